@@ -1,0 +1,303 @@
+// lodbake: command-line front end. Argument parsing, printing and exit codes only; every piece of
+// work is a library call (STYLE.md §1). Exit codes: 0 ok, 1 input or bake error, 2 usage.
+
+#include <cstdio>
+#include <cstring>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "lodbake/cleanup/topology.h"
+#include "lodbake/core/diagnostics.h"
+#include "lodbake/core/file_io.h"
+#include "lodbake/core/json_writer.h"
+#include "lodbake/io/mesh_io.h"
+#include "lodbake/version.h"
+
+namespace {
+
+using namespace lodbake;
+
+constexpr int kExitOk = 0;
+constexpr int kExitError = 1;
+constexpr int kExitUsage = 2;
+
+const char* kMainHelp = R"(lodbake - offline level-of-detail asset baker
+
+usage: lodbake <command> [options]
+
+commands:
+  info IN            print format, counts, attributes, bounds and topology of a mesh file
+  convert IN -o OUT  convert between .ply .obj .off .gltf .glb
+
+options:
+  -h, --help         show help (also: lodbake <command> --help)
+  --version          print the version
+
+exit codes: 0 success, 1 input or processing error, 2 usage error
+)";
+
+const char* kInfoHelp = R"(usage: lodbake info IN [--json]
+
+Prints what IN holds: format and encoding, vertex and face counts as stored and as loaded
+(triangulated), attribute streams, sub-meshes and materials, bounds, and topology (boundary
+edges and loops, components, non-manifold edges and vertices, duplicate and degenerate faces,
+unreferenced vertices). Topology is given as stored and, when it differs, with vertices welded
+by identical position (UV or normal seams split vertices in most glTF files).
+
+options:
+  --json     print one JSON object instead of text
+)";
+
+const char* kConvertHelp = R"(usage: lodbake convert IN -o OUT [--ascii]
+
+Reads IN (.ply .obj .off .gltf .glb) and writes OUT in the format its extension names. Output is
+written atomically: on any error no output file is left behind. OUT may not be IN.
+
+options:
+  -o, --output OUT   output path (required)
+  --ascii            PLY output: ascii instead of binary little endian
+)";
+
+/// Parsed command line of one subcommand: flags with optional values and positional arguments.
+struct Args {
+    std::vector<std::string> positional;
+    std::map<std::string, std::string> values;
+    std::map<std::string, bool> flags;
+};
+
+struct OptionSpec {
+    const char* long_name;
+    const char* short_name; // may be null
+    bool takes_value;
+};
+
+int usageError(const std::string& message) {
+    std::fprintf(stderr, "error: %s (see lodbake --help)\n", message.c_str());
+    return kExitUsage;
+}
+
+// Returns false (after printing) on a usage error.
+bool parseArgs(int argc, char** argv, int first, const std::vector<OptionSpec>& specs, Args& args, int& exit_code) {
+    for (int i = first; i < argc; ++i) {
+        const std::string a = argv[i];
+        if (a.size() > 1 && a[0] == '-') {
+            const OptionSpec* spec = nullptr;
+            for (const OptionSpec& s : specs)
+                if (a == s.long_name || (s.short_name && a == s.short_name)) spec = &s;
+            if (!spec) {
+                exit_code = usageError("unknown option '" + a + "'");
+                return false;
+            }
+            if (spec->takes_value) {
+                if (i + 1 >= argc) {
+                    exit_code = usageError(std::string("option ") + spec->long_name + " needs a value");
+                    return false;
+                }
+                args.values[spec->long_name] = argv[++i];
+            } else {
+                args.flags[spec->long_name] = true;
+            }
+        } else {
+            args.positional.push_back(a);
+        }
+    }
+    return true;
+}
+
+void printDiagnostics(const Diagnostics& diagnostics) {
+    for (const Diagnostic& d : diagnostics.items())
+        std::fprintf(stderr, "%s: %s\n", d.severity == Severity::Warning ? "warning" : "note", d.message.c_str());
+}
+
+int reportError(const Status& status) {
+    std::fprintf(stderr, "error: %s\n", status.message().c_str());
+    return kExitError;
+}
+
+std::string attributeList(const Mesh& mesh) {
+    std::string s = "POSITION";
+    if (mesh.hasNormals()) s += " NORMAL";
+    if (mesh.hasTangents()) s += " TANGENT";
+    for (size_t i = 0; i < mesh.uvs.size(); ++i) s += " TEXCOORD_" + std::to_string(i);
+    if (mesh.hasColors()) s += " COLOR_0";
+    return s;
+}
+
+void writeTopologyJson(JsonWriter& j, const TopologyStats& t) {
+    j.beginObject();
+    j.field("vertices", t.vertex_count);
+    j.field("referenced_vertices", t.referenced_vertex_count);
+    j.field("unreferenced_vertices", t.unreferenced_vertex_count);
+    j.field("faces", t.face_count);
+    j.field("edges", t.edge_count);
+    j.field("boundary_edges", t.boundary_edge_count);
+    j.field("boundary_loops", t.boundary_loop_count);
+    j.field("components", t.component_count);
+    j.field("non_manifold_edges", t.non_manifold_edge_count);
+    j.field("non_manifold_vertices", t.non_manifold_vertex_count);
+    j.field("inconsistent_orientation_edges", t.inconsistent_edge_count);
+    j.field("degenerate_faces", t.degenerate_face_count);
+    j.field("duplicate_faces", t.duplicate_face_count);
+    j.field("non_finite_vertices", t.non_finite_vertex_count);
+    j.field("euler_characteristic", t.euler_characteristic);
+    j.endObject();
+}
+
+void printTopologyText(const char* title, const TopologyStats& t) {
+    std::printf("%s\n", title);
+    std::printf("  vertices            %llu referenced, %llu unreferenced\n",
+                (unsigned long long)t.referenced_vertex_count, (unsigned long long)t.unreferenced_vertex_count);
+    std::printf("  edges               %llu\n", (unsigned long long)t.edge_count);
+    std::printf("  boundary            %llu edges in %llu loops\n", (unsigned long long)t.boundary_edge_count,
+                (unsigned long long)t.boundary_loop_count);
+    std::printf("  components          %llu\n", (unsigned long long)t.component_count);
+    std::printf("  non-manifold        %llu edges, %llu vertices\n", (unsigned long long)t.non_manifold_edge_count,
+                (unsigned long long)t.non_manifold_vertex_count);
+    std::printf("  orientation         %llu inconsistent edges\n", (unsigned long long)t.inconsistent_edge_count);
+    std::printf("  degenerate faces    %llu\n", (unsigned long long)t.degenerate_face_count);
+    std::printf("  duplicate faces     %llu\n", (unsigned long long)t.duplicate_face_count);
+    std::printf("  non-finite vertices %llu\n", (unsigned long long)t.non_finite_vertex_count);
+    std::printf("  euler               %lld\n", (long long)t.euler_characteristic);
+}
+
+bool sameTopology(const TopologyStats& a, const TopologyStats& b) {
+    return a.vertex_count == b.vertex_count && a.edge_count == b.edge_count &&
+           a.boundary_edge_count == b.boundary_edge_count && a.component_count == b.component_count &&
+           a.non_manifold_edge_count == b.non_manifold_edge_count &&
+           a.non_manifold_vertex_count == b.non_manifold_vertex_count &&
+           a.inconsistent_edge_count == b.inconsistent_edge_count;
+}
+
+int runInfo(int argc, char** argv) {
+    Args args;
+    int code = 0;
+    if (!parseArgs(argc, argv, 2, {{"--json", nullptr, false}, {"--help", "-h", false}}, args, code)) return code;
+    if (args.flags.count("--help")) {
+        std::fputs(kInfoHelp, stdout);
+        return kExitOk;
+    }
+    if (args.positional.size() != 1) return usageError("info takes exactly one input file");
+    const std::string& path = args.positional[0];
+
+    Diagnostics diagnostics;
+    Result<LoadedMesh> loaded = readMesh(path, ReadOptions(), diagnostics);
+    printDiagnostics(diagnostics);
+    if (!loaded.ok()) return reportError(loaded.status());
+    const Mesh& mesh = loaded->mesh;
+    const SourceInfo& src = loaded->source;
+    const Aabb box = computeBounds(mesh);
+    const TopologyStats stored = computeTopologyStats(mesh);
+    TopologyOptions weld;
+    weld.weld_by_position = true;
+    const TopologyStats welded = computeTopologyStats(mesh, weld);
+
+    if (args.flags.count("--json")) {
+        JsonWriter j;
+        j.beginObject();
+        j.field("file", path);
+        j.field("format", formatName(src.format));
+        j.field("encoding", src.encoding);
+        j.key("file_counts").beginObject();
+        j.field("vertices", src.file_vertex_count).field("faces", src.file_face_count).field("face_kind", src.face_kind);
+        j.endObject();
+        j.field("vertices", uint64_t(mesh.vertexCount()));
+        j.field("triangles", uint64_t(mesh.faceCount()));
+        j.key("attributes").beginArray();
+        j.value("POSITION");
+        if (mesh.hasNormals()) j.value("NORMAL");
+        if (mesh.hasTangents()) j.value("TANGENT");
+        for (size_t i = 0; i < mesh.uvs.size(); ++i) j.value("TEXCOORD_" + std::to_string(i));
+        if (mesh.hasColors()) j.value("COLOR_0");
+        j.endArray();
+        j.field("submeshes", uint64_t(mesh.submeshes.size()));
+        j.field("materials", uint64_t(mesh.materials.size()));
+        j.field("textures", uint64_t(mesh.textures.size()));
+        j.key("bounds").beginObject();
+        j.key("min").beginArray().value(box.min.x).value(box.min.y).value(box.min.z).endArray();
+        j.key("max").beginArray().value(box.max.x).value(box.max.y).value(box.max.z).endArray();
+        j.field("diagonal", box.diagonal());
+        j.endObject();
+        j.key("topology");
+        writeTopologyJson(j, stored);
+        j.key("topology_welded_by_position");
+        writeTopologyJson(j, welded);
+        j.key("files_read").beginArray();
+        for (const std::string& f : src.files_read) j.value(f);
+        j.endArray();
+        j.endObject();
+        std::fputs(j.str().c_str(), stdout);
+        return kExitOk;
+    }
+
+    std::printf("file                %s\n", path.c_str());
+    std::printf("format              %s %s\n", formatName(src.format), src.encoding.c_str());
+    std::printf("in file             %llu vertices, %llu %s\n", (unsigned long long)src.file_vertex_count,
+                (unsigned long long)src.file_face_count, src.face_kind.c_str());
+    std::printf("loaded              %zu vertices, %zu triangles\n", mesh.vertexCount(), mesh.faceCount());
+    std::printf("attributes          %s\n", attributeList(mesh).c_str());
+    std::printf("sub-meshes          %zu (%zu materials, %zu textures)\n", mesh.submeshes.size(), mesh.materials.size(),
+                mesh.textures.size());
+    for (size_t m = 0; m < mesh.materials.size(); ++m)
+        std::printf("  material %zu        %s\n", m, mesh.materials[m].name.c_str());
+    std::printf("bounds              [%g %g %g] .. [%g %g %g]  diagonal %g\n", box.min.x, box.min.y, box.min.z, box.max.x,
+                box.max.y, box.max.z, box.diagonal());
+    printTopologyText("topology (as stored)", stored);
+    if (!sameTopology(stored, welded)) printTopologyText("topology (vertices welded by position)", welded);
+    return kExitOk;
+}
+
+int runConvert(int argc, char** argv) {
+    Args args;
+    int code = 0;
+    if (!parseArgs(argc, argv, 2, {{"--output", "-o", true}, {"--ascii", nullptr, false}, {"--help", "-h", false}},
+                   args, code))
+        return code;
+    if (args.flags.count("--help")) {
+        std::fputs(kConvertHelp, stdout);
+        return kExitOk;
+    }
+    if (args.positional.size() != 1) return usageError("convert takes exactly one input file");
+    if (!args.values.count("--output")) return usageError("convert needs -o OUT");
+    const std::string& in = args.positional[0];
+    const std::string& out = args.values["--output"];
+    if (formatFromPath(out) == MeshFormat::Unknown)
+        return usageError("output '" + out + "' has an unknown extension, expected .ply .obj .off .gltf or .glb");
+    if (isSameFile(in, out)) return usageError("output '" + out + "' is the input file; the input is never modified");
+
+    Diagnostics diagnostics;
+    Result<LoadedMesh> loaded = readMesh(in, ReadOptions(), diagnostics);
+    if (!loaded.ok()) {
+        printDiagnostics(diagnostics);
+        return reportError(loaded.status());
+    }
+    WriteOptions wopt;
+    wopt.ply_binary = !args.flags.count("--ascii");
+    const Status written = writeMesh(loaded->mesh, out, wopt, diagnostics);
+    printDiagnostics(diagnostics);
+    if (!written.ok()) return reportError(written);
+    std::printf("wrote %s: %zu vertices, %zu triangles\n", out.c_str(), loaded->mesh.vertexCount(),
+                loaded->mesh.faceCount());
+    return kExitOk;
+}
+
+} // namespace
+
+int main(int argc, char** argv) {
+    if (argc < 2) {
+        std::fputs(kMainHelp, stderr);
+        return kExitUsage;
+    }
+    const std::string cmd = argv[1];
+    if (cmd == "--help" || cmd == "-h" || cmd == "help") {
+        std::fputs(kMainHelp, stdout);
+        return kExitOk;
+    }
+    if (cmd == "--version") {
+        std::printf("lodbake %s\n", lodbake::kVersionString);
+        return kExitOk;
+    }
+    if (cmd == "info") return runInfo(argc, argv);
+    if (cmd == "convert") return runConvert(argc, argv);
+    return usageError("unknown command '" + cmd + "'");
+}

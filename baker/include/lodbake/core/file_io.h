@@ -1,0 +1,55 @@
+#pragma once
+// File access for the baker: whole-file reads with size limits, and atomic writes so that a failed
+// or interrupted run never leaves a partial output file behind.
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "lodbake/core/status.h"
+
+namespace lodbake {
+
+/// Reads a whole file. Errors name the path. Refuses files larger than `max_size_bytes`.
+Result<std::vector<uint8_t>> readFileBytes(const std::string& path, uint64_t max_size_bytes = (uint64_t(1) << 34));
+
+/// Writes one or more files so that either all appear complete or none does: every file is written
+/// to a temporary name in its destination folder first, and renamed only after all writes succeeded.
+/// Destructing an uncommitted writer removes its temporaries.
+class AtomicFileWriter {
+public:
+    AtomicFileWriter() = default;
+    AtomicFileWriter(const AtomicFileWriter&) = delete;
+    AtomicFileWriter& operator=(const AtomicFileWriter&) = delete;
+    ~AtomicFileWriter();
+
+    /// Stages `data` for `path`. Fails (naming the path) if the temporary cannot be written.
+    Status add(const std::string& path, const void* data, size_t size);
+    Status add(const std::string& path, const std::vector<uint8_t>& data) { return add(path, data.data(), data.size()); }
+    Status add(const std::string& path, const std::string& text) { return add(path, text.data(), text.size()); }
+
+    /// Renames every staged file into place.
+    Status commit();
+
+private:
+    struct Staged {
+        std::string temp_path;
+        std::string final_path;
+    };
+    std::vector<Staged> staged_;
+    void discard();
+};
+
+/// Convenience: one file, atomically.
+Status writeFileAtomic(const std::string& path, const void* data, size_t size);
+
+/// The directory part of a path ("" for a bare file name), and the path joined to a relative name.
+std::string parentDirectory(const std::string& path);
+std::string joinPath(const std::string& dir, const std::string& name);
+/// Lower-case extension including the dot (".ply"), or "" if none.
+std::string lowerExtension(const std::string& path);
+
+/// True if both paths name the same existing file (used to refuse overwriting the input).
+bool isSameFile(const std::string& a, const std::string& b);
+
+} // namespace lodbake

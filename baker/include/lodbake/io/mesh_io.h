@@ -1,0 +1,59 @@
+#pragma once
+// Reading and writing meshes in every supported file format, chosen by file extension (readers also
+// check the magic bytes). Per-format entry points are in ply.h, obj.h, off.h and gltf/gltf_io.h.
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "lodbake/core/diagnostics.h"
+#include "lodbake/core/mesh.h"
+#include "lodbake/core/status.h"
+
+namespace lodbake {
+
+enum class MeshFormat { Unknown, Ply, Obj, Off, Gltf, Glb };
+
+/// Format from the extension (.ply .obj .off .gltf .glb, case-insensitive); Unknown otherwise.
+MeshFormat formatFromPath(const std::string& path);
+const char* formatName(MeshFormat format);
+
+/// Limits and choices for readers. Counts above a limit are refused before anything is allocated.
+struct ReadOptions {
+    uint64_t max_vertex_count = uint64_t(1) << 28; // refuse files claiming more vertices
+    uint64_t max_face_count = uint64_t(1) << 28;   // refuse files claiming more faces (after triangulation)
+    uint32_t max_polygon_vertices = 1024;          // refuse polygons (PLY lists, OBJ/OFF faces) larger than this
+    double range_grid_max_edge_factor = 4.0;       // range grids: drop triangles with an edge longer than this × median grid spacing
+    bool load_textures = true;                     // read referenced texture files into Texture::bytes
+};
+
+/// What the file said, before any conversion (for `lodbake info` and for build-system depfiles).
+struct SourceInfo {
+    MeshFormat format = MeshFormat::Unknown;
+    std::string encoding;           // e.g. "binary_little_endian", "ascii", "glb", "draco"
+    uint64_t file_vertex_count = 0; // vertices (positions) as stored in the file
+    uint64_t file_face_count = 0;   // faces as stored (polygons, strips or grid cells are counted as the file has them)
+    std::string face_kind;          // "triangles", "polygons", "tristrips", "range_grid", ...
+    std::vector<std::string> files_read; // every file opened, input first (MTL, textures, .bin buffers)
+};
+
+struct LoadedMesh {
+    Mesh mesh;
+    SourceInfo source;
+};
+
+/// Loads a file as one flattened mesh (glTF: all triangle primitives, node transforms applied).
+/// Errors are one line naming the file, the element and what was expected.
+Result<LoadedMesh> readMesh(const std::string& path, const ReadOptions& options, Diagnostics& diagnostics);
+
+struct WriteOptions {
+    bool ply_binary = true;        // PLY: binary_little_endian (true) or ascii
+    bool embed_textures = true;    // glTF (.gltf): embed images in the buffer instead of side files
+};
+
+/// Writes `mesh` in the format its extension names, atomically (no partial file on failure). Side
+/// files (.mtl, .bin, textures) are written next to it in the same atomic step.
+Status writeMesh(const Mesh& mesh, const std::string& path, const WriteOptions& options, Diagnostics& diagnostics);
+
+} // namespace lodbake

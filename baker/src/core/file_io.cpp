@@ -1,0 +1,122 @@
+#include "lodbake/core/file_io.h"
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <system_error>
+
+#include <sys/stat.h>
+#include <unistd.h>
+
+namespace lodbake {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string errnoText() { return std::strerror(errno); }
+
+} // namespace
+
+Result<std::vector<uint8_t>> readFileBytes(const std::string& path, uint64_t max_size_bytes) {
+    struct stat st {};
+    if (::stat(path.c_str(), &st) != 0) return ioError(path + ": cannot open: " + errnoText());
+    if (S_ISDIR(st.st_mode)) return ioError(path + ": is a directory, expected a file");
+    FILE* f = std::fopen(path.c_str(), "rb");
+    if (!f) return ioError(path + ": cannot open: " + errnoText());
+    std::vector<uint8_t> bytes;
+    if (S_ISREG(st.st_mode)) {
+        if (uint64_t(st.st_size) > max_size_bytes) {
+            std::fclose(f);
+            return resourceLimit(path + ": file is " + std::to_string(st.st_size) + " bytes, over the limit of " +
+                                 std::to_string(max_size_bytes));
+        }
+        bytes.resize(size_t(st.st_size));
+        size_t got = bytes.empty() ? 0 : std::fread(bytes.data(), 1, bytes.size(), f);
+        if (got != bytes.size()) {
+            std::fclose(f);
+            return ioError(path + ": read " + std::to_string(got) + " of " + std::to_string(bytes.size()) + " bytes");
+        }
+    } else {
+        // A pipe or device: read in chunks up to the limit.
+        uint8_t chunk[65536];
+        size_t got;
+        while ((got = std::fread(chunk, 1, sizeof(chunk), f)) > 0) {
+            bytes.insert(bytes.end(), chunk, chunk + got);
+            if (bytes.size() > max_size_bytes) {
+                std::fclose(f);
+                return resourceLimit(path + ": input is over the limit of " + std::to_string(max_size_bytes) + " bytes");
+            }
+        }
+    }
+    std::fclose(f);
+    return bytes;
+}
+
+AtomicFileWriter::~AtomicFileWriter() { discard(); }
+
+void AtomicFileWriter::discard() {
+    for (const Staged& s : staged_) std::remove(s.temp_path.c_str());
+    staged_.clear();
+}
+
+Status AtomicFileWriter::add(const std::string& path, const void* data, size_t size) {
+    // The temporary sits in the destination folder so the final rename never crosses file systems.
+    // Its name starts with '.' and ends in the process id so concurrent bakes do not collide.
+    const std::string dir = parentDirectory(path);
+    const std::string base = fs::path(path).filename().string();
+    const std::string temp = joinPath(dir, "." + base + ".tmp" + std::to_string(::getpid()));
+    FILE* f = std::fopen(temp.c_str(), "wb");
+    if (!f) return ioError(path + ": cannot write: " + errnoText());
+    const bool wrote = size == 0 || std::fwrite(data, 1, size, f) == size;
+    const bool closed = std::fclose(f) == 0;
+    if (!wrote || !closed) {
+        std::remove(temp.c_str());
+        return ioError(path + ": write failed: " + errnoText());
+    }
+    staged_.push_back({temp, path});
+    return Status();
+}
+
+Status AtomicFileWriter::commit() {
+    for (size_t i = 0; i < staged_.size(); ++i) {
+        if (std::rename(staged_[i].temp_path.c_str(), staged_[i].final_path.c_str()) != 0) {
+            const std::string err = errnoText();
+            // Files renamed so far stay (they are complete); the rest are removed by discard().
+            staged_.erase(staged_.begin(), staged_.begin() + long(i));
+            const std::string failed = staged_.front().final_path;
+            discard();
+            return ioError(failed + ": cannot move into place: " + err);
+        }
+    }
+    staged_.clear();
+    return Status();
+}
+
+Status writeFileAtomic(const std::string& path, const void* data, size_t size) {
+    AtomicFileWriter w;
+    LODBAKE_RETURN_IF_ERROR(w.add(path, data, size));
+    return w.commit();
+}
+
+std::string parentDirectory(const std::string& path) { return fs::path(path).parent_path().string(); }
+
+std::string joinPath(const std::string& dir, const std::string& name) {
+    if (dir.empty()) return name;
+    return (fs::path(dir) / name).string();
+}
+
+std::string lowerExtension(const std::string& path) {
+    std::string ext = fs::path(path).extension().string();
+    for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+    return ext;
+}
+
+bool isSameFile(const std::string& a, const std::string& b) {
+    std::error_code ec;
+    const bool same = fs::equivalent(a, b, ec);
+    return !ec && same;
+}
+
+} // namespace lodbake

@@ -1,0 +1,15 @@
+# lodbake_target_options(<target>): warnings, -Werror when LODBAKE_WERROR, and no FP contraction so
+# results do not depend on whether the compiler fuses multiply-adds (determinism, STYLE.md §7).
+function(lodbake_target_options target)
+    if(MSVC)
+        target_compile_options(${target} PRIVATE /W4 /fp:precise)
+        if(LODBAKE_WERROR)
+            target_compile_options(${target} PRIVATE /WX)
+        endif()
+    else()
+        target_compile_options(${target} PRIVATE -Wall -Wextra -Wshadow -ffp-contract=off)
+        if(LODBAKE_WERROR)
+            target_compile_options(${target} PRIVATE -Werror)
+        endif()
+    endif()
+endfunction()

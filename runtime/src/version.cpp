@@ -1,0 +1,7 @@
+#include "lodrt/lodrt.h"
+
+namespace lodrt {
+
+const char* versionString() { return LODRT_VERSION_STRING; }
+
+} // namespace lodrt

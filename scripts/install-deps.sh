@@ -1,0 +1,37 @@
+#!/usr/bin/env bash
+# Installs everything lodbake needs on a Debian (bookworm) machine: compilers and CMake, the
+# libraries (tinygltf, Draco, OpenImageIO, oneTBB, GoogleTest, nlohmann-json), the tools the tests
+# and benchmarks run (Draco CLI, meshoptimizer, Open3D for ../shared/eval) and the Khronos
+# glTF-Validator from npm. Safe to run again: it installs only what is missing.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+packages=(
+    build-essential cmake ninja-build pkg-config git
+    libtinygltf-dev nlohmann-json3-dev libstb-dev
+    libdraco-dev draco
+    libopenimageio-dev openimageio-tools
+    libtbb-dev
+    libgtest-dev googletest
+    libmeshoptimizer-dev
+    python3 python3-numpy python3-open3d
+    nodejs npm
+)
+
+missing=()
+for p in "${packages[@]}"; do
+    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]})); then
+    sudo_cmd=()
+    if [ "$(id -u)" -ne 0 ]; then sudo_cmd=(sudo); fi
+    echo "installing Debian packages: ${missing[*]}"
+    "${sudo_cmd[@]}" apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+
+# Node tools used by the tests (versions pinned by scripts/node/package-lock.json).
+if [ ! -d scripts/node/node_modules/gltf-validator ]; then
+    echo "installing npm packages for the tests (scripts/node)"
+    (cd scripts/node && npm ci --no-audit --no-fund --loglevel=error)
+fi

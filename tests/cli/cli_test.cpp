@@ -1,0 +1,210 @@
+// The lodbake command line as a build system and a person see it: exit codes, one-line errors that
+// name the file, no output left behind on failure, input never modified. The malformed corpus lives
+// in tests/malformed/<format>/, described by each folder's expect.tsv.
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "lodbake/core/file_io.h"
+#include "lodbake/core/hash.h"
+#include "test_paths.h"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct RunResult {
+    int exit_code = -1;
+    std::string out;
+    std::string err;
+};
+
+std::string readText(const std::string& path) {
+    std::ifstream f(path, std::ios::binary);
+    std::stringstream ss;
+    ss << f.rdbuf();
+    return ss.str();
+}
+
+std::string shellQuote(const std::string& s) {
+    std::string q = "'";
+    for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    return q + "'";
+}
+
+RunResult runCli(const std::vector<std::string>& args) {
+    static int counter = 0;
+    const std::string base = lodbake_test::scratchDir() + "/cli_run_" + std::to_string(::getpid()) + "_" + std::to_string(++counter);
+    std::string cmd = shellQuote(lodbake_test::lodbakeCli());
+    for (const std::string& a : args) cmd += " " + shellQuote(a);
+    cmd += " >" + base + ".out 2>" + base + ".err </dev/null";
+    const int status = std::system(cmd.c_str());
+    RunResult r;
+    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+    r.out = readText(base + ".out");
+    r.err = readText(base + ".err");
+    return r;
+}
+
+std::vector<std::string> lines(const std::string& text) {
+    std::vector<std::string> out;
+    std::stringstream ss(text);
+    std::string line;
+    while (std::getline(ss, line)) out.push_back(line);
+    return out;
+}
+
+uint64_t hashFile(const std::string& path) {
+    auto bytes = lodbake::readFileBytes(path);
+    lodbake::Hasher h;
+    if (bytes.ok()) h.addBytes(bytes->data(), bytes->size());
+    return h.digest();
+}
+
+// A case of the malformed corpus: a file that every command must refuse cleanly.
+struct MalformedCase {
+    std::string path;
+    std::string expected; // substring the error line must contain (the element that is wrong)
+};
+
+std::vector<MalformedCase> malformedCases() {
+    std::vector<MalformedCase> cases;
+    const fs::path root = fs::path(lodbake_test::sourceDir()) / "tests" / "malformed";
+    if (!fs::is_directory(root)) return cases;
+    std::vector<fs::path> dirs;
+    for (const auto& e : fs::directory_iterator(root))
+        if (e.is_directory()) dirs.push_back(e.path());
+    std::sort(dirs.begin(), dirs.end());
+    for (const fs::path& dir : dirs) {
+        std::ifstream tsv(dir / "expect.tsv");
+        std::string line;
+        while (std::getline(tsv, line)) {
+            if (line.empty() || line[0] == '#') continue;
+            const size_t tab = line.find('\t');
+            const std::string name = line.substr(0, tab);
+            const std::string expected = tab == std::string::npos ? "" : line.substr(tab + 1);
+            if (name == "side") continue; // a side file (MTL, texture) used by another case
+            cases.push_back({(dir / name).string(), expected});
+        }
+    }
+    return cases;
+}
+
+std::string caseName(const testing::TestParamInfo<MalformedCase>& info) {
+    const fs::path p(info.param.path);
+    std::string n = p.parent_path().filename().string() + "_" + p.filename().string();
+    for (char& c : n)
+        if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+    return n;
+}
+
+} // namespace
+
+TEST(CliTest, HelpExitsZero) {
+    const RunResult r = runCli({"--help"});
+    EXPECT_EQ(r.exit_code, 0);
+    EXPECT_NE(r.out.find("usage: lodbake"), std::string::npos);
+    for (const char* cmd : {"info", "convert"}) {
+        const RunResult c = runCli({cmd, "--help"});
+        EXPECT_EQ(c.exit_code, 0) << cmd;
+        EXPECT_NE(c.out.find(std::string("usage: lodbake ") + cmd), std::string::npos) << cmd;
+    }
+}
+
+TEST(CliTest, UsageErrorsExitTwo) {
+    EXPECT_EQ(runCli({}).exit_code, 2);
+    EXPECT_EQ(runCli({"frobnicate"}).exit_code, 2);
+    EXPECT_EQ(runCli({"info"}).exit_code, 2);
+    EXPECT_EQ(runCli({"info", "a.ply", "b.ply"}).exit_code, 2);
+    EXPECT_EQ(runCli({"info", "--no-such-flag", "a.ply"}).exit_code, 2);
+    EXPECT_EQ(runCli({"convert", "a.ply"}).exit_code, 2);
+    EXPECT_EQ(runCli({"convert", "a.ply", "-o"}).exit_code, 2);
+    EXPECT_EQ(runCli({"convert", "a.ply", "-o", "out.xyz"}).exit_code, 2);
+}
+
+TEST(CliTest, MissingFileIsOneLineErrorNamingIt) {
+    const std::string missing = lodbake_test::scratchDir() + "/does_not_exist.ply";
+    const RunResult r = runCli({"info", missing});
+    EXPECT_EQ(r.exit_code, 1);
+    const auto err = lines(r.err);
+    ASSERT_EQ(err.size(), 1u) << r.err;
+    EXPECT_EQ(err[0].rfind("error: ", 0), 0u);
+    EXPECT_NE(err[0].find(missing), std::string::npos);
+}
+
+TEST(CliTest, ConvertRefusesToOverwriteInput) {
+    const std::string path = lodbake_test::scratchDir() + "/self.ply";
+    const std::string text = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                             "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+                             "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+    ASSERT_TRUE(lodbake::writeFileAtomic(path, text.data(), text.size()).ok());
+    const RunResult r = runCli({"convert", path, "-o", path});
+    EXPECT_EQ(r.exit_code, 2);
+    EXPECT_EQ(readText(path), text);
+}
+
+class MalformedInputTest : public testing::TestWithParam<MalformedCase> {};
+
+TEST_P(MalformedInputTest, FailsCleanlyWithoutOutput) {
+    const MalformedCase& c = GetParam();
+    const uint64_t before = hashFile(c.path);
+    const std::string out_dir = lodbake_test::scratchDir() + "/malformed_" + fs::path(c.path).filename().string();
+    fs::remove_all(out_dir);
+    fs::create_directories(out_dir);
+
+    const RunResult info = runCli({"info", c.path});
+    EXPECT_EQ(info.exit_code, 1) << info.err;
+    std::vector<std::string> errors;
+    for (const std::string& l : lines(info.err))
+        if (l.rfind("error: ", 0) == 0) errors.push_back(l);
+    ASSERT_EQ(errors.size(), 1u) << "expected exactly one error line, got:\n" << info.err;
+    EXPECT_NE(errors[0].find(c.path), std::string::npos) << "error must name the file: " << errors[0];
+    EXPECT_NE(errors[0].find(c.expected), std::string::npos)
+        << "error must mention '" << c.expected << "': " << errors[0];
+
+    for (const char* ext : {".glb", ".ply"}) {
+        const RunResult conv = runCli({"convert", c.path, "-o", out_dir + "/out" + ext});
+        EXPECT_EQ(conv.exit_code, 1) << conv.err;
+    }
+    EXPECT_TRUE(fs::is_empty(out_dir)) << "a failed convert left files in " << out_dir;
+    EXPECT_EQ(hashFile(c.path), before) << "the input was modified";
+}
+
+INSTANTIATE_TEST_SUITE_P(Corpus, MalformedInputTest, testing::ValuesIn(malformedCases()), caseName);
+GTEST_ALLOW_UNINSTANTIATED_PARAMETERIZED_TEST(MalformedInputTest);
+
+TEST(MalformedCorpusTest, EveryFileIsListed) {
+    const fs::path root = fs::path(lodbake_test::sourceDir()) / "tests" / "malformed";
+    size_t listed = 0;
+    for (const auto& dir : fs::directory_iterator(root)) {
+        if (!dir.is_directory()) continue;
+        std::ifstream tsv(dir.path() / "expect.tsv");
+        ASSERT_TRUE(tsv.good()) << dir.path() << " has no expect.tsv";
+        std::vector<std::string> names;
+        std::string line;
+        while (std::getline(tsv, line)) {
+            if (line.empty() || line[0] == '#') continue;
+            const size_t tab = line.find('\t');
+            names.push_back(line.rfind("side\t", 0) == 0 ? line.substr(5) : line.substr(0, tab));
+        }
+        for (const auto& f : fs::directory_iterator(dir.path())) {
+            const std::string n = f.path().filename().string();
+            if (n == "expect.tsv") continue;
+            EXPECT_NE(std::find(names.begin(), names.end(), n), names.end())
+                << f.path() << " is not listed in expect.tsv";
+        }
+        listed += names.size();
+    }
+    EXPECT_GT(listed, 0u);
+}
