@@ -1,0 +1,38 @@
+#pragma once
+// Two-sided surface distance between a reference mesh and an approximation, the error every LOD
+// level carries. Metro-style: area-uniform samples on each surface plus its vertices, exact
+// point-to-triangle distance to the other surface through a BVH. Agrees with
+// ../shared/eval/meshdist.py (same definitions) within sampling noise.
+
+#include <cstdint>
+
+#include "lodbake/core/mesh.h"
+#include "lodbake/core/status.h"
+
+namespace lodbake {
+
+struct DistanceOptions {
+    uint32_t sample_count = 200000; // area-uniform samples per side (vertices are added on top)
+    uint64_t seed = 1;              // sampling is deterministic for a seed, whatever the thread count
+    bool include_vertices = true;   // also measure from every referenced vertex, so spikes are not missed
+};
+
+/// Distances in object units and relative to the reference's bounding-box diagonal.
+struct DistanceResult {
+    double hausdorff = 0.0;     // max of both one-sided maxima
+    double mean = 0.0;          // (mean(ref→approx) + mean(approx→ref)) / 2
+    double rms = 0.0;           // sqrt((ms(ref→approx) + ms(approx→ref)) / 2)
+    double max_ref_to_approx = 0.0;
+    double max_approx_to_ref = 0.0;
+    double diagonal = 0.0;      // reference bounding-box diagonal (referenced vertices)
+    double hausdorffRel() const { return diagonal > 0 ? hausdorff / diagonal : 0.0; }
+    double meanRel() const { return diagonal > 0 ? mean / diagonal : 0.0; }
+    double rmsRel() const { return diagonal > 0 ? rms / diagonal : 0.0; }
+};
+
+/// Measures the two-sided distance. Fails (InvalidInput) if either mesh has no triangle of
+/// non-zero area.
+Result<DistanceResult> measureSurfaceDistance(const Mesh& reference, const Mesh& approx,
+                                              const DistanceOptions& options = {});
+
+} // namespace lodbake
