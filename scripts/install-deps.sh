@@ -8,15 +8,18 @@ cd "$(dirname "$0")/.."
 
 packages=(
     build-essential cmake ninja-build pkg-config git
-    libtinygltf-dev nlohmann-json3-dev libstb-dev
+    libtinygltf-dev nlohmann-json3-dev
     libdraco-dev draco
     libopenimageio-dev openimageio-tools
     libtbb-dev
     libgtest-dev googletest
     libmeshoptimizer-dev
     python3 python3-numpy python3-open3d
-    nodejs npm
 )
+# Node.js: machines of this kind ship it (with npm bundled); Debian's own npm package conflicts with
+# such a build, so only ask apt for node and npm when the commands are missing.
+command -v node >/dev/null 2>&1 || packages+=(nodejs)
+command -v npm >/dev/null 2>&1 || packages+=(npm)
 
 missing=()
 for p in "${packages[@]}"; do
