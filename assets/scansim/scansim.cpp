@@ -22,20 +22,30 @@ constexpr double kPi = 3.14159265358979323846;
 // The scanner reports coordinates in its own frame, centred near the object rather than on the
 // turntable axis, so the .conf translations are not zero and a reader that ignores them is caught.
 constexpr Vec3d kScannerOffset{0.0015, -0.045, 0.001};
-constexpr double kMinStep = 2e-5;            // metres; sphere tracing never steps less than this
-constexpr int kMaxSteps = 20000;             // per ray; far more than any ray needs
-constexpr double kShadowRayOffset = 6e-5;    // metres along the normal, so a shadow ray does not re-hit its start
-constexpr double kNormalDelta = 1e-5;        // metres, central differences
+constexpr double kMinStep = 2e-5;         // metres; sphere tracing never steps less than this
+constexpr int kMaxSteps = 20000;          // per ray; far more than any ray needs
+constexpr double kShadowRayOffset = 6e-5; // metres along the normal, so a shadow ray does not re-hit its start
+constexpr double kNormalDelta = 1e-5;     // metres, central differences
 // Per-cell random streams (counter-based, so one setting never shifts another's random choices).
 constexpr uint64_t kStreamSpeckle = 1;
 constexpr uint64_t kStreamNoise1 = 2;
 constexpr uint64_t kStreamNoise2 = 3;
 
-Vec3d operator+(const Vec3d& a, const Vec3d& b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
-Vec3d operator-(const Vec3d& a, const Vec3d& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-Vec3d operator*(const Vec3d& a, double s) { return {a.x * s, a.y * s, a.z * s}; }
-double dot(const Vec3d& a, const Vec3d& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-double length(const Vec3d& a) { return std::sqrt(dot(a, a)); }
+Vec3d operator+(const Vec3d& a, const Vec3d& b) {
+    return {a.x + b.x, a.y + b.y, a.z + b.z};
+}
+Vec3d operator-(const Vec3d& a, const Vec3d& b) {
+    return {a.x - b.x, a.y - b.y, a.z - b.z};
+}
+Vec3d operator*(const Vec3d& a, double s) {
+    return {a.x * s, a.y * s, a.z * s};
+}
+double dot(const Vec3d& a, const Vec3d& b) {
+    return a.x * b.x + a.y * b.y + a.z * b.z;
+}
+double length(const Vec3d& a) {
+    return std::sqrt(dot(a, a));
+}
 Vec3d normalized(const Vec3d& a) {
     const double l = length(a);
     return l > 0.0 ? a * (1.0 / l) : Vec3d{0.0, 0.0, 0.0};
@@ -54,7 +64,9 @@ uint64_t hash4(uint64_t a, uint64_t b, uint64_t c, uint64_t d) {
 }
 
 // Uniform in (0, 1), never exactly 0 or 1.
-double unitFromHash(uint64_t h) { return (double(h >> 11) + 0.5) * (1.0 / 9007199254740992.0); }
+double unitFromHash(uint64_t h) {
+    return (double(h >> 11) + 0.5) * (1.0 / 9007199254740992.0);
+}
 
 double cellUniform(uint64_t seed, uint64_t view, uint64_t cell, uint64_t stream) {
     return unitFromHash(hash4(seed, view, cell, stream));
@@ -83,7 +95,9 @@ Vec3d mulTransposed(const double m[9], const Vec3d& p) {
             m[2] * p.x + m[5] * p.y + m[8] * p.z};
 }
 
-double quintic(double t) { return t * t * t * (t * (t * 6.0 - 15.0) + 10.0); }
+double quintic(double t) {
+    return t * t * t * (t * (t * 6.0 - 15.0) + 10.0);
+}
 
 // Lattice value noise in [-1, 1], smooth (C2) thanks to the quintic fade.
 
@@ -106,7 +120,9 @@ double valueNoise(uint64_t seed, uint64_t octave, const Vec3d& p) {
     return y0 + (y1 - y0) * tz;
 }
 
-bool finitePositive(double v) { return std::isfinite(v) && v > 0.0; }
+bool finitePositive(double v) {
+    return std::isfinite(v) && v > 0.0;
+}
 
 } // namespace
 
@@ -232,7 +248,9 @@ std::string fileNameForView(const std::string& name, double degrees) {
     return name + buf;
 }
 
-void appendText(std::vector<uint8_t>& out, const std::string& s) { out.insert(out.end(), s.begin(), s.end()); }
+void appendText(std::vector<uint8_t>& out, const std::string& s) {
+    out.insert(out.end(), s.begin(), s.end());
+}
 
 void appendU32le(std::vector<uint8_t>& out, uint32_t v) {
     for (int i = 0; i < 4; ++i) out.push_back(uint8_t(v >> (8 * i)));
@@ -273,7 +291,8 @@ Status validateOptions(const ScanOptions& o) {
     if (!std::isfinite(o.projector_baseline)) return bad("projector_baseline", "a finite number");
     if (!(o.range_noise_sigma >= 0.0) || !std::isfinite(o.range_noise_sigma)) return bad("sigma", "a number >= 0");
     if (!(o.grazing_limit_deg > 0.0 && o.grazing_limit_deg <= 90.0)) return bad("grazing", "degrees in (0, 90]");
-    if (!(o.speckle_probability >= 0.0 && o.speckle_probability <= 1.0)) return bad("speckle", "a probability in [0, 1]");
+    if (!(o.speckle_probability >= 0.0 && o.speckle_probability <= 1.0))
+        return bad("speckle", "a probability in [0, 1]");
     if (!(finitePositive(s.radius_x) && finitePositive(s.radius_y) && finitePositive(s.radius_z)))
         return bad("shape radii", "positive numbers");
     if (!(s.exponent >= 2.0 && s.exponent <= 8.0)) return bad("shape exponent", "2..8");
@@ -427,7 +446,9 @@ std::string confText(const ScanSet& scans) {
     return text;
 }
 
-std::string confFileName(const ScanOptions& options) { return options.name + ".conf"; }
+std::string confFileName(const ScanOptions& options) {
+    return options.name + ".conf";
+}
 
 Status writeScanSet(const ScanSet& scans, const ScanOptions& options, const std::string& directory) {
     std::error_code ec;

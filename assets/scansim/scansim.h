@@ -29,24 +29,24 @@ struct Vec3d {
 
 /// The scanned object. World frame: the turntable axis is +y, the base stands on y = 0. Metres.
 struct ShapeOptions {
-    double radius_x = 0.045;        // superquadric semi-axes of the rock before displacement
+    double radius_x = 0.045; // superquadric semi-axes of the rock before displacement
     double radius_y = 0.034;
     double radius_z = 0.038;
-    double exponent = 2.6;          // superquadric exponent: 2 is an ellipsoid, larger is boxier
-    double noise_amplitude = 0.16;  // radial displacement, as a fraction of the undisplaced radius
-    double noise_frequency = 2.2;   // lowest octave's frequency over the unit sphere of directions
-    int noise_octaves = 5;          // each octave doubles the frequency and halves the amplitude
-    double rock_center_y = 0.048;   // height of the rock's centre above the turntable
-    double base_radius = 0.036;     // cylindrical base (plinth) under the rock
+    double exponent = 2.6;         // superquadric exponent: 2 is an ellipsoid, larger is boxier
+    double noise_amplitude = 0.16; // radial displacement, as a fraction of the undisplaced radius
+    double noise_frequency = 2.2;  // lowest octave's frequency over the unit sphere of directions
+    int noise_octaves = 5;         // each octave doubles the frequency and halves the amplitude
+    double rock_center_y = 0.048;  // height of the rock's centre above the turntable
+    double base_radius = 0.036;    // cylindrical base (plinth) under the rock
     double base_height = 0.02;
 };
 
 struct ScanOptions {
-    uint64_t seed = 1;                 // drives the shape's noise and every scanner random choice
-    std::string name = "rock";         // file names: <name>_<degrees>.ply and <name>.conf
-    int view_count = 6;                // turntable positions, 360/view_count degrees apart
-    uint32_t num_cols = 160;           // rays per view, horizontally
-    uint32_t num_rows = 120;           // rays per view, vertically (row 0 is the bottom)
+    uint64_t seed = 1;         // drives the shape's noise and every scanner random choice
+    std::string name = "rock"; // file names: <name>_<degrees>.ply and <name>.conf
+    int view_count = 6;        // turntable positions, 360/view_count degrees apart
+    uint32_t num_cols = 160;   // rays per view, horizontally
+    uint32_t num_rows = 120;   // rays per view, vertically (row 0 is the bottom)
     // The pinhole camera sits at (0, 0, camera_distance) in scanner coordinates and looks down -z;
     // ray (col, row) aims at ((col + 0.5 - num_cols / 2) * pitch, (row + 0.5 - num_rows / 2) * pitch, 0)
     // with pitch = frame_height / num_rows. The projector sits at (projector_baseline, 0, camera_distance).
@@ -95,11 +95,11 @@ struct ViewStats {
 };
 
 struct ScanView {
-    std::string file_name;             // "<name>_<degrees>.ply"
-    double turntable_deg = 0.0;        // rotation of the turntable for this view
-    std::vector<int32_t> cell_vertex;  // num_rows * num_cols, row-major from the bottom row; -1: no sample
-    std::vector<float> points;         // 3 per kept sample, scanner frame, in cell order
-    std::vector<float> confidence;     // 1 per kept sample: cosine of the angle between normal and view ray
+    std::string file_name;               // "<name>_<degrees>.ply"
+    double turntable_deg = 0.0;          // rotation of the turntable for this view
+    std::vector<int32_t> cell_vertex;    // num_rows * num_cols, row-major from the bottom row; -1: no sample
+    std::vector<float> points;           // 3 per kept sample, scanner frame, in cell order
+    std::vector<float> confidence;       // 1 per kept sample: cosine of the angle between normal and view ray
     double quaternion[4] = {0, 0, 0, 1}; // qx qy qz qw of the .conf line
     double translation[3] = {0, 0, 0};   // tx ty tz of the .conf line
     ViewStats stats;

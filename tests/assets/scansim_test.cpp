@@ -156,8 +156,8 @@ TEST(ScanSimTest, PlyLayoutMatchesStanfordRangeGrid) {
     const std::vector<uint8_t> text = rangeGridPlyBytes(v, o);
     const std::string ascii(text.begin(), text.end());
     EXPECT_NE(ascii.find("format ascii 1.0\n"), std::string::npos);
-    const size_t body_lines = size_t(std::count(ascii.begin(), ascii.end(), '\n')) -
-                              size_t(std::count(header.begin(), header.end(), '\n'));
+    const size_t body_lines =
+        size_t(std::count(ascii.begin(), ascii.end(), '\n')) - size_t(std::count(header.begin(), header.end(), '\n'));
     EXPECT_EQ(body_lines, n + cells);
 }
 
