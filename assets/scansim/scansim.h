@@ -1,0 +1,136 @@
+#pragma once
+// lodbake_scansim: a turntable range-scanner simulator that makes the project's own sample scans.
+//
+// A procedural object (a superquadric "rock" whose radius is displaced by seeded multi-octave value
+// noise, standing on a cylindrical base) is scanned from `view_count` turntable positions. Per view
+// a pinhole camera casts a regular grid of rays (num_cols x num_rows); the first hit of each ray is
+// kept unless the point is shadowed from the projector (triangulation scanners need both to see it),
+// seen at a grazing angle beyond the limit, or lost to a random speckle dropout. Kept points get
+// Gaussian range noise along the viewing ray. Output is what a Stanford/Cyberware scan looks like:
+// one PLY per view with `element range_grid`, in scanner coordinates, plus a .conf whose
+// `bmesh name tx ty tz qx qy qz qw` lines bring each view into world coordinates as
+// p_world = R(q)^T * p + t.
+//
+// Every random choice comes from a counter-based hash of (seed, view, cell, purpose), so the output
+// is a pure function of the options, and changing one setting (say the noise sigma) leaves every
+// other random choice (which cells are speckled) as it was.
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "lodbake/core/status.h"
+
+namespace lodbake::scansim {
+
+struct Vec3d {
+    double x = 0.0, y = 0.0, z = 0.0;
+};
+
+/// The scanned object. World frame: the turntable axis is +y, the base stands on y = 0. Metres.
+struct ShapeOptions {
+    double radius_x = 0.045; // superquadric semi-axes of the rock before displacement
+    double radius_y = 0.034;
+    double radius_z = 0.038;
+    double exponent = 2.6;         // superquadric exponent: 2 is an ellipsoid, larger is boxier
+    double noise_amplitude = 0.16; // radial displacement, as a fraction of the undisplaced radius
+    double noise_frequency = 2.2;  // lowest octave's frequency over the unit sphere of directions
+    int noise_octaves = 5;         // each octave doubles the frequency and halves the amplitude
+    double rock_center_y = 0.048;  // height of the rock's centre above the turntable
+    double base_radius = 0.036;    // cylindrical base (plinth) under the rock
+    double base_height = 0.02;
+};
+
+struct ScanOptions {
+    uint64_t seed = 1;         // drives the shape's noise and every scanner random choice
+    std::string name = "rock"; // file names: <name>_<degrees>.ply and <name>.conf
+    int view_count = 6;        // turntable positions, 360/view_count degrees apart
+    uint32_t num_cols = 160;   // rays per view, horizontally
+    uint32_t num_rows = 120;   // rays per view, vertically (row 0 is the bottom)
+    // The pinhole camera sits at (0, 0, camera_distance) in scanner coordinates and looks down -z;
+    // ray (col, row) aims at ((col + 0.5 - num_cols / 2) * pitch, (row + 0.5 - num_rows / 2) * pitch, 0)
+    // with pitch = frame_height / num_rows. The projector sits at (projector_baseline, 0, camera_distance).
+    double camera_distance = 0.45;     // camera to turntable axis, metres
+    double frame_height = 0.125;       // height the grid covers at the turntable axis, metres (square pixels)
+    double projector_baseline = 0.15;  // projector offset from the camera along scanner x, metres
+    double range_noise_sigma = 0.0002; // Gaussian noise along the viewing ray, metres (0: none)
+    double grazing_limit_deg = 75.0;   // drop points whose normal is further than this from the view ray
+    double speckle_probability = 0.01; // chance that an otherwise good sample is lost
+    bool simulate_shadows = true;      // drop points the projector cannot see
+    bool write_confidence = false;     // add `property float confidence` (cosine of the view angle)
+    bool binary = true;                // binary_little_endian (true) or ascii PLY
+    ShapeOptions shape;
+};
+
+/// The object as an implicit function: negative inside, positive outside, zero on the surface.
+class Shape {
+public:
+    Shape(const ShapeOptions& options, uint64_t seed);
+    /// A value with the sign of the signed distance; |value| / lipschitz() does not exceed the distance.
+    double field(const Vec3d& p) const;
+    /// Outward unit normal (central differences of field()).
+    Vec3d normal(const Vec3d& p) const;
+    /// Bound of |grad field| (twice the largest slope measured around the surface, see the
+    /// constructor): field(p) / lipschitz() is the sphere-tracing step.
+    double lipschitz() const { return lipschitz_; }
+    /// A sphere around the world origin that contains the whole object.
+    double boundingRadius() const { return bounding_radius_; }
+
+private:
+    ShapeOptions options_;
+    uint64_t seed_;
+    double lipschitz_ = 1.0;
+    double bounding_radius_ = 1.0;
+    double rockField(const Vec3d& p) const;
+};
+
+/// Counts for one view. Every grid cell is exactly one of: miss, shadowed, grazing, speckle, kept.
+struct ViewStats {
+    uint64_t cells = 0;
+    uint64_t hits = 0;            // rays that hit the object
+    uint64_t dropped_shadow = 0;  // hit, but the projector cannot see the point
+    uint64_t dropped_grazing = 0; // hit and lit, but seen beyond the grazing limit
+    uint64_t dropped_speckle = 0; // would have been kept, lost to a random dropout
+    uint64_t kept = 0;            // samples written
+};
+
+struct ScanView {
+    std::string file_name;               // "<name>_<degrees>.ply"
+    double turntable_deg = 0.0;          // rotation of the turntable for this view
+    std::vector<int32_t> cell_vertex;    // num_rows * num_cols, row-major from the bottom row; -1: no sample
+    std::vector<float> points;           // 3 per kept sample, scanner frame, in cell order
+    std::vector<float> confidence;       // 1 per kept sample: cosine of the angle between normal and view ray
+    double quaternion[4] = {0, 0, 0, 1}; // qx qy qz qw of the .conf line
+    double translation[3] = {0, 0, 0};   // tx ty tz of the .conf line
+    ViewStats stats;
+};
+
+struct ScanSet {
+    std::vector<ScanView> views;
+};
+
+/// Checks the options (positive sizes, probabilities in [0,1], ...): an error names the bad field.
+Status validateOptions(const ScanOptions& options);
+
+/// Scans the object from every view. Deterministic for the given options.
+Result<ScanSet> simulateScans(const ScanOptions& options);
+
+/// The PLY file of one view (header with obj_info num_cols/num_rows, vertices, range_grid).
+std::vector<uint8_t> rangeGridPlyBytes(const ScanView& view, const ScanOptions& options);
+
+/// The .conf text: one `bmesh` line per view.
+std::string confText(const ScanSet& scans);
+
+/// Name of the .conf file: "<name>.conf".
+std::string confFileName(const ScanOptions& options);
+
+/// Writes every view and the .conf into `directory` (created if missing), atomically as a set.
+Status writeScanSet(const ScanSet& scans, const ScanOptions& options, const std::string& directory);
+
+/// Named option sets for the bundled samples ("rock"); an error for an unknown name.
+Result<ScanOptions> presetOptions(const std::string& name);
+
+/// p_world = R(q)^T * p + t, the Stanford .conf convention.
+Vec3d scannerToWorld(const Vec3d& p, const double quaternion[4], const double translation[3]);
+
+} // namespace lodbake::scansim
