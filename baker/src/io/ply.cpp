@@ -839,8 +839,13 @@ Result<LoadedMesh> readPlyFromMemory(const uint8_t* data, size_t size, const std
                 if (count_d < 0)
                     return invalidInput(where() + "negative list count " + std::to_string(int64_t(count_d)));
                 const uint64_t count = uint64_t(count_d);
+                if (int(pi) == index_prop && is_face && count > options.max_polygon_vertices)
+                    return resourceLimit(where() + "polygon has " + std::to_string(count) +
+                                         " vertices, more than the limit of " +
+                                         std::to_string(options.max_polygon_vertices));
                 const uint64_t value_bytes = header.encoding == Encoding::Ascii ? 2 : scalarSize(p.value_type);
-                if (count > cursor.remaining() / value_bytes + 1)
+                const uint64_t slack = header.encoding == Encoding::Ascii ? 1 : 0; // last ascii value needs no separator
+                if (count > cursor.remaining() / value_bytes + slack)
                     return invalidInput(where() + "list of " + std::to_string(count) +
                                         " values runs past the end of the file");
                 if (int(pi) != index_prop) {
@@ -848,9 +853,6 @@ Result<LoadedMesh> readPlyFromMemory(const uint8_t* data, size_t size, const std
                     if (e != ReadError::None) return invalidInput(where() + describeError(e, cursor, p.value_type));
                     continue;
                 }
-                if (is_face && count > options.max_polygon_vertices)
-                    return resourceLimit(where() + "polygon has " + std::to_string(count) + " vertices, more than the limit of " +
-                                         std::to_string(options.max_polygon_vertices));
                 if (is_grid && count > 1)
                     return invalidInput(where() + "expected 0 or 1 vertex indices per grid cell, got " +
                                         std::to_string(count));
