@@ -456,6 +456,7 @@ struct BodyData {
     bool has_strips = false;
     bool has_grid = false;
     uint64_t face_element_count = 0;
+    size_t short_faces = 0;       // faces with fewer than 3 vertices, dropped
 };
 
 std::string describeError(ReadError e, const BodyCursor& cursor, ScalarType t) {
@@ -544,7 +545,9 @@ void earClip(const Mesh& mesh, const uint32_t* idx, size_t n, std::vector<uint32
 
 void triangulatePolygon(const Mesh& mesh, const uint32_t* idx, size_t n, std::vector<uint32_t>& out) {
     if (n == 3) {
-        out.insert(out.end(), idx, idx + 3);
+        out.push_back(idx[0]);
+        out.push_back(idx[1]);
+        out.push_back(idx[2]);
         return;
     }
     if (n == 4) {
@@ -802,8 +805,12 @@ Result<LoadedMesh> readPlyFromMemory(const uint8_t* data, size_t size, const std
                                      " exceeds the limit of " + std::to_string(options.max_face_count));
             body.has_faces = true;
             body.face_element_count += el.count;
-            body.polygons.offsets.reserve(body.polygons.offsets.size() + size_t(el.count));
-            body.polygons.indices.reserve(body.polygons.indices.size() + size_t(el.count) * 3);
+            if (int(ei) > vertex_element) {
+                mesh.indices.reserve(mesh.indices.size() + size_t(el.count) * 3);
+            } else {
+                body.polygons.offsets.reserve(body.polygons.offsets.size() + size_t(el.count));
+                body.polygons.indices.reserve(body.polygons.indices.size() + size_t(el.count) * 3);
+            }
         }
         size_t rows = 0, cols = 0;
         if (index_prop >= 0 && is_grid) {
@@ -876,6 +883,10 @@ Result<LoadedMesh> readPlyFromMemory(const uint8_t* data, size_t size, const std
                     body.strips.push_back(-1);
                 } else if (is_grid) {
                     if (count == 1) body.grid[size_t(ri)] = int32_t(poly[0]);
+                } else if (int(ei) > vertex_element) {
+                    // Positions are known: triangulate now instead of keeping the raw lists.
+                    if (poly.size() < 3) ++body.short_faces;
+                    else triangulatePolygon(mesh, poly.data(), poly.size(), mesh.indices);
                 } else {
                     body.polygons.indices.insert(body.polygons.indices.end(), poly.begin(), poly.end());
                     if (body.polygons.indices.size() > std::numeric_limits<uint32_t>::max())
@@ -890,20 +901,21 @@ Result<LoadedMesh> readPlyFromMemory(const uint8_t* data, size_t size, const std
 
     // Triangulate.
     if (body.has_faces) {
+        // Faces of an element that came before the vertex element (rare) were kept raw until now.
         source.face_kind = "polygons";
         const RawFaces& rf = body.polygons;
-        mesh.indices.reserve(rf.indices.size());
-        size_t dropped = 0;
+        mesh.indices.reserve(mesh.indices.size() + rf.indices.size());
         for (size_t f = 0; f + 1 < rf.offsets.size(); ++f) {
             const size_t n = rf.offsets[f + 1] - rf.offsets[f];
             if (n < 3) {
-                ++dropped;
+                ++body.short_faces;
                 continue;
             }
             triangulatePolygon(mesh, rf.indices.data() + rf.offsets[f], n, mesh.indices);
         }
-        if (dropped > 0)
-            diagnostics.warn(name + ": face: " + std::to_string(dropped) + " faces with fewer than 3 vertices dropped");
+        if (body.short_faces > 0)
+            diagnostics.warn(name + ": face: " + std::to_string(body.short_faces) +
+                             " faces with fewer than 3 vertices dropped");
     }
     if (body.has_strips) {
         if (!body.has_faces) source.face_kind = "tristrips";
