@@ -140,6 +140,13 @@ std::vector<std::string> splitWords(const char* p, const char* end) {
     return words;
 }
 
+// Element and property names end up in messages, so they must be printable ASCII.
+bool isPrintableName(const std::string& s) {
+    for (char c : s)
+        if (static_cast<unsigned char>(c) < 0x21 || static_cast<unsigned char>(c) > 0x7e) return false;
+    return !s.empty();
+}
+
 bool parseUnsigned(const std::string& s, uint64_t& out) {
     const char* b = s.data();
     const char* e = b + s.size();
@@ -174,7 +181,6 @@ Result<Header> parseHeader(const uint8_t* data, size_t size, const std::string& 
         ++line_number;
         const std::string where = name + ": header line " + std::to_string(line_number);
         const std::vector<std::string> words = splitWords(p, line_end);
-        const char* line_begin = p;
         p = next;
         if (line_number == 1) continue; // the magic, checked above
         if (words.empty()) continue;
@@ -219,6 +225,8 @@ Result<Header> parseHeader(const uint8_t* data, size_t size, const std::string& 
         if (keyword == "element") {
             if (words.size() != 3) return invalidInput(where + ": element: expected 'element <name> <count>'");
             Element element;
+            if (!isPrintableName(words[1]))
+                return invalidInput(where + ": element: name " + quoted(words[1]) + " is not printable ASCII");
             element.name = words[1];
             if (!words[2].empty() && words[2][0] == '-')
                 return invalidInput(where + ": element " + words[1] + ": negative count " + quoted(words[2]));
@@ -251,13 +259,15 @@ Result<Header> parseHeader(const uint8_t* data, size_t size, const std::string& 
                     return invalidInput(where + ": element " + element.name + ": unknown property type " + quoted(words[1]));
                 prop.name = words[2];
             }
+            if (!isPrintableName(prop.name))
+                return invalidInput(where + ": element " + element.name + ": property name " + quoted(prop.name) +
+                                    " is not printable ASCII");
             if (element.findProperty(prop.name) >= 0)
                 return invalidInput(where + ": element " + element.name + ": property " + quoted(prop.name) +
                                     " declared twice");
             element.properties.push_back(std::move(prop));
             continue;
         }
-        (void)line_begin;
         return invalidInput(where + ": unknown keyword " + quoted(keyword));
     }
     if (!has_format) return invalidInput(name + ": header: no 'format' line");
@@ -291,9 +301,12 @@ public:
             pos_ += size_t(bytes);
             return ReadError::None;
         }
+        // Skipped ascii values only need to be numbers: writers are often loose with the declared
+        // type of properties nobody reads (a "uchar" intensity written as 0.5).
+        (void)t;
         double ignored = 0;
         for (uint64_t i = 0; i < count; ++i) {
-            const ReadError e = readAscii(t, ignored);
+            const ReadError e = readAscii(ScalarType::Float64, ignored);
             if (e != ReadError::None) return e;
         }
         return ReadError::None;
