@@ -758,6 +758,8 @@ Result<LoadedMesh> readPlyFromMemory(const uint8_t* data, size_t size, const std
                             return invalidInput(name + ": vertex " + std::to_string(vi) + " property '" + p.name +
                                                 "': negative list count");
                         if (e == ReadError::None) e = cursor.skip(p.value_type, uint64_t(count));
+                    } else if (slots[pi] == kIgnore) {
+                        e = cursor.skip(p.value_type, 1);
                     } else {
                         e = cursor.read(p.value_type, value[size_t(slots[pi])]);
                     }
