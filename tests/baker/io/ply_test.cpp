@@ -428,6 +428,8 @@ TEST(PlyReaderTest, HeaderQuirksAreTolerated) {
     ASSERT_TRUE(r.ok()) << r.status().message();
     EXPECT_EQ(r->mesh.indices, (std::vector<uint32_t>{0, 1, 2}));
     EXPECT_EQ(diagnostics.warningCount(), 0u);
+    ASSERT_EQ(diagnostics.items().size(), 1u); // one note for the two `bye` lines
+    EXPECT_EQ(diagnostics.items()[0].message, "q.ply: header: ignored 2 non-standard 'bye' line(s)");
 }
 
 TEST(PlyReaderTest, NoFacesIsAPointCloud) {
