@@ -380,6 +380,7 @@ private:
 
     std::vector<Vec3f> positions_;
     std::vector<Vec4f> colors_; // as written, one per position once any colour was seen
+    std::vector<uint8_t> color_given_; // parallel to colors_: 0 where the v line had no colour
     uint64_t colored_count_ = 0;
     std::vector<Vec2f> texcoords_; // already flipped to the glTF convention
     std::vector<Vec3f> normals_;
@@ -490,11 +491,16 @@ private:
         positions_.push_back({t[0], t[1], t[2]});
         if (n == 4) ++w_coordinates_;
         if (n >= 6) {
-            if (colors_.empty()) colors_.resize(positions_.size() - 1, Vec4f(1.0f, 1.0f, 1.0f, 1.0f));
+            if (colors_.empty()) {
+                colors_.resize(positions_.size() - 1, Vec4f(1.0f, 1.0f, 1.0f, 1.0f));
+                color_given_.resize(positions_.size() - 1, 0);
+            }
             colors_.push_back({t[3], t[4], t[5], n == 7 ? t[6] : 1.0f});
+            color_given_.push_back(1);
             ++colored_count_;
         } else if (!colors_.empty()) {
             colors_.push_back({1.0f, 1.0f, 1.0f, 1.0f});
+            color_given_.push_back(0);
         }
         return Status();
     }
@@ -518,6 +524,7 @@ private:
         c.vt = c.vn = kNone;
         if (s1 == std::string_view::npos) return Status();
         const std::string_view after = tok.substr(s1 + 1);
+        if (after.empty()) return fail("f: expected v, v/vt, v//vn or v/vt/vn, got '" + excerpt(tok) + "'");
         const size_t s2 = after.find('/');
         const std::string_view vt = after.substr(0, s2);
         if (!vt.empty()) LODBAKE_RETURN_IF_ERROR(resolveIndex(vt, "texture coordinate", texcoords_.size(), c.vt));
@@ -684,7 +691,23 @@ private:
         if (unreferenced > 0 && face_count_ > 0)
             diagnostics_.note(name_ + ": " + std::to_string(unreferenced) + " vertices are used by no face (kept)");
 
+        // Number vertices by position index, then by first use: a file without vt/vn keeps its
+        // vertex order, and unreferenced positions stay where the file has them.
         const size_t vertex_count = unified_.size();
+        {
+            std::vector<uint32_t> new_id(vertex_count);
+            std::vector<UnifiedVertex> ordered;
+            ordered.reserve(vertex_count);
+            for (uint32_t head : chain_head_)
+                for (uint32_t u = head; u != kNone; u = unified_[u].next) {
+                    new_id[u] = uint32_t(ordered.size());
+                    ordered.push_back(unified_[u]);
+                }
+            for (uint32_t& i : indices_) i = new_id[i];
+            unified_ = std::move(ordered);
+        }
+        std::vector<uint8_t> used(vertex_count, 0);
+        for (uint32_t i : indices_) used[i] = 1;
         bool any_vt = false, any_vn = false;
         uint64_t missing_vt = 0, missing_vn = 0;
         for (const UnifiedVertex& u : unified_) {
@@ -699,11 +722,11 @@ private:
             mesh.positions[i] = positions_[c.v];
             if (any_vt) {
                 if (c.vt != kNone) mesh.uvs[0][i] = texcoords_[c.vt];
-                else if (i < vertex_count - unreferenced) ++missing_vt;
+                else if (used[i]) ++missing_vt;
             }
             if (any_vn) {
                 if (c.vn != kNone) mesh.normals[i] = normalize(normals_[c.vn]);
-                else if (i < vertex_count - unreferenced) ++missing_vn;
+                else if (used[i]) ++missing_vn;
             }
         }
         if (missing_vt > 0)
@@ -716,7 +739,8 @@ private:
         }
         if (!colors_.empty()) {
             float max_component = 0.0f;
-            for (const Vec4f& c : colors_) max_component = std::max({max_component, c.x, c.y, c.z});
+            for (size_t i = 0; i < colors_.size(); ++i)
+                if (color_given_[i]) max_component = std::max({max_component, colors_[i].x, colors_[i].y, colors_[i].z});
             // Some exporters write 0..255 although the de-facto convention is 0..1.
             const float scale = max_component > 1.0f ? 1.0f / 255.0f : 1.0f;
             if (scale != 1.0f)
@@ -726,7 +750,12 @@ private:
                                   " of " + std::to_string(positions_.size()) + " vertices have no colour; set to white");
             mesh.colors.resize(vertex_count);
             for (size_t i = 0; i < vertex_count; ++i) {
-                const Vec4f& c = colors_[unified_[i].corner.v];
+                const uint32_t v = unified_[i].corner.v;
+                if (!color_given_[v]) {
+                    mesh.colors[i] = {1.0f, 1.0f, 1.0f, 1.0f};
+                    continue;
+                }
+                const Vec4f& c = colors_[v];
                 mesh.colors[i] = {detail::srgbToLinear(c.x * scale), detail::srgbToLinear(c.y * scale),
                                   detail::srgbToLinear(c.z * scale), std::clamp(c.w, 0.0f, 1.0f)};
             }
