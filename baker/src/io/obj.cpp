@@ -437,6 +437,10 @@ private:
         if (key.empty()) return Status();
         if (key == "v") return vertex(rest);
         if (key == "f" || key == "fo") return face(rest);
+        if ((key == "vt" || key == "vn") && std::max(texcoords_.size(), normals_.size()) >= options_.max_vertex_count)
+            return resourceLimit(name_ + ": line " + std::to_string(line_) + ": more than " +
+                                 std::to_string(options_.max_vertex_count) + " " + std::string(key) +
+                                 " entries (ReadOptions limit)");
         if (key == "vt") {
             float t[3];
             size_t n = 0;
