@@ -397,6 +397,44 @@ TEST(ObjReaderTest, EveryPrefixOfAFileFailsCleanlyOrLoadsConsistently) {
     }
 }
 
+TEST(ObjReaderTest, SurvivesSeededByteMutations) {
+    FakeFiles side;
+    side.add("dir/m.mtl", "newmtl a\nKd 1 0 0\nmap_Kd -s 1 1 1 t.png\n");
+    side.files["dir/t.png"] = kPngBytes;
+    const std::string base = "mtllib m.mtl\nv 0 0 0 1 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0.5 0.5 1\nvt 0 0\nvt 1 1\n"
+                             "vn 0 0 1\nusemtl a\nf 1/1/1 2/2/1 3/1/1 4/2/1 5/1/1\nf -1 -2 -3\nl 1 2\n";
+    const char kAlphabet[] = "0123456789 -/.#\\\nfvtnl\r\x00\xff";
+    uint64_t state = 0x9e3779b97f4a7c15ull; // fixed seed: the same mutations on every run
+    auto next = [&state]() {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        return state;
+    };
+    size_t loaded = 0;
+    for (int iteration = 0; iteration < 3000; ++iteration) {
+        std::string text = base;
+        const int edits = 1 + int(next() % 4);
+        for (int e = 0; e < edits; ++e) {
+            const size_t pos = size_t(next() % text.size());
+            const char c = kAlphabet[next() % (sizeof(kAlphabet) - 1)];
+            switch (next() % 3) {
+            case 0: text[pos] = c; break;
+            case 1: text.insert(text.begin() + long(pos), c); break;
+            default: text.erase(pos, 1); break;
+            }
+        }
+        const Result<LoadedMesh> r = readObj(text, &side);
+        if (r.ok()) {
+            ++loaded;
+            EXPECT_TRUE(checkMeshConsistency(r->mesh, "mutated").ok()) << text;
+        } else {
+            EXPECT_EQ(r.status().message().find('\n'), std::string::npos) << r.status().message();
+        }
+    }
+    EXPECT_GT(loaded, 0u); // the mutations must not all be fatal, or the check above proves nothing
+}
+
 // The shared scans, each loaded once for the suite.
 class ObjSharedMeshTest : public testing::Test {
 protected:

@@ -166,6 +166,41 @@ TEST(OffReaderTest, EveryTruncatedPrefixFailsCleanly) {
     EXPECT_TRUE(readOff(text).ok());
 }
 
+TEST(OffReaderTest, SurvivesSeededByteMutations) {
+    const std::string base = "CNOFF\n5 2 0\n0 0 0 0 0 1 255 0 0\n1 0 0 0 0 1 0 1.0 0\n1 1 0 0 0 1 0 0 255 255\n"
+                             "0 1 0 0 0 1 9 9 9\n0.5 0.5 1 0 0 1 1 1 1\n5 0 1 2 4 3 1 0 0\n3 0 2 3\n# end\n";
+    const char kAlphabet[] = "0123456789 -.#eE\nCNOF\r\x00\xff";
+    uint64_t state = 0x2545f4914f6cdd1dull; // fixed seed
+    auto next = [&state]() {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        return state;
+    };
+    size_t loaded = 0;
+    for (int iteration = 0; iteration < 3000; ++iteration) {
+        std::string text = base;
+        const int edits = 1 + int(next() % 4);
+        for (int e = 0; e < edits; ++e) {
+            const size_t pos = size_t(next() % text.size());
+            const char c = kAlphabet[next() % (sizeof(kAlphabet) - 1)];
+            switch (next() % 3) {
+            case 0: text[pos] = c; break;
+            case 1: text.insert(text.begin() + long(pos), c); break;
+            default: text.erase(pos, 1); break;
+            }
+        }
+        const Result<LoadedMesh> r = readOff(text);
+        if (r.ok()) {
+            ++loaded;
+            EXPECT_TRUE(checkMeshConsistency(r->mesh, "mutated").ok()) << text;
+        } else {
+            EXPECT_EQ(r.status().message().find('\n'), std::string::npos) << r.status().message();
+        }
+    }
+    EXPECT_GT(loaded, 0u);
+}
+
 TEST(OffReaderTest, WarnsAboutTrailingLines) {
     Diagnostics diag;
     const auto r = readOff("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 1 2\n", &diag);
