@@ -11,7 +11,9 @@
 
 namespace lodbake::detail {
 
-inline bool isSpace(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v'; }
+inline bool isSpace(char c) {
+    return c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v';
+}
 
 /// Splits the next whitespace-separated token off the front of `s` (empty when none is left).
 inline std::string_view nextToken(std::string_view& s) {

@@ -28,7 +28,9 @@ struct FakeFiles {
     std::map<std::string, std::vector<uint8_t>> files;
     std::vector<std::string> requested;
 
-    void add(const std::string& path, const std::string& text) { files[path] = std::vector<uint8_t>(text.begin(), text.end()); }
+    void add(const std::string& path, const std::string& text) {
+        files[path] = std::vector<uint8_t>(text.begin(), text.end());
+    }
     SideFileLoader loader() {
         return [this](const std::string& path) -> Result<std::vector<uint8_t>> {
             requested.push_back(path);
@@ -67,7 +69,6 @@ double triangleArea(const Mesh& m, size_t t, Vec3d* normal_out = nullptr) {
     if (normal_out) *normal_out = n;
     return 0.5 * length(n);
 }
-
 
 const char* kSquareMtl = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n";
 
@@ -180,7 +181,7 @@ TEST(ObjReaderTest, GroupsFacesIntoOneSubMeshPerMaterialInFirstUseOrder) {
     FakeFiles side;
     side.add("dir/m.mtl", "newmtl red\nKd 1 0 0\nnewmtl blue\nKd 0 0 1\nnewmtl unused\n");
     const std::string text = std::string("mtllib m.mtl\n") + kSquareMtl +
-                             "f 1 2 3\n"             // no material
+                             "f 1 2 3\n"              // no material
                              "usemtl blue\nf 1 3 4\n" // blue
                              "o other\ng grp\ns 1\n"
                              "usemtl red\nf 2 3 4\n"
@@ -217,8 +218,8 @@ TEST(ObjReaderTest, MapsMtlOntoMetallicRoughness) {
                                 "map_Kd tex/skin color.png\n");
     side.files["dir/mat/tex/skin color.png"] = kPngBytes;
     side.files["dir/mat/tex/normal.jpg"] = kJpegBytes;
-    const auto r = readObj(std::string("mtllib mat/lib.mtl\nusemtl skin\n") + kSquareMtl + "f 1 2 3\nusemtl metal\nf 1 3 4\n",
-                           &side);
+    const auto r = readObj(
+        std::string("mtllib mat/lib.mtl\nusemtl skin\n") + kSquareMtl + "f 1 2 3\nusemtl metal\nf 1 3 4\n", &side);
     ASSERT_TRUE(r.ok()) << r.status().message();
     const Mesh& m = r->mesh;
     ASSERT_EQ(m.materials.size(), 2u);
@@ -361,8 +362,9 @@ TEST(ObjReaderTest, RejectsHostileInputWithLineNumbers) {
     EXPECT_NE(errorOf("v 0 0\n").find("expected at least 3 numbers, got 2"), std::string::npos);
     EXPECT_NE(errorOf("v 1 2 3 4 5\n").find("got 5"), std::string::npos);
     EXPECT_NE(errorOf("vn 0 0 nan\n").find("not finite"), std::string::npos);
-    EXPECT_NE(errorOf(tri + "\x89PNG\x01\x02 junk\n").find("line 4: expected an OBJ statement, got '\\x89PNG\\x01\\x02'"),
-              std::string::npos);
+    EXPECT_NE(
+        errorOf(tri + "\x89PNG\x01\x02 junk\n").find("line 4: expected an OBJ statement, got '\\x89PNG\\x01\\x02'"),
+        std::string::npos);
     EXPECT_NE(errorOf(tri + "usemtl\n").find("usemtl: expected a material name"), std::string::npos);
     EXPECT_NE(errorOf(tri + "mtllib\n").find("mtllib: expected a file name"), std::string::npos);
 
@@ -385,8 +387,9 @@ TEST(ObjReaderTest, RejectsHostileInputWithLineNumbers) {
 TEST(ObjReaderTest, EveryPrefixOfAFileFailsCleanlyOrLoadsConsistently) {
     FakeFiles side;
     side.add("dir/m.mtl", "newmtl a\nKd 1 0 0\n");
-    const std::string text = "mtllib m.mtl\nv 0 0 0 1 0 0\nv 1 0 0 0 1 0\nv 1 1 0 0 0 1\nv 0 1 0 1 1 1\n"
-                             "vt 0 0\nvt 1 1\nvn 0 0 1\nusemtl a\nf 1/1/1 2/2/1 3/1/1 4/2/1\nf -1/-1/-1 -2/-2/-1 -3/-1/-1\n";
+    const std::string text =
+        "mtllib m.mtl\nv 0 0 0 1 0 0\nv 1 0 0 0 1 0\nv 1 1 0 0 0 1\nv 0 1 0 1 1 1\n"
+        "vt 0 0\nvt 1 1\nvn 0 0 1\nusemtl a\nf 1/1/1 2/2/1 3/1/1 4/2/1\nf -1/-1/-1 -2/-2/-1 -3/-1/-1\n";
     for (size_t n = 0; n <= text.size(); ++n) {
         const Result<LoadedMesh> r = readObj(text.substr(0, n), &side);
         if (r.ok()) {
@@ -419,9 +422,15 @@ TEST(ObjReaderTest, SurvivesSeededByteMutations) {
             const size_t pos = size_t(next() % text.size());
             const char c = kAlphabet[next() % (sizeof(kAlphabet) - 1)];
             switch (next() % 3) {
-            case 0: text[pos] = c; break;
-            case 1: text.insert(text.begin() + long(pos), c); break;
-            default: text.erase(pos, 1); break;
+            case 0:
+                text[pos] = c;
+                break;
+            case 1:
+                text.insert(text.begin() + long(pos), c);
+                break;
+            default:
+                text.erase(pos, 1);
+                break;
             }
         }
         const Result<LoadedMesh> r = readObj(text, &side);

@@ -31,12 +31,15 @@ Status errorOf(const std::string& text, const ReadOptions& options = ReadOptions
     return r.status();
 }
 
-bool contains(const Status& s, const std::string& what) { return s.message().find(what) != std::string::npos; }
+bool contains(const Status& s, const std::string& what) {
+    return s.message().find(what) != std::string::npos;
+}
 
 TEST(OffReaderTest, ReadsPlainOffWithCommentsAndCountsOnEitherLine) {
-    for (const std::string& text : {std::string("OFF\n# a comment\n4 2 0\n0 0 0\n1 0 0\n1 1 0 # corner\n0 1 0\n\n"
-                                                "3 0 1 2\n3 0 2 3\n"),
-                                    std::string("OFF 4 2 5\r\n0 0 0\r\n1 0 0\r\n1 1 0\r\n0 1 0\r\n3 0 1 2\r\n3 0 2 3")}) {
+    for (const std::string& text :
+         {std::string("OFF\n# a comment\n4 2 0\n0 0 0\n1 0 0\n1 1 0 # corner\n0 1 0\n\n"
+                      "3 0 1 2\n3 0 2 3\n"),
+          std::string("OFF 4 2 5\r\n0 0 0\r\n1 0 0\r\n1 1 0\r\n0 1 0\r\n3 0 1 2\r\n3 0 2 3")}) {
         const auto r = readOff(text);
         ASSERT_TRUE(r.ok()) << r.status().message();
         const Mesh& m = r->mesh;
@@ -72,7 +75,8 @@ TEST(OffReaderTest, ReadsNormalsAndTexcoordsInEveryCombination) {
     ASSERT_TRUE(n->mesh.hasNormals());
     EXPECT_EQ(n->mesh.normals[0], Vec3f(0, 0, 1));
 
-    const auto cn = readOff("CNOFF\n3 1 0\n0 0 0 0 0 1 1.0 1.0 1.0 1.0\n1 0 0 0 0 1 0 0 0\n0 1 0 0 0 1 0 255 0\n3 0 1 2\n");
+    const auto cn =
+        readOff("CNOFF\n3 1 0\n0 0 0 0 0 1 1.0 1.0 1.0 1.0\n1 0 0 0 0 1 0 0 0\n0 1 0 0 0 1 0 255 0\n3 0 1 2\n");
     ASSERT_TRUE(cn.ok()) << cn.status().message();
     EXPECT_TRUE(cn->mesh.hasNormals());
     EXPECT_FLOAT_EQ(cn->mesh.colors[2].y, 1.0f);
@@ -128,7 +132,8 @@ TEST(OffReaderTest, RefusesCountsTheFileCannotHoldBeforeAllocating) {
     big.max_vertex_count = UINT64_MAX;
     big.max_face_count = UINT64_MAX;
     const Status s2 = errorOf("OFF\n4000000000 9000000000000000000 0\n0 0 0\n", big);
-    EXPECT_TRUE(contains(s2, "header: 4000000000 vertices and 9000000000000000000 faces need at least")) << s2.message();
+    EXPECT_TRUE(contains(s2, "header: 4000000000 vertices and 9000000000000000000 faces need at least"))
+        << s2.message();
     EXPECT_TRUE(contains(errorOf("OFF\n100 10 0\n0 0 0\n"), "but the file has"));
     EXPECT_TRUE(contains(errorOf("OFF\n0 0 0\n"), "no vertices"));
     EXPECT_TRUE(contains(errorOf("OFF\n-3 1 0\n"), "header: expected the vertex count"));
@@ -148,8 +153,10 @@ TEST(OffReaderTest, RejectsBadElementsNamingThem) {
     EXPECT_TRUE(contains(errorOf(head + "0 1 0\n3 0 x 2\n"), "face 0: expected a vertex index, got 'x'"));
     EXPECT_TRUE(contains(errorOf(head + "0 1 0\nthree 0 1 2\n"), "face 0: expected the vertex count"));
     EXPECT_TRUE(contains(errorOf("OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"), "but the file has"));
-    EXPECT_TRUE(contains(errorOf("OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n# padding padding\n"), "face 1: expected more data"));
-    EXPECT_TRUE(contains(errorOf("COFF\n3 1 0\n0 0 0 1 1\n1 0 0\n0 1 0\n3 0 1 2\n"), "vertex 0: expected 6 or 7 values"));
+    EXPECT_TRUE(contains(errorOf("OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n# padding padding\n"),
+                         "face 1: expected more data"));
+    EXPECT_TRUE(
+        contains(errorOf("COFF\n3 1 0\n0 0 0 1 1\n1 0 0\n0 1 0\n3 0 1 2\n"), "vertex 0: expected 6 or 7 values"));
     ReadOptions small;
     small.max_polygon_vertices = 3;
     EXPECT_TRUE(contains(errorOf("OFF\n4 1 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n", small),
@@ -157,7 +164,8 @@ TEST(OffReaderTest, RejectsBadElementsNamingThem) {
 }
 
 TEST(OffReaderTest, EveryTruncatedPrefixFailsCleanly) {
-    const std::string text = "COFF\n4 2 0\n0 0 0 255 0 0\n1 0 0 0 255 0\n1 1 0 0 0 255\n0 1 0 9 9 9\n3 0 1 2\n3 0 2 3\n";
+    const std::string text =
+        "COFF\n4 2 0\n0 0 0 255 0 0\n1 0 0 0 255 0\n1 1 0 0 0 255\n0 1 0 9 9 9\n3 0 1 2\n3 0 2 3\n";
     const size_t last_line = text.rfind("3 0 2 3");
     for (size_t n = 0; n < last_line; ++n) {
         const Result<LoadedMesh> r = readOff(text.substr(0, n));
@@ -185,9 +193,15 @@ TEST(OffReaderTest, SurvivesSeededByteMutations) {
             const size_t pos = size_t(next() % text.size());
             const char c = kAlphabet[next() % (sizeof(kAlphabet) - 1)];
             switch (next() % 3) {
-            case 0: text[pos] = c; break;
-            case 1: text.insert(text.begin() + long(pos), c); break;
-            default: text.erase(pos, 1); break;
+            case 0:
+                text[pos] = c;
+                break;
+            case 1:
+                text.insert(text.begin() + long(pos), c);
+                break;
+            default:
+                text.erase(pos, 1);
+                break;
             }
         }
         const Result<LoadedMesh> r = readOff(text);
