@@ -641,6 +641,8 @@ private:
             const std::string sniffed = mimeFromBytes(tex.bytes);
             if (!sniffed.empty()) tex.mime_type = sniffed;
         }
+        detail::sanitizeUtf8(tex.name);
+        detail::sanitizeUtf8(tex.uri);
         out = int32_t(textures.size());
         by_path.emplace(pending.path, out);
         textures.push_back(std::move(tex));
@@ -681,6 +683,9 @@ private:
                                                     mat.emissive_texture.texture));
             if (mat.emissive_texture.isSet() && mat.emissive_factor == Vec3f(0.0f, 0.0f, 0.0f))
                 mat.emissive_factor = {1.0f, 1.0f, 1.0f};
+            if (detail::sanitizeUtf8(mat.name))
+                diagnostics_.warn(name_ +
+                                  ": material name is not valid UTF-8; invalid bytes replaced by '?': " + mat.name);
             mesh.materials.push_back(std::move(mat));
         }
 

@@ -288,6 +288,21 @@ TEST(ObjReaderTest, RejectsBrokenMtlAndUnknownMaterials) {
     EXPECT_NE(e.find("line 8: usemtl: unknown material 'b'"), std::string::npos) << e;
 }
 
+TEST(ObjReaderTest, NonUtf8MaterialNamesAreMadeSafe) {
+    FakeFiles side;
+    side.add("dir/m.mtl", "newmtl caf\xc3\xa9\nKd 1 1 1\nnewmtl bad\xff\xc3name\nKd 1 1 1\n");
+    Diagnostics diag;
+    const auto r = readObj(std::string("mtllib m.mtl\nusemtl bad\xff\xc3name\n") + kSquareMtl +
+                               "f 1 2 3\nusemtl caf\xc3\xa9\nf 1 3 4\n",
+                           &side, &diag);
+    ASSERT_TRUE(r.ok()) << r.status().message();
+    ASSERT_EQ(r->mesh.materials.size(), 2u);
+    EXPECT_EQ(r->mesh.materials[0].name, "caf\xc3\xa9"); // valid UTF-8 is kept
+    EXPECT_EQ(r->mesh.materials[1].name, "bad??name");
+    EXPECT_EQ(r->mesh.submeshes[0].name, "bad??name");
+    EXPECT_EQ(diag.warningCount(), 1u);
+}
+
 TEST(ObjReaderTest, MtllibMayFollowUsemtl) {
     FakeFiles side;
     side.add("dir/late.mtl", "newmtl a\nKd 0 1 0\n");
