@@ -31,8 +31,12 @@ constexpr uint32_t kDefaultMaxDepth = 64;
 constexpr uint32_t kDefaultMaxNodes = 1u << 22;
 constexpr uint32_t kDefaultMaxStringLength = 1u << 26;
 
-bool isSpace(char c) { return c == ' ' || c == '\t' || c == '\n' || c == '\r'; }
-bool isDigit(char c) { return c >= '0' && c <= '9'; }
+bool isSpace(char c) {
+    return c == ' ' || c == '\t' || c == '\n' || c == '\r';
+}
+bool isDigit(char c) {
+    return c >= '0' && c <= '9';
+}
 
 int hexValue(char c) {
     if (c >= '0' && c <= '9') return c - '0';
@@ -201,16 +205,35 @@ struct JsonParser {
             const char e = text[pos + 1];
             char simple = 0;
             switch (e) {
-            case '"': simple = '"'; break;
-            case '\\': simple = '\\'; break;
-            case '/': simple = '/'; break;
-            case 'b': simple = '\b'; break;
-            case 'f': simple = '\f'; break;
-            case 'n': simple = '\n'; break;
-            case 'r': simple = '\r'; break;
-            case 't': simple = '\t'; break;
-            case 'u': break;
-            default: ++pos; return Result::BadJson;
+            case '"':
+                simple = '"';
+                break;
+            case '\\':
+                simple = '\\';
+                break;
+            case '/':
+                simple = '/';
+                break;
+            case 'b':
+                simple = '\b';
+                break;
+            case 'f':
+                simple = '\f';
+                break;
+            case 'n':
+                simple = '\n';
+                break;
+            case 'r':
+                simple = '\r';
+                break;
+            case 't':
+                simple = '\t';
+                break;
+            case 'u':
+                break;
+            default:
+                ++pos;
+                return Result::BadJson;
             }
             if (simple) {
                 if (!strings.push(allocator, simple)) return Result::OutOfMemory;
@@ -421,7 +444,9 @@ JsonType JsonValue::type() const {
     return document_->nodes_[index_].type;
 }
 
-double JsonValue::number() const { return type() == JsonType::Number ? document_->nodes_[index_].number : 0.0; }
+double JsonValue::number() const {
+    return type() == JsonType::Number ? document_->nodes_[index_].number : 0.0;
+}
 
 bool JsonValue::asUint64(uint64_t* out) const {
     if (type() != JsonType::Number) return false;
@@ -466,9 +491,13 @@ JsonValue JsonValue::find(std::string_view key) const {
 
 // ---- JsonDocument
 
-JsonDocument::~JsonDocument() { release(); }
+JsonDocument::~JsonDocument() {
+    release();
+}
 
-JsonDocument::JsonDocument(JsonDocument&& other) noexcept { *this = static_cast<JsonDocument&&>(other); }
+JsonDocument::JsonDocument(JsonDocument&& other) noexcept {
+    *this = static_cast<JsonDocument&&>(other);
+}
 
 JsonDocument& JsonDocument::operator=(JsonDocument&& other) noexcept {
     if (this == &other) return *this;
@@ -503,8 +532,8 @@ size_t JsonDocument::memoryBytes() const {
     return size_t(node_count_) * sizeof(JsonNode) + size_t(children_count_) * sizeof(uint32_t) + strings_size_;
 }
 
-Result parseJson(const char* text, size_t size, const Allocator* allocator, const JsonLimits* limits,
-                 JsonDocument* out, JsonError* error) {
+Result parseJson(const char* text, size_t size, const Allocator* allocator, const JsonLimits* limits, JsonDocument* out,
+                 JsonError* error) {
     if (!out || (!text && size > 0)) return Result::InvalidArgument;
     JsonParser::clear(out);
     if (error) error->offset = 0;

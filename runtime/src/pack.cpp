@@ -19,49 +19,72 @@ using detail::Growable;
 uint32_t componentSize(ComponentType type) {
     switch (type) {
     case ComponentType::Byte:
-    case ComponentType::UnsignedByte: return 1;
+    case ComponentType::UnsignedByte:
+        return 1;
     case ComponentType::Short:
-    case ComponentType::UnsignedShort: return 2;
+    case ComponentType::UnsignedShort:
+        return 2;
     case ComponentType::UnsignedInt:
-    case ComponentType::Float: return 4;
+    case ComponentType::Float:
+        return 4;
     }
     return 0;
 }
 
 uint32_t componentCount(AccessorType type) {
     switch (type) {
-    case AccessorType::Scalar: return 1;
-    case AccessorType::Vec2: return 2;
-    case AccessorType::Vec3: return 3;
-    case AccessorType::Vec4: return 4;
-    case AccessorType::Mat2: return 4;
-    case AccessorType::Mat3: return 9;
-    case AccessorType::Mat4: return 16;
+    case AccessorType::Scalar:
+        return 1;
+    case AccessorType::Vec2:
+        return 2;
+    case AccessorType::Vec3:
+        return 3;
+    case AccessorType::Vec4:
+        return 4;
+    case AccessorType::Mat2:
+        return 4;
+    case AccessorType::Mat3:
+        return 9;
+    case AccessorType::Mat4:
+        return 16;
     }
     return 0;
 }
 
 const char* accessorTypeName(AccessorType type) {
     switch (type) {
-    case AccessorType::Scalar: return "SCALAR";
-    case AccessorType::Vec2: return "VEC2";
-    case AccessorType::Vec3: return "VEC3";
-    case AccessorType::Vec4: return "VEC4";
-    case AccessorType::Mat2: return "MAT2";
-    case AccessorType::Mat3: return "MAT3";
-    case AccessorType::Mat4: return "MAT4";
+    case AccessorType::Scalar:
+        return "SCALAR";
+    case AccessorType::Vec2:
+        return "VEC2";
+    case AccessorType::Vec3:
+        return "VEC3";
+    case AccessorType::Vec4:
+        return "VEC4";
+    case AccessorType::Mat2:
+        return "MAT2";
+    case AccessorType::Mat3:
+        return "MAT3";
+    case AccessorType::Mat4:
+        return "MAT4";
     }
     return "?";
 }
 
 const char* componentTypeName(ComponentType type) {
     switch (type) {
-    case ComponentType::Byte: return "i8";
-    case ComponentType::UnsignedByte: return "u8";
-    case ComponentType::Short: return "i16";
-    case ComponentType::UnsignedShort: return "u16";
-    case ComponentType::UnsignedInt: return "u32";
-    case ComponentType::Float: return "f32";
+    case ComponentType::Byte:
+        return "i8";
+    case ComponentType::UnsignedByte:
+        return "u8";
+    case ComponentType::Short:
+        return "i16";
+    case ComponentType::UnsignedShort:
+        return "u16";
+    case ComponentType::UnsignedInt:
+        return "u32";
+    case ComponentType::Float:
+        return "f32";
     }
     return "?";
 }
@@ -77,8 +100,11 @@ bool parseComponentType(uint64_t code, ComponentType* out) {
     case 5122:
     case 5123:
     case 5125:
-    case 5126: *out = ComponentType(uint32_t(code)); return true;
-    default: return false;
+    case 5126:
+        *out = ComponentType(uint32_t(code));
+        return true;
+    default:
+        return false;
     }
 }
 
@@ -215,8 +241,8 @@ struct PackLoader {
     }
 
     // Reads an optional (or required) index into an array of `limit` objects named `what`.
-    Result getIndex(JsonValue owner, const char* path, const char* key, bool required, uint32_t limit,
-                    const char* what, uint32_t* out) {
+    Result getIndex(JsonValue owner, const char* path, const char* key, bool required, uint32_t limit, const char* what,
+                    uint32_t* out) {
         uint64_t value = 0;
         Result r = getInteger(owner, path, key, required, kNoIndex, &value);
         if (r != Result::Ok) return r;
@@ -407,16 +433,15 @@ struct PackLoader {
                 ComponentType type;
                 r = getInteger(json, part_path, "componentType", true, 0, &code);
                 if (r != Result::Ok) return r;
-                if (!parseComponentType(code, &type) || (type != ComponentType::UnsignedByte &&
-                                                         type != ComponentType::UnsignedShort &&
-                                                         type != ComponentType::UnsignedInt))
+                if (!parseComponentType(code, &type) ||
+                    (type != ComponentType::UnsignedByte && type != ComponentType::UnsignedShort &&
+                     type != ComponentType::UnsignedInt))
                     return fail(Result::BadGltf, "%s/componentType: %llu; expected 5121, 5123 or 5125", part_path,
                                 static_cast<unsigned long long>(code));
                 size = alignment = componentSize(type);
             }
             if (pack->buffer_views_[view].byte_stride)
-                return fail(Result::BadGltf, "%s/bufferView: sparse data must not use a strided bufferView",
-                            part_path);
+                return fail(Result::BadGltf, "%s/bufferView: sparse data must not use a strided bufferView", part_path);
             r = checkRange(part_path, view, offset, count, size, alignment);
             if (r != Result::Ok) return r;
         }
@@ -557,8 +582,8 @@ struct PackLoader {
                  accessor.component_type != ComponentType::UnsignedShort &&
                  accessor.component_type != ComponentType::UnsignedInt) ||
                 accessor.normalized)
-                return fail(Result::BadGltf, "%s: accessor %u must be SCALAR u8/u16/u32 and not normalized",
-                            index_path, info.indices);
+                return fail(Result::BadGltf, "%s: accessor %u must be SCALAR u8/u16/u32 and not normalized", index_path,
+                            info.indices);
             info.index_count = accessor.count;
             r = checkIndexValues(index_path, accessor, info.vertex_count);
             if (r != Result::Ok) return r;
@@ -572,7 +597,9 @@ struct PackLoader {
             info.triangle_count = info.index_count / 3;
             break;
         case 5:
-        case 6: info.triangle_count = info.index_count >= 3 ? info.index_count - 2 : 0; break;
+        case 6:
+            info.triangle_count = info.index_count >= 3 ? info.index_count - 2 : 0;
+            break;
         default: {
             char mode_path[96];
             std::snprintf(mode_path, sizeof(mode_path), "%s/mode", path);
@@ -645,7 +672,8 @@ struct PackLoader {
                 uint64_t child = 0;
                 if (!children.at(c).asUint64(&child) || child >= count)
                     return fail(Result::BadGltf, "/nodes/%u/children/%u: expected a node index below %u", i, c, count);
-                if (child == i) return fail(Result::BadGltf, "/nodes/%u/children/%u: a node cannot be its own child", i, c);
+                if (child == i)
+                    return fail(Result::BadGltf, "/nodes/%u/children/%u: a node cannot be its own child", i, c);
                 NodeInfo& node = pack->nodes_[child];
                 if (node.parent != kNoIndex)
                     return fail(Result::BadGltf, "/nodes/%u/children/%u: node %llu already has parent %u", i, c,
@@ -680,8 +708,8 @@ struct PackLoader {
         if (dropped_warnings > 0 && warnings.size > 0) {
             char message[256];
             const RawWarning& last = warnings.data[warnings.size - 1];
-            std::snprintf(message, sizeof(message), "%s (and %u more warnings)", warning_text.data + last.message_offset,
-                          dropped_warnings);
+            std::snprintf(message, sizeof(message), "%s (and %u more warnings)",
+                          warning_text.data + last.message_offset, dropped_warnings);
             uint32_t offset = 0;
             if (appendText(message, &offset) != Result::Ok) return Result::OutOfMemory;
             warnings.data[warnings.size - 1].message_offset = offset;
@@ -703,12 +731,23 @@ struct PackLoader {
         if (r != Result::Ok) {
             const char* what = "not a glTF container";
             switch (r) {
-            case Result::Truncated: what = "truncated: a length field runs past the end of the data"; break;
-            case Result::BadMagic: what = "expected the GLB magic \"glTF\" or a JSON object"; break;
-            case Result::UnsupportedVersion: what = "GLB container version is not 2"; break;
-            case Result::BadChunk: what = "expected a JSON chunk first, an optional BIN chunk second, 4-byte aligned"; break;
-            case Result::TrailingBytes: what = "bytes follow the end given in the GLB header"; break;
-            default: break;
+            case Result::Truncated:
+                what = "truncated: a length field runs past the end of the data";
+                break;
+            case Result::BadMagic:
+                what = "expected the GLB magic \"glTF\" or a JSON object";
+                break;
+            case Result::UnsupportedVersion:
+                what = "GLB container version is not 2";
+                break;
+            case Result::BadChunk:
+                what = "expected a JSON chunk first, an optional BIN chunk second, 4-byte aligned";
+                break;
+            case Result::TrailingBytes:
+                what = "bytes follow the end given in the GLB header";
+                break;
+            default:
+                break;
             }
             return fail(r, "container: %s", what);
         }
@@ -738,9 +777,13 @@ struct PackLoader {
     }
 };
 
-Pack::~Pack() { release(); }
+Pack::~Pack() {
+    release();
+}
 
-Pack::Pack(Pack&& other) noexcept { *this = static_cast<Pack&&>(other); }
+Pack::Pack(Pack&& other) noexcept {
+    *this = static_cast<Pack&&>(other);
+}
 
 Pack& Pack::operator=(Pack&& other) noexcept {
     if (this == &other) return *this;

@@ -42,11 +42,21 @@ std::string jsonString(std::string_view text) {
     std::string out = "\"";
     for (char c : text) {
         switch (c) {
-        case '"': out += "\\\""; break;
-        case '\\': out += "\\\\"; break;
-        case '\n': out += "\\n"; break;
-        case '\r': out += "\\r"; break;
-        case '\t': out += "\\t"; break;
+        case '"':
+            out += "\\\"";
+            break;
+        case '\\':
+            out += "\\\\";
+            break;
+        case '\n':
+            out += "\\n";
+            break;
+        case '\r':
+            out += "\\r";
+            break;
+        case '\t':
+            out += "\\t";
+            break;
         default:
             if (uint8_t(c) < 0x20) {
                 char buf[8];
@@ -68,12 +78,14 @@ std::string printable(std::string_view text) {
 }
 
 const char* modeName(uint32_t mode) {
-    static const char* const kNames[] = {"POINTS", "LINES", "LINE_LOOP", "LINE_STRIP", "TRIANGLES", "TRIANGLE_STRIP",
-                                         "TRIANGLE_FAN"};
+    static const char* const kNames[] = {"POINTS",    "LINES",          "LINE_LOOP",   "LINE_STRIP",
+                                         "TRIANGLES", "TRIANGLE_STRIP", "TRIANGLE_FAN"};
     return mode < 7 ? kNames[mode] : "?";
 }
 
-unsigned long long ull(uint64_t v) { return static_cast<unsigned long long>(v); }
+unsigned long long ull(uint64_t v) {
+    return static_cast<unsigned long long>(v);
+}
 
 struct Totals {
     uint64_t primitives = 0, vertices = 0, triangles = 0, bytes = 0;
@@ -113,7 +125,8 @@ void printText(const char* path, const lodrt::Pack& pack) {
             std::printf("  primitive %u: %s, %llu vertices, %llu triangles", p, modeName(prim.mode),
                         ull(prim.vertex_count), ull(prim.triangle_count));
             if (prim.material != lodrt::kNoIndex) std::printf(", material %u", prim.material);
-            std::printf("\n      %-6s %-12s %-7s %-4s %10s %12s\n", "acc", "semantic", "type", "comp", "count", "bytes");
+            std::printf("\n      %-6s %-12s %-7s %-4s %10s %12s\n", "acc", "semantic", "type", "comp", "count",
+                        "bytes");
             if (prim.indices != lodrt::kNoIndex) printAccessorRow(pack, prim.indices, "(indices)");
             for (uint32_t a = 0; a < prim.attribute_count; ++a) {
                 const lodrt::AttributeInfo& attr = pack.attribute(prim.first_attribute + a);

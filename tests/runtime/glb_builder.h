@@ -85,6 +85,8 @@ inline std::string quadJson(const std::string& extra = "") {
            extra + "}";
 }
 
-inline std::vector<uint8_t> quadGlb() { return makeGlb(quadJson(), quadBin()); }
+inline std::vector<uint8_t> quadGlb() {
+    return makeGlb(quadJson(), quadBin());
+}
 
 } // namespace lodrt_test

@@ -17,9 +17,13 @@ using lodrt_test::makeGlbChunks;
 
 namespace {
 
-std::vector<uint8_t> bytesOf(const std::string& text) { return std::vector<uint8_t>(text.begin(), text.end()); }
+std::vector<uint8_t> bytesOf(const std::string& text) {
+    return std::vector<uint8_t>(text.begin(), text.end());
+}
 
-Result parse(const std::vector<uint8_t>& bytes, GlbView* view) { return lodrt::parseGlb(bytes.data(), bytes.size(), view); }
+Result parse(const std::vector<uint8_t>& bytes, GlbView* view) {
+    return lodrt::parseGlb(bytes.data(), bytes.size(), view);
+}
 
 bool isEmpty(const GlbView& view) {
     return !view.json && view.json_size == 0 && !view.bin && view.bin_size == 0 && !view.is_binary;
@@ -65,8 +69,9 @@ TEST(GlbTest, AcceptsPlainGltfJson) {
 
 TEST(GlbTest, SkipsUnknownChunkTypes) {
     std::vector<Chunk> chunks = {{kChunkJson, bytesOf("{}  ")}, {kChunkBin, {9, 9, 9, 9}}, {0x12345678u, {1, 2, 3, 4}}};
+    const std::vector<uint8_t> glb = makeGlbChunks(chunks);
     GlbView view;
-    ASSERT_EQ(parse(makeGlbChunks(chunks), &view), Result::Ok);
+    ASSERT_EQ(parse(glb, &view), Result::Ok);
     EXPECT_EQ(view.bin_size, 4u);
     EXPECT_EQ(view.bin[0], 9);
 }
@@ -155,17 +160,18 @@ TEST(GlbTest, RejectsMisalignedChunks) {
 
 TEST(GlbTest, RejectsMissingOrMisplacedJsonChunk) {
     GlbView view;
-    EXPECT_EQ(parse(makeGlbChunks({}), &view), Result::BadChunk);                      // header only
+    EXPECT_EQ(parse(makeGlbChunks({}), &view), Result::BadChunk);                          // header only
     EXPECT_EQ(parse(makeGlbChunks({{kChunkBin, {1, 2, 3, 4}}}), &view), Result::BadChunk); // BIN first
     EXPECT_EQ(parse(makeGlbChunks({{kChunkJson, {}}}), &view), Result::BadChunk);          // empty JSON
     EXPECT_EQ(parse(makeGlbChunks({{kChunkJson, bytesOf("{}  ")}, {kChunkJson, bytesOf("{}  ")}}), &view),
               Result::BadChunk);
-    EXPECT_EQ(parse(makeGlbChunks({{kChunkJson, bytesOf("{}  ")}, {kChunkBin, {1, 1, 1, 1}}, {kChunkBin, {2, 2, 2, 2}}}),
-                    &view),
-              Result::BadChunk);
-    EXPECT_EQ(parse(makeGlbChunks({{kChunkJson, bytesOf("{}  ")}, {7u, {0, 0, 0, 0}}, {kChunkBin, {2, 2, 2, 2}}}),
-                    &view),
-              Result::BadChunk);
+    EXPECT_EQ(
+        parse(makeGlbChunks({{kChunkJson, bytesOf("{}  ")}, {kChunkBin, {1, 1, 1, 1}}, {kChunkBin, {2, 2, 2, 2}}}),
+              &view),
+        Result::BadChunk);
+    EXPECT_EQ(
+        parse(makeGlbChunks({{kChunkJson, bytesOf("{}  ")}, {7u, {0, 0, 0, 0}}, {kChunkBin, {2, 2, 2, 2}}}), &view),
+        Result::BadChunk);
 }
 
 TEST(GlbTest, RejectsNullArguments) {

@@ -144,9 +144,27 @@ TEST(JsonTest, RejectsTrailingGarbage) {
 }
 
 TEST(JsonTest, RejectsSyntaxErrors) {
-    for (const char* text : {"", " ", "{", "}", "[1,]", "[,1]", "{\"a\":1,}", "{\"a\" 1}", "{\"a\":}", "{a:1}",
-                             "{'a':1}", "[1 2]", "tru", "nul", "True", "[true false]", "{\"a\":1 \"b\":2}", "[1]]",
-                             "{\"a\":[}", "/* c */ {}", "[\"a\"\"b\"]"}) {
+    for (const char* text : {"",
+                             " ",
+                             "{",
+                             "}",
+                             "[1,]",
+                             "[,1]",
+                             "{\"a\":1,}",
+                             "{\"a\" 1}",
+                             "{\"a\":}",
+                             "{a:1}",
+                             "{'a':1}",
+                             "[1 2]",
+                             "tru",
+                             "nul",
+                             "True",
+                             "[true false]",
+                             "{\"a\":1 \"b\":2}",
+                             "[1]]",
+                             "{\"a\":[}",
+                             "/* c */ {}",
+                             "[\"a\"\"b\"]"}) {
         EXPECT_EQ(parseOnly(text), Result::BadJson) << text;
     }
 }
@@ -164,8 +182,7 @@ TEST(JsonTest, HugeNumbersAreOutOfRange) {
     EXPECT_EQ(parseOnly("[1e-400]"), Result::NumberOutOfRange);
     EXPECT_EQ(parseOnly("[" + std::string(400, '9') + "]"), Result::NumberOutOfRange);
     JsonDocument doc;
-    ASSERT_EQ(parse("[1.7976931348623157e308, 4.9e-324, 123456789012345678901234567890, 0.1, -0]", &doc),
-              Result::Ok);
+    ASSERT_EQ(parse("[1.7976931348623157e308, 4.9e-324, 123456789012345678901234567890, 0.1, -0]", &doc), Result::Ok);
     EXPECT_EQ(doc.root().at(0).number(), 1.7976931348623157e308);
     EXPECT_EQ(doc.root().at(1).number(), 4.9e-324);
     EXPECT_EQ(doc.root().at(2).number(), 1.2345678901234568e29);
@@ -219,8 +236,8 @@ TEST(JsonTest, ValidatesSurrogatePairs) {
 }
 
 TEST(JsonTest, ValidatesUtf8) {
-    const char* const good[] = {"\x7F", "\xC2\x80", "\xDF\xBF", "\xE0\xA0\x80", "\xED\x9F\xBF", "\xEE\x80\x80",
-                                "\xEF\xBF\xBF", "\xF0\x90\x80\x80", "\xF4\x8F\xBF\xBF"};
+    const char* const good[] = {"\x7F",         "\xC2\x80",     "\xDF\xBF",         "\xE0\xA0\x80",    "\xED\x9F\xBF",
+                                "\xEE\x80\x80", "\xEF\xBF\xBF", "\xF0\x90\x80\x80", "\xF4\x8F\xBF\xBF"};
     for (const char* s : good) {
         JsonDocument doc;
         ASSERT_EQ(parse(std::string("[\"") + s + "\"]", &doc), Result::Ok) << s;
@@ -262,7 +279,7 @@ TEST(JsonTest, RejectsDuplicateKeys) {
     EXPECT_EQ(parseOnly(R"({"a":1,"a":2})"), Result::BadJson);
     EXPECT_EQ(parseOnly(R"({"a":1,"b":2,"c":3,"b":{}})"), Result::BadJson);
     EXPECT_EQ(parseOnly(R"({"x":{"k":1,"k":1}})"), Result::BadJson);
-    EXPECT_EQ(parseOnly(R"({"a":1,"\u0061":2})"), Result::BadJson); // same key after unescaping
+    EXPECT_EQ(parseOnly(R"({"a":1,"\u0061":2})"), Result::BadJson);         // same key after unescaping
     EXPECT_EQ(parseOnly(R"({"a":{"a":{"a":1}},"b":{"a":2}})"), Result::Ok); // same key, different objects
     EXPECT_EQ(parseOnly(R"({"a":1,"a ":2,"A":3,"":4})"), Result::Ok);
     // Many keys: the check is O(n log n), and a duplicate at the end is still found.
@@ -353,8 +370,7 @@ TEST(JsonTest, AllocationFailureAtEveryStepIsCleanOutOfMemory) {
         heap.fail_at = fail_at;
         allocator = heap.allocator();
         JsonDocument doc;
-        EXPECT_EQ(lodrt::parseJson(kSampleDoc, std::strlen(kSampleDoc), &allocator, nullptr, &doc),
-                  Result::OutOfMemory)
+        EXPECT_EQ(lodrt::parseJson(kSampleDoc, std::strlen(kSampleDoc), &allocator, nullptr, &doc), Result::OutOfMemory)
             << fail_at;
         EXPECT_EQ(heap.live, 0) << fail_at;
     }

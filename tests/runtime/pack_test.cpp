@@ -220,7 +220,8 @@ TEST(PackTest, ErrorsNameTheJsonPointer) {
         {R"("primitives":[{)", R"("primitives":[],"x":[{)", Result::BadGltf, "/meshes/0/primitives"},
         {R"("mesh":0)", R"("mesh":1)", Result::BadGltf, "/nodes/1/mesh"},
         {R"("children":[1])", R"("children":[0])", Result::BadGltf, "/nodes/0/children/0: a node cannot be"},
-        {R"("children":[1])", R"("children":[1,1])", Result::BadGltf, "/nodes/0/children/1: node 1 already has parent 0"},
+        {R"("children":[1])", R"("children":[1,1])", Result::BadGltf,
+         "/nodes/0/children/1: node 1 already has parent 0"},
         {R"("name":"quad","mesh":0)", R"("name":"quad","mesh":0,"children":[0])", Result::BadGltf,
          "/nodes/1/children: node hierarchy contains a cycle"},
         {R"("accessors":[)", R"("accessors":{},"x":[)", Result::BadGltf, "/accessors: expected an array"},
@@ -253,9 +254,8 @@ TEST(PackTest, RejectsIndexValuesOutOfRange) {
 }
 
 TEST(PackTest, RejectsNodeCycles) {
-    const Loaded loaded =
-        loadJson(quadWith(R"("nodes":[{"name":"root","children":[1]},{"name":"quad","mesh":0}])",
-                          R"("nodes":[{"children":[1]},{"children":[2]},{"children":[1]}])"));
+    const Loaded loaded = loadJson(quadWith(R"("nodes":[{"name":"root","children":[1]},{"name":"quad","mesh":0}])",
+                                            R"("nodes":[{"children":[1]},{"children":[2]},{"children":[1]}])"));
     EXPECT_EQ(loaded.result, Result::BadGltf) << loaded.message;
     const Loaded cycle = loadJson(quadWith(R"("nodes":[{"name":"root","children":[1]},{"name":"quad","mesh":0}])",
                                            R"("nodes":[{"children":[1]},{"children":[2]},{"children":[0]}])"));
@@ -298,7 +298,8 @@ TEST(PackTest, EveryTruncatedPrefixFailsCleanly) {
         EXPECT_EQ(std::strncmp(message, "container: ", 11), 0) << message;
     }
     // Every prefix of the plain JSON form fails too (it is no longer one complete JSON value).
-    const std::string json = quadWith(R"("buffers":[{"byteLength":108}])", R"("buffers":[{"byteLength":108,"uri":"a"}])");
+    const std::string json =
+        quadWith(R"("buffers":[{"byteLength":108}])", R"("buffers":[{"byteLength":108,"uri":"a"}])");
     for (size_t size = 1; size < json.size(); ++size) {
         std::vector<uint8_t> prefix(json.begin(), json.begin() + size);
         Pack pack;
@@ -334,10 +335,18 @@ TEST(PackTest, RandomCorruptionNeverCrashes) {
         for (int f = 0; f < flips; ++f) {
             const size_t at = rng() % bytes.size();
             switch (rng() % 4) {
-            case 0: bytes[at] = uint8_t(rng()); break;            // random byte
-            case 1: bytes[at] ^= uint8_t(1u << (rng() % 8)); break; // bit flip
-            case 2: bytes[at] = uint8_t("0123456789{}[]\",:"[rng() % 17]); break; // JSON-ish byte
-            default: bytes[at] = uint8_t(bytes[at] + 1); break;
+            case 0:
+                bytes[at] = uint8_t(rng());
+                break; // random byte
+            case 1:
+                bytes[at] ^= uint8_t(1u << (rng() % 8));
+                break; // bit flip
+            case 2:
+                bytes[at] = uint8_t("0123456789{}[]\",:"[rng() % 17]);
+                break; // JSON-ish byte
+            default:
+                bytes[at] = uint8_t(bytes[at] + 1);
+                break;
             }
         }
         Pack pack;

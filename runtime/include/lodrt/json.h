@@ -101,7 +101,7 @@ private:
     uint32_t node_count_ = 0;
     uint32_t* children_ = nullptr; // child node indices, contiguous per container
     uint32_t children_count_ = 0;
-    char* strings_ = nullptr;      // decoded strings and keys, each NUL-terminated
+    char* strings_ = nullptr; // decoded strings and keys, each NUL-terminated
     size_t strings_size_ = 0;
 };
 

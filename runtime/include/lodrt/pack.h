@@ -20,8 +20,8 @@ constexpr uint32_t kNoIndex = 0xFFFFFFFFu;
 
 /// Zero-initialised means defaults.
 struct LoadOptions {
-    Allocator allocator;     // all memory of the Pack and of its JSON document
-    JsonLimits json_limits;  // limits for the JSON chunk
+    Allocator allocator;           // all memory of the Pack and of its JSON document
+    JsonLimits json_limits;        // limits for the JSON chunk
     bool skip_index_check = false; // do not scan index buffers for values >= vertex count
 };
 
@@ -80,13 +80,13 @@ struct AttributeInfo {
 };
 
 struct PrimitiveInfo {
-    uint32_t mode = 4;              // glTF primitive mode; 4 = TRIANGLES
-    uint32_t indices = kNoIndex;    // accessor index, or kNoIndex for non-indexed
+    uint32_t mode = 4;           // glTF primitive mode; 4 = TRIANGLES
+    uint32_t indices = kNoIndex; // accessor index, or kNoIndex for non-indexed
     uint32_t material = kNoIndex;
-    uint64_t vertex_count = 0;      // count of the attribute accessors (all equal)
-    uint64_t index_count = 0;       // indices count, or vertex_count when non-indexed
-    uint64_t triangle_count = 0;    // 0 for point and line modes
-    uint32_t first_attribute = 0;   // into Pack::attribute()
+    uint64_t vertex_count = 0;    // count of the attribute accessors (all equal)
+    uint64_t index_count = 0;     // indices count, or vertex_count when non-indexed
+    uint64_t triangle_count = 0;  // 0 for point and line modes
+    uint32_t first_attribute = 0; // into Pack::attribute()
     uint32_t attribute_count = 0;
     JsonValue json;
 };
