@@ -400,6 +400,12 @@ struct JsonParser {
     }
 
     Result run() {
+        // Size the arrays from the input once (glTF JSON averages 10-15 bytes per value), so large
+        // documents are not copied through many doublings; the estimate is capped by the limits.
+        const size_t node_estimate = std::min<size_t>(size / 16 + 16, max_nodes);
+        if (!nodes.reserve(allocator, node_estimate) || !children.reserve(allocator, node_estimate) ||
+            !strings.reserve(allocator, size / 4 + 16))
+            return Result::OutOfMemory;
         if (size >= 3 && std::memcmp(text, "\xEF\xBB\xBF", 3) == 0) pos = 3;
         Result r = parseValue(UINT32_MAX, 0);
         if (r != Result::Ok) return r;

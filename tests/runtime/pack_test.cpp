@@ -366,6 +366,41 @@ TEST(PackTest, RandomCorruptionNeverCrashes) {
     EXPECT_GT(failed, 1000);
 }
 
+TEST(PackTest, StructuredJsonMutationsNeverCrash) {
+    // Edits that keep the container valid and often the JSON too, so the glTF checks get exercised:
+    // digit changes, insertions, deletions, copied spans, BIN byte changes.
+    std::mt19937 rng(7u);
+    int counts[16] = {};
+    for (int iteration = 0; iteration < 3000; ++iteration) {
+        std::string json = quadJson();
+        std::vector<uint8_t> bin = quadBin();
+        const int edits = 1 + int(rng() % 3);
+        for (int e = 0; e < edits; ++e) {
+            const size_t at = rng() % json.size();
+            const char digit = char('0' + rng() % 10);
+            switch (rng() % 5) {
+            case 0: json[at] = digit; break;
+            case 1: json.insert(at, 1, digit); break;
+            case 2: json.erase(at, 1); break;
+            case 3: json.insert(at, json.substr(rng() % json.size(), rng() % 20)); break;
+            default: bin[rng() % bin.size()] = uint8_t(rng()); break;
+            }
+        }
+        Pack pack;
+        const Loaded loaded = load(makeGlb(json, bin), &pack);
+        ++counts[int(loaded.result) & 15];
+        if (loaded.result == Result::Ok) {
+            EXPECT_GE(walk(pack), 0u);
+        } else {
+            EXPECT_FALSE(loaded.message.empty());
+        }
+    }
+    EXPECT_GT(counts[int(Result::Ok)], 100);
+    EXPECT_GT(counts[int(Result::BadJson)], 100);
+    EXPECT_GT(counts[int(Result::BadGltf)], 100);
+    EXPECT_GT(counts[int(Result::OutOfBounds)], 10);
+}
+
 TEST(PackTest, AllocationFailureAtEveryStepIsCleanOutOfMemory) {
     const std::vector<uint8_t> glb = quadGlb();
     CountingHeap probe;
