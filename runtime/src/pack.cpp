@@ -91,8 +91,6 @@ const char* componentTypeName(ComponentType type) {
 
 namespace {
 
-constexpr uint64_t kMaxJsonInteger = 9007199254740992ull; // 2^53
-
 bool parseComponentType(uint64_t code, ComponentType* out) {
     switch (code) {
     case 5120:
