@@ -148,16 +148,11 @@ void printText(const char* path, const lodrt::Pack& pack) {
 
 std::string accessorJson(const lodrt::Pack& pack, uint32_t index, std::string_view semantic) {
     const lodrt::AccessorInfo& acc = pack.accessor(index);
-    char buf[256];
-    std::snprintf(buf, sizeof(buf),
-                  "{\"accessor\": %u, \"semantic\": %s, \"type\": \"%s\", \"componentType\": \"%s\", \"count\": %llu, "
-                  "\"bytes\": %llu, \"sparse\": %s}",
-                  index, "%s", lodrt::accessorTypeName(acc.type), lodrt::componentTypeName(acc.component_type),
-                  ull(acc.count), ull(acc.byte_length), acc.is_sparse ? "true" : "false");
-    std::string out = buf;
-    const size_t at = out.find("%s");
-    out.replace(at, 2, jsonString(semantic));
-    return out;
+    return "{\"accessor\": " + std::to_string(index) + ", \"semantic\": " + jsonString(semantic) + ", \"type\": \"" +
+           lodrt::accessorTypeName(acc.type) + "\", \"componentType\": \"" +
+           lodrt::componentTypeName(acc.component_type) + "\", \"count\": " + std::to_string(acc.count) +
+           ", \"bytes\": " + std::to_string(acc.byte_length) + ", \"sparse\": " + (acc.is_sparse ? "true" : "false") +
+           "}";
 }
 
 void printJson(const char* path, const lodrt::Pack* pack, const char* error) {
@@ -260,7 +255,11 @@ int main(int argc, char** argv) {
     char message[512];
     const lodrt::Result result = lodrt::loadPack(bytes.data(), bytes.size(), nullptr, &pack, message, sizeof(message));
     if (result != lodrt::Result::Ok) {
-        if (as_json) printJson(path, nullptr, message);
+        if (as_json) {
+            printJson(path, nullptr, message);
+        } else {
+            std::printf("problems:\n  error %s\n", message);
+        }
         std::fprintf(stderr, "error: %s: %s\n", path, message);
         return kExitBadPack;
     }

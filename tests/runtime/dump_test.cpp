@@ -108,6 +108,7 @@ TEST(DumpTest, BadPackIsOneErrorLineAndExit1) {
     EXPECT_EQ(run.exit_code, 1);
     EXPECT_EQ(lineCount(run.err), 1u) << run.err;
     EXPECT_EQ(run.err.rfind("error: " + path + ": /accessors/2/count: 60 elements", 0), 0u) << run.err;
+    EXPECT_NE(run.out.find("problems:\n  error /accessors/2/count: 60 elements"), std::string::npos) << run.out;
 
     std::vector<uint8_t> truncated = lodrt_test::quadGlb();
     truncated.resize(truncated.size() - 1);
