@@ -5,7 +5,12 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "lodrt/allocator.h"
 #include "lodrt/export.h"
+#include "lodrt/glb.h"
+#include "lodrt/json.h"
+#include "lodrt/pack.h"
+#include "lodrt/result.h"
 
 namespace lodrt {
 
