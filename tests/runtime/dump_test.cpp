@@ -6,6 +6,8 @@
 
 #include <sys/wait.h>
 
+#include <unistd.h>
+
 #include <gtest/gtest.h>
 
 #include "glb_builder.h"
@@ -30,7 +32,8 @@ std::string readText(const std::string& path) {
 }
 
 std::string scratchPath(const std::string& name) {
-    return std::string(LODRT_TEST_BINARY_DIR) + "/dump_test_" + name;
+    // The process id keeps parallel ctest processes (one per test) from sharing scratch files.
+    return std::string(LODRT_TEST_BINARY_DIR) + "/dump_test_" + std::to_string(::getpid()) + "_" + name;
 }
 
 void writeBytes(const std::string& path, const std::vector<uint8_t>& bytes) {
