@@ -16,6 +16,8 @@
 #include <cstring>
 #include <limits>
 
+#include "io/polygon_triangulation.h"
+
 namespace lodbake {
 
 namespace {
@@ -485,103 +487,19 @@ std::string describeError(ReadError e, const BodyCursor& cursor, ScalarType t) {
     return "unknown read error";
 }
 
-// Three triangles' worth of helpers for polygon triangulation.
-Vec3d newellNormal(const Mesh& mesh, const uint32_t* idx, size_t n) {
-    Vec3d nrm;
-    for (size_t i = 0; i < n; ++i) {
-        const Vec3d a = toDouble(mesh.positions[idx[i]]);
-        const Vec3d b = toDouble(mesh.positions[idx[(i + 1) % n]]);
-        nrm.x += (a.y - b.y) * (a.z + b.z);
-        nrm.y += (a.z - b.z) * (a.x + b.x);
-        nrm.z += (a.x - b.x) * (a.y + b.y);
-    }
-    return nrm;
-}
-
-void fan(const uint32_t* idx, size_t n, std::vector<uint32_t>& out) {
-    for (size_t i = 1; i + 1 < n; ++i) {
-        out.push_back(idx[0]);
-        out.push_back(idx[i]);
-        out.push_back(idx[i + 1]);
-    }
-}
-
-// Ear clipping in the polygon's best-fit (Newell) plane; falls back to a fan when no ear is found
-// (self-intersecting or degenerate outlines).
-void earClip(const Mesh& mesh, const uint32_t* idx, size_t n, std::vector<uint32_t>& out) {
-    const Vec3d nrm = newellNormal(mesh, idx, n);
-    const double len = length(nrm);
-    if (!(len > 0.0)) return fan(idx, n, out);
-    const Vec3d w = nrm / len;
-    const Vec3d helper = std::fabs(w.x) < 0.9 ? Vec3d(1, 0, 0) : Vec3d(0, 1, 0);
-    const Vec3d ax = normalize(cross(helper, w));
-    const Vec3d ay = cross(w, ax);
-    std::vector<Vec2<double>> pts(n);
-    for (size_t i = 0; i < n; ++i) {
-        const Vec3d p = toDouble(mesh.positions[idx[i]]);
-        pts[i] = {dot(p, ax), dot(p, ay)};
-    }
-    auto orient = [&](size_t a, size_t b, size_t c) {
-        return (pts[b].x - pts[a].x) * (pts[c].y - pts[a].y) - (pts[b].y - pts[a].y) * (pts[c].x - pts[a].x);
-    };
-    std::vector<size_t> ring(n);
-    for (size_t i = 0; i < n; ++i) ring[i] = i;
-    size_t start = out.size();
-    while (ring.size() > 3) {
-        bool clipped = false;
-        const size_t m = ring.size();
-        for (size_t k = 0; k < m && !clipped; ++k) {
-            const size_t a = ring[(k + m - 1) % m], b = ring[k], c = ring[(k + 1) % m];
-            if (orient(a, b, c) <= 0.0) continue; // reflex or flat: not an ear
-            bool inside = false;
-            for (size_t j = 0; j < m && !inside; ++j) {
-                const size_t q = ring[j];
-                if (q == a || q == b || q == c) continue;
-                inside = orient(a, b, q) >= 0.0 && orient(b, c, q) >= 0.0 && orient(c, a, q) >= 0.0;
-            }
-            if (inside) continue;
-            out.push_back(idx[a]);
-            out.push_back(idx[b]);
-            out.push_back(idx[c]);
-            ring.erase(ring.begin() + std::ptrdiff_t(k));
-            clipped = true;
-        }
-        if (!clipped) {
-            out.resize(start);
-            return fan(idx, n, out);
-        }
-    }
-    out.push_back(idx[ring[0]]);
-    out.push_back(idx[ring[1]]);
-    out.push_back(idx[ring[2]]);
-}
-
+// Polygons go through the triangulation OBJ and OFF share; it returns corner numbers of the polygon.
 void triangulatePolygon(const Mesh& mesh, const uint32_t* idx, size_t n, std::vector<uint32_t>& out) {
     if (n == 3) {
-        out.push_back(idx[0]);
-        out.push_back(idx[1]);
-        out.push_back(idx[2]);
+        out.insert(out.end(), idx, idx + 3);
         return;
     }
-    if (n == 4) {
-        // Split on the diagonal 0-2 unless the quad is concave at 1 or 3, where only 1-3 stays inside.
-        const Vec3d nrm = newellNormal(mesh, idx, 4);
-        auto triNormal = [&](uint32_t a, uint32_t b, uint32_t c) {
-            const Vec3d pa = toDouble(mesh.positions[a]);
-            return cross(toDouble(mesh.positions[b]) - pa, toDouble(mesh.positions[c]) - pa);
-        };
-        const bool diag02_ok = dot(triNormal(idx[0], idx[1], idx[2]), nrm) > 0.0 &&
-                               dot(triNormal(idx[0], idx[2], idx[3]), nrm) > 0.0;
-        if (diag02_ok) {
-            const uint32_t t[6] = {idx[0], idx[1], idx[2], idx[0], idx[2], idx[3]};
-            out.insert(out.end(), t, t + 6);
-        } else {
-            const uint32_t t[6] = {idx[0], idx[1], idx[3], idx[1], idx[2], idx[3]};
-            out.insert(out.end(), t, t + 6);
-        }
-        return;
-    }
-    earClip(mesh, idx, n, out);
+    thread_local std::vector<Vec3f> corners;
+    thread_local std::vector<uint32_t> local;
+    corners.resize(n);
+    for (size_t i = 0; i < n; ++i) corners[i] = mesh.positions[idx[i]];
+    local.clear();
+    detail::triangulatePolygon(corners.data(), uint32_t(n), local);
+    for (uint32_t c : local) out.push_back(idx[c]);
 }
 
 // Median of a list (mean of the two middle values for an even count); 0 for an empty list.
