@@ -63,9 +63,18 @@ Status checkGlbContainer(const uint8_t* data, size_t size, const std::string& na
     return Status::okStatus();
 }
 
+// What the JSON pre-pass found. tinygltf 2.7 (built without Draco) refuses an `indices` accessor
+// without a buffer view, which is how KHR_draco_mesh_compression primitives declare them, so those
+// are taken out of the JSON before tinygltf sees it and remembered here.
+struct JsonPrepass {
+    bool is_changed = false;
+    std::string json_text;                                  // the rewritten JSON when is_changed
+    std::map<std::pair<size_t, size_t>, int> draco_indices; // (mesh, primitive) -> indices accessor
+};
+
 // Checks the references tinygltf follows while loading (buffer views of buffers and images), so that
 // a hostile file cannot make it read outside its buffers.
-Status checkJsonReferences(const uint8_t* json_bytes, size_t json_size, const std::string& name) {
+Status checkJsonReferences(const uint8_t* json_bytes, size_t json_size, const std::string& name, JsonPrepass& prepass) {
     nlohmann::json root;
     try {
         root = nlohmann::json::parse(json_bytes, json_bytes + json_size);
@@ -121,7 +130,47 @@ Status checkJsonReferences(const uint8_t* json_bytes, size_t json_size, const st
             return invalidInput(name + ": image " + std::to_string(i) + ": bufferView: expected an index below " +
                                 std::to_string(view_count));
     }
+    auto meshes = root.find("meshes");
+    if (meshes != root.end() && meshes->is_array()) {
+        for (size_t m = 0; m < meshes->size(); ++m) {
+            nlohmann::json& mesh = (*meshes)[m];
+            if (!mesh.is_object() || !mesh.contains("primitives") || !mesh["primitives"].is_array()) continue;
+            nlohmann::json& primitives = mesh["primitives"];
+            for (size_t p = 0; p < primitives.size(); ++p) {
+                nlohmann::json& primitive = primitives[p];
+                if (!primitive.is_object() || !primitive.contains("extensions") || !primitive["extensions"].is_object() ||
+                    !primitive["extensions"].contains(kDracoExtension) || !primitive.contains("indices"))
+                    continue;
+                if (!primitive["indices"].is_number_unsigned())
+                    return invalidInput(name + ": mesh " + std::to_string(m) + " primitive " + std::to_string(p) +
+                                        ": indices: expected an accessor index");
+                prepass.draco_indices[{m, p}] = primitive["indices"].get<int>();
+                primitive.erase("indices");
+                prepass.is_changed = true;
+            }
+        }
+    }
+    if (prepass.is_changed) prepass.json_text = root.dump();
     return Status::okStatus();
+}
+
+// A GLB with its JSON chunk replaced (other chunks copied as they are).
+std::vector<uint8_t> replaceGlbJson(const uint8_t* data, size_t size, size_t old_json_size, std::string json) {
+    while (json.size() % 4 != 0) json.push_back(' ');
+    const size_t rest_offset = 12 + 8 + old_json_size;
+    const size_t rest = size > rest_offset ? size - rest_offset : 0;
+    std::vector<uint8_t> out;
+    auto put32 = [&](uint32_t v) {
+        for (int i = 0; i < 4; ++i) out.push_back(uint8_t(v >> (8 * i)));
+    };
+    put32(kGlbMagic);
+    put32(2);
+    put32(uint32_t(12 + 8 + json.size() + rest));
+    put32(uint32_t(json.size()));
+    put32(kChunkJson);
+    out.insert(out.end(), json.begin(), json.end());
+    out.insert(out.end(), data + rest_offset, data + rest_offset + rest);
+    return out;
 }
 
 // tinygltf callbacks: external files go through the SideFileLoader, images stay encoded.
@@ -521,7 +570,7 @@ bool wantedSemantic(const std::string& s) {
 
 Result<PrimitiveData> readPrimitive(const tinygltf::Model& model, const tinygltf::Primitive& primitive,
                                     const std::string& where, bool quantized, const ReadOptions& options,
-                                    bool* used_draco) {
+                                    int draco_indices_accessor, bool* used_draco) {
     PrimitiveData out;
     out.material = primitive.material;
     if (primitive.material >= 0 && size_t(primitive.material) >= model.materials.size())
@@ -579,12 +628,12 @@ Result<PrimitiveData> readPrimitive(const tinygltf::Model& model, const tinygltf
             draco_ids[semantics[i]] = accessor_index;
             sources.push_back(std::move(src));
         }
-        if (primitive.indices >= 0) {
-            if (size_t(primitive.indices) >= model.accessors.size())
-                return invalidInput(where + ": indices accessor " + std::to_string(primitive.indices) + " does not exist");
-            const size_t declared = model.accessors[size_t(primitive.indices)].count;
+        if (draco_indices_accessor >= 0) {
+            if (size_t(draco_indices_accessor) >= model.accessors.size())
+                return invalidInput(where + ": indices accessor " + std::to_string(draco_indices_accessor) + " does not exist");
+            const size_t declared = model.accessors[size_t(draco_indices_accessor)].count;
             if (declared != decoded.indices.size())
-                return invalidInput(where + ": accessor " + std::to_string(primitive.indices) + " (indices): count " +
+                return invalidInput(where + ": accessor " + std::to_string(draco_indices_accessor) + " (indices): count " +
                                     std::to_string(declared) + " but the Draco data has " +
                                     std::to_string(decoded.indices.size()) + " indices");
         }
@@ -824,8 +873,16 @@ Result<LoadedMesh> readGltfImpl(const uint8_t* data, size_t size, const std::str
     size_t json_size = size;
     if (is_glb) LODBAKE_RETURN_IF_ERROR(checkGlbContainer(data, size, name, &json, &json_size));
     if (json_size == 0) return invalidInput(name + ": JSON: the document is empty");
-    LODBAKE_RETURN_IF_ERROR(checkJsonReferences(json, json_size, name));
+    JsonPrepass prepass;
+    LODBAKE_RETURN_IF_ERROR(checkJsonReferences(json, json_size, name, prepass));
     if (size > std::numeric_limits<unsigned int>::max()) return resourceLimit(name + ": file larger than 4 GiB");
+    std::vector<uint8_t> rewritten;
+    if (prepass.is_changed) {
+        if (is_glb) rewritten = replaceGlbJson(data, size, json_size, prepass.json_text);
+        else rewritten.assign(prepass.json_text.begin(), prepass.json_text.end());
+        data = rewritten.data();
+        size = rewritten.size();
+    }
 
     tinygltf::Model model;
     {
@@ -871,7 +928,10 @@ Result<LoadedMesh> readGltfImpl(const uint8_t* data, size_t size, const std::str
                 diagnostics.note(where + ": point/line primitive skipped");
                 continue;
             }
-            LODBAKE_ASSIGN_OR_RETURN(PrimitiveData part, readPrimitive(model, primitive, where, quantized, options, &used_draco));
+            auto draco_indices = prepass.draco_indices.find({size_t(instance.mesh), p});
+            const int draco_indices_accessor = draco_indices == prepass.draco_indices.end() ? -1 : draco_indices->second;
+            LODBAKE_ASSIGN_OR_RETURN(PrimitiveData part, readPrimitive(model, primitive, where, quantized, options,
+                                                                       draco_indices_accessor, &used_draco));
             total_vertices += part.positions.size();
             total_faces += part.indices.size() / 3;
             if (total_vertices > options.max_vertex_count || total_faces > options.max_face_count)
