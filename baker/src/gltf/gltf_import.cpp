@@ -3,6 +3,7 @@
 // and scene flattening with node transforms applied.
 #include "lodbake/gltf/gltf_io.h"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstring>
@@ -514,6 +515,7 @@ struct PrimitiveData {
     std::vector<uint32_t> indices;
     int material = -1;
     std::string name;
+    int shares_vertices_of = -1; // index of an earlier part of the same instance with the same accessors
 };
 
 // A primitive attribute: accessor values (or Draco-decoded values) and how to describe it in errors.
@@ -651,6 +653,8 @@ Result<PrimitiveData> readPrimitive(const tinygltf::Model& model, const tinygltf
         sources.push_back(std::move(src));
     }
 
+    // POSITION first, so that its problems are the ones reported.
+    std::stable_partition(sources.begin(), sources.end(), [](const AttributeSource& a) { return a.semantic == "POSITION"; });
     const AttributeSource* position = nullptr;
     for (const auto& s : sources)
         if (s.semantic == "POSITION") position = &s;
@@ -734,7 +738,7 @@ Result<PrimitiveData> readPrimitive(const tinygltf::Model& model, const tinygltf
             const uint32_t a = raw[i], b = raw[i + 1], c = raw[i + 2];
             if (a == b || b == c || a == c) continue; // strip restarts
             if (i % 2 == 0) out.indices.insert(out.indices.end(), {a, b, c});
-            else out.indices.insert(out.indices.end(), {b, a, c});
+            else out.indices.insert(out.indices.end(), {a, c, b}); // spec order for odd triangles
         }
         break;
     case TINYGLTF_MODE_TRIANGLE_FAN:
@@ -918,8 +922,12 @@ Result<LoadedMesh> readGltfImpl(const uint8_t* data, size_t size, const std::str
     bool used_draco = false;
     std::vector<PrimitiveData> parts;
     uint64_t total_vertices = 0, total_faces = 0;
+    std::set<int> counted_positions;                 // POSITION accessors counted in file_vertex_count
+    std::set<std::pair<int, size_t>> counted_primitives; // (mesh, primitive) counted in file_face_count
     for (const Instance& instance : instances) {
         const tinygltf::Mesh& gmesh = model.meshes[size_t(instance.mesh)];
+        // Primitives of one mesh that use the same attribute accessors share their vertices.
+        std::map<std::map<std::string, int>, size_t> shared;
         for (size_t p = 0; p < gmesh.primitives.size(); ++p) {
             const std::string where = name + ": mesh \"" + (gmesh.name.empty() ? std::to_string(instance.mesh) : gmesh.name) +
                                       "\" primitive " + std::to_string(p);
@@ -932,10 +940,25 @@ Result<LoadedMesh> readGltfImpl(const uint8_t* data, size_t size, const std::str
             const int draco_indices_accessor = draco_indices == prepass.draco_indices.end() ? -1 : draco_indices->second;
             LODBAKE_ASSIGN_OR_RETURN(PrimitiveData part, readPrimitive(model, primitive, where, quantized, options,
                                                                        draco_indices_accessor, &used_draco));
-            total_vertices += part.positions.size();
-            total_faces += part.indices.size() / 3;
+            const bool is_draco = primitive.extensions.count(kDracoExtension) > 0;
+            if (counted_positions.insert(primitive.attributes.at("POSITION")).second || is_draco)
+                total_vertices += part.positions.size();
+            if (counted_primitives.insert({instance.mesh, p}).second) total_faces += part.indices.size() / 3;
             if (total_vertices > options.max_vertex_count || total_faces > options.max_face_count)
                 return resourceLimit(where + ": the scene exceeds the reader's vertex or face limit");
+            if (!is_draco) {
+                auto it = shared.find(primitive.attributes);
+                if (it != shared.end()) {
+                    part.shares_vertices_of = int(it->second);
+                    part.positions.clear();
+                    part.normals.clear();
+                    part.tangents.clear();
+                    part.uvs.clear();
+                    part.colors.clear();
+                } else {
+                    shared[primitive.attributes] = parts.size();
+                }
+            }
             applyTransform(instance.world, part);
             part.name = gmesh.name;
             parts.push_back(std::move(part));
@@ -956,8 +979,12 @@ Result<LoadedMesh> readGltfImpl(const uint8_t* data, size_t size, const std::str
         if (!part.uvs.empty()) uv_sets = std::max(uv_sets, part.uvs.rbegin()->first + 1);
     }
     mesh.uvs.resize(uv_sets);
-    for (const PrimitiveData& part : parts) {
-        const auto base = uint32_t(mesh.positions.size());
+    std::vector<uint32_t> part_base(parts.size(), 0);
+    for (size_t k = 0; k < parts.size(); ++k) {
+        const PrimitiveData& part = parts[k];
+        const auto base = part.shares_vertices_of >= 0 ? part_base[size_t(part.shares_vertices_of)]
+                                                       : uint32_t(mesh.positions.size());
+        part_base[k] = base;
         const size_t n = part.positions.size();
         mesh.positions.insert(mesh.positions.end(), part.positions.begin(), part.positions.end());
         if (has_normals) {
