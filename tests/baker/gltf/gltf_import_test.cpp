@@ -421,6 +421,31 @@ TEST(GltfImportTest, DracoCompressedGlbDecodesToTheSourceTriangles) {
         EXPECT_TRUE(found) << "source triangle " << t[0] << " " << t[1] << " " << t[2] << " not decoded";
     }
 
+    // A damaged Draco stream (truncated, or with flipped bytes) is refused or decoded, never a crash;
+    // truncation must always be refused.
+    const size_t draco_size = encoded.size();
+    for (size_t cut = 0; cut < draco_size; cut += 5) {
+        json d = doc;
+        d["bufferViews"][0]["byteLength"] = cut == 0 ? 1 : cut;
+        const std::vector<uint8_t> truncated = lodbake_test::makeGlb(d, bin);
+        Diagnostics dd;
+        Result<LoadedMesh> t = readGltfFromMemory(truncated.data(), truncated.size(), "cut.glb", noSideFiles(), ReadOptions{}, dd);
+        EXPECT_FALSE(t.ok()) << "truncated at " << cut;
+        if (!t.ok()) {
+            EXPECT_NE(t.status().message().find("KHR_draco_mesh_compression"), std::string::npos) << t.status().message();
+        }
+    }
+    for (size_t at = 0; at < draco_size; at += 3) {
+        std::vector<uint8_t> flipped = bin;
+        flipped[at] ^= 0x5A;
+        const std::vector<uint8_t> damaged = lodbake_test::makeGlb(doc, flipped);
+        Diagnostics dd;
+        Result<LoadedMesh> t = readGltfFromMemory(damaged.data(), damaged.size(), "flip.glb", noSideFiles(), ReadOptions{}, dd);
+        if (t.ok()) {
+            EXPECT_EQ(t->mesh.faceCount(), grid.triangles.size());
+        }
+    }
+
     // Accessor counts must agree with the Draco data.
     doc["accessors"][0]["count"] = dmesh->num_points() + 1;
     const std::vector<uint8_t> bad = lodbake_test::makeGlb(doc, bin);
