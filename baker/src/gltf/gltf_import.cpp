@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <cmath>
 #include <cstring>
 #include <exception>
@@ -177,13 +178,32 @@ std::vector<uint8_t> replaceGlbJson(const uint8_t* data, size_t size, size_t old
 // tinygltf callbacks: external files go through the SideFileLoader, images stay encoded.
 struct LoaderContext {
     const SideFileLoader* load_side_file = nullptr;
+    std::string base_dir; // folder of the glTF file ("" for the current folder)
 };
+
+// URIs are percent-encoded ("my%20texture.png"); files are not.
+std::string percentDecode(const std::string& uri) {
+    std::string out;
+    for (size_t i = 0; i < uri.size(); ++i) {
+        if (uri[i] == '%' && i + 2 < uri.size() && std::isxdigit(static_cast<unsigned char>(uri[i + 1])) &&
+            std::isxdigit(static_cast<unsigned char>(uri[i + 2]))) {
+            out.push_back(char(std::stoi(uri.substr(i + 1, 2), nullptr, 16)));
+            i += 2;
+        } else {
+            out.push_back(uri[i]);
+        }
+    }
+    return out;
+}
 
 bool fileExists(const std::string&, void*) { return true; }
 std::string expandFilePath(const std::string& path, void*) { return path; }
 bool readWholeFile(std::vector<unsigned char>* out, std::string* err, const std::string& path, void* user) {
     auto* context = static_cast<LoaderContext*>(user);
-    Result<std::vector<uint8_t>> bytes = (*context->load_side_file)(path);
+    // tinygltf joins base_dir and the raw URI; decode the URI part and join it our way.
+    std::string uri = path;
+    if (!context->base_dir.empty() && uri.rfind(context->base_dir + "/", 0) == 0) uri = uri.substr(context->base_dir.size() + 1);
+    Result<std::vector<uint8_t>> bytes = (*context->load_side_file)(joinPath(context->base_dir, percentDecode(uri)));
     if (!bytes.ok()) {
         if (err) *err += bytes.status().message() + "\n";
         return false;
@@ -891,7 +911,7 @@ Result<LoadedMesh> readGltfImpl(const uint8_t* data, size_t size, const std::str
     tinygltf::Model model;
     {
         tinygltf::TinyGLTF loader;
-        LoaderContext context{&load_side_file};
+        LoaderContext context{&load_side_file, parentDirectory(name)};
         loader.SetFsCallbacks({&fileExists, &expandFilePath, &readWholeFile, &writeWholeFile, &context});
         loader.SetImageLoader(&keepEncodedImage, nullptr);
         std::string err, warn;
