@@ -230,6 +230,7 @@ std::string firstLine(const std::string& text) {
         if (end == std::string::npos) end = text.size();
         std::string line = text.substr(start, end - start);
         while (!line.empty() && (line.back() == '\r' || line.back() == ' ')) line.pop_back();
+        if (line.size() > 240) line = line.substr(0, 240) + "...";
         if (!line.empty()) return line;
         start = end + 1;
     }

@@ -455,3 +455,35 @@ TEST(GltfImportTest, DracoCompressedGlbDecodesToTheSourceTriangles) {
 }
 
 } // namespace
+
+namespace {
+
+// Damaged files (bytes flipped, lengths cut) are refused with a message or read, never a crash.
+TEST(GltfImportTest, RandomlyDamagedFilesNeverCrash) {
+    Result<GltfFiles> files = writeGltfToMemory(lodbake_test::richMesh(), GltfWriteOptions{});
+    ASSERT_TRUE(files.ok());
+    const std::vector<uint8_t>& glb = files->main;
+    uint64_t state = 0x9E3779B97F4A7C15ull; // fixed seed: the same cases every run
+    auto next = [&]() {
+        state = state * 6364136223846793005ull + 1442695040888963407ull;
+        return uint32_t(state >> 33);
+    };
+    size_t refused = 0;
+    for (int round = 0; round < 400; ++round) {
+        std::vector<uint8_t> damaged = glb;
+        const int flips = 1 + int(next() % 4);
+        for (int k = 0; k < flips; ++k) damaged[next() % damaged.size()] = uint8_t(next());
+        if (round % 5 == 0) damaged.resize(next() % damaged.size());
+        Diagnostics diagnostics;
+        Result<LoadedMesh> r =
+            readGltfFromMemory(damaged.data(), damaged.size(), "damaged.glb", noSideFiles(), ReadOptions{}, diagnostics);
+        if (!r.ok()) {
+            ++refused;
+            EXPECT_EQ(r.status().message().rfind("damaged.glb: ", 0), 0u) << r.status().message();
+            EXPECT_EQ(r.status().message().find('\n'), std::string::npos) << r.status().message();
+        }
+    }
+    EXPECT_GT(refused, 80u); // every truncation at least
+}
+
+} // namespace
