@@ -1033,6 +1033,19 @@ Result<LoadedMesh> readGltfImpl(const uint8_t* data, size_t size, const std::str
         for (uint32_t i : part.indices) mesh.indices.push_back(base + i);
         mesh.submeshes.push_back(std::move(sub));
     }
+    // Texture slots must sample a UV set the mesh has.
+    for (size_t m = 0; m < mesh.materials.size(); ++m) {
+        Material& material = mesh.materials[m];
+        for (TextureSlot* slot : {&material.base_color_texture, &material.metallic_roughness_texture,
+                                  &material.normal_texture, &material.occlusion_texture, &material.emissive_texture}) {
+            if (slot->isSet() && slot->texcoord >= mesh.uvs.size()) {
+                diagnostics.warn(name + ": material " + std::to_string(m) + ": texture " + std::to_string(slot->texture) +
+                                 " samples TEXCOORD_" + std::to_string(slot->texcoord) +
+                                 ", which the meshes lack; the texture is dropped from the material");
+                *slot = TextureSlot{};
+            }
+        }
+    }
     return loaded;
 }
 

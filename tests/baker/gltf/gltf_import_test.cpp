@@ -266,12 +266,14 @@ TEST(GltfImportTest, QuantizedAttributesAreDequantized) {
 TEST(GltfImportTest, ExternalBufferAndImageGoThroughTheLoader) {
     DocBuilder b;
     addTriangleMesh(b, "tri");
+    b.doc()["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_0"] = b.floats({0, 0, 1, 0, 0, 1}, "VEC2", 2);
     json d = b.doc();
     d["buffers"] = json::array({{{"byteLength", b.bin().size()}, {"uri", "geo%20data.bin"}}});
     d["images"] = json::array({{{"uri", "tex.png"}}});
     d["textures"] = json::array({{{"source", 0}}});
     d["materials"] = json::array({{{"name", "m"},
                                    {"alphaMode", "BLEND"},
+                                   {"emissiveTexture", {{"index", 0}, {"texCoord", 3}}},
                                    {"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}}}, {"metallicFactor", 0.0}}}}});
     d["meshes"][0]["primitives"][0]["material"] = 0;
     const std::string text = d.dump();
@@ -297,6 +299,10 @@ TEST(GltfImportTest, ExternalBufferAndImageGoThroughTheLoader) {
     EXPECT_EQ(m.materials[0].alpha_mode, AlphaMode::Blend);
     EXPECT_EQ(m.materials[0].metallic_factor, 0.0f);
     EXPECT_EQ(m.materials[0].base_color_texture.texture, 0);
+    // TEXCOORD_3 does not exist: the slot is dropped with a warning, keeping the mesh consistent.
+    EXPECT_FALSE(m.materials[0].emissive_texture.isSet());
+    EXPECT_EQ(diagnostics.warningCount(), 1u);
+    EXPECT_TRUE(checkMeshConsistency(m, "x").ok());
     EXPECT_EQ(m.submeshes[0].material.value, 0u);
 }
 

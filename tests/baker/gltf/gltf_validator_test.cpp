@@ -68,6 +68,27 @@ TEST(GltfValidatorTest, TinyMeshWithEveryAttributePasses) {
     Diagnostics diagnostics;
     ASSERT_TRUE(writeMesh(big, big_path, WriteOptions{}, diagnostics).ok());
     files.push_back(big_path);
+    // Awkward input: degenerate triangles, an unreferenced vertex, an empty sub-mesh, colours out of
+    // [0,1], non-unit normals, a zero tangent and a texture that is not an image.
+    Mesh awkward = lodbake_test::richMesh();
+    awkward.positions.push_back(Vec3f(9.0f, 9.0f, 9.0f));
+    awkward.normals.push_back(Vec3f(0.0f, 2.0f, 0.0f));
+    awkward.tangents.push_back(Vec4f(0.0f, 0.0f, 0.0f, 1.0f));
+    for (auto& set : awkward.uvs) set.push_back(Vec2f(0.0f, 0.0f));
+    awkward.colors.push_back(Vec4f(2.0f, -1.0f, 0.5f, 1.0f));
+    awkward.indices.insert(awkward.indices.end(), {0, 0, 1, 2, 2, 2});
+    awkward.submeshes[1].index_count += 6;
+    SubMesh empty;
+    empty.first_index = uint32_t(awkward.indices.size());
+    awkward.submeshes.push_back(empty);
+    Texture junk;
+    junk.bytes = {1, 2, 3};
+    awkward.textures.push_back(junk);
+    awkward.materials[1].emissive_texture.texture = 1;
+    const std::string awkward_path = outDir() + "/awkward.glb";
+    const Status awkward_status = writeMesh(awkward, awkward_path, WriteOptions{}, diagnostics);
+    ASSERT_TRUE(awkward_status.ok()) << awkward_status.message();
+    files.push_back(awkward_path);
     const lodbake_test::CommandResult r = validate(files);
     EXPECT_EQ(r.exit_code, 0) << r.output;
 }
