@@ -4,6 +4,7 @@
 // aligned views, no dangling texture coordinates).
 #include "lodbake/gltf/gltf_io.h"
 
+#include <cctype>
 #include <cmath>
 #include <cstring>
 #include <exception>
@@ -282,6 +283,23 @@ Result<tinygltf::Model> buildModel(const Mesh& mesh, std::vector<uint8_t>& buffe
     return model;
 }
 
+// URIs are percent-encoded: "my mesh.bin" is written as "my%20mesh.bin".
+std::string percentEncode(const std::string& name) {
+    static const char* kHex = "0123456789ABCDEF";
+    std::string out;
+    for (char ch : name) {
+        const auto c = static_cast<unsigned char>(ch);
+        if (std::isalnum(c) || c == '-' || c == '.' || c == '_' || c == '~' || c == '/') {
+            out.push_back(ch);
+        } else {
+            out.push_back('%');
+            out.push_back(kHex[c >> 4]);
+            out.push_back(kHex[c & 15]);
+        }
+    }
+    return out;
+}
+
 Result<GltfFiles> writeImpl(const Mesh& mesh, const GltfWriteOptions& options) {
     std::vector<uint8_t> buffer_bytes;
     LODBAKE_ASSIGN_OR_RETURN(tinygltf::Model model, buildModel(mesh, buffer_bytes));
@@ -296,11 +314,11 @@ Result<GltfFiles> writeImpl(const Mesh& mesh, const GltfWriteOptions& options) {
     }
     if (options.bin_name.empty()) return invalidInput("glTF export: .gltf output needs a side buffer name");
     model.buffers[0].data.clear();
-    model.buffers[0].uri = options.bin_name;
+    model.buffers[0].uri = percentEncode(options.bin_name);
     if (!writer.WriteGltfSceneToStream(&model, stream, true, false)) return internalError("glTF export: tinygltf failed");
     // tinygltf embeds buffers when writing to a stream; point the buffer at the side file instead.
     nlohmann::json json = nlohmann::json::parse(stream.str());
-    json["buffers"] = nlohmann::json::array({{{"byteLength", buffer_bytes.size()}, {"uri", options.bin_name}}});
+    json["buffers"] = nlohmann::json::array({{{"byteLength", buffer_bytes.size()}, {"uri", percentEncode(options.bin_name)}}});
     const std::string text = json.dump(2) + "\n";
     files.main.assign(text.begin(), text.end());
     files.bin = std::move(buffer_bytes);

@@ -1046,6 +1046,7 @@ Result<LoadedMesh> readGltfImpl(const uint8_t* data, size_t size, const std::str
             }
         }
     }
+    LODBAKE_RETURN_IF_ERROR(checkMeshConsistency(mesh, name));
     return loaded;
 }
 

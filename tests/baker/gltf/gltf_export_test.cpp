@@ -119,18 +119,18 @@ TEST(GltfExportTest, GltfWithSideBinRoundTrips) {
     const Mesh source = lodbake_test::richMesh();
     GltfWriteOptions options;
     options.binary = false;
-    options.bin_name = "rich.bin";
+    options.bin_name = "rich mesh.bin";
     Result<GltfFiles> files = writeGltfToMemory(source, options);
     ASSERT_TRUE(files.ok()) << files.status().message();
     ASSERT_FALSE(files->bin.empty());
     EXPECT_EQ(files->bin.size() % 4, 0u);
     const auto json = nlohmann::json::parse(files->main.begin(), files->main.end());
-    EXPECT_EQ(json["buffers"][0]["uri"], "rich.bin");
+    EXPECT_EQ(json["buffers"][0]["uri"], "rich%20mesh.bin");
     EXPECT_EQ(json["buffers"][0]["byteLength"], files->bin.size());
     std::vector<std::string> requested;
     SideFileLoader loader = [&](const std::string& path) -> Result<std::vector<uint8_t>> {
         requested.push_back(path);
-        if (path == "dir/rich.bin") return files->bin;
+        if (path == "dir/rich mesh.bin") return files->bin;
         return ioError(path + ": not found");
     };
     Diagnostics diagnostics;
