@@ -246,7 +246,6 @@ Result<tinygltf::Model> buildModel(const Mesh& mesh, std::vector<uint8_t>& buffe
         all.index_count = uint32_t(mesh.indices.size());
         submeshes.push_back(all);
     }
-    std::vector<bool> material_used(model.materials.size(), false);
     for (const SubMesh& sub : submeshes) {
         if (sub.index_count == 0) continue;
         tinygltf::Accessor accessor;
@@ -258,10 +257,7 @@ Result<tinygltf::Model> buildModel(const Mesh& mesh, std::vector<uint8_t>& buffe
         model.accessors.push_back(std::move(accessor));
         tinygltf::Primitive primitive = base;
         primitive.indices = int(model.accessors.size() - 1);
-        if (sub.material.isValid() && sub.material.value < model.materials.size()) {
-            primitive.material = int(sub.material.value);
-            material_used[sub.material.value] = true;
-        }
+        if (sub.material.isValid() && sub.material.value < model.materials.size()) primitive.material = int(sub.material.value);
         gmesh.primitives.push_back(std::move(primitive));
     }
     if (gmesh.primitives.empty()) return invalidInput("glTF export: every sub-mesh is empty");
@@ -279,7 +275,6 @@ Result<tinygltf::Model> buildModel(const Mesh& mesh, std::vector<uint8_t>& buffe
     tinygltf::Buffer gbuffer;
     gbuffer.data = buffer_bytes;
     model.buffers.push_back(std::move(gbuffer));
-    (void)material_used;
     return model;
 }
 
