@@ -19,7 +19,8 @@ Result<DracoMeshData> decodeImpl(const uint8_t* data, size_t size, const std::ve
     buffer.Init(reinterpret_cast<const char*>(data), size);
     draco::Decoder decoder;
     auto decoded = decoder.DecodeMeshFromBuffer(&buffer);
-    if (!decoded.ok()) return invalidInput(context + ": cannot decode Draco data: " + decoded.status().error_msg_string());
+    if (!decoded.ok())
+        return invalidInput(context + ": cannot decode Draco data: " + decoded.status().error_msg_string());
     std::unique_ptr<draco::Mesh> mesh = std::move(decoded).value();
     if (!mesh) return invalidInput(context + ": Draco data holds no mesh");
 

@@ -17,8 +17,8 @@ struct DracoAttributeData {
 
 struct DracoMeshData {
     uint32_t point_count = 0;
-    std::vector<uint32_t> indices;                 // 3 per face, into the points
-    std::vector<DracoAttributeData> attributes;    // in the order of the requested ids
+    std::vector<uint32_t> indices;              // 3 per face, into the points
+    std::vector<DracoAttributeData> attributes; // in the order of the requested ids
 };
 
 /// Decodes a Draco mesh and extracts the attributes with the given unique ids. `context` prefixes

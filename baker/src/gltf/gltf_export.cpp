@@ -48,8 +48,8 @@ private:
 };
 
 template <class T>
-int addFloatAccessor(tinygltf::Model& model, BufferBuilder& buffer, const std::vector<T>& values, int components, int type,
-                     bool with_bounds) {
+int addFloatAccessor(tinygltf::Model& model, BufferBuilder& buffer, const std::vector<T>& values, int components,
+                     int type, bool with_bounds) {
     std::vector<float> flat;
     flat.reserve(values.size() * size_t(components));
     for (const T& v : values) {
@@ -82,7 +82,9 @@ std::string sniffMime(const std::vector<uint8_t>& b) {
     return "";
 }
 
-bool finite3(const Vec3f& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+bool finite3(const Vec3f& v) {
+    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
 
 // Unit normals for the validator: non-unit ones are renormalised; zero or non-finite ones are
 // replaced by the area-weighted normal of the faces around the vertex (or +Z for isolated vertices).
@@ -166,11 +168,13 @@ Result<tinygltf::Model> buildModel(const Mesh& mesh, std::vector<uint8_t>& buffe
                 addFloatAccessor(model, buffer, exportTangents(mesh, normals), 4, TINYGLTF_TYPE_VEC4, false);
     }
     for (size_t s = 0; s < mesh.uvs.size(); ++s)
-        base.attributes["TEXCOORD_" + std::to_string(s)] = addFloatAccessor(model, buffer, mesh.uvs[s], 2, TINYGLTF_TYPE_VEC2, false);
+        base.attributes["TEXCOORD_" + std::to_string(s)] =
+            addFloatAccessor(model, buffer, mesh.uvs[s], 2, TINYGLTF_TYPE_VEC2, false);
     if (mesh.hasColors()) {
         std::vector<Vec4f> colors = mesh.colors;
         for (Vec4f& c : colors)
-            for (float* f : {&c.x, &c.y, &c.z, &c.w}) *f = std::isfinite(*f) ? std::min(std::max(*f, 0.0f), 1.0f) : 0.0f;
+            for (float* f : {&c.x, &c.y, &c.z, &c.w})
+                *f = std::isfinite(*f) ? std::min(std::max(*f, 0.0f), 1.0f) : 0.0f;
         base.attributes["COLOR_0"] = addFloatAccessor(model, buffer, colors, 4, TINYGLTF_TYPE_VEC4, false);
     }
 
@@ -214,7 +218,8 @@ Result<tinygltf::Model> buildModel(const Mesh& mesh, std::vector<uint8_t>& buffe
         tinygltf::Material out;
         out.name = in.name;
         auto& pbr = out.pbrMetallicRoughness;
-        pbr.baseColorFactor = {in.base_color_factor.x, in.base_color_factor.y, in.base_color_factor.z, in.base_color_factor.w};
+        pbr.baseColorFactor = {in.base_color_factor.x, in.base_color_factor.y, in.base_color_factor.z,
+                               in.base_color_factor.w};
         for (double& f : pbr.baseColorFactor) f = std::isfinite(f) ? std::min(std::max(f, 0.0), 1.0) : 1.0;
         pbr.metallicFactor = std::min(std::max(double(in.metallic_factor), 0.0), 1.0);
         pbr.roughnessFactor = std::min(std::max(double(in.roughness_factor), 0.0), 1.0);
@@ -228,12 +233,16 @@ Result<tinygltf::Model> buildModel(const Mesh& mesh, std::vector<uint8_t>& buffe
         out.emissiveFactor = {in.emissive_factor.x, in.emissive_factor.y, in.emissive_factor.z};
         for (double& f : out.emissiveFactor) f = std::isfinite(f) ? std::min(std::max(f, 0.0), 1.0) : 0.0;
         switch (in.alpha_mode) {
-        case AlphaMode::Opaque: out.alphaMode = "OPAQUE"; break;
+        case AlphaMode::Opaque:
+            out.alphaMode = "OPAQUE";
+            break;
         case AlphaMode::Mask:
             out.alphaMode = "MASK";
             out.alphaCutoff = std::max(double(in.alpha_cutoff), 0.0);
             break;
-        case AlphaMode::Blend: out.alphaMode = "BLEND"; break;
+        case AlphaMode::Blend:
+            out.alphaMode = "BLEND";
+            break;
         }
         out.doubleSided = in.is_double_sided;
         model.materials.push_back(std::move(out));
@@ -251,13 +260,15 @@ Result<tinygltf::Model> buildModel(const Mesh& mesh, std::vector<uint8_t>& buffe
         tinygltf::Accessor accessor;
         accessor.bufferView = index_view;
         accessor.byteOffset = size_t(sub.first_index) * size_t(index_size);
-        accessor.componentType = short_indices ? TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT : TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT;
+        accessor.componentType =
+            short_indices ? TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT : TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT;
         accessor.count = sub.index_count;
         accessor.type = TINYGLTF_TYPE_SCALAR;
         model.accessors.push_back(std::move(accessor));
         tinygltf::Primitive primitive = base;
         primitive.indices = int(model.accessors.size() - 1);
-        if (sub.material.isValid() && sub.material.value < model.materials.size()) primitive.material = int(sub.material.value);
+        if (sub.material.isValid() && sub.material.value < model.materials.size())
+            primitive.material = int(sub.material.value);
         gmesh.primitives.push_back(std::move(primitive));
     }
     if (gmesh.primitives.empty()) return invalidInput("glTF export: every sub-mesh is empty");
@@ -302,7 +313,8 @@ Result<GltfFiles> writeImpl(const Mesh& mesh, const GltfWriteOptions& options) {
     std::ostringstream stream;
     GltfFiles files;
     if (options.binary) {
-        if (!writer.WriteGltfSceneToStream(&model, stream, false, true)) return internalError("glTF export: tinygltf failed");
+        if (!writer.WriteGltfSceneToStream(&model, stream, false, true))
+            return internalError("glTF export: tinygltf failed");
         const std::string s = stream.str();
         files.main.assign(s.begin(), s.end());
         return files;
@@ -310,10 +322,12 @@ Result<GltfFiles> writeImpl(const Mesh& mesh, const GltfWriteOptions& options) {
     if (options.bin_name.empty()) return invalidInput("glTF export: .gltf output needs a side buffer name");
     model.buffers[0].data.clear();
     model.buffers[0].uri = percentEncode(options.bin_name);
-    if (!writer.WriteGltfSceneToStream(&model, stream, true, false)) return internalError("glTF export: tinygltf failed");
+    if (!writer.WriteGltfSceneToStream(&model, stream, true, false))
+        return internalError("glTF export: tinygltf failed");
     // tinygltf embeds buffers when writing to a stream; point the buffer at the side file instead.
     nlohmann::json json = nlohmann::json::parse(stream.str());
-    json["buffers"] = nlohmann::json::array({{{"byteLength", buffer_bytes.size()}, {"uri", percentEncode(options.bin_name)}}});
+    json["buffers"] =
+        nlohmann::json::array({{{"byteLength", buffer_bytes.size()}, {"uri", percentEncode(options.bin_name)}}});
     const std::string text = json.dump(2) + "\n";
     files.main.assign(text.begin(), text.end());
     files.bin = std::move(buffer_bytes);

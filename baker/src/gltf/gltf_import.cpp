@@ -23,12 +23,14 @@ namespace lodbake {
 
 namespace {
 
-constexpr uint32_t kGlbMagic = 0x46546C67;     // "glTF"
-constexpr uint32_t kChunkJson = 0x4E4F534A;    // "JSON"
-constexpr uint32_t kChunkBin = 0x004E4942;     // "BIN\0"
+constexpr uint32_t kGlbMagic = 0x46546C67;  // "glTF"
+constexpr uint32_t kChunkJson = 0x4E4F534A; // "JSON"
+constexpr uint32_t kChunkBin = 0x004E4942;  // "BIN\0"
 constexpr const char* kDracoExtension = "KHR_draco_mesh_compression";
 
-uint32_t readU32(const uint8_t* p) { return uint32_t(p[0]) | uint32_t(p[1]) << 8 | uint32_t(p[2]) << 16 | uint32_t(p[3]) << 24; }
+uint32_t readU32(const uint8_t* p) {
+    return uint32_t(p[0]) | uint32_t(p[1]) << 8 | uint32_t(p[2]) << 16 | uint32_t(p[3]) << 24;
+}
 
 // Checks the GLB container (header and chunk table) before tinygltf reads it.
 Status checkGlbContainer(const uint8_t* data, size_t size, const std::string& name, const uint8_t** json,
@@ -39,8 +41,8 @@ Status checkGlbContainer(const uint8_t* data, size_t size, const std::string& na
     if (version != 2) return invalidInput(name + ": GLB header: version " + std::to_string(version) + ", expected 2");
     const uint32_t total = readU32(data + 8);
     if (total != size)
-        return invalidInput(name + ": GLB header: length field says " + std::to_string(total) + " bytes but the file has " +
-                            std::to_string(size));
+        return invalidInput(name + ": GLB header: length field says " + std::to_string(total) +
+                            " bytes but the file has " + std::to_string(size));
     size_t offset = 12;
     int chunk_index = 0;
     while (offset < size) {
@@ -49,8 +51,9 @@ Status checkGlbContainer(const uint8_t* data, size_t size, const std::string& na
         const uint32_t length = readU32(data + offset);
         const uint32_t type = readU32(data + offset + 4);
         if (uint64_t(length) > size - offset - 8)
-            return invalidInput(name + ": GLB chunk " + std::to_string(chunk_index) + ": length " + std::to_string(length) +
-                                " runs past the end of the file (" + std::to_string(size - offset - 8) + " bytes left)");
+            return invalidInput(name + ": GLB chunk " + std::to_string(chunk_index) + ": length " +
+                                std::to_string(length) + " runs past the end of the file (" +
+                                std::to_string(size - offset - 8) + " bytes left)");
         if (chunk_index == 0) {
             if (type != kChunkJson) return invalidInput(name + ": GLB chunk 0: expected the JSON chunk first");
             *json = data + offset + 8;
@@ -96,7 +99,8 @@ Status checkJsonReferences(const uint8_t* json_bytes, size_t json_size, const st
     const nlohmann::json* views = arrayOf("bufferViews");
     const nlohmann::json* images = arrayOf("images");
     for (const auto* a : {buffers, views, images})
-        if (a != nullptr && !a->is_array()) return invalidInput(name + ": JSON: buffers, bufferViews and images must be arrays");
+        if (a != nullptr && !a->is_array())
+            return invalidInput(name + ": JSON: buffers, bufferViews and images must be arrays");
     const size_t buffer_count = buffers ? buffers->size() : 0;
     const size_t view_count = views ? views->size() : 0;
     for (size_t i = 0; i < view_count; ++i) {
@@ -112,7 +116,8 @@ Status checkJsonReferences(const uint8_t* json_bytes, size_t json_size, const st
             declared = buffer["byteLength"].get<uint64_t>();
         uint64_t offset = 0, length = 0;
         if (v.contains("byteOffset")) {
-            if (!v["byteOffset"].is_number_unsigned()) return invalidInput(where + ": byteOffset: expected a non-negative integer");
+            if (!v["byteOffset"].is_number_unsigned())
+                return invalidInput(where + ": byteOffset: expected a non-negative integer");
             offset = v["byteOffset"].get<uint64_t>();
         }
         if (!v.contains("byteLength") || !v["byteLength"].is_number_unsigned())
@@ -140,8 +145,9 @@ Status checkJsonReferences(const uint8_t* json_bytes, size_t json_size, const st
             nlohmann::json& primitives = mesh["primitives"];
             for (size_t p = 0; p < primitives.size(); ++p) {
                 nlohmann::json& primitive = primitives[p];
-                if (!primitive.is_object() || !primitive.contains("extensions") || !primitive["extensions"].is_object() ||
-                    !primitive["extensions"].contains(kDracoExtension) || !primitive.contains("indices"))
+                if (!primitive.is_object() || !primitive.contains("extensions") ||
+                    !primitive["extensions"].is_object() || !primitive["extensions"].contains(kDracoExtension) ||
+                    !primitive.contains("indices"))
                     continue;
                 if (!primitive["indices"].is_number_unsigned())
                     return invalidInput(name + ": mesh " + std::to_string(m) + " primitive " + std::to_string(p) +
@@ -196,13 +202,18 @@ std::string percentDecode(const std::string& uri) {
     return out;
 }
 
-bool fileExists(const std::string&, void*) { return true; }
-std::string expandFilePath(const std::string& path, void*) { return path; }
+bool fileExists(const std::string&, void*) {
+    return true;
+}
+std::string expandFilePath(const std::string& path, void*) {
+    return path;
+}
 bool readWholeFile(std::vector<unsigned char>* out, std::string* err, const std::string& path, void* user) {
     auto* context = static_cast<LoaderContext*>(user);
     // tinygltf joins base_dir and the raw URI; decode the URI part and join it our way.
     std::string uri = path;
-    if (!context->base_dir.empty() && uri.rfind(context->base_dir + "/", 0) == 0) uri = uri.substr(context->base_dir.size() + 1);
+    if (!context->base_dir.empty() && uri.rfind(context->base_dir + "/", 0) == 0)
+        uri = uri.substr(context->base_dir.size() + 1);
     Result<std::vector<uint8_t>> bytes = (*context->load_side_file)(joinPath(context->base_dir, percentDecode(uri)));
     if (!bytes.ok()) {
         if (err) *err += bytes.status().message() + "\n";
@@ -215,8 +226,8 @@ bool writeWholeFile(std::string* err, const std::string&, const std::vector<unsi
     if (err) *err += "writing is not allowed while reading\n";
     return false;
 }
-bool keepEncodedImage(tinygltf::Image* image, const int, std::string*, std::string*, int, int, const unsigned char* bytes,
-                      int size, void*) {
+bool keepEncodedImage(tinygltf::Image* image, const int, std::string*, std::string*, int, int,
+                      const unsigned char* bytes, int size, void*) {
     // Images in buffer views are copied later with bounds checks; only URI images are kept here.
     if (image->bufferView < 0 && bytes != nullptr && size > 0) image->image.assign(bytes, bytes + size);
     image->as_is = true;
@@ -242,35 +253,52 @@ std::string firstLine(const std::string& text) {
 int componentSize(int component_type) {
     switch (component_type) {
     case TINYGLTF_COMPONENT_TYPE_BYTE:
-    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return 1;
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
+        return 1;
     case TINYGLTF_COMPONENT_TYPE_SHORT:
-    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: return 2;
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT:
+        return 2;
     case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT:
-    case TINYGLTF_COMPONENT_TYPE_FLOAT: return 4;
-    default: return 0;
+    case TINYGLTF_COMPONENT_TYPE_FLOAT:
+        return 4;
+    default:
+        return 0;
     }
 }
 
 int componentCount(int type) {
     switch (type) {
-    case TINYGLTF_TYPE_SCALAR: return 1;
-    case TINYGLTF_TYPE_VEC2: return 2;
-    case TINYGLTF_TYPE_VEC3: return 3;
-    case TINYGLTF_TYPE_VEC4: return 4;
-    case TINYGLTF_TYPE_MAT2: return 4;
-    case TINYGLTF_TYPE_MAT3: return 9;
-    case TINYGLTF_TYPE_MAT4: return 16;
-    default: return 0;
+    case TINYGLTF_TYPE_SCALAR:
+        return 1;
+    case TINYGLTF_TYPE_VEC2:
+        return 2;
+    case TINYGLTF_TYPE_VEC3:
+        return 3;
+    case TINYGLTF_TYPE_VEC4:
+        return 4;
+    case TINYGLTF_TYPE_MAT2:
+        return 4;
+    case TINYGLTF_TYPE_MAT3:
+        return 9;
+    case TINYGLTF_TYPE_MAT4:
+        return 16;
+    default:
+        return 0;
     }
 }
 
 const char* typeName(int components) {
     switch (components) {
-    case 1: return "SCALAR";
-    case 2: return "VEC2";
-    case 3: return "VEC3";
-    case 4: return "VEC4";
-    default: return "MAT";
+    case 1:
+        return "SCALAR";
+    case 2:
+        return "VEC2";
+    case 3:
+        return "VEC3";
+    case 4:
+        return "VEC4";
+    default:
+        return "MAT";
     }
 }
 
@@ -280,7 +308,8 @@ double readComponent(const uint8_t* p, int component_type, bool normalized) {
         const double v = double(int8_t(p[0]));
         return normalized ? std::max(v / 127.0, -1.0) : v;
     }
-    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return normalized ? p[0] / 255.0 : double(p[0]);
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
+        return normalized ? p[0] / 255.0 : double(p[0]);
     case TINYGLTF_COMPONENT_TYPE_SHORT: {
         int16_t s;
         std::memcpy(&s, p, 2);
@@ -291,13 +320,15 @@ double readComponent(const uint8_t* p, int component_type, bool normalized) {
         std::memcpy(&s, p, 2);
         return normalized ? s / 65535.0 : double(s);
     }
-    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: return double(readU32(p));
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT:
+        return double(readU32(p));
     case TINYGLTF_COMPONENT_TYPE_FLOAT: {
         float f;
         std::memcpy(&f, p, 4);
         return double(f);
     }
-    default: return 0.0;
+    default:
+        return 0.0;
     }
 }
 
@@ -310,14 +341,15 @@ struct AccessorData {
 };
 
 // Bytes [offset, offset + length) of a buffer view, checked against its buffer.
-Result<std::pair<const uint8_t*, size_t>> viewBytes(const tinygltf::Model& model, int view_index, const std::string& where) {
+Result<std::pair<const uint8_t*, size_t>> viewBytes(const tinygltf::Model& model, int view_index,
+                                                    const std::string& where) {
     if (view_index < 0 || size_t(view_index) >= model.bufferViews.size())
         return invalidInput(where + ": bufferView " + std::to_string(view_index) + " does not exist (" +
                             std::to_string(model.bufferViews.size()) + " buffer views)");
     const tinygltf::BufferView& view = model.bufferViews[size_t(view_index)];
     if (view.buffer < 0 || size_t(view.buffer) >= model.buffers.size())
-        return invalidInput(where + ": bufferView " + std::to_string(view_index) + ": buffer " + std::to_string(view.buffer) +
-                            " does not exist");
+        return invalidInput(where + ": bufferView " + std::to_string(view_index) + ": buffer " +
+                            std::to_string(view.buffer) + " does not exist");
     const std::vector<unsigned char>& data = model.buffers[size_t(view.buffer)].data;
     if (view.byteOffset > data.size() || view.byteLength > data.size() - view.byteOffset)
         return invalidInput(where + ": bufferView " + std::to_string(view_index) + ": bytes " +
@@ -333,8 +365,9 @@ Status checkRange(size_t view_length, size_t offset, size_t count, size_t stride
     if (count == 0) return Status::okStatus();
     const uint64_t last = uint64_t(offset) + uint64_t(count - 1) * stride + element_size;
     if (offset > view_length || last > view_length)
-        return invalidInput(where + ": " + std::to_string(count) + " elements from byte offset " + std::to_string(offset) +
-                            " need " + std::to_string(last) + " bytes but the buffer view has " + std::to_string(view_length));
+        return invalidInput(where + ": " + std::to_string(count) + " elements from byte offset " +
+                            std::to_string(offset) + " need " + std::to_string(last) +
+                            " bytes but the buffer view has " + std::to_string(view_length));
     return Status::okStatus();
 }
 
@@ -342,7 +375,8 @@ Result<AccessorData> readAccessor(const tinygltf::Model& model, int index, const
                                   const ReadOptions& options) {
     const std::string where = where_prefix;
     if (index < 0 || size_t(index) >= model.accessors.size())
-        return invalidInput(where + ": accessor does not exist (" + std::to_string(model.accessors.size()) + " accessors)");
+        return invalidInput(where + ": accessor does not exist (" + std::to_string(model.accessors.size()) +
+                            " accessors)");
     const tinygltf::Accessor& accessor = model.accessors[size_t(index)];
     AccessorData out;
     out.component_type = accessor.componentType;
@@ -373,7 +407,8 @@ Result<AccessorData> readAccessor(const tinygltf::Model& model, int index, const
                                     "-byte elements");
             stride = bv.byteStride;
         }
-        LODBAKE_RETURN_IF_ERROR(checkRange(view.second, accessor.byteOffset, accessor.count, stride, element_size, where));
+        LODBAKE_RETURN_IF_ERROR(
+            checkRange(view.second, accessor.byteOffset, accessor.count, stride, element_size, where));
         out.values.resize(accessor.count * size_t(out.components));
         for (size_t i = 0; i < accessor.count; ++i) {
             const uint8_t* p = view.first + accessor.byteOffset + i * stride;
@@ -389,7 +424,8 @@ Result<AccessorData> readAccessor(const tinygltf::Model& model, int index, const
         const auto& sparse = accessor.sparse;
         const std::string sw = where + ": sparse";
         if (sparse.count <= 0 || size_t(sparse.count) > accessor.count)
-            return invalidInput(sw + ": count " + std::to_string(sparse.count) + " must be 1.." + std::to_string(accessor.count));
+            return invalidInput(sw + ": count " + std::to_string(sparse.count) + " must be 1.." +
+                                std::to_string(accessor.count));
         const int isize = componentSize(sparse.indices.componentType);
         if (sparse.indices.componentType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE &&
             sparse.indices.componentType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
@@ -406,8 +442,9 @@ Result<AccessorData> readAccessor(const tinygltf::Model& model, int index, const
                                            element_size, element_size, sw + " values"));
         int64_t previous = -1;
         for (size_t k = 0; k < size_t(sparse.count); ++k) {
-            const auto target = int64_t(readComponent(iview.first + size_t(sparse.indices.byteOffset) + k * size_t(isize),
-                                                      sparse.indices.componentType, false));
+            const auto target =
+                int64_t(readComponent(iview.first + size_t(sparse.indices.byteOffset) + k * size_t(isize),
+                                      sparse.indices.componentType, false));
             if (target <= previous || uint64_t(target) >= accessor.count)
                 return invalidInput(sw + ": index " + std::to_string(k) + " (" + std::to_string(target) +
                                     ") must be increasing and below " + std::to_string(accessor.count));
@@ -421,12 +458,13 @@ Result<AccessorData> readAccessor(const tinygltf::Model& model, int index, const
     return out;
 }
 
-
 // ---- Transforms ---------------------------------------------------------------------------------
 
 using Mat4 = std::array<double, 16>; // column-major, like glTF
 
-Mat4 identity() { return {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1}; }
+Mat4 identity() {
+    return {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+}
 
 Mat4 multiply(const Mat4& a, const Mat4& b) {
     Mat4 r{};
@@ -468,9 +506,9 @@ Result<Mat4> localMatrix(const tinygltf::Node& node, const std::string& where) {
     for (double v : {t[0], t[1], t[2], s[0], s[1], s[2]})
         if (!std::isfinite(v)) return invalidInput(where + ": translation/scale: not finite");
     const double x = q[0], y = q[1], z = q[2], w = q[3];
-    const double r[9] = {1 - 2 * (y * y + z * z), 2 * (x * y + z * w), 2 * (x * z - y * w),
-                         2 * (x * y - z * w), 1 - 2 * (x * x + z * z), 2 * (y * z + x * w),
-                         2 * (x * z + y * w), 2 * (y * z - x * w), 1 - 2 * (x * x + y * y)}; // column-major
+    const double r[9] = {1 - 2 * (y * y + z * z), 2 * (x * y + z * w),     2 * (x * z - y * w),
+                         2 * (x * y - z * w),     1 - 2 * (x * x + z * z), 2 * (y * z + x * w),
+                         2 * (x * z + y * w),     2 * (y * z - x * w),     1 - 2 * (x * x + y * y)}; // column-major
     Mat4 m{};
     for (int c = 0; c < 3; ++c)
         for (int row = 0; row < 3; ++row) m[size_t(c * 4 + row)] = r[c * 3 + row] * s[c];
@@ -563,13 +601,15 @@ Status checkAttributeFormat(const AttributeSource& a, const std::string& where, 
             return invalidInput(where + ": integer positions need KHR_mesh_quantization in extensionsUsed");
     } else if (s == "NORMAL") {
         LODBAKE_RETURN_IF_ERROR(expectComponents(3));
-        if (!is_float && !(quantized && d.normalized && (d.component_type == TINYGLTF_COMPONENT_TYPE_BYTE ||
-                                                         d.component_type == TINYGLTF_COMPONENT_TYPE_SHORT)))
+        if (!is_float &&
+            !(quantized && d.normalized &&
+              (d.component_type == TINYGLTF_COMPONENT_TYPE_BYTE || d.component_type == TINYGLTF_COMPONENT_TYPE_SHORT)))
             return invalidInput(where + ": expected float (or normalized byte/short with KHR_mesh_quantization)");
     } else if (s == "TANGENT") {
         LODBAKE_RETURN_IF_ERROR(expectComponents(4));
-        if (!is_float && !(quantized && d.normalized && (d.component_type == TINYGLTF_COMPONENT_TYPE_BYTE ||
-                                                         d.component_type == TINYGLTF_COMPONENT_TYPE_SHORT)))
+        if (!is_float &&
+            !(quantized && d.normalized &&
+              (d.component_type == TINYGLTF_COMPONENT_TYPE_BYTE || d.component_type == TINYGLTF_COMPONENT_TYPE_SHORT)))
             return invalidInput(where + ": expected float (or normalized byte/short with KHR_mesh_quantization)");
     } else if (s.rfind("TEXCOORD_", 0) == 0) {
         LODBAKE_RETURN_IF_ERROR(expectComponents(2));
@@ -619,7 +659,8 @@ Result<PrimitiveData> readPrimitive(const tinygltf::Model& model, const tinygltf
         std::vector<std::string> semantics;
         for (const std::string& key : attrs.Keys()) {
             const tinygltf::Value& id = attrs.Get(key);
-            if (!id.IsNumber() || id.GetNumberAsInt() < 0) return invalidInput(dw + ": attributes." + key + ": expected an id");
+            if (!id.IsNumber() || id.GetNumberAsInt() < 0)
+                return invalidInput(dw + ": attributes." + key + ": expected an id");
             if (!wantedSemantic(key)) continue;
             if (primitive.attributes.count(key) == 0)
                 return invalidInput(dw + ": attributes." + key + ": the primitive has no such attribute accessor");
@@ -653,11 +694,12 @@ Result<PrimitiveData> readPrimitive(const tinygltf::Model& model, const tinygltf
         }
         if (draco_indices_accessor >= 0) {
             if (size_t(draco_indices_accessor) >= model.accessors.size())
-                return invalidInput(where + ": indices accessor " + std::to_string(draco_indices_accessor) + " does not exist");
+                return invalidInput(where + ": indices accessor " + std::to_string(draco_indices_accessor) +
+                                    " does not exist");
             const size_t declared = model.accessors[size_t(draco_indices_accessor)].count;
             if (declared != decoded.indices.size())
-                return invalidInput(where + ": accessor " + std::to_string(draco_indices_accessor) + " (indices): count " +
-                                    std::to_string(declared) + " but the Draco data has " +
+                return invalidInput(where + ": accessor " + std::to_string(draco_indices_accessor) +
+                                    " (indices): count " + std::to_string(declared) + " but the Draco data has " +
                                     std::to_string(decoded.indices.size()) + " indices");
         }
         draco_indices = std::move(decoded.indices);
@@ -675,7 +717,8 @@ Result<PrimitiveData> readPrimitive(const tinygltf::Model& model, const tinygltf
     }
 
     // POSITION first, so that its problems are the ones reported.
-    std::stable_partition(sources.begin(), sources.end(), [](const AttributeSource& a) { return a.semantic == "POSITION"; });
+    std::stable_partition(sources.begin(), sources.end(),
+                          [](const AttributeSource& a) { return a.semantic == "POSITION"; });
     const AttributeSource* position = nullptr;
     for (const auto& s : sources)
         if (s.semantic == "POSITION") position = &s;
@@ -693,7 +736,8 @@ Result<PrimitiveData> readPrimitive(const tinygltf::Model& model, const tinygltf
             out.positions.resize(vertex_count);
             for (size_t i = 0; i < vertex_count; ++i) {
                 const Vec3f p(float(v[i * 3]), float(v[i * 3 + 1]), float(v[i * 3 + 2]));
-                if (!isFinite(p) || !std::isfinite(v[i * 3]) || !std::isfinite(v[i * 3 + 1]) || !std::isfinite(v[i * 3 + 2]))
+                if (!isFinite(p) || !std::isfinite(v[i * 3]) || !std::isfinite(v[i * 3 + 1]) ||
+                    !std::isfinite(v[i * 3 + 2]))
                     return invalidInput(aw + ": vertex " + std::to_string(i) + " is not finite (NaN or Inf)");
                 out.positions[i] = p;
             }
@@ -704,12 +748,14 @@ Result<PrimitiveData> readPrimitive(const tinygltf::Model& model, const tinygltf
         } else if (s.semantic == "TANGENT") {
             out.tangents.resize(vertex_count);
             for (size_t i = 0; i < vertex_count; ++i)
-                out.tangents[i] = Vec4f(float(v[i * 4]), float(v[i * 4 + 1]), float(v[i * 4 + 2]), v[i * 4 + 3] < 0 ? -1.0f : 1.0f);
+                out.tangents[i] =
+                    Vec4f(float(v[i * 4]), float(v[i * 4 + 1]), float(v[i * 4 + 2]), v[i * 4 + 3] < 0 ? -1.0f : 1.0f);
         } else if (s.semantic == "COLOR_0") {
             out.colors.resize(vertex_count);
             const size_t n = size_t(s.data.components);
             for (size_t i = 0; i < vertex_count; ++i)
-                out.colors[i] = Vec4f(float(v[i * n]), float(v[i * n + 1]), float(v[i * n + 2]), n == 4 ? float(v[i * n + 3]) : 1.0f);
+                out.colors[i] = Vec4f(float(v[i * n]), float(v[i * n + 1]), float(v[i * n + 2]),
+                                      n == 4 ? float(v[i * n + 3]) : 1.0f);
         } else {
             const std::string digits = s.semantic.substr(9);
             if (digits.empty() || digits.size() > 2 || digits.find_first_not_of("0123456789") != std::string::npos)
@@ -758,14 +804,17 @@ Result<PrimitiveData> readPrimitive(const tinygltf::Model& model, const tinygltf
         for (size_t i = 0; i + 2 < raw.size(); ++i) {
             const uint32_t a = raw[i], b = raw[i + 1], c = raw[i + 2];
             if (a == b || b == c || a == c) continue; // strip restarts
-            if (i % 2 == 0) out.indices.insert(out.indices.end(), {a, b, c});
-            else out.indices.insert(out.indices.end(), {a, c, b}); // spec order for odd triangles
+            if (i % 2 == 0)
+                out.indices.insert(out.indices.end(), {a, b, c});
+            else
+                out.indices.insert(out.indices.end(), {a, c, b}); // spec order for odd triangles
         }
         break;
     case TINYGLTF_MODE_TRIANGLE_FAN:
         for (size_t i = 1; i + 1 < raw.size(); ++i) out.indices.insert(out.indices.end(), {raw[i], raw[i + 1], raw[0]});
         break;
-    default: return invalidInput(where + ": mode " + std::to_string(primitive.mode) + " is not valid");
+    default:
+        return invalidInput(where + ": mode " + std::to_string(primitive.mode) + " is not valid");
     }
     return out;
 }
@@ -789,13 +838,15 @@ Vec3f transformVector(const std::array<double, 9>& m, const Vec3f& v) { // colum
 void applyTransform(const Mat4& world, PrimitiveData& p) {
     if (world == identity()) return;
     for (Vec3f& v : p.positions) v = transformPoint(world, v);
-    const std::array<double, 9> a = {world[0], world[1], world[2], world[4], world[5], world[6], world[8], world[9], world[10]};
-    const double det = a[0] * (a[4] * a[8] - a[7] * a[5]) - a[3] * (a[1] * a[8] - a[7] * a[2]) + a[6] * (a[1] * a[5] - a[4] * a[2]);
+    const std::array<double, 9> a = {world[0], world[1], world[2], world[4], world[5],
+                                     world[6], world[8], world[9], world[10]};
+    const double det =
+        a[0] * (a[4] * a[8] - a[7] * a[5]) - a[3] * (a[1] * a[8] - a[7] * a[2]) + a[6] * (a[1] * a[5] - a[4] * a[2]);
     // Inverse transpose is the cofactor matrix divided by det; the scale goes away on renormalisation,
     // but its sign matters.
     const std::array<double, 9> cof = {a[4] * a[8] - a[5] * a[7], a[5] * a[6] - a[3] * a[8], a[3] * a[7] - a[4] * a[6],
-                                 a[2] * a[7] - a[1] * a[8], a[0] * a[8] - a[2] * a[6], a[1] * a[6] - a[0] * a[7],
-                                 a[1] * a[5] - a[2] * a[4], a[2] * a[3] - a[0] * a[5], a[0] * a[4] - a[1] * a[3]};
+                                       a[2] * a[7] - a[1] * a[8], a[0] * a[8] - a[2] * a[6], a[1] * a[6] - a[0] * a[7],
+                                       a[1] * a[5] - a[2] * a[4], a[2] * a[3] - a[0] * a[5], a[0] * a[4] - a[1] * a[3]};
     // cof is the cofactor matrix (det * inverse transpose), column-major like `a`; only its sign
     // needs fixing, the scale goes away on renormalisation.
     std::array<double, 9> nm = cof;
@@ -833,7 +884,8 @@ Status importMaterials(const tinygltf::Model& model, const std::string& name, co
         if (out.name.empty()) out.name = image.name;
         if (image.uri.rfind("data:", 0) != 0) out.uri = image.uri;
         if (image.bufferView >= 0) {
-            LODBAKE_ASSIGN_OR_RETURN(auto bytes, viewBytes(model, image.bufferView, name + ": image " + std::to_string(texture.source)));
+            LODBAKE_ASSIGN_OR_RETURN(
+                auto bytes, viewBytes(model, image.bufferView, name + ": image " + std::to_string(texture.source)));
             out.bytes.assign(bytes.first, bytes.first + bytes.second);
         } else {
             out.bytes = image.image;
@@ -867,17 +919,23 @@ Status importMaterials(const tinygltf::Model& model, const std::string& name, co
         out.metallic_factor = float(pbr.metallicFactor);
         out.roughness_factor = float(pbr.roughnessFactor);
         if (in.emissiveFactor.size() == 3)
-            out.emissive_factor = Vec3f(float(in.emissiveFactor[0]), float(in.emissiveFactor[1]), float(in.emissiveFactor[2]));
-        LODBAKE_RETURN_IF_ERROR(slot(pbr.baseColorTexture.index, pbr.baseColorTexture.texCoord, where, out.base_color_texture));
+            out.emissive_factor =
+                Vec3f(float(in.emissiveFactor[0]), float(in.emissiveFactor[1]), float(in.emissiveFactor[2]));
+        LODBAKE_RETURN_IF_ERROR(
+            slot(pbr.baseColorTexture.index, pbr.baseColorTexture.texCoord, where, out.base_color_texture));
         LODBAKE_RETURN_IF_ERROR(slot(pbr.metallicRoughnessTexture.index, pbr.metallicRoughnessTexture.texCoord, where,
                                      out.metallic_roughness_texture));
         LODBAKE_RETURN_IF_ERROR(slot(in.normalTexture.index, in.normalTexture.texCoord, where, out.normal_texture));
         out.normal_scale = float(in.normalTexture.scale);
-        LODBAKE_RETURN_IF_ERROR(slot(in.occlusionTexture.index, in.occlusionTexture.texCoord, where, out.occlusion_texture));
+        LODBAKE_RETURN_IF_ERROR(
+            slot(in.occlusionTexture.index, in.occlusionTexture.texCoord, where, out.occlusion_texture));
         out.occlusion_strength = float(in.occlusionTexture.strength);
-        LODBAKE_RETURN_IF_ERROR(slot(in.emissiveTexture.index, in.emissiveTexture.texCoord, where, out.emissive_texture));
-        if (in.alphaMode == "MASK") out.alpha_mode = AlphaMode::Mask;
-        else if (in.alphaMode == "BLEND") out.alpha_mode = AlphaMode::Blend;
+        LODBAKE_RETURN_IF_ERROR(
+            slot(in.emissiveTexture.index, in.emissiveTexture.texCoord, where, out.emissive_texture));
+        if (in.alphaMode == "MASK")
+            out.alpha_mode = AlphaMode::Mask;
+        else if (in.alphaMode == "BLEND")
+            out.alpha_mode = AlphaMode::Blend;
         else if (!in.alphaMode.empty() && in.alphaMode != "OPAQUE")
             return invalidInput(where + ": alphaMode \"" + in.alphaMode + "\", expected OPAQUE, MASK or BLEND");
         out.alpha_cutoff = float(in.alphaCutoff);
@@ -888,10 +946,12 @@ Status importMaterials(const tinygltf::Model& model, const std::string& name, co
 }
 
 Result<LoadedMesh> readGltfImpl(const uint8_t* data, size_t size, const std::string& name,
-                                const SideFileLoader& load_side_file, const ReadOptions& options, Diagnostics& diagnostics) {
+                                const SideFileLoader& load_side_file, const ReadOptions& options,
+                                Diagnostics& diagnostics) {
     const bool is_glb = size >= 4 && readU32(data) == kGlbMagic;
     if (!is_glb && lowerExtension(name) == ".glb") {
-        if (size < 12) return invalidInput(name + ": GLB header: expected 12 bytes, the file has " + std::to_string(size));
+        if (size < 12)
+            return invalidInput(name + ": GLB header: expected 12 bytes, the file has " + std::to_string(size));
         return invalidInput(name + ": GLB header: bad magic, expected \"glTF\"");
     }
     const uint8_t* json = data;
@@ -903,8 +963,10 @@ Result<LoadedMesh> readGltfImpl(const uint8_t* data, size_t size, const std::str
     if (size > std::numeric_limits<unsigned int>::max()) return resourceLimit(name + ": file larger than 4 GiB");
     std::vector<uint8_t> rewritten;
     if (prepass.is_changed) {
-        if (is_glb) rewritten = replaceGlbJson(data, size, json_size, prepass.json_text);
-        else rewritten.assign(prepass.json_text.begin(), prepass.json_text.end());
+        if (is_glb)
+            rewritten = replaceGlbJson(data, size, json_size, prepass.json_text);
+        else
+            rewritten.assign(prepass.json_text.begin(), prepass.json_text.end());
         data = rewritten.data();
         size = rewritten.size();
     }
@@ -917,9 +979,10 @@ Result<LoadedMesh> readGltfImpl(const uint8_t* data, size_t size, const std::str
         loader.SetImageLoader(&keepEncodedImage, nullptr);
         std::string err, warn;
         const std::string base_dir = parentDirectory(name);
-        const bool ok = is_glb ? loader.LoadBinaryFromMemory(&model, &err, &warn, data, static_cast<unsigned int>(size), base_dir)
-                               : loader.LoadASCIIFromString(&model, &err, &warn, reinterpret_cast<const char*>(data),
-                                                            static_cast<unsigned int>(size), base_dir);
+        const bool ok =
+            is_glb ? loader.LoadBinaryFromMemory(&model, &err, &warn, data, static_cast<unsigned int>(size), base_dir)
+                   : loader.LoadASCIIFromString(&model, &err, &warn, reinterpret_cast<const char*>(data),
+                                                static_cast<unsigned int>(size), base_dir);
         if (!ok) return invalidInput(name + ": " + firstLine(err));
         if (!warn.empty()) diagnostics.note(name + ": " + firstLine(warn));
     }
@@ -943,14 +1006,15 @@ Result<LoadedMesh> readGltfImpl(const uint8_t* data, size_t size, const std::str
     bool used_draco = false;
     std::vector<PrimitiveData> parts;
     uint64_t total_vertices = 0, total_faces = 0;
-    std::set<int> counted_positions;                 // POSITION accessors counted in file_vertex_count
+    std::set<int> counted_positions;                     // POSITION accessors counted in file_vertex_count
     std::set<std::pair<int, size_t>> counted_primitives; // (mesh, primitive) counted in file_face_count
     for (const Instance& instance : instances) {
         const tinygltf::Mesh& gmesh = model.meshes[size_t(instance.mesh)];
         // Primitives of one mesh that use the same attribute accessors share their vertices.
         std::map<std::map<std::string, int>, size_t> shared;
         for (size_t p = 0; p < gmesh.primitives.size(); ++p) {
-            const std::string where = name + ": mesh \"" + (gmesh.name.empty() ? std::to_string(instance.mesh) : gmesh.name) +
+            const std::string where = name + ": mesh \"" +
+                                      (gmesh.name.empty() ? std::to_string(instance.mesh) : gmesh.name) +
                                       "\" primitive " + std::to_string(p);
             const tinygltf::Primitive& primitive = gmesh.primitives[p];
             if (primitive.mode >= TINYGLTF_MODE_POINTS && primitive.mode <= TINYGLTF_MODE_LINE_STRIP) {
@@ -958,7 +1022,8 @@ Result<LoadedMesh> readGltfImpl(const uint8_t* data, size_t size, const std::str
                 continue;
             }
             auto draco_indices = prepass.draco_indices.find({size_t(instance.mesh), p});
-            const int draco_indices_accessor = draco_indices == prepass.draco_indices.end() ? -1 : draco_indices->second;
+            const int draco_indices_accessor =
+                draco_indices == prepass.draco_indices.end() ? -1 : draco_indices->second;
             LODBAKE_ASSIGN_OR_RETURN(PrimitiveData part, readPrimitive(model, primitive, where, quantized, options,
                                                                        draco_indices_accessor, &used_draco));
             const bool is_draco = primitive.extensions.count(kDracoExtension) > 0;
@@ -1003,27 +1068,35 @@ Result<LoadedMesh> readGltfImpl(const uint8_t* data, size_t size, const std::str
     std::vector<uint32_t> part_base(parts.size(), 0);
     for (size_t k = 0; k < parts.size(); ++k) {
         const PrimitiveData& part = parts[k];
-        const auto base = part.shares_vertices_of >= 0 ? part_base[size_t(part.shares_vertices_of)]
-                                                       : uint32_t(mesh.positions.size());
+        const auto base =
+            part.shares_vertices_of >= 0 ? part_base[size_t(part.shares_vertices_of)] : uint32_t(mesh.positions.size());
         part_base[k] = base;
         const size_t n = part.positions.size();
         mesh.positions.insert(mesh.positions.end(), part.positions.begin(), part.positions.end());
         if (has_normals) {
-            if (part.normals.empty()) mesh.normals.insert(mesh.normals.end(), n, Vec3f(0.0f, 0.0f, 0.0f));
-            else mesh.normals.insert(mesh.normals.end(), part.normals.begin(), part.normals.end());
+            if (part.normals.empty())
+                mesh.normals.insert(mesh.normals.end(), n, Vec3f(0.0f, 0.0f, 0.0f));
+            else
+                mesh.normals.insert(mesh.normals.end(), part.normals.begin(), part.normals.end());
         }
         if (has_tangents) {
-            if (part.tangents.empty()) mesh.tangents.insert(mesh.tangents.end(), n, Vec4f(1.0f, 0.0f, 0.0f, 1.0f));
-            else mesh.tangents.insert(mesh.tangents.end(), part.tangents.begin(), part.tangents.end());
+            if (part.tangents.empty())
+                mesh.tangents.insert(mesh.tangents.end(), n, Vec4f(1.0f, 0.0f, 0.0f, 1.0f));
+            else
+                mesh.tangents.insert(mesh.tangents.end(), part.tangents.begin(), part.tangents.end());
         }
         if (has_colors) {
-            if (part.colors.empty()) mesh.colors.insert(mesh.colors.end(), n, Vec4f(1.0f, 1.0f, 1.0f, 1.0f));
-            else mesh.colors.insert(mesh.colors.end(), part.colors.begin(), part.colors.end());
+            if (part.colors.empty())
+                mesh.colors.insert(mesh.colors.end(), n, Vec4f(1.0f, 1.0f, 1.0f, 1.0f));
+            else
+                mesh.colors.insert(mesh.colors.end(), part.colors.begin(), part.colors.end());
         }
         for (uint32_t s = 0; s < uv_sets; ++s) {
             auto it = part.uvs.find(s);
-            if (it == part.uvs.end()) mesh.uvs[s].insert(mesh.uvs[s].end(), n, Vec2f(0.0f, 0.0f));
-            else mesh.uvs[s].insert(mesh.uvs[s].end(), it->second.begin(), it->second.end());
+            if (it == part.uvs.end())
+                mesh.uvs[s].insert(mesh.uvs[s].end(), n, Vec2f(0.0f, 0.0f));
+            else
+                mesh.uvs[s].insert(mesh.uvs[s].end(), it->second.begin(), it->second.end());
         }
         SubMesh sub;
         sub.name = part.name;
@@ -1039,8 +1112,8 @@ Result<LoadedMesh> readGltfImpl(const uint8_t* data, size_t size, const std::str
         for (TextureSlot* slot : {&material.base_color_texture, &material.metallic_roughness_texture,
                                   &material.normal_texture, &material.occlusion_texture, &material.emissive_texture}) {
             if (slot->isSet() && slot->texcoord >= mesh.uvs.size()) {
-                diagnostics.warn(name + ": material " + std::to_string(m) + ": texture " + std::to_string(slot->texture) +
-                                 " samples TEXCOORD_" + std::to_string(slot->texcoord) +
+                diagnostics.warn(name + ": material " + std::to_string(m) + ": texture " +
+                                 std::to_string(slot->texture) + " samples TEXCOORD_" + std::to_string(slot->texcoord) +
                                  ", which the meshes lack; the texture is dropped from the material");
                 *slot = TextureSlot{};
             }

@@ -14,12 +14,14 @@ namespace {
 using namespace lodbake;
 
 SideFileLoader noSideFiles() {
-    return [](const std::string& path) -> Result<std::vector<uint8_t>> { return ioError(path + ": no side files here"); };
+    return
+        [](const std::string& path) -> Result<std::vector<uint8_t>> { return ioError(path + ": no side files here"); };
 }
 
 LoadedMesh importGlb(const std::vector<uint8_t>& bytes) {
     Diagnostics diagnostics;
-    Result<LoadedMesh> r = readGltfFromMemory(bytes.data(), bytes.size(), "mem.glb", noSideFiles(), ReadOptions{}, diagnostics);
+    Result<LoadedMesh> r =
+        readGltfFromMemory(bytes.data(), bytes.size(), "mem.glb", noSideFiles(), ReadOptions{}, diagnostics);
     EXPECT_TRUE(r.ok()) << r.status().message();
     return r.ok() ? std::move(r).value() : LoadedMesh{};
 }
@@ -134,8 +136,8 @@ TEST(GltfExportTest, GltfWithSideBinRoundTrips) {
         return ioError(path + ": not found");
     };
     Diagnostics diagnostics;
-    Result<LoadedMesh> r = readGltfFromMemory(files->main.data(), files->main.size(), "dir/rich.gltf", loader, ReadOptions{},
-                                              diagnostics);
+    Result<LoadedMesh> r =
+        readGltfFromMemory(files->main.data(), files->main.size(), "dir/rich.gltf", loader, ReadOptions{}, diagnostics);
     ASSERT_TRUE(r.ok()) << r.status().message();
     EXPECT_EQ(r->source.encoding, "gltf");
     expectSameMesh(source, r->mesh);
@@ -184,7 +186,8 @@ int indexComponentType(const Mesh& mesh) {
 TEST(GltfExportTest, IndexWidthFollowsVertexCount) {
     Mesh small;
     small.positions.resize(65535);
-    for (size_t i = 0; i < small.positions.size(); ++i) small.positions[i] = Vec3f(float(i % 256), float(i / 256), 0.0f);
+    for (size_t i = 0; i < small.positions.size(); ++i)
+        small.positions[i] = Vec3f(float(i % 256), float(i / 256), 0.0f);
     small.indices = {0, 1, 65534};
     EXPECT_EQ(indexComponentType(small), 5123);
     Mesh large = small;

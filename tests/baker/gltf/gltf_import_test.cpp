@@ -27,15 +27,16 @@ public:
         doc_["meshes"] = json::array();
     }
 
-    template <class T>
-    int view(const std::vector<T>& values) {
+    template <class T> int view(const std::vector<T>& values) {
         const size_t offset = lodbake_test::appendValues(bin_, values);
-        doc_["bufferViews"].push_back({{"buffer", 0}, {"byteOffset", offset}, {"byteLength", values.size() * sizeof(T)}});
+        doc_["bufferViews"].push_back(
+            {{"buffer", 0}, {"byteOffset", offset}, {"byteLength", values.size() * sizeof(T)}});
         return int(doc_["bufferViews"].size() - 1);
     }
 
     template <class T>
-    int accessor(const std::vector<T>& values, int component_type, const char* type, size_t count, bool normalized = false) {
+    int accessor(const std::vector<T>& values, int component_type, const char* type, size_t count,
+                 bool normalized = false) {
         json a = {{"bufferView", view(values)}, {"componentType", component_type}, {"type", type}, {"count", count}};
         if (normalized) a["normalized"] = true;
         doc_["accessors"].push_back(a);
@@ -53,8 +54,8 @@ public:
 
     std::string gltfText() {
         json d = doc_;
-        d["buffers"] = json::array(
-            {{{"byteLength", bin_.size()}, {"uri", "data:application/octet-stream;base64," + lodbake_test::base64(bin_)}}});
+        d["buffers"] = json::array({{{"byteLength", bin_.size()},
+                                     {"uri", "data:application/octet-stream;base64," + lodbake_test::base64(bin_)}}});
         return d.dump();
     }
 
@@ -89,7 +90,8 @@ int addTriangleMesh(DocBuilder& b, const std::string& name) {
     const int idx = b.indices({0, 1, 2});
     b.doc()["meshes"].push_back(
         {{"name", name},
-         {"primitives", json::array({{{"attributes", {{"POSITION", pos}, {"NORMAL", nrm}, {"TANGENT", tan}}}, {"indices", idx}}})}});
+         {"primitives",
+          json::array({{{"attributes", {{"POSITION", pos}, {"NORMAL", nrm}, {"TANGENT", tan}}}, {"indices", idx}}})}});
     return int(b.doc()["meshes"].size() - 1);
 }
 
@@ -204,8 +206,9 @@ TEST(GltfImportTest, SparseAccessorAndMissingIndices) {
     const int pos = b.floats({0, 0, 0, 1, 0, 0, 0, 1, 0, 5, 5, 5, 6, 6, 6, 7, 7, 7}, "VEC3", 3);
     const int sparse_idx = b.view(std::vector<uint16_t>{1, 4});
     const int sparse_val = b.view(std::vector<float>{9, 8, 7, 6, 5, 4});
-    b.doc()["accessors"][size_t(pos)]["sparse"] = {
-        {"count", 2}, {"indices", {{"bufferView", sparse_idx}, {"componentType", 5123}}}, {"values", {{"bufferView", sparse_val}}}};
+    b.doc()["accessors"][size_t(pos)]["sparse"] = {{"count", 2},
+                                                   {"indices", {{"bufferView", sparse_idx}, {"componentType", 5123}}},
+                                                   {"values", {{"bufferView", sparse_val}}}};
     b.doc()["meshes"].push_back({{"primitives", json::array({{{"attributes", {{"POSITION", pos}}}}})}});
     Diagnostics diagnostics;
     Result<LoadedMesh> r = readText(b.gltfText(), diagnostics);
@@ -234,7 +237,8 @@ TEST(GltfImportTest, QuantizedAttributesAreDequantized) {
     b.doc()["bufferViews"][size_t(b.doc()["accessors"][size_t(col)]["bufferView"].get<int>())]["byteStride"] = 4;
     b.doc()["meshes"].push_back(
         {{"primitives",
-          json::array({{{"attributes", {{"POSITION", pos}, {"NORMAL", nrm}, {"TEXCOORD_0", uv}, {"COLOR_0", col}}}}})}});
+          json::array(
+              {{{"attributes", {{"POSITION", pos}, {"NORMAL", nrm}, {"TEXCOORD_0", uv}, {"COLOR_0", col}}}}})}});
     b.doc()["nodes"] = json::array({{{"mesh", 0}, {"scale", {0.01, 0.01, 0.01}}}});
     b.doc()["scenes"] = json::array({{{"nodes", {0}}}});
     b.doc()["extensionsUsed"] = {"KHR_mesh_quantization"};
@@ -271,10 +275,11 @@ TEST(GltfImportTest, ExternalBufferAndImageGoThroughTheLoader) {
     d["buffers"] = json::array({{{"byteLength", b.bin().size()}, {"uri", "geo%20data.bin"}}});
     d["images"] = json::array({{{"uri", "tex.png"}}});
     d["textures"] = json::array({{{"source", 0}}});
-    d["materials"] = json::array({{{"name", "m"},
-                                   {"alphaMode", "BLEND"},
-                                   {"emissiveTexture", {{"index", 0}, {"texCoord", 3}}},
-                                   {"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}}}, {"metallicFactor", 0.0}}}}});
+    d["materials"] =
+        json::array({{{"name", "m"},
+                      {"alphaMode", "BLEND"},
+                      {"emissiveTexture", {{"index", 0}, {"texCoord", 3}}},
+                      {"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}}}, {"metallicFactor", 0.0}}}}});
     d["meshes"][0]["primitives"][0]["material"] = 0;
     const std::string text = d.dump();
     std::vector<std::string> requested;
@@ -310,7 +315,8 @@ TEST(GltfImportTest, ErrorsNameTheElement) {
     DocBuilder b;
     const int pos = b.floats({0, 0, 0, 1, 0, 0, 0, 1, 0}, "VEC3", 3);
     const int idx = b.indices({0, 1, 9});
-    b.doc()["meshes"].push_back({{"name", "Rock"}, {"primitives", json::array({{{"attributes", {{"POSITION", pos}}}, {"indices", idx}}})}});
+    b.doc()["meshes"].push_back(
+        {{"name", "Rock"}, {"primitives", json::array({{{"attributes", {{"POSITION", pos}}}, {"indices", idx}}})}});
     Diagnostics diagnostics;
     Result<LoadedMesh> r = readText(b.gltfText(), diagnostics);
     ASSERT_FALSE(r.ok());
@@ -381,21 +387,21 @@ TEST(GltfImportTest, DracoCompressedGlbDecodesToTheSourceTriangles) {
         {{"componentType", 5125}, {"type", "SCALAR"}, {"count", dmesh->num_faces() * 3}},
     });
     doc["meshes"] = json::array(
-        {{{"primitives",
-           json::array({{{"attributes", {{"POSITION", 0}, {"TEXCOORD_0", 1}}},
-                         {"indices", 2},
-                         {"extensions",
-                          {{"KHR_draco_mesh_compression",
-                            {{"bufferView", 0},
-                             {"attributes",
-                              {{"POSITION", dmesh->attribute(pos_att)->unique_id()},
-                               {"TEXCOORD_0", dmesh->attribute(uv_att)->unique_id()}}}}}}}}})}}});
+        {{{"primitives", json::array({{{"attributes", {{"POSITION", 0}, {"TEXCOORD_0", 1}}},
+                                       {"indices", 2},
+                                       {"extensions",
+                                        {{"KHR_draco_mesh_compression",
+                                          {{"bufferView", 0},
+                                           {"attributes",
+                                            {{"POSITION", dmesh->attribute(pos_att)->unique_id()},
+                                             {"TEXCOORD_0", dmesh->attribute(uv_att)->unique_id()}}}}}}}}})}}});
     doc["nodes"] = json::array({{{"mesh", 0}}});
     doc["scenes"] = json::array({{{"nodes", {0}}}});
     const std::vector<uint8_t> glb = lodbake_test::makeGlb(doc, bin);
 
     Diagnostics diagnostics;
-    Result<LoadedMesh> r = readGltfFromMemory(glb.data(), glb.size(), "draco.glb", noSideFiles(), ReadOptions{}, diagnostics);
+    Result<LoadedMesh> r =
+        readGltfFromMemory(glb.data(), glb.size(), "draco.glb", noSideFiles(), ReadOptions{}, diagnostics);
     ASSERT_TRUE(r.ok()) << r.status().message();
     EXPECT_EQ(r->source.encoding, "glb+draco");
     const Mesh& m = r->mesh;
@@ -435,10 +441,12 @@ TEST(GltfImportTest, DracoCompressedGlbDecodesToTheSourceTriangles) {
         d["bufferViews"][0]["byteLength"] = cut == 0 ? 1 : cut;
         const std::vector<uint8_t> truncated = lodbake_test::makeGlb(d, bin);
         Diagnostics dd;
-        Result<LoadedMesh> t = readGltfFromMemory(truncated.data(), truncated.size(), "cut.glb", noSideFiles(), ReadOptions{}, dd);
+        Result<LoadedMesh> t =
+            readGltfFromMemory(truncated.data(), truncated.size(), "cut.glb", noSideFiles(), ReadOptions{}, dd);
         EXPECT_FALSE(t.ok()) << "truncated at " << cut;
         if (!t.ok()) {
-            EXPECT_NE(t.status().message().find("KHR_draco_mesh_compression"), std::string::npos) << t.status().message();
+            EXPECT_NE(t.status().message().find("KHR_draco_mesh_compression"), std::string::npos)
+                << t.status().message();
         }
     }
     for (size_t at = 0; at < draco_size; at += 3) {
@@ -446,7 +454,8 @@ TEST(GltfImportTest, DracoCompressedGlbDecodesToTheSourceTriangles) {
         flipped[at] ^= 0x5A;
         const std::vector<uint8_t> damaged = lodbake_test::makeGlb(doc, flipped);
         Diagnostics dd;
-        Result<LoadedMesh> t = readGltfFromMemory(damaged.data(), damaged.size(), "flip.glb", noSideFiles(), ReadOptions{}, dd);
+        Result<LoadedMesh> t =
+            readGltfFromMemory(damaged.data(), damaged.size(), "flip.glb", noSideFiles(), ReadOptions{}, dd);
         if (t.ok()) {
             EXPECT_EQ(t->mesh.faceCount(), grid.triangles.size());
         }
@@ -455,9 +464,11 @@ TEST(GltfImportTest, DracoCompressedGlbDecodesToTheSourceTriangles) {
     // Accessor counts must agree with the Draco data.
     doc["accessors"][0]["count"] = dmesh->num_points() + 1;
     const std::vector<uint8_t> bad = lodbake_test::makeGlb(doc, bin);
-    Result<LoadedMesh> refused = readGltfFromMemory(bad.data(), bad.size(), "draco.glb", noSideFiles(), ReadOptions{}, diagnostics);
+    Result<LoadedMesh> refused =
+        readGltfFromMemory(bad.data(), bad.size(), "draco.glb", noSideFiles(), ReadOptions{}, diagnostics);
     ASSERT_FALSE(refused.ok());
-    EXPECT_NE(refused.status().message().find("accessor 0 (POSITION)"), std::string::npos) << refused.status().message();
+    EXPECT_NE(refused.status().message().find("accessor 0 (POSITION)"), std::string::npos)
+        << refused.status().message();
 }
 
 } // namespace
@@ -481,8 +492,8 @@ TEST(GltfImportTest, RandomlyDamagedFilesNeverCrash) {
         for (int k = 0; k < flips; ++k) damaged[next() % damaged.size()] = uint8_t(next());
         if (round % 5 == 0) damaged.resize(next() % damaged.size());
         Diagnostics diagnostics;
-        Result<LoadedMesh> r =
-            readGltfFromMemory(damaged.data(), damaged.size(), "damaged.glb", noSideFiles(), ReadOptions{}, diagnostics);
+        Result<LoadedMesh> r = readGltfFromMemory(damaged.data(), damaged.size(), "damaged.glb", noSideFiles(),
+                                                  ReadOptions{}, diagnostics);
         if (!r.ok()) {
             ++refused;
             EXPECT_EQ(r.status().message().rfind("damaged.glb: ", 0), 0u) << r.status().message();

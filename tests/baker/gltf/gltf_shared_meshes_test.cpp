@@ -21,8 +21,10 @@ protected:
         for (const char* name : {"lee_perry_smith/LeePerrySmith.glb", "nefertiti_fraunhofer_textured.glb"}) {
             Diagnostics diagnostics;
             Result<LoadedMesh> r = readMesh(lodbake_test::sharedMesh(name), ReadOptions{}, diagnostics);
-            if (r.ok()) loaded_[name] = std::make_shared<LoadedMesh>(std::move(r).value());
-            else errors_[name] = r.status().message();
+            if (r.ok())
+                loaded_[name] = std::make_shared<LoadedMesh>(std::move(r).value());
+            else
+                errors_[name] = r.status().message();
         }
     }
     static void TearDownTestSuite() {

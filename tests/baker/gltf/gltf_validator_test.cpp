@@ -18,8 +18,12 @@ namespace {
 namespace fs = std::filesystem;
 using namespace lodbake;
 
-std::string nodeExecutable() { return LODBAKE_TEST_NODE; }
-std::string validatorScript() { return lodbake_test::sourceDir() + "/scripts/node/validate-gltf.js"; }
+std::string nodeExecutable() {
+    return LODBAKE_TEST_NODE;
+}
+std::string validatorScript() {
+    return lodbake_test::sourceDir() + "/scripts/node/validate-gltf.js";
+}
 
 // Fails the current test unless node and the validator package are installed.
 void requireValidator() {
@@ -31,7 +35,8 @@ void requireValidator() {
 }
 
 lodbake_test::CommandResult validate(const std::vector<std::string>& files) {
-    std::string command = lodbake_test::shellQuote(nodeExecutable()) + " " + lodbake_test::shellQuote(validatorScript());
+    std::string command =
+        lodbake_test::shellQuote(nodeExecutable()) + " " + lodbake_test::shellQuote(validatorScript());
     for (const std::string& f : files) command += " " + lodbake_test::shellQuote(f);
     return lodbake_test::runCommand(command);
 }
@@ -126,9 +131,10 @@ TEST(GltfValidatorTest, ConvertedSharedMeshesPass) {
     for (const auto& input : inputs) {
         for (const char* ext : {".glb", ".gltf"}) {
             const std::string out = outDir() + "/" + input.second + ext;
-            const lodbake_test::CommandResult r = lodbake_test::runCommand(
-                lodbake_test::shellQuote(lodbake_test::lodbakeCli()) + " convert " +
-                lodbake_test::shellQuote(lodbake_test::sharedMesh(input.first)) + " -o " + lodbake_test::shellQuote(out));
+            const lodbake_test::CommandResult r =
+                lodbake_test::runCommand(lodbake_test::shellQuote(lodbake_test::lodbakeCli()) + " convert " +
+                                         lodbake_test::shellQuote(lodbake_test::sharedMesh(input.first)) + " -o " +
+                                         lodbake_test::shellQuote(out));
             if (r.exit_code != 0 && r.output.find("reader not built yet") != std::string::npos) {
                 // That format's reader is still being written in parallel; the glTF inputs always run.
                 std::cout << "note: " << input.first << " skipped: " << r.output;

@@ -31,8 +31,8 @@ Result<LoadedMesh> readGltfFromMemory(const uint8_t* data, size_t size, const st
                                       Diagnostics& diagnostics);
 
 struct GltfWriteOptions {
-    bool binary = true;          // GLB (true) or .gltf JSON with a side .bin
-    std::string bin_name;        // .gltf only: name of the side buffer file (written percent-encoded)
+    bool binary = true;   // GLB (true) or .gltf JSON with a side .bin
+    std::string bin_name; // .gltf only: name of the side buffer file (written percent-encoded)
 };
 
 /// Files that make up a glTF export: the main file and, for .gltf, the side buffer.
