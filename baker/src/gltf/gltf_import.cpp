@@ -27,6 +27,7 @@ constexpr uint32_t kGlbMagic = 0x46546C67;  // "glTF"
 constexpr uint32_t kChunkJson = 0x4E4F534A; // "JSON"
 constexpr uint32_t kChunkBin = 0x004E4942;  // "BIN\0"
 constexpr const char* kDracoExtension = "KHR_draco_mesh_compression";
+constexpr uint64_t kMaxViewlessCount = uint64_t(1) << 20; // elements of an accessor without a bufferView
 
 uint32_t readU32(const uint8_t* p) {
     return uint32_t(p[0]) | uint32_t(p[1]) << 8 | uint32_t(p[2]) << 16 | uint32_t(p[3]) << 24;
@@ -417,6 +418,14 @@ Result<AccessorData> readAccessor(const tinygltf::Model& model, int index, const
                     readComponent(p + size_t(c) * size_t(csize), accessor.componentType, accessor.normalized);
         }
     } else {
+        // No bytes back such an accessor (zeros plus sparse values), so its count cannot be checked
+        // against the file: allow what a sparse accessor plausibly needs, not the reader's limits.
+        const uint64_t allowed =
+            std::max<uint64_t>(kMaxViewlessCount, 64 * uint64_t(accessor.sparse.isSparse ? accessor.sparse.count : 0));
+        if (accessor.count > allowed)
+            return resourceLimit(where + ": count " + std::to_string(accessor.count) +
+                                 " without a bufferView exceeds " + std::to_string(allowed) +
+                                 " (the reader limit for accessors with no data)");
         out.values.assign(accessor.count * size_t(out.components), 0.0);
     }
 

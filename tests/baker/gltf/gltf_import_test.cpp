@@ -504,3 +504,28 @@ TEST(GltfImportTest, RandomlyDamagedFilesNeverCrash) {
 }
 
 } // namespace
+
+namespace {
+
+TEST(GltfImportTest, AccessorWithoutDataCannotClaimHugeCounts) {
+    DocBuilder b;
+    const int idx = b.indices({0, 1, 2});
+    b.doc()["accessors"].push_back({{"componentType", 5126}, {"type", "VEC3"}, {"count", 200000000}});
+    const int pos = int(b.doc()["accessors"].size() - 1);
+    b.doc()["meshes"].push_back(
+        {{"primitives", json::array({{{"attributes", {{"POSITION", pos}}}, {"indices", idx}}})}});
+    Diagnostics diagnostics;
+    Result<LoadedMesh> r = readText(b.gltfText(), diagnostics);
+    ASSERT_FALSE(r.ok());
+    EXPECT_EQ(r.status().code(), StatusCode::ResourceLimit);
+    EXPECT_NE(r.status().message().find("accessor 1 (POSITION): count 200000000 without a bufferView"),
+              std::string::npos)
+        << r.status().message();
+    // A small one is all zeros, as the spec says.
+    b.doc()["accessors"][size_t(pos)]["count"] = 3;
+    Result<LoadedMesh> zeros = readText(b.gltfText(), diagnostics);
+    ASSERT_TRUE(zeros.ok()) << zeros.status().message();
+    EXPECT_EQ(zeros->mesh.positions[2].x, 0.0f);
+}
+
+} // namespace
