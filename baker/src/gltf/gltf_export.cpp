@@ -1,0 +1,347 @@
+// glTF 2.0 / GLB export through tinygltf: one mesh, one primitive per sub-mesh, every stream in its
+// own tightly packed buffer view, images embedded in the buffer. The output is made to pass the
+// Khronos glTF-Validator without errors or warnings (exact min/max, unit normals and tangents,
+// aligned views, no dangling texture coordinates).
+#include "lodbake/gltf/gltf_io.h"
+
+#include <cctype>
+#include <cmath>
+#include <cstring>
+#include <exception>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+#include <tiny_gltf.h>
+
+#include "lodbake/version.h"
+
+namespace lodbake {
+
+namespace {
+
+class BufferBuilder {
+public:
+    explicit BufferBuilder(tinygltf::Model& model) : model_(model) {}
+
+    // Appends bytes as a new buffer view (4-byte aligned); returns its index.
+    int addView(const void* data, size_t size, int target) {
+        while (bytes_.size() % 4 != 0) bytes_.push_back(0);
+        tinygltf::BufferView view;
+        view.buffer = 0;
+        view.byteOffset = bytes_.size();
+        view.byteLength = size;
+        view.target = target;
+        const auto* p = static_cast<const uint8_t*>(data);
+        bytes_.insert(bytes_.end(), p, p + size);
+        model_.bufferViews.push_back(std::move(view));
+        return int(model_.bufferViews.size() - 1);
+    }
+
+    std::vector<uint8_t> finish() {
+        while (bytes_.size() % 4 != 0) bytes_.push_back(0);
+        return std::move(bytes_);
+    }
+
+private:
+    tinygltf::Model& model_;
+    std::vector<uint8_t> bytes_;
+};
+
+template <class T>
+int addFloatAccessor(tinygltf::Model& model, BufferBuilder& buffer, const std::vector<T>& values, int components,
+                     int type, bool with_bounds) {
+    std::vector<float> flat;
+    flat.reserve(values.size() * size_t(components));
+    for (const T& v : values) {
+        const float* f = &v.x;
+        for (int c = 0; c < components; ++c) flat.push_back(f[c]);
+    }
+    tinygltf::Accessor accessor;
+    accessor.bufferView = buffer.addView(flat.data(), flat.size() * sizeof(float), TINYGLTF_TARGET_ARRAY_BUFFER);
+    accessor.byteOffset = 0;
+    accessor.componentType = TINYGLTF_COMPONENT_TYPE_FLOAT;
+    accessor.count = values.size();
+    accessor.type = type;
+    if (with_bounds) {
+        accessor.minValues.assign(size_t(components), 0.0);
+        accessor.maxValues.assign(size_t(components), 0.0);
+        for (size_t i = 0; i < values.size(); ++i)
+            for (int c = 0; c < components; ++c) {
+                const double v = flat[i * size_t(components) + size_t(c)];
+                if (i == 0 || v < accessor.minValues[size_t(c)]) accessor.minValues[size_t(c)] = v;
+                if (i == 0 || v > accessor.maxValues[size_t(c)]) accessor.maxValues[size_t(c)] = v;
+            }
+    }
+    model.accessors.push_back(std::move(accessor));
+    return int(model.accessors.size() - 1);
+}
+
+std::string sniffMime(const std::vector<uint8_t>& b) {
+    if (b.size() >= 8 && b[0] == 0x89 && b[1] == 'P' && b[2] == 'N' && b[3] == 'G') return "image/png";
+    if (b.size() >= 3 && b[0] == 0xFF && b[1] == 0xD8 && b[2] == 0xFF) return "image/jpeg";
+    return "";
+}
+
+bool finite3(const Vec3f& v) {
+    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
+
+// Unit normals for the validator: non-unit ones are renormalised; zero or non-finite ones are
+// replaced by the area-weighted normal of the faces around the vertex (or +Z for isolated vertices).
+std::vector<Vec3f> exportNormals(const Mesh& mesh) {
+    std::vector<Vec3f> normals = mesh.normals;
+    std::vector<bool> bad(normals.size(), false);
+    bool any_bad = false;
+    for (size_t i = 0; i < normals.size(); ++i) {
+        const Vec3f& n = normals[i];
+        const double len = std::sqrt(double(n.x) * n.x + double(n.y) * n.y + double(n.z) * n.z);
+        if (!finite3(n) || !(len > 1e-12)) {
+            bad[i] = true;
+            any_bad = true;
+        } else {
+            normals[i] = Vec3f(float(n.x / len), float(n.y / len), float(n.z / len));
+        }
+    }
+    if (any_bad) {
+        std::vector<Vec3d> sum(normals.size(), Vec3d(0.0, 0.0, 0.0));
+        for (size_t f = 0; f < mesh.faceCount(); ++f) {
+            const uint32_t a = mesh.indices[f * 3], b = mesh.indices[f * 3 + 1], c = mesh.indices[f * 3 + 2];
+            const Vec3d n = cross(toDouble(mesh.positions[b]) - toDouble(mesh.positions[a]),
+                                  toDouble(mesh.positions[c]) - toDouble(mesh.positions[a]));
+            for (uint32_t v : {a, b, c})
+                if (bad[v]) sum[v] = sum[v] + n;
+        }
+        for (size_t i = 0; i < normals.size(); ++i) {
+            if (!bad[i]) continue;
+            const double len = length(sum[i]);
+            normals[i] = len > 0.0 ? Vec3f(float(sum[i].x / len), float(sum[i].y / len), float(sum[i].z / len))
+                                   : Vec3f(0.0f, 0.0f, 1.0f);
+        }
+    }
+    // float rounding after division can leave |n| a few ulps off 1; the validator allows 0.0005.
+    return normals;
+}
+
+std::vector<Vec4f> exportTangents(const Mesh& mesh, const std::vector<Vec3f>& normals) {
+    std::vector<Vec4f> tangents = mesh.tangents;
+    for (size_t i = 0; i < tangents.size(); ++i) {
+        Vec4f& t = tangents[i];
+        const double len = std::sqrt(double(t.x) * t.x + double(t.y) * t.y + double(t.z) * t.z);
+        const float w = t.w < 0.0f ? -1.0f : 1.0f;
+        if (std::isfinite(len) && len > 1e-12) {
+            t = Vec4f(float(t.x / len), float(t.y / len), float(t.z / len), w);
+        } else {
+            // Any unit vector perpendicular to the normal.
+            const Vec3f n = normals[i];
+            const Vec3d axis = std::fabs(n.x) < 0.9f ? Vec3d(1.0, 0.0, 0.0) : Vec3d(0.0, 1.0, 0.0);
+            const Vec3d p = normalize(cross(toDouble(n), axis));
+            t = Vec4f(float(p.x), float(p.y), float(p.z), w);
+        }
+    }
+    return tangents;
+}
+
+Result<tinygltf::Model> buildModel(const Mesh& mesh, std::vector<uint8_t>& buffer_bytes) {
+    if (mesh.faceCount() == 0) return invalidInput("glTF export: the mesh has no triangles");
+    for (size_t i = 0; i < mesh.positions.size(); ++i)
+        if (!finite3(mesh.positions[i]))
+            return invalidInput("glTF export: vertex " + std::to_string(i) + ": position is not finite");
+    for (const auto& set : mesh.uvs)
+        for (size_t i = 0; i < set.size(); ++i)
+            if (!std::isfinite(set[i].x) || !std::isfinite(set[i].y))
+                return invalidInput("glTF export: vertex " + std::to_string(i) + ": texture coordinate is not finite");
+
+    tinygltf::Model model;
+    model.asset.version = "2.0";
+    model.asset.generator = std::string("lodbake ") + kVersionString;
+    BufferBuilder buffer(model);
+
+    tinygltf::Primitive base;
+    base.mode = TINYGLTF_MODE_TRIANGLES;
+    base.attributes["POSITION"] = addFloatAccessor(model, buffer, mesh.positions, 3, TINYGLTF_TYPE_VEC3, true);
+    std::vector<Vec3f> normals;
+    if (mesh.hasNormals()) {
+        normals = exportNormals(mesh);
+        base.attributes["NORMAL"] = addFloatAccessor(model, buffer, normals, 3, TINYGLTF_TYPE_VEC3, false);
+        if (mesh.hasTangents())
+            base.attributes["TANGENT"] =
+                addFloatAccessor(model, buffer, exportTangents(mesh, normals), 4, TINYGLTF_TYPE_VEC4, false);
+    }
+    for (size_t s = 0; s < mesh.uvs.size(); ++s)
+        base.attributes["TEXCOORD_" + std::to_string(s)] =
+            addFloatAccessor(model, buffer, mesh.uvs[s], 2, TINYGLTF_TYPE_VEC2, false);
+    if (mesh.hasColors()) {
+        std::vector<Vec4f> colors = mesh.colors;
+        for (Vec4f& c : colors)
+            for (float* f : {&c.x, &c.y, &c.z, &c.w})
+                *f = std::isfinite(*f) ? std::min(std::max(*f, 0.0f), 1.0f) : 0.0f;
+        base.attributes["COLOR_0"] = addFloatAccessor(model, buffer, colors, 4, TINYGLTF_TYPE_VEC4, false);
+    }
+
+    // Indices: one view, one accessor per sub-mesh.
+    const bool short_indices = mesh.vertexCount() < 65536;
+    const int index_size = short_indices ? 2 : 4;
+    std::vector<uint8_t> index_bytes(mesh.indices.size() * size_t(index_size));
+    for (size_t i = 0; i < mesh.indices.size(); ++i) {
+        if (short_indices) {
+            const auto v = uint16_t(mesh.indices[i]);
+            std::memcpy(&index_bytes[i * 2], &v, 2);
+        } else {
+            std::memcpy(&index_bytes[i * 4], &mesh.indices[i], 4);
+        }
+    }
+    const int index_view = buffer.addView(index_bytes.data(), index_bytes.size(), TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER);
+
+    // Textures with bytes a viewer can decode; others are dropped (and the slots using them).
+    std::vector<int> texture_map(mesh.textures.size(), -1);
+    for (size_t t = 0; t < mesh.textures.size(); ++t) {
+        const Texture& texture = mesh.textures[t];
+        const std::string mime = sniffMime(texture.bytes);
+        if (mime.empty()) continue;
+        tinygltf::Image image;
+        image.name = texture.name;
+        image.mimeType = mime;
+        image.bufferView = buffer.addView(texture.bytes.data(), texture.bytes.size(), 0);
+        model.images.push_back(std::move(image));
+        tinygltf::Texture gtex;
+        gtex.source = int(model.images.size() - 1);
+        model.textures.push_back(std::move(gtex));
+        texture_map[t] = int(model.textures.size() - 1);
+    }
+    auto slot = [&](const TextureSlot& s, int& index, int& texcoord) {
+        if (!s.isSet() || size_t(s.texture) >= texture_map.size() || texture_map[size_t(s.texture)] < 0) return;
+        if (s.texcoord >= mesh.uvs.size()) return;
+        index = texture_map[size_t(s.texture)];
+        texcoord = int(s.texcoord);
+    };
+    for (const Material& in : mesh.materials) {
+        tinygltf::Material out;
+        out.name = in.name;
+        auto& pbr = out.pbrMetallicRoughness;
+        pbr.baseColorFactor = {in.base_color_factor.x, in.base_color_factor.y, in.base_color_factor.z,
+                               in.base_color_factor.w};
+        for (double& f : pbr.baseColorFactor) f = std::isfinite(f) ? std::min(std::max(f, 0.0), 1.0) : 1.0;
+        pbr.metallicFactor = std::min(std::max(double(in.metallic_factor), 0.0), 1.0);
+        pbr.roughnessFactor = std::min(std::max(double(in.roughness_factor), 0.0), 1.0);
+        slot(in.base_color_texture, pbr.baseColorTexture.index, pbr.baseColorTexture.texCoord);
+        slot(in.metallic_roughness_texture, pbr.metallicRoughnessTexture.index, pbr.metallicRoughnessTexture.texCoord);
+        slot(in.normal_texture, out.normalTexture.index, out.normalTexture.texCoord);
+        out.normalTexture.scale = in.normal_scale;
+        slot(in.occlusion_texture, out.occlusionTexture.index, out.occlusionTexture.texCoord);
+        out.occlusionTexture.strength = std::min(std::max(double(in.occlusion_strength), 0.0), 1.0);
+        slot(in.emissive_texture, out.emissiveTexture.index, out.emissiveTexture.texCoord);
+        out.emissiveFactor = {in.emissive_factor.x, in.emissive_factor.y, in.emissive_factor.z};
+        for (double& f : out.emissiveFactor) f = std::isfinite(f) ? std::min(std::max(f, 0.0), 1.0) : 0.0;
+        switch (in.alpha_mode) {
+        case AlphaMode::Opaque:
+            out.alphaMode = "OPAQUE";
+            break;
+        case AlphaMode::Mask:
+            out.alphaMode = "MASK";
+            out.alphaCutoff = std::max(double(in.alpha_cutoff), 0.0);
+            break;
+        case AlphaMode::Blend:
+            out.alphaMode = "BLEND";
+            break;
+        }
+        out.doubleSided = in.is_double_sided;
+        model.materials.push_back(std::move(out));
+    }
+
+    tinygltf::Mesh gmesh;
+    std::vector<SubMesh> submeshes = mesh.submeshes;
+    if (submeshes.empty()) {
+        SubMesh all;
+        all.index_count = uint32_t(mesh.indices.size());
+        submeshes.push_back(all);
+    }
+    for (const SubMesh& sub : submeshes) {
+        if (sub.index_count == 0) continue;
+        tinygltf::Accessor accessor;
+        accessor.bufferView = index_view;
+        accessor.byteOffset = size_t(sub.first_index) * size_t(index_size);
+        accessor.componentType =
+            short_indices ? TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT : TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT;
+        accessor.count = sub.index_count;
+        accessor.type = TINYGLTF_TYPE_SCALAR;
+        model.accessors.push_back(std::move(accessor));
+        tinygltf::Primitive primitive = base;
+        primitive.indices = int(model.accessors.size() - 1);
+        if (sub.material.isValid() && sub.material.value < model.materials.size())
+            primitive.material = int(sub.material.value);
+        gmesh.primitives.push_back(std::move(primitive));
+    }
+    if (gmesh.primitives.empty()) return invalidInput("glTF export: every sub-mesh is empty");
+    model.meshes.push_back(std::move(gmesh));
+
+    tinygltf::Node node;
+    node.mesh = 0;
+    model.nodes.push_back(std::move(node));
+    tinygltf::Scene scene;
+    scene.nodes.push_back(0);
+    model.scenes.push_back(std::move(scene));
+    model.defaultScene = 0;
+
+    buffer_bytes = buffer.finish();
+    tinygltf::Buffer gbuffer;
+    gbuffer.data = buffer_bytes;
+    model.buffers.push_back(std::move(gbuffer));
+    return model;
+}
+
+// URIs are percent-encoded: "my mesh.bin" is written as "my%20mesh.bin".
+std::string percentEncode(const std::string& name) {
+    static const char* kHex = "0123456789ABCDEF";
+    std::string out;
+    for (char ch : name) {
+        const auto c = static_cast<unsigned char>(ch);
+        if (std::isalnum(c) || c == '-' || c == '.' || c == '_' || c == '~' || c == '/') {
+            out.push_back(ch);
+        } else {
+            out.push_back('%');
+            out.push_back(kHex[c >> 4]);
+            out.push_back(kHex[c & 15]);
+        }
+    }
+    return out;
+}
+
+Result<GltfFiles> writeImpl(const Mesh& mesh, const GltfWriteOptions& options) {
+    std::vector<uint8_t> buffer_bytes;
+    LODBAKE_ASSIGN_OR_RETURN(tinygltf::Model model, buildModel(mesh, buffer_bytes));
+    tinygltf::TinyGLTF writer;
+    std::ostringstream stream;
+    GltfFiles files;
+    if (options.binary) {
+        if (!writer.WriteGltfSceneToStream(&model, stream, false, true))
+            return internalError("glTF export: tinygltf failed");
+        const std::string s = stream.str();
+        files.main.assign(s.begin(), s.end());
+        return files;
+    }
+    if (options.bin_name.empty()) return invalidInput("glTF export: .gltf output needs a side buffer name");
+    model.buffers[0].data.clear();
+    model.buffers[0].uri = percentEncode(options.bin_name);
+    if (!writer.WriteGltfSceneToStream(&model, stream, true, false))
+        return internalError("glTF export: tinygltf failed");
+    // tinygltf embeds buffers when writing to a stream; point the buffer at the side file instead.
+    nlohmann::json json = nlohmann::json::parse(stream.str());
+    json["buffers"] =
+        nlohmann::json::array({{{"byteLength", buffer_bytes.size()}, {"uri", percentEncode(options.bin_name)}}});
+    const std::string text = json.dump(2) + "\n";
+    files.main.assign(text.begin(), text.end());
+    files.bin = std::move(buffer_bytes);
+    return files;
+}
+
+} // namespace
+
+Result<GltfFiles> writeGltfToMemory(const Mesh& mesh, const GltfWriteOptions& options) {
+    try {
+        return writeImpl(mesh, options);
+    } catch (const std::exception& e) {
+        return internalError(std::string("glTF export failed: ") + e.what());
+    }
+}
+
+} // namespace lodbake
