@@ -28,7 +28,7 @@ usage: lodbake <command> [options]
 
 commands:
   info IN            print format, counts, attributes, bounds and topology of a mesh file
-  convert IN -o OUT  convert between .ply .obj .off .gltf .glb
+  convert IN -o OUT  convert between .ply .obj .off .gltf .glb (.conf scan sets as input)
 
 options:
   -h, --help         show help (also: lodbake <command> --help)
@@ -51,8 +51,9 @@ options:
 
 const char* kConvertHelp = R"(usage: lodbake convert IN -o OUT [--ascii]
 
-Reads IN (.ply .obj .off .gltf .glb) and writes OUT in the format its extension names. Output is
-written atomically: on any error no output file is left behind. OUT may not be IN.
+Reads IN (.ply .obj .off .gltf .glb, or a Stanford .conf range-scan set) and writes OUT in the
+format its extension names. Output is written atomically: on any error no output file is left
+behind. OUT may not be IN.
 
 options:
   -o, --output OUT   output path (required)
@@ -261,7 +262,7 @@ int runConvert(int argc, char** argv) {
     if (!args.values.count("--output")) return usageError("convert needs -o OUT");
     const std::string& in = args.positional[0];
     const std::string& out = args.values["--output"];
-    if (formatFromPath(out) == MeshFormat::Unknown)
+    if (formatFromPath(out) == MeshFormat::Unknown || formatFromPath(out) == MeshFormat::Conf)
         return usageError("output '" + out + "' has an unknown extension, expected .ply .obj .off .gltf or .glb");
     if (isSameFile(in, out)) return usageError("output '" + out + "' is the input file; the input is never modified");
 

@@ -2,6 +2,7 @@
 
 #include "lodbake/core/file_io.h"
 #include "lodbake/gltf/gltf_io.h"
+#include "lodbake/io/conf.h"
 #include "lodbake/io/obj.h"
 #include "lodbake/io/off.h"
 #include "lodbake/io/ply.h"
@@ -17,6 +18,7 @@ MeshFormat formatFromPath(const std::string& path) {
     if (ext == ".off") return MeshFormat::Off;
     if (ext == ".gltf") return MeshFormat::Gltf;
     if (ext == ".glb") return MeshFormat::Glb;
+    if (ext == ".conf") return MeshFormat::Conf;
     return MeshFormat::Unknown;
 }
 
@@ -27,6 +29,7 @@ const char* formatName(MeshFormat format) {
     case MeshFormat::Off: return "OFF";
     case MeshFormat::Gltf: return "glTF";
     case MeshFormat::Glb: return "GLB";
+    case MeshFormat::Conf: return "Stanford .conf";
     case MeshFormat::Unknown: break;
     }
     return "unknown";
@@ -48,7 +51,12 @@ Result<LoadedMesh> readMesh(const std::string& path, const ReadOptions& options,
     const MeshFormat format = formatFromPath(path);
     if (format == MeshFormat::Unknown)
         return unsupported(path + ": unknown file extension \"" + lowerExtension(path) +
-                           "\", expected .ply, .obj, .off, .gltf or .glb");
+                           "\", expected .ply, .obj, .off, .gltf, .glb or .conf");
+    if (format == MeshFormat::Conf) {
+        Result<LoadedMesh> conf = readConf(path, options, diagnostics);
+        if (conf.ok()) LODBAKE_RETURN_IF_ERROR(checkMeshConsistency(conf->mesh, path));
+        return conf;
+    }
     LODBAKE_ASSIGN_OR_RETURN(std::vector<uint8_t> bytes, readFileBytes(path));
     SourceInfo side;
     Result<LoadedMesh> result = [&]() -> Result<LoadedMesh> {
@@ -60,6 +68,7 @@ Result<LoadedMesh> readMesh(const std::string& path, const ReadOptions& options,
         case MeshFormat::Gltf:
         case MeshFormat::Glb:
             return readGltfFromMemory(bytes.data(), bytes.size(), path, fileLoader(side), options, diagnostics);
+        case MeshFormat::Conf:
         case MeshFormat::Unknown: break;
         }
         return internalError(path + ": no reader");
@@ -107,6 +116,7 @@ Status writeMesh(const Mesh& mesh, const std::string& path, const WriteOptions& 
         if (!gopt.binary) LODBAKE_RETURN_IF_ERROR(out.add(joinPath(parentDirectory(path), gopt.bin_name), files.bin));
         break;
     }
+    case MeshFormat::Conf:
     case MeshFormat::Unknown:
         return unsupported(path + ": unknown output extension \"" + lowerExtension(path) +
                            "\", expected .ply, .obj, .off, .gltf or .glb");

@@ -13,9 +13,10 @@
 
 namespace lodbake {
 
-enum class MeshFormat { Unknown, Ply, Obj, Off, Gltf, Glb };
+enum class MeshFormat { Unknown, Ply, Obj, Off, Gltf, Glb, Conf };
 
-/// Format from the extension (.ply .obj .off .gltf .glb, case-insensitive); Unknown otherwise.
+/// Format from the extension (.ply .obj .off .gltf .glb, and .conf for Stanford range-scan sets;
+/// case-insensitive); Unknown otherwise. .conf is input only.
 MeshFormat formatFromPath(const std::string& path);
 const char* formatName(MeshFormat format);
 
@@ -48,8 +49,7 @@ struct LoadedMesh {
 Result<LoadedMesh> readMesh(const std::string& path, const ReadOptions& options, Diagnostics& diagnostics);
 
 struct WriteOptions {
-    bool ply_binary = true;        // PLY: binary_little_endian (true) or ascii
-    bool embed_textures = true;    // glTF (.gltf): embed images in the buffer instead of side files
+    bool ply_binary = true; // PLY: binary_little_endian (true) or ascii
 };
 
 /// Writes `mesh` in the format its extension names, atomically (no partial file on failure). Side
