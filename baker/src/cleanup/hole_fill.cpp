@@ -70,6 +70,7 @@ bool triangulateDp(const std::vector<Vec3d>& p, const std::vector<Vec3d>& outsid
                 if (a.angle >= 1e300 || b.angle >= 1e300) continue;
                 if ((m > i + 1 && diagonalExists(i, m)) || (m + 1 < k && diagonalExists(m, k))) continue;
                 const Vec3d nt = normalOf(i, m, k);
+                if (dot(nt, nt) == 0.0) continue; // coincident or collinear corners (e.g. both halves of a split pinch vertex)
                 double ang = std::max(a.angle, b.angle);
                 ang = std::max(ang, angleBetween(nt, m == i + 1 ? outside[i] : normalOf(i, apex[at(i, m)], m)));
                 ang = std::max(ang, angleBetween(nt, k == m + 1 ? outside[m] : normalOf(m, apex[at(m, k)], k)));
@@ -119,7 +120,10 @@ bool triangulateEars(const std::vector<Vec3d>& p, const Vec3d& normal,
     for (uint32_t remaining = n; remaining > 3; --remaining) {
         uint32_t best = kNone;
         for (uint32_t i = 0; i < n; ++i)
-            if (alive[i] && (best == kNone || angle[i] < angle[best]) && !diagonalExists(prev[i], next[i])) best = i;
+            if (alive[i] && (best == kNone || angle[i] < angle[best]) && !diagonalExists(prev[i], next[i])) {
+                const Vec3d nt = cross(p[i] - p[prev[i]], p[next[i]] - p[prev[i]]);
+                if (dot(nt, nt) > 0.0) best = i;
+            }
         if (best == kNone) return false;
         const uint32_t a = prev[best], c = next[best];
         out.push_back({c, best, a});
@@ -150,6 +154,9 @@ void refinePatch(Patch& patch, uint32_t loop_size, const std::function<bool(uint
                     slot[slot[0] == kNone ? 0 : 1] = t;
                 }
             std::vector<uint8_t> touched(patch.tris.size(), 0);
+            std::vector<uint32_t> degree(patch.pos.size(), 0);
+            for (const Tri& t : patch.tris)
+                for (uint32_t v : t) ++degree[v];
             size_t flips = 0;
             for (uint32_t t = 0; t < patch.tris.size(); ++t) {
                 for (int k = 0; k < 3 && !touched[t]; ++k) {
@@ -163,17 +170,26 @@ void refinePatch(Patch& patch, uint32_t loop_size, const std::function<bool(uint
                     for (int j = 0; j < 3; ++j)
                         if (patch.tris[u][j] != a && patch.tris[u][j] != b) d = patch.tris[u][j];
                     if (d == kNone || d == c || edge_tris.count(edgeKey(c, d))) continue;
+                    // An inner vertex must keep at least three triangles, or it folds onto a neighbour.
+                    if ((a >= loop_size && degree[a] <= 3) || (b >= loop_size && degree[b] <= 3)) continue;
                     if (c < loop_size && d < loop_size && diagonalExists(c, d)) continue;
                     auto angleAt = [&](uint32_t x) {
                         const Vec3d e0 = patch.pos[a] - patch.pos[x], e1 = patch.pos[b] - patch.pos[x];
                         return angleBetween(e0, e1);
                     };
                     if (angleAt(c) + angleAt(d) <= M_PI + 1e-9) continue;
+                    const Vec3d n0 = triNormal(patch.pos[a], patch.pos[d], patch.pos[c]);
+                    const Vec3d n1 = triNormal(patch.pos[d], patch.pos[b], patch.pos[c]);
+                    if (dot(n0, n0) == 0.0 || dot(n1, n1) == 0.0 || dot(n0, n1) <= 0.0) continue; // would fold
                     // t = (a,b,c), u = (b,a,d) -> (a,d,c), (d,b,c)
                     patch.tris[t] = {a, d, c};
                     patch.tris[u] = {d, b, c};
                     touched[t] = touched[u] = 1;
                     edge_tris[edgeKey(c, d)] = {t, u};
+                    --degree[a];
+                    --degree[b];
+                    ++degree[c];
+                    ++degree[d];
                     ++flips;
                 }
             }
@@ -222,7 +238,7 @@ void fairPatch(Patch& patch, uint32_t loop_size, uint32_t iterations) {
     }
     for (uint32_t it = 0; it < iterations; ++it)
         for (uint32_t v = loop_size; v < n; ++v) {
-            if (nb[v].empty()) continue;
+            if (nb[v].size() < 3) continue;
             Vec3d s;
             for (uint32_t u : nb[v]) s += patch.pos[u];
             patch.pos[v] = s / double(nb[v].size());
