@@ -153,7 +153,108 @@ DenoiseReport denoise(Mesh& mesh, const DenoiseOptions& options) {
         x.swap(next);
     };
 
-    if (options.method == DenoiseMethod::PLaplacian) {
+    if (options.preserve_features) {
+        // Sun et al. 2007, "Fast and effective feature-preserving mesh denoising": face normals are
+        // averaged only with neighbours (sharing a vertex) within the feature angle, so nothing is
+        // averaged across a crease; free vertices then move to fit the filtered normals, which
+        // leaves an already clean surface where it is. Crease vertices slide along the crease.
+        const size_t face_count = mesh.faceCount();
+        std::vector<uint32_t> vf_begin(n + 1, 0), vf;
+        for (uint32_t i : mesh.indices) ++vf_begin[i + 1];
+        for (size_t v = 0; v < n; ++v) vf_begin[v + 1] += vf_begin[v];
+        vf.resize(mesh.indices.size());
+        {
+            std::vector<uint32_t> fill(vf_begin.begin(), vf_begin.end() - 1);
+            for (size_t c = 0; c < mesh.indices.size(); ++c) vf[fill[mesh.indices[c]]++] = uint32_t(c / 3);
+        }
+        const double cos_limit = std::cos(options.feature_angle_deg * M_PI / 180.0);
+        // Crease guard: the two faces of every crease edge, with the input dihedral angle.
+        struct Crease {
+            uint32_t f0, f1;
+            double angle;
+        };
+        std::vector<Crease> creases;
+        auto dihedral = [&](uint32_t f0, uint32_t f1) {
+            const uint32_t* a = &mesh.indices[3 * f0];
+            const uint32_t* b = &mesh.indices[3 * f1];
+            const Vec3d n0 = normalize(cross(x[a[1]] - x[a[0]], x[a[2]] - x[a[0]]));
+            const Vec3d n1 = normalize(cross(x[b[1]] - x[b[0]], x[b[2]] - x[b[0]]));
+            return std::acos(std::max(-1.0, std::min(1.0, dot(n0, n1)))) * 180.0 / M_PI;
+        };
+        for (uint32_t e = 0; e < table.edgeCount(); ++e) {
+            if (table.uses(e) != 2) continue;
+            const uint32_t* c = &table.corners[table.begin[e]];
+            const double a = dihedral(c[0] / 3, c[1] / 3);
+            if (a > options.feature_angle_deg) creases.push_back({c[0] / 3, c[1] / 3, a});
+        }
+        std::vector<Vec3d> fn(face_count), filtered(face_count);
+        std::vector<double> area(face_count);
+        for (uint32_t it = 0; it < options.iterations; ++it) {
+            for (size_t f = 0; f < face_count; ++f) {
+                const uint32_t* t = &mesh.indices[3 * f];
+                const Vec3d c = cross(x[t[1]] - x[t[0]], x[t[2]] - x[t[0]]);
+                area[f] = 0.5 * length(c);
+                fn[f] = normalize(c);
+            }
+            for (int pass = 0; pass < 3; ++pass) {
+                for (size_t f = 0; f < face_count; ++f) {
+                    Vec3d s = fn[f] * area[f];
+                    for (int k = 0; k < 3; ++k) {
+                        const uint32_t v = mesh.indices[3 * f + k];
+                        for (uint32_t i = vf_begin[v]; i < vf_begin[v + 1]; ++i) {
+                            const uint32_t g = vf[i];
+                            // Sun et al.'s weight: zero at the feature angle, growing quadratically inside it.
+                            const double d = dot(fn[f], fn[g]) - cos_limit;
+                            if (g != f && d > 0) s += fn[g] * (area[g] * d * d / ((1 - cos_limit) * (1 - cos_limit)));
+                        }
+                    }
+                    filtered[f] = length(s) > 0 ? normalize(s) : fn[f];
+                }
+                fn.swap(filtered);
+            }
+            for (int step = 0; step < 5; ++step) {
+                for (size_t v = 0; v < n; ++v) {
+                    next[v] = x[v];
+                    if (role[v] == VertexRole::Fixed) continue;
+                    if (role[v] == VertexRole::Crease) {
+                        const Vec3d q0 = x[crease_nb[v][0]], q1 = x[crease_nb[v][1]];
+                        const Vec3d t = normalize(q1 - q0);
+                        next[v] = x[v] + t * (dot((q0 + q1) * 0.5 - x[v], t) * options.lambda);
+                        continue;
+                    }
+                    const uint32_t count = vf_begin[v + 1] - vf_begin[v];
+                    if (!count) continue;
+                    Vec3d d;
+                    for (uint32_t i = vf_begin[v]; i < vf_begin[v + 1]; ++i) {
+                        const uint32_t f = vf[i];
+                        const uint32_t* t = &mesh.indices[3 * f];
+                        const Vec3d c = (x[t[0]] + x[t[1]] + x[t[2]]) / 3.0;
+                        d += fn[f] * dot(fn[f], c - x[v]);
+                    }
+                    next[v] = x[v] + d / double(count);
+                }
+                x.swap(next); // `next` now holds the previous positions
+                // Undo the step around any crease whose dihedral drifted too far, and pin those
+                // vertices; repeat, since an undo can disturb a crease sharing a vertex.
+                for (bool changed = true; changed;) {
+                    changed = false;
+                    for (const Crease& cr : creases) {
+                        if (std::fabs(dihedral(cr.f0, cr.f1) - cr.angle) <= options.max_crease_change_deg) continue;
+                        for (uint32_t f : {cr.f0, cr.f1})
+                            for (int k = 0; k < 3; ++k) {
+                                const uint32_t v = mesh.indices[3 * f + k];
+                                if (x[v] != next[v]) changed = true;
+                                x[v] = next[v];
+                                if (role[v] != VertexRole::Fixed) {
+                                    role[v] = VertexRole::Fixed;
+                                    ++r.fixed_vertices;
+                                }
+                            }
+                    }
+                }
+            }
+        }
+    } else if (options.method == DenoiseMethod::PLaplacian) {
         // Curvature proxy: |umbrella Laplacian| / mean incident edge length, on the input.
         std::vector<double> fidelity(n, options.fidelity);
         if (options.adaptive_fidelity) {

@@ -142,8 +142,8 @@ bool triangulateEars(const std::vector<Vec3d>& p, const Vec3d& normal,
 void refinePatch(Patch& patch, uint32_t loop_size, const std::function<bool(uint32_t, uint32_t)>& diagonalExists,
                  size_t max_vertices) {
     const double kSqrt2 = std::sqrt(2.0);
-    auto relax = [&]() {
-        for (int sweep = 0; sweep < 10; ++sweep) {
+    auto relax = [&](int max_sweeps) {
+        for (int sweep = 0; sweep < max_sweeps; ++sweep) {
             std::unordered_map<uint64_t, std::array<uint32_t, 2>> edge_tris; // looked up only, never iterated
             edge_tris.reserve(patch.tris.size() * 2);
             for (uint32_t t = 0; t < patch.tris.size(); ++t)
@@ -196,7 +196,7 @@ void refinePatch(Patch& patch, uint32_t loop_size, const std::function<bool(uint
             if (!flips) break;
         }
     };
-    relax();
+    relax(10);
     for (int round = 0; round < 40; ++round) {
         const size_t tri_count = patch.tris.size();
         size_t splits = 0;
@@ -219,8 +219,9 @@ void refinePatch(Patch& patch, uint32_t loop_size, const std::function<bool(uint
             ++splits;
         }
         if (!splits) break;
-        relax();
+        relax(1);
     }
+    relax(10);
 }
 
 void fairPatch(Patch& patch, uint32_t loop_size, uint32_t iterations) {
@@ -260,6 +261,10 @@ HoleFillReport fillHoles(Mesh& mesh, const HoleFillOptions& options) {
         const uint32_t n = uint32_t(loop.vertices.size());
         if (!loop.closed || n < 3) {
             ++r.holes_unfillable;
+            continue;
+        }
+        if (n == 3 && loop.corners[0] / 3 == loop.corners[1] / 3 && loop.corners[1] / 3 == loop.corners[2] / 3) {
+            ++r.holes_unfillable; // a lone triangle: filling would only add its back face
             continue;
         }
         if (n > options.max_hole_edges) {

@@ -1,7 +1,9 @@
 #pragma once
 // Surface denoising: Laplacian smoothing with umbrella, cotangent or Fujiwara weights, Taubin λ|μ
 // (the volume-preserving default), and the p-Laplacian diffusion with a curvature-adaptive fidelity
-// term from Guerra 2012 (seed 003). A feature-preserving mode keeps sharp creases.
+// term from Guerra 2012 (seed 003). A feature-preserving mode keeps sharp creases: it filters face
+// normals only among neighbours within the feature angle and moves vertices to fit them (Sun,
+// Rosin, Martin, Langbein 2007), so creases are never averaged across.
 
 #include <cstdint>
 
@@ -33,8 +35,11 @@ struct DenoiseOptions {
     double fidelity = 0.1;          // PLaplacian λ: pull back toward the input
     bool adaptive_fidelity = true;  // PLaplacian: scale λ per vertex by its curvature relative to the mean
     bool fix_boundary = true;       // boundary vertices do not move
-    bool preserve_features = false; // vertices on creases move only along the crease; corners are fixed
+    bool preserve_features = false; // replaces `method`: normal filtering within the feature angle (Sun et al. 2007)
+                                    // for free vertices; crease vertices slide along the crease; corners fixed
     double feature_angle_deg = 30.0; // a crease is an edge whose face normals differ by more than this
+    double max_crease_change_deg = 1.0; // preserve_features: a step that changes a crease's dihedral angle by more
+                                        // than this is undone around it and those vertices are pinned
 };
 
 struct DenoiseReport {

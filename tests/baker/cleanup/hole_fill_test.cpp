@@ -1,0 +1,112 @@
+#include <chrono>
+
+#include <gtest/gtest.h>
+
+#include "cleanup_builders.h"
+#include "lodbake/cleanup/passes.h"
+#include "lodbake/cleanup/validate.h"
+
+using namespace lodbake;
+using namespace lodbake_test;
+
+namespace {
+Mesh tetrahedronMissingFace() {
+    Mesh m = tetrahedron();
+    m.indices.resize(9);
+    return m;
+}
+double maxEdgeLength(const Mesh& m, size_t first_face) {
+    double mx = 0;
+    for (size_t f = first_face; f < m.faceCount(); ++f)
+        for (int k = 0; k < 3; ++k)
+            mx = std::max(mx, double(length(m.positions[m.indices[3 * f + k]] - m.positions[m.indices[3 * f + (k + 1) % 3]])));
+    return mx;
+}
+} // namespace
+
+TEST(HoleFillTest, ClosesThreeEdgeHole) {
+    Mesh m = tetrahedronMissingFace();
+    const HoleFillReport r = fillHoles(m);
+    EXPECT_EQ(r.holes_found, 1u);
+    EXPECT_EQ(r.holes_filled, 1u);
+    EXPECT_EQ(r.faces_added, 1u);
+    EXPECT_EQ(r.vertices_added, 0u);
+    EXPECT_TRUE(validate(m).isClosedManifold()); // oriented like its neighbours
+}
+
+TEST(HoleFillTest, ClosesHemisphereWithDpAndRefines) {
+    Mesh m = hemisphere(6, 40); // equator hole of 40 edges
+    const size_t faces = m.faceCount();
+    const HoleFillReport r = fillHoles(m);
+    EXPECT_EQ(r.filled_lengths, (std::vector<uint32_t>{40}));
+    EXPECT_GT(r.vertices_added, 0u); // refined to the boundary density
+    EXPECT_TRUE(validate(m).isClosedManifold());
+    // Boundary edges are ~0.157 long; refined patch edges stay within a few of them.
+    EXPECT_LT(maxEdgeLength(m, faces), 0.6);
+}
+
+TEST(HoleFillTest, BareTriangulationAddsNoVertices) {
+    Mesh m = hemisphere(6, 40);
+    HoleFillOptions o;
+    o.refine = o.fair = false;
+    const HoleFillReport r = fillHoles(m, o);
+    EXPECT_EQ(r.vertices_added, 0u);
+    EXPECT_EQ(r.faces_added, 38u); // n - 2
+    EXPECT_TRUE(validate(m).isClosedManifold());
+}
+
+TEST(HoleFillTest, ThousandEdgeHoleIsFast) {
+    Mesh m = hemisphere(4, 1000);
+    HoleFillOptions o;
+    o.max_hole_edges = 1000;
+    const auto t0 = std::chrono::steady_clock::now();
+    const HoleFillReport r = fillHoles(m, o);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    EXPECT_EQ(r.filled_lengths, (std::vector<uint32_t>{1000}));
+    EXPECT_TRUE(validate(m).isClosedManifold());
+    RecordProperty("fill_seconds", std::to_string(seconds));
+    EXPECT_LT(seconds, 20.0); // generous: shared CI machines; typical is well under a second
+}
+
+TEST(HoleFillTest, ThousandEdgeHoleBareEarClipping) {
+    Mesh m = hemisphere(4, 1000);
+    HoleFillOptions o;
+    o.max_hole_edges = 1000;
+    o.refine = o.fair = false;
+    const HoleFillReport r = fillHoles(m, o);
+    EXPECT_EQ(r.faces_added, 998u);
+    EXPECT_TRUE(validate(m).isClosedManifold());
+}
+
+TEST(HoleFillTest, LeavesLargeHolesOpenAndReportsThem) {
+    Mesh m = hemisphere(4, 64);
+    HoleFillOptions o;
+    o.max_hole_edges = 63;
+    const HoleFillReport r = fillHoles(m, o);
+    EXPECT_EQ(r.holes_filled, 0u);
+    EXPECT_EQ(r.skipped_lengths, (std::vector<uint32_t>{64}));
+    EXPECT_EQ(validate(m).boundary_loop_lengths, (std::vector<uint32_t>{64}));
+}
+
+TEST(HoleFillTest, NewFacesJoinTheAdjacentSubMesh) {
+    Mesh m = tetrahedronMissingFace();
+    m.submeshes = {{"a", 0, 3, MaterialId::invalid()}, {"b", 3, 6, MaterialId::invalid()}};
+    fillHoles(m);
+    ASSERT_EQ(m.faceCount(), 4u);
+    EXPECT_EQ(m.submeshes[0].index_count + m.submeshes[1].index_count, 12u);
+    EXPECT_EQ(m.submeshes[1].first_index, m.submeshes[0].index_count);
+}
+
+TEST(HoleFillTest, AllBoundaryStripAndSingleTriangle) {
+    Mesh s = strip(30); // one loop of 62 edges: gets capped into a closed flat pillow
+    const HoleFillReport r = fillHoles(s);
+    EXPECT_EQ(r.holes_filled, 1u);
+    EXPECT_TRUE(validate(s).isManifold());
+    Mesh t = singleTriangle(); // its own boundary: the fill would duplicate the face
+    const HoleFillReport rt = fillHoles(t);
+    EXPECT_EQ(rt.holes_found, 1u);
+    EXPECT_TRUE(validate(t).isManifold());
+    EXPECT_EQ(validate(t).topology.duplicate_face_count, 0u);
+    Mesh empty;
+    EXPECT_EQ(fillHoles(empty).holes_found, 0u);
+}
