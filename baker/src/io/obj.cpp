@@ -201,9 +201,8 @@ public:
                 out.back().mtl_display = mtl_display_;
                 continue;
             }
-            const bool known = k == "kd" || k == "d" || k == "tr" || k == "ke" || k == "ns" || k == "pr" ||
-                               k == "pm" || k == "map_kd" || k == "map_bump" || k == "bump" || k == "norm" ||
-                               k == "map_ke";
+            const bool known = k == "kd" || k == "d" || k == "tr" || k == "ke" || k == "ns" || k == "pr" || k == "pm" ||
+                               k == "map_kd" || k == "map_bump" || k == "bump" || k == "norm" || k == "map_ke";
             if (!known) {
                 // Ka, Ks, Ni, illum, Tf, map_Ks, map_d, disp, refl, ... have no glTF counterpart.
                 ++ignored_;
@@ -296,8 +295,8 @@ private:
     // of the line, so names with spaces survive.
     Status readMap(std::string_view key, std::string_view rest, PendingTexture& slot, float& bump_scale) const {
         static const std::map<std::string, int> kFixedArity = {
-            {"-blendu", 1}, {"-blendv", 1}, {"-boost", 1}, {"-mm", 2},  {"-texres", 1}, {"-clamp", 1},
-            {"-bm", 1},     {"-imfchan", 1}, {"-type", 1}, {"-cc", 1},  {"-halo", 0}};
+            {"-blendu", 1}, {"-blendv", 1},  {"-boost", 1}, {"-mm", 2}, {"-texres", 1}, {"-clamp", 1},
+            {"-bm", 1},     {"-imfchan", 1}, {"-type", 1},  {"-cc", 1}, {"-halo", 0}};
         for (;;) {
             std::string_view probe = rest;
             const std::string_view opt = nextToken(probe);
@@ -355,8 +354,8 @@ class ObjReader {
 public:
     ObjReader(const std::string& name, const SideFileLoader& loader, const ReadOptions& options,
               Diagnostics& diagnostics)
-        : name_(name), loader_(loader), options_(options), diagnostics_(diagnostics),
-          base_dir_(parentDirectory(name)) {}
+        : name_(name), loader_(loader), options_(options), diagnostics_(diagnostics), base_dir_(parentDirectory(name)) {
+    }
 
     Result<LoadedMesh> read(const uint8_t* data, size_t size) {
         LineReader reader(data, size);
@@ -379,15 +378,16 @@ private:
     uint64_t line_ = 0;
 
     std::vector<Vec3f> positions_;
-    std::vector<Vec4f> colors_; // as written, one per position once any colour was seen
+    std::vector<Vec4f> colors_;        // as written, one per position once any colour was seen
+    std::vector<uint8_t> color_given_; // parallel to colors_: 0 where the v line had no colour
     uint64_t colored_count_ = 0;
     std::vector<Vec2f> texcoords_; // already flipped to the glTF convention
     std::vector<Vec3f> normals_;
 
     std::vector<uint32_t> chain_head_; // per position: first unified vertex using it
     std::vector<UnifiedVertex> unified_;
-    std::vector<uint32_t> indices_;    // unified vertex per triangle corner
-    std::vector<uint32_t> tri_slot_;   // usemtl slot per triangle
+    std::vector<uint32_t> indices_;  // unified vertex per triangle corner
+    std::vector<uint32_t> tri_slot_; // usemtl slot per triangle
 
     std::vector<UseMtl> usemtl_;
     std::map<std::string, uint32_t> slot_by_name_;
@@ -421,7 +421,8 @@ private:
                             excerpt(tok) + "' after them");
             float v = 0.0f;
             if (!parseFloat(tok, v)) return fail(std::string(key) + ": expected a number, got '" + excerpt(tok) + "'");
-            if (!std::isfinite(v)) return fail(std::string(key) + ": coordinate is not finite ('" + excerpt(tok) + "')");
+            if (!std::isfinite(v))
+                return fail(std::string(key) + ": coordinate is not finite ('" + excerpt(tok) + "')");
             out[count++] = v;
         }
         if (count < min_count)
@@ -436,6 +437,10 @@ private:
         if (key.empty()) return Status();
         if (key == "v") return vertex(rest);
         if (key == "f" || key == "fo") return face(rest);
+        if ((key == "vt" || key == "vn") && std::max(texcoords_.size(), normals_.size()) >= options_.max_vertex_count)
+            return resourceLimit(name_ + ": line " + std::to_string(line_) + ": more than " +
+                                 std::to_string(options_.max_vertex_count) + " " + std::string(key) +
+                                 " entries (ReadOptions limit)");
         if (key == "vt") {
             float t[3];
             size_t n = 0;
@@ -483,18 +488,24 @@ private:
         float t[7];
         size_t n = 0;
         LODBAKE_RETURN_IF_ERROR(readFloats("v", rest, t, 3, 7, n));
-        if (n == 5) return fail("v: expected 3 (x y z), 4 (x y z w), 6 (x y z r g b) or 7 (x y z r g b a) numbers, got 5");
+        if (n == 5)
+            return fail("v: expected 3 (x y z), 4 (x y z w), 6 (x y z r g b) or 7 (x y z r g b a) numbers, got 5");
         if (positions_.size() >= options_.max_vertex_count)
             return resourceLimit(name_ + ": line " + std::to_string(line_) + ": more than " +
                                  std::to_string(options_.max_vertex_count) + " vertices (ReadOptions limit)");
         positions_.push_back({t[0], t[1], t[2]});
         if (n == 4) ++w_coordinates_;
         if (n >= 6) {
-            if (colors_.empty()) colors_.resize(positions_.size() - 1, Vec4f(1.0f, 1.0f, 1.0f, 1.0f));
+            if (colors_.empty()) {
+                colors_.resize(positions_.size() - 1, Vec4f(1.0f, 1.0f, 1.0f, 1.0f));
+                color_given_.resize(positions_.size() - 1, 0);
+            }
             colors_.push_back({t[3], t[4], t[5], n == 7 ? t[6] : 1.0f});
+            color_given_.push_back(1);
             ++colored_count_;
         } else if (!colors_.empty()) {
             colors_.push_back({1.0f, 1.0f, 1.0f, 1.0f});
+            color_given_.push_back(0);
         }
         return Status();
     }
@@ -502,7 +513,8 @@ private:
     // Resolves one OBJ index (1-based, or negative: relative to the elements defined so far).
     Status resolveIndex(std::string_view tok, const char* what, size_t defined, uint32_t& out) const {
         int64_t idx = 0;
-        if (!parseInt(tok, idx)) return fail("f: " + std::string(what) + " index: expected an integer, got '" + excerpt(tok) + "'");
+        if (!parseInt(tok, idx))
+            return fail("f: " + std::string(what) + " index: expected an integer, got '" + excerpt(tok) + "'");
         if (idx == 0) return fail("f: " + std::string(what) + " index 0 is invalid (OBJ indices start at 1)");
         const int64_t resolved = idx > 0 ? idx - 1 : int64_t(defined) + idx;
         if (resolved < 0 || resolved >= int64_t(defined))
@@ -518,6 +530,7 @@ private:
         c.vt = c.vn = kNone;
         if (s1 == std::string_view::npos) return Status();
         const std::string_view after = tok.substr(s1 + 1);
+        if (after.empty()) return fail("f: expected v, v/vt, v//vn or v/vt/vn, got '" + excerpt(tok) + "'");
         const size_t s2 = after.find('/');
         const std::string_view vt = after.substr(0, s2);
         if (!vt.empty()) LODBAKE_RETURN_IF_ERROR(resolveIndex(vt, "texture coordinate", texcoords_.size(), c.vt));
@@ -628,6 +641,8 @@ private:
             const std::string sniffed = mimeFromBytes(tex.bytes);
             if (!sniffed.empty()) tex.mime_type = sniffed;
         }
+        detail::sanitizeUtf8(tex.name);
+        detail::sanitizeUtf8(tex.uri);
         out = int32_t(textures.size());
         by_path.emplace(pending.path, out);
         textures.push_back(std::move(tex));
@@ -668,6 +683,9 @@ private:
                                                     mat.emissive_texture.texture));
             if (mat.emissive_texture.isSet() && mat.emissive_factor == Vec3f(0.0f, 0.0f, 0.0f))
                 mat.emissive_factor = {1.0f, 1.0f, 1.0f};
+            if (detail::sanitizeUtf8(mat.name))
+                diagnostics_.warn(name_ +
+                                  ": material name is not valid UTF-8; invalid bytes replaced by '?': " + mat.name);
             mesh.materials.push_back(std::move(mat));
         }
 
@@ -684,7 +702,23 @@ private:
         if (unreferenced > 0 && face_count_ > 0)
             diagnostics_.note(name_ + ": " + std::to_string(unreferenced) + " vertices are used by no face (kept)");
 
+        // Number vertices by position index, then by first use: a file without vt/vn keeps its
+        // vertex order, and unreferenced positions stay where the file has them.
         const size_t vertex_count = unified_.size();
+        {
+            std::vector<uint32_t> new_id(vertex_count);
+            std::vector<UnifiedVertex> ordered;
+            ordered.reserve(vertex_count);
+            for (uint32_t head : chain_head_)
+                for (uint32_t u = head; u != kNone; u = unified_[u].next) {
+                    new_id[u] = uint32_t(ordered.size());
+                    ordered.push_back(unified_[u]);
+                }
+            for (uint32_t& i : indices_) i = new_id[i];
+            unified_ = std::move(ordered);
+        }
+        std::vector<uint8_t> used(vertex_count, 0);
+        for (uint32_t i : indices_) used[i] = 1;
         bool any_vt = false, any_vn = false;
         uint64_t missing_vt = 0, missing_vn = 0;
         for (const UnifiedVertex& u : unified_) {
@@ -698,12 +732,16 @@ private:
             const Corner& c = unified_[i].corner;
             mesh.positions[i] = positions_[c.v];
             if (any_vt) {
-                if (c.vt != kNone) mesh.uvs[0][i] = texcoords_[c.vt];
-                else if (i < vertex_count - unreferenced) ++missing_vt;
+                if (c.vt != kNone)
+                    mesh.uvs[0][i] = texcoords_[c.vt];
+                else if (used[i])
+                    ++missing_vt;
             }
             if (any_vn) {
-                if (c.vn != kNone) mesh.normals[i] = normalize(normals_[c.vn]);
-                else if (i < vertex_count - unreferenced) ++missing_vn;
+                if (c.vn != kNone)
+                    mesh.normals[i] = normalize(normals_[c.vn]);
+                else if (used[i])
+                    ++missing_vn;
             }
         }
         if (missing_vt > 0)
@@ -716,17 +754,23 @@ private:
         }
         if (!colors_.empty()) {
             float max_component = 0.0f;
-            for (const Vec4f& c : colors_) max_component = std::max({max_component, c.x, c.y, c.z});
+            for (size_t i = 0; i < colors_.size(); ++i)
+                if (color_given_[i])
+                    max_component = std::max({max_component, colors_[i].x, colors_[i].y, colors_[i].z});
             // Some exporters write 0..255 although the de-facto convention is 0..1.
             const float scale = max_component > 1.0f ? 1.0f / 255.0f : 1.0f;
-            if (scale != 1.0f)
-                diagnostics_.note(name_ + ": vertex colours exceed 1; read as 0..255 values");
+            if (scale != 1.0f) diagnostics_.note(name_ + ": vertex colours exceed 1; read as 0..255 values");
             if (colored_count_ < positions_.size())
-                diagnostics_.warn(name_ + ": " + std::to_string(positions_.size() - colored_count_) +
-                                  " of " + std::to_string(positions_.size()) + " vertices have no colour; set to white");
+                diagnostics_.warn(name_ + ": " + std::to_string(positions_.size() - colored_count_) + " of " +
+                                  std::to_string(positions_.size()) + " vertices have no colour; set to white");
             mesh.colors.resize(vertex_count);
             for (size_t i = 0; i < vertex_count; ++i) {
-                const Vec4f& c = colors_[unified_[i].corner.v];
+                const uint32_t v = unified_[i].corner.v;
+                if (!color_given_[v]) {
+                    mesh.colors[i] = {1.0f, 1.0f, 1.0f, 1.0f};
+                    continue;
+                }
+                const Vec4f& c = colors_[v];
                 mesh.colors[i] = {detail::srgbToLinear(c.x * scale), detail::srgbToLinear(c.y * scale),
                                   detail::srgbToLinear(c.z * scale), std::clamp(c.w, 0.0f, 1.0f)};
             }
@@ -887,8 +931,10 @@ ObjFiles writeObjToMemory(const Mesh& mesh, const std::string& base_name) {
         write_faces(0, mesh.indices.size());
     } else {
         for (const SubMesh& s : mesh.submeshes) {
-            if (s.material.isValid()) o += "usemtl " + names[s.material.value] + "\n";
-            else if (need_default) o += "usemtl " + default_name + "\n";
+            if (s.material.isValid())
+                o += "usemtl " + names[s.material.value] + "\n";
+            else if (need_default)
+                o += "usemtl " + default_name + "\n";
             write_faces(s.first_index, s.index_count);
         }
     }
@@ -913,12 +959,14 @@ ObjFiles writeObjToMemory(const Mesh& mesh, const std::string& base_name) {
     for (size_t i = 0; i < mesh.materials.size(); ++i) {
         const Material& mat = mesh.materials[i];
         m += "\nnewmtl " + names[i] + "\n";
-        const float kd[3] = {detail::linearToSrgb(mat.base_color_factor.x), detail::linearToSrgb(mat.base_color_factor.y),
+        const float kd[3] = {detail::linearToSrgb(mat.base_color_factor.x),
+                             detail::linearToSrgb(mat.base_color_factor.y),
                              detail::linearToSrgb(mat.base_color_factor.z)};
         appendVec(m, "Kd", kd, 3);
         if (mat.base_color_factor.w != 1.0f) appendVec(m, "d", &mat.base_color_factor.w, 1);
         if (mat.emissive_factor != Vec3f(0.0f, 0.0f, 0.0f)) {
-            const float ke[3] = {detail::linearToSrgb(mat.emissive_factor.x), detail::linearToSrgb(mat.emissive_factor.y),
+            const float ke[3] = {detail::linearToSrgb(mat.emissive_factor.x),
+                                 detail::linearToSrgb(mat.emissive_factor.y),
                                  detail::linearToSrgb(mat.emissive_factor.z)};
             appendVec(m, "Ke", ke, 3);
         }

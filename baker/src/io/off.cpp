@@ -54,9 +54,10 @@ public:
             const std::string_view tok = nextToken(rest);
             if (tok.empty() && i == 2) break; // the edge count is often left out
             if (!parseInt(tok, counts[i]) || counts[i] < 0)
-                return invalidInput(name_ + ": header: expected " +
-                                    std::string(i == 0 ? "the vertex count" : (i == 1 ? "the face count" : "the edge count")) +
-                                    " (a non-negative integer), got '" + excerpt(tok) + "'");
+                return invalidInput(
+                    name_ + ": header: expected " +
+                    std::string(i == 0 ? "the vertex count" : (i == 1 ? "the face count" : "the edge count")) +
+                    " (a non-negative integer), got '" + excerpt(tok) + "'");
         }
         if (!nextToken(rest).empty())
             return invalidInput(name_ + ": header: expected 'vertex_count face_count edge_count', got extra values");
@@ -90,9 +91,11 @@ public:
             const std::string_view count_tok = nextToken(rest);
             int64_t k = 0;
             if (!parseInt(count_tok, k))
-                return invalidInput(name_ + ": " + element + ": expected the vertex count, got '" + excerpt(count_tok) + "'");
+                return invalidInput(name_ + ": " + element + ": expected the vertex count, got '" + excerpt(count_tok) +
+                                    "'");
             if (k < 3)
-                return invalidInput(name_ + ": " + element + ": expected at least 3 vertices, got " + std::to_string(k));
+                return invalidInput(name_ + ": " + element + ": expected at least 3 vertices, got " +
+                                    std::to_string(k));
             if (uint64_t(k) > options_.max_polygon_vertices)
                 return invalidInput(name_ + ": " + element + ": " + std::to_string(k) + " vertices, more than " +
                                     std::to_string(options_.max_polygon_vertices) +
@@ -102,10 +105,11 @@ public:
                 const std::string_view tok = nextToken(rest);
                 int64_t idx = 0;
                 if (tok.empty())
-                    return invalidInput(name_ + ": " + element + ": expected " + std::to_string(k) + " vertex indices, got " +
-                                        std::to_string(i));
+                    return invalidInput(name_ + ": " + element + ": expected " + std::to_string(k) +
+                                        " vertex indices, got " + std::to_string(i));
                 if (!parseInt(tok, idx))
-                    return invalidInput(name_ + ": " + element + ": expected a vertex index, got '" + excerpt(tok) + "'");
+                    return invalidInput(name_ + ": " + element + ": expected a vertex index, got '" + excerpt(tok) +
+                                        "'");
                 if (idx < 0 || uint64_t(idx) >= vertex_count)
                     return invalidInput(name_ + ": " + element + ": vertex index " + std::to_string(idx) +
                                         " out of range (" + std::to_string(vertex_count) + " vertices)");
@@ -161,7 +165,8 @@ private:
             p_ = nl ? nl + 1 : end_;
             ++line_number_;
             if (s.size() > kMaxLineBytes) {
-                line_error_ = "line " + std::to_string(line_number_) + ": longer than " + std::to_string(kMaxLineBytes) + " bytes";
+                line_error_ = "line " + std::to_string(line_number_) + ": longer than " +
+                              std::to_string(kMaxLineBytes) + " bytes";
                 return false;
             }
             const size_t hash = s.find('#');
@@ -185,7 +190,8 @@ private:
     Status parseKeyword(std::string_view keyword) {
         std::string_view k = keyword;
         if (k.size() < 3 || k.substr(k.size() - 3) != "OFF")
-            return invalidInput(name_ + ": header: expected an OFF keyword ([ST][C][N]OFF), got '" + excerpt(keyword) + "'");
+            return invalidInput(name_ + ": header: expected an OFF keyword ([ST][C][N]OFF), got '" + excerpt(keyword) +
+                                "'");
         k.remove_suffix(3);
         if (k.size() >= 2 && k.substr(0, 2) == "ST") {
             has_uvs_ = true;
@@ -203,18 +209,19 @@ private:
             return unsupported(name_ + ": header: '" + excerpt(keyword) +
                                "' is unsupported (only 3D OFF is read; 4OFF and nOFF are not)");
         if (!k.empty())
-            return invalidInput(name_ + ": header: expected an OFF keyword ([ST][C][N]OFF), got '" + excerpt(keyword) + "'");
+            return invalidInput(name_ + ": header: expected an OFF keyword ([ST][C][N]OFF), got '" + excerpt(keyword) +
+                                "'");
         return Status();
     }
 
     Status checkCounts(uint64_t vertex_count, uint64_t face_count) const {
         if (vertex_count == 0) return invalidInput(name_ + ": header: no vertices (vertex count is 0)");
         if (vertex_count > options_.max_vertex_count)
-            return resourceLimit(name_ + ": header: vertex count " + std::to_string(vertex_count) + " is over the limit of " +
-                                 std::to_string(options_.max_vertex_count));
+            return resourceLimit(name_ + ": header: vertex count " + std::to_string(vertex_count) +
+                                 " is over the limit of " + std::to_string(options_.max_vertex_count));
         if (face_count > options_.max_face_count)
-            return resourceLimit(name_ + ": header: face count " + std::to_string(face_count) + " is over the limit of " +
-                                 std::to_string(options_.max_face_count));
+            return resourceLimit(name_ + ": header: face count " + std::to_string(face_count) +
+                                 " is over the limit of " + std::to_string(options_.max_face_count));
         const uint64_t left = uint64_t(end_ - p_);
         // Computed in long double: with raised limits the products could overflow 64 bits.
         const long double needed_exact =
@@ -241,7 +248,8 @@ private:
         const size_t fixed = 3 + (has_normals_ ? 3 : 0) + (has_uvs_ ? 2 : 0);
         size_t color_count = 0;
         if (has_colors_) {
-            if (n == fixed + 3 || n == fixed + 4) color_count = n - fixed;
+            if (n == fixed + 3 || n == fixed + 4)
+                color_count = n - fixed;
             else
                 return invalidInput(name_ + ": " + element + ": expected " + std::to_string(fixed + 3) + " or " +
                                     std::to_string(fixed + 4) + " values, got " + std::to_string(n));

@@ -34,7 +34,9 @@ struct P2 {
     double x, y;
 };
 
-double cross2(const P2& o, const P2& a, const P2& b) { return (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x); }
+double cross2(const P2& o, const P2& a, const P2& b) {
+    return (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x);
+}
 
 // Strictly inside or on the boundary of the counter-clockwise triangle abc.
 bool inTriangle(const P2& p, const P2& a, const P2& b, const P2& c) {

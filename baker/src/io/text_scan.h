@@ -11,7 +11,9 @@
 
 namespace lodbake::detail {
 
-inline bool isSpace(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v'; }
+inline bool isSpace(char c) {
+    return c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v';
+}
 
 /// Splits the next whitespace-separated token off the front of `s` (empty when none is left).
 inline std::string_view nextToken(std::string_view& s) {
@@ -65,6 +67,39 @@ inline std::string excerpt(std::string_view s) {
     }
     if (s.size() > n) out += "...";
     return out;
+}
+
+/// Replaces every byte that is not part of a well-formed UTF-8 sequence with '?', so names taken
+/// from files can go into JSON (glTF) safely. Returns true if anything was replaced.
+inline bool sanitizeUtf8(std::string& s) {
+    bool changed = false;
+    size_t i = 0;
+    while (i < s.size()) {
+        const unsigned char c = static_cast<unsigned char>(s[i]);
+        size_t len = c < 0x80                   ? 1
+                     : (c >= 0xc2 && c <= 0xdf) ? 2
+                     : (c >= 0xe0 && c <= 0xef) ? 3
+                     : (c >= 0xf0 && c <= 0xf4) ? 4
+                                                : 0;
+        bool ok = len > 0 && i + len <= s.size();
+        for (size_t k = 1; ok && k < len; ++k) ok = (static_cast<unsigned char>(s[i + k]) & 0xc0) == 0x80;
+        if (ok && len >= 3) {
+            // Reject overlong forms, surrogates and code points above U+10FFFF.
+            const unsigned char c1 = static_cast<unsigned char>(s[i + 1]);
+            if (c == 0xe0 && c1 < 0xa0) ok = false;
+            if (c == 0xed && c1 >= 0xa0) ok = false;
+            if (c == 0xf0 && c1 < 0x90) ok = false;
+            if (c == 0xf4 && c1 >= 0x90) ok = false;
+        }
+        if (ok && (c >= 0x20 || c == '\t')) {
+            i += len;
+        } else {
+            s[i] = '?';
+            changed = true;
+            ++i;
+        }
+    }
+    return changed;
 }
 
 /// Shortest text that reads back to exactly `v` (std::to_chars), so writers are deterministic.
