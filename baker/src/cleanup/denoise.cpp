@@ -281,7 +281,7 @@ DenoiseReport denoise(Mesh& mesh, const DenoiseOptions& options) {
         }
         std::vector<double> wp(adj.neighbours.size());
         const double scale = computeBounds(mesh).diagonal() * 1e-9 + 1e-30; // keeps |d|^(p-2) finite
-        for (uint32_t outer = 0; outer < options.iterations; ++outer)
+        for (uint32_t outer = 0; outer < options.outer_iterations; ++outer)
             for (int inner = 0; inner < 10; ++inner) {
                 for (size_t v = 0; v < n; ++v)
                     for (uint32_t i = adj.begin[v]; i < adj.begin[v + 1]; ++i)

@@ -139,67 +139,115 @@ bool triangulateEars(const std::vector<Vec3d>& p, const Vec3d& normal,
     return true;
 }
 
+// Edge -> its (up to two) patch triangles, kept up to date through splits and flips. Looked up only,
+// never iterated, so its order cannot reach the output.
+class PatchEdges {
+public:
+    explicit PatchEdges(const std::vector<Tri>& tris) {
+        map_.reserve(tris.size() * 4);
+        for (uint32_t t = 0; t < tris.size(); ++t)
+            for (int k = 0; k < 3; ++k) add(tris[t][k], tris[t][(k + 1) % 3], t);
+    }
+    void add(uint32_t a, uint32_t b, uint32_t t) {
+        auto& slot = map_.try_emplace(edgeKey(a, b), std::array<uint32_t, 2>{kNone, kNone}).first->second;
+        slot[slot[0] == kNone ? 0 : 1] = t;
+    }
+    void replace(uint32_t a, uint32_t b, uint32_t from, uint32_t to) {
+        auto& slot = map_[edgeKey(a, b)];
+        for (uint32_t& s : slot)
+            if (s == from) {
+                s = to;
+                return;
+            }
+    }
+    void erase(uint32_t a, uint32_t b) { map_.erase(edgeKey(a, b)); }
+    bool has(uint32_t a, uint32_t b) const { return map_.count(edgeKey(a, b)) != 0; }
+    uint32_t other(uint32_t a, uint32_t b, uint32_t t) const {
+        auto it = map_.find(edgeKey(a, b));
+        if (it == map_.end()) return kNone;
+        return it->second[0] == t ? it->second[1] : it->second[0];
+    }
+
+private:
+    std::unordered_map<uint64_t, std::array<uint32_t, 2>> map_;
+};
+
 void refinePatch(Patch& patch, uint32_t loop_size, const std::function<bool(uint32_t, uint32_t)>& diagonalExists,
                  size_t max_vertices) {
     const double kSqrt2 = std::sqrt(2.0);
-    auto relax = [&](int max_sweeps) {
-        for (int sweep = 0; sweep < max_sweeps; ++sweep) {
-            std::unordered_map<uint64_t, std::array<uint32_t, 2>> edge_tris; // looked up only, never iterated
-            edge_tris.reserve(patch.tris.size() * 2);
-            for (uint32_t t = 0; t < patch.tris.size(); ++t)
-                for (int k = 0; k < 3; ++k) {
-                    auto& slot = edge_tris.try_emplace(edgeKey(patch.tris[t][k], patch.tris[t][(k + 1) % 3]),
-                                                       std::array<uint32_t, 2>{kNone, kNone})
-                                     .first->second;
-                    slot[slot[0] == kNone ? 0 : 1] = t;
-                }
-            std::vector<uint8_t> touched(patch.tris.size(), 0);
-            std::vector<uint32_t> degree(patch.pos.size(), 0);
-            for (const Tri& t : patch.tris)
-                for (uint32_t v : t) ++degree[v];
-            size_t flips = 0;
-            for (uint32_t t = 0; t < patch.tris.size(); ++t) {
-                for (int k = 0; k < 3 && !touched[t]; ++k) {
-                    const uint32_t a = patch.tris[t][k], b = patch.tris[t][(k + 1) % 3], c = patch.tris[t][(k + 2) % 3];
-                    if (a < loop_size && b < loop_size && (b == (a + 1) % loop_size || a == (b + 1) % loop_size))
-                        continue; // a loop edge: borders the mesh
-                    const auto& pair = edge_tris[edgeKey(a, b)];
-                    const uint32_t u = pair[0] == t ? pair[1] : pair[0];
-                    if (u == kNone || touched[u]) continue;
-                    uint32_t d = kNone;
-                    for (int j = 0; j < 3; ++j)
-                        if (patch.tris[u][j] != a && patch.tris[u][j] != b) d = patch.tris[u][j];
-                    if (d == kNone || d == c || edge_tris.count(edgeKey(c, d))) continue;
-                    // An inner vertex must keep at least three triangles, or it folds onto a neighbour.
-                    if ((a >= loop_size && degree[a] <= 3) || (b >= loop_size && degree[b] <= 3)) continue;
-                    if (c < loop_size && d < loop_size && diagonalExists(c, d)) continue;
-                    auto angleAt = [&](uint32_t x) {
-                        const Vec3d e0 = patch.pos[a] - patch.pos[x], e1 = patch.pos[b] - patch.pos[x];
-                        return angleBetween(e0, e1);
-                    };
-                    if (angleAt(c) + angleAt(d) <= M_PI + 1e-9) continue;
-                    const Vec3d n0 = triNormal(patch.pos[a], patch.pos[d], patch.pos[c]);
-                    const Vec3d n1 = triNormal(patch.pos[d], patch.pos[b], patch.pos[c]);
-                    if (dot(n0, n0) == 0.0 || dot(n1, n1) == 0.0 || dot(n0, n1) <= 0.0) continue; // would fold
-                    // t = (a,b,c), u = (b,a,d) -> (a,d,c), (d,b,c)
-                    patch.tris[t] = {a, d, c};
-                    patch.tris[u] = {d, b, c};
-                    touched[t] = touched[u] = 1;
-                    edge_tris[edgeKey(c, d)] = {t, u};
-                    --degree[a];
-                    --degree[b];
-                    ++degree[c];
-                    ++degree[d];
-                    ++flips;
-                }
-            }
-            if (!flips) break;
+    PatchEdges edges(patch.tris);
+    std::vector<uint32_t> degree(patch.pos.size(), 0);
+    for (const Tri& t : patch.tris)
+        for (uint32_t v : t) ++degree[v];
+    auto isLoopEdge = [&](uint32_t a, uint32_t b) {
+        return a < loop_size && b < loop_size && (b == (a + 1) % loop_size || a == (b + 1) % loop_size);
+    };
+    // Flips edge (a,b) of triangle t if it is not locally Delaunay; returns whether it flipped.
+    auto tryFlip = [&](uint32_t t, uint32_t a, uint32_t b, std::vector<std::pair<uint32_t, uint32_t>>& work) {
+        if (isLoopEdge(a, b)) return false; // borders the mesh
+        // Orient (a,b) as triangle t runs it.
+        const Tri& tt = patch.tris[t];
+        int k = 0;
+        while (k < 3 && !(tt[k] == a && tt[(k + 1) % 3] == b)) ++k;
+        if (k == 3) std::swap(a, b);
+        k = 0;
+        while (k < 3 && !(tt[k] == a && tt[(k + 1) % 3] == b)) ++k;
+        if (k == 3) return false;
+        const uint32_t c = tt[(k + 2) % 3];
+        const uint32_t u = edges.other(a, b, t);
+        if (u == kNone) return false;
+        uint32_t d = kNone;
+        for (uint32_t v : patch.tris[u])
+            if (v != a && v != b) d = v;
+        if (d == kNone || d == c || edges.has(c, d)) return false;
+        if (c < loop_size && d < loop_size && diagonalExists(c, d)) return false;
+        // An inner vertex must keep at least three triangles, or it folds onto a neighbour.
+        if ((a >= loop_size && degree[a] <= 3) || (b >= loop_size && degree[b] <= 3)) return false;
+        auto angleAt = [&](uint32_t x) { return angleBetween(patch.pos[a] - patch.pos[x], patch.pos[b] - patch.pos[x]); };
+        if (angleAt(c) + angleAt(d) <= M_PI + 1e-9) return false;
+        const Vec3d n0 = triNormal(patch.pos[a], patch.pos[d], patch.pos[c]);
+        const Vec3d n1 = triNormal(patch.pos[d], patch.pos[b], patch.pos[c]);
+        if (dot(n0, n0) == 0.0 || dot(n1, n1) == 0.0 || dot(n0, n1) <= 0.0) return false; // would fold
+        // t = (a,b,c), u = (b,a,d) -> t = (a,d,c), u = (d,b,c)
+        patch.tris[t] = {a, d, c};
+        patch.tris[u] = {d, b, c};
+        edges.erase(a, b);
+        edges.add(c, d, t);
+        edges.add(c, d, u);
+        edges.replace(a, d, u, t);
+        edges.replace(b, c, t, u);
+        --degree[a];
+        --degree[b];
+        ++degree[c];
+        ++degree[d];
+        work.push_back({a, d});
+        work.push_back({d, b});
+        work.push_back({b, c});
+        work.push_back({c, a});
+        return true;
+    };
+    // Worklist of edges to check, processed in order; bounded so a 3D configuration that keeps
+    // flipping cannot loop forever.
+    auto relax = [&](std::vector<std::pair<uint32_t, uint32_t>> work) {
+        size_t budget = 20 * patch.tris.size() + 100;
+        std::vector<std::pair<uint32_t, uint32_t>> more;
+        for (size_t i = 0; i < work.size() && budget > 0; ++i, --budget) {
+            const auto [a, b] = work[i];
+            const uint32_t t = edges.other(a, b, kNone); // any triangle on the edge
+            if (t == kNone) continue;
+            more.clear();
+            if (tryFlip(t, a, b, more)) work.insert(work.end(), more.begin(), more.end());
         }
     };
-    relax(10);
-    for (int round = 0; round < 40; ++round) {
+    {
+        std::vector<std::pair<uint32_t, uint32_t>> all;
+        for (const Tri& t : patch.tris)
+            for (int k = 0; k < 3; ++k) all.push_back({t[k], t[(k + 1) % 3]});
+        relax(std::move(all));
+    }
+    for (int round = 0; round < 60; ++round) {
         const size_t tri_count = patch.tris.size();
-        size_t splits = 0;
+        std::vector<std::pair<uint32_t, uint32_t>> work;
         for (size_t t = 0; t < tri_count && patch.pos.size() < max_vertices; ++t) {
             const Tri tri = patch.tris[t];
             const Vec3d c = (patch.pos[tri[0]] + patch.pos[tri[1]] + patch.pos[tri[2]]) / 3.0;
@@ -211,17 +259,29 @@ void refinePatch(Patch& patch, uint32_t loop_size, const std::function<bool(uint
             }
             if (!split) continue;
             const uint32_t x = uint32_t(patch.pos.size());
+            const uint32_t t1 = uint32_t(patch.tris.size()), t2 = t1 + 1;
             patch.pos.push_back(c);
             patch.sigma.push_back(sc);
+            degree.push_back(3);
+            for (uint32_t v : tri) ++degree[v];
             patch.tris[t] = {tri[0], tri[1], x};
             patch.tris.push_back({tri[1], tri[2], x});
             patch.tris.push_back({tri[2], tri[0], x});
-            ++splits;
+            edges.replace(tri[1], tri[2], uint32_t(t), t1);
+            edges.replace(tri[2], tri[0], uint32_t(t), t2);
+            edges.add(tri[0], x, uint32_t(t));
+            edges.add(tri[0], x, t2);
+            edges.add(tri[1], x, uint32_t(t));
+            edges.add(tri[1], x, t1);
+            edges.add(tri[2], x, t1);
+            edges.add(tri[2], x, t2);
+            work.push_back({tri[0], tri[1]});
+            work.push_back({tri[1], tri[2]});
+            work.push_back({tri[2], tri[0]});
         }
-        if (!splits) break;
-        relax(1);
+        if (work.empty()) break;
+        relax(std::move(work));
     }
-    relax(10);
 }
 
 void fairPatch(Patch& patch, uint32_t loop_size, uint32_t iterations) {

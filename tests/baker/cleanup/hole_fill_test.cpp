@@ -65,7 +65,7 @@ TEST(HoleFillTest, ThousandEdgeHoleIsFast) {
     EXPECT_EQ(r.filled_lengths, (std::vector<uint32_t>{1000}));
     EXPECT_TRUE(validate(m).isClosedManifold());
     RecordProperty("fill_seconds", std::to_string(seconds));
-    EXPECT_LT(seconds, 20.0); // generous: shared CI machines; typical is well under a second
+    EXPECT_LT(seconds, 60.0); // catches an O(n^3) fallback or a flip loop; ~1 s on an idle machine (repair_bench)
 }
 
 TEST(HoleFillTest, ThousandEdgeHoleBareEarClipping) {

@@ -27,12 +27,13 @@ enum class LaplacianWeights {
 struct DenoiseOptions {
     DenoiseMethod method = DenoiseMethod::Taubin;
     LaplacianWeights weights = LaplacianWeights::Umbrella; // for Laplacian and Taubin
-    uint32_t iterations = 5;        // Laplacian/Taubin: steps; PLaplacian: outer iterations of 10 inner steps
+    uint32_t iterations = 5;        // Laplacian/Taubin: steps; feature mode: normal-filter/vertex-update rounds
+    uint32_t outer_iterations = 2;  // PLaplacian: outer iterations of 10 inner diffusion steps
     double lambda = 0.5;            // Laplacian/Taubin step size (0, 1]
     double mu = -0.53;              // Taubin shrink-compensating step (|μ| slightly above λ)
     double p = 1.0;                 // PLaplacian exponent (2 = plain Laplacian; p < 2 favours edges)
-    double time_step = 0.25;        // PLaplacian Δt (weights are normalised, so ≤ 1 is stable)
-    double fidelity = 0.1;          // PLaplacian λ: pull back toward the input
+    double time_step = 0.1;         // PLaplacian Δt (weights are normalised, so ≤ 1 is stable)
+    double fidelity = 0.3;          // PLaplacian λ: pull back toward the input
     bool adaptive_fidelity = true;  // PLaplacian: scale λ per vertex by its curvature relative to the mean
     bool fix_boundary = true;       // boundary vertices do not move
     bool preserve_features = false; // replaces `method`: normal filtering within the feature angle (Sun et al. 2007)
