@@ -58,6 +58,8 @@ DegenerateReport removeDegenerateFaces(Mesh& mesh, const DegenerateOptions& opti
     return r;
 }
 
-PassCounters UnreferencedReport::counters() const { return {{"vertices_removed", vertices_removed}}; }
+PassCounters UnreferencedReport::counters() const {
+    return {{"vertices_removed", vertices_removed}};
+}
 
 } // namespace lodbake

@@ -277,7 +277,8 @@ DenoiseReport denoise(Mesh& mesh, const DenoiseOptions& options) {
             }
             const double mean = count ? sum / double(count) : 0.0;
             for (size_t v = 0; v < n; ++v)
-                fidelity[v] = mean > 0 ? options.fidelity * std::min(4.0, std::max(0.25, kappa[v] / mean)) : options.fidelity;
+                fidelity[v] =
+                    mean > 0 ? options.fidelity * std::min(4.0, std::max(0.25, kappa[v] / mean)) : options.fidelity;
         }
         std::vector<double> wp(adj.neighbours.size());
         const double scale = computeBounds(mesh).diagonal() * 1e-9 + 1e-30; // keeps |d|^(p-2) finite

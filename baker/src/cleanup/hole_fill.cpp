@@ -29,12 +29,14 @@ namespace {
 using Tri = std::array<uint32_t, 3>;
 
 struct Patch {
-    std::vector<Vec3d> pos;     // loop vertices first (0..n-1), then new ones
-    std::vector<double> sigma;  // target edge length per vertex
-    std::vector<Tri> tris;      // local ids, oriented like the surrounding surface
+    std::vector<Vec3d> pos;    // loop vertices first (0..n-1), then new ones
+    std::vector<double> sigma; // target edge length per vertex
+    std::vector<Tri> tris;     // local ids, oriented like the surrounding surface
 };
 
-Vec3d triNormal(const Vec3d& a, const Vec3d& b, const Vec3d& c) { return cross(b - a, c - a); }
+Vec3d triNormal(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
+    return cross(b - a, c - a);
+}
 
 double angleBetween(const Vec3d& n0, const Vec3d& n1) {
     const double l = length(n0) * length(n1);
@@ -70,7 +72,8 @@ bool triangulateDp(const std::vector<Vec3d>& p, const std::vector<Vec3d>& outsid
                 if (a.angle >= 1e300 || b.angle >= 1e300) continue;
                 if ((m > i + 1 && diagonalExists(i, m)) || (m + 1 < k && diagonalExists(m, k))) continue;
                 const Vec3d nt = normalOf(i, m, k);
-                if (dot(nt, nt) == 0.0) continue; // coincident or collinear corners (e.g. both halves of a split pinch vertex)
+                if (dot(nt, nt) == 0.0)
+                    continue; // coincident or collinear corners (e.g. both halves of a split pinch vertex)
                 double ang = std::max(a.angle, b.angle);
                 ang = std::max(ang, angleBetween(nt, m == i + 1 ? outside[i] : normalOf(i, apex[at(i, m)], m)));
                 ang = std::max(ang, angleBetween(nt, k == m + 1 ? outside[m] : normalOf(m, apex[at(m, k)], k)));
@@ -203,7 +206,9 @@ void refinePatch(Patch& patch, uint32_t loop_size, const std::function<bool(uint
         if (c < loop_size && d < loop_size && diagonalExists(c, d)) return false;
         // An inner vertex must keep at least three triangles, or it folds onto a neighbour.
         if ((a >= loop_size && degree[a] <= 3) || (b >= loop_size && degree[b] <= 3)) return false;
-        auto angleAt = [&](uint32_t x) { return angleBetween(patch.pos[a] - patch.pos[x], patch.pos[b] - patch.pos[x]); };
+        auto angleAt = [&](uint32_t x) {
+            return angleBetween(patch.pos[a] - patch.pos[x], patch.pos[b] - patch.pos[x]);
+        };
         if (angleAt(c) + angleAt(d) <= M_PI + 1e-9) return false;
         const Vec3d n0 = triNormal(patch.pos[a], patch.pos[d], patch.pos[c]);
         const Vec3d n1 = triNormal(patch.pos[d], patch.pos[b], patch.pos[c]);
@@ -348,9 +353,9 @@ HoleFillReport fillHoles(Mesh& mesh, const HoleFillOptions& options) {
         auto diagonalExists = [&](uint32_t i, uint32_t k) {
             return table.find(loop.vertices[i], loop.vertices[k]) != kNone;
         };
-        bool ok = n <= options.max_dp_edges ? triangulateDp(patch.pos, outside, diagonalExists, patch.tris)
-                                            : triangulateEars(patch.pos, normalize(newell) * -1.0, diagonalExists,
-                                                              patch.tris);
+        bool ok = n <= options.max_dp_edges
+                      ? triangulateDp(patch.pos, outside, diagonalExists, patch.tris)
+                      : triangulateEars(patch.pos, normalize(newell) * -1.0, diagonalExists, patch.tris);
         if (!ok) {
             ++r.holes_unfillable;
             continue;

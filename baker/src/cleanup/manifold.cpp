@@ -27,8 +27,8 @@ namespace {
 double pairScore(const Mesh& m, uint32_t ca, uint32_t cb) {
     const bool opposite = halfStart(m, ca) != halfStart(m, cb);
     const Vec3d na = normalize(faceNormal(m, ca / 3)), nb = normalize(faceNormal(m, cb / 3));
-    const double d = dot(na, nb);                   // 1 when flat and consistent
-    return opposite ? 2.0 + d : -d;                 // inconsistent pairs: flat means normals opposite
+    const double d = dot(na, nb);   // 1 when flat and consistent
+    return opposite ? 2.0 + d : -d; // inconsistent pairs: flat means normals opposite
 }
 
 // Greedy pairing of the half-edges of one edge; returns pairs, leaves the rest in `unpaired`.
@@ -99,8 +99,10 @@ ManifoldReport makeManifold(Mesh& mesh, const ManifoldOptions& options) {
             for (uint32_t e = 0; e < table.edgeCount(); ++e) {
                 const uint32_t k = table.uses(e);
                 const uint32_t* c = &table.corners[table.begin[e]];
-                if (k == 2) joins.push_back({c[0], c[1]});
-                else if (k > 2) pairEdge(mesh, c, std::min<uint32_t>(k, 64), joins, unpaired);
+                if (k == 2)
+                    joins.push_back({c[0], c[1]});
+                else if (k > 2)
+                    pairEdge(mesh, c, std::min<uint32_t>(k, 64), joins, unpaired);
             }
             if (unpaired.empty()) break;
             std::vector<uint8_t> keep2(mesh.faceCount(), 1);

@@ -133,7 +133,9 @@ uint32_t duplicateVertex(Mesh& mesh, uint32_t v) {
     return uint32_t(mesh.positions.size() - 1);
 }
 
-UnionFind::UnionFind(size_t n) : parent_(n) { std::iota(parent_.begin(), parent_.end(), uint32_t(0)); }
+UnionFind::UnionFind(size_t n) : parent_(n) {
+    std::iota(parent_.begin(), parent_.end(), uint32_t(0));
+}
 
 uint32_t UnionFind::find(uint32_t x) {
     while (parent_[x] != x) {
@@ -146,8 +148,10 @@ uint32_t UnionFind::find(uint32_t x) {
 void UnionFind::unite(uint32_t a, uint32_t b) {
     a = find(a);
     b = find(b);
-    if (a < b) parent_[b] = a;
-    else if (b < a) parent_[a] = b;
+    if (a < b)
+        parent_[b] = a;
+    else if (b < a)
+        parent_[a] = b;
 }
 
 size_t splitVerticesByFans(Mesh& mesh, const std::vector<CornerPair>& joins, size_t& added) {

@@ -35,8 +35,12 @@ struct EdgeTable {
 EdgeTable buildEdgeTable(const Mesh& mesh);
 
 /// Start and end vertex of half-edge (corner) c.
-inline uint32_t halfStart(const Mesh& m, uint32_t c) { return m.indices[c]; }
-inline uint32_t halfEnd(const Mesh& m, uint32_t c) { return m.indices[c % 3 == 2 ? c - 2 : c + 1]; }
+inline uint32_t halfStart(const Mesh& m, uint32_t c) {
+    return m.indices[c];
+}
+inline uint32_t halfEnd(const Mesh& m, uint32_t c) {
+    return m.indices[c % 3 == 2 ? c - 2 : c + 1];
+}
 
 inline bool hasRepeatedIndex(const Mesh& m, size_t f) {
     const uint32_t* t = &m.indices[3 * f];

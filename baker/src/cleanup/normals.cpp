@@ -32,7 +32,8 @@ NormalsReport computeNormals(Mesh& mesh, const NormalOptions& options) {
         return a < b;
     });
     for (size_t i = 0; i < n; ++i)
-        weld[order[i]] = (i > 0 && mesh.positions[order[i]] == mesh.positions[order[i - 1]]) ? weld[order[i - 1]] : order[i];
+        weld[order[i]] =
+            (i > 0 && mesh.positions[order[i]] == mesh.positions[order[i - 1]]) ? weld[order[i - 1]] : order[i];
     Mesh welded;
     welded.indices.resize(mesh.indices.size());
     for (size_t c = 0; c < mesh.indices.size(); ++c) welded.indices[c] = weld[mesh.indices[c]];
@@ -73,8 +74,10 @@ NormalsReport computeNormals(Mesh& mesh, const NormalOptions& options) {
         std::vector<uint32_t> first(n, kNone);
         for (uint32_t c = 0; c < welded.indices.size(); ++c) {
             uint32_t& f = first[welded.indices[c]];
-            if (f == kNone) f = c;
-            else groups.unite(f, c);
+            if (f == kNone)
+                f = c;
+            else
+                groups.unite(f, c);
         }
     }
 

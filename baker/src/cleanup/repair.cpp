@@ -26,7 +26,8 @@ Result<RepairReport> repairMesh(Mesh& mesh, const RepairOptions& options, const 
         return &report.passes.back();
     };
     if (options.weld) add("weld", weldVertices(mesh, options.weld_options).counters());
-    if (options.remove_degenerate) add("degenerate", removeDegenerateFaces(mesh, options.degenerate_options).counters());
+    if (options.remove_degenerate)
+        add("degenerate", removeDegenerateFaces(mesh, options.degenerate_options).counters());
     add("unreferenced", removeUnreferencedVertices(mesh).counters());
     if (options.make_manifold) add("manifold", makeManifold(mesh, options.manifold_options).counters());
     if (options.orient) add("orient", orientFaces(mesh, options.orient_options).counters());
@@ -38,7 +39,8 @@ Result<RepairReport> repairMesh(Mesh& mesh, const RepairOptions& options, const 
     if (options.fill_holes) {
         const HoleFillReport h = fillHoles(mesh, options.hole_options);
         PassSummary* s = add("holes", h.counters());
-        if (!h.filled_lengths.empty()) s->notes.push_back("filled holes of " + lengthsList(h.filled_lengths) + " edges");
+        if (!h.filled_lengths.empty())
+            s->notes.push_back("filled holes of " + lengthsList(h.filled_lengths) + " edges");
         if (!h.skipped_lengths.empty())
             s->notes.push_back("left open (over " + std::to_string(options.hole_options.max_hole_edges) +
                                " edges): " + lengthsList(h.skipped_lengths));
@@ -66,6 +68,9 @@ Result<RepairReport> repairMesh(Mesh& mesh, const RepairOptions& options, const 
     if (!report.after.boundary_loop_lengths.empty())
         unresolved(std::to_string(report.after.boundary_loop_lengths.size()) + " boundary loops left open (" +
                    lengthsList(report.after.boundary_loop_lengths) + " edges)");
+    if (report.after.component_face_counts.size() > 1)
+        unresolved(std::to_string(report.after.component_face_counts.size()) + " components remain (faces: " +
+                   lengthsList(report.after.component_face_counts, 5) + "); overlapping sheets are not merged");
     if (t.degenerate_face_count) unresolved(std::to_string(t.degenerate_face_count) + " degenerate faces remain");
     if (t.duplicate_face_count) unresolved(std::to_string(t.duplicate_face_count) + " duplicate faces remain");
     return report;

@@ -46,8 +46,8 @@ ValidationReport validate(const Mesh& input, const ValidateOptions& options) {
         std::sort(order.begin(), order.end(), less);
         std::vector<uint32_t> rep(order.size());
         for (size_t i = 0; i < order.size(); ++i)
-            rep[order[i]] = (i > 0 && input.positions[order[i]] == input.positions[order[i - 1]]) ? rep[order[i - 1]]
-                                                                                                   : order[i];
+            rep[order[i]] =
+                (i > 0 && input.positions[order[i]] == input.positions[order[i - 1]]) ? rep[order[i - 1]] : order[i];
         for (uint32_t& i : welded.indices) i = rep[i];
         m = &welded;
     }

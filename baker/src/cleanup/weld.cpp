@@ -24,7 +24,8 @@ namespace {
 bool attributesMatch(const Mesh& m, uint32_t a, uint32_t b, const WeldOptions& o) {
     if (!o.respect_attributes) return true;
     for (const auto& uv : m.uvs)
-        if (std::fabs(uv[a].x - uv[b].x) > o.uv_tolerance || std::fabs(uv[a].y - uv[b].y) > o.uv_tolerance) return false;
+        if (std::fabs(uv[a].x - uv[b].x) > o.uv_tolerance || std::fabs(uv[a].y - uv[b].y) > o.uv_tolerance)
+            return false;
     if (m.hasNormals()) {
         const Vec3d na = normalize(toDouble(m.normals[a])), nb = normalize(toDouble(m.normals[b]));
         const double cos_limit = std::cos(double(o.normal_angle_deg) * M_PI / 180.0);

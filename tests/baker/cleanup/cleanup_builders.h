@@ -17,7 +17,8 @@ inline lodbake::Mesh uvSphere(uint32_t rings, uint32_t segments) {
         const double th = M_PI * double(r) / rings - M_PI / 2;
         for (uint32_t s = 0; s < segments; ++s) {
             const double ph = 2 * M_PI * double(s) / segments;
-            m.positions.push_back({float(std::cos(th) * std::cos(ph)), float(std::cos(th) * std::sin(ph)), float(std::sin(th))});
+            m.positions.push_back(
+                {float(std::cos(th) * std::cos(ph)), float(std::cos(th) * std::sin(ph)), float(std::sin(th))});
         }
     }
     m.positions.push_back({0, 0, 1});
@@ -29,7 +30,8 @@ inline lodbake::Mesh uvSphere(uint32_t rings, uint32_t segments) {
             m.indices.insert(m.indices.end(), {ring(r, s), ring(r, s + 1), ring(r + 1, s + 1)});
             m.indices.insert(m.indices.end(), {ring(r, s), ring(r + 1, s + 1), ring(r + 1, s)});
         }
-    for (uint32_t s = 0; s < segments; ++s) m.indices.insert(m.indices.end(), {ring(rings - 1, s), ring(rings - 1, s + 1), top});
+    for (uint32_t s = 0; s < segments; ++s)
+        m.indices.insert(m.indices.end(), {ring(rings - 1, s), ring(rings - 1, s + 1), top});
     return m;
 }
 

@@ -8,13 +8,13 @@ using namespace lodbake_test;
 
 TEST(DegenerateTest, RemovesEachKindAndCountsIt) {
     Mesh m = quad();
-    m.positions.push_back({0.5f, 0, 0});     // 4: on edge 0-1
+    m.positions.push_back({0.5f, 0, 0});          // 4: on edge 0-1
     m.positions.push_back({std::nanf(""), 0, 0}); // 5
-    m.indices.insert(m.indices.end(), {0, 0, 1});   // repeated index
-    m.indices.insert(m.indices.end(), {0, 1, 4});   // zero area
-    m.indices.insert(m.indices.end(), {2, 1, 0});   // duplicate of face 0 with the other winding
-    m.indices.insert(m.indices.end(), {1, 2, 0});   // duplicate of face 0, rotated
-    m.indices.insert(m.indices.end(), {0, 2, 5});   // non-finite vertex
+    m.indices.insert(m.indices.end(), {0, 0, 1}); // repeated index
+    m.indices.insert(m.indices.end(), {0, 1, 4}); // zero area
+    m.indices.insert(m.indices.end(), {2, 1, 0}); // duplicate of face 0 with the other winding
+    m.indices.insert(m.indices.end(), {1, 2, 0}); // duplicate of face 0, rotated
+    m.indices.insert(m.indices.end(), {0, 2, 5}); // non-finite vertex
     const DegenerateReport r = removeDegenerateFaces(m);
     EXPECT_EQ(r.repeated_index_faces, 1u);
     EXPECT_EQ(r.zero_area_faces, 1u);

@@ -13,7 +13,8 @@ using namespace lodbake_test;
 namespace {
 Mesh noisySphere(float amplitude) {
     Mesh m = uvSphere(24, 48);
-    for (size_t v = 0; v < m.vertexCount(); ++v) m.positions[v] = m.positions[v] * (1.0f + amplitude * hashNoise(uint32_t(v)));
+    for (size_t v = 0; v < m.vertexCount(); ++v)
+        m.positions[v] = m.positions[v] * (1.0f + amplitude * hashNoise(uint32_t(v)));
     return m;
 }
 double meanRadius(const Mesh& m) {
@@ -38,8 +39,10 @@ Mesh noisyBox(uint32_t n, float amplitude) {
             for (uint32_t i = 0; i < n; ++i)
                 for (uint32_t j = 0; j < n; ++j) {
                     const uint32_t a = base + i * (n + 1) + j, b = a + n + 1, c = b + 1, d = a + 1;
-                    if (side > 0) m.indices.insert(m.indices.end(), {a, b, c, a, c, d});
-                    else m.indices.insert(m.indices.end(), {a, c, b, a, d, c});
+                    if (side > 0)
+                        m.indices.insert(m.indices.end(), {a, b, c, a, c, d});
+                    else
+                        m.indices.insert(m.indices.end(), {a, c, b, a, d, c});
                 }
         }
     weldVertices(m);
@@ -64,7 +67,8 @@ double creaseDihedralMaxChange(const Mesh& reference, const Mesh& after, double 
     double worst = 0;
     auto normal = [](const Mesh& m, size_t f) {
         const Vec3d a = toDouble(m.positions[m.indices[3 * f]]);
-        return normalize(cross(toDouble(m.positions[m.indices[3 * f + 1]]) - a, toDouble(m.positions[m.indices[3 * f + 2]]) - a));
+        return normalize(
+            cross(toDouble(m.positions[m.indices[3 * f + 1]]) - a, toDouble(m.positions[m.indices[3 * f + 2]]) - a));
     };
     auto angle = [&](const Mesh& m, size_t f, size_t g) {
         return std::acos(std::max(-1.0, std::min(1.0, dot(normal(m, f), normal(m, g))))) * 180 / M_PI;
@@ -89,7 +93,8 @@ TEST(DenoiseTest, EveryMethodAndWeightLowersRoughness) {
     const Mesh input = noisySphere(0.02f);
     const double rough = meanDihedralDeviation(input);
     for (DenoiseMethod method : {DenoiseMethod::Laplacian, DenoiseMethod::Taubin, DenoiseMethod::PLaplacian})
-        for (LaplacianWeights w : {LaplacianWeights::Umbrella, LaplacianWeights::Cotangent, LaplacianWeights::Fujiwara}) {
+        for (LaplacianWeights w :
+             {LaplacianWeights::Umbrella, LaplacianWeights::Cotangent, LaplacianWeights::Fujiwara}) {
             Mesh m = input;
             DenoiseOptions o;
             o.method = method;
@@ -112,7 +117,7 @@ TEST(DenoiseTest, TaubinPreservesVolumeLaplacianShrinks) {
     o.method = DenoiseMethod::Taubin;
     denoise(taubin, o);
     const double r0 = meanRadius(input);
-    EXPECT_LT(meanRadius(lap), r0 - 0.01) << r0;            // plain Laplacian shrinks the sphere
+    EXPECT_LT(meanRadius(lap), r0 - 0.01) << r0; // plain Laplacian shrinks the sphere
     // Taubin keeps its size: far less change than the Laplacian's shrinkage.
     EXPECT_LT(std::fabs(meanRadius(taubin) - r0), 0.25 * (r0 - meanRadius(lap)));
 }

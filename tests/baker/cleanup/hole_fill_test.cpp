@@ -19,7 +19,8 @@ double maxEdgeLength(const Mesh& m, size_t first_face) {
     double mx = 0;
     for (size_t f = first_face; f < m.faceCount(); ++f)
         for (int k = 0; k < 3; ++k)
-            mx = std::max(mx, double(length(m.positions[m.indices[3 * f + k]] - m.positions[m.indices[3 * f + (k + 1) % 3]])));
+            mx = std::max(
+                mx, double(length(m.positions[m.indices[3 * f + k]] - m.positions[m.indices[3 * f + (k + 1) % 3]])));
     return mx;
 }
 } // namespace

@@ -17,8 +17,7 @@ TEST(NormalsTest, SphereNormalsPointOutward) {
         const NormalsReport r = computeNormals(m, o);
         EXPECT_EQ(r.vertices_added, 0u);
         ASSERT_EQ(m.normals.size(), m.vertexCount());
-        for (size_t v = 0; v < m.vertexCount(); ++v)
-            EXPECT_GT(dot(m.normals[v], normalize(m.positions[v])), 0.98f);
+        for (size_t v = 0; v < m.vertexCount(); ++v) EXPECT_GT(dot(m.normals[v], normalize(m.positions[v])), 0.98f);
     }
 }
 
@@ -38,9 +37,9 @@ TEST(NormalsTest, AngleWeightingIgnoresTessellation) {
 }
 
 TEST(NormalsTest, CreaseAngleSplitsCubeCorners) {
-    Mesh m = makeMesh({{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}},
-                      {0, 2, 1, 0, 3, 2, 4, 5, 6, 4, 6, 7, 0, 1, 5, 0, 5, 4, 1, 2, 6, 1, 6, 5, 2, 3, 7, 2, 7, 6,
-                       3, 0, 4, 3, 4, 7});
+    Mesh m = makeMesh(
+        {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}},
+        {0, 2, 1, 0, 3, 2, 4, 5, 6, 4, 6, 7, 0, 1, 5, 0, 5, 4, 1, 2, 6, 1, 6, 5, 2, 3, 7, 2, 7, 6, 3, 0, 4, 3, 4, 7});
     Mesh smooth = m;
     EXPECT_EQ(computeNormals(smooth).vertices_added, 0u); // default 180: never split
     NormalOptions o;

@@ -71,7 +71,7 @@ TEST(RepairTest, DegenerateConfigurationsAreClean) {
     cases.push_back(Mesh());                                                          // empty
     cases.push_back(makeMesh({{0, 0, 0}, {1, 0, 0}, {2, 0, 0}}, {0, 1, 2, 1, 1, 2})); // all faces degenerate
     cases.push_back(singleTriangle());
-    cases.push_back(strip(20));                                                       // all-boundary strip
+    cases.push_back(strip(20)); // all-boundary strip
     Mesh isolated;
     isolated.positions = {{0, 0, 0}, {1, 1, 1}, {2, 0, 1}};
     cases.push_back(isolated);
@@ -84,8 +84,10 @@ TEST(RepairTest, DegenerateConfigurationsAreClean) {
         Result<RepairReport> r = repairMesh(m, RepairOptions(), "case" + std::to_string(i), d);
         ASSERT_TRUE(r.ok()) << i;
         EXPECT_TRUE(checkMeshConsistency(m, "out").ok()) << i;
-        if (m.faceCount()) EXPECT_TRUE(r->after.isManifold()) << i;
-        else EXPECT_FALSE(r->unresolved.empty()) << i; // "no triangles left" is reported
+        if (m.faceCount())
+            EXPECT_TRUE(r->after.isManifold()) << i;
+        else
+            EXPECT_FALSE(r->unresolved.empty()) << i; // "no triangles left" is reported
     }
 }
 
@@ -164,7 +166,7 @@ TEST_F(RepairScanTest, Lucy100kIsAlreadyCleanAndFast) {
     EXPECT_TRUE(r->after.isClosedManifold());
     EXPECT_EQ(m.faceCount(), input->faceCount());
     EXPECT_EQ(m.positions, input->positions); // nothing to fix, so geometry is untouched
-    EXPECT_LT(seconds, 5.0); // budget is 1 s (see repair_bench); loose here for loaded CI machines
+    EXPECT_LT(seconds, 5.0);                  // budget is 1 s (see repair_bench); loose here for loaded CI machines
 }
 
 TEST_F(RepairScanTest, RawScanBecomesManifoldAndDenoiseStaysInNoiseBand) {

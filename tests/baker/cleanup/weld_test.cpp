@@ -63,8 +63,8 @@ TEST(WeldTest, RespectsUvSeamsUnlessAsked) {
     o.respect_attributes = false;
     const WeldReport all = weldVertices(m, o);
     EXPECT_EQ(all.vertices_merged, 1u);
-    ASSERT_EQ(m.uvs[0].size(), 4u);                  // stream compacted with the positions
-    EXPECT_EQ(m.uvs[0][2], (Vec2f{1, 1}));           // the representative keeps its own UV
+    ASSERT_EQ(m.uvs[0].size(), 4u);        // stream compacted with the positions
+    EXPECT_EQ(m.uvs[0][2], (Vec2f{1, 1})); // the representative keeps its own UV
     EXPECT_EQ(m.indices[4], 2u);
 }
 

@@ -17,7 +17,8 @@ enum class NormalWeighting {
 
 struct NormalOptions {
     NormalWeighting weighting = NormalWeighting::AreaAngle;
-    double crease_angle_deg = 180.0; // faces whose normals differ by more than this do not share a normal; 180: never split
+    double crease_angle_deg =
+        180.0; // faces whose normals differ by more than this do not share a normal; 180: never split
 };
 
 struct NormalsReport {

@@ -21,15 +21,15 @@ using PassCounters = std::vector<std::pair<std::string, uint64_t>>;
 // ---- weld -------------------------------------------------------------------------------------
 
 struct WeldOptions {
-    double tolerance_rel = 0.0;        // merge distance as a fraction of the bbox diagonal; 0: bit-identical positions only
-    bool respect_attributes = true;    // never merge across UV / normal seams (below)
-    float uv_tolerance = 1e-4f;        // max |Δuv| per component for two vertices to merge
-    float normal_angle_deg = 1.0f;     // max angle between normals for two vertices to merge
+    double tolerance_rel = 0.0; // merge distance as a fraction of the bbox diagonal; 0: bit-identical positions only
+    bool respect_attributes = true; // never merge across UV / normal seams (below)
+    float uv_tolerance = 1e-4f;     // max |Δuv| per component for two vertices to merge
+    float normal_angle_deg = 1.0f;  // max angle between normals for two vertices to merge
 };
 
 struct WeldReport {
-    uint64_t vertices_merged = 0;   // vertices that now point at another (earlier) vertex
-    uint64_t seam_pairs_kept = 0;   // pairs close enough to merge but kept apart by respect_attributes
+    uint64_t vertices_merged = 0; // vertices that now point at another (earlier) vertex
+    uint64_t seam_pairs_kept = 0; // pairs close enough to merge but kept apart by respect_attributes
     uint64_t vertices_before = 0;
     uint64_t vertices_after = 0;
     PassCounters counters() const;
@@ -100,7 +100,7 @@ ManifoldReport makeManifold(Mesh& mesh, const ManifoldOptions& options = {});
 // ---- orientation ---------------------------------------------------------------------------------------
 
 struct OrientOptions {
-    bool outward = true;   // closed components: make the signed volume positive
+    bool outward = true;            // closed components: make the signed volume positive
     bool cut_non_orientable = true; // Möbius-like components: cut the conflicting edges (else leave them inconsistent)
 };
 
@@ -109,7 +109,7 @@ struct OrientReport {
     uint64_t components = 0;
     uint64_t closed_components_reversed = 0; // flipped as a whole to face outward
     uint64_t non_orientable_components = 0;
-    uint64_t edges_cut = 0;                   // conflicting edges cut in non-orientable components
+    uint64_t edges_cut = 0; // conflicting edges cut in non-orientable components
     uint64_t vertices_added = 0;
     PassCounters counters() const;
 };
@@ -141,10 +141,10 @@ ComponentReport removeSmallComponents(Mesh& mesh, const ComponentOptions& option
 // ---- hole filling --------------------------------------------------------------------------------------
 
 struct HoleFillOptions {
-    uint32_t max_hole_edges = 100;  // fill boundary loops of at most this many edges; larger ones stay open
-    uint32_t max_dp_edges = 200;    // up to this size use the O(n^3) Liepa triangulation, above it min-angle ear clipping
-    bool refine = true;             // split patch triangles to match the surrounding edge density, relax by flips
-    bool fair = true;               // smooth the new interior vertices (umbrella, boundary fixed)
+    uint32_t max_hole_edges = 100; // fill boundary loops of at most this many edges; larger ones stay open
+    uint32_t max_dp_edges = 200; // up to this size use the O(n^3) Liepa triangulation, above it min-angle ear clipping
+    bool refine = true;          // split patch triangles to match the surrounding edge density, relax by flips
+    bool fair = true;            // smooth the new interior vertices (umbrella, boundary fixed)
     uint32_t fair_iterations = 30;
 };
 
@@ -153,9 +153,9 @@ struct HoleFillReport {
     uint64_t holes_filled = 0;
     uint64_t faces_added = 0;
     uint64_t vertices_added = 0;
-    std::vector<uint32_t> filled_lengths;   // edges per filled hole, descending
-    std::vector<uint32_t> skipped_lengths;  // too large (> max_hole_edges), descending
-    uint64_t holes_unfillable = 0;          // every triangulation would create a non-manifold edge, or open chain
+    std::vector<uint32_t> filled_lengths;  // edges per filled hole, descending
+    std::vector<uint32_t> skipped_lengths; // too large (> max_hole_edges), descending
+    uint64_t holes_unfillable = 0;         // every triangulation would create a non-manifold edge, or open chain
     PassCounters counters() const;
 };
 

@@ -17,7 +17,7 @@ namespace lodbake {
 
 struct RepairOptions {
     bool weld = true;
-    WeldOptions weld_options{1e-6};  // tiny tolerance: catches float noise in "shared" vertices of soups
+    WeldOptions weld_options{1e-6}; // tiny tolerance: catches float noise in "shared" vertices of soups
     bool remove_degenerate = true;
     DegenerateOptions degenerate_options;
     bool make_manifold = true;
@@ -28,14 +28,14 @@ struct RepairOptions {
     ComponentOptions component_options;
     bool fill_holes = true;
     HoleFillOptions hole_options;
-    bool denoise = false;            // changes geometry: opt in (see docs/repair.md)
+    bool denoise = false; // changes geometry: opt in (see docs/repair.md)
     DenoiseOptions denoise_options;
     bool normals = true;
     NormalOptions normal_options;
 };
 
 struct PassSummary {
-    std::string name;       // "weld", "degenerate", ...
+    std::string name; // "weld", "degenerate", ...
     PassCounters counters;
     std::vector<std::string> notes;
 };
