@@ -457,6 +457,8 @@ int runRepair(int argc, char** argv) {
         writePassesJson(j, *report);
         j.key("after");
         writeValidationJson(j, report->after);
+        j.key("after_welded_by_position");
+        writeValidationJson(j, report->after_welded);
         j.key("unresolved").beginArray();
         for (const std::string& u : report->unresolved) j.value(u);
         j.endArray();

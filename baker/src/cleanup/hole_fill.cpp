@@ -16,7 +16,8 @@ namespace lodbake {
 using namespace cleanup_detail;
 
 PassCounters HoleFillReport::counters() const {
-    return {{"holes_found", holes_found},
+    return {{"seam_loops", seam_loops},
+            {"holes_found", holes_found},
             {"holes_filled", holes_filled},
             {"holes_skipped_too_large", uint64_t(skipped_lengths.size())},
             {"holes_unfillable", holes_unfillable},
@@ -319,15 +320,32 @@ HoleFillReport fillHoles(Mesh& mesh, const HoleFillOptions& options) {
     const EdgeTable table = buildEdgeTable(mesh);
     const std::vector<BoundaryLoop> loops = findBoundaryLoops(mesh, table);
     const std::vector<uint32_t> face_sub = faceSubmeshes(mesh);
-    r.holes_found = loops.size();
+    // Boundary edges that meet another boundary edge at the same positions are attribute seams (UV
+    // island borders), not holes: loops containing one are left alone.
+    const std::vector<uint32_t> weld = positionWeldMap(mesh);
+    std::vector<uint64_t> welded_boundary;
+    for (const BoundaryLoop& loop : loops)
+        for (uint32_t c : loop.corners) welded_boundary.push_back(edgeKey(weld[halfStart(mesh, c)], weld[halfEnd(mesh, c)]));
+    std::sort(welded_boundary.begin(), welded_boundary.end());
+    auto isSeam = [&](uint32_t c) {
+        const uint64_t k = edgeKey(weld[halfStart(mesh, c)], weld[halfEnd(mesh, c)]);
+        const auto range = std::equal_range(welded_boundary.begin(), welded_boundary.end(), k);
+        return range.second - range.first > 1;
+    };
     std::vector<Tri> new_faces;
     std::vector<uint32_t> new_face_sub;
     for (const BoundaryLoop& loop : loops) {
         const uint32_t n = uint32_t(loop.vertices.size());
         if (!loop.closed || n < 3) {
+            ++r.holes_found;
             ++r.holes_unfillable;
             continue;
         }
+        if (std::any_of(loop.corners.begin(), loop.corners.end(), isSeam)) {
+            ++r.seam_loops;
+            continue;
+        }
+        ++r.holes_found;
         if (n == 3 && loop.corners[0] / 3 == loop.corners[1] / 3 && loop.corners[1] / 3 == loop.corners[2] / 3) {
             ++r.holes_unfillable; // a lone triangle: filling would only add its back face
             continue;

@@ -233,6 +233,24 @@ std::vector<BoundaryLoop> findBoundaryLoops(const Mesh& mesh, const EdgeTable& t
     return loops;
 }
 
+std::vector<uint32_t> positionWeldMap(const Mesh& mesh) {
+    const uint32_t n = uint32_t(mesh.vertexCount());
+    std::vector<uint32_t> order(n), rep(n);
+    std::iota(order.begin(), order.end(), 0u);
+    auto less = [&](uint32_t a, uint32_t b) {
+        const Vec3f& p = mesh.positions[a];
+        const Vec3f& q = mesh.positions[b];
+        if (p.x != q.x) return p.x < q.x;
+        if (p.y != q.y) return p.y < q.y;
+        if (p.z != q.z) return p.z < q.z;
+        return a < b;
+    };
+    std::sort(order.begin(), order.end(), less);
+    for (uint32_t i = 0; i < n; ++i)
+        rep[order[i]] = (i > 0 && mesh.positions[order[i]] == mesh.positions[order[i - 1]]) ? rep[order[i - 1]] : order[i];
+    return rep;
+}
+
 VertexAdjacency buildVertexAdjacency(const Mesh& mesh) {
     const size_t n = mesh.vertexCount();
     VertexAdjacency adj;

@@ -97,6 +97,10 @@ struct BoundaryLoop {
 };
 std::vector<BoundaryLoop> findBoundaryLoops(const Mesh& mesh, const EdgeTable& table);
 
+/// Every vertex mapped to the lowest-numbered vertex with a bit-identical position, so that attribute
+/// seams (UV or normal splits) can be told apart from real boundaries.
+std::vector<uint32_t> positionWeldMap(const Mesh& mesh);
+
 /// Per-vertex sorted unique neighbours, CSR form.
 struct VertexAdjacency {
     std::vector<uint32_t> begin; // vertexCount() + 1

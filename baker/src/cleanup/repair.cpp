@@ -53,6 +53,9 @@ Result<RepairReport> repairMesh(Mesh& mesh, const RepairOptions& options, const 
     }
     if (options.normals) add("normals", computeNormals(mesh, options.normal_options).counters());
     report.after = validate(mesh);
+    ValidateOptions welded;
+    welded.weld_by_position = true;
+    report.after_welded = validate(mesh, welded);
 
     const TopologyStats& t = report.after.topology;
     auto unresolved = [&](const std::string& what) {
@@ -65,12 +68,14 @@ Result<RepairReport> repairMesh(Mesh& mesh, const RepairOptions& options, const 
         unresolved(std::to_string(t.non_manifold_vertex_count) + " non-manifold vertices remain");
     if (t.inconsistent_edge_count)
         unresolved(std::to_string(t.inconsistent_edge_count) + " edges with inconsistent orientation remain");
-    if (!report.after.boundary_loop_lengths.empty())
-        unresolved(std::to_string(report.after.boundary_loop_lengths.size()) + " boundary loops left open (" +
-                   lengthsList(report.after.boundary_loop_lengths) + " edges)");
-    if (report.after.component_face_counts.size() > 1)
-        unresolved(std::to_string(report.after.component_face_counts.size()) + " components remain (faces: " +
-                   lengthsList(report.after.component_face_counts, 5) + "); overlapping sheets are not merged");
+    // Rims and components are judged with seams merged: UV islands are not holes or pieces.
+    const ValidationReport& w = report.after_welded;
+    if (!w.boundary_loop_lengths.empty())
+        unresolved(std::to_string(w.boundary_loop_lengths.size()) + " boundary loops left open (" +
+                   lengthsList(w.boundary_loop_lengths) + " edges)");
+    if (w.component_face_counts.size() > 1)
+        unresolved(std::to_string(w.component_face_counts.size()) + " components remain (faces: " +
+                   lengthsList(w.component_face_counts, 5) + "); overlapping sheets are not merged");
     if (t.degenerate_face_count) unresolved(std::to_string(t.degenerate_face_count) + " degenerate faces remain");
     if (t.duplicate_face_count) unresolved(std::to_string(t.duplicate_face_count) + " duplicate faces remain");
     return report;

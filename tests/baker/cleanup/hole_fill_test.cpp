@@ -111,3 +111,35 @@ TEST(HoleFillTest, AllBoundaryStripAndSingleTriangle) {
     Mesh empty;
     EXPECT_EQ(fillHoles(empty).holes_found, 0u);
 }
+
+TEST(HoleFillTest, UvSeamsAreNotHoles) {
+    // Two UV islands of one closed sphere: the upper half's vertices on the equator are duplicated.
+    Mesh m = uvSphere(6, 12);
+    m.uvs.push_back(std::vector<Vec2f>(m.vertexCount(), Vec2f(0, 0)));
+    const size_t n = m.vertexCount();
+    std::vector<uint32_t> copy(n, UINT32_MAX);
+    for (size_t f = 0; f < m.faceCount(); ++f) {
+        bool upper = true;
+        for (int k = 0; k < 3; ++k) upper &= m.positions[m.indices[3 * f + k]].z >= -1e-6f;
+        if (!upper) continue;
+        for (int k = 0; k < 3; ++k) {
+            uint32_t& v = m.indices[3 * f + k];
+            if (std::fabs(m.positions[v].z) > 1e-6f) continue;
+            if (copy[v] == UINT32_MAX) {
+                copy[v] = uint32_t(m.positions.size());
+                m.positions.push_back(m.positions[v]);
+                m.uvs[0].push_back(Vec2f(1, 1));
+            }
+            v = copy[v];
+        }
+    }
+    ASSERT_EQ(validate(m).boundary_loop_lengths.size(), 2u);
+    const size_t faces = m.faceCount();
+    const HoleFillReport r = fillHoles(m);
+    EXPECT_EQ(r.seam_loops, 2u);
+    EXPECT_EQ(r.holes_found, 0u);
+    EXPECT_EQ(m.faceCount(), faces);
+    ComponentOptions o;
+    o.min_area_fraction = 0.6; // each island is half the area: neither may go, they are one surface
+    EXPECT_EQ(removeSmallComponents(m, o).components_removed, 0u);
+}

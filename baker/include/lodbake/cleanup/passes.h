@@ -134,7 +134,8 @@ struct ComponentReport {
     PassCounters counters() const;
 };
 
-/// Removes vertex-connected components that are small by face count or by area fraction. The
+/// Removes vertex-connected components (vertices with bit-identical positions count as connected, so
+/// UV islands of one surface stay together) that are small by face count or by area fraction. The
 /// largest component (by area, ties by lowest face) is always kept. Leaves vertices unreferenced.
 ComponentReport removeSmallComponents(Mesh& mesh, const ComponentOptions& options = {});
 
@@ -149,6 +150,7 @@ struct HoleFillOptions {
 };
 
 struct HoleFillReport {
+    uint64_t seam_loops = 0;        // boundary loops along attribute seams (a matching rim at the same positions): not holes
     uint64_t holes_found = 0;
     uint64_t holes_filled = 0;
     uint64_t faces_added = 0;
@@ -159,7 +161,8 @@ struct HoleFillReport {
     PassCounters counters() const;
 };
 
-/// Fills closed boundary loops of at most max_hole_edges edges (Liepa 2003, "Filling holes in
+/// Fills closed boundary loops of at most max_hole_edges edges (loops running along an attribute
+/// seam, where another rim has the same positions, are not holes and are skipped) (Liepa 2003, "Filling holes in
 /// meshes": a triangulation minimising the worst dihedral angle then area, then refinement and
 /// fairing). New faces are oriented with the surrounding ones and appended to the sub-mesh of the
 /// adjacent face. Precondition: manifold and consistently oriented (makeManifold, orientFaces).

@@ -43,13 +43,15 @@ struct PassSummary {
 struct RepairReport {
     ValidationReport before;
     ValidationReport after;
+    ValidationReport after_welded;       // `after` with bit-identical positions merged: UV/normal seams are not rims
     std::vector<PassSummary> passes;
     std::vector<std::string> unresolved; // what the pipeline could not fix, one line each
 };
 
 /// Runs the enabled passes in the order above on `mesh`. Fails (InvalidInput) only when the mesh is
 /// internally inconsistent (checkMeshConsistency); `name` prefixes that message. What remains wrong
-/// afterwards is listed in RepairReport::unresolved and also sent to `diagnostics` as warnings.
+/// afterwards is listed in RepairReport::unresolved and also sent to `diagnostics` as warnings:
+/// non-manifold and orientation problems as stored, open rims and components with seams merged.
 Result<RepairReport> repairMesh(Mesh& mesh, const RepairOptions& options, const std::string& name,
                                 Diagnostics& diagnostics);
 
