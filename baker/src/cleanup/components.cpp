@@ -23,22 +23,17 @@ ComponentReport removeSmallComponents(Mesh& mesh, const ComponentOptions& option
     // that meet another boundary edge at the same positions (a seam). A vertex merely shared by
     // position (a pinch the manifold pass split) does not join anything.
     UnionFind uf(mesh.vertexCount());
-    {
-        const std::vector<uint32_t> weld = positionWeldMap(mesh);
+    const std::vector<uint32_t> weld = positionWeldMap(mesh);
+    bool shared = false;
+    for (uint32_t v = 0; v < weld.size() && !shared; ++v) shared = weld[v] != v;
+    if (shared) {
         const EdgeTable table = buildEdgeTable(mesh);
-        std::vector<std::pair<uint64_t, uint32_t>> rims; // (welded key, corner)
-        for (uint32_t e = 0; e < table.edgeCount(); ++e)
-            if (table.uses(e) == 1) {
-                const uint32_t c = table.corners[table.begin[e]];
-                rims.push_back({edgeKey(weld[halfStart(mesh, c)], weld[halfEnd(mesh, c)]), c});
+        const std::vector<uint8_t> seam = seamCorners(mesh, table, weld);
+        for (uint32_t c = 0; c < seam.size(); ++c)
+            if (seam[c]) {
+                uf.unite(halfStart(mesh, c), weld[halfStart(mesh, c)]);
+                uf.unite(halfEnd(mesh, c), weld[halfEnd(mesh, c)]);
             }
-        std::sort(rims.begin(), rims.end());
-        for (size_t i = 1; i < rims.size(); ++i)
-            if (rims[i].first == rims[i - 1].first)
-                for (uint32_t c : {rims[i].second, rims[i - 1].second}) {
-                    uf.unite(halfStart(mesh, c), weld[halfStart(mesh, c)]);
-                    uf.unite(halfEnd(mesh, c), weld[halfEnd(mesh, c)]);
-                }
     }
     for (size_t f = 0; f < face_count; ++f) {
         uf.unite(mesh.indices[3 * f], mesh.indices[3 * f + 1]);

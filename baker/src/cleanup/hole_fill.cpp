@@ -320,18 +320,10 @@ HoleFillReport fillHoles(Mesh& mesh, const HoleFillOptions& options) {
     const EdgeTable table = buildEdgeTable(mesh);
     const std::vector<BoundaryLoop> loops = findBoundaryLoops(mesh, table);
     const std::vector<uint32_t> face_sub = faceSubmeshes(mesh);
-    // Boundary edges that meet another boundary edge at the same positions are attribute seams (UV
-    // island borders), not holes: loops containing one are left alone.
-    const std::vector<uint32_t> weld = positionWeldMap(mesh);
-    std::vector<uint64_t> welded_boundary;
-    for (const BoundaryLoop& loop : loops)
-        for (uint32_t c : loop.corners) welded_boundary.push_back(edgeKey(weld[halfStart(mesh, c)], weld[halfEnd(mesh, c)]));
-    std::sort(welded_boundary.begin(), welded_boundary.end());
-    auto isSeam = [&](uint32_t c) {
-        const uint64_t k = edgeKey(weld[halfStart(mesh, c)], weld[halfEnd(mesh, c)]);
-        const auto range = std::equal_range(welded_boundary.begin(), welded_boundary.end(), k);
-        return range.second - range.first > 1;
-    };
+    // Boundary edges along an attribute seam (UV island borders) are not holes: loops containing
+    // one are left alone.
+    const std::vector<uint8_t> seam = seamCorners(mesh, table, positionWeldMap(mesh));
+    auto isSeam = [&](uint32_t c) { return seam[c] != 0; };
     std::vector<Tri> new_faces;
     std::vector<uint32_t> new_face_sub;
     for (const BoundaryLoop& loop : loops) {

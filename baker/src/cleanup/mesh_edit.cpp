@@ -13,27 +13,49 @@ uint32_t EdgeTable::find(uint32_t a, uint32_t b) const {
 }
 
 EdgeTable buildEdgeTable(const Mesh& mesh) {
+    // Counting sort by the lower vertex, then a small sort by (upper vertex, corner) inside each
+    // bucket: the same order as sorting (key, corner) globally, in linear time for mesh-like input.
     EdgeTable t;
     const size_t corner_count = mesh.indices.size();
-    std::vector<std::pair<uint64_t, uint32_t>> half;
-    half.reserve(corner_count);
+    const size_t n = mesh.vertexCount();
+    std::vector<uint32_t> bucket(n + 1, 0);
     for (size_t f = 0; f < mesh.faceCount(); ++f) {
         if (hasRepeatedIndex(mesh, f)) continue;
         for (uint32_t k = 0; k < 3; ++k) {
             const uint32_t c = uint32_t(3 * f + k);
-            half.push_back({edgeKey(halfStart(mesh, c), halfEnd(mesh, c)), c});
+            ++bucket[std::min(halfStart(mesh, c), halfEnd(mesh, c)) + 1];
         }
     }
-    std::sort(half.begin(), half.end());
+    for (size_t v = 0; v < n; ++v) bucket[v + 1] += bucket[v];
+    std::vector<std::pair<uint32_t, uint32_t>> half(bucket[n]); // (upper vertex, corner)
+    {
+        std::vector<uint32_t> fill(bucket.begin(), bucket.end() - 1);
+        for (size_t f = 0; f < mesh.faceCount(); ++f) {
+            if (hasRepeatedIndex(mesh, f)) continue;
+            for (uint32_t k = 0; k < 3; ++k) {
+                const uint32_t c = uint32_t(3 * f + k);
+                const uint32_t a = halfStart(mesh, c), b = halfEnd(mesh, c);
+                half[fill[std::min(a, b)]++] = {std::max(a, b), c};
+            }
+        }
+    }
     t.corner_edge.assign(corner_count, kNone);
     t.corners.resize(half.size());
-    for (size_t i = 0; i < half.size(); ++i) {
-        if (i == 0 || half[i].first != half[i - 1].first) {
-            t.keys.push_back(half[i].first);
-            t.begin.push_back(uint32_t(i));
+    t.keys.reserve(half.size() / 2 + 1);
+    t.begin.reserve(half.size() / 2 + 2);
+    for (size_t lo = 0; lo < n; ++lo) {
+        const auto first = half.begin() + bucket[lo], last = half.begin() + bucket[lo + 1];
+        std::sort(first, last);
+        for (auto it = first; it != last; ++it) {
+            const size_t i = size_t(it - half.begin());
+            const uint64_t key = (uint64_t(lo) << 32) | it->first;
+            if (t.keys.empty() || t.keys.back() != key) {
+                t.keys.push_back(key);
+                t.begin.push_back(uint32_t(i));
+            }
+            t.corners[i] = it->second;
+            t.corner_edge[it->second] = uint32_t(t.keys.size() - 1);
         }
-        t.corners[i] = half[i].second;
-        t.corner_edge[half[i].second] = uint32_t(t.keys.size() - 1);
     }
     t.begin.push_back(uint32_t(half.size()));
     return t;
@@ -249,6 +271,44 @@ std::vector<uint32_t> positionWeldMap(const Mesh& mesh) {
     for (uint32_t i = 0; i < n; ++i)
         rep[order[i]] = (i > 0 && mesh.positions[order[i]] == mesh.positions[order[i - 1]]) ? rep[order[i - 1]] : order[i];
     return rep;
+}
+
+namespace {
+bool attributesDiffer(const Mesh& m, uint32_t a, uint32_t b) {
+    if (m.hasNormals() && m.normals[a] != m.normals[b]) return true;
+    if (m.hasTangents() && m.tangents[a] != m.tangents[b]) return true;
+    if (m.hasColors() && m.colors[a] != m.colors[b]) return true;
+    for (const auto& uv : m.uvs)
+        if (uv[a] != uv[b]) return true;
+    return false;
+}
+} // namespace
+
+std::vector<uint8_t> seamCorners(const Mesh& mesh, const EdgeTable& table, const std::vector<uint32_t>& weld) {
+    std::vector<uint8_t> seam(mesh.indices.size(), 0);
+    if (!mesh.hasNormals() && !mesh.hasTangents() && !mesh.hasColors() && mesh.uvs.empty()) return seam;
+    std::vector<std::pair<uint64_t, uint32_t>> rims; // (welded key, corner)
+    for (uint32_t e = 0; e < table.edgeCount(); ++e)
+        if (table.uses(e) == 1) {
+            const uint32_t c = table.corners[table.begin[e]];
+            rims.push_back({edgeKey(weld[halfStart(mesh, c)], weld[halfEnd(mesh, c)]), c});
+        }
+    std::sort(rims.begin(), rims.end());
+    for (size_t i = 0; i < rims.size();) {
+        size_t j = i;
+        while (j < rims.size() && rims[j].first == rims[i].first) ++j;
+        for (size_t x = i; x < j; ++x)
+            for (size_t y = i; y < j; ++y) {
+                if (x == y) continue;
+                const uint32_t c = rims[x].second, o = rims[y].second;
+                const uint32_t va = halfStart(mesh, c), vb = halfEnd(mesh, c);
+                uint32_t oa = halfStart(mesh, o), ob = halfEnd(mesh, o);
+                if (weld[oa] != weld[va]) std::swap(oa, ob);
+                if (attributesDiffer(mesh, va, oa) || attributesDiffer(mesh, vb, ob)) seam[c] = seam[o] = 1;
+            }
+        i = j;
+    }
+    return seam;
 }
 
 VertexAdjacency buildVertexAdjacency(const Mesh& mesh) {

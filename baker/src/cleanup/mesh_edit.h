@@ -101,6 +101,11 @@ std::vector<BoundaryLoop> findBoundaryLoops(const Mesh& mesh, const EdgeTable& t
 /// seams (UV or normal splits) can be told apart from real boundaries.
 std::vector<uint32_t> positionWeldMap(const Mesh& mesh);
 
+/// Per corner: 1 when its half-edge is a boundary edge lying on an attribute seam, that is, another
+/// boundary edge has the same two positions and the vertices there differ in some attribute (UV,
+/// normal, tangent, colour). Copies with identical attributes (a cut or split pinch) are not seams.
+std::vector<uint8_t> seamCorners(const Mesh& mesh, const EdgeTable& table, const std::vector<uint32_t>& weld);
+
 /// Per-vertex sorted unique neighbours, CSR form.
 struct VertexAdjacency {
     std::vector<uint32_t> begin; // vertexCount() + 1

@@ -35,6 +35,7 @@ NormalsReport computeNormals(Mesh& mesh, const NormalOptions& options) {
         weld[order[i]] =
             (i > 0 && mesh.positions[order[i]] == mesh.positions[order[i - 1]]) ? weld[order[i - 1]] : order[i];
     Mesh welded;
+    welded.positions = mesh.positions; // the edge table sizes its buckets by vertex count
     welded.indices.resize(mesh.indices.size());
     for (size_t c = 0; c < mesh.indices.size(); ++c) welded.indices[c] = weld[mesh.indices[c]];
 

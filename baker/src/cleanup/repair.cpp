@@ -1,11 +1,50 @@
 // The default repair pipeline (see repair.h and docs/repair.md).
 #include "lodbake/cleanup/repair.h"
 
+#include <algorithm>
+#include <functional>
 #include <string>
+
+#include "mesh_edit.h"
 
 namespace lodbake {
 
 namespace {
+
+// Lengths of the boundary loops that are not attribute seams (descending), and the face counts of
+// the components with UV islands joined across seams (descending).
+void openRimsAndSurfaces(const Mesh& mesh, std::vector<uint32_t>& rims, std::vector<uint32_t>& surfaces) {
+    using namespace cleanup_detail;
+    const std::vector<uint32_t> weld = positionWeldMap(mesh);
+    const EdgeTable table = buildEdgeTable(mesh);
+    const std::vector<uint8_t> seam = seamCorners(mesh, table, weld);
+    for (const BoundaryLoop& loop : findBoundaryLoops(mesh, table))
+        if (std::none_of(loop.corners.begin(), loop.corners.end(), [&](uint32_t c) { return seam[c] != 0; }))
+            rims.push_back(uint32_t(loop.vertices.size()));
+    UnionFind uf(mesh.vertexCount());
+    for (uint32_t c = 0; c < seam.size(); ++c)
+        if (seam[c]) {
+            uf.unite(halfStart(mesh, c), weld[halfStart(mesh, c)]);
+            uf.unite(halfEnd(mesh, c), weld[halfEnd(mesh, c)]);
+        }
+    for (size_t f = 0; f < mesh.faceCount(); ++f) {
+        uf.unite(mesh.indices[3 * f], mesh.indices[3 * f + 1]);
+        uf.unite(mesh.indices[3 * f], mesh.indices[3 * f + 2]);
+    }
+    std::vector<uint32_t> faces_of_root(mesh.vertexCount(), 0);
+    for (size_t f = 0; f < mesh.faceCount(); ++f) ++faces_of_root[uf.find(mesh.indices[3 * f])];
+    for (uint32_t count : faces_of_root)
+        if (count) surfaces.push_back(count);
+    std::sort(rims.begin(), rims.end(), std::greater<uint32_t>());
+    std::sort(surfaces.begin(), surfaces.end(), std::greater<uint32_t>());
+}
+
+bool hasSharedPositions(const Mesh& mesh) {
+    const std::vector<uint32_t> weld = cleanup_detail::positionWeldMap(mesh);
+    for (uint32_t v = 0; v < weld.size(); ++v)
+        if (weld[v] != v) return true;
+    return false;
+}
 
 std::string lengthsList(const std::vector<uint32_t>& lengths, size_t max_items = 10) {
     std::string s;
@@ -53,9 +92,13 @@ Result<RepairReport> repairMesh(Mesh& mesh, const RepairOptions& options, const 
     }
     if (options.normals) add("normals", computeNormals(mesh, options.normal_options).counters());
     report.after = validate(mesh);
-    ValidateOptions welded;
-    welded.weld_by_position = true;
-    report.after_welded = validate(mesh, welded);
+    if (hasSharedPositions(mesh)) {
+        ValidateOptions welded;
+        welded.weld_by_position = true;
+        report.after_welded = validate(mesh, welded);
+    } else {
+        report.after_welded = report.after; // nothing to weld
+    }
 
     const TopologyStats& t = report.after.topology;
     auto unresolved = [&](const std::string& what) {
@@ -68,14 +111,14 @@ Result<RepairReport> repairMesh(Mesh& mesh, const RepairOptions& options, const 
         unresolved(std::to_string(t.non_manifold_vertex_count) + " non-manifold vertices remain");
     if (t.inconsistent_edge_count)
         unresolved(std::to_string(t.inconsistent_edge_count) + " edges with inconsistent orientation remain");
-    // Rims and components are judged with seams merged: UV islands are not holes or pieces.
-    const ValidationReport& w = report.after_welded;
-    if (!w.boundary_loop_lengths.empty())
-        unresolved(std::to_string(w.boundary_loop_lengths.size()) + " boundary loops left open (" +
-                   lengthsList(w.boundary_loop_lengths) + " edges)");
-    if (w.component_face_counts.size() > 1)
-        unresolved(std::to_string(w.component_face_counts.size()) + " components remain (faces: " +
-                   lengthsList(w.component_face_counts, 5) + "); overlapping sheets are not merged");
+    // Rims and components are judged with attribute seams joined: UV islands are not holes or pieces.
+    std::vector<uint32_t> rims, surfaces;
+    openRimsAndSurfaces(mesh, rims, surfaces);
+    if (!rims.empty())
+        unresolved(std::to_string(rims.size()) + " boundary loops left open (" + lengthsList(rims) + " edges)");
+    if (surfaces.size() > 1)
+        unresolved(std::to_string(surfaces.size()) + " components remain (faces: " + lengthsList(surfaces, 5) +
+                   "); overlapping sheets are not merged");
     if (t.degenerate_face_count) unresolved(std::to_string(t.degenerate_face_count) + " degenerate faces remain");
     if (t.duplicate_face_count) unresolved(std::to_string(t.duplicate_face_count) + " duplicate faces remain");
     return report;
