@@ -118,7 +118,7 @@ Result<RepairReport> repairMesh(Mesh& mesh, const RepairOptions& options, const 
         unresolved(std::to_string(rims.size()) + " boundary loops left open (" + lengthsList(rims) + " edges)");
     if (surfaces.size() > 1)
         unresolved(std::to_string(surfaces.size()) + " components remain (faces: " + lengthsList(surfaces, 5) +
-                   "); overlapping sheets are not merged");
+                   "); separate pieces and overlapping sheets are not joined");
     if (t.degenerate_face_count) unresolved(std::to_string(t.degenerate_face_count) + " degenerate faces remain");
     if (t.duplicate_face_count) unresolved(std::to_string(t.duplicate_face_count) + " duplicate faces remain");
     return report;
