@@ -81,7 +81,9 @@ options:
   --no-refine                 fill holes with the bare triangulation (no refinement or fairing)
   --denoise METHOD            taubin | laplacian | plaplacian (default: no denoising)
   --weights W                 umbrella | cotangent | fujiwara (laplacian, taubin; default umbrella)
-  --iterations N              denoise iterations (default 5)
+  --iterations N              denoise iterations (default 5; plaplacian: outer iterations, default 2)
+  --p P                       plaplacian exponent (default 1)
+  --fidelity F                plaplacian pull toward the input (default 0.3)
   --preserve-features         keep creases sharp while denoising
   --crease-angle DEG          normals: split vertices at edges sharper than DEG (default 180: never)
   --no-normals                keep the input normals
@@ -355,6 +357,7 @@ int runRepair(int argc, char** argv) {
         {"--max-hole-edges", nullptr, true}, {"--no-refine", nullptr, false},
         {"--denoise", nullptr, true},       {"--weights", nullptr, true},
         {"--iterations", nullptr, true},    {"--preserve-features", nullptr, false},
+        {"--p", nullptr, true},             {"--fidelity", nullptr, true},
         {"--crease-angle", nullptr, true},  {"--no-normals", nullptr, false},
         {"--help", "-h", false}};
     if (!parseArgs(argc, argv, 2, specs, args, code)) return code;
@@ -417,9 +420,16 @@ int runRepair(int argc, char** argv) {
         else if (m == "fujiwara") opt.denoise_options.weights = LaplacianWeights::Fujiwara;
         else return usageError("--weights expects umbrella, cotangent or fujiwara, got '" + m + "'");
     }
-    v = opt.denoise_options.iterations;
+    const bool plaplacian = opt.denoise_options.method == DenoiseMethod::PLaplacian;
+    v = plaplacian ? opt.denoise_options.outer_iterations : opt.denoise_options.iterations;
     if (!number("--iterations", 0, 10000, v)) return code;
-    opt.denoise_options.iterations = uint32_t(v);
+    (plaplacian ? opt.denoise_options.outer_iterations : opt.denoise_options.iterations) = uint32_t(v);
+    v = opt.denoise_options.p;
+    if (!number("--p", 0.1, 2.0, v)) return code;
+    opt.denoise_options.p = v;
+    v = opt.denoise_options.fidelity;
+    if (!number("--fidelity", 0.0, 10.0, v)) return code;
+    opt.denoise_options.fidelity = v;
     opt.denoise_options.preserve_features = args.flags.count("--preserve-features") > 0;
     v = opt.normal_options.crease_angle_deg;
     if (!number("--crease-angle", 0, 180, v)) return code;

@@ -363,14 +363,16 @@ HoleFillReport fillHoles(Mesh& mesh, const HoleFillOptions& options) {
         auto diagonalExists = [&](uint32_t i, uint32_t k) {
             return table.find(loop.vertices[i], loop.vertices[k]) != kNone;
         };
-        bool ok = n <= options.max_dp_edges
+        // The DP needs n^2 memory and n^3 time: above kMaxDpEdges it is never used, whatever the options say.
+        constexpr uint32_t kMaxDpEdges = 400;
+        bool ok = n <= std::min(options.max_dp_edges, kMaxDpEdges)
                       ? triangulateDp(patch.pos, outside, diagonalExists, patch.tris)
                       : triangulateEars(patch.pos, normalize(newell) * -1.0, diagonalExists, patch.tris);
         if (!ok) {
             ++r.holes_unfillable;
             continue;
         }
-        if (options.refine) refinePatch(patch, n, diagonalExists, size_t(n) * 200 + 1000);
+        if (options.refine) refinePatch(patch, n, diagonalExists, std::min<size_t>(size_t(n) * 200 + 1000, 4000000));
         if (options.fair) fairPatch(patch, n, options.fair_iterations);
         std::vector<uint32_t> global(patch.pos.size());
         for (uint32_t i = 0; i < n; ++i) global[i] = loop.vertices[i];
