@@ -33,6 +33,7 @@ struct Patch {
     std::vector<Vec3d> pos;    // loop vertices first (0..n-1), then new ones
     std::vector<double> sigma; // target edge length per vertex
     std::vector<Tri> tris;     // local ids, oriented like the surrounding surface
+    std::vector<Tri> parents;  // per new vertex (index - loop size): the triangle it split
 };
 
 Vec3d triNormal(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
@@ -268,6 +269,7 @@ void refinePatch(Patch& patch, uint32_t loop_size, const std::function<bool(uint
             const uint32_t t1 = uint32_t(patch.tris.size()), t2 = t1 + 1;
             patch.pos.push_back(c);
             patch.sigma.push_back(sc);
+            patch.parents.push_back(tri);
             degree.push_back(3);
             for (uint32_t v : tri) ++degree[v];
             patch.tris[t] = {tri[0], tri[1], x};
@@ -377,7 +379,10 @@ HoleFillReport fillHoles(Mesh& mesh, const HoleFillOptions& options) {
         std::vector<uint32_t> global(patch.pos.size());
         for (uint32_t i = 0; i < n; ++i) global[i] = loop.vertices[i];
         for (uint32_t i = n; i < patch.pos.size(); ++i) {
-            global[i] = duplicateVertex(mesh, loop.vertices[0]);
+            // Attributes (UVs, colours, ...) are the mean of the split triangle's corners, which are
+            // all older than this vertex; the normals pass recomputes normals afterwards.
+            const Tri& from = patch.parents[i - n];
+            global[i] = blendedVertex(mesh, {global[from[0]], global[from[1]], global[from[2]]});
             mesh.positions[global[i]] = Vec3f(patch.pos[i]);
         }
         for (const Tri& t : patch.tris) {

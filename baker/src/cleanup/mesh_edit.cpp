@@ -155,6 +155,35 @@ uint32_t duplicateVertex(Mesh& mesh, uint32_t v) {
     return uint32_t(mesh.positions.size() - 1);
 }
 
+uint32_t blendedVertex(Mesh& mesh, const std::array<uint32_t, 3>& from) {
+    const uint32_t v = duplicateVertex(mesh, from[0]);
+    const float third = 1.0f / 3.0f;
+    mesh.positions[v] = (mesh.positions[from[0]] + mesh.positions[from[1]] + mesh.positions[from[2]]) * third;
+    if (mesh.hasNormals())
+        mesh.normals[v] = normalize(mesh.normals[from[0]] + mesh.normals[from[1]] + mesh.normals[from[2]]);
+    if (mesh.hasTangents()) {
+        Vec3f t;
+        for (uint32_t f : from) t += Vec3f(mesh.tangents[f].x, mesh.tangents[f].y, mesh.tangents[f].z);
+        t = normalize(t);
+        mesh.tangents[v] = Vec4f(t.x, t.y, t.z, mesh.tangents[from[0]].w);
+    }
+    if (mesh.hasColors()) {
+        Vec4f c;
+        for (uint32_t f : from)
+            for (int k = 0; k < 4; ++k) c[k] += mesh.colors[f][k] * third;
+        mesh.colors[v] = c;
+    }
+    for (auto& uv : mesh.uvs) {
+        Vec2f u;
+        for (uint32_t f : from) {
+            u.x += uv[f].x * third;
+            u.y += uv[f].y * third;
+        }
+        uv[v] = u;
+    }
+    return v;
+}
+
 UnionFind::UnionFind(size_t n) : parent_(n) {
     std::iota(parent_.begin(), parent_.end(), uint32_t(0));
 }

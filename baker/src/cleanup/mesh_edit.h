@@ -67,6 +67,10 @@ void remapVertices(Mesh& mesh, const std::vector<uint32_t>& old_to_new, uint32_t
 /// Appends a copy of vertex v (all streams); returns its index.
 uint32_t duplicateVertex(Mesh& mesh, uint32_t v);
 
+/// Appends a vertex whose every attribute is the mean of the three given vertices' (unit vectors
+/// renormalised, tangent handedness from the first); returns its index.
+uint32_t blendedVertex(Mesh& mesh, const std::array<uint32_t, 3>& from);
+
 /// Union-find with smallest-root-wins, so results depend only on the order of unions.
 class UnionFind {
 public:

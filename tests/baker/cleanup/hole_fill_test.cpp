@@ -143,3 +143,23 @@ TEST(HoleFillTest, UvSeamsAreNotHoles) {
     o.min_area_fraction = 0.6; // each island is half the area: neither may go, they are one surface
     EXPECT_EQ(removeSmallComponents(m, o).components_removed, 0u);
 }
+
+TEST(HoleFillTest, NewVerticesInterpolateAttributes) {
+    Mesh m = hemisphere(6, 40);
+    m.uvs.push_back({});
+    m.colors.clear();
+    for (const Vec3f& p : m.positions) {
+        m.uvs[0].push_back({p.x * 0.5f + 0.5f, p.y * 0.5f + 0.5f});
+        m.colors.push_back({0.25f, 0.5f, 0.75f, 1.0f});
+    }
+    const size_t before = m.vertexCount();
+    const HoleFillReport r = fillHoles(m);
+    ASSERT_GT(r.vertices_added, 0u);
+    ASSERT_EQ(m.uvs[0].size(), m.vertexCount());
+    for (size_t v = before; v < m.vertexCount(); ++v) {
+        // Inside the unit disk of the rim's UVs, and the constant colour is kept.
+        const Vec2f uv = m.uvs[0][v];
+        EXPECT_LT(std::hypot(uv.x - 0.5f, uv.y - 0.5f), 0.5f);
+        EXPECT_NEAR(m.colors[v].y, 0.5f, 1e-6f);
+    }
+}
