@@ -113,6 +113,35 @@ ManifoldReport makeManifold(Mesh& mesh, const ManifoldOptions& options) {
     size_t added = 0;
     r.vertices_split = splitVerticesByFans(mesh, joins, added);
     r.vertices_added = added;
+    // A cut face still joined to the kept pair around both ends of the edge keeps using it (splitting
+    // vertices cannot separate it): those faces are removed. Bounded; each round removes faces.
+    for (int round = 0; round < 8; ++round) {
+        table = buildEdgeTable(mesh);
+        std::vector<uint32_t> extra;
+        for (uint32_t e = 0; e < table.edgeCount(); ++e) {
+            const uint32_t k = table.uses(e);
+            if (k <= 2) continue;
+            // Keep only the best-fitting pair on this edge.
+            std::vector<CornerPair> pairs;
+            pairEdge(mesh, &table.corners[table.begin[e]], std::min<uint32_t>(k, 64), pairs, extra);
+            for (size_t i = 1; i < pairs.size(); ++i) extra.insert(extra.end(), {pairs[i].a, pairs[i].b});
+            for (uint32_t i = 64; i < k; ++i) extra.push_back(table.corners[table.begin[e] + i]);
+        }
+        if (extra.empty()) break;
+        std::vector<uint8_t> keep(mesh.faceCount(), 1);
+        for (uint32_t c : extra) keep[c / 3] = 0;
+        const size_t removed = removeFaces(mesh, keep);
+        r.faces_removed += removed;
+        r.faces_cut -= std::min<uint64_t>(r.faces_cut, removed);
+        // Removing faces can pinch a vertex again: split once more across the remaining pairs.
+        table = buildEdgeTable(mesh);
+        joins.clear();
+        for (uint32_t e = 0; e < table.edgeCount(); ++e)
+            if (table.uses(e) == 2) joins.push_back({table.corners[table.begin[e]], table.corners[table.begin[e] + 1]});
+        size_t more = 0;
+        r.vertices_split += splitVerticesByFans(mesh, joins, more);
+        r.vertices_added += more;
+    }
     return r;
 }
 

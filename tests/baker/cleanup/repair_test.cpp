@@ -240,3 +240,40 @@ TEST_F(RepairScanTest, FandiskCreasesSurviveFeaturePreservingDenoise) {
     EXPECT_GT(creases, 100u);
     EXPECT_LT(worst, 2.0);
 }
+
+TEST(RepairTest, RandomSmallMeshesNeverBreakInvariants) {
+    // Deterministic pseudo-random soups: repeated indices, coincident and NaN vertices, fins,
+    // duplicates. Every pass must finish and leave a consistent mesh.
+    uint32_t state = 12345;
+    auto next = [&]() {
+        state = state * 1664525u + 1013904223u;
+        return state >> 8;
+    };
+    for (int round = 0; round < 300; ++round) {
+        Mesh m;
+        const uint32_t vertex_count = 1 + next() % 12;
+        for (uint32_t v = 0; v < vertex_count; ++v) {
+            Vec3f p(float(next() % 4), float(next() % 4), float(next() % 3));
+            if (next() % 40 == 0) p.x = std::nanf("");
+            m.positions.push_back(p);
+        }
+        if (round % 3 == 0) m.uvs.push_back(std::vector<Vec2f>(vertex_count, Vec2f(float(next() % 2), 0)));
+        const uint32_t face_count = next() % 24;
+        for (uint32_t f = 0; f < 3 * face_count; ++f) m.indices.push_back(next() % vertex_count);
+        RepairOptions o;
+        o.denoise = round % 2 == 0;
+        o.denoise_options.preserve_features = round % 4 == 0;
+        o.denoise_options.method = DenoiseMethod(round % 3);
+        o.normal_options.crease_angle_deg = round % 5 == 0 ? 45.0 : 180.0;
+        o.component_options.min_face_count = round % 7;
+        o.hole_options.max_dp_edges = round % 2 ? 200 : 3; // exercise ear clipping on small loops too
+        Diagnostics d;
+        Result<RepairReport> r = repairMesh(m, o, "random", d);
+        ASSERT_TRUE(r.ok()) << round;
+        ASSERT_TRUE(checkMeshConsistency(m, "out").ok()) << round;
+        for (const Vec3f& p : m.positions) EXPECT_TRUE(isFinite(p)) << round;
+        EXPECT_EQ(r->after.topology.non_manifold_edge_count, 0u) << round;
+        EXPECT_EQ(r->after.topology.non_manifold_vertex_count, 0u) << round;
+        EXPECT_EQ(r->after.topology.inconsistent_edge_count, 0u) << round;
+    }
+}
