@@ -1,0 +1,65 @@
+// Removal of degenerate faces (repeated index, zero area, non-finite vertex) and duplicate faces.
+#include <algorithm>
+#include <array>
+
+#include "lodbake/cleanup/passes.h"
+#include "mesh_edit.h"
+
+namespace lodbake {
+
+using namespace cleanup_detail;
+
+PassCounters DegenerateReport::counters() const {
+    return {{"repeated_index_faces", repeated_index_faces},
+            {"zero_area_faces", zero_area_faces},
+            {"non_finite_faces", non_finite_faces},
+            {"duplicate_faces", duplicate_faces}};
+}
+
+DegenerateReport removeDegenerateFaces(Mesh& mesh, const DegenerateOptions& options) {
+    DegenerateReport r;
+    const size_t face_count = mesh.faceCount();
+    std::vector<uint8_t> keep(face_count, 1);
+    std::vector<std::array<uint32_t, 4>> keys;
+    keys.reserve(face_count);
+    for (size_t f = 0; f < face_count; ++f) {
+        const uint32_t* t = &mesh.indices[3 * f];
+        if (hasRepeatedIndex(mesh, f)) {
+            keep[f] = 0;
+            ++r.repeated_index_faces;
+            continue;
+        }
+        if (!isFinite(mesh.positions[t[0]]) || !isFinite(mesh.positions[t[1]]) || !isFinite(mesh.positions[t[2]])) {
+            keep[f] = 0;
+            ++r.non_finite_faces;
+            continue;
+        }
+        if (options.remove_zero_area) {
+            const Vec3d n = faceNormal(mesh, f);
+            if (dot(n, n) == 0.0) {
+                keep[f] = 0;
+                ++r.zero_area_faces;
+                continue;
+            }
+        }
+        std::array<uint32_t, 4> k = {t[0], t[1], t[2], uint32_t(f)};
+        std::sort(k.begin(), k.begin() + 3);
+        keys.push_back(k);
+    }
+    if (options.remove_duplicates) {
+        std::sort(keys.begin(), keys.end());
+        for (size_t i = 1; i < keys.size(); ++i)
+            if (keys[i][0] == keys[i - 1][0] && keys[i][1] == keys[i - 1][1] && keys[i][2] == keys[i - 1][2]) {
+                keep[keys[i][3]] = 0; // the earlier face (lower index, sorted first) stays
+                ++r.duplicate_faces;
+            }
+    }
+    removeFaces(mesh, keep);
+    return r;
+}
+
+PassCounters UnreferencedReport::counters() const {
+    return {{"vertices_removed", vertices_removed}};
+}
+
+} // namespace lodbake

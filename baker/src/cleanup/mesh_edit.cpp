@@ -1,0 +1,385 @@
+#include "mesh_edit.h"
+
+#include <algorithm>
+#include <numeric>
+
+namespace lodbake {
+namespace cleanup_detail {
+
+uint32_t EdgeTable::find(uint32_t a, uint32_t b) const {
+    const uint64_t k = edgeKey(a, b);
+    auto it = std::lower_bound(keys.begin(), keys.end(), k);
+    return it != keys.end() && *it == k ? uint32_t(it - keys.begin()) : kNone;
+}
+
+EdgeTable buildEdgeTable(const Mesh& mesh) {
+    // Counting sort by the lower vertex, then a small sort by (upper vertex, corner) inside each
+    // bucket: the same order as sorting (key, corner) globally, in linear time for mesh-like input.
+    EdgeTable t;
+    const size_t corner_count = mesh.indices.size();
+    const size_t n = mesh.vertexCount();
+    std::vector<uint32_t> bucket(n + 1, 0);
+    for (size_t f = 0; f < mesh.faceCount(); ++f) {
+        if (hasRepeatedIndex(mesh, f)) continue;
+        for (uint32_t k = 0; k < 3; ++k) {
+            const uint32_t c = uint32_t(3 * f + k);
+            ++bucket[std::min(halfStart(mesh, c), halfEnd(mesh, c)) + 1];
+        }
+    }
+    for (size_t v = 0; v < n; ++v) bucket[v + 1] += bucket[v];
+    std::vector<std::pair<uint32_t, uint32_t>> half(bucket[n]); // (upper vertex, corner)
+    {
+        std::vector<uint32_t> fill(bucket.begin(), bucket.end() - 1);
+        for (size_t f = 0; f < mesh.faceCount(); ++f) {
+            if (hasRepeatedIndex(mesh, f)) continue;
+            for (uint32_t k = 0; k < 3; ++k) {
+                const uint32_t c = uint32_t(3 * f + k);
+                const uint32_t a = halfStart(mesh, c), b = halfEnd(mesh, c);
+                half[fill[std::min(a, b)]++] = {std::max(a, b), c};
+            }
+        }
+    }
+    t.corner_edge.assign(corner_count, kNone);
+    t.corners.resize(half.size());
+    t.keys.reserve(half.size() / 2 + 1);
+    t.begin.reserve(half.size() / 2 + 2);
+    for (size_t lo = 0; lo < n; ++lo) {
+        const auto first = half.begin() + bucket[lo], last = half.begin() + bucket[lo + 1];
+        std::sort(first, last);
+        for (auto it = first; it != last; ++it) {
+            const size_t i = size_t(it - half.begin());
+            const uint64_t key = (uint64_t(lo) << 32) | it->first;
+            if (t.keys.empty() || t.keys.back() != key) {
+                t.keys.push_back(key);
+                t.begin.push_back(uint32_t(i));
+            }
+            t.corners[i] = it->second;
+            t.corner_edge[it->second] = uint32_t(t.keys.size() - 1);
+        }
+    }
+    t.begin.push_back(uint32_t(half.size()));
+    return t;
+}
+
+Vec3d faceNormal(const Mesh& m, size_t f) {
+    const Vec3d a = toDouble(m.positions[m.indices[3 * f]]);
+    const Vec3d b = toDouble(m.positions[m.indices[3 * f + 1]]);
+    const Vec3d c = toDouble(m.positions[m.indices[3 * f + 2]]);
+    return cross(b - a, c - a);
+}
+
+std::vector<uint32_t> faceSubmeshes(const Mesh& mesh) {
+    std::vector<uint32_t> s(mesh.faceCount(), 0);
+    for (size_t i = 0; i < mesh.submeshes.size(); ++i) {
+        const SubMesh& sm = mesh.submeshes[i];
+        for (uint32_t f = sm.first_index / 3; f < (sm.first_index + sm.index_count) / 3 && f < s.size(); ++f)
+            s[f] = uint32_t(i);
+    }
+    return s;
+}
+
+size_t removeFaces(Mesh& mesh, const std::vector<uint8_t>& keep) {
+    const size_t face_count = mesh.faceCount();
+    std::vector<uint32_t> kept_before(face_count + 1, 0); // faces kept among [0, f)
+    for (size_t f = 0; f < face_count; ++f) kept_before[f + 1] = kept_before[f] + (keep[f] ? 1 : 0);
+    if (kept_before[face_count] == face_count) return 0;
+    size_t out = 0;
+    for (size_t f = 0; f < face_count; ++f) {
+        if (!keep[f]) continue;
+        for (int k = 0; k < 3; ++k) mesh.indices[3 * out + k] = mesh.indices[3 * f + k];
+        ++out;
+    }
+    mesh.indices.resize(3 * out);
+    for (SubMesh& sm : mesh.submeshes) {
+        const size_t first = std::min<size_t>(sm.first_index / 3, face_count);
+        const size_t last = std::min<size_t>((sm.first_index + sm.index_count) / 3, face_count);
+        sm.first_index = 3 * kept_before[first];
+        sm.index_count = 3 * (kept_before[last] - kept_before[first]);
+    }
+    return face_count - out;
+}
+
+void insertFaces(Mesh& mesh, const std::vector<std::array<uint32_t, 3>>& faces, const std::vector<uint32_t>& submesh) {
+    if (faces.empty()) return;
+    if (mesh.submeshes.empty()) {
+        for (const auto& t : faces) mesh.indices.insert(mesh.indices.end(), t.begin(), t.end());
+        return;
+    }
+    // Rebuild the index buffer sub-mesh by sub-mesh, appending each one's new faces at its end.
+    std::vector<uint32_t> indices;
+    indices.reserve(mesh.indices.size() + 3 * faces.size());
+    for (size_t s = 0; s < mesh.submeshes.size(); ++s) {
+        SubMesh& sm = mesh.submeshes[s];
+        const uint32_t first = uint32_t(indices.size());
+        indices.insert(indices.end(), mesh.indices.begin() + sm.first_index,
+                       mesh.indices.begin() + sm.first_index + sm.index_count);
+        for (size_t i = 0; i < faces.size(); ++i)
+            if (submesh[i] == s || (s + 1 == mesh.submeshes.size() && submesh[i] >= mesh.submeshes.size()))
+                indices.insert(indices.end(), faces[i].begin(), faces[i].end());
+        sm.first_index = first;
+        sm.index_count = uint32_t(indices.size()) - first;
+    }
+    mesh.indices.swap(indices);
+}
+
+namespace {
+template <class T> void remapStream(std::vector<T>& s, const std::vector<uint32_t>& first_old, uint32_t new_count) {
+    if (s.empty()) return;
+    std::vector<T> out(new_count);
+    for (uint32_t n = 0; n < new_count; ++n) out[n] = s[first_old[n]];
+    s.swap(out);
+}
+template <class T> void pushCopy(std::vector<T>& s, uint32_t v) {
+    if (!s.empty()) s.push_back(T(s[v]));
+}
+} // namespace
+
+void remapVertices(Mesh& mesh, const std::vector<uint32_t>& old_to_new, uint32_t new_count) {
+    std::vector<uint32_t> first_old(new_count, kNone);
+    for (uint32_t v = 0; v < old_to_new.size(); ++v)
+        if (old_to_new[v] != kNone && first_old[old_to_new[v]] == kNone) first_old[old_to_new[v]] = v;
+    remapStream(mesh.positions, first_old, new_count);
+    remapStream(mesh.normals, first_old, new_count);
+    remapStream(mesh.tangents, first_old, new_count);
+    remapStream(mesh.colors, first_old, new_count);
+    for (auto& uv : mesh.uvs) remapStream(uv, first_old, new_count);
+    for (uint32_t& i : mesh.indices) i = old_to_new[i];
+}
+
+uint32_t duplicateVertex(Mesh& mesh, uint32_t v) {
+    pushCopy(mesh.positions, v);
+    pushCopy(mesh.normals, v);
+    pushCopy(mesh.tangents, v);
+    pushCopy(mesh.colors, v);
+    for (auto& uv : mesh.uvs) pushCopy(uv, v);
+    return uint32_t(mesh.positions.size() - 1);
+}
+
+uint32_t blendedVertex(Mesh& mesh, const std::array<uint32_t, 3>& from) {
+    const uint32_t v = duplicateVertex(mesh, from[0]);
+    const float third = 1.0f / 3.0f;
+    mesh.positions[v] = (mesh.positions[from[0]] + mesh.positions[from[1]] + mesh.positions[from[2]]) * third;
+    if (mesh.hasNormals())
+        mesh.normals[v] = normalize(mesh.normals[from[0]] + mesh.normals[from[1]] + mesh.normals[from[2]]);
+    if (mesh.hasTangents()) {
+        Vec3f t;
+        for (uint32_t f : from) t += Vec3f(mesh.tangents[f].x, mesh.tangents[f].y, mesh.tangents[f].z);
+        t = normalize(t);
+        mesh.tangents[v] = Vec4f(t.x, t.y, t.z, mesh.tangents[from[0]].w);
+    }
+    if (mesh.hasColors()) {
+        Vec4f c;
+        for (uint32_t f : from)
+            for (int k = 0; k < 4; ++k) c[k] += mesh.colors[f][k] * third;
+        mesh.colors[v] = c;
+    }
+    for (auto& uv : mesh.uvs) {
+        Vec2f u;
+        for (uint32_t f : from) {
+            u.x += uv[f].x * third;
+            u.y += uv[f].y * third;
+        }
+        uv[v] = u;
+    }
+    return v;
+}
+
+UnionFind::UnionFind(size_t n) : parent_(n) {
+    std::iota(parent_.begin(), parent_.end(), uint32_t(0));
+}
+
+uint32_t UnionFind::find(uint32_t x) {
+    while (parent_[x] != x) {
+        parent_[x] = parent_[parent_[x]];
+        x = parent_[x];
+    }
+    return x;
+}
+
+void UnionFind::unite(uint32_t a, uint32_t b) {
+    a = find(a);
+    b = find(b);
+    if (a < b)
+        parent_[b] = a;
+    else if (b < a)
+        parent_[a] = b;
+}
+
+size_t splitVerticesByFans(Mesh& mesh, const std::vector<CornerPair>& joins, size_t& added) {
+    added = 0;
+    const size_t corner_count = mesh.indices.size();
+    UnionFind fans(corner_count);
+    for (const CornerPair& p : joins) {
+        const uint32_t an = p.a % 3 == 2 ? p.a - 2 : p.a + 1;
+        const uint32_t bn = p.b % 3 == 2 ? p.b - 2 : p.b + 1;
+        if (mesh.indices[p.a] == mesh.indices[p.b]) { // same direction (orientation not yet consistent)
+            fans.unite(p.a, p.b);
+            fans.unite(an, bn);
+        } else {
+            fans.unite(p.a, bn);
+            fans.unite(an, p.b);
+        }
+    }
+    // Corners are visited in ascending order, so a vertex's first fan is the one with its lowest corner.
+    const size_t n = mesh.vertexCount();
+    std::vector<uint32_t> first_root(n, kNone);
+    std::vector<std::pair<uint32_t, uint32_t>> extra; // (root, new vertex), few in practice
+    std::vector<uint32_t> root_vertex(corner_count, kNone);
+    std::vector<uint8_t> split(n, 0);
+    size_t split_count = 0;
+    for (size_t c = 0; c < corner_count; ++c) {
+        const uint32_t v = mesh.indices[c];
+        const uint32_t r = fans.find(uint32_t(c));
+        if (first_root[v] == kNone) first_root[v] = r;
+        if (r == first_root[v]) continue;
+        if (root_vertex[r] == kNone) {
+            root_vertex[r] = duplicateVertex(mesh, v);
+            ++added;
+            if (!split[v]) {
+                split[v] = 1;
+                ++split_count;
+            }
+        }
+        mesh.indices[c] = root_vertex[r];
+    }
+    return split_count;
+}
+
+std::vector<BoundaryLoop> findBoundaryLoops(const Mesh& mesh, const EdgeTable& table) {
+    // Directed boundary half-edges sorted by start vertex, then corner.
+    std::vector<std::pair<uint32_t, uint32_t>> out; // (start vertex, corner)
+    for (size_t e = 0; e < table.edgeCount(); ++e)
+        if (table.uses(uint32_t(e)) == 1) {
+            const uint32_t c = table.corners[table.begin[e]];
+            out.push_back({halfStart(mesh, c), c});
+        }
+    std::sort(out.begin(), out.end());
+    std::vector<uint8_t> used(out.size(), 0);
+    auto nextFrom = [&](uint32_t v) -> size_t {
+        auto it = std::lower_bound(out.begin(), out.end(), std::make_pair(v, uint32_t(0)));
+        for (; it != out.end() && it->first == v; ++it)
+            if (!used[size_t(it - out.begin())]) return size_t(it - out.begin());
+        return SIZE_MAX;
+    };
+    std::vector<BoundaryLoop> loops;
+    for (size_t i = 0; i < out.size(); ++i) {
+        if (used[i]) continue;
+        BoundaryLoop loop;
+        const uint32_t start = out[i].first;
+        size_t cur = i;
+        loop.closed = false;
+        while (cur != SIZE_MAX) {
+            used[cur] = 1;
+            loop.vertices.push_back(out[cur].first);
+            loop.corners.push_back(out[cur].second);
+            const uint32_t end = halfEnd(mesh, out[cur].second);
+            if (end == start) {
+                loop.closed = true;
+                break;
+            }
+            cur = nextFrom(end);
+        }
+        loops.push_back(std::move(loop));
+    }
+    return loops;
+}
+
+std::vector<uint32_t> positionWeldMap(const Mesh& mesh) {
+    const uint32_t n = uint32_t(mesh.vertexCount());
+    std::vector<uint32_t> order(n), rep(n);
+    std::iota(order.begin(), order.end(), 0u);
+    auto less = [&](uint32_t a, uint32_t b) {
+        const Vec3f& p = mesh.positions[a];
+        const Vec3f& q = mesh.positions[b];
+        if (p.x != q.x) return p.x < q.x;
+        if (p.y != q.y) return p.y < q.y;
+        if (p.z != q.z) return p.z < q.z;
+        return a < b;
+    };
+    std::sort(order.begin(), order.end(), less);
+    for (uint32_t i = 0; i < n; ++i)
+        rep[order[i]] = (i > 0 && mesh.positions[order[i]] == mesh.positions[order[i - 1]]) ? rep[order[i - 1]] : order[i];
+    return rep;
+}
+
+namespace {
+bool attributesDiffer(const Mesh& m, uint32_t a, uint32_t b) {
+    if (m.hasNormals() && m.normals[a] != m.normals[b]) return true;
+    if (m.hasTangents() && m.tangents[a] != m.tangents[b]) return true;
+    if (m.hasColors() && m.colors[a] != m.colors[b]) return true;
+    for (const auto& uv : m.uvs)
+        if (uv[a] != uv[b]) return true;
+    return false;
+}
+} // namespace
+
+std::vector<uint8_t> seamCorners(const Mesh& mesh, const EdgeTable& table, const std::vector<uint32_t>& weld) {
+    std::vector<uint8_t> seam(mesh.indices.size(), 0);
+    if (!mesh.hasNormals() && !mesh.hasTangents() && !mesh.hasColors() && mesh.uvs.empty()) return seam;
+    std::vector<std::pair<uint64_t, uint32_t>> rims; // (welded key, corner)
+    for (uint32_t e = 0; e < table.edgeCount(); ++e)
+        if (table.uses(e) == 1) {
+            const uint32_t c = table.corners[table.begin[e]];
+            rims.push_back({edgeKey(weld[halfStart(mesh, c)], weld[halfEnd(mesh, c)]), c});
+        }
+    std::sort(rims.begin(), rims.end());
+    for (size_t i = 0; i < rims.size();) {
+        size_t j = i;
+        while (j < rims.size() && rims[j].first == rims[i].first) ++j;
+        for (size_t x = i; x < j; ++x)
+            for (size_t y = i; y < j; ++y) {
+                if (x == y) continue;
+                const uint32_t c = rims[x].second, o = rims[y].second;
+                const uint32_t va = halfStart(mesh, c), vb = halfEnd(mesh, c);
+                uint32_t oa = halfStart(mesh, o), ob = halfEnd(mesh, o);
+                if (weld[oa] != weld[va]) std::swap(oa, ob);
+                if (attributesDiffer(mesh, va, oa) || attributesDiffer(mesh, vb, ob)) seam[c] = seam[o] = 1;
+            }
+        i = j;
+    }
+    return seam;
+}
+
+VertexAdjacency buildVertexAdjacency(const Mesh& mesh) {
+    const size_t n = mesh.vertexCount();
+    VertexAdjacency adj;
+    adj.begin.assign(n + 1, 0);
+    for (size_t f = 0; f < mesh.faceCount(); ++f)
+        for (int k = 0; k < 3; ++k) adj.begin[mesh.indices[3 * f + k] + 1] += 2;
+    for (size_t v = 0; v < n; ++v) adj.begin[v + 1] += adj.begin[v];
+    std::vector<uint32_t> fill(adj.begin.begin(), adj.begin.end() - 1);
+    adj.neighbours.resize(adj.begin[n]);
+    for (size_t f = 0; f < mesh.faceCount(); ++f)
+        for (int k = 0; k < 3; ++k) {
+            const uint32_t v = mesh.indices[3 * f + k];
+            adj.neighbours[fill[v]++] = mesh.indices[3 * f + (k + 1) % 3];
+            adj.neighbours[fill[v]++] = mesh.indices[3 * f + (k + 2) % 3];
+        }
+    // Sort and deduplicate each range, then compact.
+    uint32_t out = 0;
+    for (size_t v = 0; v < n; ++v) {
+        auto b = adj.neighbours.begin() + adj.begin[v], e = adj.neighbours.begin() + adj.begin[v + 1];
+        std::sort(b, e);
+        const auto last = std::unique(b, e);
+        const uint32_t start = out;
+        for (auto it = b; it != last; ++it)
+            if (*it != v) adj.neighbours[out++] = *it;
+        adj.begin[v] = start;
+    }
+    adj.begin[n] = out;
+    adj.neighbours.resize(out);
+    return adj;
+}
+
+std::vector<uint8_t> boundaryVertices(const Mesh& mesh, const EdgeTable& table) {
+    std::vector<uint8_t> b(mesh.vertexCount(), 0);
+    for (size_t e = 0; e < table.edgeCount(); ++e)
+        if (table.uses(uint32_t(e)) == 1) {
+            const uint32_t c = table.corners[table.begin[e]];
+            b[halfStart(mesh, c)] = b[halfEnd(mesh, c)] = 1;
+        }
+    return b;
+}
+
+} // namespace cleanup_detail
+} // namespace lodbake

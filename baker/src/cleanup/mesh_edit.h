@@ -1,0 +1,124 @@
+#pragma once
+// Internal helpers shared by the cleanup passes: an undirected edge table over face corners, face and
+// vertex removal that keeps every attribute stream and sub-mesh range in step, vertex duplication,
+// boundary-loop walking. Not part of the public surface.
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "lodbake/core/mesh.h"
+
+namespace lodbake {
+namespace cleanup_detail {
+
+constexpr uint32_t kNone = UINT32_MAX;
+
+inline uint64_t edgeKey(uint32_t a, uint32_t b) {
+    return a < b ? (uint64_t(a) << 32) | b : (uint64_t(b) << 32) | a;
+}
+
+/// Every half-edge is a face corner c, running from indices[c] to indices[next(c)]. Faces with a
+/// repeated index contribute no half-edges. Edges are the distinct undirected keys, sorted.
+struct EdgeTable {
+    std::vector<uint64_t> keys;        // per edge, sorted ascending
+    std::vector<uint32_t> begin;       // per edge + 1: range into `corners`
+    std::vector<uint32_t> corners;     // half-edges grouped by edge, ascending corner within an edge
+    std::vector<uint32_t> corner_edge; // per corner: its edge, or kNone (face with a repeated index)
+
+    size_t edgeCount() const { return keys.size(); }
+    uint32_t uses(uint32_t e) const { return begin[e + 1] - begin[e]; }
+    /// Edge id of (a,b) or kNone.
+    uint32_t find(uint32_t a, uint32_t b) const;
+};
+
+EdgeTable buildEdgeTable(const Mesh& mesh);
+
+/// Start and end vertex of half-edge (corner) c.
+inline uint32_t halfStart(const Mesh& m, uint32_t c) {
+    return m.indices[c];
+}
+inline uint32_t halfEnd(const Mesh& m, uint32_t c) {
+    return m.indices[c % 3 == 2 ? c - 2 : c + 1];
+}
+
+inline bool hasRepeatedIndex(const Mesh& m, size_t f) {
+    const uint32_t* t = &m.indices[3 * f];
+    return t[0] == t[1] || t[1] == t[2] || t[0] == t[2];
+}
+
+/// Unnormalised face normal (twice the area vector), in double.
+Vec3d faceNormal(const Mesh& m, size_t f);
+
+/// Removes the faces with keep[f] == 0, keeping order and sub-mesh ranges. Returns faces removed.
+size_t removeFaces(Mesh& mesh, const std::vector<uint8_t>& keep);
+
+/// Appends triangles; each goes at the end of the sub-mesh given in `submesh` (ignored when the mesh
+/// has no sub-meshes).
+void insertFaces(Mesh& mesh, const std::vector<std::array<uint32_t, 3>>& faces, const std::vector<uint32_t>& submesh);
+
+/// Sub-mesh index of every face (all 0 when there are none).
+std::vector<uint32_t> faceSubmeshes(const Mesh& mesh);
+
+/// Rebuilds every stream: old vertex v becomes old_to_new[v] (kNone drops it). A new vertex takes
+/// the attributes of the lowest old vertex mapped to it. Indices are rewritten.
+void remapVertices(Mesh& mesh, const std::vector<uint32_t>& old_to_new, uint32_t new_count);
+
+/// Appends a copy of vertex v (all streams); returns its index.
+uint32_t duplicateVertex(Mesh& mesh, uint32_t v);
+
+/// Appends a vertex whose every attribute is the mean of the three given vertices' (unit vectors
+/// renormalised, tangent handedness from the first); returns its index.
+uint32_t blendedVertex(Mesh& mesh, const std::array<uint32_t, 3>& from);
+
+/// Union-find with smallest-root-wins, so results depend only on the order of unions.
+class UnionFind {
+public:
+    explicit UnionFind(size_t n);
+    uint32_t find(uint32_t x);
+    void unite(uint32_t a, uint32_t b);
+
+private:
+    std::vector<uint32_t> parent_;
+};
+
+/// A pair of half-edges (corners) across which the surface continues.
+struct CornerPair {
+    uint32_t a, b;
+};
+
+/// Groups the corners around each vertex into fans: corners are joined across every pair in
+/// `joins`. A vertex whose corners form k > 1 fans is split into k vertices (the fan holding the
+/// lowest corner keeps the index). Returns the number of vertices split; `added` gets the new count.
+size_t splitVerticesByFans(Mesh& mesh, const std::vector<CornerPair>& joins, size_t& added);
+
+/// Directed boundary walk over half-edges used by exactly one face. Each result is a vertex
+/// sequence v0..vn-1 whose faces traverse vi -> vi+1; `closed` tells whether the walk got back to v0.
+struct BoundaryLoop {
+    std::vector<uint32_t> vertices;
+    std::vector<uint32_t> corners; // the boundary half-edge starting at each vertex
+    bool closed = true;
+};
+std::vector<BoundaryLoop> findBoundaryLoops(const Mesh& mesh, const EdgeTable& table);
+
+/// Every vertex mapped to the lowest-numbered vertex with a bit-identical position, so that attribute
+/// seams (UV or normal splits) can be told apart from real boundaries.
+std::vector<uint32_t> positionWeldMap(const Mesh& mesh);
+
+/// Per corner: 1 when its half-edge is a boundary edge lying on an attribute seam, that is, another
+/// boundary edge has the same two positions and the vertices there differ in some attribute (UV,
+/// normal, tangent, colour). Copies with identical attributes (a cut or split pinch) are not seams.
+std::vector<uint8_t> seamCorners(const Mesh& mesh, const EdgeTable& table, const std::vector<uint32_t>& weld);
+
+/// Per-vertex sorted unique neighbours, CSR form.
+struct VertexAdjacency {
+    std::vector<uint32_t> begin; // vertexCount() + 1
+    std::vector<uint32_t> neighbours;
+};
+VertexAdjacency buildVertexAdjacency(const Mesh& mesh);
+
+/// Vertices on an edge used by exactly one face.
+std::vector<uint8_t> boundaryVertices(const Mesh& mesh, const EdgeTable& table);
+
+} // namespace cleanup_detail
+} // namespace lodbake

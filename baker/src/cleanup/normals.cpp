@@ -1,0 +1,132 @@
+// Vertex normals: face normals weighted by area and/or corner angle (Thürmer & Wüthrich 1998), grouped
+// per position across edges whose dihedral stays within the crease angle; vertices are split where a
+// crease separates their corners.
+#include "lodbake/cleanup/normals.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+#include "mesh_edit.h"
+
+namespace lodbake {
+
+using namespace cleanup_detail;
+
+PassCounters NormalsReport::counters() const {
+    return {{"crease_edges", crease_edges}, {"vertices_split", vertices_split}, {"vertices_added", vertices_added}};
+}
+
+NormalsReport computeNormals(Mesh& mesh, const NormalOptions& options) {
+    NormalsReport r;
+    const size_t n = mesh.vertexCount();
+    const size_t face_count = mesh.faceCount();
+    // Welded ids: vertices with bit-identical positions share topology (UV seams do not break fans).
+    std::vector<uint32_t> order(n), weld(n);
+    for (uint32_t v = 0; v < n; ++v) order[v] = v;
+    std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
+        const Vec3f &p = mesh.positions[a], &q = mesh.positions[b];
+        if (p.x != q.x) return p.x < q.x;
+        if (p.y != q.y) return p.y < q.y;
+        if (p.z != q.z) return p.z < q.z;
+        return a < b;
+    });
+    for (size_t i = 0; i < n; ++i)
+        weld[order[i]] =
+            (i > 0 && mesh.positions[order[i]] == mesh.positions[order[i - 1]]) ? weld[order[i - 1]] : order[i];
+    Mesh welded;
+    welded.positions = mesh.positions; // the edge table sizes its buckets by vertex count
+    welded.indices.resize(mesh.indices.size());
+    for (size_t c = 0; c < mesh.indices.size(); ++c) welded.indices[c] = weld[mesh.indices[c]];
+
+    std::vector<Vec3d> face_n(face_count);
+    std::vector<double> face_area(face_count, 0.0);
+    for (size_t f = 0; f < face_count; ++f) {
+        if (hasRepeatedIndex(mesh, f)) continue;
+        const Vec3d nn = faceNormal(mesh, f);
+        const double l = length(nn);
+        if (!(l > 0.0) || !std::isfinite(l)) continue;
+        face_n[f] = nn / l;
+        face_area[f] = 0.5 * l;
+    }
+
+    UnionFind groups(mesh.indices.size());
+    const bool split = options.crease_angle_deg < 180.0;
+    if (split) {
+        const double cos_limit = std::cos(options.crease_angle_deg * M_PI / 180.0);
+        const EdgeTable table = buildEdgeTable(welded);
+        for (uint32_t e = 0; e < table.edgeCount(); ++e) {
+            if (table.uses(e) != 2) continue;
+            const uint32_t a = table.corners[table.begin[e]], b = table.corners[table.begin[e] + 1];
+            if (dot(face_n[a / 3], face_n[b / 3]) < cos_limit) {
+                ++r.crease_edges;
+                continue;
+            }
+            const uint32_t an = a % 3 == 2 ? a - 2 : a + 1, bn = b % 3 == 2 ? b - 2 : b + 1;
+            if (welded.indices[a] == welded.indices[b]) {
+                groups.unite(a, b);
+                groups.unite(an, bn);
+            } else {
+                groups.unite(a, bn);
+                groups.unite(an, b);
+            }
+        }
+    } else {
+        std::vector<uint32_t> first(n, kNone);
+        for (uint32_t c = 0; c < welded.indices.size(); ++c) {
+            uint32_t& f = first[welded.indices[c]];
+            if (f == kNone)
+                f = c;
+            else
+                groups.unite(f, c);
+        }
+    }
+
+    std::vector<Vec3d> acc(mesh.indices.size());
+    for (size_t f = 0; f < face_count; ++f) {
+        if (face_area[f] == 0.0) continue;
+        for (int k = 0; k < 3; ++k) {
+            const uint32_t c = uint32_t(3 * f + k);
+            double weight = 1.0;
+            if (options.weighting != NormalWeighting::Area) {
+                const Vec3d o = toDouble(mesh.positions[mesh.indices[c]]);
+                const Vec3d u = normalize(toDouble(mesh.positions[mesh.indices[3 * f + (k + 1) % 3]]) - o);
+                const Vec3d v = normalize(toDouble(mesh.positions[mesh.indices[3 * f + (k + 2) % 3]]) - o);
+                weight = std::acos(std::max(-1.0, std::min(1.0, dot(u, v))));
+            }
+            if (options.weighting != NormalWeighting::Angle) weight *= face_area[f];
+            acc[groups.find(c)] += face_n[f] * weight;
+        }
+    }
+
+    mesh.normals.assign(n, Vec3f(0, 0, 1));
+    std::vector<uint32_t> first_root(n, kNone);
+    std::map<std::pair<uint32_t, uint32_t>, uint32_t> extra; // (vertex, group) -> split copy
+    std::vector<uint8_t> was_split(n, 0);
+    for (uint32_t c = 0; c < mesh.indices.size(); ++c) {
+        const uint32_t v = mesh.indices[c];
+        const uint32_t root = groups.find(c);
+        const Vec3d nn = normalize(acc[root]);
+        const Vec3f normal = length(nn) > 0 ? Vec3f(nn) : Vec3f(0, 0, 1);
+        if (first_root[v] == kNone) {
+            first_root[v] = root;
+            mesh.normals[v] = normal;
+            continue;
+        }
+        if (first_root[v] == root) continue;
+        auto [it, inserted] = extra.try_emplace({v, root}, 0u);
+        if (inserted) {
+            it->second = duplicateVertex(mesh, v);
+            mesh.normals[it->second] = normal;
+            ++r.vertices_added;
+            if (!was_split[v]) {
+                was_split[v] = 1;
+                ++r.vertices_split;
+            }
+        }
+        mesh.indices[c] = it->second;
+    }
+    return r;
+}
+
+} // namespace lodbake

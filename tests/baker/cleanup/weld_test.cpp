@@ -1,0 +1,102 @@
+#include <gtest/gtest.h>
+
+#include "cleanup_builders.h"
+#include "lodbake/cleanup/passes.h"
+#include "lodbake/cleanup/validate.h"
+
+using namespace lodbake;
+using namespace lodbake_test;
+
+namespace {
+// A triangle soup: every face has its own three vertices.
+Mesh soup(const Mesh& m) {
+    Mesh s;
+    for (uint32_t i : m.indices) {
+        s.indices.push_back(uint32_t(s.positions.size()));
+        s.positions.push_back(m.positions[i]);
+    }
+    return s;
+}
+} // namespace
+
+TEST(WeldTest, ExactWeldRestoresSoup) {
+    Mesh m = soup(uvSphere(8, 12));
+    const size_t faces = m.faceCount();
+    const WeldReport r = weldVertices(m);
+    EXPECT_EQ(r.vertices_before, faces * 3);
+    EXPECT_EQ(r.vertices_after, uvSphere(8, 12).vertexCount());
+    EXPECT_EQ(r.vertices_merged, r.vertices_before - r.vertices_after);
+    EXPECT_TRUE(validate(m).isClosedManifold());
+}
+
+TEST(WeldTest, ToleranceMergesJitteredCopiesOnly) {
+    Mesh m = soup(uvSphere(8, 12));
+    for (size_t v = 0; v < m.vertexCount(); ++v) m.positions[v].x += 1e-7f * hashNoise(uint32_t(v));
+    Mesh exact = m;
+    EXPECT_LT(weldVertices(exact).vertices_merged, m.vertexCount() - 86);
+    WeldOptions o;
+    o.tolerance_rel = 1e-5;
+    const WeldReport r = weldVertices(m, o);
+    EXPECT_EQ(r.vertices_after, 86u); // (8-1)*12 + 2 poles
+    EXPECT_TRUE(validate(m).isClosedManifold());
+}
+
+TEST(WeldTest, ToleranceDoesNotMergeDistinctNeighbours) {
+    Mesh m = uvSphere(8, 12);
+    WeldOptions o;
+    o.tolerance_rel = 1e-4;
+    EXPECT_EQ(weldVertices(m, o).vertices_merged, 0u);
+}
+
+TEST(WeldTest, RespectsUvSeamsUnlessAsked) {
+    Mesh m = quad();
+    // Duplicate vertex 2 with a different UV and use it in the second face.
+    m.uvs.push_back({{0, 0}, {1, 0}, {1, 1}, {0, 1}});
+    m.positions.push_back(m.positions[2]);
+    m.uvs[0].push_back({0.5f, 0.5f});
+    m.indices[4] = 4;
+    Mesh kept = m;
+    const WeldReport r = weldVertices(kept);
+    EXPECT_EQ(r.vertices_merged, 0u);
+    EXPECT_EQ(r.seam_pairs_kept, 1u);
+    WeldOptions o;
+    o.respect_attributes = false;
+    const WeldReport all = weldVertices(m, o);
+    EXPECT_EQ(all.vertices_merged, 1u);
+    ASSERT_EQ(m.uvs[0].size(), 4u);        // stream compacted with the positions
+    EXPECT_EQ(m.uvs[0][2], (Vec2f{1, 1})); // the representative keeps its own UV
+    EXPECT_EQ(m.indices[4], 2u);
+}
+
+TEST(WeldTest, RespectsNormalSeams) {
+    Mesh m = quad();
+    m.normals.assign(4, {0, 0, 1});
+    m.positions.push_back(m.positions[0]);
+    m.normals.push_back({1, 0, 0});
+    m.indices[3] = 4;
+    WeldOptions o;
+    o.tolerance_rel = 1e-3;
+    EXPECT_EQ(weldVertices(m, o).vertices_merged, 0u);
+}
+
+TEST(WeldTest, IsDeterministicAndKeepsLowestIndex) {
+    Mesh m = makeMesh({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 0, 0}, {0, 0, 0}}, {0, 1, 2, 4, 2, 3});
+    Mesh copy = m;
+    weldVertices(m);
+    weldVertices(copy);
+    EXPECT_EQ(m.indices, copy.indices);
+    EXPECT_EQ(m.indices, (std::vector<uint32_t>{0, 1, 2, 0, 2, 1}));
+}
+
+TEST(WeldTest, NonFiniteNeverMerges) {
+    Mesh m = makeMesh({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {std::nanf(""), 0, 0}, {std::nanf(""), 0, 0}}, {0, 1, 2});
+    EXPECT_EQ(weldVertices(m).vertices_merged, 0u);
+    WeldOptions o;
+    o.tolerance_rel = 0.1;
+    EXPECT_EQ(weldVertices(m, o).vertices_merged, 0u);
+}
+
+TEST(WeldTest, EmptyMesh) {
+    Mesh m;
+    EXPECT_EQ(weldVertices(m).vertices_after, 0u);
+}
