@@ -177,6 +177,16 @@ bool EdgeCollapser::evaluate(uint32_t edge, Candidate& c) const {
     Quadric geometric = quadric_[a];
     geometric += quadric_[b];
     c.error = geometric.weight > 0 ? std::sqrt(geometric.evaluate(c.position) / geometric.weight) : 0.0;
+    // Queue key: area-weighted cost divided by area^exponent (see SimplifyOptions).
+    if (geometric.weight > 0) {
+        const double e = options_.cost_area_exponent;
+        if (e == 0.5f)
+            c.cost /= std::sqrt(geometric.weight);
+        else if (e == 1.0f)
+            c.cost /= geometric.weight;
+        else if (e != 0.0f)
+            c.cost /= std::pow(geometric.weight, e);
+    }
     return true;
 }
 
@@ -448,9 +458,9 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
         if (!isFinite(mesh.positions[v]))
             return invalidInput("simplify input: vertex " + std::to_string(v) + ": expected finite coordinates");
     if (!(options.min_triangle_quality >= 0.0f) || !(options.max_normal_change_deg > 0.0f) ||
-        !(options.border_weight >= 0.0f))
+        !(options.border_weight >= 0.0f) || !(options.cost_area_exponent >= 0.0f && options.cost_area_exponent <= 1.0f))
         return invalidInput("simplify options: expected min_triangle_quality >= 0, max_normal_change_deg > 0, "
-                            "border_weight >= 0");
+                            "border_weight >= 0, cost_area_exponent in [0, 1]");
     source_ = &mesh;
     options_ = options;
     cos_max_normal_change_ = std::cos(std::min(double(options.max_normal_change_deg), 180.0) * kPi / 180.0);

@@ -44,6 +44,10 @@ struct SimplifyOptions {
     float max_normal_change_deg = 75.0f; // largest rotation of any face normal in one collapse
     float min_triangle_quality = 0.05f;  // reject collapses creating triangles below this quality
                                    // (4√3·area / Σ edge², 1 = equilateral) unless no worse than before
+    float cost_area_exponent = 0.5f; // queue order: Q(p) / area^k over the merged quadric's face area.
+                                   // 0 = Garland–Heckbert's raw area-weighted cost (lowest mean error,
+                                   // but small thin features go early), 1 = mean squared distance
+                                   // (lowest Hausdorff); 0.5 balances both (docs/simplify.md)
     bool lock_border = false;      // keep open-boundary vertices exactly in place
     AttributeWeights attribute_weights;
 };
