@@ -174,8 +174,11 @@ bool EdgeCollapser::evaluate(uint32_t edge, Candidate& c) const {
     // Positions are stored in float: evaluate what will actually be stored.
     c.position = toD(Vec3f(float(c.position.x), float(c.position.y), float(c.position.z)));
     c.cost = q.evaluate(c.position);
-    Quadric geometric = quadric_[a];
-    geometric += quadric_[b];
+    Quadric geometric = q;
+    if (channel_count_ > 0) {
+        geometric = quadric_[a];
+        geometric += quadric_[b];
+    }
     c.error = geometric.weight > 0 ? std::sqrt(geometric.evaluate(c.position) / geometric.weight) : 0.0;
     // Queue key: area-weighted cost divided by area^exponent (see SimplifyOptions).
     if (geometric.weight > 0) {
@@ -200,9 +203,8 @@ Vec3d EdgeCollapser::fanNormal(const std::vector<uint32_t>& fan) const {
 }
 
 bool EdgeCollapser::checkFaces(const std::vector<uint32_t>& fan, uint32_t moved, const Vec3d& p, uint32_t f0,
-                               uint32_t f1, const Vec3d& region_normal, double& min_old, double& min_new) const {
+                               uint32_t f1, RegionNormal& region, double& min_old, double& min_new) const {
     const Vec3d pm = toD(position_[moved]);
-    const double region_len = length(region_normal);
     for (uint32_t h : fan) {
         const uint32_t f = h / 3;
         const Vec3d px = toD(position_[corner_point_[nextHe(h)]]);
@@ -221,7 +223,11 @@ bool EdgeCollapser::checkFaces(const std::vector<uint32_t>& fan, uint32_t moved,
             if (dot(n_old, n_new) < cos_max_normal_change_ * len_old * len_new) return false;
         } else {
             // A sliver's normal is noise: judge the new face against the surrounding surface.
-            if (dot(region_normal, n_new) < cos_max_normal_change_ * region_len * len_new) return false;
+            if (!region.ready) {
+                region.normal = fanNormal(fan_u_) + fanNormal(fan_v_);
+                region.ready = true;
+            }
+            if (dot(region.normal, n_new) < cos_max_normal_change_ * length(region.normal) * len_new) return false;
         }
     }
     return true;
@@ -280,7 +286,7 @@ bool EdgeCollapser::isValid(const Candidate& c, int& pair_count, WedgePair* pair
             if (!found) return false;
         }
     }
-    const Vec3d region = fanNormal(fan_u_) + fanNormal(fan_v_);
+    RegionNormal region;
     double min_old = 1.0, min_new = 1.0;
     if (!checkFaces(fan_u_, u, c.position, f0, f1, region, min_old, min_new) ||
         !checkFaces(fan_v_, v, c.position, f0, f1, region, min_old, min_new)) return false;
@@ -385,16 +391,21 @@ void EdgeCollapser::collapse(const Candidate& c, const WedgePair* pairs, int pai
 
     const uint8_t old_w0 = kind_[w0];
     const uint8_t old_w1 = w1 == kNone ? 0 : kind_[w1];
-    kind_[v] = classify(v);
     kind_[w0] = classify(w0);
     if (w1 != kNone) kind_[w1] = classify(w1);
-    updateEdgesAround(v);
+    kind_[v] = classify(v); // leaves v's fan in fan_tmp_
+    if (kind_[v] == kLocked || kind_[v] == kDead) gatherFan(v, fan_tmp_);
+    updateEdgesInFan();
     if (kind_[w0] != old_w0) updateEdgesAround(w0);
     if (w1 != kNone && kind_[w1] != old_w1) updateEdgesAround(w1);
 }
 
 void EdgeCollapser::updateEdgesAround(uint32_t point) {
     gatherFan(point, fan_tmp_);
+    updateEdgesInFan();
+}
+
+void EdgeCollapser::updateEdgesInFan() {
     Candidate c;
     auto update = [&](uint32_t he) {
         const uint32_t e = canonical(he);
