@@ -154,8 +154,12 @@ bool EdgeCollapser::evaluate(uint32_t edge, Candidate& c) const {
     const Quadric q = combinedQuadric(edge, c.removed);
     const Vec3d pk = toD(position_[c.kept]);
     const Vec3d pr = toD(position_[c.removed]);
-    if (kind_[c.kept] == kCorner) {
+    if (kind_[c.kept] == kCorner || (kind_[c.kept] == kLine && !feature)) {
+        // Corners never move; a border/seam point only moves along its own feature line.
         c.position = pk;
+    } else if (kind_[c.kept] == kLine) {
+        // Both on the same feature line: stay on the segment between them, which lies on it.
+        c.position = minimizeOnSegment(q, pr, pk);
     } else {
         Vec3d best = minimizeOnSegment(q, pr, pk);
         double best_cost = q.evaluate(best);

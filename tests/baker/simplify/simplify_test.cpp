@@ -387,4 +387,77 @@ TEST(SimplifyTest, BunnyScanKeepsHolesAndBeatsReferenceError) {
     EXPECT_LT(d->meanRel(), 2.2e-4);
 }
 
+TEST(SimplifyTest, BorderPointsMoveOnlyAlongTheBorderEvenWithoutConstraintPlanes) {
+    // With no constraint planes a flat grid costs nothing anywhere: only the feature rule keeps
+    // border points on the (simplified) outline instead of pulling them inside.
+    SimplifyOptions o = ratio(0.05f);
+    o.border_weight = 0.0f;
+    const SimplifyOutput out = run(lodbake_test::flatGrid(12), o);
+    EXPECT_LT(out.mesh.faceCount(), 40u);
+    std::map<std::pair<uint32_t, uint32_t>, int> edge_uses;
+    for (size_t f = 0; f < out.mesh.faceCount(); ++f)
+        for (int k = 0; k < 3; ++k) {
+            const uint32_t a = out.mesh.indices[f * 3 + k], b = out.mesh.indices[f * 3 + (k + 1) % 3];
+            ++edge_uses[{std::min(a, b), std::max(a, b)}];
+        }
+    int border_points = 0;
+    float worst = 0.0f;
+    for (const auto& e : edge_uses) {
+        if (e.second != 1) continue;
+        for (uint32_t v : {e.first.first, e.first.second}) {
+            const Vec3f p = out.mesh.positions[v];
+            worst = std::max(worst, std::min(std::min(p.x, 1.0f - p.x), std::min(p.y, 1.0f - p.y)));
+            ++border_points;
+        }
+    }
+    EXPECT_GT(border_points, 0);
+    // Cutting a square's corner moves border points onto the cut (measured 0.013 here); a border
+    // point pulled inside by an interior collapse lands a cell (1/12) or more away from it.
+    EXPECT_LT(worst, 0.03f);
+}
+
+TEST(SimplifyTest, LinkConditionKeepsClosedSurfacesManifoldDownToATetrahedron) {
+    // With the geometric checks relaxed only the topological ones stand between the collapses
+    // and a non-manifold result.
+    for (int levels : {0, 1, 2}) {
+        SimplifyOptions o;
+        o.target_triangles = 1;
+        o.min_triangle_quality = 0.0f;
+        o.max_normal_change_deg = 180.0f;
+        const SimplifyOutput out = run(lodbake_test::icosphere(levels), o);
+        const lodbake::TopologyStats t = lodbake::computeTopologyStats(out.mesh);
+        EXPECT_EQ(out.mesh.faceCount(), 4u) << "levels " << levels;
+        EXPECT_EQ(t.boundary_edge_count, 0u);
+        EXPECT_EQ(t.non_manifold_edge_count, 0u);
+        EXPECT_EQ(t.non_manifold_vertex_count, 0u);
+        EXPECT_EQ(t.duplicate_face_count, 0u);
+        EXPECT_EQ(t.euler_characteristic, 2);
+    }
+    // A torus (genus 1) keeps its genus: Euler characteristic stays 0.
+    Mesh torus;
+    const int n = 12, m = 8;
+    for (int i = 0; i < n; ++i)
+        for (int j = 0; j < m; ++j) {
+            const float a = 6.2831853f * float(i) / n, b = 6.2831853f * float(j) / m;
+            torus.positions.push_back({(2 + std::cos(b)) * std::cos(a), (2 + std::cos(b)) * std::sin(a), std::sin(b)});
+        }
+    for (int i = 0; i < n; ++i)
+        for (int j = 0; j < m; ++j) {
+            const uint32_t p00 = uint32_t(i * m + j), p10 = uint32_t(((i + 1) % n) * m + j),
+                           p01 = uint32_t(i * m + (j + 1) % m), p11 = uint32_t(((i + 1) % n) * m + (j + 1) % m);
+            torus.indices.insert(torus.indices.end(), {p00, p10, p11, p00, p11, p01});
+        }
+    SimplifyOptions o;
+    o.target_triangles = 1;
+    o.min_triangle_quality = 0.0f;
+    o.max_normal_change_deg = 180.0f;
+    const SimplifyOutput out = run(torus, o);
+    const lodbake::TopologyStats t = lodbake::computeTopologyStats(out.mesh);
+    EXPECT_LT(out.mesh.faceCount(), torus.faceCount() / 4);
+    EXPECT_EQ(t.euler_characteristic, 0);
+    EXPECT_EQ(t.non_manifold_edge_count, 0u);
+    EXPECT_EQ(t.non_manifold_vertex_count, 0u);
+    EXPECT_EQ(t.duplicate_face_count, 0u);
+}
+
 } // namespace
