@@ -161,19 +161,14 @@ bool EdgeCollapser::evaluate(uint32_t edge, Candidate& c) const {
         // Both on the same feature line: stay on the segment between them, which lies on it.
         c.position = minimizeOnSegment(q, pr, pk);
     } else {
-        Vec3d best = minimizeOnSegment(q, pr, pk);
-        double best_cost = q.evaluate(best);
-        Vec3d opt;
         // The free optimum is only trusted near the edge: in flat or cylindrical regions a barely
-        // conditioned system can place the vertex far away at almost no quadric cost.
-        if (solveQuadric(q, opt) && length2(opt - (pr + pk) * 0.5) <= 4.0 * length2(pk - pr)) {
-            const double opt_cost = q.evaluate(opt);
-            if (opt_cost < best_cost) {
-                best = opt;
-                best_cost = opt_cost;
-            }
-        }
-        c.position = best;
+        // conditioned system can place the vertex far away at almost no quadric cost. When it is
+        // trusted it is the global minimum, so the segment search is only the fallback.
+        Vec3d opt;
+        if (solveQuadric(q, opt) && length2(opt - (pr + pk) * 0.5) <= 4.0 * length2(pk - pr))
+            c.position = opt;
+        else
+            c.position = minimizeOnSegment(q, pr, pk);
     }
     // Positions are stored in float: evaluate what will actually be stored.
     c.position = toD(Vec3f(float(c.position.x), float(c.position.y), float(c.position.z)));
