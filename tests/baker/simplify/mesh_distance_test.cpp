@@ -156,6 +156,23 @@ TEST(MeshDistanceTest, BitIdenticalAcrossThreadCountsAndSeeded) {
     EXPECT_NEAR(one.mean, other_seed.mean, one.mean * 0.02);
 }
 
+TEST(MeshDistanceTest, PreparedReferenceGivesTheSameResult) {
+    Mesh reference = perturbed(icosphere(4), 0.01f, 11);
+    Mesh approx = perturbed(icosphere(2), 0.01f, 12);
+    lodbake::DistanceOptions options;
+    options.sample_count = 20000;
+    auto prepared = lodbake::DistanceReference::prepare(reference);
+    ASSERT_TRUE(prepared.ok());
+    lodbake::DistanceResult direct = measure(reference, approx, options);
+    auto again = lodbake::measureSurfaceDistance(prepared.value(), approx, options);
+    ASSERT_TRUE(again.ok());
+    EXPECT_EQ(direct.hausdorff, again->hausdorff);
+    EXPECT_EQ(direct.mean, again->mean);
+    EXPECT_EQ(direct.rms, again->rms);
+    EXPECT_EQ(direct.diagonal, again->diagonal);
+    EXPECT_FALSE(lodbake::DistanceReference::prepare(lodbake_test::makeMesh({{0, 0, 0}}, {})).ok());
+}
+
 TEST(MeshDistanceTest, RejectsDegenerateInput) {
     Mesh good = lodbake_test::tetrahedron();
     Mesh no_triangles = good;

@@ -6,6 +6,7 @@
 
 #include <cstdint>
 
+#include "lodbake/core/bvh.h"
 #include "lodbake/core/mesh.h"
 #include "lodbake/core/status.h"
 
@@ -31,8 +32,30 @@ struct DistanceResult {
 };
 
 /// Measures the two-sided distance. Fails (InvalidInput) if either mesh has no triangle of
-/// non-zero area.
+/// non-zero area, has an index out of range or a referenced vertex with a NaN/Inf coordinate, or if
+/// options ask for no points at all (sample_count 0 and include_vertices false).
+/// The result is bit-identical for any thread count.
 Result<DistanceResult> measureSurfaceDistance(const Mesh& reference, const Mesh& approx,
+                                              const DistanceOptions& options = {});
+
+/// A reference surface checked and indexed once, for measuring several approximations against it
+/// (every level of an LOD chain) without rebuilding its BVH each time. Keeps a pointer to the mesh:
+/// `reference` must outlive this object and stay unchanged.
+class DistanceReference {
+public:
+    /// Fails as measureSurfaceDistance does for a bad reference.
+    static Result<DistanceReference> prepare(const Mesh& reference);
+
+    const Mesh& mesh() const { return *mesh_; }
+    const TriangleBvh& bvh() const { return bvh_; }
+
+private:
+    const Mesh* mesh_ = nullptr;
+    TriangleBvh bvh_;
+};
+
+/// Same as measureSurfaceDistance(reference.mesh(), approx, options), with the same result.
+Result<DistanceResult> measureSurfaceDistance(const DistanceReference& reference, const Mesh& approx,
                                               const DistanceOptions& options = {});
 
 } // namespace lodbake
