@@ -1,8 +1,1053 @@
-// TRANSIENT: replaced by the PLY reader work before anything lands.
+// PLY reader and writer (Turk 1994, "The PLY Polygon File Format"; the Stanford range-image
+// conventions of the 3D Scanning Repository: `element range_grid` with obj_info num_cols/num_rows).
+//
+// The reader parses the header into elements and properties, then walks the body once, element by
+// element, through a cursor that hides the encoding (ascii tokens or binary scalars of either byte
+// order). Every count is checked against the bytes still present before anything is allocated.
+// Faces, strips and grids are collected raw and turned into triangles after the whole body is read,
+// because the element order in a PLY is free and triangulation needs the positions.
+
 #include "lodbake/io/ply.h"
+
+#include <algorithm>
+#include <array>
+#include <charconv>
+#include <cmath>
+#include <cstring>
+#include <limits>
+
 namespace lodbake {
-Result<LoadedMesh> readPlyFromMemory(const uint8_t*, size_t, const std::string& name, const ReadOptions&, Diagnostics&) {
-    return unsupported(name + ": PLY reader not built yet");
+
+namespace {
+
+enum class ScalarType : uint8_t { Int8, Uint8, Int16, Uint16, Int32, Uint32, Float32, Float64 };
+
+bool parseScalarType(const std::string& s, ScalarType& out) {
+    static const std::pair<const char*, ScalarType> kNames[] = {
+        {"char", ScalarType::Int8},     {"int8", ScalarType::Int8},       {"uchar", ScalarType::Uint8},
+        {"uint8", ScalarType::Uint8},   {"short", ScalarType::Int16},     {"int16", ScalarType::Int16},
+        {"ushort", ScalarType::Uint16}, {"uint16", ScalarType::Uint16},   {"int", ScalarType::Int32},
+        {"int32", ScalarType::Int32},   {"uint", ScalarType::Uint32},     {"uint32", ScalarType::Uint32},
+        {"float", ScalarType::Float32}, {"float32", ScalarType::Float32}, {"double", ScalarType::Float64},
+        {"float64", ScalarType::Float64},
+    };
+    for (const auto& n : kNames)
+        if (s == n.first) {
+            out = n.second;
+            return true;
+        }
+    return false;
 }
-std::vector<uint8_t> writePlyToMemory(const Mesh&, bool) { return {}; }
+
+size_t scalarSize(ScalarType t) {
+    switch (t) {
+    case ScalarType::Int8:
+    case ScalarType::Uint8: return 1;
+    case ScalarType::Int16:
+    case ScalarType::Uint16: return 2;
+    case ScalarType::Int32:
+    case ScalarType::Uint32:
+    case ScalarType::Float32: return 4;
+    case ScalarType::Float64: return 8;
+    }
+    return 1;
+}
+
+bool isIntegerType(ScalarType t) { return t != ScalarType::Float32 && t != ScalarType::Float64; }
+
+// Largest value of an integer type, used to normalise integer colour channels.
+double integerTypeMax(ScalarType t) {
+    switch (t) {
+    case ScalarType::Int8: return 127.0;
+    case ScalarType::Uint8: return 255.0;
+    case ScalarType::Int16: return 32767.0;
+    case ScalarType::Uint16: return 65535.0;
+    case ScalarType::Int32: return 2147483647.0;
+    case ScalarType::Uint32: return 4294967295.0;
+    default: return 1.0;
+    }
+}
+
+enum class Encoding { Ascii, BinaryLittleEndian, BinaryBigEndian };
+
+struct Property {
+    std::string name;
+    bool is_list = false;
+    ScalarType count_type = ScalarType::Uint8; // lists only
+    ScalarType value_type = ScalarType::Float32;
+};
+
+struct Element {
+    std::string name;
+    uint64_t count = 0;
+    std::vector<Property> properties;
+
+    int findProperty(const std::string& n) const {
+        for (size_t i = 0; i < properties.size(); ++i)
+            if (properties[i].name == n) return int(i);
+        return -1;
+    }
+};
+
+struct Header {
+    Encoding encoding = Encoding::Ascii;
+    std::vector<Element> elements;
+    int64_t num_cols = -1; // obj_info num_cols (range grids)
+    int64_t num_rows = -1;
+    size_t body_offset = 0;
+};
+
+const char* encodingName(Encoding e) {
+    switch (e) {
+    case Encoding::Ascii: return "ascii";
+    case Encoding::BinaryLittleEndian: return "binary_little_endian";
+    case Encoding::BinaryBigEndian: return "binary_big_endian";
+    }
+    return "ascii";
+}
+
+// Makes arbitrary file bytes safe to quote inside a one-line message.
+std::string quoted(const char* p, size_t n) {
+    static const char kHex[] = "0123456789abcdef";
+    std::string out = "'";
+    const size_t shown = std::min<size_t>(n, 40);
+    for (size_t i = 0; i < shown; ++i) {
+        const unsigned char c = static_cast<unsigned char>(p[i]);
+        if (c >= 0x20 && c < 0x7f && c != '\'' && c != '\\') {
+            out += char(c);
+        } else {
+            out += "\\x";
+            out += kHex[c >> 4];
+            out += kHex[c & 15];
+        }
+    }
+    if (shown < n) out += "...";
+    out += "'";
+    return out;
+}
+std::string quoted(const std::string& s) { return quoted(s.data(), s.size()); }
+
+bool isSpace(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\f' || c == '\v'; }
+
+std::vector<std::string> splitWords(const char* p, const char* end) {
+    std::vector<std::string> words;
+    while (p < end) {
+        while (p < end && isSpace(*p)) ++p;
+        const char* s = p;
+        while (p < end && !isSpace(*p)) ++p;
+        if (p > s) words.emplace_back(s, p);
+    }
+    return words;
+}
+
+bool parseUnsigned(const std::string& s, uint64_t& out) {
+    const char* b = s.data();
+    const char* e = b + s.size();
+    if (b < e && *b == '+') ++b;
+    auto r = std::from_chars(b, e, out);
+    return r.ec == std::errc() && r.ptr == e && b < e;
+}
+
+Result<Header> parseHeader(const uint8_t* data, size_t size, const std::string& name, Diagnostics& diagnostics) {
+    const char* text = reinterpret_cast<const char*>(data);
+    const char* end = text + size;
+    if (size < 3 || std::memcmp(text, "ply", 3) != 0 ||
+        (size > 3 && text[3] != '\n' && text[3] != '\r' && text[3] != ' ')) {
+        return invalidInput(name + ": header: expected the magic word 'ply' on the first line, got " +
+                            quoted(text, std::min<size_t>(size, 8)));
+    }
+    // Find end_header first: a file without it would otherwise fail on whatever body line comes next.
+    static const char kEndHeader[] = "end_header";
+    const char* found = std::search(text, end, kEndHeader, kEndHeader + sizeof(kEndHeader) - 1);
+    if (found == end) return invalidInput(name + ": header: no 'end_header' line");
+
+    Header header;
+    bool has_format = false;
+    size_t line_number = 0;
+    size_t bye_lines = 0;
+    const char* p = text;
+    while (true) {
+        if (p >= end) return invalidInput(name + ": header: no 'end_header' line");
+        const char* nl = static_cast<const char*>(std::memchr(p, '\n', size_t(end - p)));
+        const char* line_end = nl ? nl : end;
+        const char* next = nl ? nl + 1 : end;
+        ++line_number;
+        const std::string where = name + ": header line " + std::to_string(line_number);
+        const std::vector<std::string> words = splitWords(p, line_end);
+        const char* line_begin = p;
+        p = next;
+        if (line_number == 1) continue; // the magic, checked above
+        if (words.empty()) continue;
+        const std::string& keyword = words[0];
+        if (keyword == "comment") continue;
+        if (keyword == "obj_info") {
+            if (words.size() >= 3 && (words[1] == "num_cols" || words[1] == "num_rows")) {
+                uint64_t v = 0;
+                if (!parseUnsigned(words[2], v) || v > (uint64_t(1) << 31))
+                    return invalidInput(where + ": obj_info " + words[1] + ": expected a non-negative integer, got " +
+                                        quoted(words[2]));
+                (words[1] == "num_cols" ? header.num_cols : header.num_rows) = int64_t(v);
+            }
+            continue;
+        }
+        if (keyword == "bye") {
+            // Some Stanford range scans carry these; strict readers reject them. Harmless.
+            ++bye_lines;
+            continue;
+        }
+        if (keyword == "end_header") {
+            if (words.size() != 1) return invalidInput(where + ": end_header: unexpected text after it");
+            if (!nl) return invalidInput(where + ": end_header: expected a line break after it");
+            header.body_offset = size_t(next - text);
+            break;
+        }
+        if (keyword == "format") {
+            if (has_format) return invalidInput(where + ": format: given twice");
+            if (words.size() != 3) return invalidInput(where + ": format: expected 'format <encoding> 1.0'");
+            if (words[1] == "ascii") header.encoding = Encoding::Ascii;
+            else if (words[1] == "binary_little_endian") header.encoding = Encoding::BinaryLittleEndian;
+            else if (words[1] == "binary_big_endian") header.encoding = Encoding::BinaryBigEndian;
+            else
+                return invalidInput(where + ": format: expected ascii, binary_little_endian or binary_big_endian, got " +
+                                    quoted(words[1]));
+            if (words[2] != "1.0" && words[2] != "1")
+                return unsupported(where + ": format: version " + quoted(words[2]) + " is not supported (expected 1.0)");
+            has_format = true;
+            continue;
+        }
+        if (!has_format) return invalidInput(where + ": expected 'format' before " + quoted(keyword));
+        if (keyword == "element") {
+            if (words.size() != 3) return invalidInput(where + ": element: expected 'element <name> <count>'");
+            Element element;
+            element.name = words[1];
+            if (!words[2].empty() && words[2][0] == '-')
+                return invalidInput(where + ": element " + words[1] + ": negative count " + quoted(words[2]));
+            if (!parseUnsigned(words[2], element.count))
+                return invalidInput(where + ": element " + words[1] + ": expected a count, got " + quoted(words[2]));
+            header.elements.push_back(std::move(element));
+            continue;
+        }
+        if (keyword == "property") {
+            if (header.elements.empty()) return invalidInput(where + ": property before any element");
+            Element& element = header.elements.back();
+            Property prop;
+            if (words.size() >= 2 && words[1] == "list") {
+                if (words.size() != 5)
+                    return invalidInput(where + ": element " + element.name +
+                                        ": expected 'property list <count type> <value type> <name>'");
+                if (!parseScalarType(words[2], prop.count_type))
+                    return invalidInput(where + ": element " + element.name + ": unknown property type " + quoted(words[2]));
+                if (!parseScalarType(words[3], prop.value_type))
+                    return invalidInput(where + ": element " + element.name + ": unknown property type " + quoted(words[3]));
+                if (!isIntegerType(prop.count_type))
+                    return invalidInput(where + ": element " + element.name + ": list count type must be an integer type, got " +
+                                        quoted(words[2]));
+                prop.is_list = true;
+                prop.name = words[4];
+            } else {
+                if (words.size() != 3)
+                    return invalidInput(where + ": element " + element.name + ": expected 'property <type> <name>'");
+                if (!parseScalarType(words[1], prop.value_type))
+                    return invalidInput(where + ": element " + element.name + ": unknown property type " + quoted(words[1]));
+                prop.name = words[2];
+            }
+            if (element.findProperty(prop.name) >= 0)
+                return invalidInput(where + ": element " + element.name + ": property " + quoted(prop.name) +
+                                    " declared twice");
+            element.properties.push_back(std::move(prop));
+            continue;
+        }
+        (void)line_begin;
+        return invalidInput(where + ": unknown keyword " + quoted(keyword));
+    }
+    if (!has_format) return invalidInput(name + ": header: no 'format' line");
+    if (bye_lines > 0)
+        diagnostics.note(name + ": header: ignored " + std::to_string(bye_lines) + " non-standard 'bye' line(s)");
+    return header;
+}
+
+enum class ReadError { None, End, NotNumber, NotInteger, OutOfRange };
+
+// A cursor over the body that reads one scalar at a time, whatever the encoding.
+class BodyCursor {
+public:
+    BodyCursor(const uint8_t* data, size_t size, size_t pos, Encoding encoding)
+        : data_(data), size_(size), pos_(pos), encoding_(encoding) {}
+
+    size_t remaining() const { return size_ - pos_; }
+    size_t position() const { return pos_; }
+    const std::string& lastToken() const { return token_; }
+
+    ReadError read(ScalarType t, double& out) {
+        if (encoding_ == Encoding::Ascii) return readAscii(t, out);
+        return readBinary(t, out);
+    }
+
+    // Skips `count` values of type `t` without converting them.
+    ReadError skip(ScalarType t, uint64_t count) {
+        if (encoding_ != Encoding::Ascii) {
+            const uint64_t bytes = count * scalarSize(t);
+            if (count > remaining() || bytes > remaining()) return ReadError::End;
+            pos_ += size_t(bytes);
+            return ReadError::None;
+        }
+        double ignored = 0;
+        for (uint64_t i = 0; i < count; ++i) {
+            const ReadError e = readAscii(t, ignored);
+            if (e != ReadError::None) return e;
+        }
+        return ReadError::None;
+    }
+
+    // After the last element: anything but whitespace (ascii) or any byte (binary) is left over.
+    size_t trailingBytes() const {
+        if (encoding_ != Encoding::Ascii) return remaining();
+        size_t p = pos_;
+        while (p < size_ && isSpace(char(data_[p]))) ++p;
+        return size_ - p;
+    }
+
+private:
+    ReadError readBinary(ScalarType t, double& out) {
+        const size_t n = scalarSize(t);
+        if (remaining() < n) return ReadError::End;
+        uint8_t b[8];
+        std::memcpy(b, data_ + pos_, n);
+        pos_ += n;
+        if (encoding_ == Encoding::BinaryBigEndian) std::reverse(b, b + n);
+        switch (t) {
+        case ScalarType::Int8: out = double(int8_t(b[0])); break;
+        case ScalarType::Uint8: out = double(b[0]); break;
+        case ScalarType::Int16: { int16_t v; std::memcpy(&v, b, 2); out = v; break; }
+        case ScalarType::Uint16: { uint16_t v; std::memcpy(&v, b, 2); out = v; break; }
+        case ScalarType::Int32: { int32_t v; std::memcpy(&v, b, 4); out = v; break; }
+        case ScalarType::Uint32: { uint32_t v; std::memcpy(&v, b, 4); out = v; break; }
+        case ScalarType::Float32: { float v; std::memcpy(&v, b, 4); out = v; break; }
+        case ScalarType::Float64: { double v; std::memcpy(&v, b, 8); out = v; break; }
+        }
+        return ReadError::None;
+    }
+
+    ReadError readAscii(ScalarType t, double& out) {
+        const char* p = reinterpret_cast<const char*>(data_) + pos_;
+        const char* end = reinterpret_cast<const char*>(data_) + size_;
+        while (p < end && isSpace(*p)) ++p;
+        if (p == end) {
+            pos_ = size_;
+            return ReadError::End;
+        }
+        const char* s = p;
+        while (p < end && !isSpace(*p)) ++p;
+        pos_ = size_t(p - reinterpret_cast<const char*>(data_));
+        const char* b = s;
+        if (*b == '+' && p - b > 1) ++b;
+        if (isIntegerType(t)) {
+            int64_t v = 0;
+            const auto r = std::from_chars(b, p, v);
+            if (r.ec == std::errc::result_out_of_range) return fail(s, p, ReadError::OutOfRange);
+            if (r.ec != std::errc() || r.ptr != p) {
+                double d = 0;
+                const auto rd = std::from_chars(b, p, d);
+                return fail(s, p, rd.ec == std::errc() && rd.ptr == p ? ReadError::NotInteger : ReadError::NotNumber);
+            }
+            const double lo = t == ScalarType::Int8 ? -128.0 : t == ScalarType::Int16 ? -32768.0
+                            : t == ScalarType::Int32 ? -2147483648.0 : 0.0;
+            if (double(v) < lo || double(v) > integerTypeMax(t)) return fail(s, p, ReadError::OutOfRange);
+            out = double(v);
+            return ReadError::None;
+        }
+        double v = 0;
+        const auto r = std::from_chars(b, p, v, std::chars_format::general);
+        if (r.ec == std::errc::result_out_of_range) {
+            out = (*b == '-') ? -std::numeric_limits<double>::infinity() : std::numeric_limits<double>::infinity();
+            return ReadError::None; // an overflow is reported like any other non-finite value
+        }
+        if (r.ec != std::errc() || r.ptr != p) return fail(s, p, ReadError::NotNumber);
+        out = t == ScalarType::Float32 ? double(float(v)) : v;
+        return ReadError::None;
+    }
+
+    ReadError fail(const char* s, const char* p, ReadError e) {
+        token_.assign(s, p);
+        return e;
+    }
+
+    const uint8_t* data_;
+    size_t size_;
+    size_t pos_;
+    Encoding encoding_;
+    std::string token_;
+};
+
+// Smallest number of body bytes one record of `element` can take (lists empty).
+uint64_t minRecordBytes(const Element& element, Encoding encoding) {
+    uint64_t n = 0;
+    for (const Property& p : element.properties) {
+        if (encoding == Encoding::Ascii) n += 2; // one character and one separator per value
+        else n += scalarSize(p.is_list ? p.count_type : p.value_type);
+    }
+    return n;
+}
+
+// What a vertex property feeds.
+enum Slot { kX, kY, kZ, kNx, kNy, kNz, kRed, kGreen, kBlue, kAlpha, kU, kV, kSlotCount, kIgnore = kSlotCount };
+
+Slot vertexSlot(const std::string& n) {
+    if (n == "x") return kX;
+    if (n == "y") return kY;
+    if (n == "z") return kZ;
+    if (n == "nx") return kNx;
+    if (n == "ny") return kNy;
+    if (n == "nz") return kNz;
+    if (n == "red" || n == "diffuse_red" || n == "r") return kRed;
+    if (n == "green" || n == "diffuse_green" || n == "g") return kGreen;
+    if (n == "blue" || n == "diffuse_blue" || n == "b") return kBlue;
+    if (n == "alpha" || n == "diffuse_alpha" || n == "a") return kAlpha;
+    if (n == "s" || n == "u" || n == "texture_u" || n == "texture_s") return kU;
+    if (n == "t" || n == "v" || n == "texture_v" || n == "texture_t") return kV;
+    return kIgnore;
+}
+
+const char* kSlotNames[kSlotCount] = {"x", "y", "z", "nx", "ny", "nz", "red", "green", "blue", "alpha", "u", "v"};
+
+float srgbToLinear(double c) {
+    c = std::clamp(c, 0.0, 1.0);
+    return float(c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4));
+}
+
+// sRGB decode of the 256 byte values, computed once so every uchar colour maps identically.
+const std::array<float, 256>& srgbByteTable() {
+    static const std::array<float, 256> table = [] {
+        std::array<float, 256> t{};
+        for (int i = 0; i < 256; ++i) t[size_t(i)] = srgbToLinear(i / 255.0);
+        return t;
+    }();
+    return table;
+}
+
+uint8_t linearToSrgbByte(float c) {
+    if (!(c > 0.0f)) return 0;
+    if (c >= 1.0f) return 255;
+    // Nearest byte by its decoded value, so decode(encode(decode(b))) == decode(b) for every byte.
+    const std::array<float, 256>& t = srgbByteTable();
+    const auto it = std::lower_bound(t.begin(), t.end(), c);
+    size_t i = size_t(it - t.begin());
+    if (i > 0 && (i == 256 || c - t[i - 1] <= t[i] - c)) --i;
+    return uint8_t(i);
+}
+
+uint8_t unitToByte(float c) {
+    if (!(c > 0.0f)) return 0;
+    if (c >= 1.0f) return 255;
+    return uint8_t(std::lround(double(c) * 255.0));
+}
+
+// Raw face data as the file has it, triangulated once the whole body is read.
+struct RawFaces {
+    std::vector<uint32_t> offsets{0}; // polygon i is indices[offsets[i], offsets[i+1])
+    std::vector<uint32_t> indices;
+};
+
+struct BodyData {
+    RawFaces polygons;
+    std::vector<int64_t> strips;  // concatenated strips, -1 separates them
+    std::vector<int32_t> grid;    // rows*cols, -1 for no sample
+    bool has_faces = false;
+    bool has_strips = false;
+    bool has_grid = false;
+    uint64_t face_element_count = 0;
+};
+
+std::string describeError(ReadError e, const BodyCursor& cursor, ScalarType t) {
+    switch (e) {
+    case ReadError::End: return "file ends early (expected more data)";
+    case ReadError::NotNumber: return "expected a number, got " + quoted(cursor.lastToken());
+    case ReadError::NotInteger: return "expected an integer, got " + quoted(cursor.lastToken());
+    case ReadError::OutOfRange:
+        return "value " + quoted(cursor.lastToken()) + " does not fit the property type (" +
+               (isIntegerType(t) ? "integer" : "real") + ")";
+    case ReadError::None: break;
+    }
+    return "unknown read error";
+}
+
+// Three triangles' worth of helpers for polygon triangulation.
+Vec3d newellNormal(const Mesh& mesh, const uint32_t* idx, size_t n) {
+    Vec3d nrm;
+    for (size_t i = 0; i < n; ++i) {
+        const Vec3d a = toDouble(mesh.positions[idx[i]]);
+        const Vec3d b = toDouble(mesh.positions[idx[(i + 1) % n]]);
+        nrm.x += (a.y - b.y) * (a.z + b.z);
+        nrm.y += (a.z - b.z) * (a.x + b.x);
+        nrm.z += (a.x - b.x) * (a.y + b.y);
+    }
+    return nrm;
+}
+
+void fan(const uint32_t* idx, size_t n, std::vector<uint32_t>& out) {
+    for (size_t i = 1; i + 1 < n; ++i) {
+        out.push_back(idx[0]);
+        out.push_back(idx[i]);
+        out.push_back(idx[i + 1]);
+    }
+}
+
+// Ear clipping in the polygon's best-fit (Newell) plane; falls back to a fan when no ear is found
+// (self-intersecting or degenerate outlines).
+void earClip(const Mesh& mesh, const uint32_t* idx, size_t n, std::vector<uint32_t>& out) {
+    const Vec3d nrm = newellNormal(mesh, idx, n);
+    const double len = length(nrm);
+    if (!(len > 0.0)) return fan(idx, n, out);
+    const Vec3d w = nrm / len;
+    const Vec3d helper = std::fabs(w.x) < 0.9 ? Vec3d(1, 0, 0) : Vec3d(0, 1, 0);
+    const Vec3d ax = normalize(cross(helper, w));
+    const Vec3d ay = cross(w, ax);
+    std::vector<Vec2<double>> pts(n);
+    for (size_t i = 0; i < n; ++i) {
+        const Vec3d p = toDouble(mesh.positions[idx[i]]);
+        pts[i] = {dot(p, ax), dot(p, ay)};
+    }
+    auto orient = [&](size_t a, size_t b, size_t c) {
+        return (pts[b].x - pts[a].x) * (pts[c].y - pts[a].y) - (pts[b].y - pts[a].y) * (pts[c].x - pts[a].x);
+    };
+    std::vector<size_t> ring(n);
+    for (size_t i = 0; i < n; ++i) ring[i] = i;
+    size_t start = out.size();
+    while (ring.size() > 3) {
+        bool clipped = false;
+        const size_t m = ring.size();
+        for (size_t k = 0; k < m && !clipped; ++k) {
+            const size_t a = ring[(k + m - 1) % m], b = ring[k], c = ring[(k + 1) % m];
+            if (orient(a, b, c) <= 0.0) continue; // reflex or flat: not an ear
+            bool inside = false;
+            for (size_t j = 0; j < m && !inside; ++j) {
+                const size_t q = ring[j];
+                if (q == a || q == b || q == c) continue;
+                inside = orient(a, b, q) >= 0.0 && orient(b, c, q) >= 0.0 && orient(c, a, q) >= 0.0;
+            }
+            if (inside) continue;
+            out.push_back(idx[a]);
+            out.push_back(idx[b]);
+            out.push_back(idx[c]);
+            ring.erase(ring.begin() + std::ptrdiff_t(k));
+            clipped = true;
+        }
+        if (!clipped) {
+            out.resize(start);
+            return fan(idx, n, out);
+        }
+    }
+    out.push_back(idx[ring[0]]);
+    out.push_back(idx[ring[1]]);
+    out.push_back(idx[ring[2]]);
+}
+
+void triangulatePolygon(const Mesh& mesh, const uint32_t* idx, size_t n, std::vector<uint32_t>& out) {
+    if (n == 3) {
+        out.insert(out.end(), idx, idx + 3);
+        return;
+    }
+    if (n == 4) {
+        // Split on the diagonal 0-2 unless the quad is concave at 1 or 3, where only 1-3 stays inside.
+        const Vec3d nrm = newellNormal(mesh, idx, 4);
+        auto triNormal = [&](uint32_t a, uint32_t b, uint32_t c) {
+            const Vec3d pa = toDouble(mesh.positions[a]);
+            return cross(toDouble(mesh.positions[b]) - pa, toDouble(mesh.positions[c]) - pa);
+        };
+        const bool diag02_ok = dot(triNormal(idx[0], idx[1], idx[2]), nrm) > 0.0 &&
+                               dot(triNormal(idx[0], idx[2], idx[3]), nrm) > 0.0;
+        if (diag02_ok) {
+            const uint32_t t[6] = {idx[0], idx[1], idx[2], idx[0], idx[2], idx[3]};
+            out.insert(out.end(), t, t + 6);
+        } else {
+            const uint32_t t[6] = {idx[0], idx[1], idx[3], idx[1], idx[2], idx[3]};
+            out.insert(out.end(), t, t + 6);
+        }
+        return;
+    }
+    earClip(mesh, idx, n, out);
+}
+
+// Median of a list (mean of the two middle values for an even count); 0 for an empty list.
+double medianOf(std::vector<double>& v) {
+    if (v.empty()) return 0.0;
+    const size_t mid = v.size() / 2;
+    std::nth_element(v.begin(), v.begin() + std::ptrdiff_t(mid), v.end());
+    double m = v[mid];
+    if (v.size() % 2 == 0) m = 0.5 * (m + *std::max_element(v.begin(), v.begin() + std::ptrdiff_t(mid)));
+    return m;
+}
+
+bool isDegenerate(uint32_t a, uint32_t b, uint32_t c) { return a == b || b == c || a == c; }
+
+// Row-major range grid (Stanford range images): cells with 4 samples give 2 triangles split on the
+// shorter diagonal, cells with 3 give 1; triangles with an edge longer than `max_edge_factor` × the
+// grid spacing bridge depth discontinuities and are dropped. Winding makes the normals face the scanner.
+void triangulateRangeGrid(const Mesh& mesh, const std::vector<int32_t>& grid, size_t rows, size_t cols,
+                          double max_edge_factor, std::vector<uint32_t>& out) {
+    auto dist = [&](int32_t a, int32_t b) {
+        return length(toDouble(mesh.positions[size_t(a)]) - toDouble(mesh.positions[size_t(b)]));
+    };
+    // Spacing is measured separately along rows and along columns, and the coarser of the two medians
+    // is the grid spacing: scanners sample the two directions at different rates (for the Cyberware
+    // scans about 0.55 mm within a row and 0.8 mm between rows), and a threshold tied to the finer one
+    // would cut ordinary cells of the coarser direction.
+    std::vector<double> along_row, along_col;
+    for (size_t r = 0; r < rows; ++r)
+        for (size_t c = 0; c < cols; ++c) {
+            const int32_t a = grid[r * cols + c];
+            if (a < 0) continue;
+            if (c + 1 < cols && grid[r * cols + c + 1] >= 0) along_row.push_back(dist(a, grid[r * cols + c + 1]));
+            if (r + 1 < rows && grid[(r + 1) * cols + c] >= 0) along_col.push_back(dist(a, grid[(r + 1) * cols + c]));
+        }
+    const double median = std::max(medianOf(along_row), medianOf(along_col));
+    if (!(median > 0.0)) return;
+    const double max_edge = max_edge_factor * median;
+    auto emit = [&](int32_t a, int32_t b, int32_t c) {
+        if (dist(a, b) > max_edge || dist(b, c) > max_edge || dist(c, a) > max_edge) return;
+        out.push_back(uint32_t(a));
+        out.push_back(uint32_t(b));
+        out.push_back(uint32_t(c));
+    };
+    for (size_t r = 0; r + 1 < rows; ++r)
+        for (size_t c = 0; c + 1 < cols; ++c) {
+            // Corners in the cyclic order that faces the scanner: top-left, top-right, bottom-right,
+            // bottom-left (rows grow downwards in the image).
+            const int32_t tl = grid[r * cols + c], tr = grid[r * cols + c + 1];
+            const int32_t bl = grid[(r + 1) * cols + c], br = grid[(r + 1) * cols + c + 1];
+            const int present = (tl >= 0) + (tr >= 0) + (bl >= 0) + (br >= 0);
+            if (present == 4) {
+                if (dist(tl, br) <= dist(tr, bl)) {
+                    emit(tl, tr, br);
+                    emit(tl, br, bl);
+                } else {
+                    emit(tl, tr, bl);
+                    emit(tr, br, bl);
+                }
+            } else if (present == 3) {
+                int32_t q[3];
+                int k = 0;
+                for (int32_t v : {tl, tr, br, bl})
+                    if (v >= 0) q[k++] = v;
+                emit(q[0], q[1], q[2]);
+            }
+        }
+}
+
+} // namespace
+
+Result<LoadedMesh> readPlyFromMemory(const uint8_t* data, size_t size, const std::string& name,
+                                     const ReadOptions& options, Diagnostics& diagnostics) {
+    LODBAKE_ASSIGN_OR_RETURN(Header header, parseHeader(data, size, name, diagnostics));
+
+    // Roles of the elements we understand; everything else is skipped.
+    int vertex_element = -1;
+    for (size_t i = 0; i < header.elements.size(); ++i)
+        if (header.elements[i].name == "vertex" && vertex_element < 0) vertex_element = int(i);
+    if (vertex_element < 0) return invalidInput(name + ": header: no 'element vertex'");
+    const Element& vel = header.elements[size_t(vertex_element)];
+    for (const char* axis : {"x", "y", "z"}) {
+        const int pi = vel.findProperty(axis);
+        if (pi < 0) return invalidInput(name + ": header: element vertex has no property '" + axis + "'");
+        if (vel.properties[size_t(pi)].is_list)
+            return invalidInput(name + ": header: element vertex property '" + std::string(axis) + "' is a list");
+    }
+    const uint64_t vertex_count = vel.count;
+    if (vertex_count == 0) return invalidInput(name + ": vertex: no vertices");
+    if (vertex_count > options.max_vertex_count)
+        return resourceLimit(name + ": header: element vertex count " + std::to_string(vertex_count) +
+                             " exceeds the limit of " + std::to_string(options.max_vertex_count));
+
+    // Refuse counts the remaining bytes cannot hold, before allocating anything.
+    {
+        const uint64_t body = size - header.body_offset;
+        uint64_t needed = 0;
+        for (const Element& el : header.elements) {
+            const uint64_t per = minRecordBytes(el, header.encoding);
+            const uint64_t ascii_slack = header.encoding == Encoding::Ascii ? 1 : 0; // last value needs no separator
+            if (per > 0 && el.count > (body + ascii_slack) / per)
+                return invalidInput(name + ": header: element " + el.name + " count " + std::to_string(el.count) +
+                                    " needs at least " + std::to_string(el.count) + " x " + std::to_string(per) +
+                                    " bytes but the body has " + std::to_string(body));
+            needed += el.count * per;
+            if (needed > body + ascii_slack)
+                return invalidInput(name + ": header: elements up to " + el.name + " need at least " +
+                                    std::to_string(needed) + " bytes but the body has " + std::to_string(body));
+        }
+    }
+
+    LoadedMesh loaded;
+    Mesh& mesh = loaded.mesh;
+    SourceInfo& source = loaded.source;
+    source.format = MeshFormat::Ply;
+    source.encoding = encodingName(header.encoding);
+    source.file_vertex_count = vertex_count;
+    source.face_kind = "none";
+
+    BodyData body;
+    BodyCursor cursor(data, size, header.body_offset, header.encoding);
+
+    for (size_t ei = 0; ei < header.elements.size(); ++ei) {
+        const Element& el = header.elements[ei];
+        if (el.properties.empty()) continue;
+        if (int(ei) == vertex_element) {
+            std::vector<int> slots(el.properties.size(), kIgnore);
+            std::array<bool, kSlotCount> present{};
+            std::array<ScalarType, kSlotCount> slot_type{};
+            for (size_t pi = 0; pi < el.properties.size(); ++pi) {
+                const Property& p = el.properties[pi];
+                if (p.is_list) continue;
+                const Slot s = vertexSlot(p.name);
+                if (s == kIgnore || present[s]) continue;
+                slots[pi] = s;
+                present[s] = true;
+                slot_type[s] = p.value_type;
+            }
+            const bool has_normals = present[kNx] && present[kNy] && present[kNz];
+            const bool has_colors = present[kRed] && present[kGreen] && present[kBlue];
+            const bool has_uvs = present[kU] && present[kV];
+            if ((present[kNx] || present[kNy] || present[kNz]) && !has_normals)
+                diagnostics.warn(name + ": vertex: incomplete normal (needs nx, ny, nz); normals ignored");
+            if ((present[kRed] || present[kGreen] || present[kBlue]) && !has_colors)
+                diagnostics.warn(name + ": vertex: incomplete colour (needs red, green, blue); colours ignored");
+            if ((present[kU] || present[kV]) && !has_uvs)
+                diagnostics.warn(name + ": vertex: incomplete texture coordinate; texture coordinates ignored");
+            const size_t n = size_t(vertex_count);
+            mesh.positions.resize(n);
+            if (has_normals) mesh.normals.resize(n);
+            if (has_colors) mesh.colors.resize(n);
+            if (has_uvs) mesh.uvs.assign(1, std::vector<Vec2f>(n));
+            std::array<double, kSlotCount + 1> value{};
+            const std::array<float, 256>& srgb = srgbByteTable();
+            auto colorChannel = [&](int s) -> float {
+                const double v = value[size_t(s)];
+                if (slot_type[size_t(s)] == ScalarType::Uint8) return srgb[size_t(v)];
+                if (isIntegerType(slot_type[size_t(s)])) return srgbToLinear(v / integerTypeMax(slot_type[size_t(s)]));
+                return srgbToLinear(v);
+            };
+            auto alphaChannel = [&]() -> float {
+                if (!present[kAlpha]) return 1.0f;
+                const double v = value[kAlpha];
+                if (isIntegerType(slot_type[kAlpha])) return float(std::clamp(v / integerTypeMax(slot_type[kAlpha]), 0.0, 1.0));
+                return float(std::clamp(v, 0.0, 1.0));
+            };
+            for (size_t vi = 0; vi < n; ++vi) {
+                for (size_t pi = 0; pi < el.properties.size(); ++pi) {
+                    const Property& p = el.properties[pi];
+                    ReadError e;
+                    if (p.is_list) {
+                        double count = 0;
+                        e = cursor.read(p.count_type, count);
+                        if (e == ReadError::None && count < 0)
+                            return invalidInput(name + ": vertex " + std::to_string(vi) + " property '" + p.name +
+                                                "': negative list count");
+                        if (e == ReadError::None) e = cursor.skip(p.value_type, uint64_t(count));
+                    } else {
+                        e = cursor.read(p.value_type, value[size_t(slots[pi])]);
+                    }
+                    if (e != ReadError::None)
+                        return invalidInput(name + ": vertex " + std::to_string(vi) + " property '" + p.name +
+                                            "': " + describeError(e, cursor, p.value_type));
+                }
+                const Vec3f pos{float(value[kX]), float(value[kY]), float(value[kZ])};
+                if (!isFinite(pos))
+                    return invalidInput(name + ": vertex " + std::to_string(vi) + ": coordinate is not finite (" +
+                                        std::to_string(pos.x) + ", " + std::to_string(pos.y) + ", " +
+                                        std::to_string(pos.z) + ")");
+                mesh.positions[vi] = pos;
+                if (has_normals) {
+                    const Vec3f nrm{float(value[kNx]), float(value[kNy]), float(value[kNz])};
+                    if (!isFinite(nrm))
+                        return invalidInput(name + ": vertex " + std::to_string(vi) + ": normal is not finite");
+                    mesh.normals[vi] = normalize(nrm);
+                }
+                if (has_colors) {
+                    for (int s : {kRed, kGreen, kBlue, kAlpha})
+                        if (present[size_t(s)] && !std::isfinite(value[size_t(s)]))
+                            return invalidInput(name + ": vertex " + std::to_string(vi) + " property '" +
+                                                kSlotNames[s] + "': colour is not finite");
+                    mesh.colors[vi] = {colorChannel(kRed), colorChannel(kGreen), colorChannel(kBlue), alphaChannel()};
+                }
+                if (has_uvs) {
+                    if (!std::isfinite(value[kU]) || !std::isfinite(value[kV]))
+                        return invalidInput(name + ": vertex " + std::to_string(vi) +
+                                            ": texture coordinate is not finite");
+                    mesh.uvs[0][vi] = {float(value[kU]), float(1.0 - double(float(value[kV])))};
+                }
+            }
+            continue;
+        }
+
+        const bool is_face = el.name == "face";
+        const bool is_strip = el.name == "tristrips";
+        const bool is_grid = el.name == "range_grid";
+        int index_prop = -1;
+        if (is_face || is_strip || is_grid) {
+            index_prop = el.findProperty("vertex_indices");
+            if (index_prop < 0) index_prop = el.findProperty("vertex_index");
+            if (index_prop < 0 || !el.properties[size_t(index_prop)].is_list) {
+                diagnostics.warn(name + ": element " + el.name + ": no 'vertex_indices' list; element skipped");
+                index_prop = -1;
+            } else if (!isIntegerType(el.properties[size_t(index_prop)].value_type)) {
+                return invalidInput(name + ": header: element " + el.name + " property '" +
+                                    el.properties[size_t(index_prop)].name + "': vertex indices must be integers");
+            }
+        }
+        if (index_prop >= 0 && (body.has_faces || body.has_strips || body.has_grid)) {
+            diagnostics.warn(name + ": element " + el.name + ": a second face-like element; its faces are kept too");
+        }
+        if (index_prop >= 0 && is_face) {
+            if (el.count > options.max_face_count)
+                return resourceLimit(name + ": header: element face count " + std::to_string(el.count) +
+                                     " exceeds the limit of " + std::to_string(options.max_face_count));
+            body.has_faces = true;
+            body.face_element_count += el.count;
+            body.polygons.offsets.reserve(body.polygons.offsets.size() + size_t(el.count));
+            body.polygons.indices.reserve(body.polygons.indices.size() + size_t(el.count) * 3);
+        }
+        size_t rows = 0, cols = 0;
+        if (index_prop >= 0 && is_grid) {
+            if (header.num_cols < 0 || header.num_rows < 0)
+                return invalidInput(name + ": header: element range_grid needs 'obj_info num_cols' and 'obj_info num_rows'");
+            rows = size_t(header.num_rows);
+            cols = size_t(header.num_cols);
+            if (uint64_t(rows) * uint64_t(cols) != el.count)
+                return invalidInput(name + ": header: element range_grid count " + std::to_string(el.count) +
+                                    " is not num_rows x num_cols = " + std::to_string(rows) + " x " +
+                                    std::to_string(cols));
+            body.has_grid = true;
+            body.grid.assign(size_t(el.count), -1);
+        }
+        if (index_prop >= 0 && is_strip) body.has_strips = true;
+        if (index_prop >= 0) source.file_face_count += el.count;
+
+        std::vector<uint32_t> poly;
+        for (uint64_t ri = 0; ri < el.count; ++ri) {
+            for (size_t pi = 0; pi < el.properties.size(); ++pi) {
+                const Property& p = el.properties[pi];
+                auto where = [&]() {
+                    return name + ": " + el.name + " " + std::to_string(ri) + " property '" + p.name + "': ";
+                };
+                if (!p.is_list) {
+                    const ReadError e = cursor.skip(p.value_type, 1);
+                    if (e != ReadError::None) return invalidInput(where() + describeError(e, cursor, p.value_type));
+                    continue;
+                }
+                double count_d = 0;
+                ReadError e = cursor.read(p.count_type, count_d);
+                if (e != ReadError::None) return invalidInput(where() + describeError(e, cursor, p.count_type));
+                if (count_d < 0)
+                    return invalidInput(where() + "negative list count " + std::to_string(int64_t(count_d)));
+                const uint64_t count = uint64_t(count_d);
+                if (int(pi) == index_prop && is_face && count > options.max_polygon_vertices)
+                    return resourceLimit(where() + "polygon has " + std::to_string(count) +
+                                         " vertices, more than the limit of " +
+                                         std::to_string(options.max_polygon_vertices));
+                const uint64_t value_bytes = header.encoding == Encoding::Ascii ? 2 : scalarSize(p.value_type);
+                const uint64_t slack = header.encoding == Encoding::Ascii ? 1 : 0; // last ascii value needs no separator
+                if (count > cursor.remaining() / value_bytes + slack)
+                    return invalidInput(where() + "list of " + std::to_string(count) +
+                                        " values runs past the end of the file");
+                if (int(pi) != index_prop) {
+                    e = cursor.skip(p.value_type, count);
+                    if (e != ReadError::None) return invalidInput(where() + describeError(e, cursor, p.value_type));
+                    continue;
+                }
+                if (is_grid && count > 1)
+                    return invalidInput(where() + "expected 0 or 1 vertex indices per grid cell, got " +
+                                        std::to_string(count));
+                poly.clear();
+                for (uint64_t k = 0; k < count; ++k) {
+                    double v = 0;
+                    e = cursor.read(p.value_type, v);
+                    if (e != ReadError::None) return invalidInput(where() + describeError(e, cursor, p.value_type));
+                    if (is_strip && v == -1.0) {
+                        body.strips.push_back(-1);
+                        continue;
+                    }
+                    if (v < 0 || v >= double(vertex_count))
+                        return invalidInput(name + ": " + el.name + " " + std::to_string(ri) + ": vertex index " +
+                                            std::to_string(int64_t(v)) + " out of range (" +
+                                            std::to_string(vertex_count) + " vertices)");
+                    if (is_strip) body.strips.push_back(int64_t(v));
+                    else poly.push_back(uint32_t(v));
+                }
+                if (is_strip) {
+                    body.strips.push_back(-1);
+                } else if (is_grid) {
+                    if (count == 1) body.grid[size_t(ri)] = int32_t(poly[0]);
+                } else {
+                    body.polygons.indices.insert(body.polygons.indices.end(), poly.begin(), poly.end());
+                    if (body.polygons.indices.size() > std::numeric_limits<uint32_t>::max())
+                        return resourceLimit(where() + "too many face indices");
+                    body.polygons.offsets.push_back(uint32_t(body.polygons.indices.size()));
+                }
+            }
+        }
+    }
+    if (const size_t extra = cursor.trailingBytes(); extra > 0)
+        diagnostics.warn(name + ": body: " + std::to_string(extra) + " bytes after the last element ignored");
+
+    // Triangulate.
+    if (body.has_faces) {
+        source.face_kind = "polygons";
+        const RawFaces& rf = body.polygons;
+        mesh.indices.reserve(rf.indices.size());
+        size_t dropped = 0;
+        for (size_t f = 0; f + 1 < rf.offsets.size(); ++f) {
+            const size_t n = rf.offsets[f + 1] - rf.offsets[f];
+            if (n < 3) {
+                ++dropped;
+                continue;
+            }
+            triangulatePolygon(mesh, rf.indices.data() + rf.offsets[f], n, mesh.indices);
+        }
+        if (dropped > 0)
+            diagnostics.warn(name + ": face: " + std::to_string(dropped) + " faces with fewer than 3 vertices dropped");
+    }
+    if (body.has_strips) {
+        if (!body.has_faces) source.face_kind = "tristrips";
+        size_t degenerate = 0;
+        size_t begin = 0;
+        for (size_t i = 0; i <= body.strips.size(); ++i) {
+            if (i < body.strips.size() && body.strips[i] >= 0) continue;
+            // Strip [begin, i): triangle k is (s[k], s[k+1], s[k+2]) for even k and (s[k+1], s[k], s[k+2])
+            // for odd k, which keeps every triangle's winding the same.
+            for (size_t k = begin; k + 2 < i; ++k) {
+                uint32_t a = uint32_t(body.strips[k]), b = uint32_t(body.strips[k + 1]);
+                const uint32_t c = uint32_t(body.strips[k + 2]);
+                if ((k - begin) % 2 == 1) std::swap(a, b);
+                if (isDegenerate(a, b, c)) {
+                    ++degenerate;
+                    continue;
+                }
+                mesh.indices.push_back(a);
+                mesh.indices.push_back(b);
+                mesh.indices.push_back(c);
+            }
+            begin = i + 1;
+        }
+        (void)degenerate; // strips use repeated indices on purpose to turn corners; dropping them is normal
+    }
+    if (body.has_grid) {
+        if (!body.has_faces && !body.has_strips) source.face_kind = "range_grid";
+        triangulateRangeGrid(mesh, body.grid, size_t(header.num_rows), size_t(header.num_cols),
+                             options.range_grid_max_edge_factor, mesh.indices);
+    }
+    if (mesh.faceCount() > options.max_face_count)
+        return resourceLimit(name + ": face: " + std::to_string(mesh.faceCount()) +
+                             " triangles after triangulation exceed the limit of " +
+                             std::to_string(options.max_face_count));
+    return loaded;
+}
+
+namespace {
+
+void appendText(std::vector<uint8_t>& out, const std::string& s) { out.insert(out.end(), s.begin(), s.end()); }
+
+template <class T> void appendLittleEndian(std::vector<uint8_t>& out, T v) {
+    uint8_t b[sizeof(T)];
+    std::memcpy(b, &v, sizeof(T));
+    // The baker only runs on little-endian hosts today; keep the byte order explicit anyway.
+    const uint16_t probe = 1;
+    uint8_t first = 0;
+    std::memcpy(&first, &probe, 1);
+    if (first == 0) std::reverse(b, b + sizeof(T));
+    out.insert(out.end(), b, b + sizeof(T));
+}
+
+void appendFloatText(std::vector<uint8_t>& out, float v) {
+    char buf[64];
+    const auto r = std::to_chars(buf, buf + sizeof(buf), v); // shortest text that reads back exactly
+    out.insert(out.end(), buf, r.ptr);
+}
+
+void appendUintText(std::vector<uint8_t>& out, uint32_t v) {
+    char buf[16];
+    const auto r = std::to_chars(buf, buf + sizeof(buf), v);
+    out.insert(out.end(), buf, r.ptr);
+}
+
+} // namespace
+
+std::vector<uint8_t> writePlyToMemory(const Mesh& mesh, bool binary) {
+    const size_t n = mesh.vertexCount();
+    const bool has_normals = mesh.normals.size() == n && n > 0;
+    const bool has_uvs = !mesh.uvs.empty() && mesh.uvs[0].size() == n && n > 0;
+    const bool has_colors = mesh.colors.size() == n && n > 0;
+    const size_t face_count = mesh.faceCount();
+
+    std::vector<uint8_t> out;
+    std::string h = "ply\n";
+    h += binary ? "format binary_little_endian 1.0\n" : "format ascii 1.0\n";
+    h += "comment written by lodbake\n";
+    h += "element vertex " + std::to_string(n) + "\n";
+    h += "property float x\nproperty float y\nproperty float z\n";
+    if (has_normals) h += "property float nx\nproperty float ny\nproperty float nz\n";
+    if (has_uvs) h += "property float s\nproperty float t\n";
+    if (has_colors) h += "property uchar red\nproperty uchar green\nproperty uchar blue\nproperty uchar alpha\n";
+    h += "element face " + std::to_string(face_count) + "\n";
+    h += "property list uchar int vertex_indices\n";
+    h += "end_header\n";
+    appendText(out, h);
+
+    size_t per_vertex = 12 + (has_normals ? 12 : 0) + (has_uvs ? 8 : 0) + (has_colors ? 4 : 0);
+    out.reserve(out.size() + (binary ? n * per_vertex + face_count * 13 : n * per_vertex * 3 + face_count * 24));
+
+    for (size_t v = 0; v < n; ++v) {
+        float f[8];
+        size_t nf = 0;
+        f[nf++] = mesh.positions[v].x;
+        f[nf++] = mesh.positions[v].y;
+        f[nf++] = mesh.positions[v].z;
+        if (has_normals) {
+            f[nf++] = mesh.normals[v].x;
+            f[nf++] = mesh.normals[v].y;
+            f[nf++] = mesh.normals[v].z;
+        }
+        if (has_uvs) {
+            f[nf++] = mesh.uvs[0][v].x;
+            f[nf++] = float(1.0 - double(mesh.uvs[0][v].y)); // back to PLY's v-up convention
+        }
+        uint8_t rgba[4] = {0, 0, 0, 0};
+        if (has_colors) {
+            const Vec4f& c = mesh.colors[v];
+            rgba[0] = linearToSrgbByte(c.x);
+            rgba[1] = linearToSrgbByte(c.y);
+            rgba[2] = linearToSrgbByte(c.z);
+            rgba[3] = unitToByte(c.w);
+        }
+        if (binary) {
+            for (size_t i = 0; i < nf; ++i) appendLittleEndian(out, f[i]);
+            if (has_colors) out.insert(out.end(), rgba, rgba + 4);
+        } else {
+            for (size_t i = 0; i < nf; ++i) {
+                if (i > 0) out.push_back(' ');
+                appendFloatText(out, f[i]);
+            }
+            if (has_colors)
+                for (uint8_t c : rgba) {
+                    out.push_back(' ');
+                    appendUintText(out, c);
+                }
+            out.push_back('\n');
+        }
+    }
+    for (size_t t = 0; t < face_count; ++t) {
+        const uint32_t* idx = &mesh.indices[t * 3];
+        if (binary) {
+            out.push_back(3);
+            for (int k = 0; k < 3; ++k) appendLittleEndian(out, int32_t(idx[k]));
+        } else {
+            out.push_back('3');
+            for (int k = 0; k < 3; ++k) {
+                out.push_back(' ');
+                appendUintText(out, idx[k]);
+            }
+            out.push_back('\n');
+        }
+    }
+    return out;
+}
+
 } // namespace lodbake
