@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <array>
 #include <map>
 #include <sstream>
 #include <string>
@@ -14,6 +15,8 @@
 #include <gtest/gtest.h>
 
 #include "core/parallel.h"
+#include "lodbake/core/diagnostics.h"
+#include "lodbake/io/mesh_io.h"
 #include "mesh_builders.h"
 #include "test_paths.h"
 
@@ -83,6 +86,35 @@ Mesh perturbed(Mesh m, float amplitude, uint64_t seed) {
     };
     for (Vec3f& p : m.positions) p += Vec3f(next(), next(), next()) * amplitude;
     return m;
+}
+
+// Vertex clustering on a grid of `cells` per bounding-box diagonal: a crude but real decimation.
+Mesh clustered(const Mesh& m, double cells) {
+    lodbake::Aabb box = lodbake::computeBounds(m);
+    const double cell = box.diagonal() / cells;
+    std::map<std::array<int64_t, 3>, uint32_t> cell_of;
+    std::vector<lodbake::Vec3d> sum;
+    std::vector<uint32_t> count, remap(m.positions.size());
+    for (size_t v = 0; v < m.positions.size(); ++v) {
+        lodbake::Vec3d p = lodbake::toDouble(m.positions[v]);
+        std::array<int64_t, 3> key{int64_t(std::floor((p.x - box.min.x) / cell)), int64_t(std::floor((p.y - box.min.y) / cell)),
+                                   int64_t(std::floor((p.z - box.min.z) / cell))};
+        auto it = cell_of.emplace(key, uint32_t(sum.size())).first;
+        if (it->second == sum.size()) {
+            sum.push_back(lodbake::Vec3d());
+            count.push_back(0);
+        }
+        sum[it->second] += p;
+        count[it->second]++;
+        remap[v] = it->second;
+    }
+    Mesh out;
+    for (size_t c = 0; c < sum.size(); ++c) out.positions.push_back(Vec3f(sum[c] / double(count[c])));
+    for (size_t t = 0; t < m.faceCount(); ++t) {
+        uint32_t a = remap[m.indices[t * 3]], b = remap[m.indices[t * 3 + 1]], c = remap[m.indices[t * 3 + 2]];
+        if (a != b && b != c && c != a) out.indices.insert(out.indices.end(), {a, b, c});
+    }
+    return out;
 }
 
 lodbake::DistanceResult measure(const Mesh& a, const Mesh& b, const lodbake::DistanceOptions& options = {}) {
@@ -279,6 +311,20 @@ TEST(MeshDistanceTest, AgreesWithOpen3dScriptOnSyntheticMeshes) {
     Mesh sphere = icosphere(5);
     expectAgreesWithPython(sphere, icosahedron(), "sphere_ico");
     expectAgreesWithPython(sphere, perturbed(icosphere(3), 0.01f, 3), "sphere_noisy");
+}
+
+TEST(MeshDistanceTest, AgreesWithOpen3dScriptOnBunny) {
+    LODBAKE_REQUIRE_SHARED_MESHES();
+    lodbake::Diagnostics diagnostics;
+    auto loaded = lodbake::readMesh(lodbake_test::sharedMesh("bunny_zipper.ply"), lodbake::ReadOptions(), diagnostics);
+    ASSERT_TRUE(loaded.ok()) << loaded.status().message();
+    const Mesh& bunny = loaded->mesh;
+    ASSERT_EQ(bunny.faceCount(), 69451u);
+    const float noise = float(lodbake::computeBounds(bunny).diagonal() * 0.002);
+    expectAgreesWithPython(bunny, perturbed(bunny, noise, 5), "bunny_noisy");
+    Mesh decimated = clustered(bunny, 60.0);
+    ASSERT_LT(decimated.faceCount(), bunny.faceCount() / 4);
+    expectAgreesWithPython(bunny, decimated, "bunny_clustered");
 }
 
 } // namespace
