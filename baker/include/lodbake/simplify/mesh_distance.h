@@ -1,6 +1,6 @@
 #pragma once
 // Two-sided surface distance between a reference mesh and an approximation, the error every LOD
-// level carries. Metro-style: area-uniform samples on each surface plus its vertices, exact
+// level carries. Metro-style: area-uniform (stratified) samples on each surface plus its vertices, exact
 // point-to-triangle distance to the other surface through a BVH. Agrees with
 // ../shared/eval/meshdist.py (same definitions) within sampling noise.
 
