@@ -86,9 +86,9 @@ std::vector<size_t> nativeChain(const Mesh& mesh) {
     std::vector<unsigned int> destination(mesh.indices.size());
     for (double ratio : kChainRatios) {
         size_t target = size_t(double(mesh.faceCount()) * ratio) * 3;
-        size_t count = meshopt_simplify(destination.data(), mesh.indices.data(), mesh.indices.size(),
-                                        &mesh.positions[0].x, mesh.positions.size(), sizeof(lodbake::Vec3f), target,
-                                        FLT_MAX, 0, nullptr);
+        size_t count =
+            meshopt_simplify(destination.data(), mesh.indices.data(), mesh.indices.size(), &mesh.positions[0].x,
+                             mesh.positions.size(), sizeof(lodbake::Vec3f), target, FLT_MAX, 0, nullptr);
         triangles.push_back(count / 3);
     }
     return triangles;
@@ -138,8 +138,8 @@ std::string jsonString(const std::string& line, const std::string& key) {
 // Runs scripts/node-bench/simplify.mjs once for all targets of one mesh.
 std::vector<AnchorLevel> runNodeAnchor(const Args& args, const std::string& input_ply, const std::string& prefix,
                                        const std::vector<size_t>& targets) {
-    std::string cmd = "node " + shellQuote(args.node_bench_dir + "/simplify.mjs") + " " + shellQuote(input_ply) +
-                      " " + shellQuote(prefix);
+    std::string cmd = "node " + shellQuote(args.node_bench_dir + "/simplify.mjs") + " " + shellQuote(input_ply) + " " +
+                      shellQuote(prefix);
     for (size_t t : targets) cmd += " " + std::to_string(t);
     std::vector<AnchorLevel> levels;
     FILE* pipe = popen(cmd.c_str(), "r");
@@ -227,8 +227,9 @@ void benchMesh(const Args& args, const std::string& name) {
     for (size_t t : ours_chain_tris) std::printf(" %zu", t);
     std::printf("; native:");
     for (size_t t : native_chain_tris) std::printf(" %zu", t);
-    std::printf("\n  peak RSS per input triangle: ours %.0f B, native meshopt %.0f B (whole child process: load + chain)\n",
-                double(ours_rss) / tris, double(native_rss) / tris);
+    std::printf(
+        "\n  peak RSS per input triangle: ours %.0f B, native meshopt %.0f B (whole child process: load + chain)\n",
+        double(ours_rss) / tris, double(native_rss) / tris);
 
     // Quality.
     auto chain = ourChain(mesh, kQualityRatios);
@@ -261,8 +262,8 @@ void benchMesh(const Args& args, const std::string& name) {
         }
     }
 
-    std::printf("  %-6s | %9s %10s %10s | %9s %10s %10s | %6s %6s %6s\n", "ratio", "ours tri", "ours mean",
-                "ours haus", "mo13 tri", "mo13 mean", "mo13 haus", "tri", "mean", "haus");
+    std::printf("  %-6s | %9s %10s %10s | %9s %10s %10s | %6s %6s %6s\n", "ratio", "ours tri", "ours mean", "ours haus",
+                "mo13 tri", "mo13 mean", "mo13 haus", "tri", "mean", "haus");
     double measure_s = 0;
     for (size_t i = 0; i < chain->levels.size(); ++i) {
         const lodbake::LodLevel& level = chain->levels[i];
@@ -306,15 +307,21 @@ int main(int argc, char** argv) {
             }
             return argv[++i];
         };
-        if (a == "--meshes") args.meshes_dir = value();
-        else if (a == "--out") args.out_dir = value();
-        else if (a == "--node-bench") args.node_bench_dir = value();
-        else if (a == "--samples") args.samples = uint32_t(std::strtoul(value().c_str(), nullptr, 10));
-        else if (a == "--skip-node") args.run_node = false;
+        if (a == "--meshes")
+            args.meshes_dir = value();
+        else if (a == "--out")
+            args.out_dir = value();
+        else if (a == "--node-bench")
+            args.node_bench_dir = value();
+        else if (a == "--samples")
+            args.samples = uint32_t(std::strtoul(value().c_str(), nullptr, 10));
+        else if (a == "--skip-node")
+            args.run_node = false;
         else if (!a.empty() && a[0] == '-') {
             std::fprintf(stderr, "error: unknown option %s\n", a.c_str());
             return 2;
-        } else args.meshes.push_back(a);
+        } else
+            args.meshes.push_back(a);
     }
     if (args.meshes.empty()) args.meshes = kDefaultMeshes;
     if (std::system(("mkdir -p " + shellQuote(args.out_dir)).c_str()) != 0) {

@@ -34,7 +34,9 @@ uint64_t splitmix64(uint64_t x) {
 }
 
 // Uniform in [0, 1) with 53 random bits.
-double toUnit(uint64_t bits) { return double(bits >> 11) * (1.0 / 9007199254740992.0); }
+double toUnit(uint64_t bits) {
+    return double(bits >> 11) * (1.0 / 9007199254740992.0);
+}
 
 double triangleArea(const Mesh& mesh, size_t t) {
     Vec3d a = toDouble(mesh.positions[mesh.indices[t * 3]]);
@@ -141,8 +143,9 @@ Result<SideStats> measureSide(const Mesh& from, const Mesh& to_mesh, const Trian
             double previous_sq = std::numeric_limits<double>::infinity();
             if (previous.isValid()) {
                 const uint32_t* tri = &to_mesh.indices[size_t(previous.value) * 3];
-                Vec3d q = closestPointOnTriangle(p, toDouble(to_mesh.positions[tri[0]]),
-                                                 toDouble(to_mesh.positions[tri[1]]), toDouble(to_mesh.positions[tri[2]]));
+                Vec3d q =
+                    closestPointOnTriangle(p, toDouble(to_mesh.positions[tri[0]]), toDouble(to_mesh.positions[tri[1]]),
+                                           toDouble(to_mesh.positions[tri[2]]));
                 previous_sq = dot(p - q, p - q);
             }
             ClosestHit hit = to.closest(p, std::nextafter(previous_sq, std::numeric_limits<double>::infinity()));
@@ -192,8 +195,8 @@ Result<DistanceResult> measureSurfaceDistance(const DistanceReference& reference
     LODBAKE_ASSIGN_OR_RETURN(TriangleBvh approx_bvh, TriangleBvh::build(approx.positions, approx.indices));
     LODBAKE_ASSIGN_OR_RETURN(SideStats ref_to_approx,
                              measureSide(ref_mesh, approx, approx_bvh, options, kReferenceStream, "reference"));
-    LODBAKE_ASSIGN_OR_RETURN(SideStats approx_to_ref, measureSide(approx, ref_mesh, reference.bvh(), options,
-                                                                  kApproxStream, "approximation"));
+    LODBAKE_ASSIGN_OR_RETURN(SideStats approx_to_ref,
+                             measureSide(approx, ref_mesh, reference.bvh(), options, kApproxStream, "approximation"));
 
     DistanceResult r;
     r.max_ref_to_approx = ref_to_approx.max;

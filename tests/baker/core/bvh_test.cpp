@@ -22,7 +22,9 @@ struct TestRng {
     }
 };
 
-double distSq(const Vec3d& a, const Vec3d& b) { return lodbake::dot(a - b, a - b); }
+double distSq(const Vec3d& a, const Vec3d& b) {
+    return lodbake::dot(a - b, a - b);
+}
 
 TEST(TriangleBvhTest, ClosestPointRegions) {
     Vec3d a(0, 0, 0), b(1, 0, 0), c(0, 1, 0);
@@ -65,7 +67,8 @@ TEST(TriangleBvhTest, MatchesBruteForceOnRandomSoup) {
     for (uint32_t t = 0; t < 3000; ++t) {
         Vec3f base(float(rng.next()), float(rng.next()), float(rng.next()));
         for (int k = 0; k < 3; ++k) {
-            Vec3f offset(float(rng.next() - 0.5) * 0.1f, float(rng.next() - 0.5) * 0.1f, float(rng.next() - 0.5) * 0.1f);
+            Vec3f offset(float(rng.next() - 0.5) * 0.1f, float(rng.next() - 0.5) * 0.1f,
+                         float(rng.next() - 0.5) * 0.1f);
             positions.push_back(base + (t % 97 == 0 ? Vec3f() : offset));
             indices.push_back(uint32_t(positions.size() - 1));
         }

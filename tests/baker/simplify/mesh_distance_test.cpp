@@ -28,11 +28,11 @@ using lodbake::Vec3f;
 Mesh icosahedron() {
     const float t = (1.0f + std::sqrt(5.0f)) / 2.0f;
     Mesh m;
-    m.positions = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
-                   {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+    m.positions = {{-1, t, 0},  {1, t, 0},  {-1, -t, 0}, {1, -t, 0}, {0, -1, t},  {0, 1, t},
+                   {0, -1, -t}, {0, 1, -t}, {t, 0, -1},  {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
     for (Vec3f& p : m.positions) p = lodbake::normalize(p);
-    m.indices = {0, 11, 5, 0, 5, 1, 0, 1, 7, 0, 7, 10, 0, 10, 11, 1, 5, 9, 5, 11, 4, 11, 10, 2, 10, 7, 6, 7, 1, 8,
-                 3, 9, 4, 3, 4, 2, 3, 2, 6, 3, 6, 8, 3, 8, 9, 4, 9, 5, 2, 4, 11, 6, 2, 10, 8, 6, 7, 9, 8, 1};
+    m.indices = {0, 11, 5, 0, 5, 1, 0, 1, 7, 0, 7, 10, 0, 10, 11, 1, 5, 9, 5, 11, 4,  11, 10, 2,  10, 7, 6, 7, 1, 8,
+                 3, 9,  4, 3, 4, 2, 3, 2, 6, 3, 6, 8,  3, 8,  9,  4, 9, 5, 2, 4,  11, 6,  2,  10, 8,  6, 7, 9, 8, 1};
     return m;
 }
 
@@ -97,7 +97,8 @@ Mesh clustered(const Mesh& m, double cells) {
     std::vector<uint32_t> count, remap(m.positions.size());
     for (size_t v = 0; v < m.positions.size(); ++v) {
         lodbake::Vec3d p = lodbake::toDouble(m.positions[v]);
-        std::array<int64_t, 3> key{int64_t(std::floor((p.x - box.min.x) / cell)), int64_t(std::floor((p.y - box.min.y) / cell)),
+        std::array<int64_t, 3> key{int64_t(std::floor((p.x - box.min.x) / cell)),
+                                   int64_t(std::floor((p.y - box.min.y) / cell)),
                                    int64_t(std::floor((p.z - box.min.z) / cell))};
         auto it = cell_of.emplace(key, uint32_t(sum.size())).first;
         if (it->second == sum.size()) {
@@ -150,7 +151,8 @@ TEST(MeshDistanceTest, SphereVsInscribedIcosahedron) {
     // sampling density bound how close we get.
     Mesh sphere = icosphere(5);
     Mesh ico = icosahedron();
-    Vec3f centre = (ico.positions[ico.indices[0]] + ico.positions[ico.indices[1]] + ico.positions[ico.indices[2]]) / 3.0f;
+    Vec3f centre =
+        (ico.positions[ico.indices[0]] + ico.positions[ico.indices[1]] + ico.positions[ico.indices[2]]) / 3.0f;
     const double expected = 1.0 - lodbake::length(lodbake::toDouble(centre));
     ASSERT_NEAR(expected, 0.2053, 1e-3); // sanity of the construction itself
     lodbake::DistanceResult r = measure(sphere, ico);
@@ -220,8 +222,10 @@ TEST(MeshDistanceTest, RejectsDegenerateInput) {
         EXPECT_EQ(r.status().code(), lodbake::StatusCode::InvalidInput);
         EXPECT_NE(r.status().message().find(fragment), std::string::npos) << r.status().message();
     };
-    expectError(no_triangles, good, "reference mesh: expected at least one triangle of non-zero area, found no triangles");
-    expectError(good, flat, "approximation mesh: expected at least one triangle of non-zero area, found only degenerate");
+    expectError(no_triangles, good,
+                "reference mesh: expected at least one triangle of non-zero area, found no triangles");
+    expectError(good, flat,
+                "approximation mesh: expected at least one triangle of non-zero area, found only degenerate");
     expectError(good, out_of_range, "approximation mesh: triangle 0: index 3 out of range (3 vertices)");
     expectError(not_finite, good, "reference mesh: vertex 1: expected finite coordinates");
 

@@ -27,7 +27,7 @@ struct TriangleBvhOptions {
 /// Result of a nearest-triangle query.
 struct ClosestHit {
     double distance_sq = std::numeric_limits<double>::infinity(); // squared distance to `point`
-    FaceId face = FaceId::invalid();                             // triangle index in the input, invalid if none found
+    FaceId face = FaceId::invalid();                              // triangle index in the input, invalid if none found
     Vec3d point;                                                  // closest point on that triangle
     bool isFound() const { return face.isValid(); }
 };
@@ -79,8 +79,8 @@ private:
                            std::vector<BuildTask>* deferred);
 
     std::vector<Node> nodes_;
-    std::vector<Vec3f> corners_;          // 3 per triangle slot, leaf order
-    std::vector<uint32_t> face_of_slot_;  // input triangle index of each slot
+    std::vector<Vec3f> corners_;         // 3 per triangle slot, leaf order
+    std::vector<uint32_t> face_of_slot_; // input triangle index of each slot
     uint32_t depth_ = 0;
 };
 

@@ -20,12 +20,12 @@ struct DistanceOptions {
 
 /// Distances in object units and relative to the reference's bounding-box diagonal.
 struct DistanceResult {
-    double hausdorff = 0.0;     // max of both one-sided maxima
-    double mean = 0.0;          // (mean(ref→approx) + mean(approx→ref)) / 2
-    double rms = 0.0;           // sqrt((ms(ref→approx) + ms(approx→ref)) / 2)
+    double hausdorff = 0.0; // max of both one-sided maxima
+    double mean = 0.0;      // (mean(ref→approx) + mean(approx→ref)) / 2
+    double rms = 0.0;       // sqrt((ms(ref→approx) + ms(approx→ref)) / 2)
     double max_ref_to_approx = 0.0;
     double max_approx_to_ref = 0.0;
-    double diagonal = 0.0;      // reference bounding-box diagonal (referenced vertices)
+    double diagonal = 0.0; // reference bounding-box diagonal (referenced vertices)
     double hausdorffRel() const { return diagonal > 0 ? hausdorff / diagonal : 0.0; }
     double meanRel() const { return diagonal > 0 ? mean / diagonal : 0.0; }
     double rmsRel() const { return diagonal > 0 ? rms / diagonal : 0.0; }
