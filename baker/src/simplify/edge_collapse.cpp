@@ -37,6 +37,8 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kTwoSqrt3 = 3.4641016151377544;
+// Below this quality (4√3·area / Σ edge²) a face's normal is too unstable to bound its rotation.
+constexpr double kReliableQuality = 0.05;
 
 uint32_t floatBits(float f) {
     uint32_t b;
@@ -178,24 +180,38 @@ bool EdgeCollapser::evaluate(uint32_t edge, Candidate& c) const {
     return true;
 }
 
+Vec3d EdgeCollapser::fanNormal(const std::vector<uint32_t>& fan) const {
+    Vec3d sum;
+    for (uint32_t h : fan) {
+        const Vec3d p0 = toD(position_[corner_point_[h]]);
+        sum += cross(toD(position_[corner_point_[nextHe(h)]]) - p0, toD(position_[corner_point_[prevHe(h)]]) - p0);
+    }
+    return sum;
+}
+
 bool EdgeCollapser::checkFaces(const std::vector<uint32_t>& fan, uint32_t moved, const Vec3d& p, uint32_t f0,
-                               uint32_t f1) const {
+                               uint32_t f1, const Vec3d& region_normal, double& min_old, double& min_new) const {
     const Vec3d pm = toD(position_[moved]);
+    const double region_len = length(region_normal);
     for (uint32_t h : fan) {
         const uint32_t f = h / 3;
-        if (f == f0 || f == f1) continue;
         const Vec3d px = toD(position_[corner_point_[nextHe(h)]]);
         const Vec3d py = toD(position_[corner_point_[prevHe(h)]]);
         const Vec3d n_old = cross(px - pm, py - pm);
+        const double len_old = length(n_old);
+        const double q_old = kTwoSqrt3 * len_old / (length2(px - pm) + length2(py - pm) + length2(px - py));
+        min_old = std::min(min_old, q_old);
+        if (f == f0 || f == f1) continue;
         const Vec3d n_new = cross(px - p, py - p);
         const double len_new = length(n_new);
-        const double len_old = length(n_old);
         if (!(len_new > 0.0)) return false;
-        if (dot(n_old, n_new) < cos_max_normal_change_ * len_old * len_new) return false;
         const double q_new = kTwoSqrt3 * len_new / (length2(px - p) + length2(py - p) + length2(px - py));
-        if (q_new < options_.min_triangle_quality) {
-            const double q_old = kTwoSqrt3 * len_old / (length2(px - pm) + length2(py - pm) + length2(px - py));
-            if (q_new < q_old) return false;
+        min_new = std::min(min_new, q_new);
+        if (q_old >= kReliableQuality) {
+            if (dot(n_old, n_new) < cos_max_normal_change_ * len_old * len_new) return false;
+        } else {
+            // A sliver's normal is noise: judge the new face against the surrounding surface.
+            if (dot(region_normal, n_new) < cos_max_normal_change_ * region_len * len_new) return false;
         }
     }
     return true;
@@ -254,7 +270,13 @@ bool EdgeCollapser::isValid(const Candidate& c, int& pair_count, WedgePair* pair
             if (!found) return false;
         }
     }
-    return checkFaces(fan_u_, u, c.position, f0, f1) && checkFaces(fan_v_, v, c.position, f0, f1);
+    const Vec3d region = fanNormal(fan_u_) + fanNormal(fan_v_);
+    double min_old = 1.0, min_new = 1.0;
+    if (!checkFaces(fan_u_, u, c.position, f0, f1, region, min_old, min_new) ||
+        !checkFaces(fan_v_, v, c.position, f0, f1, region, min_old, min_new)) return false;
+    // Needles: the worst triangle of the neighbourhood may not get worse (removing a sliver is fine).
+    if (min_new < options_.min_triangle_quality && min_new < min_old) return false;
+    return true;
 }
 
 void EdgeCollapser::collapse(const Candidate& c, const WedgePair* pairs, int pair_count, CollapseSequence* sequence) {
@@ -378,10 +400,32 @@ void EdgeCollapser::updateEdgesAround(uint32_t point) {
     }
 }
 
+void EdgeCollapser::requeueAll() {
+    Candidate c;
+    for (uint32_t h = 0; h < uint32_t(corner_point_.size()); ++h) {
+        if (corner_point_[h] == kNone || canonical(h) != h) continue;
+        if (evaluate(h, c))
+            queue_.set(h, float(c.cost));
+        else
+            queue_.remove(h);
+    }
+}
+
 bool EdgeCollapser::run(size_t target_faces, double max_error, CollapseSequence* sequence) {
     Candidate c;
     WedgePair pairs[2];
-    while (alive_faces_ > target_faces && !queue_.empty()) {
+    size_t collapses_at_requeue = collapses_;
+    bool requeued = false;
+    while (alive_faces_ > target_faces) {
+        if (queue_.empty()) {
+            // Rejected edges leave the queue until a collapse next to them re-evaluates them; an
+            // empty queue may still hide collapses made valid by changes further away.
+            if (requeued && collapses_ == collapses_at_requeue) break;
+            requeueAll();
+            requeued = true;
+            collapses_at_requeue = collapses_;
+            if (queue_.empty()) break;
+        }
         const uint32_t e = queue_.topId();
         if (!evaluate(e, c) || c.error > max_error) {
             queue_.remove(e);

@@ -67,9 +67,12 @@ private:
     bool evaluate(uint32_t edge, Candidate& c) const;
     void collectPairs(uint32_t edge, uint32_t removed, WedgePair* pairs, int& pair_count) const;
     bool isValid(const Candidate& c, int& pair_count, WedgePair* pairs);
-    bool checkFaces(const std::vector<uint32_t>& fan, uint32_t moved, const Vec3d& p, uint32_t f0, uint32_t f1) const;
+    bool checkFaces(const std::vector<uint32_t>& fan, uint32_t moved, const Vec3d& p, uint32_t f0, uint32_t f1,
+                    const Vec3d& region_normal, double& min_old, double& min_new) const;
+    Vec3d fanNormal(const std::vector<uint32_t>& fan) const;
     void collapse(const Candidate& c, const WedgePair* pairs, int pair_count, CollapseSequence* sequence);
     void updateEdgesAround(uint32_t point);
+    void requeueAll();
     Quadric combinedQuadric(uint32_t edge, uint32_t removed) const;
 
     const Mesh* source_ = nullptr;
