@@ -8,14 +8,12 @@
 //   speed    our 5-level chain (0.5, 0.25, 0.1, 0.03, 0.01; buildLodChain without error
 //            measurement) against native meshopt_simplify (Debian libmeshoptimizer 0.18, options 0,
 //            no error limit) for the same 5 levels, each from the original, one thread.
-//   memory   peak RSS of a fresh child process that loads the mesh and builds the chain (or runs
-//            the 5 meshopt_simplify calls), in bytes per input triangle.
+//   memory   peak RSS (VmHWM) of a fresh process of this program that loads the mesh and
+//            builds the chain (or runs the 5 meshopt_simplify calls), minus an idle one, per input triangle.
 //
 // usage: simplify_bench [--meshes DIR] [--out DIR] [--node-bench DIR] [--samples N] [--skip-node] [MESH...]
 // Not a ctest: run it through scripts/bench-simplify.sh.
 
-#include <sys/resource.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -24,7 +22,8 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
-#include <functional>
+#include <cstring>
+#include <fstream>
 #include <map>
 #include <sstream>
 #include <string>
@@ -94,26 +93,57 @@ std::vector<size_t> nativeChain(const Mesh& mesh) {
     return triangles;
 }
 
-// Runs `work` in a fresh child process and returns its peak RSS in bytes (0 if it failed).
-// The parent holds no mesh when this is called, so the child's peak is the work's own.
-uint64_t peakRssOfChild(const std::function<bool()>& work) {
-    std::fflush(stdout);
-    pid_t pid = fork();
-    if (pid < 0) return 0;
-    if (pid == 0) {
-        bool ok = work();
-        _exit(ok ? 0 : 1);
-    }
-    int status = 0;
-    struct rusage usage {};
-    if (wait4(pid, &status, 0, &usage) != pid || !WIFEXITED(status) || WEXITSTATUS(status) != 0) return 0;
-    return uint64_t(usage.ru_maxrss) * 1024; // Linux reports kilobytes
-}
-
 std::string shellQuote(const std::string& s) {
     std::string out = "'";
     for (char c : s) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
     return out + "'";
+}
+
+// Peak resident set of this process so far (VmHWM), in bytes; 0 if unknown. VmHWM belongs to the
+// address space, so a freshly exec'd process starts from zero (ru_maxrss would include the forking
+// parent's pages).
+uint64_t peakRssOfSelf() {
+    std::ifstream status("/proc/self/status");
+    std::string line;
+    while (std::getline(status, line)) {
+        if (line.rfind("VmHWM:", 0) == 0) return uint64_t(std::strtoull(line.c_str() + 6, nullptr, 10)) * 1024;
+    }
+    return 0;
+}
+
+// The work whose peak memory is measured, run by a child process (`--rss-child none|ours|native MESH`);
+// prints "peak_rss <bytes>".
+bool rssChildWork(const std::string& which, const std::string& path) {
+    if (which != "none") { // "none" is the baseline: an idle process of this program
+        auto mesh = load(path);
+        if (!mesh.ok()) return false;
+        if (which == "ours") {
+            if (!ourChain(mesh.value(), kChainRatios).ok()) return false;
+        } else {
+            nativeChain(mesh.value());
+        }
+    }
+    std::printf("peak_rss %llu\n", static_cast<unsigned long long>(peakRssOfSelf()));
+    return true;
+}
+
+// Runs this program again as `--rss-child which path` and returns the child's peak RSS in bytes
+// (0 if it failed). A fresh process, not a bare fork: TBB's worker pool does not survive fork.
+uint64_t peakRssOfChild(const std::string& which, const std::string& path) {
+    std::fflush(stdout);
+    char self[4096];
+    ssize_t n = readlink("/proc/self/exe", self, sizeof(self) - 1);
+    if (n <= 0) return 0;
+    self[n] = 0;
+    std::string cmd = shellQuote(self) + " --rss-child " + which + " " + shellQuote(path);
+    FILE* pipe = popen(cmd.c_str(), "r");
+    if (!pipe) return 0;
+    uint64_t rss = 0;
+    char line[256];
+    while (std::fgets(line, sizeof(line), pipe)) {
+        if (std::strncmp(line, "peak_rss ", 9) == 0) rss = std::strtoull(line + 9, nullptr, 10);
+    }
+    return pclose(pipe) == 0 ? rss : 0;
 }
 
 struct AnchorLevel {
@@ -171,16 +201,9 @@ void benchMesh(const Args& args, const std::string& name) {
     std::fflush(stdout);
 
     // Memory first, while the parent holds no mesh.
-    uint64_t ours_rss = peakRssOfChild([&] {
-        auto mesh = load(path);
-        return mesh.ok() && ourChain(mesh.value(), kChainRatios).ok();
-    });
-    uint64_t native_rss = peakRssOfChild([&] {
-        auto mesh = load(path);
-        if (!mesh.ok()) return false;
-        nativeChain(mesh.value());
-        return true;
-    });
+    const uint64_t baseline_rss = peakRssOfChild("none", path);
+    const uint64_t ours_rss = peakRssOfChild("ours", path);
+    const uint64_t native_rss = peakRssOfChild("native", path);
 
     auto loaded = load(path);
     if (!loaded.ok()) {
@@ -227,9 +250,10 @@ void benchMesh(const Args& args, const std::string& name) {
     for (size_t t : ours_chain_tris) std::printf(" %zu", t);
     std::printf("; native:");
     for (size_t t : native_chain_tris) std::printf(" %zu", t);
-    std::printf(
-        "\n  peak RSS per input triangle: ours %.0f B, native meshopt %.0f B (whole child process: load + chain)\n",
-        double(ours_rss) / tris, double(native_rss) / tris);
+    auto net = [&](uint64_t rss) { return rss > baseline_rss ? double(rss - baseline_rss) / tris : 0.0; };
+    std::printf("\n  peak RSS per input triangle (child process: load + chain, minus an idle one's %.1f MB): "
+                "ours %.0f B, native meshopt %.0f B\n",
+                double(baseline_rss) / 1e6, net(ours_rss), net(native_rss));
 
     // Quality.
     auto chain = ourChain(mesh, kQualityRatios);
@@ -297,6 +321,7 @@ void benchMesh(const Args& args, const std::string& name) {
 } // namespace
 
 int main(int argc, char** argv) {
+    if (argc == 4 && std::string(argv[1]) == "--rss-child") return rssChildWork(argv[2], argv[3]) ? 0 : 1;
     Args args;
     for (int i = 1; i < argc; ++i) {
         std::string a = argv[i];
