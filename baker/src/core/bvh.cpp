@@ -8,6 +8,9 @@
 #include <algorithm>
 #include <array>
 #include <cassert>
+#include <string>
+
+#include "core/parallel.h"
 
 namespace lodbake {
 namespace {
@@ -100,85 +103,67 @@ Vec3d closestPointOnTriangle(const Vec3d& p, const Vec3d& a, const Vec3d& b, con
     return a + ab * v + ac * w;
 }
 
-TriangleBvh TriangleBvh::build(const std::vector<Vec3f>& positions, const std::vector<uint32_t>& indices,
-                               const TriangleBvhOptions& options) {
-    assert(indices.size() % 3 == 0);
-    TriangleBvh bvh;
-    const size_t tri_count = indices.size() / 3;
-    if (tri_count == 0) return bvh;
-    assert(tri_count < std::numeric_limits<uint32_t>::max());
+// Triangles are partitioned in place as one contiguous record each, so every pass over a range reads
+// memory sequentially (indirection through an index array made the build cache-bound).
+struct TriangleBvh::Prim {
+    Box box;
+    Vec3f centroid;
+    uint32_t face;
+};
 
+struct TriangleBvh::BuildTask {
+    uint32_t node; // index of the node this range becomes, in the node array being filled
+    uint32_t begin, end;
+    uint32_t depth;
+    Box box;          // bounds of the triangles in [begin, end)
+    Box centroid_box; // bounds of their centroids
+};
+
+void TriangleBvh::boundsOf(const std::vector<Prim>& prims, BuildTask& task) {
+    task.box = Box();
+    task.centroid_box = Box();
+    for (uint32_t i = task.begin; i < task.end; ++i) {
+        task.box.expand(prims[i].box);
+        task.centroid_box.expand(prims[i].centroid);
+    }
+}
+
+// Builds the subtree for `root` into `nodes` (root.node must already exist there). Ranges of at most
+// `defer_count` triangles that still need splitting are appended to `deferred` instead, when given.
+void TriangleBvh::buildRange(std::vector<Prim>& prims, const BuildTask& root, const TriangleBvhOptions& options,
+                             std::vector<Node>& nodes, uint32_t& depth, uint32_t defer_count,
+                             std::vector<BuildTask>* deferred) {
     const uint32_t max_leaf = std::max<uint32_t>(1, options.max_leaf_triangles);
     const uint32_t bin_count = std::min<uint32_t>(64, std::max<uint32_t>(2, options.bin_count));
-
-    // Triangles are partitioned in place as one contiguous record each, so every pass over a range
-    // reads memory sequentially (indirection through an index array made the build cache-bound).
-    struct Prim {
-        Box box;
-        Vec3f centroid;
-        uint32_t face;
-    };
-    std::vector<Prim> prims(tri_count);
-    for (size_t t = 0; t < tri_count; ++t) {
-        Prim& p = prims[t];
-        for (int k = 0; k < 3; ++k) {
-            assert(indices[t * 3 + k] < positions.size());
-            p.box.expand(positions[indices[t * 3 + k]]);
-        }
-        p.centroid = (p.box.min + p.box.max) * 0.5f;
-        p.face = uint32_t(t);
-    }
-
-    struct Task {
-        uint32_t node;
-        uint32_t begin, end;
-        uint32_t depth;
-        Box box;          // bounds of the triangles in [begin, end)
-        Box centroid_box; // bounds of their centroids
-    };
-    auto boundsOf = [&prims](uint32_t begin, uint32_t end, Box& box, Box& centroid_box) {
-        box = Box();
-        centroid_box = Box();
-        for (uint32_t i = begin; i < end; ++i) {
-            box.expand(prims[i].box);
-            centroid_box.expand(prims[i].centroid);
-        }
-    };
-
-    std::vector<Task> stack;
-    bvh.nodes_.reserve(2 * (tri_count / max_leaf + 1));
-    bvh.nodes_.emplace_back();
-    {
-        Task root{0, 0, uint32_t(tri_count), 1, Box(), Box()};
-        boundsOf(root.begin, root.end, root.box, root.centroid_box);
-        stack.push_back(root);
-    }
-
     struct Bin {
         Box box, centroid_box;
         uint32_t count = 0;
     };
     std::array<Bin, 64> bins;
     std::array<double, 64> right_cost;
-
     // Past this depth splits are by count only, which bounds the total depth by
     // kSahDepthLimit + log2(triangles) < kMaxDepth.
     constexpr uint32_t kSahDepthLimit = kMaxDepth - 40;
 
+    std::vector<BuildTask> stack{root};
     while (!stack.empty()) {
-        Task task = stack.back();
+        BuildTask task = stack.back();
         stack.pop_back();
-        bvh.depth_ = std::max(bvh.depth_, task.depth);
+        depth = std::max(depth, task.depth);
         {
-            Node& node = bvh.nodes_[task.node];
+            Node& node = nodes[task.node];
             node.bounds_min = task.box.min;
             node.bounds_max = task.box.max;
         }
         const uint32_t count = task.end - task.begin;
         if (count <= max_leaf) {
-            Node& node = bvh.nodes_[task.node];
+            Node& node = nodes[task.node];
             node.first = task.begin;
             node.count = count;
+            continue;
+        }
+        if (deferred && count <= defer_count) {
+            deferred->push_back(task);
             continue;
         }
 
@@ -187,8 +172,8 @@ TriangleBvh TriangleBvh::build(const std::vector<Vec3f>& positions, const std::v
         const int axis = ext.x >= ext.y && ext.x >= ext.z ? 0 : (ext.y >= ext.z ? 1 : 2);
         const float lo = task.centroid_box.min[axis], hi = task.centroid_box.max[axis];
         uint32_t best_split = 0;
-        Task left_task{0, task.begin, 0, task.depth + 1, Box(), Box()};
-        Task right_task{0, 0, task.end, task.depth + 1, Box(), Box()};
+        BuildTask left_task{0, task.begin, 0, task.depth + 1, Box(), Box()};
+        BuildTask right_task{0, 0, task.end, task.depth + 1, Box(), Box()};
         if (task.depth < kSahDepthLimit && hi > lo) {
             const double scale = double(bin_count) / (double(hi) - lo);
             auto binOf = [&](const Prim& p) {
@@ -223,7 +208,7 @@ TriangleBvh TriangleBvh::build(const std::vector<Vec3f>& positions, const std::v
             }
             if (best_split > 0) {
                 for (uint32_t b = 0; b < bin_count; ++b) {
-                    Task& side = b < best_split ? left_task : right_task;
+                    BuildTask& side = b < best_split ? left_task : right_task;
                     side.box.expand(bins[b].box);
                     side.centroid_box.expand(bins[b].centroid_box);
                 }
@@ -241,21 +226,80 @@ TriangleBvh TriangleBvh::build(const std::vector<Vec3f>& positions, const std::v
                                  float ca = a.centroid[axis], cb = b.centroid[axis];
                                  return ca < cb || (ca == cb && a.face < b.face);
                              });
-            boundsOf(left_task.begin, left_task.end, left_task.box, left_task.centroid_box);
-            boundsOf(left_task.end, right_task.end, right_task.box, right_task.centroid_box);
+            boundsOf(prims, left_task);
+            right_task.begin = left_task.end;
+            boundsOf(prims, right_task);
         }
         right_task.begin = left_task.end;
 
-        uint32_t left = uint32_t(bvh.nodes_.size());
-        bvh.nodes_.emplace_back();
-        bvh.nodes_.emplace_back();
-        Node& node = bvh.nodes_[task.node];
+        uint32_t left = uint32_t(nodes.size());
+        nodes.emplace_back();
+        nodes.emplace_back();
+        Node& node = nodes[task.node];
         node.first = left;
         node.count = 0;
         left_task.node = left;
         right_task.node = left + 1;
         stack.push_back(right_task);
         stack.push_back(left_task);
+    }
+}
+
+Result<TriangleBvh> TriangleBvh::build(const std::vector<Vec3f>& positions, const std::vector<uint32_t>& indices,
+                                       const TriangleBvhOptions& options) {
+    assert(indices.size() % 3 == 0);
+    TriangleBvh bvh;
+    const size_t tri_count = indices.size() / 3;
+    if (tri_count == 0) return bvh;
+    if (tri_count >= std::numeric_limits<uint32_t>::max() / 2) {
+        return resourceLimit("triangle BVH: " + std::to_string(tri_count) + " triangles, expected fewer than 2^31");
+    }
+
+    std::vector<Prim> prims(tri_count);
+    for (size_t t = 0; t < tri_count; ++t) {
+        Prim& p = prims[t];
+        for (int k = 0; k < 3; ++k) {
+            assert(indices[t * 3 + k] < positions.size());
+            p.box.expand(positions[indices[t * 3 + k]]);
+        }
+        p.centroid = (p.box.min + p.box.max) * 0.5f;
+        p.face = uint32_t(t);
+    }
+
+    // The top of the tree is built on one thread until ranges are small; those subtrees are then
+    // built in parallel into their own node arrays and appended in range order. The split rule
+    // depends only on the triangle count, so the tree is the same for any thread count.
+    const uint32_t defer_count = std::max<uint32_t>(kSubtreeTriangles, uint32_t(tri_count / 64));
+    bvh.nodes_.reserve(2 * tri_count / std::max<uint32_t>(1, options.max_leaf_triangles) + 2);
+    bvh.nodes_.emplace_back();
+    BuildTask root{0, 0, uint32_t(tri_count), 1, Box(), Box()};
+    boundsOf(prims, root);
+    std::vector<BuildTask> deferred;
+    buildRange(prims, root, options, bvh.nodes_, bvh.depth_, defer_count, &deferred);
+
+    struct Subtree {
+        std::vector<Node> nodes;
+        uint32_t depth = 0;
+    };
+    std::vector<Subtree> subtrees(deferred.size());
+    LODBAKE_RETURN_IF_ERROR(parallelFor(deferred.size(), 1, [&](size_t i) {
+        BuildTask local_root = deferred[i];
+        local_root.node = 0;
+        subtrees[i].nodes.emplace_back();
+        // Ranges are disjoint, so each task partitions its own slice of `prims`.
+        buildRange(prims, local_root, options, subtrees[i].nodes, subtrees[i].depth, 0, nullptr);
+    }));
+    for (size_t i = 0; i < deferred.size(); ++i) {
+        // Local node 0 replaces the placeholder; local node k >= 1 goes to base + k - 1.
+        const std::vector<Node>& local = subtrees[i].nodes;
+        const uint32_t base = uint32_t(bvh.nodes_.size());
+        auto remap = [&](Node n) {
+            if (n.count == 0) n.first = base + n.first - 1;
+            return n;
+        };
+        bvh.nodes_[deferred[i].node] = remap(local[0]);
+        for (size_t k = 1; k < local.size(); ++k) bvh.nodes_.push_back(remap(local[k]));
+        bvh.depth_ = std::max(bvh.depth_, subtrees[i].depth);
     }
     assert(bvh.depth_ <= kMaxDepth);
 

@@ -6,6 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include "core/parallel.h"
+
 namespace {
 
 using lodbake::Vec3d;
@@ -20,7 +22,9 @@ struct TestRng {
     }
 };
 
-double distSq(const Vec3d& a, const Vec3d& b) { return lodbake::dot(a - b, a - b); }
+double distSq(const Vec3d& a, const Vec3d& b) {
+    return lodbake::dot(a - b, a - b);
+}
 
 TEST(TriangleBvhTest, ClosestPointRegions) {
     Vec3d a(0, 0, 0), b(1, 0, 0), c(0, 1, 0);
@@ -63,13 +67,16 @@ TEST(TriangleBvhTest, MatchesBruteForceOnRandomSoup) {
     for (uint32_t t = 0; t < 3000; ++t) {
         Vec3f base(float(rng.next()), float(rng.next()), float(rng.next()));
         for (int k = 0; k < 3; ++k) {
-            Vec3f offset(float(rng.next() - 0.5) * 0.1f, float(rng.next() - 0.5) * 0.1f, float(rng.next() - 0.5) * 0.1f);
+            Vec3f offset(float(rng.next() - 0.5) * 0.1f, float(rng.next() - 0.5) * 0.1f,
+                         float(rng.next() - 0.5) * 0.1f);
             positions.push_back(base + (t % 97 == 0 ? Vec3f() : offset));
             indices.push_back(uint32_t(positions.size() - 1));
         }
     }
     for (int k = 0; k < 30; ++k) indices.insert(indices.end(), {0, 1, 2});
-    lodbake::TriangleBvh bvh = lodbake::TriangleBvh::build(positions, indices);
+    auto built = lodbake::TriangleBvh::build(positions, indices);
+    ASSERT_TRUE(built.ok());
+    const lodbake::TriangleBvh& bvh = built.value();
     ASSERT_EQ(bvh.triangleCount(), indices.size() / 3);
     EXPECT_LE(bvh.depth(), lodbake::TriangleBvh::kMaxDepth);
 
@@ -89,13 +96,40 @@ TEST(TriangleBvhTest, MatchesBruteForceOnRandomSoup) {
     }
 }
 
+TEST(TriangleBvhTest, SameTreeForAnyThreadCount) {
+    // Large enough that the top is split on one thread and the subtrees in parallel.
+    TestRng rng{7};
+    std::vector<Vec3f> positions;
+    std::vector<uint32_t> indices;
+    for (uint32_t t = 0; t < 60000; ++t) {
+        Vec3f base(float(rng.next()), float(rng.next()), float(rng.next() * 0.1));
+        for (int k = 0; k < 3; ++k) {
+            positions.push_back(base + Vec3f(float(rng.next()) * 0.01f, float(rng.next()) * 0.01f, 0.0f));
+            indices.push_back(uint32_t(positions.size() - 1));
+        }
+    }
+    std::vector<lodbake::TriangleBvh> trees;
+    for (size_t threads : {1, 2}) {
+        lodbake::ScopedThreadLimit limit(threads);
+        trees.push_back(lodbake::TriangleBvh::build(positions, indices).value());
+    }
+    EXPECT_EQ(trees[0].nodeCount(), trees[1].nodeCount());
+    EXPECT_EQ(trees[0].depth(), trees[1].depth());
+    for (int i = 0; i < 200; ++i) {
+        Vec3d p(rng.next(), rng.next(), rng.next() * 0.2 - 0.05);
+        lodbake::ClosestHit a = trees[0].closest(p), b = trees[1].closest(p);
+        EXPECT_EQ(a.face, b.face);
+        EXPECT_EQ(a.distance_sq, b.distance_sq);
+    }
+}
+
 TEST(TriangleBvhTest, RespectsMaxDistanceAndEmptyTree) {
     std::vector<Vec3f> positions{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
     std::vector<uint32_t> indices{0, 1, 2};
-    lodbake::TriangleBvh bvh = lodbake::TriangleBvh::build(positions, indices);
+    lodbake::TriangleBvh bvh = lodbake::TriangleBvh::build(positions, indices).value();
     EXPECT_TRUE(bvh.closest(Vec3d(0.2, 0.2, 1.0)).isFound());
     EXPECT_FALSE(bvh.closest(Vec3d(0.2, 0.2, 1.0), 0.5).isFound()); // 1.0² is not < 0.5
-    lodbake::TriangleBvh empty = lodbake::TriangleBvh::build(positions, {});
+    lodbake::TriangleBvh empty = lodbake::TriangleBvh::build(positions, {}).value();
     EXPECT_TRUE(empty.isEmpty());
     EXPECT_FALSE(empty.closest(Vec3d(0, 0, 0)).isFound());
 }

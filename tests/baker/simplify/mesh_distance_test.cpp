@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <array>
 #include <map>
 #include <sstream>
 #include <string>
@@ -14,6 +15,8 @@
 #include <gtest/gtest.h>
 
 #include "core/parallel.h"
+#include "lodbake/core/diagnostics.h"
+#include "lodbake/io/mesh_io.h"
 #include "mesh_builders.h"
 #include "test_paths.h"
 
@@ -25,11 +28,11 @@ using lodbake::Vec3f;
 Mesh icosahedron() {
     const float t = (1.0f + std::sqrt(5.0f)) / 2.0f;
     Mesh m;
-    m.positions = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
-                   {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+    m.positions = {{-1, t, 0},  {1, t, 0},  {-1, -t, 0}, {1, -t, 0}, {0, -1, t},  {0, 1, t},
+                   {0, -1, -t}, {0, 1, -t}, {t, 0, -1},  {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
     for (Vec3f& p : m.positions) p = lodbake::normalize(p);
-    m.indices = {0, 11, 5, 0, 5, 1, 0, 1, 7, 0, 7, 10, 0, 10, 11, 1, 5, 9, 5, 11, 4, 11, 10, 2, 10, 7, 6, 7, 1, 8,
-                 3, 9, 4, 3, 4, 2, 3, 2, 6, 3, 6, 8, 3, 8, 9, 4, 9, 5, 2, 4, 11, 6, 2, 10, 8, 6, 7, 9, 8, 1};
+    m.indices = {0, 11, 5, 0, 5, 1, 0, 1, 7, 0, 7, 10, 0, 10, 11, 1, 5, 9, 5, 11, 4,  11, 10, 2,  10, 7, 6, 7, 1, 8,
+                 3, 9,  4, 3, 4, 2, 3, 2, 6, 3, 6, 8,  3, 8,  9,  4, 9, 5, 2, 4,  11, 6,  2,  10, 8,  6, 7, 9, 8, 1};
     return m;
 }
 
@@ -85,6 +88,36 @@ Mesh perturbed(Mesh m, float amplitude, uint64_t seed) {
     return m;
 }
 
+// Vertex clustering on a grid of `cells` per bounding-box diagonal: a crude but real decimation.
+Mesh clustered(const Mesh& m, double cells) {
+    lodbake::Aabb box = lodbake::computeBounds(m);
+    const double cell = box.diagonal() / cells;
+    std::map<std::array<int64_t, 3>, uint32_t> cell_of;
+    std::vector<lodbake::Vec3d> sum;
+    std::vector<uint32_t> count, remap(m.positions.size());
+    for (size_t v = 0; v < m.positions.size(); ++v) {
+        lodbake::Vec3d p = lodbake::toDouble(m.positions[v]);
+        std::array<int64_t, 3> key{int64_t(std::floor((p.x - box.min.x) / cell)),
+                                   int64_t(std::floor((p.y - box.min.y) / cell)),
+                                   int64_t(std::floor((p.z - box.min.z) / cell))};
+        auto it = cell_of.emplace(key, uint32_t(sum.size())).first;
+        if (it->second == sum.size()) {
+            sum.push_back(lodbake::Vec3d());
+            count.push_back(0);
+        }
+        sum[it->second] += p;
+        count[it->second]++;
+        remap[v] = it->second;
+    }
+    Mesh out;
+    for (size_t c = 0; c < sum.size(); ++c) out.positions.push_back(Vec3f(sum[c] / double(count[c])));
+    for (size_t t = 0; t < m.faceCount(); ++t) {
+        uint32_t a = remap[m.indices[t * 3]], b = remap[m.indices[t * 3 + 1]], c = remap[m.indices[t * 3 + 2]];
+        if (a != b && b != c && c != a) out.indices.insert(out.indices.end(), {a, b, c});
+    }
+    return out;
+}
+
 lodbake::DistanceResult measure(const Mesh& a, const Mesh& b, const lodbake::DistanceOptions& options = {}) {
     auto r = lodbake::measureSurfaceDistance(a, b, options);
     EXPECT_TRUE(r.ok()) << r.status().message();
@@ -118,7 +151,8 @@ TEST(MeshDistanceTest, SphereVsInscribedIcosahedron) {
     // sampling density bound how close we get.
     Mesh sphere = icosphere(5);
     Mesh ico = icosahedron();
-    Vec3f centre = (ico.positions[ico.indices[0]] + ico.positions[ico.indices[1]] + ico.positions[ico.indices[2]]) / 3.0f;
+    Vec3f centre =
+        (ico.positions[ico.indices[0]] + ico.positions[ico.indices[1]] + ico.positions[ico.indices[2]]) / 3.0f;
     const double expected = 1.0 - lodbake::length(lodbake::toDouble(centre));
     ASSERT_NEAR(expected, 0.2053, 1e-3); // sanity of the construction itself
     lodbake::DistanceResult r = measure(sphere, ico);
@@ -156,6 +190,23 @@ TEST(MeshDistanceTest, BitIdenticalAcrossThreadCountsAndSeeded) {
     EXPECT_NEAR(one.mean, other_seed.mean, one.mean * 0.02);
 }
 
+TEST(MeshDistanceTest, PreparedReferenceGivesTheSameResult) {
+    Mesh reference = perturbed(icosphere(4), 0.01f, 11);
+    Mesh approx = perturbed(icosphere(2), 0.01f, 12);
+    lodbake::DistanceOptions options;
+    options.sample_count = 20000;
+    auto prepared = lodbake::DistanceReference::prepare(reference);
+    ASSERT_TRUE(prepared.ok());
+    lodbake::DistanceResult direct = measure(reference, approx, options);
+    auto again = lodbake::measureSurfaceDistance(prepared.value(), approx, options);
+    ASSERT_TRUE(again.ok());
+    EXPECT_EQ(direct.hausdorff, again->hausdorff);
+    EXPECT_EQ(direct.mean, again->mean);
+    EXPECT_EQ(direct.rms, again->rms);
+    EXPECT_EQ(direct.diagonal, again->diagonal);
+    EXPECT_FALSE(lodbake::DistanceReference::prepare(lodbake_test::makeMesh({{0, 0, 0}}, {})).ok());
+}
+
 TEST(MeshDistanceTest, RejectsDegenerateInput) {
     Mesh good = lodbake_test::tetrahedron();
     Mesh no_triangles = good;
@@ -171,8 +222,10 @@ TEST(MeshDistanceTest, RejectsDegenerateInput) {
         EXPECT_EQ(r.status().code(), lodbake::StatusCode::InvalidInput);
         EXPECT_NE(r.status().message().find(fragment), std::string::npos) << r.status().message();
     };
-    expectError(no_triangles, good, "reference mesh: expected at least one triangle of non-zero area, found no triangles");
-    expectError(good, flat, "approximation mesh: expected at least one triangle of non-zero area, found only degenerate");
+    expectError(no_triangles, good,
+                "reference mesh: expected at least one triangle of non-zero area, found no triangles");
+    expectError(good, flat,
+                "approximation mesh: expected at least one triangle of non-zero area, found only degenerate");
     expectError(good, out_of_range, "approximation mesh: triangle 0: index 3 out of range (3 vertices)");
     expectError(not_finite, good, "reference mesh: vertex 1: expected finite coordinates");
 
@@ -262,6 +315,20 @@ TEST(MeshDistanceTest, AgreesWithOpen3dScriptOnSyntheticMeshes) {
     Mesh sphere = icosphere(5);
     expectAgreesWithPython(sphere, icosahedron(), "sphere_ico");
     expectAgreesWithPython(sphere, perturbed(icosphere(3), 0.01f, 3), "sphere_noisy");
+}
+
+TEST(MeshDistanceTest, AgreesWithOpen3dScriptOnBunny) {
+    LODBAKE_REQUIRE_SHARED_MESHES();
+    lodbake::Diagnostics diagnostics;
+    auto loaded = lodbake::readMesh(lodbake_test::sharedMesh("bunny_zipper.ply"), lodbake::ReadOptions(), diagnostics);
+    ASSERT_TRUE(loaded.ok()) << loaded.status().message();
+    const Mesh& bunny = loaded->mesh;
+    ASSERT_EQ(bunny.faceCount(), 69451u);
+    const float noise = float(lodbake::computeBounds(bunny).diagonal() * 0.002);
+    expectAgreesWithPython(bunny, perturbed(bunny, noise, 5), "bunny_noisy");
+    Mesh decimated = clustered(bunny, 60.0);
+    ASSERT_LT(decimated.faceCount(), bunny.faceCount() / 4);
+    expectAgreesWithPython(bunny, decimated, "bunny_clustered");
 }
 
 } // namespace

@@ -15,6 +15,7 @@
 
 #include "lodbake/core/index_types.h"
 #include "lodbake/core/math.h"
+#include "lodbake/core/status.h"
 
 namespace lodbake {
 
@@ -26,7 +27,7 @@ struct TriangleBvhOptions {
 /// Result of a nearest-triangle query.
 struct ClosestHit {
     double distance_sq = std::numeric_limits<double>::infinity(); // squared distance to `point`
-    FaceId face = FaceId::invalid();                             // triangle index in the input, invalid if none found
+    FaceId face = FaceId::invalid();                              // triangle index in the input, invalid if none found
     Vec3d point;                                                  // closest point on that triangle
     bool isFound() const { return face.isValid(); }
 };
@@ -42,8 +43,10 @@ public:
     /// Builds over every triangle of `indices` (3 per triangle) into `positions`.
     /// \pre indices.size() % 3 == 0 and every index < positions.size() (callers validate input first);
     ///      positions are finite.
-    static TriangleBvh build(const std::vector<Vec3f>& positions, const std::vector<uint32_t>& indices,
-                             const TriangleBvhOptions& options = {});
+    /// Fails only when resources run out (more than 2^31 triangles, or a failed allocation).
+    /// The tree is identical for any thread count.
+    static Result<TriangleBvh> build(const std::vector<Vec3f>& positions, const std::vector<uint32_t>& indices,
+                                     const TriangleBvhOptions& options = {});
 
     /// The triangle nearest to `p`. Only triangles strictly closer than sqrt(max_distance_sq) are
     /// considered; returns a hit with face invalid when there are none (or the tree is empty).
@@ -57,6 +60,8 @@ public:
     uint32_t depth() const { return depth_; }
 
     static constexpr uint32_t kMaxDepth = 96;
+    /// Ranges up to this many triangles (or 1/64 of the mesh, if larger) are built as parallel subtrees.
+    static constexpr uint32_t kSubtreeTriangles = 4096;
 
 private:
     struct Node {
@@ -66,9 +71,16 @@ private:
         uint32_t count = 0; // 0 for an inner node; triangles in the leaf otherwise
     };
 
+    struct Prim;      // build-time triangle record (bvh.cpp)
+    struct BuildTask; // build-time range (bvh.cpp)
+    static void boundsOf(const std::vector<Prim>& prims, BuildTask& task);
+    static void buildRange(std::vector<Prim>& prims, const BuildTask& root, const TriangleBvhOptions& options,
+                           std::vector<Node>& nodes, uint32_t& depth, uint32_t defer_count,
+                           std::vector<BuildTask>* deferred);
+
     std::vector<Node> nodes_;
-    std::vector<Vec3f> corners_;          // 3 per triangle slot, leaf order
-    std::vector<uint32_t> face_of_slot_;  // input triangle index of each slot
+    std::vector<Vec3f> corners_;         // 3 per triangle slot, leaf order
+    std::vector<uint32_t> face_of_slot_; // input triangle index of each slot
     uint32_t depth_ = 0;
 };
 
