@@ -140,6 +140,13 @@ std::vector<std::string> splitWords(const char* p, const char* end) {
     return words;
 }
 
+// Element and property names end up in messages, so they must be printable ASCII.
+bool isPrintableName(const std::string& s) {
+    for (char c : s)
+        if (static_cast<unsigned char>(c) < 0x21 || static_cast<unsigned char>(c) > 0x7e) return false;
+    return !s.empty();
+}
+
 bool parseUnsigned(const std::string& s, uint64_t& out) {
     const char* b = s.data();
     const char* e = b + s.size();
@@ -174,7 +181,6 @@ Result<Header> parseHeader(const uint8_t* data, size_t size, const std::string& 
         ++line_number;
         const std::string where = name + ": header line " + std::to_string(line_number);
         const std::vector<std::string> words = splitWords(p, line_end);
-        const char* line_begin = p;
         p = next;
         if (line_number == 1) continue; // the magic, checked above
         if (words.empty()) continue;
@@ -219,6 +225,8 @@ Result<Header> parseHeader(const uint8_t* data, size_t size, const std::string& 
         if (keyword == "element") {
             if (words.size() != 3) return invalidInput(where + ": element: expected 'element <name> <count>'");
             Element element;
+            if (!isPrintableName(words[1]))
+                return invalidInput(where + ": element: name " + quoted(words[1]) + " is not printable ASCII");
             element.name = words[1];
             if (!words[2].empty() && words[2][0] == '-')
                 return invalidInput(where + ": element " + words[1] + ": negative count " + quoted(words[2]));
@@ -251,13 +259,15 @@ Result<Header> parseHeader(const uint8_t* data, size_t size, const std::string& 
                     return invalidInput(where + ": element " + element.name + ": unknown property type " + quoted(words[1]));
                 prop.name = words[2];
             }
+            if (!isPrintableName(prop.name))
+                return invalidInput(where + ": element " + element.name + ": property name " + quoted(prop.name) +
+                                    " is not printable ASCII");
             if (element.findProperty(prop.name) >= 0)
                 return invalidInput(where + ": element " + element.name + ": property " + quoted(prop.name) +
                                     " declared twice");
             element.properties.push_back(std::move(prop));
             continue;
         }
-        (void)line_begin;
         return invalidInput(where + ": unknown keyword " + quoted(keyword));
     }
     if (!has_format) return invalidInput(name + ": header: no 'format' line");
@@ -291,9 +301,12 @@ public:
             pos_ += size_t(bytes);
             return ReadError::None;
         }
+        // Skipped ascii values only need to be numbers: writers are often loose with the declared
+        // type of properties nobody reads (a "uchar" intensity written as 0.5).
+        (void)t;
         double ignored = 0;
         for (uint64_t i = 0; i < count; ++i) {
-            const ReadError e = readAscii(t, ignored);
+            const ReadError e = readAscii(ScalarType::Float64, ignored);
             if (e != ReadError::None) return e;
         }
         return ReadError::None;
@@ -456,6 +469,7 @@ struct BodyData {
     bool has_strips = false;
     bool has_grid = false;
     uint64_t face_element_count = 0;
+    size_t short_faces = 0;       // faces with fewer than 3 vertices, dropped
 };
 
 std::string describeError(ReadError e, const BodyCursor& cursor, ScalarType t) {
@@ -544,7 +558,9 @@ void earClip(const Mesh& mesh, const uint32_t* idx, size_t n, std::vector<uint32
 
 void triangulatePolygon(const Mesh& mesh, const uint32_t* idx, size_t n, std::vector<uint32_t>& out) {
     if (n == 3) {
-        out.insert(out.end(), idx, idx + 3);
+        out.push_back(idx[0]);
+        out.push_back(idx[1]);
+        out.push_back(idx[2]);
         return;
     }
     if (n == 4) {
@@ -742,6 +758,8 @@ Result<LoadedMesh> readPlyFromMemory(const uint8_t* data, size_t size, const std
                             return invalidInput(name + ": vertex " + std::to_string(vi) + " property '" + p.name +
                                                 "': negative list count");
                         if (e == ReadError::None) e = cursor.skip(p.value_type, uint64_t(count));
+                    } else if (slots[pi] == kIgnore) {
+                        e = cursor.skip(p.value_type, 1);
                     } else {
                         e = cursor.read(p.value_type, value[size_t(slots[pi])]);
                     }
@@ -802,8 +820,12 @@ Result<LoadedMesh> readPlyFromMemory(const uint8_t* data, size_t size, const std
                                      " exceeds the limit of " + std::to_string(options.max_face_count));
             body.has_faces = true;
             body.face_element_count += el.count;
-            body.polygons.offsets.reserve(body.polygons.offsets.size() + size_t(el.count));
-            body.polygons.indices.reserve(body.polygons.indices.size() + size_t(el.count) * 3);
+            if (int(ei) > vertex_element) {
+                mesh.indices.reserve(mesh.indices.size() + size_t(el.count) * 3);
+            } else {
+                body.polygons.offsets.reserve(body.polygons.offsets.size() + size_t(el.count));
+                body.polygons.indices.reserve(body.polygons.indices.size() + size_t(el.count) * 3);
+            }
         }
         size_t rows = 0, cols = 0;
         if (index_prop >= 0 && is_grid) {
@@ -876,6 +898,10 @@ Result<LoadedMesh> readPlyFromMemory(const uint8_t* data, size_t size, const std
                     body.strips.push_back(-1);
                 } else if (is_grid) {
                     if (count == 1) body.grid[size_t(ri)] = int32_t(poly[0]);
+                } else if (int(ei) > vertex_element) {
+                    // Positions are known: triangulate now instead of keeping the raw lists.
+                    if (poly.size() < 3) ++body.short_faces;
+                    else triangulatePolygon(mesh, poly.data(), poly.size(), mesh.indices);
                 } else {
                     body.polygons.indices.insert(body.polygons.indices.end(), poly.begin(), poly.end());
                     if (body.polygons.indices.size() > std::numeric_limits<uint32_t>::max())
@@ -890,20 +916,21 @@ Result<LoadedMesh> readPlyFromMemory(const uint8_t* data, size_t size, const std
 
     // Triangulate.
     if (body.has_faces) {
+        // Faces of an element that came before the vertex element (rare) were kept raw until now.
         source.face_kind = "polygons";
         const RawFaces& rf = body.polygons;
-        mesh.indices.reserve(rf.indices.size());
-        size_t dropped = 0;
+        mesh.indices.reserve(mesh.indices.size() + rf.indices.size());
         for (size_t f = 0; f + 1 < rf.offsets.size(); ++f) {
             const size_t n = rf.offsets[f + 1] - rf.offsets[f];
             if (n < 3) {
-                ++dropped;
+                ++body.short_faces;
                 continue;
             }
             triangulatePolygon(mesh, rf.indices.data() + rf.offsets[f], n, mesh.indices);
         }
-        if (dropped > 0)
-            diagnostics.warn(name + ": face: " + std::to_string(dropped) + " faces with fewer than 3 vertices dropped");
+        if (body.short_faces > 0)
+            diagnostics.warn(name + ": face: " + std::to_string(body.short_faces) +
+                             " faces with fewer than 3 vertices dropped");
     }
     if (body.has_strips) {
         if (!body.has_faces) source.face_kind = "tristrips";

@@ -428,6 +428,8 @@ TEST(PlyReaderTest, HeaderQuirksAreTolerated) {
     ASSERT_TRUE(r.ok()) << r.status().message();
     EXPECT_EQ(r->mesh.indices, (std::vector<uint32_t>{0, 1, 2}));
     EXPECT_EQ(diagnostics.warningCount(), 0u);
+    ASSERT_EQ(diagnostics.items().size(), 1u); // one note for the two `bye` lines
+    EXPECT_EQ(diagnostics.items()[0].message, "q.ply: header: ignored 2 non-standard 'bye' line(s)");
 }
 
 TEST(PlyReaderTest, NoFacesIsAPointCloud) {
@@ -691,4 +693,20 @@ TEST(PlySharedMeshesTest, RoundTripOfAScan) {
         EXPECT_EQ(back->mesh.indices, r->mesh.indices);
         EXPECT_EQ(writePlyToMemory(back->mesh, binary), bytes);
     }
+}
+
+TEST(PlyReaderTest, FacesBeforeVerticesAndLooseSkippedValues) {
+    // Element order is free in PLY; skipped ascii properties only need to be numbers.
+    const std::string s = "ply\nformat ascii 1.0\nelement face 2\nproperty list uchar int vertex_indices\n"
+                          "element vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
+                          "property uchar intensity\nend_header\n4 0 1 2 3\n2 0 1\n"
+                          "0 0 0 0.5\n1 0 0 7\n1 1 0 -3\n0 1 0 1e3\n";
+    Diagnostics diagnostics;
+    Result<LoadedMesh> r =
+        readPlyFromMemory(reinterpret_cast<const uint8_t*>(s.data()), s.size(), "o.ply", ReadOptions(), diagnostics);
+    ASSERT_TRUE(r.ok()) << r.status().message();
+    EXPECT_EQ(r->mesh.indices, (std::vector<uint32_t>{0, 1, 2, 0, 2, 3}));
+    ASSERT_EQ(diagnostics.warningCount(), 1u); // the 2-vertex face
+    EXPECT_NE(diagnostics.items()[0].message.find("o.ply: face: 1 faces with fewer than 3 vertices dropped"),
+              std::string::npos);
 }
