@@ -63,8 +63,13 @@ Result<LodChain> buildLodChain(const Mesh& mesh, const LodChainOptions& options,
         chain.levels.push_back(std::move(level));
     }
     if (options.measure_error) {
+        // The input's BVH is built once for all levels.
+        Result<DistanceReference> reference = DistanceReference::prepare(mesh);
+        if (!reference.ok())
+            diagnostics.warn("lod chain: errors not measured: " + reference.status().message());
         for (LodLevel& level : chain.levels) {
-            Result<DistanceResult> d = measureSurfaceDistance(mesh, level.mesh, options.distance);
+            if (!reference.ok()) break;
+            Result<DistanceResult> d = measureSurfaceDistance(*reference, level.mesh, options.distance);
             if (!d.ok()) {
                 diagnostics.warn("lod chain: level ratio " + std::to_string(level.target_ratio) +
                                  ": error not measured: " + d.status().message());
