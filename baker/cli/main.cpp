@@ -354,7 +354,8 @@ int runSimplify(int argc, char** argv) {
     if (formatFromPath(out) == MeshFormat::Unknown)
         return usageError("output '" + out + "' has an unknown extension, expected .ply .obj .off .gltf or .glb");
     if (isSameFile(in, out)) return usageError("output '" + out + "' is the input file; the input is never modified");
-    const int targets = int(args.values.count("--ratio") + args.values.count("--triangles") + args.values.count("--error"));
+    const int targets =
+        int(args.values.count("--ratio") + args.values.count("--triangles") + args.values.count("--error"));
     if (targets != 1) return usageError("simplify needs exactly one of --ratio, --triangles, --error");
     SimplifyOptions options;
     double value = 0;
@@ -407,7 +408,8 @@ int runSimplify(int argc, char** argv) {
         return kExitOk;
     }
     std::printf("wrote %s: %zu vertices, %zu triangles (from %zu)%s\n", out.c_str(), result->mesh.vertexCount(),
-                result->mesh.faceCount(), result->input_triangles, result->reached_target ? "" : ", target not reached");
+                result->mesh.faceCount(), result->input_triangles,
+                result->reached_target ? "" : ", target not reached");
     if (distance.ok())
         std::printf("distance to input: hausdorff %.4g (%.3e of diagonal), mean %.4g (%.3e)\n", distance->hausdorff,
                     distance->hausdorffRel(), distance->mean, distance->meanRel());
@@ -472,9 +474,9 @@ int runLods(int argc, char** argv) {
         double* target;
     };
     double fov_deg = 60.0;
-    for (const NumberOption& n : {NumberOption{"--pixels", &options.screen.pixel_threshold},
-                                  NumberOption{"--viewport", &options.screen.viewport_height_px},
-                                  NumberOption{"--fov", &fov_deg}}) {
+    for (const NumberOption& n :
+         {NumberOption{"--pixels", &options.screen.pixel_threshold},
+          NumberOption{"--viewport", &options.screen.viewport_height_px}, NumberOption{"--fov", &fov_deg}}) {
         if (!args.values.count(n.name)) continue;
         if (!parseNumber(args.values[n.name], *n.target) || !(*n.target > 0.0))
             return usageError(std::string(n.name) + " expects a positive number, got '" + args.values[n.name] + "'");

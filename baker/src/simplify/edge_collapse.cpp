@@ -46,9 +46,13 @@ uint32_t floatBits(float f) {
     return b;
 }
 
-Vec3d toD(const Vec3f& v) { return Vec3d(v); }
+Vec3d toD(const Vec3f& v) {
+    return Vec3d(v);
+}
 
-double length2(const Vec3d& v) { return dot(v, v); }
+double length2(const Vec3d& v) {
+    return dot(v, v);
+}
 
 } // namespace
 
@@ -112,12 +116,14 @@ EdgeCollapser::Kind EdgeCollapser::classify(uint32_t point) {
 void EdgeCollapser::collectPairs(uint32_t edge, uint32_t removed, WedgePair* pairs, int& pair_count) const {
     const uint32_t a_corner = edge, b_corner = nextHe(edge);
     const bool remove_a = corner_point_[edge] == removed;
-    pairs[0] = remove_a ? WedgePair{wedgeAt(a_corner), wedgeAt(b_corner)} : WedgePair{wedgeAt(b_corner), wedgeAt(a_corner)};
+    pairs[0] =
+        remove_a ? WedgePair{wedgeAt(a_corner), wedgeAt(b_corner)} : WedgePair{wedgeAt(b_corner), wedgeAt(a_corner)};
     pair_count = 1;
     const uint32_t t = twin_[edge];
     if (t == kNone) return;
     // The twin runs b -> a: corner t is b, corner next(t) is a.
-    const WedgePair p = remove_a ? WedgePair{wedgeAt(nextHe(t)), wedgeAt(t)} : WedgePair{wedgeAt(t), wedgeAt(nextHe(t))};
+    const WedgePair p =
+        remove_a ? WedgePair{wedgeAt(nextHe(t)), wedgeAt(t)} : WedgePair{wedgeAt(t), wedgeAt(nextHe(t))};
     if (p.removed != pairs[0].removed || p.kept != pairs[0].kept) pairs[pair_count++] = p;
 }
 
@@ -288,7 +294,8 @@ bool EdgeCollapser::isValid(const Candidate& c, int& pair_count, WedgePair* pair
     RegionNormal region;
     double min_old = 1.0, min_new = 1.0;
     if (!checkFaces(fan_u_, u, c.position, f0, f1, region, min_old, min_new) ||
-        !checkFaces(fan_v_, v, c.position, f0, f1, region, min_old, min_new)) return false;
+        !checkFaces(fan_v_, v, c.position, f0, f1, region, min_old, min_new))
+        return false;
     // Needles: the worst triangle of the neighbourhood may not get worse (removing a sliver is fine).
     if (min_new < options_.min_triangle_quality && min_new < min_old) return false;
     return true;
@@ -603,7 +610,8 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
             continue;
         }
         corner_point_.insert(corner_point_.end(), {p0, p1, p2});
-        if (has_wedges) corner_wedge_.insert(corner_wedge_.end(), {vertex_wedge[i0], vertex_wedge[i1], vertex_wedge[i2]});
+        if (has_wedges)
+            corner_wedge_.insert(corner_wedge_.end(), {vertex_wedge[i0], vertex_wedge[i1], vertex_wedge[i2]});
         if (multi_group) face_group_.push_back(uint32_t(std::min(group, groups.size() - 1)));
         face_source_.push_back(uint32_t(f));
     }

@@ -43,12 +43,12 @@ private:
     static constexpr uint32_t kNone = 0xffffffffu;
 
     struct Candidate {
-        uint32_t edge = kNone;  // canonical half-edge
+        uint32_t edge = kNone; // canonical half-edge
         uint32_t removed = kNone;
         uint32_t kept = kNone;
         Vec3d position;
         double cost = 0;
-        double error = 0;       // geometric RMS distance estimate, object units
+        double error = 0; // geometric RMS distance estimate, object units
     };
     struct WedgePair {
         uint32_t removed;
@@ -87,24 +87,24 @@ private:
 
     // Points (distinct positions) and wedges (distinct position + attributes).
     std::vector<Vec3f> position_;
-    std::vector<uint32_t> point_he_;   // an outgoing half-edge of an alive face, or kNone
+    std::vector<uint32_t> point_he_; // an outgoing half-edge of an alive face, or kNone
     std::vector<uint8_t> kind_;
-    std::vector<uint32_t> mark_;       // scratch stamps for the link condition
+    std::vector<uint32_t> mark_; // scratch stamps for the link condition
     uint32_t stamp_ = 0;
     std::vector<Quadric> quadric_;
     std::vector<uint32_t> wedge_vertex_; // an input vertex carrying the wedge's original attributes
     std::vector<uint32_t> wedge_point_;
-    uint32_t channel_count_ = 0;         // scalar attribute channels per wedge
-    std::vector<float> channel_weight_;  // per channel, squared weight × scale²
-    std::vector<float> wedge_value_;     // wedge_count × channel_count_
+    uint32_t channel_count_ = 0;                  // scalar attribute channels per wedge
+    std::vector<float> channel_weight_;           // per channel, squared weight × scale²
+    std::vector<float> wedge_value_;              // wedge_count × channel_count_
     std::vector<AttributeQuadric> wedge_quadric_; // wedge_count × channel_count_
 
     // Corner table: half-edge h goes from corner_point_[h] to corner_point_[nextHe(h)].
     std::vector<uint32_t> corner_point_; // kNone for dead faces
     std::vector<uint32_t> corner_wedge_; // empty when there are no attribute streams
     std::vector<uint32_t> twin_;
-    std::vector<uint32_t> face_group_;   // sub-mesh per face; empty with a single sub-mesh
-    std::vector<uint32_t> face_source_;  // input face index per face
+    std::vector<uint32_t> face_group_;  // sub-mesh per face; empty with a single sub-mesh
+    std::vector<uint32_t> face_source_; // input face index per face
     std::vector<uint32_t> group_first_face_;
 
     CollapseQueue queue_;

@@ -65,8 +65,7 @@ Result<LodChain> buildLodChain(const Mesh& mesh, const LodChainOptions& options,
     if (options.measure_error) {
         // The input's BVH is built once for all levels.
         Result<DistanceReference> reference = DistanceReference::prepare(mesh);
-        if (!reference.ok())
-            diagnostics.warn("lod chain: errors not measured: " + reference.status().message());
+        if (!reference.ok()) diagnostics.warn("lod chain: errors not measured: " + reference.status().message());
         for (LodLevel& level : chain.levels) {
             if (!reference.ok()) break;
             Result<DistanceResult> d = measureSurfaceDistance(*reference, level.mesh, options.distance);

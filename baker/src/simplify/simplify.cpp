@@ -23,8 +23,7 @@ Result<SimplifyOutput> simplify(const Mesh& mesh, const SimplifyOptions& options
     if (!(options.target_ratio >= 0.0f && options.target_ratio <= 1.0f))
         return invalidInput("simplify options: target_ratio " + formatError(options.target_ratio) +
                             ": expected a value in [0, 1]");
-    if (!(options.max_error >= 0.0))
-        return invalidInput("simplify options: max_error: expected a non-negative number");
+    if (!(options.max_error >= 0.0)) return invalidInput("simplify options: max_error: expected a non-negative number");
     detail::EdgeCollapser engine;
     LODBAKE_RETURN_IF_ERROR(engine.init(mesh, options, diagnostics));
     const size_t faces = engine.initialFaceCount();

@@ -98,7 +98,8 @@ TEST(LodChainTest, CollapseSequenceReplaysToEveryLevel) {
             const uint32_t a = find(sphere.indices[f * 3]), b = find(sphere.indices[f * 3 + 1]),
                            c = find(sphere.indices[f * 3 + 2]);
             if (a == b || b == c || a == c) continue;
-            replayed.push_back({pos[a].x, pos[a].y, pos[a].z, pos[b].x, pos[b].y, pos[b].z, pos[c].x, pos[c].y, pos[c].z});
+            replayed.push_back(
+                {pos[a].x, pos[a].y, pos[a].z, pos[b].x, pos[b].y, pos[b].z, pos[c].x, pos[c].y, pos[c].z});
         }
         const Mesh& m = level.mesh;
         for (size_t f = 0; f < m.faceCount(); ++f) {

@@ -341,14 +341,17 @@ TEST(SimplifyTest, OutputIsDeterministic) {
     const SimplifyOutput b = run(sphere, ratio(0.2f));
     ASSERT_EQ(a.mesh.indices, b.mesh.indices);
     ASSERT_EQ(a.mesh.positions.size(), b.mesh.positions.size());
-    EXPECT_EQ(0, std::memcmp(a.mesh.positions.data(), b.mesh.positions.data(), a.mesh.positions.size() * sizeof(Vec3f)));
-    EXPECT_EQ(0, std::memcmp(a.mesh.colors.data(), b.mesh.colors.data(), a.mesh.colors.size() * sizeof(lodbake::Vec4f)));
+    EXPECT_EQ(0,
+              std::memcmp(a.mesh.positions.data(), b.mesh.positions.data(), a.mesh.positions.size() * sizeof(Vec3f)));
+    EXPECT_EQ(0,
+              std::memcmp(a.mesh.colors.data(), b.mesh.colors.data(), a.mesh.colors.size() * sizeof(lodbake::Vec4f)));
 }
 
 TEST(SimplifyTest, DuplicateVerticesAndDegenerateFacesAreHandled) {
     // The same quad twice over: vertices 4..7 repeat 0..3 exactly and a zero-area face is added.
-    Mesh q = lodbake_test::makeMesh({{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}},
-                                    {0, 1, 2, 4, 6, 7, 0, 4, 1});
+    Mesh q =
+        lodbake_test::makeMesh({{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}},
+                               {0, 1, 2, 4, 6, 7, 0, 4, 1});
     Diagnostics diagnostics;
     const SimplifyOutput out = run(q, ratio(1.0f), &diagnostics);
     EXPECT_EQ(out.mesh.faceCount(), 2u);

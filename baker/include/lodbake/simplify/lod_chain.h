@@ -46,11 +46,11 @@ struct WedgeUpdate {
 };
 
 struct CollapseSequence {
-    std::vector<Vec3f> point_positions;   // initial position of every point
-    std::vector<uint32_t> wedge_point;    // point of every wedge
-    std::vector<CollapseRecord> records;  // in execution order
+    std::vector<Vec3f> point_positions;  // initial position of every point
+    std::vector<uint32_t> wedge_point;   // point of every wedge
+    std::vector<CollapseRecord> records; // in execution order
     std::vector<WedgeUpdate> wedge_updates;
-    uint32_t attribute_stride = 0;        // floats per wedge update in wedge_attributes
+    uint32_t attribute_stride = 0; // floats per wedge update in wedge_attributes
     std::vector<float> wedge_attributes;
 };
 
@@ -58,15 +58,15 @@ struct CollapseSequence {
 /// used from the distance d at which e projects to `pixel_threshold` pixels,
 /// d = e · viewport_height_px / (2 · pixel_threshold · tan(vertical_fov_rad / 2)).
 struct ScreenParams {
-    double pixel_threshold = 1.0;    // largest tolerated screen-space error, pixels
+    double pixel_threshold = 1.0; // largest tolerated screen-space error, pixels
     double viewport_height_px = 1080.0;
     double vertical_fov_rad = 1.0471975511965976; // 60 degrees
 };
 
 struct LodChainOptions {
     std::vector<double> ratios{0.5, 0.25, 0.1, 0.03, 0.01}; // per level, fraction of input triangles
-    SimplifyOptions simplify;     // validity rules and weights (its targets are ignored)
-    bool measure_error = true;    // measure each level against the input with measureSurfaceDistance
+    SimplifyOptions simplify;                               // validity rules and weights (its targets are ignored)
+    bool measure_error = true; // measure each level against the input with measureSurfaceDistance
     DistanceOptions distance;
     ScreenParams screen;
     bool record_collapses = true; // fill LodChain::sequence
@@ -75,19 +75,19 @@ struct LodChainOptions {
 struct LodLevel {
     Mesh mesh;
     double target_ratio = 0;
-    size_t collapse_count = 0;     // prefix of the collapse sequence that produced this level
-    double quadric_error = 0;      // largest estimated collapse error so far (object units)
-    bool reached_target = false;   // false: could not simplify further (see Diagnostics)
+    size_t collapse_count = 0;   // prefix of the collapse sequence that produced this level
+    double quadric_error = 0;    // largest estimated collapse error so far (object units)
+    bool reached_target = false; // false: could not simplify further (see Diagnostics)
     bool has_distance = false;
-    DistanceResult distance;       // against the input mesh (when measured)
-    double switch_distance = 0;    // from this distance on the level is acceptable (object units)
-    double screen_coverage = 0;    // bounding-sphere diameter / viewport height at switch_distance
+    DistanceResult distance;    // against the input mesh (when measured)
+    double switch_distance = 0; // from this distance on the level is acceptable (object units)
+    double screen_coverage = 0; // bounding-sphere diameter / viewport height at switch_distance
 };
 
 struct LodChain {
-    std::vector<LodLevel> levels;  // in order of decreasing detail (ratios sorted descending)
+    std::vector<LodLevel> levels; // in order of decreasing detail (ratios sorted descending)
     CollapseSequence sequence;
-    double bounding_radius = 0;    // input bounding sphere radius (half the box diagonal)
+    double bounding_radius = 0; // input bounding sphere radius (half the box diagonal)
 };
 
 /// d = e · H / (2 · p · tan(fov / 2)); 0 for e ≤ 0, +inf when p ≤ 0 or fov invalid.

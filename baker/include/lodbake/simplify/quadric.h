@@ -42,11 +42,11 @@ Vec3d minimizeOnSegment(const Quadric& q, const Vec3d& p0, const Vec3d& p1);
 /// the placement solve and are optimised, not snapped.
 struct AttributeQuadric {
     double g00 = 0, g01 = 0, g02 = 0, g11 = 0, g12 = 0, g22 = 0; // Σ a g gᵀ
-    double e0 = 0, e1 = 0, e2 = 0;                                // Σ a d g
-    double h0 = 0, h1 = 0, h2 = 0;                                // Σ a g
-    double dd = 0;                                                // Σ a d²
-    double d = 0;                                                 // Σ a d
-    double area = 0;                                              // Σ a
+    double e0 = 0, e1 = 0, e2 = 0;                               // Σ a d g
+    double h0 = 0, h1 = 0, h2 = 0;                               // Σ a g
+    double dd = 0;                                               // Σ a d²
+    double d = 0;                                                // Σ a d
+    double area = 0;                                             // Σ a
 
     /// Adds the face (p0,p1,p2) with corner values s0,s1,s2, weighted by `weight` (area × channel weight²).
     void addTriangle(const Vec3d& p0, const Vec3d& p1, const Vec3d& p2, double s0, double s1, double s2, double weight);

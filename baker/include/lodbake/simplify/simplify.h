@@ -36,28 +36,29 @@ struct AttributeWeights {
 /// What the simplifier may do. The ratio, triangle and error targets combine: simplification stops
 /// at the first one reached.
 struct SimplifyOptions {
-    float target_ratio = 0.5f;    // fraction of input triangles to keep (0: no ratio target)
+    float target_ratio = 0.5f;     // fraction of input triangles to keep (0: no ratio target)
     uint32_t target_triangles = 0; // absolute triangle count to reach; overrides target_ratio when > 0
-    double max_error = std::numeric_limits<double>::infinity(); // object units; a collapse whose
-                                   // estimated error (quadric RMS distance) exceeds it is not done
-    float border_weight = 10.0f;   // weight of boundary/seam constraint planes (× edge length²)
-    float max_normal_change_deg = 75.0f; // largest rotation of any face normal in one collapse
-    float min_triangle_quality = 0.05f;  // reject collapses creating triangles below this quality
-                                   // (4√3·area / Σ edge², 1 = equilateral) unless no worse than before
+    double max_error =
+        std::numeric_limits<double>::infinity(); // object units; a collapse whose
+                                                 // estimated error (quadric RMS distance) exceeds it is not done
+    float border_weight = 10.0f;                 // weight of boundary/seam constraint planes (× edge length²)
+    float max_normal_change_deg = 75.0f;         // largest rotation of any face normal in one collapse
+    float min_triangle_quality = 0.05f;          // reject collapses creating triangles below this quality
+                                        // (4√3·area / Σ edge², 1 = equilateral) unless no worse than before
     float cost_area_exponent = 0.5f; // queue order: Q(p) / area^k over the merged quadric's face area.
-                                   // 0 = Garland–Heckbert's raw area-weighted cost (lowest mean error,
-                                   // but small thin features go early), 1 = mean squared distance
-                                   // (lowest Hausdorff); 0.5 balances both (docs/simplify.md)
-    bool lock_border = false;      // keep open-boundary vertices exactly in place
+                                     // 0 = Garland–Heckbert's raw area-weighted cost (lowest mean error,
+                                     // but small thin features go early), 1 = mean squared distance
+                                     // (lowest Hausdorff); 0.5 balances both (docs/simplify.md)
+    bool lock_border = false;        // keep open-boundary vertices exactly in place
     AttributeWeights attribute_weights;
 };
 
 struct SimplifyOutput {
     Mesh mesh;
-    size_t input_triangles = 0;   // after dropping faces degenerate by position
-    size_t collapses = 0;         // edge collapses performed
+    size_t input_triangles = 0;    // after dropping faces degenerate by position
+    size_t collapses = 0;          // edge collapses performed
     double max_collapse_error = 0; // largest estimated error (object units) of a collapse performed
-    bool reached_target = false;  // false: stopped at the best valid mesh (see Diagnostics)
+    bool reached_target = false;   // false: stopped at the best valid mesh (see Diagnostics)
 };
 
 /// Simplifies `mesh`. When the target cannot be reached (every remaining collapse is invalid or
