@@ -393,7 +393,6 @@ void EdgeCollapser::collapse(const Candidate& c, const WedgePair* pairs, int pai
     kind_[u] = kDead;
     ++collapses_;
     max_error_done_ = std::max(max_error_done_, c.error);
-    (void)f1;
 
     const uint8_t old_w0 = kind_[w0];
     const uint8_t old_w1 = w1 == kNone ? 0 : kind_[w1];
