@@ -463,4 +463,23 @@ TEST(SimplifyTest, LinkConditionKeepsClosedSurfacesManifoldDownToATetrahedron) {
     EXPECT_EQ(t.duplicate_face_count, 0u);
 }
 
+TEST(SimplifyTest, RawRangeScanKeepsItsTopology) {
+    // A raw scan: 10 components, 35 holes, 14 bow-tie vertices on its borders.
+    LODBAKE_REQUIRE_SHARED_MESHES();
+    Diagnostics diagnostics;
+    auto loaded =
+        lodbake::readMesh(lodbake_test::sharedMesh("bunny_scan_bun000_tri.ply"), lodbake::ReadOptions(), diagnostics);
+    ASSERT_TRUE(loaded.ok()) << loaded.status().message();
+    const SimplifyOutput out = run(loaded->mesh, ratio(0.05f));
+    EXPECT_TRUE(out.reached_target);
+    const lodbake::TopologyStats before = lodbake::computeTopologyStats(loaded->mesh);
+    const lodbake::TopologyStats after = lodbake::computeTopologyStats(out.mesh);
+    EXPECT_EQ(after.component_count, before.component_count);
+    EXPECT_EQ(after.euler_characteristic, before.euler_characteristic);
+    EXPECT_EQ(after.non_manifold_edge_count, before.non_manifold_edge_count);
+    EXPECT_EQ(after.non_manifold_vertex_count, before.non_manifold_vertex_count);
+    EXPECT_EQ(after.inconsistent_edge_count, 0u);
+    EXPECT_EQ(after.duplicate_face_count, 0u);
+}
+
 } // namespace
