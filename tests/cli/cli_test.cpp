@@ -78,6 +78,9 @@ struct MalformedCase {
     std::string expected; // substring the error line must contain (the element that is wrong)
 };
 
+// Shown by ctest instead of the struct's bytes.
+void PrintTo(const MalformedCase& c, std::ostream* os) { *os << c.path; }
+
 std::vector<MalformedCase> malformedCases() {
     std::vector<MalformedCase> cases;
     const fs::path root = fs::path(lodbake_test::sourceDir()) / "tests" / "malformed";

@@ -1,0 +1,104 @@
+#pragma once
+// Discrete LOD chains built in ONE incremental simplification pass: the collapse sequence runs
+// from full detail downwards and a snapshot is taken whenever a requested level is reached, so a
+// 5-level chain costs about one simplification. The collapse sequence is recorded for the
+// progressive representation (PFRep).
+//
+// Collapse record format (CollapseSequence):
+//   Vertex ids in records are POINT ids: indices into CollapseSequence::point_positions, the
+//   distinct positions of the input (bit-identical positions share a point).
+//   Attribute corners are WEDGE ids: indices into wedge_point, one per distinct
+//   (position, attributes) vertex of the input; wedge w lies on point wedge_point[w].
+//   records[i] is the i-th collapse in execution order:
+//     removed_point  the point that disappears (every reference to it becomes kept_point);
+//     kept_point     the surviving point, moved to `position`;
+//     position       the new position of kept_point;
+//     first_wedge_update, wedge_update_count: a range of wedge_updates. Each entry says that
+//       removed_wedge (a wedge of removed_point) is replaced by kept_wedge (a wedge of kept_point),
+//       whose attributes become the `attribute_stride` floats at
+//       wedge_attributes[(first_wedge_update + k) * attribute_stride] in the layout
+//       [normal xyz][uv0 xy][uv1 xy]...[colour rgba] (only the streams the input has).
+//   The faces removed by a collapse are those that contained both points. Level i's mesh is the
+//   input after records[0 .. levels[i].collapse_count).
+
+#include <cstdint>
+#include <vector>
+
+#include "lodbake/core/diagnostics.h"
+#include "lodbake/core/mesh.h"
+#include "lodbake/core/status.h"
+#include "lodbake/simplify/mesh_distance.h"
+#include "lodbake/simplify/simplify.h"
+
+namespace lodbake {
+
+struct CollapseRecord {
+    uint32_t removed_point = 0;
+    uint32_t kept_point = 0;
+    Vec3f position;
+    uint32_t first_wedge_update = 0;
+    uint32_t wedge_update_count = 0;
+};
+
+struct WedgeUpdate {
+    uint32_t removed_wedge = 0;
+    uint32_t kept_wedge = 0;
+};
+
+struct CollapseSequence {
+    std::vector<Vec3f> point_positions;  // initial position of every point
+    std::vector<uint32_t> wedge_point;   // point of every wedge
+    std::vector<CollapseRecord> records; // in execution order
+    std::vector<WedgeUpdate> wedge_updates;
+    uint32_t attribute_stride = 0; // floats per wedge update in wedge_attributes
+    std::vector<float> wedge_attributes;
+};
+
+/// How switch distances are derived (docs/simplify.md): the level whose Hausdorff error is e is
+/// used from the distance d at which e projects to `pixel_threshold` pixels,
+/// d = e · viewport_height_px / (2 · pixel_threshold · tan(vertical_fov_rad / 2)).
+struct ScreenParams {
+    double pixel_threshold = 1.0; // largest tolerated screen-space error, pixels
+    double viewport_height_px = 1080.0;
+    double vertical_fov_rad = 1.0471975511965976; // 60 degrees
+};
+
+struct LodChainOptions {
+    std::vector<double> ratios{0.5, 0.25, 0.1, 0.03, 0.01}; // per level, fraction of input triangles
+    SimplifyOptions simplify;                               // validity rules and weights (its targets are ignored)
+    bool measure_error = true; // measure each level against the input with measureSurfaceDistance
+    DistanceOptions distance;
+    ScreenParams screen;
+    bool record_collapses = true; // fill LodChain::sequence
+};
+
+struct LodLevel {
+    Mesh mesh;
+    double target_ratio = 0;
+    size_t collapse_count = 0;   // prefix of the collapse sequence that produced this level
+    double quadric_error = 0;    // largest estimated collapse error so far (object units)
+    bool reached_target = false; // false: could not simplify further (see Diagnostics)
+    bool has_distance = false;
+    DistanceResult distance;    // against the input mesh (when measured)
+    double switch_distance = 0; // from this distance on the level is acceptable (object units)
+    double screen_coverage = 0; // bounding-sphere diameter / viewport height at switch_distance
+};
+
+struct LodChain {
+    std::vector<LodLevel> levels; // in order of decreasing detail (ratios sorted descending)
+    CollapseSequence sequence;
+    double bounding_radius = 0; // input bounding sphere radius (half the box diagonal)
+};
+
+/// d = e · H / (2 · p · tan(fov / 2)); 0 for e ≤ 0, +inf when p ≤ 0 or fov invalid.
+double switchDistance(double error, const ScreenParams& screen);
+/// Fraction of the viewport height covered by a sphere of `radius` at `distance` (the projected
+/// diameter, 2 r / (2 d tan(fov/2))), capped at 1 (so 1 when distance ≤ 0).
+double screenCoverage(double radius, double distance, const ScreenParams& screen);
+
+/// Builds the chain. Ratios must lie in (0, 1]; duplicates are dropped, the rest sorted in
+/// decreasing order. A level that cannot be reached repeats the smallest valid mesh, with
+/// reached_target = false and a note. Fails on invalid input or options.
+Result<LodChain> buildLodChain(const Mesh& mesh, const LodChainOptions& options, Diagnostics& diagnostics);
+
+} // namespace lodbake

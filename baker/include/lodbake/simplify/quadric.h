@@ -1,0 +1,60 @@
+#pragma once
+// Quadric error metric (Garland & Heckbert 1997) and its attribute extension (Hoppe 1999 style,
+// with the attribute values eliminated in closed form), in double precision.
+//
+// A Quadric measures Q(p) = pᵀ A p + 2 bᵀ p + c, a weighted sum of squared distances from p to a
+// set of planes. `weight` is the summed weight of those planes (the face AREA for face planes),
+// so Q(p) / weight is a mean squared distance in object units².
+
+#include "lodbake/core/math.h"
+
+namespace lodbake {
+
+struct Quadric {
+    double a00 = 0, a01 = 0, a02 = 0, a11 = 0, a12 = 0, a22 = 0; // symmetric A
+    double b0 = 0, b1 = 0, b2 = 0;
+    double c = 0;
+    double weight = 0;
+
+    /// The quadric of the plane n·p + d = 0 (n unit length) times `weight`.
+    static Quadric fromPlane(const Vec3d& n, double d, double weight);
+    /// Plane through p0,p1,p2 weighted by the triangle's area. Zero for a degenerate triangle.
+    static Quadric fromTriangle(const Vec3d& p0, const Vec3d& p1, const Vec3d& p2);
+
+    Quadric& operator+=(const Quadric& o);
+    Quadric& operator*=(double s);
+    /// Q(p); clamped at 0 (rounding can make it slightly negative).
+    double evaluate(const Vec3d& p) const;
+};
+
+/// Solves A p = -b for the minimiser of q. Returns false, leaving `out` untouched, when A is
+/// singular or ill-conditioned (smallest/largest eigenvalue ratio, estimated from the
+/// determinant, below `min_condition`); callers then fall back to a line search or endpoints.
+bool solveQuadric(const Quadric& q, Vec3d& out, double min_condition = 1e-7);
+
+/// Minimiser of q on the segment [p0, p1] (exact for the 1-D quadratic, clamped to the segment).
+Vec3d minimizeOnSegment(const Quadric& q, const Vec3d& p0, const Vec3d& p1);
+
+/// The quadric of one scalar attribute channel s over a set of faces. Each face contributes the
+/// linear field s(p) = g·p + d interpolating its three corner values (g lies in the face plane),
+/// weighted by area. For a point p the best attribute value is s*(p) = (h·p + D) / A, and the
+/// remaining error Σ a (s* − g·p − d)² is a quadric in p (toQuadric), so attributes take part in
+/// the placement solve and are optimised, not snapped.
+struct AttributeQuadric {
+    double g00 = 0, g01 = 0, g02 = 0, g11 = 0, g12 = 0, g22 = 0; // Σ a g gᵀ
+    double e0 = 0, e1 = 0, e2 = 0;                               // Σ a d g
+    double h0 = 0, h1 = 0, h2 = 0;                               // Σ a g
+    double dd = 0;                                               // Σ a d²
+    double d = 0;                                                // Σ a d
+    double area = 0;                                             // Σ a
+
+    /// Adds the face (p0,p1,p2) with corner values s0,s1,s2, weighted by `weight` (area × channel weight²).
+    void addTriangle(const Vec3d& p0, const Vec3d& p1, const Vec3d& p2, double s0, double s1, double s2, double weight);
+    AttributeQuadric& operator+=(const AttributeQuadric& o);
+    /// The optimal attribute value at p (the area-weighted mean of the face fields at p).
+    double optimalValue(const Vec3d& p) const;
+    /// Adds the post-elimination error quadric to `q` (its weight is left unchanged).
+    void addTo(Quadric& q) const;
+};
+
+} // namespace lodbake

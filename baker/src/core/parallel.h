@@ -1,0 +1,50 @@
+#pragma once
+// The one place the baker touches TBB (STYLE.md §2): a fixed-grain parallel loop and a scoped thread
+// limit. Callers parallelise over independent items and write into per-item slots, so the output
+// never depends on the thread count or the schedule (STYLE.md §7).
+
+#include <cstddef>
+#include <exception>
+#include <new>
+#include <string>
+
+#include <tbb/blocked_range.h>
+#include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
+#include <tbb/partitioner.h>
+
+#include "lodbake/core/status.h"
+
+namespace lodbake {
+
+/// Calls fn(i) for every i in [0, count), `grain` consecutive items per task. fn must only write
+/// state owned by item i. TBB task exceptions (bad_alloc) are caught here and become a Status;
+/// fn itself must not throw.
+template <class Fn> Status parallelFor(size_t count, size_t grain, Fn&& fn) {
+    if (count == 0) return Status::okStatus();
+    try {
+        tbb::parallel_for(
+            tbb::blocked_range<size_t>(0, count, grain > 0 ? grain : 1),
+            [&fn](const tbb::blocked_range<size_t>& range) {
+                for (size_t i = range.begin(); i != range.end(); ++i) fn(i);
+            },
+            tbb::simple_partitioner());
+    } catch (const std::bad_alloc&) {
+        return resourceLimit("out of memory in a parallel task");
+    } catch (const std::exception& e) {
+        return internalError(std::string("parallel task failed: ") + e.what());
+    }
+    return Status::okStatus();
+}
+
+/// Limits the worker threads TBB may use while it is alive (CLI --threads, determinism tests).
+class ScopedThreadLimit {
+public:
+    explicit ScopedThreadLimit(size_t thread_count)
+        : control_(tbb::global_control::max_allowed_parallelism, thread_count > 0 ? thread_count : 1) {}
+
+private:
+    tbb::global_control control_;
+};
+
+} // namespace lodbake

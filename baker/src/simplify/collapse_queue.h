@@ -1,0 +1,119 @@
+#pragma once
+// Indexed binary min-heap of collapse candidates (Gasparello 2007 §2: each edge stores its heap
+// position so update and remove are O(log n) without searching). Ordered by cost, then by id, so
+// the collapse order never depends on heap layout or insertion history.
+
+#include <cstdint>
+#include <vector>
+
+namespace lodbake::detail {
+
+class CollapseQueue {
+public:
+    static constexpr uint32_t kAbsent = 0xffffffffu;
+
+    /// Ids are in [0, id_capacity).
+    explicit CollapseQueue(size_t id_capacity = 0) : pos_(id_capacity, kAbsent) {}
+
+    void reserve(size_t n) { heap_.reserve(n); }
+    bool empty() const { return heap_.empty(); }
+    size_t size() const { return heap_.size(); }
+    bool contains(uint32_t id) const { return pos_[id] != kAbsent; }
+    uint32_t topId() const { return heap_[0].id; }
+    float topCost() const { return heap_[0].cost; }
+    float cost(uint32_t id) const { return heap_[pos_[id]].cost; }
+
+    /// Inserts `id` or changes its cost if present.
+    void set(uint32_t id, float cost) {
+        uint32_t i = pos_[id];
+        if (i == kAbsent) {
+            i = uint32_t(heap_.size());
+            heap_.push_back({cost, id});
+            pos_[id] = i;
+            siftUp(i);
+            return;
+        }
+        const Entry old = heap_[i];
+        heap_[i].cost = cost;
+        if (less(heap_[i], old))
+            siftUp(i);
+        else
+            siftDown(i);
+    }
+
+    /// Removes `id` if present.
+    void remove(uint32_t id) {
+        const uint32_t i = pos_[id];
+        if (i == kAbsent) return;
+        pos_[id] = kAbsent;
+        const uint32_t last = uint32_t(heap_.size() - 1);
+        if (i == last) {
+            heap_.pop_back();
+            return;
+        }
+        const Entry moved = heap_[last];
+        heap_.pop_back();
+        heap_[i] = moved;
+        pos_[moved.id] = i;
+        if (i > 0 && less(moved, heap_[(i - 1) / 2]))
+            siftUp(i);
+        else
+            siftDown(i);
+    }
+
+    uint32_t pop() {
+        const uint32_t id = heap_[0].id;
+        remove(id);
+        return id;
+    }
+
+    /// True when the heap order and the position index agree (for tests).
+    bool isConsistent() const {
+        for (size_t i = 0; i < heap_.size(); ++i) {
+            if (pos_[heap_[i].id] != i) return false;
+            if (i > 0 && less(heap_[i], heap_[(i - 1) / 2])) return false;
+        }
+        return true;
+    }
+
+private:
+    struct Entry {
+        float cost;
+        uint32_t id;
+    };
+    static bool less(const Entry& a, const Entry& b) { return a.cost < b.cost || (a.cost == b.cost && a.id < b.id); }
+
+    void siftUp(uint32_t i) {
+        const Entry e = heap_[i];
+        while (i > 0) {
+            const uint32_t parent = (i - 1) / 2;
+            if (!less(e, heap_[parent])) break;
+            heap_[i] = heap_[parent];
+            pos_[heap_[i].id] = i;
+            i = parent;
+        }
+        heap_[i] = e;
+        pos_[e.id] = i;
+    }
+
+    void siftDown(uint32_t i) {
+        const Entry e = heap_[i];
+        const uint32_t n = uint32_t(heap_.size());
+        for (;;) {
+            uint32_t child = 2 * i + 1;
+            if (child >= n) break;
+            if (child + 1 < n && less(heap_[child + 1], heap_[child])) ++child;
+            if (!less(heap_[child], e)) break;
+            heap_[i] = heap_[child];
+            pos_[heap_[i].id] = i;
+            i = child;
+        }
+        heap_[i] = e;
+        pos_[e.id] = i;
+    }
+
+    std::vector<Entry> heap_;
+    std::vector<uint32_t> pos_;
+};
+
+} // namespace lodbake::detail

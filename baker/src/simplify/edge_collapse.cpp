@@ -1,0 +1,801 @@
+// Incremental edge collapse with quadric error metrics.
+//   M. Garland, P. Heckbert, "Surface Simplification Using Quadric Error Metrics", SIGGRAPH 1997.
+//   M. Garland, P. Heckbert, "Simplifying Surfaces with Color and Texture using Quadric Error
+//     Metrics", IEEE Visualization 1998; H. Hoppe, "New Quadric Metric for Simplifying Meshes with
+//     Appearance Attributes", IEEE Visualization 1999 (attribute quadrics, see quadric.h).
+//   T. Dey, H. Edelsbrunner, S. Guha, D. Nekhayev, "Topology Preserving Edge Contraction", 1999
+//     (link condition).
+//   Constraint planes for borders and the heap with stored positions follow L. Gasparello's thesis
+//   (Pisa 2007), ch. 2 and 4.3.3.
+//
+// Connectivity is a corner table: half-edge h = corner h of the index buffer, from corner_point_[h]
+// to corner_point_[nextHe(h)], twin_[h] the opposite half-edge or kNone. Edges that are not
+// 2-manifold with consistent orientation get no twin and lock their endpoints, so non-manifold
+// spots of the input are never touched.
+//
+// Collapse (u removed, v kept, v moved to p), f0 = face of the edge, f1 = face of its twin:
+//
+//           w0                       w0
+//          /  \                      |
+//     t2  / f0 \  t1           t2 == t1 (glued)
+//        /      \                    |
+//       u ------ v        ==>        v (at p)
+//        \      /                    |
+//         \ f1 /                     |
+//          \  /                      |
+//           w1                       w1
+#include "simplify/edge_collapse.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <string>
+
+namespace lodbake::detail {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kTwoSqrt3 = 3.4641016151377544;
+// Below this quality (4√3·area / Σ edge²) a face's normal is too unstable to bound its rotation.
+constexpr double kReliableQuality = 0.05;
+
+uint32_t floatBits(float f) {
+    uint32_t b;
+    std::memcpy(&b, &f, sizeof b);
+    return b;
+}
+
+Vec3d toD(const Vec3f& v) {
+    return Vec3d(v);
+}
+
+double length2(const Vec3d& v) {
+    return dot(v, v);
+}
+
+} // namespace
+
+bool EdgeCollapser::isFeature(uint32_t h) const {
+    const uint32_t t = twin_[h];
+    if (t == kNone) return true;
+    if (!face_group_.empty() && face_group_[h / 3] != face_group_[t / 3]) return true;
+    if (!corner_wedge_.empty())
+        return corner_wedge_[h] != corner_wedge_[nextHe(t)] || corner_wedge_[nextHe(h)] != corner_wedge_[t];
+    return false;
+}
+
+bool EdgeCollapser::canRemove(uint32_t point, bool feature_edge) const {
+    const uint8_t k = kind_[point];
+    if (k == kFree) return true;
+    if (k == kLine) return feature_edge;
+    return false;
+}
+
+bool EdgeCollapser::gatherFan(uint32_t point, std::vector<uint32_t>& fan) const {
+    fan.clear();
+    const uint32_t h0 = point_he_[point];
+    if (h0 == kNone) return true;
+    const size_t guard = corner_point_.size();
+    uint32_t h = h0;
+    for (;;) {
+        fan.push_back(h);
+        const uint32_t n = twin_[prevHe(h)];
+        if (n == h0) return true;
+        if (n == kNone || fan.size() > guard) break;
+        h = n;
+    }
+    // Open fan: walk the other way from h0.
+    h = h0;
+    for (;;) {
+        const uint32_t t = twin_[h];
+        if (t == kNone) break;
+        h = nextHe(t);
+        if (h == h0 || fan.size() > guard) break;
+        fan.push_back(h);
+    }
+    return false;
+}
+
+EdgeCollapser::Kind EdgeCollapser::classify(uint32_t point) {
+    if (kind_[point] == kLocked || kind_[point] == kDead) return Kind(kind_[point]);
+    if (point_he_[point] == kNone) return kDead;
+    const bool closed = gatherFan(point, fan_tmp_);
+    if (!closed && options_.lock_border) return kCorner;
+    int features = 0;
+    for (uint32_t h : fan_tmp_) {
+        if (isFeature(h)) ++features;
+        const uint32_t in = prevHe(h);
+        if (twin_[in] == kNone) ++features; // a boundary edge coming in is nobody's outgoing edge
+    }
+    if (features == 0) return kFree;
+    if (features == 2) return kLine;
+    return kCorner;
+}
+
+void EdgeCollapser::collectPairs(uint32_t edge, uint32_t removed, WedgePair* pairs, int& pair_count) const {
+    const uint32_t a_corner = edge, b_corner = nextHe(edge);
+    const bool remove_a = corner_point_[edge] == removed;
+    pairs[0] =
+        remove_a ? WedgePair{wedgeAt(a_corner), wedgeAt(b_corner)} : WedgePair{wedgeAt(b_corner), wedgeAt(a_corner)};
+    pair_count = 1;
+    const uint32_t t = twin_[edge];
+    if (t == kNone) return;
+    // The twin runs b -> a: corner t is b, corner next(t) is a.
+    const WedgePair p =
+        remove_a ? WedgePair{wedgeAt(nextHe(t)), wedgeAt(t)} : WedgePair{wedgeAt(t), wedgeAt(nextHe(t))};
+    if (p.removed != pairs[0].removed || p.kept != pairs[0].kept) pairs[pair_count++] = p;
+}
+
+Quadric EdgeCollapser::combinedQuadric(uint32_t edge, uint32_t removed) const {
+    const uint32_t a = corner_point_[edge], b = corner_point_[nextHe(edge)];
+    Quadric q = quadric_[a];
+    q += quadric_[b];
+    if (channel_count_ == 0) return q;
+    WedgePair pairs[2];
+    int count = 0;
+    collectPairs(edge, removed, pairs, count);
+    for (int i = 0; i < count; ++i) {
+        for (uint32_t ch = 0; ch < channel_count_; ++ch) {
+            AttributeQuadric aq = wedge_quadric_[size_t(pairs[i].removed) * channel_count_ + ch];
+            aq += wedge_quadric_[size_t(pairs[i].kept) * channel_count_ + ch];
+            aq.addTo(q);
+        }
+    }
+    return q;
+}
+
+bool EdgeCollapser::evaluate(uint32_t edge, Candidate& c) const {
+    const uint32_t a = corner_point_[edge];
+    if (a == kNone) return false;
+    const uint32_t b = corner_point_[nextHe(edge)];
+    if (kind_[a] >= kLocked || kind_[b] >= kLocked) return false;
+    const bool feature = isFeature(edge);
+    const bool ra = canRemove(a, feature);
+    const bool rb = canRemove(b, feature);
+    if (!ra && !rb) return false;
+    c.edge = edge;
+    c.removed = ra ? a : b;
+    c.kept = ra ? b : a;
+    const Quadric q = combinedQuadric(edge, c.removed);
+    const Vec3d pk = toD(position_[c.kept]);
+    const Vec3d pr = toD(position_[c.removed]);
+    if (kind_[c.kept] == kCorner || (kind_[c.kept] == kLine && !feature)) {
+        // Corners never move; a border/seam point only moves along its own feature line.
+        c.position = pk;
+    } else if (kind_[c.kept] == kLine) {
+        // Both on the same feature line: stay on the segment between them, which lies on it.
+        c.position = minimizeOnSegment(q, pr, pk);
+    } else {
+        // The free optimum is only trusted near the edge: in flat or cylindrical regions a barely
+        // conditioned system can place the vertex far away at almost no quadric cost. When it is
+        // trusted it is the global minimum, so the segment search is only the fallback.
+        Vec3d opt;
+        if (solveQuadric(q, opt) && length2(opt - (pr + pk) * 0.5) <= 4.0 * length2(pk - pr))
+            c.position = opt;
+        else
+            c.position = minimizeOnSegment(q, pr, pk);
+    }
+    // Positions are stored in float: evaluate what will actually be stored.
+    c.position = toD(Vec3f(float(c.position.x), float(c.position.y), float(c.position.z)));
+    c.cost = q.evaluate(c.position);
+    Quadric geometric = q;
+    if (channel_count_ > 0) {
+        geometric = quadric_[a];
+        geometric += quadric_[b];
+    }
+    c.error = geometric.weight > 0 ? std::sqrt(geometric.evaluate(c.position) / geometric.weight) : 0.0;
+    // Queue key: area-weighted cost divided by area^exponent (see SimplifyOptions).
+    if (geometric.weight > 0) {
+        const double e = options_.cost_area_exponent;
+        if (e == 0.5f)
+            c.cost /= std::sqrt(geometric.weight);
+        else if (e == 1.0f)
+            c.cost /= geometric.weight;
+        else if (e != 0.0f)
+            c.cost /= std::pow(geometric.weight, e);
+    }
+    return true;
+}
+
+Vec3d EdgeCollapser::fanNormal(const std::vector<uint32_t>& fan) const {
+    Vec3d sum;
+    for (uint32_t h : fan) {
+        const Vec3d p0 = toD(position_[corner_point_[h]]);
+        sum += cross(toD(position_[corner_point_[nextHe(h)]]) - p0, toD(position_[corner_point_[prevHe(h)]]) - p0);
+    }
+    return sum;
+}
+
+bool EdgeCollapser::checkFaces(const std::vector<uint32_t>& fan, uint32_t moved, const Vec3d& p, uint32_t f0,
+                               uint32_t f1, RegionNormal& region, double& min_old, double& min_new) const {
+    const Vec3d pm = toD(position_[moved]);
+    for (uint32_t h : fan) {
+        const uint32_t f = h / 3;
+        const Vec3d px = toD(position_[corner_point_[nextHe(h)]]);
+        const Vec3d py = toD(position_[corner_point_[prevHe(h)]]);
+        const Vec3d n_old = cross(px - pm, py - pm);
+        const double len_old = length(n_old);
+        const double q_old = kTwoSqrt3 * len_old / (length2(px - pm) + length2(py - pm) + length2(px - py));
+        min_old = std::min(min_old, q_old);
+        if (f == f0 || f == f1) continue;
+        const Vec3d n_new = cross(px - p, py - p);
+        const double len_new = length(n_new);
+        if (!(len_new > 0.0)) return false;
+        const double q_new = kTwoSqrt3 * len_new / (length2(px - p) + length2(py - p) + length2(px - py));
+        min_new = std::min(min_new, q_new);
+        if (q_old >= kReliableQuality) {
+            if (dot(n_old, n_new) < cos_max_normal_change_ * len_old * len_new) return false;
+        } else {
+            // A sliver's normal is noise: judge the new face against the surrounding surface.
+            if (!region.ready) {
+                region.normal = fanNormal(fan_u_) + fanNormal(fan_v_);
+                region.ready = true;
+            }
+            if (dot(region.normal, n_new) < cos_max_normal_change_ * length(region.normal) * len_new) return false;
+        }
+    }
+    return true;
+}
+
+bool EdgeCollapser::isValid(const Candidate& c, int& pair_count, WedgePair* pairs) {
+    const uint32_t u = c.removed, v = c.kept, h = c.edge;
+    const uint32_t t = twin_[h];
+    const uint32_t f0 = h / 3;
+    const uint32_t f1 = t == kNone ? kNone : t / 3;
+    const bool u_closed = gatherFan(u, fan_u_);
+    const bool v_closed = gatherFan(v, fan_v_);
+    // An interior edge joining two boundary points would pinch the surface (the hole's virtual
+    // vertex is a common neighbour outside the edge's link).
+    if (t != kNone && !u_closed && !v_closed) return false;
+    const uint32_t w0 = corner_point_[prevHe(h)];
+    const uint32_t w1 = t == kNone ? kNone : corner_point_[prevHe(t)];
+    if (w0 == w1) return false;
+    // A face whose two other edges are both open would be left dangling or isolated.
+    if (twin_[nextHe(h)] == kNone && twin_[prevHe(h)] == kNone) return false;
+    if (t != kNone && twin_[nextHe(t)] == kNone && twin_[prevHe(t)] == kNone) return false;
+
+    // Link condition, vertices: common neighbours of u and v must be exactly w0 (and w1).
+    if (stamp_ >= 0xfffffff0u) {
+        std::fill(mark_.begin(), mark_.end(), 0u);
+        stamp_ = 0;
+    }
+    ++stamp_;
+    for (uint32_t he : fan_u_) {
+        mark_[corner_point_[nextHe(he)]] = stamp_;
+        mark_[corner_point_[prevHe(he)]] = stamp_;
+    }
+    for (uint32_t he : fan_v_) {
+        const uint32_t x = corner_point_[nextHe(he)];
+        const uint32_t y = corner_point_[prevHe(he)];
+        if (mark_[x] == stamp_ && x != w0 && x != w1 && x != u) return false;
+        if (mark_[y] == stamp_ && y != w0 && y != w1 && y != u) return false;
+    }
+    // Link condition, edges: the edge w0-w1 is in both links iff faces (u,w0,w1) and (v,w0,w1)
+    // exist; they are the faces across the other two edges of f0 (the tetrahedron case).
+    if (t != kNone) {
+        const uint32_t t1 = twin_[nextHe(h)], t2 = twin_[prevHe(h)];
+        if (t1 != kNone && t2 != kNone && corner_point_[prevHe(t1)] == w1 && corner_point_[prevHe(t2)] == w1)
+            return false;
+    }
+
+    pair_count = 0;
+    if (!corner_wedge_.empty()) {
+        collectPairs(h, u, pairs, pair_count);
+        if (pair_count == 2 && pairs[0].removed == pairs[1].removed) return false; // one wedge, two targets
+        // Every wedge of u must have a partner on v, or one side of a seam would be torn.
+        for (uint32_t he : fan_u_) {
+            const uint32_t w = corner_wedge_[he];
+            bool found = false;
+            for (int i = 0; i < pair_count; ++i) found = found || pairs[i].removed == w;
+            if (!found) return false;
+        }
+    }
+    RegionNormal region;
+    double min_old = 1.0, min_new = 1.0;
+    if (!checkFaces(fan_u_, u, c.position, f0, f1, region, min_old, min_new) ||
+        !checkFaces(fan_v_, v, c.position, f0, f1, region, min_old, min_new))
+        return false;
+    // Needles: the worst triangle of the neighbourhood may not get worse (removing a sliver is fine).
+    if (min_new < options_.min_triangle_quality && min_new < min_old) return false;
+    return true;
+}
+
+void EdgeCollapser::collapse(const Candidate& c, const WedgePair* pairs, int pair_count, CollapseSequence* sequence) {
+    const uint32_t u = c.removed, v = c.kept, h = c.edge;
+    const uint32_t t = twin_[h];
+    const uint32_t f0 = h / 3;
+    const uint32_t f1 = t == kNone ? kNone : t / 3;
+    const uint32_t w0 = corner_point_[prevHe(h)];
+    const uint32_t w1 = t == kNone ? kNone : corner_point_[prevHe(t)];
+
+    for (uint32_t k = 0; k < 3; ++k) {
+        queue_.remove(canonical(f0 * 3 + k));
+        if (f1 != kNone) queue_.remove(canonical(f1 * 3 + k));
+    }
+
+    quadric_[v] += quadric_[u];
+    const Vec3f p(float(c.position.x), float(c.position.y), float(c.position.z));
+    CollapseRecord record;
+    if (sequence) {
+        record.removed_point = u;
+        record.kept_point = v;
+        record.position = p;
+        record.first_wedge_update = uint32_t(sequence->wedge_updates.size());
+        record.wedge_update_count = uint32_t(pair_count);
+    }
+    const bool has_normals = source_->hasNormals();
+    const uint32_t color_first = source_->hasColors() ? channel_count_ - 4 : channel_count_;
+    for (int i = 0; i < pair_count; ++i) {
+        const size_t kept_base = size_t(pairs[i].kept) * channel_count_;
+        const size_t removed_base = size_t(pairs[i].removed) * channel_count_;
+        for (uint32_t ch = 0; ch < channel_count_; ++ch) {
+            wedge_quadric_[kept_base + ch] += wedge_quadric_[removed_base + ch];
+            double value = wedge_quadric_[kept_base + ch].optimalValue(c.position);
+            if (ch >= color_first) value = std::clamp(value, 0.0, 1.0);
+            wedge_value_[kept_base + ch] = float(value);
+        }
+        if (has_normals) {
+            Vec3f n(wedge_value_[kept_base], wedge_value_[kept_base + 1], wedge_value_[kept_base + 2]);
+            const float len = length(n);
+            if (len > 0.0f) n = n / len;
+            wedge_value_[kept_base] = n.x;
+            wedge_value_[kept_base + 1] = n.y;
+            wedge_value_[kept_base + 2] = n.z;
+        }
+        if (sequence) {
+            sequence->wedge_updates.push_back({pairs[i].removed, pairs[i].kept});
+            sequence->wedge_attributes.insert(sequence->wedge_attributes.end(), wedge_value_.begin() + kept_base,
+                                              wedge_value_.begin() + kept_base + channel_count_);
+        }
+    }
+    if (sequence) sequence->records.push_back(record);
+    position_[v] = p;
+
+    for (uint32_t he : fan_u_) {
+        corner_point_[he] = v;
+        if (!corner_wedge_.empty()) {
+            const uint32_t w = corner_wedge_[he];
+            for (int i = 0; i < pair_count; ++i)
+                if (pairs[i].removed == w) corner_wedge_[he] = pairs[i].kept;
+        }
+    }
+
+    // Remove f0 (and f1): glue the twins of their two other edges together.
+    for (int side = 0; side < 2; ++side) {
+        const uint32_t hf = side == 0 ? h : t;
+        if (hf == kNone) continue;
+        const uint32_t e1 = nextHe(hf), e2 = prevHe(hf);
+        const uint32_t t1 = twin_[e1], t2 = twin_[e2];
+        const uint32_t w = corner_point_[e2];
+        if (t1 != kNone) twin_[t1] = t2;
+        if (t2 != kNone) twin_[t2] = t1;
+        point_he_[w] = t1 != kNone ? t1 : (t2 != kNone ? nextHe(t2) : kNone);
+        const uint32_t f = hf / 3;
+        for (uint32_t k = 0; k < 3; ++k) {
+            twin_[f * 3 + k] = kNone;
+            corner_point_[f * 3 + k] = kNone;
+        }
+        --alive_faces_;
+    }
+
+    point_he_[v] = kNone;
+    for (const std::vector<uint32_t>* fan : {&fan_v_, &fan_u_}) {
+        for (uint32_t he : *fan) {
+            if (corner_point_[he] == v) {
+                point_he_[v] = he;
+                break;
+            }
+        }
+        if (point_he_[v] != kNone) break;
+    }
+    point_he_[u] = kNone;
+    kind_[u] = kDead;
+    ++collapses_;
+    max_error_done_ = std::max(max_error_done_, c.error);
+
+    const uint8_t old_w0 = kind_[w0];
+    const uint8_t old_w1 = w1 == kNone ? 0 : kind_[w1];
+    kind_[w0] = classify(w0);
+    if (w1 != kNone) kind_[w1] = classify(w1);
+    kind_[v] = classify(v); // leaves v's fan in fan_tmp_
+    if (kind_[v] == kLocked || kind_[v] == kDead) gatherFan(v, fan_tmp_);
+    updateEdgesInFan();
+    if (kind_[w0] != old_w0) updateEdgesAround(w0);
+    if (w1 != kNone && kind_[w1] != old_w1) updateEdgesAround(w1);
+}
+
+void EdgeCollapser::updateEdgesAround(uint32_t point) {
+    gatherFan(point, fan_tmp_);
+    updateEdgesInFan();
+}
+
+void EdgeCollapser::updateEdgesInFan() {
+    Candidate c;
+    auto update = [&](uint32_t he) {
+        const uint32_t e = canonical(he);
+        if (evaluate(e, c))
+            queue_.set(e, float(c.cost));
+        else
+            queue_.remove(e);
+    };
+    for (uint32_t he : fan_tmp_) {
+        update(he);
+        const uint32_t in = prevHe(he);
+        if (twin_[in] == kNone) update(in);
+    }
+}
+
+void EdgeCollapser::requeueAll() {
+    Candidate c;
+    for (uint32_t h = 0; h < uint32_t(corner_point_.size()); ++h) {
+        if (corner_point_[h] == kNone || canonical(h) != h) continue;
+        if (evaluate(h, c))
+            queue_.set(h, float(c.cost));
+        else
+            queue_.remove(h);
+    }
+}
+
+bool EdgeCollapser::run(size_t target_faces, double max_error, CollapseSequence* sequence) {
+    Candidate c;
+    WedgePair pairs[2];
+    size_t collapses_at_requeue = collapses_;
+    bool requeued = false;
+    while (alive_faces_ > target_faces) {
+        if (queue_.empty()) {
+            // Rejected edges leave the queue until a collapse next to them re-evaluates them; an
+            // empty queue may still hide collapses made valid by changes further away.
+            if (requeued && collapses_ == collapses_at_requeue) break;
+            requeueAll();
+            requeued = true;
+            collapses_at_requeue = collapses_;
+            if (queue_.empty()) break;
+        }
+        const uint32_t e = queue_.topId();
+        if (!evaluate(e, c) || c.error > max_error) {
+            queue_.remove(e);
+            continue;
+        }
+        int pair_count = 0;
+        if (!isValid(c, pair_count, pairs)) {
+            // Dropped until a neighbouring collapse changes it and re-queues it.
+            queue_.remove(e);
+            continue;
+        }
+        collapse(c, pairs, pair_count, sequence);
+    }
+    return alive_faces_ <= target_faces;
+}
+
+Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Diagnostics& diagnostics) {
+    LODBAKE_RETURN_IF_ERROR(checkMeshConsistency(mesh, "simplify input"));
+    for (size_t v = 0; v < mesh.vertexCount(); ++v)
+        if (!isFinite(mesh.positions[v]))
+            return invalidInput("simplify input: vertex " + std::to_string(v) + ": expected finite coordinates");
+    if (!(options.min_triangle_quality >= 0.0f) || !(options.max_normal_change_deg > 0.0f) ||
+        !(options.border_weight >= 0.0f) || !(options.cost_area_exponent >= 0.0f && options.cost_area_exponent <= 1.0f))
+        return invalidInput("simplify options: expected min_triangle_quality >= 0, max_normal_change_deg > 0, "
+                            "border_weight >= 0, cost_area_exponent in [0, 1]");
+    source_ = &mesh;
+    options_ = options;
+    cos_max_normal_change_ = std::cos(std::min(double(options.max_normal_change_deg), 180.0) * kPi / 180.0);
+
+    const uint32_t vertex_count = uint32_t(mesh.vertexCount());
+    std::vector<uint8_t> referenced(vertex_count, 0);
+    for (uint32_t i : mesh.indices) referenced[i] = 1;
+    std::vector<uint32_t> order;
+    order.reserve(vertex_count);
+    for (uint32_t v = 0; v < vertex_count; ++v)
+        if (referenced[v]) order.push_back(v);
+
+    // Attribute channels: normal xyz, each UV set, colour rgba.
+    channel_count_ = (mesh.hasNormals() ? 3 : 0) + 2 * uint32_t(mesh.uvs.size()) + (mesh.hasColors() ? 4 : 0);
+    const Aabb box = computeBounds(mesh);
+    const double diagonal = box.isEmpty() ? 1.0 : std::max(box.diagonal(), 1e-30);
+    channel_weight_.clear();
+    const AttributeWeights& aw = options.attribute_weights;
+    if (mesh.hasNormals())
+        for (int k = 0; k < 3; ++k) channel_weight_.push_back(float(aw.normal * aw.normal * diagonal * diagonal));
+    for (size_t s = 0; s < mesh.uvs.size(); ++s)
+        for (int k = 0; k < 2; ++k) channel_weight_.push_back(float(aw.uv * aw.uv * diagonal * diagonal));
+    if (mesh.hasColors())
+        for (int k = 0; k < 4; ++k) channel_weight_.push_back(float(aw.color * aw.color * diagonal * diagonal));
+    auto channelValue = [&](uint32_t v, uint32_t ch) -> float {
+        if (mesh.hasNormals()) {
+            if (ch < 3) return mesh.normals[v][int(ch)];
+            ch -= 3;
+        }
+        if (ch < 2 * mesh.uvs.size()) return mesh.uvs[ch / 2][v][int(ch % 2)];
+        ch -= uint32_t(2 * mesh.uvs.size());
+        return mesh.colors[v][int(ch)];
+    };
+    const bool has_wedges = channel_count_ > 0 || mesh.hasTangents();
+
+    // Weld by bit-identical position (points), and by position + attributes (wedges). Sorting
+    // with the vertex id as last key makes every group's representative its smallest vertex.
+    auto posLess = [&](uint32_t a, uint32_t b) {
+        for (int k = 0; k < 3; ++k) {
+            const uint32_t x = floatBits(mesh.positions[a][k]), y = floatBits(mesh.positions[b][k]);
+            if (x != y) return x < y;
+        }
+        return false;
+    };
+    auto attrLess = [&](uint32_t a, uint32_t b) {
+        for (uint32_t ch = 0; ch < channel_count_; ++ch) {
+            const uint32_t x = floatBits(channelValue(a, ch)), y = floatBits(channelValue(b, ch));
+            if (x != y) return x < y;
+        }
+        if (mesh.hasTangents())
+            for (int k = 0; k < 4; ++k) {
+                const uint32_t x = floatBits(mesh.tangents[a][k]), y = floatBits(mesh.tangents[b][k]);
+                if (x != y) return x < y;
+            }
+        return false;
+    };
+    std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
+        if (posLess(a, b)) return true;
+        if (posLess(b, a)) return false;
+        if (has_wedges) {
+            if (attrLess(a, b)) return true;
+            if (attrLess(b, a)) return false;
+        }
+        return a < b;
+    });
+    std::vector<uint32_t> point_rep(vertex_count, kNone), wedge_rep(vertex_count, kNone);
+    for (size_t i = 0; i < order.size();) {
+        size_t j = i;
+        while (j < order.size() && !posLess(order[i], order[j])) ++j; // same position: [i, j)
+        uint32_t rep = order[i];
+        for (size_t k = i; k < j; ++k) rep = std::min(rep, order[k]);
+        for (size_t k = i; k < j; ++k) point_rep[order[k]] = rep;
+        for (size_t k = i; k < j;) {
+            size_t l = k + 1;
+            while (l < j && !(has_wedges && attrLess(order[k], order[l]))) ++l;
+            for (size_t m = k; m < l; ++m) wedge_rep[order[m]] = order[k]; // order[k] is the smallest id
+            k = l;
+        }
+        i = j;
+    }
+    std::vector<uint32_t> vertex_point(vertex_count, kNone), vertex_wedge(vertex_count, kNone);
+    position_.clear();
+    wedge_vertex_.clear();
+    wedge_point_.clear();
+    for (uint32_t v = 0; v < vertex_count; ++v) {
+        if (!referenced[v]) continue;
+        if (point_rep[v] == v) {
+            vertex_point[v] = uint32_t(position_.size());
+            position_.push_back(mesh.positions[v]);
+        } else {
+            vertex_point[v] = vertex_point[point_rep[v]];
+        }
+        if (wedge_rep[v] == v) {
+            vertex_wedge[v] = uint32_t(wedge_vertex_.size());
+            wedge_vertex_.push_back(v);
+            wedge_point_.push_back(vertex_point[v]);
+        } else {
+            vertex_wedge[v] = vertex_wedge[wedge_rep[v]];
+        }
+    }
+    std::vector<uint32_t>().swap(point_rep);
+    std::vector<uint32_t>().swap(wedge_rep);
+    std::vector<uint32_t>().swap(order);
+    const uint32_t point_count = uint32_t(position_.size());
+    const uint32_t wedge_count = uint32_t(wedge_vertex_.size());
+
+    // Faces, in input order, without those degenerate by position.
+    const size_t input_faces = mesh.faceCount();
+    std::vector<SubMesh> groups = mesh.submeshes;
+    const bool multi_group = groups.size() > 1;
+    corner_point_.clear();
+    corner_point_.reserve(input_faces * 3);
+    corner_wedge_.clear();
+    if (has_wedges) corner_wedge_.reserve(input_faces * 3);
+    face_group_.clear();
+    face_source_.clear();
+    face_source_.reserve(input_faces);
+    group_first_face_.assign(groups.size() + 1, 0);
+    size_t dropped = 0;
+    size_t group = 0;
+    for (size_t f = 0; f < input_faces; ++f) {
+        while (group < groups.size() && f * 3 >= size_t(groups[group].first_index) + groups[group].index_count) {
+            ++group;
+            if (group < groups.size()) group_first_face_[group] = uint32_t(face_source_.size());
+        }
+        const uint32_t i0 = mesh.indices[f * 3], i1 = mesh.indices[f * 3 + 1], i2 = mesh.indices[f * 3 + 2];
+        const uint32_t p0 = vertex_point[i0], p1 = vertex_point[i1], p2 = vertex_point[i2];
+        if (p0 == p1 || p1 == p2 || p0 == p2) {
+            ++dropped;
+            continue;
+        }
+        corner_point_.insert(corner_point_.end(), {p0, p1, p2});
+        if (has_wedges)
+            corner_wedge_.insert(corner_wedge_.end(), {vertex_wedge[i0], vertex_wedge[i1], vertex_wedge[i2]});
+        if (multi_group) face_group_.push_back(uint32_t(std::min(group, groups.size() - 1)));
+        face_source_.push_back(uint32_t(f));
+    }
+    for (size_t g = group + 1; g < groups.size(); ++g) group_first_face_[g] = uint32_t(face_source_.size());
+    group_first_face_[groups.size()] = uint32_t(face_source_.size());
+    if (dropped > 0)
+        diagnostics.note("simplify input: " + std::to_string(dropped) +
+                         " faces with repeated positions dropped (zero area)");
+    const uint32_t face_count = uint32_t(face_source_.size());
+    const uint32_t he_count = face_count * 3;
+    initial_faces_ = face_count;
+    alive_faces_ = face_count;
+    collapses_ = 0;
+    max_error_done_ = 0;
+
+    // Twins: pair a->b with b->a when each occurs exactly once; otherwise lock both points.
+    kind_.assign(point_count, kFree);
+    {
+        std::vector<uint32_t> start(size_t(point_count) + 1, 0);
+        for (uint32_t h = 0; h < he_count; ++h) ++start[corner_point_[h] + 1];
+        for (uint32_t p = 0; p < point_count; ++p) start[p + 1] += start[p];
+        std::vector<uint32_t> list(he_count);
+        std::vector<uint32_t> fill(start.begin(), start.end() - 1);
+        for (uint32_t h = 0; h < he_count; ++h) list[fill[corner_point_[h]]++] = h;
+        std::vector<uint32_t>().swap(fill);
+        twin_.assign(he_count, kNone);
+        for (uint32_t h = 0; h < he_count; ++h) {
+            const uint32_t a = corner_point_[h], b = corner_point_[nextHe(h)];
+            uint32_t same = 0, reverse = 0, match = kNone;
+            for (uint32_t i = start[a]; i < start[a + 1]; ++i)
+                if (corner_point_[nextHe(list[i])] == b) ++same;
+            for (uint32_t i = start[b]; i < start[b + 1]; ++i)
+                if (corner_point_[nextHe(list[i])] == a) {
+                    ++reverse;
+                    match = list[i];
+                }
+            if (same == 1 && reverse == 1)
+                twin_[h] = match;
+            else if (same + reverse > 1) {
+                kind_[a] = kLocked;
+                kind_[b] = kLocked;
+            }
+        }
+        point_he_.assign(point_count, kNone);
+        for (uint32_t p = 0; p < point_count; ++p)
+            if (start[p] < start[p + 1]) point_he_[p] = list[start[p]];
+        // A point whose faces form more than one fan (a bow-tie) is non-manifold: lock it.
+        size_t locked = 0;
+        for (uint32_t p = 0; p < point_count; ++p) {
+            if (point_he_[p] == kNone) {
+                kind_[p] = kDead;
+                continue;
+            }
+            if (kind_[p] != kLocked) {
+                gatherFan(p, fan_tmp_);
+                if (fan_tmp_.size() != start[p + 1] - start[p]) kind_[p] = kLocked;
+            }
+            if (kind_[p] == kLocked) ++locked;
+        }
+        if (locked > 0)
+            diagnostics.note("simplify input: " + std::to_string(locked) +
+                             " points on non-manifold or inconsistently oriented edges/fans are kept unchanged");
+    }
+
+    // Quadrics: area-weighted face planes plus constraint planes along feature edges.
+    quadric_.assign(point_count, Quadric());
+    for (uint32_t f = 0; f < face_count; ++f) {
+        const Vec3d p0 = toD(position_[corner_point_[f * 3]]);
+        const Vec3d p1 = toD(position_[corner_point_[f * 3 + 1]]);
+        const Vec3d p2 = toD(position_[corner_point_[f * 3 + 2]]);
+        const Quadric q = Quadric::fromTriangle(p0, p1, p2);
+        for (uint32_t k = 0; k < 3; ++k) quadric_[corner_point_[f * 3 + k]] += q;
+        const Vec3d n = normalize(cross(p1 - p0, p2 - p0));
+        for (uint32_t k = 0; k < 3; ++k) {
+            const uint32_t h = f * 3 + k;
+            if (!isFeature(h) || (twin_[h] != kNone && twin_[h] < h)) continue;
+            const Vec3d a = toD(position_[corner_point_[h]]);
+            const Vec3d b = toD(position_[corner_point_[nextHe(h)]]);
+            const Vec3d e = b - a;
+            const Vec3d m = normalize(cross(e, n));
+            if (!(length2(m) > 0.0)) continue;
+            Quadric cq = Quadric::fromPlane(m, -dot(m, a), double(options.border_weight) * length2(e));
+            cq.weight = 0; // constraints steer placement; they are not surface area
+            quadric_[corner_point_[h]] += cq;
+            quadric_[corner_point_[nextHe(h)]] += cq;
+        }
+    }
+    wedge_value_.assign(size_t(wedge_count) * channel_count_, 0.0f);
+    wedge_quadric_.assign(size_t(wedge_count) * channel_count_, AttributeQuadric());
+    if (channel_count_ > 0) {
+        for (uint32_t w = 0; w < wedge_count; ++w)
+            for (uint32_t ch = 0; ch < channel_count_; ++ch)
+                wedge_value_[size_t(w) * channel_count_ + ch] = channelValue(wedge_vertex_[w], ch);
+        for (uint32_t f = 0; f < face_count; ++f) {
+            const Vec3d p0 = toD(position_[corner_point_[f * 3]]);
+            const Vec3d p1 = toD(position_[corner_point_[f * 3 + 1]]);
+            const Vec3d p2 = toD(position_[corner_point_[f * 3 + 2]]);
+            const size_t w0 = size_t(corner_wedge_[f * 3]) * channel_count_;
+            const size_t w1 = size_t(corner_wedge_[f * 3 + 1]) * channel_count_;
+            const size_t w2 = size_t(corner_wedge_[f * 3 + 2]) * channel_count_;
+            for (uint32_t ch = 0; ch < channel_count_; ++ch) {
+                AttributeQuadric aq;
+                aq.addTriangle(p0, p1, p2, wedge_value_[w0 + ch], wedge_value_[w1 + ch], wedge_value_[w2 + ch],
+                               channel_weight_[ch]);
+                wedge_quadric_[w0 + ch] += aq;
+                wedge_quadric_[w1 + ch] += aq;
+                wedge_quadric_[w2 + ch] += aq;
+            }
+        }
+    }
+
+    for (uint32_t p = 0; p < point_count; ++p) kind_[p] = classify(p);
+    mark_.assign(point_count, 0);
+    stamp_ = 0;
+
+    queue_ = CollapseQueue(he_count);
+    queue_.reserve(he_count / 2 + 16);
+    Candidate c;
+    for (uint32_t h = 0; h < he_count; ++h)
+        if (canonical(h) == h && evaluate(h, c)) queue_.set(h, float(c.cost));
+    return Status::okStatus();
+}
+
+void EdgeCollapser::describe(CollapseSequence& sequence) const {
+    sequence.point_positions = position_;
+    sequence.wedge_point = wedge_point_;
+    sequence.attribute_stride = channel_count_;
+    sequence.records.clear();
+    sequence.wedge_updates.clear();
+    sequence.wedge_attributes.clear();
+}
+
+Mesh EdgeCollapser::extract() const {
+    const Mesh& src = *source_;
+    Mesh out;
+    const size_t wedge_count = wedge_point_.size();
+    std::vector<uint32_t> remap(wedge_count, kNone);
+    std::vector<uint32_t> used;
+    out.indices.reserve(alive_faces_ * 3);
+    const size_t group_count = src.submeshes.size();
+    out.submeshes = src.submeshes;
+    for (size_t g = 0; g < std::max<size_t>(group_count, 1); ++g) {
+        const uint32_t first = group_count ? group_first_face_[g] : 0;
+        const uint32_t last = group_count ? group_first_face_[g + 1] : uint32_t(face_source_.size());
+        const size_t first_index = out.indices.size();
+        for (uint32_t f = first; f < last; ++f) {
+            if (corner_point_[f * 3] == kNone) continue;
+            for (uint32_t k = 0; k < 3; ++k) {
+                const uint32_t w = wedgeAt(f * 3 + k);
+                if (remap[w] == kNone) {
+                    remap[w] = uint32_t(used.size());
+                    used.push_back(w);
+                }
+                out.indices.push_back(remap[w]);
+            }
+        }
+        if (group_count) {
+            out.submeshes[g].first_index = uint32_t(first_index);
+            out.submeshes[g].index_count = uint32_t(out.indices.size() - first_index);
+        }
+    }
+    const size_t n = used.size();
+    out.positions.resize(n);
+    if (src.hasNormals()) out.normals.resize(n);
+    if (src.hasTangents()) out.tangents.resize(n);
+    out.uvs.assign(src.uvs.size(), std::vector<Vec2f>(n));
+    if (src.hasColors()) out.colors.resize(n);
+    for (size_t i = 0; i < n; ++i) {
+        const uint32_t w = used[i];
+        // Without attribute streams wedges are points.
+        const uint32_t point = corner_wedge_.empty() ? w : wedge_point_[w];
+        out.positions[i] = position_[point];
+        const float* value = channel_count_ ? &wedge_value_[size_t(w) * channel_count_] : nullptr;
+        uint32_t ch = 0;
+        if (src.hasNormals()) {
+            out.normals[i] = Vec3f(value[0], value[1], value[2]);
+            ch = 3;
+        }
+        for (size_t s = 0; s < src.uvs.size(); ++s, ch += 2) out.uvs[s][i] = Vec2f(value[ch], value[ch + 1]);
+        if (src.hasColors()) out.colors[i] = Vec4f(value[ch], value[ch + 1], value[ch + 2], value[ch + 3]);
+        if (src.hasTangents()) out.tangents[i] = src.tangents[wedge_vertex_[w]];
+    }
+    out.materials = src.materials;
+    out.textures = src.textures;
+    return out;
+}
+
+} // namespace lodbake::detail

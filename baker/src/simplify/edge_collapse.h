@@ -1,0 +1,119 @@
+#pragma once
+// The edge-collapse engine shared by simplify() and buildLodChain(): a corner table (half-edge =
+// corner, uint32 twins) over the input welded by position, per-point quadrics, per-wedge
+// attribute quadrics and an indexed collapse queue. It can be run towards successively smaller
+// targets and snapshotted in between, which is how a whole LOD chain costs one pass.
+
+#include <cstdint>
+#include <vector>
+
+#include "lodbake/core/diagnostics.h"
+#include "lodbake/core/mesh.h"
+#include "lodbake/core/status.h"
+#include "lodbake/simplify/lod_chain.h"
+#include "lodbake/simplify/quadric.h"
+#include "lodbake/simplify/simplify.h"
+#include "simplify/collapse_queue.h"
+
+namespace lodbake::detail {
+
+class EdgeCollapser {
+public:
+    /// Builds the connectivity, quadrics and queue. Fails on invalid input.
+    Status init(const Mesh& mesh, const SimplifyOptions& options, Diagnostics& diagnostics);
+
+    /// Collapses edges in cost order until at most `target_faces` remain or no valid collapse with
+    /// estimated error ≤ max_error is left. Appends to `sequence` when not null. Returns true when
+    /// the face target was reached.
+    bool run(size_t target_faces, double max_error, CollapseSequence* sequence);
+
+    /// The current mesh (alive faces in input order, referenced wedges in first-use order).
+    Mesh extract() const;
+
+    /// Points, wedges and attribute layout of the sequence (before any record).
+    void describe(CollapseSequence& sequence) const;
+
+    size_t faceCount() const { return alive_faces_; }
+    size_t initialFaceCount() const { return initial_faces_; }
+    size_t collapseCount() const { return collapses_; }
+    double maxCollapseError() const { return max_error_done_; }
+
+private:
+    enum Kind : uint8_t { kFree = 0, kLine = 1, kCorner = 2, kLocked = 3, kDead = 4 };
+    static constexpr uint32_t kNone = 0xffffffffu;
+
+    struct Candidate {
+        uint32_t edge = kNone; // canonical half-edge
+        uint32_t removed = kNone;
+        uint32_t kept = kNone;
+        Vec3d position;
+        double cost = 0;
+        double error = 0; // geometric RMS distance estimate, object units
+    };
+    struct WedgePair {
+        uint32_t removed;
+        uint32_t kept;
+    };
+
+    static uint32_t nextHe(uint32_t h) { return h % 3 == 2 ? h - 2 : h + 1; }
+    static uint32_t prevHe(uint32_t h) { return h % 3 == 0 ? h + 2 : h - 1; }
+    uint32_t canonical(uint32_t h) const { return (twin_[h] == kNone || h < twin_[h]) ? h : twin_[h]; }
+    uint32_t wedgeAt(uint32_t h) const { return corner_wedge_.empty() ? corner_point_[h] : corner_wedge_[h]; }
+    bool isFeature(uint32_t h) const;
+    bool canRemove(uint32_t point, bool feature_edge) const;
+    // Outgoing half-edges of `point`, one per incident face; returns false if the fan is open.
+    bool gatherFan(uint32_t point, std::vector<uint32_t>& fan) const;
+    Kind classify(uint32_t point);
+    bool evaluate(uint32_t edge, Candidate& c) const;
+    void collectPairs(uint32_t edge, uint32_t removed, WedgePair* pairs, int& pair_count) const;
+    bool isValid(const Candidate& c, int& pair_count, WedgePair* pairs);
+    struct RegionNormal {
+        bool ready = false;
+        Vec3d normal; // summed face normals of both fans, computed when a sliver needs it
+    };
+    bool checkFaces(const std::vector<uint32_t>& fan, uint32_t moved, const Vec3d& p, uint32_t f0, uint32_t f1,
+                    RegionNormal& region, double& min_old, double& min_new) const;
+    Vec3d fanNormal(const std::vector<uint32_t>& fan) const;
+    void collapse(const Candidate& c, const WedgePair* pairs, int pair_count, CollapseSequence* sequence);
+    void updateEdgesAround(uint32_t point);
+    void updateEdgesInFan(); // the edges of the fan in fan_tmp_
+    void requeueAll();
+    Quadric combinedQuadric(uint32_t edge, uint32_t removed) const;
+
+    const Mesh* source_ = nullptr;
+    SimplifyOptions options_;
+    double cos_max_normal_change_ = 0;
+    double attribute_scale_ = 1;
+
+    // Points (distinct positions) and wedges (distinct position + attributes).
+    std::vector<Vec3f> position_;
+    std::vector<uint32_t> point_he_; // an outgoing half-edge of an alive face, or kNone
+    std::vector<uint8_t> kind_;
+    std::vector<uint32_t> mark_; // scratch stamps for the link condition
+    uint32_t stamp_ = 0;
+    std::vector<Quadric> quadric_;
+    std::vector<uint32_t> wedge_vertex_; // an input vertex carrying the wedge's original attributes
+    std::vector<uint32_t> wedge_point_;
+    uint32_t channel_count_ = 0;                  // scalar attribute channels per wedge
+    std::vector<float> channel_weight_;           // per channel, squared weight × scale²
+    std::vector<float> wedge_value_;              // wedge_count × channel_count_
+    std::vector<AttributeQuadric> wedge_quadric_; // wedge_count × channel_count_
+
+    // Corner table: half-edge h goes from corner_point_[h] to corner_point_[nextHe(h)].
+    std::vector<uint32_t> corner_point_; // kNone for dead faces
+    std::vector<uint32_t> corner_wedge_; // empty when there are no attribute streams
+    std::vector<uint32_t> twin_;
+    std::vector<uint32_t> face_group_;  // sub-mesh per face; empty with a single sub-mesh
+    std::vector<uint32_t> face_source_; // input face index per face
+    std::vector<uint32_t> group_first_face_;
+
+    CollapseQueue queue_;
+    size_t alive_faces_ = 0;
+    size_t initial_faces_ = 0;
+    size_t collapses_ = 0;
+    double max_error_done_ = 0;
+
+    std::vector<uint32_t> fan_u_, fan_v_, fan_tmp_;
+};
+
+} // namespace lodbake::detail

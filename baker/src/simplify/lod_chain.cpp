@@ -1,0 +1,93 @@
+// Discrete LOD chains from one incremental edge-collapse pass (Gasparello 2007 §1.4 and §4.3.5:
+// discrete levels selected by distance), with per-level measured error and switch distances.
+#include "lodbake/simplify/lod_chain.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <string>
+
+#include "simplify/edge_collapse.h"
+
+namespace lodbake {
+
+double switchDistance(double error, const ScreenParams& screen) {
+    if (!(error > 0.0)) return 0.0;
+    const double t = std::tan(screen.vertical_fov_rad * 0.5);
+    if (!(screen.pixel_threshold > 0.0) || !(t > 0.0) || !std::isfinite(t)) return HUGE_VAL;
+    return error * screen.viewport_height_px / (2.0 * screen.pixel_threshold * t);
+}
+
+double screenCoverage(double radius, double distance, const ScreenParams& screen) {
+    const double t = std::tan(screen.vertical_fov_rad * 0.5);
+    if (!(distance > 0.0) || !(t > 0.0)) return 1.0;
+    return std::min(1.0, radius / (distance * t));
+}
+
+Result<LodChain> buildLodChain(const Mesh& mesh, const LodChainOptions& options, Diagnostics& diagnostics) {
+    std::vector<double> ratios = options.ratios;
+    for (double r : ratios) {
+        if (!(r > 0.0 && r <= 1.0)) {
+            char buf[64];
+            std::snprintf(buf, sizeof buf, "%g", r);
+            return invalidInput(std::string("lod chain options: ratio ") + buf + ": expected a value in (0, 1]");
+        }
+    }
+    if (ratios.empty()) return invalidInput("lod chain options: ratios: expected at least one level");
+    std::sort(ratios.begin(), ratios.end(), [](double a, double b) { return a > b; });
+    ratios.erase(std::unique(ratios.begin(), ratios.end()), ratios.end());
+
+    detail::EdgeCollapser engine;
+    LODBAKE_RETURN_IF_ERROR(engine.init(mesh, options.simplify, diagnostics));
+    LodChain chain;
+    const Aabb box = computeBounds(mesh);
+    chain.bounding_radius = box.isEmpty() ? 0.0 : box.diagonal() * 0.5;
+    CollapseSequence* sequence = options.record_collapses ? &chain.sequence : nullptr;
+    if (sequence) engine.describe(*sequence);
+    const size_t faces = engine.initialFaceCount();
+    bool stuck = false;
+    for (double ratio : ratios) {
+        LodLevel level;
+        level.target_ratio = ratio;
+        const size_t target = size_t(std::ceil(ratio * double(faces)));
+        level.reached_target = !stuck && engine.run(target, HUGE_VAL, sequence);
+        if (!level.reached_target) {
+            stuck = true;
+            diagnostics.note("lod chain: level ratio " + std::to_string(ratio) + " stopped at " +
+                             std::to_string(engine.faceCount()) + " triangles (target " + std::to_string(target) +
+                             "): no valid collapse left");
+        }
+        level.collapse_count = engine.collapseCount();
+        level.quadric_error = engine.maxCollapseError();
+        level.mesh = engine.extract();
+        chain.levels.push_back(std::move(level));
+    }
+    if (options.measure_error) {
+        // The input's BVH is built once for all levels.
+        Result<DistanceReference> reference = DistanceReference::prepare(mesh);
+        if (!reference.ok()) diagnostics.warn("lod chain: errors not measured: " + reference.status().message());
+        for (LodLevel& level : chain.levels) {
+            if (!reference.ok()) break;
+            Result<DistanceResult> d = measureSurfaceDistance(*reference, level.mesh, options.distance);
+            if (!d.ok()) {
+                diagnostics.warn("lod chain: level ratio " + std::to_string(level.target_ratio) +
+                                 ": error not measured: " + d.status().message());
+                continue;
+            }
+            level.has_distance = true;
+            level.distance = *d;
+        }
+    }
+    // Switch distances use the measured Hausdorff error when there is one, else the quadric
+    // estimate; they are made non-decreasing down the chain so selection by distance is monotone.
+    double previous = 0.0;
+    for (LodLevel& level : chain.levels) {
+        const double e = level.has_distance ? level.distance.hausdorff : level.quadric_error;
+        level.switch_distance = std::max(previous, switchDistance(e, options.screen));
+        previous = level.switch_distance;
+        level.screen_coverage = screenCoverage(chain.bounding_radius, level.switch_distance, options.screen);
+    }
+    return chain;
+}
+
+} // namespace lodbake

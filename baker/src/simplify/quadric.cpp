@@ -1,0 +1,178 @@
+// Quadric error metric: M. Garland, P. Heckbert, "Surface Simplification Using Quadric Error
+// Metrics", SIGGRAPH 1997 (face quadrics, area weighting, optimal placement). Attribute quadrics:
+// H. Hoppe, "New Quadric Metric for Simplifying Meshes with Appearance Attributes", IEEE Vis 1999
+// (per-face linear attribute fields); here the attribute unknowns are eliminated in closed form.
+#include "lodbake/simplify/quadric.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace lodbake {
+
+Quadric Quadric::fromPlane(const Vec3d& n, double d, double weight) {
+    Quadric q;
+    q.a00 = weight * n.x * n.x;
+    q.a01 = weight * n.x * n.y;
+    q.a02 = weight * n.x * n.z;
+    q.a11 = weight * n.y * n.y;
+    q.a12 = weight * n.y * n.z;
+    q.a22 = weight * n.z * n.z;
+    q.b0 = weight * d * n.x;
+    q.b1 = weight * d * n.y;
+    q.b2 = weight * d * n.z;
+    q.c = weight * d * d;
+    q.weight = weight;
+    return q;
+}
+
+Quadric Quadric::fromTriangle(const Vec3d& p0, const Vec3d& p1, const Vec3d& p2) {
+    const Vec3d n = cross(p1 - p0, p2 - p0);
+    const double len = length(n);
+    if (!(len > 0.0)) return Quadric();
+    const Vec3d unit = n / len;
+    return fromPlane(unit, -dot(unit, p0), 0.5 * len);
+}
+
+Quadric& Quadric::operator+=(const Quadric& o) {
+    a00 += o.a00;
+    a01 += o.a01;
+    a02 += o.a02;
+    a11 += o.a11;
+    a12 += o.a12;
+    a22 += o.a22;
+    b0 += o.b0;
+    b1 += o.b1;
+    b2 += o.b2;
+    c += o.c;
+    weight += o.weight;
+    return *this;
+}
+
+Quadric& Quadric::operator*=(double s) {
+    a00 *= s;
+    a01 *= s;
+    a02 *= s;
+    a11 *= s;
+    a12 *= s;
+    a22 *= s;
+    b0 *= s;
+    b1 *= s;
+    b2 *= s;
+    c *= s;
+    weight *= s;
+    return *this;
+}
+
+double Quadric::evaluate(const Vec3d& p) const {
+    const double x = p.x, y = p.y, z = p.z;
+    const double r = a00 * x * x + a11 * y * y + a22 * z * z + 2.0 * (a01 * x * y + a02 * x * z + a12 * y * z) +
+                     2.0 * (b0 * x + b1 * y + b2 * z) + c;
+    return r > 0.0 ? r : 0.0;
+}
+
+bool solveQuadric(const Quadric& q, Vec3d& out, double min_condition) {
+    // Cofactors of the symmetric matrix A.
+    const double c00 = q.a11 * q.a22 - q.a12 * q.a12;
+    const double c01 = q.a02 * q.a12 - q.a01 * q.a22;
+    const double c02 = q.a01 * q.a12 - q.a02 * q.a11;
+    const double det = q.a00 * c00 + q.a01 * c01 + q.a02 * c02;
+    const double trace = q.a00 + q.a11 + q.a22;
+    if (!(trace > 0.0)) return false;
+    // A is positive semi-definite, so det / (trace/3)³ ≤ 1 and it is small exactly when the
+    // smallest eigenvalue is small against the others: a cheap conditioning test.
+    const double s = trace / 3.0;
+    if (!(det > min_condition * s * s * s)) return false;
+    const double c11 = q.a00 * q.a22 - q.a02 * q.a02;
+    const double c12 = q.a01 * q.a02 - q.a00 * q.a12;
+    const double c22 = q.a00 * q.a11 - q.a01 * q.a01;
+    const double inv = 1.0 / det;
+    const Vec3d p(-(c00 * q.b0 + c01 * q.b1 + c02 * q.b2) * inv, -(c01 * q.b0 + c11 * q.b1 + c12 * q.b2) * inv,
+                  -(c02 * q.b0 + c12 * q.b1 + c22 * q.b2) * inv);
+    if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z))) return false;
+    out = p;
+    return true;
+}
+
+Vec3d minimizeOnSegment(const Quadric& q, const Vec3d& p0, const Vec3d& p1) {
+    // Q(p0 + t d) = Q(p0) + 2 t (A p0 + b)·d + t² dᵀ A d.
+    const Vec3d d = p1 - p0;
+    const Vec3d ap(q.a00 * p0.x + q.a01 * p0.y + q.a02 * p0.z + q.b0, q.a01 * p0.x + q.a11 * p0.y + q.a12 * p0.z + q.b1,
+                   q.a02 * p0.x + q.a12 * p0.y + q.a22 * p0.z + q.b2);
+    const Vec3d ad(q.a00 * d.x + q.a01 * d.y + q.a02 * d.z, q.a01 * d.x + q.a11 * d.y + q.a12 * d.z,
+                   q.a02 * d.x + q.a12 * d.y + q.a22 * d.z);
+    const double curvature = dot(d, ad);
+    double t = 0.5;
+    if (curvature > 0.0) t = std::clamp(-dot(ap, d) / curvature, 0.0, 1.0);
+    return p0 + d * t;
+}
+
+void AttributeQuadric::addTriangle(const Vec3d& p0, const Vec3d& p1, const Vec3d& p2, double s0, double s1, double s2,
+                                   double weight) {
+    const Vec3d edge1 = p1 - p0;
+    const Vec3d edge2 = p2 - p0;
+    const Vec3d n = cross(edge1, edge2);
+    const double n2 = dot(n, n);
+    if (!(n2 > 0.0)) return;
+    // The gradient lies in the face plane and reproduces the value differences along both edges:
+    // g = (Δs1 (e2 × n) + Δs2 (n × e1)) / |n|².
+    const Vec3d g = (cross(edge2, n) * (s1 - s0) + cross(n, edge1) * (s2 - s0)) / n2;
+    const double dv = s0 - dot(g, p0);
+    const double a = 0.5 * std::sqrt(n2) * weight;
+    g00 += a * g.x * g.x;
+    g01 += a * g.x * g.y;
+    g02 += a * g.x * g.z;
+    g11 += a * g.y * g.y;
+    g12 += a * g.y * g.z;
+    g22 += a * g.z * g.z;
+    e0 += a * dv * g.x;
+    e1 += a * dv * g.y;
+    e2 += a * dv * g.z;
+    h0 += a * g.x;
+    h1 += a * g.y;
+    h2 += a * g.z;
+    dd += a * dv * dv;
+    d += a * dv;
+    area += a;
+}
+
+AttributeQuadric& AttributeQuadric::operator+=(const AttributeQuadric& o) {
+    g00 += o.g00;
+    g01 += o.g01;
+    g02 += o.g02;
+    g11 += o.g11;
+    g12 += o.g12;
+    g22 += o.g22;
+    e0 += o.e0;
+    e1 += o.e1;
+    e2 += o.e2;
+    h0 += o.h0;
+    h1 += o.h1;
+    h2 += o.h2;
+    dd += o.dd;
+    d += o.d;
+    area += o.area;
+    return *this;
+}
+
+double AttributeQuadric::optimalValue(const Vec3d& p) const {
+    if (!(area > 0.0)) return 0.0;
+    return (h0 * p.x + h1 * p.y + h2 * p.z + d) / area;
+}
+
+void AttributeQuadric::addTo(Quadric& q) const {
+    if (!(area > 0.0)) return;
+    // E(p) = pᵀ(G − h hᵀ/A) p + 2 (e − D h / A)·p + (F − D²/A).
+    const double inv = 1.0 / area;
+    q.a00 += g00 - h0 * h0 * inv;
+    q.a01 += g01 - h0 * h1 * inv;
+    q.a02 += g02 - h0 * h2 * inv;
+    q.a11 += g11 - h1 * h1 * inv;
+    q.a12 += g12 - h1 * h2 * inv;
+    q.a22 += g22 - h2 * h2 * inv;
+    q.b0 += e0 - d * h0 * inv;
+    q.b1 += e1 - d * h1 * inv;
+    q.b2 += e2 - d * h2 * inv;
+    q.c += dd - d * d * inv;
+}
+
+} // namespace lodbake

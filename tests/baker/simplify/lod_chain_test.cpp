@@ -1,0 +1,200 @@
+#include "lodbake/simplify/lod_chain.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <map>
+
+#include <gtest/gtest.h>
+
+#include "lodbake/cleanup/topology.h"
+#include "lodbake/io/mesh_io.h"
+#include "simplify_test_meshes.h"
+#include "test_paths.h"
+
+namespace {
+
+using lodbake::Diagnostics;
+using lodbake::LodChain;
+using lodbake::LodChainOptions;
+using lodbake::Mesh;
+using lodbake::Vec3f;
+
+LodChain build(const Mesh& mesh, const LodChainOptions& options) {
+    Diagnostics d;
+    auto r = lodbake::buildLodChain(mesh, options, d);
+    EXPECT_TRUE(r.ok()) << r.status().message();
+    return r.ok() ? std::move(r).value() : LodChain();
+}
+
+LodChainOptions quick() {
+    LodChainOptions o;
+    o.distance.sample_count = 20000;
+    return o;
+}
+
+TEST(LodChainTest, OnePassReachesEveryLevel) {
+    const Mesh sphere = lodbake_test::icosphere(5); // 20480 faces
+    const LodChain chain = build(sphere, quick());
+    ASSERT_EQ(chain.levels.size(), 5u);
+    const double ratios[] = {0.5, 0.25, 0.1, 0.03, 0.01};
+    size_t previous_collapses = 0;
+    for (size_t i = 0; i < 5; ++i) {
+        const lodbake::LodLevel& l = chain.levels[i];
+        EXPECT_DOUBLE_EQ(l.target_ratio, ratios[i]);
+        EXPECT_TRUE(l.reached_target);
+        const double target = std::ceil(ratios[i] * 20480);
+        EXPECT_LE(double(l.mesh.faceCount()), target);
+        EXPECT_GE(double(l.mesh.faceCount()), target - 2);
+        EXPECT_GT(l.collapse_count, previous_collapses);
+        previous_collapses = l.collapse_count;
+        const lodbake::TopologyStats t = lodbake::computeTopologyStats(l.mesh);
+        EXPECT_EQ(t.euler_characteristic, 2);
+        EXPECT_EQ(t.boundary_edge_count, 0u);
+    }
+    EXPECT_EQ(chain.sequence.records.size(), chain.levels.back().collapse_count);
+}
+
+TEST(LodChainTest, ErrorIsMonotoneAcrossTheChain) {
+    const LodChain chain = build(lodbake_test::icosphere(5), quick());
+    for (size_t i = 1; i < chain.levels.size(); ++i) {
+        const auto& a = chain.levels[i - 1];
+        const auto& b = chain.levels[i];
+        ASSERT_TRUE(a.has_distance && b.has_distance);
+        EXPECT_GE(b.quadric_error, a.quadric_error);
+        EXPECT_GT(b.distance.mean, a.distance.mean);
+        EXPECT_GT(b.distance.hausdorff, a.distance.hausdorff);
+        EXPECT_GE(b.switch_distance, a.switch_distance);
+        EXPECT_LE(b.screen_coverage, a.screen_coverage);
+    }
+}
+
+TEST(LodChainTest, CollapseSequenceReplaysToEveryLevel) {
+    // Sphere vertices are all distinct and referenced, so points are the input vertices in order.
+    const Mesh sphere = lodbake_test::icosphere(4);
+    LodChainOptions o = quick();
+    o.measure_error = false;
+    const LodChain chain = build(sphere, o);
+    const lodbake::CollapseSequence& s = chain.sequence;
+    ASSERT_EQ(s.point_positions.size(), sphere.vertexCount());
+    std::vector<uint32_t> parent(sphere.vertexCount());
+    for (uint32_t i = 0; i < parent.size(); ++i) parent[i] = i;
+    std::vector<Vec3f> pos = s.point_positions;
+    auto find = [&](uint32_t v) {
+        while (parent[v] != v) v = parent[v];
+        return v;
+    };
+    size_t applied = 0;
+    for (const lodbake::LodLevel& level : chain.levels) {
+        for (; applied < level.collapse_count; ++applied) {
+            const lodbake::CollapseRecord& r = s.records[applied];
+            ASSERT_EQ(find(r.removed_point), r.removed_point); // removed only once
+            ASSERT_EQ(find(r.kept_point), r.kept_point);
+            parent[r.removed_point] = r.kept_point;
+            pos[r.kept_point] = r.position;
+        }
+        std::vector<std::array<float, 9>> replayed, actual;
+        for (size_t f = 0; f < sphere.faceCount(); ++f) {
+            const uint32_t a = find(sphere.indices[f * 3]), b = find(sphere.indices[f * 3 + 1]),
+                           c = find(sphere.indices[f * 3 + 2]);
+            if (a == b || b == c || a == c) continue;
+            replayed.push_back(
+                {pos[a].x, pos[a].y, pos[a].z, pos[b].x, pos[b].y, pos[b].z, pos[c].x, pos[c].y, pos[c].z});
+        }
+        const Mesh& m = level.mesh;
+        for (size_t f = 0; f < m.faceCount(); ++f) {
+            const Vec3f a = m.positions[m.indices[f * 3]], b = m.positions[m.indices[f * 3 + 1]],
+                        c = m.positions[m.indices[f * 3 + 2]];
+            actual.push_back({a.x, a.y, a.z, b.x, b.y, b.z, c.x, c.y, c.z});
+        }
+        EXPECT_EQ(replayed, actual) << "level " << level.target_ratio;
+    }
+}
+
+TEST(LodChainTest, ChainIsDeterministicAndMatchesSingleSimplify) {
+    const Mesh sphere = lodbake_test::icosphere(4);
+    LodChainOptions o = quick();
+    o.measure_error = false;
+    const LodChain a = build(sphere, o);
+    const LodChain b = build(sphere, o);
+    ASSERT_EQ(a.levels.size(), b.levels.size());
+    for (size_t i = 0; i < a.levels.size(); ++i) {
+        EXPECT_EQ(a.levels[i].mesh.indices, b.levels[i].mesh.indices);
+        EXPECT_EQ(a.levels[i].mesh.positions, b.levels[i].mesh.positions);
+    }
+    // A level equals simplify() to the same target: both run the same collapse order.
+    Diagnostics d;
+    lodbake::SimplifyOptions so;
+    so.target_ratio = 0.1f;
+    auto single = lodbake::simplify(sphere, so, d);
+    ASSERT_TRUE(single.ok());
+    EXPECT_EQ(single->mesh.indices, a.levels[2].mesh.indices);
+    EXPECT_EQ(single->mesh.positions, a.levels[2].mesh.positions);
+}
+
+TEST(LodChainTest, SwitchDistanceFollowsTheProjectionFormula) {
+    lodbake::ScreenParams s; // 1 px, 1080 px, 60 degrees
+    const double expected = 0.01 * 1080.0 / (2.0 * 1.0 * std::tan(3.14159265358979323846 / 6.0));
+    EXPECT_NEAR(lodbake::switchDistance(0.01, s), expected, 1e-12);
+    s.pixel_threshold = 2.0;
+    EXPECT_NEAR(lodbake::switchDistance(0.01, s), expected / 2.0, 1e-12);
+    EXPECT_EQ(lodbake::switchDistance(0.0, s), 0.0);
+    // A sphere of radius r at distance d covers r / (d tan(fov/2)) of the viewport height.
+    s.pixel_threshold = 1.0;
+    EXPECT_NEAR(lodbake::screenCoverage(1.0, 10.0, s), 1.0 / (10.0 * std::tan(3.14159265358979323846 / 6.0)), 1e-12);
+    EXPECT_EQ(lodbake::screenCoverage(1.0, 0.0, s), 1.0);
+    // At the switch distance the error e projects to exactly p pixels.
+    const double d = lodbake::switchDistance(0.003, s);
+    const double pixels = 0.003 / (2.0 * d * std::tan(s.vertical_fov_rad / 2.0)) * s.viewport_height_px;
+    EXPECT_NEAR(pixels, s.pixel_threshold, 1e-12);
+}
+
+TEST(LodChainTest, RejectsBadRatiosAndNotesUnreachableLevels) {
+    Diagnostics d;
+    LodChainOptions o;
+    o.ratios = {0.5, 0.0};
+    EXPECT_FALSE(lodbake::buildLodChain(lodbake_test::icosphere(1), o, d).ok());
+    o.ratios = {1.5};
+    EXPECT_FALSE(lodbake::buildLodChain(lodbake_test::icosphere(1), o, d).ok());
+    // A tetrahedron cannot lose a face: every level repeats it and says so.
+    const Mesh tetra = lodbake_test::icosphere(0); // icosahedron: 20 faces, reaches 4 at best
+    o.ratios = {0.5, 0.01};
+    o.measure_error = false;
+    auto chain = lodbake::buildLodChain(tetra, o, d);
+    ASSERT_TRUE(chain.ok());
+    EXPECT_TRUE(chain->levels[0].reached_target);
+    EXPECT_FALSE(chain->levels[1].reached_target);
+    EXPECT_GE(chain->levels[1].mesh.faceCount(), 4u);
+    EXPECT_FALSE(d.empty());
+}
+
+TEST(LodChainTest, Lucy100kChainMeasuresEveryLevel) {
+    LODBAKE_REQUIRE_SHARED_MESHES();
+    Diagnostics diagnostics;
+    auto loaded = lodbake::readMesh(lodbake_test::sharedMesh("lucy100k.ply"), lodbake::ReadOptions(), diagnostics);
+    ASSERT_TRUE(loaded.ok()) << loaded.status().message();
+    LodChainOptions o;
+    o.distance.sample_count = 50000;
+    const LodChain chain = build(loaded->mesh, o);
+    ASSERT_EQ(chain.levels.size(), 5u);
+    for (size_t i = 0; i < chain.levels.size(); ++i) {
+        const auto& l = chain.levels[i];
+        EXPECT_TRUE(l.reached_target);
+        ASSERT_TRUE(l.has_distance);
+        // The mean error grows level by level; the Hausdorff error need not (a coarser level can
+        // place one vertex better), so switch distances are made monotone instead.
+        if (i > 0) {
+            EXPECT_GT(l.distance.mean, chain.levels[i - 1].distance.mean);
+            EXPECT_GE(l.switch_distance, chain.levels[i - 1].switch_distance);
+        }
+        const lodbake::TopologyStats t = lodbake::computeTopologyStats(l.mesh);
+        EXPECT_EQ(t.boundary_edge_count, 0u);
+        EXPECT_EQ(t.non_manifold_edge_count, 0u);
+        EXPECT_EQ(t.component_count, 1u);
+    }
+    // Generous bounds around what was measured (mean 1e-3 of the diagonal even at 1 %).
+    EXPECT_LT(chain.levels[0].distance.meanRel(), 5e-5);
+    EXPECT_LT(chain.levels[4].distance.meanRel(), 3e-3);
+}
+
+} // namespace

@@ -1,0 +1,158 @@
+#include "lodbake/simplify/quadric.h"
+
+#include <random>
+#include <set>
+#include <utility>
+
+#include <gtest/gtest.h>
+
+#include "simplify/collapse_queue.h"
+
+namespace {
+
+using lodbake::AttributeQuadric;
+using lodbake::Quadric;
+using lodbake::Vec3d;
+
+TEST(QuadricTest, PlaneQuadricMeasuresWeightedSquaredDistance) {
+    // Plane z = 1, i.e. n = (0,0,1), d = -1, weight 3.
+    const Quadric q = Quadric::fromPlane(Vec3d(0, 0, 1), -1.0, 3.0);
+    EXPECT_DOUBLE_EQ(q.evaluate(Vec3d(5, -2, 1)), 0.0);
+    EXPECT_DOUBLE_EQ(q.evaluate(Vec3d(0, 0, 3)), 3.0 * 4.0);
+    EXPECT_DOUBLE_EQ(q.weight, 3.0);
+}
+
+TEST(QuadricTest, TriangleQuadricIsAreaWeightedNotNormalised) {
+    const Quadric small = Quadric::fromTriangle(Vec3d(0, 0, 0), Vec3d(1, 0, 0), Vec3d(0, 1, 0));
+    const Quadric big = Quadric::fromTriangle(Vec3d(0, 0, 0), Vec3d(2, 0, 0), Vec3d(0, 2, 0));
+    EXPECT_DOUBLE_EQ(small.weight, 0.5);
+    EXPECT_DOUBLE_EQ(big.weight, 2.0);
+    EXPECT_DOUBLE_EQ(small.evaluate(Vec3d(7, 7, 2)), 0.5 * 4.0);
+    EXPECT_DOUBLE_EQ(big.evaluate(Vec3d(7, 7, 2)), 2.0 * 4.0);
+    const Quadric degenerate = Quadric::fromTriangle(Vec3d(0, 0, 0), Vec3d(1, 1, 1), Vec3d(2, 2, 2));
+    EXPECT_DOUBLE_EQ(degenerate.weight, 0.0);
+    EXPECT_DOUBLE_EQ(degenerate.evaluate(Vec3d(1, 2, 3)), 0.0);
+}
+
+TEST(QuadricTest, SumOfQuadricsIsSumOfErrors) {
+    Quadric a = Quadric::fromPlane(Vec3d(1, 0, 0), -1.0, 1.0);
+    const Quadric b = Quadric::fromPlane(Vec3d(0, 1, 0), 2.0, 2.0);
+    const Vec3d p(0.5, 0.25, -3);
+    const double expected = a.evaluate(p) + b.evaluate(p);
+    a += b;
+    EXPECT_NEAR(a.evaluate(p), expected, 1e-12);
+    EXPECT_DOUBLE_EQ(a.weight, 3.0);
+}
+
+TEST(QuadricTest, OptimalPlacementIsTheCornerOfThreePlanes) {
+    Quadric q = Quadric::fromPlane(Vec3d(1, 0, 0), -1.0, 1.0);
+    q += Quadric::fromPlane(Vec3d(0, 1, 0), -2.0, 1.0);
+    q += Quadric::fromPlane(Vec3d(0, 0, 1), -3.0, 1.0);
+    Vec3d p;
+    ASSERT_TRUE(lodbake::solveQuadric(q, p));
+    EXPECT_NEAR(p.x, 1.0, 1e-12);
+    EXPECT_NEAR(p.y, 2.0, 1e-12);
+    EXPECT_NEAR(p.z, 3.0, 1e-12);
+    EXPECT_NEAR(q.evaluate(p), 0.0, 1e-12);
+}
+
+TEST(QuadricTest, IllConditionedSystemsAreRefused) {
+    Vec3d p(9, 9, 9);
+    const Quadric plane = Quadric::fromPlane(Vec3d(0, 0, 1), 0.0, 1.0);
+    EXPECT_FALSE(lodbake::solveQuadric(plane, p));
+    Quadric two = plane;
+    two += Quadric::fromPlane(Vec3d(1, 0, 0), 0.0, 1.0);
+    EXPECT_FALSE(lodbake::solveQuadric(two, p));
+    // Three planes, two of them almost parallel: refused at the default conditioning.
+    Quadric nearly = two;
+    nearly += Quadric::fromPlane(lodbake::normalize(Vec3d(1, 1e-6, 0)), 0.0, 1.0);
+    EXPECT_FALSE(lodbake::solveQuadric(nearly, p));
+    EXPECT_EQ(p.x, 9.0); // untouched on failure
+    EXPECT_FALSE(lodbake::solveQuadric(Quadric(), p));
+}
+
+TEST(QuadricTest, SegmentMinimumLiesOnThePlaneAndIsClamped) {
+    const Quadric q = Quadric::fromPlane(Vec3d(0, 0, 1), 0.0, 1.0);
+    const Vec3d m = lodbake::minimizeOnSegment(q, Vec3d(0, 0, -1), Vec3d(0, 0, 3));
+    EXPECT_NEAR(m.z, 0.0, 1e-12);
+    const Vec3d clamped = lodbake::minimizeOnSegment(q, Vec3d(0, 0, 1), Vec3d(0, 0, 3));
+    EXPECT_NEAR(clamped.z, 1.0, 1e-12);
+}
+
+TEST(QuadricTest, AttributeQuadricReproducesALinearField) {
+    // s = 2x + 3y + 1 sampled on two triangles of the plane z = 0.
+    auto s = [](const Vec3d& p) { return 2 * p.x + 3 * p.y + 1; };
+    const Vec3d a(0, 0, 0), b(1, 0, 0), c(1, 1, 0), d(0, 1, 0);
+    AttributeQuadric aq;
+    aq.addTriangle(a, b, c, s(a), s(b), s(c), 1.0);
+    aq.addTriangle(a, c, d, s(a), s(c), s(d), 1.0);
+    EXPECT_NEAR(aq.area, 1.0, 1e-12);
+    const Vec3d p(0.3, 0.6, 0);
+    EXPECT_NEAR(aq.optimalValue(p), s(p), 1e-12);
+    Quadric q;
+    aq.addTo(q);
+    EXPECT_NEAR(q.evaluate(p), 0.0, 1e-12); // a consistent field costs nothing anywhere
+}
+
+TEST(QuadricTest, AttributeQuadricsOfDisagreeingFieldsAverageAndCost) {
+    const Vec3d a(0, 0, 0), b(1, 0, 0), c(0, 1, 0);
+    AttributeQuadric zero, one;
+    zero.addTriangle(a, b, c, 0, 0, 0, 1.0);
+    one.addTriangle(a, b, c, 1, 1, 1, 1.0);
+    AttributeQuadric both = zero;
+    both += one;
+    EXPECT_NEAR(both.optimalValue(Vec3d(0.2, 0.2, 0)), 0.5, 1e-12);
+    Quadric q;
+    both.addTo(q);
+    // Σ a (s* − s_f)² = 0.5·0.25 + 0.5·0.25.
+    EXPECT_NEAR(q.evaluate(Vec3d(0.2, 0.2, 0)), 0.25, 1e-12);
+}
+
+TEST(CollapseQueueTest, PopsByCostThenById) {
+    lodbake::detail::CollapseQueue q(10);
+    q.set(5, 1.0f);
+    q.set(3, 1.0f);
+    q.set(7, 0.5f);
+    q.set(1, 2.0f);
+    EXPECT_EQ(q.pop(), 7u);
+    EXPECT_EQ(q.pop(), 3u); // tie with 5: smaller id first
+    EXPECT_EQ(q.pop(), 5u);
+    EXPECT_EQ(q.pop(), 1u);
+    EXPECT_TRUE(q.empty());
+}
+
+TEST(CollapseQueueTest, UpdateAndRemoveMatchAReferenceOrdering) {
+    constexpr uint32_t kIds = 500;
+    lodbake::detail::CollapseQueue q(kIds);
+    std::set<std::pair<float, uint32_t>> reference;
+    std::vector<float> cost(kIds, -1.0f);
+    std::mt19937 rng(12345);
+    for (int step = 0; step < 20000; ++step) {
+        const uint32_t id = rng() % kIds;
+        const int op = int(rng() % 4);
+        if (op < 2) {
+            const float c = float(rng() % 100); // many ties
+            if (cost[id] >= 0) reference.erase({cost[id], id});
+            cost[id] = c;
+            reference.insert({c, id});
+            q.set(id, c);
+        } else if (op == 2) {
+            if (cost[id] >= 0) reference.erase({cost[id], id});
+            cost[id] = -1.0f;
+            q.remove(id);
+        } else if (!reference.empty()) {
+            const auto top = *reference.begin();
+            ASSERT_EQ(q.topId(), top.second);
+            ASSERT_EQ(q.pop(), top.second);
+            reference.erase(reference.begin());
+            cost[top.second] = -1.0f;
+        }
+        ASSERT_EQ(q.size(), reference.size());
+        if (step % 997 == 0) {
+            ASSERT_TRUE(q.isConsistent());
+        }
+    }
+    ASSERT_TRUE(q.isConsistent());
+}
+
+} // namespace

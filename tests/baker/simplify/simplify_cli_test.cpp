@@ -1,0 +1,117 @@
+// The `simplify` and `lods` subcommands, run as a user would (the library is tested elsewhere).
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "lodbake/core/diagnostics.h"
+#include "lodbake/io/mesh_io.h"
+#include "simplify_test_meshes.h"
+#include "test_paths.h"
+
+namespace {
+
+struct CliRun {
+    int exit_code = -1;
+    std::string out, err;
+};
+
+std::string slurp(const std::string& path) {
+    std::ifstream f(path, std::ios::binary);
+    std::stringstream ss;
+    ss << f.rdbuf();
+    return ss.str();
+}
+
+std::string quote(const std::string& s) {
+    std::string q = "'";
+    for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    return q + "'";
+}
+
+CliRun lodbake(const std::vector<std::string>& args) {
+    static int counter = 0;
+    const std::string base =
+        lodbake_test::scratchDir() + "/simplify_cli_" + std::to_string(::getpid()) + "_" + std::to_string(++counter);
+    std::string cmd = quote(lodbake_test::lodbakeCli());
+    for (const std::string& a : args) cmd += " " + quote(a);
+    cmd += " >" + base + ".out 2>" + base + ".err </dev/null";
+    const int status = std::system(cmd.c_str());
+    CliRun r;
+    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+    r.out = slurp(base + ".out");
+    r.err = slurp(base + ".err");
+    return r;
+}
+
+// A sphere written once as a PLY input for every test.
+const std::string& sphereFile() {
+    static const std::string path = [] {
+        const std::string p = lodbake_test::scratchDir() + "/simplify_cli_sphere.ply";
+        lodbake::Diagnostics d;
+        EXPECT_TRUE(lodbake::writeMesh(lodbake_test::icosphere(4), p, lodbake::WriteOptions(), d).ok());
+        return p;
+    }();
+    return path;
+}
+
+size_t triangles(const std::string& path) {
+    lodbake::Diagnostics d;
+    auto m = lodbake::readMesh(path, lodbake::ReadOptions(), d);
+    EXPECT_TRUE(m.ok()) << m.status().message();
+    return m.ok() ? m->mesh.faceCount() : 0;
+}
+
+TEST(SimplifyCliTest, SimplifyWritesTheTargetTriangleCount) {
+    const std::string out = lodbake_test::scratchDir() + "/simplify_cli_half.ply";
+    std::filesystem::remove(out);
+    const CliRun r = lodbake({"simplify", sphereFile(), "-o", out, "--triangles", "1000", "--json"});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_LE(triangles(out), 1000u);
+    EXPECT_GE(triangles(out), 998u);
+    EXPECT_NE(r.out.find("\"hausdorff_rel\""), std::string::npos);
+    const CliRun ratio = lodbake({"simplify", sphereFile(), "-o", out, "--ratio", "0.25"});
+    ASSERT_EQ(ratio.exit_code, 0) << ratio.err;
+    EXPECT_LE(triangles(out), 1280u);
+}
+
+TEST(SimplifyCliTest, LodsWritesEveryLevelAndTheJsonReport) {
+    const std::string prefix = lodbake_test::scratchDir() + "/simplify_cli_chain";
+    const CliRun r = lodbake({"lods", sphereFile(), "-o", prefix, "--levels", "0.5,0.1,0.02"});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const size_t expected[] = {2560, 512, 103};
+    for (int i = 0; i < 3; ++i) {
+        const std::string file = prefix + "_lod" + std::to_string(i) + ".ply";
+        ASSERT_TRUE(std::filesystem::exists(file)) << file;
+        EXPECT_LE(triangles(file), expected[i]);
+        EXPECT_GE(triangles(file) + 2, expected[i]);
+    }
+    const std::string json = slurp(prefix + ".json");
+    for (const char* key : {"\"levels\"", "\"triangles\"", "\"vertices\"", "\"hausdorff\"", "\"mean_rel\"",
+                            "\"switch_distance\"", "\"screen_coverage\""})
+        EXPECT_NE(json.find(key), std::string::npos) << key;
+}
+
+TEST(SimplifyCliTest, UsageErrorsExitTwo) {
+    const std::string out = lodbake_test::scratchDir() + "/simplify_cli_unused.ply";
+    EXPECT_EQ(lodbake({"simplify", sphereFile(), "-o", out}).exit_code, 2); // no target
+    EXPECT_EQ(lodbake({"simplify", sphereFile(), "-o", out, "--ratio", "0.5", "--error", "1"}).exit_code, 2);
+    EXPECT_EQ(lodbake({"simplify", sphereFile(), "-o", out, "--ratio", "1.5"}).exit_code, 2);
+    EXPECT_EQ(lodbake({"simplify", sphereFile(), "-o", out, "--triangles", "abc"}).exit_code, 2);
+    EXPECT_EQ(lodbake({"lods", sphereFile(), "-o", out, "--levels", "0.5,x"}).exit_code, 2);
+    EXPECT_EQ(lodbake({"lods", sphereFile(), "-o", out, "--levels", "0"}).exit_code, 2);
+    EXPECT_EQ(lodbake({"lods", sphereFile()}).exit_code, 2);
+    const CliRun missing = lodbake({"simplify", "/nonexistent/in.ply", "-o", out, "--ratio", "0.5"});
+    EXPECT_EQ(missing.exit_code, 1);
+    EXPECT_EQ(missing.err.rfind("error: ", 0), 0u);
+    EXPECT_FALSE(std::filesystem::exists(out));
+}
+
+} // namespace
