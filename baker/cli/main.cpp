@@ -352,7 +352,7 @@ int runConvert(int argc, char** argv) {
 bool parseNumber(const std::string& text, double& out) {
     char* end = nullptr;
     out = std::strtod(text.c_str(), &end);
-    return !text.empty() && end && *end == '\0';
+    return !text.empty() && end && *end == '\0' && std::isfinite(out);
 }
 
 void writePassesJson(JsonWriter& j, const RepairReport& report) {
@@ -526,12 +526,6 @@ int runRepair(int argc, char** argv) {
     printTopologyText("topology after", report->after.topology);
     std::printf("wrote %s: %zu vertices, %zu triangles\n", out.c_str(), mesh.vertexCount(), mesh.faceCount());
     return kExitOk;
-}
-
-bool parseNumber(const std::string& text, double& out) {
-    char* end = nullptr;
-    out = std::strtod(text.c_str(), &end);
-    return !text.empty() && end && *end == '\0' && std::isfinite(out);
 }
 
 void writeDistanceJson(JsonWriter& j, const DistanceResult& d) {
