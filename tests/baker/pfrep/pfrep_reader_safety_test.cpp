@@ -123,7 +123,9 @@ TEST(PfrepReaderSafetyTest, CraftedDamageGivesItsCode) {
         auto b = blob;
         set32(b, 8, 0xfffffff0u); // absurd vertex count: refused before anything is read
         EXPECT_NE(open(b), lodrt::Result::Ok);
-        set32(b, 8, get32(blob, 8) + 100); // sections no longer fit
+        set32(b, 8, get32(blob, 8) + 100); // the offset table no longer starts where the header says
+        EXPECT_EQ(open(b), lodrt::Result::OutOfBounds);
+        set32(b, 8, get32(blob, 8) + 100000); // sections no longer fit
         EXPECT_EQ(open(b), lodrt::Result::Truncated);
     }
     {

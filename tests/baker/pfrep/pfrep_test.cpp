@@ -138,29 +138,37 @@ TEST_F(PfrepTest, EveryLevelEqualsAnIndependentReplay) {
     for (Baked* b : {rocker_, scan_}) {
         ASSERT_NE(b, nullptr);
         // Replay the recorded collapses on a plain triangle set and compare at ~60 levels.
+        std::vector<Tri> tris;
+        std::vector<std::vector<uint32_t>> incident(b->chain.sequence.point_positions.size());
+        std::vector<uint8_t> dead;
         std::multiset<Tri> alive;
+        auto add = [&](Tri t) {
+            for (uint32_t p : t) incident[p].push_back(uint32_t(tris.size()));
+            tris.push_back(t);
+            dead.push_back(0);
+            alive.insert(canonicalTri(t[0], t[1], t[2]));
+        };
         for (size_t t = 0; t < b->point_triangles.size() / 3; ++t)
-            alive.insert(canonicalTri(b->point_triangles[t * 3], b->point_triangles[t * 3 + 1],
-                                      b->point_triangles[t * 3 + 2]));
+            add({b->point_triangles[t * 3], b->point_triangles[t * 3 + 1], b->point_triangles[t * 3 + 2]});
         const auto& records = b->chain.sequence.records;
         const size_t step = std::max<size_t>(1, records.size() / 60);
         for (size_t k = 0; k <= records.size(); ++k) {
-            if (k % step == 0 || k == records.size() || k < 5)
+            if (k % step == 0 || k == records.size() || k < 5) {
                 ASSERT_TRUE(extractPoints(*b, uint32_t(k)) == alive) << "k = " << k;
+            }
             if (k == records.size()) break;
             const uint32_t u = records[k].removed_point, v = records[k].kept_point;
-            std::multiset<Tri> next;
-            for (Tri t : alive) {
-                if (t[0] != u && t[1] != u && t[2] != u) {
-                    next.insert(t);
-                    continue;
-                }
+            const std::vector<uint32_t> ring = incident[u];
+            for (uint32_t id : ring) {
+                if (dead[id]) continue;
+                dead[id] = 1;
+                Tri t = tris[id];
+                alive.erase(alive.find(canonicalTri(t[0], t[1], t[2])));
                 if (t[0] == v || t[1] == v || t[2] == v) continue;
                 for (auto& p : t)
                     if (p == u) p = v;
-                next.insert(canonicalTri(t[0], t[1], t[2]));
+                add(t);
             }
-            alive.swap(next);
         }
     }
 }
@@ -208,7 +216,9 @@ TEST_F(PfrepTest, FansDrawTheSameTrianglesAsTheList) {
             }
             EXPECT_TRUE(a == f) << "k = " << k;
             // Fans save submissions: fewer values than a list's 3 per triangle.
-            if (count > 100) EXPECT_LT(values, count * 3);
+            if (k == 0) {
+                EXPECT_LT(values, count * 3); // full detail: fans average well above one triangle
+            }
         }
         size_t count = 0;
         EXPECT_EQ(lodrt::pfrepExtractLevel(m, 0, idx.data(), 3, &count), lodrt::Result::BufferTooSmall);
