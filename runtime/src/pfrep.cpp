@@ -175,9 +175,45 @@ inline bool visitEntry(const PfrepModel& m, const uint8_t* s, uint32_t i, Keep&&
     return ok;
 }
 
+// Calls fn(i) for every vertex whose mask bit is 0 (present), 64 bits at a time; fn may change the
+// mask (a bit cleared ahead in the current word is then skipped until the next pass).
+template <typename Fn> inline bool forEachPresent(const PfrepModel& m, const uint8_t* mask, Fn&& fn) {
+    const size_t bytes = pfrepMaskBytes(m);
+    size_t b = 0;
+    for (; b + 8 <= bytes; b += 8) {
+        uint64_t w;
+        std::memcpy(&w, mask + b, 8);
+        uint64_t present = ~w;
+        while (present) {
+            const uint32_t i = uint32_t(b * 8) + uint32_t(__builtin_ctzll(present));
+            present &= present - 1;
+            if (i >= m.vertex_count) return true;
+            if (!fn(i)) return false;
+        }
+    }
+    for (; b < bytes; ++b) {
+        uint32_t present = uint32_t(~mask[b]) & 0xffu;
+        while (present) {
+            const uint32_t i = uint32_t(b * 8) + uint32_t(__builtin_ctz(present));
+            present &= present - 1;
+            if (i >= m.vertex_count) return true;
+            if (!fn(i)) return false;
+        }
+    }
+    return true;
+}
+
+struct LogTable {
+    float value[256];
+    LogTable() {
+        value[0] = 0.0f;
+        for (int c = 1; c < 256; ++c) value[c] = std::exp2(float(c - 1) / float(format::kPfrepLogCodeSteps));
+    }
+};
+
 float logValue(const PfrepModel& m, uint32_t code) {
-    if (code == 0) return 0.0f;
-    return m.error_unit * std::exp2(float(code - 1) / float(format::kPfrepLogCodeSteps));
+    static const LogTable table;
+    return m.error_unit * table.value[code & 255];
 }
 
 } // namespace
@@ -378,26 +414,20 @@ Result pfrepExtractSelective(const PfrepModel& m, const uint8_t* mask, uint32_t*
     const uint8_t* s = m.data + m.entries_offset;
     size_t count = 0;
     bool fits = true;
-    for (uint32_t w = 0; w < (m.vertex_count + 7) / 8 && fits; ++w) {
-        uint32_t present = uint32_t(~mask[w]) & 0xffu;
-        while (present && fits) {
-            const uint32_t i = w * 8 + uint32_t(__builtin_ctz(present));
-            present &= present - 1;
-            if (i >= m.vertex_count) break;
-            fits = visitEntry(
-                m, s, i, [mask](uint32_t d) { return d == kNoDependency || maskBit(mask, d); },
-                [&](const Entry&, uint32_t, uint32_t a, uint32_t b) {
-                    if (maskBit(mask, a) || maskBit(mask, b)) return true;
-                    if (count == capacity) return false;
-                    uint32_t* t = indices + count * 3;
-                    t[0] = i;
-                    t[1] = a;
-                    t[2] = b;
-                    ++count;
-                    return true;
-                });
-        }
-    }
+    fits = forEachPresent(m, mask, [&](uint32_t i) {
+        return visitEntry(
+            m, s, i, [mask](uint32_t d) { return d == kNoDependency || maskBit(mask, d); },
+            [&](const Entry&, uint32_t, uint32_t a, uint32_t b) {
+                if (maskBit(mask, a) || maskBit(mask, b)) return true;
+                if (count == capacity) return false;
+                uint32_t* t = indices + count * 3;
+                t[0] = i;
+                t[1] = a;
+                t[2] = b;
+                ++count;
+                return true;
+            });
+    });
     *triangle_count = count;
     return fits ? Result::Ok : Result::BufferTooSmall;
 }
@@ -450,30 +480,25 @@ Result pfrepRefine(const PfrepModel& m, const PfrepView& view, uint8_t* mask, ui
     if (!mask || !scratch || !changes || scratch_capacity < pfrepScratchValues(m)) return Result::InvalidArgument;
     const uint8_t* s = m.data + m.entries_offset;
     size_t done = 0;
-    for (uint32_t w = 0; w < (m.vertex_count + 7) / 8; ++w) {
-        uint32_t present = uint32_t(~mask[w]) & 0xffu;
-        while (present) {
-            const uint32_t i = w * 8 + uint32_t(__builtin_ctz(present));
-            present &= present - 1;
-            if (i >= m.vertex_count) break;
-            if (maskBit(mask, i)) continue; // simplified earlier in this pass
-            if (i < m.removed_count && !pfrepWanted(m, view, i)) {
-                pfrepSimplifyVertex(m, mask, i, scratch, scratch_capacity);
+    forEachPresent(m, mask, [&](uint32_t i) {
+        if (maskBit(mask, i)) return true; // simplified earlier in this pass
+        if (i < m.removed_count && !pfrepWanted(m, view, i)) {
+            pfrepSimplifyVertex(m, mask, i, scratch, scratch_capacity);
+            ++done;
+            return true;
+        }
+        const Entry e = decodeHeader(s, entryStart(m, i));
+        uint64_t bit = e.first_mask_bit + (e.has_original ? e.neighbours : 0);
+        for (uint32_t k = 0; k < e.dependencies; ++k) {
+            const uint32_t d = i - 1 - bitsAt(s, bit, e.dependency_width);
+            bit += e.dependency_width + e.neighbours;
+            if (maskBit(mask, d) && pfrepWanted(m, view, d)) {
+                pfrepInsertVertex(m, mask, d, scratch, scratch_capacity);
                 ++done;
-                continue;
-            }
-            const Entry e = decodeHeader(s, entryStart(m, i));
-            uint64_t bit = e.first_mask_bit + (e.has_original ? e.neighbours : 0);
-            for (uint32_t k = 0; k < e.dependencies; ++k) {
-                const uint32_t d = i - 1 - bitsAt(s, bit, e.dependency_width);
-                bit += e.dependency_width + e.neighbours;
-                if (maskBit(mask, d) && pfrepWanted(m, view, d)) {
-                    pfrepInsertVertex(m, mask, d, scratch, scratch_capacity);
-                    ++done;
-                }
             }
         }
-    }
+        return true;
+    });
     *changes = done;
     return Result::Ok;
 }
