@@ -261,11 +261,16 @@ Result openPfrep(const void* data, size_t size, PfrepModel* model) {
     m.entries_size = uint32_t(entries_size);
     uint64_t original = 0;
     uint32_t max_neighbours = 0;
+    if (m.vertex_count > 0 && entryStart(m, 0) != 0) return Result::BadStructure;
     for (uint32_t i = 0; i < m.vertex_count; ++i) {
         const Result r = validateEntry(m, i, original);
         if (r != Result::Ok) return r;
         const Entry e = decodeHeader(m.data + m.entries_offset, entryStart(m, i));
         max_neighbours = std::max(max_neighbours, e.neighbours);
+        // Entries are contiguous (each starts at the byte after the previous one ends), so
+        // progressive extraction walks the stream without the offset table.
+        const uint64_t next = i + 1 < m.vertex_count ? entryStart(m, i + 1) : uint64_t(m.entries_size) * 8;
+        if (next != ((e.end_bit + 7) & ~uint64_t(7))) return Result::BadStructure;
     }
     if (original != m.level0_triangles) return Result::BadStructure;
     m.max_fan_neighbours = max_neighbours;
@@ -287,22 +292,71 @@ Result pfrepExtractLevel(const PfrepModel& m, uint32_t level, uint32_t* indices,
     if (!triangle_count || (!indices && capacity > 0) || level > m.removed_count) return Result::InvalidArgument;
     const uint8_t* s = m.data + m.entries_offset;
     size_t count = 0;
-    bool fits = true;
-    for (uint32_t i = level; i < m.vertex_count && fits; ++i) {
-        fits = visitEntry(
-            m, s, i, [level](uint32_t d) { return d == kNoDependency || d < level; },
-            [&](const Entry&, uint32_t, uint32_t a, uint32_t b) {
-                if (count == capacity) return false;
+    if (level >= m.vertex_count) {
+        *triangle_count = 0;
+        return Result::Ok;
+    }
+    uint64_t bit = entryStart(m, level);
+    uint32_t ring[65];
+    for (uint32_t i = level; i < m.vertex_count; ++i) {
+        const Entry e = decodeHeader(s, bit);
+        bit = (e.end_bit + 7) & ~uint64_t(7);
+        const uint32_t n = e.neighbours;
+        if (n > 64) {
+            // Rare wide fans: the general path.
+            const bool fits = visitEntry(
+                m, s, i, [level](uint32_t d) { return d == kNoDependency || d < level; },
+                [&](const Entry&, uint32_t, uint32_t a, uint32_t b) {
+                    if (count == capacity) return false;
+                    uint32_t* t = indices + count * 3;
+                    t[0] = i;
+                    t[1] = a;
+                    t[2] = b;
+                    ++count;
+                    return true;
+                });
+            if (!fits) {
+                *triangle_count = count;
+                return Result::BufferTooSmall;
+            }
+            continue;
+        }
+        const uint32_t w = e.neighbour_width;
+        uint64_t nb = e.neighbour_bit;
+        for (uint32_t j = 0; j < n; ++j, nb += w) ring[j] = i + 1 + bitsAt(s, nb, w);
+        ring[n] = ring[0];
+        uint64_t mb = e.first_mask_bit;
+        const uint32_t groups = e.dependencies + (e.has_original ? 1 : 0);
+        for (uint32_t g = 0; g < groups; ++g) {
+            bool keep = true;
+            if (g > 0 || !e.has_original) {
+                const uint32_t d = i - 1 - bitsAt(s, mb, e.dependency_width);
+                mb += e.dependency_width;
+                keep = d < level;
+            }
+            if (keep) {
+                uint64_t bits = bitsAt(s, mb, std::min(n, 32u));
+                if (n > 32) bits |= uint64_t(bitsAt(s, mb + 32, n - 32)) << 32;
+                if (size_t(__builtin_popcountll(bits)) > capacity - count) {
+                    *triangle_count = count;
+                    return Result::BufferTooSmall;
+                }
                 uint32_t* t = indices + count * 3;
-                t[0] = i;
-                t[1] = a;
-                t[2] = b;
-                ++count;
-                return true;
-            });
+                count += size_t(__builtin_popcountll(bits));
+                while (bits) {
+                    const uint32_t j = uint32_t(__builtin_ctzll(bits));
+                    bits &= bits - 1;
+                    t[0] = i;
+                    t[1] = ring[j];
+                    t[2] = ring[j + 1];
+                    t += 3;
+                }
+            }
+            mb += n;
+        }
     }
     *triangle_count = count;
-    return fits ? Result::Ok : Result::BufferTooSmall;
+    return Result::Ok;
 }
 
 Result pfrepExtractLevelFans(const PfrepModel& m, uint32_t level, uint32_t* values, size_t capacity,
