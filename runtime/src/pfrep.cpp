@@ -181,6 +181,18 @@ template <typename Fn> inline bool forEachPresent(const PfrepModel& m, const uin
     const size_t bytes = pfrepMaskBytes(m);
     size_t b = 0;
     for (; b + 8 <= bytes; b += 8) {
+        // Runs of removed vertices (the usual case far from the camera) are skipped 64 bytes at a time.
+        while (b + 64 <= bytes) {
+            uint64_t all = ~uint64_t(0);
+            for (int k = 0; k < 8; ++k) {
+                uint64_t x;
+                std::memcpy(&x, mask + b + 8 * k, 8);
+                all &= x;
+            }
+            if (all != ~uint64_t(0)) break;
+            b += 64;
+        }
+        if (b + 8 > bytes) break;
         uint64_t w;
         std::memcpy(&w, mask + b, 8);
         uint64_t present = ~w;
@@ -511,22 +523,29 @@ Result pfrepVertexBounds(const PfrepModel& m, uint32_t vertex, PfrepVertexBounds
 }
 
 bool pfrepWanted(const PfrepModel& m, const PfrepView& view, uint32_t vertex) {
-    PfrepVertexBounds b;
-    if (pfrepVertexBounds(m, vertex, &b) != Result::Ok) return false;
+    if (vertex >= m.vertex_count) return false;
+    const uint8_t* r = m.data + m.vertex_records_offset + size_t(vertex) * format::kPfrepVertexRecordSize;
+    float p[3];
+    for (int k = 0; k < 3; ++k) p[k] = m.position_min[k] + float(loadU16(r + 2 * k)) * m.position_step[k];
+    const float radius = logValue(m, r[6]);
+    const float error = logValue(m, r[7]);
     for (const auto& plane : view.planes)
-        if (plane[0] * b.position[0] + plane[1] * b.position[1] + plane[2] * b.position[2] + plane[3] < -b.radius)
-            return false;
-    const float dx = b.position[0] - view.eye[0], dy = b.position[1] - view.eye[1], dz = b.position[2] - view.eye[2];
+        if (plane[0] * p[0] + plane[1] * p[1] + plane[2] * p[2] + plane[3] < -radius) return false;
+    const float dx = p[0] - view.eye[0], dy = p[1] - view.eye[1], dz = p[2] - view.eye[2];
     const float dist2 = dx * dx + dy * dy + dz * dz;
     const float dist = std::sqrt(dist2);
-    if (dist <= b.radius) return true;
+    if (dist <= radius) return true;
+    // Screen-space error first: it rejects most vertices of distant instances.
+    if (!(error * view.pixels_per_unit_at_distance_one > view.pixel_tolerance * (dist - radius))) return false;
+    PfrepVertexBounds b;
+    pfrepVertexBounds(m, vertex, &b);
     if (b.cone_angle < 1.5707963f) {
         // Back-facing when every normal of the cone points away from the eye (Hoppe 1997 §4.2).
         const float along = b.cone_axis[0] * dx + b.cone_axis[1] * dy + b.cone_axis[2] * dz;
         const float sin_a = std::sin(b.cone_angle);
         if (along > 0 && along * along > dist2 * sin_a * sin_a) return false;
     }
-    return b.error * view.pixels_per_unit_at_distance_one > view.pixel_tolerance * (dist - b.radius);
+    return true;
 }
 
 Result pfrepRefine(const PfrepModel& m, const PfrepView& view, uint8_t* mask, uint32_t* scratch,
