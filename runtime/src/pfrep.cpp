@@ -132,6 +132,7 @@ Result validateEntry(const PfrepModel& m, uint32_t i, uint64_t& original_triangl
         });
         bit += e.neighbours;
     }
+    uint32_t previous = 0;
     for (uint32_t k = 0; k < e.dependencies; ++k) {
         const uint32_t delta = bitsAt(s, bit, e.dependency_width);
         bit += e.dependency_width;
@@ -139,6 +140,9 @@ Result validateEntry(const PfrepModel& m, uint32_t i, uint64_t& original_triangl
         if (delta >= i) return Result::BadStructure;
         const uint32_t d = i - 1 - delta;
         if (d >= m.removed_count) return Result::BadStructure;
+        // Strictly increasing: extraction stops at the first dependency not yet removed.
+        if (k > 0 && d <= previous) return Result::BadStructure;
+        previous = d;
         forEachSlot(s, bit, e.neighbours, check);
         bit += e.neighbours;
     }
@@ -333,20 +337,25 @@ Result pfrepExtractLevel(const PfrepModel& m, uint32_t level, uint32_t* indices,
             }
             continue;
         }
-        const uint32_t w = e.neighbour_width;
-        uint64_t nb = e.neighbour_bit;
-        for (uint32_t j = 0; j < n; ++j, nb += w) ring[j] = i + 1 + bitsAt(s, nb, w);
-        ring[n] = ring[0];
+        // The ring is decoded only once a group is kept; dependencies are stored in increasing
+        // order, so the first one at or above `level` ends the entry.
+        bool ring_ready = false;
         uint64_t mb = e.first_mask_bit;
         const uint32_t groups = e.dependencies + (e.has_original ? 1 : 0);
         for (uint32_t g = 0; g < groups; ++g) {
-            bool keep = true;
             if (g > 0 || !e.has_original) {
                 const uint32_t d = i - 1 - bitsAt(s, mb, e.dependency_width);
                 mb += e.dependency_width;
-                keep = d < level;
+                if (d >= level) break;
             }
-            if (keep) {
+            {
+                if (!ring_ready) {
+                    const uint32_t w = e.neighbour_width;
+                    uint64_t nb = e.neighbour_bit;
+                    for (uint32_t j = 0; j < n; ++j, nb += w) ring[j] = i + 1 + bitsAt(s, nb, w);
+                    ring[n] = ring[0];
+                    ring_ready = true;
+                }
                 uint64_t bits = bitsAt(s, mb, std::min(n, 32u));
                 if (n > 32) bits |= uint64_t(bitsAt(s, mb + 32, n - 32)) << 32;
                 if (size_t(__builtin_popcountll(bits)) > capacity - count) {
