@@ -13,6 +13,8 @@
 #include <string>
 #include <vector>
 
+#include <time.h>
+
 #include "lodbake/io/mesh_io.h"
 #include "lodbake/pfrep/pfrep_builder.h"
 #include "lodbake/simplify/lod_chain.h"
@@ -22,6 +24,12 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+// CPU time of this thread: on a loaded shared machine, wall time also counts time spent descheduled.
+double cpuSeconds() {
+    timespec ts;
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+    return double(ts.tv_sec) + double(ts.tv_nsec) * 1e-9;
+}
 
 std::string meshPath(const std::string& name) { return std::string(LODBAKE_BENCH_SHARED_MESHES_DIR) + "/" + name; }
 
@@ -119,17 +127,20 @@ int main(int argc, char** argv) {
         if (lodrt::openPfrep(dragon.blob.data(), dragon.blob.size(), &m) == lodrt::Result::Ok) {
             std::vector<uint32_t> idx(lodrt::pfrepMaxTriangles(m) * 3);
             std::vector<uint32_t> fans(lodrt::pfrepMaxFanValues(m));
-            double worst = HUGE_VAL;
+            double worst = HUGE_VAL, worst_cpu = HUGE_VAL;
             for (double f : {0.0, 0.1, 0.25, 0.5, 0.75, 0.9, 0.97, 0.99, 0.999, 1.0}) {
                 const uint32_t k = uint32_t(f * m.removed_count);
                 size_t count = 0;
                 int reps = 0;
                 const auto t = Clock::now();
+                const double c0 = cpuSeconds();
                 do {
                     lodrt::pfrepExtractLevel(m, k, idx.data(), idx.size() / 3, &count);
                     ++reps;
                 } while (secondsSince(t) < 0.3);
                 const double s = secondsSince(t) / reps;
+                const double cpu = (cpuSeconds() - c0) / reps;
+                worst_cpu = std::min(worst_cpu, count / cpu / 1e6);
                 size_t values = 0;
                 const auto tf = Clock::now();
                 int fan_reps = 0;
@@ -149,12 +160,13 @@ int main(int argc, char** argv) {
                 const double sc = secondsSince(tc) / copy_reps;
                 const double rate = count / s / 1e6;
                 worst = std::min(worst, rate);
-                std::printf("  k %8u (%5.1f%%): %8zu triangles in %8.3f ms = %6.1f M tri/s (memcpy of the list: %6.1f M "
+                std::printf("  k %8u (%5.1f%%): %8zu triangles in %8.3f ms = %6.1f M tri/s (thread CPU time: %6.1f M tri/s) (memcpy of the list: %6.1f M "
                             "tri/s, ratio %.2f); fans: %zu values (%.2f per triangle) %6.1f M tri/s\n",
-                            k, f * 100, count, s * 1e3, rate, count / sc / 1e6, sc / s, values,
+                            k, f * 100, count, s * 1e3, rate, count / cpu / 1e6, count / sc / 1e6, sc / s, values,
                             count ? double(values) / count : 0.0, count / sf / 1e6);
             }
-            std::printf("  worst %.1f M triangles/s: bar %s\n", worst, worst >= 50 ? "met" : "NOT met");
+            std::printf("  worst %.1f M triangles/s wall, %.1f M triangles/s thread CPU time: bar %s\n", worst, worst_cpu,
+                        worst >= 50 ? "met" : (worst_cpu >= 50 ? "met in CPU time only" : "NOT met"));
         }
     }
 
@@ -183,13 +195,14 @@ int main(int argc, char** argv) {
             const float spacing = 3.0f * size;
             const float ppu = 1080.0f / (2.0f * std::tan(0.5236f));
             const int kFrames = 300;
-            double total = 0, worst = 0;
+            double total = 0, total_cpu = 0, worst = 0;
             size_t total_changes = 0, last_tris = 0;
             std::vector<uint32_t> idx(lodrt::pfrepMaxTriangles(m) * 3);
             for (int frame = 0; frame < kFrames; ++frame) {
                 const float cam[3] = {20 * spacing * (0.5f + 0.4f * std::sin(frame * 0.02f)), -5 * spacing + frame * 0.3f * spacing / 3,
                                       2.0f * size};
                 const auto t = Clock::now();
+                const double c0 = cpuSeconds();
                 size_t changes = 0;
                 for (int i = 0; i < kInstances; ++i) {
                     const float ox = (i % 40) * spacing, oy = (i / 40) * spacing;
@@ -214,6 +227,7 @@ int main(int argc, char** argv) {
                     changes += n;
                 }
                 const double s = secondsSince(t);
+                total_cpu += cpuSeconds() - c0;
                 total += s;
                 worst = std::max(worst, s);
                 total_changes += changes;
@@ -226,6 +240,7 @@ int main(int argc, char** argv) {
                     }
                 }
             }
+            std::printf("  thread CPU time: mean %.3f ms/frame\n", total_cpu / kFrames * 1e3);
             std::printf("  %d frames: mean %.3f ms/frame, worst %.3f ms, %.1f vertex operations/frame; state %zu bytes "
                         "per instance for %u vertices (|V| bits); %zu triangles in the last frame: bar %s\n",
                         kFrames, total / kFrames * 1e3, worst * 1e3, double(total_changes) / kFrames, mask_bytes,
