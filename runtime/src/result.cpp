@@ -34,6 +34,10 @@ const char* resultName(Result result) {
         return "BadGltf";
     case Result::OutOfBounds:
         return "OutOfBounds";
+    case Result::BadStructure:
+        return "BadStructure";
+    case Result::BufferTooSmall:
+        return "BufferTooSmall";
     }
     return "Unknown";
 }

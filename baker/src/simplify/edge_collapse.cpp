@@ -30,6 +30,7 @@
 #include <cmath>
 #include <cstring>
 #include <string>
+#include <utility>
 
 namespace lodbake::detail {
 
@@ -157,10 +158,22 @@ bool EdgeCollapser::evaluate(uint32_t edge, Candidate& c) const {
     c.edge = edge;
     c.removed = ra ? a : b;
     c.kept = ra ? b : a;
-    const Quadric q = combinedQuadric(edge, c.removed);
-    const Vec3d pk = toD(position_[c.kept]);
-    const Vec3d pr = toD(position_[c.removed]);
-    if (kind_[c.kept] == kCorner || (kind_[c.kept] == kLine && !feature)) {
+    Quadric q = combinedQuadric(edge, c.removed);
+    Vec3d pk = toD(position_[c.kept]);
+    Vec3d pr = toD(position_[c.removed]);
+    if (options_.placement == CollapsePlacement::KeepEndpoint) {
+        // Half-edge collapse: the kept point stays where it is. When either end may go, the
+        // direction with the lower cost is taken (ties: remove the first end, a).
+        if (ra && rb) {
+            Quadric q_other = combinedQuadric(edge, b);
+            if (q_other.evaluate(pr) < q.evaluate(pk)) {
+                std::swap(c.removed, c.kept);
+                std::swap(pk, pr);
+                q = q_other;
+            }
+        }
+        c.position = pk;
+    } else if (kind_[c.kept] == kCorner || (kind_[c.kept] == kLine && !feature)) {
         // Corners never move; a border/seam point only moves along its own feature line.
         c.position = pk;
     } else if (kind_[c.kept] == kLine) {

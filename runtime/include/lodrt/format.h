@@ -15,5 +15,29 @@ constexpr uint32_t kGlbChunkBin = 0x004E4942u;  // "BIN\0"
 constexpr uint32_t kGlbHeaderSize = 12;
 constexpr uint32_t kGlbChunkHeaderSize = 8;
 
+// PFRep progressive fans (docs/format/pfrep.md). Little-endian; all offsets are byte offsets from the
+// start of the blob. Vertex ids are removal ranks: vertex i is the i-th vertex removed by the
+// half-edge-collapse sequence, ids >= removed_count are never removed.
+constexpr uint32_t kPfrepMagic = 0x31524650u; // "PFR1"
+constexpr uint32_t kPfrepVersion = 1;
+constexpr uint32_t kPfrepHeaderSize = 64;
+// Header fields (byte offset: type):
+//   0 u32 magic, 4 u32 version, 8 u32 vertex_count, 12 u32 removed_count, 16 u32 block_shift,
+//   20 u32 level0_triangles, 24 f32[3] position_min, 36 f32[3] position_step,
+//   48 f32 error_unit, 52 u32 vertex_records_offset, 56 u32 offset_table_offset, 60 u32 entries_offset.
+constexpr uint32_t kPfrepVertexRecordSize = 10; // u16 q[3], u8 radius, u8 error, u16 cone
+constexpr uint32_t kPfrepMaxBlockShift = 8;
+constexpr uint32_t kPfrepStreamPadding = 16;    // zero bytes after the entry stream (64-bit bit reads)
+constexpr uint32_t kPfrepMaxVertices = 0x40000000u;
+// Entry bit fields (LSB first): neighbour count (6 bits, 63 = 63 + next 16 bits), dependency count
+// (3 bits, 7 = 7 + next 16 bits), has_original (1), neighbour width (5), dependency width (5, only
+// when dependencies > 0).
+constexpr uint32_t kPfrepCountBits = 6;
+constexpr uint32_t kPfrepDependencyCountBits = 3;
+constexpr uint32_t kPfrepCountEscapeBits = 16;
+constexpr uint32_t kPfrepWidthBits = 5;
+// Log-scale codes: value(code) = 0 for code 0, else error_unit * 2^((code - 1) / 8).
+constexpr uint32_t kPfrepLogCodeSteps = 8;
+
 } // namespace format
 } // namespace lodrt

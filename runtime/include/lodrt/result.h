@@ -24,6 +24,8 @@ enum class Result : int {
     OutOfMemory,        // the allocator returned null
     BadGltf,            // the JSON is valid but breaks a glTF 2.0 rule (wrong type, missing property, bad index)
     OutOfBounds,        // an accessor, buffer view or index points outside the bytes that exist
+    BadStructure,       // PFRep: an entry breaks an ordering rule (dependency cycle, degenerate fan, bad count)
+    BufferTooSmall,     // a caller-owned output buffer is smaller than the result
 };
 
 /// Stable name of a result code, e.g. "Truncated"; "Unknown" for values outside the enum.

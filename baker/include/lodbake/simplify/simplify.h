@@ -33,6 +33,13 @@ struct AttributeWeights {
     float color = 0.25f;
 };
 
+/// Where the surviving point of a collapse goes.
+enum class CollapsePlacement : uint8_t {
+    Optimal,      // full-edge collapse: the kept point moves to the quadric optimum (or onto its border)
+    KeepEndpoint, // half-edge collapse: the kept point stays in place (one vertex removed, the
+                  // rest untouched: the primitive PFRep is built from, docs/format/pfrep.md)
+};
+
 /// What the simplifier may do. The ratio, triangle and error targets combine: simplification stops
 /// at the first one reached.
 struct SimplifyOptions {
@@ -50,6 +57,7 @@ struct SimplifyOptions {
                                      // but small thin features go early), 1 = mean squared distance
                                      // (lowest Hausdorff); 0.5 balances both (docs/simplify.md)
     bool lock_border = false;        // keep open-boundary vertices exactly in place
+    CollapsePlacement placement = CollapsePlacement::Optimal;
     AttributeWeights attribute_weights;
 };
 

@@ -1,0 +1,466 @@
+// PFRep builder (Cortés Carrillo, progressive fans): replays a half-edge-collapse sequence, stores
+// every triangle once at its lowest-ranked corner as a fan slot with its dependency, decomposes
+// each vertex's opposite edges into walks ("crowns") concatenated into one cyclic sequence A_i with
+// one validity mask per dependency, and writes the blob of docs/format/pfrep.md.
+#include "lodbake/pfrep/pfrep_builder.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <string>
+#include <unordered_map>
+
+#include "lodrt/format.h"
+
+namespace lodbake {
+namespace {
+
+constexpr uint32_t kNone = 0xffffffffu;
+
+struct Triangle {
+    uint32_t p[3];
+    uint32_t dependency; // point whose removal created it, kNone for input triangles
+};
+
+uint32_t bitWidth(uint32_t v) { return v == 0 ? 0 : 32 - uint32_t(__builtin_clz(v)); }
+
+class BitWriter {
+public:
+    void write(uint64_t value, uint32_t bits) {
+        for (uint32_t k = 0; k < bits; ++k, ++bit_) {
+            if ((bit_ & 7) == 0) bytes_.push_back(0);
+            if ((value >> k) & 1) bytes_.back() = uint8_t(bytes_.back() | (1u << (bit_ & 7)));
+        }
+    }
+    void alignByte() { bit_ = (bit_ + 7) & ~uint64_t(7); }
+    size_t byteSize() const { return bytes_.size(); }
+    std::vector<uint8_t>& bytes() { return bytes_; }
+
+private:
+    std::vector<uint8_t> bytes_;
+    uint64_t bit_ = 0;
+};
+
+void writeCount(BitWriter& w, uint32_t count, uint32_t bits) {
+    const uint32_t escape = (1u << bits) - 1;
+    if (count < escape) {
+        w.write(count, bits);
+    } else {
+        w.write(escape, bits);
+        w.write(count - escape, lodrt::format::kPfrepCountEscapeBits);
+    }
+}
+
+void put32(std::vector<uint8_t>& b, size_t at, uint32_t v) { std::memcpy(b.data() + at, &v, 4); }
+void putF32(std::vector<uint8_t>& b, size_t at, float v) { std::memcpy(b.data() + at, &v, 4); }
+
+Vec3d toD(const Vec3f& v) { return Vec3d(v); }
+
+double pointTriangleDistance(const Vec3d& p, const Vec3d& a, const Vec3d& b, const Vec3d& c) {
+    // Closest point on a triangle (Ericson, Real-Time Collision Detection §5.1.5).
+    const Vec3d ab = b - a, ac = c - a, ap = p - a;
+    const double d1 = dot(ab, ap), d2 = dot(ac, ap);
+    if (d1 <= 0 && d2 <= 0) return length(p - a);
+    const Vec3d bp = p - b;
+    const double d3 = dot(ab, bp), d4 = dot(ac, bp);
+    if (d3 >= 0 && d4 <= d3) return length(p - b);
+    const double vc = d1 * d4 - d3 * d2;
+    if (vc <= 0 && d1 >= 0 && d3 <= 0) return length(p - (a + ab * (d1 / (d1 - d3))));
+    const Vec3d cp = p - c;
+    const double d5 = dot(ab, cp), d6 = dot(ac, cp);
+    if (d6 >= 0 && d5 <= d6) return length(p - c);
+    const double vb = d5 * d2 - d1 * d6;
+    if (vb <= 0 && d2 >= 0 && d6 <= 0) return length(p - (a + ac * (d2 / (d2 - d6))));
+    const double va = d3 * d6 - d5 * d4;
+    if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0)
+        return length(p - (b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)))));
+    const double denom = 1.0 / (va + vb + vc);
+    return length(p - (a + ab * (vb * denom) + ac * (vc * denom)));
+}
+
+uint8_t logCode(double value, double unit) {
+    if (!(value > 0) || !(unit > 0)) return 0;
+    const double c = std::ceil(std::log2(value / unit) * lodrt::format::kPfrepLogCodeSteps) + 1;
+    return uint8_t(std::clamp(c, 1.0, 255.0));
+}
+
+uint16_t coneCode(const Vec3d& axis, double angle) {
+    // Octahedral axis (6 + 6 bits) and angle in 15ths of pi, rounded up; the angle is widened by the
+    // axis quantization error so the stored cone still contains every normal.
+    Vec3d n = normalize(axis);
+    if (length(n) == 0) return uint16_t(15u << 12);
+    const double s = std::fabs(n.x) + std::fabs(n.y) + std::fabs(n.z);
+    double x = n.x / s, y = n.y / s;
+    if (n.z < 0) {
+        const double ox = x;
+        x = (1 - std::fabs(y)) * (ox >= 0 ? 1 : -1);
+        y = (1 - std::fabs(ox)) * (y >= 0 ? 1 : -1);
+    }
+    const uint32_t qx = uint32_t(std::lround((x * 0.5 + 0.5) * 63));
+    const uint32_t qy = uint32_t(std::lround((y * 0.5 + 0.5) * 63));
+    // Decode as the runtime does to measure the axis error.
+    double dx = qx / 63.0 * 2 - 1, dy = qy / 63.0 * 2 - 1, dz = 1 - std::fabs(dx) - std::fabs(dy);
+    if (dz < 0) {
+        const double ox = dx;
+        dx = (1 - std::fabs(dy)) * (ox >= 0 ? 1 : -1);
+        dy = (1 - std::fabs(ox)) * (dy >= 0 ? 1 : -1);
+    }
+    const Vec3d decoded = normalize(Vec3d(dx, dy, dz));
+    const double err = std::acos(std::clamp(dot(decoded, n), -1.0, 1.0));
+    const double a = angle + err;
+    const uint32_t code = a >= M_PI ? 15u : std::min(15u, uint32_t(std::ceil(a / M_PI * 15.0)));
+    return uint16_t(qx | (qy << 6) | (code << 12));
+}
+
+} // namespace
+
+Result<std::vector<uint32_t>> pointTriangles(const Mesh& mesh, const CollapseSequence& sequence) {
+    struct Key {
+        uint32_t b[3];
+        bool operator==(const Key& o) const { return b[0] == o.b[0] && b[1] == o.b[1] && b[2] == o.b[2]; }
+    };
+    struct KeyHash {
+        size_t operator()(const Key& k) const {
+            return size_t(k.b[0]) * 0x9E3779B97F4A7C15ull ^ size_t(k.b[1]) * 0xC2B2AE3D27D4EB4Full ^ k.b[2];
+        }
+    };
+    auto key = [](const Vec3f& p) {
+        Key k;
+        std::memcpy(&k.b[0], &p.x, 4);
+        std::memcpy(&k.b[1], &p.y, 4);
+        std::memcpy(&k.b[2], &p.z, 4);
+        return k;
+    };
+    std::unordered_map<Key, uint32_t, KeyHash> point_of;
+    point_of.reserve(sequence.point_positions.size() * 2);
+    for (uint32_t p = 0; p < sequence.point_positions.size(); ++p) point_of.emplace(key(sequence.point_positions[p]), p);
+    std::vector<uint32_t> out;
+    out.reserve(mesh.indices.size());
+    for (size_t f = 0; f < mesh.faceCount(); ++f) {
+        uint32_t t[3];
+        for (int k = 0; k < 3; ++k) {
+            auto it = point_of.find(key(mesh.positions[mesh.indices[f * 3 + k]]));
+            if (it == point_of.end()) return invalidInput("pfrep: face " + std::to_string(f) + ": position not in the collapse sequence");
+            t[k] = it->second;
+        }
+        if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue;
+        out.insert(out.end(), t, t + 3);
+    }
+    return out;
+}
+
+Result<PfrepBuild> buildPfrepFromSequence(const CollapseSequence& sequence, const std::vector<uint32_t>& point_triangles,
+                                          Diagnostics& diagnostics) {
+    namespace fmt = lodrt::format;
+    const uint32_t point_count = uint32_t(sequence.point_positions.size());
+    if (point_triangles.size() % 3 != 0) return invalidInput("pfrep: point triangle list is not a multiple of 3");
+    std::vector<Triangle> tris;
+    tris.reserve(point_triangles.size() / 3 * 3);
+    std::vector<std::vector<uint32_t>> incident(point_count);
+    std::vector<uint8_t> referenced(point_count, 0);
+    for (size_t t = 0; t < point_triangles.size() / 3; ++t) {
+        Triangle tri{{point_triangles[t * 3], point_triangles[t * 3 + 1], point_triangles[t * 3 + 2]}, kNone};
+        for (uint32_t p : tri.p) {
+            if (p >= point_count) return invalidInput("pfrep: triangle " + std::to_string(t) + ": point out of range");
+            incident[p].push_back(uint32_t(tris.size()));
+            referenced[p] = 1;
+        }
+        tris.push_back(tri);
+    }
+    std::vector<uint8_t> alive(tris.size(), 1);
+
+    // Replay: ranks in removal order, then the survivors that have faces, by point id.
+    std::vector<uint32_t> rank_of(point_count, kNone);
+    std::vector<uint32_t> rank_point;
+    rank_point.reserve(point_count);
+    std::vector<double> removal_error(point_count, 0.0);
+    std::vector<uint32_t> ring;
+    for (size_t r = 0; r < sequence.records.size(); ++r) {
+        const CollapseRecord& rec = sequence.records[r];
+        const uint32_t u = rec.removed_point, v = rec.kept_point;
+        if (u >= point_count || v >= point_count || u == v || rank_of[u] != kNone || rank_of[v] != kNone)
+            return invalidInput("pfrep: collapse " + std::to_string(r) + ": bad points");
+        if (rec.position != sequence.point_positions[v])
+            return invalidInput("pfrep: collapse " + std::to_string(r) +
+                                ": the kept point moves (full-edge collapse); PFRep needs placement KeepEndpoint");
+        rank_of[u] = uint32_t(rank_point.size());
+        rank_point.push_back(u);
+        ring.clear();
+        for (uint32_t t : incident[u])
+            if (alive[t]) ring.push_back(t);
+        if (ring.empty()) return invalidInput("pfrep: collapse " + std::to_string(r) + ": removed point has no faces");
+        std::vector<uint32_t>().swap(incident[u]);
+        double err = HUGE_VAL;
+        bool created = false;
+        const Vec3d pu = toD(sequence.point_positions[u]);
+        for (uint32_t t : ring) {
+            alive[t] = 0;
+            const Triangle& old = tris[t];
+            if (old.p[0] == v || old.p[1] == v || old.p[2] == v) continue;
+            Triangle fresh = old;
+            for (uint32_t& p : fresh.p)
+                if (p == u) p = v;
+            fresh.dependency = u;
+            const uint32_t id = uint32_t(tris.size());
+            tris.push_back(fresh);
+            alive.push_back(1);
+            for (uint32_t p : fresh.p) incident[p].push_back(id);
+            err = std::min(err, pointTriangleDistance(pu, toD(sequence.point_positions[fresh.p[0]]),
+                                                      toD(sequence.point_positions[fresh.p[1]]),
+                                                      toD(sequence.point_positions[fresh.p[2]])));
+            created = true;
+        }
+        removal_error[u] = created ? err : 0.0;
+        // Compact the incident list of v now and then (dead faces accumulate there).
+        if (incident[v].size() > 64) {
+            auto& list = incident[v];
+            list.erase(std::remove_if(list.begin(), list.end(), [&](uint32_t t) { return !alive[t]; }), list.end());
+        }
+    }
+    const uint32_t removed = uint32_t(rank_point.size());
+    for (uint32_t p = 0; p < point_count; ++p) {
+        if (rank_of[p] != kNone || !referenced[p]) continue;
+        rank_of[p] = uint32_t(rank_point.size());
+        rank_point.push_back(p);
+    }
+    const uint32_t vertex_count = uint32_t(rank_point.size());
+    if (vertex_count >= fmt::kPfrepMaxVertices) return resourceLimit("pfrep: too many vertices");
+
+    // Every triangle goes to the fan of its lowest-ranked corner, rotated to start there.
+    std::vector<uint32_t> fan_first(vertex_count + 1, 0);
+    for (const Triangle& t : tris) ++fan_first[std::min({rank_of[t.p[0]], rank_of[t.p[1]], rank_of[t.p[2]]}) + 1];
+    for (uint32_t i = 0; i < vertex_count; ++i) fan_first[i + 1] += fan_first[i];
+    struct Slot {
+        uint32_t a, b, dep; // ranks; dep kNone for input triangles
+    };
+    std::vector<Slot> slots(tris.size());
+    {
+        std::vector<uint32_t> fill(fan_first.begin(), fan_first.end() - 1);
+        for (const Triangle& t : tris) {
+            uint32_t r[3] = {rank_of[t.p[0]], rank_of[t.p[1]], rank_of[t.p[2]]};
+            int m = 0;
+            if (r[1] < r[m]) m = 1;
+            if (r[2] < r[m]) m = 2;
+            const uint32_t dep = t.dependency == kNone ? kNone : rank_of[t.dependency];
+            slots[fill[r[m]]++] = {r[(m + 1) % 3], r[(m + 2) % 3], dep};
+        }
+    }
+
+    // Per-vertex bounds for the view-dependent criterion, accumulated over dependencies (whose
+    // ranks are lower, so already final): error and sphere grow monotonically up the hierarchy.
+    std::vector<double> err(vertex_count, 0.0), radius(vertex_count, 0.0), cone_angle(vertex_count, 0.0);
+    std::vector<Vec3d> axis(vertex_count);
+    auto pos = [&](uint32_t rank) { return toD(sequence.point_positions[rank_point[rank]]); };
+    for (uint32_t i = 0; i < vertex_count; ++i) {
+        const Vec3d pi = pos(i);
+        double e = i < removed ? removal_error[rank_point[i]] : 0.0;
+        double rad = 0;
+        Vec3d sum;
+        std::vector<Vec3d> normals;
+        for (uint32_t s = fan_first[i]; s < fan_first[i + 1]; ++s) {
+            const Vec3d pa = pos(slots[s].a), pb = pos(slots[s].b);
+            rad = std::max({rad, length(pa - pi), length(pb - pi)});
+            const Vec3d n = cross(pa - pi, pb - pi);
+            sum += n;
+            normals.push_back(normalize(n));
+            if (slots[s].dep != kNone) {
+                const uint32_t d = slots[s].dep;
+                e = std::max(e, err[d]);
+                rad = std::max(rad, length(pos(d) - pi) + radius[d]);
+            }
+        }
+        Vec3d ax = normalize(sum);
+        double angle = 0;
+        if (length(ax) == 0) angle = M_PI;
+        for (const Vec3d& n : normals) angle = std::max(angle, std::acos(std::clamp(dot(ax, n), -1.0, 1.0)));
+        for (uint32_t s = fan_first[i]; s < fan_first[i + 1]; ++s) {
+            const uint32_t d = slots[s].dep;
+            if (d == kNone) continue;
+            angle = std::max(angle, std::acos(std::clamp(dot(ax, axis[d]), -1.0, 1.0)) + cone_angle[d]);
+        }
+        err[i] = e;
+        radius[i] = rad;
+        axis[i] = ax;
+        cone_angle[i] = std::min(angle, M_PI);
+    }
+
+    // Entries.
+    BitWriter stream;
+    std::vector<uint32_t> entry_offset(vertex_count);
+    PfrepBuild build;
+    std::vector<uint8_t> used;
+    std::vector<uint32_t> seq, slot_of_edge, deps;
+    for (uint32_t i = 0; i < vertex_count; ++i) {
+        stream.alignByte();
+        entry_offset[i] = uint32_t(stream.byteSize());
+        const uint32_t first = fan_first[i], count = fan_first[i + 1] - first;
+        // Walks over the directed opposite edges a -> b; a walk starts where more edges leave
+        // than arrive when there is such a vertex.
+        used.assign(count, 0);
+        seq.clear();
+        slot_of_edge.assign(count, 0);
+        uint32_t remaining = count;
+        while (remaining > 0) {
+            uint32_t start = kNone;
+            // (quadratic: only for fans of ordinary size)
+            for (uint32_t e = 0; e < count && start == kNone && count <= 256; ++e) {
+                if (used[e]) continue;
+                int balance = 0;
+                for (uint32_t f = 0; f < count; ++f) {
+                    if (used[f]) continue;
+                    balance += slots[first + f].a == slots[first + e].a;
+                    balance -= slots[first + f].b == slots[first + e].a;
+                }
+                if (balance > 0) start = e;
+            }
+            if (start == kNone)
+                for (uint32_t e = 0; e < count; ++e)
+                    if (!used[e]) {
+                        start = e;
+                        break;
+                    }
+            seq.push_back(slots[first + start].a);
+            uint32_t e = start;
+            while (e != kNone) {
+                used[e] = 1;
+                --remaining;
+                slot_of_edge[e] = uint32_t(seq.size() - 1);
+                seq.push_back(slots[first + e].b);
+                const uint32_t end = slots[first + e].b;
+                e = kNone;
+                for (uint32_t f = 0; f < count; ++f)
+                    if (!used[f] && slots[first + f].a == end) {
+                        e = f;
+                        break;
+                    }
+            }
+        }
+        if (seq.size() > 1 && seq.back() == seq.front()) seq.pop_back();
+        const uint32_t n = uint32_t(seq.size());
+        if (n > 63 + 65535) return resourceLimit("pfrep: vertex with more than 65598 fan neighbours");
+        deps.clear();
+        bool has_original = false;
+        for (uint32_t e = 0; e < count; ++e) {
+            if (slots[first + e].dep == kNone)
+                has_original = true;
+            else
+                deps.push_back(slots[first + e].dep);
+        }
+        std::sort(deps.begin(), deps.end());
+        deps.erase(std::unique(deps.begin(), deps.end()), deps.end());
+        uint32_t max_neighbour = 0, max_dep = 0;
+        for (uint32_t a : seq) max_neighbour = std::max(max_neighbour, a - i - 1);
+        for (uint32_t d : deps) max_dep = std::max(max_dep, i - 1 - d);
+        writeCount(stream, n, fmt::kPfrepCountBits);
+        writeCount(stream, uint32_t(deps.size()), fmt::kPfrepDependencyCountBits);
+        stream.write(has_original ? 1 : 0, 1);
+        const uint32_t wa = bitWidth(max_neighbour), wd = bitWidth(max_dep);
+        stream.write(wa, fmt::kPfrepWidthBits);
+        if (!deps.empty()) stream.write(wd, fmt::kPfrepWidthBits);
+        for (uint32_t a : seq) stream.write(a - i - 1, wa);
+        std::vector<uint8_t> bits(n);
+        auto writeMask = [&](uint32_t dep) {
+            std::fill(bits.begin(), bits.end(), 0);
+            for (uint32_t e = 0; e < count; ++e)
+                if (slots[first + e].dep == dep) bits[slot_of_edge[e]] = 1;
+            for (uint32_t j = 0; j < n; ++j) stream.write(bits[j], 1);
+        };
+        if (has_original) writeMask(kNone);
+        for (uint32_t d : deps) {
+            stream.write(i - 1 - d, wd);
+            writeMask(d);
+        }
+        build.dependency_groups += deps.size();
+        build.neighbour_slots += n;
+    }
+    stream.alignByte();
+    const size_t entries_size = stream.byteSize();
+
+    // Offset table: the largest block that keeps every in-block offset within 16 bits.
+    uint32_t shift = fmt::kPfrepMaxBlockShift;
+    for (;; --shift) {
+        bool fits = true;
+        for (uint32_t i = 0; i < vertex_count && fits; ++i)
+            fits = entry_offset[i] - entry_offset[(i >> shift) << shift] <= 0xffffu;
+        if (fits || shift == 0) break;
+    }
+    const size_t blocks = (size_t(vertex_count) + (size_t(1) << shift) - 1) >> shift;
+    const size_t records_offset = fmt::kPfrepHeaderSize;
+    const size_t table_offset = records_offset + size_t(vertex_count) * fmt::kPfrepVertexRecordSize;
+    const size_t entries_offset = table_offset + blocks * 4 + size_t(vertex_count) * 2;
+    const size_t total = entries_offset + entries_size + fmt::kPfrepStreamPadding;
+    if (total > 0xffffffffu) return resourceLimit("pfrep: blob larger than 4 GiB");
+    std::vector<uint8_t>& blob = build.blob;
+    blob.assign(total, 0);
+
+    Vec3f lo(HUGE_VALF, HUGE_VALF, HUGE_VALF), hi(-HUGE_VALF, -HUGE_VALF, -HUGE_VALF);
+    for (uint32_t p : rank_point)
+        for (int k = 0; k < 3; ++k) {
+            lo[k] = std::min(lo[k], sequence.point_positions[p][k]);
+            hi[k] = std::max(hi[k], sequence.point_positions[p][k]);
+        }
+    if (vertex_count == 0) lo = hi = Vec3f();
+    float step[3];
+    for (int k = 0; k < 3; ++k) step[k] = hi[k] > lo[k] ? (hi[k] - lo[k]) / 65535.0f : 0.0f;
+    const double diag = length(toD(hi) - toD(lo));
+    const float error_unit = diag > 0 ? float(diag * std::ldexp(1.0, -24)) : 1e-30f;
+
+    size_t level0 = 0;
+    for (const Triangle& t : tris) level0 += t.dependency == kNone;
+    put32(blob, 0, fmt::kPfrepMagic);
+    put32(blob, 4, fmt::kPfrepVersion);
+    put32(blob, 8, vertex_count);
+    put32(blob, 12, removed);
+    put32(blob, 16, shift);
+    put32(blob, 20, uint32_t(level0));
+    for (int k = 0; k < 3; ++k) {
+        putF32(blob, 24 + 4 * k, lo[k]);
+        putF32(blob, 36 + 4 * k, step[k]);
+    }
+    putF32(blob, 48, error_unit);
+    put32(blob, 52, uint32_t(records_offset));
+    put32(blob, 56, uint32_t(table_offset));
+    put32(blob, 60, uint32_t(entries_offset));
+    for (uint32_t i = 0; i < vertex_count; ++i) {
+        uint8_t* r = blob.data() + records_offset + size_t(i) * fmt::kPfrepVertexRecordSize;
+        const Vec3f& p = sequence.point_positions[rank_point[i]];
+        for (int k = 0; k < 3; ++k) {
+            const uint16_t q = step[k] > 0 ? uint16_t(std::clamp(std::lround((p[k] - lo[k]) / step[k]), 0L, 65535L)) : 0;
+            std::memcpy(r + 2 * k, &q, 2);
+        }
+        r[6] = logCode(radius[i], error_unit);
+        r[7] = logCode(err[i], error_unit);
+        const uint16_t cone = coneCode(axis[i], cone_angle[i]);
+        std::memcpy(r + 8, &cone, 2);
+    }
+    for (size_t b = 0; b < blocks; ++b) put32(blob, table_offset + b * 4, entry_offset[b << shift]);
+    for (uint32_t i = 0; i < vertex_count; ++i) {
+        const uint16_t rel = uint16_t(entry_offset[i] - entry_offset[(i >> shift) << shift]);
+        std::memcpy(blob.data() + table_offset + blocks * 4 + size_t(i) * 2, &rel, 2);
+    }
+    std::memcpy(blob.data() + entries_offset, stream.bytes().data(), entries_size);
+
+    build.rank_point = std::move(rank_point);
+    build.removed = removed;
+    build.level0_triangles = level0;
+    build.stored_triangles = tris.size();
+    if (removed == 0) diagnostics.note("pfrep: no vertex could be removed; the blob holds the input only");
+    return build;
+}
+
+Result<PfrepBuild> buildPfrep(const Mesh& mesh, const PfrepOptions& options, Diagnostics& diagnostics) {
+    if (!(options.target_ratio >= 0.0f && options.target_ratio <= 1.0f))
+        return invalidInput("pfrep options: ratio: expected a value in [0, 1]");
+    LodChainOptions chain_options;
+    chain_options.simplify = options.simplify;
+    chain_options.simplify.placement = CollapsePlacement::KeepEndpoint;
+    // A ratio of 0 is not accepted by the chain: one triangle's worth asks for "as far as valid".
+    chain_options.ratios = {std::max(double(options.target_ratio), 1e-9)};
+    chain_options.measure_error = false;
+    chain_options.record_collapses = true;
+    LODBAKE_ASSIGN_OR_RETURN(LodChain chain, buildLodChain(mesh, chain_options, diagnostics));
+    LODBAKE_ASSIGN_OR_RETURN(std::vector<uint32_t> triangles, pointTriangles(mesh, chain.sequence));
+    return buildPfrepFromSequence(chain.sequence, triangles, diagnostics);
+}
+
+} // namespace lodbake

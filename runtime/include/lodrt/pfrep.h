@@ -1,0 +1,117 @@
+#pragma once
+// PFRep reader: progressive fans (Cortés Carrillo), docs/format/pfrep.md.
+//
+// The blob is built by lodbake from a HALF-EDGE-collapse sequence (each step removes one vertex u and
+// re-attaches its neighbourhood to a neighbour that stays in place), so vertex ids are removal ranks
+// and every triangle ever alive is stored once, as a fan slot at its lowest-ranked corner, tagged
+// with the vertex whose removal created it (or none for input triangles).
+//
+// The reader treats the blob as hostile: openPfrep() validates every field and every entry once
+// (offsets, counts, index ranges, the rank rules that make dependency cycles impossible); after it
+// returns Ok, extraction and refinement cannot read outside the blob. Nothing here allocates or
+// throws: every output goes to caller-owned buffers whose needed size can be queried first.
+
+#include <cstddef>
+#include <cstdint>
+
+#include "lodrt/export.h"
+#include "lodrt/result.h"
+
+namespace lodrt {
+
+/// A validated view of a PFRep blob (the blob must outlive it). Plain data; copy freely.
+struct PfrepModel {
+    const uint8_t* data = nullptr;
+    size_t size = 0;
+    uint32_t vertex_count = 0;
+    uint32_t removed_count = 0; // vertices [0, removed_count) can be removed, in this order
+    uint32_t block_shift = 0;
+    uint32_t level0_triangles = 0; // triangles of the full-detail mesh (the largest any level has)
+    float position_min[3] = {0, 0, 0};
+    float position_step[3] = {0, 0, 0};
+    float error_unit = 0;
+    uint32_t vertex_records_offset = 0;
+    uint32_t offset_table_offset = 0;
+    uint32_t entries_offset = 0;
+    uint32_t entries_size = 0; // without the padding
+    uint32_t max_fan_neighbours = 0;
+};
+
+/// Validates the whole blob. Truncated / BadMagic / UnsupportedVersion / OutOfBounds /
+/// BadStructure on bad input; `model` is only written on Ok.
+LODRT_API Result openPfrep(const void* data, size_t size, PfrepModel* model);
+
+/// Dequantized positions of every vertex (3 floats each) into `out` of `capacity` floats
+/// (needs 3 * vertex_count).
+LODRT_API Result pfrepDecodePositions(const PfrepModel& model, float* out, size_t capacity);
+
+/// Bytes of one instance mask: exactly vertex_count bits, rounded up to whole bytes.
+inline size_t pfrepMaskBytes(const PfrepModel& model) { return (size_t(model.vertex_count) + 7) / 8; }
+
+/// Upper bound of the triangles any extraction yields (level0_triangles); use it to size buffers.
+inline size_t pfrepMaxTriangles(const PfrepModel& model) { return model.level0_triangles; }
+/// Upper bound of the uint32 values a fan extraction yields.
+inline size_t pfrepMaxFanValues(const PfrepModel& model) { return size_t(model.level0_triangles) * 4; }
+
+/// The mesh after the first `level` removals (0: full detail; removed_count: coarsest) as an
+/// indexed triangle list of vertex ids (3 per triangle). `*triangle_count` receives the count.
+/// BufferTooSmall when `capacity` (in triangles) is short; InvalidArgument when level > removed_count.
+LODRT_API Result pfrepExtractLevel(const PfrepModel& model, uint32_t level, uint32_t* indices, size_t capacity,
+                                   size_t* triangle_count);
+
+/// Same mesh as triangle fans: a sequence of records [n, centre, rim_0 .. rim_n] (n >= 1 triangles:
+/// (centre, rim_j, rim_j+1) for j < n). `*value_count` receives the uint32 values written.
+LODRT_API Result pfrepExtractLevelFans(const PfrepModel& model, uint32_t level, uint32_t* values, size_t capacity,
+                                       size_t* value_count);
+
+// ---- Selective refinement: one bit per vertex per instance, 1 = removed. ----
+
+/// Sets the mask to the full-detail mesh (all zero) or to the coarsest one (ranks < removed_count set).
+LODRT_API void pfrepMaskFinest(const PfrepModel& model, uint8_t* mask);
+LODRT_API void pfrepMaskCoarsest(const PfrepModel& model, uint8_t* mask);
+
+/// Scratch needed by simplify/insert/refine, in uint32 values (vertex_count; shared by instances).
+inline size_t pfrepScratchValues(const PfrepModel& model) { return model.vertex_count; }
+
+/// SimplifyVertex(v): removes v and, recursively, every vertex whose removal created a triangle of
+/// v's fan. No-op for never-removed ids or already removed v. InvalidArgument for bad arguments.
+LODRT_API Result pfrepSimplifyVertex(const PfrepModel& model, uint8_t* mask, uint32_t vertex, uint32_t* scratch,
+                                     size_t scratch_capacity);
+/// InsertVertex(v): brings v back and, recursively (lowest rank first), every corner of its visible
+/// fan triangles.
+LODRT_API Result pfrepInsertVertex(const PfrepModel& model, uint8_t* mask, uint32_t vertex, uint32_t* scratch,
+                                   size_t scratch_capacity);
+
+/// The instance's current mesh as a triangle list; visits only entries whose bit is 0.
+LODRT_API Result pfrepExtractSelective(const PfrepModel& model, const uint8_t* mask, uint32_t* indices,
+                                       size_t capacity, size_t* triangle_count);
+
+/// View-dependent criterion (Hoppe 1997): a vertex is wanted when its bounding sphere meets the
+/// view frustum, its normal cone is not entirely back-facing, and its removal error projected at
+/// its distance exceeds `pixel_tolerance` pixels. All in the instance's model space.
+struct PfrepView {
+    float eye[3] = {0, 0, 0};
+    float planes[6][4] = {}; // inward frustum planes a x + b y + c z + d >= 0
+    float pixels_per_unit_at_distance_one = 1000.0f; // viewport_height / (2 tan(fov / 2))
+    float pixel_tolerance = 1.0f;
+};
+
+/// Per-vertex data of the criterion, dequantized.
+struct PfrepVertexBounds {
+    float position[3];
+    float radius;
+    float error;
+    float cone_axis[3];
+    float cone_angle; // radians; >= pi / 2 means never back-facing
+};
+LODRT_API Result pfrepVertexBounds(const PfrepModel& model, uint32_t vertex, PfrepVertexBounds* out);
+LODRT_API bool pfrepWanted(const PfrepModel& model, const PfrepView& view, uint32_t vertex);
+
+/// One adaptation step of an instance towards `view`: every present removable vertex that is not
+/// wanted is simplified, and every removed vertex whose triangles are visible and that is wanted
+/// is inserted. Visits only the entries of present vertices. `*changes` receives the vertex
+/// operations done.
+LODRT_API Result pfrepRefine(const PfrepModel& model, const PfrepView& view, uint8_t* mask, uint32_t* scratch,
+                             size_t scratch_capacity, size_t* changes);
+
+} // namespace lodrt

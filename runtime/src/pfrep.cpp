@@ -1,0 +1,588 @@
+// PFRep reader (Cortés Carrillo's progressive fans): validation, progressive and selective
+// extraction, SimplifyVertex / InsertVertex and Hoppe's view-dependent criterion.
+// Layout: docs/format/pfrep.md and lodrt/format.h.
+#include "lodrt/pfrep.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+#include "lodrt/format.h"
+
+namespace lodrt {
+namespace {
+
+uint32_t loadU32(const uint8_t* p) {
+    uint32_t v;
+    std::memcpy(&v, p, 4);
+    return v;
+}
+uint16_t loadU16(const uint8_t* p) {
+    uint16_t v;
+    std::memcpy(&v, p, 2);
+    return v;
+}
+float loadF32(const uint8_t* p) {
+    float v;
+    std::memcpy(&v, p, 4);
+    return v;
+}
+
+// Reads `n` <= 32 bits at bit position `bit` of `base` (LSB first). The caller guarantees 8
+// readable bytes from bit / 8 (the stream padding).
+inline uint32_t bitsAt(const uint8_t* base, uint64_t bit, uint32_t n) {
+    uint64_t w;
+    std::memcpy(&w, base + (bit >> 3), 8);
+    return uint32_t((w >> (bit & 7)) & ((uint64_t(1) << n) - 1));
+}
+
+// A decoded entry header: where its arrays start.
+struct Entry {
+    uint32_t neighbours = 0;
+    uint32_t dependencies = 0;
+    bool has_original = false;
+    uint32_t neighbour_width = 0;
+    uint32_t dependency_width = 0;
+    uint64_t neighbour_bit = 0; // first bit of A
+    uint64_t first_mask_bit = 0;
+    uint64_t end_bit = 0;
+};
+
+inline uint64_t entryStart(const PfrepModel& m, uint32_t i) {
+    const uint8_t* table = m.data + m.offset_table_offset;
+    const uint32_t base = loadU32(table + size_t(i >> m.block_shift) * 4);
+    const size_t blocks = (size_t(m.vertex_count) + (size_t(1) << m.block_shift) - 1) >> m.block_shift;
+    const uint16_t rel = loadU16(table + blocks * 4 + size_t(i) * 2);
+    return (uint64_t(base) + rel) * 8;
+}
+
+inline Entry decodeHeader(const uint8_t* s, uint64_t bit) {
+    Entry e;
+    e.neighbours = bitsAt(s, bit, format::kPfrepCountBits);
+    bit += format::kPfrepCountBits;
+    if (e.neighbours == (1u << format::kPfrepCountBits) - 1) {
+        e.neighbours += bitsAt(s, bit, format::kPfrepCountEscapeBits);
+        bit += format::kPfrepCountEscapeBits;
+    }
+    e.dependencies = bitsAt(s, bit, format::kPfrepDependencyCountBits);
+    bit += format::kPfrepDependencyCountBits;
+    if (e.dependencies == (1u << format::kPfrepDependencyCountBits) - 1) {
+        e.dependencies += bitsAt(s, bit, format::kPfrepCountEscapeBits);
+        bit += format::kPfrepCountEscapeBits;
+    }
+    e.has_original = bitsAt(s, bit, 1) != 0;
+    bit += 1;
+    e.neighbour_width = bitsAt(s, bit, format::kPfrepWidthBits);
+    bit += format::kPfrepWidthBits;
+    if (e.dependencies > 0) {
+        e.dependency_width = bitsAt(s, bit, format::kPfrepWidthBits);
+        bit += format::kPfrepWidthBits;
+    }
+    e.neighbour_bit = bit;
+    e.first_mask_bit = bit + uint64_t(e.neighbours) * e.neighbour_width;
+    e.end_bit = e.first_mask_bit + (e.has_original ? e.neighbours : 0) +
+                uint64_t(e.dependencies) * (uint64_t(e.dependency_width) + e.neighbours);
+    return e;
+}
+
+inline uint32_t neighbourAt(const uint8_t* s, const Entry& e, uint32_t i, uint32_t j) {
+    return i + 1 + bitsAt(s, e.neighbour_bit + uint64_t(j) * e.neighbour_width, e.neighbour_width);
+}
+
+inline bool maskBit(const uint8_t* mask, uint32_t v) { return (mask[v >> 3] >> (v & 7)) & 1; }
+inline void setBit(uint8_t* mask, uint32_t v) { mask[v >> 3] = uint8_t(mask[v >> 3] | (1u << (v & 7))); }
+inline void clearBit(uint8_t* mask, uint32_t v) { mask[v >> 3] = uint8_t(mask[v >> 3] & ~(1u << (v & 7))); }
+
+// Calls fn(slot) for every set bit of the `n`-bit mask at `bit`.
+template <typename Fn> inline void forEachSlot(const uint8_t* s, uint64_t bit, uint32_t n, Fn&& fn) {
+    for (uint32_t c = 0; c < n; c += 32) {
+        uint32_t m = bitsAt(s, bit + c, std::min(32u, n - c));
+        while (m) {
+            const uint32_t j = c + uint32_t(__builtin_ctz(m));
+            m &= m - 1;
+            fn(j);
+        }
+    }
+}
+
+Result validateEntry(const PfrepModel& m, uint32_t i, uint64_t& original_triangles) {
+    const uint8_t* s = m.data + m.entries_offset;
+    const uint64_t limit = uint64_t(m.entries_size) * 8;
+    const uint64_t start = entryStart(m, i);
+    // The header is at most 6+16+3+16+1+5+5 bits: reading it stays in the padding.
+    if (start >= limit) return Result::OutOfBounds;
+    const Entry e = decodeHeader(s, start);
+    if (e.end_bit > limit) return Result::OutOfBounds;
+    if (e.neighbour_width > 31 || e.dependency_width > 31) return Result::BadStructure;
+    if (e.neighbours > 0 && e.neighbour_width == 0 && uint64_t(i) + 1 >= m.vertex_count) return Result::OutOfBounds;
+    for (uint32_t j = 0; j < e.neighbours; ++j) {
+        const uint64_t a = uint64_t(i) + 1 + bitsAt(s, e.neighbour_bit + uint64_t(j) * e.neighbour_width, e.neighbour_width);
+        if (a >= m.vertex_count) return Result::OutOfBounds;
+    }
+    bool degenerate = false;
+    auto check = [&](uint32_t j) {
+        const uint32_t next = j + 1 == e.neighbours ? 0 : j + 1;
+        if (neighbourAt(s, e, i, j) == neighbourAt(s, e, i, next)) degenerate = true;
+    };
+    uint64_t bit = e.first_mask_bit;
+    if (e.has_original) {
+        forEachSlot(s, bit, e.neighbours, [&](uint32_t j) {
+            check(j);
+            ++original_triangles;
+        });
+        bit += e.neighbours;
+    }
+    uint32_t previous = 0;
+    for (uint32_t k = 0; k < e.dependencies; ++k) {
+        const uint32_t delta = bitsAt(s, bit, e.dependency_width);
+        bit += e.dependency_width;
+        // Dependencies rank strictly below the entry: simplify/insert closures always terminate.
+        if (delta >= i) return Result::BadStructure;
+        const uint32_t d = i - 1 - delta;
+        if (d >= m.removed_count) return Result::BadStructure;
+        // Strictly increasing: extraction stops at the first dependency not yet removed.
+        if (k > 0 && d <= previous) return Result::BadStructure;
+        previous = d;
+        forEachSlot(s, bit, e.neighbours, check);
+        bit += e.neighbours;
+    }
+    if (degenerate) return Result::BadStructure;
+    return Result::Ok;
+}
+
+// Emits the triangles of entry i visible under `keep(d)` (d = dependency; kNone for originals).
+constexpr uint32_t kNoDependency = 0xffffffffu;
+
+template <typename Keep, typename Emit>
+inline bool visitEntry(const PfrepModel& m, const uint8_t* s, uint32_t i, Keep&& keep, Emit&& emit) {
+    const Entry e = decodeHeader(s, entryStart(m, i));
+    uint64_t bit = e.first_mask_bit;
+    bool ok = true;
+    if (e.has_original) {
+        if (keep(kNoDependency))
+            forEachSlot(s, bit, e.neighbours, [&](uint32_t j) {
+                const uint32_t next = j + 1 == e.neighbours ? 0 : j + 1;
+                ok &= emit(e, j, neighbourAt(s, e, i, j), neighbourAt(s, e, i, next));
+            });
+        bit += e.neighbours;
+    }
+    for (uint32_t k = 0; k < e.dependencies; ++k) {
+        const uint32_t d = i - 1 - bitsAt(s, bit, e.dependency_width);
+        bit += e.dependency_width;
+        if (keep(d))
+            forEachSlot(s, bit, e.neighbours, [&](uint32_t j) {
+                const uint32_t next = j + 1 == e.neighbours ? 0 : j + 1;
+                ok &= emit(e, j, neighbourAt(s, e, i, j), neighbourAt(s, e, i, next));
+            });
+        bit += e.neighbours;
+    }
+    return ok;
+}
+
+// Calls fn(i) for every vertex whose mask bit is 0 (present), 64 bits at a time; fn may change the
+// mask (a bit cleared ahead in the current word is then skipped until the next pass).
+template <typename Fn> inline bool forEachPresent(const PfrepModel& m, const uint8_t* mask, Fn&& fn) {
+    const size_t bytes = pfrepMaskBytes(m);
+    size_t b = 0;
+    for (; b + 8 <= bytes; b += 8) {
+        // Runs of removed vertices (the usual case far from the camera) are skipped 64 bytes at a time.
+        while (b + 64 <= bytes) {
+            uint64_t all = ~uint64_t(0);
+            for (int k = 0; k < 8; ++k) {
+                uint64_t x;
+                std::memcpy(&x, mask + b + 8 * k, 8);
+                all &= x;
+            }
+            if (all != ~uint64_t(0)) break;
+            b += 64;
+        }
+        if (b + 8 > bytes) break;
+        uint64_t w;
+        std::memcpy(&w, mask + b, 8);
+        uint64_t present = ~w;
+        while (present) {
+            const uint32_t i = uint32_t(b * 8) + uint32_t(__builtin_ctzll(present));
+            present &= present - 1;
+            if (i >= m.vertex_count) return true;
+            if (!fn(i)) return false;
+        }
+    }
+    for (; b < bytes; ++b) {
+        uint32_t present = uint32_t(~mask[b]) & 0xffu;
+        while (present) {
+            const uint32_t i = uint32_t(b * 8) + uint32_t(__builtin_ctz(present));
+            present &= present - 1;
+            if (i >= m.vertex_count) return true;
+            if (!fn(i)) return false;
+        }
+    }
+    return true;
+}
+
+struct LogTable {
+    float value[256];
+    LogTable() {
+        value[0] = 0.0f;
+        for (int c = 1; c < 256; ++c) value[c] = std::exp2(float(c - 1) / float(format::kPfrepLogCodeSteps));
+    }
+};
+
+float logValue(const PfrepModel& m, uint32_t code) {
+    static const LogTable table;
+    return m.error_unit * table.value[code & 255];
+}
+
+} // namespace
+
+Result openPfrep(const void* data, size_t size, PfrepModel* model) {
+    if (!data || !model) return Result::InvalidArgument;
+    const uint8_t* p = static_cast<const uint8_t*>(data);
+    if (size < format::kPfrepHeaderSize) return Result::Truncated;
+    if (loadU32(p) != format::kPfrepMagic) return Result::BadMagic;
+    if (loadU32(p + 4) != format::kPfrepVersion) return Result::UnsupportedVersion;
+    PfrepModel m;
+    m.data = p;
+    m.size = size;
+    m.vertex_count = loadU32(p + 8);
+    m.removed_count = loadU32(p + 12);
+    m.block_shift = loadU32(p + 16);
+    m.level0_triangles = loadU32(p + 20);
+    for (int k = 0; k < 3; ++k) {
+        m.position_min[k] = loadF32(p + 24 + 4 * k);
+        m.position_step[k] = loadF32(p + 36 + 4 * k);
+        if (!std::isfinite(m.position_min[k]) || !std::isfinite(m.position_step[k]) || m.position_step[k] < 0)
+            return Result::BadStructure;
+    }
+    m.error_unit = loadF32(p + 48);
+    if (!std::isfinite(m.error_unit) || m.error_unit < 0) return Result::BadStructure;
+    m.vertex_records_offset = loadU32(p + 52);
+    m.offset_table_offset = loadU32(p + 56);
+    m.entries_offset = loadU32(p + 60);
+    if (m.vertex_count > format::kPfrepMaxVertices || m.removed_count > m.vertex_count ||
+        m.block_shift > format::kPfrepMaxBlockShift)
+        return Result::BadStructure;
+    const uint64_t n = m.vertex_count;
+    const uint64_t blocks = (n + (uint64_t(1) << m.block_shift) - 1) >> m.block_shift;
+    // Sections in order: header, vertex records, offset table, entries, padding.
+    if (m.vertex_records_offset != format::kPfrepHeaderSize) return Result::OutOfBounds;
+    const uint64_t records_end = uint64_t(m.vertex_records_offset) + n * format::kPfrepVertexRecordSize;
+    if (records_end > size) return Result::Truncated;
+    if (m.offset_table_offset != records_end) return Result::OutOfBounds;
+    const uint64_t table_end = records_end + blocks * 4 + n * 2;
+    if (table_end > size) return Result::Truncated;
+    if (m.entries_offset != table_end) return Result::OutOfBounds;
+    if (size < table_end + format::kPfrepStreamPadding) return Result::Truncated;
+    const uint64_t entries_size = size - table_end - format::kPfrepStreamPadding;
+    if (entries_size > 0xffffffffu) return Result::OutOfBounds;
+    m.entries_size = uint32_t(entries_size);
+    uint64_t original = 0;
+    uint32_t max_neighbours = 0;
+    if (m.vertex_count > 0 && entryStart(m, 0) != 0) return Result::BadStructure;
+    for (uint32_t i = 0; i < m.vertex_count; ++i) {
+        const Result r = validateEntry(m, i, original);
+        if (r != Result::Ok) return r;
+        const Entry e = decodeHeader(m.data + m.entries_offset, entryStart(m, i));
+        max_neighbours = std::max(max_neighbours, e.neighbours);
+        // Entries are contiguous (each starts at the byte after the previous one ends), so
+        // progressive extraction walks the stream without the offset table.
+        const uint64_t next = i + 1 < m.vertex_count ? entryStart(m, i + 1) : uint64_t(m.entries_size) * 8;
+        if (next != ((e.end_bit + 7) & ~uint64_t(7))) return Result::BadStructure;
+    }
+    if (original != m.level0_triangles) return Result::BadStructure;
+    m.max_fan_neighbours = max_neighbours;
+    *model = m;
+    return Result::Ok;
+}
+
+Result pfrepDecodePositions(const PfrepModel& m, float* out, size_t capacity) {
+    if (!out && m.vertex_count > 0) return Result::InvalidArgument;
+    if (capacity < size_t(m.vertex_count) * 3) return Result::BufferTooSmall;
+    const uint8_t* r = m.data + m.vertex_records_offset;
+    for (uint32_t v = 0; v < m.vertex_count; ++v, r += format::kPfrepVertexRecordSize)
+        for (int k = 0; k < 3; ++k) out[size_t(v) * 3 + k] = m.position_min[k] + float(loadU16(r + 2 * k)) * m.position_step[k];
+    return Result::Ok;
+}
+
+Result pfrepExtractLevel(const PfrepModel& m, uint32_t level, uint32_t* indices, size_t capacity,
+                         size_t* triangle_count) {
+    if (!triangle_count || (!indices && capacity > 0) || level > m.removed_count) return Result::InvalidArgument;
+    const uint8_t* s = m.data + m.entries_offset;
+    size_t count = 0;
+    if (level >= m.vertex_count) {
+        *triangle_count = 0;
+        return Result::Ok;
+    }
+    uint64_t bit = entryStart(m, level);
+    uint32_t ring[65];
+    for (uint32_t i = level; i < m.vertex_count; ++i) {
+        const Entry e = decodeHeader(s, bit);
+        bit = (e.end_bit + 7) & ~uint64_t(7);
+        const uint32_t n = e.neighbours;
+        if (n > 64) {
+            // Rare wide fans: the general path.
+            const bool fits = visitEntry(
+                m, s, i, [level](uint32_t d) { return d == kNoDependency || d < level; },
+                [&](const Entry&, uint32_t, uint32_t a, uint32_t b) {
+                    if (count == capacity) return false;
+                    uint32_t* t = indices + count * 3;
+                    t[0] = i;
+                    t[1] = a;
+                    t[2] = b;
+                    ++count;
+                    return true;
+                });
+            if (!fits) {
+                *triangle_count = count;
+                return Result::BufferTooSmall;
+            }
+            continue;
+        }
+        // The ring is decoded only once a group is kept; dependencies are stored in increasing
+        // order, so the first one at or above `level` ends the entry.
+        bool ring_ready = false;
+        uint64_t mb = e.first_mask_bit;
+        const uint32_t groups = e.dependencies + (e.has_original ? 1 : 0);
+        for (uint32_t g = 0; g < groups; ++g) {
+            if (g > 0 || !e.has_original) {
+                const uint32_t d = i - 1 - bitsAt(s, mb, e.dependency_width);
+                mb += e.dependency_width;
+                if (d >= level) break;
+            }
+            {
+                if (!ring_ready) {
+                    const uint32_t w = e.neighbour_width;
+                    uint64_t nb = e.neighbour_bit;
+                    for (uint32_t j = 0; j < n; ++j, nb += w) ring[j] = i + 1 + bitsAt(s, nb, w);
+                    ring[n] = ring[0];
+                    ring_ready = true;
+                }
+                uint64_t bits = bitsAt(s, mb, std::min(n, 32u));
+                if (n > 32) bits |= uint64_t(bitsAt(s, mb + 32, n - 32)) << 32;
+                if (size_t(__builtin_popcountll(bits)) > capacity - count) {
+                    *triangle_count = count;
+                    return Result::BufferTooSmall;
+                }
+                uint32_t* t = indices + count * 3;
+                count += size_t(__builtin_popcountll(bits));
+                while (bits) {
+                    const uint32_t j = uint32_t(__builtin_ctzll(bits));
+                    bits &= bits - 1;
+                    t[0] = i;
+                    t[1] = ring[j];
+                    t[2] = ring[j + 1];
+                    t += 3;
+                }
+            }
+            mb += n;
+        }
+    }
+    *triangle_count = count;
+    return Result::Ok;
+}
+
+Result pfrepExtractLevelFans(const PfrepModel& m, uint32_t level, uint32_t* values, size_t capacity,
+                             size_t* value_count) {
+    if (!value_count || (!values && capacity > 0) || level > m.removed_count) return Result::InvalidArgument;
+    const uint8_t* s = m.data + m.entries_offset;
+    size_t used = 0;
+    bool fits = true;
+    for (uint32_t i = level; i < m.vertex_count && fits; ++i) {
+        // Consecutive slots of one entry extend the open fan; anything else starts a new record.
+        size_t record = size_t(-1);
+        uint32_t last_slot = 0;
+        fits = visitEntry(
+            m, s, i, [level](uint32_t d) { return d == kNoDependency || d < level; },
+            [&](const Entry&, uint32_t j, uint32_t a, uint32_t b) {
+                if (record != size_t(-1) && j == last_slot + 1 && values[used - 1] == a) {
+                    if (used == capacity) return false;
+                    values[used++] = b;
+                    ++values[record];
+                } else {
+                    if (capacity - used < 4) return false;
+                    record = used;
+                    values[used++] = 1;
+                    values[used++] = i;
+                    values[used++] = a;
+                    values[used++] = b;
+                }
+                last_slot = j;
+                return true;
+            });
+    }
+    *value_count = used;
+    return fits ? Result::Ok : Result::BufferTooSmall;
+}
+
+void pfrepMaskFinest(const PfrepModel& m, uint8_t* mask) {
+    if (mask) std::memset(mask, 0, pfrepMaskBytes(m));
+}
+
+void pfrepMaskCoarsest(const PfrepModel& m, uint8_t* mask) {
+    if (!mask) return;
+    std::memset(mask, 0, pfrepMaskBytes(m));
+    const uint32_t full = m.removed_count >> 3;
+    std::memset(mask, 0xff, full);
+    for (uint32_t v = full * 8; v < m.removed_count; ++v) setBit(mask, v);
+}
+
+Result pfrepSimplifyVertex(const PfrepModel& m, uint8_t* mask, uint32_t vertex, uint32_t* scratch,
+                           size_t scratch_capacity) {
+    if (!mask || !scratch || scratch_capacity < pfrepScratchValues(m) || vertex >= m.vertex_count)
+        return Result::InvalidArgument;
+    if (vertex >= m.removed_count || maskBit(mask, vertex)) return Result::Ok;
+    const uint8_t* s = m.data + m.entries_offset;
+    // Each vertex is marked when pushed, so it is pushed at most once: the stack never exceeds
+    // vertex_count values.
+    size_t top = 0;
+    setBit(mask, vertex);
+    scratch[top++] = vertex;
+    while (top > 0) {
+        const uint32_t x = scratch[--top];
+        const Entry e = decodeHeader(s, entryStart(m, x));
+        uint64_t bit = e.first_mask_bit + (e.has_original ? e.neighbours : 0);
+        for (uint32_t k = 0; k < e.dependencies; ++k) {
+            const uint32_t d = x - 1 - bitsAt(s, bit, e.dependency_width);
+            bit += e.dependency_width + e.neighbours;
+            if (!maskBit(mask, d)) {
+                setBit(mask, d);
+                scratch[top++] = d;
+            }
+        }
+    }
+    return Result::Ok;
+}
+
+Result pfrepInsertVertex(const PfrepModel& m, uint8_t* mask, uint32_t vertex, uint32_t* scratch,
+                         size_t scratch_capacity) {
+    if (!mask || !scratch || scratch_capacity < pfrepScratchValues(m) || vertex >= m.vertex_count)
+        return Result::InvalidArgument;
+    if (!maskBit(mask, vertex)) return Result::Ok;
+    const uint8_t* s = m.data + m.entries_offset;
+    // A min-heap: vertices are processed in increasing rank, and every insertion pushes only higher
+    // ranks, so a dependency's state is final when its triangles are examined.
+    size_t top = 0;
+    auto greater = [](uint32_t a, uint32_t b) { return a > b; };
+    clearBit(mask, vertex);
+    scratch[top++] = vertex;
+    while (top > 0) {
+        std::pop_heap(scratch, scratch + top, greater);
+        const uint32_t x = scratch[--top];
+        visitEntry(
+            m, s, x, [&](uint32_t d) { return d == kNoDependency || maskBit(mask, d); },
+            [&](const Entry&, uint32_t, uint32_t a, uint32_t b) {
+                for (uint32_t c : {a, b}) {
+                    if (maskBit(mask, c)) {
+                        clearBit(mask, c);
+                        scratch[top++] = c;
+                        std::push_heap(scratch, scratch + top, greater);
+                    }
+                }
+                return true;
+            });
+    }
+    return Result::Ok;
+}
+
+Result pfrepExtractSelective(const PfrepModel& m, const uint8_t* mask, uint32_t* indices, size_t capacity,
+                             size_t* triangle_count) {
+    if (!mask || !triangle_count || (!indices && capacity > 0)) return Result::InvalidArgument;
+    const uint8_t* s = m.data + m.entries_offset;
+    size_t count = 0;
+    bool fits = true;
+    fits = forEachPresent(m, mask, [&](uint32_t i) {
+        return visitEntry(
+            m, s, i, [mask](uint32_t d) { return d == kNoDependency || maskBit(mask, d); },
+            [&](const Entry&, uint32_t, uint32_t a, uint32_t b) {
+                if (maskBit(mask, a) || maskBit(mask, b)) return true;
+                if (count == capacity) return false;
+                uint32_t* t = indices + count * 3;
+                t[0] = i;
+                t[1] = a;
+                t[2] = b;
+                ++count;
+                return true;
+            });
+    });
+    *triangle_count = count;
+    return fits ? Result::Ok : Result::BufferTooSmall;
+}
+
+Result pfrepVertexBounds(const PfrepModel& m, uint32_t vertex, PfrepVertexBounds* out) {
+    if (!out || vertex >= m.vertex_count) return Result::InvalidArgument;
+    const uint8_t* r = m.data + m.vertex_records_offset + size_t(vertex) * format::kPfrepVertexRecordSize;
+    for (int k = 0; k < 3; ++k) out->position[k] = m.position_min[k] + float(loadU16(r + 2 * k)) * m.position_step[k];
+    out->radius = logValue(m, r[6]);
+    out->error = logValue(m, r[7]);
+    const uint16_t cone = loadU16(r + 8);
+    // Octahedral axis, 6 bits per coordinate, and a 4-bit angle (15 = no culling).
+    float x = float(cone & 63) / 63.0f * 2.0f - 1.0f;
+    float y = float((cone >> 6) & 63) / 63.0f * 2.0f - 1.0f;
+    float z = 1.0f - std::fabs(x) - std::fabs(y);
+    if (z < 0) {
+        const float ox = x;
+        x = (1.0f - std::fabs(y)) * (ox >= 0 ? 1.0f : -1.0f);
+        y = (1.0f - std::fabs(ox)) * (y >= 0 ? 1.0f : -1.0f);
+    }
+    const float len = std::sqrt(x * x + y * y + z * z);
+    out->cone_axis[0] = len > 0 ? x / len : 0;
+    out->cone_axis[1] = len > 0 ? y / len : 0;
+    out->cone_axis[2] = len > 0 ? z / len : 1;
+    out->cone_angle = float(cone >> 12) / 15.0f * 3.14159265f;
+    return Result::Ok;
+}
+
+bool pfrepWanted(const PfrepModel& m, const PfrepView& view, uint32_t vertex) {
+    if (vertex >= m.vertex_count) return false;
+    const uint8_t* r = m.data + m.vertex_records_offset + size_t(vertex) * format::kPfrepVertexRecordSize;
+    float p[3];
+    for (int k = 0; k < 3; ++k) p[k] = m.position_min[k] + float(loadU16(r + 2 * k)) * m.position_step[k];
+    const float radius = logValue(m, r[6]);
+    const float error = logValue(m, r[7]);
+    for (const auto& plane : view.planes)
+        if (plane[0] * p[0] + plane[1] * p[1] + plane[2] * p[2] + plane[3] < -radius) return false;
+    const float dx = p[0] - view.eye[0], dy = p[1] - view.eye[1], dz = p[2] - view.eye[2];
+    const float dist2 = dx * dx + dy * dy + dz * dz;
+    const float dist = std::sqrt(dist2);
+    if (dist <= radius) return true;
+    // Screen-space error first: it rejects most vertices of distant instances.
+    if (!(error * view.pixels_per_unit_at_distance_one > view.pixel_tolerance * (dist - radius))) return false;
+    PfrepVertexBounds b;
+    pfrepVertexBounds(m, vertex, &b);
+    if (b.cone_angle < 1.5707963f) {
+        // Back-facing when every normal of the cone points away from the eye (Hoppe 1997 §4.2).
+        const float along = b.cone_axis[0] * dx + b.cone_axis[1] * dy + b.cone_axis[2] * dz;
+        const float sin_a = std::sin(b.cone_angle);
+        if (along > 0 && along * along > dist2 * sin_a * sin_a) return false;
+    }
+    return true;
+}
+
+Result pfrepRefine(const PfrepModel& m, const PfrepView& view, uint8_t* mask, uint32_t* scratch,
+                   size_t scratch_capacity, size_t* changes) {
+    if (!mask || !scratch || !changes || scratch_capacity < pfrepScratchValues(m)) return Result::InvalidArgument;
+    const uint8_t* s = m.data + m.entries_offset;
+    size_t done = 0;
+    forEachPresent(m, mask, [&](uint32_t i) {
+        if (maskBit(mask, i)) return true; // simplified earlier in this pass
+        if (i < m.removed_count && !pfrepWanted(m, view, i)) {
+            pfrepSimplifyVertex(m, mask, i, scratch, scratch_capacity);
+            ++done;
+            return true;
+        }
+        const Entry e = decodeHeader(s, entryStart(m, i));
+        uint64_t bit = e.first_mask_bit + (e.has_original ? e.neighbours : 0);
+        for (uint32_t k = 0; k < e.dependencies; ++k) {
+            const uint32_t d = i - 1 - bitsAt(s, bit, e.dependency_width);
+            bit += e.dependency_width + e.neighbours;
+            if (maskBit(mask, d) && pfrepWanted(m, view, d)) {
+                pfrepInsertVertex(m, mask, d, scratch, scratch_capacity);
+                ++done;
+            }
+        }
+        return true;
+    });
+    *changes = done;
+    return Result::Ok;
+}
+
+} // namespace lodrt

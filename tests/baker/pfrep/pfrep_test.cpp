@@ -1,0 +1,331 @@
+// PfrepTest: the blob's levels are the simplifier's meshes (triangle for triangle, by position),
+// fans equal lists, levels are manifold when the input is, selective refinement is crack-free, and
+// raw non-manifold scans go through.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <map>
+#include <memory>
+#include <random>
+#include <set>
+
+#include "lodbake/io/mesh_io.h"
+#include "lodbake/pfrep/pfrep_builder.h"
+#include "lodbake/simplify/lod_chain.h"
+#include "lodrt/pfrep.h"
+#include "test_paths.h"
+
+namespace {
+
+using lodbake::CollapseSequence;
+using Tri = std::array<uint32_t, 3>;
+
+Tri canonicalTri(uint32_t a, uint32_t b, uint32_t c) {
+    // Rotation that starts at the smallest id keeps the orientation.
+    if (b < a && b < c) return {b, c, a};
+    if (c < a && c < b) return {c, a, b};
+    return {a, b, c};
+}
+
+struct Baked {
+    lodbake::LodChain chain;
+    std::vector<uint32_t> point_triangles;
+    lodbake::PfrepBuild build;
+    lodrt::PfrepModel model;
+};
+
+// Simplifies with half-edge collapses, keeping snapshots at several ratios, and builds the blob
+// from the very same recorded sequence.
+std::unique_ptr<Baked> bake(const std::string& name, std::vector<double> ratios) {
+    lodbake::Diagnostics diagnostics;
+    auto loaded = lodbake::readMesh(lodbake_test::sharedMesh(name), {}, diagnostics);
+    if (!loaded.ok()) return nullptr;
+    auto baked = std::make_unique<Baked>();
+    lodbake::LodChainOptions options;
+    options.ratios = std::move(ratios);
+    options.measure_error = false;
+    options.simplify.placement = lodbake::CollapsePlacement::KeepEndpoint;
+    auto chain = lodbake::buildLodChain(loaded->mesh, options, diagnostics);
+    if (!chain.ok()) return nullptr;
+    baked->chain = std::move(*chain);
+    auto tris = lodbake::pointTriangles(loaded->mesh, baked->chain.sequence);
+    if (!tris.ok()) return nullptr;
+    baked->point_triangles = std::move(*tris);
+    auto build = lodbake::buildPfrepFromSequence(baked->chain.sequence, baked->point_triangles, diagnostics);
+    if (!build.ok()) return nullptr;
+    baked->build = std::move(*build);
+    if (lodrt::openPfrep(baked->build.blob.data(), baked->build.blob.size(), &baked->model) != lodrt::Result::Ok)
+        return nullptr;
+    return baked;
+}
+
+// A level as a set of point triangles.
+std::multiset<Tri> extractPoints(const Baked& b, uint32_t level) {
+    std::vector<uint32_t> idx(lodrt::pfrepMaxTriangles(b.model) * 3);
+    size_t count = 0;
+    EXPECT_EQ(lodrt::pfrepExtractLevel(b.model, level, idx.data(), idx.size() / 3, &count), lodrt::Result::Ok);
+    std::multiset<Tri> out;
+    for (size_t t = 0; t < count; ++t)
+        out.insert(canonicalTri(b.build.rank_point[idx[t * 3]], b.build.rank_point[idx[t * 3 + 1]],
+                                b.build.rank_point[idx[t * 3 + 2]]));
+    return out;
+}
+
+std::multiset<Tri> meshPoints(const lodbake::Mesh& mesh, const CollapseSequence& seq) {
+    auto tris = lodbake::pointTriangles(mesh, seq);
+    EXPECT_TRUE(tris.ok());
+    std::multiset<Tri> out;
+    for (size_t t = 0; tris.ok() && t < tris->size() / 3; ++t)
+        out.insert(canonicalTri((*tris)[t * 3], (*tris)[t * 3 + 1], (*tris)[t * 3 + 2]));
+    return out;
+}
+
+// Closed 2-manifold: every directed edge has exactly one opposite and appears once.
+bool closedManifold(const std::vector<uint32_t>& idx, size_t count, std::string& why) {
+    std::map<std::pair<uint32_t, uint32_t>, int> directed;
+    for (size_t t = 0; t < count; ++t)
+        for (int k = 0; k < 3; ++k) ++directed[{idx[t * 3 + k], idx[t * 3 + (k + 1) % 3]}];
+    for (const auto& [e, n] : directed) {
+        auto it = directed.find({e.second, e.first});
+        if (n != 1 || it == directed.end() || it->second != 1) {
+            why = "edge " + std::to_string(e.first) + "-" + std::to_string(e.second) + " used " + std::to_string(n) +
+                  " times, reverse " + std::to_string(it == directed.end() ? 0 : it->second);
+            return false;
+        }
+    }
+    return true;
+}
+
+class PfrepTest : public ::testing::Test {
+protected:
+    static void SetUpTestSuite() {
+        if (!lodbake_test::haveSharedMeshes()) return;
+        rocker_ = bake("rocker_arm.obj", {0.9, 0.7, 0.5, 0.3, 0.1, 0.03, 0.01}).release();
+        scan_ = bake("dragon_scan_stand0_tri.ply", {0.8, 0.5, 0.2, 0.05}).release();
+        bunny_ = bake("bunny_zipper.ply", {0.6, 0.25, 0.05}).release();
+    }
+    static void TearDownTestSuite() {
+        delete rocker_;
+        delete scan_;
+        delete bunny_;
+        rocker_ = scan_ = bunny_ = nullptr;
+    }
+    static Baked* rocker_;
+    static Baked* scan_;
+    static Baked* bunny_;
+};
+Baked* PfrepTest::rocker_ = nullptr;
+Baked* PfrepTest::scan_ = nullptr;
+Baked* PfrepTest::bunny_ = nullptr;
+
+TEST_F(PfrepTest, LevelsEqualTheSimplifierSnapshots) {
+    LODBAKE_REQUIRE_SHARED_MESHES();
+    for (Baked* b : {rocker_, scan_, bunny_}) {
+        ASSERT_NE(b, nullptr);
+        EXPECT_EQ(b->build.removed, b->chain.sequence.records.size());
+        for (const auto& level : b->chain.levels) {
+            const auto got = extractPoints(*b, uint32_t(level.collapse_count));
+            const auto want = meshPoints(level.mesh, b->chain.sequence);
+            EXPECT_EQ(got.size(), level.mesh.faceCount());
+            EXPECT_TRUE(got == want) << "level after " << level.collapse_count << " collapses";
+        }
+    }
+}
+
+TEST_F(PfrepTest, EveryLevelEqualsAnIndependentReplay) {
+    LODBAKE_REQUIRE_SHARED_MESHES();
+    for (Baked* b : {rocker_, scan_}) {
+        ASSERT_NE(b, nullptr);
+        // Replay the recorded collapses on a plain triangle set and compare at ~60 levels.
+        std::vector<Tri> tris;
+        std::vector<std::vector<uint32_t>> incident(b->chain.sequence.point_positions.size());
+        std::vector<uint8_t> dead;
+        std::multiset<Tri> alive;
+        auto add = [&](Tri t) {
+            for (uint32_t p : t) incident[p].push_back(uint32_t(tris.size()));
+            tris.push_back(t);
+            dead.push_back(0);
+            alive.insert(canonicalTri(t[0], t[1], t[2]));
+        };
+        for (size_t t = 0; t < b->point_triangles.size() / 3; ++t)
+            add({b->point_triangles[t * 3], b->point_triangles[t * 3 + 1], b->point_triangles[t * 3 + 2]});
+        const auto& records = b->chain.sequence.records;
+        const size_t step = std::max<size_t>(1, records.size() / 60);
+        for (size_t k = 0; k <= records.size(); ++k) {
+            if (k % step == 0 || k == records.size() || k < 5) {
+                ASSERT_TRUE(extractPoints(*b, uint32_t(k)) == alive) << "k = " << k;
+            }
+            if (k == records.size()) break;
+            const uint32_t u = records[k].removed_point, v = records[k].kept_point;
+            const std::vector<uint32_t> ring = incident[u];
+            for (uint32_t id : ring) {
+                if (dead[id]) continue;
+                dead[id] = 1;
+                Tri t = tris[id];
+                alive.erase(alive.find(canonicalTri(t[0], t[1], t[2])));
+                if (t[0] == v || t[1] == v || t[2] == v) continue;
+                for (auto& p : t)
+                    if (p == u) p = v;
+                add(t);
+            }
+        }
+    }
+}
+
+TEST_F(PfrepTest, LevelsOfAClosedInputAreClosedManifoldsWithoutDuplicates) {
+    LODBAKE_REQUIRE_SHARED_MESHES();
+    ASSERT_NE(rocker_, nullptr);
+    const lodrt::PfrepModel& m = rocker_->model;
+    std::vector<uint32_t> idx(lodrt::pfrepMaxTriangles(m) * 3);
+    for (uint32_t k = 0; k <= m.removed_count; k += std::max(1u, m.removed_count / 40)) {
+        size_t count = 0;
+        ASSERT_EQ(lodrt::pfrepExtractLevel(m, k, idx.data(), idx.size() / 3, &count), lodrt::Result::Ok);
+        std::string why;
+        EXPECT_TRUE(closedManifold(idx, count, why)) << "k = " << k << ": " << why;
+        std::set<Tri> unique;
+        for (size_t t = 0; t < count; ++t) {
+            for (int c = 0; c < 3; ++c) {
+                EXPECT_GE(idx[t * 3 + c], k);
+                EXPECT_LT(idx[t * 3 + c], m.vertex_count);
+            }
+            unique.insert(canonicalTri(idx[t * 3], idx[t * 3 + 1], idx[t * 3 + 2]));
+        }
+        EXPECT_EQ(unique.size(), count);
+    }
+}
+
+TEST_F(PfrepTest, FansDrawTheSameTrianglesAsTheList) {
+    LODBAKE_REQUIRE_SHARED_MESHES();
+    for (Baked* b : {rocker_, scan_}) {
+        ASSERT_NE(b, nullptr);
+        const lodrt::PfrepModel& m = b->model;
+        std::vector<uint32_t> idx(lodrt::pfrepMaxTriangles(m) * 3), fans(lodrt::pfrepMaxFanValues(m));
+        for (uint32_t k : {0u, m.removed_count / 3, m.removed_count / 2, m.removed_count}) {
+            size_t count = 0, values = 0;
+            ASSERT_EQ(lodrt::pfrepExtractLevel(m, k, idx.data(), idx.size() / 3, &count), lodrt::Result::Ok);
+            ASSERT_EQ(lodrt::pfrepExtractLevelFans(m, k, fans.data(), fans.size(), &values), lodrt::Result::Ok);
+            std::multiset<Tri> a, f;
+            for (size_t t = 0; t < count; ++t) a.insert(canonicalTri(idx[t * 3], idx[t * 3 + 1], idx[t * 3 + 2]));
+            for (size_t p = 0; p < values;) {
+                const uint32_t n = fans[p];
+                ASSERT_GE(n, 1u);
+                ASSERT_LE(p + n + 3, values);
+                for (uint32_t j = 0; j < n; ++j) f.insert(canonicalTri(fans[p + 1], fans[p + 2 + j], fans[p + 3 + j]));
+                p += n + 3;
+            }
+            EXPECT_TRUE(a == f) << "k = " << k;
+            // Fans save submissions: fewer values than a list's 3 per triangle.
+            if (k == 0) {
+                EXPECT_LT(values, count * 3); // full detail: fans average well above one triangle
+            }
+        }
+        size_t count = 0;
+        EXPECT_EQ(lodrt::pfrepExtractLevel(m, 0, idx.data(), 3, &count), lodrt::Result::BufferTooSmall);
+        EXPECT_EQ(lodrt::pfrepExtractLevel(m, m.removed_count + 1, idx.data(), idx.size() / 3, &count),
+                  lodrt::Result::InvalidArgument);
+    }
+}
+
+TEST_F(PfrepTest, SelectiveRefinementIsCrackFree) {
+    LODBAKE_REQUIRE_SHARED_MESHES();
+    ASSERT_NE(rocker_, nullptr);
+    const lodrt::PfrepModel& m = rocker_->model;
+    std::vector<uint8_t> mask(lodrt::pfrepMaskBytes(m));
+    std::vector<uint32_t> scratch(lodrt::pfrepScratchValues(m));
+    std::vector<uint32_t> idx(lodrt::pfrepMaxTriangles(m) * 3);
+    std::mt19937 rng(7);
+    // The mask starts at the full mesh: selective extraction equals level 0.
+    lodrt::pfrepMaskFinest(m, mask.data());
+    size_t count = 0;
+    ASSERT_EQ(lodrt::pfrepExtractSelective(m, mask.data(), idx.data(), idx.size() / 3, &count), lodrt::Result::Ok);
+    EXPECT_EQ(count, m.level0_triangles);
+    lodrt::pfrepMaskCoarsest(m, mask.data());
+    ASSERT_EQ(lodrt::pfrepExtractSelective(m, mask.data(), idx.data(), idx.size() / 3, &count), lodrt::Result::Ok);
+    size_t coarse = 0;
+    std::vector<uint32_t> idx2(idx.size());
+    ASSERT_EQ(lodrt::pfrepExtractLevel(m, m.removed_count, idx2.data(), idx2.size() / 3, &coarse), lodrt::Result::Ok);
+    EXPECT_EQ(count, coarse);
+    // Random operations, a region at a time (refine around one vertex, coarsen elsewhere).
+    size_t distinct_sizes = 0, last = 0;
+    for (int round = 0; round < 60; ++round) {
+        for (int op = 0; op < 40; ++op) {
+            const uint32_t v = rng() % m.removed_count;
+            if (rng() % 2)
+                ASSERT_EQ(lodrt::pfrepInsertVertex(m, mask.data(), v, scratch.data(), scratch.size()), lodrt::Result::Ok);
+            else
+                ASSERT_EQ(lodrt::pfrepSimplifyVertex(m, mask.data(), v, scratch.data(), scratch.size()), lodrt::Result::Ok);
+        }
+        ASSERT_EQ(lodrt::pfrepExtractSelective(m, mask.data(), idx.data(), idx.size() / 3, &count), lodrt::Result::Ok);
+        std::string why;
+        ASSERT_TRUE(closedManifold(idx, count, why)) << "round " << round << ": " << why;
+        for (size_t t = 0; t < count * 3; ++t) ASSERT_FALSE((mask[idx[t] >> 3] >> (idx[t] & 7)) & 1);
+        distinct_sizes += count != last;
+        last = count;
+    }
+    EXPECT_GT(distinct_sizes, 10u);
+}
+
+TEST_F(PfrepTest, ViewDependentRefinementFollowsTheCameraWithoutCracks) {
+    LODBAKE_REQUIRE_SHARED_MESHES();
+    ASSERT_NE(rocker_, nullptr);
+    const lodrt::PfrepModel& m = rocker_->model;
+    std::vector<uint8_t> mask(lodrt::pfrepMaskBytes(m));
+    std::vector<uint32_t> scratch(lodrt::pfrepScratchValues(m));
+    std::vector<uint32_t> idx(lodrt::pfrepMaxTriangles(m) * 3);
+    lodrt::pfrepMaskCoarsest(m, mask.data());
+    float lo[3], hi[3];
+    for (int k = 0; k < 3; ++k) {
+        lo[k] = m.position_min[k];
+        hi[k] = m.position_min[k] + 65535.0f * m.position_step[k];
+    }
+    const float size = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]});
+    std::vector<size_t> counts;
+    for (float dist : {20.0f, 5.0f, 1.5f, 0.8f, 5.0f, 20.0f}) {
+        lodrt::PfrepView view;
+        view.eye[0] = (lo[0] + hi[0]) * 0.5f;
+        view.eye[1] = (lo[1] + hi[1]) * 0.5f;
+        view.eye[2] = hi[2] + dist * size;
+        // A frustum that keeps everything (planes far away) so only distance and facing matter.
+        for (int p = 0; p < 6; ++p) {
+            view.planes[p][p / 2] = p % 2 ? -1.0f : 1.0f;
+            view.planes[p][3] = 1e6f;
+        }
+        for (int iter = 0; iter < 20; ++iter) {
+            size_t changes = 0;
+            ASSERT_EQ(lodrt::pfrepRefine(m, view, mask.data(), scratch.data(), scratch.size(), &changes),
+                      lodrt::Result::Ok);
+            if (changes == 0) break;
+        }
+        size_t count = 0;
+        ASSERT_EQ(lodrt::pfrepExtractSelective(m, mask.data(), idx.data(), idx.size() / 3, &count), lodrt::Result::Ok);
+        std::string why;
+        EXPECT_TRUE(closedManifold(idx, count, why)) << "distance " << dist << ": " << why;
+        counts.push_back(count);
+    }
+    EXPECT_LT(counts[0], counts[2]); // closer: more triangles
+    EXPECT_LT(counts[5], counts[3]); // moving away coarsens again
+}
+
+TEST(PfrepRawScanTest, NonManifoldMergedScansWithoutRepair) {
+    LODBAKE_REQUIRE_SHARED_MESHES();
+    auto b = bake("dragon_stand_merged.ply", {0.5, 0.1});
+    ASSERT_NE(b, nullptr);
+    for (const auto& level : b->chain.levels) {
+        const auto got = extractPoints(*b, uint32_t(level.collapse_count));
+        EXPECT_TRUE(got == meshPoints(level.mesh, b->chain.sequence)) << "after " << level.collapse_count;
+    }
+    EXPECT_LE(double(b->build.blob.size()) / double(b->model.vertex_count), 40.0);
+}
+
+TEST(PfrepBuilderTest, RefusesFullEdgeSequences) {
+    lodbake::CollapseSequence seq;
+    seq.point_positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}};
+    seq.records.push_back({0, 1, lodbake::Vec3f(0.5f, 0, 0), 0, 0});
+    lodbake::Diagnostics d;
+    auto r = lodbake::buildPfrepFromSequence(seq, {0, 1, 2, 1, 3, 2}, d);
+    ASSERT_FALSE(r.ok());
+    EXPECT_NE(r.status().message().find("KeepEndpoint"), std::string::npos);
+}
+
+} // namespace

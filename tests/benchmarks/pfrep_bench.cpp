@@ -1,0 +1,280 @@
+// pfrep_bench: the PFRep bars (docs/format/pfrep.md), measured in one run.
+//   1. blob bytes per vertex on every shared scan (bar: <= 40; Cortés Carrillo reports 83);
+//   2. progressive extraction throughput on dragon_poisson.ply for many k (bar: >= 50 M triangles/s);
+//   3. selective refinement of 1,000 lucy100k instances from a moving camera (bar: < 2 ms per frame),
+//      instance state exactly |V| bits;
+//   4. writes PFRep levels and full-edge discrete levels at equal triangle counts for meshdist.py.
+// usage: pfrep_bench [--quick] (quick: skips the largest scans in part 1)
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include <time.h>
+
+#include "lodbake/io/mesh_io.h"
+#include "lodbake/pfrep/pfrep_builder.h"
+#include "lodbake/simplify/lod_chain.h"
+#include "lodrt/pfrep.h"
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+// CPU time of this thread: on a loaded shared machine, wall time also counts time spent descheduled.
+double cpuSeconds() {
+    timespec ts;
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+    return double(ts.tv_sec) + double(ts.tv_nsec) * 1e-9;
+}
+
+std::string meshPath(const std::string& name) { return std::string(LODBAKE_BENCH_SHARED_MESHES_DIR) + "/" + name; }
+
+bool load(const std::string& name, lodbake::Mesh& mesh) {
+    lodbake::Diagnostics d;
+    auto loaded = lodbake::readMesh(meshPath(name), {}, d);
+    if (!loaded.ok()) {
+        std::printf("  %s: %s\n", name.c_str(), loaded.status().message().c_str());
+        return false;
+    }
+    mesh = std::move(loaded->mesh);
+    return true;
+}
+
+bool bake(const lodbake::Mesh& mesh, lodbake::PfrepBuild& build, double& seconds) {
+    lodbake::Diagnostics d;
+    const auto t = Clock::now();
+    auto b = lodbake::buildPfrep(mesh, {}, d);
+    seconds = secondsSince(t);
+    if (!b.ok()) {
+        std::printf("  build failed: %s\n", b.status().message().c_str());
+        return false;
+    }
+    build = std::move(*b);
+    return true;
+}
+
+lodbake::Mesh levelMesh(const lodrt::PfrepModel& m, uint32_t k) {
+    std::vector<float> pos(size_t(m.vertex_count) * 3);
+    lodrt::pfrepDecodePositions(m, pos.data(), pos.size());
+    std::vector<uint32_t> idx(lodrt::pfrepMaxTriangles(m) * 3);
+    size_t count = 0;
+    lodrt::pfrepExtractLevel(m, k, idx.data(), idx.size() / 3, &count);
+    lodbake::Mesh mesh;
+    for (uint32_t v = 0; v < m.vertex_count; ++v) mesh.positions.push_back({pos[v * 3], pos[v * 3 + 1], pos[v * 3 + 2]});
+    mesh.indices.assign(idx.begin(), idx.begin() + std::ptrdiff_t(count * 3));
+    return mesh;
+}
+
+size_t levelTriangles(const lodrt::PfrepModel& m, uint32_t k, std::vector<uint32_t>& idx) {
+    size_t count = 0;
+    lodrt::pfrepExtractLevel(m, k, idx.data(), idx.size() / 3, &count);
+    return count;
+}
+
+// Smallest k whose level has at most `target` triangles (levels shrink monotonically).
+uint32_t levelFor(const lodrt::PfrepModel& m, size_t target, std::vector<uint32_t>& idx) {
+    uint32_t lo = 0, hi = m.removed_count;
+    while (lo < hi) {
+        const uint32_t mid = lo + (hi - lo) / 2;
+        if (levelTriangles(m, mid, idx) <= target)
+            hi = mid;
+        else
+            lo = mid + 1;
+    }
+    return lo;
+}
+
+} // namespace
+
+int main(int argc, char** argv) {
+    const bool quick = argc > 1 && std::strcmp(argv[1], "--quick") == 0;
+    std::printf("== 1. blob size (bar: <= 40 bytes/vertex; paper: 83)\n");
+    std::vector<std::string> scans = {"rocker_arm.obj", "bunny_zipper.ply", "bunny_scan_bun000_tri.ply",
+                                      "dragon_scan_stand0_tri.ply", "lucy100k.ply", "nefertiti.obj", "igea.ply"};
+    if (!quick) {
+        scans.push_back("dragon_stand_merged.ply");
+        scans.push_back("dragon_poisson.ply");
+    }
+    lodbake::PfrepBuild dragon, lucy;
+    bool all_met = true;
+    for (const std::string& name : scans) {
+        lodbake::Mesh mesh;
+        if (!load(name, mesh)) continue;
+        lodbake::PfrepBuild build;
+        double seconds = 0;
+        if (!bake(mesh, build, seconds)) continue;
+        const double per_vertex = double(build.blob.size()) / double(build.rank_point.size());
+        const double per_input = double(build.blob.size()) / double(mesh.vertexCount());
+        all_met &= per_vertex <= 40.0;
+        std::printf("  %-28s V %8zu  removed %8zu  stored tris %8zu  deps/vertex %.2f  A/vertex %.2f  "
+                    "%9zu bytes  %.2f B/vertex (%.2f per input vertex)  build %.1f s  %s\n",
+                    name.c_str(), build.rank_point.size(), build.removed, build.stored_triangles,
+                    double(build.dependency_groups) / double(build.rank_point.size()),
+                    double(build.neighbour_slots) / double(build.rank_point.size()), build.blob.size(), per_vertex,
+                    per_input, seconds, per_vertex <= 40.0 ? "met" : "NOT MET");
+        if (name == "dragon_poisson.ply") dragon = std::move(build);
+        if (name == "lucy100k.ply") lucy = std::move(build);
+    }
+    std::printf("  bar %s\n", all_met ? "met on every scan measured" : "NOT met");
+
+    if (!dragon.blob.empty()) {
+        std::printf("== 2. progressive extraction, dragon_poisson (bar: >= 50 M triangles/s, one core)\n");
+        lodrt::PfrepModel m;
+        if (lodrt::openPfrep(dragon.blob.data(), dragon.blob.size(), &m) == lodrt::Result::Ok) {
+            std::vector<uint32_t> idx(lodrt::pfrepMaxTriangles(m) * 3);
+            std::vector<uint32_t> fans(lodrt::pfrepMaxFanValues(m));
+            double worst = HUGE_VAL, worst_cpu = HUGE_VAL;
+            for (double f : {0.0, 0.1, 0.25, 0.5, 0.75, 0.9, 0.97, 0.99, 0.999, 1.0}) {
+                const uint32_t k = uint32_t(f * m.removed_count);
+                size_t count = 0;
+                int reps = 0;
+                const auto t = Clock::now();
+                const double c0 = cpuSeconds();
+                do {
+                    lodrt::pfrepExtractLevel(m, k, idx.data(), idx.size() / 3, &count);
+                    ++reps;
+                } while (secondsSince(t) < 0.3);
+                const double s = secondsSince(t) / reps;
+                const double cpu = (cpuSeconds() - c0) / reps;
+                worst_cpu = std::min(worst_cpu, count / cpu / 1e6);
+                size_t values = 0;
+                const auto tf = Clock::now();
+                int fan_reps = 0;
+                do {
+                    lodrt::pfrepExtractLevelFans(m, k, fans.data(), fans.size(), &values);
+                    ++fan_reps;
+                } while (secondsSince(tf) < 0.3);
+                const double sf = secondsSince(tf) / fan_reps;
+                // Anchor, same run: copying a ready index list of the same size (memcpy bound).
+                std::vector<uint32_t> copy(count * 3 + 1);
+                int copy_reps = 0;
+                const auto tc = Clock::now();
+                do {
+                    std::memcpy(copy.data(), idx.data(), count * 3 * sizeof(uint32_t));
+                    ++copy_reps;
+                } while (secondsSince(tc) < 0.1);
+                const double sc = secondsSince(tc) / copy_reps;
+                const double rate = count / s / 1e6;
+                worst = std::min(worst, rate);
+                std::printf("  k %8u (%5.1f%%): %8zu triangles in %8.3f ms = %6.1f M tri/s (thread CPU time: %6.1f M tri/s) (memcpy of the list: %6.1f M "
+                            "tri/s, ratio %.2f); fans: %zu values (%.2f per triangle) %6.1f M tri/s\n",
+                            k, f * 100, count, s * 1e3, rate, count / cpu / 1e6, count / sc / 1e6, sc / s, values,
+                            count ? double(values) / count : 0.0, count / sf / 1e6);
+            }
+            std::printf("  worst %.1f M triangles/s wall, %.1f M triangles/s thread CPU time: bar %s\n", worst, worst_cpu,
+                        worst >= 50 ? "met" : (worst_cpu >= 50 ? "met in CPU time only" : "NOT met"));
+        }
+    }
+
+    lodbake::Mesh lucy_mesh;
+    if (lucy.blob.empty() && load("lucy100k.ply", lucy_mesh)) {
+        double seconds = 0;
+        bake(lucy_mesh, lucy, seconds);
+    }
+    if (!lucy.blob.empty()) {
+        std::printf("== 3. selective refinement, 1000 lucy100k instances, moving camera (bar: < 2 ms/frame)\n");
+        lodrt::PfrepModel m;
+        if (lodrt::openPfrep(lucy.blob.data(), lucy.blob.size(), &m) == lodrt::Result::Ok) {
+            const int kInstances = 1000;
+            const size_t mask_bytes = lodrt::pfrepMaskBytes(m);
+            std::vector<uint8_t> masks(mask_bytes * kInstances);
+            for (int i = 0; i < kInstances; ++i) lodrt::pfrepMaskCoarsest(m, masks.data() + mask_bytes * i);
+            std::vector<uint32_t> scratch(lodrt::pfrepScratchValues(m));
+            float lo[3], hi[3];
+            for (int k = 0; k < 3; ++k) {
+                lo[k] = m.position_min[k];
+                hi[k] = lo[k] + 65535.0f * m.position_step[k];
+            }
+            const float size = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]});
+            // Instances on a 40 x 25 grid, 3 model sizes apart; the camera flies over at
+            // 2 sizes height, looking along +y with a 60 degree frustum, 1080 px viewport.
+            const float spacing = 3.0f * size;
+            const float ppu = 1080.0f / (2.0f * std::tan(0.5236f));
+            const int kFrames = 300;
+            double total = 0, total_cpu = 0, worst = 0;
+            size_t total_changes = 0, last_tris = 0;
+            std::vector<uint32_t> idx(lodrt::pfrepMaxTriangles(m) * 3);
+            for (int frame = 0; frame < kFrames; ++frame) {
+                const float cam[3] = {20 * spacing * (0.5f + 0.4f * std::sin(frame * 0.02f)), -5 * spacing + frame * 0.3f * spacing / 3,
+                                      2.0f * size};
+                const auto t = Clock::now();
+                const double c0 = cpuSeconds();
+                size_t changes = 0;
+                for (int i = 0; i < kInstances; ++i) {
+                    const float ox = (i % 40) * spacing, oy = (i / 40) * spacing;
+                    lodrt::PfrepView view;
+                    // Model space of instance i: the eye relative to the instance's origin.
+                    view.eye[0] = cam[0] - ox + lo[0];
+                    view.eye[1] = cam[1] - oy + lo[1];
+                    view.eye[2] = cam[2] + lo[2];
+                    // Frustum looking along +y: near plane and four side planes at 30 degrees.
+                    const float c = std::cos(0.5236f), s = std::sin(0.5236f);
+                    const float planes[5][3] = {{0, 1, 0}, {c, s, 0}, {-c, s, 0}, {0, s, c}, {0, s, -c}};
+                    for (int p = 0; p < 5; ++p) {
+                        for (int k = 0; k < 3; ++k) view.planes[p][k] = planes[p][k];
+                        view.planes[p][3] = -(planes[p][0] * view.eye[0] + planes[p][1] * view.eye[1] +
+                                              planes[p][2] * view.eye[2]);
+                    }
+                    view.planes[5][3] = 1e30f; // no far plane
+                    view.pixels_per_unit_at_distance_one = ppu;
+                    view.pixel_tolerance = 1.0f;
+                    size_t n = 0;
+                    lodrt::pfrepRefine(m, view, masks.data() + mask_bytes * i, scratch.data(), scratch.size(), &n);
+                    changes += n;
+                }
+                const double s = secondsSince(t);
+                total_cpu += cpuSeconds() - c0;
+                total += s;
+                worst = std::max(worst, s);
+                total_changes += changes;
+                if (frame == kFrames - 1) {
+                    last_tris = 0;
+                    for (int i = 0; i < kInstances; ++i) {
+                        size_t count = 0;
+                        lodrt::pfrepExtractSelective(m, masks.data() + mask_bytes * i, idx.data(), idx.size() / 3, &count);
+                        last_tris += count;
+                    }
+                }
+            }
+            std::printf("  thread CPU time: mean %.3f ms/frame\n", total_cpu / kFrames * 1e3);
+            std::printf("  %d frames: mean %.3f ms/frame, worst %.3f ms, %.1f vertex operations/frame; state %zu bytes "
+                        "per instance for %u vertices (|V| bits); %zu triangles in the last frame: bar %s\n",
+                        kFrames, total / kFrames * 1e3, worst * 1e3, double(total_changes) / kFrames, mask_bytes,
+                        m.vertex_count, last_tris, total / kFrames * 1e3 < 2.0 ? "met" : "NOT met");
+        }
+    }
+
+    // 4. Levels for meshdist.py: PFRep (half-edge, positions quantized) against the full-edge chain.
+    const std::string out = LODBAKE_BENCH_OUT_DIR;
+    for (const char* name : {"lucy100k.ply", "rocker_arm.obj"}) {
+        lodbake::Mesh mesh;
+        if (!load(name, mesh)) continue;
+        lodbake::PfrepBuild build;
+        double seconds = 0;
+        if (!bake(mesh, build, seconds)) continue;
+        lodrt::PfrepModel m;
+        if (lodrt::openPfrep(build.blob.data(), build.blob.size(), &m) != lodrt::Result::Ok) continue;
+        lodbake::LodChainOptions options;
+        options.ratios = {0.5, 0.1, 0.02};
+        options.measure_error = false;
+        lodbake::Diagnostics d;
+        auto chain = lodbake::buildLodChain(mesh, options, d);
+        if (!chain.ok()) continue;
+        std::vector<uint32_t> idx(lodrt::pfrepMaxTriangles(m) * 3);
+        for (size_t l = 0; l < chain->levels.size(); ++l) {
+            const auto& level = chain->levels[l];
+            const uint32_t k = levelFor(m, level.mesh.faceCount(), idx);
+            const std::string base = out + "/" + std::string(name).substr(0, std::string(name).find('.')) + "_" +
+                                     std::to_string(level.mesh.faceCount());
+            lodbake::writeMesh(level.mesh, base + "_chain.ply", {}, d);
+            lodbake::writeMesh(levelMesh(m, k), base + "_pfrep.ply", {}, d);
+            std::printf("  wrote %s_{chain,pfrep}.ply (pfrep level %u: %zu triangles)\n", base.c_str(), k,
+                        levelTriangles(m, k, idx));
+        }
+    }
+    return 0;
+}
