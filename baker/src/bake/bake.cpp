@@ -102,19 +102,22 @@ Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vect
             if (sizes[l][t].width != source_sizes[t].width || sizes[l][t].height != source_sizes[t].height)
                 resized[{t, {sizes[l][t].width, sizes[l][t].height}}];
         }
-    std::vector<std::pair<size_t, ImageSize>> jobs;
-    for (const auto& entry : resized) jobs.push_back({entry.first.first, {entry.first.second.first, entry.first.second.second}});
-    std::vector<Result<std::vector<uint8_t>>> job_results(jobs.size(), Result<std::vector<uint8_t>>(std::vector<uint8_t>()));
-    LODBAKE_RETURN_IF_ERROR(parallelFor(jobs.size(), 1, [&](size_t j) {
+    // One job per texture: decode and linearise once, then every size it needs (a halving chain).
+    std::vector<std::vector<ImageSize>> wanted(sources.size());
+    for (const auto& entry : resized) wanted[entry.first.first].push_back({entry.first.second.first, entry.first.second.second});
+    std::vector<Result<std::vector<std::vector<uint8_t>>>> job_results(
+        sources.size(), Result<std::vector<std::vector<uint8_t>>>(std::vector<std::vector<uint8_t>>()));
+    LODBAKE_RETURN_IF_ERROR(parallelFor(sources.size(), 1, [&](size_t t) {
+        if (wanted[t].empty()) return;
         TextureResizeOptions options;
-        options.size = jobs[j].second;
-        options.is_srgb = srgb[jobs[j].first];
-        job_results[j] = resizeEncodedImage(sources[jobs[j].first].bytes,
-                                            input.name + ": texture " + std::to_string(jobs[j].first), options);
+        options.is_srgb = srgb[t];
+        job_results[t] = resizeEncodedImageLevels(sources[t].bytes, input.name + ": texture " + std::to_string(t),
+                                                  wanted[t], options);
     }));
-    for (size_t j = 0; j < jobs.size(); ++j) {
-        if (!job_results[j].ok()) return job_results[j].status();
-        resized[{jobs[j].first, {jobs[j].second.width, jobs[j].second.height}}] = std::move(job_results[j]).value();
+    for (size_t t = 0; t < sources.size(); ++t) {
+        if (!job_results[t].ok()) return job_results[t].status();
+        for (size_t k = 0; k < wanted[t].size(); ++k)
+            resized[{t, {wanted[t][k].width, wanted[t][k].height}}] = std::move(job_results[t].value()[k]);
     }
     for (size_t l = 1; l < asset.levels.size(); ++l) {
         std::vector<Texture>& textures = asset.levels[l].mesh.textures;

@@ -31,6 +31,15 @@ struct TextureResizeOptions {
     std::string filter = "lanczos3"; // OpenImageIO filter name
 };
 
+/// Several sizes of one image at once (texture levels): decodes and linearises once, then halves
+/// repeatedly (each step a 2:1 filter, like mipmap generation), taking every requested size from the
+/// nearest larger step. Returns one encoded image per entry of `sizes`, in order; options.size is
+/// ignored. Sizes larger than the source are an error.
+Result<std::vector<std::vector<uint8_t>>> resizeEncodedImageLevels(const std::vector<uint8_t>& encoded,
+                                                                   const std::string& name,
+                                                                   const std::vector<ImageSize>& sizes,
+                                                                   const TextureResizeOptions& options);
+
 /// Resizes `encoded` (PNG or JPEG, detected from the bytes) and encodes the result in the same
 /// format, channel count and bit depth. Deterministic (single-threaded filtering, no metadata copied).
 /// Errors: unknown or undecodable image, or a size of 0.
