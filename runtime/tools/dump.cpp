@@ -174,6 +174,34 @@ LodReport analyseLods(const lodrt::Pack& pack) {
             if (ids.at(i).asUint64(&id) && id < node_count && id != n) is_lower[size_t(id)] = true;
         }
     }
+    // Cycles through several groups (a lower level whose own MSFT_lod leads back): depth-first search
+    // over the id graph; an edge into a node still on the stack closes a cycle.
+    std::vector<uint8_t> state(node_count, 0); // 0 new, 1 on stack, 2 done
+    for (uint32_t start = 0; start < node_count; ++start) {
+        if (state[start] != 0) continue;
+        std::vector<std::pair<uint32_t, uint32_t>> stack{{start, 0}}; // node, next id position
+        state[start] = 1;
+        while (!stack.empty()) {
+            const uint32_t n = stack.back().first;
+            const lodrt::JsonValue ids = pack.node(n).json.find("extensions").find("MSFT_lod").find("ids");
+            if (stack.back().second >= ids.size()) {
+                state[n] = 2;
+                stack.pop_back();
+                continue;
+            }
+            const uint32_t i = stack.back().second++;
+            uint64_t id = 0;
+            if (!ids.at(i).asUint64(&id) || id >= node_count || id == n) continue; // reported per group
+            if (state[size_t(id)] == 1) {
+                report.problems.push_back({nodePointer(n) + "/extensions/MSFT_lod/ids/" + std::to_string(i),
+                                           "MSFT_lod cycle: node " + std::to_string(id) + " leads back to node " +
+                                               std::to_string(n)});
+            } else if (state[size_t(id)] == 0) {
+                state[size_t(id)] = 1;
+                stack.push_back({uint32_t(id), 0});
+            }
+        }
+    }
     for (uint32_t n = 0; n < node_count; ++n) {
         const lodrt::JsonValue lod = pack.node(n).json.find("extensions").find("MSFT_lod");
         if (!lod.isValid() || is_lower[n]) continue;
@@ -195,19 +223,6 @@ LodReport analyseLods(const lodrt::Pack& pack) {
                     report.problems.push_back({where, "MSFT_lod cycle: node " + std::to_string(id) +
                                                           " is already a level of this group"});
                     ok = false;
-                }
-            // A lower level with its own MSFT_lod would make the chain ambiguous (and can loop back).
-            if (ok && pack.node(uint32_t(id)).json.find("extensions").find("MSFT_lod").isValid())
-                for (uint32_t c : chain) {
-                    const lodrt::JsonValue inner = pack.node(uint32_t(id)).json.find("extensions").find("MSFT_lod").find("ids");
-                    for (uint32_t k = 0; k < inner.size(); ++k) {
-                        uint64_t back = 0;
-                        if (inner.at(k).asUint64(&back) && back == c && ok) {
-                            report.problems.push_back({where, "MSFT_lod cycle: node " + std::to_string(id) +
-                                                                  " points back to node " + std::to_string(c)});
-                            ok = false;
-                        }
-                    }
                 }
             if (ok) chain.push_back(uint32_t(id));
         }

@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "lodbake/core/file_io.h"
+#include "lodbake/core/json_writer.h"
 
 namespace lodbake {
 
@@ -33,8 +34,8 @@ Status readNumber(const Json& v, const std::string& where, double lo, double hi,
     if (!v.is_number()) return expected(where, "a number", v);
     const double d = v.get<double>();
     if (!std::isfinite(d) || (lo_exclusive ? !(d > lo) : !(d >= lo)) || !(d <= hi))
-        return invalidInput(where + ": expected a number in " + (lo_exclusive ? "(" : "[") + Json(lo).dump() + ", " +
-                            Json(hi).dump() + "], got " + v.dump());
+        return invalidInput(where + ": expected a number in " + (lo_exclusive ? "(" : "[") + JsonWriter::formatNumber(lo) + ", " +
+                            JsonWriter::formatNumber(hi) + "], got " + v.dump());
     out = d;
     return Status::okStatus();
 }

@@ -129,24 +129,37 @@ TEST_F(BakeCliTest, LoddumpShowsTheLodTableWithoutProblems) {
     EXPECT_EQ(one.output.find("\"rock_lod1\""), std::string::npos) << one.output;
 }
 
-TEST_F(BakeCliTest, LoddumpFlagsBrokenLodChains) {
-    ASSERT_EQ(run1_.exit_code, 0) << run1_.output;
-    nlohmann::json doc = lodbake_test::glbJson(bytesOf(rock1_));
-    // Rewrite as .gltf without the buffer so only the JSON checks matter: a cycle and rising coverage.
-    doc.erase("buffers");
-    doc.erase("bufferViews");
-    doc.erase("accessors");
-    doc.erase("images");
-    doc.erase("textures");
-    doc.erase("materials");
-    for (auto& mesh : doc["meshes"]) mesh["primitives"] = nlohmann::json::array({{{"attributes", nlohmann::json::object()}}});
-    doc["nodes"][0]["extensions"]["MSFT_lod"]["ids"][1] = 0;
-    doc["nodes"][0]["extras"]["MSFT_screencoverage"][4] = 0.9;
-    const std::string path = outDir() + "/broken_lod.gltf";
-    std::ofstream(path) << doc.dump();
-    const CommandResult d = loddump(shellQuote(path));
-    EXPECT_EQ(d.exit_code, 1) << d.output;
-    EXPECT_NE(d.output.find("MSFT_lod cycle"), std::string::npos) << d.output;
+TEST(LoddumpLodCheckTest, FlagsCyclesRisingCoverageAndFallingErrors) {
+    std::ifstream in(src("schemas/LODBAKE_lod_metrics/examples/minimal.gltf"));
+    const nlohmann::json example = nlohmann::json::parse(in);
+    const CommandResult good = loddump(shellQuote(src("schemas/LODBAKE_lod_metrics/examples/minimal.gltf")));
+    EXPECT_EQ(good.exit_code, 0) << good.output;
+    EXPECT_EQ(good.output.find("  error "), std::string::npos) << good.output;
+    struct Case {
+        const char* name;
+        void (*edit)(nlohmann::json&);
+        const char* expected;
+    };
+    const Case cases[] = {
+        {"self", [](nlohmann::json& d) { d["nodes"][0]["extensions"]["MSFT_lod"]["ids"][0] = 0; }, "MSFT_lod cycle"},
+        {"back", [](nlohmann::json& d) { d["nodes"][1]["extensions"]["MSFT_lod"]["ids"] = {0}; }, "MSFT_lod cycle"},
+        {"range", [](nlohmann::json& d) { d["nodes"][0]["extensions"]["MSFT_lod"]["ids"][0] = 7; },
+         "/nodes/0/extensions/MSFT_lod/ids/0: expected a node index below 2"},
+        {"coverage", [](nlohmann::json& d) { d["nodes"][0]["extras"]["MSFT_screencoverage"] = {0.2, 0.5}; },
+         "level 1: screen coverage increases"},
+        {"error",
+         [](nlohmann::json& d) { d["nodes"][0]["extensions"]["LODBAKE_lod_metrics"]["levels"][0]["hausdorffError"] = 1.0; },
+         "level 1: error decreases"},
+    };
+    for (const Case& c : cases) {
+        nlohmann::json doc = example;
+        c.edit(doc);
+        const std::string path = outDir() + "/lod_check_" + c.name + ".gltf";
+        std::ofstream(path) << doc.dump();
+        const CommandResult d = loddump(shellQuote(path));
+        EXPECT_EQ(d.exit_code, 1) << c.name << ": " << d.output;
+        EXPECT_NE(d.output.find(c.expected), std::string::npos) << c.name << ": " << d.output;
+    }
 }
 
 TEST_F(BakeCliTest, ReportListsEveryLevel) {
