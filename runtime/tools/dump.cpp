@@ -109,7 +109,6 @@ Totals computeTotals(const lodrt::Pack& pack) {
     return totals;
 }
 
-
 // One LOD group: a node with MSFT_lod (or a scene node with a mesh and no MSFT_lod: one level).
 struct LodLevelRow {
     uint32_t node = lodrt::kNoIndex;
@@ -193,9 +192,9 @@ LodReport analyseLods(const lodrt::Pack& pack) {
             uint64_t id = 0;
             if (!ids.at(i).asUint64(&id) || id >= node_count || id == n) continue; // reported per group
             if (state[size_t(id)] == 1) {
-                report.problems.push_back({nodePointer(n) + "/extensions/MSFT_lod/ids/" + std::to_string(i),
-                                           "MSFT_lod cycle: node " + std::to_string(id) + " leads back to node " +
-                                               std::to_string(n)});
+                report.problems.push_back(
+                    {nodePointer(n) + "/extensions/MSFT_lod/ids/" + std::to_string(i),
+                     "MSFT_lod cycle: node " + std::to_string(id) + " leads back to node " + std::to_string(n)});
             } else if (state[size_t(id)] == 0) {
                 state[size_t(id)] = 1;
                 stack.push_back({uint32_t(id), 0});
@@ -220,13 +219,14 @@ LodReport analyseLods(const lodrt::Pack& pack) {
             }
             for (uint32_t c : chain)
                 if (c == id) {
-                    report.problems.push_back({where, "MSFT_lod cycle: node " + std::to_string(id) +
-                                                          " is already a level of this group"});
+                    report.problems.push_back(
+                        {where, "MSFT_lod cycle: node " + std::to_string(id) + " is already a level of this group"});
                     ok = false;
                 }
             if (ok) chain.push_back(uint32_t(id));
         }
-        const lodrt::JsonValue metrics = pack.node(n).json.find("extensions").find("LODBAKE_lod_metrics").find("levels");
+        const lodrt::JsonValue metrics =
+            pack.node(n).json.find("extensions").find("LODBAKE_lod_metrics").find("levels");
         const lodrt::JsonValue coverage = pack.node(n).json.find("extras").find("MSFT_screencoverage");
         if (metrics.isValid() && metrics.size() != chain.size())
             report.problems.push_back({nodePointer(n) + "/extensions/LODBAKE_lod_metrics/levels",
@@ -259,16 +259,16 @@ LodReport analyseLods(const lodrt::Pack& pack) {
             const std::string lvl = "level " + std::to_string(l);
             if (a.has_coverage && b.has_coverage && b.coverage > a.coverage)
                 report.problems.push_back({nodePointer(n) + "/extras/MSFT_screencoverage/" + std::to_string(l),
-                                           lvl + ": screen coverage increases (" + std::to_string(a.coverage) +
-                                               " -> " + std::to_string(b.coverage) + ")"});
+                                           lvl + ": screen coverage increases (" + std::to_string(a.coverage) + " -> " +
+                                               std::to_string(b.coverage) + ")"});
             if (a.has_metrics && b.has_metrics && (b.hausdorff < a.hausdorff || b.mean < a.mean))
-                report.problems.push_back({nodePointer(n) + "/extensions/LODBAKE_lod_metrics/levels/" +
-                                               std::to_string(l),
-                                           lvl + ": error decreases from the finer level"});
+                report.problems.push_back(
+                    {nodePointer(n) + "/extensions/LODBAKE_lod_metrics/levels/" + std::to_string(l),
+                     lvl + ": error decreases from the finer level"});
             if (a.has_metrics && b.has_metrics && b.switch_distance < a.switch_distance)
-                report.problems.push_back({nodePointer(n) + "/extensions/LODBAKE_lod_metrics/levels/" +
-                                               std::to_string(l),
-                                           lvl + ": switch distance decreases"});
+                report.problems.push_back(
+                    {nodePointer(n) + "/extensions/LODBAKE_lod_metrics/levels/" + std::to_string(l),
+                     lvl + ": switch distance decreases"});
         }
         report.groups.push_back(std::move(group));
     }

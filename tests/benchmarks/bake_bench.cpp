@@ -41,9 +41,10 @@ double nativeSeconds(const lodbake::Mesh& mesh, const std::vector<double>& ratio
         std::vector<unsigned int> destination(mesh.indices.size());
         for (size_t i = first; i < ratios.size(); i += 2) {
             const size_t target = size_t(double(mesh.faceCount()) * ratios[i]) * 3;
-            triangles[i] = meshopt_simplify(destination.data(), mesh.indices.data(), mesh.indices.size(),
-                                            &mesh.positions[0].x, mesh.positions.size(), sizeof(lodbake::Vec3f),
-                                            target, FLT_MAX, 0, nullptr) / 3;
+            triangles[i] =
+                meshopt_simplify(destination.data(), mesh.indices.data(), mesh.indices.size(), &mesh.positions[0].x,
+                                 mesh.positions.size(), sizeof(lodbake::Vec3f), target, FLT_MAX, 0, nullptr) /
+                3;
         }
     };
     std::thread other(work, 1);

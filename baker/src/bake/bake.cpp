@@ -95,16 +95,17 @@ Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vect
         for (size_t t = 0; t < sources.size(); ++t) {
             sizes[l][t] = source_sizes[t];
             if (l == 0 || !resizable[t]) continue;
-            const double target = metrics.levels[l].screen_coverage * settings.viewport_height_px *
-                                  settings.textures.texels_per_pixel;
-            sizes[l][t] = levelTextureSize(source_sizes[t], target, settings.textures.min_size_px,
-                                           settings.textures.max_size_px);
+            const double target =
+                metrics.levels[l].screen_coverage * settings.viewport_height_px * settings.textures.texels_per_pixel;
+            sizes[l][t] =
+                levelTextureSize(source_sizes[t], target, settings.textures.min_size_px, settings.textures.max_size_px);
             if (sizes[l][t].width != source_sizes[t].width || sizes[l][t].height != source_sizes[t].height)
                 resized[{t, {sizes[l][t].width, sizes[l][t].height}}];
         }
     // One job per texture: decode and linearise once, then every size it needs (a halving chain).
     std::vector<std::vector<ImageSize>> wanted(sources.size());
-    for (const auto& entry : resized) wanted[entry.first.first].push_back({entry.first.second.first, entry.first.second.second});
+    for (const auto& entry : resized)
+        wanted[entry.first.first].push_back({entry.first.second.first, entry.first.second.second});
     std::vector<Result<std::vector<std::vector<uint8_t>>>> job_results(
         sources.size(), Result<std::vector<std::vector<uint8_t>>>(std::vector<std::vector<uint8_t>>()));
     LODBAKE_RETURN_IF_ERROR(parallelFor(sources.size(), 1, [&](size_t t) {
@@ -125,8 +126,8 @@ Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vect
             const auto found = resized.find({t, {sizes[l][t].width, sizes[l][t].height}});
             if (found == resized.end()) continue;
             textures[t].bytes = found->second;
-            textures[t].name = sources[t].name + "_" + std::to_string(sizes[l][t].width) + "x" +
-                               std::to_string(sizes[l][t].height);
+            textures[t].name =
+                sources[t].name + "_" + std::to_string(sizes[l][t].width) + "x" + std::to_string(sizes[l][t].height);
         }
     }
     slot.report.texture_sizes = sizes;
@@ -158,14 +159,15 @@ Result<BakeOutput> bake(std::vector<BakeInput> inputs, const BakeSettings& setti
     if (settings.compact && encoders.empty()) LODBAKE_RETURN_IF_ERROR(checkCompact(description));
 
     std::vector<AssetSlot> slots(inputs.size());
-    LODBAKE_RETURN_IF_ERROR(parallelFor(inputs.size(), 1, [&](size_t i) {
-        slots[i].status = bakeAsset(inputs[i], settings, encoders, slots[i]);
-    }));
+    LODBAKE_RETURN_IF_ERROR(parallelFor(
+        inputs.size(), 1, [&](size_t i) { slots[i].status = bakeAsset(inputs[i], settings, encoders, slots[i]); }));
     BakeOutput output;
     for (AssetSlot& slot : slots) {
         for (const Diagnostic& d : slot.diagnostics.items()) {
-            if (d.severity == Severity::Warning) diagnostics.warn(d.message);
-            else diagnostics.note(d.message);
+            if (d.severity == Severity::Warning)
+                diagnostics.warn(d.message);
+            else
+                diagnostics.note(d.message);
         }
         LODBAKE_RETURN_IF_ERROR(slot.status);
         description.assets.push_back(std::move(slot.asset));

@@ -20,10 +20,12 @@ namespace {
 using Json = nlohmann::json;
 
 std::string typeName(const Json& v) {
-    return v.is_number() ? "a number" : v.is_boolean() ? "a boolean" : v.is_string() ? "a string"
-                                       : v.is_array()   ? "an array"
-                                       : v.is_object()  ? "an object"
-                                                        : "null";
+    return v.is_number()    ? "a number"
+           : v.is_boolean() ? "a boolean"
+           : v.is_string()  ? "a string"
+           : v.is_array()   ? "an array"
+           : v.is_object()  ? "an object"
+                            : "null";
 }
 
 Status expected(const std::string& where, const std::string& what, const Json& got) {
@@ -34,8 +36,8 @@ Status readNumber(const Json& v, const std::string& where, double lo, double hi,
     if (!v.is_number()) return expected(where, "a number", v);
     const double d = v.get<double>();
     if (!std::isfinite(d) || (lo_exclusive ? !(d > lo) : !(d >= lo)) || !(d <= hi))
-        return invalidInput(where + ": expected a number in " + (lo_exclusive ? "(" : "[") + JsonWriter::formatNumber(lo) + ", " +
-                            JsonWriter::formatNumber(hi) + "], got " + v.dump());
+        return invalidInput(where + ": expected a number in " + (lo_exclusive ? "(" : "[") +
+                            JsonWriter::formatNumber(lo) + ", " + JsonWriter::formatNumber(hi) + "], got " + v.dump());
     out = d;
     return Status::okStatus();
 }
@@ -110,11 +112,13 @@ Status applyImpl(const Json& root, const std::string& name, BakeSettings& s) {
          [&](const Json& v, const std::string& w) { return readNumber(v, w, 1.0, 1e5, false, s.viewport_height_px); }},
         {"vertical_fov_deg",
          [&](const Json& v, const std::string& w) { return readNumber(v, w, 1.0, 179.0, false, s.vertical_fov_deg); }},
-        {"hysteresis", [&](const Json& v, const std::string& w) { return readNumber(v, w, 0.0, 0.9, false, s.hysteresis); }},
+        {"hysteresis",
+         [&](const Json& v, const std::string& w) { return readNumber(v, w, 0.0, 0.9, false, s.hysteresis); }},
         {"repair", [&](const Json& v, const std::string& w) { return readBool(v, w, s.repair); }},
         {"error_samples",
          [&](const Json& v, const std::string& w) { return readUint(v, w, 1000, 100000000, s.error_samples); }},
-        {"textures", [&](const Json& v, const std::string&) { return applyObject(v, name, "/textures", texture_handlers); }},
+        {"textures",
+         [&](const Json& v, const std::string&) { return applyObject(v, name, "/textures", texture_handlers); }},
         {"threads", [&](const Json& v, const std::string& w) { return readUint(v, w, 0, 1024, s.threads); }},
         {"compact", [&](const Json& v, const std::string& w) { return readBool(v, w, s.compact); }},
     };

@@ -145,10 +145,15 @@ TEST(LoddumpLodCheckTest, FlagsCyclesRisingCoverageAndFallingErrors) {
         {"back", [](nlohmann::json& d) { d["nodes"][1]["extensions"]["MSFT_lod"]["ids"] = {0}; }, "MSFT_lod cycle"},
         {"range", [](nlohmann::json& d) { d["nodes"][0]["extensions"]["MSFT_lod"]["ids"][0] = 7; },
          "/nodes/0/extensions/MSFT_lod/ids/0: expected a node index below 2"},
-        {"coverage", [](nlohmann::json& d) { d["nodes"][0]["extras"]["MSFT_screencoverage"] = {0.2, 0.5}; },
+        {"coverage",
+         [](nlohmann::json& d) {
+             d["nodes"][0]["extras"]["MSFT_screencoverage"] = {0.2, 0.5};
+         },
          "level 1: screen coverage increases"},
         {"error",
-         [](nlohmann::json& d) { d["nodes"][0]["extensions"]["LODBAKE_lod_metrics"]["levels"][0]["hausdorffError"] = 1.0; },
+         [](nlohmann::json& d) {
+             d["nodes"][0]["extensions"]["LODBAKE_lod_metrics"]["levels"][0]["hausdorffError"] = 1.0;
+         },
          "level 1: error decreases"},
     };
     for (const Case& c : cases) {
@@ -173,7 +178,8 @@ TEST_F(BakeCliTest, ReportListsEveryLevel) {
 
 TEST(BakeCliUsageTest, CompactFailsNamingTheMissingExtensions) {
     const std::string out = outDir() + "/compact.glb";
-    const CommandResult r = bake(shellQuote(src("assets/samples/rock_scan/rock_000.ply")) + " --compact -o " + shellQuote(out));
+    const CommandResult r =
+        bake(shellQuote(src("assets/samples/rock_scan/rock_000.ply")) + " --compact -o " + shellQuote(out));
     EXPECT_EQ(r.exit_code, 1) << r.output;
     EXPECT_NE(r.output.find("LODBAKE_valence_compression"), std::string::npos) << r.output;
     EXPECT_NE(r.output.find("LODBAKE_progressive_fans"), std::string::npos) << r.output;
@@ -200,7 +206,8 @@ TEST(BakeCliUsageTest, PresetErrorsAndOverrides) {
 TEST(BakeSharedMeshesTest, ScansBakeIntoValidPacks) {
     LODBAKE_REQUIRE_SHARED_MESHES();
     std::vector<std::string> packs;
-    for (const char* name : {"bunny_zipper.ply", "lee_perry_smith/LeePerrySmith.glb", "nefertiti_fraunhofer_textured.glb"}) {
+    for (const char* name :
+         {"bunny_zipper.ply", "lee_perry_smith/LeePerrySmith.glb", "nefertiti_fraunhofer_textured.glb"}) {
         const std::string stem = fs::path(name).stem().string();
         const std::string out = outDir() + "/" + stem + ".glb";
         const CommandResult r = bake(shellQuote(lodbake_test::sharedMesh(name)) + " --preset " +

@@ -35,8 +35,8 @@ TEST(BakeConfigTest, EveryBundledPresetParsesAndMatchesTheSchema) {
 
 TEST(BakeConfigTest, PresetOverridesOnlyWhatItNames) {
     BakeSettings settings;
-    ASSERT_TRUE(applyPresetJson(R"({"version": 1, "pixel_threshold": 2.5, "textures": {"max_size_px": 512}})",
-                                "p.json", settings)
+    ASSERT_TRUE(applyPresetJson(R"({"version": 1, "pixel_threshold": 2.5, "textures": {"max_size_px": 512}})", "p.json",
+                                settings)
                     .ok());
     EXPECT_EQ(settings.pixel_threshold, 2.5);
     EXPECT_EQ(settings.textures.max_size_px, 512u);
@@ -93,7 +93,8 @@ TEST(BakeConfigTest, PrintedConfigHasSortedKeysRoundTripsAndMatchesTheSchema) {
     EXPECT_EQ(settingsToJson(again), text);
     const std::string path = lodbake_test::scratchDir() + "/printed_config.json";
     std::ofstream(path) << text;
-    const auto r = lodbake_test::runCommand(schemaCheck("config/bake_preset.schema.json", lodbake_test::shellQuote(path)));
+    const auto r =
+        lodbake_test::runCommand(schemaCheck("config/bake_preset.schema.json", lodbake_test::shellQuote(path)));
     EXPECT_EQ(r.exit_code, 0) << r.output;
 }
 

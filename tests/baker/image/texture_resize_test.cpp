@@ -13,11 +13,11 @@ TEST(TextureResizeTest, LevelSizesArePowerOfTwoFriendlyAndClamped) {
         const ImageSize s = levelTextureSize({w, h}, target, lo, hi);
         return std::make_pair(s.width, s.height);
     };
-    EXPECT_EQ(size(2048, 2048, 300, 16, 4096), std::make_pair(512u, 512u));   // rounds up to a power of two
-    EXPECT_EQ(size(2048, 1024, 300, 16, 4096), std::make_pair(512u, 256u));   // keeps the aspect ratio
-    EXPECT_EQ(size(2048, 2048, 3, 16, 4096), std::make_pair(16u, 16u));       // min clamp
+    EXPECT_EQ(size(2048, 2048, 300, 16, 4096), std::make_pair(512u, 512u));    // rounds up to a power of two
+    EXPECT_EQ(size(2048, 1024, 300, 16, 4096), std::make_pair(512u, 256u));    // keeps the aspect ratio
+    EXPECT_EQ(size(2048, 2048, 3, 16, 4096), std::make_pair(16u, 16u));        // min clamp
     EXPECT_EQ(size(2048, 2048, 5000, 16, 1024), std::make_pair(1024u, 1024u)); // max clamp
-    EXPECT_EQ(size(512, 512, 5000, 16, 4096), std::make_pair(512u, 512u));    // never upscales
+    EXPECT_EQ(size(512, 512, 5000, 16, 4096), std::make_pair(512u, 512u));     // never upscales
     EXPECT_EQ(size(1, 1, 0.1, 1, 4096), std::make_pair(1u, 1u));
 }
 

@@ -24,8 +24,8 @@ struct BakeAssetReport {
     std::string name;
     uint64_t input_triangles = 0;
     uint64_t input_vertices = 0;
-    std::vector<std::string> repair_unresolved; // what repair could not fix
-    LodMetrics metrics;                         // LOD0 first
+    std::vector<std::string> repair_unresolved;        // what repair could not fix
+    LodMetrics metrics;                                // LOD0 first
     std::vector<std::vector<ImageSize>> texture_sizes; // per level, per texture of that level's mesh
 };
 

@@ -23,16 +23,17 @@ struct TextureLodSettings {
 
 struct BakeSettings {
     int version = kBakePresetVersion;
-    std::vector<double> lod_ratios{0.5, 0.25, 0.1, 0.03, 0.01}; // levels after LOD0 (the repaired input), triangle fractions
-    double pixel_threshold = 1.0;      // largest tolerated screen-space error, pixels
+    std::vector<double> lod_ratios{0.5, 0.25, 0.1, 0.03,
+                                   0.01}; // levels after LOD0 (the repaired input), triangle fractions
+    double pixel_threshold = 1.0;         // largest tolerated screen-space error, pixels
     double viewport_height_px = 1080.0;
     double vertical_fov_deg = 60.0;
-    double hysteresis = 0.1;           // band around each switch distance, fraction of it: [d(1-h), d(1+h)]
-    bool repair = true;                // run the default repair pipeline before simplifying
-    uint32_t error_samples = 200000;   // area-uniform samples per side when measuring each level's error
+    double hysteresis = 0.1;         // band around each switch distance, fraction of it: [d(1-h), d(1+h)]
+    bool repair = true;              // run the default repair pipeline before simplifying
+    uint32_t error_samples = 200000; // area-uniform samples per side when measuring each level's error
     TextureLodSettings textures;
-    uint32_t threads = 0;              // worker threads; 0: all cores (the output does not depend on it)
-    bool compact = false;              // list our stream extensions in extensionsRequired
+    uint32_t threads = 0; // worker threads; 0: all cores (the output does not depend on it)
+    bool compact = false; // list our stream extensions in extensionsRequired
 };
 
 /// Applies the preset text `json_text` (from file `name`, used in messages) over `settings`. Keys are

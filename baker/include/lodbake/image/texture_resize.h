@@ -25,9 +25,9 @@ Result<ImageSize> probeImageSize(const std::vector<uint8_t>& encoded, const std:
 ImageSize levelTextureSize(ImageSize source, double target_px, uint32_t min_px, uint32_t max_px);
 
 struct TextureResizeOptions {
-    ImageSize size;          // output size (use levelTextureSize)
-    bool is_srgb = true;     // colour data (base colour, emissive): filter in linear light, store sRGB again
-    int jpeg_quality = 92;   // JPEG output quality, 1..100
+    ImageSize size;                  // output size (use levelTextureSize)
+    bool is_srgb = true;             // colour data (base colour, emissive): filter in linear light, store sRGB again
+    int jpeg_quality = 92;           // JPEG output quality, 1..100
     std::string filter = "lanczos3"; // OpenImageIO filter name
 };
 

@@ -28,7 +28,7 @@ struct PackExtension {
     std::string json;                           // the extension object as JSON text
     std::vector<std::vector<uint8_t>> blobs;    // payloads, each stored in its own buffer view
     std::vector<std::string> blob_view_members; // blob i's buffer-view index goes into this member
-    bool is_stream = false; // a compressed stream: listed in extensionsRequired when compact
+    bool is_stream = false;                     // a compressed stream: listed in extensionsRequired when compact
 };
 
 struct PackLevel {
@@ -39,8 +39,8 @@ struct PackLevel {
 
 struct PackAsset {
     std::string name;
-    std::vector<PackLevel> levels;      // highest detail first
-    std::vector<double> screen_coverage; // MSFT_screencoverage, one per level
+    std::vector<PackLevel> levels;              // highest detail first
+    std::vector<double> screen_coverage;        // MSFT_screencoverage, one per level
     std::vector<PackExtension> node_extensions; // on the LOD0 node
 };
 
@@ -57,10 +57,10 @@ struct LodMetricsLevel {
     double mean_error = 0;          // object units
     double hausdorff_error_rel = 0; // fraction of the bounding-box diagonal
     double mean_error_rel = 0;
-    double switch_distance = 0;  // object units, from here on the level is acceptable
-    double screen_coverage = 0;  // projected bounding-sphere diameter / viewport height at the switch distance
-    double hysteresis_near = 0;  // switch back to the finer level below this distance
-    double hysteresis_far = 0;   // switch to this level beyond this distance
+    double switch_distance = 0; // object units, from here on the level is acceptable
+    double screen_coverage = 0; // projected bounding-sphere diameter / viewport height at the switch distance
+    double hysteresis_near = 0; // switch back to the finer level below this distance
+    double hysteresis_far = 0;  // switch to this level beyond this distance
 };
 
 struct LodMetrics {
