@@ -54,79 +54,78 @@ std::vector<uint8_t> bytesOf(const std::string& path) {
     return r.ok() ? *r : std::vector<uint8_t>();
 }
 
-// The rock sample is baked once for the suite (with 1 and 2 threads).
-class BakeCliTest : public ::testing::Test {
-protected:
-    static void SetUpTestSuite() {
-        rock1_ = outDir() + "/rock_t1.glb";
-        rock2_ = outDir() + "/rock_t2.glb";
-        report_ = outDir() + "/rock_report.json";
-        const std::string in = shellQuote(src("assets/samples/rock_scan/rock.conf"));
-        const std::string preset = " --preset " + shellQuote(src("configs/desktop.json"));
-        run1_ = bake(in + preset + " --threads 1 -o " + shellQuote(rock1_) + " --report " + shellQuote(report_));
-        run2_ = bake(in + preset + " --threads 2 -o " + shellQuote(rock2_));
+// One test so the sample is baked once per process (ctest runs every test in its own process).
+TEST(BakeCliTest, RockSampleBakesIntoAValidDeterministicPackThatLoddumpReads) {
+    const std::string rock1 = outDir() + "/rock_t1.glb";
+    const std::string rock2 = outDir() + "/rock_t2.glb";
+    const std::string report_path = outDir() + "/rock_report.json";
+    const std::string in = shellQuote(src("assets/samples/rock_scan/rock.conf"));
+    const std::string preset = " --preset " + shellQuote(src("configs/desktop.json"));
+    const CommandResult run1 =
+        bake(in + preset + " --threads 1 -o " + shellQuote(rock1) + " --report " + shellQuote(report_path));
+    const CommandResult run2 = bake(in + preset + " --threads 2 -o " + shellQuote(rock2));
+    ASSERT_EQ(run1.exit_code, 0) << run1.output;
+    {
+        SCOPED_TRACE("RockSampleBakesIntoAValidPack");
+        EXPECT_NE(run1.output.find("6 levels"), std::string::npos) << run1.output;
+        const CommandResult v = validateGltf({rock1});
+        EXPECT_EQ(v.exit_code, 0) << v.output;
+        EXPECT_NE(v.output.find("errors 0 warnings 0"), std::string::npos) << v.output;
+        const CommandResult m = validateMetrics({rock1});
+        EXPECT_EQ(m.exit_code, 0) << m.output;
     }
-    static std::string rock1_, rock2_, report_;
-    static CommandResult run1_, run2_;
-};
-std::string BakeCliTest::rock1_, BakeCliTest::rock2_, BakeCliTest::report_;
-CommandResult BakeCliTest::run1_, BakeCliTest::run2_;
-
-TEST_F(BakeCliTest, RockSampleBakesIntoAValidPack) {
-    ASSERT_EQ(run1_.exit_code, 0) << run1_.output;
-    EXPECT_NE(run1_.output.find("6 levels"), std::string::npos) << run1_.output;
-    const CommandResult v = validateGltf({rock1_});
-    EXPECT_EQ(v.exit_code, 0) << v.output;
-    EXPECT_NE(v.output.find("errors 0 warnings 0"), std::string::npos) << v.output;
-    const CommandResult m = validateMetrics({rock1_});
-    EXPECT_EQ(m.exit_code, 0) << m.output;
-}
-
-TEST_F(BakeCliTest, SameBytesForOneAndTwoThreads) {
-    ASSERT_EQ(run1_.exit_code, 0) << run1_.output;
-    ASSERT_EQ(run2_.exit_code, 0) << run2_.output;
-    const std::vector<uint8_t> a = bytesOf(rock1_), b = bytesOf(rock2_);
-    ASSERT_FALSE(a.empty());
-    EXPECT_TRUE(a == b) << "thread count changed the pack";
-}
-
-TEST_F(BakeCliTest, PackHasMsftLodChainAndMonotoneMetrics) {
-    ASSERT_EQ(run1_.exit_code, 0) << run1_.output;
-    const std::vector<uint8_t> glb = bytesOf(rock1_);
-    const nlohmann::json doc = lodbake_test::glbJson(glb);
-    ASSERT_EQ(doc["scenes"][0]["nodes"].size(), 1u);
-    const nlohmann::json& root = doc["nodes"][doc["scenes"][0]["nodes"][0].get<int>()];
-    const nlohmann::json& ids = root["extensions"]["MSFT_lod"]["ids"];
-    ASSERT_EQ(ids.size(), 5u);
-    const nlohmann::json& coverage = root["extras"]["MSFT_screencoverage"];
-    ASSERT_EQ(coverage.size(), 6u);
-    const nlohmann::json& levels = root["extensions"]["LODBAKE_lod_metrics"]["levels"];
-    ASSERT_EQ(levels.size(), 6u);
-    for (size_t l = 1; l < 6; ++l) {
-        EXPECT_LE(coverage[l].get<double>(), coverage[l - 1].get<double>());
-        EXPECT_GE(levels[l]["hausdorffError"].get<double>(), levels[l - 1]["hausdorffError"].get<double>());
-        EXPECT_LT(levels[l]["triangles"].get<double>(), levels[l - 1]["triangles"].get<double>());
-        EXPECT_GT(levels[l]["switchDistance"].get<double>(), 0.0);
-        // Each level is a plain mesh with the level's triangle count.
-        const nlohmann::json& node = doc["nodes"][ids[l - 1].get<int>()];
-        EXPECT_TRUE(node.contains("mesh"));
+    {
+        SCOPED_TRACE("SameBytesForOneAndTwoThreads");
+        ASSERT_EQ(run2.exit_code, 0) << run2.output;
+        const std::vector<uint8_t> a = bytesOf(rock1), b = bytesOf(rock2);
+        ASSERT_FALSE(a.empty());
+        EXPECT_TRUE(a == b) << "thread count changed the pack";
     }
-    EXPECT_EQ(coverage[5].get<double>(), 0.0);
-    EXPECT_EQ(doc.value("extensionsRequired", nlohmann::json::array()).size(), 0u);
-}
-
-TEST_F(BakeCliTest, LoddumpShowsTheLodTableWithoutProblems) {
-    ASSERT_EQ(run1_.exit_code, 0) << run1_.output;
-    const CommandResult d = loddump(shellQuote(rock1_));
-    EXPECT_EQ(d.exit_code, 0) << d.output;
-    EXPECT_NE(d.output.find("lod group \"rock\" (node 0): 6 levels"), std::string::npos) << d.output;
-    EXPECT_NE(d.output.find("problems: none"), std::string::npos) << d.output;
-    const CommandResult one = loddump("--level 2 " + shellQuote(rock1_));
-    EXPECT_EQ(one.exit_code, 0) << one.output;
-    EXPECT_NE(one.output.find("\n  2 "), std::string::npos) << one.output;
-    EXPECT_EQ(one.output.find("\n  3 "), std::string::npos) << one.output;
-    EXPECT_NE(one.output.find("\"rock_lod2\""), std::string::npos) << one.output;
-    EXPECT_EQ(one.output.find("\"rock_lod1\""), std::string::npos) << one.output;
+    {
+        SCOPED_TRACE("PackHasMsftLodChainAndMonotoneMetrics");
+        const std::vector<uint8_t> glb = bytesOf(rock1);
+        const nlohmann::json doc = lodbake_test::glbJson(glb);
+        ASSERT_EQ(doc["scenes"][0]["nodes"].size(), 1u);
+        const nlohmann::json& root = doc["nodes"][doc["scenes"][0]["nodes"][0].get<int>()];
+        const nlohmann::json& ids = root["extensions"]["MSFT_lod"]["ids"];
+        ASSERT_EQ(ids.size(), 5u);
+        const nlohmann::json& coverage = root["extras"]["MSFT_screencoverage"];
+        ASSERT_EQ(coverage.size(), 6u);
+        const nlohmann::json& levels = root["extensions"]["LODBAKE_lod_metrics"]["levels"];
+        ASSERT_EQ(levels.size(), 6u);
+        for (size_t l = 1; l < 6; ++l) {
+            EXPECT_LE(coverage[l].get<double>(), coverage[l - 1].get<double>());
+            EXPECT_GE(levels[l]["hausdorffError"].get<double>(), levels[l - 1]["hausdorffError"].get<double>());
+            EXPECT_LT(levels[l]["triangles"].get<double>(), levels[l - 1]["triangles"].get<double>());
+            EXPECT_GT(levels[l]["switchDistance"].get<double>(), 0.0);
+            // Each level is a plain mesh with the level's triangle count.
+            const nlohmann::json& node = doc["nodes"][ids[l - 1].get<int>()];
+            EXPECT_TRUE(node.contains("mesh"));
+        }
+        EXPECT_EQ(coverage[5].get<double>(), 0.0);
+        EXPECT_EQ(doc.value("extensionsRequired", nlohmann::json::array()).size(), 0u);
+    }
+    {
+        SCOPED_TRACE("LoddumpShowsTheLodTableWithoutProblems");
+        const CommandResult d = loddump(shellQuote(rock1));
+        EXPECT_EQ(d.exit_code, 0) << d.output;
+        EXPECT_NE(d.output.find("lod group \"rock\" (node 0): 6 levels"), std::string::npos) << d.output;
+        EXPECT_NE(d.output.find("problems: none"), std::string::npos) << d.output;
+        const CommandResult one = loddump("--level 2 " + shellQuote(rock1));
+        EXPECT_EQ(one.exit_code, 0) << one.output;
+        EXPECT_NE(one.output.find("\n  2 "), std::string::npos) << one.output;
+        EXPECT_EQ(one.output.find("\n  3 "), std::string::npos) << one.output;
+        EXPECT_NE(one.output.find("\"rock_lod2\""), std::string::npos) << one.output;
+        EXPECT_EQ(one.output.find("\"rock_lod1\""), std::string::npos) << one.output;
+    }
+    {
+        SCOPED_TRACE("ReportListsEveryLevel");
+        std::ifstream report_stream(report_path);
+        const nlohmann::json report = nlohmann::json::parse(report_stream);
+        ASSERT_EQ(report["assets"].size(), 1u);
+        EXPECT_EQ(report["assets"][0]["levels"].size(), 6u);
+        EXPECT_EQ(report["packBytes"].get<size_t>(), bytesOf(rock1).size());
+    }
 }
 
 TEST(LoddumpLodCheckTest, FlagsCyclesRisingCoverageAndFallingErrors) {
@@ -165,15 +164,6 @@ TEST(LoddumpLodCheckTest, FlagsCyclesRisingCoverageAndFallingErrors) {
         EXPECT_EQ(d.exit_code, 1) << c.name << ": " << d.output;
         EXPECT_NE(d.output.find(c.expected), std::string::npos) << c.name << ": " << d.output;
     }
-}
-
-TEST_F(BakeCliTest, ReportListsEveryLevel) {
-    ASSERT_EQ(run1_.exit_code, 0) << run1_.output;
-    std::ifstream in(report_);
-    const nlohmann::json report = nlohmann::json::parse(in);
-    ASSERT_EQ(report["assets"].size(), 1u);
-    EXPECT_EQ(report["assets"][0]["levels"].size(), 6u);
-    EXPECT_EQ(report["packBytes"].get<size_t>(), bytesOf(rock1_).size());
 }
 
 TEST(BakeCliUsageTest, CompactFailsNamingTheMissingExtensions) {
