@@ -2,7 +2,7 @@
 # One command from a fresh Debian machine to a baked sample: install the dependencies (the same
 # script setup-and-test.sh uses), build lodbake and loddump in Release, run the bundled sample scan
 # (assets/samples/rock_scan, made by lodbake_scansim) through the pipeline into build/demo/, and show
-# what came out.
+# what came out (one view converted; the whole set baked into build/demo/rock.glb, shown by loddump).
 #
 # usage: scripts/demo.sh [--no-install] [VIEW]
 #   --no-install  skip scripts/install-deps.sh (the dependencies are already there)
@@ -81,7 +81,19 @@ stage_convert() {
     run "$lodbake" convert "$current" -o "$out"
     current=$out
 }
-stages=(inspect convert)
+stage_bake() {
+    # The whole scan set (every view aligned by rock.conf), not just one view: repair joins what it can,
+    # then the LOD chain, texture levels and the pack (docs/bake.md).
+    local out=$demo_dir/rock.glb
+    say "baking the whole scan set into one LOD pack: $out (desktop preset)"
+    run "$lodbake" bake "$sample_dir/rock.conf" --preset configs/desktop.json -o "$out" --report "$demo_dir/rock_report.json"
+    current=$out
+}
+stage_dump() {
+    say "the pack as the runtime sees it (loddump: LOD table, checks, meshes)"
+    run "$loddump" "$current"
+}
+stages=(inspect convert bake dump)
 
 for stage in "${stages[@]}"; do
     "stage_$stage"

@@ -14,7 +14,7 @@ packages=(
     libtbb-dev
     libgtest-dev googletest
     libmeshoptimizer-dev
-    python3 python3-numpy python3-open3d
+    python3 python3-numpy python3-open3d python3-jsonschema
 )
 # Node.js: machines of this kind ship it (with npm bundled); Debian's own npm package conflicts with
 # such a build, so only ask apt for node and npm when the commands are missing.

@@ -14,38 +14,11 @@
 #include <tiny_gltf.h>
 
 #include "lodbake/version.h"
+#include "gltf/gltf_model.h"
 
 namespace lodbake {
 
 namespace {
-
-class BufferBuilder {
-public:
-    explicit BufferBuilder(tinygltf::Model& model) : model_(model) {}
-
-    // Appends bytes as a new buffer view (4-byte aligned); returns its index.
-    int addView(const void* data, size_t size, int target) {
-        while (bytes_.size() % 4 != 0) bytes_.push_back(0);
-        tinygltf::BufferView view;
-        view.buffer = 0;
-        view.byteOffset = bytes_.size();
-        view.byteLength = size;
-        view.target = target;
-        const auto* p = static_cast<const uint8_t*>(data);
-        bytes_.insert(bytes_.end(), p, p + size);
-        model_.bufferViews.push_back(std::move(view));
-        return int(model_.bufferViews.size() - 1);
-    }
-
-    std::vector<uint8_t> finish() {
-        while (bytes_.size() % 4 != 0) bytes_.push_back(0);
-        return std::move(bytes_);
-    }
-
-private:
-    tinygltf::Model& model_;
-    std::vector<uint8_t> bytes_;
-};
 
 template <class T>
 int addFloatAccessor(tinygltf::Model& model, BufferBuilder& buffer, const std::vector<T>& values, int components,
@@ -141,7 +114,9 @@ std::vector<Vec4f> exportTangents(const Mesh& mesh, const std::vector<Vec3f>& no
     return tangents;
 }
 
-Result<tinygltf::Model> buildModel(const Mesh& mesh, std::vector<uint8_t>& buffer_bytes) {
+} // namespace
+
+Result<int> addMeshToModel(tinygltf::Model& model, BufferBuilder& buffer, const Mesh& mesh, ModelDedupe* dedupe) {
     if (mesh.faceCount() == 0) return invalidInput("glTF export: the mesh has no triangles");
     for (size_t i = 0; i < mesh.positions.size(); ++i)
         if (!finite3(mesh.positions[i]))
@@ -150,11 +125,6 @@ Result<tinygltf::Model> buildModel(const Mesh& mesh, std::vector<uint8_t>& buffe
         for (size_t i = 0; i < set.size(); ++i)
             if (!std::isfinite(set[i].x) || !std::isfinite(set[i].y))
                 return invalidInput("glTF export: vertex " + std::to_string(i) + ": texture coordinate is not finite");
-
-    tinygltf::Model model;
-    model.asset.version = "2.0";
-    model.asset.generator = std::string("lodbake ") + kVersionString;
-    BufferBuilder buffer(model);
 
     tinygltf::Primitive base;
     base.mode = TINYGLTF_MODE_TRIANGLES;
@@ -198,6 +168,13 @@ Result<tinygltf::Model> buildModel(const Mesh& mesh, std::vector<uint8_t>& buffe
         const Texture& texture = mesh.textures[t];
         const std::string mime = sniffMime(texture.bytes);
         if (mime.empty()) continue;
+        if (dedupe) {
+            const auto found = dedupe->textures.find(texture.bytes);
+            if (found != dedupe->textures.end()) {
+                texture_map[t] = found->second;
+                continue;
+            }
+        }
         tinygltf::Image image;
         image.name = texture.name;
         image.mimeType = mime;
@@ -207,6 +184,7 @@ Result<tinygltf::Model> buildModel(const Mesh& mesh, std::vector<uint8_t>& buffe
         gtex.source = int(model.images.size() - 1);
         model.textures.push_back(std::move(gtex));
         texture_map[t] = int(model.textures.size() - 1);
+        if (dedupe) dedupe->textures.emplace(texture.bytes, texture_map[t]);
     }
     auto slot = [&](const TextureSlot& s, int& index, int& texcoord) {
         if (!s.isSet() || size_t(s.texture) >= texture_map.size() || texture_map[size_t(s.texture)] < 0) return;
@@ -214,6 +192,7 @@ Result<tinygltf::Model> buildModel(const Mesh& mesh, std::vector<uint8_t>& buffe
         index = texture_map[size_t(s.texture)];
         texcoord = int(s.texcoord);
     };
+    std::vector<int> material_map;
     for (const Material& in : mesh.materials) {
         tinygltf::Material out;
         out.name = in.name;
@@ -245,7 +224,15 @@ Result<tinygltf::Model> buildModel(const Mesh& mesh, std::vector<uint8_t>& buffe
             break;
         }
         out.doubleSided = in.is_double_sided;
-        model.materials.push_back(std::move(out));
+        int index = -1;
+        if (dedupe)
+            for (size_t m = dedupe->first_material; m < model.materials.size() && index < 0; ++m)
+                if (model.materials[m] == out) index = int(m);
+        if (index < 0) {
+            model.materials.push_back(std::move(out));
+            index = int(model.materials.size() - 1);
+        }
+        material_map.push_back(index);
     }
 
     tinygltf::Mesh gmesh;
@@ -267,12 +254,23 @@ Result<tinygltf::Model> buildModel(const Mesh& mesh, std::vector<uint8_t>& buffe
         model.accessors.push_back(std::move(accessor));
         tinygltf::Primitive primitive = base;
         primitive.indices = int(model.accessors.size() - 1);
-        if (sub.material.isValid() && sub.material.value < model.materials.size())
-            primitive.material = int(sub.material.value);
+        if (sub.material.isValid() && sub.material.value < material_map.size())
+            primitive.material = material_map[sub.material.value];
         gmesh.primitives.push_back(std::move(primitive));
     }
     if (gmesh.primitives.empty()) return invalidInput("glTF export: every sub-mesh is empty");
     model.meshes.push_back(std::move(gmesh));
+    return int(model.meshes.size() - 1);
+}
+
+namespace {
+
+Result<tinygltf::Model> buildModel(const Mesh& mesh, std::vector<uint8_t>& buffer_bytes) {
+    tinygltf::Model model;
+    model.asset.version = "2.0";
+    model.asset.generator = std::string("lodbake ") + kVersionString;
+    BufferBuilder buffer(model);
+    LODBAKE_RETURN_IF_ERROR(addMeshToModel(model, buffer, mesh, nullptr).status());
 
     tinygltf::Node node;
     node.mesh = 0;

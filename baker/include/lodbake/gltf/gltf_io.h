@@ -49,3 +49,17 @@ struct GltfFiles {
 Result<GltfFiles> writeGltfToMemory(const Mesh& mesh, const GltfWriteOptions& options);
 
 } // namespace lodbake
+
+namespace lodbake {
+
+struct PackDescription;
+
+/// Serialises a pack description (pack/pack.h) as one GLB: per asset, one glTF mesh per level, a
+/// LOD0 node in the scene with MSFT_lod (the other levels' nodes, highest detail first),
+/// extras.MSFT_screencoverage and the asset's node extensions; mesh and primitive extensions with
+/// their blobs stored as buffer views. Extensions are listed in extensionsUsed; stream extensions also
+/// in extensionsRequired when the description is compact. Deterministic bytes; passes the Khronos
+/// validator. Errors: a level without triangles or non-finite data, malformed extension JSON.
+Result<std::vector<uint8_t>> writePackGlb(const PackDescription& description);
+
+} // namespace lodbake

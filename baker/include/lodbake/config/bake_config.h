@@ -1,0 +1,54 @@
+#pragma once
+// Bake settings: the options struct with its defaults (the single source of truth, mirrored with
+// descriptions in schemas/config/bake_preset.schema.json), preset parsing and the resolved-settings
+// printout. JSON parsing (nlohmann-json) stays inside this module.
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "lodbake/core/status.h"
+
+namespace lodbake {
+
+/// Preset format version this baker reads.
+constexpr int kBakePresetVersion = 1;
+
+struct TextureLodSettings {
+    bool enabled = true;           // downscale each level's textures to its expected on-screen size
+    uint32_t max_size_px = 4096;   // no level texture is larger than this (the source size is also a cap)
+    uint32_t min_size_px = 16;     // no level texture is made smaller than this
+    double texels_per_pixel = 1.0; // texels per screen pixel of the object's projected size at the switch distance
+};
+
+struct BakeSettings {
+    int version = kBakePresetVersion;
+    std::vector<double> lod_ratios{0.5, 0.25, 0.1, 0.03,
+                                   0.01}; // levels after LOD0 (the repaired input), triangle fractions
+    double pixel_threshold = 1.0;         // largest tolerated screen-space error, pixels
+    double viewport_height_px = 1080.0;
+    double vertical_fov_deg = 60.0;
+    double hysteresis = 0.1;         // band around each switch distance, fraction of it: [d(1-h), d(1+h)]
+    bool repair = true;              // run the default repair pipeline before simplifying
+    uint32_t error_samples = 200000; // area-uniform samples per side when measuring each level's error
+    TextureLodSettings textures;
+    uint32_t threads = 0; // worker threads; 0: all cores (the output does not depend on it)
+    bool compact = false; // list our stream extensions in extensionsRequired
+};
+
+/// Applies the preset text `json_text` (from file `name`, used in messages) over `settings`. Keys are
+/// checked against the schema's: an unknown key, a wrong type, an out-of-range value or a missing or
+/// unsupported "version" is an error "<name>: <key path>: <what was expected>".
+Status applyPresetJson(const std::string& json_text, const std::string& name, BakeSettings& settings);
+
+/// Reads the file at `path` and applies it (applyPresetJson).
+Status applyPresetFile(const std::string& path, BakeSettings& settings);
+
+/// Checks cross-field rules the schema cannot state (min_size_px <= max_size_px); `name` prefixes messages.
+Status validateSettings(const BakeSettings& settings, const std::string& name);
+
+/// The resolved settings as a preset document with sorted keys (two-space indent, trailing newline).
+/// Feeding it back through applyPresetJson reproduces `settings`.
+std::string settingsToJson(const BakeSettings& settings);
+
+} // namespace lodbake

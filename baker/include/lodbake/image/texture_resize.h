@@ -1,0 +1,49 @@
+#pragma once
+// Texture levels: decode an encoded image (PNG or JPEG), filter it down in linear light and encode it
+// again in the same format. OpenImageIO stays inside this module (STYLE.md §2).
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "lodbake/core/status.h"
+
+namespace lodbake {
+
+struct ImageSize {
+    uint32_t width = 0;
+    uint32_t height = 0;
+};
+
+/// Reads the dimensions from the header of an encoded PNG or JPEG. `name` prefixes messages.
+Result<ImageSize> probeImageSize(const std::vector<uint8_t>& encoded, const std::string& name);
+
+/// The size of a level texture whose larger side should be about `target_px` texels: the target is
+/// rounded up to a power of two and clamped to [min_px, max_px]; both sides scale by the same
+/// power-of-two factor (so power-of-two sources stay power-of-two, aspect ratios are kept). Never
+/// larger than the source; each side at least 1.
+ImageSize levelTextureSize(ImageSize source, double target_px, uint32_t min_px, uint32_t max_px);
+
+struct TextureResizeOptions {
+    ImageSize size;                  // output size (use levelTextureSize)
+    bool is_srgb = true;             // colour data (base colour, emissive): filter in linear light, store sRGB again
+    int jpeg_quality = 92;           // JPEG output quality, 1..100
+    std::string filter = "lanczos3"; // OpenImageIO filter name
+};
+
+/// Several sizes of one image at once (texture levels): decodes and linearises once, then halves
+/// repeatedly (each step a 2:1 filter, like mipmap generation), taking every requested size from the
+/// nearest larger step. Returns one encoded image per entry of `sizes`, in order; options.size is
+/// ignored. Sizes larger than the source are an error.
+Result<std::vector<std::vector<uint8_t>>> resizeEncodedImageLevels(const std::vector<uint8_t>& encoded,
+                                                                   const std::string& name,
+                                                                   const std::vector<ImageSize>& sizes,
+                                                                   const TextureResizeOptions& options);
+
+/// Resizes `encoded` (PNG or JPEG, detected from the bytes) and encodes the result in the same
+/// format, channel count and bit depth. Deterministic (single-threaded filtering, no metadata copied).
+/// Errors: unknown or undecodable image, or a size of 0.
+Result<std::vector<uint8_t>> resizeEncodedImage(const std::vector<uint8_t>& encoded, const std::string& name,
+                                                const TextureResizeOptions& options);
+
+} // namespace lodbake

@@ -1,0 +1,98 @@
+#pragma once
+// The pack description: what goes into a baked glTF pack, independent of any glTF library. The gltf
+// module serialises it (writePackGlb in gltf/gltf_io.h).
+//
+// Layout: one LOD group per baked asset. The group's LOD0 node is in the scene and carries MSFT_lod
+// (ids of the lower-detail nodes, highest detail first), extras.MSFT_screencoverage and the
+// LODBAKE_lod_metrics extension. Every level is an ordinary glTF mesh, so viewers without our
+// extensions show LOD0.
+//
+// Extension hook: a compressed stream (LODBAKE_valence_compression on a primitive,
+// LODBAKE_progressive_fans on a mesh) is a PackExtension added to a PackLevel by a
+// PackStreamEncoder: its JSON object plus binary blobs that the writer stores as buffer views,
+// writing each view's index into the named member of the object.
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "lodbake/core/mesh.h"
+#include "lodbake/core/status.h"
+#include "lodbake/simplify/lod_chain.h"
+
+namespace lodbake {
+
+struct PackExtension {
+    std::string name;                           // e.g. "LODBAKE_lod_metrics"
+    std::string json;                           // the extension object as JSON text
+    std::vector<std::vector<uint8_t>> blobs;    // payloads, each stored in its own buffer view
+    std::vector<std::string> blob_view_members; // blob i's buffer-view index goes into this member
+    bool is_stream = false;                     // a compressed stream: listed in extensionsRequired when compact
+};
+
+struct PackLevel {
+    Mesh mesh;
+    std::vector<PackExtension> mesh_extensions;
+    std::vector<std::vector<PackExtension>> primitive_extensions; // per non-empty sub-mesh (glTF primitive), or empty
+};
+
+struct PackAsset {
+    std::string name;
+    std::vector<PackLevel> levels;              // highest detail first
+    std::vector<double> screen_coverage;        // MSFT_screencoverage, one per level
+    std::vector<PackExtension> node_extensions; // on the LOD0 node
+};
+
+struct PackDescription {
+    std::vector<PackAsset> assets;
+    bool compact = false; // stream extensions go into extensionsRequired
+};
+
+/// Per-level metrics in the form LODBAKE_lod_metrics stores (schemas/LODBAKE_lod_metrics).
+struct LodMetricsLevel {
+    uint64_t triangles = 0;
+    uint64_t vertices = 0;
+    double hausdorff_error = 0;     // object units
+    double mean_error = 0;          // object units
+    double hausdorff_error_rel = 0; // fraction of the bounding-box diagonal
+    double mean_error_rel = 0;
+    double switch_distance = 0; // object units, from here on the level is acceptable
+    double screen_coverage = 0; // projected bounding-sphere diameter / viewport height at the switch distance
+    double hysteresis_near = 0; // switch back to the finer level below this distance
+    double hysteresis_far = 0;  // switch to this level beyond this distance
+};
+
+struct LodMetrics {
+    double bounding_radius = 0;
+    double pixel_threshold = 1;
+    double viewport_height_px = 1080;
+    double vertical_fov_rad = 0;
+    std::vector<LodMetricsLevel> levels;
+};
+
+/// Metrics of `chain` with LOD0 = `full` (error 0, switch distance 0) prepended. `hysteresis` is the
+/// band half-width as a fraction of each switch distance.
+LodMetrics lodMetrics(const Mesh& full, const LodChain& chain, const ScreenParams& screen, double hysteresis);
+
+/// The LODBAKE_lod_metrics extension object (sorted keys, shortest round-trip numbers).
+PackExtension lodMetricsExtension(const LodMetrics& metrics);
+
+/// MSFT_screencoverage values: level i is shown while the coverage is at least value i, i.e. until
+/// level i+1's switch distance; the last level's value is 0 (never culled). Non-increasing.
+std::vector<double> msftScreenCoverage(const LodMetrics& metrics);
+
+/// A compressed-stream encoder: adds its extension to level `level_index` of an asset.
+struct PackStreamEncoder {
+    std::string extension_name;
+    std::function<Status(const LodChain& chain, size_t level_index, PackLevel& level)> encode;
+};
+
+/// The stream encoders built into this baker (none until the codec and pfrep modules land).
+std::vector<PackStreamEncoder> builtinStreamEncoders();
+
+/// Compact packs need compressed streams: fails (Unsupported) naming the stream extensions that are
+/// missing when `description.compact` is set and no stream extension is present.
+Status checkCompact(const PackDescription& description);
+
+} // namespace lodbake

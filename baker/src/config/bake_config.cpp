@@ -1,0 +1,181 @@
+// Bake presets: JSON (nlohmann-json, its exceptions caught here) applied over BakeSettings. Every
+// key is known; anything else is an error naming the key and the file, so a typo never bakes with
+// defaults silently.
+#include "lodbake/config/bake_config.h"
+
+#include <cmath>
+#include <exception>
+#include <functional>
+#include <map>
+
+#include <nlohmann/json.hpp>
+
+#include "lodbake/core/file_io.h"
+#include "lodbake/core/json_writer.h"
+
+namespace lodbake {
+
+namespace {
+
+using Json = nlohmann::json;
+
+std::string typeName(const Json& v) {
+    return v.is_number()    ? "a number"
+           : v.is_boolean() ? "a boolean"
+           : v.is_string()  ? "a string"
+           : v.is_array()   ? "an array"
+           : v.is_object()  ? "an object"
+                            : "null";
+}
+
+Status expected(const std::string& where, const std::string& what, const Json& got) {
+    return invalidInput(where + ": expected " + what + ", got " + typeName(got) + " " + got.dump());
+}
+
+Status readNumber(const Json& v, const std::string& where, double lo, double hi, bool lo_exclusive, double& out) {
+    if (!v.is_number()) return expected(where, "a number", v);
+    const double d = v.get<double>();
+    if (!std::isfinite(d) || (lo_exclusive ? !(d > lo) : !(d >= lo)) || !(d <= hi))
+        return invalidInput(where + ": expected a number in " + (lo_exclusive ? "(" : "[") +
+                            JsonWriter::formatNumber(lo) + ", " + JsonWriter::formatNumber(hi) + "], got " + v.dump());
+    out = d;
+    return Status::okStatus();
+}
+
+Status readUint(const Json& v, const std::string& where, uint32_t lo, uint32_t hi, uint32_t& out) {
+    if (!v.is_number_integer() && !(v.is_number_float() && std::floor(v.get<double>()) == v.get<double>()))
+        return expected(where, "an integer", v);
+    const double d = v.get<double>();
+    if (!(d >= lo && d <= hi))
+        return invalidInput(where + ": expected an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) +
+                            "], got " + v.dump());
+    out = uint32_t(d);
+    return Status::okStatus();
+}
+
+Status readBool(const Json& v, const std::string& where, bool& out) {
+    if (!v.is_boolean()) return expected(where, "true or false", v);
+    out = v.get<bool>();
+    return Status::okStatus();
+}
+
+// A member handler gets the value and its location "<file>: <JSON pointer>" for messages.
+using Handler = std::function<Status(const Json&, const std::string&)>;
+
+// Applies the members of `object` (at `file`: `pointer`) through `handlers`; unknown keys are errors.
+Status applyObject(const Json& object, const std::string& file, const std::string& pointer,
+                   const std::map<std::string, Handler>& handlers) {
+    if (!object.is_object()) return expected(file + ": " + (pointer.empty() ? "/" : pointer), "an object", object);
+    for (auto it = object.begin(); it != object.end(); ++it) {
+        const std::string member = pointer + "/" + it.key();
+        const auto h = handlers.find(it.key());
+        if (h == handlers.end()) {
+            std::string known;
+            for (const auto& k : handlers) known += (known.empty() ? "" : ", ") + k.first;
+            return invalidInput(file + ": " + member + ": unknown key (known keys: " + known + ")");
+        }
+        LODBAKE_RETURN_IF_ERROR(h->second(it.value(), file + ": " + member));
+    }
+    return Status::okStatus();
+}
+
+Status applyImpl(const Json& root, const std::string& name, BakeSettings& s) {
+    if (!root.is_object()) return expected(name, "a JSON object", root);
+    if (!root.contains("version")) return invalidInput(name + ": /version: required key missing");
+    const Json& version = root["version"];
+    if (!version.is_number_integer() || version.get<int64_t>() != kBakePresetVersion)
+        return invalidInput(name + ": /version: expected " + std::to_string(kBakePresetVersion) + ", got " +
+                            version.dump());
+    TextureLodSettings& t = s.textures;
+    const std::map<std::string, Handler> texture_handlers{
+        {"enabled", [&](const Json& v, const std::string& w) { return readBool(v, w, t.enabled); }},
+        {"max_size_px", [&](const Json& v, const std::string& w) { return readUint(v, w, 1, 65536, t.max_size_px); }},
+        {"min_size_px", [&](const Json& v, const std::string& w) { return readUint(v, w, 1, 65536, t.min_size_px); }},
+        {"texels_per_pixel",
+         [&](const Json& v, const std::string& w) { return readNumber(v, w, 0.0, 64.0, true, t.texels_per_pixel); }},
+    };
+    const std::map<std::string, Handler> handlers{
+        {"version", [&](const Json&, const std::string&) { return Status::okStatus(); }},
+        {"lod_ratios",
+         [&](const Json& v, const std::string& w) -> Status {
+             if (!v.is_array() || v.empty() || v.size() > 16)
+                 return expected(w, "an array of 1 to 16 numbers in (0, 1]", v);
+             std::vector<double> ratios(v.size());
+             for (size_t i = 0; i < v.size(); ++i)
+                 LODBAKE_RETURN_IF_ERROR(readNumber(v[i], w + "/" + std::to_string(i), 0.0, 1.0, true, ratios[i]));
+             s.lod_ratios = ratios;
+             return Status::okStatus();
+         }},
+        {"pixel_threshold",
+         [&](const Json& v, const std::string& w) { return readNumber(v, w, 0.0, 1e4, true, s.pixel_threshold); }},
+        {"viewport_height_px",
+         [&](const Json& v, const std::string& w) { return readNumber(v, w, 1.0, 1e5, false, s.viewport_height_px); }},
+        {"vertical_fov_deg",
+         [&](const Json& v, const std::string& w) { return readNumber(v, w, 1.0, 179.0, false, s.vertical_fov_deg); }},
+        {"hysteresis",
+         [&](const Json& v, const std::string& w) { return readNumber(v, w, 0.0, 0.9, false, s.hysteresis); }},
+        {"repair", [&](const Json& v, const std::string& w) { return readBool(v, w, s.repair); }},
+        {"error_samples",
+         [&](const Json& v, const std::string& w) { return readUint(v, w, 1000, 100000000, s.error_samples); }},
+        {"textures",
+         [&](const Json& v, const std::string&) { return applyObject(v, name, "/textures", texture_handlers); }},
+        {"threads", [&](const Json& v, const std::string& w) { return readUint(v, w, 0, 1024, s.threads); }},
+        {"compact", [&](const Json& v, const std::string& w) { return readBool(v, w, s.compact); }},
+    };
+    return applyObject(root, name, "", handlers);
+}
+
+} // namespace
+
+Status applyPresetJson(const std::string& json_text, const std::string& name, BakeSettings& settings) {
+    BakeSettings updated = settings; // all or nothing
+    try {
+        const Json root = Json::parse(json_text);
+        LODBAKE_RETURN_IF_ERROR(applyImpl(root, name, updated));
+    } catch (const Json::parse_error& e) {
+        return invalidInput(name + ": not valid JSON at byte " + std::to_string(e.byte) + ": " + e.what());
+    } catch (const std::exception& e) {
+        return invalidInput(name + ": " + e.what());
+    }
+    LODBAKE_RETURN_IF_ERROR(validateSettings(updated, name));
+    settings = updated;
+    return Status::okStatus();
+}
+
+Status applyPresetFile(const std::string& path, BakeSettings& settings) {
+    LODBAKE_ASSIGN_OR_RETURN(std::vector<uint8_t> bytes, readFileBytes(path, uint64_t(1) << 20));
+    return applyPresetJson(std::string(bytes.begin(), bytes.end()), path, settings);
+}
+
+Status validateSettings(const BakeSettings& settings, const std::string& name) {
+    if (settings.textures.min_size_px > settings.textures.max_size_px)
+        return invalidInput(name + ": /textures: min_size_px " + std::to_string(settings.textures.min_size_px) +
+                            " must not exceed max_size_px " + std::to_string(settings.textures.max_size_px));
+    return Status::okStatus();
+}
+
+std::string settingsToJson(const BakeSettings& s) {
+    try {
+        // nlohmann::json objects are std::map based: keys come out sorted.
+        Json j;
+        j["version"] = s.version;
+        j["lod_ratios"] = s.lod_ratios;
+        j["pixel_threshold"] = s.pixel_threshold;
+        j["viewport_height_px"] = s.viewport_height_px;
+        j["vertical_fov_deg"] = s.vertical_fov_deg;
+        j["hysteresis"] = s.hysteresis;
+        j["repair"] = s.repair;
+        j["error_samples"] = s.error_samples;
+        j["textures"] = {{"enabled", s.textures.enabled},
+                         {"max_size_px", s.textures.max_size_px},
+                         {"min_size_px", s.textures.min_size_px},
+                         {"texels_per_pixel", s.textures.texels_per_pixel}};
+        j["threads"] = s.threads;
+        j["compact"] = s.compact;
+        return j.dump(2) + "\n";
+    } catch (const std::exception&) {
+        return "{}\n"; // dump only throws on invalid UTF-8, which these keys cannot contain
+    }
+}
+
+} // namespace lodbake

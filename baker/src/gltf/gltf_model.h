@@ -1,0 +1,55 @@
+#pragma once
+// Internal to the gltf module: building a tinygltf::Model from meshes, shared by the single-mesh
+// export (gltf_export.cpp) and the pack writer (gltf_pack_export.cpp).
+
+#include <cstdint>
+#include <map>
+#include <vector>
+
+#include <tiny_gltf.h>
+
+#include "lodbake/core/mesh.h"
+#include "lodbake/core/status.h"
+
+namespace lodbake {
+
+class BufferBuilder {
+public:
+    explicit BufferBuilder(tinygltf::Model& model) : model_(model) {}
+
+    // Appends bytes as a new buffer view (4-byte aligned); returns its index.
+    int addView(const void* data, size_t size, int target) {
+        while (bytes_.size() % 4 != 0) bytes_.push_back(0);
+        tinygltf::BufferView view;
+        view.buffer = 0;
+        view.byteOffset = bytes_.size();
+        view.byteLength = size;
+        view.target = target;
+        const auto* p = static_cast<const uint8_t*>(data);
+        bytes_.insert(bytes_.end(), p, p + size);
+        model_.bufferViews.push_back(std::move(view));
+        return int(model_.bufferViews.size() - 1);
+    }
+
+    std::vector<uint8_t> finish() {
+        while (bytes_.size() % 4 != 0) bytes_.push_back(0);
+        return std::move(bytes_);
+    }
+
+private:
+    tinygltf::Model& model_;
+    std::vector<uint8_t> bytes_;
+};
+
+/// Sharing across the meshes of one model: identical encoded images become one glTF texture, and
+/// identical materials one material.
+struct ModelDedupe {
+    std::map<std::vector<uint8_t>, int> textures; // encoded bytes -> texture index
+    size_t first_material = 0;                    // materials before this index are never shared
+};
+
+/// Appends `mesh` (attribute streams, indices, its images, materials, one primitive per non-empty
+/// sub-mesh) to `model`; returns the new mesh's index. `dedupe` may be null (no sharing).
+Result<int> addMeshToModel(tinygltf::Model& model, BufferBuilder& buffer, const Mesh& mesh, ModelDedupe* dedupe);
+
+} // namespace lodbake

@@ -1,0 +1,227 @@
+// `lodbake bake` end to end: the bundled sample and shared scans baked into packs that pass the
+// Khronos validator, whose LODBAKE_lod_metrics objects match their schema, that loddump reads
+// without failed checks, and whose bytes do not depend on the thread count.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "../gltf/gltf_test_util.h"
+#include "lodbake/core/file_io.h"
+#include "test_paths.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using lodbake_test::CommandResult;
+using lodbake_test::runCommand;
+using lodbake_test::shellQuote;
+
+std::string outDir() {
+    const std::string dir = lodbake_test::scratchDir() + "/bake_cli";
+    fs::create_directories(dir);
+    return dir;
+}
+
+std::string src(const std::string& relative) {
+    return lodbake_test::sourceDir() + "/" + relative;
+}
+
+CommandResult bake(const std::string& args) {
+    return runCommand(shellQuote(lodbake_test::lodbakeCli()) + " bake " + args);
+}
+
+CommandResult loddump(const std::string& args) {
+    return runCommand(shellQuote(LODBAKE_TEST_LODDUMP) + " " + args);
+}
+
+CommandResult validateGltf(const std::vector<std::string>& files) {
+    std::string command = shellQuote(LODBAKE_TEST_NODE) + " " + shellQuote(src("scripts/node/validate-gltf.js"));
+    for (const std::string& f : files) command += " " + shellQuote(f);
+    return runCommand(command);
+}
+
+CommandResult validateMetrics(const std::vector<std::string>& files) {
+    std::string command = "python3 " + shellQuote(src("tests/support/validate_schema.py")) + " " +
+                          shellQuote(src("schemas/LODBAKE_lod_metrics/schema/node.LODBAKE_lod_metrics.schema.json")) +
+                          " --node-extension LODBAKE_lod_metrics";
+    for (const std::string& f : files) command += " " + shellQuote(f);
+    return runCommand(command);
+}
+
+std::vector<uint8_t> bytesOf(const std::string& path) {
+    auto r = lodbake::readFileBytes(path);
+    return r.ok() ? *r : std::vector<uint8_t>();
+}
+
+// One test so the sample is baked once per process (ctest runs every test in its own process).
+TEST(BakeCliTest, RockSampleBakesIntoAValidDeterministicPackThatLoddumpReads) {
+    const std::string rock1 = outDir() + "/rock_t1.glb";
+    const std::string rock2 = outDir() + "/rock_t2.glb";
+    const std::string report_path = outDir() + "/rock_report.json";
+    const std::string in = shellQuote(src("assets/samples/rock_scan/rock.conf"));
+    const std::string preset = " --preset " + shellQuote(src("configs/desktop.json"));
+    const CommandResult run1 =
+        bake(in + preset + " --threads 1 -o " + shellQuote(rock1) + " --report " + shellQuote(report_path));
+    const CommandResult run2 = bake(in + preset + " --threads 2 -o " + shellQuote(rock2));
+    ASSERT_EQ(run1.exit_code, 0) << run1.output;
+    {
+        SCOPED_TRACE("RockSampleBakesIntoAValidPack");
+        EXPECT_NE(run1.output.find("6 levels"), std::string::npos) << run1.output;
+        const CommandResult v = validateGltf({rock1});
+        EXPECT_EQ(v.exit_code, 0) << v.output;
+        EXPECT_NE(v.output.find("errors 0 warnings 0"), std::string::npos) << v.output;
+        const CommandResult m = validateMetrics({rock1});
+        EXPECT_EQ(m.exit_code, 0) << m.output;
+    }
+    {
+        SCOPED_TRACE("SameBytesForOneAndTwoThreads");
+        ASSERT_EQ(run2.exit_code, 0) << run2.output;
+        const std::vector<uint8_t> a = bytesOf(rock1), b = bytesOf(rock2);
+        ASSERT_FALSE(a.empty());
+        EXPECT_TRUE(a == b) << "thread count changed the pack";
+    }
+    {
+        SCOPED_TRACE("PackHasMsftLodChainAndMonotoneMetrics");
+        const std::vector<uint8_t> glb = bytesOf(rock1);
+        const nlohmann::json doc = lodbake_test::glbJson(glb);
+        ASSERT_EQ(doc["scenes"][0]["nodes"].size(), 1u);
+        const nlohmann::json& root = doc["nodes"][doc["scenes"][0]["nodes"][0].get<int>()];
+        const nlohmann::json& ids = root["extensions"]["MSFT_lod"]["ids"];
+        ASSERT_EQ(ids.size(), 5u);
+        const nlohmann::json& coverage = root["extras"]["MSFT_screencoverage"];
+        ASSERT_EQ(coverage.size(), 6u);
+        const nlohmann::json& levels = root["extensions"]["LODBAKE_lod_metrics"]["levels"];
+        ASSERT_EQ(levels.size(), 6u);
+        for (size_t l = 1; l < 6; ++l) {
+            EXPECT_LE(coverage[l].get<double>(), coverage[l - 1].get<double>());
+            EXPECT_GE(levels[l]["hausdorffError"].get<double>(), levels[l - 1]["hausdorffError"].get<double>());
+            EXPECT_LT(levels[l]["triangles"].get<double>(), levels[l - 1]["triangles"].get<double>());
+            EXPECT_GT(levels[l]["switchDistance"].get<double>(), 0.0);
+            // Each level is a plain mesh with the level's triangle count.
+            const nlohmann::json& node = doc["nodes"][ids[l - 1].get<int>()];
+            EXPECT_TRUE(node.contains("mesh"));
+        }
+        EXPECT_EQ(coverage[5].get<double>(), 0.0);
+        EXPECT_EQ(doc.value("extensionsRequired", nlohmann::json::array()).size(), 0u);
+    }
+    {
+        SCOPED_TRACE("LoddumpShowsTheLodTableWithoutProblems");
+        const CommandResult d = loddump(shellQuote(rock1));
+        EXPECT_EQ(d.exit_code, 0) << d.output;
+        EXPECT_NE(d.output.find("lod group \"rock\" (node 0): 6 levels"), std::string::npos) << d.output;
+        EXPECT_NE(d.output.find("problems: none"), std::string::npos) << d.output;
+        const CommandResult one = loddump("--level 2 " + shellQuote(rock1));
+        EXPECT_EQ(one.exit_code, 0) << one.output;
+        EXPECT_NE(one.output.find("\n  2 "), std::string::npos) << one.output;
+        EXPECT_EQ(one.output.find("\n  3 "), std::string::npos) << one.output;
+        EXPECT_NE(one.output.find("\"rock_lod2\""), std::string::npos) << one.output;
+        EXPECT_EQ(one.output.find("\"rock_lod1\""), std::string::npos) << one.output;
+    }
+    {
+        SCOPED_TRACE("ReportListsEveryLevel");
+        std::ifstream report_stream(report_path);
+        const nlohmann::json report = nlohmann::json::parse(report_stream);
+        ASSERT_EQ(report["assets"].size(), 1u);
+        EXPECT_EQ(report["assets"][0]["levels"].size(), 6u);
+        EXPECT_EQ(report["packBytes"].get<size_t>(), bytesOf(rock1).size());
+    }
+}
+
+TEST(LoddumpLodCheckTest, FlagsCyclesRisingCoverageAndFallingErrors) {
+    std::ifstream in(src("schemas/LODBAKE_lod_metrics/examples/minimal.gltf"));
+    const nlohmann::json example = nlohmann::json::parse(in);
+    const CommandResult good = loddump(shellQuote(src("schemas/LODBAKE_lod_metrics/examples/minimal.gltf")));
+    EXPECT_EQ(good.exit_code, 0) << good.output;
+    EXPECT_EQ(good.output.find("  error "), std::string::npos) << good.output;
+    struct Case {
+        const char* name;
+        void (*edit)(nlohmann::json&);
+        const char* expected;
+    };
+    const Case cases[] = {
+        {"self", [](nlohmann::json& d) { d["nodes"][0]["extensions"]["MSFT_lod"]["ids"][0] = 0; }, "MSFT_lod cycle"},
+        {"back", [](nlohmann::json& d) { d["nodes"][1]["extensions"]["MSFT_lod"]["ids"] = {0}; }, "MSFT_lod cycle"},
+        {"range", [](nlohmann::json& d) { d["nodes"][0]["extensions"]["MSFT_lod"]["ids"][0] = 7; },
+         "/nodes/0/extensions/MSFT_lod/ids/0: expected a node index below 2"},
+        {"coverage",
+         [](nlohmann::json& d) {
+             d["nodes"][0]["extras"]["MSFT_screencoverage"] = {0.2, 0.5};
+         },
+         "level 1: screen coverage increases"},
+        {"error",
+         [](nlohmann::json& d) {
+             d["nodes"][0]["extensions"]["LODBAKE_lod_metrics"]["levels"][0]["hausdorffError"] = 1.0;
+         },
+         "level 1: error decreases"},
+    };
+    for (const Case& c : cases) {
+        nlohmann::json doc = example;
+        c.edit(doc);
+        const std::string path = outDir() + "/lod_check_" + c.name + ".gltf";
+        std::ofstream(path) << doc.dump();
+        const CommandResult d = loddump(shellQuote(path));
+        EXPECT_EQ(d.exit_code, 1) << c.name << ": " << d.output;
+        EXPECT_NE(d.output.find(c.expected), std::string::npos) << c.name << ": " << d.output;
+    }
+}
+
+TEST(BakeCliUsageTest, CompactFailsNamingTheMissingExtensions) {
+    const std::string out = outDir() + "/compact.glb";
+    const CommandResult r =
+        bake(shellQuote(src("assets/samples/rock_scan/rock_000.ply")) + " --compact -o " + shellQuote(out));
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_NE(r.output.find("LODBAKE_valence_compression"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("LODBAKE_progressive_fans"), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(out));
+}
+
+TEST(BakeCliUsageTest, PresetErrorsAndOverrides) {
+    const std::string bad = outDir() + "/bad_preset.json";
+    std::ofstream(bad) << R"({"version": 1, "lod_ratio": [0.5]})";
+    CommandResult r = bake("--print-config --preset " + shellQuote(bad));
+    EXPECT_EQ(r.exit_code, 1);
+    EXPECT_NE(r.output.find("error: " + bad + ": /lod_ratio: unknown key"), std::string::npos) << r.output;
+    r = bake("--print-config --preset " + shellQuote(src("configs/mobile.json")) + " --pixels 3 --threads 2");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    const nlohmann::json printed = nlohmann::json::parse(r.output);
+    EXPECT_EQ(printed["pixel_threshold"].get<double>(), 3.0);
+    EXPECT_EQ(printed["threads"].get<int>(), 2);
+    EXPECT_EQ(printed["viewport_height_px"].get<double>(), 720.0); // from the preset
+    EXPECT_EQ(bake("x.ply -o out.gltf").exit_code, 2);
+    EXPECT_EQ(bake("-o out.glb").exit_code, 2);
+}
+
+// The shared scans through the mobile preset: each pack passes the validator and the metrics schema.
+TEST(BakeSharedMeshesTest, ScansBakeIntoValidPacks) {
+    LODBAKE_REQUIRE_SHARED_MESHES();
+    std::vector<std::string> packs;
+    for (const char* name :
+         {"bunny_zipper.ply", "lee_perry_smith/LeePerrySmith.glb", "nefertiti_fraunhofer_textured.glb"}) {
+        const std::string stem = fs::path(name).stem().string();
+        const std::string out = outDir() + "/" + stem + ".glb";
+        const CommandResult r = bake(shellQuote(lodbake_test::sharedMesh(name)) + " --preset " +
+                                     shellQuote(src("configs/mobile.json")) + " -o " + shellQuote(out));
+        ASSERT_EQ(r.exit_code, 0) << name << ": " << r.output;
+        packs.push_back(out);
+        const CommandResult d = loddump(shellQuote(out));
+        EXPECT_EQ(d.exit_code, 0) << d.output;
+    }
+    const CommandResult v = validateGltf(packs);
+    EXPECT_EQ(v.exit_code, 0) << v.output;
+    const CommandResult m = validateMetrics(packs);
+    EXPECT_EQ(m.exit_code, 0) << m.output;
+    // Nefertiti's textures shrink level by level (its base colour is 2048 or larger).
+    const nlohmann::json doc = lodbake_test::glbJson(bytesOf(packs[2]));
+    EXPECT_GT(doc["images"].size(), 2u);
+}
+
+TEST(LodMetricsSchemaTest, ExampleMatchesTheSchemaAndPassesTheValidator) {
+    const std::string example = src("schemas/LODBAKE_lod_metrics/examples/minimal.gltf");
+    const CommandResult m = validateMetrics({example});
+    EXPECT_EQ(m.exit_code, 0) << m.output;
+    const CommandResult v = validateGltf({example});
+    EXPECT_EQ(v.exit_code, 0) << v.output;
+}
+
+} // namespace

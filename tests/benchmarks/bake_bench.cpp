@@ -1,0 +1,142 @@
+// Bake benchmark: `lodbake bake MESH --preset configs/desktop.json --threads 2` (the whole CLI run:
+// read, repair, 5-level chain with measured errors, texture levels, pack writing) against native
+// meshopt_simplify (Debian libmeshoptimizer, options 0, no error limit) building the same 5 levels
+// from the original on 2 threads, in the same run. Prints both times and the ratio; the bar is ≤ 3.
+//
+// usage: bake_bench [--runs N] [MESH]   (default dragon_poisson.ply from ../shared/meshes)
+// Not a ctest: these machines are noisy, so the best of N runs of each side is compared.
+
+#include <algorithm>
+#include <cfloat>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <meshoptimizer.h>
+
+#include "core/parallel.h"
+#include "lodbake/bake/bake.h"
+#include "lodbake/cleanup/repair.h"
+#include "lodbake/config/bake_config.h"
+#include "lodbake/simplify/lod_chain.h"
+#include "lodbake/core/diagnostics.h"
+#include "lodbake/io/mesh_io.h"
+
+namespace {
+
+double now() {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+std::string shellQuote(const std::string& s) {
+    std::string out = "'";
+    for (char c : s) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    return out + "'";
+}
+
+// The preset's levels with meshopt_simplify, each from the original, levels spread over 2 threads.
+double nativeSeconds(const lodbake::Mesh& mesh, const std::vector<double>& ratios, std::vector<size_t>& triangles) {
+    triangles.assign(ratios.size(), 0);
+    const double start = now();
+    auto work = [&](size_t first) {
+        std::vector<unsigned int> destination(mesh.indices.size());
+        for (size_t i = first; i < ratios.size(); i += 2) {
+            const size_t target = size_t(double(mesh.faceCount()) * ratios[i]) * 3;
+            triangles[i] =
+                meshopt_simplify(destination.data(), mesh.indices.data(), mesh.indices.size(), &mesh.positions[0].x,
+                                 mesh.positions.size(), sizeof(lodbake::Vec3f), target, FLT_MAX, 0, nullptr) /
+                3;
+        }
+    };
+    std::thread other(work, 1);
+    work(0);
+    other.join();
+    return now() - start;
+}
+
+} // namespace
+
+int main(int argc, char** argv) {
+    std::string mesh_path = std::string(LODBAKE_BENCH_MESHES_DIR) + "/dragon_poisson.ply";
+    int runs = 3;
+    for (int i = 1; i < argc; ++i) {
+        const std::string a = argv[i];
+        if (a == "--runs" && i + 1 < argc) {
+            runs = std::max(1, std::atoi(argv[++i]));
+        } else if (!a.empty() && a[0] != '-') {
+            mesh_path = a;
+        } else {
+            std::fprintf(stderr, "usage: bake_bench [--runs N] [MESH]\n");
+            return 2;
+        }
+    }
+    const std::string preset = std::string(LODBAKE_BENCH_SOURCE_DIR) + "/configs/desktop.json";
+    lodbake::BakeSettings settings;
+    const lodbake::Status preset_status = lodbake::applyPresetFile(preset, settings);
+    if (!preset_status.ok()) {
+        std::fprintf(stderr, "error: %s\n", preset_status.message().c_str());
+        return 1;
+    }
+    lodbake::Diagnostics diagnostics;
+    auto loaded = lodbake::readMesh(mesh_path, lodbake::ReadOptions{}, diagnostics);
+    if (!loaded.ok()) {
+        std::fprintf(stderr, "error: %s\n", loaded.status().message().c_str());
+        return 1;
+    }
+    const lodbake::Mesh& mesh = loaded->mesh;
+    std::printf("mesh %s: %zu triangles; levels", mesh_path.c_str(), mesh.faceCount());
+    for (double r : settings.lod_ratios) std::printf(" %g", r);
+    std::printf("\n");
+
+    const std::string out = std::string(LODBAKE_BENCH_OUT_DIR) + "/bake_bench.glb";
+    const std::string command = shellQuote(LODBAKE_BENCH_CLI) + " bake " + shellQuote(mesh_path) + " --preset " +
+                                shellQuote(preset) + " --threads 2 -o " + shellQuote(out) + " > /dev/null 2>&1";
+    double ours = 1e30, native = 1e30;
+    std::vector<size_t> triangles;
+    for (int r = 0; r < runs; ++r) {
+        const double start = now();
+        if (std::system(command.c_str()) != 0) {
+            std::fprintf(stderr, "error: '%s' failed\n", command.c_str());
+            return 1;
+        }
+        ours = std::min(ours, now() - start);
+        native = std::min(native, nativeSeconds(mesh, settings.lod_ratios, triangles));
+    }
+    // Where the time goes, in process (2 threads): repair, then the chain with and without measuring.
+    {
+        lodbake::ScopedThreadLimit limit(2);
+        lodbake::Mesh repaired = mesh;
+        lodbake::Diagnostics d;
+        double t0 = now();
+        (void)lodbake::repairMesh(repaired, lodbake::RepairOptions{}, "bench", d);
+        const double repair_s = now() - t0;
+        lodbake::LodChainOptions chain_options;
+        chain_options.ratios = settings.lod_ratios;
+        chain_options.record_collapses = false;
+        chain_options.measure_error = false;
+        t0 = now();
+        (void)lodbake::buildLodChain(repaired, chain_options, d);
+        const double chain_s = now() - t0;
+        chain_options.measure_error = true;
+        chain_options.distance.sample_count = settings.error_samples;
+        t0 = now();
+        (void)lodbake::buildLodChain(repaired, chain_options, d);
+        const double measured_s = now() - t0;
+        std::vector<lodbake::BakeInput> inputs{{"bench", mesh}};
+        t0 = now();
+        auto baked = lodbake::bake(std::move(inputs), settings, d);
+        const double bake_s = now() - t0;
+        std::printf("stages (in process, 2 threads): repair %.3f s; chain %.3f s; chain + error measurement %.3f s; "
+                    "bake() total %.3f s (pack %zu bytes)\n",
+                    repair_s, chain_s, measured_s, bake_s, baked.ok() ? baked->glb.size() : size_t(0));
+    }
+    std::printf("native meshopt_simplify levels (triangles):");
+    for (size_t t : triangles) std::printf(" %zu", t);
+    std::printf("\nlodbake bake (desktop preset, 2 threads, whole CLI run) %.3f s; native meshopt_simplify "
+                "(2 threads) %.3f s; ratio %.2f (bar: <= 3); best of %d\n",
+                ours, native, ours / native, runs);
+    return 0;
+}
