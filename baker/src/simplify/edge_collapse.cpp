@@ -26,9 +26,12 @@
 //           w1                       w1
 #include "simplify/edge_collapse.h"
 
+#include "lodbake/core/bvh.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <string>
 
 namespace lodbake::detail {
@@ -39,6 +42,8 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr double kTwoSqrt3 = 3.4641016151377544;
 // Below this quality (4√3·area / Σ edge²) a face's normal is too unstable to bound its rotation.
 constexpr double kReliableQuality = 0.05;
+// A popped collapse whose point distances add more than this many times its key is re-queued.
+constexpr double kRecheckFactor = 4.0;
 
 uint32_t floatBits(float f) {
     uint32_t b;
@@ -405,6 +410,31 @@ void EdgeCollapser::collapse(const Candidate& c, const WedgePair* pairs, int pai
     if (w1 != kNone && kind_[w1] != old_w1) updateEdgesAround(w1);
 }
 
+double EdgeCollapser::endpointDistance2(const Candidate& c) const {
+    // fan_u_ / fan_v_ hold the fans gathered by isValid.
+    const uint32_t f0 = c.edge / 3;
+    const uint32_t t = twin_[c.edge];
+    const uint32_t f1 = t == kNone ? kNone : t / 3;
+    const Vec3d pu = toD(position_[c.removed]), pv = toD(position_[c.kept]);
+    double du = std::numeric_limits<double>::infinity(), dv = du, dp = du;
+    for (const std::vector<uint32_t>* fan : {&fan_u_, &fan_v_}) {
+        for (uint32_t h : *fan) {
+            const uint32_t f = h / 3;
+            const Vec3d o = toD(position_[corner_point_[h]]);
+            const Vec3d ox = toD(position_[corner_point_[nextHe(h)]]);
+            const Vec3d oy = toD(position_[corner_point_[prevHe(h)]]);
+            dp = std::min(dp, length2(closestPointOnTriangle(c.position, o, ox, oy) - c.position));
+            if (f == f0 || f == f1) continue;
+            du = std::min(du, length2(closestPointOnTriangle(pu, c.position, ox, oy) - pu));
+            dv = std::min(dv, length2(closestPointOnTriangle(pv, c.position, ox, oy) - pv));
+        }
+    }
+    if (!std::isfinite(du)) du = 0;
+    if (!std::isfinite(dv)) dv = 0;
+    if (!std::isfinite(dp)) dp = 0;
+    return std::max(std::max(du, dv), dp);
+}
+
 void EdgeCollapser::updateEdgesAround(uint32_t point) {
     gatherFan(point, fan_tmp_);
     updateEdgesInFan();
@@ -414,6 +444,7 @@ void EdgeCollapser::updateEdgesInFan() {
     Candidate c;
     auto update = [&](uint32_t he) {
         const uint32_t e = canonical(he);
+        if (!rechecked_.empty()) rechecked_[e] = 0;
         if (evaluate(e, c))
             queue_.set(e, float(c.cost));
         else
@@ -463,6 +494,23 @@ bool EdgeCollapser::run(size_t target_faces, double max_error, CollapseSequence*
             queue_.remove(e);
             continue;
         }
+        if (!rechecked_.empty() && !rechecked_[e]) {
+            // Quadrics measure distance to planes: a sharp tip whose faces are nearly parallel to
+            // the motion, or a placement off the surface, looks cheap. Price the true point
+            // distances (endpoints to the new fan, new position to the old fans) once, and let the
+            // edge compete again with that price.
+            const double d2 = endpointDistance2(c);
+            const double a = quadric_[c.removed].weight + quadric_[c.kept].weight;
+            const double extra =
+                double(options_.tip_distance_weight) * std::max(0.0, d2 - c.error * c.error) * std::sqrt(a);
+            // Small corrections barely change the order: only a key that grows past
+            // kRecheckFactor × itself sends the edge back into the queue.
+            if (extra > kRecheckFactor * c.cost) {
+                rechecked_[e] = 1;
+                queue_.set(e, float(c.cost + extra));
+                if (queue_.topId() != e) continue; // still the cheapest: collapse it now
+            }
+        }
         collapse(c, pairs, pair_count, sequence);
     }
     return alive_faces_ <= target_faces;
@@ -474,9 +522,10 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
         if (!isFinite(mesh.positions[v]))
             return invalidInput("simplify input: vertex " + std::to_string(v) + ": expected finite coordinates");
     if (!(options.min_triangle_quality >= 0.0f) || !(options.max_normal_change_deg > 0.0f) ||
-        !(options.border_weight >= 0.0f) || !(options.cost_area_exponent >= 0.0f && options.cost_area_exponent <= 1.0f))
+        !(options.border_weight >= 0.0f) || !(options.cost_area_exponent >= 0.0f && options.cost_area_exponent <= 1.0f) ||
+        !(options.tip_distance_weight >= 0.0f))
         return invalidInput("simplify options: expected min_triangle_quality >= 0, max_normal_change_deg > 0, "
-                            "border_weight >= 0, cost_area_exponent in [0, 1]");
+                            "border_weight >= 0, cost_area_exponent in [0, 1], tip_distance_weight >= 0");
     source_ = &mesh;
     options_ = options;
     cos_max_normal_change_ = std::cos(std::min(double(options.max_normal_change_deg), 180.0) * kPi / 180.0);
@@ -722,6 +771,7 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
         }
     }
 
+    rechecked_.assign(options.tip_distance_weight > 0 ? he_count : 0, 0);
     for (uint32_t p = 0; p < point_count; ++p) kind_[p] = classify(p);
     mark_.assign(point_count, 0);
     stamp_ = 0;

@@ -73,6 +73,9 @@ private:
     };
     bool checkFaces(const std::vector<uint32_t>& fan, uint32_t moved, const Vec3d& p, uint32_t f0, uint32_t f1,
                     RegionNormal& region, double& min_old, double& min_new) const;
+    // Largest squared point distance of a valid collapse (fans from isValid): the endpoints' old
+    // positions to the new fan, and the new position to the old fans.
+    double endpointDistance2(const Candidate& c) const;
     Vec3d fanNormal(const std::vector<uint32_t>& fan) const;
     void collapse(const Candidate& c, const WedgePair* pairs, int pair_count, CollapseSequence* sequence);
     void updateEdgesAround(uint32_t point);
@@ -84,6 +87,7 @@ private:
     SimplifyOptions options_;
     double cos_max_normal_change_ = 0;
     double attribute_scale_ = 1;
+    std::vector<uint8_t> rechecked_; // per half-edge: its key already includes endpointDistance2
 
     // Points (distinct positions) and wedges (distinct position + attributes).
     std::vector<Vec3f> position_;

@@ -49,6 +49,11 @@ struct SimplifyOptions {
                                      // 0 = Garland–Heckbert's raw area-weighted cost (lowest mean error,
                                      // but small thin features go early), 1 = mean squared distance
                                      // (lowest Hausdorff); 0.5 balances both (docs/simplify.md)
+    float tip_distance_weight = 1.0f; // when a collapse is first popped, the squared point distances of
+                                      // its endpoints to the new fan and of the new position to the old
+                                      // fans, beyond the quadric estimate, are added to its key
+                                      // (× sqrt(area)) and it competes again: keeps sharp tips and
+                                      // off-surface placements from looking cheap (0: off)
     bool lock_border = false;        // keep open-boundary vertices exactly in place
     AttributeWeights attribute_weights;
 };
