@@ -42,7 +42,8 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr double kTwoSqrt3 = 3.4641016151377544;
 // Below this quality (4√3·area / Σ edge²) a face's normal is too unstable to bound its rotation.
 constexpr double kReliableQuality = 0.05;
-// A popped collapse whose point distances add more than this many times its key is re-queued.
+// A popped collapse whose point-distance penalty grows its key by more than this many times its
+// quadric part is re-queued.
 constexpr double kRecheckFactor = 4.0;
 
 uint32_t floatBits(float f) {
@@ -200,6 +201,7 @@ bool EdgeCollapser::evaluate(uint32_t edge, Candidate& c) const {
         else if (e != 0.0f)
             c.cost /= std::pow(geometric.weight, e);
     }
+    if (!penalty_.empty()) c.cost += double(penalty_[edge]); // see run()
     return true;
 }
 
@@ -238,6 +240,38 @@ bool EdgeCollapser::checkFaces(const std::vector<uint32_t>& fan, uint32_t moved,
                 region.ready = true;
             }
             if (dot(region.normal, n_new) < cos_max_normal_change_ * length(region.normal) * len_new) return false;
+        }
+    }
+    return true;
+}
+
+bool EdgeCollapser::checkUvFaces(const std::vector<uint32_t>& fan, const Vec3d& p, uint32_t f0, uint32_t f1,
+                                 const WedgePair* pairs, int pair_count) const {
+    for (uint32_t set = 0; set < uv_set_count_; ++set) {
+        const uint32_t ch = uv_channel_ + 2 * set;
+        auto value = [&](uint32_t w, uint32_t k) { return double(wedge_value_[size_t(w) * channel_count_ + ch + k]); };
+        for (uint32_t h : fan) {
+            const uint32_t f = h / 3;
+            if (f == f0 || f == f1) continue;
+            const uint32_t w = corner_wedge_[h], wx = corner_wedge_[nextHe(h)], wy = corner_wedge_[prevHe(h)];
+            const double xu = value(wx, 0) , xv = value(wx, 1), yu = value(wy, 0), yv = value(wy, 1);
+            double nu = value(w, 0), nv = value(w, 1);
+            for (int i = 0; i < pair_count; ++i) {
+                if (pairs[i].removed != w && pairs[i].kept != w) continue;
+                const size_t kept = size_t(pairs[i].kept) * channel_count_ + ch;
+                const size_t removed = size_t(pairs[i].removed) * channel_count_ + ch;
+                AttributeQuadric qu = wedge_quadric_[kept];
+                qu += wedge_quadric_[removed];
+                AttributeQuadric qv = wedge_quadric_[kept + 1];
+                qv += wedge_quadric_[removed + 1];
+                nu = double(float(qu.optimalValue(p)));
+                nv = double(float(qv.optimalValue(p)));
+                break;
+            }
+            const double old_area = (xu - value(w, 0)) * (yv - value(w, 1)) - (yu - value(w, 0)) * (xv - value(w, 1));
+            const double new_area = (xu - nu) * (yv - nv) - (yu - nu) * (xv - nv);
+            if (old_area == 0.0) continue; // already degenerate in UV: nothing to preserve
+            if ((old_area > 0) != (new_area > 0) || new_area == 0.0) return false;
         }
     }
     return true;
@@ -295,6 +329,13 @@ bool EdgeCollapser::isValid(const Candidate& c, int& pair_count, WedgePair* pair
             for (int i = 0; i < pair_count; ++i) found = found || pairs[i].removed == w;
             if (!found) return false;
         }
+    }
+    if (uv_channel_ != kNone) {
+        // A UV chart never loses its last face, and no face flips or degenerates in texture space.
+        if (chart_alive_[face_chart_[f0]] == 1 || (f1 != kNone && chart_alive_[face_chart_[f1]] == 1)) return false;
+        if (!checkUvFaces(fan_u_, c.position, f0, f1, pairs, pair_count) ||
+            !checkUvFaces(fan_v_, c.position, f0, f1, pairs, pair_count))
+            return false;
     }
     RegionNormal region;
     double min_old = 1.0, min_new = 1.0;
@@ -377,6 +418,7 @@ void EdgeCollapser::collapse(const Candidate& c, const WedgePair* pairs, int pai
         if (t2 != kNone) twin_[t2] = t1;
         point_he_[w] = t1 != kNone ? t1 : (t2 != kNone ? nextHe(t2) : kNone);
         const uint32_t f = hf / 3;
+        if (uv_channel_ != kNone) --chart_alive_[face_chart_[f]];
         for (uint32_t k = 0; k < 3; ++k) {
             twin_[f * 3 + k] = kNone;
             corner_point_[f * 3 + k] = kNone;
@@ -444,7 +486,6 @@ void EdgeCollapser::updateEdgesInFan() {
     Candidate c;
     auto update = [&](uint32_t he) {
         const uint32_t e = canonical(he);
-        if (!rechecked_.empty()) rechecked_[e] = 0;
         if (evaluate(e, c))
             queue_.set(e, float(c.cost));
         else
@@ -494,20 +535,20 @@ bool EdgeCollapser::run(size_t target_faces, double max_error, CollapseSequence*
             queue_.remove(e);
             continue;
         }
-        if (!rechecked_.empty() && !rechecked_[e]) {
+        if (!penalty_.empty()) {
             // Quadrics measure distance to planes: a sharp tip whose faces are nearly parallel to
-            // the motion, or a placement off the surface, looks cheap. Price the true point
-            // distances (endpoints to the new fan, new position to the old fans) once, and let the
-            // edge compete again with that price.
+            // the motion, or a placement off the surface, looks cheap. The true point distances
+            // (endpoints to the new fan, new position to the old fans) are priced when the edge is
+            // popped and kept as its penalty (added by evaluate until the next pop); when the key
+            // grows by more than kRecheckFactor × its quadric part the edge competes again.
+            const double base = c.cost - double(penalty_[e]);
             const double d2 = endpointDistance2(c);
             const double a = quadric_[c.removed].weight + quadric_[c.kept].weight;
             const double extra =
                 double(options_.tip_distance_weight) * std::max(0.0, d2 - c.error * c.error) * std::sqrt(a);
-            // Small corrections barely change the order: only a key that grows past
-            // kRecheckFactor × itself sends the edge back into the queue.
-            if (extra > kRecheckFactor * c.cost) {
-                rechecked_[e] = 1;
-                queue_.set(e, float(c.cost + extra));
+            penalty_[e] = float(extra);
+            if (base + extra > c.cost + kRecheckFactor * std::max(base, 0.0)) {
+                queue_.set(e, float(base + extra));
                 if (queue_.topId() != e) continue; // still the cheapest: collapse it now
             }
         }
@@ -771,7 +812,31 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
         }
     }
 
-    rechecked_.assign(options.tip_distance_weight > 0 ? he_count : 0, 0);
+    penalty_.assign(options.tip_distance_weight > 0 ? he_count : 0, 0.0f);
+    // UV charts: faces joined across edges whose two corners share wedges (union-find).
+    uv_set_count_ = uint32_t(mesh.uvs.size());
+    uv_channel_ = uv_set_count_ > 0 ? (mesh.hasNormals() ? 3u : 0u) : kNone;
+    face_chart_.clear();
+    chart_alive_.clear();
+    if (uv_channel_ != kNone) {
+        face_chart_.resize(face_count);
+        for (uint32_t f = 0; f < face_count; ++f) face_chart_[f] = f;
+        auto root = [&](uint32_t x) {
+            while (face_chart_[x] != x) x = face_chart_[x] = face_chart_[face_chart_[x]];
+            return x;
+        };
+        for (uint32_t h = 0; h < he_count; ++h) {
+            const uint32_t t = twin_[h];
+            if (t == kNone || t < h || isFeature(h)) continue;
+            const uint32_t a = root(h / 3), b = root(t / 3);
+            if (a != b) face_chart_[std::max(a, b)] = std::min(a, b);
+        }
+        chart_alive_.assign(face_count, 0);
+        for (uint32_t f = 0; f < face_count; ++f) {
+            face_chart_[f] = root(f);
+            ++chart_alive_[face_chart_[f]];
+        }
+    }
     for (uint32_t p = 0; p < point_count; ++p) kind_[p] = classify(p);
     mark_.assign(point_count, 0);
     stamp_ = 0;
