@@ -452,8 +452,9 @@ void EdgeCollapser::collapse(const Candidate& c, const WedgePair* pairs, int pai
     if (w1 != kNone && kind_[w1] != old_w1) updateEdgesAround(w1);
 }
 
-double EdgeCollapser::endpointDistance2(const Candidate& c) const {
-    // fan_u_ / fan_v_ hold the fans gathered by isValid.
+double EdgeCollapser::endpointDistance2(const Candidate& c, double floor2) const {
+    // fan_u_ / fan_v_ hold the fans gathered by isValid. Each distance only matters above floor2
+    // (the quadric estimate), so its search stops as soon as it falls to that.
     const uint32_t f0 = c.edge / 3;
     const uint32_t t = twin_[c.edge];
     const uint32_t f1 = t == kNone ? kNone : t / 3;
@@ -462,13 +463,15 @@ double EdgeCollapser::endpointDistance2(const Candidate& c) const {
     for (const std::vector<uint32_t>* fan : {&fan_u_, &fan_v_}) {
         for (uint32_t h : *fan) {
             const uint32_t f = h / 3;
-            const Vec3d o = toD(position_[corner_point_[h]]);
             const Vec3d ox = toD(position_[corner_point_[nextHe(h)]]);
             const Vec3d oy = toD(position_[corner_point_[prevHe(h)]]);
-            dp = std::min(dp, length2(closestPointOnTriangle(c.position, o, ox, oy) - c.position));
+            if (dp > floor2) {
+                const Vec3d o = toD(position_[corner_point_[h]]);
+                dp = std::min(dp, length2(closestPointOnTriangle(c.position, o, ox, oy) - c.position));
+            }
             if (f == f0 || f == f1) continue;
-            du = std::min(du, length2(closestPointOnTriangle(pu, c.position, ox, oy) - pu));
-            dv = std::min(dv, length2(closestPointOnTriangle(pv, c.position, ox, oy) - pv));
+            if (du > floor2) du = std::min(du, length2(closestPointOnTriangle(pu, c.position, ox, oy) - pu));
+            if (dv > floor2) dv = std::min(dv, length2(closestPointOnTriangle(pv, c.position, ox, oy) - pv));
         }
     }
     if (!std::isfinite(du)) du = 0;
@@ -542,12 +545,21 @@ bool EdgeCollapser::run(size_t target_faces, double max_error, CollapseSequence*
             // popped and kept as its penalty (added by evaluate until the next pop); when the key
             // grows by more than kRecheckFactor × its quadric part the edge competes again.
             const double base = c.cost - double(penalty_[e]);
-            const double d2 = endpointDistance2(c);
-            const double a = quadric_[c.removed].weight + quadric_[c.kept].weight;
-            const double extra =
-                double(options_.tip_distance_weight) * std::max(0.0, d2 - c.error * c.error) * std::sqrt(a);
+            const double floor2 = c.error * c.error;
+            const double scale = double(options_.tip_distance_weight) *
+                                 std::sqrt(quadric_[c.removed].weight + quadric_[c.kept].weight);
+            const double limit = c.cost + kRecheckFactor * std::max(base, 0.0);
+            // Every distance is at most the larger endpoint displacement: when even that cannot
+            // send the edge back, collapse without measuring.
+            const double bound = std::max(length2(toD(position_[c.removed]) - c.position),
+                                          length2(toD(position_[c.kept]) - c.position));
+            if (base + scale * std::max(0.0, bound - floor2) <= limit) {
+                collapse(c, pairs, pair_count, sequence);
+                continue;
+            }
+            const double extra = scale * std::max(0.0, endpointDistance2(c, floor2) - floor2);
             penalty_[e] = float(extra);
-            if (base + extra > c.cost + kRecheckFactor * std::max(base, 0.0)) {
+            if (base + extra > limit) {
                 queue_.set(e, float(base + extra));
                 if (queue_.topId() != e) continue; // still the cheapest: collapse it now
             }

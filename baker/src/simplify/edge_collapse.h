@@ -75,7 +75,7 @@ private:
                     RegionNormal& region, double& min_old, double& min_new) const;
     // Largest squared point distance of a valid collapse (fans from isValid): the endpoints' old
     // positions to the new fan, and the new position to the old fans.
-    double endpointDistance2(const Candidate& c) const;
+    double endpointDistance2(const Candidate& c, double floor2) const;
     // False when a face of `fan` (other than f0/f1) would flip or degenerate in any UV set.
     bool checkUvFaces(const std::vector<uint32_t>& fan, const Vec3d& p, uint32_t f0, uint32_t f1,
                       const WedgePair* pairs, int pair_count) const;

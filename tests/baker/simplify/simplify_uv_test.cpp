@@ -26,7 +26,8 @@ struct UvStats {
     size_t open_uv_edges = 0;   // island border edges that are neither a seam nor a mesh border
     size_t flipped = 0;         // faces whose signed UV area opposes their island's
     size_t zero_uv_area = 0;    // faces with (numerically) no UV area
-    double stretch = 0;         // area-weighted mean of max(r, 1/r), r = UV area / 3D area, normalised
+    double stretch = 0;         // area-weighted mean of max(r, 1/r), r = (UV area / 3D area) / (total ratio);
+                                // 1 = no area distortion; faces without UV area left out
 };
 
 uint64_t bitsOf(float f) {
@@ -105,7 +106,7 @@ UvStats uvStats(const Mesh& m) {
     for (size_t f = 0; f < faces; ++f) island_area[findRoot(parent, f)] += uv_area[f];
     s.islands = island_area.size();
     const double scale = uv_total / area_total;
-    double weighted = 0;
+    double weighted = 0, weighted_area = 0;
     for (size_t f = 0; f < faces; ++f) {
         const double island = island_area[findRoot(parent, f)];
         if (std::abs(uv_area[f]) <= 1e-12 * uv_total) {
@@ -113,14 +114,14 @@ UvStats uvStats(const Mesh& m) {
         } else if ((uv_area[f] > 0) != (island > 0)) {
             ++s.flipped;
         }
-        if (area[f] > 0 && std::abs(uv_area[f]) > 0) {
+        // Faces without UV area are counted above; their stretch is undefined.
+        if (area[f] > 0 && std::abs(uv_area[f]) > 1e-12 * uv_total) {
             const double r = std::abs(uv_area[f]) / area[f] / scale;
             weighted += area[f] * std::max(r, 1.0 / r);
-        } else {
-            weighted += area[f] * 1e3; // a collapsed UV triangle: count as extreme stretch
+            weighted_area += area[f];
         }
     }
-    s.stretch = weighted / area_total;
+    s.stretch = weighted_area > 0 ? weighted / weighted_area : 0.0;
     return s;
 }
 
