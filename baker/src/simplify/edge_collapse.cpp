@@ -254,7 +254,7 @@ bool EdgeCollapser::checkUvFaces(const std::vector<uint32_t>& fan, const Vec3d& 
             const uint32_t f = h / 3;
             if (f == f0 || f == f1) continue;
             const uint32_t w = corner_wedge_[h], wx = corner_wedge_[nextHe(h)], wy = corner_wedge_[prevHe(h)];
-            const double xu = value(wx, 0) , xv = value(wx, 1), yu = value(wy, 0), yv = value(wy, 1);
+            const double xu = value(wx, 0), xv = value(wx, 1), yu = value(wy, 0), yv = value(wy, 1);
             double nu = value(w, 0), nv = value(w, 1);
             for (int i = 0; i < pair_count; ++i) {
                 if (pairs[i].removed != w && pairs[i].kept != w) continue;
@@ -546,13 +546,13 @@ bool EdgeCollapser::run(size_t target_faces, double max_error, CollapseSequence*
             // grows by more than kRecheckFactor × its quadric part the edge competes again.
             const double base = c.cost - double(penalty_[e]);
             const double floor2 = c.error * c.error;
-            const double scale = double(options_.tip_distance_weight) *
-                                 std::sqrt(quadric_[c.removed].weight + quadric_[c.kept].weight);
+            const double scale =
+                double(options_.tip_distance_weight) * std::sqrt(quadric_[c.removed].weight + quadric_[c.kept].weight);
             const double limit = c.cost + kRecheckFactor * std::max(base, 0.0);
             // Every distance is at most the larger endpoint displacement: when even that cannot
             // send the edge back, collapse without measuring.
-            const double bound = std::max(length2(toD(position_[c.removed]) - c.position),
-                                          length2(toD(position_[c.kept]) - c.position));
+            const double bound =
+                std::max(length2(toD(position_[c.removed]) - c.position), length2(toD(position_[c.kept]) - c.position));
             if (base + scale * std::max(0.0, bound - floor2) <= limit) {
                 collapse(c, pairs, pair_count, sequence);
                 continue;
@@ -575,7 +575,8 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
         if (!isFinite(mesh.positions[v]))
             return invalidInput("simplify input: vertex " + std::to_string(v) + ": expected finite coordinates");
     if (!(options.min_triangle_quality >= 0.0f) || !(options.max_normal_change_deg > 0.0f) ||
-        !(options.border_weight >= 0.0f) || !(options.cost_area_exponent >= 0.0f && options.cost_area_exponent <= 1.0f) ||
+        !(options.border_weight >= 0.0f) ||
+        !(options.cost_area_exponent >= 0.0f && options.cost_area_exponent <= 1.0f) ||
         !(options.tip_distance_weight >= 0.0f))
         return invalidInput("simplify options: expected min_triangle_quality >= 0, max_normal_change_deg > 0, "
                             "border_weight >= 0, cost_area_exponent in [0, 1], tip_distance_weight >= 0");

@@ -94,7 +94,7 @@ private:
     uint32_t uv_set_count_ = 0;
     std::vector<uint32_t> face_chart_;  // UV chart (representative face) per face
     std::vector<uint32_t> chart_alive_; // alive faces per chart representative
-    std::vector<float> penalty_; // per canonical half-edge: point-distance price from its last pop (run())
+    std::vector<float> penalty_;        // per canonical half-edge: point-distance price from its last pop (run())
 
     // Points (distinct positions) and wedges (distinct position + attributes).
     std::vector<Vec3f> position_;

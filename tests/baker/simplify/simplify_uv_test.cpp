@@ -21,13 +21,13 @@ namespace {
 using lodbake::Mesh;
 
 struct UvStats {
-    size_t islands = 0;         // faces connected through edges whose two corners share position and UV
-    size_t seam_edges = 0;      // position edges whose faces disagree on the UV of an endpoint
-    size_t open_uv_edges = 0;   // island border edges that are neither a seam nor a mesh border
-    size_t flipped = 0;         // faces whose signed UV area opposes their island's
-    size_t zero_uv_area = 0;    // faces with (numerically) no UV area
-    double stretch = 0;         // area-weighted mean of max(r, 1/r), r = (UV area / 3D area) / (total ratio);
-                                // 1 = no area distortion; faces without UV area left out
+    size_t islands = 0;       // faces connected through edges whose two corners share position and UV
+    size_t seam_edges = 0;    // position edges whose faces disagree on the UV of an endpoint
+    size_t open_uv_edges = 0; // island border edges that are neither a seam nor a mesh border
+    size_t flipped = 0;       // faces whose signed UV area opposes their island's
+    size_t zero_uv_area = 0;  // faces with (numerically) no UV area
+    double stretch = 0;       // area-weighted mean of max(r, 1/r), r = (UV area / 3D area) / (total ratio);
+                              // 1 = no area distortion; faces without UV area left out
 };
 
 uint64_t bitsOf(float f) {
@@ -96,7 +96,8 @@ UvStats uvStats(const Mesh& m) {
     for (size_t f = 0; f < faces; ++f) {
         const uint32_t i0 = m.indices[f * 3], i1 = m.indices[f * 3 + 1], i2 = m.indices[f * 3 + 2];
         const auto &t0 = m.uvs[0][i0], &t1 = m.uvs[0][i1], &t2 = m.uvs[0][i2];
-        uv_area[f] = 0.5 * ((double(t1.x) - t0.x) * (double(t2.y) - t0.y) - (double(t2.x) - t0.x) * (double(t1.y) - t0.y));
+        uv_area[f] =
+            0.5 * ((double(t1.x) - t0.x) * (double(t2.y) - t0.y) - (double(t2.x) - t0.x) * (double(t1.y) - t0.y));
         const lodbake::Vec3d p0(m.positions[i0]), p1(m.positions[i1]), p2(m.positions[i2]);
         area[f] = 0.5 * lodbake::length(lodbake::cross(p1 - p0, p2 - p0));
         uv_total += std::abs(uv_area[f]);
