@@ -26,9 +26,12 @@
 //           w1                       w1
 #include "simplify/edge_collapse.h"
 
+#include "lodbake/core/bvh.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <string>
 #include <utility>
 
@@ -40,6 +43,9 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr double kTwoSqrt3 = 3.4641016151377544;
 // Below this quality (4√3·area / Σ edge²) a face's normal is too unstable to bound its rotation.
 constexpr double kReliableQuality = 0.05;
+// A popped collapse whose point-distance penalty grows its key by more than this many times its
+// quadric part is re-queued.
+constexpr double kRecheckFactor = 4.0;
 
 uint32_t floatBits(float f) {
     uint32_t b;
@@ -208,6 +214,7 @@ bool EdgeCollapser::evaluate(uint32_t edge, Candidate& c) const {
         else if (e != 0.0f)
             c.cost /= std::pow(geometric.weight, e);
     }
+    if (!penalty_.empty()) c.cost += double(penalty_[edge]); // see run()
     return true;
 }
 
@@ -246,6 +253,38 @@ bool EdgeCollapser::checkFaces(const std::vector<uint32_t>& fan, uint32_t moved,
                 region.ready = true;
             }
             if (dot(region.normal, n_new) < cos_max_normal_change_ * length(region.normal) * len_new) return false;
+        }
+    }
+    return true;
+}
+
+bool EdgeCollapser::checkUvFaces(const std::vector<uint32_t>& fan, const Vec3d& p, uint32_t f0, uint32_t f1,
+                                 const WedgePair* pairs, int pair_count) const {
+    for (uint32_t set = 0; set < uv_set_count_; ++set) {
+        const uint32_t ch = uv_channel_ + 2 * set;
+        auto value = [&](uint32_t w, uint32_t k) { return double(wedge_value_[size_t(w) * channel_count_ + ch + k]); };
+        for (uint32_t h : fan) {
+            const uint32_t f = h / 3;
+            if (f == f0 || f == f1) continue;
+            const uint32_t w = corner_wedge_[h], wx = corner_wedge_[nextHe(h)], wy = corner_wedge_[prevHe(h)];
+            const double xu = value(wx, 0), xv = value(wx, 1), yu = value(wy, 0), yv = value(wy, 1);
+            double nu = value(w, 0), nv = value(w, 1);
+            for (int i = 0; i < pair_count; ++i) {
+                if (pairs[i].removed != w && pairs[i].kept != w) continue;
+                const size_t kept = size_t(pairs[i].kept) * channel_count_ + ch;
+                const size_t removed = size_t(pairs[i].removed) * channel_count_ + ch;
+                AttributeQuadric qu = wedge_quadric_[kept];
+                qu += wedge_quadric_[removed];
+                AttributeQuadric qv = wedge_quadric_[kept + 1];
+                qv += wedge_quadric_[removed + 1];
+                nu = double(float(qu.optimalValue(p)));
+                nv = double(float(qv.optimalValue(p)));
+                break;
+            }
+            const double old_area = (xu - value(w, 0)) * (yv - value(w, 1)) - (yu - value(w, 0)) * (xv - value(w, 1));
+            const double new_area = (xu - nu) * (yv - nv) - (yu - nu) * (xv - nv);
+            if (old_area == 0.0) continue; // already degenerate in UV: nothing to preserve
+            if ((old_area > 0) != (new_area > 0) || new_area == 0.0) return false;
         }
     }
     return true;
@@ -303,6 +342,13 @@ bool EdgeCollapser::isValid(const Candidate& c, int& pair_count, WedgePair* pair
             for (int i = 0; i < pair_count; ++i) found = found || pairs[i].removed == w;
             if (!found) return false;
         }
+    }
+    if (uv_channel_ != kNone) {
+        // A UV chart never loses its last face, and no face flips or degenerates in texture space.
+        if (chart_alive_[face_chart_[f0]] == 1 || (f1 != kNone && chart_alive_[face_chart_[f1]] == 1)) return false;
+        if (!checkUvFaces(fan_u_, c.position, f0, f1, pairs, pair_count) ||
+            !checkUvFaces(fan_v_, c.position, f0, f1, pairs, pair_count))
+            return false;
     }
     RegionNormal region;
     double min_old = 1.0, min_new = 1.0;
@@ -385,6 +431,7 @@ void EdgeCollapser::collapse(const Candidate& c, const WedgePair* pairs, int pai
         if (t2 != kNone) twin_[t2] = t1;
         point_he_[w] = t1 != kNone ? t1 : (t2 != kNone ? nextHe(t2) : kNone);
         const uint32_t f = hf / 3;
+        if (uv_channel_ != kNone) --chart_alive_[face_chart_[f]];
         for (uint32_t k = 0; k < 3; ++k) {
             twin_[f * 3 + k] = kNone;
             corner_point_[f * 3 + k] = kNone;
@@ -416,6 +463,34 @@ void EdgeCollapser::collapse(const Candidate& c, const WedgePair* pairs, int pai
     updateEdgesInFan();
     if (kind_[w0] != old_w0) updateEdgesAround(w0);
     if (w1 != kNone && kind_[w1] != old_w1) updateEdgesAround(w1);
+}
+
+double EdgeCollapser::endpointDistance2(const Candidate& c, double floor2) const {
+    // fan_u_ / fan_v_ hold the fans gathered by isValid. Each distance only matters above floor2
+    // (the quadric estimate), so its search stops as soon as it falls to that.
+    const uint32_t f0 = c.edge / 3;
+    const uint32_t t = twin_[c.edge];
+    const uint32_t f1 = t == kNone ? kNone : t / 3;
+    const Vec3d pu = toD(position_[c.removed]), pv = toD(position_[c.kept]);
+    double du = std::numeric_limits<double>::infinity(), dv = du, dp = du;
+    for (const std::vector<uint32_t>* fan : {&fan_u_, &fan_v_}) {
+        for (uint32_t h : *fan) {
+            const uint32_t f = h / 3;
+            const Vec3d ox = toD(position_[corner_point_[nextHe(h)]]);
+            const Vec3d oy = toD(position_[corner_point_[prevHe(h)]]);
+            if (dp > floor2) {
+                const Vec3d o = toD(position_[corner_point_[h]]);
+                dp = std::min(dp, length2(closestPointOnTriangle(c.position, o, ox, oy) - c.position));
+            }
+            if (f == f0 || f == f1) continue;
+            if (du > floor2) du = std::min(du, length2(closestPointOnTriangle(pu, c.position, ox, oy) - pu));
+            if (dv > floor2) dv = std::min(dv, length2(closestPointOnTriangle(pv, c.position, ox, oy) - pv));
+        }
+    }
+    if (!std::isfinite(du)) du = 0;
+    if (!std::isfinite(dv)) dv = 0;
+    if (!std::isfinite(dp)) dp = 0;
+    return std::max(std::max(du, dv), dp);
 }
 
 void EdgeCollapser::updateEdgesAround(uint32_t point) {
@@ -476,6 +551,32 @@ bool EdgeCollapser::run(size_t target_faces, double max_error, CollapseSequence*
             queue_.remove(e);
             continue;
         }
+        if (!penalty_.empty()) {
+            // Quadrics measure distance to planes: a sharp tip whose faces are nearly parallel to
+            // the motion, or a placement off the surface, looks cheap. The true point distances
+            // (endpoints to the new fan, new position to the old fans) are priced when the edge is
+            // popped and kept as its penalty (added by evaluate until the next pop); when the key
+            // grows by more than kRecheckFactor × its quadric part the edge competes again.
+            const double base = c.cost - double(penalty_[e]);
+            const double floor2 = c.error * c.error;
+            const double scale =
+                double(options_.tip_distance_weight) * std::sqrt(quadric_[c.removed].weight + quadric_[c.kept].weight);
+            const double limit = c.cost + kRecheckFactor * std::max(base, 0.0);
+            // Every distance is at most the larger endpoint displacement: when even that cannot
+            // send the edge back, collapse without measuring.
+            const double bound =
+                std::max(length2(toD(position_[c.removed]) - c.position), length2(toD(position_[c.kept]) - c.position));
+            if (base + scale * std::max(0.0, bound - floor2) <= limit) {
+                collapse(c, pairs, pair_count, sequence);
+                continue;
+            }
+            const double extra = scale * std::max(0.0, endpointDistance2(c, floor2) - floor2);
+            penalty_[e] = float(extra);
+            if (base + extra > limit) {
+                queue_.set(e, float(base + extra));
+                if (queue_.topId() != e) continue; // still the cheapest: collapse it now
+            }
+        }
         collapse(c, pairs, pair_count, sequence);
     }
     return alive_faces_ <= target_faces;
@@ -487,9 +588,11 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
         if (!isFinite(mesh.positions[v]))
             return invalidInput("simplify input: vertex " + std::to_string(v) + ": expected finite coordinates");
     if (!(options.min_triangle_quality >= 0.0f) || !(options.max_normal_change_deg > 0.0f) ||
-        !(options.border_weight >= 0.0f) || !(options.cost_area_exponent >= 0.0f && options.cost_area_exponent <= 1.0f))
+        !(options.border_weight >= 0.0f) ||
+        !(options.cost_area_exponent >= 0.0f && options.cost_area_exponent <= 1.0f) ||
+        !(options.tip_distance_weight >= 0.0f))
         return invalidInput("simplify options: expected min_triangle_quality >= 0, max_normal_change_deg > 0, "
-                            "border_weight >= 0, cost_area_exponent in [0, 1]");
+                            "border_weight >= 0, cost_area_exponent in [0, 1], tip_distance_weight >= 0");
     source_ = &mesh;
     options_ = options;
     cos_max_normal_change_ = std::cos(std::min(double(options.max_normal_change_deg), 180.0) * kPi / 180.0);
@@ -735,6 +838,31 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
         }
     }
 
+    penalty_.assign(options.tip_distance_weight > 0 ? he_count : 0, 0.0f);
+    // UV charts: faces joined across edges whose two corners share wedges (union-find).
+    uv_set_count_ = uint32_t(mesh.uvs.size());
+    uv_channel_ = uv_set_count_ > 0 ? (mesh.hasNormals() ? 3u : 0u) : kNone;
+    face_chart_.clear();
+    chart_alive_.clear();
+    if (uv_channel_ != kNone) {
+        face_chart_.resize(face_count);
+        for (uint32_t f = 0; f < face_count; ++f) face_chart_[f] = f;
+        auto root = [&](uint32_t x) {
+            while (face_chart_[x] != x) x = face_chart_[x] = face_chart_[face_chart_[x]];
+            return x;
+        };
+        for (uint32_t h = 0; h < he_count; ++h) {
+            const uint32_t t = twin_[h];
+            if (t == kNone || t < h || isFeature(h)) continue;
+            const uint32_t a = root(h / 3), b = root(t / 3);
+            if (a != b) face_chart_[std::max(a, b)] = std::min(a, b);
+        }
+        chart_alive_.assign(face_count, 0);
+        for (uint32_t f = 0; f < face_count; ++f) {
+            face_chart_[f] = root(f);
+            ++chart_alive_[face_chart_[f]];
+        }
+    }
     for (uint32_t p = 0; p < point_count; ++p) kind_[p] = classify(p);
     mark_.assign(point_count, 0);
     stamp_ = 0;

@@ -73,6 +73,12 @@ private:
     };
     bool checkFaces(const std::vector<uint32_t>& fan, uint32_t moved, const Vec3d& p, uint32_t f0, uint32_t f1,
                     RegionNormal& region, double& min_old, double& min_new) const;
+    // Largest squared point distance of a valid collapse (fans from isValid): the endpoints' old
+    // positions to the new fan, and the new position to the old fans.
+    double endpointDistance2(const Candidate& c, double floor2) const;
+    // False when a face of `fan` (other than f0/f1) would flip or degenerate in any UV set.
+    bool checkUvFaces(const std::vector<uint32_t>& fan, const Vec3d& p, uint32_t f0, uint32_t f1,
+                      const WedgePair* pairs, int pair_count) const;
     Vec3d fanNormal(const std::vector<uint32_t>& fan) const;
     void collapse(const Candidate& c, const WedgePair* pairs, int pair_count, CollapseSequence* sequence);
     void updateEdgesAround(uint32_t point);
@@ -84,6 +90,11 @@ private:
     SimplifyOptions options_;
     double cos_max_normal_change_ = 0;
     double attribute_scale_ = 1;
+    uint32_t uv_channel_ = 0xffffffffu; // first UV channel, none without UV sets
+    uint32_t uv_set_count_ = 0;
+    std::vector<uint32_t> face_chart_;  // UV chart (representative face) per face
+    std::vector<uint32_t> chart_alive_; // alive faces per chart representative
+    std::vector<float> penalty_;        // per canonical half-edge: point-distance price from its last pop (run())
 
     // Points (distinct positions) and wedges (distinct position + attributes).
     std::vector<Vec3f> position_;

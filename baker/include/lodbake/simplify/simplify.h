@@ -52,11 +52,16 @@ struct SimplifyOptions {
     float max_normal_change_deg = 75.0f;         // largest rotation of any face normal in one collapse
     float min_triangle_quality = 0.05f;          // reject collapses creating triangles below this quality
                                         // (4√3·area / Σ edge², 1 = equilateral) unless no worse than before
-    float cost_area_exponent = 0.5f; // queue order: Q(p) / area^k over the merged quadric's face area.
-                                     // 0 = Garland–Heckbert's raw area-weighted cost (lowest mean error,
-                                     // but small thin features go early), 1 = mean squared distance
-                                     // (lowest Hausdorff); 0.5 balances both (docs/simplify.md)
-    bool lock_border = false;        // keep open-boundary vertices exactly in place
+    float cost_area_exponent = 0.5f;  // queue order: Q(p) / area^k over the merged quadric's face area.
+                                      // 0 = Garland–Heckbert's raw area-weighted cost (lowest mean error,
+                                      // but small thin features go early), 1 = mean squared distance
+                                      // (lowest Hausdorff); 0.5 balances both (docs/simplify.md)
+    float tip_distance_weight = 1.0f; // when a collapse is first popped, the squared point distances of
+                                      // its endpoints to the new fan and of the new position to the old
+                                      // fans, beyond the quadric estimate, are added to its key
+                                      // (× sqrt(area)) and it competes again: keeps sharp tips and
+                                      // off-surface placements from looking cheap (0: off)
+    bool lock_border = false;         // keep open-boundary vertices exactly in place
     CollapsePlacement placement = CollapsePlacement::Optimal;
     AttributeWeights attribute_weights;
 };
