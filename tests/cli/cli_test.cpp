@@ -2,7 +2,6 @@
 // name the file, no output left behind on failure, input never modified. The malformed corpus lives
 // in tests/malformed/<format>/, described by each folder's expect.tsv.
 
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -18,44 +17,17 @@
 
 #include "lodbake/core/file_io.h"
 #include "lodbake/core/hash.h"
+#include "cli_runner.h"
 #include "test_paths.h"
 
 namespace fs = std::filesystem;
 
 namespace {
 
-struct RunResult {
-    int exit_code = -1;
-    std::string out;
-    std::string err;
-};
+using RunResult = lodbake_test::CliRun;
+using lodbake_test::readTextFile;
 
-std::string readText(const std::string& path) {
-    std::ifstream f(path, std::ios::binary);
-    std::stringstream ss;
-    ss << f.rdbuf();
-    return ss.str();
-}
-
-std::string shellQuote(const std::string& s) {
-    std::string q = "'";
-    for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-    return q + "'";
-}
-
-RunResult runCli(const std::vector<std::string>& args) {
-    static int counter = 0;
-    const std::string base = lodbake_test::scratchDir() + "/cli_run_" + std::to_string(::getpid()) + "_" + std::to_string(++counter);
-    std::string cmd = shellQuote(lodbake_test::lodbakeCli());
-    for (const std::string& a : args) cmd += " " + shellQuote(a);
-    cmd += " >" + base + ".out 2>" + base + ".err </dev/null";
-    const int status = std::system(cmd.c_str());
-    RunResult r;
-    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-    r.out = readText(base + ".out");
-    r.err = readText(base + ".err");
-    return r;
-}
+RunResult runCli(const std::vector<std::string>& args) { return lodbake_test::runLodbake(args); }
 
 std::vector<std::string> lines(const std::string& text) {
     std::vector<std::string> out;
@@ -154,7 +126,7 @@ TEST(CliTest, ConvertRefusesToOverwriteInput) {
     ASSERT_TRUE(lodbake::writeFileAtomic(path, text.data(), text.size()).ok());
     const RunResult r = runCli({"convert", path, "-o", path});
     EXPECT_EQ(r.exit_code, 2);
-    EXPECT_EQ(readText(path), text);
+    EXPECT_EQ(readTextFile(path), text);
 }
 
 class MalformedInputTest : public testing::TestWithParam<MalformedCase> {};

@@ -1,5 +1,4 @@
 // `lodbake repair` end to end: exit codes, --json report, output written atomically.
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <cstdlib>
@@ -13,35 +12,16 @@
 
 #include "lodbake/cleanup/validate.h"
 #include "lodbake/io/mesh_io.h"
+#include "cli_runner.h"
 #include "test_paths.h"
 
 namespace {
 
-struct CliRun {
-    int exit_code = -1;
-    std::string out, err;
-};
+using lodbake_test::CliRun;
 
-std::string slurp(const std::string& path) {
-    std::ifstream f(path, std::ios::binary);
-    std::stringstream ss;
-    ss << f.rdbuf();
-    return ss.str();
-}
-
-CliRun repairCli(const std::vector<std::string>& args) {
-    static int counter = 0;
-    const std::string base =
-        lodbake_test::scratchDir() + "/repair_cli_" + std::to_string(::getpid()) + "_" + std::to_string(++counter);
-    std::string cmd = "'" + lodbake_test::lodbakeCli() + "' repair";
-    for (const std::string& a : args) cmd += " '" + a + "'";
-    cmd += " >" + base + ".out 2>" + base + ".err </dev/null";
-    const int status = std::system(cmd.c_str());
-    CliRun r;
-    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-    r.out = slurp(base + ".out");
-    r.err = slurp(base + ".err");
-    return r;
+CliRun repairCli(std::vector<std::string> args) {
+    args.insert(args.begin(), "repair");
+    return lodbake_test::runLodbake(args);
 }
 
 } // namespace

@@ -1,7 +1,6 @@
 // PfrepCliTest: `lodbake pfrep` builds a blob and `--extract K` writes level K; bad blobs and
 // arguments fail with one error line.
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <cstdlib>
@@ -13,36 +12,14 @@
 
 #include "../simplify/simplify_test_meshes.h"
 #include "lodbake/io/mesh_io.h"
+#include "cli_runner.h"
 #include "test_paths.h"
 
 namespace {
 
-struct CliRun {
-    int exit_code = -1;
-    std::string out, err;
-};
+using lodbake_test::CliRun;
 
-std::string slurp(const std::string& path) {
-    std::ifstream f(path, std::ios::binary);
-    std::stringstream ss;
-    ss << f.rdbuf();
-    return ss.str();
-}
-
-CliRun lodbake(const std::vector<std::string>& args) {
-    static int counter = 0;
-    const std::string base =
-        lodbake_test::scratchDir() + "/pfrep_cli_" + std::to_string(::getpid()) + "_" + std::to_string(++counter);
-    std::string cmd = "'" + lodbake_test::lodbakeCli() + "'";
-    for (const std::string& a : args) cmd += " '" + a + "'";
-    cmd += " >" + base + ".out 2>" + base + ".err </dev/null";
-    const int status = std::system(cmd.c_str());
-    CliRun r;
-    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-    r.out = slurp(base + ".out");
-    r.err = slurp(base + ".err");
-    return r;
-}
+CliRun lodbake(const std::vector<std::string>& args) { return lodbake_test::runLodbake(args); }
 
 TEST(PfrepCliTest, BuildThenExtractLevels) {
     const std::string dir = lodbake_test::scratchDir();
@@ -67,7 +44,7 @@ TEST(PfrepCliTest, BuildThenExtractLevels) {
     // A damaged blob: one error line naming the file.
     const std::string bad = dir + "/pfrep_cli_bad.lbp";
     {
-        std::string bytes = slurp(blob);
+        std::string bytes = lodbake_test::readTextFile(blob);
         bytes.resize(bytes.size() / 2);
         std::ofstream(bad, std::ios::binary) << bytes;
     }

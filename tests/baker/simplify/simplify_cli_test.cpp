@@ -1,5 +1,4 @@
 // The `simplify` and `lods` subcommands, run as a user would (the library is tested elsewhere).
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <cstdlib>
@@ -14,42 +13,14 @@
 #include "lodbake/core/diagnostics.h"
 #include "lodbake/io/mesh_io.h"
 #include "simplify_test_meshes.h"
+#include "cli_runner.h"
 #include "test_paths.h"
 
 namespace {
 
-struct CliRun {
-    int exit_code = -1;
-    std::string out, err;
-};
+using lodbake_test::CliRun;
 
-std::string slurp(const std::string& path) {
-    std::ifstream f(path, std::ios::binary);
-    std::stringstream ss;
-    ss << f.rdbuf();
-    return ss.str();
-}
-
-std::string quote(const std::string& s) {
-    std::string q = "'";
-    for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-    return q + "'";
-}
-
-CliRun lodbake(const std::vector<std::string>& args) {
-    static int counter = 0;
-    const std::string base =
-        lodbake_test::scratchDir() + "/simplify_cli_" + std::to_string(::getpid()) + "_" + std::to_string(++counter);
-    std::string cmd = quote(lodbake_test::lodbakeCli());
-    for (const std::string& a : args) cmd += " " + quote(a);
-    cmd += " >" + base + ".out 2>" + base + ".err </dev/null";
-    const int status = std::system(cmd.c_str());
-    CliRun r;
-    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-    r.out = slurp(base + ".out");
-    r.err = slurp(base + ".err");
-    return r;
-}
+CliRun lodbake(const std::vector<std::string>& args) { return lodbake_test::runLodbake(args); }
 
 // A sphere written once as a PLY input for every test.
 const std::string& sphereFile() {
@@ -93,7 +64,7 @@ TEST(SimplifyCliTest, LodsWritesEveryLevelAndTheJsonReport) {
         EXPECT_LE(triangles(file), expected[i]);
         EXPECT_GE(triangles(file) + 2, expected[i]);
     }
-    const std::string json = slurp(prefix + ".json");
+    const std::string json = lodbake_test::readTextFile(prefix + ".json");
     for (const char* key : {"\"levels\"", "\"triangles\"", "\"vertices\"", "\"hausdorff\"", "\"mean_rel\"",
                             "\"switch_distance\"", "\"screen_coverage\""})
         EXPECT_NE(json.find(key), std::string::npos) << key;
