@@ -15,6 +15,8 @@ inline std::string sharedMesh(const std::string& name) { return sharedMeshesDir(
 std::string scratchDir();
 /// Path of the lodbake CLI built alongside the tests.
 inline std::string lodbakeCli() { return LODBAKE_TEST_CLI; }
+/// The Python interpreter that has the Debian packages the tests need (jsonschema, numpy, open3d).
+inline std::string python() { return LODBAKE_TEST_PYTHON; }
 /// True if the shared scans are present (a clone without `../shared` skips the tests that need them).
 bool haveSharedMeshes();
 

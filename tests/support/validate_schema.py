@@ -14,7 +14,11 @@ import struct
 import sys
 
 import jsonschema
-import referencing
+
+try:  # jsonschema >= 4.18 resolves $ref through `referencing`
+    import referencing
+except ImportError:  # Debian 12's python3-jsonschema 4.10: the older RefResolver
+    referencing = None
 
 GLTF_PROPERTY = {
     "$schema": "https://json-schema.org/draft/2020-12/schema",
@@ -39,10 +43,15 @@ def main(argv):
         print(__doc__, file=sys.stderr)
         return 2
     schema = json.load(open(argv[1]))
-    registry = referencing.Registry().with_resource(
-        "glTFProperty.schema.json", referencing.Resource.from_contents(GLTF_PROPERTY))
     jsonschema.Draft202012Validator.check_schema(schema)
-    validator = jsonschema.Draft202012Validator(schema, registry=registry)
+    if referencing is not None:
+        registry = referencing.Registry().with_resource(
+            "glTFProperty.schema.json", referencing.Resource.from_contents(GLTF_PROPERTY))
+        validator = jsonschema.Draft202012Validator(schema, registry=registry)
+    else:
+        resolver = jsonschema.RefResolver.from_schema(
+            schema, store={"glTFProperty.schema.json": GLTF_PROPERTY})
+        validator = jsonschema.Draft202012Validator(schema, resolver=resolver)
     files = argv[2:]
     extension = None
     if files[0] == "--node-extension":

@@ -42,7 +42,7 @@ CommandResult validateGltf(const std::vector<std::string>& files) {
 }
 
 CommandResult validateMetrics(const std::vector<std::string>& files) {
-    std::string command = "python3 " + shellQuote(src("tests/support/validate_schema.py")) + " " +
+    std::string command = lodbake_test::python() + " " + shellQuote(src("tests/support/validate_schema.py")) + " " +
                           shellQuote(src("schemas/LODBAKE_lod_metrics/schema/node.LODBAKE_lod_metrics.schema.json")) +
                           " --node-extension LODBAKE_lod_metrics";
     for (const std::string& f : files) command += " " + shellQuote(f);

@@ -17,7 +17,7 @@ std::string presetPath(const std::string& name) {
 }
 
 std::string schemaCheck(const std::string& schema, const std::string& args) {
-    return "python3 " + lodbake_test::shellQuote(lodbake_test::sourceDir() + "/tests/support/validate_schema.py") +
+    return lodbake_test::python() + " " + lodbake_test::shellQuote(lodbake_test::sourceDir() + "/tests/support/validate_schema.py") +
            " " + lodbake_test::shellQuote(lodbake_test::sourceDir() + "/schemas/" + schema) + " " + args;
 }
 

@@ -265,17 +265,8 @@ struct PythonResult {
     double hausdorff = NAN, mean = NAN;
 };
 
-// The first interpreter that can import open3d (a pyenv shim may shadow the system one that has it).
-std::string pythonWithOpen3d() {
-    static const std::string found = [] {
-        for (const char* candidate : {"python3", "/usr/bin/python3"}) {
-            std::string probe = std::string(candidate) + " -c 'import numpy, open3d' > /dev/null 2>&1";
-            if (std::system(probe.c_str()) == 0) return std::string(candidate);
-        }
-        return std::string();
-    }();
-    return found;
-}
+// Debian's interpreter, where scripts/install-deps.sh installs python3-open3d.
+std::string pythonWithOpen3d() { return lodbake_test::python(); }
 
 PythonResult runMeshdistPy(const std::string& ref_path, const std::string& approx_path) {
     const std::string python = pythonWithOpen3d();
