@@ -34,6 +34,10 @@ const char* resultName(Result result) {
         return "BadGltf";
     case Result::OutOfBounds:
         return "OutOfBounds";
+    case Result::CorruptStream:
+        return "CorruptStream";
+    case Result::BufferTooSmall:
+        return "BufferTooSmall";
     }
     return "Unknown";
 }

@@ -24,6 +24,8 @@ enum class Result : int {
     OutOfMemory,        // the allocator returned null
     BadGltf,            // the JSON is valid but breaks a glTF 2.0 rule (wrong type, missing property, bad index)
     OutOfBounds,        // an accessor, buffer view or index points outside the bytes that exist
+    CorruptStream,      // a compressed stream decodes to something impossible (index out of range, overrun)
+    BufferTooSmall,     // a caller-provided output or scratch buffer is smaller than the size query said
 };
 
 /// Stable name of a result code, e.g. "Truncated"; "Unknown" for values outside the enum.

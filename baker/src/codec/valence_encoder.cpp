@@ -1,0 +1,361 @@
+// Encoder of the .lbm compressed mesh. Every model step mirrors runtime/src/valence_decoder.cpp;
+// docs/format/valence.md is the normative description of both.
+
+#include "lodbake/codec/valence_encoder.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <string>
+
+#include "codec/range_encoder.h"
+#include "lodrt/format.h"
+#include "lodrt/valence.h"
+
+namespace lodbake::codec {
+namespace {
+
+using namespace lodrt::format;
+
+constexpr uint32_t kUnassigned = 0xFFFFFFFFu;
+constexpr uint32_t kNone = 0xFFFFFFFFu;
+constexpr uint32_t kClassProbs = 1u << kValenceClassTreeBits;
+constexpr uint32_t kTopProbs = 33;
+
+void initProbs(uint16_t* probs, size_t n) { std::fill(probs, probs + n, uint16_t(kRangeProbInit)); }
+
+template <int Components> struct ResidualModel {
+    uint16_t klass[Components][kValenceResidualContexts][kClassProbs];
+    uint16_t top[Components][kValenceResidualContexts][kTopProbs];
+    uint32_t previous[Components];
+    void init() {
+        initProbs(&klass[0][0][0], sizeof(klass) / 2);
+        initProbs(&top[0][0][0], sizeof(top) / 2);
+        for (int j = 0; j < Components; ++j) previous[j] = 0;
+    }
+    void encode(RangeEncoder& re, int j, int64_t residual) {
+        uint32_t ctx = std::min<uint32_t>(previous[j], kValenceResidualContexts - 1);
+        uint64_t u = residual >= 0 ? uint64_t(residual) << 1 : ((uint64_t(-residual - 1)) << 1) | 1u;
+        previous[j] = re.uint(klass[j][ctx], top[j][ctx], u);
+    }
+};
+
+struct Fifo16 {
+    uint32_t ring[16];
+    uint32_t head = 0;
+    uint32_t count = 0;
+    uint32_t at(uint32_t i) const { return ring[(head - 1 - i) & 15u]; }
+    void push(uint32_t v) {
+        ring[head & 15u] = v;
+        ++head;
+        if (count < 16) ++count;
+    }
+    int find(uint32_t v) const {
+        for (uint32_t i = 0; i < count; ++i)
+            if (at(i) == v) return int(i);
+        return -1;
+    }
+};
+
+// Faces in a depth-first order over edge adjacency, so most faces share an edge with a recent one.
+std::vector<uint32_t> traversalOrder(const std::vector<uint32_t>& indices) {
+    const size_t fn = indices.size() / 3;
+    std::vector<std::pair<uint64_t, uint32_t>> edges;
+    edges.reserve(fn * 3);
+    for (size_t f = 0; f < fn; ++f) {
+        for (int i = 0; i < 3; ++i) {
+            uint32_t a = indices[3 * f + i], b = indices[3 * f + (i + 1) % 3];
+            if (a == b) continue;
+            uint64_t key = (uint64_t(std::min(a, b)) << 32) | std::max(a, b);
+            edges.push_back({key, uint32_t(f)});
+        }
+    }
+    std::sort(edges.begin(), edges.end());
+    // Faces around one edge are chained (each to the next), enough to connect them.
+    std::vector<std::pair<uint32_t, uint32_t>> links;
+    for (size_t i = 1; i < edges.size(); ++i) {
+        if (edges[i].first != edges[i - 1].first || edges[i].second == edges[i - 1].second) continue;
+        links.push_back({edges[i - 1].second, edges[i].second});
+        links.push_back({edges[i].second, edges[i - 1].second});
+    }
+    std::sort(links.begin(), links.end());
+    std::vector<uint32_t> first(fn + 1, 0);
+    for (const auto& l : links) ++first[l.first + 1];
+    for (size_t f = 0; f < fn; ++f) first[f + 1] += first[f];
+
+    std::vector<uint32_t> order;
+    order.reserve(fn);
+    std::vector<uint8_t> done(fn, 0);
+    std::vector<uint32_t> stack;
+    for (size_t seed = 0; seed < fn; ++seed) {
+        if (done[seed]) continue;
+        stack.push_back(uint32_t(seed));
+        while (!stack.empty()) {
+            uint32_t f = stack.back();
+            stack.pop_back();
+            if (done[f]) continue;
+            done[f] = 1;
+            order.push_back(f);
+            for (uint32_t k = first[f + 1]; k-- > first[f];)
+                if (!done[links[k].second]) stack.push_back(links[k].second);
+        }
+    }
+    return order;
+}
+
+struct Encoder {
+    const Mesh* mesh;
+    const ValenceEncodeOptions* options;
+    bool normals = false;
+    std::vector<uint32_t> new_of;                 // old -> new
+    std::vector<uint16_t> qpos_old;               // 3 per old vertex
+    std::vector<uint16_t> qnorm_old;              // 2 per old vertex
+    std::vector<uint16_t> qpos, qnorm;            // by new index
+    RangeEncoder conn, pos, nrm;
+    uint16_t edge_probs[kValenceEdgeFifo + 1][32];
+    uint16_t vertex_probs[2][32];
+    uint16_t explicit_class[kClassProbs];
+    uint16_t explicit_top[kTopProbs];
+    ResidualModel<3> pos_model;
+    ResidualModel<2> nrm_model;
+    Fifo16 edge_a, edge_b, edge_c, vertices;
+    uint32_t next_new = 0;
+
+    void init() {
+        initProbs(&edge_probs[0][0], sizeof(edge_probs) / 2);
+        initProbs(&vertex_probs[0][0], sizeof(vertex_probs) / 2);
+        initProbs(explicit_class, kClassProbs);
+        initProbs(explicit_top, kTopProbs);
+        pos_model.init();
+        nrm_model.init();
+    }
+
+    void encodeAttributes(uint32_t old, uint32_t x, uint32_t a, uint32_t b, uint32_t c) {
+        const int64_t qmax = (int64_t(1) << options->position_bits) - 1;
+        for (int j = 0; j < 3; ++j) {
+            int64_t p = 0;
+            if (a != kNone) {
+                p = int64_t(qpos[3 * a + j]) + qpos[3 * b + j] - qpos[3 * c + j];
+                p = std::clamp<int64_t>(p, 0, qmax);
+            } else if (x > 0) {
+                p = qpos[3 * (x - 1) + j];
+            }
+            qpos[3 * x + j] = qpos_old[3 * old + j];
+            pos_model.encode(pos, j, int64_t(qpos[3 * x + j]) - p);
+        }
+        if (normals) {
+            const uint32_t nb = options->normal_bits;
+            const uint32_t mask = (1u << nb) - 1;
+            const int64_t half = int64_t(1) << (nb - 1);
+            for (int j = 0; j < 2; ++j) {
+                uint32_t p = 0;
+                if (a != kNone) p = (uint32_t(qnorm[2 * a + j]) + qnorm[2 * b + j]) >> 1;
+                else if (x > 0) p = qnorm[2 * (x - 1) + j];
+                else p = uint32_t(half);
+                qnorm[2 * x + j] = qnorm_old[2 * old + j];
+                int64_t r = int64_t((qnorm[2 * x + j] - p) & mask);
+                if (r >= half) r -= int64_t(mask) + 1;
+                nrm_model.encode(nrm, j, r);
+            }
+        }
+    }
+
+    // Codes input vertex `old`; returns its new index.
+    uint32_t encodeVertex(uint32_t ctx, uint32_t old, uint32_t a, uint32_t b, uint32_t c) {
+        uint32_t id = new_of[old];
+        if (id == kUnassigned) {
+            conn.tree(vertex_probs[ctx], 5, kValenceVertexSymbolNew);
+            id = next_new++;
+            new_of[old] = id;
+            encodeAttributes(old, id, a, b, c);
+            return id;
+        }
+        int slot = vertices.find(id);
+        if (slot >= 0) {
+            conn.tree(vertex_probs[ctx], 5, uint32_t(slot) + 1);
+            return id;
+        }
+        conn.tree(vertex_probs[ctx], 5, kValenceVertexSymbolExplicit);
+        conn.uint(explicit_class, explicit_top, uint64_t(next_new - 1 - id));
+        return id;
+    }
+};
+
+void put32(std::vector<uint8_t>& out, size_t at, uint32_t v) {
+    for (int i = 0; i < 4; ++i) out[at + i] = uint8_t(v >> (8 * i));
+}
+void putFloat(std::vector<uint8_t>& out, size_t at, float f) {
+    uint32_t u;
+    std::memcpy(&u, &f, 4);
+    put32(out, at, u);
+}
+
+} // namespace
+
+Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeOptions& options) {
+    LODBAKE_RETURN_IF_ERROR(checkMeshConsistency(mesh, "valence encoder"));
+    if (options.position_bits < kValenceMinPositionBits || options.position_bits > kValenceMaxPositionBits)
+        return invalidInput("valence encoder: position bits " + std::to_string(options.position_bits) +
+                            " outside [8, 16]");
+    const bool normals = options.encode_normals && mesh.hasNormals();
+    if (normals && (options.normal_bits < kValenceMinNormalBits || options.normal_bits > kValenceMaxNormalBits))
+        return invalidInput("valence encoder: normal bits " + std::to_string(options.normal_bits) +
+                            " outside [4, 16]");
+    const size_t vn = mesh.vertexCount(), fn = mesh.faceCount();
+    if (vn > kValenceMaxCount || fn > kValenceMaxCount)
+        return invalidInput("valence encoder: " + std::to_string(vn) + " vertices / " + std::to_string(fn) +
+                            " triangles exceed the format limit of 2^28");
+    for (size_t i = 0; i < vn; ++i) {
+        const Vec3f& p = mesh.positions[i];
+        if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+            return invalidInput("valence encoder: vertex " + std::to_string(i) + ": position is not finite");
+    }
+
+    // Quantization cube: all vertices (unreferenced ones are coded too).
+    float lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
+    for (size_t i = 0; i < vn; ++i) {
+        const float c[3] = {mesh.positions[i].x, mesh.positions[i].y, mesh.positions[i].z};
+        for (int j = 0; j < 3; ++j) {
+            if (i == 0 || c[j] < lo[j]) lo[j] = c[j];
+            if (i == 0 || c[j] > hi[j]) hi[j] = c[j];
+        }
+    }
+    float cube = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2], 0.0f});
+    if (!std::isfinite(cube)) return invalidInput("valence encoder: bounding box extent overflows a float");
+    const uint32_t qmax = (1u << options.position_bits) - 1;
+    const float step = cube / float(qmax);
+
+    Encoder e;
+    e.mesh = &mesh;
+    e.options = &options;
+    e.normals = normals;
+    e.init();
+    e.new_of.assign(vn, kUnassigned);
+    e.qpos_old.resize(3 * vn);
+    e.qpos.resize(3 * vn);
+    ValenceEncodeResult result;
+    for (size_t i = 0; i < vn; ++i) {
+        const float c[3] = {mesh.positions[i].x, mesh.positions[i].y, mesh.positions[i].z};
+        for (int j = 0; j < 3; ++j) {
+            double t = cube > 0.0f ? double(c[j] - lo[j]) / double(cube) * qmax : 0.0;
+            long q = std::lround(std::floor(t + 0.5));
+            q = std::clamp<long>(q, 0, long(qmax));
+            e.qpos_old[3 * i + j] = uint16_t(q);
+            double decoded = double(lo[j] + float(q) * step);
+            result.max_position_error = std::max(result.max_position_error, std::fabs(decoded - double(c[j])));
+        }
+    }
+    if (normals) {
+        e.qnorm_old.resize(2 * vn);
+        e.qnorm.resize(2 * vn);
+        for (size_t i = 0; i < vn; ++i) {
+            const float n[3] = {mesh.normals[i].x, mesh.normals[i].y, mesh.normals[i].z};
+            uint32_t q[2];
+            lodrt::octahedralEncode(n, options.normal_bits, q);
+            e.qnorm_old[2 * i] = uint16_t(q[0]);
+            e.qnorm_old[2 * i + 1] = uint16_t(q[1]);
+        }
+    }
+
+    result.old_face_of = traversalOrder(mesh.indices);
+    uint32_t previous_edge = kValenceEdgeFifo;
+    for (uint32_t f : result.old_face_of) {
+        const uint32_t o[3] = {mesh.indices[3 * size_t(f)], mesh.indices[3 * size_t(f) + 1],
+                               mesh.indices[3 * size_t(f) + 2]};
+        // The first FIFO edge a->b that this face contains as a directed edge.
+        uint32_t es = kValenceEdgeFifo, rot = 0;
+        for (uint32_t i = 0; i < e.edge_a.count && es == kValenceEdgeFifo; ++i) {
+            for (uint32_t r = 0; r < 3; ++r) {
+                if (e.new_of[o[r]] == e.edge_a.at(i) && e.new_of[o[(r + 1) % 3]] == e.edge_b.at(i)) {
+                    es = i;
+                    rot = r;
+                    break;
+                }
+            }
+        }
+        e.conn.tree(e.edge_probs[previous_edge], 5, es);
+        previous_edge = es;
+        uint32_t v[3];
+        if (es < kValenceEdgeFifo) {
+            v[0] = e.edge_a.at(es);
+            v[1] = e.edge_b.at(es);
+            v[2] = e.encodeVertex(0, o[(rot + 2) % 3], v[0], v[1], e.edge_c.at(es));
+        } else {
+            for (int i = 0; i < 3; ++i) v[i] = e.encodeVertex(1, o[i], kNone, kNone, kNone);
+        }
+        for (int i = 0; i < 3; ++i) {
+            e.edge_a.push(v[(i + 1) % 3]);
+            e.edge_b.push(v[i]);
+            e.edge_c.push(v[(i + 2) % 3]);
+        }
+        for (int i = 0; i < 3; ++i)
+            if (e.vertices.find(v[i]) < 0) e.vertices.push(v[i]);
+    }
+    for (size_t i = 0; i < vn; ++i) {
+        if (e.new_of[i] != kUnassigned) continue;
+        uint32_t x = e.next_new++;
+        e.new_of[i] = x;
+        e.encodeAttributes(uint32_t(i), x, kNone, kNone, kNone);
+    }
+
+    std::vector<uint8_t> conn = e.conn.finish(), pos = e.pos.finish(), nrm;
+    if (normals) nrm = e.nrm.finish();
+    std::vector<uint8_t>& out = result.bytes;
+    out.assign(kValenceHeaderSize, 0);
+    put32(out, 0, kValenceMagic);
+    out[4] = uint8_t(kValenceVersion);
+    out[5] = uint8_t(kValenceVersion >> 8);
+    out[6] = normals ? uint8_t(kValenceFlagNormals) : 0;
+    put32(out, 8, uint32_t(vn));
+    put32(out, 12, uint32_t(fn));
+    out[16] = uint8_t(options.position_bits);
+    out[17] = normals ? uint8_t(options.normal_bits) : 0;
+    for (int j = 0; j < 3; ++j) putFloat(out, 20 + 4 * j, lo[j]);
+    putFloat(out, 32, cube);
+    put32(out, 36, uint32_t(conn.size()));
+    put32(out, 40, uint32_t(pos.size()));
+    put32(out, 44, uint32_t(nrm.size()));
+    out.insert(out.end(), conn.begin(), conn.end());
+    out.insert(out.end(), pos.begin(), pos.end());
+    out.insert(out.end(), nrm.begin(), nrm.end());
+    result.header_bytes = kValenceHeaderSize;
+    result.connectivity_bytes = conn.size();
+    result.position_bytes = pos.size();
+    result.normal_bytes = nrm.size();
+    result.new_vertex_of = std::move(e.new_of);
+    return result;
+}
+
+Result<Mesh> decodeValence(const std::vector<uint8_t>& bytes, const std::string& name) {
+    lodrt::ValenceInfo info;
+    lodrt::Result r = lodrt::valenceReadInfo(bytes.data(), bytes.size(), &info);
+    if (r != lodrt::Result::Ok)
+        return invalidInput(name + ": header: " + lodrt::resultName(r));
+    Mesh mesh;
+    std::vector<float> positions(3 * size_t(info.vertex_count)), normals;
+    if (info.has_normals) normals.resize(3 * size_t(info.vertex_count));
+    mesh.indices.resize(3 * size_t(info.triangle_count));
+    std::vector<uint32_t> scratch((lodrt::valenceScratchSize(info) + 3) / 4);
+    lodrt::ValenceOutput output;
+    output.indices = mesh.indices.data();
+    output.index_capacity = mesh.indices.size();
+    output.positions = positions.data();
+    output.position_capacity = positions.size();
+    output.normals = info.has_normals ? normals.data() : nullptr;
+    output.normal_capacity = normals.size();
+    output.scratch = scratch.data();
+    output.scratch_size = scratch.size() * 4;
+    r = lodrt::valenceDecode(bytes.data(), bytes.size(), output);
+    if (r != lodrt::Result::Ok) return invalidInput(name + ": stream: " + lodrt::resultName(r));
+    mesh.positions.resize(info.vertex_count);
+    for (size_t i = 0; i < info.vertex_count; ++i)
+        mesh.positions[i] = Vec3f{positions[3 * i], positions[3 * i + 1], positions[3 * i + 2]};
+    if (info.has_normals) {
+        mesh.normals.resize(info.vertex_count);
+        for (size_t i = 0; i < info.vertex_count; ++i)
+            mesh.normals[i] = Vec3f{normals[3 * i], normals[3 * i + 1], normals[3 * i + 2]};
+    }
+    return mesh;
+}
+
+} // namespace lodbake::codec
