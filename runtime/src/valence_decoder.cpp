@@ -131,20 +131,32 @@ template <int Components> struct ResidualModel {
     }
 };
 
-struct Fifo16 {
-    uint32_t ring[16];
+template <uint32_t N> struct Fifo {
+    uint32_t ring[N];
     uint32_t head = 0;
     uint32_t count = 0;
-    uint32_t at(uint32_t i) const { return ring[(head - 1 - i) & 15u]; }
+    uint32_t at(uint32_t i) const { return ring[(head - 1 - i) & (N - 1)]; }
     void push(uint32_t v) {
-        ring[head & 15u] = v;
+        ring[head & (N - 1)] = v;
         ++head;
-        if (count < 16) ++count;
+        if (count < N) ++count;
     }
-    bool contains(uint32_t v) const {
+};
+
+// Move-to-front cache of recently referenced vertices.
+template <uint32_t N> struct MoveToFront {
+    uint32_t slot[N];
+    uint32_t count = 0;
+    int find(uint32_t v) const {
         for (uint32_t i = 0; i < count; ++i)
-            if (at(i) == v) return true;
-        return false;
+            if (slot[i] == v) return int(i);
+        return -1;
+    }
+    void touch(uint32_t v) {
+        int at = find(v);
+        uint32_t i = at >= 0 ? uint32_t(at) : (count < N ? count++ : N - 1);
+        for (; i > 0; --i) slot[i] = slot[i - 1];
+        slot[0] = v;
     }
 };
 
@@ -153,13 +165,14 @@ struct Decoder {
     uint16_t* qpos;  // 3 per vertex
     uint16_t* qnorm; // 2 per vertex, or null
     RangeDecoder conn, pos, nrm;
-    uint16_t edge_probs[kValenceEdgeFifo + 1][32];
-    uint16_t vertex_probs[2][32];
+    uint16_t edge_probs[kValenceEdgeFifo + 1][1u << kValenceSymbolTreeBits];
+    uint16_t vertex_probs[2][1u << kValenceSymbolTreeBits];
     uint16_t explicit_class[kClassProbs];
     uint16_t explicit_top[kTopProbs];
     ResidualModel<3> pos_model;
     ResidualModel<2> nrm_model;
-    Fifo16 edge_a, edge_b, edge_c, vertices;
+    Fifo<kValenceEdgeFifo> edge_a, edge_b, edge_c;
+    MoveToFront<kValenceVertexFifo> vertices;
     uint32_t next_new = 0;
 
     void init() {
@@ -210,7 +223,7 @@ struct Decoder {
 
     // One vertex reference; `ctx` 0 for the apex of an edge-matched triangle, 1 otherwise.
     Result decodeVertex(uint32_t ctx, uint32_t a, uint32_t b, uint32_t c, uint32_t* out) {
-        uint32_t s = conn.tree(vertex_probs[ctx], 5);
+        uint32_t s = conn.tree(vertex_probs[ctx], kValenceSymbolTreeBits);
         if (s == kValenceVertexSymbolNew) {
             if (next_new >= info->vertex_count) return Result::CorruptStream;
             uint32_t x = next_new++;
@@ -221,7 +234,7 @@ struct Decoder {
         }
         if (s <= kValenceVertexFifo) {
             if (s - 1 >= vertices.count) return Result::CorruptStream;
-            *out = vertices.at(s - 1);
+            *out = vertices.slot[s - 1];
             return Result::Ok;
         }
         if (s != kValenceVertexSymbolExplicit) return Result::CorruptStream;
@@ -360,7 +373,7 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
     constexpr uint32_t kNone = Decoder::kNone;
     uint32_t previous_edge = kValenceEdgeFifo;
     for (size_t t = 0; t < tn; ++t) {
-        uint32_t es = d.conn.tree(d.edge_probs[previous_edge], 5);
+        uint32_t es = d.conn.tree(d.edge_probs[previous_edge], kValenceSymbolTreeBits);
         if (es > kValenceEdgeFifo || (es < kValenceEdgeFifo && es >= d.edge_a.count)) return Result::CorruptStream;
         previous_edge = es;
         uint32_t v[3];
@@ -379,14 +392,14 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
         output.indices[3 * t + 1] = v[1];
         output.indices[3 * t + 2] = v[2];
         // Each edge is offered reversed (as a neighbour with the same orientation sees it), with
-        // the opposite corner for the parallelogram.
-        for (int i = 0; i < 3; ++i) {
+        // the opposite corner for the parallelogram; not the edge just matched (now interior).
+        for (int i = es < kValenceEdgeFifo ? 1 : 0; i < 3; ++i) {
             d.edge_a.push(v[(i + 1) % 3]);
             d.edge_b.push(v[i]);
             d.edge_c.push(v[(i + 2) % 3]);
         }
         for (int i = 0; i < 3; ++i)
-            if (!d.vertices.contains(v[i])) d.vertices.push(v[i]);
+            d.vertices.touch(v[i]);
     }
     // Vertices no triangle references, in order.
     while (d.next_new < info.vertex_count) {

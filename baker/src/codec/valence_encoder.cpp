@@ -40,65 +40,106 @@ template <int Components> struct ResidualModel {
     }
 };
 
-struct Fifo16 {
-    uint32_t ring[16];
+template <uint32_t N> struct Fifo {
+    uint32_t ring[N];
     uint32_t head = 0;
     uint32_t count = 0;
-    uint32_t at(uint32_t i) const { return ring[(head - 1 - i) & 15u]; }
+    uint32_t at(uint32_t i) const { return ring[(head - 1 - i) & (N - 1)]; }
     void push(uint32_t v) {
-        ring[head & 15u] = v;
+        ring[head & (N - 1)] = v;
         ++head;
-        if (count < 16) ++count;
-    }
-    int find(uint32_t v) const {
-        for (uint32_t i = 0; i < count; ++i)
-            if (at(i) == v) return int(i);
-        return -1;
+        if (count < N) ++count;
     }
 };
 
-// Faces in a depth-first order over edge adjacency, so most faces share an edge with a recent one.
-std::vector<uint32_t> traversalOrder(const std::vector<uint32_t>& indices) {
-    const size_t fn = indices.size() / 3;
-    std::vector<std::pair<uint64_t, uint32_t>> edges;
-    edges.reserve(fn * 3);
-    for (size_t f = 0; f < fn; ++f) {
-        for (int i = 0; i < 3; ++i) {
-            uint32_t a = indices[3 * f + i], b = indices[3 * f + (i + 1) % 3];
-            if (a == b) continue;
-            uint64_t key = (uint64_t(std::min(a, b)) << 32) | std::max(a, b);
-            edges.push_back({key, uint32_t(f)});
-        }
+// Move-to-front cache of recently referenced vertices.
+template <uint32_t N> struct MoveToFront {
+    uint32_t slot[N];
+    uint32_t count = 0;
+    int find(uint32_t v) const {
+        for (uint32_t i = 0; i < count; ++i)
+            if (slot[i] == v) return int(i);
+        return -1;
     }
-    std::sort(edges.begin(), edges.end());
-    // Faces around one edge are chained (each to the next), enough to connect them.
-    std::vector<std::pair<uint32_t, uint32_t>> links;
-    for (size_t i = 1; i < edges.size(); ++i) {
-        if (edges[i].first != edges[i - 1].first || edges[i].second == edges[i - 1].second) continue;
-        links.push_back({edges[i - 1].second, edges[i].second});
-        links.push_back({edges[i].second, edges[i - 1].second});
+    void touch(uint32_t v) {
+        int at = find(v);
+        uint32_t i = at >= 0 ? uint32_t(at) : (count < N ? count++ : N - 1);
+        for (; i > 0; --i) slot[i] = slot[i - 1];
+        slot[0] = v;
     }
-    std::sort(links.begin(), links.end());
-    std::vector<uint32_t> first(fn + 1, 0);
-    for (const auto& l : links) ++first[l.first + 1];
-    for (size_t f = 0; f < fn; ++f) first[f + 1] += first[f];
+};
 
+// Faces in a vertex-cache-friendly order (Forsyth's linear-speed greedy: a 16-entry LRU cache, the
+// best-scoring triangle around cached vertices next), so that most triangles share an edge with a
+// recent one and most old apices are recent vertices.
+std::vector<uint32_t> traversalOrder(const std::vector<uint32_t>& indices, size_t vertex_count) {
+    constexpr int kCache = int(kValenceVertexFifo);
+    const size_t fn = indices.size() / 3;
+    std::vector<uint32_t> first(vertex_count + 1, 0);
+    for (uint32_t v : indices) ++first[v + 1];
+    for (size_t v = 0; v < vertex_count; ++v) first[v + 1] += first[v];
+    std::vector<uint32_t> faces_of(indices.size());
+    {
+        std::vector<uint32_t> fill(first.begin(), first.end() - 1);
+        for (size_t c = 0; c < indices.size(); ++c) faces_of[fill[indices[c]]++] = uint32_t(c / 3);
+    }
+    std::vector<uint32_t> live(vertex_count); // unemitted faces per vertex
+    for (size_t v = 0; v < vertex_count; ++v) live[v] = first[v + 1] - first[v];
+    std::vector<int> cache_pos(vertex_count, -1);
+    auto vertexScore = [&](uint32_t v) {
+        if (live[v] == 0) return -1.0;
+        double s = 0.0;
+        int p = cache_pos[v];
+        if (p >= 0) s = p < 3 ? 0.75 : std::pow(1.0 - double(p - 3) / double(kCache - 3), 1.5);
+        return s + 2.0 / std::sqrt(double(live[v]));
+    };
+    std::vector<double> vscore(vertex_count);
+    for (size_t v = 0; v < vertex_count; ++v) vscore[v] = vertexScore(uint32_t(v));
+    std::vector<uint8_t> done(fn, 0);
     std::vector<uint32_t> order;
     order.reserve(fn);
-    std::vector<uint8_t> done(fn, 0);
-    std::vector<uint32_t> stack;
-    for (size_t seed = 0; seed < fn; ++seed) {
-        if (done[seed]) continue;
-        stack.push_back(uint32_t(seed));
-        while (!stack.empty()) {
-            uint32_t f = stack.back();
-            stack.pop_back();
-            if (done[f]) continue;
-            done[f] = 1;
-            order.push_back(f);
-            for (uint32_t k = first[f + 1]; k-- > first[f];)
-                if (!done[links[k].second]) stack.push_back(links[k].second);
+    std::vector<uint32_t> cache, next_cache;
+    size_t scan = 0;
+    while (order.size() < fn) {
+        // Best face around the cached vertices; ties by lower face index.
+        uint32_t best = 0xFFFFFFFFu;
+        double best_score = -1e300;
+        for (uint32_t v : cache) {
+            for (uint32_t k = first[v]; k < first[v + 1]; ++k) {
+                uint32_t f = faces_of[k];
+                if (done[f]) continue;
+                double s = vscore[indices[3 * f]] + vscore[indices[3 * f + 1]] + vscore[indices[3 * f + 2]];
+                if (s > best_score || (s == best_score && f < best)) {
+                    best_score = s;
+                    best = f;
+                }
+            }
         }
+        if (best == 0xFFFFFFFFu) {
+            while (done[scan]) ++scan;
+            best = uint32_t(scan);
+        }
+        done[best] = 1;
+        order.push_back(best);
+        // LRU update: the face's vertices to the front.
+        next_cache.clear();
+        for (int i = 0; i < 3; ++i) {
+            uint32_t v = indices[3 * size_t(best) + i];
+            --live[v];
+            if (std::find(next_cache.begin(), next_cache.end(), v) == next_cache.end()) next_cache.push_back(v);
+        }
+        for (uint32_t v : cache)
+            if (std::find(next_cache.begin(), next_cache.end(), v) == next_cache.end()) next_cache.push_back(v);
+        for (size_t i = kCache; i < next_cache.size(); ++i) {
+            cache_pos[next_cache[i]] = -1;
+            vscore[next_cache[i]] = vertexScore(next_cache[i]);
+        }
+        if (next_cache.size() > size_t(kCache)) next_cache.resize(kCache);
+        for (size_t i = 0; i < next_cache.size(); ++i) {
+            cache_pos[next_cache[i]] = int(i);
+            vscore[next_cache[i]] = vertexScore(next_cache[i]);
+        }
+        std::swap(cache, next_cache);
     }
     return order;
 }
@@ -112,13 +153,14 @@ struct Encoder {
     std::vector<uint16_t> qnorm_old;              // 2 per old vertex
     std::vector<uint16_t> qpos, qnorm;            // by new index
     RangeEncoder conn, pos, nrm;
-    uint16_t edge_probs[kValenceEdgeFifo + 1][32];
-    uint16_t vertex_probs[2][32];
+    uint16_t edge_probs[kValenceEdgeFifo + 1][1u << kValenceSymbolTreeBits];
+    uint16_t vertex_probs[2][1u << kValenceSymbolTreeBits];
     uint16_t explicit_class[kClassProbs];
     uint16_t explicit_top[kTopProbs];
     ResidualModel<3> pos_model;
     ResidualModel<2> nrm_model;
-    Fifo16 edge_a, edge_b, edge_c, vertices;
+    Fifo<kValenceEdgeFifo> edge_a, edge_b, edge_c;
+    MoveToFront<kValenceVertexFifo> vertices;
     uint32_t next_new = 0;
 
     void init() {
@@ -164,7 +206,7 @@ struct Encoder {
     uint32_t encodeVertex(uint32_t ctx, uint32_t old, uint32_t a, uint32_t b, uint32_t c) {
         uint32_t id = new_of[old];
         if (id == kUnassigned) {
-            conn.tree(vertex_probs[ctx], 5, kValenceVertexSymbolNew);
+            conn.tree(vertex_probs[ctx], kValenceSymbolTreeBits, kValenceVertexSymbolNew);
             id = next_new++;
             new_of[old] = id;
             encodeAttributes(old, id, a, b, c);
@@ -172,10 +214,10 @@ struct Encoder {
         }
         int slot = vertices.find(id);
         if (slot >= 0) {
-            conn.tree(vertex_probs[ctx], 5, uint32_t(slot) + 1);
+            conn.tree(vertex_probs[ctx], kValenceSymbolTreeBits, uint32_t(slot) + 1);
             return id;
         }
-        conn.tree(vertex_probs[ctx], 5, kValenceVertexSymbolExplicit);
+        conn.tree(vertex_probs[ctx], kValenceSymbolTreeBits, kValenceVertexSymbolExplicit);
         conn.uint(explicit_class, explicit_top, uint64_t(next_new - 1 - id));
         return id;
     }
@@ -257,7 +299,7 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
         }
     }
 
-    result.old_face_of = traversalOrder(mesh.indices);
+    result.old_face_of = traversalOrder(mesh.indices, vn);
     uint32_t previous_edge = kValenceEdgeFifo;
     for (uint32_t f : result.old_face_of) {
         const uint32_t o[3] = {mesh.indices[3 * size_t(f)], mesh.indices[3 * size_t(f) + 1],
@@ -273,7 +315,7 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
                 }
             }
         }
-        e.conn.tree(e.edge_probs[previous_edge], 5, es);
+        e.conn.tree(e.edge_probs[previous_edge], kValenceSymbolTreeBits, es);
         previous_edge = es;
         uint32_t v[3];
         if (es < kValenceEdgeFifo) {
@@ -283,13 +325,13 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
         } else {
             for (int i = 0; i < 3; ++i) v[i] = e.encodeVertex(1, o[i], kNone, kNone, kNone);
         }
-        for (int i = 0; i < 3; ++i) {
+        for (int i = es < kValenceEdgeFifo ? 1 : 0; i < 3; ++i) {
             e.edge_a.push(v[(i + 1) % 3]);
             e.edge_b.push(v[i]);
             e.edge_c.push(v[(i + 2) % 3]);
         }
         for (int i = 0; i < 3; ++i)
-            if (e.vertices.find(v[i]) < 0) e.vertices.push(v[i]);
+            e.vertices.touch(v[i]);
     }
     for (size_t i = 0; i < vn; ++i) {
         if (e.new_of[i] != kUnassigned) continue;

@@ -34,9 +34,10 @@ constexpr uint32_t kRangeProbBits = 11;
 constexpr uint32_t kRangeProbInit = 1u << (kRangeProbBits - 1);
 constexpr uint32_t kRangeAdaptShift = 5;
 constexpr uint32_t kRangeTopValue = 1u << 24;
-// Connectivity model: an edge FIFO and a vertex FIFO of recent entries.
-constexpr uint32_t kValenceEdgeFifo = 16;   // edge symbol 0..15 = FIFO slot, 16 = no shared edge
-constexpr uint32_t kValenceVertexFifo = 16; // vertex symbol 0 = new, 1..16 = FIFO slot + 1, 17 = explicit
+// Connectivity model: a FIFO of recent edges and a move-to-front cache of recent vertices.
+constexpr uint32_t kValenceEdgeFifo = 32;   // edge symbol 0..31 = FIFO slot, 32 = no shared edge
+constexpr uint32_t kValenceVertexFifo = 32; // vertex symbol 0 = new, 1..32 = cache slot + 1, 33 = explicit
+constexpr uint32_t kValenceSymbolTreeBits = 6; // edge and vertex symbols are 6-bit trees
 constexpr uint32_t kValenceVertexSymbolNew = 0;
 constexpr uint32_t kValenceVertexSymbolExplicit = kValenceVertexFifo + 1;
 // Integer coding: the bit length class k (0..32) of value+1 as a 6-bit tree, then k low bits.

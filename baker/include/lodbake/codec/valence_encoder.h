@@ -8,9 +8,10 @@
 // sub-meshes are NOT coded (the CLI warns). Any triangle soup is accepted: non-manifold and
 // inconsistently oriented input costs more bits but needs no cutting and no duplicated vertices.
 //
-// Status: connectivity is coded with an edge-FIFO traversal coder (each triangle names a recently
-// seen edge and its apex: a new vertex, a recent one or an explicit back-reference), not yet with
-// Touma-Gotsman valence conquest; see docs/format/valence.md "Limitations".
+// Status: connectivity is coded with an edge-FIFO coder over a vertex-cache-optimized triangle order
+// (each triangle names a recently seen edge and its apex: a new vertex, a cached one or an explicit
+// back-reference), not yet with Touma-Gotsman valence conquest; see docs/format/valence.md
+// "Limitations".
 
 #include <cstdint>
 #include <vector>
