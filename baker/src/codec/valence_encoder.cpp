@@ -232,6 +232,31 @@ void putFloat(std::vector<uint8_t>& out, size_t at, float f) {
     put32(out, at, u);
 }
 
+std::string describe(lodrt::Result r) {
+    const char* what = "";
+    switch (r) {
+    case lodrt::Result::Truncated:
+        what = "the file ends before the lengths its header gives";
+        break;
+    case lodrt::Result::BadMagic:
+        what = "not an .lbm file (bad magic)";
+        break;
+    case lodrt::Result::UnsupportedVersion:
+        what = "format version other than 1";
+        break;
+    case lodrt::Result::TrailingBytes:
+        what = "bytes after the streams the header announces";
+        break;
+    case lodrt::Result::CorruptStream:
+        what = "corrupt (a value out of range)";
+        break;
+    default:
+        what = "cannot decode";
+        break;
+    }
+    return std::string(what) + " (" + lodrt::resultName(r) + ")";
+}
+
 } // namespace
 
 Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeOptions& options) {
@@ -372,7 +397,7 @@ Result<Mesh> decodeValence(const std::vector<uint8_t>& bytes, const std::string&
     lodrt::ValenceInfo info;
     lodrt::Result r = lodrt::valenceReadInfo(bytes.data(), bytes.size(), &info);
     if (r != lodrt::Result::Ok)
-        return invalidInput(name + ": header: " + lodrt::resultName(r));
+        return invalidInput(name + ": header: " + describe(r));
     Mesh mesh;
     std::vector<float> positions(3 * size_t(info.vertex_count)), normals;
     if (info.has_normals) normals.resize(3 * size_t(info.vertex_count));
@@ -388,7 +413,7 @@ Result<Mesh> decodeValence(const std::vector<uint8_t>& bytes, const std::string&
     output.scratch = scratch.data();
     output.scratch_size = scratch.size() * 4;
     r = lodrt::valenceDecode(bytes.data(), bytes.size(), output);
-    if (r != lodrt::Result::Ok) return invalidInput(name + ": stream: " + lodrt::resultName(r));
+    if (r != lodrt::Result::Ok) return invalidInput(name + ": streams: " + describe(r));
     mesh.positions.resize(info.vertex_count);
     for (size_t i = 0; i < info.vertex_count; ++i)
         mesh.positions[i] = Vec3f{positions[3 * i], positions[3 * i + 1], positions[3 * i + 2]};

@@ -7,10 +7,16 @@
 #include <array>
 #include <cmath>
 #include <deque>
+#include <cstdlib>
+#include <fstream>
 #include <random>
+#include <sstream>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include "lodbake/codec/valence_encoder.h"
 #include "lodbake/core/diagnostics.h"
+#include "lodbake/core/file_io.h"
 #include "lodbake/io/mesh_io.h"
 #include "lodrt/format.h"
 #include "lodrt/valence.h"
@@ -200,6 +206,57 @@ TEST(ValenceCodecTest, SharedScans) {
         // Well below the 96 bits per vertex of float positions plus 3 x 32-bit indices per face.
         EXPECT_LT(double(r.bytes.size()) * 8.0 / double(m->vertexCount()), 40.0) << name;
     }
+}
+
+struct CliRun {
+    int exit_code = -1;
+    std::string out, err;
+};
+
+CliRun runCli(const std::string& args) {
+    static int counter = 0;
+    const std::string base =
+        lodbake_test::scratchDir() + "/valence_cli_" + std::to_string(::getpid()) + "_" + std::to_string(++counter);
+    const std::string cmd = "'" + lodbake_test::lodbakeCli() + "' " + args + " >" + base + ".out 2>" + base + ".err";
+    const int status = std::system(cmd.c_str());
+    CliRun r;
+    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    for (auto [path, text] : {std::make_pair(base + ".out", &r.out), std::make_pair(base + ".err", &r.err)}) {
+        std::ifstream f(path);
+        std::stringstream ss;
+        ss << f.rdbuf();
+        *text = ss.str();
+    }
+    return r;
+}
+
+TEST(ValenceCodecTest, CliEncodeDecode) {
+    const std::string dir = lodbake_test::scratchDir();
+    const std::string in = dir + "/valence_torus.ply", lbm = dir + "/valence_torus.lbm", out = dir + "/valence_back.ply";
+    lodbake::Diagnostics diag;
+    ASSERT_TRUE(lodbake::writeMesh(torus(12, 8), in, {}, diag).ok());
+    CliRun enc = runCli("encode '" + in + "' -o '" + lbm + "' --bits 12 --normal-bits 8 --json");
+    ASSERT_EQ(enc.exit_code, 0) << enc.err;
+    EXPECT_NE(enc.out.find("\"connectivity\""), std::string::npos);
+    EXPECT_NE(enc.out.find("\"bits_per_vertex\""), std::string::npos);
+    CliRun dec = runCli("decode '" + lbm + "' -o '" + out + "'");
+    ASSERT_EQ(dec.exit_code, 0) << dec.err;
+    auto back = lodbake::readMesh(out, {}, diag);
+    ASSERT_TRUE(back.ok());
+    EXPECT_EQ(back->mesh.vertexCount(), 96u);
+    EXPECT_EQ(back->mesh.faceCount(), 192u);
+    EXPECT_TRUE(back->mesh.hasNormals());
+    // A cut file: exit 1, one error line naming the file, no output.
+    auto bytes = lodbake::readFileBytes(lbm);
+    ASSERT_TRUE(bytes.ok());
+    const std::string cut = dir + "/valence_cut.lbm", cut_out = dir + "/valence_cut.ply";
+    ASSERT_TRUE(lodbake::writeFileAtomic(cut, bytes->data(), bytes->size() - 3).ok());
+    CliRun bad = runCli("decode '" + cut + "' -o '" + cut_out + "'");
+    EXPECT_EQ(bad.exit_code, 1);
+    EXPECT_EQ(bad.err.rfind("error: " + cut + ": ", 0), 0u) << bad.err;
+    EXPECT_EQ(std::count(bad.err.begin(), bad.err.end(), '\n'), 1);
+    EXPECT_FALSE(std::ifstream(cut_out).good());
+    EXPECT_EQ(runCli("encode '" + in + "' -o '" + lbm + "' --bits 7").exit_code, 2);
 }
 
 // ---- decoder safety ----
