@@ -85,7 +85,7 @@ bool sharesEdge(const uint32_t* a, const uint32_t* b) {
 std::vector<uint32_t> traversalOrder(const std::vector<uint32_t>& indices, size_t vertex_count) {
     constexpr int kCache = int(kValenceVertexFifo);
     constexpr double kStripBonus = 2.0;
-    constexpr size_t kSearch = 8;
+    constexpr size_t kSearch = 4;
     const size_t fn = indices.size() / 3;
     std::vector<uint32_t> first(vertex_count + 1, 0);
     for (uint32_t v : indices) ++first[v + 1];
@@ -98,12 +98,17 @@ std::vector<uint32_t> traversalOrder(const std::vector<uint32_t>& indices, size_
     std::vector<uint32_t> live(vertex_count); // unemitted faces per vertex
     for (size_t v = 0; v < vertex_count; ++v) live[v] = first[v + 1] - first[v];
     std::vector<int> cache_pos(vertex_count, -1);
+    double position_score[kCache];
+    for (int p = 0; p < kCache; ++p)
+        position_score[p] = p < 3 ? 0.75 : std::pow(1.0 - double(p - 3) / double(kCache - 3), 1.5);
+    constexpr uint32_t kValenceTable = 64;
+    double valence_score[kValenceTable];
+    for (uint32_t n = 1; n < kValenceTable; ++n) valence_score[n] = 2.0 / std::sqrt(double(n));
     auto vertexScore = [&](uint32_t v) {
         if (live[v] == 0) return -1.0;
-        double s = 0.0;
-        int p = cache_pos[v];
-        if (p >= 0) s = p < 3 ? 0.75 : std::pow(1.0 - double(p - 3) / double(kCache - 3), 1.5);
-        return s + 2.0 / std::sqrt(double(live[v]));
+        const int p = cache_pos[v];
+        const double s = p >= 0 ? position_score[p] : 0.0;
+        return s + (live[v] < kValenceTable ? valence_score[live[v]] : 2.0 / std::sqrt(double(live[v])));
     };
     std::vector<double> vscore(vertex_count);
     for (size_t v = 0; v < vertex_count; ++v) vscore[v] = vertexScore(uint32_t(v));
@@ -140,13 +145,13 @@ std::vector<uint32_t> traversalOrder(const std::vector<uint32_t>& indices, size_
         order.push_back(best);
         // LRU update: the face's vertices to the front.
         next_cache.clear();
+        const uint32_t* t = &indices[3 * size_t(best)];
         for (int i = 0; i < 3; ++i) {
-            uint32_t v = indices[3 * size_t(best) + i];
-            --live[v];
-            if (std::find(next_cache.begin(), next_cache.end(), v) == next_cache.end()) next_cache.push_back(v);
+            --live[t[i]];
+            if (std::find(next_cache.begin(), next_cache.end(), t[i]) == next_cache.end()) next_cache.push_back(t[i]);
         }
         for (uint32_t v : cache)
-            if (std::find(next_cache.begin(), next_cache.end(), v) == next_cache.end()) next_cache.push_back(v);
+            if (v != t[0] && v != t[1] && v != t[2]) next_cache.push_back(v);
         for (size_t i = kCache; i < next_cache.size(); ++i) {
             cache_pos[next_cache[i]] = -1;
             vscore[next_cache[i]] = vertexScore(next_cache[i]);
