@@ -15,7 +15,9 @@ using namespace format;
 uint32_t read32(const uint8_t* p) {
     return uint32_t(p[0]) | (uint32_t(p[1]) << 8) | (uint32_t(p[2]) << 16) | (uint32_t(p[3]) << 24);
 }
-uint16_t read16(const uint8_t* p) { return uint16_t(p[0] | (p[1] << 8)); }
+uint16_t read16(const uint8_t* p) {
+    return uint16_t(p[0] | (p[1] << 8));
+}
 float readFloat(const uint8_t* p) {
     uint32_t u = read32(p);
     float f;
@@ -121,7 +123,10 @@ template <int Components> struct ResidualModel {
     }
     // Zigzag-decoded residual of component j; false on a corrupt class.
     bool decode(RangeDecoder& rd, int j, int64_t* residual) {
-        uint32_t ctx = previous[j] < kValenceResidualContexts ? previous[j] : kValenceResidualContexts - 1;
+        // Context: the mean class of this component's last residual and of the residual coded just
+        // before (the previous component, or for component 0 the last component of the last vertex).
+        uint32_t ctx = (previous[j] + previous[(j + Components - 1) % Components] + 1) >> 1;
+        if (ctx >= kValenceResidualContexts) ctx = kValenceResidualContexts - 1;
         uint64_t u;
         uint32_t k;
         if (!rd.uint(klass[j][ctx], top[j][ctx], &u, &k)) return false;
@@ -209,9 +214,12 @@ struct Decoder {
             const int64_t half = int64_t(1) << (nb - 1);
             for (int j = 0; j < 2; ++j) {
                 uint32_t p = 0;
-                if (a != kNone) p = (uint32_t(qnorm[2 * a + j]) + qnorm[2 * b + j]) >> 1;
-                else if (x > 0) p = qnorm[2 * (x - 1) + j];
-                else p = uint32_t(half);
+                if (a != kNone)
+                    p = (uint32_t(qnorm[2 * a + j]) + qnorm[2 * b + j]) >> 1;
+                else if (x > 0)
+                    p = qnorm[2 * (x - 1) + j];
+                else
+                    p = uint32_t(half);
                 int64_t r;
                 if (!nrm_model.decode(nrm, j, &r)) return Result::CorruptStream;
                 if (r < -half || r >= half) return Result::CorruptStream;
@@ -281,7 +289,8 @@ Result valenceReadInfo(const uint8_t* data, size_t size, ValenceInfo* info) {
     // Every coded symbol costs at least ~0.022 bits (probabilities saturate at 31/2048), so a stream
     // of n bytes cannot hold more than a bounded number of triangles or vertices: refuse counts above
     // that before the caller allocates for them.
-    if (uint64_t(v.triangle_count) > uint64_t(kValenceTrianglesPerByte) * v.connectivity_bytes + kValenceTrianglesPerByte)
+    if (uint64_t(v.triangle_count) >
+        uint64_t(kValenceTrianglesPerByte) * v.connectivity_bytes + kValenceTrianglesPerByte)
         return Result::CorruptStream;
     if (uint64_t(v.vertex_count) > uint64_t(kValenceVerticesPerByte) * v.position_bytes + kValenceVerticesPerByte)
         return Result::CorruptStream;
@@ -398,8 +407,7 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
             d.edge_b.push(v[i]);
             d.edge_c.push(v[(i + 2) % 3]);
         }
-        for (int i = 0; i < 3; ++i)
-            d.vertices.touch(v[i]);
+        for (int i = 0; i < 3; ++i) d.vertices.touch(v[i]);
     }
     // Vertices no triangle references, in order.
     while (d.next_new < info.vertex_count) {
@@ -413,8 +421,7 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
     const uint32_t qmax = (1u << info.position_bits) - 1;
     const float step = info.cube_size / float(qmax);
     for (size_t i = 0; i < vn; ++i)
-        for (int j = 0; j < 3; ++j)
-            output.positions[3 * i + j] = info.bounds_min[j] + float(d.qpos[3 * i + j]) * step;
+        for (int j = 0; j < 3; ++j) output.positions[3 * i + j] = info.bounds_min[j] + float(d.qpos[3 * i + j]) * step;
     if (output.normals && info.has_normals) {
         for (size_t i = 0; i < vn; ++i) {
             uint32_t q[2] = {d.qnorm[2 * i], d.qnorm[2 * i + 1]};

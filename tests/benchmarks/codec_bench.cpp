@@ -116,12 +116,11 @@ int main(int argc, char** argv) {
     const std::string dir = argc > 1 ? argv[1] : LODBAKE_BENCH_MESHES_DIR;
     std::vector<std::string> names;
     for (int i = 2; i < argc; ++i) names.push_back(argv[i]);
-    if (names.empty())
-        names = {"bunny_zipper.ply", "igea.ply", "lucy100k.ply", "nefertiti.obj", "dragon_poisson.ply"};
+    if (names.empty()) names = {"bunny_zipper.ply", "igea.ply", "lucy100k.ply", "nefertiti.obj", "dragon_poisson.ply"};
 
-    std::printf("%-20s %4s %2s %7s | %9s %9s %5s | %6s %6s %6s | %8s %8s %5s | %8s %8s %5s | %9s %9s\n", "mesh",
-                "bits", "n", "V", "ours B", "draco B", "ratio", "conn", "pos", "nrm", "dec ms", "draco", "ratio",
-                "enc ms", "draco", "ratio", "err ours", "err draco");
+    std::printf("%-20s %4s %2s %7s | %9s %9s %5s | %6s %6s %6s | %8s %8s %5s | %8s %8s %5s | %9s %9s\n", "mesh", "bits",
+                "n", "V", "ours B", "draco B", "ratio", "conn", "pos", "nrm", "dec ms", "draco", "ratio", "enc ms",
+                "draco", "ratio", "err ours", "err draco");
     for (const std::string& name : names) {
         Diagnostics diag;
         auto loaded = readMesh(dir + "/" + name, {}, diag);

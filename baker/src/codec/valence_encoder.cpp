@@ -22,7 +22,9 @@ constexpr uint32_t kNone = 0xFFFFFFFFu;
 constexpr uint32_t kClassProbs = 1u << kValenceClassTreeBits;
 constexpr uint32_t kTopProbs = 33;
 
-void initProbs(uint16_t* probs, size_t n) { std::fill(probs, probs + n, uint16_t(kRangeProbInit)); }
+void initProbs(uint16_t* probs, size_t n) {
+    std::fill(probs, probs + n, uint16_t(kRangeProbInit));
+}
 
 template <int Components> struct ResidualModel {
     uint16_t klass[Components][kValenceResidualContexts][kClassProbs];
@@ -34,7 +36,8 @@ template <int Components> struct ResidualModel {
         for (int j = 0; j < Components; ++j) previous[j] = 0;
     }
     void encode(RangeEncoder& re, int j, int64_t residual) {
-        uint32_t ctx = std::min<uint32_t>(previous[j], kValenceResidualContexts - 1);
+        uint32_t ctx = std::min<uint32_t>((previous[j] + previous[(j + Components - 1) % Components] + 1) >> 1,
+                                          kValenceResidualContexts - 1);
         uint64_t u = residual >= 0 ? uint64_t(residual) << 1 : ((uint64_t(-residual - 1)) << 1) | 1u;
         previous[j] = re.uint(klass[j][ctx], top[j][ctx], u);
     }
@@ -170,10 +173,10 @@ struct Encoder {
     const Mesh* mesh;
     const ValenceEncodeOptions* options;
     bool normals = false;
-    std::vector<uint32_t> new_of;                 // old -> new
-    std::vector<uint16_t> qpos_old;               // 3 per old vertex
-    std::vector<uint16_t> qnorm_old;              // 2 per old vertex
-    std::vector<uint16_t> qpos, qnorm;            // by new index
+    std::vector<uint32_t> new_of;      // old -> new
+    std::vector<uint16_t> qpos_old;    // 3 per old vertex
+    std::vector<uint16_t> qnorm_old;   // 2 per old vertex
+    std::vector<uint16_t> qpos, qnorm; // by new index
     RangeEncoder conn, pos, nrm;
     uint16_t edge_probs[kValenceEdgeFifo + 1][1u << kValenceSymbolTreeBits];
     uint16_t vertex_probs[2][1u << kValenceSymbolTreeBits];
@@ -213,9 +216,12 @@ struct Encoder {
             const int64_t half = int64_t(1) << (nb - 1);
             for (int j = 0; j < 2; ++j) {
                 uint32_t p = 0;
-                if (a != kNone) p = (uint32_t(qnorm[2 * a + j]) + qnorm[2 * b + j]) >> 1;
-                else if (x > 0) p = qnorm[2 * (x - 1) + j];
-                else p = uint32_t(half);
+                if (a != kNone)
+                    p = (uint32_t(qnorm[2 * a + j]) + qnorm[2 * b + j]) >> 1;
+                else if (x > 0)
+                    p = qnorm[2 * (x - 1) + j];
+                else
+                    p = uint32_t(half);
                 qnorm[2 * x + j] = qnorm_old[2 * old + j];
                 int64_t r = int64_t((qnorm[2 * x + j] - p) & mask);
                 if (r >= half) r -= int64_t(mask) + 1;
@@ -288,8 +294,7 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
                             " outside [8, 16]");
     const bool normals = options.encode_normals && mesh.hasNormals();
     if (normals && (options.normal_bits < kValenceMinNormalBits || options.normal_bits > kValenceMaxNormalBits))
-        return invalidInput("valence encoder: normal bits " + std::to_string(options.normal_bits) +
-                            " outside [4, 16]");
+        return invalidInput("valence encoder: normal bits " + std::to_string(options.normal_bits) + " outside [4, 16]");
     const size_t vn = mesh.vertexCount(), fn = mesh.faceCount();
     if (vn > kValenceMaxCount || fn > kValenceMaxCount)
         return invalidInput("valence encoder: " + std::to_string(vn) + " vertices / " + std::to_string(fn) +
@@ -377,8 +382,7 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
             e.edge_b.push(v[i]);
             e.edge_c.push(v[(i + 2) % 3]);
         }
-        for (int i = 0; i < 3; ++i)
-            e.vertices.touch(v[i]);
+        for (int i = 0; i < 3; ++i) e.vertices.touch(v[i]);
     }
     for (size_t i = 0; i < vn; ++i) {
         if (e.new_of[i] != kUnassigned) continue;
@@ -418,8 +422,7 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
 Result<Mesh> decodeValence(const std::vector<uint8_t>& bytes, const std::string& name) {
     lodrt::ValenceInfo info;
     lodrt::Result r = lodrt::valenceReadInfo(bytes.data(), bytes.size(), &info);
-    if (r != lodrt::Result::Ok)
-        return invalidInput(name + ": header: " + describe(r));
+    if (r != lodrt::Result::Ok) return invalidInput(name + ": header: " + describe(r));
     Mesh mesh;
     std::vector<float> positions(3 * size_t(info.vertex_count)), normals;
     if (info.has_normals) normals.resize(3 * size_t(info.vertex_count));

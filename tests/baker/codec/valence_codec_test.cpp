@@ -75,8 +75,8 @@ void expectRoundTrip(const Mesh& in, const ValenceEncodeOptions& options, Valenc
     for (size_t v = 0; v < in.vertexCount(); ++v) {
         const Vec3f& a = in.positions[v];
         const Vec3f& b = m.positions[enc->new_vertex_of[v]];
-        max_err = std::max({max_err, double(std::fabs(a.x - b.x)), double(std::fabs(a.y - b.y)),
-                            double(std::fabs(a.z - b.z))});
+        max_err = std::max(
+            {max_err, double(std::fabs(a.x - b.x)), double(std::fabs(a.y - b.y)), double(std::fabs(a.z - b.z))});
     }
     EXPECT_LE(max_err, tol);
     EXPECT_NEAR(max_err, enc->max_position_error, 1e-6 * (cube + 1.0));
@@ -88,8 +88,9 @@ void expectRoundTrip(const Mesh& in, const ValenceEncodeOptions& options, Valenc
             float len = std::sqrt(a.x * a.x + a.y * a.y + a.z * a.z);
             if (!(len > 0.0f)) continue;
             const Vec3f& b = m.normals[enc->new_vertex_of[v]];
-            double d = std::sqrt(double(a.x / len - b.x) * (a.x / len - b.x) + double(a.y / len - b.y) * (a.y / len - b.y) +
-                                 double(a.z / len - b.z) * (a.z / len - b.z));
+            double d =
+                std::sqrt(double(a.x / len - b.x) * (a.x / len - b.x) + double(a.y / len - b.y) * (a.y / len - b.y) +
+                          double(a.z / len - b.z) * (a.z / len - b.z));
             ASSERT_LE(d, tol_n) << "normal " << v;
         }
     }
@@ -131,9 +132,15 @@ Mesh torus(int nu, int nv) {
     return m;
 }
 
-TEST(ValenceCodecTest, SingleTriangle) { expectRoundTrip(lodbake_test::singleTriangle(), {}); }
-TEST(ValenceCodecTest, Tetrahedron) { expectRoundTrip(lodbake_test::tetrahedron(), {}); }
-TEST(ValenceCodecTest, EmptyMesh) { expectRoundTrip(Mesh(), {}); }
+TEST(ValenceCodecTest, SingleTriangle) {
+    expectRoundTrip(lodbake_test::singleTriangle(), {});
+}
+TEST(ValenceCodecTest, Tetrahedron) {
+    expectRoundTrip(lodbake_test::tetrahedron(), {});
+}
+TEST(ValenceCodecTest, EmptyMesh) {
+    expectRoundTrip(Mesh(), {});
+}
 TEST(ValenceCodecTest, OpenGridWithHoles) {
     for (uint32_t bits : {8u, 11u, 14u, 16u}) {
         ValenceEncodeOptions o;
@@ -232,7 +239,8 @@ CliRun runCli(const std::string& args) {
 
 TEST(ValenceCodecTest, CliEncodeDecode) {
     const std::string dir = lodbake_test::scratchDir();
-    const std::string in = dir + "/valence_torus.ply", lbm = dir + "/valence_torus.lbm", out = dir + "/valence_back.ply";
+    const std::string in = dir + "/valence_torus.ply", lbm = dir + "/valence_torus.lbm",
+                      out = dir + "/valence_back.ply";
     lodbake::Diagnostics diag;
     ASSERT_TRUE(lodbake::writeMesh(torus(12, 8), in, {}, diag).ok());
     CliRun enc = runCli("encode '" + in + "' -o '" + lbm + "' --bits 12 --normal-bits 8 --json");
@@ -307,7 +315,9 @@ std::vector<uint8_t> sampleStream() {
     return enc->bytes;
 }
 
-TEST(ValenceDecoderSafetyTest, ValidStreamDecodes) { EXPECT_EQ(decodeChecked(sampleStream()), lodrt::Result::Ok); }
+TEST(ValenceDecoderSafetyTest, ValidStreamDecodes) {
+    EXPECT_EQ(decodeChecked(sampleStream()), lodrt::Result::Ok);
+}
 
 TEST(ValenceDecoderSafetyTest, EveryTruncatedPrefixFails) {
     std::vector<uint8_t> bytes = sampleStream();
