@@ -167,8 +167,9 @@ template <uint32_t N> struct MoveToFront {
 
 struct Decoder {
     const ValenceInfo* info;
-    uint16_t* qpos;  // 3 per vertex
-    uint16_t* qnorm; // 2 per vertex, or null
+    uint16_t* qpos;      // 3 per vertex
+    uint16_t* qnorm;     // 2 per vertex, or null
+    int64_t* normal_sum; // 3 per vertex when normals: sum of incident face normals (quantized space)
     RangeDecoder conn, pos, nrm;
     uint16_t edge_probs[kValenceEdgeFifo + 1][1u << kValenceSymbolTreeBits];
     uint16_t vertex_probs[2][1u << kValenceSymbolTreeBits];
@@ -208,22 +209,46 @@ struct Decoder {
             if (q < 0 || q > qmax) return Result::CorruptStream;
             qpos[3 * x + j] = uint16_t(q);
         }
-        if (qnorm) {
-            const uint32_t nb = info->normal_bits;
-            const uint32_t mask = (1u << nb) - 1;
-            const int64_t half = int64_t(1) << (nb - 1);
+        return Result::Ok;
+    }
+
+    // Normals are decoded after all positions, in vertex order, each predicted by the octahedral code
+    // of the sum of its faces' (area-weighted) normals computed exactly on the quantized positions.
+    Result decodeNormals(const uint32_t* indices, size_t triangle_count) {
+        const size_t vn = info->vertex_count;
+        for (size_t i = 0; i < 3 * vn; ++i) normal_sum[i] = 0;
+        for (size_t t = 0; t < triangle_count; ++t) {
+            const uint32_t* f = &indices[3 * t];
+            int64_t e1[3], e2[3];
+            for (int j = 0; j < 3; ++j) {
+                e1[j] = int64_t(qpos[3 * f[1] + j]) - qpos[3 * f[0] + j];
+                e2[j] = int64_t(qpos[3 * f[2] + j]) - qpos[3 * f[0] + j];
+            }
+            const int64_t n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+                                  e1[0] * e2[1] - e1[1] * e2[0]};
+            for (int c = 0; c < 3; ++c)
+                for (int j = 0; j < 3; ++j) normal_sum[3 * f[c] + j] += n[j];
+        }
+        const uint32_t nb = info->normal_bits;
+        const uint32_t mask = (1u << nb) - 1;
+        const int64_t half = int64_t(1) << (nb - 1);
+        for (size_t x = 0; x < vn; ++x) {
+            const int64_t* sum = &normal_sum[3 * x];
+            uint32_t p[2];
+            if (sum[0] != 0 || sum[1] != 0 || sum[2] != 0) {
+                const float fs[3] = {float(sum[0]), float(sum[1]), float(sum[2])};
+                octahedralEncode(fs, nb, p);
+            } else if (x > 0) {
+                p[0] = qnorm[2 * (x - 1)];
+                p[1] = qnorm[2 * (x - 1) + 1];
+            } else {
+                p[0] = p[1] = uint32_t(half);
+            }
             for (int j = 0; j < 2; ++j) {
-                uint32_t p = 0;
-                if (a != kNone)
-                    p = (uint32_t(qnorm[2 * a + j]) + qnorm[2 * b + j]) >> 1;
-                else if (x > 0)
-                    p = qnorm[2 * (x - 1) + j];
-                else
-                    p = uint32_t(half);
                 int64_t r;
                 if (!nrm_model.decode(nrm, j, &r)) return Result::CorruptStream;
                 if (r < -half || r >= half) return Result::CorruptStream;
-                qnorm[2 * x + j] = uint16_t((p + uint32_t(r)) & mask);
+                qnorm[2 * x + j] = uint16_t((p[j] + uint32_t(r)) & mask);
             }
         }
         return Result::Ok;
@@ -306,9 +331,10 @@ Result valenceReadInfo(const uint8_t* data, size_t size, ValenceInfo* info) {
 }
 
 size_t valenceScratchSize(const ValenceInfo& info) {
-    size_t per_vertex = 3 + (info.has_normals ? 2 : 0);
-    size_t bytes = size_t(info.vertex_count) * per_vertex * sizeof(uint16_t);
-    return (bytes + 3) & ~size_t(3);
+    // int64 face-normal sums (normals only), then uint16 quantized positions and normals.
+    size_t bytes = info.has_normals ? size_t(info.vertex_count) * 3 * sizeof(int64_t) : 0;
+    bytes += size_t(info.vertex_count) * (3 + (info.has_normals ? 2 : 0)) * sizeof(uint16_t);
+    return (bytes + 7) & ~size_t(7);
 }
 
 void octahedralEncode(const float n[3], uint32_t bits, uint32_t out[2]) {
@@ -360,7 +386,7 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
     const size_t vn = size_t(info.vertex_count), tn = size_t(info.triangle_count);
     if ((tn > 0 && !output.indices) || (vn > 0 && !output.positions) || (vn > 0 && !output.scratch))
         return Result::InvalidArgument;
-    if (reinterpret_cast<uintptr_t>(output.scratch) % 4 != 0) return Result::InvalidArgument;
+    if (reinterpret_cast<uintptr_t>(output.scratch) % 8 != 0) return Result::InvalidArgument;
     if (output.index_capacity < 3 * tn || output.position_capacity < 3 * vn ||
         output.scratch_size < valenceScratchSize(info) ||
         (output.normals && info.has_normals && output.normal_capacity < 3 * vn))
@@ -369,7 +395,9 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
     // The decoder state is ~14 KB of models: kept in a static-free local object.
     Decoder d;
     d.info = &info;
-    d.qpos = static_cast<uint16_t*>(output.scratch);
+    d.normal_sum = info.has_normals ? static_cast<int64_t*>(output.scratch) : nullptr;
+    d.qpos = reinterpret_cast<uint16_t*>(static_cast<uint8_t*>(output.scratch) +
+                                         (info.has_normals ? vn * 3 * sizeof(int64_t) : 0));
     d.qnorm = info.has_normals ? d.qpos + 3 * vn : nullptr;
     d.init();
     const uint8_t* stream = data + kValenceHeaderSize;
@@ -413,6 +441,10 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
     while (d.next_new < info.vertex_count) {
         uint32_t x = d.next_new++;
         r = d.decodeAttributes(x, kNone, kNone, kNone);
+        if (r != Result::Ok) return r;
+    }
+    if (info.has_normals) {
+        r = d.decodeNormals(output.indices, tn);
         if (r != Result::Ok) return r;
     }
     if (!d.conn.finishedExactly() || !d.pos.finishedExactly() || (info.has_normals && !d.nrm.finishedExactly()))

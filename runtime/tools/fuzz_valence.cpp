@@ -14,7 +14,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     std::vector<uint32_t> indices(3 * size_t(info.triangle_count));
     std::vector<float> positions(3 * size_t(info.vertex_count));
     std::vector<float> normals(info.has_normals ? 3 * size_t(info.vertex_count) : 0);
-    std::vector<uint32_t> scratch(lodrt::valenceScratchSize(info) / 4);
+    std::vector<uint64_t> scratch(lodrt::valenceScratchSize(info) / 8);
     lodrt::ValenceOutput out;
     out.indices = indices.data();
     out.index_capacity = indices.size();
@@ -23,7 +23,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     out.normals = normals.empty() ? nullptr : normals.data();
     out.normal_capacity = normals.size();
     out.scratch = scratch.data();
-    out.scratch_size = scratch.size() * 4;
+    out.scratch_size = scratch.size() * 8;
     if (lodrt::valenceDecode(data, size, out) == lodrt::Result::Ok) {
         for (uint32_t i : indices)
             if (i >= info.vertex_count) __builtin_trap();

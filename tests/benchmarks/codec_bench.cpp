@@ -158,7 +158,7 @@ int main(int argc, char** argv) {
                 lodrt::valenceReadInfo(ours.bytes.data(), ours.bytes.size(), &info);
                 std::vector<uint32_t> indices(3 * size_t(info.triangle_count));
                 std::vector<float> positions(3 * size_t(info.vertex_count)), nrm(positions.size());
-                std::vector<uint32_t> scratch(lodrt::valenceScratchSize(info) / 4 + 1);
+                std::vector<uint64_t> scratch(lodrt::valenceScratchSize(info) / 8 + 1);
                 lodrt::ValenceOutput out;
                 out.indices = indices.data();
                 out.index_capacity = indices.size();
@@ -167,7 +167,7 @@ int main(int argc, char** argv) {
                 out.normals = normals ? nrm.data() : nullptr;
                 out.normal_capacity = nrm.size();
                 out.scratch = scratch.data();
-                out.scratch_size = scratch.size() * 4;
+                out.scratch_size = scratch.size() * 8;
                 lodrt::Result r = lodrt::Result::Ok;
                 const double dec_ms =
                     bestMs([&] { r = lodrt::valenceDecode(ours.bytes.data(), ours.bytes.size(), out); });

@@ -210,20 +210,42 @@ struct Encoder {
             qpos[3 * x + j] = qpos_old[3 * old + j];
             pos_model.encode(pos, j, int64_t(qpos[3 * x + j]) - p);
         }
-        if (normals) {
-            const uint32_t nb = options->normal_bits;
-            const uint32_t mask = (1u << nb) - 1;
-            const int64_t half = int64_t(1) << (nb - 1);
+    }
+
+    // Normals after all positions, in new vertex order, each predicted from the exact sum of its
+    // faces' normals on the quantized positions (the decoder's decodeNormals).
+    void encodeNormals(const std::vector<uint32_t>& triangles) {
+        const size_t vn = new_of.size();
+        std::vector<int64_t> sum(3 * vn, 0);
+        for (size_t t = 0; t + 2 < triangles.size(); t += 3) {
+            const uint32_t* f = &triangles[t];
+            int64_t e1[3], e2[3];
+            for (int j = 0; j < 3; ++j) {
+                e1[j] = int64_t(qpos[3 * f[1] + j]) - qpos[3 * f[0] + j];
+                e2[j] = int64_t(qpos[3 * f[2] + j]) - qpos[3 * f[0] + j];
+            }
+            const int64_t n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+                                  e1[0] * e2[1] - e1[1] * e2[0]};
+            for (int c = 0; c < 3; ++c)
+                for (int j = 0; j < 3; ++j) sum[3 * f[c] + j] += n[j];
+        }
+        const uint32_t nb = options->normal_bits;
+        const uint32_t mask = (1u << nb) - 1;
+        const int64_t half = int64_t(1) << (nb - 1);
+        for (size_t x = 0; x < vn; ++x) {
+            const int64_t* s3 = &sum[3 * x];
+            uint32_t p[2];
+            if (s3[0] != 0 || s3[1] != 0 || s3[2] != 0) {
+                const float fs[3] = {float(s3[0]), float(s3[1]), float(s3[2])};
+                lodrt::octahedralEncode(fs, nb, p);
+            } else if (x > 0) {
+                p[0] = qnorm[2 * (x - 1)];
+                p[1] = qnorm[2 * (x - 1) + 1];
+            } else {
+                p[0] = p[1] = uint32_t(half);
+            }
             for (int j = 0; j < 2; ++j) {
-                uint32_t p = 0;
-                if (a != kNone)
-                    p = (uint32_t(qnorm[2 * a + j]) + qnorm[2 * b + j]) >> 1;
-                else if (x > 0)
-                    p = qnorm[2 * (x - 1) + j];
-                else
-                    p = uint32_t(half);
-                qnorm[2 * x + j] = qnorm_old[2 * old + j];
-                int64_t r = int64_t((qnorm[2 * x + j] - p) & mask);
+                int64_t r = int64_t((qnorm[2 * x + j] - p[j]) & mask);
                 if (r >= half) r -= int64_t(mask) + 1;
                 nrm_model.encode(nrm, j, r);
             }
@@ -353,6 +375,8 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
 
     result.old_face_of = traversalOrder(mesh.indices, vn);
     uint32_t previous_edge = kValenceEdgeFifo;
+    std::vector<uint32_t> triangles; // as decoded, new vertex indices
+    triangles.reserve(mesh.indices.size());
     for (uint32_t f : result.old_face_of) {
         const uint32_t o[3] = {mesh.indices[3 * size_t(f)], mesh.indices[3 * size_t(f) + 1],
                                mesh.indices[3 * size_t(f) + 2]};
@@ -383,12 +407,20 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
             e.edge_c.push(v[(i + 2) % 3]);
         }
         for (int i = 0; i < 3; ++i) e.vertices.touch(v[i]);
+        triangles.insert(triangles.end(), {v[0], v[1], v[2]});
     }
     for (size_t i = 0; i < vn; ++i) {
         if (e.new_of[i] != kUnassigned) continue;
         uint32_t x = e.next_new++;
         e.new_of[i] = x;
         e.encodeAttributes(uint32_t(i), x, kNone, kNone, kNone);
+    }
+    if (normals) {
+        for (size_t i = 0; i < vn; ++i) {
+            e.qnorm[2 * size_t(e.new_of[i])] = e.qnorm_old[2 * i];
+            e.qnorm[2 * size_t(e.new_of[i]) + 1] = e.qnorm_old[2 * i + 1];
+        }
+        e.encodeNormals(triangles);
     }
 
     std::vector<uint8_t> conn = e.conn.finish(), pos = e.pos.finish(), nrm;
@@ -427,7 +459,7 @@ Result<Mesh> decodeValence(const std::vector<uint8_t>& bytes, const std::string&
     std::vector<float> positions(3 * size_t(info.vertex_count)), normals;
     if (info.has_normals) normals.resize(3 * size_t(info.vertex_count));
     mesh.indices.resize(3 * size_t(info.triangle_count));
-    std::vector<uint32_t> scratch((lodrt::valenceScratchSize(info) + 3) / 4);
+    std::vector<uint64_t> scratch((lodrt::valenceScratchSize(info) + 7) / 8);
     lodrt::ValenceOutput output;
     output.indices = mesh.indices.data();
     output.index_capacity = mesh.indices.size();
@@ -436,7 +468,7 @@ Result<Mesh> decodeValence(const std::vector<uint8_t>& bytes, const std::string&
     output.normals = info.has_normals ? normals.data() : nullptr;
     output.normal_capacity = normals.size();
     output.scratch = scratch.data();
-    output.scratch_size = scratch.size() * 4;
+    output.scratch_size = scratch.size() * 8;
     r = lodrt::valenceDecode(bytes.data(), bytes.size(), output);
     if (r != lodrt::Result::Ok) return invalidInput(name + ": streams: " + describe(r));
     mesh.positions.resize(info.vertex_count);

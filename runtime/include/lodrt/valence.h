@@ -29,7 +29,8 @@ struct ValenceInfo {
 /// up to exactly `size`). Does not decode the streams.
 LODRT_API Result valenceReadInfo(const uint8_t* data, size_t size, ValenceInfo* info);
 
-/// Bytes of scratch valenceDecode needs (quantized integer positions and normals), 4-byte aligned.
+/// Bytes of scratch valenceDecode needs (quantized positions and normals, and 64-bit face-normal sums
+/// when the stream has normals), a multiple of 8.
 LODRT_API size_t valenceScratchSize(const ValenceInfo& info);
 
 /// Caller-owned buffers. Capacities are in elements of the pointed-to type.
@@ -40,7 +41,7 @@ struct ValenceOutput {
     size_t position_capacity = 0;
     float* normals = nullptr; // 3 * vertex_count when has_normals; may be null to skip them
     size_t normal_capacity = 0;
-    void* scratch = nullptr; // valenceScratchSize bytes, aligned to 4
+    void* scratch = nullptr; // valenceScratchSize bytes, aligned to 8
     size_t scratch_size = 0;
 };
 

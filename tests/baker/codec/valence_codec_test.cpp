@@ -284,7 +284,7 @@ lodrt::Result decodeChecked(const std::vector<uint8_t>& bytes) {
     std::vector<uint32_t> indices(3 * size_t(info.triangle_count) + 4, kGuard);
     std::vector<float> positions(3 * size_t(info.vertex_count) + 4, 1234.5f);
     std::vector<float> normals(3 * size_t(info.vertex_count) + 4, 1234.5f);
-    std::vector<uint32_t> scratch(lodrt::valenceScratchSize(info) / 4 + 4, kGuard);
+    std::vector<uint64_t> scratch(lodrt::valenceScratchSize(info) / 8 + 4, kGuard);
     lodrt::ValenceOutput out;
     out.indices = indices.data();
     out.index_capacity = indices.size() - 4;
@@ -293,7 +293,7 @@ lodrt::Result decodeChecked(const std::vector<uint8_t>& bytes) {
     out.normals = normals.data();
     out.normal_capacity = normals.size() - 4;
     out.scratch = scratch.data();
-    out.scratch_size = (scratch.size() - 4) * 4;
+    out.scratch_size = (scratch.size() - 4) * 8;
     r = lodrt::valenceDecode(bytes.data(), bytes.size(), out);
     for (int i = 0; i < 4; ++i) {
         EXPECT_EQ(indices[indices.size() - 1 - i], kGuard);
@@ -353,19 +353,19 @@ TEST(ValenceDecoderSafetyTest, SmallBuffersAreRefused) {
     ASSERT_EQ(lodrt::valenceReadInfo(bytes.data(), bytes.size(), &info), lodrt::Result::Ok);
     std::vector<uint32_t> indices(3 * info.triangle_count);
     std::vector<float> positions(3 * info.vertex_count);
-    std::vector<uint32_t> scratch(lodrt::valenceScratchSize(info) / 4);
+    std::vector<uint64_t> scratch(lodrt::valenceScratchSize(info) / 8);
     lodrt::ValenceOutput out;
     out.indices = indices.data();
     out.index_capacity = indices.size() - 1;
     out.positions = positions.data();
     out.position_capacity = positions.size();
     out.scratch = scratch.data();
-    out.scratch_size = scratch.size() * 4;
+    out.scratch_size = scratch.size() * 8;
     EXPECT_EQ(lodrt::valenceDecode(bytes.data(), bytes.size(), out), lodrt::Result::BufferTooSmall);
     out.index_capacity = indices.size();
-    out.scratch_size -= 4;
+    out.scratch_size -= 8;
     EXPECT_EQ(lodrt::valenceDecode(bytes.data(), bytes.size(), out), lodrt::Result::BufferTooSmall);
-    out.scratch_size += 4;
+    out.scratch_size += 8;
     EXPECT_EQ(lodrt::valenceDecode(bytes.data(), bytes.size(), out), lodrt::Result::Ok);
 }
 
