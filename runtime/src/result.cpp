@@ -36,6 +36,8 @@ const char* resultName(Result result) {
         return "OutOfBounds";
     case Result::BadStructure:
         return "BadStructure";
+    case Result::CorruptStream:
+        return "CorruptStream";
     case Result::BufferTooSmall:
         return "BufferTooSmall";
     }

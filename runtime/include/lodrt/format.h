@@ -38,6 +38,34 @@ constexpr uint32_t kPfrepCountEscapeBits = 16;
 constexpr uint32_t kPfrepWidthBits = 5;
 // Log-scale codes: value(code) = 0 for code 0, else error_unit * 2^((code - 1) / 8).
 constexpr uint32_t kPfrepLogCodeSteps = 8;
+// Compressed mesh (.lbm), docs/format/valence.md. Little-endian header of kValenceHeaderSize bytes,
+// then the connectivity, position and normal range-coded streams, back to back.
+constexpr uint32_t kValenceMagic = 0x4D42424Cu; // "LBBM" little-endian
+constexpr uint16_t kValenceVersion = 1;
+constexpr uint32_t kValenceHeaderSize = 48;
+constexpr uint16_t kValenceFlagNormals = 1u;
+constexpr uint32_t kValenceMinPositionBits = 8;
+constexpr uint32_t kValenceMaxPositionBits = 16;
+constexpr uint32_t kValenceMinNormalBits = 4;
+constexpr uint32_t kValenceMaxNormalBits = 16;
+constexpr uint32_t kValenceMaxCount = 1u << 28; // vertex and triangle counts
+// Header plausibility: counts above these multiples of their stream's byte length are refused.
+constexpr uint32_t kValenceTrianglesPerByte = 128; // of the connectivity stream
+constexpr uint32_t kValenceVerticesPerByte = 64;   // of the position stream (and of the normal stream)
+// Binary range coder (LZMA style): 11-bit probabilities, adaptation shift 5, 32-bit range.
+constexpr uint32_t kRangeProbBits = 11;
+constexpr uint32_t kRangeProbInit = 1u << (kRangeProbBits - 1);
+constexpr uint32_t kRangeAdaptShift = 5;
+constexpr uint32_t kRangeTopValue = 1u << 24;
+// Connectivity model: a FIFO of recent edges and a move-to-front cache of recent vertices.
+constexpr uint32_t kValenceEdgeFifo = 32;   // edge symbol 0..31 = FIFO slot, 32 = no shared edge
+constexpr uint32_t kValenceVertexFifo = 32; // vertex symbol 0 = new, 1..32 = cache slot + 1, 33 = explicit
+constexpr uint32_t kValenceSymbolTreeBits = 6; // edge and vertex symbols are 6-bit trees
+constexpr uint32_t kValenceVertexSymbolNew = 0;
+constexpr uint32_t kValenceVertexSymbolExplicit = kValenceVertexFifo + 1;
+// Integer coding: the bit length class k (0..32) of value+1 as a 6-bit tree, then k low bits.
+constexpr uint32_t kValenceClassTreeBits = 6;
+constexpr uint32_t kValenceResidualContexts = 18; // previous class of the same component, clamped
 
 } // namespace format
 } // namespace lodrt

@@ -26,6 +26,7 @@ enum class Result : int {
     OutOfBounds,        // an accessor, buffer view or index points outside the bytes that exist
     BadStructure,       // PFRep: an entry breaks an ordering rule (dependency cycle, degenerate fan, bad count)
     BufferTooSmall,     // a caller-owned output buffer is smaller than the result
+    CorruptStream,      // a compressed stream decodes to something impossible (index out of range, overrun)
 };
 
 /// Stable name of a result code, e.g. "Truncated"; "Unknown" for values outside the enum.

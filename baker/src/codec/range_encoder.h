@@ -1,0 +1,86 @@
+#pragma once
+// LZMA-style binary range encoder, the twin of RangeDecoder in runtime/src/valence_decoder.cpp
+// (docs/format/valence.md "Range coder"). Adaptive 11-bit probabilities, 32-bit range, carry via a
+// cached byte.
+
+#include <cstdint>
+#include <vector>
+
+#include "lodrt/format.h"
+
+namespace lodbake::codec {
+
+class RangeEncoder {
+public:
+    void bit(uint16_t& prob, uint32_t b) {
+        using namespace lodrt::format;
+        uint32_t bound = (range_ >> kRangeProbBits) * prob;
+        if (b == 0) {
+            range_ = bound;
+            prob = uint16_t(prob + (((1u << kRangeProbBits) - prob) >> kRangeAdaptShift));
+        } else {
+            low_ += bound;
+            range_ -= bound;
+            prob = uint16_t(prob - (prob >> kRangeAdaptShift));
+        }
+        while (range_ < kRangeTopValue) {
+            range_ <<= 8;
+            shiftLow();
+        }
+    }
+    void direct(uint32_t value, uint32_t count) {
+        for (uint32_t i = count; i-- > 0;) {
+            range_ >>= 1;
+            if ((value >> i) & 1u) low_ += range_;
+            while (range_ < lodrt::format::kRangeTopValue) {
+                range_ <<= 8;
+                shiftLow();
+            }
+        }
+    }
+    void tree(uint16_t* probs, uint32_t bits, uint32_t value) {
+        uint32_t m = 1;
+        for (uint32_t i = bits; i-- > 0;) {
+            uint32_t b = (value >> i) & 1u;
+            bit(probs[m], b);
+            m = (m << 1) | b;
+        }
+    }
+    /// Bit-length class of value+1, then its bits below the leading one (first modelled, rest direct).
+    /// Returns the class.
+    uint32_t uint(uint16_t* class_probs, uint16_t* top_probs, uint64_t value) {
+        uint64_t v = value + 1;
+        uint32_t k = 0;
+        while ((v >> (k + 1)) != 0) ++k;
+        tree(class_probs, lodrt::format::kValenceClassTreeBits, k);
+        if (k >= 1) bit(top_probs[k], uint32_t((v >> (k - 1)) & 1u));
+        if (k >= 2) direct(uint32_t(v & ((uint64_t(1) << (k - 1)) - 1)), k - 1);
+        return k;
+    }
+    std::vector<uint8_t> finish() {
+        for (int i = 0; i < 5; ++i) shiftLow();
+        return std::move(out_);
+    }
+
+private:
+    void shiftLow() {
+        if (uint32_t(low_) < 0xFF000000u || (low_ >> 32) != 0) {
+            uint8_t carry = uint8_t(low_ >> 32);
+            uint8_t temp = cache_;
+            do {
+                out_.push_back(uint8_t(temp + carry));
+                temp = 0xFF;
+            } while (--cache_size_ != 0);
+            cache_ = uint8_t(low_ >> 24);
+        }
+        ++cache_size_;
+        low_ = (low_ & 0x00FFFFFFu) << 8;
+    }
+    uint64_t low_ = 0;
+    uint32_t range_ = 0xFFFFFFFFu;
+    uint8_t cache_ = 0;
+    uint64_t cache_size_ = 1;
+    std::vector<uint8_t> out_;
+};
+
+} // namespace lodbake::codec

@@ -1,0 +1,56 @@
+#pragma once
+// Decoder for lodbake's compressed mesh format (.lbm, docs/format/valence.md), meshoptimizer
+// decodeVertexBuffer style: read the header with valenceReadInfo, allocate the outputs and the
+// scratch it asks for, then call valenceDecode. No allocation, no exceptions; every byte of the
+// input is treated as hostile (errors are Result codes, never reads or writes out of bounds).
+
+#include <cstddef>
+#include <cstdint>
+
+#include "lodrt/export.h"
+#include "lodrt/result.h"
+
+namespace lodrt {
+
+struct ValenceInfo {
+    uint32_t vertex_count = 0;
+    uint32_t triangle_count = 0;
+    uint32_t position_bits = 0; // quantization bits per coordinate
+    uint32_t normal_bits = 0;   // octahedral bits per component; 0 when the stream has no normals
+    bool has_normals = false;
+    float bounds_min[3] = {0.0f, 0.0f, 0.0f}; // corner of the quantization cube
+    float cube_size = 0.0f;                   // edge length of the quantization cube
+    uint32_t connectivity_bytes = 0;
+    uint32_t position_bytes = 0;
+    uint32_t normal_bytes = 0;
+};
+
+/// Parses and validates the header (magic, version, bit depths, counts, that the stream lengths add
+/// up to exactly `size`). Does not decode the streams.
+LODRT_API Result valenceReadInfo(const uint8_t* data, size_t size, ValenceInfo* info);
+
+/// Bytes of scratch valenceDecode needs (quantized positions and normals, and 64-bit face-normal sums
+/// when the stream has normals), a multiple of 8.
+LODRT_API size_t valenceScratchSize(const ValenceInfo& info);
+
+/// Caller-owned buffers. Capacities are in elements of the pointed-to type.
+struct ValenceOutput {
+    uint32_t* indices = nullptr; // 3 * triangle_count
+    size_t index_capacity = 0;
+    float* positions = nullptr; // 3 * vertex_count, xyz
+    size_t position_capacity = 0;
+    float* normals = nullptr; // 3 * vertex_count when has_normals; may be null to skip them
+    size_t normal_capacity = 0;
+    void* scratch = nullptr; // valenceScratchSize bytes, aligned to 8
+    size_t scratch_size = 0;
+};
+
+/// Decodes the whole stream. On any error the outputs hold unspecified (but in-bounds) values.
+LODRT_API Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& output);
+
+/// Octahedral mapping shared by the encoder and the decoder: unit vector <-> two integers in
+/// [0, 2^bits - 1].
+LODRT_API void octahedralEncode(const float n[3], uint32_t bits, uint32_t out[2]);
+LODRT_API void octahedralDecode(const uint32_t in[2], uint32_t bits, float n[3]);
+
+} // namespace lodrt

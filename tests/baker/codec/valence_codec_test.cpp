@@ -1,0 +1,391 @@
+// ValenceCodecTest: encoder (baker) + decoder (runtime) round trips on hand-built meshes and shared
+// scans. ValenceDecoderSafetyTest: hostile streams give error codes, never out-of-bounds access.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <deque>
+#include <cstdlib>
+#include <fstream>
+#include <random>
+#include <sstream>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include "lodbake/codec/valence_encoder.h"
+#include "lodbake/core/diagnostics.h"
+#include "lodbake/core/file_io.h"
+#include "lodbake/io/mesh_io.h"
+#include "lodrt/format.h"
+#include "lodrt/valence.h"
+#include "mesh_builders.h"
+#include "test_paths.h"
+
+namespace {
+
+using lodbake::Mesh;
+using lodbake::Vec3f;
+using lodbake::codec::decodeValence;
+using lodbake::codec::encodeValence;
+using lodbake::codec::ValenceEncodeOptions;
+using lodbake::codec::ValenceEncodeResult;
+
+// Smallest rotation of a triangle (keeps the orientation).
+std::array<uint32_t, 3> canonical(uint32_t a, uint32_t b, uint32_t c) {
+    if (a <= b && a <= c) return {a, b, c};
+    if (b <= a && b <= c) return {b, c, a};
+    return {c, a, b};
+}
+
+// Checks the decoded mesh against the input through the encoder's permutations: same triangles (up to
+// rotation) and positions within half a quantization step.
+void expectRoundTrip(const Mesh& in, const ValenceEncodeOptions& options, ValenceEncodeResult* out = nullptr) {
+    auto enc = encodeValence(in, options);
+    ASSERT_TRUE(enc.ok()) << enc.status().message();
+    auto dec = decodeValence(enc->bytes, "test");
+    ASSERT_TRUE(dec.ok()) << dec.status().message();
+    const Mesh& m = *dec;
+    ASSERT_EQ(m.vertexCount(), in.vertexCount());
+    ASSERT_EQ(m.faceCount(), in.faceCount());
+    ASSERT_EQ(enc->old_face_of.size(), in.faceCount());
+    // The permutations are permutations.
+    std::vector<uint32_t> seen(in.vertexCount(), 0);
+    for (uint32_t v : enc->new_vertex_of) {
+        ASSERT_LT(v, in.vertexCount());
+        ++seen[v];
+    }
+    for (uint32_t s : seen) ASSERT_EQ(s, 1u);
+    std::vector<uint32_t> faces = enc->old_face_of;
+    std::sort(faces.begin(), faces.end());
+    for (size_t f = 0; f < faces.size(); ++f) ASSERT_EQ(faces[f], f);
+    for (size_t f = 0; f < m.faceCount(); ++f) {
+        uint32_t o = enc->old_face_of[f];
+        auto want = canonical(enc->new_vertex_of[in.indices[3 * o]], enc->new_vertex_of[in.indices[3 * o + 1]],
+                              enc->new_vertex_of[in.indices[3 * o + 2]]);
+        auto got = canonical(m.indices[3 * f], m.indices[3 * f + 1], m.indices[3 * f + 2]);
+        ASSERT_EQ(got, want) << "face " << f;
+    }
+    lodbake::Aabb box;
+    for (const Vec3f& p : in.positions) box.expand(p);
+    float cube = in.positions.empty() ? 0.0f : std::max({box.extent().x, box.extent().y, box.extent().z});
+    double tol = cube / double((1u << options.position_bits) - 1) * 0.5 + 1e-6 * (cube + 1.0);
+    double max_err = 0.0;
+    for (size_t v = 0; v < in.vertexCount(); ++v) {
+        const Vec3f& a = in.positions[v];
+        const Vec3f& b = m.positions[enc->new_vertex_of[v]];
+        max_err = std::max(
+            {max_err, double(std::fabs(a.x - b.x)), double(std::fabs(a.y - b.y)), double(std::fabs(a.z - b.z))});
+    }
+    EXPECT_LE(max_err, tol);
+    EXPECT_NEAR(max_err, enc->max_position_error, 1e-6 * (cube + 1.0));
+    if (in.hasNormals() && options.encode_normals) {
+        ASSERT_TRUE(m.hasNormals());
+        double tol_n = 4.0 / double((1u << options.normal_bits) - 1);
+        for (size_t v = 0; v < in.vertexCount(); ++v) {
+            Vec3f a = in.normals[v];
+            float len = std::sqrt(a.x * a.x + a.y * a.y + a.z * a.z);
+            if (!(len > 0.0f)) continue;
+            const Vec3f& b = m.normals[enc->new_vertex_of[v]];
+            double d =
+                std::sqrt(double(a.x / len - b.x) * (a.x / len - b.x) + double(a.y / len - b.y) * (a.y / len - b.y) +
+                          double(a.z / len - b.z) * (a.z / len - b.z));
+            ASSERT_LE(d, tol_n) << "normal " << v;
+        }
+    }
+    // Re-encoding gives identical bytes.
+    auto again = encodeValence(in, options);
+    ASSERT_TRUE(again.ok());
+    EXPECT_EQ(again->bytes, enc->bytes);
+    if (out) *out = std::move(*enc);
+}
+
+Mesh grid(int n, bool holes) {
+    Mesh m;
+    for (int y = 0; y <= n; ++y)
+        for (int x = 0; x <= n; ++x) m.positions.push_back(Vec3f{float(x), float(y), 0.1f * float((x * y) % 5)});
+    for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x) {
+            if (holes && (x % 4 == 1) && (y % 3 == 1)) continue;
+            uint32_t a = uint32_t(y * (n + 1) + x), b = a + 1, c = a + uint32_t(n + 1), d = c + 1;
+            m.indices.insert(m.indices.end(), {a, b, d, a, d, c});
+        }
+    return m;
+}
+
+Mesh torus(int nu, int nv) {
+    Mesh m;
+    const float kPi = 3.14159265358979f;
+    for (int i = 0; i < nu; ++i)
+        for (int j = 0; j < nv; ++j) {
+            float u = 2 * kPi * float(i) / float(nu), v = 2 * kPi * float(j) / float(nv);
+            m.positions.push_back(Vec3f{(2 + std::cos(v)) * std::cos(u), (2 + std::cos(v)) * std::sin(u), std::sin(v)});
+            m.normals.push_back(Vec3f{std::cos(v) * std::cos(u), std::cos(v) * std::sin(u), std::sin(v)});
+        }
+    for (int i = 0; i < nu; ++i)
+        for (int j = 0; j < nv; ++j) {
+            uint32_t a = uint32_t(i * nv + j), b = uint32_t(((i + 1) % nu) * nv + j),
+                     c = uint32_t(i * nv + (j + 1) % nv), d = uint32_t(((i + 1) % nu) * nv + (j + 1) % nv);
+            m.indices.insert(m.indices.end(), {a, b, d, a, d, c});
+        }
+    return m;
+}
+
+TEST(ValenceCodecTest, SingleTriangle) {
+    expectRoundTrip(lodbake_test::singleTriangle(), {});
+}
+TEST(ValenceCodecTest, Tetrahedron) {
+    expectRoundTrip(lodbake_test::tetrahedron(), {});
+}
+TEST(ValenceCodecTest, EmptyMesh) {
+    expectRoundTrip(Mesh(), {});
+}
+TEST(ValenceCodecTest, OpenGridWithHoles) {
+    for (uint32_t bits : {8u, 11u, 14u, 16u}) {
+        ValenceEncodeOptions o;
+        o.position_bits = bits;
+        expectRoundTrip(grid(20, true), o);
+    }
+}
+TEST(ValenceCodecTest, MultipleComponentsAndUnreferencedVertices) {
+    Mesh m = grid(5, false);
+    lodbake::appendMesh(m, lodbake_test::tetrahedron());
+    lodbake::appendMesh(m, torus(6, 5));
+    m.positions.push_back(Vec3f{7, 7, 7}); // unreferenced
+    m.normals.clear();
+    expectRoundTrip(m, {});
+}
+TEST(ValenceCodecTest, NonManifoldFanAndBowTie) {
+    expectRoundTrip(lodbake_test::bowTie(), {});
+    expectRoundTrip(lodbake_test::finEdge(), {});
+    // Five triangles on one edge (0,1), and one flipped triangle (inconsistent orientation).
+    Mesh fan = lodbake_test::makeMesh({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}, {1, 1, 1}},
+                                      {0, 1, 2, 1, 0, 3, 0, 1, 4, 0, 1, 5, 1, 0, 6, 2, 1, 6});
+    expectRoundTrip(fan, {});
+    // Repeated indices in a triangle are kept too.
+    expectRoundTrip(lodbake_test::makeMesh({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {0, 1, 2, 0, 0, 1}), {});
+}
+TEST(ValenceCodecTest, TorusWithNormals) {
+    for (uint32_t nb : {6u, 10u, 16u}) {
+        ValenceEncodeOptions o;
+        o.normal_bits = nb;
+        expectRoundTrip(torus(24, 12), o);
+    }
+    ValenceEncodeOptions no_normals;
+    no_normals.encode_normals = false;
+    ValenceEncodeResult r;
+    expectRoundTrip(torus(24, 12), no_normals, &r);
+    EXPECT_EQ(r.normal_bytes, 0u);
+}
+TEST(ValenceCodecTest, RejectsBadOptionsAndNonFinite) {
+    ValenceEncodeOptions o;
+    o.position_bits = 17;
+    EXPECT_FALSE(encodeValence(lodbake_test::tetrahedron(), o).ok());
+    Mesh m = lodbake_test::tetrahedron();
+    m.positions[2].y = std::nanf("");
+    auto r = encodeValence(m, {});
+    ASSERT_FALSE(r.ok());
+    EXPECT_NE(r.status().message().find("vertex 2"), std::string::npos);
+}
+
+// Shared scans are loaded once per process.
+const Mesh* loadShared(const std::string& name) {
+    static std::deque<std::pair<std::string, Mesh>> cache; // deque: pointers stay valid
+    for (auto& c : cache)
+        if (c.first == name) return &c.second;
+    lodbake::Diagnostics diag;
+    auto loaded = lodbake::readMesh(lodbake_test::sharedMesh(name), {}, diag);
+    if (!loaded.ok()) return nullptr;
+    cache.push_back({name, std::move(loaded->mesh)});
+    return &cache.back().second;
+}
+
+TEST(ValenceCodecTest, SharedScans) {
+    LODBAKE_REQUIRE_SHARED_MESHES();
+    for (const char* name : {"bunny_zipper.ply", "lucy100k.ply", "dragon_scan_stand0_tri.ply"}) {
+        const Mesh* m = loadShared(name);
+        ASSERT_NE(m, nullptr) << name;
+        ValenceEncodeOptions o;
+        o.position_bits = 12;
+        ValenceEncodeResult r;
+        expectRoundTrip(*m, o, &r);
+        // Well below the 96 bits per vertex of float positions plus 3 x 32-bit indices per face.
+        EXPECT_LT(double(r.bytes.size()) * 8.0 / double(m->vertexCount()), 40.0) << name;
+    }
+}
+
+struct CliRun {
+    int exit_code = -1;
+    std::string out, err;
+};
+
+CliRun runCli(const std::string& args) {
+    static int counter = 0;
+    const std::string base =
+        lodbake_test::scratchDir() + "/valence_cli_" + std::to_string(::getpid()) + "_" + std::to_string(++counter);
+    const std::string cmd = "'" + lodbake_test::lodbakeCli() + "' " + args + " >" + base + ".out 2>" + base + ".err";
+    const int status = std::system(cmd.c_str());
+    CliRun r;
+    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    for (auto [path, text] : {std::make_pair(base + ".out", &r.out), std::make_pair(base + ".err", &r.err)}) {
+        std::ifstream f(path);
+        std::stringstream ss;
+        ss << f.rdbuf();
+        *text = ss.str();
+    }
+    return r;
+}
+
+TEST(ValenceCodecTest, CliEncodeDecode) {
+    const std::string dir = lodbake_test::scratchDir();
+    const std::string in = dir + "/valence_torus.ply", lbm = dir + "/valence_torus.lbm",
+                      out = dir + "/valence_back.ply";
+    lodbake::Diagnostics diag;
+    ASSERT_TRUE(lodbake::writeMesh(torus(12, 8), in, {}, diag).ok());
+    CliRun enc = runCli("encode '" + in + "' -o '" + lbm + "' --bits 12 --normal-bits 8 --json");
+    ASSERT_EQ(enc.exit_code, 0) << enc.err;
+    EXPECT_NE(enc.out.find("\"connectivity\""), std::string::npos);
+    EXPECT_NE(enc.out.find("\"bits_per_vertex\""), std::string::npos);
+    CliRun dec = runCli("decode '" + lbm + "' -o '" + out + "'");
+    ASSERT_EQ(dec.exit_code, 0) << dec.err;
+    auto back = lodbake::readMesh(out, {}, diag);
+    ASSERT_TRUE(back.ok());
+    EXPECT_EQ(back->mesh.vertexCount(), 96u);
+    EXPECT_EQ(back->mesh.faceCount(), 192u);
+    EXPECT_TRUE(back->mesh.hasNormals());
+    // A cut file: exit 1, one error line naming the file, no output.
+    auto bytes = lodbake::readFileBytes(lbm);
+    ASSERT_TRUE(bytes.ok());
+    const std::string cut = dir + "/valence_cut.lbm", cut_out = dir + "/valence_cut.ply";
+    ASSERT_TRUE(lodbake::writeFileAtomic(cut, bytes->data(), bytes->size() - 3).ok());
+    CliRun bad = runCli("decode '" + cut + "' -o '" + cut_out + "'");
+    EXPECT_EQ(bad.exit_code, 1);
+    EXPECT_EQ(bad.err.rfind("error: " + cut + ": ", 0), 0u) << bad.err;
+    EXPECT_EQ(std::count(bad.err.begin(), bad.err.end(), '\n'), 1);
+    EXPECT_FALSE(std::ifstream(cut_out).good());
+    EXPECT_EQ(runCli("encode '" + in + "' -o '" + lbm + "' --bits 7").exit_code, 2);
+}
+
+// ---- decoder safety ----
+
+struct Decoded {
+    std::vector<uint32_t> indices;
+    std::vector<float> positions, normals;
+    std::vector<uint32_t> scratch;
+};
+
+// Decodes with buffers sized from the header; guard words after each buffer catch overruns.
+lodrt::Result decodeChecked(const std::vector<uint8_t>& bytes) {
+    lodrt::ValenceInfo info;
+    lodrt::Result r = lodrt::valenceReadInfo(bytes.data(), bytes.size(), &info);
+    if (r != lodrt::Result::Ok) return r;
+    constexpr uint32_t kGuard = 0xDEADBEEFu;
+    std::vector<uint32_t> indices(3 * size_t(info.triangle_count) + 4, kGuard);
+    std::vector<float> positions(3 * size_t(info.vertex_count) + 4, 1234.5f);
+    std::vector<float> normals(3 * size_t(info.vertex_count) + 4, 1234.5f);
+    std::vector<uint64_t> scratch(lodrt::valenceScratchSize(info) / 8 + 4, kGuard);
+    lodrt::ValenceOutput out;
+    out.indices = indices.data();
+    out.index_capacity = indices.size() - 4;
+    out.positions = positions.data();
+    out.position_capacity = positions.size() - 4;
+    out.normals = normals.data();
+    out.normal_capacity = normals.size() - 4;
+    out.scratch = scratch.data();
+    out.scratch_size = (scratch.size() - 4) * 8;
+    r = lodrt::valenceDecode(bytes.data(), bytes.size(), out);
+    for (int i = 0; i < 4; ++i) {
+        EXPECT_EQ(indices[indices.size() - 1 - i], kGuard);
+        EXPECT_EQ(positions[positions.size() - 1 - i], 1234.5f);
+        EXPECT_EQ(normals[normals.size() - 1 - i], 1234.5f);
+        EXPECT_EQ(scratch[scratch.size() - 1 - i], kGuard);
+    }
+    if (r == lodrt::Result::Ok) {
+        for (size_t i = 0; i < 3 * size_t(info.triangle_count); ++i) EXPECT_LT(indices[i], info.vertex_count);
+    }
+    return r;
+}
+
+std::vector<uint8_t> sampleStream() {
+    Mesh m = torus(16, 10);
+    lodbake::appendMesh(m, grid(6, true));
+    auto enc = encodeValence(m, {});
+    EXPECT_TRUE(enc.ok());
+    return enc->bytes;
+}
+
+TEST(ValenceDecoderSafetyTest, ValidStreamDecodes) {
+    EXPECT_EQ(decodeChecked(sampleStream()), lodrt::Result::Ok);
+}
+
+TEST(ValenceDecoderSafetyTest, EveryTruncatedPrefixFails) {
+    std::vector<uint8_t> bytes = sampleStream();
+    for (size_t n = 0; n < bytes.size(); ++n) {
+        std::vector<uint8_t> cut(bytes.begin(), bytes.begin() + long(n));
+        lodrt::Result r = decodeChecked(cut);
+        ASSERT_NE(r, lodrt::Result::Ok) << "prefix " << n;
+        if (n < lodrt::format::kValenceHeaderSize && n >= 4) {
+            ASSERT_EQ(r, lodrt::Result::Truncated);
+        }
+    }
+}
+
+TEST(ValenceDecoderSafetyTest, TrailingBytesBadMagicUnknownVersion) {
+    std::vector<uint8_t> bytes = sampleStream();
+    auto extra = bytes;
+    extra.push_back(0);
+    EXPECT_EQ(decodeChecked(extra), lodrt::Result::TrailingBytes);
+    auto magic = bytes;
+    magic[0] ^= 0x20;
+    EXPECT_EQ(decodeChecked(magic), lodrt::Result::BadMagic);
+    auto version = bytes;
+    version[4] = 2;
+    EXPECT_EQ(decodeChecked(version), lodrt::Result::UnsupportedVersion);
+    auto bits = bytes;
+    bits[16] = 17;
+    EXPECT_EQ(decodeChecked(bits), lodrt::Result::CorruptStream);
+}
+
+TEST(ValenceDecoderSafetyTest, SmallBuffersAreRefused) {
+    std::vector<uint8_t> bytes = sampleStream();
+    lodrt::ValenceInfo info;
+    ASSERT_EQ(lodrt::valenceReadInfo(bytes.data(), bytes.size(), &info), lodrt::Result::Ok);
+    std::vector<uint32_t> indices(3 * info.triangle_count);
+    std::vector<float> positions(3 * info.vertex_count);
+    std::vector<uint64_t> scratch(lodrt::valenceScratchSize(info) / 8);
+    lodrt::ValenceOutput out;
+    out.indices = indices.data();
+    out.index_capacity = indices.size() - 1;
+    out.positions = positions.data();
+    out.position_capacity = positions.size();
+    out.scratch = scratch.data();
+    out.scratch_size = scratch.size() * 8;
+    EXPECT_EQ(lodrt::valenceDecode(bytes.data(), bytes.size(), out), lodrt::Result::BufferTooSmall);
+    out.index_capacity = indices.size();
+    out.scratch_size -= 8;
+    EXPECT_EQ(lodrt::valenceDecode(bytes.data(), bytes.size(), out), lodrt::Result::BufferTooSmall);
+    out.scratch_size += 8;
+    EXPECT_EQ(lodrt::valenceDecode(bytes.data(), bytes.size(), out), lodrt::Result::Ok);
+}
+
+TEST(ValenceDecoderSafetyTest, RandomCorruptionNeverCrashes) {
+    std::vector<uint8_t> bytes = sampleStream();
+    std::mt19937 rng(12345);
+    int failures = 0;
+    for (int trial = 0; trial < 3000; ++trial) {
+        auto bad = bytes;
+        int flips = 1 + int(rng() % 4);
+        for (int k = 0; k < flips; ++k) {
+            // Mostly the streams; sometimes the header.
+            size_t at = (rng() % 8 == 0) ? rng() % lodrt::format::kValenceHeaderSize : rng() % bad.size();
+            bad[at] = uint8_t(rng());
+        }
+        if (bad == bytes) continue;
+        if (decodeChecked(bad) != lodrt::Result::Ok) ++failures;
+    }
+    // Most corruptions are detected (the rest decode to some in-range mesh, which is allowed).
+    EXPECT_GT(failures, 1500);
+}
+
+} // namespace
