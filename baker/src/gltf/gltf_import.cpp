@@ -898,9 +898,11 @@ Status importMaterials(const tinygltf::Model& model, const std::string& name, co
             out.bytes.assign(bytes.first, bytes.first + bytes.second);
         } else {
             out.bytes = image.image;
-            if (out.bytes.empty())
-                diagnostics.warn(name + ": image " + std::to_string(texture.source) + ": \"" + image.uri +
-                                 "\" could not be read, kept without pixels");
+            // A texture file that is referenced but missing is an error, as for OBJ's map_Kd: baking
+            // on without it would silently drop the texture from every level.
+            if (out.bytes.empty() && options.load_textures)
+                return invalidInput(name + ": image " + std::to_string(texture.source) + ": \"" + image.uri +
+                                    "\": cannot read the image file (expected it next to the glTF)");
         }
         out.mime_type = image.mimeType;
         if (out.mime_type.empty()) out.mime_type = mimeFromBytes(out.bytes);
