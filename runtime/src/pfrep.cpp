@@ -425,19 +425,17 @@ void pfrepMaskCoarsest(const PfrepModel& m, uint8_t* mask) {
     for (uint32_t v = full * 8; v < m.removed_count; ++v) setBit(mask, v);
 }
 
-Result pfrepSimplifyVertex(const PfrepModel& m, uint8_t* mask, uint32_t vertex, uint32_t* scratch,
-                           size_t scratch_capacity) {
-    if (!mask || !scratch || scratch_capacity < pfrepScratchValues(m) || vertex >= m.vertex_count)
-        return Result::InvalidArgument;
-    if (vertex >= m.removed_count || maskBit(mask, vertex)) return Result::Ok;
+namespace {
+
+// Removes `vertex` and its simplification closure, recording every vertex it removes in
+// scratch[0, n) (each once: a vertex is marked when queued, so n <= vertex_count). Returns n.
+size_t simplifyClosure(const PfrepModel& m, uint8_t* mask, uint32_t vertex, uint32_t* scratch) {
     const uint8_t* s = m.data + m.entries_offset;
-    // Each vertex is marked when pushed, so it is pushed at most once: the stack never exceeds
-    // vertex_count values.
-    size_t top = 0;
+    size_t queued = 0, next = 0;
     setBit(mask, vertex);
-    scratch[top++] = vertex;
-    while (top > 0) {
-        const uint32_t x = scratch[--top];
+    scratch[queued++] = vertex;
+    while (next < queued) {
+        const uint32_t x = scratch[next++];
         const Entry e = decodeHeader(s, entryStart(m, x));
         uint64_t bit = e.first_mask_bit + (e.has_original ? e.neighbours : 0);
         for (uint32_t k = 0; k < e.dependencies; ++k) {
@@ -445,10 +443,21 @@ Result pfrepSimplifyVertex(const PfrepModel& m, uint8_t* mask, uint32_t vertex, 
             bit += e.dependency_width + e.neighbours;
             if (!maskBit(mask, d)) {
                 setBit(mask, d);
-                scratch[top++] = d;
+                scratch[queued++] = d;
             }
         }
     }
+    return queued;
+}
+
+} // namespace
+
+Result pfrepSimplifyVertex(const PfrepModel& m, uint8_t* mask, uint32_t vertex, uint32_t* scratch,
+                           size_t scratch_capacity) {
+    if (!mask || !scratch || scratch_capacity < pfrepScratchValues(m) || vertex >= m.vertex_count)
+        return Result::InvalidArgument;
+    if (vertex >= m.removed_count || maskBit(mask, vertex)) return Result::Ok;
+    simplifyClosure(m, mask, vertex, scratch);
     return Result::Ok;
 }
 
@@ -531,8 +540,11 @@ Result pfrepVertexBounds(const PfrepModel& m, uint32_t vertex, PfrepVertexBounds
     return Result::Ok;
 }
 
-bool pfrepWanted(const PfrepModel& m, const PfrepView& view, uint32_t vertex) {
-    if (vertex >= m.vertex_count) return false;
+namespace {
+
+// Hoppe's criterion with the screen-error tolerance scaled by `scale` (1: insert threshold;
+// view.hysteresis: keep threshold).
+bool wantedAt(const PfrepModel& m, const PfrepView& view, uint32_t vertex, float scale) {
     const uint8_t* r = m.data + m.vertex_records_offset + size_t(vertex) * format::kPfrepVertexRecordSize;
     float p[3];
     for (int k = 0; k < 3; ++k) p[k] = m.position_min[k] + float(loadU16(r + 2 * k)) * m.position_step[k];
@@ -545,7 +557,7 @@ bool pfrepWanted(const PfrepModel& m, const PfrepView& view, uint32_t vertex) {
     const float dist = std::sqrt(dist2);
     if (dist <= radius) return true;
     // Screen-space error first: it rejects most vertices of distant instances.
-    if (!(error * view.pixels_per_unit_at_distance_one > view.pixel_tolerance * (dist - radius))) return false;
+    if (!(error * view.pixels_per_unit_at_distance_one > scale * view.pixel_tolerance * (dist - radius))) return false;
     PfrepVertexBounds b;
     pfrepVertexBounds(m, vertex, &b);
     if (b.cone_angle < 1.5707963f) {
@@ -557,24 +569,46 @@ bool pfrepWanted(const PfrepModel& m, const PfrepView& view, uint32_t vertex) {
     return true;
 }
 
+float keepScale(const PfrepView& view) {
+    const float h = view.hysteresis;
+    return h > 0.0f && h <= 1.0f ? h : 1.0f; // NaN and out-of-range values: no band
+}
+
+} // namespace
+
+bool pfrepWanted(const PfrepModel& m, const PfrepView& view, uint32_t vertex) {
+    if (vertex >= m.vertex_count) return false;
+    return wantedAt(m, view, vertex, 1.0f);
+}
+
 Result pfrepRefine(const PfrepModel& m, const PfrepView& view, uint8_t* mask, uint32_t* scratch,
                    size_t scratch_capacity, size_t* changes) {
     if (!mask || !scratch || !changes || scratch_capacity < pfrepScratchValues(m)) return Result::InvalidArgument;
     const uint8_t* s = m.data + m.entries_offset;
+    const float keep = keepScale(view);
     size_t done = 0;
     forEachPresent(m, mask, [&](uint32_t i) {
         if (maskBit(mask, i)) return true; // simplified earlier in this pass
-        if (i < m.removed_count && !pfrepWanted(m, view, i)) {
-            pfrepSimplifyVertex(m, mask, i, scratch, scratch_capacity);
-            ++done;
-            return true;
+        if (i < m.removed_count && !wantedAt(m, view, i, keep)) {
+            // The closure may take vertices that are still kept (above tolerance * hysteresis);
+            // then the simplification is undone, otherwise the next pass would insert them again
+            // and a static camera would toggle the same vertices every frame.
+            const size_t n = simplifyClosure(m, mask, i, scratch);
+            bool blocked = false;
+            for (size_t k = 1; k < n && !blocked; ++k) blocked = wantedAt(m, view, scratch[k], keep);
+            if (blocked) {
+                for (size_t k = 0; k < n; ++k) clearBit(mask, scratch[k]);
+            } else {
+                ++done;
+                return true;
+            }
         }
         const Entry e = decodeHeader(s, entryStart(m, i));
         uint64_t bit = e.first_mask_bit + (e.has_original ? e.neighbours : 0);
         for (uint32_t k = 0; k < e.dependencies; ++k) {
             const uint32_t d = i - 1 - bitsAt(s, bit, e.dependency_width);
             bit += e.dependency_width + e.neighbours;
-            if (maskBit(mask, d) && pfrepWanted(m, view, d)) {
+            if (maskBit(mask, d) && wantedAt(m, view, d, 1.0f)) {
                 pfrepInsertVertex(m, mask, d, scratch, scratch_capacity);
                 ++done;
             }

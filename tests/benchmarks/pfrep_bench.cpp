@@ -4,7 +4,7 @@
 //   3. selective refinement of 1,000 lucy100k instances from a moving camera (bar: < 2 ms per frame),
 //      instance state exactly |V| bits;
 //   4. writes PFRep levels and full-edge discrete levels at equal triangle counts for meshdist.py.
-// usage: pfrep_bench [--quick] (quick: skips the largest scans in part 1)
+// usage: pfrep_bench [--quick | --refine] (quick: skips the largest scans in part 1; refine: part 3 only)
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -92,10 +92,12 @@ uint32_t levelFor(const lodrt::PfrepModel& m, size_t target, std::vector<uint32_
 
 int main(int argc, char** argv) {
     const bool quick = argc > 1 && std::strcmp(argv[1], "--quick") == 0;
-    std::printf("== 1. blob size (bar: <= 40 bytes/vertex; paper: 83)\n");
+    const bool refine_only = argc > 1 && std::strcmp(argv[1], "--refine") == 0;
+    if (!refine_only) std::printf("== 1. blob size (bar: <= 40 bytes/vertex; paper: 83)\n");
     std::vector<std::string> scans = {"rocker_arm.obj", "bunny_zipper.ply", "bunny_scan_bun000_tri.ply",
                                       "dragon_scan_stand0_tri.ply", "lucy100k.ply", "nefertiti.obj", "igea.ply"};
-    if (!quick) {
+    if (refine_only) scans.clear();
+    if (!quick && !refine_only) {
         scans.push_back("dragon_stand_merged.ply");
         scans.push_back("dragon_poisson.ply");
     }
@@ -119,7 +121,7 @@ int main(int argc, char** argv) {
         if (name == "dragon_poisson.ply") dragon = std::move(build);
         if (name == "lucy100k.ply") lucy = std::move(build);
     }
-    std::printf("  bar %s\n", all_met ? "met on every scan measured" : "NOT met");
+    if (!refine_only) std::printf("  bar %s\n", all_met ? "met on every scan measured" : "NOT met");
 
     if (!dragon.blob.empty()) {
         std::printf("== 2. progressive extraction, dragon_poisson (bar: >= 50 M triangles/s, one core)\n");
@@ -197,6 +199,14 @@ int main(int argc, char** argv) {
             const int kFrames = 300;
             double total = 0, total_cpu = 0, worst = 0;
             size_t total_changes = 0, last_tris = 0;
+            // Instrumentation (outside the timed region): per-frame vertex operations and mask bits
+            // flipped, the worst frame, and bits that flip again within 3 frames of a flip (toggles).
+            int worst_frame = 0, worst_cpu_frame = 0;
+            double worst_cpu = 0;
+            std::vector<size_t> frame_ops(kFrames), frame_flips(kFrames), frame_toggles(kFrames);
+            std::vector<uint8_t> previous(masks);
+            std::vector<uint8_t> flipped[3] = {std::vector<uint8_t>(masks.size()), std::vector<uint8_t>(masks.size()),
+                                               std::vector<uint8_t>(masks.size())};
             std::vector<uint32_t> idx(lodrt::pfrepMaxTriangles(m) * 3);
             for (int frame = 0; frame < kFrames; ++frame) {
                 const float cam[3] = {20 * spacing * (0.5f + 0.4f * std::sin(frame * 0.02f)), -5 * spacing + frame * 0.3f * spacing / 3,
@@ -227,10 +237,24 @@ int main(int argc, char** argv) {
                     changes += n;
                 }
                 const double s = secondsSince(t);
-                total_cpu += cpuSeconds() - c0;
+                const double frame_cpu = cpuSeconds() - c0;
+                total_cpu += frame_cpu;
+                if (frame_cpu > worst_cpu) worst_cpu_frame = frame;
+                worst_cpu = std::max(worst_cpu, frame_cpu);
                 total += s;
+                if (s > worst) worst_frame = frame;
                 worst = std::max(worst, s);
                 total_changes += changes;
+                frame_ops[size_t(frame)] = changes;
+                std::vector<uint8_t>& now = flipped[frame % 3];
+                for (size_t b = 0; b < masks.size(); ++b) {
+                    const uint8_t recent = uint8_t(flipped[0][b] | flipped[1][b] | flipped[2][b]);
+                    const uint8_t x = uint8_t(masks[b] ^ previous[b]);
+                    frame_flips[size_t(frame)] += size_t(__builtin_popcount(x));
+                    frame_toggles[size_t(frame)] += size_t(__builtin_popcount(x & recent));
+                    now[b] = x;
+                }
+                previous = masks;
                 if (frame == kFrames - 1) {
                     last_tris = 0;
                     for (int i = 0; i < kInstances; ++i) {
@@ -240,15 +264,30 @@ int main(int argc, char** argv) {
                     }
                 }
             }
-            std::printf("  thread CPU time: mean %.3f ms/frame\n", total_cpu / kFrames * 1e3);
+            std::printf("  thread CPU time: mean %.3f ms/frame, worst %.3f ms (frame %d, %zu vertex operations)\n",
+                        total_cpu / kFrames * 1e3, worst_cpu * 1e3, worst_cpu_frame, frame_ops[size_t(worst_cpu_frame)]);
             std::printf("  %d frames: mean %.3f ms/frame, worst %.3f ms, %.1f vertex operations/frame; state %zu bytes "
                         "per instance for %u vertices (|V| bits); %zu triangles in the last frame: bar %s\n",
                         kFrames, total / kFrames * 1e3, worst * 1e3, double(total_changes) / kFrames, mask_bytes,
                         m.vertex_count, last_tris, total / kFrames * 1e3 < 2.0 ? "met" : "NOT met");
+            size_t ops_rest = 0, flips_rest = 0, toggles = 0, max_ops_rest = 0;
+            for (int f = 1; f < kFrames; ++f) {
+                ops_rest += frame_ops[size_t(f)];
+                flips_rest += frame_flips[size_t(f)];
+                toggles += frame_toggles[size_t(f)];
+                max_ops_rest = std::max(max_ops_rest, frame_ops[size_t(f)]);
+            }
+            std::printf("  worst frame %d (%zu vertex operations, %zu mask bits flipped); frame 0: %zu operations; "
+                        "frames 1..%d: mean %.1f operations (max %zu), %.1f bits flipped, %.1f bits re-flipped "
+                        "within 3 frames (toggles)\n",
+                        worst_frame, frame_ops[size_t(worst_frame)], frame_flips[size_t(worst_frame)], frame_ops[0],
+                        kFrames - 1, double(ops_rest) / (kFrames - 1), max_ops_rest, double(flips_rest) / (kFrames - 1),
+                        double(toggles) / (kFrames - 1));
         }
     }
 
     // 4. Levels for meshdist.py: PFRep (half-edge, positions quantized) against the full-edge chain.
+    if (refine_only) return 0;
     const std::string out = LODBAKE_BENCH_OUT_DIR;
     for (const char* name : {"lucy100k.ply", "rocker_arm.obj"}) {
         lodbake::Mesh mesh;

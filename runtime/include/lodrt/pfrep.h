@@ -94,6 +94,10 @@ struct PfrepView {
     float planes[6][4] = {}; // inward frustum planes a x + b y + c z + d >= 0
     float pixels_per_unit_at_distance_one = 1000.0f; // viewport_height / (2 tan(fov / 2))
     float pixel_tolerance = 1.0f;
+    /// Hysteresis h in (0, 1] of pfrepRefine: a removed vertex is inserted when its projected error
+    /// exceeds pixel_tolerance, a present one is simplified only below pixel_tolerance * h. Values
+    /// outside (0, 1] mean 1 (no band).
+    float hysteresis = 0.5f;
 };
 
 /// Per-vertex data of the criterion, dequantized.
@@ -107,10 +111,14 @@ struct PfrepVertexBounds {
 LODRT_API Result pfrepVertexBounds(const PfrepModel& model, uint32_t vertex, PfrepVertexBounds* out);
 LODRT_API bool pfrepWanted(const PfrepModel& model, const PfrepView& view, uint32_t vertex);
 
-/// One adaptation step of an instance towards `view`: every present removable vertex that is not
-/// wanted is simplified, and every removed vertex whose triangles are visible and that is wanted
-/// is inserted. Visits only the entries of present vertices. `*changes` receives the vertex
-/// operations done.
+/// One adaptation step of an instance towards `view`, in increasing rank: a present removable vertex
+/// is simplified when the criterion fails at tolerance pixel_tolerance * hysteresis AND it fails
+/// for every other vertex its SimplifyVertex closure would remove (else nothing changes: the
+/// closure would drop a vertex the next step inserts again); a removed vertex whose triangles are
+/// visible is inserted when the criterion holds at pixel_tolerance. The band between the two
+/// thresholds comes from the criterion alone: no state beyond the |V|-bit mask. Under a fixed view
+/// repeated steps converge and then do nothing. Visits only the entries of present vertices.
+/// `*changes` receives the vertex operations done.
 LODRT_API Result pfrepRefine(const PfrepModel& model, const PfrepView& view, uint8_t* mask, uint32_t* scratch,
                              size_t scratch_capacity, size_t* changes);
 

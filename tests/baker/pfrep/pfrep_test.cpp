@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <map>
 #include <memory>
 #include <random>
@@ -305,6 +306,105 @@ TEST_F(PfrepTest, ViewDependentRefinementFollowsTheCameraWithoutCracks) {
     }
     EXPECT_LT(counts[0], counts[2]); // closer: more triangles
     EXPECT_LT(counts[5], counts[3]); // moving away coarsens again
+}
+
+// A view of the rocker arm from `dist` model sizes above its top, shifted by `dx` sizes sideways,
+// looking down -z through a 60 degree frustum: the side planes cull part of the mesh.
+lodrt::PfrepView rockerView(const lodrt::PfrepModel& m, float dist, float dx) {
+    float lo[3], hi[3];
+    for (int k = 0; k < 3; ++k) {
+        lo[k] = m.position_min[k];
+        hi[k] = m.position_min[k] + 65535.0f * m.position_step[k];
+    }
+    const float size = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]});
+    lodrt::PfrepView view;
+    view.eye[0] = (lo[0] + hi[0]) * 0.5f + dx * size;
+    view.eye[1] = (lo[1] + hi[1]) * 0.5f;
+    view.eye[2] = hi[2] + dist * size;
+    const float c = std::cos(0.5236f), sn = std::sin(0.5236f);
+    const float planes[5][3] = {{0, 0, -1}, {c, 0, -sn}, {-c, 0, -sn}, {0, c, -sn}, {0, -c, -sn}};
+    for (int p = 0; p < 5; ++p) {
+        for (int k = 0; k < 3; ++k) view.planes[p][k] = planes[p][k];
+        view.planes[p][3] = -(planes[p][0] * view.eye[0] + planes[p][1] * view.eye[1] + planes[p][2] * view.eye[2]);
+    }
+    view.planes[5][3] = 1e30f;
+    view.pixels_per_unit_at_distance_one = 1080.0f / (2.0f * std::tan(0.5236f));
+    view.pixel_tolerance = 1.0f;
+    return view;
+}
+
+TEST_F(PfrepTest, StaticCameraConvergesThenDoesNoVertexOperations) {
+    LODBAKE_REQUIRE_SHARED_MESHES();
+    ASSERT_NE(rocker_, nullptr);
+    const lodrt::PfrepModel& m = rocker_->model;
+    std::vector<uint8_t> mask(lodrt::pfrepMaskBytes(m));
+    std::vector<uint32_t> scratch(lodrt::pfrepScratchValues(m));
+    for (float dist : {0.6f, 2.0f}) {
+        for (int start = 0; start < 2; ++start) {
+            if (start == 0)
+                lodrt::pfrepMaskCoarsest(m, mask.data());
+            else
+                lodrt::pfrepMaskFinest(m, mask.data());
+            const lodrt::PfrepView view = rockerView(m, dist, 0.1f);
+            // The first refinement: steps until one does nothing (insertions below the scan position
+            // are examined by the next step), which must happen within a few steps.
+            size_t changes = 1, first = 0;
+            int steps = 0;
+            for (; steps < 50 && changes > 0; ++steps) {
+                ASSERT_EQ(lodrt::pfrepRefine(m, view, mask.data(), scratch.data(), scratch.size(), &changes),
+                          lodrt::Result::Ok);
+                if (steps == 0) first = changes;
+            }
+            EXPECT_EQ(changes, 0u) << "distance " << dist << " start " << start << ": no fixed point in 50 steps";
+            EXPECT_GT(first, 0u);
+            const std::vector<uint8_t> settled = mask;
+            for (int frame = 0; frame < 5; ++frame) {
+                ASSERT_EQ(lodrt::pfrepRefine(m, view, mask.data(), scratch.data(), scratch.size(), &changes),
+                          lodrt::Result::Ok);
+                EXPECT_EQ(changes, 0u) << "distance " << dist << " start " << start << " frame " << frame;
+            }
+            EXPECT_EQ(mask, settled);
+        }
+    }
+}
+
+TEST_F(PfrepTest, SlowlyMovingCameraTogglesNoVertexTwiceWithinFewFrames) {
+    LODBAKE_REQUIRE_SHARED_MESHES();
+    ASSERT_NE(rocker_, nullptr);
+    const lodrt::PfrepModel& m = rocker_->model;
+    std::vector<uint8_t> mask(lodrt::pfrepMaskBytes(m));
+    std::vector<uint32_t> scratch(lodrt::pfrepScratchValues(m));
+    std::vector<uint32_t> idx(lodrt::pfrepMaxTriangles(m) * 3);
+    lodrt::pfrepMaskCoarsest(m, mask.data());
+    size_t changes = 1;
+    for (int steps = 0; steps < 50 && changes > 0; ++steps)
+        ASSERT_EQ(lodrt::pfrepRefine(m, rockerView(m, 0.8f, -0.3f), mask.data(), scratch.data(), scratch.size(), &changes),
+                  lodrt::Result::Ok);
+    ASSERT_EQ(changes, 0u);
+    // Flies sideways and closer, 1% of the model size per frame; one refinement step per frame.
+    std::vector<int> last_flip(m.vertex_count, -100);
+    size_t flips = 0;
+    std::vector<uint8_t> previous = mask;
+    for (int frame = 0; frame < 60; ++frame) {
+        const lodrt::PfrepView view = rockerView(m, 0.8f - 0.005f * frame, -0.3f + 0.01f * frame);
+        ASSERT_EQ(lodrt::pfrepRefine(m, view, mask.data(), scratch.data(), scratch.size(), &changes), lodrt::Result::Ok);
+        for (uint32_t v = 0; v < m.vertex_count; ++v) {
+            if (((mask[v >> 3] ^ previous[v >> 3]) >> (v & 7)) & 1) {
+                ++flips;
+                EXPECT_GT(frame - last_flip[v], 4) << "vertex " << v << " flipped at frames " << last_flip[v] << " and "
+                                                   << frame;
+                last_flip[v] = frame;
+            }
+        }
+        previous = mask;
+        if (frame % 10 == 9) {
+            size_t count = 0;
+            ASSERT_EQ(lodrt::pfrepExtractSelective(m, mask.data(), idx.data(), idx.size() / 3, &count), lodrt::Result::Ok);
+            std::string why;
+            ASSERT_TRUE(closedManifold(idx, count, why)) << "frame " << frame << ": " << why;
+        }
+    }
+    EXPECT_GT(flips, 0u); // the camera moved enough to change the mesh
 }
 
 TEST(PfrepRawScanTest, NonManifoldMergedScansWithoutRepair) {
