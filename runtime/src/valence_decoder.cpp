@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "lodrt/detail/valence_model.h"
 #include "lodrt/format.h"
 #include "lodrt/valence.h"
 
@@ -11,6 +12,9 @@ namespace lodrt {
 namespace {
 
 using namespace format;
+using detail::Fifo;
+using detail::MoveToFront;
+using detail::initRangeProbs;
 
 uint32_t read32(const uint8_t* p) {
     return uint32_t(p[0]) | (uint32_t(p[1]) << 8) | (uint32_t(p[2]) << 16) | (uint32_t(p[3]) << 24);
@@ -104,9 +108,6 @@ private:
     uint32_t overrun_ = 0;
 };
 
-void initProbs(uint16_t* probs, size_t n) {
-    for (size_t i = 0; i < n; ++i) probs[i] = uint16_t(kRangeProbInit);
-}
 
 constexpr uint32_t kClassProbs = 1u << kValenceClassTreeBits;
 constexpr uint32_t kTopProbs = 33;
@@ -117,8 +118,8 @@ template <int Components> struct ResidualModel {
     uint16_t top[Components][kValenceResidualContexts][kTopProbs];
     uint32_t previous[Components];
     void init() {
-        initProbs(&klass[0][0][0], sizeof(klass) / 2);
-        initProbs(&top[0][0][0], sizeof(top) / 2);
+        initRangeProbs(&klass[0][0][0], sizeof(klass) / 2);
+        initRangeProbs(&top[0][0][0], sizeof(top) / 2);
         for (int j = 0; j < Components; ++j) previous[j] = 0;
     }
     // Zigzag-decoded residual of component j; false on a corrupt class.
@@ -136,34 +137,6 @@ template <int Components> struct ResidualModel {
     }
 };
 
-template <uint32_t N> struct Fifo {
-    uint32_t ring[N];
-    uint32_t head = 0;
-    uint32_t count = 0;
-    uint32_t at(uint32_t i) const { return ring[(head - 1 - i) & (N - 1)]; }
-    void push(uint32_t v) {
-        ring[head & (N - 1)] = v;
-        ++head;
-        if (count < N) ++count;
-    }
-};
-
-// Move-to-front cache of recently referenced vertices.
-template <uint32_t N> struct MoveToFront {
-    uint32_t slot[N];
-    uint32_t count = 0;
-    int find(uint32_t v) const {
-        for (uint32_t i = 0; i < count; ++i)
-            if (slot[i] == v) return int(i);
-        return -1;
-    }
-    void touch(uint32_t v) {
-        int at = find(v);
-        uint32_t i = at >= 0 ? uint32_t(at) : (count < N ? count++ : N - 1);
-        for (; i > 0; --i) slot[i] = slot[i - 1];
-        slot[0] = v;
-    }
-};
 
 struct Decoder {
     const ValenceInfo* info;
@@ -182,10 +155,10 @@ struct Decoder {
     uint32_t next_new = 0;
 
     void init() {
-        initProbs(&edge_probs[0][0], sizeof(edge_probs) / 2);
-        initProbs(&vertex_probs[0][0], sizeof(vertex_probs) / 2);
-        initProbs(explicit_class, kClassProbs);
-        initProbs(explicit_top, kTopProbs);
+        initRangeProbs(&edge_probs[0][0], sizeof(edge_probs) / 2);
+        initRangeProbs(&vertex_probs[0][0], sizeof(vertex_probs) / 2);
+        initRangeProbs(explicit_class, kClassProbs);
+        initRangeProbs(explicit_top, kTopProbs);
         pos_model.init();
         nrm_model.init();
     }

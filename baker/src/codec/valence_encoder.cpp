@@ -9,6 +9,7 @@
 #include <string>
 
 #include "codec/range_encoder.h"
+#include "lodrt/detail/valence_model.h"
 #include "lodrt/format.h"
 #include "lodrt/valence.h"
 
@@ -16,23 +17,23 @@ namespace lodbake::codec {
 namespace {
 
 using namespace lodrt::format;
+using lodrt::detail::Fifo;
+using lodrt::detail::MoveToFront;
+using lodrt::detail::initRangeProbs;
 
 constexpr uint32_t kUnassigned = 0xFFFFFFFFu;
 constexpr uint32_t kNone = 0xFFFFFFFFu;
 constexpr uint32_t kClassProbs = 1u << kValenceClassTreeBits;
 constexpr uint32_t kTopProbs = 33;
 
-void initProbs(uint16_t* probs, size_t n) {
-    std::fill(probs, probs + n, uint16_t(kRangeProbInit));
-}
 
 template <int Components> struct ResidualModel {
     uint16_t klass[Components][kValenceResidualContexts][kClassProbs];
     uint16_t top[Components][kValenceResidualContexts][kTopProbs];
     uint32_t previous[Components];
     void init() {
-        initProbs(&klass[0][0][0], sizeof(klass) / 2);
-        initProbs(&top[0][0][0], sizeof(top) / 2);
+        initRangeProbs(&klass[0][0][0], sizeof(klass) / 2);
+        initRangeProbs(&top[0][0][0], sizeof(top) / 2);
         for (int j = 0; j < Components; ++j) previous[j] = 0;
     }
     void encode(RangeEncoder& re, int j, int64_t residual) {
@@ -43,34 +44,6 @@ template <int Components> struct ResidualModel {
     }
 };
 
-template <uint32_t N> struct Fifo {
-    uint32_t ring[N];
-    uint32_t head = 0;
-    uint32_t count = 0;
-    uint32_t at(uint32_t i) const { return ring[(head - 1 - i) & (N - 1)]; }
-    void push(uint32_t v) {
-        ring[head & (N - 1)] = v;
-        ++head;
-        if (count < N) ++count;
-    }
-};
-
-// Move-to-front cache of recently referenced vertices.
-template <uint32_t N> struct MoveToFront {
-    uint32_t slot[N];
-    uint32_t count = 0;
-    int find(uint32_t v) const {
-        for (uint32_t i = 0; i < count; ++i)
-            if (slot[i] == v) return int(i);
-        return -1;
-    }
-    void touch(uint32_t v) {
-        int at = find(v);
-        uint32_t i = at >= 0 ? uint32_t(at) : (count < N ? count++ : N - 1);
-        for (; i > 0; --i) slot[i] = slot[i - 1];
-        slot[0] = v;
-    }
-};
 
 // True when the two triangles have at least two corners in common.
 bool sharesEdge(const uint32_t* a, const uint32_t* b) {
@@ -189,10 +162,10 @@ struct Encoder {
     uint32_t next_new = 0;
 
     void init() {
-        initProbs(&edge_probs[0][0], sizeof(edge_probs) / 2);
-        initProbs(&vertex_probs[0][0], sizeof(vertex_probs) / 2);
-        initProbs(explicit_class, kClassProbs);
-        initProbs(explicit_top, kTopProbs);
+        initRangeProbs(&edge_probs[0][0], sizeof(edge_probs) / 2);
+        initRangeProbs(&vertex_probs[0][0], sizeof(vertex_probs) / 2);
+        initRangeProbs(explicit_class, kClassProbs);
+        initRangeProbs(explicit_top, kTopProbs);
         pos_model.init();
         nrm_model.init();
     }
