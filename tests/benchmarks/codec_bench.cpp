@@ -18,6 +18,8 @@
 #include <draco/compression/encode.h>
 #include <draco/mesh/mesh.h>
 
+#include "bench_timing.h"
+
 #include "lodbake/cleanup/normals.h"
 #include "lodbake/codec/valence_encoder.h"
 #include "lodbake/io/mesh_io.h"
@@ -28,16 +30,7 @@ namespace {
 constexpr int kRuns = 5;
 constexpr uint32_t kNormalBits = 10;
 
-template <class F> double bestMs(F&& f) {
-    double best = 1e300;
-    for (int i = 0; i < kRuns; ++i) {
-        const auto t0 = std::chrono::steady_clock::now();
-        f();
-        const auto t1 = std::chrono::steady_clock::now();
-        best = std::min(best, std::chrono::duration<double, std::milli>(t1 - t0).count());
-    }
-    return best;
-}
+template <class F> double bestMs(F&& f) { return lodbake_bench::bestMs(kRuns, f); }
 
 // Keeps only the vertices some triangle references, in their original order.
 lodbake::Mesh compact(const lodbake::Mesh& in) {

@@ -12,6 +12,8 @@
 #include <system_error>
 #include <vector>
 
+#include "bench_timing.h"
+
 #include "lodbake/core/file_io.h"
 #include "lodbake/io/mesh_io.h"
 
@@ -21,16 +23,7 @@ namespace {
 
 constexpr int kRuns = 5;
 
-template <class F> double bestMs(F&& f) {
-    double best = 1e300;
-    for (int i = 0; i < kRuns; ++i) {
-        const auto t0 = std::chrono::steady_clock::now();
-        f();
-        const auto t1 = std::chrono::steady_clock::now();
-        best = std::min(best, std::chrono::duration<double, std::milli>(t1 - t0).count());
-    }
-    return best;
-}
+template <class F> double bestMs(F&& f) { return lodbake_bench::bestMs(kRuns, f); }
 
 } // namespace
 
