@@ -1,0 +1,148 @@
+// Shared pieces of the lodbake command-line front end (see cli_common.h).
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <map>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include "lodbake/bake/bake.h"
+#include "lodbake/cleanup/repair.h"
+#include "lodbake/codec/valence_encoder.h"
+#include "lodbake/config/bake_config.h"
+#include "lodbake/cleanup/topology.h"
+#include "lodbake/core/diagnostics.h"
+#include "lodbake/core/file_io.h"
+#include "lodbake/core/json_writer.h"
+#include "lodbake/io/mesh_io.h"
+#include "lodbake/pfrep/pfrep_builder.h"
+#include "lodbake/simplify/lod_chain.h"
+#include "lodbake/simplify/mesh_distance.h"
+#include "lodbake/simplify/simplify.h"
+#include "lodbake/version.h"
+#include "lodrt/pfrep.h"
+
+#include "cli_common.h"
+
+namespace lodbake::cli {
+
+int usageError(const std::string& message) {
+    std::fprintf(stderr, "error: %s (see lodbake --help)\n", message.c_str());
+    return kExitUsage;
+}
+
+// Returns false (after printing) on a usage error.
+bool parseArgs(int argc, char** argv, int first, const std::vector<OptionSpec>& specs, Args& args, int& exit_code) {
+    for (int i = first; i < argc; ++i) {
+        const std::string a = argv[i];
+        if (a.size() > 1 && a[0] == '-') {
+            const OptionSpec* spec = nullptr;
+            for (const OptionSpec& s : specs)
+                if (a == s.long_name || (s.short_name && a == s.short_name)) spec = &s;
+            if (!spec) {
+                exit_code = usageError("unknown option '" + a + "'");
+                return false;
+            }
+            if (spec->takes_value) {
+                if (i + 1 >= argc) {
+                    exit_code = usageError(std::string("option ") + spec->long_name + " needs a value");
+                    return false;
+                }
+                args.values[spec->long_name] = argv[++i];
+            } else {
+                args.flags[spec->long_name] = true;
+            }
+        } else {
+            args.positional.push_back(a);
+        }
+    }
+    return true;
+}
+
+void printDiagnostics(const Diagnostics& diagnostics) {
+    for (const Diagnostic& d : diagnostics.items())
+        std::fprintf(stderr, "%s: %s\n", d.severity == Severity::Warning ? "warning" : "note", d.message.c_str());
+}
+
+int reportError(const Status& status) {
+    std::fprintf(stderr, "error: %s\n", status.message().c_str());
+    return kExitError;
+}
+
+std::string attributeList(const Mesh& mesh) {
+    std::string s = "POSITION";
+    if (mesh.hasNormals()) s += " NORMAL";
+    if (mesh.hasTangents()) s += " TANGENT";
+    for (size_t i = 0; i < mesh.uvs.size(); ++i) s += " TEXCOORD_" + std::to_string(i);
+    if (mesh.hasColors()) s += " COLOR_0";
+    return s;
+}
+
+void writeTopologyJson(JsonWriter& j, const TopologyStats& t) {
+    j.beginObject();
+    j.field("vertices", t.vertex_count);
+    j.field("referenced_vertices", t.referenced_vertex_count);
+    j.field("unreferenced_vertices", t.unreferenced_vertex_count);
+    j.field("faces", t.face_count);
+    j.field("edges", t.edge_count);
+    j.field("boundary_edges", t.boundary_edge_count);
+    j.field("boundary_loops", t.boundary_loop_count);
+    j.field("components", t.component_count);
+    j.field("non_manifold_edges", t.non_manifold_edge_count);
+    j.field("non_manifold_vertices", t.non_manifold_vertex_count);
+    j.field("inconsistent_orientation_edges", t.inconsistent_edge_count);
+    j.field("degenerate_faces", t.degenerate_face_count);
+    j.field("duplicate_faces", t.duplicate_face_count);
+    j.field("non_finite_vertices", t.non_finite_vertex_count);
+    j.field("euler_characteristic", t.euler_characteristic);
+    j.endObject();
+}
+
+void printTopologyText(const char* title, const TopologyStats& t) {
+    std::printf("%s\n", title);
+    std::printf("  vertices            %llu referenced, %llu unreferenced\n",
+                (unsigned long long)t.referenced_vertex_count, (unsigned long long)t.unreferenced_vertex_count);
+    std::printf("  edges               %llu\n", (unsigned long long)t.edge_count);
+    std::printf("  boundary            %llu edges in %llu loops\n", (unsigned long long)t.boundary_edge_count,
+                (unsigned long long)t.boundary_loop_count);
+    std::printf("  components          %llu\n", (unsigned long long)t.component_count);
+    std::printf("  non-manifold        %llu edges, %llu vertices\n", (unsigned long long)t.non_manifold_edge_count,
+                (unsigned long long)t.non_manifold_vertex_count);
+    std::printf("  orientation         %llu inconsistent edges\n", (unsigned long long)t.inconsistent_edge_count);
+    std::printf("  degenerate faces    %llu\n", (unsigned long long)t.degenerate_face_count);
+    std::printf("  duplicate faces     %llu\n", (unsigned long long)t.duplicate_face_count);
+    std::printf("  non-finite vertices %llu\n", (unsigned long long)t.non_finite_vertex_count);
+    std::printf("  euler               %lld\n", (long long)t.euler_characteristic);
+}
+
+bool parseNumber(const std::string& text, double& out) {
+    char* end = nullptr;
+    out = std::strtod(text.c_str(), &end);
+    return !text.empty() && end && *end == '\0' && std::isfinite(out);
+}
+
+// Splits "1,0.5" into numbers; false on any malformed item.
+bool parseList(const std::string& text, std::vector<double>& out) {
+    size_t start = 0;
+    while (start <= text.size()) {
+        const size_t comma = text.find(',', start);
+        const std::string item = text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+        double v = 0;
+        if (!parseNumber(item, v)) return false;
+        out.push_back(v);
+        if (comma == std::string::npos) break;
+        start = comma + 1;
+    }
+    return !out.empty();
+}
+
+void writeDistanceJson(JsonWriter& j, const DistanceResult& d) {
+    j.field("hausdorff", d.hausdorff).field("hausdorff_rel", d.hausdorffRel());
+    j.field("mean", d.mean).field("mean_rel", d.meanRel());
+    j.field("rms", d.rms).field("rms_rel", d.rmsRel());
+}
+
+} // namespace lodbake::cli

@@ -1,0 +1,59 @@
+// Shared pieces of the lodbake command-line front end: argument parsing, error printing and the
+// JSON/text writers more than one subcommand uses. Each subcommand lives in its own cmd_*.cpp.
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "lodbake/cleanup/topology.h"
+#include "lodbake/core/diagnostics.h"
+#include "lodbake/core/json_writer.h"
+#include "lodbake/core/mesh.h"
+#include "lodbake/core/status.h"
+#include "lodbake/simplify/mesh_distance.h"
+
+namespace lodbake::cli {
+
+constexpr int kExitOk = 0;
+constexpr int kExitError = 1;
+constexpr int kExitUsage = 2;
+
+/// Parsed command line of one subcommand: flags with optional values and positional arguments.
+struct Args {
+    std::vector<std::string> positional;
+    std::map<std::string, std::string> values;
+    std::map<std::string, bool> flags;
+};
+
+struct OptionSpec {
+    const char* long_name;
+    const char* short_name; // may be null
+    bool takes_value;
+};
+
+int usageError(const std::string& message);
+// Returns false (after printing) on a usage error.
+bool parseArgs(int argc, char** argv, int first, const std::vector<OptionSpec>& specs, Args& args, int& exit_code);
+void printDiagnostics(const Diagnostics& diagnostics);
+int reportError(const Status& status);
+std::string attributeList(const Mesh& mesh);
+void writeTopologyJson(JsonWriter& j, const TopologyStats& t);
+void printTopologyText(const char* title, const TopologyStats& t);
+bool parseNumber(const std::string& text, double& out);
+// Splits "1,0.5" into numbers; false on any malformed item.
+bool parseList(const std::string& text, std::vector<double>& out);
+void writeDistanceJson(JsonWriter& j, const DistanceResult& d);
+
+// Subcommands: each returns the process exit code.
+int runInfo(int argc, char** argv);
+int runConvert(int argc, char** argv);
+int runRepair(int argc, char** argv);
+int runSimplify(int argc, char** argv);
+int runLods(int argc, char** argv);
+int runPfrep(int argc, char** argv);
+int runEncode(int argc, char** argv);
+int runDecode(int argc, char** argv);
+int runBake(int argc, char** argv);
+
+} // namespace lodbake::cli

@@ -1,0 +1,156 @@
+// lodbake encode and lodbake decode (the .lbm valence codec).
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <map>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include "lodbake/bake/bake.h"
+#include "lodbake/cleanup/repair.h"
+#include "lodbake/codec/valence_encoder.h"
+#include "lodbake/config/bake_config.h"
+#include "lodbake/cleanup/topology.h"
+#include "lodbake/core/diagnostics.h"
+#include "lodbake/core/file_io.h"
+#include "lodbake/core/json_writer.h"
+#include "lodbake/io/mesh_io.h"
+#include "lodbake/pfrep/pfrep_builder.h"
+#include "lodbake/simplify/lod_chain.h"
+#include "lodbake/simplify/mesh_distance.h"
+#include "lodbake/simplify/simplify.h"
+#include "lodbake/version.h"
+#include "lodrt/pfrep.h"
+
+#include "cli_common.h"
+
+namespace lodbake::cli {
+
+namespace {
+
+const char* kEncodeHelp = R"(usage: lodbake encode IN -o OUT.lbm [--bits 14] [--normal-bits 10] [--no-normals] [--json]
+
+Compresses IN's triangles, positions (quantized in the bounding cube) and normals (octahedral)
+into the .lbm format (docs/format/valence.md). Triangles come back exactly, as index triples over
+the decoded vertex order (vertices and triangles may be reordered, triangles rotated). UV sets,
+colours, tangents and materials are not coded (a warning says so).
+
+options:
+  --bits N          position quantization bits, 8..16 (default 14)
+  --normal-bits N   octahedral normal bits per component, 4..16 (default 10)
+  --no-normals      do not code normals even if IN has them
+  --json            print bytes and bits per vertex of each stream as JSON
+)";
+
+const char* kDecodeHelp = R"(usage: lodbake decode IN.lbm -o OUT
+
+Decodes an .lbm file and writes it as .ply .obj .off .gltf or .glb.
+)";
+
+} // namespace
+
+int runEncode(int argc, char** argv) {
+    Args args;
+    int code = 0;
+    if (!parseArgs(argc, argv, 2,
+                   {{"--output", "-o", true}, {"--bits", nullptr, true}, {"--normal-bits", nullptr, true},
+                    {"--no-normals", nullptr, false}, {"--json", nullptr, false}, {"--help", "-h", false}},
+                   args, code))
+        return code;
+    if (args.flags.count("--help")) {
+        std::fputs(kEncodeHelp, stdout);
+        return kExitOk;
+    }
+    if (args.positional.size() != 1) return usageError("encode takes exactly one input file");
+    if (!args.values.count("--output")) return usageError("encode needs -o OUT.lbm");
+    const std::string& in = args.positional[0];
+    const std::string& out = args.values["--output"];
+    if (lowerExtension(out) != ".lbm") return usageError("output '" + out + "' must end in .lbm");
+    if (isSameFile(in, out)) return usageError("output '" + out + "' is the input file; the input is never modified");
+    codec::ValenceEncodeOptions options;
+    for (auto [flag, field, lo, hi] : {std::make_tuple("--bits", &options.position_bits, 8u, 16u),
+                                       std::make_tuple("--normal-bits", &options.normal_bits, 4u, 16u)}) {
+        if (!args.values.count(flag)) continue;
+        double v = 0.0;
+        if (!parseNumber(args.values[flag], v) || v != std::floor(v) || v < lo || v > hi)
+            return usageError(std::string(flag) + " expects an integer in [" + std::to_string(lo) + ", " +
+                              std::to_string(hi) + "], got '" + args.values[flag] + "'");
+        *field = uint32_t(v);
+    }
+    options.encode_normals = !args.flags.count("--no-normals");
+
+    Diagnostics diagnostics;
+    Result<LoadedMesh> loaded = readMesh(in, ReadOptions(), diagnostics);
+    printDiagnostics(diagnostics);
+    if (!loaded.ok()) return reportError(loaded.status());
+    const Mesh& mesh = loaded->mesh;
+    if (!mesh.uvs.empty() || mesh.hasColors() || mesh.hasTangents() || !mesh.materials.empty())
+        std::fprintf(stderr, "warning: %s: UV sets, colours, tangents and materials are not coded in .lbm\n",
+                     in.c_str());
+    Result<codec::ValenceEncodeResult> encoded = codec::encodeValence(mesh, options);
+    if (!encoded.ok()) return reportError(encoded.status().withPrefix(in));
+    const Status written = writeFileAtomic(out, encoded->bytes.data(), encoded->bytes.size());
+    if (!written.ok()) return reportError(written);
+    const double vn = mesh.vertexCount() > 0 ? double(mesh.vertexCount()) : 1.0;
+    if (args.flags.count("--json")) {
+        JsonWriter j;
+        j.beginObject();
+        j.field("output", out);
+        j.field("vertices", uint64_t(mesh.vertexCount()));
+        j.field("triangles", uint64_t(mesh.faceCount()));
+        j.field("position_bits", uint64_t(options.position_bits));
+        j.field("bytes", uint64_t(encoded->bytes.size()));
+        j.field("bits_per_vertex", double(encoded->bytes.size()) * 8.0 / vn);
+        j.field("header_bytes", uint64_t(encoded->header_bytes));
+        for (auto [name, bytes] : {std::make_pair("connectivity", encoded->connectivity_bytes),
+                                   std::make_pair("positions", encoded->position_bytes),
+                                   std::make_pair("normals", encoded->normal_bytes)}) {
+            j.key(name).beginObject();
+            j.field("bytes", uint64_t(bytes));
+            j.field("bits_per_vertex", double(bytes) * 8.0 / vn);
+            j.endObject();
+        }
+        j.field("max_position_error", encoded->max_position_error);
+        j.endObject();
+        std::fputs(j.str().c_str(), stdout);
+        std::fputs("\n", stdout);
+        return kExitOk;
+    }
+    std::printf("wrote %s: %zu bytes (%.2f bits/vertex: connectivity %.2f, positions %.2f, normals %.2f)\n",
+                out.c_str(), encoded->bytes.size(), double(encoded->bytes.size()) * 8.0 / vn,
+                double(encoded->connectivity_bytes) * 8.0 / vn, double(encoded->position_bytes) * 8.0 / vn,
+                double(encoded->normal_bytes) * 8.0 / vn);
+    return kExitOk;
+}
+
+int runDecode(int argc, char** argv) {
+    Args args;
+    int code = 0;
+    if (!parseArgs(argc, argv, 2, {{"--output", "-o", true}, {"--help", "-h", false}}, args, code)) return code;
+    if (args.flags.count("--help")) {
+        std::fputs(kDecodeHelp, stdout);
+        return kExitOk;
+    }
+    if (args.positional.size() != 1) return usageError("decode takes exactly one input file");
+    if (!args.values.count("--output")) return usageError("decode needs -o OUT");
+    const std::string& in = args.positional[0];
+    const std::string& out = args.values["--output"];
+    if (formatFromPath(out) == MeshFormat::Unknown || formatFromPath(out) == MeshFormat::Conf)
+        return usageError("output '" + out + "' has an unknown extension, expected .ply .obj .off .gltf or .glb");
+    if (isSameFile(in, out)) return usageError("output '" + out + "' is the input file; the input is never modified");
+    Result<std::vector<uint8_t>> bytes = readFileBytes(in);
+    if (!bytes.ok()) return reportError(bytes.status());
+    Result<Mesh> mesh = codec::decodeValence(*bytes, in);
+    if (!mesh.ok()) return reportError(mesh.status());
+    Diagnostics diagnostics;
+    const Status written = writeMesh(*mesh, out, WriteOptions(), diagnostics);
+    printDiagnostics(diagnostics);
+    if (!written.ok()) return reportError(written);
+    std::printf("wrote %s: %zu vertices, %zu triangles\n", out.c_str(), mesh->vertexCount(), mesh->faceCount());
+    return kExitOk;
+}
+
+} // namespace lodbake::cli

@@ -1,0 +1,139 @@
+// lodbake pfrep (build a PFRep blob, or extract a level from one).
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <map>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include "lodbake/bake/bake.h"
+#include "lodbake/cleanup/repair.h"
+#include "lodbake/codec/valence_encoder.h"
+#include "lodbake/config/bake_config.h"
+#include "lodbake/cleanup/topology.h"
+#include "lodbake/core/diagnostics.h"
+#include "lodbake/core/file_io.h"
+#include "lodbake/core/json_writer.h"
+#include "lodbake/io/mesh_io.h"
+#include "lodbake/pfrep/pfrep_builder.h"
+#include "lodbake/simplify/lod_chain.h"
+#include "lodbake/simplify/mesh_distance.h"
+#include "lodbake/simplify/simplify.h"
+#include "lodbake/version.h"
+#include "lodrt/pfrep.h"
+
+#include "cli_common.h"
+
+namespace lodbake::cli {
+
+namespace {
+
+const char* kPfrepHelp = R"(usage: lodbake pfrep IN -o OUT.lbp [--ratio R]
+       lodbake pfrep --extract K IN.lbp -o OUT
+
+Builds a PFRep blob (progressive fans, docs/format/pfrep.md) from a half-edge-collapse
+simplification of IN down to R of its triangles (default 0: as far as valid collapses go), or
+extracts from a blob the mesh after K vertex removals (0: full detail) and writes it as a mesh
+file (.ply .obj .off .gltf .glb; positions only, dequantized).
+
+options:
+  -o, --output OUT   output file
+  --ratio R          target fraction of triangles in [0, 1] (build only)
+  --extract K        extract level K instead of building
+)";
+
+} // namespace
+
+int runPfrep(int argc, char** argv) {
+    Args args;
+    int code = 0;
+    if (!parseArgs(argc, argv, 2,
+                   {{"--output", "-o", true}, {"--ratio", nullptr, true}, {"--extract", nullptr, true},
+                    {"--help", "-h", false}},
+                   args, code))
+        return code;
+    if (args.flags.count("--help")) {
+        std::fputs(kPfrepHelp, stdout);
+        return kExitOk;
+    }
+    if (args.positional.size() != 1) return usageError("pfrep takes exactly one input file");
+    if (!args.values.count("--output")) return usageError("pfrep needs -o OUT");
+    const std::string& in = args.positional[0];
+    const std::string& out = args.values["--output"];
+    if (isSameFile(in, out)) return usageError("output '" + out + "' is the input file; the input is never modified");
+    Diagnostics diagnostics;
+    if (args.values.count("--extract")) {
+        if (args.values.count("--ratio")) return usageError("--ratio applies to building, not to --extract");
+        double level = 0;
+        if (!parseNumber(args.values["--extract"], level) || !(level >= 0 && level <= 4e9) || level != std::floor(level))
+            return usageError("--extract expects a non-negative integer, got '" + args.values["--extract"] + "'");
+        if (formatFromPath(out) == MeshFormat::Unknown)
+            return usageError("output '" + out + "' has an unknown extension, expected .ply .obj .off .gltf or .glb");
+        Result<std::vector<uint8_t>> bytes = readFileBytes(in);
+        if (!bytes.ok()) return reportError(bytes.status());
+        lodrt::PfrepModel model;
+        const lodrt::Result opened = lodrt::openPfrep(bytes->data(), bytes->size(), &model);
+        if (opened != lodrt::Result::Ok)
+            return reportError(invalidInput(in + ": pfrep blob: " + lodrt::resultName(opened)));
+        if (level > model.removed_count)
+            return reportError(invalidInput(in + ": --extract " + args.values["--extract"] + ": the blob has levels 0.." +
+                                            std::to_string(model.removed_count)));
+        Mesh mesh;
+        std::vector<float> positions(size_t(model.vertex_count) * 3);
+        lodrt::pfrepDecodePositions(model, positions.data(), positions.size());
+        std::vector<uint32_t> indices(lodrt::pfrepMaxTriangles(model) * 3);
+        size_t count = 0;
+        const lodrt::Result extracted =
+            lodrt::pfrepExtractLevel(model, uint32_t(level), indices.data(), indices.size() / 3, &count);
+        if (extracted != lodrt::Result::Ok)
+            return reportError(invalidInput(in + ": pfrep level " + args.values["--extract"] + ": " +
+                                            lodrt::resultName(extracted)));
+        // Only the vertices the level references, in first-use order.
+        std::vector<uint32_t> remap(model.vertex_count, 0xffffffffu);
+        for (size_t c = 0; c < count * 3; ++c) {
+            uint32_t& r = remap[indices[c]];
+            if (r == 0xffffffffu) {
+                r = uint32_t(mesh.positions.size());
+                const float* p = &positions[size_t(indices[c]) * 3];
+                mesh.positions.push_back(Vec3f(p[0], p[1], p[2]));
+            }
+            mesh.indices.push_back(r);
+        }
+        const Status written = writeMesh(mesh, out, WriteOptions(), diagnostics);
+        printDiagnostics(diagnostics);
+        if (!written.ok()) return reportError(written);
+        std::printf("%s: level %u of %u: %zu triangles, %zu vertices\n", out.c_str(), unsigned(level),
+                    unsigned(model.removed_count), count, mesh.positions.size());
+        return kExitOk;
+    }
+    PfrepOptions options;
+    if (args.values.count("--ratio")) {
+        double value = 0;
+        if (!parseNumber(args.values["--ratio"], value) || !(value >= 0.0 && value <= 1.0))
+            return usageError("--ratio expects a number in [0, 1], got '" + args.values["--ratio"] + "'");
+        options.target_ratio = float(value);
+    }
+    Result<LoadedMesh> loaded = readMesh(in, ReadOptions(), diagnostics);
+    if (!loaded.ok()) {
+        printDiagnostics(diagnostics);
+        return reportError(loaded.status());
+    }
+    Result<PfrepBuild> build = buildPfrep(loaded->mesh, options, diagnostics);
+    if (!build.ok()) {
+        printDiagnostics(diagnostics);
+        return reportError(build.status().withPrefix(in));
+    }
+    const Status written = writeFileAtomic(out, build->blob.data(), build->blob.size());
+    printDiagnostics(diagnostics);
+    if (!written.ok()) return reportError(written);
+    const size_t vertices = build->rank_point.size();
+    std::printf("%s: %zu vertices (%zu removable), %zu triangles at level 0, %zu stored, %zu bytes (%.2f bytes/vertex)\n",
+                out.c_str(), vertices, build->removed, build->level0_triangles, build->stored_triangles,
+                build->blob.size(), vertices ? double(build->blob.size()) / double(vertices) : 0.0);
+    return kExitOk;
+}
+
+} // namespace lodbake::cli

@@ -1,0 +1,276 @@
+// lodbake simplify and lodbake lods.
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <map>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include "lodbake/bake/bake.h"
+#include "lodbake/cleanup/repair.h"
+#include "lodbake/codec/valence_encoder.h"
+#include "lodbake/config/bake_config.h"
+#include "lodbake/cleanup/topology.h"
+#include "lodbake/core/diagnostics.h"
+#include "lodbake/core/file_io.h"
+#include "lodbake/core/json_writer.h"
+#include "lodbake/io/mesh_io.h"
+#include "lodbake/pfrep/pfrep_builder.h"
+#include "lodbake/simplify/lod_chain.h"
+#include "lodbake/simplify/mesh_distance.h"
+#include "lodbake/simplify/simplify.h"
+#include "lodbake/version.h"
+#include "lodrt/pfrep.h"
+
+#include "cli_common.h"
+
+namespace lodbake::cli {
+
+namespace {
+
+const char* kSimplifyHelp = R"(usage: lodbake simplify IN -o OUT (--ratio R | --triangles N | --error E) [--json]
+
+Simplifies IN by quadric-error edge collapse and writes OUT (format from its extension). Open
+borders, UV/normal seams and sub-mesh borders are preserved; non-manifold spots are left as they
+are. Prints the result's size and its measured two-sided distance to IN.
+
+options:
+  -o, --output OUT   output path (required)
+  --ratio R          keep this fraction of the triangles, 0 < R <= 1
+  --triangles N      keep about N triangles
+  --error E          collapse while the estimated error stays below E (object units)
+  --json             print one JSON object instead of text
+)";
+
+const char* kLodsHelp = R"(usage: lodbake lods IN -o PREFIX [--levels 0.5,0.25,0.1,0.03,0.01] [--json]
+
+Builds a chain of levels in one simplification pass and writes PREFIX_lod<i>.<ext> per level
+plus PREFIX.json (triangles, vertices, Hausdorff and mean error, absolute and relative to the
+bounding-box diagonal, and the switch distance at which each level's Hausdorff error projects to
+--pixels pixels). <ext> is PREFIX's extension if it has a mesh one (out/bunny.glb), else --format.
+
+options:
+  -o, --output PREFIX  output prefix (required)
+  --levels LIST        comma-separated triangle ratios in (0, 1]
+  --format EXT         ply (default), obj, off, gltf or glb
+  --pixels P           screen-space error threshold in pixels (default 1)
+  --viewport H         viewport height in pixels (default 1080)
+  --fov DEG            vertical field of view in degrees (default 60)
+  --json               print PREFIX.json's content instead of text
+)";
+
+} // namespace
+
+int runSimplify(int argc, char** argv) {
+    Args args;
+    int code = 0;
+    if (!parseArgs(argc, argv, 2,
+                   {{"--output", "-o", true},
+                    {"--ratio", nullptr, true},
+                    {"--triangles", nullptr, true},
+                    {"--error", nullptr, true},
+                    {"--json", nullptr, false},
+                    {"--help", "-h", false}},
+                   args, code))
+        return code;
+    if (args.flags.count("--help")) {
+        std::fputs(kSimplifyHelp, stdout);
+        return kExitOk;
+    }
+    if (args.positional.size() != 1) return usageError("simplify takes exactly one input file");
+    if (!args.values.count("--output")) return usageError("simplify needs -o OUT");
+    const std::string& in = args.positional[0];
+    const std::string& out = args.values["--output"];
+    if (formatFromPath(out) == MeshFormat::Unknown)
+        return usageError("output '" + out + "' has an unknown extension, expected .ply .obj .off .gltf or .glb");
+    if (isSameFile(in, out)) return usageError("output '" + out + "' is the input file; the input is never modified");
+    const int targets =
+        int(args.values.count("--ratio") + args.values.count("--triangles") + args.values.count("--error"));
+    if (targets != 1) return usageError("simplify needs exactly one of --ratio, --triangles, --error");
+    SimplifyOptions options;
+    double value = 0;
+    if (args.values.count("--ratio")) {
+        if (!parseNumber(args.values["--ratio"], value) || !(value > 0.0 && value <= 1.0))
+            return usageError("--ratio expects a number in (0, 1], got '" + args.values["--ratio"] + "'");
+        options.target_ratio = float(value);
+    } else if (args.values.count("--triangles")) {
+        if (!parseNumber(args.values["--triangles"], value) || !(value >= 1.0 && value <= 4e9) ||
+            value != std::floor(value))
+            return usageError("--triangles expects a positive integer, got '" + args.values["--triangles"] + "'");
+        options.target_triangles = uint32_t(value);
+    } else {
+        if (!parseNumber(args.values["--error"], value) || !(value >= 0.0))
+            return usageError("--error expects a non-negative number, got '" + args.values["--error"] + "'");
+        options.target_ratio = 0.0f;
+        options.max_error = value;
+    }
+
+    Diagnostics diagnostics;
+    Result<LoadedMesh> loaded = readMesh(in, ReadOptions(), diagnostics);
+    if (!loaded.ok()) {
+        printDiagnostics(diagnostics);
+        return reportError(loaded.status());
+    }
+    Result<SimplifyOutput> result = simplify(loaded->mesh, options, diagnostics);
+    if (!result.ok()) {
+        printDiagnostics(diagnostics);
+        return reportError(result.status().withPrefix(in));
+    }
+    const Status written = writeMesh(result->mesh, out, WriteOptions(), diagnostics);
+    if (!written.ok()) {
+        printDiagnostics(diagnostics);
+        return reportError(written);
+    }
+    Result<DistanceResult> distance = measureSurfaceDistance(loaded->mesh, result->mesh);
+    printDiagnostics(diagnostics);
+    if (args.flags.count("--json")) {
+        JsonWriter j;
+        j.beginObject();
+        j.field("input", in).field("output", out);
+        j.field("input_triangles", uint64_t(result->input_triangles));
+        j.field("triangles", uint64_t(result->mesh.faceCount()));
+        j.field("vertices", uint64_t(result->mesh.vertexCount()));
+        j.field("reached_target", result->reached_target);
+        j.field("quadric_error", result->max_collapse_error);
+        if (distance.ok()) writeDistanceJson(j, *distance);
+        j.endObject();
+        std::fputs(j.str().c_str(), stdout);
+        return kExitOk;
+    }
+    std::printf("wrote %s: %zu vertices, %zu triangles (from %zu)%s\n", out.c_str(), result->mesh.vertexCount(),
+                result->mesh.faceCount(), result->input_triangles,
+                result->reached_target ? "" : ", target not reached");
+    if (distance.ok())
+        std::printf("distance to input: hausdorff %.4g (%.3e of diagonal), mean %.4g (%.3e)\n", distance->hausdorff,
+                    distance->hausdorffRel(), distance->mean, distance->meanRel());
+    return kExitOk;
+}
+
+int runLods(int argc, char** argv) {
+    Args args;
+    int code = 0;
+    if (!parseArgs(argc, argv, 2,
+                   {{"--output", "-o", true},
+                    {"--levels", nullptr, true},
+                    {"--format", nullptr, true},
+                    {"--pixels", nullptr, true},
+                    {"--viewport", nullptr, true},
+                    {"--fov", nullptr, true},
+                    {"--json", nullptr, false},
+                    {"--help", "-h", false}},
+                   args, code))
+        return code;
+    if (args.flags.count("--help")) {
+        std::fputs(kLodsHelp, stdout);
+        return kExitOk;
+    }
+    if (args.positional.size() != 1) return usageError("lods takes exactly one input file");
+    if (!args.values.count("--output")) return usageError("lods needs -o PREFIX");
+    const std::string& in = args.positional[0];
+    std::string prefix = args.values["--output"];
+    std::string ext = args.values.count("--format") ? "." + args.values["--format"] : ".ply";
+    if (formatFromPath(prefix) != MeshFormat::Unknown) {
+        ext = lowerExtension(prefix);
+        prefix = prefix.substr(0, prefix.size() - ext.size());
+    }
+    if (formatFromPath("x" + ext) == MeshFormat::Unknown)
+        return usageError("--format '" + ext.substr(1) + "' is unknown, expected ply, obj, off, gltf or glb");
+    LodChainOptions options;
+    if (args.values.count("--levels")) {
+        options.ratios.clear();
+        if (!parseList(args.values["--levels"], options.ratios))
+            return usageError("--levels expects comma-separated numbers, got '" + args.values["--levels"] + "'");
+        for (double r : options.ratios)
+            if (!(r > 0.0 && r <= 1.0))
+                return usageError("--levels: every ratio must lie in (0, 1], got '" + args.values["--levels"] + "'");
+    }
+    struct NumberOption {
+        const char* name;
+        double* target;
+    };
+    double fov_deg = 60.0;
+    for (const NumberOption& n :
+         {NumberOption{"--pixels", &options.screen.pixel_threshold},
+          NumberOption{"--viewport", &options.screen.viewport_height_px}, NumberOption{"--fov", &fov_deg}}) {
+        if (!args.values.count(n.name)) continue;
+        if (!parseNumber(args.values[n.name], *n.target) || !(*n.target > 0.0))
+            return usageError(std::string(n.name) + " expects a positive number, got '" + args.values[n.name] + "'");
+    }
+    if (!(fov_deg < 180.0)) return usageError("--fov must be below 180 degrees");
+    options.screen.vertical_fov_rad = fov_deg * 3.14159265358979323846 / 180.0;
+
+    Diagnostics diagnostics;
+    Result<LoadedMesh> loaded = readMesh(in, ReadOptions(), diagnostics);
+    if (!loaded.ok()) {
+        printDiagnostics(diagnostics);
+        return reportError(loaded.status());
+    }
+    Result<LodChain> chain = buildLodChain(loaded->mesh, options, diagnostics);
+    if (!chain.ok()) {
+        printDiagnostics(diagnostics);
+        return reportError(chain.status().withPrefix(in));
+    }
+    std::vector<std::string> files;
+    for (size_t i = 0; i < chain->levels.size(); ++i) {
+        files.push_back(prefix + "_lod" + std::to_string(i) + ext);
+        if (isSameFile(in, files.back())) return usageError("output '" + files.back() + "' is the input file");
+    }
+    for (size_t i = 0; i < chain->levels.size(); ++i) {
+        const Status written = writeMesh(chain->levels[i].mesh, files[i], WriteOptions(), diagnostics);
+        if (!written.ok()) {
+            printDiagnostics(diagnostics);
+            return reportError(written);
+        }
+    }
+    JsonWriter j;
+    j.beginObject();
+    j.field("input", in);
+    j.field("input_triangles", uint64_t(loaded->mesh.faceCount()));
+    j.field("bounding_radius", chain->bounding_radius);
+    j.key("screen").beginObject();
+    j.field("pixel_threshold", options.screen.pixel_threshold);
+    j.field("viewport_height_px", options.screen.viewport_height_px);
+    j.field("vertical_fov_deg", fov_deg);
+    j.endObject();
+    j.key("levels").beginArray();
+    for (size_t i = 0; i < chain->levels.size(); ++i) {
+        const LodLevel& level = chain->levels[i];
+        j.beginObject();
+        j.field("file", files[i]);
+        j.field("ratio", level.target_ratio);
+        j.field("triangles", uint64_t(level.mesh.faceCount()));
+        j.field("vertices", uint64_t(level.mesh.vertexCount()));
+        j.field("reached_target", level.reached_target);
+        j.field("quadric_error", level.quadric_error);
+        if (level.has_distance) writeDistanceJson(j, level.distance);
+        j.field("switch_distance", level.switch_distance);
+        j.field("screen_coverage", level.screen_coverage);
+        j.endObject();
+    }
+    j.endArray();
+    j.endObject();
+    const std::string json_path = prefix + ".json";
+    const Status json_written = writeFileAtomic(json_path, j.str().data(), j.str().size());
+    printDiagnostics(diagnostics);
+    if (!json_written.ok()) return reportError(json_written);
+    if (args.flags.count("--json")) {
+        std::fputs(j.str().c_str(), stdout);
+        return kExitOk;
+    }
+    for (size_t i = 0; i < chain->levels.size(); ++i) {
+        const LodLevel& level = chain->levels[i];
+        std::printf("%s: %zu triangles, %zu vertices", files[i].c_str(), level.mesh.faceCount(),
+                    level.mesh.vertexCount());
+        if (level.has_distance)
+            std::printf(", hausdorff %.3e mean %.3e (of diagonal)", level.distance.hausdorffRel(),
+                        level.distance.meanRel());
+        std::printf(", switch at %.4g\n", level.switch_distance);
+    }
+    std::printf("wrote %s\n", json_path.c_str());
+    return kExitOk;
+}
+
+} // namespace lodbake::cli
