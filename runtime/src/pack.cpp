@@ -327,7 +327,7 @@ struct PackLoader {
                 if (r != Result::Ok) return r;
                 continue;
             }
-            if (i != 0 || !glb.bin)
+            if (i != 0 || !glb.is_binary || glb.bin_size == 0)
                 return fail(Result::BadGltf, "%s: no uri, but only buffer 0 of a GLB with a BIN chunk may omit it",
                             path);
             // The BIN chunk is padded to 4 bytes, so it may exceed byteLength by up to 3.
@@ -501,6 +501,9 @@ struct PackLoader {
     // Scans an index accessor stored in the BIN chunk for values >= vertex_count.
     Result checkIndexValues(const char* path, const AccessorInfo& accessor, uint64_t vertex_count) {
         if (options.skip_index_check || accessor.buffer_view == kNoIndex || accessor.is_sparse) return Result::Ok;
+        // A deferred load (loadPackJson) has no BIN bytes yet: the streamer checks each level's
+        // indices when they arrive.
+        if (!pack->container_.bin) return Result::Ok;
         const BufferViewInfo& view = pack->buffer_views_[accessor.buffer_view];
         const BufferInfo& buffer = pack->buffers_[view.buffer];
         if (!buffer.is_glb_bin) return Result::Ok;
@@ -749,6 +752,21 @@ struct PackLoader {
             }
             return fail(r, "container: %s", what);
         }
+        return runDocument();
+    }
+
+    Result runDeferred(const uint8_t* json, size_t json_size, uint64_t bin_size) {
+        if (bin_size > uint64_t(size_t(-1))) return fail(Result::OutOfBounds, "container: BIN chunk too large");
+        pack->container_.json = json;
+        pack->container_.json_size = json_size;
+        pack->container_.bin = nullptr;
+        pack->container_.bin_size = size_t(bin_size);
+        pack->container_.is_binary = true;
+        return runDocument();
+    }
+
+    Result runDocument() {
+        Result r = Result::Ok;
         JsonError json_error;
         const GlbView& glb = pack->container_;
         r = parseJson(reinterpret_cast<const char*>(glb.json), glb.json_size, &allocator, &options.json_limits,
@@ -897,6 +915,24 @@ Result loadPack(const uint8_t* data, size_t size, const LoadOptions* options, Pa
     loader.error_size = error_message_size;
     Result result = loader.begin(out);
     if (result == Result::Ok) result = loader.run(data, size);
+    if (result == Result::OutOfMemory && error_message && error_message_size > 0 && error_message[0] == '\0')
+        loader.fail(result, "out of memory");
+    if (result != Result::Ok) PackLoader::clear(out);
+    return result;
+}
+
+Result loadPackJson(const uint8_t* json, size_t json_size, uint64_t bin_size, const LoadOptions* options, Pack* out,
+                    char* error_message, size_t error_message_size) {
+    if (error_message && error_message_size > 0) error_message[0] = '\0';
+    if (!out || (!json && json_size > 0)) return Result::InvalidArgument;
+    PackLoader::clear(out);
+    PackLoader loader{};
+    loader.options = options ? *options : LoadOptions();
+    loader.allocator = loader.options.allocator;
+    loader.error = error_message;
+    loader.error_size = error_message_size;
+    Result result = loader.begin(out);
+    if (result == Result::Ok) result = loader.runDeferred(json, json_size, bin_size);
     if (result == Result::OutOfMemory && error_message && error_message_size > 0 && error_message[0] == '\0')
         loader.fail(result, "out of memory");
     if (result != Result::Ok) PackLoader::clear(out);

@@ -7,10 +7,16 @@
 
 #include "lodrt/allocator.h"
 #include "lodrt/export.h"
+#include "lodrt/frustum.h"
 #include "lodrt/glb.h"
 #include "lodrt/json.h"
+#include "lodrt/model.h"
 #include "lodrt/pack.h"
+#include "lodrt/pfrep.h"
+#include "lodrt/pfrep_instance.h"
 #include "lodrt/result.h"
+#include "lodrt/selection.h"
+#include "lodrt/streaming.h"
 
 namespace lodrt {
 

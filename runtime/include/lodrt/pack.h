@@ -182,4 +182,12 @@ constexpr uint32_t kMaxPackWarnings = 64;
 LODRT_API Result loadPack(const uint8_t* data, size_t size, const LoadOptions* options, Pack* out,
                           char* error_message = nullptr, size_t error_message_size = 0);
 
+/// Loads the JSON chunk of a GLB whose BIN chunk is not in memory (range-read streaming, see
+/// lodrt/streaming.h): json[0, json_size) is the JSON chunk payload and bin_size the BIN chunk's
+/// length from its chunk header (0 when there is none). Everything loadPack validates is validated
+/// except index values, whose bytes are not there (the streamer checks them per level on arrival);
+/// container().bin is null and container().bin_size is bin_size. Same results as loadPack.
+LODRT_API Result loadPackJson(const uint8_t* json, size_t json_size, uint64_t bin_size, const LoadOptions* options,
+                              Pack* out, char* error_message = nullptr, size_t error_message_size = 0);
+
 } // namespace lodrt

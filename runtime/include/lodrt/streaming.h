@@ -1,0 +1,168 @@
+#pragma once
+// Pack sources and level streaming.
+//
+// PackSource opens a pack either from bytes the engine already holds or through a caller-provided
+// range-read callback: then only the GLB header and the JSON chunk are read up front, and each
+// level's BIN range is read when the streamer asks for it. Index values are checked per level when
+// its bytes arrive (lazy validation), so opening never scans geometry.
+//
+// Streamer keeps a memory budget of resident levels. Every model's coarsest level is requested
+// first and never evicted (so every model becomes drawable as early as possible); finer levels are
+// requested in order of usefulness (the model's demand priority, screen size x proximity, divided
+// by how far the level is from the wanted one) and the least useful resident levels are evicted
+// to make room. Reads and copies run through the engine's job callback on its worker threads;
+// the frame only calls update() (request/poll), which never waits.
+
+#include <atomic>
+#include <cstddef>
+#include <cstdint>
+
+#include "lodrt/allocator.h"
+#include "lodrt/export.h"
+#include "lodrt/model.h"
+#include "lodrt/pack.h"
+#include "lodrt/result.h"
+#include "lodrt/selection.h"
+
+namespace lodrt {
+
+/// Reads file bytes [offset, offset + size) into dst. Returns Ok, or any error (passed through).
+/// Called from the thread that opens the source, and from job threads for level reads, possibly
+/// concurrently: it must be thread-safe (pread-style, no shared file position).
+struct RangeReader {
+    Result (*read)(void* user, uint64_t offset, void* dst, size_t size) = nullptr;
+    void* user = nullptr;
+};
+
+/// A pack plus its models and where its BIN bytes come from. Move-only.
+class LODRT_API PackSource {
+public:
+    PackSource() = default;
+    ~PackSource();
+    PackSource(PackSource&& other) noexcept;
+    PackSource& operator=(PackSource&& other) noexcept;
+    PackSource(const PackSource&) = delete;
+    PackSource& operator=(const PackSource&) = delete;
+
+    /// The whole pack in memory (GLB or .gltf); the bytes must outlive the source. Index values are
+    /// not scanned here (options->skip_index_check is forced on); readLevel checks them.
+    /// Returns loadPack's and buildModels' results; the message says which step failed.
+    Result openBytes(const uint8_t* data, size_t size, const LoadOptions* options, char* error_message = nullptr,
+                     size_t error_message_size = 0);
+    /// A GLB of file_size bytes read through `reader`: reads the 12-byte header and the JSON chunk
+    /// (two or three calls), loads it with loadPackJson and builds the models. Returns BadMagic,
+    /// UnsupportedVersion, Truncated, TrailingBytes, BadChunk for a broken container; the reader's
+    /// error; loadPackJson's and buildModels' results.
+    Result openReader(const RangeReader& reader, uint64_t file_size, const LoadOptions* options,
+                      char* error_message = nullptr, size_t error_message_size = 0);
+
+    const Pack& pack() const { return pack_; }
+    const ModelSet& models() const { return models_; }
+    /// Bytes readLevel writes for a level (its LevelInfo::data_size).
+    uint64_t levelBytes(uint32_t model, uint32_t level) const { return models_.modelLevel(model, level).data_size; }
+
+    /// Reads (or copies) the level's BIN range into dst[0, capacity) and checks every index value of
+    /// the level's primitives against their vertex counts. Thread-safe (const; the reader must be).
+    /// Returns Ok; BufferTooSmall; BadGltf when the level has no data in the BIN chunk; OutOfBounds
+    /// for an index out of range; the reader's error.
+    Result readLevel(uint32_t model, uint32_t level, uint8_t* dst, size_t capacity) const;
+
+    /// Pointer to accessor `accessor`'s first element inside a level's bytes as readLevel wrote them
+    /// (`level_bytes`); null when the accessor has no buffer view or lies outside the level's range.
+    const uint8_t* accessorData(uint32_t model, uint32_t level, const uint8_t* level_bytes, uint32_t accessor) const;
+
+private:
+    void release();
+    Pack pack_;
+    ModelSet models_;
+    Allocator allocator_;
+    const uint8_t* bin_ = nullptr; // bytes mode
+    RangeReader reader_;
+    uint64_t bin_offset_ = 0; // reader mode: file offset of the BIN payload
+    uint8_t* json_ = nullptr; // reader mode: the JSON chunk, owned
+};
+
+/// The engine's job system: submit() must eventually call run(task) exactly once, on any thread.
+/// A null submit runs jobs inline inside Streamer::update (for tools and tests; that blocks).
+struct JobSystem {
+    void (*submit)(void* user, void (*run)(void* task), void* task) = nullptr;
+    void* user = nullptr;
+};
+
+/// Zero-initialised means defaults.
+struct StreamerOptions {
+    Allocator allocator;        // level memory and the streamer's tables
+    uint64_t budget_bytes = 0;  // resident + in-flight level bytes; 0 = unlimited. Coarsest levels
+                                // are always loaded and count towards it, but are never evicted.
+    uint32_t max_in_flight = 0; // jobs outstanding at once; 0 means 4
+};
+
+struct StreamStats {
+    uint64_t resident_bytes = 0;  // level bytes held now
+    uint64_t in_flight_bytes = 0; // level bytes being read
+    uint64_t streamed_bytes = 0;  // total bytes read since init
+    uint32_t resident_levels = 0;
+    uint32_t requests = 0;  // jobs submitted since init
+    uint32_t evictions = 0; // levels dropped since init
+    uint32_t failures = 0;  // levels whose read or check failed (never retried)
+};
+
+enum class LevelState : uint8_t { Absent, Loading, Resident, Failed };
+
+class LODRT_API Streamer {
+public:
+    Streamer() = default;
+    /// Waits for outstanding jobs (yielding), then frees everything.
+    ~Streamer();
+    Streamer(const Streamer&) = delete;
+    Streamer& operator=(const Streamer&) = delete;
+
+    /// source must not be null and must outlive the streamer; jobs may be null (jobs run inline in
+    /// update). Returns Ok, OutOfMemory, or InvalidArgument.
+    Result init(const PackSource* source, const JobSystem* jobs, const StreamerOptions* options);
+
+    /// Frame step: collects finished jobs, evicts, and submits new requests for `demand`
+    /// (source->models().modelCount() entries, from accumulateDemand; null = coarsest levels only).
+    /// Never waits for a job. Allocates only level buffers for new requests.
+    void update(const ModelDemand* demand);
+
+    /// model * kMaxLevels + level -> finest resident level at or coarser than `level`, or kNoLevel.
+    /// Valid until the next update(); pass it to selectLevels.
+    const uint8_t* residentTable() const { return resident_table_; }
+    LevelState state(uint32_t model, uint32_t level) const;
+    /// Bytes of a resident level (as PackSource::readLevel wrote them), or null.
+    const uint8_t* levelData(uint32_t model, uint32_t level, size_t* size) const;
+    StreamStats stats() const { return stats_; }
+    /// True when no job is outstanding.
+    bool idle() const { return busy_tasks_ == 0; }
+
+    struct Task; // internal
+
+private:
+    struct Slot {
+        uint8_t* data;
+        uint64_t size;
+        float usefulness;
+        uint32_t task; // index into tasks_ while Loading
+        LevelState state;
+        uint8_t is_coarsest;
+    };
+    void collect();
+    void evict(uint32_t slot);
+    void rebuildResidentTable();
+    void release();
+    const PackSource* source_ = nullptr;
+    JobSystem jobs_;
+    StreamerOptions options_;
+    Slot* slots_ = nullptr; // model.first_level + level
+    uint32_t slot_count_ = 0;
+    uint32_t* slot_model_ = nullptr;
+    uint32_t* candidates_ = nullptr;
+    Task* tasks_ = nullptr;
+    uint32_t task_count_ = 0;
+    uint32_t busy_tasks_ = 0;
+    uint8_t* resident_table_ = nullptr;
+    StreamStats stats_;
+};
+
+} // namespace lodrt

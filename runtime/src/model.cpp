@@ -1,0 +1,392 @@
+// Model layer: MSFT_lod chains -> models with levels, bounds and measured errors (see lodrt/model.h).
+// Rules of LODBAKE_lod_metrics: schemas/LODBAKE_lod_metrics/README.md (checked here with the same
+// wording as loddump).
+
+#include "lodrt/model.h"
+
+#include <cassert>
+#include <cmath>
+#include <cstdarg>
+#include <cstdio>
+#include <cstring>
+#include <limits>
+#include <new>
+
+#include "memory.h"
+
+namespace lodrt {
+
+namespace {
+
+constexpr float kInf = std::numeric_limits<float>::infinity();
+// Reference view of MSFT_screencoverage when no measured errors exist (the desktop preset's).
+constexpr double kReferenceTanHalfFov = 0.57735026918962573; // tan(30 degrees)
+constexpr double kReferenceViewportPx = 1080.0;
+
+bool finiteFloat(double v) {
+    return std::isfinite(v) && std::fabs(v) <= double(std::numeric_limits<float>::max());
+}
+
+} // namespace
+
+struct ModelBuilder {
+    const Pack* pack;
+    Allocator allocator;
+    char* error;
+    size_t error_size;
+    uint32_t* owner = nullptr; // per node: chain root owning it, or kNoIndex
+
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    Result
+    fail(Result code, const char* format, ...) {
+        if (error && error_size > 0) {
+            va_list args;
+            va_start(args, format);
+            std::vsnprintf(error, error_size, format, args);
+            va_end(args);
+        }
+        return code;
+    }
+
+    static JsonValue lodIds(const NodeInfo& node) {
+        return node.json.find("extensions").find("MSFT_lod").find("ids");
+    }
+    static bool hasLod(const NodeInfo& node) {
+        return node.json.find("extensions").find("MSFT_lod").isValid();
+    }
+
+    // Validates the chain rooted at `root` and marks its nodes as owned.
+    Result claimChain(uint32_t root) {
+        const uint32_t node_count = pack->nodeCount();
+        JsonValue lod = pack->node(root).json.find("extensions").find("MSFT_lod");
+        if (!lod.isObject()) return fail(Result::BadGltf, "/nodes/%u/extensions/MSFT_lod: expected an object", root);
+        JsonValue ids = lod.find("ids");
+        if (!ids.isArray()) return fail(Result::BadGltf, "/nodes/%u/extensions/MSFT_lod/ids: expected an array", root);
+        if (ids.size() + 1 > kMaxLevels)
+            return fail(Result::BadGltf, "/nodes/%u/extensions/MSFT_lod/ids: %u ids; lodrt supports at most %u levels",
+                        root, ids.size(), kMaxLevels);
+        if (owner[root] != kNoIndex)
+            return fail(Result::BadGltf, "/nodes/%u/extensions/MSFT_lod: node %u is already a level of node %u", root,
+                        root, owner[root]);
+        owner[root] = root;
+        for (uint32_t k = 0; k < ids.size(); ++k) {
+            uint64_t id = 0;
+            if (!ids.at(k).asUint64(&id) || id >= node_count)
+                return fail(Result::BadGltf, "/nodes/%u/extensions/MSFT_lod/ids/%u: expected a node index below %u",
+                            root, k, node_count);
+            const uint32_t j = uint32_t(id);
+            if (j == root)
+                return fail(Result::BadGltf, "/nodes/%u/extensions/MSFT_lod/ids/%u: cyclic: the node lists itself",
+                            root, k);
+            if (hasLod(pack->node(j))) {
+                JsonValue inner = lodIds(pack->node(j));
+                for (uint32_t q = 0; q < inner.size(); ++q) {
+                    uint64_t back = 0;
+                    if (inner.at(q).asUint64(&back) && back == root)
+                        return fail(Result::BadGltf,
+                                    "/nodes/%u/extensions/MSFT_lod/ids/%u: cyclic: node %u lists node %u back", root, k,
+                                    j, root);
+                }
+                return fail(
+                    Result::BadGltf,
+                    "/nodes/%u/extensions/MSFT_lod/ids/%u: node %u has MSFT_lod too; expected a plain level node", root,
+                    k, j);
+            }
+            if (owner[j] != kNoIndex)
+                return fail(Result::BadGltf,
+                            "/nodes/%u/extensions/MSFT_lod/ids/%u: node %u is already a level of node %u", root, k, j,
+                            owner[j]);
+            owner[j] = root;
+        }
+        return Result::Ok;
+    }
+
+    Result fillLevelGeometry(uint32_t model_index, uint32_t level_index, uint32_t node, LevelInfo* level,
+                             ModelInfo* model) {
+        const NodeInfo& n = pack->node(node);
+        if (n.mesh == kNoIndex)
+            return fail(Result::BadGltf, "/nodes/%u/mesh: missing; level %u of model %u needs a mesh", node,
+                        level_index, model_index);
+        level->node = node;
+        level->mesh = n.mesh;
+        const MeshInfo& mesh = pack->mesh(n.mesh);
+        uint64_t lo = UINT64_MAX, hi = 0;
+        bool streamable = true;
+        bool has_bounds = false;
+        float bmin[3] = {kInf, kInf, kInf}, bmax[3] = {-kInf, -kInf, -kInf};
+        for (uint32_t p = 0; p < mesh.primitive_count; ++p) {
+            const PrimitiveInfo& prim = pack->primitive(mesh.first_primitive + p);
+            level->triangle_count += prim.triangle_count;
+            level->vertex_count += prim.vertex_count;
+            // Accessors of this primitive: the index accessor, then every attribute.
+            for (uint32_t a = 0; a <= prim.attribute_count; ++a) {
+                uint32_t acc_index = kNoIndex;
+                if (a == prim.attribute_count) {
+                    acc_index = prim.indices;
+                } else {
+                    const AttributeInfo& attribute = pack->attribute(prim.first_attribute + a);
+                    acc_index = attribute.accessor;
+                    if (level_index == 0 && attribute.name == "POSITION") {
+                        JsonValue json = pack->accessor(acc_index).json;
+                        JsonValue mn = json.find("min"), mx = json.find("max");
+                        if (mn.size() != 3 || mx.size() != 3)
+                            return fail(Result::BadGltf, "/accessors/%u: POSITION needs min and max of 3 numbers",
+                                        acc_index);
+                        for (uint32_t c = 0; c < 3; ++c) {
+                            const double lo_c = mn.at(c).number(), hi_c = mx.at(c).number();
+                            if (!mn.at(c).isNumber() || !mx.at(c).isNumber() || !finiteFloat(lo_c) ||
+                                !finiteFloat(hi_c) || lo_c > hi_c)
+                                return fail(Result::BadGltf,
+                                            "/accessors/%u/min: expected finite numbers with min <= max (component %u)",
+                                            acc_index, c);
+                            bmin[c] = std::fmin(bmin[c], float(lo_c));
+                            bmax[c] = std::fmax(bmax[c], float(hi_c));
+                        }
+                        has_bounds = true;
+                    }
+                }
+                if (acc_index == kNoIndex) continue;
+                const AccessorInfo& acc = pack->accessor(acc_index);
+                if (acc.buffer_view == kNoIndex) continue;
+                const BufferViewInfo& view = pack->bufferView(acc.buffer_view);
+                if (!pack->buffer(view.buffer).is_glb_bin || acc.is_sparse) {
+                    streamable = false;
+                    continue;
+                }
+                if (view.byte_offset < lo) lo = view.byte_offset;
+                if (view.byte_offset + view.byte_length > hi) hi = view.byte_offset + view.byte_length;
+            }
+        }
+        if (streamable && hi > lo) {
+            level->data_offset = lo;
+            level->data_size = hi - lo;
+        }
+        if (level_index == 0) {
+            if (!has_bounds)
+                return fail(Result::BadGltf, "/meshes/%u: level 0 of model %u has no POSITION attribute", n.mesh,
+                            model_index);
+            double r2 = 0;
+            for (int c = 0; c < 3; ++c) {
+                model->aabb_min[c] = bmin[c];
+                model->aabb_max[c] = bmax[c];
+                model->sphere_center[c] = 0.5f * (bmin[c] + bmax[c]);
+                const double half = 0.5 * (double(bmax[c]) - double(bmin[c]));
+                r2 += half * half;
+            }
+            model->sphere_radius = float(std::sqrt(r2));
+        }
+        return Result::Ok;
+    }
+
+    Result readMetric(JsonValue level, const char* path, uint32_t l, const char* key, double* out) {
+        JsonValue v = level.find(key);
+        if (!v.isNumber() || !finiteFloat(v.number()) || v.number() < 0)
+            return fail(Result::BadGltf, "%s/levels/%u/%s: expected a finite number >= 0", path, l, key);
+        *out = v.number();
+        return Result::Ok;
+    }
+
+    Result fillMetrics(uint32_t root, ModelInfo* model, LevelInfo* levels) {
+        const NodeInfo& node = pack->node(root);
+        char path[96];
+        std::snprintf(path, sizeof(path), "/nodes/%u/extensions/LODBAKE_lod_metrics", root);
+        JsonValue metrics = node.json.find("extensions").find("LODBAKE_lod_metrics");
+        if (metrics.isValid()) {
+            JsonValue array = metrics.find("levels");
+            if (!array.isArray() || array.size() != model->level_count)
+                return fail(Result::BadGltf, "%s/levels: expected %u entries (MSFT_lod ids + 1)", path,
+                            model->level_count);
+            double prev_h = 0, prev_m = 0, prev_s = 0;
+            for (uint32_t l = 0; l < model->level_count; ++l) {
+                JsonValue entry = array.at(l);
+                double h = 0, m = 0, s = 0;
+                Result r = readMetric(entry, path, l, "hausdorffError", &h);
+                if (r == Result::Ok) r = readMetric(entry, path, l, "meanError", &m);
+                if (r == Result::Ok) r = readMetric(entry, path, l, "switchDistance", &s);
+                if (r != Result::Ok) return r;
+                JsonValue band = entry.find("hysteresisBand");
+                if (band.size() != 2 || !band.at(0).isNumber() || !band.at(1).isNumber() ||
+                    !finiteFloat(band.at(0).number()) || !finiteFloat(band.at(1).number()))
+                    return fail(Result::BadGltf, "%s/levels/%u/hysteresisBand: expected two finite numbers", path, l);
+                const double near_d = band.at(0).number(), far_d = band.at(1).number();
+                if (l == 0 && (h != 0 || m != 0 || s != 0))
+                    return fail(Result::BadGltf, "%s/levels/0: level 0 must have zero errors and switchDistance 0",
+                                path);
+                if (h < prev_h || m < prev_m || s < prev_s)
+                    return fail(Result::BadGltf, "%s/levels/%u: level %u: errors and switchDistance must not decrease",
+                                path, l, l);
+                if (!(near_d <= s && s <= far_d))
+                    return fail(Result::BadGltf, "%s/levels/%u/hysteresisBand: level %u: expected near <= %g <= far",
+                                path, l, l, s);
+                prev_h = h;
+                prev_m = m;
+                prev_s = s;
+                levels[l].hausdorff_error = float(h);
+                levels[l].mean_error = float(m);
+                levels[l].switch_distance = float(s);
+                levels[l].band_near = float(near_d);
+                levels[l].band_far = float(far_d);
+            }
+            model->error_source = ErrorSource::Measured;
+            return Result::Ok;
+        }
+        JsonValue coverage = node.json.find("extras").find("MSFT_screencoverage");
+        if (coverage.isValid() && model->level_count > 1) {
+            if (!coverage.isArray() || coverage.size() < model->level_count - 1)
+                return fail(Result::BadGltf, "/nodes/%u/extras/MSFT_screencoverage: expected at least %u numbers", root,
+                            model->level_count - 1);
+            double prev = 1;
+            for (uint32_t l = 1; l < model->level_count; ++l) {
+                const JsonValue v = coverage.at(l - 1);
+                const double c = v.number();
+                if (!v.isNumber() || !(c >= 0 && c <= prev))
+                    return fail(Result::BadGltf,
+                                "/nodes/%u/extras/MSFT_screencoverage/%u: expected a number in [0, 1] that does not "
+                                "increase",
+                                root, l - 1);
+                prev = c;
+                // Level l takes over where the previous level's coverage ends.
+                const double d = c > 0 ? double(model->sphere_radius) / (c * kReferenceTanHalfFov) : double(kInf);
+                const double e = d * 2.0 * kReferenceTanHalfFov / kReferenceViewportPx;
+                levels[l].switch_distance = finiteFloat(d) ? float(d) : kInf;
+                levels[l].band_near = levels[l].band_far = levels[l].switch_distance;
+                levels[l].hausdorff_error = finiteFloat(e) ? float(e) : kInf;
+            }
+            model->error_source = ErrorSource::ScreenCoverage;
+            return Result::Ok;
+        }
+        for (uint32_t l = 1; l < model->level_count; ++l) {
+            levels[l].hausdorff_error = kInf;
+            levels[l].switch_distance = levels[l].band_near = levels[l].band_far = kInf;
+        }
+        model->error_source = model->level_count > 1 ? ErrorSource::Unknown : ErrorSource::Measured;
+        return Result::Ok;
+    }
+
+    Result build(ModelSet* out) {
+        out->release();
+        out->allocator_ = allocator;
+        Result r = run(out);
+        detail::deallocateBytes(allocator, owner);
+        owner = nullptr;
+        if (r == Result::OutOfMemory && error && error_size > 0 && error[0] == '\0') fail(r, "out of memory");
+        if (r != Result::Ok) out->release();
+        return r;
+    }
+
+    Result run(ModelSet* out) {
+        const uint32_t node_count = pack->nodeCount();
+        if (node_count == 0) return Result::Ok;
+        owner = detail::allocateArray<uint32_t>(allocator, node_count);
+        if (!owner) return Result::OutOfMemory;
+        for (uint32_t i = 0; i < node_count; ++i) owner[i] = kNoIndex;
+        for (uint32_t i = 0; i < node_count; ++i) {
+            if (!hasLod(pack->node(i))) continue;
+            Result r = claimChain(i);
+            if (r != Result::Ok) return r;
+        }
+        uint32_t model_count = 0, level_count = 0;
+        for (uint32_t i = 0; i < node_count; ++i) {
+            const NodeInfo& node = pack->node(i);
+            if (owner[i] == i) {
+                ++model_count;
+                level_count += lodIds(node).size() + 1;
+            } else if (owner[i] == kNoIndex && node.mesh != kNoIndex) {
+                ++model_count;
+                ++level_count;
+            }
+        }
+        if (model_count == 0) return Result::Ok;
+        out->models_ = detail::allocateArray<ModelInfo>(allocator, model_count);
+        out->levels_ = detail::allocateArray<LevelInfo>(allocator, level_count);
+        if (!out->models_ || !out->levels_) return Result::OutOfMemory;
+        for (uint32_t i = 0; i < model_count; ++i) out->models_[i] = ModelInfo();
+        for (uint32_t i = 0; i < level_count; ++i) out->levels_[i] = LevelInfo();
+        uint32_t m = 0, first = 0;
+        for (uint32_t i = 0; i < node_count; ++i) {
+            const NodeInfo& node = pack->node(i);
+            const bool is_chain = owner[i] == i;
+            if (!is_chain && !(owner[i] == kNoIndex && node.mesh != kNoIndex)) continue;
+            ModelInfo& model = out->models_[m];
+            model.name = node.name;
+            model.root_node = i;
+            model.first_level = first;
+            model.level_count = is_chain ? lodIds(node).size() + 1 : 1;
+            LevelInfo* levels = out->levels_ + first;
+            for (uint32_t l = 0; l < model.level_count; ++l) {
+                uint64_t id = i;
+                if (l > 0) lodIds(node).at(l - 1).asUint64(&id); // validated in claimChain
+                Result r = fillLevelGeometry(m, l, uint32_t(id), &levels[l], &model);
+                if (r != Result::Ok) return r;
+            }
+            Result r = fillMetrics(i, &model, levels);
+            if (r != Result::Ok) return r;
+            first += model.level_count;
+            ++m;
+        }
+        out->model_count_ = model_count;
+        out->level_count_ = level_count;
+        return Result::Ok;
+    }
+};
+
+ModelSet::~ModelSet() {
+    release();
+}
+
+ModelSet::ModelSet(ModelSet&& other) noexcept {
+    *this = static_cast<ModelSet&&>(other);
+}
+
+ModelSet& ModelSet::operator=(ModelSet&& other) noexcept {
+    if (this == &other) return *this;
+    release();
+    allocator_ = other.allocator_;
+    models_ = other.models_;
+    levels_ = other.levels_;
+    model_count_ = other.model_count_;
+    level_count_ = other.level_count_;
+    other.models_ = nullptr;
+    other.levels_ = nullptr;
+    other.model_count_ = other.level_count_ = 0;
+    return *this;
+}
+
+void ModelSet::release() {
+    detail::deallocateBytes(allocator_, models_);
+    detail::deallocateBytes(allocator_, levels_);
+    models_ = nullptr;
+    levels_ = nullptr;
+    model_count_ = level_count_ = 0;
+}
+
+const ModelInfo& ModelSet::model(uint32_t i) const {
+    assert(i < model_count_);
+    return models_[i];
+}
+
+const LevelInfo& ModelSet::level(uint32_t i) const {
+    assert(i < level_count_);
+    return levels_[i];
+}
+
+const LevelInfo& ModelSet::modelLevel(uint32_t model_index, uint32_t level_index) const {
+    assert(model_index < model_count_ && level_index < models_[model_index].level_count);
+    return levels_[models_[model_index].first_level + level_index];
+}
+
+Result buildModels(const Pack& pack, const ModelOptions* options, ModelSet* out, char* error_message,
+                   size_t error_message_size) {
+    if (error_message && error_message_size > 0) error_message[0] = '\0';
+    if (!out) return Result::InvalidArgument;
+    ModelBuilder builder{};
+    builder.pack = &pack;
+    builder.allocator = options ? options->allocator : Allocator();
+    builder.error = error_message;
+    builder.error_size = error_message_size;
+    return builder.build(out);
+}
+
+} // namespace lodrt
