@@ -449,7 +449,10 @@ void Streamer::update(const ModelDemand* demand) {
         if (jobs_.submit) {
             jobs_.submit(jobs_.user, &Task::run, &t);
         } else {
+            // Inline: the task is done now; free its slot for the next candidate.
             Task::run(&t);
+            collect();
+            next_task = 0;
         }
     }
     // Levels that are no longer wanted stay resident while the budget allows (they cost nothing to
