@@ -411,7 +411,16 @@ void Streamer::update(const ModelDemand* demand) {
         Slot& s = slots_[slot];
         const uint64_t budget = options_.budget_bytes;
         if (budget > 0 && !s.is_coarsest) {
-            // Evict the least useful resident levels that are worth less than this one.
+            // Evict the least useful resident levels that are worth less than this one, but only when
+            // that makes enough room: evicting and then skipping would reload the victims next frame.
+            uint64_t reclaimable = 0;
+            for (uint32_t i = 0; i < slot_count_; ++i) {
+                const Slot& v = slots_[i];
+                if (v.state == LevelState::Resident && !v.is_coarsest && v.usefulness < s.usefulness)
+                    reclaimable += v.size;
+            }
+            const uint64_t used = stats_.resident_bytes + stats_.in_flight_bytes;
+            if (used + s.size > budget + reclaimable) continue;
             while (stats_.resident_bytes + stats_.in_flight_bytes + s.size > budget) {
                 uint32_t victim = slot_count_;
                 for (uint32_t i = 0; i < slot_count_; ++i) {

@@ -30,9 +30,12 @@ void perspective(ClipDepth depth, float m[16]) {
 
 // The planes worked out by hand for that frustum (left, right, bottom, top, near, far).
 const float kExpected[6][4] = {
-    {float(M_SQRT1_2), 0, -float(M_SQRT1_2), 0}, {-float(M_SQRT1_2), 0, -float(M_SQRT1_2), 0},
-    {0, float(M_SQRT1_2), -float(M_SQRT1_2), 0}, {0, -float(M_SQRT1_2), -float(M_SQRT1_2), 0},
-    {0, 0, -1, -1},                              {0, 0, 1, 100},
+    {float(M_SQRT1_2), 0, -float(M_SQRT1_2), 0},
+    {-float(M_SQRT1_2), 0, -float(M_SQRT1_2), 0},
+    {0, float(M_SQRT1_2), -float(M_SQRT1_2), 0},
+    {0, -float(M_SQRT1_2), -float(M_SQRT1_2), 0},
+    {0, 0, -1, -1},
+    {0, 0, 1, 100},
 };
 
 Frustum frustumFor(ClipDepth depth) {
@@ -48,13 +51,15 @@ Frustum frustumFor(ClipDepth depth) {
 TEST(FrustumTest, ExtractsOpenGlPlanes) {
     const Frustum f = frustumFor(ClipDepth::NegativeOneToOne);
     for (int p = 0; p < 6; ++p)
-        for (int c = 0; c < 4; ++c) EXPECT_NEAR(f.planes[p][c], kExpected[p][c], 1e-5 * (1 + std::fabs(kExpected[p][c]))) << p << " " << c;
+        for (int c = 0; c < 4; ++c)
+            EXPECT_NEAR(f.planes[p][c], kExpected[p][c], 1e-5 * (1 + std::fabs(kExpected[p][c]))) << p << " " << c;
 }
 
 TEST(FrustumTest, ExtractsVulkanPlanes) {
     const Frustum f = frustumFor(ClipDepth::ZeroToOne);
     for (int p = 0; p < 6; ++p)
-        for (int c = 0; c < 4; ++c) EXPECT_NEAR(f.planes[p][c], kExpected[p][c], 1e-5 * (1 + std::fabs(kExpected[p][c]))) << p << " " << c;
+        for (int c = 0; c < 4; ++c)
+            EXPECT_NEAR(f.planes[p][c], kExpected[p][c], 1e-5 * (1 + std::fabs(kExpected[p][c]))) << p << " " << c;
 }
 
 TEST(FrustumTest, WrongConventionMovesTheNearPlane) {
@@ -123,8 +128,8 @@ TEST(FrustumTest, BatchMatchesSingleTests) {
     }
     std::vector<Containment> spheres(n), boxes(n);
     const size_t vs = lodrt::classifySpheres(f, x.data(), y.data(), z.data(), r.data(), n, spheres.data());
-    const size_t vb = lodrt::classifyBoxes(f, lx.data(), ly.data(), lz.data(), hx.data(), hy.data(), hz.data(), n,
-                                           boxes.data());
+    const size_t vb =
+        lodrt::classifyBoxes(f, lx.data(), ly.data(), lz.data(), hx.data(), hy.data(), hz.data(), n, boxes.data());
     size_t expect_s = 0, expect_b = 0, inside = 0, outside = 0;
     for (size_t i = 0; i < n; ++i) {
         const float c[3] = {x[i], y[i], z[i]}, lo[3] = {lx[i], ly[i], lz[i]}, hi[3] = {hx[i], hy[i], hz[i]};

@@ -19,7 +19,7 @@ struct LodPackSpec {
     std::string node0_metrics;                             // overrides LODBAKE_lod_metrics of chain 0 ("none": omit)
     std::string node0_extras;                              // extras object of chain 0's root
     std::string position_min_max = R"("min":[-1,-1,-1],"max":[1,1,1])";
-    uint16_t bad_index_level = 0xFFFF;                     // level whose index buffer gets index 7
+    uint16_t bad_index_level = 0xFFFF; // level whose index buffer gets index 7
 };
 
 /// Per level: 3 positions (36 B) then 3 u16 indices padded to 8 B, i.e. 44 bytes per level.
@@ -61,11 +61,10 @@ inline std::string lodPackJson(const LodPackSpec& spec) {
             for (size_t k = 0; k < n; ++k) {
                 const double e = spec.errors[k], s = e * spec.switch_scale;
                 metrics += (k ? "," : "") + std::string(R"({"triangles":1,"vertices":3,"hausdorffError":)") +
-                           std::to_string(e) + R"(,"hausdorffErrorRelative":0,"meanError":)" +
-                           std::to_string(e / 4) + R"(,"meanErrorRelative":0,"switchDistance":)" +
-                           std::to_string(s) + R"(,"screenCoverage":1,"hysteresisBand":[)" +
-                           std::to_string(s * (1 - spec.hysteresis)) + "," + std::to_string(s * (1 + spec.hysteresis)) +
-                           "]}";
+                           std::to_string(e) + R"(,"hausdorffErrorRelative":0,"meanError":)" + std::to_string(e / 4) +
+                           R"(,"meanErrorRelative":0,"switchDistance":)" + std::to_string(s) +
+                           R"(,"screenCoverage":1,"hysteresisBand":[)" + std::to_string(s * (1 - spec.hysteresis)) +
+                           "," + std::to_string(s * (1 + spec.hysteresis)) + "]}";
             }
             metrics += "]}";
             if (chain == 0 && !spec.node0_metrics.empty()) metrics = spec.node0_metrics;
@@ -79,9 +78,9 @@ inline std::string lodPackJson(const LodPackSpec& spec) {
         nodes += node;
     }
     return R"({"asset":{"version":"2.0"},"extensionsUsed":["MSFT_lod","LODBAKE_lod_metrics"],)"
-           R"("scenes":[{"nodes":[)" + scene + R"(]}],"buffers":[{"byteLength":)" + std::to_string(levels * 44) +
-           R"(}],"bufferViews":[)" + views + R"(],"accessors":[)" + accessors + R"(],"meshes":[)" + meshes +
-           R"(],"nodes":[)" + nodes + "]}";
+           R"("scenes":[{"nodes":[)" +
+           scene + R"(]}],"buffers":[{"byteLength":)" + std::to_string(levels * 44) + R"(}],"bufferViews":[)" + views +
+           R"(],"accessors":[)" + accessors + R"(],"meshes":[)" + meshes + R"(],"nodes":[)" + nodes + "]}";
 }
 
 inline std::vector<uint8_t> lodPackGlb(const LodPackSpec& spec = LodPackSpec()) {

@@ -131,7 +131,7 @@ TEST(ModelTest, RejectsMoreLevelsThanSupported) {
 
 TEST(ModelTest, RejectsMetricsBreakingTheRules) {
     const char* bad[] = {
-        R"({"levels":[]})",                                                                // count
+        R"({"levels":[]})", // count
         R"({"levels":[{"hausdorffError":0,"meanError":0,"switchDistance":0,"hysteresisBand":[0,0]},)"
         R"({"hausdorffError":0.1,"meanError":0,"switchDistance":1,"hysteresisBand":[0.9,1.1]},)"
         R"({"hausdorffError":0.05,"meanError":0,"switchDistance":2,"hysteresisBand":[1.9,2.1]},)"
