@@ -177,30 +177,45 @@ struct SelectionKernel {
         const float* coarsen_all = table.coarsen_;
         const uint8_t* finest = table.finest_;
         size_t visible = 0;
-        for (size_t i = 0; i < in.count; ++i) {
-            if (visibility && visibility[i] == Containment::Outside) {
-                if (out.draw_level) out.draw_level[i] = kNoLevel;
-                continue;
+        // Blocks: first gather the visible indices without branches (visibility is random from the
+        // predictor's point of view), then select over the dense list.
+        constexpr size_t kBlock = 256;
+        uint32_t list[kBlock];
+        for (size_t base = 0; base < in.count; base += kBlock) {
+            const size_t end = in.count - base < kBlock ? in.count : base + kBlock;
+            size_t n = 0;
+            if (visibility) {
+                for (size_t i = base; i < end; ++i) {
+                    list[n] = uint32_t(i - base);
+                    n += visibility[i] != Containment::Outside;
+                }
+                if (out.draw_level)
+                    for (size_t i = base; i < end; ++i) out.draw_level[i] = kNoLevel;
+            } else {
+                for (size_t i = base; i < end; ++i) list[n++] = uint32_t(i - base);
             }
-            ++visible;
-            const uint32_t m = in.model[i];
-            assert(m < table.modelCount());
-            const float dx = in.center_x[i] - ex, dy = in.center_y[i] - ey, dz = in.center_z[i] - ez;
-            float d = std::sqrt(dx * dx + dy * dy + dz * dz) - in.radius[i];
-            d = d > 0 ? d : 0;
-            if (in.scale) d /= in.scale[i];
-            const float* accept = accept_all + size_t(m) * kMaxLevels;
-            const float* coarsen = coarsen_all + size_t(m) * kMaxLevels;
-            uint32_t hi = 0, lo = 0;
-            for (uint32_t l = 1; l < kMaxLevels; ++l) {
-                hi += d >= accept[l];
-                lo += d >= coarsen[l];
+            visible += n;
+            for (size_t k = 0; k < n; ++k) {
+                const size_t i = base + list[k];
+                const uint32_t m = in.model[i];
+                assert(m < table.modelCount());
+                const float dx = in.center_x[i] - ex, dy = in.center_y[i] - ey, dz = in.center_z[i] - ez;
+                float d = std::sqrt(dx * dx + dy * dy + dz * dz) - in.radius[i];
+                d = d > 0 ? d : 0;
+                if (in.scale) d /= in.scale[i];
+                const float* accept = accept_all + size_t(m) * kMaxLevels;
+                const float* coarsen = coarsen_all + size_t(m) * kMaxLevels;
+                uint32_t hi = 0, lo = 0;
+                for (uint32_t l = 1; l < kMaxLevels; ++l) {
+                    hi += d >= accept[l];
+                    lo += d >= coarsen[l];
+                }
+                uint8_t level = clampLevel(out.level[i], lo, hi);
+                level = level < finest[m] ? finest[m] : level;
+                out.level[i] = level;
+                if (out.draw_level) out.draw_level[i] = resident ? resident[size_t(m) * kMaxLevels + level] : level;
+                if (out.fade) out.fade[i] = fadeFactor(coarsen, level, table.level_counts_[m], d, table.fade_);
             }
-            uint8_t level = clampLevel(out.level[i], lo, hi);
-            level = level < finest[m] ? finest[m] : level;
-            out.level[i] = level;
-            if (out.draw_level) out.draw_level[i] = resident ? resident[size_t(m) * kMaxLevels + level] : level;
-            if (out.fade) out.fade[i] = fadeFactor(coarsen, level, table.level_counts_[m], d, table.fade_);
         }
         return visible;
     }
