@@ -1,5 +1,6 @@
 #include <cstring>
 #include <deque>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -192,4 +193,48 @@ TEST(StreamingTest, BadIndicesFailOnlyTheirLevel) {
     EXPECT_EQ(streamer.state(0, 0), LevelState::Resident);
     EXPECT_EQ(streamer.stats().failures, 1u);
     EXPECT_EQ(streamer.residentTable()[1], 2); // level 1 falls back to level 2
+}
+
+TEST(StreamingTest, MutatedPacksNeverCrash) {
+    lodrt_test::LodPackSpec spec;
+    spec.chains = 2;
+    const std::vector<uint8_t> good = lodrt_test::lodPackGlb(spec);
+    std::mt19937 rng(1234);
+    int opened = 0;
+    for (int iteration = 0; iteration < 3000; ++iteration) {
+        File file;
+        file.bytes = good;
+        const int edits = 1 + int(rng() % 4);
+        for (int e = 0; e < edits; ++e) {
+            const size_t at = rng() % file.bytes.size();
+            const uint32_t kind = rng() % 3;
+            if (kind == 0) file.bytes[at] = uint8_t(rng());
+            if (kind == 1) file.bytes[at] = uint8_t("0123456789[]{},-\"e."[rng() % 19]);
+            if (kind == 2) file.bytes[at] ^= uint8_t(1u << (rng() % 8));
+        }
+        for (int mode = 0; mode < 2; ++mode) {
+            PackSource source;
+            const Result r = mode == 0 ? source.openBytes(file.bytes.data(), file.bytes.size(), nullptr)
+                                       : source.openReader(file.reader(), file.bytes.size(), nullptr);
+            if (r != Result::Ok) continue;
+            ++opened;
+            Streamer streamer;
+            ASSERT_EQ(streamer.init(&source, nullptr, nullptr), Result::Ok);
+            std::vector<ModelDemand> demand(source.models().modelCount(), ModelDemand{0, 1.0f});
+            streamer.update(demand.data());
+            streamer.update(demand.data());
+            for (uint32_t m = 0; m < source.models().modelCount(); ++m) {
+                const lodrt::ModelInfo& model = source.models().model(m);
+                EXPECT_GE(model.level_count, 1u);
+                EXPECT_LE(model.level_count, kMaxLevels);
+                for (uint32_t l = 0; l < model.level_count; ++l) {
+                    size_t size = 0;
+                    if (streamer.levelData(m, l, &size)) {
+                        EXPECT_EQ(size, source.levelBytes(m, l));
+                    }
+                }
+            }
+        }
+    }
+    EXPECT_GT(opened, 100); // the mutations leave many packs valid enough to stream
 }
