@@ -230,6 +230,51 @@ const uint8_t* PackSource::accessorData(uint32_t model, uint32_t level, const ui
     return level_bytes + (view.byte_offset - info.data_offset) + acc.byte_offset;
 }
 
+uint64_t PackSource::levelIndexCount(uint32_t model, uint32_t level) const {
+    if (model >= models_.modelCount() || level >= models_.model(model).level_count) return 0;
+    const MeshInfo& mesh = pack_.mesh(models_.modelLevel(model, level).mesh);
+    uint64_t count = 0;
+    for (uint32_t p = 0; p < mesh.primitive_count; ++p) {
+        const PrimitiveInfo& prim = pack_.primitive(mesh.first_primitive + p);
+        if (prim.mode == 4) count += prim.index_count;
+    }
+    return count;
+}
+
+Result PackSource::copyLevelIndices(uint32_t model, uint32_t level, const uint8_t* level_bytes, uint32_t* out,
+                                    size_t capacity, size_t* written) const {
+    if (written) *written = 0;
+    if (!level_bytes || model >= models_.modelCount() || level >= models_.model(model).level_count)
+        return Result::InvalidArgument;
+    const uint64_t needed = levelIndexCount(model, level);
+    if (!out || capacity < needed) return Result::BufferTooSmall;
+    const MeshInfo& mesh = pack_.mesh(models_.modelLevel(model, level).mesh);
+    size_t n = 0;
+    for (uint32_t p = 0; p < mesh.primitive_count; ++p) {
+        const PrimitiveInfo& prim = pack_.primitive(mesh.first_primitive + p);
+        if (prim.mode != 4) continue;
+        if (prim.indices == kNoIndex) {
+            for (uint64_t k = 0; k < prim.index_count; ++k) out[n++] = uint32_t(k);
+            continue;
+        }
+        const AccessorInfo& acc = pack_.accessor(prim.indices);
+        const uint8_t* base = accessorData(model, level, level_bytes, prim.indices);
+        if (!base) return Result::InvalidArgument; // not in the level's range (sparse or external)
+        const uint32_t size = componentSize(acc.component_type);
+        const uint32_t stride = pack_.bufferView(acc.buffer_view).byte_stride;
+        const uint64_t step = stride ? stride : size;
+        for (uint64_t k = 0; k < acc.count; ++k) {
+            const uint8_t* q = base + k * step;
+            uint32_t value = q[0];
+            if (size >= 2) value |= uint32_t(q[1]) << 8;
+            if (size == 4) value |= (uint32_t(q[2]) << 16) | (uint32_t(q[3]) << 24);
+            out[n++] = value;
+        }
+    }
+    if (written) *written = n;
+    return Result::Ok;
+}
+
 // ---- Streamer ----
 
 struct Streamer::Task {

@@ -79,6 +79,16 @@ TEST(StreamingTest, ReaderReadsOnlyHeaderAndJsonUpFront) {
         }
     std::vector<uint8_t> small(3);
     EXPECT_EQ(source.readLevel(0, 0, small.data(), small.size()), Result::BufferTooSmall);
+    // Indices widened into caller memory after asking for the bound.
+    std::vector<uint8_t> level(source.levelBytes(1, 2));
+    ASSERT_EQ(source.readLevel(1, 2, level.data(), level.size()), Result::Ok);
+    ASSERT_EQ(source.levelIndexCount(1, 2), 3u);
+    std::vector<uint32_t> indices(3);
+    size_t written = 0;
+    ASSERT_EQ(source.copyLevelIndices(1, 2, level.data(), indices.data(), indices.size(), &written), Result::Ok);
+    EXPECT_EQ(written, 3u);
+    EXPECT_EQ(indices, (std::vector<uint32_t>{0, 1, 2}));
+    EXPECT_EQ(source.copyLevelIndices(1, 2, level.data(), indices.data(), 2, &written), Result::BufferTooSmall);
 }
 
 TEST(StreamingTest, ReaderRejectsBrokenContainers) {

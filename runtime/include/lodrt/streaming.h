@@ -71,6 +71,16 @@ public:
     /// (`level_bytes`); null when the accessor has no buffer view or lies outside the level's range.
     const uint8_t* accessorData(uint32_t model, uint32_t level, const uint8_t* level_bytes, uint32_t accessor) const;
 
+    /// Index values of a level (every TRIANGLES primitive of its mesh, in primitive order; a
+    /// non-indexed primitive contributes 0, 1, 2, ...), the bound copyLevelIndices needs.
+    uint64_t levelIndexCount(uint32_t model, uint32_t level) const;
+    /// Widens the level's index buffers (u8/u16/u32) from `level_bytes` (as readLevel wrote them)
+    /// into out[0, capacity) as uint32, concatenated in primitive order; `*written` receives the
+    /// count. Indices keep their per-primitive meaning (primitives of one baked level share one
+    /// vertex stream). Returns Ok, BufferTooSmall, InvalidArgument (bad ids or null bytes).
+    Result copyLevelIndices(uint32_t model, uint32_t level, const uint8_t* level_bytes, uint32_t* out, size_t capacity,
+                            size_t* written) const;
+
 private:
     void release();
     Pack pack_;
