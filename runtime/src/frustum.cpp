@@ -172,6 +172,8 @@ InstanceBvh& InstanceBvh::operator=(InstanceBvh&& other) noexcept {
     allocator_ = other.allocator_;
     nodes_ = other.nodes_;
     order_ = other.order_;
+    spheres_ = other.spheres_;
+    other.spheres_ = nullptr;
     node_count_ = other.node_count_;
     count_ = other.count_;
     other.nodes_ = nullptr;
@@ -184,6 +186,8 @@ InstanceBvh& InstanceBvh::operator=(InstanceBvh&& other) noexcept {
 void InstanceBvh::release() {
     detail::deallocateBytes(allocator_, nodes_);
     detail::deallocateBytes(allocator_, order_);
+    detail::deallocateBytes(allocator_, spheres_);
+    spheres_ = nullptr;
     nodes_ = nullptr;
     order_ = nullptr;
     node_count_ = 0;
@@ -211,7 +215,8 @@ Result InstanceBvh::build(const float* x, const float* y, const float* z, const 
     const size_t leaf_count = (count + kLeafSize - 1) / kLeafSize;
     order_ = detail::allocateArray<uint32_t>(allocator_, count);
     nodes_ = detail::allocateArray<Node>(allocator_, 2 * leaf_count - 1);
-    if (!keys || !order_ || !nodes_) {
+    spheres_ = count <= size_t(-1) / 4 ? detail::allocateArray<float>(allocator_, 4 * count) : nullptr;
+    if (!keys || !order_ || !nodes_ || !spheres_) {
         detail::deallocateBytes(allocator_, keys);
         release();
         return Result::OutOfMemory;
@@ -225,7 +230,14 @@ Result InstanceBvh::build(const float* x, const float* y, const float* z, const 
         keys[i] = (uint64_t(code) << 32) | uint64_t(i); // ties broken by index: deterministic
     }
     std::sort(keys, keys + count);
-    for (size_t i = 0; i < count; ++i) order_[i] = uint32_t(keys[i]);
+    for (size_t i = 0; i < count; ++i) {
+        const uint32_t k = uint32_t(keys[i]);
+        order_[i] = k;
+        spheres_[i] = x[k];
+        spheres_[count + i] = y[k];
+        spheres_[2 * count + i] = z[k];
+        spheres_[3 * count + i] = radius[k];
+    }
     detail::deallocateBytes(allocator_, keys);
 
     // Top-down over leaf ranges with an explicit stack; children are allocated as adjacent pairs.
@@ -278,13 +290,17 @@ Result InstanceBvh::build(const float* x, const float* y, const float* z, const 
     return Result::Ok;
 }
 
-size_t InstanceBvh::cull(const Frustum& frustum, const float* x, const float* y, const float* z, const float* radius,
-                         Containment* out) const {
+size_t InstanceBvh::cull(const Frustum& frustum, Containment* out) const {
     if (count_ == 0) return 0;
+    const float* sx = spheres_;
+    const float* sy = spheres_ + count_;
+    const float* sz = spheres_ + 2 * count_;
+    const float* sr = spheres_ + 3 * count_;
     uint32_t stack[64];
     uint32_t top = 0;
     stack[top++] = 0;
     size_t visible = 0;
+    Containment leaf[kLeafSize];
     while (top > 0) {
         const Node& node = nodes_[stack[--top]];
         const Containment c = classifyBox(frustum, node.min, node.max);
@@ -293,23 +309,20 @@ size_t InstanceBvh::cull(const Frustum& frustum, const float* x, const float* y,
             stack[top++] = node.first + 1;
             continue;
         }
-        // Leaves and whole subtrees: find the instance range of the subtree.
+        if (c == Containment::Intersecting) { // a leaf: test its members
+            const uint32_t begin = node.first;
+            visible += classifySpheres(frustum, sx + begin, sy + begin, sz + begin, sr + begin, node.count, leaf);
+            for (uint32_t j = 0; j < node.count; ++j) out[order_[begin + j]] = leaf[j];
+            continue;
+        }
+        // A whole subtree inside or outside: its instances form one range of the Morton order.
         const Node* first_leaf = &node;
         while (first_leaf->count == 0) first_leaf = &nodes_[first_leaf->first];
         const Node* last_leaf = &node;
         while (last_leaf->count == 0) last_leaf = &nodes_[last_leaf->first + 1];
         const uint32_t begin = first_leaf->first, end = last_leaf->first + last_leaf->count;
-        if (c == Containment::Intersecting) {
-            for (uint32_t j = begin; j < end; ++j) {
-                const uint32_t i = order_[j];
-                const float p[3] = {x[i], y[i], z[i]};
-                out[i] = classifySphere(frustum, p, radius[i]);
-                visible += out[i] != Containment::Outside;
-            }
-        } else {
-            for (uint32_t j = begin; j < end; ++j) out[order_[j]] = c;
-            if (c == Containment::Inside) visible += end - begin;
-        }
+        for (uint32_t j = begin; j < end; ++j) out[order_[j]] = c;
+        if (c == Containment::Inside) visible += end - begin;
     }
     return visible;
 }

@@ -181,7 +181,7 @@ bool benchCullSelect(const lodrt::PackSource& source, int frames) {
         flat_ms.push_back(nowMs() - t0);
 
         t0 = nowMs();
-        bvh.cull(frustum, x.data(), y.data(), z.data(), r.data(), vis.data());
+        bvh.cull(frustum, vis.data());
         lodrt::selectLevels(table, eye, in, vis.data(), resident.data(), out);
         bvh_ms.push_back(nowMs() - t0);
 

@@ -159,7 +159,7 @@ TEST(FrustumTest, BvhCullMatchesFlatCull) {
         const Frustum f = frustumFor(depth);
         std::vector<Containment> flat(n), tree(n);
         const size_t a = lodrt::classifySpheres(f, x.data(), y.data(), z.data(), r.data(), n, flat.data());
-        const size_t b = bvh.cull(f, x.data(), y.data(), z.data(), r.data(), tree.data());
+        const size_t b = bvh.cull(f, tree.data());
         EXPECT_EQ(a, b);
         for (size_t i = 0; i < n; ++i) {
             // A group accepted whole is Inside for each member; a member's own test agrees then.

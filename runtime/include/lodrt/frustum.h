@@ -72,10 +72,11 @@ public:
     Result build(const float* center_x, const float* center_y, const float* center_z, const float* radius, size_t count,
                  const Allocator* allocator);
 
-    /// Culls the same spheres the hierarchy was built over (same order, same count) and writes one
-    /// Containment per instance to out[0, count). Returns how many are not Outside. No allocation.
-    size_t cull(const Frustum& frustum, const float* center_x, const float* center_y, const float* center_z,
-                const float* radius, Containment* out) const;
+    /// Culls the spheres the hierarchy was built over (it keeps a copy in Morton order, so leaves
+    /// are tested with the vectorised classifySpheres) and writes one Containment per instance, in
+    /// the caller's original order, to out[0, instanceCount()). Returns how many are not Outside.
+    /// No allocation.
+    size_t cull(const Frustum& frustum, Containment* out) const;
 
     size_t instanceCount() const { return count_; }
     uint32_t nodeCount() const { return node_count_; }
@@ -91,6 +92,7 @@ private:
     Allocator allocator_;
     Node* nodes_ = nullptr;
     uint32_t* order_ = nullptr; // instance indices in Morton order
+    float* spheres_ = nullptr;  // x, y, z, radius blocks of count_ floats each, in Morton order
     uint32_t node_count_ = 0;
     size_t count_ = 0;
 };
