@@ -57,7 +57,7 @@ multilevel options:
   --percentage P     percentage of the edges to remove, 0 <= P < 100 (--ratio R means P = 100(1-R))
   --iterations K     outer iterations, each one smoothing + decimation step (default 4)
   --smoothing-iterations S  p-Laplacian steps per outer iteration (default 3)
-  --ple P            p-Laplacian exponent (default 1; 2 = plain Laplacian, < 1 gathers vertices
+  --ple P            p-Laplacian exponent (default 0.5; 2 = plain Laplacian, < 1 gathers vertices
                      toward high curvature)
   --lambda L         fidelity of the smoothing to each level's input (default 10)
   --no-adaptive      do not scale lambda by the initial curvature of each vertex

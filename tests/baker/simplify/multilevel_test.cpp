@@ -5,9 +5,12 @@
 
 #include <gtest/gtest.h>
 
+#include "cli_runner.h"
 #include "lodbake/cleanup/topology.h"
+#include "lodbake/io/mesh_io.h"
 #include "mesh_builders.h"
 #include "simplify_test_meshes.h"
+#include "test_paths.h"
 
 namespace {
 
@@ -211,6 +214,65 @@ TEST(MultilevelTest, EmptyAndDegenerateInputGiveACleanResult) {
     auto r = lodbake::simplifyMultilevel(degenerate, MultilevelOptions(), d);
     ASSERT_TRUE(r.ok());
     EXPECT_EQ(r->mesh.faceCount(), 0u);
+}
+
+// ---- CLI: lodbake simplify --method multilevel ----------------------------------------------------
+
+const std::string& sphereFile() {
+    static const std::string path = [] {
+        const std::string p = lodbake_test::scratchDir() + "/multilevel_cli_sphere.ply";
+        Diagnostics d;
+        EXPECT_TRUE(lodbake::writeMesh(lodbake_test::icosphere(4), p, lodbake::WriteOptions(), d).ok());
+        return p;
+    }();
+    return path;
+}
+
+TEST(MultilevelCliTest, RatioMapsToPercentageAndWritesTheMesh) {
+    const std::string out = lodbake_test::scratchDir() + "/multilevel_cli_out.ply";
+    const lodbake_test::CliRun run = lodbake_test::runLodbake(
+        {"simplify", sphereFile(), "-o", out, "--method", "multilevel", "--ratio", "0.25", "--json"});
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    EXPECT_NE(run.out.find("\"method\": \"multilevel\""), std::string::npos) << run.out;
+    EXPECT_NE(run.out.find("\"percentage\": 75,"), std::string::npos) << run.out;
+    Diagnostics d;
+    auto m = lodbake::readMesh(out, lodbake::ReadOptions(), d);
+    ASSERT_TRUE(m.ok());
+    // 75 % of the 7680 edges is 1920 collapses, two faces each.
+    EXPECT_EQ(m->mesh.faceCount(), 5120u - 2u * 1920u);
+}
+
+TEST(MultilevelCliTest, AcceptsEveryDocumentOption) {
+    const std::string out = lodbake_test::scratchDir() + "/multilevel_cli_opts.ply";
+    const lodbake_test::CliRun run = lodbake_test::runLodbake(
+        {"simplify", sphereFile(), "-o", out, "--method", "multilevel", "--percentage", "40", "--iterations", "2",
+         "--ple", "1.5", "--lambda", "3", "--no-adaptive", "--no-sort", "--no-smoothing"});
+    EXPECT_EQ(run.exit_code, 0) << run.err;
+    const lodbake_test::CliRun smooth_only = lodbake_test::runLodbake(
+        {"simplify", sphereFile(), "-o", out, "--method", "multilevel", "--percentage", "40", "--no-decimation"});
+    ASSERT_EQ(smooth_only.exit_code, 0) << smooth_only.err;
+    Diagnostics d;
+    auto m = lodbake::readMesh(out, lodbake::ReadOptions(), d);
+    ASSERT_TRUE(m.ok());
+    EXPECT_EQ(m->mesh.faceCount(), 5120u);
+}
+
+TEST(MultilevelCliTest, UsageErrors) {
+    const std::string out = lodbake_test::scratchDir() + "/multilevel_cli_bad.ply";
+    const std::vector<std::vector<std::string>> bad = {
+        {"--method", "bogus", "--ratio", "0.5"},
+        {"--percentage", "50"},                                // multilevel option with qem
+        {"--method", "multilevel", "--error", "0.1"},          // qem only
+        {"--method", "multilevel", "--percentage", "100"},     // out of range
+        {"--method", "multilevel", "--ratio", "0.5", "--percentage", "10"}, // two targets
+        {"--method", "multilevel", "--ratio", "0.5", "--iterations", "0"},
+    };
+    for (const auto& extra : bad) {
+        std::vector<std::string> args = {"simplify", sphereFile(), "-o", out};
+        args.insert(args.end(), extra.begin(), extra.end());
+        const lodbake_test::CliRun run = lodbake_test::runLodbake(args);
+        EXPECT_EQ(run.exit_code, 2) << extra[0] << " " << extra[1] << ": " << run.err;
+    }
 }
 
 } // namespace

@@ -22,7 +22,7 @@ struct MultilevelOptions {
     double percentage = 50.0;            // percentage of the input's edges to remove, in [0, 100)
     uint32_t iterations = 4;             // outer iterations (OUT_ITS): each smooths, then decimates 1/iterations
     uint32_t smoothing_iterations = 3;   // explicit p-Laplacian steps per outer iteration (the document's sm)
-    double ple = 1.0;                    // p-Laplacian exponent p: 2 = plain Laplacian, p < 1 gathers
+    double ple = 0.5;                    // p-Laplacian exponent p: 2 = plain Laplacian, p < 1 gathers
                                          // vertices toward high curvature
     double time_step = 0.1;              // Δt of each explicit step (weights are normalised: < 1 is stable)
     double lambda = 10.0;                // fidelity λ pulling each smoothing step back toward the level's input
