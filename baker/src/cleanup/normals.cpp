@@ -40,12 +40,12 @@ NormalsReport computeNormals(Mesh& mesh, const NormalOptions& options) {
     welded.indices.resize(mesh.indices.size());
     for (size_t c = 0; c < mesh.indices.size(); ++c) welded.indices[c] = weld[mesh.indices[c]];
 
-    // Face normals and per-corner weighted contributions are independent per face: computed in
+    // Face normals and per-corner weights are independent per face: computed in
     // parallel into per-face/per-corner slots; accumulation below stays sequential in corner order,
     // so the sums do not depend on the schedule.
     std::vector<Vec3d> face_n(face_count);
     std::vector<double> face_area(face_count, 0.0);
-    std::vector<Vec3d> contribution(mesh.indices.size());
+    std::vector<double> corner_weight(mesh.indices.size(), 0.0);
     auto faceWork = [&](size_t f) {
         if (hasRepeatedIndex(mesh, f)) return;
         const Vec3d nn = faceNormal(mesh, f);
@@ -63,7 +63,7 @@ NormalsReport computeNormals(Mesh& mesh, const NormalOptions& options) {
                 weight = std::acos(std::max(-1.0, std::min(1.0, dot(u, v))));
             }
             if (options.weighting != NormalWeighting::Angle) weight *= face_area[f];
-            contribution[c] = face_n[f] * weight;
+            corner_weight[c] = weight;
         }
     };
     if (!parallelFor(face_count, 4096, faceWork).ok())
@@ -104,7 +104,7 @@ NormalsReport computeNormals(Mesh& mesh, const NormalOptions& options) {
     std::vector<Vec3d> acc(mesh.indices.size());
     for (size_t f = 0; f < face_count; ++f) {
         if (face_area[f] == 0.0) continue;
-        for (uint32_t c = uint32_t(3 * f); c < 3 * f + 3; ++c) acc[groups.find(c)] += contribution[c];
+        for (uint32_t c = uint32_t(3 * f); c < 3 * f + 3; ++c) acc[groups.find(c)] += face_n[f] * corner_weight[c];
     }
 
     mesh.normals.assign(n, Vec3f(0, 0, 1));
