@@ -44,8 +44,8 @@ options:
   --weld-ignore-attributes    weld across UV/normal seams
   --no-weld                   skip welding
   --non-manifold cut|remove   faces beyond the best pair on an over-used edge (default cut)
-  --min-component-faces N     drop components with fewer faces (default 50)
-  --min-component-area F      drop components under this fraction of the total area (default 0.002)
+  --min-component-faces N     drop components with fewer faces (default 20)
+  --min-component-area F      drop components under this fraction of the total area (default 0.0003)
   --max-hole-edges N          fill holes of at most N edges (default 100); 0 disables filling
   --no-refine                 fill holes with the bare triangulation (no refinement or fairing)
   --denoise METHOD            taubin | laplacian | plaplacian (default: no denoising)

@@ -21,6 +21,7 @@
 #include "lodbake/pfrep/pfrep_builder.h"
 #include "lodbake/simplify/lod_chain.h"
 #include "lodbake/simplify/mesh_distance.h"
+#include "lodbake/simplify/multilevel.h"
 #include "lodbake/simplify/simplify.h"
 #include "lodbake/version.h"
 #include "lodrt/pfrep.h"
@@ -32,17 +33,37 @@ namespace lodbake::cli {
 namespace {
 
 const char* kSimplifyHelp = R"(usage: lodbake simplify IN -o OUT (--ratio R | --triangles N | --error E) [--json]
+       lodbake simplify IN -o OUT --method multilevel (--percentage P | --ratio R | --triangles N) [options]
 
-Simplifies IN by quadric-error edge collapse and writes OUT (format from its extension). Open
-borders, UV/normal seams and sub-mesh borders are preserved; non-manifold spots are left as they
-are. Prints the result's size and its measured two-sided distance to IN.
+Simplifies IN and writes OUT (format from its extension). Prints the result's size and its
+measured two-sided distance to IN.
+
+--method qem (default): quadric-error edge collapse. Open borders, UV/normal seams and sub-mesh
+borders are preserved; non-manifold spots are left as they are.
+--method multilevel: Guerra 2012's multilevel simplification for scanner meshes: each outer
+iteration smooths with a p-Laplacian flow, then collapses the shortest, flattest edges, placing
+each new vertex between the endpoints by their curvature. Geometry only (attributes are dropped);
+open borders stay fixed.
 
 options:
   -o, --output OUT   output path (required)
+  --method M         qem (default) or multilevel
   --ratio R          keep this fraction of the triangles, 0 < R <= 1
   --triangles N      keep about N triangles
-  --error E          collapse while the estimated error stays below E (object units)
+  --error E          collapse while the estimated error stays below E (object units; qem only)
   --json             print one JSON object instead of text
+
+multilevel options:
+  --percentage P     percentage of the edges to remove, 0 <= P < 100 (--ratio R means P = 100(1-R))
+  --iterations K     outer iterations, each one smoothing + decimation step (default 4)
+  --smoothing-iterations S  p-Laplacian steps per outer iteration (default 3)
+  --ple P            p-Laplacian exponent (default 0.5; 2 = plain Laplacian, < 1 gathers vertices
+                     toward high curvature)
+  --lambda L         fidelity of the smoothing to each level's input (default 10)
+  --no-adaptive      do not scale lambda by the initial curvature of each vertex
+  --no-sort          no ordering: collapse every edge under the histogram length threshold
+  --no-smoothing     skip the smoothing step of each iteration
+  --no-decimation    skip the decimation step of each iteration (smoothing only)
 )";
 
 const char* kLodsHelp = R"(usage: lodbake lods IN -o PREFIX [--levels 0.5,0.25,0.1,0.03,0.01] [--json]
@@ -62,6 +83,109 @@ options:
   --json               print PREFIX.json's content instead of text
 )";
 
+void printDistance(const Result<DistanceResult>& distance) {
+    if (distance.ok())
+        std::printf("distance to input: hausdorff %.4g (%.3e of diagonal), mean %.4g (%.3e)\n", distance->hausdorff,
+                    distance->hausdorffRel(), distance->mean, distance->meanRel());
+}
+
+int runMultilevel(Args& args, const std::string& in, const std::string& out) {
+    if (args.values.count("--error")) return usageError("--error applies to --method qem only");
+    const int targets =
+        int(args.values.count("--ratio") + args.values.count("--triangles") + args.values.count("--percentage"));
+    if (targets != 1) return usageError("simplify --method multilevel needs exactly one of --percentage, --ratio, --triangles");
+    MultilevelOptions options;
+    double value = 0;
+    if (args.values.count("--percentage")) {
+        if (!parseNumber(args.values["--percentage"], value) || !(value >= 0.0 && value < 100.0))
+            return usageError("--percentage expects a number in [0, 100), got '" + args.values["--percentage"] + "'");
+        options.percentage = value;
+    } else if (args.values.count("--ratio")) {
+        if (!parseNumber(args.values["--ratio"], value) || !(value > 0.0 && value <= 1.0))
+            return usageError("--ratio expects a number in (0, 1], got '" + args.values["--ratio"] + "'");
+        options.percentage = 100.0 * (1.0 - value);
+    } else if (!parseNumber(args.values["--triangles"], value) || !(value >= 1.0 && value <= 4e9) ||
+               value != std::floor(value)) {
+        return usageError("--triangles expects a positive integer, got '" + args.values["--triangles"] + "'");
+    }
+    const double triangles_wanted = args.values.count("--triangles") ? value : 0.0;
+    struct Count {
+        const char* name;
+        uint32_t* target;
+        double min;
+    };
+    for (const Count& c : {Count{"--iterations", &options.iterations, 1.0},
+                           Count{"--smoothing-iterations", &options.smoothing_iterations, 0.0}}) {
+        if (!args.values.count(c.name)) continue;
+        if (!parseNumber(args.values[c.name], value) || !(value >= c.min && value <= 1000.0) ||
+            value != std::floor(value))
+            return usageError(std::string(c.name) + " expects an integer in [" + std::to_string(int(c.min)) +
+                              ", 1000], got '" + args.values[c.name] + "'");
+        *c.target = uint32_t(value);
+    }
+    if (args.values.count("--ple")) {
+        if (!parseNumber(args.values["--ple"], value) || !(value > -10.0 && value <= 10.0))
+            return usageError("--ple expects a number in (-10, 10], got '" + args.values["--ple"] + "'");
+        options.ple = value;
+    }
+    if (args.values.count("--lambda")) {
+        if (!parseNumber(args.values["--lambda"], value) || !(value >= 0.0 && value <= 1e6))
+            return usageError("--lambda expects a number in [0, 1e6], got '" + args.values["--lambda"] + "'");
+        options.lambda = value;
+    }
+    options.is_adaptive = !args.flags.count("--no-adaptive");
+    options.is_sorted = !args.flags.count("--no-sort");
+    options.has_smoothing = !args.flags.count("--no-smoothing");
+    options.has_decimation = !args.flags.count("--no-decimation");
+
+    Diagnostics diagnostics;
+    Result<LoadedMesh> loaded = readMesh(in, ReadOptions(), diagnostics);
+    if (!loaded.ok()) {
+        printDiagnostics(diagnostics);
+        return reportError(loaded.status());
+    }
+    if (triangles_wanted > 0.0) {
+        const double faces = double(loaded->mesh.faceCount());
+        options.percentage = faces > 0.0 ? std::max(0.0, std::min(99.0, 100.0 * (1.0 - triangles_wanted / faces))) : 0.0;
+    }
+    Result<MultilevelOutput> result = simplifyMultilevel(loaded->mesh, options, diagnostics);
+    if (!result.ok()) {
+        printDiagnostics(diagnostics);
+        return reportError(result.status().withPrefix(in));
+    }
+    const Status written = writeMesh(result->mesh, out, WriteOptions(), diagnostics);
+    if (!written.ok()) {
+        printDiagnostics(diagnostics);
+        return reportError(written);
+    }
+    Result<DistanceResult> distance = measureSurfaceDistance(loaded->mesh, result->mesh);
+    printDiagnostics(diagnostics);
+    if (args.flags.count("--json")) {
+        JsonWriter j;
+        j.beginObject();
+        j.field("input", in).field("output", out);
+        j.field("method", "multilevel");
+        j.field("input_triangles", uint64_t(result->input_triangles));
+        j.field("triangles", uint64_t(result->mesh.faceCount()));
+        j.field("vertices", uint64_t(result->mesh.vertexCount()));
+        j.field("reached_target", result->reached_target);
+        j.field("percentage", options.percentage);
+        j.field("collapses", uint64_t(result->collapses));
+        j.field("collapses_requested", uint64_t(result->collapses_requested));
+        j.field("collapses_refused", uint64_t(result->collapses_refused));
+        j.field("length_threshold", result->length_threshold);
+        if (distance.ok()) writeDistanceJson(j, *distance);
+        j.endObject();
+        std::fputs(j.str().c_str(), stdout);
+        return kExitOk;
+    }
+    std::printf("wrote %s: %zu vertices, %zu triangles (from %zu), %zu of %zu collapses%s\n", out.c_str(),
+                result->mesh.vertexCount(), result->mesh.faceCount(), result->input_triangles, result->collapses,
+                result->collapses_requested, result->reached_target ? "" : ", target not reached");
+    printDistance(distance);
+    return kExitOk;
+}
+
 } // namespace
 
 int runSimplify(int argc, char** argv) {
@@ -72,6 +196,16 @@ int runSimplify(int argc, char** argv) {
                     {"--ratio", nullptr, true},
                     {"--triangles", nullptr, true},
                     {"--error", nullptr, true},
+                    {"--method", nullptr, true},
+                    {"--percentage", nullptr, true},
+                    {"--iterations", nullptr, true},
+                    {"--smoothing-iterations", nullptr, true},
+                    {"--ple", nullptr, true},
+                    {"--lambda", nullptr, true},
+                    {"--no-adaptive", nullptr, false},
+                    {"--no-sort", nullptr, false},
+                    {"--no-smoothing", nullptr, false},
+                    {"--no-decimation", nullptr, false},
                     {"--json", nullptr, false},
                     {"--help", "-h", false}},
                    args, code))
@@ -87,6 +221,13 @@ int runSimplify(int argc, char** argv) {
     if (formatFromPath(out) == MeshFormat::Unknown)
         return usageError("output '" + out + "' has an unknown extension, expected .ply .obj .off .gltf or .glb");
     if (isSameFile(in, out)) return usageError("output '" + out + "' is the input file; the input is never modified");
+    const std::string method = args.values.count("--method") ? args.values["--method"] : "qem";
+    if (method == "multilevel") return runMultilevel(args, in, out);
+    if (method != "qem") return usageError("--method expects qem or multilevel, got '" + method + "'");
+    for (const char* flag : {"--percentage", "--iterations", "--smoothing-iterations", "--ple", "--lambda",
+                             "--no-adaptive", "--no-sort", "--no-smoothing", "--no-decimation"})
+        if (args.values.count(flag) || args.flags.count(flag))
+            return usageError(std::string(flag) + " applies to --method multilevel only");
     const int targets =
         int(args.values.count("--ratio") + args.values.count("--triangles") + args.values.count("--error"));
     if (targets != 1) return usageError("simplify needs exactly one of --ratio, --triangles, --error");
@@ -143,9 +284,7 @@ int runSimplify(int argc, char** argv) {
     std::printf("wrote %s: %zu vertices, %zu triangles (from %zu)%s\n", out.c_str(), result->mesh.vertexCount(),
                 result->mesh.faceCount(), result->input_triangles,
                 result->reached_target ? "" : ", target not reached");
-    if (distance.ok())
-        std::printf("distance to input: hausdorff %.4g (%.3e of diagonal), mean %.4g (%.3e)\n", distance->hausdorff,
-                    distance->hausdorffRel(), distance->mean, distance->meanRel());
+    printDistance(distance);
     return kExitOk;
 }
 

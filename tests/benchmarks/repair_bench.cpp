@@ -1,9 +1,10 @@
 // repair_bench: times the default repair pipeline (repairMesh) on the shared scans, best of 3 runs
 // on fresh copies, and prints it next to an anchor measured in the same run: computeTopologyStats
 // on the same input (one sort of all half-edges), as a ratio, so a noisy machine shows in both.
-// Also prints what the pipeline left unresolved, and a denoise run's roughness before/after.
+// Also prints what the pipeline left unresolved, a denoise run's roughness before/after, and (with
+// --passes) the time of each pass run on its own, in pipeline order, on one copy.
 //
-// usage: repair_bench [DIR] [FILE...]   (DIR defaults to the shared meshes folder)
+// usage: repair_bench [--passes] [DIR] [FILE...]   (DIR defaults to the shared meshes folder)
 
 #include <algorithm>
 #include <chrono>
@@ -23,13 +24,44 @@ constexpr int kRuns = 3;
 
 template <class F> double bestMs(F&& f) { return lodbake_bench::bestMs(kRuns, f); }
 
+// Runs the default pipeline's passes one by one on a copy of `input` and prints each one's time.
+void printPassTimes(const lodbake::Mesh& input) {
+    using namespace lodbake;
+    Mesh m = input;
+    const RepairOptions o;
+    std::printf("    passes (ms):");
+    auto timed = [&](const char* name, auto&& fn) {
+        std::printf(" %s %.0f", name, lodbake_bench::bestMs(1, fn));
+    };
+    timed("validate", [&] { validate(m); });
+    timed("weld", [&] { weldVertices(m, o.weld_options); });
+    timed("degenerate", [&] { removeDegenerateFaces(m, o.degenerate_options); });
+    timed("unreferenced", [&] { removeUnreferencedVertices(m); });
+    timed("manifold", [&] { makeManifold(m, o.manifold_options); });
+    timed("orient", [&] { orientFaces(m, o.orient_options); });
+    timed("components", [&] { removeSmallComponents(m, o.component_options); });
+    timed("unreferenced", [&] { removeUnreferencedVertices(m); });
+    timed("holes", [&] { fillHoles(m, o.hole_options); });
+    timed("normals", [&] { computeNormals(m, o.normal_options); });
+    timed("validate", [&] { validate(m); });
+    std::printf("\n");
+}
+
 } // namespace
 
 int main(int argc, char** argv) {
     using namespace lodbake;
-    const std::string dir = argc > 1 ? argv[1] : LODBAKE_BENCH_SHARED_MESHES_DIR;
+    bool pass_times = false;
+    std::vector<std::string> args;
+    for (int i = 1; i < argc; ++i) {
+        if (std::string(argv[i]) == "--passes")
+            pass_times = true;
+        else
+            args.push_back(argv[i]);
+    }
+    const std::string dir = !args.empty() ? args[0] : LODBAKE_BENCH_SHARED_MESHES_DIR;
     std::vector<std::string> names;
-    for (int i = 2; i < argc; ++i) names.push_back(argv[i]);
+    for (size_t i = 1; i < args.size(); ++i) names.push_back(args[i]);
     if (names.empty())
         names = {"lucy100k.ply", "bunny_zipper.ply", "bunny_scan_bun000_tri.ply", "dragon_scan_stand0_tri.ply",
                  "dragon_stand_merged.ply"};
@@ -62,6 +94,7 @@ int main(int argc, char** argv) {
                                                     : "NOT manifold",
                     (unsigned long long)t.component_count, (unsigned long long)t.boundary_loop_count, out.faceCount());
         for (const std::string& u : report.unresolved) std::printf("    unresolved: %s\n", u.c_str());
+        if (pass_times) printPassTimes(input);
         Mesh smooth = out;
         const DenoiseReport dr = denoise(smooth);
         std::printf("    denoise (taubin): roughness %.3f -> %.3f deg, mean displacement %.2e of diagonal\n",

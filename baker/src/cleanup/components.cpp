@@ -9,10 +9,19 @@ namespace lodbake {
 
 using namespace cleanup_detail;
 
+namespace {
+
+VertexId corner(const Mesh& mesh, CornerId c) {
+    return VertexId(mesh.indices[c.value]);
+}
+
+} // namespace
+
 PassCounters ComponentReport::counters() const {
     return {{"components_before", components_before},
             {"components_removed", components_removed},
-            {"faces_removed", faces_removed}};
+            {"faces_removed", faces_removed},
+            {"area_removed_ppm", area_removed_ppm}};
 }
 
 ComponentReport removeSmallComponents(Mesh& mesh, const ComponentOptions& options) {
@@ -35,26 +44,28 @@ ComponentReport removeSmallComponents(Mesh& mesh, const ComponentOptions& option
                 uf.unite(halfEnd(mesh, c), weld[halfEnd(mesh, c)]);
             }
     }
-    for (size_t f = 0; f < face_count; ++f) {
-        uf.unite(mesh.indices[3 * f], mesh.indices[3 * f + 1]);
-        uf.unite(mesh.indices[3 * f], mesh.indices[3 * f + 2]);
+    for (FaceId f(0); f.value < face_count; ++f.value) {
+        const VertexId a = corner(mesh, cornerOf(f, 0));
+        uf.unite(a.value, corner(mesh, cornerOf(f, 1)).value);
+        uf.unite(a.value, corner(mesh, cornerOf(f, 2)).value);
     }
+    // Components are numbered by their first face; per component: face count and area.
     std::vector<uint32_t> comp_of_root(mesh.vertexCount(), kNone);
     std::vector<uint32_t> face_comp(face_count);
     std::vector<uint64_t> faces;
     std::vector<double> area;
     double total = 0.0;
-    for (size_t f = 0; f < face_count; ++f) {
-        const uint32_t root = uf.find(mesh.indices[3 * f]);
+    for (FaceId f(0); f.value < face_count; ++f.value) {
+        const uint32_t root = uf.find(corner(mesh, cornerOf(f, 0)).value);
         if (comp_of_root[root] == kNone) {
             comp_of_root[root] = uint32_t(faces.size());
             faces.push_back(0);
             area.push_back(0.0);
         }
         const uint32_t c = comp_of_root[root];
-        face_comp[f] = c;
+        face_comp[f.value] = c;
         ++faces[c];
-        const Vec3d n = faceNormal(mesh, f);
+        const Vec3d n = faceNormal(mesh, f.value);
         const double a = std::isfinite(n.x + n.y + n.z) ? 0.5 * length(n) : 0.0;
         area[c] += a;
         total += a;
@@ -65,14 +76,17 @@ ComponentReport removeSmallComponents(Mesh& mesh, const ComponentOptions& option
     for (uint32_t c = 1; c < faces.size(); ++c)
         if (area[c] > area[largest] || (area[c] == area[largest] && faces[c] > faces[largest])) largest = c;
     std::vector<uint8_t> drop(faces.size(), 0);
+    double area_removed = 0.0;
     for (uint32_t c = 0; c < faces.size(); ++c) {
         if (c == largest) continue;
         drop[c] = faces[c] < options.min_face_count || area[c] < options.min_area_fraction * total;
         r.components_removed += drop[c];
+        if (drop[c]) area_removed += area[c];
     }
+    r.area_removed_ppm = total > 0.0 ? uint64_t(std::llround(1e6 * area_removed / total)) : 0;
     if (!r.components_removed) return r;
     std::vector<uint8_t> keep(face_count);
-    for (size_t f = 0; f < face_count; ++f) keep[f] = !drop[face_comp[f]];
+    for (FaceId f(0); f.value < face_count; ++f.value) keep[f.value] = !drop[face_comp[f.value]];
     r.faces_removed = removeFaces(mesh, keep);
     return r;
 }

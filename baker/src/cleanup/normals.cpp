@@ -7,6 +7,7 @@
 #include <cmath>
 #include <map>
 
+#include "core/parallel.h"
 #include "mesh_edit.h"
 
 namespace lodbake {
@@ -39,16 +40,34 @@ NormalsReport computeNormals(Mesh& mesh, const NormalOptions& options) {
     welded.indices.resize(mesh.indices.size());
     for (size_t c = 0; c < mesh.indices.size(); ++c) welded.indices[c] = weld[mesh.indices[c]];
 
+    // Face normals and per-corner weights are independent per face: computed in
+    // parallel into per-face/per-corner slots; accumulation below stays sequential in corner order,
+    // so the sums do not depend on the schedule.
     std::vector<Vec3d> face_n(face_count);
     std::vector<double> face_area(face_count, 0.0);
-    for (size_t f = 0; f < face_count; ++f) {
-        if (hasRepeatedIndex(mesh, f)) continue;
+    std::vector<double> corner_weight(mesh.indices.size(), 0.0);
+    auto faceWork = [&](size_t f) {
+        if (hasRepeatedIndex(mesh, f)) return;
         const Vec3d nn = faceNormal(mesh, f);
         const double l = length(nn);
-        if (!(l > 0.0) || !std::isfinite(l)) continue;
+        if (!(l > 0.0) || !std::isfinite(l)) return;
         face_n[f] = nn / l;
         face_area[f] = 0.5 * l;
-    }
+        for (int k = 0; k < 3; ++k) {
+            const size_t c = 3 * f + k;
+            double weight = 1.0;
+            if (options.weighting != NormalWeighting::Area) {
+                const Vec3d o = toDouble(mesh.positions[mesh.indices[c]]);
+                const Vec3d u = normalize(toDouble(mesh.positions[mesh.indices[3 * f + (k + 1) % 3]]) - o);
+                const Vec3d v = normalize(toDouble(mesh.positions[mesh.indices[3 * f + (k + 2) % 3]]) - o);
+                weight = std::acos(std::max(-1.0, std::min(1.0, dot(u, v))));
+            }
+            if (options.weighting != NormalWeighting::Angle) weight *= face_area[f];
+            corner_weight[c] = weight;
+        }
+    };
+    if (!parallelFor(face_count, 4096, faceWork).ok())
+        for (size_t f = 0; f < face_count; ++f) faceWork(f); // a worker ran out of memory: redo on this thread
 
     UnionFind groups(mesh.indices.size());
     const bool split = options.crease_angle_deg < 180.0;
@@ -85,18 +104,7 @@ NormalsReport computeNormals(Mesh& mesh, const NormalOptions& options) {
     std::vector<Vec3d> acc(mesh.indices.size());
     for (size_t f = 0; f < face_count; ++f) {
         if (face_area[f] == 0.0) continue;
-        for (int k = 0; k < 3; ++k) {
-            const uint32_t c = uint32_t(3 * f + k);
-            double weight = 1.0;
-            if (options.weighting != NormalWeighting::Area) {
-                const Vec3d o = toDouble(mesh.positions[mesh.indices[c]]);
-                const Vec3d u = normalize(toDouble(mesh.positions[mesh.indices[3 * f + (k + 1) % 3]]) - o);
-                const Vec3d v = normalize(toDouble(mesh.positions[mesh.indices[3 * f + (k + 2) % 3]]) - o);
-                weight = std::acos(std::max(-1.0, std::min(1.0, dot(u, v))));
-            }
-            if (options.weighting != NormalWeighting::Angle) weight *= face_area[f];
-            acc[groups.find(c)] += face_n[f] * weight;
-        }
+        for (uint32_t c = uint32_t(3 * f); c < 3 * f + 3; ++c) acc[groups.find(c)] += face_n[f] * corner_weight[c];
     }
 
     mesh.normals.assign(n, Vec3f(0, 0, 1));

@@ -2,6 +2,7 @@
 #include "lodbake/cleanup/repair.h"
 
 #include <algorithm>
+#include <array>
 #include <functional>
 #include <string>
 
@@ -12,10 +13,10 @@ namespace lodbake {
 namespace {
 
 // Lengths of the boundary loops that are not attribute seams (descending), and the face counts of
-// the components with UV islands joined across seams (descending).
-void openRimsAndSurfaces(const Mesh& mesh, std::vector<uint32_t>& rims, std::vector<uint32_t>& surfaces) {
+// the components with UV islands joined across seams (descending). `weld` is positionWeldMap(mesh).
+void openRimsAndSurfaces(const Mesh& mesh, const std::vector<uint32_t>& weld, std::vector<uint32_t>& rims,
+                         std::vector<uint32_t>& surfaces) {
     using namespace cleanup_detail;
-    const std::vector<uint32_t> weld = positionWeldMap(mesh);
     const EdgeTable table = buildEdgeTable(mesh);
     const std::vector<uint8_t> seam = seamCorners(mesh, table, weld);
     for (const BoundaryLoop& loop : findBoundaryLoops(mesh, table))
@@ -27,22 +28,22 @@ void openRimsAndSurfaces(const Mesh& mesh, std::vector<uint32_t>& rims, std::vec
             uf.unite(halfStart(mesh, c), weld[halfStart(mesh, c)]);
             uf.unite(halfEnd(mesh, c), weld[halfEnd(mesh, c)]);
         }
-    for (size_t f = 0; f < mesh.faceCount(); ++f) {
-        uf.unite(mesh.indices[3 * f], mesh.indices[3 * f + 1]);
-        uf.unite(mesh.indices[3 * f], mesh.indices[3 * f + 2]);
+    for (FaceId f(0); f.value < mesh.faceCount(); ++f.value) {
+        const std::array<VertexId, 3> t = mesh.triangle(f);
+        uf.unite(t[0].value, t[1].value);
+        uf.unite(t[0].value, t[2].value);
     }
     std::vector<uint32_t> faces_of_root(mesh.vertexCount(), 0);
-    for (size_t f = 0; f < mesh.faceCount(); ++f) ++faces_of_root[uf.find(mesh.indices[3 * f])];
+    for (FaceId f(0); f.value < mesh.faceCount(); ++f.value) ++faces_of_root[uf.find(mesh.triangle(f)[0].value)];
     for (uint32_t count : faces_of_root)
         if (count) surfaces.push_back(count);
     std::sort(rims.begin(), rims.end(), std::greater<uint32_t>());
     std::sort(surfaces.begin(), surfaces.end(), std::greater<uint32_t>());
 }
 
-bool hasSharedPositions(const Mesh& mesh) {
-    const std::vector<uint32_t> weld = cleanup_detail::positionWeldMap(mesh);
-    for (uint32_t v = 0; v < weld.size(); ++v)
-        if (weld[v] != v) return true;
+bool hasSharedPositions(const std::vector<uint32_t>& weld) {
+    for (VertexId v(0); v.value < weld.size(); ++v.value)
+        if (weld[v.value] != v.value) return true;
     return false;
 }
 
@@ -64,35 +65,87 @@ Result<RepairReport> repairMesh(Mesh& mesh, const RepairOptions& options, const 
         report.passes.push_back({pass, std::move(counters), {}});
         return &report.passes.back();
     };
-    if (options.weld) add("weld", weldVertices(mesh, options.weld_options).counters());
-    if (options.remove_degenerate)
-        add("degenerate", removeDegenerateFaces(mesh, options.degenerate_options).counters());
-    add("unreferenced", removeUnreferencedVertices(mesh).counters());
-    if (options.make_manifold) add("manifold", makeManifold(mesh, options.manifold_options).counters());
-    if (options.orient) add("orient", orientFaces(mesh, options.orient_options).counters());
-    if (options.remove_small_components) {
-        add("small_components", removeSmallComponents(mesh, options.component_options).counters());
+    // Fast paths: `before` describes the mesh exactly until some pass changes its indices or
+    // positions, so a pass whose whole job that report shows to be empty is skipped (its counters
+    // are the zeros it would have reported). `same_faces` tracks that; `same_connectivity` also
+    // survives orientation flips, which change no adjacency.
+    const TopologyStats& b = report.before.topology;
+    bool same_faces = true, same_connectivity = true;
+    auto changed = [&](bool faces, bool connectivity) {
+        same_faces = same_faces && !faces;
+        same_connectivity = same_connectivity && !connectivity;
+    };
+    if (options.weld) {
+        const WeldReport w = weldVertices(mesh, options.weld_options);
+        changed(w.vertices_merged != 0, w.vertices_merged != 0);
+        add("weld", w.counters());
+    }
+    if (options.remove_degenerate) {
+        DegenerateReport d;
+        if (!same_faces || b.degenerate_face_count || b.duplicate_face_count || b.non_finite_vertex_count)
+            d = removeDegenerateFaces(mesh, options.degenerate_options);
+        const bool removed = d.repeated_index_faces + d.zero_area_faces + d.duplicate_faces + d.non_finite_faces != 0;
+        changed(removed, removed);
+        add("degenerate", d.counters());
+    }
+    {
         const UnreferencedReport u = removeUnreferencedVertices(mesh);
+        changed(u.vertices_removed != 0, u.vertices_removed != 0);
+        add("unreferenced", u.counters());
+    }
+    if (options.make_manifold) {
+        ManifoldReport m;
+        if (!same_faces || b.non_manifold_edge_count || b.non_manifold_vertex_count || b.degenerate_face_count)
+            m = makeManifold(mesh, options.manifold_options);
+        const bool edited = m.repeated_index_faces_removed + m.faces_cut + m.faces_removed + m.vertices_split != 0;
+        changed(edited, edited);
+        add("manifold", m.counters());
+    }
+    if (options.orient) {
+        const OrientReport o = orientFaces(mesh, options.orient_options);
+        changed(o.faces_flipped != 0 || o.vertices_added != 0, o.vertices_added != 0);
+        add("orient", o.counters());
+    }
+    if (options.remove_small_components) {
+        // The largest component always stays, so one component (as stored) means nothing to do.
+        ComponentReport c;
+        if (!same_connectivity || report.before.component_face_counts.size() > 1)
+            c = removeSmallComponents(mesh, options.component_options);
+        else
+            c.components_before = report.before.component_face_counts.size();
+        add("small_components", c.counters());
+        UnreferencedReport u;
+        if (c.faces_removed) u = removeUnreferencedVertices(mesh);
         report.passes.back().counters.push_back({"vertices_removed", u.vertices_removed});
+        changed(c.faces_removed != 0, c.faces_removed != 0);
     }
     if (options.fill_holes) {
-        const HoleFillReport h = fillHoles(mesh, options.hole_options);
+        HoleFillReport h;
+        if (!same_connectivity || b.boundary_edge_count) h = fillHoles(mesh, options.hole_options);
         PassSummary* s = add("holes", h.counters());
         if (!h.filled_lengths.empty())
             s->notes.push_back("filled holes of " + lengthsList(h.filled_lengths) + " edges");
         if (!h.skipped_lengths.empty())
             s->notes.push_back("left open (over " + std::to_string(options.hole_options.max_hole_edges) +
                                " edges): " + lengthsList(h.skipped_lengths));
+        changed(h.faces_added != 0, h.faces_added != 0);
     }
     if (options.denoise) {
         const DenoiseReport d = denoise(mesh, options.denoise_options);
         PassSummary* s = add("denoise", d.counters());
         s->notes.push_back("roughness (mean dihedral deviation) " + std::to_string(d.roughness_before_deg) + " -> " +
                            std::to_string(d.roughness_after_deg) + " degrees");
+        changed(true, false); // positions move: zero-area faces may appear or vanish
     }
-    if (options.normals) add("normals", computeNormals(mesh, options.normal_options).counters());
-    report.after = validate(mesh);
-    if (hasSharedPositions(mesh)) {
+    if (options.normals) {
+        const NormalsReport n = computeNormals(mesh, options.normal_options);
+        changed(n.vertices_added != 0, n.vertices_added != 0);
+        add("normals", n.counters());
+    }
+    report.after = same_faces ? report.before : validate(mesh);
+    const std::vector<uint32_t> weld = cleanup_detail::positionWeldMap(mesh);
+    const bool shared = hasSharedPositions(weld);
+    if (shared) {
         ValidateOptions welded;
         welded.weld_by_position = true;
         report.after_welded = validate(mesh, welded);
@@ -113,7 +166,12 @@ Result<RepairReport> repairMesh(Mesh& mesh, const RepairOptions& options, const 
         unresolved(std::to_string(t.inconsistent_edge_count) + " edges with inconsistent orientation remain");
     // Rims and components are judged with attribute seams joined: UV islands are not holes or pieces.
     std::vector<uint32_t> rims, surfaces;
-    openRimsAndSurfaces(mesh, rims, surfaces);
+    if (shared) {
+        openRimsAndSurfaces(mesh, weld, rims, surfaces);
+    } else { // no two vertices share a position: no seams, so `after` already has both lists
+        rims = report.after.boundary_loop_lengths;
+        surfaces = report.after.component_face_counts;
+    }
     if (!rims.empty())
         unresolved(std::to_string(rims.size()) + " boundary loops left open (" + lengthsList(rims) + " edges)");
     if (surfaces.size() > 1)

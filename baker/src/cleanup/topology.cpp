@@ -56,6 +56,23 @@ std::vector<uint32_t> weldMap(const Mesh& mesh) {
     return map;
 }
 
+// Sorts `items` by `less`, whose first criterion must be lo(item) < lo(other) with lo in [0, n): a
+// counting sort on lo, then a small sort inside each bucket. Mesh-like input has a handful of items
+// per bucket, so this is linear in practice and gives exactly std::sort's order.
+template <class T, class Lo, class Less> void bucketSort(std::vector<T>& items, size_t n, Lo lo, Less less) {
+    std::vector<uint32_t> begin(n + 1, 0);
+    for (const T& t : items) ++begin[lo(t) + 1];
+    for (size_t v = 0; v < n; ++v) begin[v + 1] += begin[v];
+    std::vector<T> sorted(items.size());
+    {
+        std::vector<uint32_t> fill(begin.begin(), begin.end() - 1);
+        for (const T& t : items) sorted[fill[lo(t)]++] = t;
+    }
+    for (size_t v = 0; v < n; ++v)
+        if (begin[v + 1] - begin[v] > 1) std::sort(sorted.begin() + begin[v], sorted.begin() + begin[v + 1], less);
+    items.swap(sorted);
+}
+
 struct HalfEdge {
     uint32_t lo, hi; // undirected key
     uint32_t face;
@@ -102,7 +119,8 @@ TopologyStats computeTopologyStats(const Mesh& mesh, const TopologyOptions& opti
         std::sort(k.begin(), k.begin() + 3);
         keys.push_back(k);
     }
-    std::sort(keys.begin(), keys.end());
+    bucketSort(keys, n, [](const std::array<uint32_t, 4>& k) { return k[0]; },
+               [](const std::array<uint32_t, 4>& x, const std::array<uint32_t, 4>& y) { return x < y; });
     for (size_t i = 1; i < keys.size(); ++i)
         s.duplicate_face_count += keys[i][0] == keys[i - 1][0] && keys[i][1] == keys[i - 1][1] &&
                                   keys[i][2] == keys[i - 1][2];
@@ -117,7 +135,7 @@ TopologyStats computeTopologyStats(const Mesh& mesh, const TopologyOptions& opti
             half.push_back({std::min(a, b), std::max(a, b), uint32_t(f), k, a < b});
         }
     }
-    std::sort(half.begin(), half.end(), [](const HalfEdge& x, const HalfEdge& y) {
+    bucketSort(half, n, [](const HalfEdge& h) { return h.lo; }, [](const HalfEdge& x, const HalfEdge& y) {
         if (x.lo != y.lo) return x.lo < y.lo;
         if (x.hi != y.hi) return x.hi < y.hi;
         return x.face != y.face ? x.face < y.face : x.corner < y.corner;

@@ -1,10 +1,11 @@
 // Vertex welding: exact (bit-identical positions, by sorting) or within a tolerance relative to the
-// bounding-box diagonal (uniform grid hash with cells of the tolerance size, 27-cell lookup).
+// bounding-box diagonal (cells of the tolerance size, sorted, 27-cell lookup).
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
-#include <unordered_map>
 
+#include "core/parallel.h"
 #include "lodbake/cleanup/passes.h"
 #include "mesh_edit.h"
 
@@ -81,48 +82,75 @@ WeldReport weldVertices(Mesh& mesh, const WeldOptions& options) {
             i = j;
         }
     } else {
-        // The hash map is only looked up, never iterated, so its order cannot reach the output.
+        // Cells of the tolerance size, counted from the box minimum, sorted x-major: for a vertex in
+        // cell (x, y, z) every point within tol lies in cells (x±1, y±1, z±1).
+        // A parallel pre-pass finds the vertices with any neighbour in range; only those take part in
+        // the sequential index-order rule (join the lowest earlier representative in range, else
+        // become one), so clean input costs one sort and a read-only parallel scan.
+        const Aabb box = computeBounds(mesh);
         const double inv = 1.0 / tol;
-        auto cellOf = [&](const Vec3f& p, int d[3]) {
-            d[0] = int(std::floor(p.x * inv));
-            d[1] = int(std::floor(p.y * inv));
-            d[2] = int(std::floor(p.z * inv));
-        };
-        auto cellKey = [](int x, int y, int z) {
-            return (uint64_t(uint32_t(x) & 0x1FFFFF) << 42) | (uint64_t(uint32_t(y) & 0x1FFFFF) << 21) |
-                   uint64_t(uint32_t(z) & 0x1FFFFF);
-        };
-        std::unordered_map<uint64_t, std::vector<uint32_t>> reps;
-        reps.reserve(n);
-        const double tol2 = tol * tol;
-        for (uint32_t v = 0; v < n; ++v) {
-            const Vec3f& p = mesh.positions[v];
+        using Cell = std::array<int64_t, 3>;
+        std::vector<std::pair<Cell, uint32_t>> cells; // (cell, vertex), finite vertices only
+        cells.reserve(n);
+        for (VertexId v(0); v.value < n; ++v.value) {
+            const Vec3f& p = mesh.positions[v.value];
             if (!isFinite(p)) continue;
-            int c[3];
-            cellOf(p, c);
+            // Clamped so far-away unreferenced strays cannot overflow (they only share clamped cells).
+            auto cell = [&](float x, float lo) {
+                return int64_t(std::max(-1e15, std::min(1e15, std::floor((double(x) - lo) * inv))));
+            };
+            cells.push_back({Cell{cell(p.x, box.min.x), cell(p.y, box.min.y), cell(p.z, box.min.z)}, v.value});
+        }
+        std::sort(cells.begin(), cells.end());
+        std::vector<uint32_t> cell_index(n, kNone); // vertex -> its slot in `cells`
+        for (uint32_t i = 0; i < cells.size(); ++i) cell_index[cells[i].second] = i;
+        const double tol2 = tol * tol;
+        // Calls fn(u) for every other finite vertex u within tol of vertex v.
+        auto forEachInRange = [&](VertexId v, auto&& fn) {
+            const Cell& c = cells[cell_index[v.value]].first;
+            const Vec3d p = toDouble(mesh.positions[v.value]);
+            // Per x slab, the cells (x, y-1..y+1, any z) are one run of the sorted list: three
+            // searches instead of nine; cells more than one z step away are skipped in the scan.
+            for (int64_t dx = -1; dx <= 1; ++dx) {
+                const Cell lo{c[0] + dx, c[1] - 1, INT64_MIN};
+                auto it = std::lower_bound(cells.begin(), cells.end(), std::make_pair(lo, uint32_t(0)));
+                for (; it != cells.end() && it->first[0] == lo[0] && it->first[1] <= c[1] + 1; ++it) {
+                    if (it->second == v.value || it->first[2] < c[2] - 1 || it->first[2] > c[2] + 1) continue;
+                    const Vec3d d = toDouble(mesh.positions[it->second]) - p;
+                    if (dot(d, d) <= tol2) fn(VertexId(it->second));
+                }
+            }
+        };
+        std::vector<uint8_t> has_neighbour(n, 0);
+        const Status scanned = parallelFor(cells.size(), 4096, [&](size_t i) {
+            forEachInRange(VertexId(cells[i].second), [&](VertexId) { has_neighbour[cells[i].second] = 1; });
+        });
+        if (!scanned.ok()) { // out of memory in a worker: do the same scan on this thread
+            for (const auto& entry : cells)
+                forEachInRange(VertexId(entry.second), [&](VertexId) { has_neighbour[entry.second] = 1; });
+        }
+        std::vector<uint8_t> is_rep(n, 0);
+        for (VertexId v(0); v.value < n; ++v.value) {
+            if (cell_index[v.value] == kNone) continue; // non-finite: never merges
+            if (!has_neighbour[v.value]) {
+                is_rep[v.value] = 1;
+                continue;
+            }
             uint32_t best = kNone;
             bool seam = false;
-            for (int dx = -1; dx <= 1; ++dx)
-                for (int dy = -1; dy <= 1; ++dy)
-                    for (int dz = -1; dz <= 1; ++dz) {
-                        auto it = reps.find(cellKey(c[0] + dx, c[1] + dy, c[2] + dz));
-                        if (it == reps.end()) continue;
-                        for (uint32_t rep : it->second) {
-                            if (rep >= best) continue;
-                            const Vec3d d = toDouble(mesh.positions[rep]) - toDouble(p);
-                            if (dot(d, d) > tol2) continue;
-                            if (!attributesMatch(mesh, rep, v, options)) {
-                                seam = true;
-                                continue;
-                            }
-                            best = rep;
-                        }
-                    }
+            forEachInRange(v, [&](VertexId u) {
+                if (u.value >= v.value || !is_rep[u.value] || u.value >= best) return;
+                if (!attributesMatch(mesh, u.value, v.value, options)) {
+                    seam = true;
+                    return;
+                }
+                best = u.value;
+            });
             if (best != kNone) {
-                target[v] = best;
+                target[v.value] = best;
             } else {
                 r.seam_pairs_kept += seam;
-                reps[cellKey(c[0], c[1], c[2])].push_back(v);
+                is_rep[v.value] = 1;
             }
         }
     }

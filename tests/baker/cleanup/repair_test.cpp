@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include "cleanup_builders.h"
+#include "core/parallel.h"
 #include "lodbake/io/mesh_io.h"
 #include "test_paths.h"
 
@@ -275,5 +276,33 @@ TEST(RepairTest, RandomSmallMeshesNeverBreakInvariants) {
         EXPECT_EQ(r->after.topology.non_manifold_edge_count, 0u) << round;
         EXPECT_EQ(r->after.topology.non_manifold_vertex_count, 0u) << round;
         EXPECT_EQ(r->after.topology.inconsistent_edge_count, 0u) << round;
+    }
+}
+
+TEST_F(RepairScanTest, SameResultForAnyThreadCount) {
+    // The weld's neighbour scan and the normals' per-face work run in parallel: the repaired mesh
+    // must not depend on the number of threads.
+    LODBAKE_REQUIRE_SHARED_MESHES();
+    const Mesh* input = scan("dragon_scan_stand0_tri.ply");
+    ASSERT_NE(input, nullptr);
+    RepairOptions o;
+    o.weld_options.tolerance_rel = 4e-3; // above the grid spacing (2.9e-3): many pairs to merge
+    o.denoise = true;
+    std::vector<Mesh> results;
+    uint64_t merged = 0;
+    for (size_t threads : {1u, 2u, 4u}) {
+        ScopedThreadLimit limit(threads);
+        Mesh m = *input;
+        Diagnostics d;
+        Result<RepairReport> r = repairMesh(m, o, "dragon", d);
+        ASSERT_TRUE(r.ok());
+        merged = counter(*r, "weld", "vertices_merged");
+        results.push_back(std::move(m));
+    }
+    EXPECT_GT(merged, 0u);
+    for (size_t i = 1; i < results.size(); ++i) {
+        EXPECT_EQ(results[i].indices, results[0].indices);
+        EXPECT_EQ(results[i].positions, results[0].positions);
+        EXPECT_EQ(results[i].normals, results[0].normals);
     }
 }

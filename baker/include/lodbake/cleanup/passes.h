@@ -123,14 +123,19 @@ OrientReport orientFaces(Mesh& mesh, const OrientOptions& options = {});
 // ---- small components ---------------------------------------------------------------------------------
 
 struct ComponentOptions {
-    uint32_t min_face_count = 50;     // remove components with fewer faces
-    double min_area_fraction = 0.002; // remove components with less than this fraction of the total area
+    // Speckle is judged at the scanner's sampling scale: under 20 triangles a component spans only
+    // a handful of samples and carries no surface shape. The area fraction catches floaters in dense
+    // reconstructions (90 faces of a million). Larger values drop real range-scan pieces separated by
+    // depth discontinuities (docs/repair.md, "Small components").
+    uint32_t min_face_count = 20;      // remove components with fewer faces
+    double min_area_fraction = 0.0003; // remove components with less than this fraction of the total area
 };
 
 struct ComponentReport {
     uint64_t components_before = 0;
     uint64_t components_removed = 0;
     uint64_t faces_removed = 0;
+    uint64_t area_removed_ppm = 0; // removed area in millionths of the total area
     PassCounters counters() const;
 };
 
