@@ -571,36 +571,51 @@ void decodeConeAxis(uint16_t cone, float axis[3]) {
 // and back-face tests (0 for insertion; the hysteresis band for keeping a present vertex).
 struct Criterion {
     float tolerance_px = 1.0f;
-    float band = 0.0f; // radians
+    float reach_per_error = 0.0f; // pixels_per_unit_at_distance_one / tolerance_px (when tolerance_px > 0)
+    float band = 0.0f;            // radians
     float sin_band = 0.0f, cos_band = 1.0f;
 };
 
 Criterion criterion(const PfrepView& view, float error_scale, float band) {
     Criterion c;
     c.tolerance_px = error_scale * view.pixel_tolerance;
+    if (c.tolerance_px > 0.0f) c.reach_per_error = view.pixels_per_unit_at_distance_one / c.tolerance_px;
     c.band = band;
     c.sin_band = std::sin(band);
     c.cos_band = std::cos(band);
     return c;
 }
 
-bool wanted(const PfrepModel& m, const PfrepView& view, const Criterion& c, uint32_t vertex) {
+// Outcome of the criterion. Bounds: the sphere is outside the (widened) frustum or its error is
+// below tolerance; the bounds of a vertex contain those of its dependencies (docs/format/pfrep.md),
+// so they fail too. Facing: back-facing only (says nothing about the dependencies).
+enum class Test { Wanted, Bounds, Facing };
+
+Test test(const PfrepModel& m, const PfrepView& view, const Criterion& c, uint32_t vertex) {
     const uint8_t* r = m.data + m.vertex_records_offset + size_t(vertex) * format::kPfrepVertexRecordSize;
     float p[3];
     for (int k = 0; k < 3; ++k) p[k] = m.position_min[k] + float(loadU16(r + 2 * k)) * m.position_step[k];
     const float radius = logValue(m, r[6]);
     const float dx = p[0] - view.eye[0], dy = p[1] - view.eye[1], dz = p[2] - view.eye[2];
     const float dist2 = dx * dx + dy * dy + dz * dz;
-    const float dist = std::sqrt(dist2);
+    const bool outside_sphere = dist2 > radius * radius;
+    // Screen-space error first, without a square root: it rejects most vertices of distant
+    // instances. error · ppu > tolerance · (dist − radius)  <=>  dist < radius + error · ppu / tolerance.
+    const float error = logValue(m, r[7]);
+    if (outside_sphere) {
+        if (c.tolerance_px > 0.0f) {
+            const float reach = radius + error * c.reach_per_error;
+            if (!(dist2 < reach * reach)) return Test::Bounds;
+        } else if (!(error * view.pixels_per_unit_at_distance_one > c.tolerance_px * (std::sqrt(dist2) - radius))) {
+            return Test::Bounds;
+        }
+    }
     // The band turns each plane outwards about the eye by `band`: a sphere that left the frustum
     // by less than that angle is still inside for a vertex already present.
-    const float slack = radius + c.sin_band * dist;
+    const float slack = radius + (c.sin_band > 0.0f ? c.sin_band * std::sqrt(dist2) : 0.0f);
     for (const auto& plane : view.planes)
-        if (plane[0] * p[0] + plane[1] * p[1] + plane[2] * p[2] + plane[3] < -slack) return false;
-    if (dist <= radius) return true;
-    // Screen-space error first: it rejects most vertices of distant instances.
-    const float error = logValue(m, r[7]);
-    if (!(error * view.pixels_per_unit_at_distance_one > c.tolerance_px * (dist - radius))) return false;
+        if (plane[0] * p[0] + plane[1] * p[1] + plane[2] * p[2] + plane[3] < -slack) return Test::Bounds;
+    if (!outside_sphere) return Test::Wanted;
     const uint16_t cone = loadU16(r + 8);
     const uint32_t a = cone >> 12;
     const ConeTable& table = coneTable();
@@ -611,9 +626,13 @@ bool wanted(const PfrepModel& m, const PfrepView& view, const Criterion& c, uint
         decodeConeAxis(cone, axis);
         const float along = axis[0] * dx + axis[1] * dy + axis[2] * dz;
         const float sin_a = table.sin[a] * c.cos_band + table.cos[a] * c.sin_band;
-        if (along > 0 && along * along > dist2 * sin_a * sin_a) return false;
+        if (along > 0 && along * along > dist2 * sin_a * sin_a) return Test::Facing;
     }
-    return true;
+    return Test::Wanted;
+}
+
+bool wanted(const PfrepModel& m, const PfrepView& view, const Criterion& c, uint32_t vertex) {
+    return test(m, view, c, vertex) == Test::Wanted;
 }
 
 float keepScale(const PfrepView& view) {
@@ -656,7 +675,10 @@ Result pfrepRefine(const PfrepModel& m, const PfrepView& view, uint8_t* mask, ui
     forEachPresent(m, mask, [&](uint32_t i) {
         if (budget > 0 && changed >= budget) return false;
         if (maskBit(mask, i)) return true; // simplified earlier in this pass
-        if (i < m.removed_count && !wanted(m, view, keep, i)) {
+        // Bounds failing at the keep threshold fail at the stricter insert threshold too, for i and
+        // (contained bounds) for all its dependencies: nothing of i's entry can be inserted.
+        const Test kept = i < m.removed_count ? test(m, view, keep, i) : test(m, view, insert, i);
+        if (i < m.removed_count && kept != Test::Wanted) {
             // A closure that would take a vertex still kept (criterion holds at the keep threshold)
             // is abandoned as soon as it meets one: otherwise the next pass would insert it again
             // and a static camera would toggle the same vertices every frame.
@@ -667,6 +689,7 @@ Result pfrepRefine(const PfrepModel& m, const PfrepView& view, uint8_t* mask, ui
                 return true;
             }
         }
+        if (kept == Test::Bounds) return true;
         const Entry e = decodeHeader(s, entryStart(m, i));
         uint64_t bit = e.first_mask_bit + (e.has_original ? e.neighbours : 0);
         for (uint32_t k = 0; k < e.dependencies; ++k) {
