@@ -95,10 +95,13 @@ int main(int argc, char** argv) {
     const bool refine_only = argc > 1 && std::strcmp(argv[1], "--refine") == 0;
     // Refinement knobs: --frame-budget N (mask bits changed per frame over all instances, in a
     // rotating instance order; 0 = none), --cull-band R (PfrepView::cull_hysteresis, radians).
+    // --interleave N: instance i is refined on frames where (i + frame) % N == 0 (N = 1: every frame).
     uint32_t frame_budget = 0;
+    int interleave = 1;
     float cull_band = lodrt::PfrepView().cull_hysteresis;
     for (int a = 1; a + 1 < argc; ++a) {
         if (std::strcmp(argv[a], "--frame-budget") == 0) frame_budget = uint32_t(std::atoi(argv[a + 1]));
+        if (std::strcmp(argv[a], "--interleave") == 0) interleave = std::max(1, std::atoi(argv[a + 1]));
         if (std::strcmp(argv[a], "--cull-band") == 0) cull_band = float(std::atof(argv[a + 1]));
     }
     if (!refine_only) std::printf("== 1. blob size (bar: <= 40 bytes/vertex; paper: 83)\n");
@@ -217,8 +220,8 @@ int main(int argc, char** argv) {
                                                std::vector<uint8_t>(masks.size())};
             std::vector<uint32_t> idx(lodrt::pfrepMaxTriangles(m) * 3);
             int next_instance = 0;
-            if (frame_budget > 0 || cull_band != lodrt::PfrepView().cull_hysteresis)
-                std::printf("  frame budget %u mask bits (0: none), cull hysteresis %.3f rad\n", frame_budget, cull_band);
+            std::printf("  frame budget %u mask bits (0: none), cull hysteresis %.3f rad, each instance refined every "
+                        "%d frame(s)\n", frame_budget, cull_band, interleave);
             for (int frame = 0; frame < kFrames; ++frame) {
                 const float cam[3] = {20 * spacing * (0.5f + 0.4f * std::sin(frame * 0.02f)), -5 * spacing + frame * 0.3f * spacing / 3,
                                       2.0f * size};
@@ -233,6 +236,7 @@ int main(int argc, char** argv) {
                     const int i = (next_instance + step) % kInstances;
                     if (frame_budget > 0 && left == 0) break;
                     ++visited;
+                    if ((i + frame) % interleave != 0) continue;
                     const float ox = (i % 40) * spacing, oy = (i / 40) * spacing;
                     lodrt::PfrepView view;
                     // Model space of instance i: the eye relative to the instance's origin.
