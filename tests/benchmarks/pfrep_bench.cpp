@@ -88,11 +88,54 @@ uint32_t levelFor(const lodrt::PfrepModel& m, size_t target, std::vector<uint32_
     return lo;
 }
 
+// --quality: the chain's levels and, for several collapse-ordering options of the half-edge
+// sequence, the PFRep level with the same triangle budget, written for ../shared/eval/meshdist.py.
+int qualityVariants() {
+    struct Variant {
+        const char* name;
+        float area_exponent;
+        float tip_weight;
+    };
+    const Variant variants[] = {{"default", 0.5f, 1.0f}, {"exp0", 0.0f, 1.0f}, {"exp1", 1.0f, 1.0f},
+                                {"notip", 0.5f, 0.0f}, {"tip4", 0.5f, 4.0f}};
+    const std::string out = LODBAKE_BENCH_OUT_DIR;
+    for (const char* name : {"lucy100k.ply", "rocker_arm.obj"}) {
+        lodbake::Mesh mesh;
+        if (!load(name, mesh)) continue;
+        const std::string stem = out + "/q_" + std::string(name).substr(0, std::string(name).find('.'));
+        lodbake::LodChainOptions options;
+        options.ratios = {0.5, 0.1, 0.02};
+        options.measure_error = false;
+        lodbake::Diagnostics d;
+        auto chain = lodbake::buildLodChain(mesh, options, d);
+        if (!chain.ok()) continue;
+        for (const auto& level : chain->levels)
+            lodbake::writeMesh(level.mesh, stem + "_" + std::to_string(level.mesh.faceCount()) + "_chain.ply", {}, d);
+        for (const Variant& v : variants) {
+            lodbake::PfrepOptions po;
+            po.simplify.cost_area_exponent = v.area_exponent;
+            po.simplify.tip_distance_weight = v.tip_weight;
+            auto b = lodbake::buildPfrep(mesh, po, d);
+            lodrt::PfrepModel m;
+            if (!b.ok() || lodrt::openPfrep(b->blob.data(), b->blob.size(), &m) != lodrt::Result::Ok) continue;
+            std::vector<uint32_t> idx(lodrt::pfrepMaxTriangles(m) * 3);
+            for (const auto& level : chain->levels) {
+                const uint32_t k = levelFor(m, level.mesh.faceCount(), idx);
+                lodbake::writeMesh(levelMesh(m, k),
+                                   stem + "_" + std::to_string(level.mesh.faceCount()) + "_" + v.name + ".ply", {}, d);
+            }
+            std::printf("  %s %s: %.1f bytes/vertex\n", name, v.name, double(b->blob.size()) / double(m.vertex_count));
+        }
+    }
+    return 0;
+}
+
 } // namespace
 
 int main(int argc, char** argv) {
     const bool quick = argc > 1 && std::strcmp(argv[1], "--quick") == 0;
     const bool refine_only = argc > 1 && std::strcmp(argv[1], "--refine") == 0;
+    if (argc > 1 && std::strcmp(argv[1], "--quality") == 0) return qualityVariants();
     // Refinement knobs: --frame-budget N (mask bits changed per frame over all instances, in a
     // rotating instance order; 0 = none), --cull-band R (PfrepView::cull_hysteresis, radians).
     // --interleave N: instance i is refined on frames where (i + frame) % N == 0 (N = 1: every frame).
