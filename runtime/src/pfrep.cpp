@@ -428,8 +428,11 @@ void pfrepMaskCoarsest(const PfrepModel& m, uint8_t* mask) {
 namespace {
 
 // Removes `vertex` and its simplification closure, recording every vertex it removes in
-// scratch[0, n) (each once: a vertex is marked when queued, so n <= vertex_count). Returns n.
-size_t simplifyClosure(const PfrepModel& m, uint8_t* mask, uint32_t vertex, uint32_t* scratch) {
+// scratch[0, n) (each once: a vertex is marked when queued, so n <= vertex_count). `veto(d)` is
+// asked for every dependency before it is taken; when it says yes the closure stops, every bit it
+// set is cleared again and 0 is returned. Returns n otherwise.
+template <typename Veto>
+size_t simplifyClosure(const PfrepModel& m, uint8_t* mask, uint32_t vertex, uint32_t* scratch, Veto&& veto) {
     const uint8_t* s = m.data + m.entries_offset;
     size_t queued = 0, next = 0;
     setBit(mask, vertex);
@@ -441,35 +444,24 @@ size_t simplifyClosure(const PfrepModel& m, uint8_t* mask, uint32_t vertex, uint
         for (uint32_t k = 0; k < e.dependencies; ++k) {
             const uint32_t d = x - 1 - bitsAt(s, bit, e.dependency_width);
             bit += e.dependency_width + e.neighbours;
-            if (!maskBit(mask, d)) {
-                setBit(mask, d);
-                scratch[queued++] = d;
+            if (maskBit(mask, d)) continue;
+            if (veto(d)) {
+                for (size_t q = 0; q < queued; ++q) clearBit(mask, scratch[q]);
+                return 0;
             }
+            setBit(mask, d);
+            scratch[queued++] = d;
         }
     }
     return queued;
 }
 
-} // namespace
-
-Result pfrepSimplifyVertex(const PfrepModel& m, uint8_t* mask, uint32_t vertex, uint32_t* scratch,
-                           size_t scratch_capacity) {
-    if (!mask || !scratch || scratch_capacity < pfrepScratchValues(m) || vertex >= m.vertex_count)
-        return Result::InvalidArgument;
-    if (vertex >= m.removed_count || maskBit(mask, vertex)) return Result::Ok;
-    simplifyClosure(m, mask, vertex, scratch);
-    return Result::Ok;
-}
-
-Result pfrepInsertVertex(const PfrepModel& m, uint8_t* mask, uint32_t vertex, uint32_t* scratch,
-                         size_t scratch_capacity) {
-    if (!mask || !scratch || scratch_capacity < pfrepScratchValues(m) || vertex >= m.vertex_count)
-        return Result::InvalidArgument;
-    if (!maskBit(mask, vertex)) return Result::Ok;
+// Inserts `vertex` (removed) and its insertion closure; returns the number of bits cleared.
+size_t insertClosure(const PfrepModel& m, uint8_t* mask, uint32_t vertex, uint32_t* scratch) {
     const uint8_t* s = m.data + m.entries_offset;
     // A min-heap: vertices are processed in increasing rank, and every insertion pushes only higher
     // ranks, so a dependency's state is final when its triangles are examined.
-    size_t top = 0;
+    size_t top = 0, cleared = 1;
     auto greater = [](uint32_t a, uint32_t b) { return a > b; };
     clearBit(mask, vertex);
     scratch[top++] = vertex;
@@ -482,6 +474,7 @@ Result pfrepInsertVertex(const PfrepModel& m, uint8_t* mask, uint32_t vertex, ui
                 for (uint32_t c : {a, b}) {
                     if (maskBit(mask, c)) {
                         clearBit(mask, c);
+                        ++cleared;
                         scratch[top++] = c;
                         std::push_heap(scratch, scratch + top, greater);
                     }
@@ -489,6 +482,26 @@ Result pfrepInsertVertex(const PfrepModel& m, uint8_t* mask, uint32_t vertex, ui
                 return true;
             });
     }
+    return cleared;
+}
+
+} // namespace
+
+Result pfrepSimplifyVertex(const PfrepModel& m, uint8_t* mask, uint32_t vertex, uint32_t* scratch,
+                           size_t scratch_capacity) {
+    if (!mask || !scratch || scratch_capacity < pfrepScratchValues(m) || vertex >= m.vertex_count)
+        return Result::InvalidArgument;
+    if (vertex >= m.removed_count || maskBit(mask, vertex)) return Result::Ok;
+    simplifyClosure(m, mask, vertex, scratch, [](uint32_t) { return false; });
+    return Result::Ok;
+}
+
+Result pfrepInsertVertex(const PfrepModel& m, uint8_t* mask, uint32_t vertex, uint32_t* scratch,
+                         size_t scratch_capacity) {
+    if (!mask || !scratch || scratch_capacity < pfrepScratchValues(m) || vertex >= m.vertex_count)
+        return Result::InvalidArgument;
+    if (!maskBit(mask, vertex)) return Result::Ok;
+    insertClosure(m, mask, vertex, scratch);
     return Result::Ok;
 }
 
@@ -516,57 +529,110 @@ Result pfrepExtractSelective(const PfrepModel& m, const uint8_t* mask, uint32_t*
     return fits ? Result::Ok : Result::BufferTooSmall;
 }
 
-Result pfrepVertexBounds(const PfrepModel& m, uint32_t vertex, PfrepVertexBounds* out) {
-    if (!out || vertex >= m.vertex_count) return Result::InvalidArgument;
-    const uint8_t* r = m.data + m.vertex_records_offset + size_t(vertex) * format::kPfrepVertexRecordSize;
-    for (int k = 0; k < 3; ++k) out->position[k] = m.position_min[k] + float(loadU16(r + 2 * k)) * m.position_step[k];
-    out->radius = logValue(m, r[6]);
-    out->error = logValue(m, r[7]);
-    const uint16_t cone = loadU16(r + 8);
-    // Octahedral axis, 6 bits per coordinate, and a 4-bit angle (15 = no culling).
+
+namespace {
+
+constexpr float kHalfPi = 1.5707963f;
+
+// Cone half-angles of the 4-bit code (c / 15 · π) with their sine and cosine.
+struct ConeTable {
+    float angle[16], sin[16], cos[16];
+    ConeTable() {
+        for (int c = 0; c < 16; ++c) {
+            angle[c] = float(c) / 15.0f * 3.14159265f;
+            sin[c] = std::sin(angle[c]);
+            cos[c] = std::cos(angle[c]);
+        }
+    }
+};
+
+const ConeTable& coneTable() {
+    static const ConeTable table;
+    return table;
+}
+
+// Octahedral axis, 6 bits per coordinate (bits 0-11 of the cone code), normalized.
+void decodeConeAxis(uint16_t cone, float axis[3]) {
     float x = float(cone & 63) / 63.0f * 2.0f - 1.0f;
     float y = float((cone >> 6) & 63) / 63.0f * 2.0f - 1.0f;
-    float z = 1.0f - std::fabs(x) - std::fabs(y);
+    const float z = 1.0f - std::fabs(x) - std::fabs(y);
     if (z < 0) {
         const float ox = x;
         x = (1.0f - std::fabs(y)) * (ox >= 0 ? 1.0f : -1.0f);
         y = (1.0f - std::fabs(ox)) * (y >= 0 ? 1.0f : -1.0f);
     }
     const float len = std::sqrt(x * x + y * y + z * z);
-    out->cone_axis[0] = len > 0 ? x / len : 0;
-    out->cone_axis[1] = len > 0 ? y / len : 0;
-    out->cone_axis[2] = len > 0 ? z / len : 1;
-    out->cone_angle = float(cone >> 12) / 15.0f * 3.14159265f;
-    return Result::Ok;
+    axis[0] = len > 0 ? x / len : 0;
+    axis[1] = len > 0 ? y / len : 0;
+    axis[2] = len > 0 ? z / len : 1;
 }
 
-namespace {
+// One threshold of Hoppe's criterion: the screen-error tolerance and the widening of the frustum
+// and back-face tests (0 for insertion; the hysteresis band for keeping a present vertex).
+struct Criterion {
+    float tolerance_px = 1.0f;
+    float reach_per_error = 0.0f; // pixels_per_unit_at_distance_one / tolerance_px (when tolerance_px > 0)
+    float band = 0.0f;            // radians
+    float sin_band = 0.0f, cos_band = 1.0f;
+};
 
-// Hoppe's criterion with the screen-error tolerance scaled by `scale` (1: insert threshold;
-// view.hysteresis: keep threshold).
-bool wantedAt(const PfrepModel& m, const PfrepView& view, uint32_t vertex, float scale) {
+Criterion criterion(const PfrepView& view, float error_scale, float band) {
+    Criterion c;
+    c.tolerance_px = error_scale * view.pixel_tolerance;
+    if (c.tolerance_px > 0.0f) c.reach_per_error = view.pixels_per_unit_at_distance_one / c.tolerance_px;
+    c.band = band;
+    c.sin_band = std::sin(band);
+    c.cos_band = std::cos(band);
+    return c;
+}
+
+// Outcome of the criterion. Bounds: the sphere is outside the (widened) frustum or its error is
+// below tolerance; the bounds of a vertex contain those of its dependencies (docs/format/pfrep.md),
+// so they fail too. Facing: back-facing only (says nothing about the dependencies).
+enum class Test { Wanted, Bounds, Facing };
+
+Test test(const PfrepModel& m, const PfrepView& view, const Criterion& c, uint32_t vertex) {
     const uint8_t* r = m.data + m.vertex_records_offset + size_t(vertex) * format::kPfrepVertexRecordSize;
     float p[3];
     for (int k = 0; k < 3; ++k) p[k] = m.position_min[k] + float(loadU16(r + 2 * k)) * m.position_step[k];
     const float radius = logValue(m, r[6]);
-    const float error = logValue(m, r[7]);
-    for (const auto& plane : view.planes)
-        if (plane[0] * p[0] + plane[1] * p[1] + plane[2] * p[2] + plane[3] < -radius) return false;
     const float dx = p[0] - view.eye[0], dy = p[1] - view.eye[1], dz = p[2] - view.eye[2];
     const float dist2 = dx * dx + dy * dy + dz * dz;
-    const float dist = std::sqrt(dist2);
-    if (dist <= radius) return true;
-    // Screen-space error first: it rejects most vertices of distant instances.
-    if (!(error * view.pixels_per_unit_at_distance_one > scale * view.pixel_tolerance * (dist - radius))) return false;
-    PfrepVertexBounds b;
-    pfrepVertexBounds(m, vertex, &b);
-    if (b.cone_angle < 1.5707963f) {
-        // Back-facing when every normal of the cone points away from the eye (Hoppe 1997 §4.2).
-        const float along = b.cone_axis[0] * dx + b.cone_axis[1] * dy + b.cone_axis[2] * dz;
-        const float sin_a = std::sin(b.cone_angle);
-        if (along > 0 && along * along > dist2 * sin_a * sin_a) return false;
+    const bool outside_sphere = dist2 > radius * radius;
+    // Screen-space error first, without a square root: it rejects most vertices of distant
+    // instances. error · ppu > tolerance · (dist − radius)  <=>  dist < radius + error · ppu / tolerance.
+    const float error = logValue(m, r[7]);
+    if (outside_sphere) {
+        if (c.tolerance_px > 0.0f) {
+            const float reach = radius + error * c.reach_per_error;
+            if (!(dist2 < reach * reach)) return Test::Bounds;
+        } else if (!(error * view.pixels_per_unit_at_distance_one > c.tolerance_px * (std::sqrt(dist2) - radius))) {
+            return Test::Bounds;
+        }
     }
-    return true;
+    // The band turns each plane outwards about the eye by `band`: a sphere that left the frustum
+    // by less than that angle is still inside for a vertex already present.
+    const float slack = radius + (c.sin_band > 0.0f ? c.sin_band * std::sqrt(dist2) : 0.0f);
+    for (const auto& plane : view.planes)
+        if (plane[0] * p[0] + plane[1] * p[1] + plane[2] * p[2] + plane[3] < -slack) return Test::Bounds;
+    if (!outside_sphere) return Test::Wanted;
+    const uint16_t cone = loadU16(r + 8);
+    const uint32_t a = cone >> 12;
+    const ConeTable& table = coneTable();
+    if (table.angle[a] + c.band < kHalfPi) {
+        // Back-facing when every normal of the cone, widened by the band, points away from the eye
+        // (Hoppe 1997 §4.2): the view direction is within pi/2 - angle of the axis.
+        float axis[3];
+        decodeConeAxis(cone, axis);
+        const float along = axis[0] * dx + axis[1] * dy + axis[2] * dz;
+        const float sin_a = table.sin[a] * c.cos_band + table.cos[a] * c.sin_band;
+        if (along > 0 && along * along > dist2 * sin_a * sin_a) return Test::Facing;
+    }
+    return Test::Wanted;
+}
+
+bool wanted(const PfrepModel& m, const PfrepView& view, const Criterion& c, uint32_t vertex) {
+    return test(m, view, c, vertex) == Test::Wanted;
 }
 
 float keepScale(const PfrepView& view) {
@@ -574,48 +640,69 @@ float keepScale(const PfrepView& view) {
     return h > 0.0f && h <= 1.0f ? h : 1.0f; // NaN and out-of-range values: no band
 }
 
+float cullBand(const PfrepView& view) {
+    const float b = view.cull_hysteresis;
+    return b >= 0.0f && b <= 0.5f ? b : 0.0f; // NaN and out-of-range values: no band
+}
+
 } // namespace
+
+Result pfrepVertexBounds(const PfrepModel& m, uint32_t vertex, PfrepVertexBounds* out) {
+    if (!out || vertex >= m.vertex_count) return Result::InvalidArgument;
+    const uint8_t* r = m.data + m.vertex_records_offset + size_t(vertex) * format::kPfrepVertexRecordSize;
+    for (int k = 0; k < 3; ++k) out->position[k] = m.position_min[k] + float(loadU16(r + 2 * k)) * m.position_step[k];
+    out->radius = logValue(m, r[6]);
+    out->error = logValue(m, r[7]);
+    const uint16_t cone = loadU16(r + 8);
+    decodeConeAxis(cone, out->cone_axis);
+    out->cone_angle = coneTable().angle[cone >> 12];
+    return Result::Ok;
+}
 
 bool pfrepWanted(const PfrepModel& m, const PfrepView& view, uint32_t vertex) {
     if (vertex >= m.vertex_count) return false;
-    return wantedAt(m, view, vertex, 1.0f);
+    return wanted(m, view, criterion(view, 1.0f, 0.0f), vertex);
 }
 
 Result pfrepRefine(const PfrepModel& m, const PfrepView& view, uint8_t* mask, uint32_t* scratch,
                    size_t scratch_capacity, size_t* changes) {
     if (!mask || !scratch || !changes || scratch_capacity < pfrepScratchValues(m)) return Result::InvalidArgument;
     const uint8_t* s = m.data + m.entries_offset;
-    const float keep = keepScale(view);
-    size_t done = 0;
+    const Criterion insert = criterion(view, 1.0f, 0.0f);
+    const Criterion keep = criterion(view, keepScale(view), cullBand(view));
+    const size_t budget = view.max_changed_bits;
+    size_t changed = 0;
     forEachPresent(m, mask, [&](uint32_t i) {
+        if (budget > 0 && changed >= budget) return false;
         if (maskBit(mask, i)) return true; // simplified earlier in this pass
-        if (i < m.removed_count && !wantedAt(m, view, i, keep)) {
-            // The closure may take vertices that are still kept (above tolerance * hysteresis);
-            // then the simplification is undone, otherwise the next pass would insert them again
+        // Bounds failing at the keep threshold fail at the stricter insert threshold too, for i and
+        // (contained bounds) for all its dependencies: nothing of i's entry can be inserted.
+        const Test kept = i < m.removed_count ? test(m, view, keep, i) : test(m, view, insert, i);
+        if (i < m.removed_count && kept != Test::Wanted) {
+            // A closure that would take a vertex still kept (criterion holds at the keep threshold)
+            // is abandoned as soon as it meets one: otherwise the next pass would insert it again
             // and a static camera would toggle the same vertices every frame.
-            const size_t n = simplifyClosure(m, mask, i, scratch);
-            bool blocked = false;
-            for (size_t k = 1; k < n && !blocked; ++k) blocked = wantedAt(m, view, scratch[k], keep);
-            if (blocked) {
-                for (size_t k = 0; k < n; ++k) clearBit(mask, scratch[k]);
-            } else {
-                ++done;
+            const size_t n =
+                simplifyClosure(m, mask, i, scratch, [&](uint32_t d) { return wanted(m, view, keep, d); });
+            if (n > 0) {
+                changed += n;
                 return true;
             }
         }
+        if (kept == Test::Bounds) return true;
         const Entry e = decodeHeader(s, entryStart(m, i));
         uint64_t bit = e.first_mask_bit + (e.has_original ? e.neighbours : 0);
         for (uint32_t k = 0; k < e.dependencies; ++k) {
             const uint32_t d = i - 1 - bitsAt(s, bit, e.dependency_width);
             bit += e.dependency_width + e.neighbours;
-            if (maskBit(mask, d) && wantedAt(m, view, d, 1.0f)) {
-                pfrepInsertVertex(m, mask, d, scratch, scratch_capacity);
-                ++done;
+            if (maskBit(mask, d) && wanted(m, view, insert, d)) {
+                changed += insertClosure(m, mask, d, scratch);
+                if (budget > 0 && changed >= budget) return false;
             }
         }
         return true;
     });
-    *changes = done;
+    *changes = changed;
     return Result::Ok;
 }
 

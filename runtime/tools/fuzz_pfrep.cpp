@@ -34,5 +34,12 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     view.eye[2] = 1.0f;
     for (int p = 0; p < 6; ++p) view.planes[p][3] = 1e6f;
     (void)lodrt::pfrepRefine(model, view, mask.data(), scratch.data(), scratch.size(), &n);
+    // A bounded step from the finest mask with the cull band on (the closures' early-abort path).
+    lodrt::pfrepMaskFinest(model, mask.data());
+    view.eye[2] = 1e3f;
+    view.max_changed_bits = 7;
+    view.cull_hysteresis = 0.2f;
+    (void)lodrt::pfrepRefine(model, view, mask.data(), scratch.data(), scratch.size(), &n);
+    (void)lodrt::pfrepExtractSelective(model, mask.data(), indices.data(), indices.size() / 3, &n);
     return 0;
 }

@@ -3,15 +3,41 @@
 // here: each adds one PackStreamEncoder to builtinStreamEncoders().
 #include "lodbake/pack/pack.h"
 
+#include "lodbake/pfrep/pfrep_extension.h"
+
 namespace lodbake {
 
 namespace {
 const char* const kStreamExtensions[] = {"LODBAKE_valence_compression", "LODBAKE_progressive_fans"};
 }
 
+namespace {
+// LODBAKE_progressive_fans on the full-detail mesh: its PFRep blob and the PFRep level matching each
+// level of the chain (schemas/LODBAKE_progressive_fans).
+PackStreamEncoder progressiveFansEncoder() {
+    return {"LODBAKE_progressive_fans", [](const LodChain& chain, size_t level_index, PackLevel& level) -> Status {
+                if (level_index != 0 || level.mesh.faceCount() == 0) return Status::okStatus();
+                std::vector<double> ratios{1.0};
+                for (const LodLevel& l : chain.levels) ratios.push_back(l.target_ratio);
+                Diagnostics diagnostics; // notes only (e.g. nothing removable); the blob is valid either way
+                LODBAKE_ASSIGN_OR_RETURN(PfrepExtensionObject object,
+                                         buildPfrepExtension(level.mesh, ratios, PfrepOptions{}, diagnostics));
+                PackExtension e;
+                e.name = "LODBAKE_progressive_fans";
+                e.json = std::move(object.json);
+                e.blobs.push_back(std::move(object.blob));
+                e.blob_view_members.push_back(kPfrepExtensionViewMember);
+                e.is_stream = true;
+                level.mesh_extensions.push_back(std::move(e));
+                return Status::okStatus();
+            }};
+}
+
+} // namespace
+
 std::vector<PackStreamEncoder> builtinStreamEncoders() {
-    // TODO(bake): register the valence and progressive-fan encoders when the codec and pfrep modules land.
-    return {};
+    // TODO(bake): register the valence encoder when the codec module lands.
+    return {progressiveFansEncoder()};
 }
 
 Status checkCompact(const PackDescription& description) {

@@ -246,6 +246,21 @@ Result<PfrepBuild> buildPfrepFromSequence(const CollapseSequence& sequence, cons
         }
     }
 
+    // Triangles per level: the slot at entry c with dependency d lives in levels (d, c] (from 0 for
+    // input triangles), capped at the last level.
+    std::vector<int64_t> level_delta(size_t(removed) + 2, 0);
+    for (uint32_t c = 0; c < vertex_count; ++c)
+        for (uint32_t s = fan_first[c]; s < fan_first[c + 1]; ++s) {
+            const uint32_t from = slots[s].dep == kNone ? 0 : slots[s].dep + 1;
+            const uint32_t to = std::min(c, removed);
+            if (from > to) continue;
+            ++level_delta[from];
+            --level_delta[size_t(to) + 1];
+        }
+    std::vector<uint32_t> level_triangles(size_t(removed) + 1);
+    int64_t running = 0;
+    for (uint32_t k = 0; k <= removed; ++k) level_triangles[k] = uint32_t(running += level_delta[k]);
+
     // Per-vertex bounds for the view-dependent criterion, accumulated over dependencies (whose
     // ranks are lower, so already final): error and sphere grow monotonically up the hierarchy.
     std::vector<double> err(vertex_count, 0.0), radius(vertex_count, 0.0), cone_angle(vertex_count, 0.0);
@@ -444,6 +459,7 @@ Result<PfrepBuild> buildPfrepFromSequence(const CollapseSequence& sequence, cons
     build.removed = removed;
     build.level0_triangles = level0;
     build.stored_triangles = tris.size();
+    build.level_triangles = std::move(level_triangles);
     if (removed == 0) diagnostics.note("pfrep: no vertex could be removed; the blob holds the input only");
     return build;
 }

@@ -98,6 +98,15 @@ struct PfrepView {
     /// exceeds pixel_tolerance, a present one is simplified only below pixel_tolerance * h. Values
     /// outside (0, 1] mean 1 (no band).
     float hysteresis = 0.5f;
+    /// Hysteresis of the frustum and back-face tests, radians in [0, 0.5]: a present vertex counts as
+    /// inside the frustum while its sphere is within this angle (seen from the eye) outside a plane,
+    /// and as front-facing while its normal cone widened by this angle is. Insertion uses the
+    /// exact tests. Values outside [0, 0.5] (and NaN) mean 0.
+    float cull_hysteresis = 0.05f;
+    /// Work bound of one pfrepRefine call: it stops starting new operations once this many mask bits
+    /// have changed (an operation's closure may exceed it by its own size); the rest continues on
+    /// the next call from the mask alone. 0 means no bound.
+    uint32_t max_changed_bits = 0;
 };
 
 /// Per-vertex data of the criterion, dequantized.
@@ -118,7 +127,9 @@ LODRT_API bool pfrepWanted(const PfrepModel& model, const PfrepView& view, uint3
 /// visible is inserted when the criterion holds at pixel_tolerance. The band between the two
 /// thresholds comes from the criterion alone: no state beyond the |V|-bit mask. Under a fixed view
 /// repeated steps converge and then do nothing. Visits only the entries of present vertices.
-/// `*changes` receives the vertex operations done.
+/// `*changes` receives the number of mask bits changed (0: the mask is a fixed point of this view). With view.max_changed_bits > 0 the step stops
+/// early; every operation is a whole SimplifyVertex / InsertVertex closure, so the mask is always a
+/// valid (crack-free) refinement, and the next step continues towards the view.
 LODRT_API Result pfrepRefine(const PfrepModel& model, const PfrepView& view, uint8_t* mask, uint32_t* scratch,
                              size_t scratch_capacity, size_t* changes);
 

@@ -407,6 +407,85 @@ TEST_F(PfrepTest, SlowlyMovingCameraTogglesNoVertexTwiceWithinFewFrames) {
     EXPECT_GT(flips, 0u); // the camera moved enough to change the mesh
 }
 
+// Converges `mask` under `view` (steps until one changes nothing); false if 50 steps do not suffice.
+bool settle(const lodrt::PfrepModel& m, const lodrt::PfrepView& view, std::vector<uint8_t>& mask,
+            std::vector<uint32_t>& scratch) {
+    size_t changes = 1;
+    for (int steps = 0; steps < 50 && changes > 0; ++steps)
+        if (lodrt::pfrepRefine(m, view, mask.data(), scratch.data(), scratch.size(), &changes) != lodrt::Result::Ok)
+            return false;
+    return changes == 0;
+}
+
+TEST_F(PfrepTest, CullBandKeepsVerticesThatJustLeftTheFrustumOrTurnedAway) {
+    LODBAKE_REQUIRE_SHARED_MESHES();
+    ASSERT_NE(rocker_, nullptr);
+    const lodrt::PfrepModel& m = rocker_->model;
+    std::vector<uint8_t> mask(lodrt::pfrepMaskBytes(m));
+    std::vector<uint32_t> scratch(lodrt::pfrepScratchValues(m));
+    std::vector<uint32_t> idx(lodrt::pfrepMaxTriangles(m) * 3);
+    lodrt::pfrepMaskCoarsest(m, mask.data());
+    ASSERT_TRUE(settle(m, rockerView(m, 0.3f, 0.0f), mask, scratch));
+    // A sideways move of 0.1 model sizes: vertices near one side plane leave the frustum, most by a
+    // small angle.
+    size_t removed_with[2] = {0, 0};
+    for (int band = 0; band < 2; ++band) {
+        std::vector<uint8_t> moved = mask;
+        lodrt::PfrepView view = rockerView(m, 0.3f, 0.1f);
+        view.cull_hysteresis = band ? 0.05f : 0.0f;
+        size_t changes = 0;
+        ASSERT_EQ(lodrt::pfrepRefine(m, view, moved.data(), scratch.data(), scratch.size(), &changes), lodrt::Result::Ok);
+        for (uint32_t v = 0; v < m.vertex_count; ++v)
+            removed_with[band] += ((moved[v >> 3] & ~mask[v >> 3]) >> (v & 7)) & 1;
+        size_t count = 0;
+        ASSERT_EQ(lodrt::pfrepExtractSelective(m, moved.data(), idx.data(), idx.size() / 3, &count), lodrt::Result::Ok);
+        std::string why;
+        EXPECT_TRUE(closedManifold(idx, count, why)) << "band " << band << ": " << why;
+    }
+    EXPECT_GT(removed_with[0], 0u) << "the move should drop vertices without a band";
+    EXPECT_LT(removed_with[1], removed_with[0]);
+}
+
+TEST_F(PfrepTest, BoundedStepsStayCrackFreeAndConverge) {
+    LODBAKE_REQUIRE_SHARED_MESHES();
+    ASSERT_NE(rocker_, nullptr);
+    const lodrt::PfrepModel& m = rocker_->model;
+    std::vector<uint8_t> mask(lodrt::pfrepMaskBytes(m));
+    std::vector<uint32_t> scratch(lodrt::pfrepScratchValues(m));
+    std::vector<uint32_t> idx(lodrt::pfrepMaxTriangles(m) * 3);
+    lodrt::PfrepView view = rockerView(m, 0.3f, 0.1f);
+    lodrt::pfrepMaskCoarsest(m, mask.data());
+    size_t unbounded_first = 0;
+    {
+        std::vector<uint8_t> copy = mask;
+        ASSERT_EQ(lodrt::pfrepRefine(m, view, copy.data(), scratch.data(), scratch.size(), &unbounded_first),
+                  lodrt::Result::Ok);
+    }
+    ASSERT_GT(unbounded_first, 100u);
+    view.max_changed_bits = 16;
+    size_t changes = 1, steps = 0, first = 0;
+    for (; steps < 400 && changes > 0; ++steps) {
+        std::vector<uint8_t> before = mask;
+        ASSERT_EQ(lodrt::pfrepRefine(m, view, mask.data(), scratch.data(), scratch.size(), &changes), lodrt::Result::Ok);
+        size_t flipped = 0;
+        for (size_t b = 0; b < mask.size(); ++b) flipped += size_t(__builtin_popcount(uint8_t(mask[b] ^ before[b])));
+        EXPECT_EQ(flipped, changes); // changes counts mask bits
+        if (steps == 0) first = changes;
+        size_t count = 0;
+        ASSERT_EQ(lodrt::pfrepExtractSelective(m, mask.data(), idx.data(), idx.size() / 3, &count), lodrt::Result::Ok);
+        std::string why;
+        ASSERT_TRUE(closedManifold(idx, count, why)) << "step " << steps << ": " << why;
+    }
+    EXPECT_GT(first, 0u);
+    EXPECT_LT(first, unbounded_first / 2);
+    EXPECT_GT(steps, 2u);
+    EXPECT_EQ(changes, 0u) << "bounded steps did not converge in 400 steps";
+    // The bounded steps end on a mask where an unbounded step has nothing to do either.
+    view.max_changed_bits = 0;
+    ASSERT_EQ(lodrt::pfrepRefine(m, view, mask.data(), scratch.data(), scratch.size(), &changes), lodrt::Result::Ok);
+    EXPECT_EQ(changes, 0u);
+}
+
 TEST(PfrepRawScanTest, NonManifoldMergedScansWithoutRepair) {
     LODBAKE_REQUIRE_SHARED_MESHES();
     auto b = bake("dragon_stand_merged.ply", {0.5, 0.1});

@@ -36,6 +36,7 @@ struct PfrepBuild {
     size_t stored_triangles = 0;       // every triangle that ever exists in the sequence
     size_t dependency_groups = 0;      // (v_d, B_d) masks stored, originals excluded
     size_t neighbour_slots = 0;        // total length of the fan sequences A_i
+    std::vector<uint32_t> level_triangles; // triangles of level k (after k removals), k = 0..removed
 };
 
 /// Points of every input triangle as the simplifier sees them (positions welded bit-exactly,

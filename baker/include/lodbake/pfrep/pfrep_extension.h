@@ -1,0 +1,42 @@
+#pragma once
+// The LODBAKE_progressive_fans mesh extension (schemas/LODBAKE_progressive_fans): the PFRep blob of a
+// pack's full-detail level, stored in a buffer view, plus the PFRep removal count that matches each
+// level of the discrete chain. The pack module wraps it into a PackExtension (stream_encoders.cpp);
+// this module does not depend on the pack.
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "lodbake/core/diagnostics.h"
+#include "lodbake/core/mesh.h"
+#include "lodbake/core/status.h"
+#include "lodbake/pfrep/pfrep_builder.h"
+
+namespace lodbake {
+
+/// The JSON member that receives the blob's buffer-view index.
+inline constexpr const char* kPfrepExtensionViewMember = "bufferView";
+
+struct PfrepExtensionLevel {
+    uint32_t removals = 0;  // PFRep level (vertices removed) that stands for this chain level
+    uint64_t triangles = 0; // triangles of that PFRep level
+};
+
+struct PfrepExtensionObject {
+    std::vector<uint8_t> blob;
+    uint32_t vertex_count = 0;
+    uint32_t removed_count = 0;
+    uint64_t triangle_count = 0;             // triangles of PFRep level 0
+    std::vector<PfrepExtensionLevel> levels; // one per chain level, highest detail first
+    std::string json; // the extension object without its bufferView member (the pack writer adds it)
+};
+
+/// Builds the PFRep of `lod0` (half-edge sequence, `options`) and, for each ratio of
+/// `level_ratios` (fractions of lod0's triangles, highest detail first; the first is usually 1),
+/// the smallest removal count whose level has at most ratio · triangle_count triangles (the coarsest
+/// level when none has). InvalidInput when a ratio is not in (0, 1] or the mesh has no triangle.
+Result<PfrepExtensionObject> buildPfrepExtension(const Mesh& lod0, const std::vector<double>& level_ratios,
+                                                 const PfrepOptions& options, Diagnostics& diagnostics);
+
+} // namespace lodbake

@@ -1,0 +1,54 @@
+// The LODBAKE_progressive_fans mesh extension object: the PFRep blob of a pack's full-detail level
+// and, for each level of the discrete chain, the PFRep level with a matching triangle budget.
+// Schema and rules: schemas/LODBAKE_progressive_fans/README.md.
+#include "lodbake/pfrep/pfrep_extension.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "lodbake/core/json_writer.h"
+
+namespace lodbake {
+
+Result<PfrepExtensionObject> buildPfrepExtension(const Mesh& lod0, const std::vector<double>& level_ratios,
+                                                 const PfrepOptions& options, Diagnostics& diagnostics) {
+    for (size_t l = 0; l < level_ratios.size(); ++l)
+        if (!(level_ratios[l] > 0.0 && level_ratios[l] <= 1.0))
+            return invalidInput("LODBAKE_progressive_fans: level " + std::to_string(l) +
+                                ": ratio: expected a value in (0, 1]");
+    if (lod0.faceCount() == 0) return invalidInput("LODBAKE_progressive_fans: the mesh has no triangle");
+    LODBAKE_ASSIGN_OR_RETURN(PfrepBuild build, buildPfrep(lod0, options, diagnostics));
+    PfrepExtensionObject out;
+    out.vertex_count = uint32_t(build.rank_point.size());
+    out.removed_count = uint32_t(build.removed);
+    out.triangle_count = build.level0_triangles;
+    const std::vector<uint32_t>& counts = build.level_triangles;
+    for (double ratio : level_ratios) {
+        const double budget = ratio * double(out.triangle_count);
+        // level_triangles does not increase with k (every removal deletes at least one triangle),
+        // so the first level within the budget is found by bisection.
+        const auto it = std::partition_point(counts.begin(), counts.end(),
+                                             [budget](uint32_t t) { return double(t) > budget; });
+        const uint32_t k = it == counts.end() ? uint32_t(counts.size() - 1) : uint32_t(it - counts.begin());
+        out.levels.push_back({k, counts[k]});
+    }
+    JsonWriter j(0);
+    j.beginObject();
+    j.key("levels").beginArray();
+    for (const PfrepExtensionLevel& level : out.levels) {
+        j.beginObject();
+        j.field("removals", uint64_t(level.removals));
+        j.field("triangles", level.triangles);
+        j.endObject();
+    }
+    j.endArray();
+    j.field("removedCount", uint64_t(out.removed_count));
+    j.field("triangleCount", out.triangle_count);
+    j.field("vertexCount", uint64_t(out.vertex_count));
+    j.endObject();
+    out.json = j.str();
+    out.blob = std::move(build.blob);
+    return out;
+}
+
+} // namespace lodbake
