@@ -320,10 +320,15 @@ int runBake(int argc, char** argv) {
     for (const BakeJob& job : jobs)
         for (const std::string& in : job.inputs)
             if (isSameFile(in, job.output)) return usageError("output '" + job.output + "' is also an input");
-    if (!out.empty() && isFolderTarget(out)) {
-        std::error_code ec;
-        fs::create_directories(out, ec);
-        if (ec) return reportError(ioError(out + ": cannot create the output folder: " + ec.message()));
+    // Batch and manifest outputs go into folders the run creates (as a build system's output tree).
+    if (args.values.count("--manifest") || (!out.empty() && isFolderTarget(out))) {
+        std::set<std::string> folders;
+        for (const BakeJob& job : jobs) folders.insert(parentDirectory(job.output));
+        for (const std::string& folder : folders) {
+            std::error_code ec;
+            if (!folder.empty()) fs::create_directories(folder, ec);
+            if (ec) return reportError(ioError(folder + ": cannot create the output folder: " + ec.message()));
+        }
     }
 
     // From here on an interrupted bake removes its temporaries before dying by the signal.

@@ -48,8 +48,8 @@ Result<std::string> readPath(const Json& v, const std::string& where) {
 
 // Relative paths are relative to `base_dir`; absolute ones are kept.
 std::string resolve(const std::string& base_dir, const std::string& p) {
-    if (fs::path(p).is_absolute()) return p;
-    return joinPath(base_dir, p);
+    if (fs::path(p).is_absolute()) return fs::path(p).lexically_normal().string();
+    return fs::path(joinPath(base_dir, p)).lexically_normal().string();
 }
 
 // A preset error as the manifest sees it: "<manifest>: <pointer>: <preset error>".

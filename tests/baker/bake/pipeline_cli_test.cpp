@@ -49,18 +49,19 @@ std::string sampleDir(const std::string& name) {
 }
 
 // `lodbake bake ARGS` run in `cwd` (stdout and stderr apart).
-struct Run {
+struct BakeRun {
     int exit_code = -1;
     std::string out, err;
 };
 
-Run bakeIn(const std::string& cwd, const std::string& args) {
+BakeRun bakeIn(const std::string& cwd, const std::string& args) {
     static int counter = 0;
     const std::string base = lodbake_test::scratchDir() + "/pipeline_run_" + std::to_string(::getpid()) + "_" +
                              std::to_string(++counter);
-    const CommandResult r = runCommand("cd " + shellQuote(cwd) + " && " + shellQuote(lodbake_test::lodbakeCli()) +
+    // A subshell: runCommand appends its own 2>&1, which must not redirect the bake's stderr.
+    const CommandResult r = runCommand("(cd " + shellQuote(cwd) + " && " + shellQuote(lodbake_test::lodbakeCli()) +
                                        " bake " + args + " >" + shellQuote(base + ".out") + " 2>" +
-                                       shellQuote(base + ".err") + " </dev/null");
+                                       shellQuote(base + ".err") + " </dev/null)");
     return {r.exit_code, textOf(base + ".out"), textOf(base + ".err")};
 }
 
@@ -74,7 +75,7 @@ std::vector<std::string> listDir(const std::string& dir) {
 
 TEST(PipelineCliTest, BatchWritesOnePackPerInputWithTheBytesOfSingleBakes) {
     const std::string d = sampleDir("batch");
-    const Run batch = bakeIn(d, "assets/crate.obj assets/barrel.obj assets/rock.ply -o out/ --preset assets/light.json "
+    const BakeRun batch = bakeIn(d, "assets/crate.obj assets/barrel.obj assets/rock.ply -o out/ --preset assets/light.json "
                                 "--threads 2");
     ASSERT_EQ(batch.exit_code, 0) << batch.err;
     EXPECT_EQ(listDir(d + "/out"), (std::vector<std::string>{"barrel.glb", "crate.glb", "rock.glb"}));
@@ -85,7 +86,7 @@ TEST(PipelineCliTest, BatchWritesOnePackPerInputWithTheBytesOfSingleBakes) {
     EXPECT_LT(b, r);
     for (const char* stem : {"crate", "barrel", "rock"}) {
         const std::string single = d + "/" + stem + "_single.glb";
-        const Run one = bakeIn(d, std::string("assets/") + stem + (std::string(stem) == "rock" ? ".ply" : ".obj") +
+        const BakeRun one = bakeIn(d, std::string("assets/") + stem + (std::string(stem) == "rock" ? ".ply" : ".obj") +
                                       " -o " + shellQuote(single) + " --preset assets/light.json --threads 1");
         ASSERT_EQ(one.exit_code, 0) << one.err;
         EXPECT_EQ(bytesOf(single), bytesOf(d + "/out/" + stem + ".glb")) << stem;
@@ -104,8 +105,8 @@ TEST(PipelineCliTest, ManifestBakesEachAssetWithItsOverrides) {
     {"inputs": ["barrel.obj", "rock.ply"], "output": "group.glb"}
   ]
 })";
-    const Run run = bakeIn(d, "--manifest assets/assets.json --report report.json --depfile deps.d");
-    ASSERT_EQ(run.exit_code, 0) << run.err;
+    const BakeRun run = bakeIn(d, "--manifest assets/assets.json --report report.json --depfile deps.d");
+    ASSERT_EQ(run.exit_code, 0) << run.err << run.out;
     EXPECT_EQ(listDir(d + "/packs"), (std::vector<std::string>{"crate.glb", "group.glb", "rock_one_level.glb"}));
     const nlohmann::json report = nlohmann::json::parse(textOf(d + "/report.json"));
     ASSERT_EQ(report["packs"].size(), 3u);
@@ -121,7 +122,7 @@ TEST(PipelineCliTest, ManifestBakesEachAssetWithItsOverrides) {
         EXPECT_NE(deps.find(needle), std::string::npos) << needle << "\n" << deps;
     // Unknown keys are errors (exit 1, the manifest and the pointer named); so is a missing input.
     std::ofstream(d + "/assets/typo.json") << R"({"version": 1, "assets": [{"input": "crate.obj", "preset_": "x"}]})";
-    const Run typo = bakeIn(d, "--manifest assets/typo.json");
+    const BakeRun typo = bakeIn(d, "--manifest assets/typo.json");
     EXPECT_EQ(typo.exit_code, 1);
     EXPECT_NE(typo.err.find("assets/typo.json: /assets/0/preset_: unknown key"), std::string::npos) << typo.err;
     EXPECT_EQ(bakeIn(d, "--manifest assets/assets.json assets/crate.obj").exit_code, 2);
@@ -131,7 +132,7 @@ TEST(PipelineCliTest, DepfileListsEveryFileReadWithSpacesEscaped) {
     const std::string d = sampleDir("depfile");
     fs::rename(d + "/assets", d + "/my assets");
     fs::create_directories(d + "/out dir");
-    const Run ok = bakeIn(d, "'my assets/crate.obj' -o 'out dir/crate.glb' --preset 'my assets/light.json' "
+    const BakeRun ok = bakeIn(d, "'my assets/crate.obj' -o 'out dir/crate.glb' --preset 'my assets/light.json' "
                              "--depfile 'out dir/crate.glb.d'");
     ASSERT_EQ(ok.exit_code, 0) << ok.err;
     EXPECT_EQ(textOf(d + "/out dir/crate.glb.d"), "out\\ dir/crate.glb: \\\n"
@@ -145,7 +146,7 @@ TEST(PipelineCliTest, CacheHitReusesThePackAndAnyChangedInputMisses) {
     const std::string d = sampleDir("cache");
     const std::string common = "assets/crate.obj -o out.glb --preset assets/light.json --cache-dir cache --report r.json "
                                "--depfile out.d";
-    const Run cold = bakeIn(d, common);
+    const BakeRun cold = bakeIn(d, common);
     ASSERT_EQ(cold.exit_code, 0) << cold.err;
     const std::vector<uint8_t> cold_bytes = bytesOf(d + "/out.glb");
     const std::string cold_deps = textOf(d + "/out.d");
@@ -153,7 +154,7 @@ TEST(PipelineCliTest, CacheHitReusesThePackAndAnyChangedInputMisses) {
     EXPECT_EQ(cold.err.find("cache hit"), std::string::npos);
     fs::remove(d + "/out.glb");
 
-    const Run warm = bakeIn(d, common + " --threads 1");
+    const BakeRun warm = bakeIn(d, common + " --threads 1");
     ASSERT_EQ(warm.exit_code, 0) << warm.err;
     EXPECT_NE(warm.err.find("note: out.glb: cache hit"), std::string::npos) << warm.err;
     EXPECT_EQ(bytesOf(d + "/out.glb"), cold_bytes);
@@ -167,7 +168,7 @@ TEST(PipelineCliTest, CacheHitReusesThePackAndAnyChangedInputMisses) {
     // A changed texture (named only inside the MTL) misses and bakes different bytes.
     fs::copy_file(d + "/assets/textures/barrel.png", d + "/assets/textures/crate.png",
                   fs::copy_options::overwrite_existing);
-    const Run texture = bakeIn(d, common);
+    const BakeRun texture = bakeIn(d, common);
     ASSERT_EQ(texture.exit_code, 0) << texture.err;
     EXPECT_EQ(texture.err.find("cache hit"), std::string::npos);
     EXPECT_NE(bytesOf(d + "/out.glb"), cold_bytes);
@@ -182,8 +183,8 @@ TEST(PipelineCliTest, CacheHitReusesThePackAndAnyChangedInputMisses) {
 TEST(PipelineCliTest, BytesDoNotDependOnTheCurrentDirectoryOrTheInputPath) {
     const std::string d = sampleDir("cwd");
     const std::string abs_assets = fs::absolute(d + "/assets").string();
-    const Run from_assets = bakeIn(d + "/assets", "crate.obj -o ../a.glb --preset light.json");
-    const Run from_root = bakeIn("/", shellQuote(abs_assets + "/crate.obj") + " -o " + shellQuote(d + "/b.glb") +
+    const BakeRun from_assets = bakeIn(d + "/assets", "crate.obj -o ../a.glb --preset light.json");
+    const BakeRun from_root = bakeIn("/", shellQuote(abs_assets + "/crate.obj") + " -o " + shellQuote(d + "/b.glb") +
                                           " --preset " + shellQuote(abs_assets + "/light.json"));
     ASSERT_EQ(from_assets.exit_code, 0) << from_assets.err;
     ASSERT_EQ(from_root.exit_code, 0) << from_root.err;
@@ -201,17 +202,17 @@ TEST(PipelineCliTest, ExitCodesQuietAndPlainProgress) {
     EXPECT_EQ(bakeIn(d, "assets/crate.obj -o x.glb --threads two").exit_code, 2);
     EXPECT_EQ(bakeIn(d, "assets/crate.obj assets/textures/../crate.obj -o out/").exit_code, 2); // same output twice
     // One missing input: exit 1, naming it; the other pack is still baked.
-    const Run missing = bakeIn(d, "assets/nothing.ply assets/rock.ply -o out/ --preset assets/light.json");
+    const BakeRun missing = bakeIn(d, "assets/nothing.ply assets/rock.ply -o out/ --preset assets/light.json");
     EXPECT_EQ(missing.exit_code, 1);
     EXPECT_NE(missing.err.find("error: assets/nothing.ply"), std::string::npos) << missing.err;
     EXPECT_EQ(listDir(d + "/out"), std::vector<std::string>{"rock.glb"});
     // Not a terminal: one plain line per pack on stderr, no bar redraws.
-    const Run plain = bakeIn(d, "assets/rock.ply -o plain.glb --preset assets/light.json");
+    const BakeRun plain = bakeIn(d, "assets/rock.ply -o plain.glb --preset assets/light.json");
     ASSERT_EQ(plain.exit_code, 0);
     EXPECT_NE(plain.err.find("lodbake: [1/1] plain.glb: baked in"), std::string::npos) << plain.err;
     EXPECT_EQ(plain.err.find('\r'), std::string::npos);
     // --quiet: nothing at all on success.
-    const Run quiet = bakeIn(d, "assets/rock.ply -o quiet.glb --preset assets/light.json --quiet");
+    const BakeRun quiet = bakeIn(d, "assets/rock.ply -o quiet.glb --preset assets/light.json --quiet");
     ASSERT_EQ(quiet.exit_code, 0);
     EXPECT_EQ(quiet.out, "");
     EXPECT_EQ(quiet.err, "");
