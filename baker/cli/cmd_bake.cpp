@@ -310,11 +310,13 @@ int runBake(int argc, char** argv) {
     }
     if (args.flags.count("--print-config")) {
         // Manifest: one resolved settings document per pack, keyed by output path.
-        JsonWriter j;
-        j.beginObject();
-        for (const BakeJob& job : jobs) j.field(job.output, settingsToJson(job.settings));
-        j.endObject();
-        std::fputs((j.str() + "\n").c_str(), stdout);
+        std::string text = "{";
+        for (size_t i = 0; i < jobs.size(); ++i) {
+            std::string settings = settingsToJson(jobs[i].settings);
+            while (!settings.empty() && settings.back() == '\n') settings.pop_back();
+            text += std::string(i ? "," : "") + "\n" + JsonWriter::escape(jobs[i].output) + ": " + settings;
+        }
+        std::fputs((text + "\n}\n").c_str(), stdout);
         return kExitOk;
     }
     for (const BakeJob& job : jobs)
