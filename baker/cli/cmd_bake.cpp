@@ -343,7 +343,7 @@ int runBake(int argc, char** argv) {
     hooks.stage_done = [&](size_t job, size_t input, BakeStage stage, double) { printer.stageDone(job, input, stage); };
     hooks.job_done = [&](size_t job, const BakeJobResult& r) { printer.jobDone(job, r); };
     const Clock::time_point start = Clock::now();
-    const std::vector<BakeJobResult> results = runBakeJobs(jobs, options, hooks);
+    std::vector<BakeJobResult> results = runBakeJobs(jobs, options, hooks);
     const double total_seconds = std::chrono::duration<double>(Clock::now() - start).count();
     printer.finish();
 
@@ -358,17 +358,13 @@ int runBake(int argc, char** argv) {
             continue;
         }
         if (r.cache_hit) std::fprintf(stderr, "note: %s: cache hit\n", jobs[i].output.c_str());
-        if (quiet) continue;
-        std::fputs(r.summary.c_str(), stdout);
-        std::printf("wrote %s (%llu bytes%s)\n", jobs[i].output.c_str(), static_cast<unsigned long long>(r.pack_bytes),
-                    r.cache_hit ? ", cache hit" : "");
     }
-    if (exit_code != kExitOk) return exit_code;
-
+    // A failed pack fails the run, but the packs that were baked are still written (the report and
+    // depfile only when every pack succeeded: a build system must re-run the failed ones).
     AtomicFileWriter writer;
     Status status = Status::okStatus();
     std::string report, depfile;
-    if (args.values.count("--report")) {
+    if (exit_code == kExitOk && args.values.count("--report")) {
         if (jobs.size() == 1 && !args.values.count("--manifest") && !isFolderTarget(out)) {
             report = jobReport(jobs[0], results[0]);
         } else {
@@ -379,7 +375,7 @@ int runBake(int argc, char** argv) {
         }
         status = writer.add(args.values["--report"], report);
     }
-    if (status.ok() && args.values.count("--depfile")) {
+    if (exit_code == kExitOk && status.ok() && args.values.count("--depfile")) {
         std::vector<DepfileRule> rules;
         for (size_t i = 0; i < jobs.size(); ++i) {
             DepfileRule rule;
@@ -392,9 +388,19 @@ int runBake(int argc, char** argv) {
         depfile = formatDepfile(rules);
         status = writer.add(args.values["--depfile"], depfile);
     }
+    // Packs first, then the report and depfile that describe them.
+    for (size_t i = 0; i < results.size() && status.ok(); ++i)
+        if (results[i].staged) status = results[i].staged->commit();
     if (status.ok()) status = writer.commit();
     if (!status.ok()) return reportError(status);
-    return kExitOk;
+    for (size_t i = 0; i < jobs.size() && !quiet; ++i) {
+        const BakeJobResult& r = results[i];
+        if (!r.status.ok()) continue;
+        std::fputs(r.summary.c_str(), stdout);
+        std::printf("wrote %s (%llu bytes%s)\n", jobs[i].output.c_str(), static_cast<unsigned long long>(r.pack_bytes),
+                    r.cache_hit ? ", cache hit" : "");
+    }
+    return exit_code;
 }
 
 } // namespace lodbake::cli

@@ -46,7 +46,8 @@ void runJob(const BakeJob& job, size_t index, const BatchOptions& options, const
         lookup = std::move(found).value();
         if (lookup.hit) {
             const Clock::time_point w = Clock::now();
-            result.status = writeFileAtomic(job.output, lookup.entry.glb.data(), lookup.entry.glb.size());
+            result.staged = std::make_unique<AtomicFileWriter>();
+            result.status = result.staged->add(job.output, lookup.entry.glb);
             stageDone(kWholePack, BakeStage::Write, secondsSince(w));
             if (!result.status.ok()) return;
             result.cache_hit = true;
@@ -88,7 +89,8 @@ void runJob(const BakeJob& job, size_t index, const BatchOptions& options, const
     result.summary = bakeSummaryText(*baked);
     result.pack_bytes = baked->glb.size();
     const Clock::time_point w = Clock::now();
-    result.status = writeFileAtomic(job.output, baked->glb.data(), baked->glb.size());
+    result.staged = std::make_unique<AtomicFileWriter>();
+    result.status = result.staged->add(job.output, baked->glb);
     stageDone(kWholePack, BakeStage::Write, secondsSince(w));
     if (!result.status.ok()) return;
     if (use_cache) {
@@ -134,6 +136,8 @@ std::vector<BakeJobResult> runBakeJobs(const std::vector<BakeJob>& jobs, const B
     if (!status.ok())
         for (BakeJobResult& r : results)
             if (r.status.ok() && r.pack_bytes == 0) r.status = status;
+    for (BakeJobResult& r : results)
+        if (!r.status.ok()) r.staged.reset(); // removes a staged temporary of a failed job
     return results;
 }
 

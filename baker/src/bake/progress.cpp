@@ -88,7 +88,7 @@ std::string BatchProgress::formatDuration(double seconds) {
 std::string BatchProgress::barLine(double elapsed_seconds, size_t width) const {
     const double f = fraction();
     char pct[16];
-    std::snprintf(pct, sizeof(pct), "%3d%%", int(std::floor(f * 100.0)));
+    std::snprintf(pct, sizeof(pct), "%3d%%", int(std::floor(f * 100.0 + 1e-9)));
     std::string tail = std::string("  ") + pct + "  " + std::to_string(jobs_done_) + "/" + std::to_string(jobCount());
     if (last_job_ < names_.size()) tail += std::string("  ") + bakeStageName(last_stage_) + " " + names_[last_job_];
     const double eta = etaSeconds(elapsed_seconds);

@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -13,6 +14,7 @@
 #include "lodbake/bake/stages.h"
 #include "lodbake/config/bake_config.h"
 #include "lodbake/core/diagnostics.h"
+#include "lodbake/core/file_io.h"
 #include "lodbake/core/status.h"
 
 namespace lodbake {
@@ -40,6 +42,9 @@ struct BakeJobResult {
     uint64_t pack_bytes = 0;
     double stage_seconds[size_t(BakeStage::Count)] = {}; // summed over the job's inputs
     double wall_seconds = 0;
+    /// The pack, written to its temporary but not yet renamed into place (null on failure): the
+    /// caller commits it (after staging its own report and depfile), or drops it to discard the pack.
+    std::unique_ptr<AtomicFileWriter> staged;
 };
 
 /// Observers of runBakeJobs, called from worker threads (the callee synchronises).
@@ -48,8 +53,9 @@ struct BatchHooks {
     std::function<void(size_t job, const BakeJobResult& result)> job_done;
 };
 
-/// Bakes every job (each reads its inputs, bakes them into one pack and writes `output`), at most
-/// options.threads workers. Results come back in job order; one failing job does not stop the
+/// Bakes every job (each reads its inputs, bakes them into one pack and stages `output` in
+/// BakeJobResult::staged; nothing is renamed into place here, so an interrupted run leaves no
+/// output), at most options.threads workers. Results come back in job order; one failing job does not stop the
 /// others. The caller checks outputs for clashes with inputs and with each other beforehand.
 std::vector<BakeJobResult> runBakeJobs(const std::vector<BakeJob>& jobs, const BatchOptions& options,
                                        const BatchHooks& hooks);
