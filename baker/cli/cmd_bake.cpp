@@ -227,6 +227,7 @@ int runBake(int argc, char** argv) {
     const bool quiet = args.flags.count("--quiet") > 0;
     BakeSettings base;
     std::vector<std::string> settings_files; // presets and the manifest: read, so listed in the depfile
+    std::vector<std::vector<std::string>> job_settings_files; // per job, the asset presets of a manifest
     if (args.values.count("--preset")) {
         const Status status = applyPresetFile(args.values["--preset"], base);
         if (!status.ok()) return reportError(status);
@@ -277,7 +278,7 @@ int runBake(int argc, char** argv) {
             job.output = a.output;
             job.settings = a.settings;
             applyOverrides(overrides, job.settings); // command-line flags win over the manifest
-            for (const std::string& f : a.settings_files) settings_files.push_back(f);
+            job_settings_files.push_back(a.settings_files);
             jobs.push_back(std::move(job));
         }
     } else if (args.flags.count("--print-config")) {
@@ -381,6 +382,9 @@ int runBake(int argc, char** argv) {
             DepfileRule rule;
             rule.target = jobs[i].output;
             rule.prerequisites = settings_files;
+            if (i < job_settings_files.size())
+                rule.prerequisites.insert(rule.prerequisites.end(), job_settings_files[i].begin(),
+                                          job_settings_files[i].end());
             rule.prerequisites.insert(rule.prerequisites.end(), results[i].files_read.begin(),
                                       results[i].files_read.end());
             rules.push_back(std::move(rule));

@@ -47,6 +47,7 @@ struct ChildRun {
 // Runs argv as a child process (stdout/stderr to `log`), timing it and reading its peak RSS.
 ChildRun runChild(const std::vector<std::string>& argv, const std::string& log) {
     ChildRun r;
+    std::fflush(stdout); // or the child's freopen flushes our buffered lines a second time
     const auto t0 = std::chrono::steady_clock::now();
     const pid_t pid = ::fork();
     if (pid == 0) {

@@ -120,6 +120,13 @@ TEST(PipelineCliTest, ManifestBakesEachAssetWithItsOverrides) {
     for (const char* needle : {"assets/assets.json", "assets/light.json", "packs/group.glb:", "assets/barrel.mtl",
                                "assets/textures/barrel.png"})
         EXPECT_NE(deps.find(needle), std::string::npos) << needle << "\n" << deps;
+    // Each rule lists what its own pack read: rock_one_level.glb reads no MTL or texture.
+    const size_t rock_rule = deps.find("packs/rock_one_level.glb:");
+    const size_t next_rule = deps.find("packs/group.glb:");
+    ASSERT_LT(rock_rule, next_rule);
+    const std::string rock_deps = deps.substr(rock_rule, next_rule - rock_rule);
+    EXPECT_NE(rock_deps.find("assets/rock.ply"), std::string::npos) << rock_deps;
+    EXPECT_EQ(rock_deps.find(".mtl"), std::string::npos) << rock_deps;
     // Unknown keys are errors (exit 1, the manifest and the pointer named); so is a missing input.
     std::ofstream(d + "/assets/typo.json") << R"({"version": 1, "assets": [{"input": "crate.obj", "preset_": "x"}]})";
     const BakeRun typo = bakeIn(d, "--manifest assets/typo.json");
@@ -175,6 +182,20 @@ TEST(PipelineCliTest, CacheHitReusesThePackAndAnyChangedInputMisses) {
     // Other settings miss too; the same settings again hit.
     EXPECT_EQ(bakeIn(d, common + " --levels 0.5").err.find("cache hit"), std::string::npos);
     EXPECT_NE(bakeIn(d, common + " --levels 0.5").err.find("cache hit"), std::string::npos);
+    // Bakers sharing one cache concurrently: all succeed with the same bytes, one entry per key.
+    fs::remove_all(d + "/cache");
+    std::string parallel = "(cd " + shellQuote(d) + " || exit 1; ";
+    for (int i = 0; i < 4; ++i)
+        parallel += shellQuote(lodbake_test::lodbakeCli()) + " bake assets/rock.ply -o rock" + std::to_string(i) +
+                    ".glb --preset assets/light.json --cache-dir cache --quiet --threads 1 & ";
+    parallel += "wait)";
+    ASSERT_EQ(runCommand(parallel).exit_code, 0);
+    for (int i = 1; i < 4; ++i)
+        EXPECT_EQ(bytesOf(d + "/rock" + std::to_string(i) + ".glb"), bytesOf(d + "/rock0.glb"));
+    EXPECT_FALSE(bytesOf(d + "/rock0.glb").empty());
+    EXPECT_EQ(listDir(d + "/cache/v1/packs").size(), 1u);
+    EXPECT_NE(bakeIn(d, "assets/rock.ply -o rock4.glb --preset assets/light.json --cache-dir cache").err.find("cache hit"),
+              std::string::npos);
     // No temporaries left in the cache.
     for (const char* sub : {"cache/v1/packs", "cache/v1/deps"})
         for (const std::string& name : listDir(d + "/" + sub)) EXPECT_NE(name[0], '.') << name;
