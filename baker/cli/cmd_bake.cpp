@@ -296,8 +296,8 @@ int runBake(int argc, char** argv) {
                 job.settings = base;
                 const auto [it, inserted] = stems.emplace(job.output, in);
                 if (!inserted)
-                    return usageError("'" + in + "' and '" + it->second + "' would both be baked into '" +
-                                      job.output + "'; use --manifest to name the outputs");
+                    return usageError("'" + in + "' and '" + it->second + "' would both be baked into '" + job.output +
+                                      "'; use --manifest to name the outputs");
                 jobs.push_back(std::move(job));
             }
         } else {
@@ -352,13 +352,20 @@ int runBake(int argc, char** argv) {
     int exit_code = kExitOk;
     for (size_t i = 0; i < jobs.size(); ++i) {
         const BakeJobResult& r = results[i];
-        printDiagnostics(r.diagnostics);
+        if (quiet) {
+            Diagnostics warnings; // --quiet keeps warnings and errors only
+            for (const Diagnostic& diagnostic : r.diagnostics.items())
+                if (diagnostic.severity == Severity::Warning) warnings.warn(diagnostic.message);
+            printDiagnostics(warnings);
+        } else {
+            printDiagnostics(r.diagnostics);
+        }
         if (!r.cache_warning.empty()) std::fprintf(stderr, "warning: cache: %s\n", r.cache_warning.c_str());
         if (!r.status.ok()) {
             exit_code = reportError(r.status);
             continue;
         }
-        if (r.cache_hit) std::fprintf(stderr, "note: %s: cache hit\n", jobs[i].output.c_str());
+        if (r.cache_hit && !quiet) std::fprintf(stderr, "note: %s: cache hit\n", jobs[i].output.c_str());
     }
     // A failed pack fails the run, but the packs that were baked are still written (the report and
     // depfile only when every pack succeeded: a build system must re-run the failed ones).

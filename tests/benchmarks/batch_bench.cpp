@@ -30,11 +30,22 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const std::vector<std::string> kAllMeshes = {
-    "bunny_scan_bun000.ply", "bunny_scan_bun000_tri.ply", "bunny_zipper.ply", "dragon_poisson.ply",
-    "dragon_scan_stand0_tri.ply", "dragon_stand_merged.ply", "fandisk.obj", "igea.ply", "igea_tristrips.ply",
-    "lee_perry_smith/LeePerrySmith.glb", "lucy100k.ply", "nefertiti.obj", "nefertiti_fraunhofer_textured.glb",
-    "range_scans/dragon_stand/dragonStandRight.conf", "rocker_arm.obj", "spot.obj"};
+const std::vector<std::string> kAllMeshes = {"bunny_scan_bun000.ply",
+                                             "bunny_scan_bun000_tri.ply",
+                                             "bunny_zipper.ply",
+                                             "dragon_poisson.ply",
+                                             "dragon_scan_stand0_tri.ply",
+                                             "dragon_stand_merged.ply",
+                                             "fandisk.obj",
+                                             "igea.ply",
+                                             "igea_tristrips.ply",
+                                             "lee_perry_smith/LeePerrySmith.glb",
+                                             "lucy100k.ply",
+                                             "nefertiti.obj",
+                                             "nefertiti_fraunhofer_textured.glb",
+                                             "range_scans/dragon_stand/dragonStandRight.conf",
+                                             "rocker_arm.obj",
+                                             "spot.obj"};
 // The largest shared scan by triangle count (1,067,852).
 constexpr const char* kLargest = "dragon_poisson.ply";
 
@@ -117,12 +128,18 @@ int main(int argc, char** argv) {
     bool do_threads = true, do_cache = true, do_memory = true;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
-        if (a == "--runs" && i + 1 < argc) runs = std::max(1, std::atoi(argv[++i]));
-        else if (a == "--preset" && i + 1 < argc) preset = argv[++i];
-        else if (a == "--only" && i + 1 < argc) meshes = split(argv[++i]);
-        else if (a == "--skip-threads") do_threads = false;
-        else if (a == "--skip-cache") do_cache = false;
-        else if (a == "--skip-memory") do_memory = false;
+        if (a == "--runs" && i + 1 < argc)
+            runs = std::max(1, std::atoi(argv[++i]));
+        else if (a == "--preset" && i + 1 < argc)
+            preset = argv[++i];
+        else if (a == "--only" && i + 1 < argc)
+            meshes = split(argv[++i]);
+        else if (a == "--skip-threads")
+            do_threads = false;
+        else if (a == "--skip-cache")
+            do_cache = false;
+        else if (a == "--skip-memory")
+            do_memory = false;
         else {
             std::fprintf(stderr, "usage: batch_bench [--runs N] [--preset FILE] [--only MESH,...] [--skip-threads] "
                                  "[--skip-cache] [--skip-memory]\n");
@@ -156,8 +173,9 @@ int main(int argc, char** argv) {
             }
         }
         const double speedup = t1 / t2;
-        std::printf("threads: 1 thread %.2f s, 2 threads %.2f s, speedup %.2fx (bar >= 1.70: %s); packs identical: %s\n",
-                    t1, t2, speedup, speedup >= 1.7 ? "met" : "NOT met", differing == 0 ? "yes" : "NO");
+        std::printf(
+            "threads: 1 thread %.2f s, 2 threads %.2f s, speedup %.2fx (bar >= 1.70: %s); packs identical: %s\n", t1,
+            t2, speedup, speedup >= 1.7 ? "met" : "NOT met", differing == 0 ? "yes" : "NO");
         if (differing) ++failures;
     }
 

@@ -132,7 +132,9 @@ Status makeDirs(const std::string& dir) {
 
 } // namespace
 
-std::string CacheKey::hex() const { return hashToHex(hi) + hashToHex(lo); }
+std::string CacheKey::hex() const {
+    return hashToHex(hi) + hashToHex(lo);
+}
 
 Result<CacheLookup> cacheLookup(const std::string& cache_dir, const std::vector<std::string>& inputs,
                                 const std::vector<std::string>& names, const BakeSettings& settings) {

@@ -24,14 +24,22 @@ constexpr double kStageShare[size_t(BakeStage::Count)] = {
 
 const char* bakeStageName(BakeStage stage) {
     switch (stage) {
-    case BakeStage::Load: return "load";
-    case BakeStage::Repair: return "repair";
-    case BakeStage::LodChain: return "lod_chain";
-    case BakeStage::Textures: return "textures";
-    case BakeStage::Encode: return "encode";
-    case BakeStage::Pack: return "pack";
-    case BakeStage::Write: return "write";
-    case BakeStage::Count: break;
+    case BakeStage::Load:
+        return "load";
+    case BakeStage::Repair:
+        return "repair";
+    case BakeStage::LodChain:
+        return "lod_chain";
+    case BakeStage::Textures:
+        return "textures";
+    case BakeStage::Encode:
+        return "encode";
+    case BakeStage::Pack:
+        return "pack";
+    case BakeStage::Write:
+        return "write";
+    case BakeStage::Count:
+        break;
     }
     return "?";
 }
@@ -50,7 +58,8 @@ BatchProgress::BatchProgress(std::vector<double> job_weights, std::vector<size_t
 
 void BatchProgress::stageDone(size_t job, size_t input, BakeStage stage) {
     if (job >= done_.size() || stage == BakeStage::Count) return;
-    const double share = kStageShare[size_t(stage)] / double(input == kWholePack ? 1 : std::max<size_t>(1, inputs_[job]));
+    const double share =
+        kStageShare[size_t(stage)] / double(input == kWholePack ? 1 : std::max<size_t>(1, inputs_[job]));
     done_[job] = std::min(0.99, done_[job] + share);
     last_job_ = job;
     last_stage_ = stage;

@@ -58,7 +58,9 @@ Status inContext(const Status& status, const std::string& where) {
     return Status(status.code(), where + ": " + status.message());
 }
 
-std::string stemOf(const std::string& p) { return fs::path(p).stem().string(); }
+std::string stemOf(const std::string& p) {
+    return fs::path(p).stem().string();
+}
 
 Result<BakeManifest> parseImpl(const Json& root, const std::string& path, const BakeSettings& base,
                                const std::string& output_dir_override) {
@@ -100,7 +102,8 @@ Result<BakeManifest> parseImpl(const Json& root, const std::string& path, const 
         asset.settings = manifest_settings;
         asset.settings_files = manifest_presets;
         if (a.contains("input") == a.contains("inputs"))
-            return invalidInput(where + ": expected exactly one of \"input\" (a path) or \"inputs\" (an array of paths)");
+            return invalidInput(where +
+                                ": expected exactly one of \"input\" (a path) or \"inputs\" (an array of paths)");
         if (a.contains("input")) {
             LODBAKE_ASSIGN_OR_RETURN(std::string in, readPath(a["input"], where + "/input"));
             asset.inputs.push_back(resolve(dir, in));
@@ -149,8 +152,8 @@ Result<BakeManifest> parseImpl(const Json& root, const std::string& path, const 
 
 } // namespace
 
-Result<BakeManifest> parseBakeManifest(const std::string& json_text, const std::string& path,
-                                       const BakeSettings& base, const std::string& output_dir_override) {
+Result<BakeManifest> parseBakeManifest(const std::string& json_text, const std::string& path, const BakeSettings& base,
+                                       const std::string& output_dir_override) {
     try {
         const Json root = Json::parse(json_text);
         return parseImpl(root, path, base, output_dir_override);

@@ -19,8 +19,8 @@ TEST(DepfileTest, EscapesSpacesHashesAndDollars) {
 }
 
 TEST(DepfileTest, OneRulePerTargetWithDuplicatesDropped) {
-    const std::string text = formatDepfile({{"out/a.glb", {"a.obj", "a.mtl", "tex a.png", "a.obj", "p.json"}},
-                                            {"out/b.glb", {"b.ply", "p.json"}}});
+    const std::string text = formatDepfile(
+        {{"out/a.glb", {"a.obj", "a.mtl", "tex a.png", "a.obj", "p.json"}}, {"out/b.glb", {"b.ply", "p.json"}}});
     EXPECT_EQ(text, "out/a.glb: \\\n  a.obj \\\n  a.mtl \\\n  tex\\ a.png \\\n  p.json\n"
                     "out/b.glb: \\\n  b.ply \\\n  p.json\n");
 }

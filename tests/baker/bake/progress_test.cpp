@@ -69,7 +69,8 @@ TEST(BatchProgressTest, CliDrawsTheBarOnlyOnATerminal) {
     EXPECT_NE(tty.output.find("100%"), std::string::npos) << tty.output;
     EXPECT_NE(tty.output.find("ETA"), std::string::npos) << tty.output;
     EXPECT_EQ(tty.output.find("lodbake: [1/1]"), std::string::npos) << "plain lines on a terminal";
-    const auto quiet = lodbake_test::runCommand("script -qfec " + lodbake_test::shellQuote(bake + " --quiet") + " /dev/null");
+    const auto quiet =
+        lodbake_test::runCommand("script -qfec " + lodbake_test::shellQuote(bake + " --quiet") + " /dev/null");
     ASSERT_EQ(quiet.exit_code, 0) << quiet.output;
     EXPECT_EQ(quiet.output.find('['), std::string::npos) << quiet.output;
 }

@@ -43,8 +43,13 @@ std::vector<std::string> allSharedInputs() {
 std::vector<std::string> sharedInputs() {
     const char* all = std::getenv("LODBAKE_TEST_ALL_SHARED_MESHES");
     if (all && std::string(all) == "1") return allSharedInputs();
-    return {"bunny_scan_bun000.ply",      "dragon_scan_stand0_tri.ply", "fandisk.obj",
-            "lee_perry_smith/LeePerrySmith.glb", "nefertiti_fraunhofer_textured.glb", "rocker_arm.obj", "spot.obj"};
+    return {"bunny_scan_bun000.ply",
+            "dragon_scan_stand0_tri.ply",
+            "fandisk.obj",
+            "lee_perry_smith/LeePerrySmith.glb",
+            "nefertiti_fraunhofer_textured.glb",
+            "rocker_arm.obj",
+            "spot.obj"};
 }
 
 TEST(BakeDeterminismTest, EverySharedMeshGivesTheSameBytesWithOneAndTwoThreads) {
@@ -73,8 +78,7 @@ TEST(BakeDeterminismTest, EverySharedMeshGivesTheSameBytesWithOneAndTwoThreads) 
             hashes[threads - 1].push_back(lodbake::hashToHex(h.digest()) + " " + std::to_string(bytes->size()));
         }
     }
-    for (size_t i = 0; i < sharedInputs().size(); ++i)
-        EXPECT_EQ(hashes[0][i], hashes[1][i]) << sharedInputs()[i];
+    for (size_t i = 0; i < sharedInputs().size(); ++i) EXPECT_EQ(hashes[0][i], hashes[1][i]) << sharedInputs()[i];
 }
 
 } // namespace

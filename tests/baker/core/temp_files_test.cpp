@@ -70,7 +70,8 @@ TEST(TempFilesTest, WithoutTheHandlerTheTemporariesStay) {
 
 TEST(TempFilesTest, SlotsAreReusedAfterUnregistering) {
     std::vector<int> slots;
-    for (int i = 0; i < lodbake::kMaxTempFiles; ++i) slots.push_back(lodbake::registerTempFile("/nonexistent/" + std::to_string(i)));
+    for (int i = 0; i < lodbake::kMaxTempFiles; ++i)
+        slots.push_back(lodbake::registerTempFile("/nonexistent/" + std::to_string(i)));
     EXPECT_EQ(lodbake::registerTempFile("/nonexistent/full"), -1);
     for (int s : slots) EXPECT_GE(s, 0);
     for (int s : slots) lodbake::unregisterTempFile(s);

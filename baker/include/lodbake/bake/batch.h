@@ -33,12 +33,12 @@ struct BatchOptions {
 
 struct BakeJobResult {
     Status status = Status::okStatus();
-    Diagnostics diagnostics;                      // warnings of this job, in stage order
+    Diagnostics diagnostics; // warnings of this job, in stage order
     bool cache_hit = false;
-    std::string cache_warning;                    // a cache store that failed (the pack itself is fine)
-    std::vector<std::string> files_read;          // every input file read (inputs, MTL, textures, scans...)
-    std::string report_json;                      // bakeReportJson of the pack
-    std::string summary;                          // bakeSummaryText of the pack
+    std::string cache_warning;           // a cache store that failed (the pack itself is fine)
+    std::vector<std::string> files_read; // every input file read (inputs, MTL, textures, scans...)
+    std::string report_json;             // bakeReportJson of the pack
+    std::string summary;                 // bakeSummaryText of the pack
     uint64_t pack_bytes = 0;
     double stage_seconds[size_t(BakeStage::Count)] = {}; // summed over the job's inputs
     double wall_seconds = 0;

@@ -40,7 +40,7 @@ struct CacheEntry {
 struct CacheLookup {
     bool hit = false;
     CacheKey primary;
-    CacheEntry entry;                              // valid when hit
+    CacheEntry entry;                                 // valid when hit
     std::vector<std::vector<std::string>> files_read; // when hit: per input, the input then its side files
 };
 

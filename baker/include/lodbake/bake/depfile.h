@@ -8,7 +8,7 @@
 namespace lodbake {
 
 struct DepfileRule {
-    std::string target;                // the output file, as named on the command line
+    std::string target;                     // the output file, as named on the command line
     std::vector<std::string> prerequisites; // every file read to make it, in first-read order
 };
 

@@ -32,8 +32,8 @@ struct BakeManifest {
 /// Errors: "<path>: <JSON pointer>: <what was expected>" for bad JSON, unknown keys, wrong types,
 /// a missing or unsupported "version", an empty asset list, a non-.glb output, and two assets
 /// writing the same output; preset errors as applyPresetFile reports them.
-Result<BakeManifest> parseBakeManifest(const std::string& json_text, const std::string& path,
-                                       const BakeSettings& base, const std::string& output_dir_override);
+Result<BakeManifest> parseBakeManifest(const std::string& json_text, const std::string& path, const BakeSettings& base,
+                                       const std::string& output_dir_override);
 
 /// Reads the file at `path` (at most 64 MiB) and parses it (parseBakeManifest).
 Result<BakeManifest> readBakeManifest(const std::string& path, const BakeSettings& base,
