@@ -1,29 +1,33 @@
-// lodbake bake.
+// lodbake bake: one pack from many inputs (-o OUT.glb), one pack per input (-o DIR/), or the packs
+// a manifest lists (--manifest). Build-system manners (docs/pipeline.md): exit codes, atomic
+// outputs that a signal never leaves half-written, --depfile, --cache-dir, --quiet, a progress bar
+// on a TTY only, --report with per-stage timings.
 
+#include <sys/ioctl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
+#include <filesystem>
 #include <map>
+#include <mutex>
+#include <set>
 #include <string>
-#include <tuple>
 #include <vector>
 
 #include "lodbake/bake/bake.h"
-#include "lodbake/cleanup/repair.h"
-#include "lodbake/codec/valence_encoder.h"
+#include "lodbake/bake/batch.h"
+#include "lodbake/bake/depfile.h"
+#include "lodbake/bake/progress.h"
 #include "lodbake/config/bake_config.h"
-#include "lodbake/cleanup/topology.h"
+#include "lodbake/config/bake_manifest.h"
 #include "lodbake/core/diagnostics.h"
 #include "lodbake/core/file_io.h"
 #include "lodbake/core/json_writer.h"
-#include "lodbake/io/mesh_io.h"
-#include "lodbake/pfrep/pfrep_builder.h"
-#include "lodbake/simplify/lod_chain.h"
-#include "lodbake/simplify/mesh_distance.h"
-#include "lodbake/simplify/simplify.h"
-#include "lodbake/version.h"
-#include "lodrt/pfrep.h"
+#include "lodbake/core/temp_files.h"
 
 #include "cli_common.h"
 
@@ -31,23 +35,169 @@ namespace lodbake::cli {
 
 namespace {
 
-const char* kBakeHelp = R"(usage: lodbake bake IN... -o OUT.glb [--preset FILE] [options]
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+const char* kBakeHelp = R"(usage: lodbake bake IN... -o OUT.glb [--preset FILE] [options]   one pack from all inputs
+       lodbake bake IN... -o DIR/ [options]                          one pack per input: DIR/<stem>.glb
+       lodbake bake --manifest FILE [-o DIR/] [options]              the packs a manifest lists
 
 Per input: repair -> LOD chain (errors measured against the repaired input, switch distances) ->
 texture levels (each level's textures downscaled to its on-screen size) -> one GLB pack. Each input
 becomes a LOD group: an MSFT_lod node (highest detail first) with MSFT_screencoverage in its extras
-and LODBAKE_lod_metrics; every level is a plain glTF mesh. See docs/bake.md.
+and LODBAKE_lod_metrics; every level is a plain glTF mesh. Packs of a batch are baked in parallel;
+their bytes do not depend on the thread count, the schedule, the current directory or input paths.
+See docs/bake.md and docs/pipeline.md.
 
 options:
-  -o, --output OUT.glb  output path (required; written atomically)
+  -o, --output PATH     OUT.glb, or a folder (ending in '/' or existing) for one pack per input
+  --manifest FILE       bake the packs listed in FILE (schemas/config/bake_manifest.schema.json)
   --preset FILE         bake preset (configs/desktop.json, mobile.json, vr.json, archive.json)
   --threads N           worker threads (default: all; the output bytes do not depend on it)
   --levels LIST         override lod_ratios: comma-separated triangle ratios in (0, 1]
   --pixels P            override pixel_threshold
   --compact             put the compressed-stream extensions in extensionsRequired
-  --report R.json       write per-level metrics and texture sizes as JSON
+  --report R.json       write per-level metrics, texture sizes, cache use and stage timings as JSON
+  --depfile OUT.d       write a Makefile-syntax depfile listing every file read
+  --cache-dir DIR       reuse packs whose inputs, settings and baker version are unchanged
+  --quiet               print only warnings and errors
   --print-config        print the resolved settings (sorted keys) and exit
+
+exit status: 0 ok, 1 a bake failed (every other pack is still written), 2 usage error.
 )";
+
+struct CliOverrides {
+    bool has_threads = false;
+    uint32_t threads = 0;
+    bool has_levels = false;
+    std::vector<double> levels;
+    bool has_pixels = false;
+    double pixels = 0;
+    bool compact = false;
+};
+
+void applyOverrides(const CliOverrides& o, BakeSettings& s) {
+    if (o.has_threads) s.threads = o.threads;
+    if (o.has_levels) s.lod_ratios = o.levels;
+    if (o.has_pixels) s.pixel_threshold = o.pixels;
+    if (o.compact) s.compact = true;
+}
+
+bool isFolderTarget(const std::string& out) {
+    if (!out.empty() && (out.back() == '/' || out.back() == '\\')) return true;
+    struct stat st {};
+    return ::stat(out.c_str(), &st) == 0 && S_ISDIR(st.st_mode);
+}
+
+uint64_t fileSize(const std::string& path) {
+    struct stat st {};
+    return ::stat(path.c_str(), &st) == 0 ? uint64_t(st.st_size) : 0;
+}
+
+size_t terminalWidth() {
+    struct winsize ws {};
+    if (::ioctl(STDERR_FILENO, TIOCGWINSZ, &ws) == 0 && ws.ws_col > 20) return ws.ws_col;
+    return 80;
+}
+
+// Progress on stderr: a redrawn bar on a terminal, otherwise one plain line per finished pack.
+class ProgressPrinter {
+public:
+    ProgressPrinter(const std::vector<BakeJob>& jobs, bool quiet)
+        : quiet_(quiet), tty_(!quiet && ::isatty(STDERR_FILENO) == 1), start_(Clock::now()),
+          progress_(weights(jobs), inputCounts(jobs), names(jobs)), names_(names(jobs)) {}
+
+    void stageDone(size_t job, size_t input, BakeStage stage) {
+        std::lock_guard<std::mutex> lock(mutex_);
+        progress_.stageDone(job, input, stage);
+        redraw(false);
+    }
+
+    void jobDone(size_t job, const BakeJobResult& r) {
+        std::lock_guard<std::mutex> lock(mutex_);
+        progress_.jobDone(job);
+        if (quiet_) return;
+        if (tty_) {
+            redraw(true);
+            return;
+        }
+        const char* what = !r.status.ok() ? "failed" : r.cache_hit ? "cache hit" : "baked";
+        std::fprintf(stderr, "lodbake: [%zu/%zu] %s: %s in %.2f s\n", progress_.jobsDone(), progress_.jobCount(),
+                     names_[job].c_str(), what, r.wall_seconds);
+        std::fflush(stderr);
+    }
+
+    // Removes the bar so that the lines printed next start on a clean row.
+    void finish() {
+        std::lock_guard<std::mutex> lock(mutex_);
+        if (tty_ && drawn_) {
+            std::fprintf(stderr, "\r\033[K");
+            std::fflush(stderr);
+        }
+    }
+
+private:
+    static std::vector<double> weights(const std::vector<BakeJob>& jobs) {
+        std::vector<double> w;
+        for (const BakeJob& j : jobs) {
+            double bytes = 0;
+            for (const std::string& in : j.inputs) bytes += double(fileSize(in));
+            w.push_back(bytes);
+        }
+        return w;
+    }
+    static std::vector<size_t> inputCounts(const std::vector<BakeJob>& jobs) {
+        std::vector<size_t> n;
+        for (const BakeJob& j : jobs) n.push_back(j.inputs.size());
+        return n;
+    }
+    static std::vector<std::string> names(const std::vector<BakeJob>& jobs) {
+        std::vector<std::string> n;
+        for (const BakeJob& j : jobs) n.push_back(fs::path(j.output).filename().string());
+        return n;
+    }
+
+    void redraw(bool force) {
+        if (!tty_) return;
+        const Clock::time_point now = Clock::now();
+        if (!force && drawn_ && now - last_draw_ < std::chrono::milliseconds(100)) return;
+        last_draw_ = now;
+        drawn_ = true;
+        const double elapsed = std::chrono::duration<double>(now - start_).count();
+        std::fprintf(stderr, "\r\033[K%s", progress_.barLine(elapsed, terminalWidth() - 1).c_str());
+        std::fflush(stderr);
+    }
+
+    std::mutex mutex_;
+    bool quiet_;
+    bool tty_;
+    Clock::time_point start_;
+    Clock::time_point last_draw_{};
+    bool drawn_ = false;
+    BatchProgress progress_;
+    std::vector<std::string> names_;
+};
+
+// The pack report (bakeReportJson, an object) with this run's fields in front of its own keys.
+std::string jobReport(const BakeJob& job, const BakeJobResult& r) {
+    JsonWriter j;
+    j.beginObject();
+    j.field("output", job.output);
+    j.field("cache", std::string(r.cache_hit ? "hit" : "miss"));
+    j.key("timings").beginObject();
+    for (size_t s = 0; s < size_t(BakeStage::Count); ++s) j.field(bakeStageName(BakeStage(s)), r.stage_seconds[s]);
+    j.field("total", r.wall_seconds);
+    j.endObject();
+    j.endObject();
+    std::string head = j.str();
+    const size_t close = head.find_last_of('}');
+    std::string body = r.report_json;
+    const size_t open = body.find('{');
+    if (close == std::string::npos || open == std::string::npos) return head;
+    head.resize(close);
+    while (!head.empty() && (head.back() == '\n' || head.back() == ' ')) head.pop_back();
+    return head + "," + body.substr(open + 1);
+}
 
 } // namespace
 
@@ -56,12 +206,16 @@ int runBake(int argc, char** argv) {
     int code = 0;
     if (!parseArgs(argc, argv, 2,
                    {{"--output", "-o", true},
+                    {"--manifest", nullptr, true},
                     {"--preset", nullptr, true},
                     {"--threads", nullptr, true},
                     {"--levels", nullptr, true},
                     {"--pixels", nullptr, true},
                     {"--compact", nullptr, false},
                     {"--report", nullptr, true},
+                    {"--depfile", nullptr, true},
+                    {"--cache-dir", nullptr, true},
+                    {"--quiet", "-q", false},
                     {"--print-config", nullptr, false},
                     {"--help", "-h", false}},
                    args, code))
@@ -70,16 +224,22 @@ int runBake(int argc, char** argv) {
         std::fputs(kBakeHelp, stdout);
         return kExitOk;
     }
-    BakeSettings settings;
+    const bool quiet = args.flags.count("--quiet") > 0;
+    BakeSettings base;
+    std::vector<std::string> settings_files; // presets and the manifest: read, so listed in the depfile
+    std::vector<std::vector<std::string>> job_settings_files; // per job, the asset presets of a manifest
     if (args.values.count("--preset")) {
-        const Status status = applyPresetFile(args.values["--preset"], settings);
+        const Status status = applyPresetFile(args.values["--preset"], base);
         if (!status.ok()) return reportError(status);
+        settings_files.push_back(args.values["--preset"]);
     }
+    CliOverrides overrides;
     if (args.values.count("--threads")) {
         double n = 0;
         if (!parseNumber(args.values["--threads"], n) || n < 0 || n > 1024 || n != std::floor(n))
             return usageError("--threads expects an integer in [0, 1024], got '" + args.values["--threads"] + "'");
-        settings.threads = uint32_t(n);
+        overrides.has_threads = true;
+        overrides.threads = uint32_t(n);
     }
     if (args.values.count("--levels")) {
         std::vector<double> ratios;
@@ -88,57 +248,170 @@ int runBake(int argc, char** argv) {
         for (double r : ratios)
             if (!(r > 0.0 && r <= 1.0))
                 return usageError("--levels: every ratio must lie in (0, 1], got '" + args.values["--levels"] + "'");
-        settings.lod_ratios = ratios;
+        overrides.has_levels = true;
+        overrides.levels = ratios;
     }
     if (args.values.count("--pixels")) {
         double p = 0;
         if (!parseNumber(args.values["--pixels"], p) || !(p > 0))
             return usageError("--pixels expects a positive number, got '" + args.values["--pixels"] + "'");
-        settings.pixel_threshold = p;
+        overrides.has_pixels = true;
+        overrides.pixels = p;
     }
-    if (args.flags.count("--compact")) settings.compact = true;
+    overrides.compact = args.flags.count("--compact") > 0;
+    applyOverrides(overrides, base);
+
+    // The jobs.
+    std::vector<BakeJob> jobs;
+    const std::string out = args.values.count("--output") ? args.values["--output"] : std::string();
+    if (args.values.count("--manifest")) {
+        if (!args.positional.empty()) return usageError("--manifest takes no input files on the command line");
+        if (!out.empty() && !isFolderTarget(out))
+            return usageError("with --manifest, -o names a folder (end it with '/'), got '" + out + "'");
+        const std::string manifest_path = args.values["--manifest"];
+        Result<BakeManifest> manifest = readBakeManifest(manifest_path, base, out);
+        if (!manifest.ok()) return reportError(manifest.status());
+        settings_files.push_back(manifest_path);
+        for (ManifestAsset& a : manifest->assets) {
+            BakeJob job;
+            job.inputs = a.inputs;
+            job.output = a.output;
+            job.settings = a.settings;
+            applyOverrides(overrides, job.settings); // command-line flags win over the manifest
+            job_settings_files.push_back(a.settings_files);
+            jobs.push_back(std::move(job));
+        }
+    } else if (args.flags.count("--print-config")) {
+        std::fputs(settingsToJson(base).c_str(), stdout);
+        return kExitOk;
+    } else {
+        if (args.positional.empty()) return usageError("bake needs at least one input file (or --manifest)");
+        if (out.empty()) return usageError("bake needs -o OUT.glb or -o DIR/");
+        if (isFolderTarget(out)) {
+            std::map<std::string, std::string> stems;
+            for (const std::string& in : args.positional) {
+                BakeJob job;
+                job.inputs = {in};
+                job.output = joinPath(out, inputGroupName(in) + ".glb");
+                job.settings = base;
+                const auto [it, inserted] = stems.emplace(job.output, in);
+                if (!inserted)
+                    return usageError("'" + in + "' and '" + it->second + "' would both be baked into '" + job.output +
+                                      "'; use --manifest to name the outputs");
+                jobs.push_back(std::move(job));
+            }
+        } else {
+            if (lowerExtension(out) != ".glb") return usageError("bake writes a .glb pack, got '" + out + "'");
+            BakeJob job;
+            job.inputs = args.positional;
+            job.output = out;
+            job.settings = base;
+            jobs.push_back(std::move(job));
+        }
+    }
     if (args.flags.count("--print-config")) {
-        std::fputs(settingsToJson(settings).c_str(), stdout);
+        // Manifest: one resolved settings document per pack, keyed by output path.
+        std::string text = "{";
+        for (size_t i = 0; i < jobs.size(); ++i) {
+            std::string settings = settingsToJson(jobs[i].settings);
+            while (!settings.empty() && settings.back() == '\n') settings.pop_back();
+            text += std::string(i ? "," : "") + "\n" + JsonWriter::escape(jobs[i].output) + ": " + settings;
+        }
+        std::fputs((text + "\n}\n").c_str(), stdout);
         return kExitOk;
     }
-    if (args.positional.empty()) return usageError("bake needs at least one input file");
-    if (!args.values.count("--output")) return usageError("bake needs -o OUT.glb");
-    const std::string out = args.values["--output"];
-    if (lowerExtension(out) != ".glb") return usageError("bake writes a .glb pack, got '" + out + "'");
-    Diagnostics diagnostics;
-    std::vector<BakeInput> inputs;
-    for (const std::string& in : args.positional) {
-        if (isSameFile(in, out)) return usageError("output '" + out + "' is also an input");
-        Result<LoadedMesh> loaded = readMesh(in, ReadOptions{}, diagnostics);
-        if (!loaded.ok()) {
-            printDiagnostics(diagnostics);
-            return reportError(loaded.status());
+    for (const BakeJob& job : jobs)
+        for (const std::string& in : job.inputs)
+            if (isSameFile(in, job.output)) return usageError("output '" + job.output + "' is also an input");
+    // Batch and manifest outputs go into folders the run creates (as a build system's output tree).
+    if (args.values.count("--manifest") || (!out.empty() && isFolderTarget(out))) {
+        std::set<std::string> folders;
+        for (const BakeJob& job : jobs) folders.insert(parentDirectory(job.output));
+        for (const std::string& folder : folders) {
+            std::error_code ec;
+            if (!folder.empty()) fs::create_directories(folder, ec);
+            if (ec) return reportError(ioError(folder + ": cannot create the output folder: " + ec.message()));
         }
-        std::string stem = in.substr(in.find_last_of("/\\") == std::string::npos ? 0 : in.find_last_of("/\\") + 1);
-        stem = stem.substr(0, stem.find_last_of('.'));
-        inputs.push_back({stem, std::move(loaded->mesh)});
     }
-    Result<BakeOutput> baked = bake(std::move(inputs), settings, diagnostics);
-    printDiagnostics(diagnostics);
-    if (!baked.ok()) return reportError(baked.status());
+
+    // From here on an interrupted bake removes its temporaries before dying by the signal.
+    installTempFileSignalCleanup();
+    BatchOptions options;
+    options.threads = overrides.has_threads ? overrides.threads : base.threads;
+    if (args.values.count("--cache-dir")) options.cache_dir = args.values["--cache-dir"];
+    ProgressPrinter printer(jobs, quiet);
+    BatchHooks hooks;
+    hooks.stage_done = [&](size_t job, size_t input, BakeStage stage, double) { printer.stageDone(job, input, stage); };
+    hooks.job_done = [&](size_t job, const BakeJobResult& r) { printer.jobDone(job, r); };
+    const Clock::time_point start = Clock::now();
+    std::vector<BakeJobResult> results = runBakeJobs(jobs, options, hooks);
+    const double total_seconds = std::chrono::duration<double>(Clock::now() - start).count();
+    printer.finish();
+
+    // Everything printed in job order, whatever order the jobs finished in.
+    int exit_code = kExitOk;
+    for (size_t i = 0; i < jobs.size(); ++i) {
+        const BakeJobResult& r = results[i];
+        if (quiet) {
+            Diagnostics warnings; // --quiet keeps warnings and errors only
+            for (const Diagnostic& diagnostic : r.diagnostics.items())
+                if (diagnostic.severity == Severity::Warning) warnings.warn(diagnostic.message);
+            printDiagnostics(warnings);
+        } else {
+            printDiagnostics(r.diagnostics);
+        }
+        if (!r.cache_warning.empty()) std::fprintf(stderr, "warning: cache: %s\n", r.cache_warning.c_str());
+        if (!r.status.ok()) {
+            exit_code = reportError(r.status);
+            continue;
+        }
+        if (r.cache_hit && !quiet) std::fprintf(stderr, "note: %s: cache hit\n", jobs[i].output.c_str());
+    }
+    // A failed pack fails the run, but the packs that were baked are still written (the report and
+    // depfile only when every pack succeeded: a build system must re-run the failed ones).
     AtomicFileWriter writer;
-    Status status = writer.add(out, baked->glb.data(), baked->glb.size());
-    std::string report;
-    if (status.ok() && args.values.count("--report")) {
-        report = bakeReportJson(*baked, settings);
-        status = writer.add(args.values["--report"], report.data(), report.size());
+    Status status = Status::okStatus();
+    std::string report, depfile;
+    if (exit_code == kExitOk && args.values.count("--report")) {
+        if (jobs.size() == 1 && !args.values.count("--manifest") && !isFolderTarget(out)) {
+            report = jobReport(jobs[0], results[0]);
+        } else {
+            std::string packs;
+            for (size_t i = 0; i < jobs.size(); ++i) packs += (i ? ",\n" : "") + jobReport(jobs[i], results[i]);
+            report = "{\n\"totalSeconds\": " + JsonWriter::formatNumber(total_seconds) + ",\n\"packs\": [\n" + packs +
+                     "\n]\n}\n";
+        }
+        status = writer.add(args.values["--report"], report);
     }
+    if (exit_code == kExitOk && status.ok() && args.values.count("--depfile")) {
+        std::vector<DepfileRule> rules;
+        for (size_t i = 0; i < jobs.size(); ++i) {
+            DepfileRule rule;
+            rule.target = jobs[i].output;
+            rule.prerequisites = settings_files;
+            if (i < job_settings_files.size())
+                rule.prerequisites.insert(rule.prerequisites.end(), job_settings_files[i].begin(),
+                                          job_settings_files[i].end());
+            rule.prerequisites.insert(rule.prerequisites.end(), results[i].files_read.begin(),
+                                      results[i].files_read.end());
+            rules.push_back(std::move(rule));
+        }
+        depfile = formatDepfile(rules);
+        status = writer.add(args.values["--depfile"], depfile);
+    }
+    // Packs first, then the report and depfile that describe them.
+    for (size_t i = 0; i < results.size() && status.ok(); ++i)
+        if (results[i].staged) status = results[i].staged->commit();
     if (status.ok()) status = writer.commit();
     if (!status.ok()) return reportError(status);
-    for (const BakeAssetReport& a : baked->assets) {
-        std::printf("%s: %llu triangles -> %zu levels:", a.name.c_str(),
-                    static_cast<unsigned long long>(a.input_triangles), a.metrics.levels.size());
-        for (const LodMetricsLevel& l : a.metrics.levels)
-            std::printf(" %llu", static_cast<unsigned long long>(l.triangles));
-        std::printf("\n");
+    for (size_t i = 0; i < jobs.size() && !quiet; ++i) {
+        const BakeJobResult& r = results[i];
+        if (!r.status.ok()) continue;
+        std::fputs(r.summary.c_str(), stdout);
+        std::printf("wrote %s (%llu bytes%s)\n", jobs[i].output.c_str(), static_cast<unsigned long long>(r.pack_bytes),
+                    r.cache_hit ? ", cache hit" : "");
     }
-    std::printf("wrote %s (%zu bytes)\n", out.c_str(), baked->glb.size());
-    return kExitOk;
+    return exit_code;
 }
 
 } // namespace lodbake::cli

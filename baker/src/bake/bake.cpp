@@ -44,12 +44,13 @@ struct AssetSlot {
 };
 
 Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vector<PackStreamEncoder>& encoders,
-                 AssetSlot& slot) {
+                 AssetSlot& slot, size_t index, const BakeHooks& hooks) {
     Mesh& mesh = input.mesh;
     slot.report.name = input.name;
     slot.report.input_triangles = mesh.faceCount();
     slot.report.input_vertices = mesh.vertexCount();
     if (settings.repair) {
+        StageTimer timer(hooks, index, BakeStage::Repair);
         LODBAKE_ASSIGN_OR_RETURN(RepairReport repair, repairMesh(mesh, RepairOptions{}, input.name, slot.diagnostics));
         slot.report.repair_unresolved = repair.unresolved;
     }
@@ -59,12 +60,14 @@ Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vect
     chain_options.screen = screen;
     chain_options.distance.sample_count = settings.error_samples;
     chain_options.record_collapses = !encoders.empty();
+    StageTimer chain_timer(hooks, index, BakeStage::LodChain);
     Result<LodChain> chain_result = buildLodChain(mesh, chain_options, slot.diagnostics);
     if (!chain_result.ok())
         return Status(chain_result.status().code(), input.name + ": " + chain_result.status().message());
     LodChain chain = std::move(chain_result).value();
     const LodMetrics metrics = lodMetrics(mesh, chain, screen, settings.hysteresis);
     slot.report.metrics = metrics;
+    chain_timer.finish();
 
     PackAsset& asset = slot.asset;
     asset.name = input.name;
@@ -76,6 +79,7 @@ Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vect
 
     // Texture levels: LOD0 keeps the sources; level l's textures are sized for the object's projected
     // size at its switch distance. Equal sizes share one resized image (and so one glTF image).
+    StageTimer texture_timer(hooks, index, BakeStage::Textures);
     const std::vector<Texture>& sources = asset.levels[0].mesh.textures;
     const std::vector<bool> srgb = srgbTextures(asset.levels[0].mesh);
     std::vector<ImageSize> source_sizes(sources.size());
@@ -131,7 +135,9 @@ Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vect
         }
     }
     slot.report.texture_sizes = sizes;
+    texture_timer.finish();
 
+    StageTimer encode_timer(hooks, index, BakeStage::Encode);
     for (const PackStreamEncoder& encoder : encoders)
         for (size_t l = 0; l < asset.levels.size(); ++l)
             LODBAKE_RETURN_IF_ERROR(encoder.encode(chain, l, asset.levels[l]));
@@ -141,6 +147,11 @@ Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vect
 } // namespace
 
 Result<BakeOutput> bake(std::vector<BakeInput> inputs, const BakeSettings& settings, Diagnostics& diagnostics) {
+    return bake(std::move(inputs), settings, diagnostics, BakeHooks{});
+}
+
+Result<BakeOutput> bake(std::vector<BakeInput> inputs, const BakeSettings& settings, Diagnostics& diagnostics,
+                        const BakeHooks& hooks) {
     LODBAKE_RETURN_IF_ERROR(validateSettings(settings, "settings"));
     if (inputs.empty()) return invalidInput("bake: no input meshes");
     std::unique_ptr<ScopedThreadLimit> limit;
@@ -160,7 +171,7 @@ Result<BakeOutput> bake(std::vector<BakeInput> inputs, const BakeSettings& setti
 
     std::vector<AssetSlot> slots(inputs.size());
     LODBAKE_RETURN_IF_ERROR(parallelFor(
-        inputs.size(), 1, [&](size_t i) { slots[i].status = bakeAsset(inputs[i], settings, encoders, slots[i]); }));
+        inputs.size(), 1, [&](size_t i) { slots[i].status = bakeAsset(inputs[i], settings, encoders, slots[i], i, hooks); }));
     BakeOutput output;
     for (AssetSlot& slot : slots) {
         for (const Diagnostic& d : slot.diagnostics.items()) {
@@ -174,6 +185,7 @@ Result<BakeOutput> bake(std::vector<BakeInput> inputs, const BakeSettings& setti
         output.assets.push_back(std::move(slot.report));
     }
     LODBAKE_RETURN_IF_ERROR(checkCompact(description));
+    StageTimer pack_timer(hooks, kWholePack, BakeStage::Pack);
     LODBAKE_ASSIGN_OR_RETURN(output.glb, writePackGlb(description));
     return output;
 }

@@ -1,5 +1,6 @@
 #include "lodbake/core/file_io.h"
 
+#include <atomic>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -8,6 +9,8 @@
 
 #include <sys/stat.h>
 #include <unistd.h>
+
+#include "lodbake/core/temp_files.h"
 
 namespace lodbake {
 
@@ -57,25 +60,38 @@ Result<std::vector<uint8_t>> readFileBytes(const std::string& path, uint64_t max
 AtomicFileWriter::~AtomicFileWriter() { discard(); }
 
 void AtomicFileWriter::discard() {
-    for (const Staged& s : staged_) std::remove(s.temp_path.c_str());
+    for (const Staged& s : staged_) {
+        std::remove(s.temp_path.c_str());
+        unregisterTempFile(s.registry_slot);
+    }
     staged_.clear();
 }
 
 Status AtomicFileWriter::add(const std::string& path, const void* data, size_t size) {
     // The temporary sits in the destination folder so the final rename never crosses file systems.
-    // Its name starts with '.' and ends in the process id so concurrent bakes do not collide.
+    // Its name starts with '.' and ends in the process id and a per-process counter so concurrent
+    // bakes, and concurrent writers of one process, do not collide. It is registered before it is
+    // created so that a signal (installTempFileSignalCleanup) removes it.
+    static std::atomic<uint64_t> counter{0};
     const std::string dir = parentDirectory(path);
     const std::string base = fs::path(path).filename().string();
-    const std::string temp = joinPath(dir, "." + base + ".tmp" + std::to_string(::getpid()));
+    const std::string temp = joinPath(dir, "." + base + ".tmp" + std::to_string(::getpid()) + "_" +
+                                               std::to_string(counter.fetch_add(1)));
+    const int slot = registerTempFile(temp);
     FILE* f = std::fopen(temp.c_str(), "wb");
-    if (!f) return ioError(path + ": cannot write: " + errnoText());
+    if (!f) {
+        unregisterTempFile(slot);
+        return ioError(path + ": cannot write: " + errnoText());
+    }
     const bool wrote = size == 0 || std::fwrite(data, 1, size, f) == size;
     const bool closed = std::fclose(f) == 0;
     if (!wrote || !closed) {
+        const std::string err = errnoText();
         std::remove(temp.c_str());
-        return ioError(path + ": write failed: " + errnoText());
+        unregisterTempFile(slot);
+        return ioError(path + ": write failed: " + err);
     }
-    staged_.push_back({temp, path});
+    staged_.push_back({temp, path, slot});
     return Status();
 }
 
@@ -89,6 +105,7 @@ Status AtomicFileWriter::commit() {
             discard();
             return ioError(failed + ": cannot move into place: " + err);
         }
+        unregisterTempFile(staged_[i].registry_slot);
     }
     staged_.clear();
     return Status();

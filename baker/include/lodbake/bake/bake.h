@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "lodbake/bake/stages.h"
 #include "lodbake/config/bake_config.h"
 #include "lodbake/core/diagnostics.h"
 #include "lodbake/core/mesh.h"
@@ -40,6 +41,9 @@ struct BakeOutput {
 /// cannot be simplified or measured, on texture errors, and (settings.compact) when no compressed
 /// stream extension is available (checkCompact).
 Result<BakeOutput> bake(std::vector<BakeInput> inputs, const BakeSettings& settings, Diagnostics& diagnostics);
+/// As above, reporting each finished stage to `hooks` (lodbake/bake/stages.h).
+Result<BakeOutput> bake(std::vector<BakeInput> inputs, const BakeSettings& settings, Diagnostics& diagnostics,
+                        const BakeHooks& hooks);
 
 /// The report as JSON (stable key order): settings echo, per asset the repair leftovers, every
 /// level's metrics and texture sizes, and the pack size.

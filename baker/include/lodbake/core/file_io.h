@@ -35,6 +35,7 @@ private:
     struct Staged {
         std::string temp_path;
         std::string final_path;
+        int registry_slot = -1; // registerTempFile (lodbake/core/temp_files.h)
     };
     std::vector<Staged> staged_;
     void discard();

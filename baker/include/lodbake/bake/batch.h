@@ -1,0 +1,69 @@
+#pragma once
+// The batch runner behind `lodbake bake`: many independent packs ("jobs"), baked in parallel with a
+// fixed decomposition (one task per job, each writing only its own output and result slot), so the
+// bytes of every pack are those a one-job, one-thread run writes. Optionally served from and stored
+// into the content-hash cache (cache.h).
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "lodbake/bake/bake.h"
+#include "lodbake/bake/stages.h"
+#include "lodbake/config/bake_config.h"
+#include "lodbake/core/diagnostics.h"
+#include "lodbake/core/file_io.h"
+#include "lodbake/core/status.h"
+
+namespace lodbake {
+
+/// One pack: its inputs (each a LOD group named after the file stem), its output and settings.
+struct BakeJob {
+    std::vector<std::string> inputs;
+    std::string output; // .glb path, written atomically
+    BakeSettings settings;
+};
+
+struct BatchOptions {
+    std::string cache_dir; // content-hash cache folder; empty: no cache
+    uint32_t threads = 0;  // worker threads for the whole batch; 0: all cores (job settings.threads is ignored)
+};
+
+struct BakeJobResult {
+    Status status = Status::okStatus();
+    Diagnostics diagnostics; // warnings of this job, in stage order
+    bool cache_hit = false;
+    std::string cache_warning;           // a cache store that failed (the pack itself is fine)
+    std::vector<std::string> files_read; // every input file read (inputs, MTL, textures, scans...)
+    std::string report_json;             // bakeReportJson of the pack
+    std::string summary;                 // bakeSummaryText of the pack
+    uint64_t pack_bytes = 0;
+    double stage_seconds[size_t(BakeStage::Count)] = {}; // summed over the job's inputs
+    double wall_seconds = 0;
+    /// The pack, written to its temporary but not yet renamed into place (null on failure): the
+    /// caller commits it (after staging its own report and depfile), or drops it to discard the pack.
+    std::unique_ptr<AtomicFileWriter> staged;
+};
+
+/// Observers of runBakeJobs, called from worker threads (the callee synchronises).
+struct BatchHooks {
+    std::function<void(size_t job, size_t input, BakeStage stage, double seconds)> stage_done;
+    std::function<void(size_t job, const BakeJobResult& result)> job_done;
+};
+
+/// Bakes every job (each reads its inputs, bakes them into one pack and stages `output` in
+/// BakeJobResult::staged; nothing is renamed into place here, so an interrupted run leaves no
+/// output), at most options.threads workers. Results come back in job order; one failing job does not stop the
+/// others. The caller checks outputs for clashes with inputs and with each other beforehand.
+std::vector<BakeJobResult> runBakeJobs(const std::vector<BakeJob>& jobs, const BatchOptions& options,
+                                       const BatchHooks& hooks);
+
+/// Group name of an input path: its file name without the last extension.
+std::string inputGroupName(const std::string& path);
+
+/// One line per asset: "<name>: <input triangles> triangles -> <n> levels: <triangles per level>".
+std::string bakeSummaryText(const BakeOutput& output);
+
+} // namespace lodbake

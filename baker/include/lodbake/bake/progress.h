@@ -1,0 +1,48 @@
+#pragma once
+// Progress accounting for a batch of bakes: the fraction done and the ETA from stage events, and
+// the text of a one-line progress bar. It only formats: the CLI decides where (and whether) to print.
+// Not thread-safe: the caller serialises calls.
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "lodbake/bake/stages.h"
+
+namespace lodbake {
+
+class BatchProgress {
+public:
+    /// `job_weights[j]`: relative cost of job j (e.g. its input bytes; zeros count as 1);
+    /// `job_inputs[j]`: its input count; `job_names[j]`: a short name (the output file name).
+    BatchProgress(std::vector<double> job_weights, std::vector<size_t> job_inputs, std::vector<std::string> job_names);
+
+    /// A stage of one input (or of the whole job, kWholePack) finished.
+    void stageDone(size_t job, size_t input, BakeStage stage);
+    /// The job finished (baked, served from the cache, or failed).
+    void jobDone(size_t job);
+
+    double fraction() const; // in [0, 1]
+    size_t jobsDone() const { return jobs_done_; }
+    size_t jobCount() const { return weights_.size(); }
+    /// Seconds left, extrapolated from `elapsed_seconds`; negative while too little is known.
+    double etaSeconds(double elapsed_seconds) const;
+
+    /// "[#########...........]  45%  3/7  lod_chain bunny.glb  ETA 0:42", at most `width` columns.
+    std::string barLine(double elapsed_seconds, size_t width) const;
+
+    /// "m:ss" (or "h:mm:ss").
+    static std::string formatDuration(double seconds);
+
+private:
+    std::vector<double> weights_;
+    std::vector<size_t> inputs_;
+    std::vector<std::string> names_;
+    std::vector<double> done_; // per job, fraction in [0, 1]
+    double total_weight_ = 0;
+    size_t jobs_done_ = 0;
+    size_t last_job_ = size_t(-1);
+    BakeStage last_stage_ = BakeStage::Load;
+};
+
+} // namespace lodbake

@@ -1,0 +1,146 @@
+// The batch runner. Jobs are the unit of parallelism (grain 1); inside a job bake() parallelises
+// over its inputs and texture jobs. Nothing a job produces depends on which worker ran it or when.
+#include "lodbake/bake/batch.h"
+
+#include <chrono>
+#include <memory>
+#include <mutex>
+
+#include "core/parallel.h"
+#include "lodbake/bake/cache.h"
+#include "lodbake/core/file_io.h"
+#include "lodbake/io/mesh_io.h"
+
+namespace lodbake {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double secondsSince(Clock::time_point t) {
+    return std::chrono::duration<double>(Clock::now() - t).count();
+}
+
+void runJob(const BakeJob& job, size_t index, const BatchOptions& options, const BatchHooks& hooks,
+            BakeJobResult& result) {
+    const Clock::time_point start = Clock::now();
+    std::mutex mutex; // bake() reports the stages of a job's inputs from several workers
+    auto stageDone = [&](size_t input, BakeStage stage, double seconds) {
+        {
+            std::lock_guard<std::mutex> lock(mutex);
+            result.stage_seconds[size_t(stage)] += seconds;
+        }
+        if (hooks.stage_done) hooks.stage_done(index, input, stage, seconds);
+    };
+    std::vector<std::string> names;
+    for (const std::string& in : job.inputs) names.push_back(inputGroupName(in));
+
+    CacheLookup lookup;
+    const bool use_cache = !options.cache_dir.empty();
+    if (use_cache) {
+        const Clock::time_point t = Clock::now();
+        Result<CacheLookup> found = cacheLookup(options.cache_dir, job.inputs, names, job.settings);
+        stageDone(kWholePack, BakeStage::Load, secondsSince(t));
+        if (!found.ok()) {
+            result.status = found.status();
+            return;
+        }
+        lookup = std::move(found).value();
+        if (lookup.hit) {
+            const Clock::time_point w = Clock::now();
+            result.staged = std::make_unique<AtomicFileWriter>();
+            result.status = result.staged->add(job.output, lookup.entry.glb);
+            stageDone(kWholePack, BakeStage::Write, secondsSince(w));
+            if (!result.status.ok()) return;
+            result.cache_hit = true;
+            for (const auto& files : lookup.files_read)
+                result.files_read.insert(result.files_read.end(), files.begin(), files.end());
+            result.report_json = std::move(lookup.entry.report_json);
+            result.summary = std::move(lookup.entry.summary);
+            result.pack_bytes = lookup.entry.glb.size();
+            result.wall_seconds = secondsSince(start);
+            return;
+        }
+    }
+
+    std::vector<BakeInput> inputs;
+    std::vector<std::vector<std::string>> files_read;
+    for (size_t i = 0; i < job.inputs.size(); ++i) {
+        const Clock::time_point t = Clock::now();
+        Result<LoadedMesh> loaded = readMesh(job.inputs[i], ReadOptions{}, result.diagnostics);
+        stageDone(i, BakeStage::Load, secondsSince(t));
+        if (!loaded.ok()) {
+            result.status = loaded.status();
+            return;
+        }
+        files_read.push_back(loaded->source.files_read);
+        result.files_read.insert(result.files_read.end(), loaded->source.files_read.begin(),
+                                 loaded->source.files_read.end());
+        inputs.push_back({names[i], std::move(loaded->mesh)});
+    }
+    BakeSettings settings = job.settings;
+    settings.threads = 0; // the batch's thread limit applies
+    BakeHooks bake_hooks;
+    bake_hooks.stage_done = stageDone;
+    Result<BakeOutput> baked = bake(std::move(inputs), settings, result.diagnostics, bake_hooks);
+    if (!baked.ok()) {
+        result.status = baked.status();
+        return;
+    }
+    result.report_json = bakeReportJson(*baked, job.settings);
+    result.summary = bakeSummaryText(*baked);
+    result.pack_bytes = baked->glb.size();
+    const Clock::time_point w = Clock::now();
+    result.staged = std::make_unique<AtomicFileWriter>();
+    result.status = result.staged->add(job.output, baked->glb);
+    stageDone(kWholePack, BakeStage::Write, secondsSince(w));
+    if (!result.status.ok()) return;
+    if (use_cache) {
+        CacheEntry entry;
+        entry.glb = std::move(baked->glb);
+        entry.report_json = result.report_json;
+        entry.summary = result.summary;
+        const Status stored = cacheStore(options.cache_dir, lookup.primary, job.inputs, files_read, entry);
+        if (!stored.ok()) result.cache_warning = stored.message();
+    }
+    result.wall_seconds = secondsSince(start);
+}
+
+} // namespace
+
+std::string inputGroupName(const std::string& path) {
+    const size_t slash = path.find_last_of("/\\");
+    std::string stem = path.substr(slash == std::string::npos ? 0 : slash + 1);
+    const size_t dot = stem.find_last_of('.');
+    return dot == std::string::npos ? stem : stem.substr(0, dot);
+}
+
+std::string bakeSummaryText(const BakeOutput& output) {
+    std::string text;
+    for (const BakeAssetReport& a : output.assets) {
+        text += a.name + ": " + std::to_string(a.input_triangles) + " triangles -> " +
+                std::to_string(a.metrics.levels.size()) + " levels:";
+        for (const LodMetricsLevel& l : a.metrics.levels) text += " " + std::to_string(l.triangles);
+        text += "\n";
+    }
+    return text;
+}
+
+std::vector<BakeJobResult> runBakeJobs(const std::vector<BakeJob>& jobs, const BatchOptions& options,
+                                       const BatchHooks& hooks) {
+    std::vector<BakeJobResult> results(jobs.size());
+    std::unique_ptr<ScopedThreadLimit> limit;
+    if (options.threads > 0) limit = std::make_unique<ScopedThreadLimit>(options.threads);
+    const Status status = parallelFor(jobs.size(), 1, [&](size_t j) {
+        runJob(jobs[j], j, options, hooks, results[j]);
+        if (hooks.job_done) hooks.job_done(j, results[j]);
+    });
+    if (!status.ok())
+        for (BakeJobResult& r : results)
+            if (r.status.ok() && r.pack_bytes == 0) r.status = status;
+    for (BakeJobResult& r : results)
+        if (!r.status.ok()) r.staged.reset(); // removes a staged temporary of a failed job
+    return results;
+}
+
+} // namespace lodbake

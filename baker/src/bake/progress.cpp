@@ -1,0 +1,112 @@
+// Batch progress. Each stage is a fixed share of a job, measured on the shared scans (the LOD chain
+// with its error measurement dominates); a job's share is its weight over the total.
+#include "lodbake/bake/progress.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+namespace lodbake {
+
+namespace {
+
+constexpr double kStageShare[size_t(BakeStage::Count)] = {
+    0.05, // Load
+    0.15, // Repair
+    0.55, // LodChain
+    0.10, // Textures
+    0.10, // Encode
+    0.03, // Pack
+    0.02, // Write
+};
+
+} // namespace
+
+const char* bakeStageName(BakeStage stage) {
+    switch (stage) {
+    case BakeStage::Load:
+        return "load";
+    case BakeStage::Repair:
+        return "repair";
+    case BakeStage::LodChain:
+        return "lod_chain";
+    case BakeStage::Textures:
+        return "textures";
+    case BakeStage::Encode:
+        return "encode";
+    case BakeStage::Pack:
+        return "pack";
+    case BakeStage::Write:
+        return "write";
+    case BakeStage::Count:
+        break;
+    }
+    return "?";
+}
+
+BatchProgress::BatchProgress(std::vector<double> job_weights, std::vector<size_t> job_inputs,
+                             std::vector<std::string> job_names)
+    : weights_(std::move(job_weights)), inputs_(std::move(job_inputs)), names_(std::move(job_names)),
+      done_(weights_.size(), 0.0) {
+    for (double& w : weights_) {
+        if (!(w > 0)) w = 1;
+        total_weight_ += w;
+    }
+    inputs_.resize(weights_.size(), 1);
+    names_.resize(weights_.size());
+}
+
+void BatchProgress::stageDone(size_t job, size_t input, BakeStage stage) {
+    if (job >= done_.size() || stage == BakeStage::Count) return;
+    const double share =
+        kStageShare[size_t(stage)] / double(input == kWholePack ? 1 : std::max<size_t>(1, inputs_[job]));
+    done_[job] = std::min(0.99, done_[job] + share);
+    last_job_ = job;
+    last_stage_ = stage;
+}
+
+void BatchProgress::jobDone(size_t job) {
+    if (job >= done_.size() || done_[job] >= 1.0) return;
+    done_[job] = 1.0;
+    ++jobs_done_;
+}
+
+double BatchProgress::fraction() const {
+    if (total_weight_ <= 0) return 1.0;
+    double sum = 0;
+    for (size_t j = 0; j < done_.size(); ++j) sum += weights_[j] * done_[j];
+    return std::min(1.0, sum / total_weight_);
+}
+
+double BatchProgress::etaSeconds(double elapsed_seconds) const {
+    const double f = fraction();
+    if (f < 0.02 || elapsed_seconds < 0.5) return -1;
+    return elapsed_seconds * (1.0 - f) / f;
+}
+
+std::string BatchProgress::formatDuration(double seconds) {
+    const long s = long(std::lround(std::max(0.0, seconds)));
+    char buf[32];
+    if (s >= 3600)
+        std::snprintf(buf, sizeof(buf), "%ld:%02ld:%02ld", s / 3600, (s / 60) % 60, s % 60);
+    else
+        std::snprintf(buf, sizeof(buf), "%ld:%02ld", s / 60, s % 60);
+    return buf;
+}
+
+std::string BatchProgress::barLine(double elapsed_seconds, size_t width) const {
+    const double f = fraction();
+    char pct[16];
+    std::snprintf(pct, sizeof(pct), "%3d%%", int(std::floor(f * 100.0 + 1e-9)));
+    std::string tail = std::string("  ") + pct + "  " + std::to_string(jobs_done_) + "/" + std::to_string(jobCount());
+    if (last_job_ < names_.size()) tail += std::string("  ") + bakeStageName(last_stage_) + " " + names_[last_job_];
+    const double eta = etaSeconds(elapsed_seconds);
+    tail += "  ETA " + (eta < 0 ? std::string("--:--") : formatDuration(eta));
+    const size_t bar_cells = width > tail.size() + 12 ? std::min<size_t>(40, width - tail.size() - 2) : 10;
+    const size_t filled = size_t(std::floor(f * double(bar_cells)));
+    std::string line = "[" + std::string(filled, '#') + std::string(bar_cells - filled, '.') + "]" + tail;
+    if (width > 0 && line.size() > width) line.resize(width);
+    return line;
+}
+
+} // namespace lodbake

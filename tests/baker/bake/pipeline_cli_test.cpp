@@ -1,0 +1,286 @@
+// `lodbake bake` at pipeline scale, end to end through the CLI: batch and manifest modes, depfiles,
+// exit codes, the cache, quiet and plain progress output, independence from the current directory
+// and input paths, and interrupted bakes. Inputs are the small OBJ+MTL+PNG and PLY assets that
+// tests/pipeline/make_sample_assets.py writes.
+#include <gtest/gtest.h>
+
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <thread>
+
+#include <nlohmann/json.hpp>
+
+#include "../gltf/gltf_test_util.h"
+#include "lodbake/core/file_io.h"
+#include "test_paths.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using lodbake_test::CommandResult;
+using lodbake_test::runCommand;
+using lodbake_test::shellQuote;
+
+std::vector<uint8_t> bytesOf(const std::string& path) {
+    auto r = lodbake::readFileBytes(path);
+    return r.ok() ? *r : std::vector<uint8_t>();
+}
+
+std::string textOf(const std::string& path) {
+    const std::vector<uint8_t> b = bytesOf(path);
+    return std::string(b.begin(), b.end());
+}
+
+// A fresh folder per test holding the sample assets (generated, deterministic).
+std::string sampleDir(const std::string& name) {
+    const std::string d = lodbake_test::scratchDir() + "/pipeline_" + name + "_" + std::to_string(::getpid());
+    fs::remove_all(d);
+    fs::create_directories(d);
+    const CommandResult r = runCommand(lodbake_test::python() + " " +
+                                       shellQuote(lodbake_test::sourceDir() + "/tests/pipeline/make_sample_assets.py") +
+                                       " " + shellQuote(d + "/assets"));
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    return d;
+}
+
+// `lodbake bake ARGS` run in `cwd` (stdout and stderr apart).
+struct BakeRun {
+    int exit_code = -1;
+    std::string out, err;
+};
+
+BakeRun bakeIn(const std::string& cwd, const std::string& args) {
+    static int counter = 0;
+    const std::string base =
+        lodbake_test::scratchDir() + "/pipeline_run_" + std::to_string(::getpid()) + "_" + std::to_string(++counter);
+    // A subshell: runCommand appends its own 2>&1, which must not redirect the bake's stderr.
+    const CommandResult r =
+        runCommand("(cd " + shellQuote(cwd) + " && " + shellQuote(lodbake_test::lodbakeCli()) + " bake " + args + " >" +
+                   shellQuote(base + ".out") + " 2>" + shellQuote(base + ".err") + " </dev/null)");
+    return {r.exit_code, textOf(base + ".out"), textOf(base + ".err")};
+}
+
+std::vector<std::string> listDir(const std::string& dir) {
+    std::vector<std::string> names;
+    if (!fs::is_directory(dir)) return names;
+    for (const auto& e : fs::directory_iterator(dir)) names.push_back(e.path().filename().string());
+    std::sort(names.begin(), names.end());
+    return names;
+}
+
+TEST(PipelineCliTest, BatchWritesOnePackPerInputWithTheBytesOfSingleBakes) {
+    const std::string d = sampleDir("batch");
+    const BakeRun batch =
+        bakeIn(d, "assets/crate.obj assets/barrel.obj assets/rock.ply -o out/ --preset assets/light.json "
+                  "--threads 2");
+    ASSERT_EQ(batch.exit_code, 0) << batch.err;
+    EXPECT_EQ(listDir(d + "/out"), (std::vector<std::string>{"barrel.glb", "crate.glb", "rock.glb"}));
+    // Summaries in input order whatever order the packs finished in.
+    const size_t c = batch.out.find("crate:"), b = batch.out.find("barrel:"), r = batch.out.find("rock:");
+    ASSERT_NE(r, std::string::npos) << batch.out;
+    EXPECT_LT(c, b);
+    EXPECT_LT(b, r);
+    for (const char* stem : {"crate", "barrel", "rock"}) {
+        const std::string single = d + "/" + stem + "_single.glb";
+        const BakeRun one = bakeIn(d, std::string("assets/") + stem + (std::string(stem) == "rock" ? ".ply" : ".obj") +
+                                          " -o " + shellQuote(single) + " --preset assets/light.json --threads 1");
+        ASSERT_EQ(one.exit_code, 0) << one.err;
+        EXPECT_EQ(bytesOf(single), bytesOf(d + "/out/" + stem + ".glb")) << stem;
+    }
+}
+
+TEST(PipelineCliTest, ManifestBakesEachAssetWithItsOverrides) {
+    const std::string d = sampleDir("manifest");
+    std::ofstream(d + "/assets/assets.json") << R"({
+  "version": 1,
+  "preset": "light.json",
+  "output_dir": "../packs",
+  "assets": [
+    {"input": "crate.obj"},
+    {"input": "rock.ply", "output": "rock_one_level.glb", "settings": {"lod_ratios": [0.25]}},
+    {"inputs": ["barrel.obj", "rock.ply"], "output": "group.glb"}
+  ]
+})";
+    const BakeRun run = bakeIn(d, "--manifest assets/assets.json --report report.json --depfile deps.d");
+    ASSERT_EQ(run.exit_code, 0) << run.err << run.out;
+    EXPECT_EQ(listDir(d + "/packs"), (std::vector<std::string>{"crate.glb", "group.glb", "rock_one_level.glb"}));
+    const nlohmann::json report = nlohmann::json::parse(textOf(d + "/report.json"));
+    ASSERT_EQ(report["packs"].size(), 3u);
+    EXPECT_EQ(report["packs"][0]["assets"][0]["levels"].size(), 3u); // LOD0 + the preset's two
+    EXPECT_EQ(report["packs"][1]["assets"][0]["levels"].size(), 2u); // LOD0 + the override's one
+    EXPECT_EQ(report["packs"][2]["assets"].size(), 2u);              // two LOD groups in one pack
+    EXPECT_EQ(report["packs"][0]["cache"], "miss");
+    EXPECT_TRUE(report["packs"][0]["timings"].contains("lod_chain"));
+    EXPECT_TRUE(report["packs"][0].contains("packBytes")); // the pack report's own keys are kept
+    const std::string deps = textOf(d + "/deps.d");
+    for (const char* needle : {"assets/assets.json", "assets/light.json", "packs/group.glb:", "assets/barrel.mtl",
+                               "assets/textures/barrel.png"})
+        EXPECT_NE(deps.find(needle), std::string::npos) << needle << "\n" << deps;
+    // Each rule lists what its own pack read: rock_one_level.glb reads no MTL or texture.
+    const size_t rock_rule = deps.find("packs/rock_one_level.glb:");
+    const size_t next_rule = deps.find("packs/group.glb:");
+    ASSERT_LT(rock_rule, next_rule);
+    const std::string rock_deps = deps.substr(rock_rule, next_rule - rock_rule);
+    EXPECT_NE(rock_deps.find("assets/rock.ply"), std::string::npos) << rock_deps;
+    EXPECT_EQ(rock_deps.find(".mtl"), std::string::npos) << rock_deps;
+    // Unknown keys are errors (exit 1, the manifest and the pointer named); so is a missing input.
+    std::ofstream(d + "/assets/typo.json") << R"({"version": 1, "assets": [{"input": "crate.obj", "preset_": "x"}]})";
+    const BakeRun typo = bakeIn(d, "--manifest assets/typo.json");
+    EXPECT_EQ(typo.exit_code, 1);
+    EXPECT_NE(typo.err.find("assets/typo.json: /assets/0/preset_: unknown key"), std::string::npos) << typo.err;
+    EXPECT_EQ(bakeIn(d, "--manifest assets/assets.json assets/crate.obj").exit_code, 2);
+}
+
+TEST(PipelineCliTest, DepfileListsEveryFileReadWithSpacesEscaped) {
+    const std::string d = sampleDir("depfile");
+    fs::rename(d + "/assets", d + "/my assets");
+    fs::create_directories(d + "/out dir");
+    const BakeRun ok = bakeIn(d, "'my assets/crate.obj' -o 'out dir/crate.glb' --preset 'my assets/light.json' "
+                                 "--depfile 'out dir/crate.glb.d'");
+    ASSERT_EQ(ok.exit_code, 0) << ok.err;
+    EXPECT_EQ(textOf(d + "/out dir/crate.glb.d"), "out\\ dir/crate.glb: \\\n"
+                                                  "  my\\ assets/light.json \\\n"
+                                                  "  my\\ assets/crate.obj \\\n"
+                                                  "  my\\ assets/crate.mtl \\\n"
+                                                  "  my\\ assets/textures/crate.png\n");
+}
+
+TEST(PipelineCliTest, CacheHitReusesThePackAndAnyChangedInputMisses) {
+    const std::string d = sampleDir("cache");
+    const std::string common =
+        "assets/crate.obj -o out.glb --preset assets/light.json --cache-dir cache --report r.json "
+        "--depfile out.d";
+    const BakeRun cold = bakeIn(d, common);
+    ASSERT_EQ(cold.exit_code, 0) << cold.err;
+    const std::vector<uint8_t> cold_bytes = bytesOf(d + "/out.glb");
+    const std::string cold_deps = textOf(d + "/out.d");
+    EXPECT_EQ(nlohmann::json::parse(textOf(d + "/r.json"))["cache"], "miss");
+    EXPECT_EQ(cold.err.find("cache hit"), std::string::npos);
+    fs::remove(d + "/out.glb");
+
+    const BakeRun warm = bakeIn(d, common + " --threads 1");
+    ASSERT_EQ(warm.exit_code, 0) << warm.err;
+    EXPECT_NE(warm.err.find("note: out.glb: cache hit"), std::string::npos) << warm.err;
+    EXPECT_EQ(bytesOf(d + "/out.glb"), cold_bytes);
+    EXPECT_EQ(textOf(d + "/out.d"), cold_deps); // a hit still lists the MTL and the texture
+    const nlohmann::json report = nlohmann::json::parse(textOf(d + "/r.json"));
+    EXPECT_EQ(report["cache"], "hit");
+    EXPECT_EQ(report["assets"][0]["name"], "crate");
+    EXPECT_EQ(warm.out, cold.out.substr(0, cold.out.find("wrote")) + "wrote out.glb (" +
+                            std::to_string(cold_bytes.size()) + " bytes, cache hit)\n");
+
+    // A changed texture (named only inside the MTL) misses and bakes different bytes.
+    fs::copy_file(d + "/assets/textures/barrel.png", d + "/assets/textures/crate.png",
+                  fs::copy_options::overwrite_existing);
+    const BakeRun texture = bakeIn(d, common);
+    ASSERT_EQ(texture.exit_code, 0) << texture.err;
+    EXPECT_EQ(texture.err.find("cache hit"), std::string::npos);
+    EXPECT_NE(bytesOf(d + "/out.glb"), cold_bytes);
+    // Other settings miss too; the same settings again hit.
+    EXPECT_EQ(bakeIn(d, common + " --levels 0.5").err.find("cache hit"), std::string::npos);
+    EXPECT_NE(bakeIn(d, common + " --levels 0.5").err.find("cache hit"), std::string::npos);
+    // Bakers sharing one cache concurrently: all succeed with the same bytes, one entry per key.
+    fs::remove_all(d + "/cache");
+    std::string parallel = "(cd " + shellQuote(d) + " || exit 1; ";
+    for (int i = 0; i < 4; ++i)
+        parallel += shellQuote(lodbake_test::lodbakeCli()) + " bake assets/rock.ply -o rock" + std::to_string(i) +
+                    ".glb --preset assets/light.json --cache-dir cache --quiet --threads 1 & ";
+    parallel += "wait)";
+    ASSERT_EQ(runCommand(parallel).exit_code, 0);
+    for (int i = 1; i < 4; ++i) EXPECT_EQ(bytesOf(d + "/rock" + std::to_string(i) + ".glb"), bytesOf(d + "/rock0.glb"));
+    EXPECT_FALSE(bytesOf(d + "/rock0.glb").empty());
+    EXPECT_EQ(listDir(d + "/cache/v1/packs").size(), 1u);
+    EXPECT_NE(
+        bakeIn(d, "assets/rock.ply -o rock4.glb --preset assets/light.json --cache-dir cache").err.find("cache hit"),
+        std::string::npos);
+    // No temporaries left in the cache.
+    for (const char* sub : {"cache/v1/packs", "cache/v1/deps"})
+        for (const std::string& name : listDir(d + "/" + sub)) EXPECT_NE(name[0], '.') << name;
+}
+
+TEST(PipelineCliTest, BytesDoNotDependOnTheCurrentDirectoryOrTheInputPath) {
+    const std::string d = sampleDir("cwd");
+    const std::string abs_assets = fs::absolute(d + "/assets").string();
+    const BakeRun from_assets = bakeIn(d + "/assets", "crate.obj -o ../a.glb --preset light.json");
+    const BakeRun from_root = bakeIn("/", shellQuote(abs_assets + "/crate.obj") + " -o " + shellQuote(d + "/b.glb") +
+                                              " --preset " + shellQuote(abs_assets + "/light.json"));
+    ASSERT_EQ(from_assets.exit_code, 0) << from_assets.err;
+    ASSERT_EQ(from_root.exit_code, 0) << from_root.err;
+    const std::vector<uint8_t> a = bytesOf(d + "/a.glb");
+    EXPECT_EQ(a, bytesOf(d + "/b.glb"));
+    const std::string text(a.begin(), a.end());
+    EXPECT_EQ(text.find(abs_assets), std::string::npos) << "the pack names an absolute path";
+    EXPECT_EQ(text.find("pipeline_cwd"), std::string::npos) << "the pack names the input folder";
+}
+
+TEST(PipelineCliTest, ExitCodesQuietAndPlainProgress) {
+    const std::string d = sampleDir("exit");
+    EXPECT_EQ(bakeIn(d, "assets/crate.obj -o x.glb --no-such-flag").exit_code, 2);
+    EXPECT_EQ(bakeIn(d, "-o out/").exit_code, 2);
+    EXPECT_EQ(bakeIn(d, "assets/crate.obj -o x.glb --threads two").exit_code, 2);
+    EXPECT_EQ(bakeIn(d, "assets/crate.obj assets/textures/../crate.obj -o out/").exit_code, 2); // same output twice
+    // One missing input: exit 1, naming it; the other pack is still baked.
+    const BakeRun missing = bakeIn(d, "assets/nothing.ply assets/rock.ply -o out/ --preset assets/light.json");
+    EXPECT_EQ(missing.exit_code, 1);
+    EXPECT_NE(missing.err.find("error: assets/nothing.ply"), std::string::npos) << missing.err;
+    EXPECT_EQ(listDir(d + "/out"), std::vector<std::string>{"rock.glb"});
+    // Not a terminal: one plain line per pack on stderr, no bar redraws.
+    const BakeRun plain = bakeIn(d, "assets/rock.ply -o plain.glb --preset assets/light.json");
+    ASSERT_EQ(plain.exit_code, 0);
+    EXPECT_NE(plain.err.find("lodbake: [1/1] plain.glb: baked in"), std::string::npos) << plain.err;
+    EXPECT_EQ(plain.err.find('\r'), std::string::npos);
+    // --quiet: nothing at all on success (crate.obj has notes: two unused vertices).
+    const BakeRun quiet = bakeIn(d, "assets/crate.obj -o quiet.glb --preset assets/light.json --quiet");
+    ASSERT_EQ(quiet.exit_code, 0);
+    EXPECT_EQ(quiet.out, "");
+    EXPECT_EQ(quiet.err, "");
+}
+
+// SIGTERM or SIGINT mid-bake: the process dies by the signal and leaves neither the output nor a
+// temporary. Delays spread over the run so some signals land while outputs are being written.
+TEST(PipelineCliTest, InterruptedBakeLeavesNoOutputAndNoTemporaries) {
+    LODBAKE_REQUIRE_SHARED_MESHES();
+    const std::string d = sampleDir("signal");
+    const std::string input = lodbake_test::sharedMesh("bunny_zipper.ply");
+    int killed = 0;
+    for (int attempt = 0; attempt < 6; ++attempt) {
+        const std::string out = d + "/out" + std::to_string(attempt);
+        fs::create_directories(out);
+        const int sig = attempt % 2 ? SIGINT : SIGTERM;
+        const pid_t pid = ::fork();
+        if (pid == 0) {
+            // A process group of its own, as a build system runs it; stdout/stderr silenced.
+            ::setpgid(0, 0);
+            const std::string cli = lodbake_test::lodbakeCli();
+            const std::string preset = lodbake_test::sourceDir() + "/configs/mobile.json";
+            const std::string pack = out + "/bunny.glb";
+            const std::string report = out + "/report.json";
+            std::freopen("/dev/null", "w", stdout);
+            std::freopen("/dev/null", "w", stderr);
+            ::execl(cli.c_str(), cli.c_str(), "bake", input.c_str(), "-o", pack.c_str(), "--preset", preset.c_str(),
+                    "--report", report.c_str(), "--depfile", (out + "/bunny.d").c_str(), static_cast<char*>(nullptr));
+            ::_exit(127);
+        }
+        std::this_thread::sleep_for(std::chrono::milliseconds(150 + 250 * attempt));
+        ::kill(pid, sig);
+        int status = 0;
+        ::waitpid(pid, &status, 0);
+        if (WIFSIGNALED(status)) {
+            ++killed;
+            EXPECT_EQ(WTERMSIG(status), sig);
+            EXPECT_EQ(listDir(out), std::vector<std::string>{}) << "after signal " << sig << " at attempt " << attempt;
+        } else {
+            // Finished before the signal: then everything is there and nothing else.
+            EXPECT_EQ(WEXITSTATUS(status), 0);
+            EXPECT_EQ(listDir(out), (std::vector<std::string>{"bunny.d", "bunny.glb", "report.json"}));
+        }
+    }
+    EXPECT_GE(killed, 1) << "every bake finished before its signal; the test did not interrupt anything";
+}
+
+} // namespace

@@ -1,0 +1,78 @@
+// Batch progress: the fraction and ETA from stage events, the bar text, and the CLI drawing the bar
+// only when stderr is a terminal.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "../gltf/gltf_test_util.h"
+#include "lodbake/bake/progress.h"
+#include "test_paths.h"
+
+namespace {
+
+using lodbake::BakeStage;
+using lodbake::BatchProgress;
+
+TEST(BatchProgressTest, FractionFollowsStagesWeightedByJob) {
+    BatchProgress p({3.0, 1.0}, {1, 2}, {"big.glb", "small.glb"});
+    EXPECT_EQ(p.fraction(), 0.0);
+    EXPECT_LT(p.etaSeconds(10.0), 0.0); // nothing known yet
+    p.stageDone(0, 0, BakeStage::Load);
+    p.stageDone(0, 0, BakeStage::Repair);
+    p.stageDone(0, 0, BakeStage::LodChain);
+    const double after_chain = p.fraction();
+    EXPECT_NEAR(after_chain, 0.75 * (0.05 + 0.15 + 0.55), 1e-12);
+    // Two inputs: each input's stage is half the job's share.
+    p.stageDone(1, 0, BakeStage::LodChain);
+    EXPECT_NEAR(p.fraction(), after_chain + 0.25 * 0.55 / 2, 1e-12);
+    // A finished job counts fully, whatever stages were reported.
+    p.jobDone(1);
+    p.jobDone(1); // idempotent
+    EXPECT_EQ(p.jobsDone(), 1u);
+    EXPECT_NEAR(p.fraction(), after_chain + 0.25, 1e-12);
+    const double f = p.fraction();
+    EXPECT_NEAR(p.etaSeconds(20.0), 20.0 * (1 - f) / f, 1e-9);
+    p.jobDone(0);
+    EXPECT_EQ(p.fraction(), 1.0);
+    EXPECT_EQ(p.etaSeconds(20.0), 0.0);
+}
+
+TEST(BatchProgressTest, BarShowsPercentJobsStageAndEtaWithinTheWidth) {
+    BatchProgress p({1.0, 1.0}, {1, 1}, {"rock.glb", "tree.glb"});
+    p.stageDone(1, 0, BakeStage::Load);
+    p.stageDone(1, 0, BakeStage::Repair);
+    p.jobDone(0);
+    const std::string line = p.barLine(30.0, 100);
+    EXPECT_LE(line.size(), 100u);
+    EXPECT_EQ(line.front(), '[');
+    EXPECT_NE(line.find(" 60%"), std::string::npos) << line;
+    EXPECT_NE(line.find("1/2"), std::string::npos) << line;
+    EXPECT_NE(line.find("repair tree.glb"), std::string::npos) << line;
+    EXPECT_NE(line.find("ETA 0:20"), std::string::npos) << line;
+    EXPECT_LE(p.barLine(30.0, 40).size(), 40u);
+    EXPECT_EQ(BatchProgress::formatDuration(3725), "1:02:05");
+    EXPECT_EQ(BatchProgress::formatDuration(59.6), "1:00");
+}
+
+TEST(BatchProgressTest, CliDrawsTheBarOnlyOnATerminal) {
+    // util-linux `script` gives the bake a pseudo-terminal.
+    if (lodbake_test::runCommand("command -v script").exit_code != 0) GTEST_SKIP() << "no `script` command";
+    const std::string d = lodbake_test::scratchDir() + "/progress_tty_" + std::to_string(::getpid());
+    std::filesystem::create_directories(d);
+    const std::string assets = lodbake_test::sourceDir() + "/assets/samples/rock_scan/rock.conf";
+    const std::string bake = lodbake_test::shellQuote(lodbake_test::lodbakeCli()) + " bake " +
+                             lodbake_test::shellQuote(assets) + " -o " + lodbake_test::shellQuote(d + "/rock.glb") +
+                             " --levels 0.5 --threads 1";
+    const auto tty = lodbake_test::runCommand("script -qfec " + lodbake_test::shellQuote(bake) + " /dev/null");
+    ASSERT_EQ(tty.exit_code, 0) << tty.output;
+    EXPECT_NE(tty.output.find("\r\033[K["), std::string::npos) << tty.output;
+    EXPECT_NE(tty.output.find("100%"), std::string::npos) << tty.output;
+    EXPECT_NE(tty.output.find("ETA"), std::string::npos) << tty.output;
+    EXPECT_EQ(tty.output.find("lodbake: [1/1]"), std::string::npos) << "plain lines on a terminal";
+    const auto quiet =
+        lodbake_test::runCommand("script -qfec " + lodbake_test::shellQuote(bake + " --quiet") + " /dev/null");
+    ASSERT_EQ(quiet.exit_code, 0) << quiet.output;
+    EXPECT_EQ(quiet.output.find('['), std::string::npos) << quiet.output;
+}
+
+} // namespace

@@ -1,0 +1,223 @@
+// Batch benchmark (issue #9 bars), each figure next to its anchor measured in the same run:
+//  1. the batch of all shared scans (`lodbake bake ALL -o DIR/`), --threads 2 against --threads 1:
+//     speedup, bar >= 1.7; the packs of both runs must be byte-identical;
+//  2. the same batch re-baked with a warm --cache-dir against the cold (cache-filling) bake: ratio,
+//     bar <= 5 %;
+//  3. peak memory (getrusage ru_maxrss of the child) of baking the largest shared scan, per input
+//     triangle: bar <= 300 B/triangle; anchor: the peak of `lodbake info` reading the same file.
+// Every bake is a separate `lodbake` process, as a build system runs it.
+//
+// usage: batch_bench [--runs N] [--preset FILE] [--only MESH,...] [--skip-threads] [--skip-cache] [--skip-memory]
+// Defaults: 1 run (the 1-thread batch takes minutes), configs/desktop.json, every shared mesh.
+// Not a ctest: these machines are noisy, so the best of N runs of each side is compared.
+
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::vector<std::string> kAllMeshes = {"bunny_scan_bun000.ply",
+                                             "bunny_scan_bun000_tri.ply",
+                                             "bunny_zipper.ply",
+                                             "dragon_poisson.ply",
+                                             "dragon_scan_stand0_tri.ply",
+                                             "dragon_stand_merged.ply",
+                                             "fandisk.obj",
+                                             "igea.ply",
+                                             "igea_tristrips.ply",
+                                             "lee_perry_smith/LeePerrySmith.glb",
+                                             "lucy100k.ply",
+                                             "nefertiti.obj",
+                                             "nefertiti_fraunhofer_textured.glb",
+                                             "range_scans/dragon_stand/dragonStandRight.conf",
+                                             "rocker_arm.obj",
+                                             "spot.obj"};
+// The largest shared scan by triangle count (1,067,852).
+constexpr const char* kLargest = "dragon_poisson.ply";
+
+struct ChildRun {
+    int exit_code = -1;
+    double seconds = 0;
+    long maxrss_kb = 0;
+};
+
+// Runs argv as a child process (stdout/stderr to `log`), timing it and reading its peak RSS.
+ChildRun runChild(const std::vector<std::string>& argv, const std::string& log) {
+    ChildRun r;
+    std::fflush(stdout); // or the child's freopen flushes our buffered lines a second time
+    const auto t0 = std::chrono::steady_clock::now();
+    const pid_t pid = ::fork();
+    if (pid == 0) {
+        std::freopen(log.c_str(), "w", stdout);
+        std::freopen(log.c_str(), "a", stderr);
+        std::vector<char*> args;
+        for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+        args.push_back(nullptr);
+        ::execv(args[0], args.data());
+        ::_exit(127);
+    }
+    int status = 0;
+    struct rusage usage {};
+    ::wait4(pid, &status, 0, &usage);
+    r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+    r.maxrss_kb = usage.ru_maxrss;
+    return r;
+}
+
+std::string readAll(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+}
+
+std::vector<std::string> split(const std::string& list) {
+    std::vector<std::string> out;
+    std::stringstream ss(list);
+    std::string item;
+    while (std::getline(ss, item, ','))
+        if (!item.empty()) out.push_back(item);
+    return out;
+}
+
+double loadAverage() {
+    double l[3] = {0, 0, 0};
+    return ::getloadavg(l, 3) > 0 ? l[0] : -1;
+}
+
+// Best of `runs` batch bakes; every run must succeed.
+bool bestBatch(const std::vector<std::string>& base, const std::string& out_dir, int runs, const std::string& log,
+               double& best_seconds) {
+    best_seconds = 1e300;
+    for (int i = 0; i < runs; ++i) {
+        fs::remove_all(out_dir);
+        std::vector<std::string> argv = base;
+        argv.push_back("-o");
+        argv.push_back(out_dir + "/");
+        const ChildRun r = runChild(argv, log);
+        if (r.exit_code != 0) {
+            std::fprintf(stderr, "batch_bench: bake failed (%d), see %s\n", r.exit_code, log.c_str());
+            return false;
+        }
+        best_seconds = std::min(best_seconds, r.seconds);
+    }
+    return true;
+}
+
+} // namespace
+
+int main(int argc, char** argv) {
+    int runs = 1;
+    std::string preset = std::string(LODBAKE_BENCH_SOURCE_DIR) + "/configs/desktop.json";
+    std::vector<std::string> meshes = kAllMeshes;
+    bool do_threads = true, do_cache = true, do_memory = true;
+    for (int i = 1; i < argc; ++i) {
+        const std::string a = argv[i];
+        if (a == "--runs" && i + 1 < argc)
+            runs = std::max(1, std::atoi(argv[++i]));
+        else if (a == "--preset" && i + 1 < argc)
+            preset = argv[++i];
+        else if (a == "--only" && i + 1 < argc)
+            meshes = split(argv[++i]);
+        else if (a == "--skip-threads")
+            do_threads = false;
+        else if (a == "--skip-cache")
+            do_cache = false;
+        else if (a == "--skip-memory")
+            do_memory = false;
+        else {
+            std::fprintf(stderr, "usage: batch_bench [--runs N] [--preset FILE] [--only MESH,...] [--skip-threads] "
+                                 "[--skip-cache] [--skip-memory]\n");
+            return 2;
+        }
+    }
+    const std::string cli = LODBAKE_BENCH_CLI;
+    const std::string work = std::string(LODBAKE_BENCH_OUT_DIR) + "/batch_bench_out";
+    fs::create_directories(work);
+    std::vector<std::string> base = {cli, "bake"};
+    for (const std::string& m : meshes) base.push_back(std::string(LODBAKE_BENCH_MESHES_DIR) + "/" + m);
+    base.insert(base.end(), {"--preset", preset, "--quiet"});
+    std::printf("batch_bench: %zu meshes, preset %s, best of %d; load average at start %.1f on %ld cores\n",
+                meshes.size(), preset.c_str(), runs, loadAverage(), ::sysconf(_SC_NPROCESSORS_ONLN));
+    int failures = 0;
+
+    if (do_threads) {
+        double t1 = 0, t2 = 0;
+        std::vector<std::string> one = base, two = base;
+        one.insert(one.end(), {"--threads", "1"});
+        two.insert(two.end(), {"--threads", "2"});
+        if (!bestBatch(one, work + "/t1", runs, work + "/t1.log", t1) ||
+            !bestBatch(two, work + "/t2", runs, work + "/t2.log", t2))
+            return 1;
+        size_t differing = 0;
+        for (const auto& e : fs::directory_iterator(work + "/t1")) {
+            const std::string name = e.path().filename().string();
+            if (readAll(e.path().string()) != readAll(work + "/t2/" + name)) {
+                std::printf("  DIFFERENT BYTES: %s\n", name.c_str());
+                ++differing;
+            }
+        }
+        const double speedup = t1 / t2;
+        std::printf(
+            "threads: 1 thread %.2f s, 2 threads %.2f s, speedup %.2fx (bar >= 1.70: %s); packs identical: %s\n", t1,
+            t2, speedup, speedup >= 1.7 ? "met" : "NOT met", differing == 0 ? "yes" : "NO");
+        if (differing) ++failures;
+    }
+
+    if (do_cache) {
+        const std::string cache = work + "/cache";
+        fs::remove_all(cache);
+        std::vector<std::string> cached = base;
+        cached.insert(cached.end(), {"--threads", "2", "--cache-dir", cache});
+        double cold = 0, warm = 0;
+        if (!bestBatch(cached, work + "/cold", 1, work + "/cold.log", cold)) return 1;
+        if (!bestBatch(cached, work + "/warm", runs, work + "/warm.log", warm)) return 1;
+        size_t differing = 0;
+        for (const auto& e : fs::directory_iterator(work + "/cold"))
+            if (readAll(e.path().string()) != readAll(work + "/warm/" + e.path().filename().string())) ++differing;
+        const double ratio = warm / cold;
+        std::printf("cache: cold %.2f s, warm %.3f s, warm/cold %.2f %% (bar <= 5 %%: %s); warm packs identical: %s\n",
+                    cold, warm, 100.0 * ratio, ratio <= 0.05 ? "met" : "NOT met", differing == 0 ? "yes" : "NO");
+        if (differing) ++failures;
+    }
+
+    if (do_memory) {
+        const std::string mesh = std::string(LODBAKE_BENCH_MESHES_DIR) + "/" + kLargest;
+        const std::string report = work + "/largest_report.json";
+        const ChildRun info = runChild({cli, "info", mesh}, work + "/info.log");
+        const ChildRun bake = runChild({cli, "bake", mesh, "-o", work + "/largest.glb", "--preset", preset, "--threads",
+                                        "2", "--quiet", "--report", report},
+                                       work + "/largest.log");
+        if (bake.exit_code != 0 || info.exit_code != 0) {
+            std::fprintf(stderr, "batch_bench: %s failed, see %s\n", kLargest, (work + "/largest.log").c_str());
+            return 1;
+        }
+        // inputTriangles from the report (the first asset).
+        const std::string text = readAll(report);
+        const size_t at = text.find("\"inputTriangles\":");
+        const double triangles = at == std::string::npos ? 0 : std::atof(text.c_str() + at + 17);
+        const double per_tri = triangles > 0 ? double(bake.maxrss_kb) * 1024.0 / triangles : 0;
+        std::printf("memory: %s, %.0f triangles: bake peak %.1f MiB = %.0f B/triangle (bar <= 300: %s); "
+                    "anchor `lodbake info` peak %.1f MiB = %.0f B/triangle, ratio %.2fx\n",
+                    kLargest, triangles, bake.maxrss_kb / 1024.0, per_tri, per_tri <= 300 ? "met" : "NOT met",
+                    info.maxrss_kb / 1024.0, triangles > 0 ? info.maxrss_kb * 1024.0 / triangles : 0,
+                    info.maxrss_kb > 0 ? double(bake.maxrss_kb) / double(info.maxrss_kb) : 0);
+    }
+    std::printf("load average at end %.1f\n", loadAverage());
+    return failures ? 1 : 0;
+}
