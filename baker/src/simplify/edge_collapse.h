@@ -71,11 +71,18 @@ private:
         bool ready = false;
         Vec3d normal; // summed face normals of both fans, computed when a sliver needs it
     };
+    // Rejects flips and too-large normal rotations; tracks the worst squared face quality of the
+    // neighbourhood before (min_old2) and after (min_new2).
     bool checkFaces(const std::vector<uint32_t>& fan, uint32_t moved, const Vec3d& p, uint32_t f0, uint32_t f1,
-                    RegionNormal& region, double& min_old, double& min_new) const;
+                    RegionNormal& region, double& min_old2, double& min_new2) const;
+    // True when two normals with dot product d and squared lengths len2_a, len2_b are further apart
+    // than max_normal_change_deg.
+    bool normalTurnsTooFar(double d, double len2_a, double len2_b) const;
     // Largest squared point distance of a valid collapse (fans from isValid): the endpoints' old
     // positions to the new fan, and the new position to the old fans.
     double endpointDistance2(const Candidate& c, double floor2) const;
+    // An upper bound of endpointDistance2 from a few point-segment distances.
+    double distanceBound2(const Candidate& c) const;
     // False when a face of `fan` (other than f0/f1) would flip or degenerate in any UV set.
     bool checkUvFaces(const std::vector<uint32_t>& fan, const Vec3d& p, uint32_t f0, uint32_t f1,
                       const WedgePair* pairs, int pair_count) const;
@@ -119,6 +126,7 @@ private:
     std::vector<uint32_t> group_first_face_;
 
     CollapseQueue queue_;
+    std::vector<uint8_t> stale_; // per canonical half-edge in the queue: its key predates a change nearby
     size_t alive_faces_ = 0;
     size_t initial_faces_ = 0;
     size_t collapses_ = 0;
