@@ -4,8 +4,12 @@
 // collapse order never depends on heap layout or insertion history. The heap is 4-ary: half the
 // depth of a binary heap, and the four children of a node share a cache line or two, which
 // matters more than the extra comparisons once a million-edge heap no longer fits in cache.
+//
+// Next to each id's heap position the queue keeps what the simplifier looks up with it on every
+// touch (a stale flag and a float payload), so one random access serves all three.
 
 #include <algorithm>
+#include <cassert>
 #include <cstdint>
 #include <vector>
 
@@ -16,23 +20,35 @@ public:
     static constexpr uint32_t kAbsent = 0xffffffffu;
 
     /// Ids are in [0, id_capacity).
-    explicit CollapseQueue(size_t id_capacity = 0) : pos_(id_capacity, kAbsent) {}
+    explicit CollapseQueue(size_t id_capacity = 0) : slot_(id_capacity, Slot{kAbsent, 0.0f, 0}) {}
 
     void reserve(size_t n) { heap_.reserve(n); }
     bool empty() const { return heap_.empty(); }
     size_t size() const { return heap_.size(); }
-    bool contains(uint32_t id) const { return pos_[id] != kAbsent; }
+    bool contains(uint32_t id) const { return pos(id) != kAbsent; }
     uint32_t topId() const { return heap_[0].id; }
     float topCost() const { return heap_[0].cost; }
-    float cost(uint32_t id) const { return heap_[pos_[id]].cost; }
+    float cost(uint32_t id) const { return heap_[pos(id)].cost; }
+
+    /// Per-id flag for keys that predate a change; cleared by set() and remove(). Only ids in the
+    /// queue can be marked.
+    bool isStale(uint32_t id) const { return slot_[id].stale != 0; }
+    void markStale(uint32_t id) {
+        if (contains(id)) slot_[id].stale = 1;
+    }
+    /// Per-id value owned by the caller, kept whether or not the id is queued (initially 0).
+    float payload(uint32_t id) const { return slot_[id].payload; }
+    void setPayload(uint32_t id, float value) { slot_[id].payload = value; }
 
     /// Inserts `id` or changes its cost if present.
     void set(uint32_t id, float cost) {
-        uint32_t i = pos_[id];
+        uint32_t i = pos(id);
+        slot_[id].stale = 0;
         if (i == kAbsent) {
             i = uint32_t(heap_.size());
+            assert(i < kAbsent);
             heap_.push_back({cost, id});
-            pos_[id] = i;
+            slot_[id].pos = i;
             siftUp(i);
             return;
         }
@@ -47,7 +63,7 @@ public:
     /// Bulk construction: append ids that are not yet present with pushUnordered, then call
     /// heapify once (O(n) instead of n sifts). No other call may come in between.
     void pushUnordered(uint32_t id, float cost) {
-        pos_[id] = uint32_t(heap_.size());
+        slot_[id].pos = uint32_t(heap_.size());
         heap_.push_back({cost, id});
     }
     void heapify() {
@@ -57,9 +73,10 @@ public:
 
     /// Removes `id` if present.
     void remove(uint32_t id) {
-        const uint32_t i = pos_[id];
+        const uint32_t i = pos(id);
+        slot_[id].pos = kAbsent;
+        slot_[id].stale = 0;
         if (i == kAbsent) return;
-        pos_[id] = kAbsent;
         const uint32_t last = uint32_t(heap_.size() - 1);
         if (i == last) {
             heap_.pop_back();
@@ -68,7 +85,7 @@ public:
         const Entry moved = heap_[last];
         heap_.pop_back();
         heap_[i] = moved;
-        pos_[moved.id] = i;
+        setPos(moved.id, i);
         if (i > 0 && less(moved, heap_[(i - 1) / kArity]))
             siftUp(i);
         else
@@ -84,7 +101,7 @@ public:
     /// True when the heap order and the position index agree (for tests).
     bool isConsistent() const {
         for (size_t i = 0; i < heap_.size(); ++i) {
-            if (pos_[heap_[i].id] != i) return false;
+            if (pos(heap_[i].id) != i) return false;
             if (i > 0 && less(heap_[i], heap_[(i - 1) / kArity])) return false;
         }
         return true;
@@ -96,7 +113,17 @@ private:
         float cost;
         uint32_t id;
     };
+    // Positions are written with plain stores while sifting (a read-modify-write there would wait
+    // for a cache miss per level), so the flag has its own field.
+    struct Slot {
+        uint32_t pos; // heap index or kAbsent
+        float payload;
+        uint32_t stale;
+    };
     static bool less(const Entry& a, const Entry& b) { return a.cost < b.cost || (a.cost == b.cost && a.id < b.id); }
+
+    uint32_t pos(uint32_t id) const { return slot_[id].pos; }
+    void setPos(uint32_t id, uint32_t i) { slot_[id].pos = i; }
 
     void siftUp(uint32_t i) {
         const Entry e = heap_[i];
@@ -104,11 +131,11 @@ private:
             const uint32_t parent = (i - 1) / kArity;
             if (!less(e, heap_[parent])) break;
             heap_[i] = heap_[parent];
-            pos_[heap_[i].id] = i;
+            setPos(heap_[i].id, i);
             i = parent;
         }
         heap_[i] = e;
-        pos_[e.id] = i;
+        setPos(e.id, i);
     }
 
     void siftDown(uint32_t i) {
@@ -123,15 +150,15 @@ private:
                 if (less(heap_[k], heap_[child])) child = k;
             if (!less(heap_[child], e)) break;
             heap_[i] = heap_[child];
-            pos_[heap_[i].id] = i;
+            setPos(heap_[i].id, i);
             i = child;
         }
         heap_[i] = e;
-        pos_[e.id] = i;
+        setPos(e.id, i);
     }
 
     std::vector<Entry> heap_;
-    std::vector<uint32_t> pos_;
+    std::vector<Slot> slot_;
 };
 
 } // namespace lodbake::detail

@@ -254,7 +254,7 @@ bool EdgeCollapser::evaluate(uint32_t edge, Candidate& c) const {
         else if (e != 0.0f)
             c.cost /= std::pow(weight, e);
     }
-    if (!penalty_.empty()) c.cost += double(penalty_[edge]); // see run()
+    if (has_penalty_) c.cost += double(queue_.payload(edge)); // see run()
     return true;
 }
 
@@ -509,8 +509,11 @@ void EdgeCollapser::collapse(const Candidate& c, const WedgePair* pairs, int pai
 
     const uint8_t old_w0 = kind_[w0];
     const uint8_t old_w1 = w1 == kNone ? 0 : kind_[w1];
-    kind_[w0] = classify(w0);
-    if (w1 != kNone) kind_[w1] = classify(w1);
+    // A free opposite point stays free: its fan stays closed, loses f0/f1 and gets one glued edge
+    // whose sides carry the same wedges and sub-mesh (no feature edge touched it), so only
+    // points on features need their fans walked again.
+    if (old_w0 != kFree) kind_[w0] = classify(w0);
+    if (w1 != kNone && old_w1 != kFree) kind_[w1] = classify(w1);
     kind_[v] = classify(v); // leaves v's fan in fan_tmp_
     if (kind_[v] == kLocked || kind_[v] == kDead) gatherFan(v, fan_tmp_);
     updateEdgesInFan();
@@ -580,12 +583,10 @@ void EdgeCollapser::updateEdgesInFan() {
     Candidate c;
     auto update = [&](uint32_t he) {
         const uint32_t e = canonical(he);
-        if (queue_.contains(e)) {
-            stale_[e] = 1;
-        } else if (evaluate(e, c)) {
+        if (queue_.contains(e))
+            queue_.markStale(e);
+        else if (evaluate(e, c))
             queue_.set(e, float(c.cost));
-            stale_[e] = 0;
-        }
     };
     for (uint32_t he : fan_tmp_) {
         update(he);
@@ -598,7 +599,6 @@ void EdgeCollapser::requeueAll() {
     Candidate c;
     for (uint32_t h = 0; h < uint32_t(corner_point_.size()); ++h) {
         if (corner_point_[h] == kNone || canonical(h) != h) continue;
-        stale_[h] = 0;
         if (evaluate(h, c))
             queue_.set(h, float(c.cost));
         else
@@ -626,13 +626,10 @@ bool EdgeCollapser::run(size_t target_faces, double max_error, CollapseSequence*
             queue_.remove(e);
             continue;
         }
-        if (stale_[e]) {
+        if (queue_.isStale(e)) {
             // Its neighbourhood changed since it was keyed: compete again with the fresh key.
-            stale_[e] = 0;
-            if (float(c.cost) > queue_.cost(e)) {
-                queue_.set(e, float(c.cost));
-                if (queue_.topId() != e) continue;
-            }
+            queue_.set(e, float(c.cost));
+            if (queue_.topId() != e) continue;
         }
         int pair_count = 0;
         if (!isValid(c, pair_count, pairs)) {
@@ -640,13 +637,13 @@ bool EdgeCollapser::run(size_t target_faces, double max_error, CollapseSequence*
             queue_.remove(e);
             continue;
         }
-        if (!penalty_.empty()) {
+        if (has_penalty_) {
             // Quadrics measure distance to planes: a sharp tip whose faces are nearly parallel to
             // the motion, or a placement off the surface, looks cheap. The true point distances
             // (endpoints to the new fan, new position to the old fans) are priced when the edge is
             // popped and kept as its penalty (added by evaluate until the next pop); when the key
             // grows by more than kRecheckFactor × its quadric part the edge competes again.
-            const double base = c.cost - double(penalty_[e]);
+            const double base = c.cost - double(queue_.payload(e));
             const double floor2 = c.error * c.error;
             const double scale =
                 double(options_.tip_distance_weight) * std::sqrt(quadric_[c.removed].weight + quadric_[c.kept].weight);
@@ -660,7 +657,7 @@ bool EdgeCollapser::run(size_t target_faces, double max_error, CollapseSequence*
                 continue;
             }
             const double extra = scale * std::max(0.0, endpointDistance2(c, floor2) - floor2);
-            penalty_[e] = float(extra);
+            queue_.setPayload(e, float(extra));
             if (base + extra > limit) {
                 queue_.set(e, float(base + extra));
                 if (queue_.topId() != e) continue; // still the cheapest: collapse it now
@@ -939,7 +936,7 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
         }
     }
 
-    penalty_.assign(options.tip_distance_weight > 0 ? he_count : 0, 0.0f);
+    has_penalty_ = options.tip_distance_weight > 0;
     // UV charts: faces joined across edges whose two corners share wedges (union-find).
     uv_set_count_ = uint32_t(mesh.uvs.size());
     uv_channel_ = uv_set_count_ > 0 ? (mesh.hasNormals() ? 3u : 0u) : kNone;
@@ -970,7 +967,6 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
 
     queue_ = CollapseQueue(he_count);
     queue_.reserve(he_count / 2 + 16);
-    stale_.assign(he_count, 0);
     Candidate c;
     for (uint32_t h = 0; h < he_count; ++h)
         if (canonical(h) == h && evaluate(h, c)) queue_.pushUnordered(h, float(c.cost));

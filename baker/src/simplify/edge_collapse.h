@@ -101,7 +101,8 @@ private:
     uint32_t uv_set_count_ = 0;
     std::vector<uint32_t> face_chart_;  // UV chart (representative face) per face
     std::vector<uint32_t> chart_alive_; // alive faces per chart representative
-    std::vector<float> penalty_;        // per canonical half-edge: point-distance price from its last pop (run())
+    bool has_penalty_ = false; // tip_distance_weight > 0: the queue payload of an edge is its point-distance
+                               // price from its last pop (run())
 
     // Points (distinct positions) and wedges (distinct position + attributes).
     std::vector<Vec3f> position_;
@@ -126,7 +127,6 @@ private:
     std::vector<uint32_t> group_first_face_;
 
     CollapseQueue queue_;
-    std::vector<uint8_t> stale_; // per canonical half-edge in the queue: its key predates a change nearby
     size_t alive_faces_ = 0;
     size_t initial_faces_ = 0;
     size_t collapses_ = 0;
