@@ -5,8 +5,8 @@
 // depth of a binary heap, and the four children of a node share a cache line or two, which
 // matters more than the extra comparisons once a million-edge heap no longer fits in cache.
 //
-// Next to each id's heap position the queue keeps what the simplifier looks up with it on every
-// touch (a stale flag and a float payload), so one random access serves all three.
+// Next to each id's heap position the queue keeps a float the simplifier looks up with it (the
+// edge's point-distance penalty), so one random access serves both.
 
 #include <algorithm>
 #include <cassert>
@@ -20,7 +20,7 @@ public:
     static constexpr uint32_t kAbsent = 0xffffffffu;
 
     /// Ids are in [0, id_capacity).
-    explicit CollapseQueue(size_t id_capacity = 0) : slot_(id_capacity, Slot{kAbsent, 0.0f, 0}) {}
+    explicit CollapseQueue(size_t id_capacity = 0) : slot_(id_capacity, Slot{kAbsent, 0.0f}) {}
 
     void reserve(size_t n) { heap_.reserve(n); }
     bool empty() const { return heap_.empty(); }
@@ -30,20 +30,22 @@ public:
     float topCost() const { return heap_[0].cost; }
     float cost(uint32_t id) const { return heap_[pos(id)].cost; }
 
-    /// Per-id flag for keys that predate a change; cleared by set() and remove(). Only ids in the
-    /// queue can be marked.
-    bool isStale(uint32_t id) const { return slot_[id].stale != 0; }
-    void markStale(uint32_t id) {
-        if (contains(id)) slot_[id].stale = 1;
-    }
     /// Per-id value owned by the caller, kept whether or not the id is queued (initially 0).
     float payload(uint32_t id) const { return slot_[id].payload; }
     void setPayload(uint32_t id, float value) { slot_[id].payload = value; }
 
+    /// Hint that `id` is about to be looked up (its slot is a random access into a large array).
+    void prefetch(uint32_t id) const {
+#if defined(__GNUC__)
+        __builtin_prefetch(&slot_[id]);
+#else
+        (void)id;
+#endif
+    }
+
     /// Inserts `id` or changes its cost if present.
     void set(uint32_t id, float cost) {
         uint32_t i = pos(id);
-        slot_[id].stale = 0;
         if (i == kAbsent) {
             i = uint32_t(heap_.size());
             assert(i < kAbsent);
@@ -75,7 +77,6 @@ public:
     void remove(uint32_t id) {
         const uint32_t i = pos(id);
         slot_[id].pos = kAbsent;
-        slot_[id].stale = 0;
         if (i == kAbsent) return;
         const uint32_t last = uint32_t(heap_.size() - 1);
         if (i == last) {
@@ -113,12 +114,9 @@ private:
         float cost;
         uint32_t id;
     };
-    // Positions are written with plain stores while sifting (a read-modify-write there would wait
-    // for a cache miss per level), so the flag has its own field.
     struct Slot {
         uint32_t pos; // heap index or kAbsent
         float payload;
-        uint32_t stale;
     };
     static bool less(const Entry& a, const Entry& b) { return a.cost < b.cost || (a.cost == b.cost && a.id < b.id); }
 

@@ -63,7 +63,8 @@ private:
     bool canRemove(uint32_t point, bool feature_edge) const;
     // Outgoing half-edges of `point`, one per incident face; returns false if the fan is open.
     bool gatherFan(uint32_t point, std::vector<uint32_t>& fan) const;
-    Kind classify(uint32_t point);
+    Kind classify(uint32_t point); // gathers the fan into fan_tmp_
+    Kind classifyFan(const std::vector<uint32_t>& fan, bool closed) const;
     bool evaluate(uint32_t edge, Candidate& c) const;
     void collectPairs(uint32_t edge, uint32_t removed, WedgePair* pairs, int& pair_count) const;
     bool isValid(const Candidate& c, int& pair_count, WedgePair* pairs);
@@ -133,6 +134,7 @@ private:
     double max_error_done_ = 0;
 
     std::vector<uint32_t> fan_u_, fan_v_, fan_tmp_;
+    bool fan_u_closed_ = true, fan_v_closed_ = true; // from the last isValid
 };
 
 } // namespace lodbake::detail
