@@ -11,14 +11,20 @@
 //   memory   peak RSS (VmHWM) of a fresh process of this program that loads the mesh and
 //            builds the chain (or runs the 5 meshopt_simplify calls), minus an idle one, per input triangle.
 //
-// usage: simplify_bench [--meshes DIR] [--out DIR] [--node-bench DIR] [--samples N] [--skip-node] [MESH...]
+//   quality levels are compared at EQUAL OR FEWER triangles: meshoptimizer 1.3 runs first at the
+//            ratio's target, then our level is made with meshoptimizer's achieved count as target.
+//
+// usage: simplify_bench [--meshes DIR] [--out DIR] [--node-bench DIR] [--samples N] [--skip-node]
+//                       [--speed-only] [--runs N] [MESH...]
+// The run ends with one summary table (markdown) of every mesh: quality, speed ratio, memory.
 // Not a ctest: run it through scripts/bench-simplify.sh.
 
 #include <unistd.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cfloat>
+#include <chrono>
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
@@ -52,7 +58,23 @@ struct Args {
     std::string node_bench_dir = LODBAKE_BENCH_NODE_DIR;
     uint32_t samples = 200000;
     bool run_node = true;
+    bool speed_only = false; // skip memory and quality
+    int runs = 0;            // timing runs per mesh; 0: 3, or 2 above 400k triangles
     std::vector<std::string> meshes;
+};
+
+// One mesh's figures, kept for the summary table printed at the end.
+struct QualityRow {
+    double ratio = 0;
+    size_t ours_tris = 0, anchor_tris = 0;
+    double ours_mean = 0, ours_haus = 0, anchor_mean = 0, anchor_haus = 0;
+};
+struct MeshResult {
+    std::string name;
+    size_t triangles = 0;
+    double ours_s = 0, native_s = 0;
+    double ours_bytes = 0, native_bytes = 0;
+    std::vector<QualityRow> quality;
 };
 
 double seconds(std::chrono::steady_clock::time_point a, std::chrono::steady_clock::time_point b) {
@@ -195,27 +217,33 @@ std::string ratioText(double ours, double anchor) {
     return b;
 }
 
-void benchMesh(const Args& args, const std::string& name) {
+MeshResult benchMesh(const Args& args, const std::string& name) {
+    MeshResult result;
+    result.name = name.substr(0, name.find('.'));
     const std::string path = args.meshes_dir + "/" + name;
     std::printf("\n== %s\n", name.c_str());
     std::fflush(stdout);
 
     // Memory first, while the parent holds no mesh.
-    const uint64_t baseline_rss = peakRssOfChild("none", path);
-    const uint64_t ours_rss = peakRssOfChild("ours", path);
-    const uint64_t native_rss = peakRssOfChild("native", path);
+    uint64_t baseline_rss = 0, ours_rss = 0, native_rss = 0;
+    if (!args.speed_only) {
+        baseline_rss = peakRssOfChild("none", path);
+        ours_rss = peakRssOfChild("ours", path);
+        native_rss = peakRssOfChild("native", path);
+    }
 
     auto loaded = load(path);
     if (!loaded.ok()) {
         std::printf("  skipped: %s\n", loaded.status().message().c_str());
-        return;
+        return result;
     }
     const Mesh& mesh = loaded.value();
     const double tris = double(mesh.faceCount());
+    result.triangles = mesh.faceCount();
     std::printf("  %zu vertices, %zu triangles\n", mesh.vertexCount(), mesh.faceCount());
 
-    // Speed: best of a few runs (fewer for big meshes), our chain on one thread and on all threads.
-    const int runs = mesh.faceCount() > 400000 ? 1 : 3;
+    // Speed: best of a few alternating runs, our chain on one thread (and once on all threads).
+    const int runs = args.runs > 0 ? args.runs : (mesh.faceCount() > 400000 ? 2 : 3);
     double ours_1t = 1e30, ours_nt = 1e30, native_t = 1e30;
     std::vector<size_t> ours_chain_tris, native_chain_tris;
     for (int r = 0; r < runs; ++r) {
@@ -226,13 +254,13 @@ void benchMesh(const Args& args, const std::string& name) {
             auto t1 = std::chrono::steady_clock::now();
             if (!chain.ok()) {
                 std::printf("  our chain failed: %s\n", chain.status().message().c_str());
-                return;
+                return result;
             }
             ours_1t = std::min(ours_1t, seconds(t0, t1));
             ours_chain_tris.clear();
             for (const auto& level : chain->levels) ours_chain_tris.push_back(level.mesh.faceCount());
         }
-        {
+        if (r == 0) {
             auto t0 = std::chrono::steady_clock::now();
             auto chain = ourChain(mesh, kChainRatios);
             auto t1 = std::chrono::steady_clock::now();
@@ -243,79 +271,119 @@ void benchMesh(const Args& args, const std::string& name) {
         auto t1 = std::chrono::steady_clock::now();
         native_t = std::min(native_t, seconds(t0, t1));
     }
-    std::printf("  5-level chain (0.5 0.25 0.1 0.03 0.01): ours %.3f s (1 thread), %.3f s (all threads); "
-                "native meshopt_simplify 0.18 %.3f s; ours/native %.2f (1 thread)\n",
-                ours_1t, ours_nt, native_t, ours_1t / native_t);
+    result.ours_s = ours_1t;
+    result.native_s = native_t;
+    std::printf("  5-level chain (0.5 0.25 0.1 0.03 0.01), best of %d: ours %.3f s (1 thread), %.3f s (all threads); "
+                "native meshopt_simplify %.3f s; ours/native %.2f (1 thread)\n",
+                runs, ours_1t, ours_nt, native_t, ours_1t / native_t);
     std::printf("  chain triangles ours:");
     for (size_t t : ours_chain_tris) std::printf(" %zu", t);
     std::printf("; native:");
     for (size_t t : native_chain_tris) std::printf(" %zu", t);
+    std::printf("\n");
+    if (args.speed_only) return result;
     auto net = [&](uint64_t rss) { return rss > baseline_rss ? double(rss - baseline_rss) / tris : 0.0; };
-    std::printf("\n  peak RSS per input triangle (child process: load + chain, minus an idle one's %.1f MB): "
+    result.ours_bytes = net(ours_rss);
+    result.native_bytes = net(native_rss);
+    std::printf("  peak RSS per input triangle (child process: load + chain, minus an idle one's %.1f MB): "
                 "ours %.0f B, native meshopt %.0f B\n",
-                double(baseline_rss) / 1e6, net(ours_rss), net(native_rss));
+                double(baseline_rss) / 1e6, result.ours_bytes, result.native_bytes);
 
-    // Quality.
-    auto chain = ourChain(mesh, kQualityRatios);
+    // Quality: meshoptimizer 1.3 first, at each ratio's target; then ours at its achieved count.
+    std::vector<size_t> targets;
+    for (double ratio : kQualityRatios) targets.push_back(std::max<size_t>(1, size_t(std::ceil(ratio * tris))));
+    std::vector<AnchorLevel> anchor;
+    if (args.run_node) {
+        std::string input_ply = args.out_dir + "/" + result.name + "_input.ply";
+        lodbake::Diagnostics diagnostics;
+        lodbake::Status written = lodbake::writeMesh(mesh, input_ply, lodbake::WriteOptions(), diagnostics);
+        if (written.ok()) {
+            anchor = runNodeAnchor(args, input_ply, args.out_dir + "/" + result.name + "_meshopt13", targets);
+        } else {
+            std::printf("  cannot write %s: %s\n", input_ply.c_str(), written.message().c_str());
+        }
+    }
+    // Our targets: the anchor's achieved count where it has one (never more than the ratio's target).
+    // The chain's level target is ceil(ratio × input faces), so aim half a triangle below the count.
+    std::vector<double> our_ratios;
+    for (size_t i = 0; i < targets.size(); ++i) {
+        size_t count = targets[i];
+        if (i < anchor.size() && anchor[i].triangles > 0) count = std::min(count, anchor[i].triangles);
+        our_ratios.push_back((double(count) - 0.5) / tris);
+    }
+    auto chain = ourChain(mesh, our_ratios);
     if (!chain.ok()) {
         std::printf("  our chain failed: %s\n", chain.status().message().c_str());
-        return;
+        return result;
     }
     auto prepare_start = std::chrono::steady_clock::now();
     auto reference = lodbake::DistanceReference::prepare(mesh);
     const double prepare_s = seconds(prepare_start, std::chrono::steady_clock::now());
     if (!reference.ok()) {
         std::printf("  cannot measure: %s\n", reference.status().message().c_str());
-        return;
+        return result;
     }
     lodbake::DistanceOptions distance;
     distance.sample_count = args.samples;
 
-    std::vector<size_t> targets;
-    for (const auto& level : chain->levels) targets.push_back(std::max<size_t>(1, level.mesh.faceCount()));
-    std::vector<AnchorLevel> anchor;
-    if (args.run_node) {
-        std::string base = name.substr(0, name.find('.'));
-        std::string input_ply = args.out_dir + "/" + base + "_input.ply";
-        lodbake::Diagnostics diagnostics;
-        lodbake::Status written = lodbake::writeMesh(mesh, input_ply, lodbake::WriteOptions(), diagnostics);
-        if (written.ok()) {
-            anchor = runNodeAnchor(args, input_ply, args.out_dir + "/" + base + "_meshopt13", targets);
-        } else {
-            std::printf("  cannot write %s: %s\n", input_ply.c_str(), written.message().c_str());
-        }
-    }
-
     std::printf("  %-6s | %9s %10s %10s | %9s %10s %10s | %6s %6s %6s\n", "ratio", "ours tri", "ours mean", "ours haus",
                 "mo13 tri", "mo13 mean", "mo13 haus", "tri", "mean", "haus");
     double measure_s = 0;
-    for (size_t i = 0; i < chain->levels.size(); ++i) {
+    for (size_t i = 0; i < chain->levels.size() && i < kQualityRatios.size(); ++i) {
         const lodbake::LodLevel& level = chain->levels[i];
         auto measure_start = std::chrono::steady_clock::now();
         auto ours = lodbake::measureSurfaceDistance(reference.value(), level.mesh, distance);
         measure_s += seconds(measure_start, std::chrono::steady_clock::now());
-        double anchor_tris = 0, anchor_mean = 0, anchor_haus = 0;
+        QualityRow row;
+        row.ratio = kQualityRatios[i];
+        row.ours_tris = level.mesh.faceCount();
         if (i < anchor.size()) {
             auto anchor_mesh = load(anchor[i].path);
             if (anchor_mesh.ok()) {
                 auto d = lodbake::measureSurfaceDistance(reference.value(), anchor_mesh.value(), distance);
                 if (d.ok()) {
-                    anchor_tris = double(anchor_mesh->faceCount());
-                    anchor_mean = d->meanRel();
-                    anchor_haus = d->hausdorffRel();
+                    row.anchor_tris = anchor_mesh->faceCount();
+                    row.anchor_mean = d->meanRel();
+                    row.anchor_haus = d->hausdorffRel();
                 }
             }
         }
-        double ours_mean = ours.ok() ? ours->meanRel() : 0, ours_haus = ours.ok() ? ours->hausdorffRel() : 0;
-        std::printf("  %-6g | %9zu %10.3e %10.3e | %9.0f %10.3e %10.3e | %s %s %s%s\n", level.target_ratio,
-                    level.mesh.faceCount(), ours_mean, ours_haus, anchor_tris, anchor_mean, anchor_haus,
-                    ratioText(double(level.mesh.faceCount()), anchor_tris).c_str(),
-                    ratioText(ours_mean, anchor_mean).c_str(), ratioText(ours_haus, anchor_haus).c_str(),
-                    level.reached_target ? "" : "  (ours missed the target; anchor given our count)");
+        if (ours.ok()) {
+            row.ours_mean = ours->meanRel();
+            row.ours_haus = ours->hausdorffRel();
+        }
+        result.quality.push_back(row);
+        std::printf("  %-6g | %9zu %10.3e %10.3e | %9zu %10.3e %10.3e | %s %s %s%s\n", row.ratio, row.ours_tris,
+                    row.ours_mean, row.ours_haus, row.anchor_tris, row.anchor_mean, row.anchor_haus,
+                    ratioText(double(row.ours_tris), double(row.anchor_tris)).c_str(),
+                    ratioText(row.ours_mean, row.anchor_mean).c_str(), ratioText(row.ours_haus, row.anchor_haus).c_str(),
+                    level.reached_target ? "" : "  (ours missed the target)");
     }
     std::printf("  distance metric (ours, all threads): reference BVH %.3f s, %zu levels measured in %.3f s\n",
                 prepare_s, chain->levels.size(), measure_s);
     std::fflush(stdout);
+    return result;
+}
+
+void printSummary(const std::vector<MeshResult>& results, bool speed_only) {
+    std::printf("\n## Summary (ratios ours / anchor; quality anchor meshoptimizer 1.3 simplifyWithUpdate, speed "
+                "anchor native meshopt_simplify)\n\n");
+    if (!speed_only) {
+        std::printf("| mesh | ratio | triangles ours / mo 1.3 | our mean | mo 1.3 mean | our Hausdorff | mo 1.3 "
+                    "Hausdorff | mean ratio | Hausdorff ratio |\n|---|---|---|---|---|---|---|---|---|\n");
+        for (const MeshResult& m : results)
+            for (const QualityRow& q : m.quality)
+                std::printf("| %s | %g | %zu / %zu | %.3e | %.3e | %.3e | %.3e | %s | %s |\n", m.name.c_str(), q.ratio,
+                            q.ours_tris, q.anchor_tris, q.ours_mean, q.anchor_mean, q.ours_haus, q.anchor_haus,
+                            ratioText(q.ours_mean, q.anchor_mean).c_str(),
+                            ratioText(q.ours_haus, q.anchor_haus).c_str());
+        std::printf("\n");
+    }
+    std::printf("| mesh | triangles | chain ours s | native s | time ratio | ours B/tri | native B/tri |\n"
+                "|---|---|---|---|---|---|---|\n");
+    for (const MeshResult& m : results)
+        std::printf("| %s | %zu | %.3f | %.3f | %s | %.0f | %.0f |\n", m.name.c_str(), m.triangles, m.ours_s,
+                    m.native_s, ratioText(m.ours_s, m.native_s).c_str(), m.ours_bytes, m.native_bytes);
 }
 
 } // namespace
@@ -342,6 +410,10 @@ int main(int argc, char** argv) {
             args.samples = uint32_t(std::strtoul(value().c_str(), nullptr, 10));
         else if (a == "--skip-node")
             args.run_node = false;
+        else if (a == "--speed-only")
+            args.speed_only = true;
+        else if (a == "--runs")
+            args.runs = int(std::strtol(value().c_str(), nullptr, 10));
         else if (!a.empty() && a[0] == '-') {
             std::fprintf(stderr, "error: unknown option %s\n", a.c_str());
             return 2;
@@ -356,6 +428,8 @@ int main(int argc, char** argv) {
     std::printf("simplify_bench: distances relative to the input's bounding-box diagonal, %u samples per side "
                 "plus vertices; ratio columns are ours / meshoptimizer 1.3 (lower is better for mean and haus)\n",
                 args.samples);
-    for (const std::string& name : args.meshes) benchMesh(args, name);
+    std::vector<MeshResult> results;
+    for (const std::string& name : args.meshes) results.push_back(benchMesh(args, name));
+    printSummary(results, args.speed_only);
     return 0;
 }

@@ -63,7 +63,8 @@ private:
     bool canRemove(uint32_t point, bool feature_edge) const;
     // Outgoing half-edges of `point`, one per incident face; returns false if the fan is open.
     bool gatherFan(uint32_t point, std::vector<uint32_t>& fan) const;
-    Kind classify(uint32_t point);
+    Kind classify(uint32_t point); // gathers the fan into fan_tmp_
+    Kind classifyFan(const std::vector<uint32_t>& fan, bool closed) const;
     bool evaluate(uint32_t edge, Candidate& c) const;
     void collectPairs(uint32_t edge, uint32_t removed, WedgePair* pairs, int& pair_count) const;
     bool isValid(const Candidate& c, int& pair_count, WedgePair* pairs);
@@ -71,11 +72,18 @@ private:
         bool ready = false;
         Vec3d normal; // summed face normals of both fans, computed when a sliver needs it
     };
+    // Rejects flips and too-large normal rotations; tracks the worst squared face quality of the
+    // neighbourhood before (min_old2) and after (min_new2).
     bool checkFaces(const std::vector<uint32_t>& fan, uint32_t moved, const Vec3d& p, uint32_t f0, uint32_t f1,
-                    RegionNormal& region, double& min_old, double& min_new) const;
+                    RegionNormal& region, double& min_old2, double& min_new2) const;
+    // True when two normals with dot product d and squared lengths len2_a, len2_b are further apart
+    // than max_normal_change_deg.
+    bool normalTurnsTooFar(double d, double len2_a, double len2_b) const;
     // Largest squared point distance of a valid collapse (fans from isValid): the endpoints' old
     // positions to the new fan, and the new position to the old fans.
     double endpointDistance2(const Candidate& c, double floor2) const;
+    // An upper bound of endpointDistance2 from a few point-segment distances.
+    double distanceBound2(const Candidate& c) const;
     // False when a face of `fan` (other than f0/f1) would flip or degenerate in any UV set.
     bool checkUvFaces(const std::vector<uint32_t>& fan, const Vec3d& p, uint32_t f0, uint32_t f1,
                       const WedgePair* pairs, int pair_count) const;
@@ -94,7 +102,8 @@ private:
     uint32_t uv_set_count_ = 0;
     std::vector<uint32_t> face_chart_;  // UV chart (representative face) per face
     std::vector<uint32_t> chart_alive_; // alive faces per chart representative
-    std::vector<float> penalty_;        // per canonical half-edge: point-distance price from its last pop (run())
+    bool has_penalty_ = false; // tip_distance_weight > 0: the queue payload of an edge is its point-distance
+                               // price from its last pop (run())
 
     // Points (distinct positions) and wedges (distinct position + attributes).
     std::vector<Vec3f> position_;
@@ -125,6 +134,7 @@ private:
     double max_error_done_ = 0;
 
     std::vector<uint32_t> fan_u_, fan_v_, fan_tmp_;
+    bool fan_u_closed_ = true, fan_v_closed_ = true; // from the last isValid
 };
 
 } // namespace lodbake::detail
