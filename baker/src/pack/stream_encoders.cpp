@@ -10,8 +10,9 @@ const char* const kStreamExtensions[] = {"LODBAKE_valence_compression", "LODBAKE
 }
 
 std::vector<PackStreamEncoder> builtinStreamEncoders() {
-    // TODO(bake): register the valence and progressive-fan encoders when the codec and pfrep modules land.
-    return {};
+    std::vector<PackStreamEncoder> encoders;
+    encoders.push_back(valenceStreamEncoder());
+    return encoders;
 }
 
 Status checkCompact(const PackDescription& description) {
@@ -24,10 +25,11 @@ Status checkCompact(const PackDescription& description) {
                 for (const PackExtension& e : list)
                     if (e.is_stream) return Status::okStatus();
         }
-    std::string missing;
-    for (const char* name : kStreamExtensions) missing += (missing.empty() ? "" : " and ") + std::string(name);
-    return unsupported("--compact needs compressed streams, but " + missing +
-                       " are not produced by this baker yet (bake without --compact)");
+    std::string names;
+    for (const char* name : kStreamExtensions) names += (names.empty() ? "" : " or ") + std::string(name);
+    return unsupported("--compact needs compressed streams (" + names +
+                       "), but no level got one (the valence stream codes single-primitive levels only); bake "
+                       "without --compact");
 }
 
 } // namespace lodbake

@@ -3,6 +3,9 @@
 // referenced vertices, each measured exactly against the other surface (closest point on triangle
 // through a TriangleBvh). Same definitions as ../shared/eval/meshdist.py.
 //
+// Speed: the points of a side are measured in Morton (Z-curve) order of their position, so
+// consecutive queries are close in space and the previous answer bounds the next query tightly.
+//
 // Determinism: sample k of a side is drawn from a counter-based generator (splitmix64 of seed, side
 // and k), so it does not depend on which thread draws it. Points are processed in chunks of a fixed
 // size; each chunk writes its max / sum / sum of squares into its own slot and the slots are combined
@@ -14,6 +17,7 @@
 #include <cmath>
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/parallel.h"
@@ -36,6 +40,27 @@ uint64_t splitmix64(uint64_t x) {
 // Uniform in [0, 1) with 53 random bits.
 double toUnit(uint64_t bits) {
     return double(bits >> 11) * (1.0 / 9007199254740992.0);
+}
+
+constexpr uint32_t kMortonCells = 1u << 21; // per axis: 3 x 21 bits fill a 63-bit code
+
+// Spreads the low 21 bits of x so that bit i lands at bit 3i.
+uint64_t spreadBits(uint64_t x) {
+    x &= 0x1fffffull;
+    x = (x | (x << 32)) & 0x1f00000000ffffull;
+    x = (x | (x << 16)) & 0x1f0000ff0000ffull;
+    x = (x | (x << 8)) & 0x100f00f00f00f00full;
+    x = (x | (x << 4)) & 0x10c30c30c30c30c3ull;
+    x = (x | (x << 2)) & 0x1249249249249249ull;
+    return x;
+}
+
+// Z-order code of a point already scaled to [0, kMortonCells - 1] per axis (clamped).
+uint64_t mortonCode(const Vec3d& q) {
+    auto cell = [](double v) {
+        return uint64_t(std::min(std::max(v, 0.0), double(kMortonCells - 1)));
+    };
+    return spreadBits(cell(q.x)) | (spreadBits(cell(q.y)) << 1) | (spreadBits(cell(q.z)) << 2);
 }
 
 double triangleArea(const Mesh& mesh, size_t t) {
@@ -132,12 +157,30 @@ Result<SideStats> measureSide(const Mesh& from, const Mesh& to_mesh, const Trian
         return a * (1.0 - r1) + b * (r1 * (1.0 - u2)) + c * (r1 * u2);
     };
 
+    // Points and their Morton codes, then the visiting order: by code, ties by point index.
+    std::vector<Vec3d> points(point_count);
+    std::vector<std::pair<uint64_t, uint32_t>> order(point_count);
+    const Aabb box = computeBounds(from);
+    const Vec3d box_min = toDouble(box.min);
+    const Vec3d extent = toDouble(box.max) - box_min;
+    const double max_extent = std::max({extent.x, extent.y, extent.z, 1e-300});
+    const double scale = double(kMortonCells - 1) / max_extent;
+    LODBAKE_RETURN_IF_ERROR(parallelFor(chunk_count, 1, [&](size_t chunk) {
+        const size_t end = std::min(point_count, (chunk + 1) * kChunkSize);
+        for (size_t i = chunk * kChunkSize; i < end; ++i) {
+            points[i] = pointAt(i);
+            const Vec3d q = (points[i] - box_min) * scale;
+            order[i] = {mortonCode(q), uint32_t(i)};
+        }
+    }));
+    std::sort(order.begin(), order.end());
+
     LODBAKE_RETURN_IF_ERROR(parallelFor(chunk_count, 1, [&](size_t chunk) {
         SideStats s;
         const size_t end = std::min(point_count, (chunk + 1) * kChunkSize);
         FaceId previous = FaceId::invalid();
-        for (size_t i = chunk * kChunkSize; i < end; ++i) {
-            const Vec3d p = pointAt(i);
+        for (size_t k = chunk * kChunkSize; k < end; ++k) {
+            const Vec3d& p = points[order[k].second];
             // Consecutive points are usually near each other: the previous answer's distance is a
             // tight bound that prunes most of the tree. The minimum found is the same either way.
             double previous_sq = std::numeric_limits<double>::infinity();
