@@ -156,7 +156,7 @@ void drawMesh(SheetImage& image, std::vector<float>& depth, uint32_t cell_x, uin
                     const float d = std::min({w0 * std::fabs(area) / std::max(len0, 1e-6f),
                                               w1 * std::fabs(area) / std::max(len1, 1e-6f),
                                               w2 * std::fabs(area) / std::max(len2, 1e-6f)});
-                    const float ink = std::clamp(1.0f - (d - 0.4f), 0.0f, 1.0f) * 0.85f;
+                    const float ink = std::clamp(1.0f - d / 0.75f, 0.0f, 1.0f) * 0.8f;
                     for (int k = 0; k < 3; ++k) colour[k] = colour[k] * (1 - ink) + kWireColour[k] * ink;
                 }
                 uint8_t* out = &image.rgb[pixel * 3];

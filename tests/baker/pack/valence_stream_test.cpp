@@ -237,7 +237,8 @@ size_t checkRoundTrip(const std::vector<uint8_t>& glb, const std::string& name, 
         const lodrt::BufferViewInfo& iv = pack.bufferView(ia.buffer_view);
         const uint8_t* ib = bin + iv.byte_offset + ia.byte_offset;
         const uint32_t isize = lodrt::componentSize(ia.component_type);
-        ASSERT_EQ(ia.count, d.indices.size()) << name;
+        EXPECT_EQ(ia.count, d.indices.size()) << name;
+        if (ia.count != d.indices.size()) continue;
         size_t mismatched = 0;
         for (size_t t = 0; t < d.indices.size(); t += 3) {
             uint32_t plain[3] = {0, 0, 0};
@@ -254,7 +255,8 @@ size_t checkRoundTrip(const std::vector<uint8_t>& glb, const std::string& name, 
         for (uint32_t a = 0; a < prim.attribute_count; ++a)
             if (pack.attribute(prim.first_attribute + a).name == "POSITION")
                 position = pack.attribute(prim.first_attribute + a).accessor;
-        ASSERT_NE(position, lodrt::kNoIndex);
+        EXPECT_NE(position, lodrt::kNoIndex) << name;
+        if (position == lodrt::kNoIndex) continue;
         const lodrt::AccessorInfo& pa = pack.accessor(position);
         const uint8_t* pb = bin + pack.bufferView(pa.buffer_view).byte_offset + pa.byte_offset;
         const double step = quantizationStep(d.info);
@@ -282,14 +284,15 @@ CommandResult validateObjects(const std::vector<std::string>& files) {
     return runCommand(command);
 }
 
-// Every shared scan, baked with a light preset (two levels, few error samples): every level that has
-// one primitive carries a stream, and every stream round-trips. The extension objects of all packs
+// Every shared scan, baked with a light preset (no repair, two levels, few error samples): every level
+// carries a stream (every scan is one primitive), and every stream round-trips. The extension objects of all packs
 // are checked against the schema.
 TEST(ValenceStreamSharedMeshesTest, EveryScanRoundTripsThroughTheRuntimeDecoder) {
     LODBAKE_REQUIRE_SHARED_MESHES();
     BakeSettings settings;
-    settings.lod_ratios = {0.2, 0.02};
-    settings.error_samples = 5000;
+    settings.repair = false;
+    settings.lod_ratios = {0.1, 0.01};
+    settings.error_samples = 1000;
     settings.textures.enabled = false;
     settings.threads = 2;
     std::vector<nlohmann::json> objects;
