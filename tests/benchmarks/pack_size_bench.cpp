@@ -2,8 +2,9 @@
 // same pipeline as the CLI; texture levels off, since only geometry is compared) against gltfpack -cc
 // (npm gltfpack from scripts/node-bench, meshopt compression, its default quantization) writing the
 // same levels as one file per level with -si R for R in 1.0 0.5 0.25 0.1 0.03 0.01, the sizes summed.
-// gltfpack reads the scan as a plain GLB written by lodbake (same streams: positions, normals and UVs
-// where the scan has them; textures and materials dropped on both sides). Prints both totals and
+// gltfpack reads the repaired scan (the pack's LOD0: repairMesh, as bake runs it) as a plain GLB
+// written by lodbake, so both sides code the same streams (positions, the normals repair computes,
+// UVs where the scan has them; textures and materials dropped on both sides). Prints both totals and
 // our/gltfpack per scan; the bar is <= 0.5.
 //
 // usage: pack_size_bench [MESH...]   (default: the untextured shared scans)
@@ -17,6 +18,7 @@
 #include <vector>
 
 #include "lodbake/bake/bake.h"
+#include "lodbake/cleanup/repair.h"
 #include "lodbake/config/bake_config.h"
 #include "lodbake/core/diagnostics.h"
 #include "lodbake/core/file_io.h"
@@ -84,9 +86,18 @@ int main(int argc, char** argv) {
             return 1;
         }
         stripMaterials(loaded->mesh);
-        const size_t triangles = loaded->mesh.faceCount();
         const std::string stem = fs::path(path).stem().string();
-        lodbake::Result<lodbake::GltfFiles> source = lodbake::writeGltfToMemory(loaded->mesh, {});
+        lodbake::Mesh repaired = loaded->mesh;
+        if (settings.repair) {
+            lodbake::Result<lodbake::RepairReport> repair =
+                lodbake::repairMesh(repaired, lodbake::RepairOptions{}, stem, diagnostics);
+            if (!repair.ok()) {
+                std::fprintf(stderr, "error: %s\n", repair.status().message().c_str());
+                return 1;
+            }
+        }
+        const size_t triangles = repaired.faceCount();
+        lodbake::Result<lodbake::GltfFiles> source = lodbake::writeGltfToMemory(repaired, {});
         if (!source.ok()) {
             std::fprintf(stderr, "error: %s: %s\n", path.c_str(), source.status().message().c_str());
             return 1;
