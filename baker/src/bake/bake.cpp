@@ -58,7 +58,8 @@ Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vect
     chain_options.ratios = settings.lod_ratios;
     chain_options.screen = screen;
     chain_options.distance.sample_count = settings.error_samples;
-    chain_options.record_collapses = !encoders.empty();
+    chain_options.record_collapses = false;
+    for (const PackStreamEncoder& encoder : encoders) chain_options.record_collapses |= encoder.needs_collapses;
     Result<LodChain> chain_result = buildLodChain(mesh, chain_options, slot.diagnostics);
     if (!chain_result.ok())
         return Status(chain_result.status().code(), input.name + ": " + chain_result.status().message());

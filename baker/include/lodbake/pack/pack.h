@@ -85,6 +85,7 @@ std::vector<double> msftScreenCoverage(const LodMetrics& metrics);
 /// A compressed-stream encoder: adds its extension to level `level_index` of an asset.
 struct PackStreamEncoder {
     std::string extension_name;
+    bool needs_collapses = false; // reads chain.sequence (the chain then records its collapses)
     std::function<Status(const LodChain& chain, size_t level_index, PackLevel& level)> encode;
 };
 
