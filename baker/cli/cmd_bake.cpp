@@ -56,7 +56,8 @@ options:
   --threads N           worker threads (default: all; the output bytes do not depend on it)
   --levels LIST         override lod_ratios: comma-separated triangle ratios in (0, 1]
   --pixels P            override pixel_threshold
-  --compact             put the compressed-stream extensions in extensionsRequired
+  --compact             compressed-only pack: valence streams replace the plain level data
+  --no-progressive-fans do not embed LOD0's PFRep blob (preset key progressive_fans)
   --report R.json       write per-level metrics, texture sizes, cache use and stage timings as JSON
   --depfile OUT.d       write a Makefile-syntax depfile listing every file read
   --cache-dir DIR       reuse packs whose inputs, settings and baker version are unchanged
@@ -74,6 +75,7 @@ struct CliOverrides {
     bool has_pixels = false;
     double pixels = 0;
     bool compact = false;
+    bool no_progressive_fans = false;
 };
 
 void applyOverrides(const CliOverrides& o, BakeSettings& s) {
@@ -81,6 +83,7 @@ void applyOverrides(const CliOverrides& o, BakeSettings& s) {
     if (o.has_levels) s.lod_ratios = o.levels;
     if (o.has_pixels) s.pixel_threshold = o.pixels;
     if (o.compact) s.compact = true;
+    if (o.no_progressive_fans) s.progressive_fans = false;
 }
 
 bool isFolderTarget(const std::string& out) {
@@ -212,6 +215,7 @@ int runBake(int argc, char** argv) {
                     {"--levels", nullptr, true},
                     {"--pixels", nullptr, true},
                     {"--compact", nullptr, false},
+                    {"--no-progressive-fans", nullptr, false},
                     {"--report", nullptr, true},
                     {"--depfile", nullptr, true},
                     {"--cache-dir", nullptr, true},
@@ -259,6 +263,7 @@ int runBake(int argc, char** argv) {
         overrides.pixels = p;
     }
     overrides.compact = args.flags.count("--compact") > 0;
+    overrides.no_progressive_fans = args.flags.count("--no-progressive-fans") > 0;
     applyOverrides(overrides, base);
 
     // The jobs.

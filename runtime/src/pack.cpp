@@ -292,6 +292,9 @@ struct PackLoader {
             JsonValue name = required.at(i);
             if (!name.isString())
                 return fail(Result::BadGltf, "/extensionsRequired/%u: expected an extension name string", i);
+            // Streams lodrt has decoders for (lodrt/valence.h, lodrt/pfrep.h) are not worth a warning.
+            if (name.string() == "LODBAKE_valence_compression" || name.string() == "LODBAKE_progressive_fans")
+                continue;
             char pointer[64], shown[96];
             std::snprintf(pointer, sizeof(pointer), "/extensionsRequired/%u", i);
             escapePointerToken(name.string(), shown, sizeof(shown));

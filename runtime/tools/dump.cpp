@@ -1,6 +1,13 @@
 // loddump: prints a summary of a pack (GLB or .gltf) using only the runtime. The only lodrt program
-// that opens files; everything it shows comes from lodrt::loadPack.
+// that opens files; everything it shows comes from lodrt::loadPack and the lodrt stream decoders.
+// --render draws a contact sheet (contact_sheet.h) and writes it through a PNG module loaded with
+// dlopen (png_module.cpp), so OpenImageIO costs nothing unless a picture is asked for.
+#include <dlfcn.h>
+#include <unistd.h>
+
+#include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
@@ -9,7 +16,10 @@
 #include <string_view>
 #include <vector>
 
+#include "contact_sheet.h"
 #include "lodrt/lodrt.h"
+#include "lodrt/pfrep.h"
+#include "lodrt/valence.h"
 
 namespace {
 
@@ -18,13 +28,18 @@ constexpr int kExitBadPack = 1;
 constexpr int kExitUsage = 2;
 
 void printUsage(std::FILE* out) {
-    std::fprintf(out, "usage: loddump PACK [--json] [--level N]\n"
+    std::fprintf(out, "usage: loddump PACK [--json] [--level N] [--render OUT.png [--wireframe]]\n"
                       "Prints the LOD groups (MSFT_lod + LODBAKE_lod_metrics: per level triangles, vertices,\n"
-                      "errors, screen coverage, switch distance, bytes), then meshes, primitives, accessors and\n"
-                      "problems of a .glb/.gltf pack. --level N shows only level N of each group (and only\n"
-                      "those meshes). Checks: MSFT_lod ids in range and without cycles, screen coverage not\n"
-                      "increasing and errors not decreasing from one level to the next.\n"
-                      "Exit status: 0 ok, 1 bad pack or failed LOD check, 2 usage.\n");
+                      "errors, screen coverage, switch distance, bytes per stream: plain accessors,\n"
+                      "LODBAKE_valence_compression, LODBAKE_progressive_fans, each with its ratio to the same\n"
+                      "data as float32/uint32), then meshes, primitives, accessors and problems of a .glb/.gltf\n"
+                      "pack. --level N shows only level N of each group (and only those meshes).\n"
+                      "Checks: MSFT_lod ids in range and without cycles, screen coverage not increasing and\n"
+                      "errors not decreasing from one level to the next, every compressed stream decodes and\n"
+                      "matches the plain accessors, PFRep full detail agrees with the chain's level 0.\n"
+                      "--render OUT.png draws every level of every group side by side (flat shaded; with\n"
+                      "--wireframe the triangle edges too) and writes the picture with OpenImageIO.\n"
+                      "Exit status: 0 ok, 1 bad pack or failed check, 2 usage.\n");
 }
 
 bool readFile(const char* path, std::vector<uint8_t>* bytes, std::string* error) {
@@ -118,6 +133,11 @@ struct LodLevelRow {
     double hausdorff = 0, mean = 0, hausdorff_rel = 0, mean_rel = 0, switch_distance = 0, metric_coverage = 0;
     bool has_coverage = false;
     double coverage = 0; // MSFT_screencoverage
+    // Bytes stored per stream, and the same data as float32 components / uint32 indices ("raw").
+    uint64_t plain_bytes = 0, plain_raw = 0;
+    uint64_t valence_bytes = 0, valence_raw = 0;
+    uint64_t pfrep_bytes = 0, pfrep_raw = 0;
+    bool has_valence = false, has_pfrep = false;
 };
 
 struct LodGroup {
@@ -135,15 +155,106 @@ struct LodReport {
     std::vector<Problem> problems;
 };
 
+constexpr std::string_view kValence = "LODBAKE_valence_compression";
+constexpr std::string_view kPfrep = "LODBAKE_progressive_fans";
+
+// The accessor's data as float32 components / uint32 indices.
+uint64_t rawBytes(const lodrt::AccessorInfo& acc) {
+    return acc.count * lodrt::componentCount(acc.type) * 4;
+}
+
+// The bytes of buffer view `index` when lodrt can see them (the GLB BIN chunk); null otherwise.
+const uint8_t* viewBytes(const lodrt::Pack& pack, uint64_t index, uint64_t* size) {
+    if (index >= pack.bufferViewCount()) return nullptr;
+    const lodrt::BufferViewInfo& view = pack.bufferView(uint32_t(index));
+    const lodrt::BufferInfo& buffer = pack.buffer(view.buffer);
+    const lodrt::GlbView& c = pack.container();
+    if (!buffer.is_glb_bin || !c.bin || view.byte_offset + view.byte_length > c.bin_size) return nullptr;
+    *size = view.byte_length;
+    return c.bin + view.byte_offset;
+}
+
+// The buffer view an extension object names in `member`, or kNoIndex when absent or not an index.
+uint32_t extensionView(const lodrt::Pack& pack, lodrt::JsonValue object, std::string_view member) {
+    uint64_t view = 0;
+    if (!object.find(member).asUint64(&view) || view >= pack.bufferViewCount()) return lodrt::kNoIndex;
+    return uint32_t(view);
+}
+
+// Element e of an accessor, component k, as uint32 (indices) or float; false when lodrt cannot see
+// the data (no buffer view, or an external buffer).
+const uint8_t* accessorBase(const lodrt::Pack& pack, uint32_t index, uint64_t* stride) {
+    const lodrt::AccessorInfo& acc = pack.accessor(index);
+    if (acc.buffer_view == lodrt::kNoIndex || acc.is_sparse) return nullptr;
+    uint64_t size = 0;
+    const uint8_t* view = viewBytes(pack, acc.buffer_view, &size);
+    if (!view) return nullptr;
+    const uint32_t view_stride = pack.bufferView(acc.buffer_view).byte_stride;
+    *stride = view_stride ? view_stride : acc.element_size;
+    if (acc.count > 0 && acc.byte_offset + (acc.count - 1) * *stride + acc.element_size > size) return nullptr;
+    return view + acc.byte_offset;
+}
+
+bool readIndices(const lodrt::Pack& pack, uint32_t index, std::vector<uint32_t>* out) {
+    uint64_t stride = 0;
+    const uint8_t* base = accessorBase(pack, index, &stride);
+    const lodrt::AccessorInfo& acc = pack.accessor(index);
+    if (!base || acc.type != lodrt::AccessorType::Scalar) return false;
+    out->resize(acc.count);
+    for (uint64_t i = 0; i < acc.count; ++i) {
+        const uint8_t* p = base + i * stride;
+        switch (acc.component_type) {
+        case lodrt::ComponentType::UnsignedByte:
+            (*out)[i] = p[0];
+            break;
+        case lodrt::ComponentType::UnsignedShort:
+            (*out)[i] = uint32_t(p[0]) | uint32_t(p[1]) << 8;
+            break;
+        case lodrt::ComponentType::UnsignedInt:
+            (*out)[i] = uint32_t(p[0]) | uint32_t(p[1]) << 8 | uint32_t(p[2]) << 16 | uint32_t(p[3]) << 24;
+            break;
+        default:
+            return false;
+        }
+    }
+    return true;
+}
+
+bool readPositions(const lodrt::Pack& pack, uint32_t index, std::vector<float>* out) {
+    uint64_t stride = 0;
+    const uint8_t* base = accessorBase(pack, index, &stride);
+    const lodrt::AccessorInfo& acc = pack.accessor(index);
+    if (!base || acc.type != lodrt::AccessorType::Vec3 || acc.component_type != lodrt::ComponentType::Float)
+        return false;
+    out->resize(acc.count * 3);
+    for (uint64_t i = 0; i < acc.count; ++i) std::memcpy(&(*out)[i * 3], base + i * stride, 12);
+    return true;
+}
+
+uint32_t findAttribute(const lodrt::Pack& pack, const lodrt::PrimitiveInfo& prim, std::string_view name) {
+    for (uint32_t a = 0; a < prim.attribute_count; ++a)
+        if (pack.attribute(prim.first_attribute + a).name == name) return pack.attribute(prim.first_attribute + a).accessor;
+    return lodrt::kNoIndex;
+}
+
 // Sizes of a mesh: vertices and bytes count each accessor once (primitives of one level share streams).
 void measureMesh(const lodrt::Pack& pack, uint32_t mesh_index, LodLevelRow& row) {
     const lodrt::MeshInfo& mesh = pack.mesh(mesh_index);
-    std::vector<uint32_t> seen;
-    auto count = [&](uint32_t accessor) {
-        for (uint32_t a : seen)
+    std::vector<uint32_t> seen, seen_valence;
+    auto once = [](std::vector<uint32_t>& list, uint32_t accessor) {
+        for (uint32_t a : list)
             if (a == accessor) return false;
-        seen.push_back(accessor);
-        row.bytes += pack.accessor(accessor).byte_length;
+        list.push_back(accessor);
+        return true;
+    };
+    auto count = [&](uint32_t accessor) {
+        if (!once(seen, accessor)) return false;
+        const lodrt::AccessorInfo& acc = pack.accessor(accessor);
+        row.bytes += acc.byte_length;
+        if (acc.buffer_view != lodrt::kNoIndex) {
+            row.plain_bytes += acc.byte_length;
+            row.plain_raw += rawBytes(acc);
+        }
         return true;
     };
     for (uint32_t p = 0; p < mesh.primitive_count; ++p) {
@@ -154,6 +265,163 @@ void measureMesh(const lodrt::Pack& pack, uint32_t mesh_index, LodLevelRow& row)
             const lodrt::AttributeInfo& attr = pack.attribute(prim.first_attribute + a);
             if (count(attr.accessor) && attr.name == "POSITION") row.vertices += pack.accessor(attr.accessor).count;
         }
+        const lodrt::JsonValue valence = prim.json.find("extensions").find(kValence);
+        if (valence.isObject()) {
+            row.has_valence = true;
+            const uint32_t view = extensionView(pack, valence, "bufferView");
+            if (view != lodrt::kNoIndex) row.valence_bytes += pack.bufferView(view).byte_length;
+            // What the stream replaces: the attributes it supplies and the indices.
+            const lodrt::JsonValue attributes = valence.find("attributes");
+            for (uint32_t k = 0; k < attributes.size(); ++k) {
+                const uint32_t accessor = findAttribute(pack, prim, attributes.keyAt(k));
+                if (accessor != lodrt::kNoIndex && once(seen_valence, accessor))
+                    row.valence_raw += rawBytes(pack.accessor(accessor));
+            }
+            if (prim.indices != lodrt::kNoIndex && once(seen_valence, prim.indices))
+                row.valence_raw += rawBytes(pack.accessor(prim.indices));
+        }
+    }
+    const lodrt::JsonValue pfrep = mesh.json.find("extensions").find(kPfrep);
+    if (pfrep.isObject()) {
+        row.has_pfrep = true;
+        const uint32_t view = extensionView(pack, pfrep, "bufferView");
+        if (view != lodrt::kNoIndex) row.pfrep_bytes += pack.bufferView(view).byte_length;
+        // A PFRep codes the whole refinement of this mesh: compare it with its positions and indices.
+        for (uint32_t p = 0; p < mesh.primitive_count; ++p) {
+            const lodrt::PrimitiveInfo& prim = pack.primitive(mesh.first_primitive + p);
+            const uint32_t position = findAttribute(pack, prim, "POSITION");
+            if (position != lodrt::kNoIndex) row.pfrep_raw += rawBytes(pack.accessor(position));
+            row.pfrep_raw += prim.triangle_count * 12;
+        }
+    }
+}
+
+// A level's triangles, from the plain accessors or, when they have no data, from the valence stream.
+struct DecodedPrimitive {
+    std::vector<float> positions;
+    std::vector<uint32_t> indices;
+};
+
+// Decodes primitive `p` of mesh `m`'s LODBAKE_valence_compression stream. Returns false with *error
+// set when it fails to decode or contradicts the primitive; *seen is false when there is no stream
+// or its bytes are not visible to lodrt (external buffer), which is not an error.
+bool decodeValencePrimitive(const lodrt::Pack& pack, uint32_t prim_index, DecodedPrimitive* out, bool* seen,
+                            std::string* error) {
+    *seen = false;
+    const lodrt::PrimitiveInfo& prim = pack.primitive(prim_index);
+    const lodrt::JsonValue ext = prim.json.find("extensions").find(kValence);
+    if (!ext.isObject()) return true;
+    const uint32_t view = extensionView(pack, ext, "bufferView");
+    if (view == lodrt::kNoIndex) {
+        *seen = true;
+        *error = "bufferView: expected a buffer view index below " + std::to_string(pack.bufferViewCount());
+        return false;
+    }
+    uint64_t size = 0;
+    const uint8_t* data = viewBytes(pack, view, &size);
+    if (!data) return true;
+    *seen = true;
+    lodrt::ValenceInfo info;
+    lodrt::Result r = lodrt::valenceReadInfo(data, size_t(size), &info);
+    if (r != lodrt::Result::Ok) {
+        *error = std::string("stream fails to decode: header: ") + lodrt::resultName(r);
+        return false;
+    }
+    if (info.triangle_count != prim.triangle_count || info.vertex_count != prim.vertex_count) {
+        *error = "stream has " + std::to_string(info.vertex_count) + " vertices and " +
+                 std::to_string(info.triangle_count) + " triangles, the primitive " + std::to_string(prim.vertex_count) +
+                 " and " + std::to_string(prim.triangle_count);
+        return false;
+    }
+    out->positions.assign(size_t(info.vertex_count) * 3, 0.0f);
+    out->indices.assign(size_t(info.triangle_count) * 3, 0);
+    std::vector<float> normals(info.has_normals ? size_t(info.vertex_count) * 3 : 0);
+    std::vector<uint64_t> scratch((lodrt::valenceScratchSize(info) + 7) / 8);
+    lodrt::ValenceOutput output;
+    output.indices = out->indices.data();
+    output.index_capacity = out->indices.size();
+    output.positions = out->positions.data();
+    output.position_capacity = out->positions.size();
+    output.normals = normals.empty() ? nullptr : normals.data();
+    output.normal_capacity = normals.size();
+    output.scratch = scratch.data();
+    output.scratch_size = scratch.size() * 8;
+    r = lodrt::valenceDecode(data, size_t(size), output);
+    if (r != lodrt::Result::Ok) {
+        *error = std::string("stream fails to decode: ") + lodrt::resultName(r);
+        return false;
+    }
+    // Where the plain accessors have data, they must hold the same triangles (each possibly rotated)
+    // in the same order, and the same positions up to the quantization step.
+    std::vector<uint32_t> plain;
+    if (prim.indices != lodrt::kNoIndex && readIndices(pack, prim.indices, &plain) && plain.size() == out->indices.size()) {
+        for (size_t t = 0; t < plain.size(); t += 3) {
+            const uint32_t* d = &out->indices[t];
+            bool same = false;
+            for (int k = 0; k < 3 && !same; ++k)
+                same = d[0] == plain[t + size_t(k)] && d[1] == plain[t + size_t(k + 1) % 3] &&
+                       d[2] == plain[t + size_t(k + 2) % 3];
+            if (!same) {
+                *error = "decoded triangle " + std::to_string(t / 3) + " differs from the plain indices";
+                return false;
+            }
+        }
+    }
+    std::vector<float> plain_positions;
+    const uint32_t position = findAttribute(pack, prim, "POSITION");
+    if (position != lodrt::kNoIndex && readPositions(pack, position, &plain_positions) &&
+        plain_positions.size() == out->positions.size()) {
+        const double step = double(info.cube_size) / double((1u << info.position_bits) - 1);
+        for (size_t i = 0; i < plain_positions.size(); ++i) {
+            const double diff = std::fabs(double(plain_positions[i]) - double(out->positions[i]));
+            if (!(diff <= step + 1e-6 * double(info.cube_size))) {
+                char buf[160];
+                std::snprintf(buf, sizeof(buf), "decoded vertex %zu is %.3g from the plain position (step %.3g)",
+                              i / 3, diff, step);
+                *error = buf;
+                return false;
+            }
+        }
+    }
+    return true;
+}
+
+// Checks every compressed stream of the pack: valence streams decode and agree with the primitive;
+// PFRep blobs open and code the same full-detail triangle count as the mesh they sit on.
+void checkStreams(const lodrt::Pack& pack, std::vector<Problem>& problems) {
+    for (uint32_t m = 0; m < pack.meshCount(); ++m) {
+        const lodrt::MeshInfo& mesh = pack.mesh(m);
+        const std::string mesh_pointer = "/meshes/" + std::to_string(m);
+        uint64_t mesh_triangles = 0;
+        for (uint32_t p = 0; p < mesh.primitive_count; ++p) {
+            mesh_triangles += pack.primitive(mesh.first_primitive + p).triangle_count;
+            DecodedPrimitive decoded;
+            bool seen = false;
+            std::string error;
+            if (!decodeValencePrimitive(pack, mesh.first_primitive + p, &decoded, &seen, &error))
+                problems.push_back(
+                    {mesh_pointer + "/primitives/" + std::to_string(p) + "/extensions/" + std::string(kValence), error});
+        }
+        const lodrt::JsonValue pfrep = mesh.json.find("extensions").find(kPfrep);
+        if (!pfrep.isObject()) continue;
+        const std::string where = mesh_pointer + "/extensions/" + std::string(kPfrep);
+        const uint32_t view = extensionView(pack, pfrep, "bufferView");
+        uint64_t size = 0;
+        const uint8_t* data = view == lodrt::kNoIndex ? nullptr : viewBytes(pack, view, &size);
+        if (view == lodrt::kNoIndex) {
+            problems.push_back({where, "bufferView: expected a buffer view index"});
+            continue;
+        }
+        if (!data) continue;
+        lodrt::PfrepModel model;
+        const lodrt::Result r = lodrt::openPfrep(data, size_t(size), &model);
+        if (r != lodrt::Result::Ok) {
+            problems.push_back({where, std::string("stream fails to decode: ") + lodrt::resultName(r)});
+            continue;
+        }
+        if (model.level0_triangles != mesh_triangles)
+            problems.push_back({where, "PFRep full detail has " + std::to_string(model.level0_triangles) +
+                                           " triangles, the mesh (chain level 0) " + std::to_string(mesh_triangles)});
     }
 }
 
@@ -272,6 +540,7 @@ LodReport analyseLods(const lodrt::Pack& pack) {
         }
         report.groups.push_back(std::move(group));
     }
+    checkStreams(pack, report.problems);
     return report;
 }
 
@@ -279,12 +548,24 @@ bool levelSelected(int level_filter, uint32_t level) {
     return level_filter < 0 || uint32_t(level_filter) == level;
 }
 
+// "BYTES RATIO" for one stream column, "-" when the level has no such stream.
+std::string streamCell(bool present, uint64_t bytes, uint64_t raw) {
+    if (!present) return "-";
+    char buf[48];
+    if (raw > 0)
+        std::snprintf(buf, sizeof(buf), "%llu %.3f", ull(bytes), double(bytes) / double(raw));
+    else
+        std::snprintf(buf, sizeof(buf), "%llu -", ull(bytes));
+    return buf;
+}
+
 void printLodText(const lodrt::Pack& pack, const LodReport& report, int level_filter) {
     for (const LodGroup& g : report.groups) {
         std::printf("lod group \"%s\" (node %u): %zu levels\n", printable(pack.node(g.root).name).c_str(), g.root,
                     g.levels.size());
-        std::printf("  %-5s %5s %5s %10s %10s %12s %12s %10s %12s %10s\n", "level", "node", "mesh", "triangles",
-                    "vertices", "hausdorff", "mean", "coverage", "switch_dist", "bytes");
+        std::printf("  %-5s %5s %5s %10s %10s %11s %11s %9s %11s %17s %17s %17s\n", "level", "node", "mesh",
+                    "triangles", "vertices", "hausdorff", "mean", "coverage", "switch_dist", "plain  ratio",
+                    "valence  ratio", "pfrep  ratio");
         for (uint32_t l = 0; l < g.levels.size(); ++l) {
             if (!levelSelected(level_filter, l)) continue;
             const LodLevelRow& r = g.levels[l];
@@ -295,10 +576,21 @@ void printLodText(const lodrt::Pack& pack, const LodReport& report, int level_fi
                 std::snprintf(sw, sizeof(sw), "%.4g", r.switch_distance);
             }
             if (r.has_coverage) std::snprintf(cov, sizeof(cov), "%.4g", r.coverage);
-            std::printf("  %-5u %5u %5d %10llu %10llu %12s %12s %10s %12s %10llu\n", l, r.node,
+            std::printf("  %-5u %5u %5d %10llu %10llu %11s %11s %9s %11s %17s %17s %17s\n", l, r.node,
                         r.mesh == lodrt::kNoIndex ? -1 : int(r.mesh), ull(r.triangles), ull(r.vertices), hd, mn, cov,
-                        sw, ull(r.bytes));
+                        sw, streamCell(true, r.plain_bytes, r.plain_raw).c_str(),
+                        streamCell(r.has_valence, r.valence_bytes, r.valence_raw).c_str(),
+                        streamCell(r.has_pfrep, r.pfrep_bytes, r.pfrep_raw).c_str());
         }
+        uint64_t plain = 0, plain_raw = 0, valence = 0, valence_raw = 0;
+        for (const LodLevelRow& r : g.levels) {
+            plain += r.plain_bytes;
+            plain_raw += r.plain_raw;
+            valence += r.valence_bytes;
+            valence_raw += r.valence_raw;
+        }
+        std::printf("  all levels: plain %s, valence %s\n", streamCell(true, plain, plain_raw).c_str(),
+                    streamCell(valence > 0, valence, valence_raw).c_str());
     }
 }
 
@@ -317,11 +609,22 @@ std::string lodJson(const lodrt::Pack& pack, const LodReport& report, int level_
             std::snprintf(buf, sizeof(buf),
                           "{\"level\": %u, \"node\": %u, \"triangles\": %llu, \"vertices\": %llu, \"bytes\": %llu, "
                           "\"hausdorffError\": %.17g, \"meanError\": %.17g, \"switchDistance\": %.17g, "
-                          "\"screenCoverage\": %.17g}",
+                          "\"screenCoverage\": %.17g, \"streams\": {\"plain\": {\"bytes\": %llu, \"rawBytes\": %llu}",
                           l, r.node, ull(r.triangles), ull(r.vertices), ull(r.bytes), r.hausdorff, r.mean,
-                          r.switch_distance, r.coverage);
+                          r.switch_distance, r.coverage, ull(r.plain_bytes), ull(r.plain_raw));
+            std::string streams = buf;
+            if (r.has_valence) {
+                std::snprintf(buf, sizeof(buf), ", \"valence\": {\"bytes\": %llu, \"rawBytes\": %llu}",
+                              ull(r.valence_bytes), ull(r.valence_raw));
+                streams += buf;
+            }
+            if (r.has_pfrep) {
+                std::snprintf(buf, sizeof(buf), ", \"pfrep\": {\"bytes\": %llu, \"rawBytes\": %llu}",
+                              ull(r.pfrep_bytes), ull(r.pfrep_raw));
+                streams += buf;
+            }
             out += first ? "\n      " : ",\n      ";
-            out += buf;
+            out += streams + "}}";
             first = false;
         }
         out += "]}";
@@ -461,11 +764,120 @@ void printJson(const char* path, const lodrt::Pack* pack, const char* error, con
     std::fwrite(out.data(), 1, out.size(), stdout);
 }
 
+// The level's triangles for the picture: every primitive's plain data, or its decoded valence stream
+// when the plain accessors carry none (compact packs).
+loddump::SheetMesh levelTriangles(const lodrt::Pack& pack, const LodLevelRow& row, uint32_t level) {
+    loddump::SheetMesh out;
+    out.label = "L" + std::to_string(level) + " " + std::to_string(row.triangles) + " tris";
+    if (row.mesh == lodrt::kNoIndex) return out;
+    const lodrt::MeshInfo& mesh = pack.mesh(row.mesh);
+    for (uint32_t p = 0; p < mesh.primitive_count; ++p) {
+        const lodrt::PrimitiveInfo& prim = pack.primitive(mesh.first_primitive + p);
+        if (prim.mode != 4) continue;
+        DecodedPrimitive d;
+        const uint32_t position = findAttribute(pack, prim, "POSITION");
+        bool ok = position != lodrt::kNoIndex && readPositions(pack, position, &d.positions);
+        if (ok) {
+            if (prim.indices != lodrt::kNoIndex) {
+                ok = readIndices(pack, prim.indices, &d.indices);
+            } else {
+                d.indices.resize(d.positions.size() / 3);
+                for (size_t i = 0; i < d.indices.size(); ++i) d.indices[i] = uint32_t(i);
+            }
+        }
+        if (!ok) {
+            bool seen = false;
+            std::string error;
+            d = DecodedPrimitive();
+            if (!decodeValencePrimitive(pack, mesh.first_primitive + p, &d, &seen, &error) || !seen) continue;
+        }
+        const uint32_t base = uint32_t(out.positions.size() / 3);
+        out.positions.insert(out.positions.end(), d.positions.begin(), d.positions.end());
+        for (uint32_t i : d.indices) out.indices.push_back(base + i);
+    }
+    return out;
+}
+
+using WriteRgb8 = int (*)(const char*, const uint8_t*, uint32_t, uint32_t, char*, size_t);
+
+// Loads the PNG module: $LODDUMP_OIIO_MODULE, then beside the executable (installed:
+// ../lib/lodbake/), then the build tree.
+WriteRgb8 loadImageWriter(std::string* error) {
+#ifdef LODDUMP_OIIO_MODULE_NAME
+    std::vector<std::string> candidates;
+    if (const char* env = std::getenv("LODDUMP_OIIO_MODULE")) candidates.push_back(env);
+    char exe[4096];
+    const ssize_t n = readlink("/proc/self/exe", exe, sizeof(exe) - 1);
+    if (n > 0) {
+        exe[n] = '\0';
+        std::string dir(exe);
+        dir = dir.substr(0, dir.find_last_of('/'));
+        candidates.push_back(dir + "/../lib/lodbake/" LODDUMP_OIIO_MODULE_NAME);
+        candidates.push_back(dir + "/" LODDUMP_OIIO_MODULE_NAME);
+    }
+    candidates.push_back(LODDUMP_OIIO_MODULE_BUILD_PATH);
+    std::string tried;
+    for (const std::string& path : candidates) {
+        void* handle = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
+        if (!handle) {
+            const char* why = dlerror();
+            tried += "\n  " + path + ": " + (why ? why : "?");
+            continue;
+        }
+        void* entry = dlsym(handle, "loddump_write_rgb8");
+        if (entry) return reinterpret_cast<WriteRgb8>(entry);
+        tried += "\n  " + path + ": no loddump_write_rgb8";
+    }
+    *error = "cannot load the PNG module (OpenImageIO):" + tried;
+#else
+    *error = "this loddump was built without OpenImageIO, so --render is not available";
+#endif
+    return nullptr;
+}
+
+int renderSheet(const lodrt::Pack& pack, const LodReport& report, int level_filter, const char* out_path,
+                bool wireframe) {
+    std::vector<std::vector<loddump::SheetMesh>> rows;
+    for (const LodGroup& g : report.groups) {
+        rows.emplace_back();
+        for (uint32_t l = 0; l < g.levels.size(); ++l)
+            if (levelSelected(level_filter, l)) rows.back().push_back(levelTriangles(pack, g.levels[l], l));
+    }
+    if (report.groups.empty()) {
+        // No LOD group: one row of every mesh instanced by a node.
+        rows.emplace_back();
+        for (uint32_t n = 0; n < pack.nodeCount(); ++n) {
+            LodLevelRow row;
+            row.mesh = pack.node(n).mesh;
+            if (row.mesh == lodrt::kNoIndex) continue;
+            measureMesh(pack, row.mesh, row);
+            rows.back().push_back(levelTriangles(pack, row, uint32_t(rows.back().size())));
+        }
+    }
+    loddump::SheetOptions options;
+    options.wireframe = wireframe;
+    const loddump::SheetImage image = loddump::renderContactSheet(rows, options);
+    std::string error;
+    const WriteRgb8 write = loadImageWriter(&error);
+    char message[512] = "";
+    if (!write) {
+        std::fprintf(stderr, "error: %s: %s\n", out_path, error.c_str());
+        return kExitBadPack;
+    }
+    if (write(out_path, image.rgb.data(), image.width, image.height, message, sizeof(message)) != 0) {
+        std::fprintf(stderr, "error: %s: %s\n", out_path, message);
+        return kExitBadPack;
+    }
+    return kExitOk;
+}
+
 } // namespace
 
 int main(int argc, char** argv) {
     const char* path = nullptr;
     bool as_json = false;
+    bool wireframe = false;
+    const char* render_path = nullptr;
     int level_filter = -1;
     for (int i = 1; i < argc; ++i) {
         const std::string_view arg = argv[i];
@@ -481,6 +893,15 @@ int main(int argc, char** argv) {
             }
             level_filter = int(value);
             ++i;
+        } else if (arg == "--render") {
+            if (i + 1 >= argc || *argv[i + 1] == '\0') {
+                std::fprintf(stderr, "error: --render expects an output image path (OUT.png)\n");
+                printUsage(stderr);
+                return kExitUsage;
+            }
+            render_path = argv[++i];
+        } else if (arg == "--wireframe") {
+            wireframe = true;
         } else if (arg == "-h" || arg == "--help") {
             printUsage(stdout);
             return kExitOk;
@@ -497,6 +918,11 @@ int main(int argc, char** argv) {
         }
     }
     if (!path) {
+        printUsage(stderr);
+        return kExitUsage;
+    }
+    if (wireframe && !render_path) {
+        std::fprintf(stderr, "error: --wireframe needs --render OUT.png\n");
         printUsage(stderr);
         return kExitUsage;
     }
@@ -524,10 +950,12 @@ int main(int argc, char** argv) {
     } else {
         printText(path, pack, lods, level_filter);
     }
+    int status = kExitOk;
+    if (render_path) status = renderSheet(pack, lods, level_filter, render_path, wireframe);
     if (!lods.problems.empty()) {
         std::fprintf(stderr, "error: %s: %s: %s\n", path, lods.problems[0].pointer.c_str(),
                      lods.problems[0].message.c_str());
         return kExitBadPack;
     }
-    return kExitOk;
+    return status;
 }

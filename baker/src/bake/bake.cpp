@@ -59,7 +59,8 @@ Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vect
     chain_options.ratios = settings.lod_ratios;
     chain_options.screen = screen;
     chain_options.distance.sample_count = settings.error_samples;
-    chain_options.record_collapses = !encoders.empty();
+    chain_options.record_collapses = false;
+    for (const PackStreamEncoder& encoder : encoders) chain_options.record_collapses |= encoder.needs_collapses;
     StageTimer chain_timer(hooks, index, BakeStage::LodChain);
     Result<LodChain> chain_result = buildLodChain(mesh, chain_options, slot.diagnostics);
     if (!chain_result.ok())
@@ -163,7 +164,10 @@ Result<BakeOutput> bake(std::vector<BakeInput> inputs, const BakeSettings& setti
         const int n = seen[input.name]++;
         if (n > 0) input.name += "_" + std::to_string(n);
     }
-    const std::vector<PackStreamEncoder> encoders = builtinStreamEncoders();
+    std::vector<PackStreamEncoder> encoders;
+    for (PackStreamEncoder& encoder : builtinStreamEncoders())
+        if (settings.progressive_fans || encoder.extension_name != "LODBAKE_progressive_fans")
+            encoders.push_back(std::move(encoder));
     PackDescription description;
     description.compact = settings.compact;
     // Fail before the expensive stages when no stream encoder exists at all.

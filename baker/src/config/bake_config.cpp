@@ -121,6 +121,7 @@ Status applyImpl(const Json& root, const std::string& name, BakeSettings& s) {
          [&](const Json& v, const std::string&) { return applyObject(v, name, "/textures", texture_handlers); }},
         {"threads", [&](const Json& v, const std::string& w) { return readUint(v, w, 0, 1024, s.threads); }},
         {"compact", [&](const Json& v, const std::string& w) { return readBool(v, w, s.compact); }},
+        {"progressive_fans", [&](const Json& v, const std::string& w) { return readBool(v, w, s.progressive_fans); }},
     };
     return applyObject(root, name, "", handlers);
 }
@@ -172,6 +173,7 @@ std::string settingsToJson(const BakeSettings& s) {
                          {"texels_per_pixel", s.textures.texels_per_pixel}};
         j["threads"] = s.threads;
         j["compact"] = s.compact;
+        j["progressive_fans"] = s.progressive_fans;
         return j.dump(2) + "\n";
     } catch (const std::exception&) {
         return "{}\n"; // dump only throws on invalid UTF-8, which these keys cannot contain

@@ -35,18 +35,108 @@ tinygltf::Value toValue(const nlohmann::json& j) {
     return tinygltf::Value();
 }
 
+// Where an extension object with buffer-view members sits, so the members can be renumbered when
+// the buffer is compacted.
+struct ViewPatch {
+    enum class Scope { Mesh, Primitive, Node } scope = Scope::Mesh;
+    size_t object = 0;    // mesh or node index
+    size_t primitive = 0; // Scope::Primitive only
+    std::string extension;
+    std::string member;
+};
+
 Status addExtension(const PackExtension& e, BufferBuilder& buffer, tinygltf::ExtensionMap& target,
-                    std::set<std::string>& used, std::set<std::string>& streams) {
+                    std::set<std::string>& used, std::set<std::string>& streams, const ViewPatch& where,
+                    std::vector<ViewPatch>& patches) {
     nlohmann::json object = nlohmann::json::parse(e.json);
     if (!object.is_object()) return invalidInput("pack: extension " + e.name + ": expected a JSON object");
     if (e.blobs.size() != e.blob_view_members.size())
         return internalError("pack: extension " + e.name + ": blob and member counts differ");
-    for (size_t b = 0; b < e.blobs.size(); ++b)
+    for (size_t b = 0; b < e.blobs.size(); ++b) {
         object[e.blob_view_members[b]] = buffer.addView(e.blobs[b].data(), e.blobs[b].size(), 0);
+        ViewPatch patch = where;
+        patch.extension = e.name;
+        patch.member = e.blob_view_members[b];
+        patches.push_back(std::move(patch));
+    }
     target[e.name] = toValue(object);
     used.insert(e.name);
     if (e.is_stream) streams.insert(e.name);
     return Status::okStatus();
+}
+
+tinygltf::ExtensionMap& patchTarget(tinygltf::Model& model, const ViewPatch& p) {
+    switch (p.scope) {
+    case ViewPatch::Scope::Mesh:
+        return model.meshes[p.object].extensions;
+    case ViewPatch::Scope::Primitive:
+        return model.meshes[p.object].primitives[p.primitive].extensions;
+    case ViewPatch::Scope::Node:
+        break;
+    }
+    return model.nodes[p.object].extensions;
+}
+
+// Compact packs, as KHR_draco_mesh_compression does: the accessors a primitive's stream extension
+// supplies (its "attributes" map and the indices) keep count, type and min/max but lose their
+// buffer view, unless a primitive without such a stream also uses them. Then the buffer is rebuilt
+// from the views still referenced, in their original order, and every view index is renumbered.
+std::vector<uint8_t> dropStreamedAccessors(tinygltf::Model& model, const std::set<std::string>& streams,
+                                           const std::vector<uint8_t>& bytes, const std::vector<ViewPatch>& patches) {
+    std::set<int> covered, needed;
+    for (const tinygltf::Mesh& mesh : model.meshes)
+        for (const tinygltf::Primitive& primitive : mesh.primitives) {
+            std::set<std::string> supplied;
+            bool has_stream = false;
+            for (const auto& ext : primitive.extensions) {
+                if (!streams.count(ext.first)) continue;
+                has_stream = true;
+                const tinygltf::Value& attributes = ext.second.Get("attributes");
+                if (attributes.IsObject())
+                    for (const std::string& key : attributes.Keys()) supplied.insert(key);
+            }
+            for (const auto& attribute : primitive.attributes)
+                (supplied.count(attribute.first) ? covered : needed).insert(attribute.second);
+            if (primitive.indices >= 0) (has_stream ? covered : needed).insert(primitive.indices);
+        }
+    for (int a : covered)
+        if (!needed.count(a)) model.accessors[size_t(a)].bufferView = -1;
+
+    std::vector<int> views_used(model.bufferViews.size(), 0);
+    for (const tinygltf::Accessor& a : model.accessors)
+        if (a.bufferView >= 0) views_used[size_t(a.bufferView)] = 1;
+    for (const tinygltf::Image& i : model.images)
+        if (i.bufferView >= 0) views_used[size_t(i.bufferView)] = 1;
+    for (const ViewPatch& p : patches) {
+        const tinygltf::Value& v = patchTarget(model, p)[p.extension].Get(p.member);
+        if (v.IsInt()) views_used[size_t(v.Get<int>())] = 1;
+    }
+    std::vector<int> new_index(model.bufferViews.size(), -1);
+    std::vector<tinygltf::BufferView> views;
+    std::vector<uint8_t> out;
+    for (size_t i = 0; i < model.bufferViews.size(); ++i) {
+        if (!views_used[i]) continue;
+        tinygltf::BufferView view = model.bufferViews[i];
+        while (out.size() % 4 != 0) out.push_back(0);
+        const auto begin = bytes.begin() + std::ptrdiff_t(view.byteOffset);
+        view.byteOffset = out.size();
+        out.insert(out.end(), begin, begin + std::ptrdiff_t(view.byteLength));
+        new_index[i] = int(views.size());
+        views.push_back(std::move(view));
+    }
+    while (out.size() % 4 != 0) out.push_back(0);
+    model.bufferViews = std::move(views);
+    for (tinygltf::Accessor& a : model.accessors)
+        if (a.bufferView >= 0) a.bufferView = new_index[size_t(a.bufferView)];
+    for (tinygltf::Image& i : model.images)
+        if (i.bufferView >= 0) i.bufferView = new_index[size_t(i.bufferView)];
+    for (const ViewPatch& p : patches) {
+        tinygltf::ExtensionMap& target = patchTarget(model, p);
+        tinygltf::Value::Object object = target[p.extension].Get<tinygltf::Value::Object>();
+        object[p.member] = tinygltf::Value(new_index[size_t(object[p.member].Get<int>())]);
+        target[p.extension] = tinygltf::Value(std::move(object));
+    }
+    return out;
 }
 
 Result<std::vector<uint8_t>> writeImpl(const PackDescription& description) {
@@ -56,6 +146,7 @@ Result<std::vector<uint8_t>> writeImpl(const PackDescription& description) {
     BufferBuilder buffer(model);
     ModelDedupe dedupe;
     std::set<std::string> used, streams;
+    std::vector<ViewPatch> patches;
     tinygltf::Scene scene;
     for (const PackAsset& asset : description.assets) {
         if (asset.levels.empty()) return invalidInput("pack: asset \"" + asset.name + "\" has no levels");
@@ -69,13 +160,19 @@ Result<std::vector<uint8_t>> writeImpl(const PackDescription& description) {
                 return Status(mesh_index.status().code(), level_name + ": " + mesh_index.status().message());
             tinygltf::Mesh& gmesh = model.meshes[size_t(*mesh_index)];
             gmesh.name = level_name;
+            ViewPatch where;
+            where.object = size_t(*mesh_index);
             for (const PackExtension& e : level.mesh_extensions)
-                LODBAKE_RETURN_IF_ERROR(addExtension(e, buffer, gmesh.extensions, used, streams));
+                LODBAKE_RETURN_IF_ERROR(addExtension(e, buffer, gmesh.extensions, used, streams, where, patches));
             if (!level.primitive_extensions.empty() && level.primitive_extensions.size() != gmesh.primitives.size())
                 return internalError(level_name + ": primitive extension lists do not match the primitives");
-            for (size_t p = 0; p < level.primitive_extensions.size(); ++p)
+            where.scope = ViewPatch::Scope::Primitive;
+            for (size_t p = 0; p < level.primitive_extensions.size(); ++p) {
+                where.primitive = p;
                 for (const PackExtension& e : level.primitive_extensions[p])
-                    LODBAKE_RETURN_IF_ERROR(addExtension(e, buffer, gmesh.primitives[p].extensions, used, streams));
+                    LODBAKE_RETURN_IF_ERROR(
+                        addExtension(e, buffer, gmesh.primitives[p].extensions, used, streams, where, patches));
+            }
             tinygltf::Node node;
             node.name = l == 0 ? asset.name : level_name;
             node.mesh = *mesh_index;
@@ -98,8 +195,11 @@ Result<std::vector<uint8_t>> writeImpl(const PackDescription& description) {
                 root.extras = tinygltf::Value(std::move(extras));
             }
         }
+        ViewPatch where;
+        where.scope = ViewPatch::Scope::Node;
+        where.object = size_t(nodes[0]);
         for (const PackExtension& e : asset.node_extensions)
-            LODBAKE_RETURN_IF_ERROR(addExtension(e, buffer, root.extensions, used, streams));
+            LODBAKE_RETURN_IF_ERROR(addExtension(e, buffer, root.extensions, used, streams, where, patches));
         scene.nodes.push_back(nodes[0]);
     }
     if (scene.nodes.empty()) return invalidInput("pack: nothing to write");
@@ -110,6 +210,7 @@ Result<std::vector<uint8_t>> writeImpl(const PackDescription& description) {
 
     tinygltf::Buffer gbuffer;
     gbuffer.data = buffer.finish();
+    if (description.compact) gbuffer.data = dropStreamedAccessors(model, streams, gbuffer.data, patches);
     model.buffers.push_back(std::move(gbuffer));
     tinygltf::TinyGLTF writer;
     std::ostringstream stream;

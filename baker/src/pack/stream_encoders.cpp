@@ -15,7 +15,9 @@ namespace {
 // LODBAKE_progressive_fans on the full-detail mesh: its PFRep blob and the PFRep level matching each
 // level of the chain (schemas/LODBAKE_progressive_fans).
 PackStreamEncoder progressiveFansEncoder() {
-    return {"LODBAKE_progressive_fans", [](const LodChain& chain, size_t level_index, PackLevel& level) -> Status {
+    PackStreamEncoder encoder;
+    encoder.extension_name = "LODBAKE_progressive_fans";
+    encoder.encode = [](const LodChain& chain, size_t level_index, PackLevel& level) -> Status {
                 if (level_index != 0 || level.mesh.faceCount() == 0) return Status::okStatus();
                 std::vector<double> ratios{1.0};
                 for (const LodLevel& l : chain.levels) ratios.push_back(l.target_ratio);
@@ -27,17 +29,24 @@ PackStreamEncoder progressiveFansEncoder() {
                 e.json = std::move(object.json);
                 e.blobs.push_back(std::move(object.blob));
                 e.blob_view_members.push_back(kPfrepExtensionViewMember);
-                e.is_stream = true;
+                // Extra data beside the plain levels, never a replacement for them: a viewer that
+                // ignores it loses nothing, so it is not a stream --compact makes required.
+                e.is_stream = false;
                 level.mesh_extensions.push_back(std::move(e));
                 return Status::okStatus();
-            }};
+            };
+    return encoder;
 }
 
 } // namespace
 
 std::vector<PackStreamEncoder> builtinStreamEncoders() {
-    // TODO(bake): register the valence encoder when the codec module lands.
-    return {progressiveFansEncoder()};
+    // PFRep first: it builds its blob from LOD0 as baked, before the valence encoder renumbers the
+    // levels into its decoded vertex order.
+    std::vector<PackStreamEncoder> encoders;
+    encoders.push_back(progressiveFansEncoder());
+    encoders.push_back(valenceStreamEncoder());
+    return encoders;
 }
 
 Status checkCompact(const PackDescription& description) {
@@ -50,10 +59,11 @@ Status checkCompact(const PackDescription& description) {
                 for (const PackExtension& e : list)
                     if (e.is_stream) return Status::okStatus();
         }
-    std::string missing;
-    for (const char* name : kStreamExtensions) missing += (missing.empty() ? "" : " and ") + std::string(name);
-    return unsupported("--compact needs compressed streams, but " + missing +
-                       " are not produced by this baker yet (bake without --compact)");
+    std::string names;
+    for (const char* name : kStreamExtensions) names += (names.empty() ? "" : " or ") + std::string(name);
+    return unsupported("--compact needs compressed streams (" + names +
+                       "), but no level got one (the valence stream codes single-primitive levels only); bake "
+                       "without --compact");
 }
 
 } // namespace lodbake

@@ -66,9 +66,14 @@ Result<LodChain> buildLodChain(const Mesh& mesh, const LodChainOptions& options,
         // The input's BVH is built once for all levels.
         Result<DistanceReference> reference = DistanceReference::prepare(mesh);
         if (!reference.ok()) diagnostics.warn("lod chain: errors not measured: " + reference.status().message());
-        for (LodLevel& level : chain.levels) {
-            if (!reference.ok()) break;
-            Result<DistanceResult> d = measureSurfaceDistance(*reference, level.mesh, options.distance);
+        std::vector<const Mesh*> meshes;
+        for (const LodLevel& level : chain.levels) meshes.push_back(&level.mesh);
+        // All levels at once: they are measured in parallel, the reference's samples drawn once.
+        std::vector<Result<DistanceResult>> measured;
+        if (reference.ok()) measured = measureSurfaceDistances(*reference, meshes, options.distance);
+        for (size_t i = 0; i < measured.size(); ++i) {
+            LodLevel& level = chain.levels[i];
+            const Result<DistanceResult>& d = measured[i];
             if (!d.ok()) {
                 diagnostics.warn("lod chain: level ratio " + std::to_string(level.target_ratio) +
                                  ": error not measured: " + d.status().message());

@@ -167,15 +167,19 @@ TEST(LoddumpLodCheckTest, FlagsCyclesRisingCoverageAndFallingErrors) {
     }
 }
 
-// The progressive-fans stream is registered, so a compact pack lists it in extensionsRequired.
-TEST(BakeCliUsageTest, CompactListsTheStreamExtensionsAsRequired) {
+// A compact pack requires the valence stream (it replaces the plain data); the progressive-fans
+// blob is extra data a viewer may ignore, so it is used but not required.
+TEST(BakeCliUsageTest, CompactPackRequiresTheValenceStreamAndLoddumpDecodesIt) {
     const std::string out = outDir() + "/compact.glb";
     const CommandResult r =
         bake(shellQuote(src("assets/samples/rock_scan/rock_000.ply")) + " --compact -o " + shellQuote(out));
     ASSERT_EQ(r.exit_code, 0) << r.output;
     const nlohmann::json doc = lodbake_test::glbJson(bytesOf(out));
-    const nlohmann::json required = doc.value("extensionsRequired", nlohmann::json::array());
-    EXPECT_NE(std::find(required.begin(), required.end(), "LODBAKE_progressive_fans"), required.end()) << required;
+    EXPECT_EQ(doc["extensionsRequired"], nlohmann::json::array({"LODBAKE_valence_compression"}));
+    const CommandResult d = loddump(shellQuote(out));
+    EXPECT_EQ(d.exit_code, 0) << d.output;
+    const nlohmann::json used = doc.value("extensionsUsed", nlohmann::json::array());
+    EXPECT_NE(std::find(used.begin(), used.end(), "LODBAKE_progressive_fans"), used.end()) << used;
 }
 
 TEST(BakeCliUsageTest, PresetErrorsAndOverrides) {
@@ -190,6 +194,10 @@ TEST(BakeCliUsageTest, PresetErrorsAndOverrides) {
     EXPECT_EQ(printed["pixel_threshold"].get<double>(), 3.0);
     EXPECT_EQ(printed["threads"].get<int>(), 2);
     EXPECT_EQ(printed["viewport_height_px"].get<double>(), 720.0); // from the preset
+    EXPECT_TRUE(printed["progressive_fans"].get<bool>());
+    r = bake("--print-config --no-progressive-fans");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_FALSE(nlohmann::json::parse(r.output)["progressive_fans"].get<bool>());
     EXPECT_EQ(bake("x.ply -o out.gltf").exit_code, 2);
     EXPECT_EQ(bake("-o out.glb").exit_code, 2);
 }

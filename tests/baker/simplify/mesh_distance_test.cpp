@@ -207,6 +207,34 @@ TEST(MeshDistanceTest, PreparedReferenceGivesTheSameResult) {
     EXPECT_FALSE(lodbake::DistanceReference::prepare(lodbake_test::makeMesh({{0, 0, 0}}, {})).ok());
 }
 
+TEST(MeshDistanceTest, BatchOfLevelsEqualsOneByOneForAnyThreadCount) {
+    Mesh reference = perturbed(icosphere(4), 0.01f, 21);
+    std::vector<Mesh> levels = {perturbed(icosphere(3), 0.01f, 22), perturbed(icosphere(2), 0.02f, 23),
+                                lodbake_test::makeMesh({{0, 0, 0}}, {}), perturbed(icosphere(1), 0.02f, 24)};
+    std::vector<const Mesh*> pointers;
+    for (const Mesh& m : levels) pointers.push_back(&m);
+    lodbake::DistanceOptions options;
+    options.sample_count = 20000;
+    auto prepared = lodbake::DistanceReference::prepare(reference);
+    ASSERT_TRUE(prepared.ok());
+    for (int threads : {1, 2}) {
+        lodbake::ScopedThreadLimit limit(threads);
+        const auto batch = lodbake::measureSurfaceDistances(prepared.value(), pointers, options);
+        ASSERT_EQ(batch.size(), levels.size());
+        for (size_t i = 0; i < levels.size(); ++i) {
+            const auto single = lodbake::measureSurfaceDistance(prepared.value(), levels[i], options);
+            ASSERT_EQ(batch[i].ok(), single.ok()) << i;
+            if (!single.ok()) {
+                EXPECT_EQ(batch[i].status().message(), single.status().message());
+                continue;
+            }
+            EXPECT_EQ(batch[i]->hausdorff, single->hausdorff) << i;
+            EXPECT_EQ(batch[i]->mean, single->mean) << i;
+            EXPECT_EQ(batch[i]->rms, single->rms) << i;
+        }
+    }
+}
+
 TEST(MeshDistanceTest, RejectsDegenerateInput) {
     Mesh good = lodbake_test::tetrahedron();
     Mesh no_triangles = good;

@@ -34,6 +34,7 @@ struct BakeSettings {
     TextureLodSettings textures;
     uint32_t threads = 0; // worker threads; 0: all cores (the output does not depend on it)
     bool compact = false; // list our stream extensions in extensionsRequired
+    bool progressive_fans = true; // embed LOD0's PFRep blob (LODBAKE_progressive_fans) in the pack
 };
 
 /// Applies the preset text `json_text` (from file `name`, used in messages) over `settings`. Keys are

@@ -85,10 +85,28 @@ std::vector<double> msftScreenCoverage(const LodMetrics& metrics);
 /// A compressed-stream encoder: adds its extension to level `level_index` of an asset.
 struct PackStreamEncoder {
     std::string extension_name;
+    bool needs_collapses = false; // reads chain.sequence (the chain then records its collapses)
     std::function<Status(const LodChain& chain, size_t level_index, PackLevel& level)> encode;
 };
 
-/// The stream encoders built into this baker (none until the codec and pfrep modules land).
+/// Quantization of the LODBAKE_valence_compression streams. The defaults match gltfpack's default
+/// quantization (14-bit positions, 8-bit normals), so pack sizes compare like for like.
+struct ValenceStreamOptions {
+    uint32_t position_bits = 14; // 8..16, per coordinate in the bounding cube
+    uint32_t normal_bits = 8;    // octahedral bits per component, 4..16
+};
+
+/// The LODBAKE_valence_compression encoder (schemas/LODBAKE_valence_compression): codes a level
+/// whose mesh has a single primitive (at most one non-empty sub-mesh) with codec::encodeValence
+/// into one buffer view, and reorders the level's vertices and triangles into the decoded order, so
+/// the plain accessors and the decoded stream hold the same triangles with the same indices (uncoded
+/// attributes such as UVs stay plain and line up with the decoded vertices). Levels with several
+/// primitives are left without the extension. Fails when the codec rejects the mesh or when the
+/// decoded triangles are not the input's (an internal error).
+PackStreamEncoder valenceStreamEncoder(const ValenceStreamOptions& options = {});
+
+/// The stream encoders built into this baker, in the order they run (valence last: it renumbers the
+/// level's vertices).
 std::vector<PackStreamEncoder> builtinStreamEncoders();
 
 /// Compact packs need compressed streams: fails (Unsupported) naming the stream extensions that are

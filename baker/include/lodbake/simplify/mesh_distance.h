@@ -5,6 +5,7 @@
 // ../shared/eval/meshdist.py (same definitions) within sampling noise.
 
 #include <cstdint>
+#include <vector>
 
 #include "lodbake/core/bvh.h"
 #include "lodbake/core/mesh.h"
@@ -57,5 +58,13 @@ private:
 /// Same as measureSurfaceDistance(reference.mesh(), approx, options), with the same result.
 Result<DistanceResult> measureSurfaceDistance(const DistanceReference& reference, const Mesh& approx,
                                               const DistanceOptions& options = {});
+
+/// Measures every approximation against one reference: results[i] is exactly (bit for bit) what
+/// measureSurfaceDistance(reference, *approximations[i], options) returns, including its error. The
+/// reference side's points are drawn once, and the approximations are measured in parallel (the
+/// result does not depend on the thread count). Pointers must not be null.
+std::vector<Result<DistanceResult>> measureSurfaceDistances(const DistanceReference& reference,
+                                                            const std::vector<const Mesh*>& approximations,
+                                                            const DistanceOptions& options = {});
 
 } // namespace lodbake

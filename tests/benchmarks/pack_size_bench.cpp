@@ -1,0 +1,144 @@
+// Pack size benchmark: `lodbake bake MESH --preset configs/desktop.json --compact` (in process, the
+// same pipeline as the CLI; texture levels off, since only geometry is compared) against gltfpack -cc
+// (npm gltfpack from scripts/node-bench, meshopt compression, its default quantization) writing the
+// same levels as one file per level with -si R for R in 1.0 0.5 0.25 0.1 0.03 0.01, the sizes summed.
+// gltfpack reads the repaired scan (the pack's LOD0: repairMesh, as bake runs it) as a plain GLB
+// written by lodbake, so both sides code the same streams (positions, the normals repair computes,
+// UVs where the scan has them; textures and materials dropped on both sides). Prints both totals and
+// our/gltfpack per scan; the bar is <= 0.5.
+//
+// usage: pack_size_bench [MESH...]   (default: the untextured shared scans)
+// Not a ctest. Needs `npm ci` in scripts/node-bench.
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "lodbake/bake/bake.h"
+#include "lodbake/cleanup/repair.h"
+#include "lodbake/config/bake_config.h"
+#include "lodbake/core/diagnostics.h"
+#include "lodbake/core/file_io.h"
+#include "lodbake/gltf/gltf_io.h"
+#include "lodbake/io/mesh_io.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string shellQuote(const std::string& s) {
+    std::string out = "'";
+    for (char c : s) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    return out + "'";
+}
+
+void stripMaterials(lodbake::Mesh& mesh) {
+    mesh.textures.clear();
+    mesh.materials.clear();
+    for (lodbake::SubMesh& s : mesh.submeshes) s.material = lodbake::MaterialId::invalid();
+}
+
+} // namespace
+
+int main(int argc, char** argv) {
+    std::vector<std::string> meshes;
+    for (int i = 1; i < argc; ++i) {
+        if (argv[i][0] == '-') {
+            std::fprintf(stderr, "usage: pack_size_bench [MESH...]\n");
+            return 2;
+        }
+        meshes.push_back(argv[i]);
+    }
+    if (meshes.empty())
+        for (const char* name : {"bunny_zipper.ply", "igea.ply", "lucy100k.ply", "nefertiti.obj", "rocker_arm.obj",
+                                 "bunny_scan_bun000_tri.ply", "dragon_scan_stand0_tri.ply", "dragon_poisson.ply",
+                                 "dragon_stand_merged.ply", "fandisk.obj"})
+            meshes.push_back(std::string(LODBAKE_BENCH_MESHES_DIR) + "/" + name);
+    const std::string gltfpack = std::string(LODBAKE_BENCH_NODE_DIR) + "/node_modules/.bin/gltfpack";
+    if (!fs::exists(gltfpack)) {
+        std::fprintf(stderr, "error: %s missing: run `npm ci` in scripts/node-bench\n", gltfpack.c_str());
+        return 1;
+    }
+    const std::string out_dir = LODBAKE_BENCH_OUT_DIR;
+    fs::create_directories(out_dir);
+
+    lodbake::BakeSettings settings;
+    const lodbake::Status preset =
+        lodbake::applyPresetFile(std::string(LODBAKE_BENCH_SOURCE_DIR) + "/configs/desktop.json", settings);
+    if (!preset.ok()) {
+        std::fprintf(stderr, "error: %s\n", preset.message().c_str());
+        return 1;
+    }
+    settings.compact = true;
+    // gltfpack writes the levels only; PFRep (LODBAKE_progressive_fans) is extra data with no
+    // counterpart there, so the like-for-like pack leaves it out.
+    settings.progressive_fans = false;
+    settings.textures.enabled = false;
+    const double ratios[] = {1.0, 0.5, 0.25, 0.1, 0.03, 0.01};
+
+    std::printf("%-28s %10s %12s %12s %8s\n", "scan", "triangles", "ours_bytes", "gltfpack", "ratio");
+    double worst = 0;
+    for (const std::string& path : meshes) {
+        lodbake::Diagnostics diagnostics;
+        lodbake::Result<lodbake::LoadedMesh> loaded = lodbake::readMesh(path, lodbake::ReadOptions{}, diagnostics);
+        if (!loaded.ok()) {
+            std::fprintf(stderr, "error: %s\n", loaded.status().message().c_str());
+            return 1;
+        }
+        stripMaterials(loaded->mesh);
+        const std::string stem = fs::path(path).stem().string();
+        lodbake::Mesh repaired = loaded->mesh;
+        if (settings.repair) {
+            lodbake::Result<lodbake::RepairReport> repair =
+                lodbake::repairMesh(repaired, lodbake::RepairOptions{}, stem, diagnostics);
+            if (!repair.ok()) {
+                std::fprintf(stderr, "error: %s\n", repair.status().message().c_str());
+                return 1;
+            }
+        }
+        const size_t triangles = repaired.faceCount();
+        lodbake::Result<lodbake::GltfFiles> source = lodbake::writeGltfToMemory(repaired, {});
+        if (!source.ok()) {
+            std::fprintf(stderr, "error: %s: %s\n", path.c_str(), source.status().message().c_str());
+            return 1;
+        }
+        const std::string source_path = out_dir + "/" + stem + "_source.glb";
+        if (!lodbake::writeFileAtomic(source_path, source->main.data(), source->main.size()).ok()) return 1;
+
+        std::vector<lodbake::BakeInput> inputs(1);
+        inputs[0].name = stem;
+        inputs[0].mesh = std::move(loaded->mesh);
+        lodbake::Result<lodbake::BakeOutput> ours = lodbake::bake(std::move(inputs), settings, diagnostics);
+        if (!ours.ok()) {
+            std::fprintf(stderr, "error: %s: %s\n", path.c_str(), ours.status().message().c_str());
+            return 1;
+        }
+        if (!lodbake::writeFileAtomic(out_dir + "/" + stem + "_compact.glb", ours->glb.data(), ours->glb.size()).ok())
+            return 1;
+
+        uintmax_t theirs = 0;
+        for (double r : ratios) {
+            char name[64];
+            std::snprintf(name, sizeof(name), "_gltfpack_%g.glb", r);
+            const std::string out = out_dir + "/" + stem + name;
+            char si[32];
+            std::snprintf(si, sizeof(si), "%g", r);
+            const std::string command = shellQuote(gltfpack) + " -i " + shellQuote(source_path) + " -o " +
+                                        shellQuote(out) + " -cc -si " + si + " > /dev/null 2>&1";
+            if (std::system(command.c_str()) != 0 || !fs::exists(out)) {
+                std::fprintf(stderr, "error: gltfpack failed: %s\n", command.c_str());
+                return 1;
+            }
+            theirs += fs::file_size(out);
+        }
+        const double ratio = double(ours->glb.size()) / double(theirs);
+        worst = std::max(worst, ratio);
+        std::printf("%-28s %10zu %12zu %12ju %8.3f\n", stem.c_str(), triangles, ours->glb.size(), theirs, ratio);
+        std::fflush(stdout);
+    }
+    std::printf("worst ratio %.3f (bar <= 0.5): %s\n", worst, worst <= 0.5 ? "met" : "NOT met");
+    return 0;
+}
