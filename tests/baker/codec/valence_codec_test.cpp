@@ -340,10 +340,10 @@ TEST(ValenceDecoderSafetyTest, TrailingBytesBadMagicUnknownVersion) {
     magic[0] ^= 0x20;
     EXPECT_EQ(decodeChecked(magic), lodrt::Result::BadMagic);
     auto version = bytes;
-    version[4] = 2;
+    version[4] = 3;
     EXPECT_EQ(decodeChecked(version), lodrt::Result::UnsupportedVersion);
     auto bits = bytes;
-    bits[16] = 17;
+    bits[24] = 17;
     EXPECT_EQ(decodeChecked(bits), lodrt::Result::CorruptStream);
 }
 
