@@ -261,7 +261,7 @@ namespace {
 // Scratch layout, in order (each block 8-aligned): see valenceScratchSize.
 struct ScratchLayout {
     size_t corner_vertex, corner_opposite, vertex_flags, vertex_corner, vertex_valence, node_vertex, node_prev,
-        node_next, node_free, node_corner, stack_head, stack_size, final_of, conquest_of, qpos, qpos_final,
+        node_next, node_free, node_corner, completion, stack_head, stack_size, final_of, final_done, qpos, qpos_final,
         decoded, normal_sum, qnorm, total;
 };
 
@@ -285,10 +285,11 @@ ScratchLayout layout(const ValenceInfo& info) {
     l.node_next = take(nodes * 4);
     l.node_free = take(nodes * 4);
     l.node_corner = take(nodes * 4);
+    l.completion = take(vc * 4);
     l.stack_head = take(tc * 4);
     l.stack_size = take(tc * 4);
     l.final_of = take(vc * 4);
-    l.conquest_of = take(vn * 4);
+    l.final_done = take(vn);
     l.qpos = take(3 * vc * 4);
     l.qpos_final = take(3 * vn * 4);
     l.decoded = take(vc);
@@ -375,6 +376,7 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
     a.node_next = u32(l.node_next);
     a.node_free = u32(l.node_free);
     a.node_corner = u32(l.node_corner);
+    a.completion = u32(l.completion);
     a.stack_head = u32(l.stack_head);
     a.stack_size = u32(l.stack_size);
     a.max_vertices = vc;
@@ -385,10 +387,10 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
     if (!reader.rd.init(stream, info.connectivity_bytes)) return Result::CorruptStream;
     r = conquest.run(reader);
     if (r != Result::Ok) return r;
-    if (conquest.vertex_count != vc || conquest.triangle_count != tc) return Result::CorruptStream;
+    if (conquest.vertex_count != vc || conquest.triangle_count != tc || conquest.completion_count != vc)
+        return Result::CorruptStream;
 
     uint32_t* final_of = u32(l.final_of);
-    uint32_t* conquest_of = u32(l.conquest_of);
     uint32_t dup_count = 0;
     if (!reader.readU32(reader.dup, &dup_count) || dup_count > vc) return Result::CorruptStream;
     uint32_t dups_read = 0, dup_rank = kNone, dup_original = 0;
@@ -422,7 +424,6 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
             continue;
         }
         if (final_count >= vn) return Result::CorruptStream;
-        conquest_of[final_count] = v;
         final_of[v] = final_count++;
     }
     if (dup_rank != kNone || !reader.rd.finishedExactly()) return Result::CorruptStream;
@@ -437,7 +438,7 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
     }
     if (out_t != tn) return Result::CorruptStream;
 
-    // 2. Positions, in conquest order, then the vertices no triangle uses.
+    // 2. Positions, in the order positionOrder gives, then the vertices no triangle uses.
     stream += info.connectivity_bytes;
     RangeDecoder pos;
     if (!pos.init(stream, info.position_bytes)) return Result::CorruptStream;
@@ -447,18 +448,27 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
     int32_t* qpos = reinterpret_cast<int32_t*>(base + l.qpos);
     int32_t* qpos_final = reinterpret_cast<int32_t*>(base + l.qpos_final);
     uint8_t* decoded = base + l.decoded;
-    std::memset(decoded, 0, vc);
     const int32_t qmax = int32_t((1u << info.position_bits) - 1);
     int32_t last[3] = {(qmax + 1) / 2, (qmax + 1) / 2, (qmax + 1) / 2};
-    for (uint32_t v = 0; v < vc; ++v) {
+    // The node arrays are free again: they hold the position order and its scratch.
+    uint32_t* order = a.node_corner;
+    const uint32_t ordered_count =
+        detail::positionOrder(a.corner_vertex, a.corner_opposite, a.vertex_corner, a.vertex_flags, a.vertex_valence,
+                              vc, order, decoded, a.node_free, a.node_vertex, a.node_prev, a.node_next);
+    if (ordered_count == kNone) return Result::CorruptStream;
+    std::memset(decoded, 0, vc);
+    uint8_t* final_done = base + l.final_done;
+    std::memset(final_done, 0, vn);
+    for (uint32_t i = 0; i < ordered_count; ++i) {
+        const uint32_t v = order[i];
         const uint32_t fid = final_of[v];
         if (fid == kNone) continue;
         int32_t* q = &qpos[3 * size_t(v)];
-        if (conquest_of[fid] != v) {
-            const int32_t* src = &qpos[3 * size_t(conquest_of[fid])];
-            q[0] = src[0];
-            q[1] = src[1];
-            q[2] = src[2];
+        int32_t* qf = &qpos_final[3 * size_t(fid)];
+        if (final_done[fid]) {
+            q[0] = qf[0];
+            q[1] = qf[1];
+            q[2] = qf[2];
         } else {
             int32_t pred[3];
             uint32_t scale = 0, count = 0;
@@ -470,15 +480,16 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
             for (int j = 0; j < 3; ++j) {
                 int32_t res;
                 uint32_t length;
-                if (!pos_model.decode(pos, j, ctx, &res, &length)) return Result::CorruptStream;
+                if (!pos_model.decode(pos, j, ctx, &res, &length))
+                    return Result::CorruptStream;
                 const int32_t value = pred[j] + res;
                 if (value < 0 || value > qmax) return Result::CorruptStream;
                 q[j] = value;
             }
-            int32_t* qf = &qpos_final[3 * size_t(fid)];
             qf[0] = q[0];
             qf[1] = q[1];
             qf[2] = q[2];
+            final_done[fid] = 1;
         }
         last[0] = q[0];
         last[1] = q[1];
@@ -491,7 +502,8 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
         for (int j = 0; j < 3; ++j) {
             int32_t res;
             uint32_t length;
-            if (!pos_model.decode(pos, j, ctx, &res, &length)) return Result::CorruptStream;
+            if (!pos_model.decode(pos, j, ctx, &res, &length))
+                return Result::CorruptStream;
             const int32_t value = last[j] + res;
             if (value < 0 || value > qmax) return Result::CorruptStream;
             qpos_final[3 * fid + size_t(j)] = last[j] = value;
@@ -526,7 +538,7 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
         const uint32_t nb = info.normal_bits;
         const uint32_t mask = (1u << nb) - 1;
         const int32_t half = int32_t(1) << (nb - 1);
-        uint32_t previous_length[2] = {0, 0};
+        uint32_t nrm_length[2] = {0, 0};
         for (size_t x = 0; x < vn; ++x) {
             const int64_t* s3 = &sum[3 * x];
             uint32_t p[2];
@@ -542,11 +554,11 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
             for (int j = 0; j < 2; ++j) {
                 int32_t res;
                 uint32_t length;
-                const uint32_t ctx = previous_length[j] < kValenceNormalContexts ? previous_length[j]
+                const uint32_t ctx = nrm_length[j] < kValenceNormalContexts ? nrm_length[j]
                                                                                  : kValenceNormalContexts - 1;
                 if (!nrm_model.decode(nrm, j, ctx, &res, &length)) return Result::CorruptStream;
                 if (res < -half || res >= half) return Result::CorruptStream;
-                previous_length[j] = length;
+                nrm_length[j] = length;
                 qnorm[2 * x + size_t(j)] = (p[j] + uint32_t(res)) & mask;
             }
             if (nrm.overrun()) return Result::CorruptStream;

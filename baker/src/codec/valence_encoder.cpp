@@ -183,7 +183,7 @@ ClosedMesh buildClosed(const Mesh& mesh, const std::vector<uint8_t>& exploded) {
 // Signals a broken decoder assumption; `culprit` is a closed vertex to cut loose.
 struct Failure {
     bool failed = false;
-    uint32_t culprit_a = kNone, culprit_b = kNone;
+    uint32_t culprit_a = kNone, culprit_b = kNone, culprit_c = kNone;
 };
 
 struct EncoderIo {
@@ -244,6 +244,7 @@ struct EncoderIo {
         return newSymbol(lodrt::detail::kSeedContext, v, s);
     }
     uint32_t seed_index = 0;
+    uint32_t last_vertices[3] = {kNone, kNone, kNone};
     lodrt::Result newSymbol(uint32_t ctx, uint32_t v, VertexSymbol* s) {
         if (engine_id[v] != kNone) return fail(v, kNone);
         s->kind = m->source[v] == kNone ? VertexKind::Dummy : VertexKind::Add;
@@ -323,6 +324,7 @@ struct EncoderIo {
         }
         if (conquered[rt]) return fail(m->corner_vertex[3 * rt], m->corner_vertex[3 * rt + 1]);
         conquered[rt] = 1;
+        for (uint32_t i = 0; i < 3; ++i) last_vertices[i] = m->corner_vertex[3 * rt + i];
         for (uint32_t i = 0; i < 3; ++i) {
             const uint32_t ec = 3 * t + i, rc = real_of[ec];
             if (engine_id[m->corner_vertex[rc]] != a.corner_vertex[ec])
@@ -354,13 +356,13 @@ struct Attempt {
     RangeEncoder conn;
     Failure failure;
     std::vector<uint32_t> corner_vertex, corner_opposite, vertex_flags, vertex_corner, vertex_valence, node_vertex,
-        node_prev, node_next, node_free, node_corner, stack_head, stack_size;
+        node_prev, node_next, node_free, node_corner, completion, stack_head, stack_size;
 
     bool run(const Mesh& mesh, const std::vector<uint8_t>& exploded) {
         closed = buildClosed(mesh, exploded);
         const size_t vc = closed.source.size(), tc = closed.corner_vertex.size() / 3;
         for (auto* v : {&corner_vertex, &corner_opposite}) v->assign(3 * tc, 0);
-        for (auto* v : {&vertex_flags, &vertex_corner, &vertex_valence}) v->assign(vc, 0);
+        for (auto* v : {&vertex_flags, &vertex_corner, &vertex_valence, &completion}) v->assign(vc, 0);
         for (auto* v : {&node_vertex, &node_prev, &node_next, &node_free, &node_corner}) v->assign(vc + tc, 0);
         for (auto* v : {&stack_head, &stack_size}) v->assign(tc, 0);
         auto& a = engine.a;
@@ -374,6 +376,7 @@ struct Attempt {
         a.node_next = node_next.data();
         a.node_free = node_free.data();
         a.node_corner = node_corner.data();
+        a.completion = completion.data();
         a.stack_head = stack_head.data();
         a.stack_size = stack_size.data();
         a.max_vertices = uint32_t(vc);
@@ -385,8 +388,16 @@ struct Attempt {
         io.init();
         io.real_of.reserve(3 * tc);
         lodrt::Result r = engine.run(io);
-        if (r != lodrt::Result::Ok && !failure.failed) failure.failed = true;
-        if (!failure.failed && (engine.vertex_count != vc || engine.triangle_count != tc)) failure.failed = true;
+        if (r != lodrt::Result::Ok && !failure.failed) {
+            // The engine refused a step (e.g. a front pinched onto itself): blame the last triangle.
+            failure.failed = true;
+            failure.culprit_a = io.last_vertices[0];
+            failure.culprit_b = io.last_vertices[1];
+            failure.culprit_c = io.last_vertices[2];
+        }
+        if (!failure.failed &&
+            (engine.vertex_count != vc || engine.triangle_count != tc || engine.completion_count != vc))
+            failure.failed = true;
         return !failure.failed;
     }
 };
@@ -476,7 +487,7 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
         if (round < kMaxRestarts) {
             const Failure& f = attempt->failure;
             std::vector<uint8_t> culprit(vn, 0);
-            for (uint32_t cv : {f.culprit_a, f.culprit_b})
+            for (uint32_t cv : {f.culprit_a, f.culprit_b, f.culprit_c})
                 if (cv != kNone && attempt->closed.source[cv] != kNone) culprit[attempt->closed.source[cv]] = 1;
             for (size_t t = 0; t < fn; ++t) {
                 if (exploded[t]) continue;
@@ -495,7 +506,7 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
     // Final vertex order: conquest order without dummies and copies, then unreferenced vertices.
     std::vector<uint32_t> closed_of_engine(vc);
     for (uint32_t v = 0; v < vc; ++v) closed_of_engine[io.engine_id[v]] = v;
-    std::vector<uint32_t> final_of(vc, kNone), new_of(vn, kNone), conquest_of;
+    std::vector<uint32_t> final_of(vc, kNone), new_of(vn, kNone);
     std::vector<std::pair<uint32_t, uint32_t>> dups; // (rank among non-dummies, final id of the original)
     uint32_t final_count = 0, rank = 0;
     for (uint32_t ev = 0; ev < vc; ++ev) {
@@ -506,7 +517,6 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
             final_of[ev] = new_of[src];
         } else {
             new_of[src] = final_of[ev] = final_count++;
-            conquest_of.push_back(ev);
         }
         ++rank;
     }
@@ -532,20 +542,29 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
     }
     if (result.old_face_of.size() != fn) return internalError("valence encoder: triangle count mismatch");
 
-    // Positions in conquest order, predicted exactly as the decoder will.
+    // Positions in the order positionOrder gives, predicted exactly as the decoder will.
     RangeEncoder pos;
     ResidualModel<3, lodrt::detail::kPositionContexts> pos_model;
     pos_model.init();
     std::vector<int32_t> qpos(3 * size_t(vc), 0), qpos_final(3 * vn);
     std::vector<uint8_t> decoded(vc, 0);
     int32_t last[3] = {int32_t(qmax + 1) / 2, int32_t(qmax + 1) / 2, int32_t(qmax + 1) / 2};
-    for (uint32_t ev = 0; ev < vc; ++ev) {
+    std::vector<uint32_t> order(vc), degree(vc), stack0(vc), stack1(vc), stack2(vc);
+    const uint32_t ordered_count =
+        lodrt::detail::positionOrder(a.corner_vertex, a.corner_opposite, a.vertex_corner, a.vertex_flags,
+                                     a.vertex_valence, vc, order.data(), decoded.data(), degree.data(), stack0.data(),
+                                     stack1.data(), stack2.data());
+    if (ordered_count == kNone) return internalError("valence encoder: broken corner cycle");
+    std::fill(decoded.begin(), decoded.end(), uint8_t(0));
+    std::vector<uint8_t> final_done(vn, 0);
+    for (uint32_t i = 0; i < ordered_count; ++i) {
+        const uint32_t ev = order[i];
         const uint32_t fid = final_of[ev];
         if (fid == kNone) continue;
         const uint32_t src = cm.source[closed_of_engine[ev]];
         int32_t* q = &qpos[3 * size_t(ev)];
         for (int j = 0; j < 3; ++j) q[j] = qpos_in[3 * size_t(src) + size_t(j)];
-        if (conquest_of[fid] == ev) {
+        if (!final_done[fid]) {
             int32_t pred[3];
             uint32_t scale = 0, count = 0;
             if (!lodrt::detail::predictPosition(a.corner_vertex, a.corner_opposite, a.vertex_corner, decoded.data(),
@@ -554,6 +573,7 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
             const uint32_t ctx = lodrt::detail::scaleContext(scale, count);
             for (int j = 0; j < 3; ++j) pos.residual(pos_model, j, ctx, q[j] - pred[j]);
             for (int j = 0; j < 3; ++j) qpos_final[3 * size_t(fid) + size_t(j)] = q[j];
+            final_done[fid] = 1;
         }
         for (int j = 0; j < 3; ++j) last[j] = q[j];
         decoded[ev] = 1;
@@ -603,7 +623,7 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
         const uint32_t nb = options.normal_bits;
         const uint32_t mask = (1u << nb) - 1;
         const int32_t half = int32_t(1) << (nb - 1);
-        uint32_t previous_length[2] = {0, 0};
+        uint32_t nrm_length[2] = {0, 0};
         for (size_t x = 0; x < vn; ++x) {
             const int64_t* s3 = &sum[3 * x];
             uint32_t p[2];
@@ -619,8 +639,8 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
             for (int j = 0; j < 2; ++j) {
                 int32_t r = int32_t((qnorm[2 * x + size_t(j)] - p[j]) & mask);
                 if (r >= half) r -= int32_t(mask) + 1;
-                const uint32_t ctx = std::min(previous_length[j], kValenceNormalContexts - 1);
-                previous_length[j] = nrm.residual(nrm_model, j, ctx, r);
+                const uint32_t ctx = std::min(nrm_length[j], kValenceNormalContexts - 1);
+                nrm_length[j] = nrm.residual(nrm_model, j, ctx, r);
             }
         }
     }
