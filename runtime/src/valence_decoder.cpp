@@ -42,19 +42,18 @@ public:
         for (int i = 0; i < 5; ++i) code_ = (code_ << 8) | next();
         return true;
     }
+    // Branch-free: the decoded bits of well-mixed contexts are unpredictable, so select instead of
+    // branching on them.
     inline uint32_t bit(uint16_t& prob) {
-        const uint32_t bound = (range_ >> kRangeProbBits) * prob;
-        uint32_t result;
-        if (code_ < bound) {
-            range_ = bound;
-            prob = uint16_t(prob + (((1u << kRangeProbBits) - prob) >> kRangeAdaptShift));
-            result = 0;
-        } else {
-            code_ -= bound;
-            range_ -= bound;
-            prob = uint16_t(prob - (prob >> kRangeAdaptShift));
-            result = 1;
-        }
+        const uint32_t p = prob;
+        const uint32_t bound = (range_ >> kRangeProbBits) * p;
+        const uint32_t result = code_ >= bound ? 1u : 0u;
+        const uint32_t mask = 0u - result;
+        code_ -= bound & mask;
+        range_ = result ? range_ - bound : bound;
+        const uint32_t up = p + (((1u << kRangeProbBits) - p) >> kRangeAdaptShift);
+        const uint32_t down = p - (p >> kRangeAdaptShift);
+        prob = uint16_t(result ? down : up);
         if (range_ < kRangeTopValue) {
             range_ <<= 8;
             code_ = (code_ << 8) | next();
@@ -450,19 +449,80 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
     uint8_t* decoded = base + l.decoded;
     const int32_t qmax = int32_t((1u << info.position_bits) - 1);
     int32_t last[3] = {(qmax + 1) / 2, (qmax + 1) / 2, (qmax + 1) / 2};
-    // The node arrays are free again: they hold the position order and its scratch.
-    uint32_t* order = a.node_corner;
-    const uint32_t ordered_count =
-        detail::positionOrder(a.corner_vertex, a.corner_opposite, a.vertex_corner, a.vertex_flags, a.vertex_valence,
-                              vc, order, decoded, a.node_free, a.node_vertex, a.node_prev, a.node_next);
-    if (ordered_count == kNone) return Result::CorruptStream;
-    std::memset(decoded, 0, vc);
+    // detail::positionOrder and detail::predictPosition fused into one walk around each vertex (the
+    // encoder runs them separately; the round-trip tests hold the two to the same result). The node
+    // arrays are free again: they hold the order's degree counts and stacks.
     uint8_t* final_done = base + l.final_done;
     std::memset(final_done, 0, vn);
-    for (uint32_t i = 0; i < ordered_count; ++i) {
-        const uint32_t v = order[i];
+    std::memset(decoded, 0, vc);
+    uint32_t* degree = a.node_free;
+    for (uint32_t v = 0; v < vc; ++v) degree[v] = 0;
+    uint32_t* stack[3] = {a.node_vertex, a.node_prev, a.node_next};
+    uint32_t top[3] = {0, 0, 0};
+    const uint32_t* cv = a.corner_vertex;
+    const uint32_t* opp = a.corner_opposite;
+    uint32_t scan = 0;
+    for (;;) {
+        uint32_t v = kNone;
+        for (int level = 2; level >= 0 && v == kNone; --level) {
+            while (top[level] > 0) {
+                const uint32_t u = stack[level][--top[level]];
+                if (!decoded[u]) {
+                    v = u;
+                    break;
+                }
+            }
+        }
+        if (v == kNone) {
+            while (scan < vc && (decoded[scan] || (a.vertex_flags[scan] & detail::kFlagDummy))) ++scan;
+            if (scan == vc) break;
+            v = scan;
+        }
+        const uint32_t c0 = a.vertex_corner[v];
+        if (c0 == kNone) return Result::CorruptStream;
+        int64_t sum[3] = {0, 0, 0};
+        uint32_t count = 0, neighbour = kNone, scale = 0;
+        const uint32_t max_steps = a.vertex_valence[v];
+        uint32_t c = c0;
+        for (uint32_t steps = 0;; ++steps) {
+            if (steps > max_steps) return Result::CorruptStream;
+            const uint32_t cm = c % 3, t3 = c - cm;
+            const uint32_t cn = cm == 2 ? t3 : c + 1, cp = cm == 0 ? t3 + 2 : c - 1;
+            const uint32_t va = cv[cn], vb = cv[cp];
+            const uint32_t da = decoded[va], db = decoded[vb];
+            if (da & db) {
+                if (opp[c] == kNone) return Result::CorruptStream;
+                const uint32_t w = cv[opp[c]];
+                if (decoded[w]) {
+                    const int32_t* pa = &qpos[3 * size_t(va)];
+                    const int32_t* pb = &qpos[3 * size_t(vb)];
+                    const int32_t* pw = &qpos[3 * size_t(w)];
+                    sum[0] += int64_t(pa[0]) + pb[0] - pw[0];
+                    sum[1] += int64_t(pa[1]) + pb[1] - pw[1];
+                    sum[2] += int64_t(pa[2]) + pb[2] - pw[2];
+                    if (count == 0) {
+                        for (int k = 0; k < 3; ++k) {
+                            const uint32_t d = uint32_t(pa[k] > pb[k] ? pa[k] - pb[k] : pb[k] - pa[k]);
+                            if (d > scale) scale = d;
+                        }
+                    }
+                    ++count;
+                }
+            } else if (da | db) {
+                const uint32_t u = da ? vb : va;
+                if (!(a.vertex_flags[u] & detail::kFlagDummy)) {
+                    const uint32_t d = ++degree[u];
+                    if (d <= 3) stack[d - 1][top[d - 1]++] = u;
+                }
+            }
+            if (neighbour == kNone && da) neighbour = va;
+            const uint32_t o = opp[cn];
+            if (o == kNone) return Result::CorruptStream;
+            const uint32_t om = o % 3;
+            c = om == 2 ? o - 2 : o + 1;
+            if (c == c0) break;
+        }
         const uint32_t fid = final_of[v];
-        if (fid == kNone) continue;
         int32_t* q = &qpos[3 * size_t(v)];
         int32_t* qf = &qpos_final[3 * size_t(fid)];
         if (final_done[fid]) {
@@ -471,17 +531,18 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
             q[2] = qf[2];
         } else {
             int32_t pred[3];
-            uint32_t scale = 0, count = 0;
-            if (a.vertex_corner[v] == kNone ||
-                !detail::predictPosition(a.corner_vertex, a.corner_opposite, a.vertex_corner, decoded, qpos, v, last,
-                                         a.vertex_valence[v], pred, &scale, &count))
-                return Result::CorruptStream;
+            if (count > 0) {
+                for (int k = 0; k < 3; ++k) pred[k] = int32_t(detail::divRound(sum[k], count));
+            } else if (neighbour != kNone) {
+                for (int k = 0; k < 3; ++k) pred[k] = qpos[3 * size_t(neighbour) + size_t(k)];
+            } else {
+                for (int k = 0; k < 3; ++k) pred[k] = last[k];
+            }
             const uint32_t ctx = detail::scaleContext(scale, count);
             for (int j = 0; j < 3; ++j) {
                 int32_t res;
                 uint32_t length;
-                if (!pos_model.decode(pos, j, ctx, &res, &length))
-                    return Result::CorruptStream;
+                if (!pos_model.decode(pos, j, ctx, &res, &length)) return Result::CorruptStream;
                 const int32_t value = pred[j] + res;
                 if (value < 0 || value > qmax) return Result::CorruptStream;
                 q[j] = value;
