@@ -106,6 +106,10 @@ private:
     uint32_t overrun_ = 0;
 };
 
+// Corner arithmetic without a hardware divide (exact for every 32-bit corner number).
+inline uint32_t div3(uint32_t c) { return uint32_t((uint64_t(c) * 0xAAAAAAABull) >> 33); }
+inline uint32_t mul3(uint32_t t) { return t * 3; }
+
 constexpr uint32_t kClassProbs = 1u << kValenceClassTreeBits;
 constexpr uint32_t kTopProbs = 33;
 
@@ -486,7 +490,7 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
         uint32_t c = c0;
         for (uint32_t steps = 0;; ++steps) {
             if (steps > max_steps) return Result::CorruptStream;
-            const uint32_t cm = c % 3, t3 = c - cm;
+            const uint32_t t3 = mul3(div3(c)), cm = c - t3;
             const uint32_t cn = cm == 2 ? t3 : c + 1, cp = cm == 0 ? t3 + 2 : c - 1;
             const uint32_t va = cv[cn], vb = cv[cp];
             const uint32_t da = decoded[va], db = decoded[vb];
@@ -518,8 +522,7 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
             if (neighbour == kNone && da) neighbour = va;
             const uint32_t o = opp[cn];
             if (o == kNone) return Result::CorruptStream;
-            const uint32_t om = o % 3;
-            c = om == 2 ? o - 2 : o + 1;
+            c = o - mul3(div3(o)) == 2 ? o - 2 : o + 1;
             if (c == c0) break;
         }
         const uint32_t fid = final_of[v];
