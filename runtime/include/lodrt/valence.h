@@ -32,7 +32,8 @@ struct ValenceInfo {
 LODRT_API Result valenceReadInfo(const uint8_t* data, size_t size, ValenceInfo* info);
 
 /// Bytes of scratch valenceDecode needs (the conquest's corner table, active lists and quantized
-/// attributes; about 60 bytes per closed vertex plus 40 per closed triangle), a multiple of 8.
+/// attributes; about 53 bytes per closed vertex plus 52 per closed triangle, plus 12 per vertex and
+/// 32 more with normals), a multiple of 8.
 LODRT_API size_t valenceScratchSize(const ValenceInfo& info);
 
 /// Caller-owned buffers. Capacities are in elements of the pointed-to type.
