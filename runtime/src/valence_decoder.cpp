@@ -1,5 +1,7 @@
-// Decoder for the .lbm compressed mesh (docs/format/valence.md). Mirrors
-// baker/src/codec/valence_encoder.cpp step for step; every model update here has its twin there.
+// Decoder for the .lbm compressed mesh (docs/format/valence.md). The connectivity is rebuilt by the
+// conquest engine shared with the encoder (lodrt/detail/valence_model.h); this file supplies the
+// stream reading side of it, then decodes positions (multi-parallelogram prediction over the decoded
+// corner table) and normals. Everything lives in caller memory; every value read is checked.
 
 #include <cmath>
 #include <cstring>
@@ -12,9 +14,9 @@ namespace lodrt {
 namespace {
 
 using namespace format;
-using detail::Fifo;
-using detail::MoveToFront;
-using detail::initRangeProbs;
+using detail::kNone;
+using detail::VertexKind;
+using detail::VertexSymbol;
 
 uint32_t read32(const uint8_t* p) {
     return uint32_t(p[0]) | (uint32_t(p[1]) << 8) | (uint32_t(p[2]) << 16) | (uint32_t(p[3]) << 24);
@@ -40,34 +42,30 @@ public:
         for (int i = 0; i < 5; ++i) code_ = (code_ << 8) | next();
         return true;
     }
-    uint32_t bit(uint16_t& prob) {
-        uint32_t bound = (range_ >> kRangeProbBits) * prob;
-        uint32_t result;
-        if (code_ < bound) {
-            range_ = bound;
-            prob = uint16_t(prob + (((1u << kRangeProbBits) - prob) >> kRangeAdaptShift));
-            result = 0;
-        } else {
-            code_ -= bound;
-            range_ -= bound;
-            prob = uint16_t(prob - (prob >> kRangeAdaptShift));
-            result = 1;
-        }
+    // Branch-free: the decoded bits of well-mixed contexts are unpredictable, so select instead of
+    // branching on them.
+    inline uint32_t bit(uint16_t& prob) {
+        const uint32_t p = prob;
+        const uint32_t bound = (range_ >> kRangeProbBits) * p;
+        const uint32_t result = code_ >= bound ? 1u : 0u;
+        const uint32_t mask = 0u - result;
+        code_ -= bound & mask;
+        range_ = result ? range_ - bound : bound;
+        const uint32_t up = p + (((1u << kRangeProbBits) - p) >> kRangeAdaptShift);
+        const uint32_t down = p - (p >> kRangeAdaptShift);
+        prob = uint16_t(result ? down : up);
         if (range_ < kRangeTopValue) {
             range_ <<= 8;
             code_ = (code_ << 8) | next();
         }
         return result;
     }
-    uint32_t direct(uint32_t count) {
+    inline uint32_t direct(uint32_t count) {
         uint32_t v = 0;
         for (uint32_t i = 0; i < count; ++i) {
             range_ >>= 1;
-            uint32_t b = 0;
-            if (code_ >= range_) {
-                code_ -= range_;
-                b = 1;
-            }
+            const uint32_t b = code_ >= range_ ? 1u : 0u;
+            code_ -= range_ & (0u - b);
             v = (v << 1) | b;
             if (range_ < kRangeTopValue) {
                 range_ <<= 8;
@@ -76,17 +74,16 @@ public:
         }
         return v;
     }
-    uint32_t tree(uint16_t* probs, uint32_t bits) {
+    inline uint32_t tree(uint16_t* probs, uint32_t bits) {
         uint32_t m = 1;
         for (uint32_t i = 0; i < bits; ++i) m = (m << 1) | bit(probs[m]);
         return m - (1u << bits);
     }
     // Bit-length class k of value+1 (6-bit tree), its top bit below the leading one modelled, the rest
-    // direct. Returns false for a class above 32 bits.
-    bool uint(uint16_t* class_probs, uint16_t* top_probs, uint64_t* value, uint32_t* klass) {
-        uint32_t k = tree(class_probs, kValenceClassTreeBits);
+    // direct. False for a class above 32 bits.
+    bool uint(uint16_t* class_probs, uint16_t* top_probs, uint64_t* value) {
+        const uint32_t k = tree(class_probs, kValenceClassTreeBits);
         if (k > 32) return false;
-        *klass = k;
         uint64_t v = 1;
         if (k >= 1) v = (v << 1) | bit(top_probs[k]);
         if (k >= 2) v = (v << (k - 1)) | direct(k - 1);
@@ -94,9 +91,10 @@ public:
         return true;
     }
     bool finishedExactly() const { return overrun_ == 0 && p_ == end_; }
+    bool overrun() const { return overrun_ > 8; }
 
 private:
-    uint8_t next() {
+    inline uint8_t next() {
         if (p_ < end_) return *p_++;
         ++overrun_;
         return 0;
@@ -108,148 +106,102 @@ private:
     uint32_t overrun_ = 0;
 };
 
+// Corner arithmetic without a hardware divide (exact for every 32-bit corner number).
+inline uint32_t div3(uint32_t c) { return uint32_t((uint64_t(c) * 0xAAAAAAABull) >> 33); }
+inline uint32_t mul3(uint32_t t) { return t * 3; }
 
 constexpr uint32_t kClassProbs = 1u << kValenceClassTreeBits;
 constexpr uint32_t kTopProbs = 33;
 
-// Adaptive models of one residual stream with `Components` components.
-template <int Components> struct ResidualModel {
-    uint16_t klass[Components][kValenceResidualContexts][kClassProbs];
-    uint16_t top[Components][kValenceResidualContexts][kTopProbs];
-    uint32_t previous[Components];
+struct UintModel {
+    uint16_t klass[kClassProbs];
+    uint16_t top[kTopProbs];
     void init() {
-        initRangeProbs(&klass[0][0][0], sizeof(klass) / 2);
-        initRangeProbs(&top[0][0][0], sizeof(top) / 2);
-        for (int j = 0; j < Components; ++j) previous[j] = 0;
+        detail::initRangeProbs(klass, kClassProbs);
+        detail::initRangeProbs(top, kTopProbs);
     }
-    // Zigzag-decoded residual of component j; false on a corrupt class.
-    bool decode(RangeDecoder& rd, int j, int64_t* residual) {
-        // Context: the mean class of this component's last residual and of the residual coded just
-        // before (the previous component, or for component 0 the last component of the last vertex).
-        uint32_t ctx = (previous[j] + previous[(j + Components - 1) % Components] + 1) >> 1;
-        if (ctx >= kValenceResidualContexts) ctx = kValenceResidualContexts - 1;
-        uint64_t u;
-        uint32_t k;
-        if (!rd.uint(klass[j][ctx], top[j][ctx], &u, &k)) return false;
-        previous[j] = k;
-        *residual = (u & 1) ? -int64_t(u >> 1) - 1 : int64_t(u >> 1);
+};
+
+// Residual models of one attribute: per component and context, the bit length of |r| as a tree,
+// then the sign and the top mantissa bit.
+template <int Components, int Contexts> struct ResidualModel {
+    static constexpr uint32_t kTree = 1u << kValenceResidualTreeBits;
+    uint16_t length[Components][Contexts][kTree];
+    uint16_t sign[Components];
+    uint16_t top[Components][kTree];
+    void init() {
+        detail::initRangeProbs(&length[0][0][0], sizeof(length) / 2);
+        detail::initRangeProbs(sign, Components);
+        detail::initRangeProbs(&top[0][0], sizeof(top) / 2);
+    }
+    // Residual of component j in context ctx; *length_out = bit length of |r|. False when corrupt.
+    inline bool decode(RangeDecoder& rd, int j, uint32_t ctx, int32_t* r, uint32_t* length_out) {
+        const uint32_t k = rd.tree(length[j][ctx], kValenceResidualTreeBits);
+        *length_out = k;
+        if (k == 0) {
+            *r = 0;
+            return true;
+        }
+        if (k > 17) return false;
+        const uint32_t negative = rd.bit(sign[j]);
+        uint32_t m = 1;
+        if (k >= 2) m = (m << 1) | rd.bit(top[j][k]);
+        if (k >= 3) m = (m << (k - 2)) | rd.direct(k - 2);
+        *r = negative ? -int32_t(m) : int32_t(m);
         return true;
     }
 };
 
-
-struct Decoder {
-    const ValenceInfo* info;
-    uint16_t* qpos;      // 3 per vertex
-    uint16_t* qnorm;     // 2 per vertex, or null
-    int64_t* normal_sum; // 3 per vertex when normals: sum of incident face normals (quantized space)
-    RangeDecoder conn, pos, nrm;
-    uint16_t edge_probs[kValenceEdgeFifo + 1][1u << kValenceSymbolTreeBits];
-    uint16_t vertex_probs[2][1u << kValenceSymbolTreeBits];
-    uint16_t explicit_class[kClassProbs];
-    uint16_t explicit_top[kTopProbs];
-    ResidualModel<3> pos_model;
-    ResidualModel<2> nrm_model;
-    Fifo<kValenceEdgeFifo> edge_a, edge_b, edge_c;
-    MoveToFront<kValenceVertexFifo> vertices;
-    uint32_t next_new = 0;
+// The stream side of the conquest engine.
+struct ConnectivityReader {
+    RangeDecoder rd;
+    uint16_t more;
+    uint16_t symbols[detail::kValenceContexts][1u << kValenceSymbolTreeBits];
+    UintModel escape, offset, list, free_a, dup;
 
     void init() {
-        initRangeProbs(&edge_probs[0][0], sizeof(edge_probs) / 2);
-        initRangeProbs(&vertex_probs[0][0], sizeof(vertex_probs) / 2);
-        initRangeProbs(explicit_class, kClassProbs);
-        initRangeProbs(explicit_top, kTopProbs);
-        pos_model.init();
-        nrm_model.init();
+        more = uint16_t(kRangeProbInit);
+        detail::initRangeProbs(&symbols[0][0], sizeof(symbols) / 2);
+        escape.init();
+        offset.init();
+        list.init();
+        free_a.init();
+        dup.init();
     }
-
-    // Decodes the attributes of the new vertex x; (a, b, c) is the parallelogram (c opposite), or
-    // a == kNone for the previous-vertex predictor.
-    static constexpr uint32_t kNone = 0xFFFFFFFFu;
-    Result decodeAttributes(uint32_t x, uint32_t a, uint32_t b, uint32_t c) {
-        const int64_t qmax = (int64_t(1) << info->position_bits) - 1;
-        for (int j = 0; j < 3; ++j) {
-            int64_t p = 0;
-            if (a != kNone) {
-                p = int64_t(qpos[3 * a + j]) + qpos[3 * b + j] - qpos[3 * c + j];
-                p = p < 0 ? 0 : (p > qmax ? qmax : p);
-            } else if (x > 0) {
-                p = qpos[3 * (x - 1) + j];
-            }
-            int64_t r;
-            if (!pos_model.decode(pos, j, &r)) return Result::CorruptStream;
-            int64_t q = p + r;
-            if (q < 0 || q > qmax) return Result::CorruptStream;
-            qpos[3 * x + j] = uint16_t(q);
-        }
-        return Result::Ok;
+    bool moreComponents() { return !rd.overrun() && rd.bit(more) != 0; }
+    bool readU32(UintModel& m, uint32_t* out) {
+        uint64_t v;
+        if (!rd.uint(m.klass, m.top, &v) || v > 0xFFFFFFFFu) return false;
+        *out = uint32_t(v);
+        return true;
     }
-
-    // Normals are decoded after all positions, in vertex order, each predicted by the octahedral code
-    // of the sum of its faces' (area-weighted) normals computed exactly on the quantized positions.
-    Result decodeNormals(const uint32_t* indices, size_t triangle_count) {
-        const size_t vn = info->vertex_count;
-        for (size_t i = 0; i < 3 * vn; ++i) normal_sum[i] = 0;
-        for (size_t t = 0; t < triangle_count; ++t) {
-            const uint32_t* f = &indices[3 * t];
-            int64_t e1[3], e2[3];
-            for (int j = 0; j < 3; ++j) {
-                e1[j] = int64_t(qpos[3 * f[1] + j]) - qpos[3 * f[0] + j];
-                e2[j] = int64_t(qpos[3 * f[2] + j]) - qpos[3 * f[0] + j];
-            }
-            const int64_t n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
-                                  e1[0] * e2[1] - e1[1] * e2[0]};
-            for (int c = 0; c < 3; ++c)
-                for (int j = 0; j < 3; ++j) normal_sum[3 * f[c] + j] += n[j];
+    Result symbol(uint32_t ctx, VertexSymbol* s) {
+        if (rd.overrun()) return Result::CorruptStream;
+        const uint32_t sym = rd.tree(symbols[ctx], kValenceSymbolTreeBits);
+        bool ok = true;
+        if (sym >= kValenceSymbolFirstValence) {
+            s->kind = VertexKind::Add;
+            s->valence = sym - kValenceSymbolFirstValence + 3;
+        } else if (sym == kValenceSymbolEscape || sym == kValenceSymbolDummy) {
+            s->kind = sym == kValenceSymbolDummy ? VertexKind::Dummy : VertexKind::Add;
+            ok = readU32(escape, &s->valence);
+        } else if (sym == kValenceSymbolSplit) {
+            s->kind = VertexKind::Split;
+            ok = readU32(offset, &s->offset) && readU32(free_a, &s->free_a);
+            s->offset += 3;
+        } else {
+            s->kind = VertexKind::Merge;
+            ok = readU32(list, &s->list) && readU32(offset, &s->offset) && readU32(free_a, &s->free_a);
         }
-        const uint32_t nb = info->normal_bits;
-        const uint32_t mask = (1u << nb) - 1;
-        const int64_t half = int64_t(1) << (nb - 1);
-        for (size_t x = 0; x < vn; ++x) {
-            const int64_t* sum = &normal_sum[3 * x];
-            uint32_t p[2];
-            if (sum[0] != 0 || sum[1] != 0 || sum[2] != 0) {
-                const float fs[3] = {float(sum[0]), float(sum[1]), float(sum[2])};
-                octahedralEncode(fs, nb, p);
-            } else if (x > 0) {
-                p[0] = qnorm[2 * (x - 1)];
-                p[1] = qnorm[2 * (x - 1) + 1];
-            } else {
-                p[0] = p[1] = uint32_t(half);
-            }
-            for (int j = 0; j < 2; ++j) {
-                int64_t r;
-                if (!nrm_model.decode(nrm, j, &r)) return Result::CorruptStream;
-                if (r < -half || r >= half) return Result::CorruptStream;
-                qnorm[2 * x + j] = uint16_t((p[j] + uint32_t(r)) & mask);
-            }
-        }
-        return Result::Ok;
+        return ok ? Result::Ok : Result::CorruptStream;
     }
-
-    // One vertex reference; `ctx` 0 for the apex of an edge-matched triangle, 1 otherwise.
-    Result decodeVertex(uint32_t ctx, uint32_t a, uint32_t b, uint32_t c, uint32_t* out) {
-        uint32_t s = conn.tree(vertex_probs[ctx], kValenceSymbolTreeBits);
-        if (s == kValenceVertexSymbolNew) {
-            if (next_new >= info->vertex_count) return Result::CorruptStream;
-            uint32_t x = next_new++;
-            Result r = decodeAttributes(x, a, b, c);
-            if (r != Result::Ok) return r;
-            *out = x;
-            return Result::Ok;
-        }
-        if (s <= kValenceVertexFifo) {
-            if (s - 1 >= vertices.count) return Result::CorruptStream;
-            *out = vertices.slot[s - 1];
-            return Result::Ok;
-        }
-        if (s != kValenceVertexSymbolExplicit) return Result::CorruptStream;
-        uint64_t d;
-        uint32_t k;
-        if (!conn.uint(explicit_class, explicit_top, &d, &k) || d >= next_new) return Result::CorruptStream;
-        *out = next_new - 1 - uint32_t(d);
-        return Result::Ok;
+    Result seedVertex(VertexSymbol* s) {
+        Result r = symbol(detail::kSeedContext, s);
+        if (r == Result::Ok && s->kind != VertexKind::Add && s->kind != VertexKind::Dummy) return Result::CorruptStream;
+        return r;
     }
+    Result vertexSymbol(uint32_t ctx, uint32_t, VertexSymbol* s) { return symbol(ctx, s); }
+    Result onTriangle(uint32_t, uint32_t) { return Result::Ok; }
 };
 
 } // namespace
@@ -259,23 +211,29 @@ Result valenceReadInfo(const uint8_t* data, size_t size, ValenceInfo* info) {
     *info = ValenceInfo();
     if (size < 4) return Result::Truncated;
     if (read32(data) != kValenceMagic) return Result::BadMagic;
-    if (size < kValenceHeaderSize) return Result::Truncated;
+    if (size < 6) return Result::Truncated;
     if (read16(data + 4) != kValenceVersion) return Result::UnsupportedVersion;
+    if (size < kValenceHeaderSize) return Result::Truncated;
     const uint16_t flags = read16(data + 6);
     if (flags & ~kValenceFlagNormals) return Result::CorruptStream;
     ValenceInfo v;
     v.vertex_count = read32(data + 8);
     v.triangle_count = read32(data + 12);
-    v.position_bits = data[16];
-    v.normal_bits = data[17];
-    if (read16(data + 18) != 0) return Result::CorruptStream;
-    for (int j = 0; j < 3; ++j) v.bounds_min[j] = readFloat(data + 20 + 4 * j);
-    v.cube_size = readFloat(data + 32);
-    v.connectivity_bytes = read32(data + 36);
-    v.position_bytes = read32(data + 40);
-    v.normal_bytes = read32(data + 44);
+    v.closed_vertex_count = read32(data + 16);
+    v.closed_triangle_count = read32(data + 20);
+    v.position_bits = data[24];
+    v.normal_bits = data[25];
+    if (read16(data + 26) != 0) return Result::CorruptStream;
+    for (int j = 0; j < 3; ++j) v.bounds_min[j] = readFloat(data + 28 + 4 * j);
+    v.cube_size = readFloat(data + 40);
+    v.connectivity_bytes = read32(data + 44);
+    v.position_bytes = read32(data + 48);
+    v.normal_bytes = read32(data + 52);
     v.has_normals = (flags & kValenceFlagNormals) != 0;
-    if (v.vertex_count > kValenceMaxCount || v.triangle_count > kValenceMaxCount) return Result::CorruptStream;
+    if (v.vertex_count > kValenceMaxCount || v.triangle_count > kValenceMaxCount ||
+        v.closed_vertex_count > kValenceMaxCount || v.closed_triangle_count > kValenceMaxCount)
+        return Result::CorruptStream;
+    if (v.triangle_count > v.closed_triangle_count) return Result::CorruptStream;
     if (v.position_bits < kValenceMinPositionBits || v.position_bits > kValenceMaxPositionBits)
         return Result::CorruptStream;
     if (v.has_normals ? (v.normal_bits < kValenceMinNormalBits || v.normal_bits > kValenceMaxNormalBits)
@@ -284,16 +242,14 @@ Result valenceReadInfo(const uint8_t* data, size_t size, ValenceInfo* info) {
     for (int j = 0; j < 3; ++j)
         if (!std::isfinite(v.bounds_min[j])) return Result::CorruptStream;
     if (!std::isfinite(v.cube_size) || v.cube_size < 0.0f) return Result::CorruptStream;
-    // Every coded symbol costs at least ~0.022 bits (probabilities saturate at 31/2048), so a stream
-    // of n bytes cannot hold more than a bounded number of triangles or vertices: refuse counts above
-    // that before the caller allocates for them.
-    if (uint64_t(v.triangle_count) >
-        uint64_t(kValenceTrianglesPerByte) * v.connectivity_bytes + kValenceTrianglesPerByte)
-        return Result::CorruptStream;
-    if (uint64_t(v.vertex_count) > uint64_t(kValenceVerticesPerByte) * v.position_bytes + kValenceVerticesPerByte)
-        return Result::CorruptStream;
-    if (v.has_normals &&
-        uint64_t(v.vertex_count) > uint64_t(kValenceVerticesPerByte) * v.normal_bytes + kValenceVerticesPerByte)
+    // Every coded symbol costs more than 1/256 of a byte (probabilities saturate), so a stream of n
+    // bytes cannot describe more than a bounded number of elements: refuse larger counts before the
+    // caller allocates for them.
+    const uint64_t conn = v.connectivity_bytes;
+    if (v.closed_triangle_count > uint64_t(kValenceTrianglesPerByte) * (conn + 1) ||
+        v.closed_vertex_count > uint64_t(kValenceVerticesPerByte) * (conn + 1) ||
+        v.vertex_count > uint64_t(kValenceVerticesPerByte) * (uint64_t(v.position_bytes) + 1) ||
+        (v.has_normals && v.vertex_count > uint64_t(kValenceVerticesPerByte) * (uint64_t(v.normal_bytes) + 1)))
         return Result::CorruptStream;
     const uint64_t total =
         uint64_t(kValenceHeaderSize) + v.connectivity_bytes + v.position_bytes + uint64_t(v.normal_bytes);
@@ -303,11 +259,53 @@ Result valenceReadInfo(const uint8_t* data, size_t size, ValenceInfo* info) {
     return Result::Ok;
 }
 
+namespace {
+
+// Scratch layout, in order (each block 8-aligned): see valenceScratchSize.
+struct ScratchLayout {
+    size_t corner_vertex, corner_opposite, vertex_flags, vertex_corner, vertex_valence, node_vertex, node_prev,
+        node_next, node_free, node_corner, completion, stack_head, stack_size, final_of, final_done, qpos, qpos_final,
+        decoded, normal_sum, qnorm, total;
+};
+
+ScratchLayout layout(const ValenceInfo& info) {
+    ScratchLayout l;
+    const size_t vc = info.closed_vertex_count, tc = info.closed_triangle_count, vn = info.vertex_count;
+    const size_t nodes = vc + tc;
+    size_t at = 0;
+    auto take = [&](size_t bytes) {
+        size_t here = at;
+        at += (bytes + 7) & ~size_t(7);
+        return here;
+    };
+    l.corner_vertex = take(3 * tc * 4);
+    l.corner_opposite = take(3 * tc * 4);
+    l.vertex_flags = take(vc * 4);
+    l.vertex_corner = take(vc * 4);
+    l.vertex_valence = take(vc * 4);
+    l.node_vertex = take(nodes * 4);
+    l.node_prev = take(nodes * 4);
+    l.node_next = take(nodes * 4);
+    l.node_free = take(nodes * 4);
+    l.node_corner = take(nodes * 4);
+    l.completion = take(vc * 4);
+    l.stack_head = take(tc * 4);
+    l.stack_size = take(tc * 4);
+    l.final_of = take(vc * 4);
+    l.final_done = take(vn);
+    l.qpos = take(3 * vc * 4);
+    l.qpos_final = take(3 * vn * 4);
+    l.decoded = take(vc);
+    l.normal_sum = take(info.has_normals ? 3 * vn * 8 : 0);
+    l.qnorm = take(info.has_normals ? 2 * vn * 4 : 0);
+    l.total = at;
+    return l;
+}
+
+} // namespace
+
 size_t valenceScratchSize(const ValenceInfo& info) {
-    // int64 face-normal sums (normals only), then uint16 quantized positions and normals.
-    size_t bytes = info.has_normals ? size_t(info.vertex_count) * 3 * sizeof(int64_t) : 0;
-    bytes += size_t(info.vertex_count) * (3 + (info.has_normals ? 2 : 0)) * sizeof(uint16_t);
-    return (bytes + 7) & ~size_t(7);
+    return layout(info).total;
 }
 
 void octahedralEncode(const float n[3], uint32_t bits, uint32_t out[2]) {
@@ -356,81 +354,282 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
     ValenceInfo info;
     Result r = valenceReadInfo(data, size, &info);
     if (r != Result::Ok) return r;
-    const size_t vn = size_t(info.vertex_count), tn = size_t(info.triangle_count);
-    if ((tn > 0 && !output.indices) || (vn > 0 && !output.positions) || (vn > 0 && !output.scratch))
-        return Result::InvalidArgument;
+    const size_t vn = info.vertex_count, tn = info.triangle_count;
+    const uint32_t vc = info.closed_vertex_count, tc = info.closed_triangle_count;
+    if ((tn > 0 && !output.indices) || (vn > 0 && !output.positions)) return Result::InvalidArgument;
     if (reinterpret_cast<uintptr_t>(output.scratch) % 8 != 0) return Result::InvalidArgument;
-    if (output.index_capacity < 3 * tn || output.position_capacity < 3 * vn ||
-        output.scratch_size < valenceScratchSize(info) ||
+    const ScratchLayout l = layout(info);
+    if (l.total > 0 && !output.scratch) return Result::InvalidArgument;
+    if (output.index_capacity < 3 * tn || output.position_capacity < 3 * vn || output.scratch_size < l.total ||
         (output.normals && info.has_normals && output.normal_capacity < 3 * vn))
         return Result::BufferTooSmall;
+    uint8_t* base = static_cast<uint8_t*>(output.scratch);
+    auto u32 = [&](size_t offset) { return reinterpret_cast<uint32_t*>(base + offset); };
 
-    // The decoder state is ~14 KB of models: kept in a static-free local object.
-    Decoder d;
-    d.info = &info;
-    d.normal_sum = info.has_normals ? static_cast<int64_t*>(output.scratch) : nullptr;
-    d.qpos = reinterpret_cast<uint16_t*>(static_cast<uint8_t*>(output.scratch) +
-                                         (info.has_normals ? vn * 3 * sizeof(int64_t) : 0));
-    d.qnorm = info.has_normals ? d.qpos + 3 * vn : nullptr;
-    d.init();
+    // 1. Connectivity: the conquest, then the duplicate list.
+    detail::Conquest<ConnectivityReader> conquest;
+    detail::ConquestArrays& a = conquest.a;
+    a.corner_vertex = u32(l.corner_vertex);
+    a.corner_opposite = u32(l.corner_opposite);
+    a.vertex_flags = u32(l.vertex_flags);
+    a.vertex_corner = u32(l.vertex_corner);
+    a.vertex_valence = u32(l.vertex_valence);
+    a.node_vertex = u32(l.node_vertex);
+    a.node_prev = u32(l.node_prev);
+    a.node_next = u32(l.node_next);
+    a.node_free = u32(l.node_free);
+    a.node_corner = u32(l.node_corner);
+    a.completion = u32(l.completion);
+    a.stack_head = u32(l.stack_head);
+    a.stack_size = u32(l.stack_size);
+    a.max_vertices = vc;
+    a.max_triangles = tc;
+    ConnectivityReader reader;
+    reader.init();
     const uint8_t* stream = data + kValenceHeaderSize;
-    if (!d.conn.init(stream, info.connectivity_bytes)) return Result::CorruptStream;
-    stream += info.connectivity_bytes;
-    if (!d.pos.init(stream, info.position_bytes)) return Result::CorruptStream;
-    stream += info.position_bytes;
-    if (info.has_normals && !d.nrm.init(stream, info.normal_bytes)) return Result::CorruptStream;
-
-    constexpr uint32_t kNone = Decoder::kNone;
-    uint32_t previous_edge = kValenceEdgeFifo;
-    for (size_t t = 0; t < tn; ++t) {
-        uint32_t es = d.conn.tree(d.edge_probs[previous_edge], kValenceSymbolTreeBits);
-        if (es > kValenceEdgeFifo || (es < kValenceEdgeFifo && es >= d.edge_a.count)) return Result::CorruptStream;
-        previous_edge = es;
-        uint32_t v[3];
-        if (es < kValenceEdgeFifo) {
-            v[0] = d.edge_a.at(es);
-            v[1] = d.edge_b.at(es);
-            r = d.decodeVertex(0, v[0], v[1], d.edge_c.at(es), &v[2]);
-            if (r != Result::Ok) return r;
-        } else {
-            for (int i = 0; i < 3; ++i) {
-                r = d.decodeVertex(1, kNone, kNone, kNone, &v[i]);
-                if (r != Result::Ok) return r;
-            }
-        }
-        output.indices[3 * t + 0] = v[0];
-        output.indices[3 * t + 1] = v[1];
-        output.indices[3 * t + 2] = v[2];
-        // Each edge is offered reversed (as a neighbour with the same orientation sees it), with
-        // the opposite corner for the parallelogram; not the edge just matched (now interior).
-        for (int i = es < kValenceEdgeFifo ? 1 : 0; i < 3; ++i) {
-            d.edge_a.push(v[(i + 1) % 3]);
-            d.edge_b.push(v[i]);
-            d.edge_c.push(v[(i + 2) % 3]);
-        }
-        for (int i = 0; i < 3; ++i) d.vertices.touch(v[i]);
-    }
-    // Vertices no triangle references, in order.
-    while (d.next_new < info.vertex_count) {
-        uint32_t x = d.next_new++;
-        r = d.decodeAttributes(x, kNone, kNone, kNone);
-        if (r != Result::Ok) return r;
-    }
-    if (info.has_normals) {
-        r = d.decodeNormals(output.indices, tn);
-        if (r != Result::Ok) return r;
-    }
-    if (!d.conn.finishedExactly() || !d.pos.finishedExactly() || (info.has_normals && !d.nrm.finishedExactly()))
+    if (!reader.rd.init(stream, info.connectivity_bytes)) return Result::CorruptStream;
+    r = conquest.run(reader);
+    if (r != Result::Ok) return r;
+    if (conquest.vertex_count != vc || conquest.triangle_count != tc || conquest.completion_count != vc)
         return Result::CorruptStream;
 
-    const uint32_t qmax = (1u << info.position_bits) - 1;
-    const float step = info.cube_size / float(qmax);
-    for (size_t i = 0; i < vn; ++i)
-        for (int j = 0; j < 3; ++j) output.positions[3 * i + j] = info.bounds_min[j] + float(d.qpos[3 * i + j]) * step;
-    if (output.normals && info.has_normals) {
-        for (size_t i = 0; i < vn; ++i) {
-            uint32_t q[2] = {d.qnorm[2 * i], d.qnorm[2 * i + 1]};
-            octahedralDecode(q, info.normal_bits, &output.normals[3 * i]);
+    uint32_t* final_of = u32(l.final_of);
+    uint32_t dup_count = 0;
+    if (!reader.readU32(reader.dup, &dup_count) || dup_count > vc) return Result::CorruptStream;
+    uint32_t dups_read = 0, dup_rank = kNone, dup_original = 0;
+    uint64_t previous_rank = 0;
+    auto nextDup = [&]() {
+        if (dups_read == dup_count) {
+            dup_rank = kNone;
+            return true;
+        }
+        uint32_t gap, back;
+        if (!reader.readU32(reader.dup, &gap) || !reader.readU32(reader.dup, &back)) return false;
+        const uint64_t rank = (dups_read == 0 ? 0 : previous_rank + 1) + gap;
+        const uint64_t finals_before = rank - dups_read;
+        if (rank >= vc || back >= finals_before) return false;
+        previous_rank = rank;
+        dup_rank = uint32_t(rank);
+        dup_original = uint32_t(finals_before - 1 - back);
+        ++dups_read;
+        return true;
+    };
+    if (!nextDup()) return Result::CorruptStream;
+    uint32_t final_count = 0, rank = 0;
+    for (uint32_t v = 0; v < vc; ++v) {
+        if (a.vertex_flags[v] & detail::kFlagDummy) {
+            final_of[v] = kNone;
+            continue;
+        }
+        if (rank++ == dup_rank) {
+            final_of[v] = dup_original;
+            if (!nextDup()) return Result::CorruptStream;
+            continue;
+        }
+        if (final_count >= vn) return Result::CorruptStream;
+        final_of[v] = final_count++;
+    }
+    if (dup_rank != kNone || !reader.rd.finishedExactly()) return Result::CorruptStream;
+
+    size_t out_t = 0;
+    for (uint32_t t = 0; t < tc; ++t) {
+        const uint32_t* cv = &a.corner_vertex[3 * size_t(t)];
+        if ((a.vertex_flags[cv[0]] | a.vertex_flags[cv[1]] | a.vertex_flags[cv[2]]) & detail::kFlagDummy) continue;
+        if (out_t >= tn) return Result::CorruptStream;
+        for (int i = 0; i < 3; ++i) output.indices[3 * out_t + size_t(i)] = final_of[cv[i]];
+        ++out_t;
+    }
+    if (out_t != tn) return Result::CorruptStream;
+
+    // 2. Positions, in the order positionOrder gives, then the vertices no triangle uses.
+    stream += info.connectivity_bytes;
+    RangeDecoder pos;
+    if (!pos.init(stream, info.position_bytes)) return Result::CorruptStream;
+    stream += info.position_bytes;
+    ResidualModel<3, detail::kPositionContexts> pos_model;
+    pos_model.init();
+    int32_t* qpos = reinterpret_cast<int32_t*>(base + l.qpos);
+    int32_t* qpos_final = reinterpret_cast<int32_t*>(base + l.qpos_final);
+    uint8_t* decoded = base + l.decoded;
+    const int32_t qmax = int32_t((1u << info.position_bits) - 1);
+    int32_t last[3] = {(qmax + 1) / 2, (qmax + 1) / 2, (qmax + 1) / 2};
+    // detail::positionOrder and detail::predictPosition fused into one walk around each vertex (the
+    // encoder runs them separately; the round-trip tests hold the two to the same result). The node
+    // arrays are free again: they hold the order's degree counts and stacks.
+    uint8_t* final_done = base + l.final_done;
+    std::memset(final_done, 0, vn);
+    std::memset(decoded, 0, vc);
+    uint32_t* degree = a.node_free;
+    for (uint32_t v = 0; v < vc; ++v) degree[v] = 0;
+    uint32_t* stack[3] = {a.node_vertex, a.node_prev, a.node_next};
+    uint32_t top[3] = {0, 0, 0};
+    const uint32_t* cv = a.corner_vertex;
+    const uint32_t* opp = a.corner_opposite;
+    uint32_t scan = 0;
+    for (;;) {
+        uint32_t v = kNone;
+        for (int level = 2; level >= 0 && v == kNone; --level) {
+            while (top[level] > 0) {
+                const uint32_t u = stack[level][--top[level]];
+                if (!decoded[u]) {
+                    v = u;
+                    break;
+                }
+            }
+        }
+        if (v == kNone) {
+            while (scan < vc && (decoded[scan] || (a.vertex_flags[scan] & detail::kFlagDummy))) ++scan;
+            if (scan == vc) break;
+            v = scan;
+        }
+        const uint32_t c0 = a.vertex_corner[v];
+        if (c0 == kNone) return Result::CorruptStream;
+        int64_t sum[3] = {0, 0, 0};
+        uint32_t count = 0, neighbour = kNone, scale = 0;
+        const uint32_t max_steps = a.vertex_valence[v];
+        uint32_t c = c0;
+        for (uint32_t steps = 0;; ++steps) {
+            if (steps > max_steps) return Result::CorruptStream;
+            const uint32_t t3 = mul3(div3(c)), cm = c - t3;
+            const uint32_t cn = cm == 2 ? t3 : c + 1, cp = cm == 0 ? t3 + 2 : c - 1;
+            const uint32_t va = cv[cn], vb = cv[cp];
+            const uint32_t da = decoded[va], db = decoded[vb];
+            if (da & db) {
+                if (opp[c] == kNone) return Result::CorruptStream;
+                const uint32_t w = cv[opp[c]];
+                if (decoded[w]) {
+                    const int32_t* pa = &qpos[3 * size_t(va)];
+                    const int32_t* pb = &qpos[3 * size_t(vb)];
+                    const int32_t* pw = &qpos[3 * size_t(w)];
+                    sum[0] += int64_t(pa[0]) + pb[0] - pw[0];
+                    sum[1] += int64_t(pa[1]) + pb[1] - pw[1];
+                    sum[2] += int64_t(pa[2]) + pb[2] - pw[2];
+                    if (count == 0) {
+                        for (int k = 0; k < 3; ++k) {
+                            const uint32_t d = uint32_t(pa[k] > pb[k] ? pa[k] - pb[k] : pb[k] - pa[k]);
+                            if (d > scale) scale = d;
+                        }
+                    }
+                    ++count;
+                }
+            } else if (da | db) {
+                const uint32_t u = da ? vb : va;
+                if (!(a.vertex_flags[u] & detail::kFlagDummy)) {
+                    const uint32_t d = ++degree[u];
+                    if (d <= 3) stack[d - 1][top[d - 1]++] = u;
+                }
+            }
+            if (neighbour == kNone && da) neighbour = va;
+            const uint32_t o = opp[cn];
+            if (o == kNone) return Result::CorruptStream;
+            c = o - mul3(div3(o)) == 2 ? o - 2 : o + 1;
+            if (c == c0) break;
+        }
+        const uint32_t fid = final_of[v];
+        int32_t* q = &qpos[3 * size_t(v)];
+        int32_t* qf = &qpos_final[3 * size_t(fid)];
+        if (final_done[fid]) {
+            q[0] = qf[0];
+            q[1] = qf[1];
+            q[2] = qf[2];
+        } else {
+            int32_t pred[3];
+            if (count > 0) {
+                for (int k = 0; k < 3; ++k) pred[k] = int32_t(detail::divRound(sum[k], count));
+            } else if (neighbour != kNone) {
+                for (int k = 0; k < 3; ++k) pred[k] = qpos[3 * size_t(neighbour) + size_t(k)];
+            } else {
+                for (int k = 0; k < 3; ++k) pred[k] = last[k];
+            }
+            const uint32_t ctx = detail::scaleContext(scale, count);
+            for (int j = 0; j < 3; ++j) {
+                int32_t res;
+                uint32_t length;
+                if (!pos_model.decode(pos, j, ctx, &res, &length)) return Result::CorruptStream;
+                const int32_t value = pred[j] + res;
+                if (value < 0 || value > qmax) return Result::CorruptStream;
+                q[j] = value;
+            }
+            qf[0] = q[0];
+            qf[1] = q[1];
+            qf[2] = q[2];
+            final_done[fid] = 1;
+        }
+        last[0] = q[0];
+        last[1] = q[1];
+        last[2] = q[2];
+        decoded[v] = 1;
+        if (pos.overrun()) return Result::CorruptStream;
+    }
+    for (size_t fid = final_count; fid < vn; ++fid) {
+        const uint32_t ctx = detail::scaleContext(0, 0);
+        for (int j = 0; j < 3; ++j) {
+            int32_t res;
+            uint32_t length;
+            if (!pos_model.decode(pos, j, ctx, &res, &length))
+                return Result::CorruptStream;
+            const int32_t value = last[j] + res;
+            if (value < 0 || value > qmax) return Result::CorruptStream;
+            qpos_final[3 * fid + size_t(j)] = last[j] = value;
+        }
+    }
+    if (!pos.finishedExactly()) return Result::CorruptStream;
+    const float step = qmax > 0 ? info.cube_size / float(qmax) : 0.0f;
+    for (size_t i = 0; i < 3 * vn; ++i) output.positions[i] = info.bounds_min[i % 3] + float(qpos_final[i]) * step;
+
+    // 3. Normals, in final order, predicted by the exact sum of the face normals on the quantized
+    // positions.
+    if (info.has_normals) {
+        RangeDecoder nrm;
+        if (!nrm.init(stream, info.normal_bytes)) return Result::CorruptStream;
+        int64_t* sum = reinterpret_cast<int64_t*>(base + l.normal_sum);
+        uint32_t* qnorm = u32(l.qnorm);
+        for (size_t i = 0; i < 3 * vn; ++i) sum[i] = 0;
+        for (size_t t = 0; t < tn; ++t) {
+            const uint32_t* f = &output.indices[3 * t];
+            const int32_t* p0 = &qpos_final[3 * size_t(f[0])];
+            const int32_t* p1 = &qpos_final[3 * size_t(f[1])];
+            const int32_t* p2 = &qpos_final[3 * size_t(f[2])];
+            const int64_t e1[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
+            const int64_t e2[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
+            const int64_t n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+                                  e1[0] * e2[1] - e1[1] * e2[0]};
+            for (int c = 0; c < 3; ++c)
+                for (int j = 0; j < 3; ++j) sum[3 * size_t(f[c]) + size_t(j)] += n[j];
+        }
+        ResidualModel<2, kValenceNormalContexts> nrm_model;
+        nrm_model.init();
+        const uint32_t nb = info.normal_bits;
+        const uint32_t mask = (1u << nb) - 1;
+        const int32_t half = int32_t(1) << (nb - 1);
+        uint32_t nrm_length[2] = {0, 0};
+        for (size_t x = 0; x < vn; ++x) {
+            const int64_t* s3 = &sum[3 * x];
+            uint32_t p[2];
+            if (s3[0] != 0 || s3[1] != 0 || s3[2] != 0) {
+                const float fs[3] = {float(s3[0]), float(s3[1]), float(s3[2])};
+                octahedralEncode(fs, nb, p);
+            } else if (x > 0) {
+                p[0] = qnorm[2 * (x - 1)];
+                p[1] = qnorm[2 * (x - 1) + 1];
+            } else {
+                p[0] = p[1] = uint32_t(half);
+            }
+            for (int j = 0; j < 2; ++j) {
+                int32_t res;
+                uint32_t length;
+                const uint32_t ctx = nrm_length[j] < kValenceNormalContexts ? nrm_length[j]
+                                                                                 : kValenceNormalContexts - 1;
+                if (!nrm_model.decode(nrm, j, ctx, &res, &length)) return Result::CorruptStream;
+                if (res < -half || res >= half) return Result::CorruptStream;
+                nrm_length[j] = length;
+                qnorm[2 * x + size_t(j)] = (p[j] + uint32_t(res)) & mask;
+            }
+            if (nrm.overrun()) return Result::CorruptStream;
+        }
+        if (!nrm.finishedExactly()) return Result::CorruptStream;
+        if (output.normals) {
+            for (size_t i = 0; i < vn; ++i) octahedralDecode(&qnorm[2 * i], info.normal_bits, &output.normals[3 * i]);
         }
     }
     return Result::Ok;

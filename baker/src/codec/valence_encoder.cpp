@@ -1,11 +1,17 @@
-// Encoder of the .lbm compressed mesh. Every model step mirrors runtime/src/valence_decoder.cpp;
-// docs/format/valence.md is the normative description of both.
+// Encoder of the .lbm compressed mesh (docs/format/valence.md). The input is cut into a closed
+// manifold (non-manifold or inconsistently oriented edges become boundaries, vertices with several
+// fans are copied, every boundary loop gets a dummy vertex), then conquered by the engine shared with
+// the decoder (lodrt/detail/valence_model.h, Touma-Gotsman 1998 / Alliez-Desbrun 2001). This file's
+// Io answers the engine's questions from the mesh, writes the symbols, and checks every assumption the
+// decoder will make; when one does not hold (a pinched front in a very irregular input), the triangles
+// around the offending vertices are cut loose and the encoding restarts.
 
 #include "lodbake/codec/valence_encoder.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <memory>
 #include <string>
 
 #include "codec/range_encoder.h"
@@ -17,232 +23,318 @@ namespace lodbake::codec {
 namespace {
 
 using namespace lodrt::format;
-using lodrt::detail::Fifo;
-using lodrt::detail::MoveToFront;
 using lodrt::detail::initRangeProbs;
+using lodrt::detail::kNone;
+using lodrt::detail::VertexKind;
+using lodrt::detail::VertexSymbol;
 
-constexpr uint32_t kUnassigned = 0xFFFFFFFFu;
-constexpr uint32_t kNone = 0xFFFFFFFFu;
 constexpr uint32_t kClassProbs = 1u << kValenceClassTreeBits;
 constexpr uint32_t kTopProbs = 33;
+constexpr int kMaxRestarts = 12;
 
+inline uint32_t nextCorner(uint32_t c) { return c % 3 == 2 ? c - 2 : c + 1; }
+inline uint32_t prevCorner(uint32_t c) { return c % 3 == 0 ? c + 2 : c - 1; }
 
-template <int Components> struct ResidualModel {
-    uint16_t klass[Components][kValenceResidualContexts][kClassProbs];
-    uint16_t top[Components][kValenceResidualContexts][kTopProbs];
-    uint32_t previous[Components];
+struct UintModel {
+    uint16_t klass[kClassProbs];
+    uint16_t top[kTopProbs];
     void init() {
-        initRangeProbs(&klass[0][0][0], sizeof(klass) / 2);
-        initRangeProbs(&top[0][0][0], sizeof(top) / 2);
-        for (int j = 0; j < Components; ++j) previous[j] = 0;
-    }
-    void encode(RangeEncoder& re, int j, int64_t residual) {
-        uint32_t ctx = std::min<uint32_t>((previous[j] + previous[(j + Components - 1) % Components] + 1) >> 1,
-                                          kValenceResidualContexts - 1);
-        uint64_t u = residual >= 0 ? uint64_t(residual) << 1 : ((uint64_t(-residual - 1)) << 1) | 1u;
-        previous[j] = re.uint(klass[j][ctx], top[j][ctx], u);
+        initRangeProbs(klass, kClassProbs);
+        initRangeProbs(top, kTopProbs);
     }
 };
 
+template <int Components, int Contexts> struct ResidualModel {
+    static constexpr uint32_t kTree = 1u << kValenceResidualTreeBits;
+    uint16_t length[Components][Contexts][kTree];
+    uint16_t sign[Components];
+    uint16_t top[Components][kTree];
+    void init() {
+        initRangeProbs(&length[0][0][0], sizeof(length) / 2);
+        initRangeProbs(sign, Components);
+        initRangeProbs(&top[0][0], sizeof(top) / 2);
+    }
+};
 
-// True when the two triangles have at least two corners in common.
-bool sharesEdge(const uint32_t* a, const uint32_t* b) {
-    int shared = 0;
-    for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j) shared += a[i] == b[j];
-    return shared >= 2;
+// The closed manifold the conquest runs on: a corner table whose first 3 * face_count corners are the
+// input faces (same order and rotation), then the dummy triangles.
+struct ClosedMesh {
+    std::vector<uint32_t> corner_vertex; // closed vertex per corner
+    std::vector<uint32_t> opposite;      // every corner paired
+    std::vector<uint32_t> source;        // closed vertex -> input vertex, kNone for dummies
+    std::vector<uint32_t> valence;       // corners per closed vertex
+    size_t real_triangles = 0;
+};
+
+// Union-find with path halving.
+uint32_t findRoot(std::vector<uint32_t>& parent, uint32_t x) {
+    while (parent[x] != x) {
+        parent[x] = parent[parent[x]];
+        x = parent[x];
+    }
+    return x;
 }
 
-// Faces in a vertex-cache-friendly order (Forsyth's linear-speed greedy: an LRU cache as large as the
-// coder's vertex cache, the best-scoring triangle around cached vertices next), plus a bonus for
-// continuing across an edge of the face just emitted: most triangles then name edge FIFO slot 0 or 1
-// and most old apices are cached. The bonus (measured: 14.0 -> 11.8 bits/vertex on bunny_zipper,
-// 14.4 -> 12.3 on lucy100k) makes the order strip-like without giving up the cache.
-std::vector<uint32_t> traversalOrder(const std::vector<uint32_t>& indices, size_t vertex_count) {
-    constexpr int kCache = int(kValenceVertexFifo);
-    constexpr double kStripBonus = 2.0;
-    constexpr size_t kSearch = 4;
-    const size_t fn = indices.size() / 3;
-    std::vector<uint32_t> first(vertex_count + 1, 0);
-    for (uint32_t v : indices) ++first[v + 1];
-    for (size_t v = 0; v < vertex_count; ++v) first[v + 1] += first[v];
-    std::vector<uint32_t> faces_of(indices.size());
-    {
-        std::vector<uint32_t> fill(first.begin(), first.end() - 1);
-        for (size_t c = 0; c < indices.size(); ++c) faces_of[fill[indices[c]]++] = uint32_t(c / 3);
+// Builds the closed manifold. `exploded[f]` faces get private copies of their three vertices.
+ClosedMesh buildClosed(const Mesh& mesh, const std::vector<uint8_t>& exploded) {
+    const size_t fn = mesh.faceCount(), cn = 3 * fn;
+    ClosedMesh m;
+    m.real_triangles = fn;
+    // Working vertex per corner: the input vertex, or a private copy for exploded/degenerate faces.
+    std::vector<uint32_t> work(cn), work_source;
+    std::vector<uint32_t> work_of_input(mesh.vertexCount(), kNone);
+    for (size_t f = 0; f < fn; ++f) {
+        const uint32_t* t = &mesh.indices[3 * f];
+        const bool own = exploded[f] || t[0] == t[1] || t[1] == t[2] || t[0] == t[2];
+        for (int i = 0; i < 3; ++i) {
+            if (own) {
+                work[3 * f + size_t(i)] = uint32_t(work_source.size());
+                work_source.push_back(t[i]);
+            } else {
+                if (work_of_input[t[i]] == kNone) {
+                    work_of_input[t[i]] = uint32_t(work_source.size());
+                    work_source.push_back(t[i]);
+                }
+                work[3 * f + size_t(i)] = work_of_input[t[i]];
+            }
+        }
     }
-    std::vector<uint32_t> live(vertex_count); // unemitted faces per vertex
-    for (size_t v = 0; v < vertex_count; ++v) live[v] = first[v + 1] - first[v];
-    std::vector<int> cache_pos(vertex_count, -1);
-    double position_score[kCache];
-    for (int p = 0; p < kCache; ++p)
-        position_score[p] = p < 3 ? 0.75 : std::pow(1.0 - double(p - 3) / double(kCache - 3), 1.5);
-    constexpr uint32_t kValenceTable = 64;
-    double valence_score[kValenceTable];
-    for (uint32_t n = 1; n < kValenceTable; ++n) valence_score[n] = 2.0 / std::sqrt(double(n));
-    auto vertexScore = [&](uint32_t v) {
-        if (live[v] == 0) return -1.0;
-        const int p = cache_pos[v];
-        const double s = p >= 0 ? position_score[p] : 0.0;
-        return s + (live[v] < kValenceTable ? valence_score[live[v]] : 2.0 / std::sqrt(double(live[v])));
-    };
-    std::vector<double> vscore(vertex_count);
-    for (size_t v = 0; v < vertex_count; ++v) vscore[v] = vertexScore(uint32_t(v));
-    std::vector<uint8_t> done(fn, 0);
-    std::vector<uint32_t> order;
-    order.reserve(fn);
-    std::vector<uint32_t> cache, next_cache;
-    size_t scan = 0;
-    while (order.size() < fn) {
-        // Best face around the cached vertices; ties by lower face index.
-        uint32_t best = 0xFFFFFFFFu;
-        double best_score = -1e300;
-        // The most recent vertices first; the rest of the cache only when they have no face left.
-        for (size_t ci = 0; ci < cache.size(); ++ci) {
-            if (ci == kSearch && best != 0xFFFFFFFFu) break;
-            const uint32_t v = cache[ci];
-            for (uint32_t k = first[v]; k < first[v + 1]; ++k) {
-                uint32_t f = faces_of[k];
-                if (done[f]) continue;
-                double s = vscore[indices[3 * f]] + vscore[indices[3 * f + 1]] + vscore[indices[3 * f + 2]];
-                if (!order.empty() && sharesEdge(&indices[3 * size_t(f)], &indices[3 * size_t(order.back())]))
-                    s += kStripBonus;
-                if (s > best_score || (s == best_score && f < best)) {
-                    best_score = s;
-                    best = f;
+    // Pair half-edges: an undirected edge with exactly one half-edge each way is interior; every
+    // other half-edge becomes a boundary. Corner c is opposite the half-edge next(c) -> prev(c).
+    m.opposite.assign(cn, kNone);
+    {
+        std::vector<std::pair<uint64_t, uint32_t>> keys(cn);
+        for (uint32_t c = 0; c < cn; ++c) {
+            const uint64_t u = work[nextCorner(c)], w = work[prevCorner(c)];
+            keys[c] = {std::min(u, w) << 32 | std::max(u, w), c};
+        }
+        std::sort(keys.begin(), keys.end());
+        for (size_t i = 0; i < cn;) {
+            size_t j = i;
+            while (j < cn && keys[j].first == keys[i].first) ++j;
+            if (j - i == 2) {
+                const uint32_t c = keys[i].second, d = keys[i + 1].second;
+                if (work[nextCorner(c)] == work[prevCorner(d)]) {
+                    m.opposite[c] = d;
+                    m.opposite[d] = c;
                 }
             }
+            i = j;
         }
-        if (best == 0xFFFFFFFFu) {
-            while (done[scan]) ++scan;
-            best = uint32_t(scan);
-        }
-        done[best] = 1;
-        order.push_back(best);
-        // LRU update: the face's vertices to the front.
-        next_cache.clear();
-        const uint32_t* t = &indices[3 * size_t(best)];
-        for (int i = 0; i < 3; ++i) {
-            --live[t[i]];
-            if (std::find(next_cache.begin(), next_cache.end(), t[i]) == next_cache.end()) next_cache.push_back(t[i]);
-        }
-        for (uint32_t v : cache)
-            if (v != t[0] && v != t[1] && v != t[2]) next_cache.push_back(v);
-        for (size_t i = kCache; i < next_cache.size(); ++i) {
-            cache_pos[next_cache[i]] = -1;
-            vscore[next_cache[i]] = vertexScore(next_cache[i]);
-        }
-        if (next_cache.size() > size_t(kCache)) next_cache.resize(kCache);
-        for (size_t i = 0; i < next_cache.size(); ++i) {
-            cache_pos[next_cache[i]] = int(i);
-            vscore[next_cache[i]] = vertexScore(next_cache[i]);
-        }
-        std::swap(cache, next_cache);
     }
-    return order;
+    // Split vertices into fans: corners around one working vertex joined across paired edges.
+    std::vector<uint32_t> parent(cn);
+    for (uint32_t c = 0; c < cn; ++c) parent[c] = c;
+    for (uint32_t c = 0; c < cn; ++c) {
+        const uint32_t o = m.opposite[nextCorner(c)];
+        if (o == kNone) continue;
+        const uint32_t s = nextCorner(o); // the same vertex's corner across the edge
+        const uint32_t ra = findRoot(parent, c), rb = findRoot(parent, s);
+        if (ra != rb) parent[std::max(ra, rb)] = std::min(ra, rb);
+    }
+    // One closed vertex per fan, numbered by the fan's first corner.
+    std::vector<uint32_t> vertex_of_root(cn, kNone);
+    m.corner_vertex.resize(cn);
+    for (uint32_t c = 0; c < cn; ++c) {
+        const uint32_t r = findRoot(parent, c);
+        if (vertex_of_root[r] == kNone) {
+            vertex_of_root[r] = uint32_t(m.source.size());
+            m.source.push_back(work_source[work[c]]);
+        }
+        m.corner_vertex[c] = vertex_of_root[r];
+    }
+    // Boundary loops: each vertex now has at most one outgoing boundary half-edge.
+    const size_t vn = m.source.size();
+    std::vector<uint32_t> out_boundary(vn, kNone);
+    for (uint32_t c = 0; c < cn; ++c)
+        if (m.opposite[c] == kNone) out_boundary[m.corner_vertex[nextCorner(c)]] = c;
+    std::vector<uint8_t> capped(cn, 0);
+    for (uint32_t c0 = 0; c0 < cn; ++c0) {
+        if (m.opposite[c0] != kNone || capped[c0]) continue;
+        const uint32_t d = uint32_t(m.source.size());
+        m.source.push_back(kNone);
+        uint32_t first_tri = kNone, previous_tri = kNone;
+        for (uint32_t c = c0;;) {
+            capped[c] = 1;
+            const uint32_t u = m.corner_vertex[nextCorner(c)], w = m.corner_vertex[prevCorner(c)];
+            const uint32_t t = uint32_t(m.corner_vertex.size() / 3);
+            m.corner_vertex.insert(m.corner_vertex.end(), {w, u, d});
+            m.opposite.insert(m.opposite.end(), {kNone, kNone, kNone});
+            m.opposite[3 * t + 2] = c;
+            m.opposite[c] = 3 * t + 2;
+            if (previous_tri != kNone) {
+                m.opposite[3 * previous_tri + 1] = 3 * t;
+                m.opposite[3 * t] = 3 * previous_tri + 1;
+            } else {
+                first_tri = t;
+            }
+            previous_tri = t;
+            c = out_boundary[w];
+            if (c == c0) break;
+        }
+        m.opposite[3 * previous_tri + 1] = 3 * first_tri;
+        m.opposite[3 * first_tri] = 3 * previous_tri + 1;
+    }
+    m.valence.assign(m.source.size(), 0);
+    for (uint32_t v : m.corner_vertex) ++m.valence[v];
+    return m;
 }
 
-struct Encoder {
-    const Mesh* mesh;
-    const ValenceEncodeOptions* options;
-    bool normals = false;
-    std::vector<uint32_t> new_of;      // old -> new
-    std::vector<uint16_t> qpos_old;    // 3 per old vertex
-    std::vector<uint16_t> qnorm_old;   // 2 per old vertex
-    std::vector<uint16_t> qpos, qnorm; // by new index
-    RangeEncoder conn, pos, nrm;
-    uint16_t edge_probs[kValenceEdgeFifo + 1][1u << kValenceSymbolTreeBits];
-    uint16_t vertex_probs[2][1u << kValenceSymbolTreeBits];
-    uint16_t explicit_class[kClassProbs];
-    uint16_t explicit_top[kTopProbs];
-    ResidualModel<3> pos_model;
-    ResidualModel<2> nrm_model;
-    Fifo<kValenceEdgeFifo> edge_a, edge_b, edge_c;
-    MoveToFront<kValenceVertexFifo> vertices;
-    uint32_t next_new = 0;
+// Signals a broken decoder assumption; `culprit` is a closed vertex to cut loose.
+struct Failure {
+    bool failed = false;
+    uint32_t culprit_a = kNone, culprit_b = kNone, culprit_c = kNone;
+};
+
+struct EncoderIo {
+    const ClosedMesh* m = nullptr;
+    lodrt::detail::Conquest<EncoderIo>* engine = nullptr;
+    RangeEncoder* re = nullptr;
+    Failure* failure = nullptr;
+    std::vector<uint32_t> engine_id; // closed vertex -> engine vertex
+    std::vector<uint32_t> real_of;   // engine corner -> closed-mesh corner
+    std::vector<uint8_t> conquered;  // per closed triangle
+    uint32_t next_engine_vertex = 0;
+    size_t scan = 0;
+    uint32_t seed = kNone;
+    uint16_t more;
+    uint16_t symbols[lodrt::detail::kValenceContexts][1u << kValenceSymbolTreeBits];
+    UintModel escape, offset, list, free_a, dup;
 
     void init() {
-        initRangeProbs(&edge_probs[0][0], sizeof(edge_probs) / 2);
-        initRangeProbs(&vertex_probs[0][0], sizeof(vertex_probs) / 2);
-        initRangeProbs(explicit_class, kClassProbs);
-        initRangeProbs(explicit_top, kTopProbs);
-        pos_model.init();
-        nrm_model.init();
+        more = uint16_t(kRangeProbInit);
+        initRangeProbs(&symbols[0][0], sizeof(symbols) / 2);
+        escape.init();
+        offset.init();
+        list.init();
+        free_a.init();
+        dup.init();
+        engine_id.assign(m->source.size(), kNone);
+        conquered.assign(m->corner_vertex.size() / 3, 0);
     }
-
-    void encodeAttributes(uint32_t old, uint32_t x, uint32_t a, uint32_t b, uint32_t c) {
-        const int64_t qmax = (int64_t(1) << options->position_bits) - 1;
-        for (int j = 0; j < 3; ++j) {
-            int64_t p = 0;
-            if (a != kNone) {
-                p = int64_t(qpos[3 * a + j]) + qpos[3 * b + j] - qpos[3 * c + j];
-                p = std::clamp<int64_t>(p, 0, qmax);
-            } else if (x > 0) {
-                p = qpos[3 * (x - 1) + j];
-            }
-            qpos[3 * x + j] = qpos_old[3 * old + j];
-            pos_model.encode(pos, j, int64_t(qpos[3 * x + j]) - p);
-        }
+    lodrt::Result fail(uint32_t a, uint32_t b) {
+        failure->failed = true;
+        failure->culprit_a = a;
+        failure->culprit_b = b;
+        return lodrt::Result::CorruptStream;
     }
-
-    // Normals after all positions, in new vertex order, each predicted from the exact sum of its
-    // faces' normals on the quantized positions (the decoder's decodeNormals).
-    void encodeNormals(const std::vector<uint32_t>& triangles) {
-        const size_t vn = new_of.size();
-        std::vector<int64_t> sum(3 * vn, 0);
-        for (size_t t = 0; t + 2 < triangles.size(); t += 3) {
-            const uint32_t* f = &triangles[t];
-            int64_t e1[3], e2[3];
-            for (int j = 0; j < 3; ++j) {
-                e1[j] = int64_t(qpos[3 * f[1] + j]) - qpos[3 * f[0] + j];
-                e2[j] = int64_t(qpos[3 * f[2] + j]) - qpos[3 * f[0] + j];
-            }
-            const int64_t n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
-                                  e1[0] * e2[1] - e1[1] * e2[0]};
-            for (int c = 0; c < 3; ++c)
-                for (int j = 0; j < 3; ++j) sum[3 * f[c] + j] += n[j];
-        }
-        const uint32_t nb = options->normal_bits;
-        const uint32_t mask = (1u << nb) - 1;
-        const int64_t half = int64_t(1) << (nb - 1);
-        for (size_t x = 0; x < vn; ++x) {
-            const int64_t* s3 = &sum[3 * x];
-            uint32_t p[2];
-            if (s3[0] != 0 || s3[1] != 0 || s3[2] != 0) {
-                const float fs[3] = {float(s3[0]), float(s3[1]), float(s3[2])};
-                lodrt::octahedralEncode(fs, nb, p);
-            } else if (x > 0) {
-                p[0] = qnorm[2 * (x - 1)];
-                p[1] = qnorm[2 * (x - 1) + 1];
-            } else {
-                p[0] = p[1] = uint32_t(half);
-            }
-            for (int j = 0; j < 2; ++j) {
-                int64_t r = int64_t((qnorm[2 * x + j] - p[j]) & mask);
-                if (r >= half) r -= int64_t(mask) + 1;
-                nrm_model.encode(nrm, j, r);
-            }
-        }
+    bool moreComponents() {
+        while (scan < m->real_triangles && conquered[scan]) ++scan;
+        const bool more_left = scan < m->real_triangles;
+        re->bit(more, more_left ? 1u : 0u);
+        seed = more_left ? uint32_t(scan) : kNone;
+        seed_index = 0;
+        return more_left;
     }
-
-    // Codes input vertex `old`; returns its new index.
-    uint32_t encodeVertex(uint32_t ctx, uint32_t old, uint32_t a, uint32_t b, uint32_t c) {
-        uint32_t id = new_of[old];
-        if (id == kUnassigned) {
-            conn.tree(vertex_probs[ctx], kValenceSymbolTreeBits, kValenceVertexSymbolNew);
-            id = next_new++;
-            new_of[old] = id;
-            encodeAttributes(old, id, a, b, c);
-            return id;
+    void writeNew(uint32_t ctx, uint32_t v) {
+        const uint32_t val = m->valence[v];
+        if (m->source[v] == kNone) {
+            re->tree(symbols[ctx], kValenceSymbolTreeBits, kValenceSymbolDummy);
+            re->uint(escape.klass, escape.top, val);
+        } else if (val >= 3 && val - 3 + kValenceSymbolFirstValence < (1u << kValenceSymbolTreeBits)) {
+            re->tree(symbols[ctx], kValenceSymbolTreeBits, val - 3 + kValenceSymbolFirstValence);
+        } else {
+            re->tree(symbols[ctx], kValenceSymbolTreeBits, kValenceSymbolEscape);
+            re->uint(escape.klass, escape.top, val);
         }
-        int slot = vertices.find(id);
-        if (slot >= 0) {
-            conn.tree(vertex_probs[ctx], kValenceSymbolTreeBits, uint32_t(slot) + 1);
-            return id;
+        engine_id[v] = next_engine_vertex++;
+    }
+    lodrt::Result seedVertex(VertexSymbol* s) {
+        const uint32_t v = m->corner_vertex[3 * size_t(seed) + seed_index++];
+        return newSymbol(lodrt::detail::kSeedContext, v, s);
+    }
+    uint32_t seed_index = 0;
+    uint32_t last_vertices[3] = {kNone, kNone, kNone};
+    lodrt::Result newSymbol(uint32_t ctx, uint32_t v, VertexSymbol* s) {
+        if (engine_id[v] != kNone) return fail(v, kNone);
+        s->kind = m->source[v] == kNone ? VertexKind::Dummy : VertexKind::Add;
+        s->valence = m->valence[v];
+        writeNew(ctx, v);
+        return lodrt::Result::Ok;
+    }
+    lodrt::Result vertexSymbol(uint32_t ctx, uint32_t focus, VertexSymbol* s) {
+        const auto& a = engine->a;
+        const uint32_t rc = real_of[a.node_corner[focus]];
+        const uint32_t ro = m->opposite[rc];
+        const uint32_t x = m->corner_vertex[ro];
+        if (conquered[ro / 3]) return fail(m->corner_vertex[rc], x);
+        if (engine_id[x] == kNone) return newSymbol(ctx, x, s);
+        // x is on the front: walk its wedge on the focus side (across edge f-x) to the front edge
+        // bounding it, counting the unconquered triangles.
+        uint32_t c = ro, m_count = 0;
+        for (;;) {
+            const uint32_t o = m->opposite[nextCorner(c)];
+            const uint32_t nc = nextCorner(o);
+            if (conquered[nc / 3]) {
+                c = nc;
+                break;
+            }
+            c = nc;
+            if (++m_count > m->valence[x]) return fail(x, kNone);
         }
-        conn.tree(vertex_probs[ctx], kValenceSymbolTreeBits, kValenceVertexSymbolExplicit);
-        conn.uint(explicit_class, explicit_top, uint64_t(next_new - 1 - id));
-        return id;
+        if (m_count == 0) return fail(x, m->corner_vertex[rc]);
+        const uint32_t target = prevCorner(c); // in the conquered triangle, opposite front edge x -> y
+        const uint32_t ex = engine_id[x];
+        auto isTarget = [&](uint32_t k) { return a.node_vertex[k] == ex && real_of[a.node_corner[k]] == target; };
+        s->free_a = m_count - 1;
+        uint32_t k = focus, d = 0;
+        do {
+            if (isTarget(k)) {
+                s->kind = VertexKind::Split;
+                s->offset = d;
+                re->tree(symbols[ctx], kValenceSymbolTreeBits, kValenceSymbolSplit);
+                if (d < 3) return fail(x, kNone);
+                re->uint(offset.klass, offset.top, d - 3);
+                re->uint(free_a.klass, free_a.top, s->free_a);
+                return lodrt::Result::Ok;
+            }
+            k = a.node_next[k];
+            ++d;
+        } while (k != focus);
+        for (uint32_t li = 0; li < engine->stack_count; ++li) {
+            const uint32_t si = engine->stack_count - 1 - li;
+            k = a.stack_head[si];
+            for (d = 0; d < a.stack_size[si]; ++d, k = a.node_next[k]) {
+                if (!isTarget(k)) continue;
+                s->kind = VertexKind::Merge;
+                s->list = li;
+                s->offset = d;
+                re->tree(symbols[ctx], kValenceSymbolTreeBits, kValenceSymbolMerge);
+                re->uint(list.klass, list.top, li);
+                re->uint(offset.klass, offset.top, d);
+                re->uint(free_a.klass, free_a.top, s->free_a);
+                return lodrt::Result::Ok;
+            }
+        }
+        return fail(x, kNone);
+    }
+    lodrt::Result onTriangle(uint32_t t, uint32_t attach) {
+        const auto& a = engine->a;
+        if (real_of.size() < 3 * size_t(t) + 3) real_of.resize(3 * size_t(t) + 3, kNone);
+        uint32_t rt;
+        if (attach == kNone) {
+            rt = seed;
+            for (uint32_t i = 0; i < 3; ++i) real_of[3 * t + i] = 3 * rt + i;
+        } else {
+            const uint32_t ro = m->opposite[real_of[attach]];
+            rt = ro / 3;
+            real_of[3 * t + 2] = ro;
+            real_of[3 * t + 0] = nextCorner(ro);
+            real_of[3 * t + 1] = prevCorner(ro);
+        }
+        if (conquered[rt]) return fail(m->corner_vertex[3 * rt], m->corner_vertex[3 * rt + 1]);
+        conquered[rt] = 1;
+        for (uint32_t i = 0; i < 3; ++i) last_vertices[i] = m->corner_vertex[3 * rt + i];
+        for (uint32_t i = 0; i < 3; ++i) {
+            const uint32_t ec = 3 * t + i, rc = real_of[ec];
+            if (engine_id[m->corner_vertex[rc]] != a.corner_vertex[ec])
+                return fail(m->corner_vertex[rc], m->corner_vertex[real_of[3 * t + (i + 1) % 3]]);
+            const uint32_t eo = a.corner_opposite[ec];
+            const uint32_t ro = m->opposite[rc];
+            const bool ok = eo != kNone ? real_of[eo] == ro : !conquered[ro / 3];
+            if (!ok) return fail(m->corner_vertex[nextCorner(rc)], m->corner_vertex[prevCorner(rc)]);
+        }
+        return lodrt::Result::Ok;
     }
 };
 
@@ -255,6 +347,61 @@ void putFloat(std::vector<uint8_t>& out, size_t at, float f) {
     put32(out, at, u);
 }
 
+// One attempt: conquest of the closed mesh built with `exploded`. Fills `io` (and its engine) or
+// reports the failure.
+struct Attempt {
+    ClosedMesh closed;
+    lodrt::detail::Conquest<EncoderIo> engine;
+    EncoderIo io;
+    RangeEncoder conn;
+    Failure failure;
+    std::vector<uint32_t> corner_vertex, corner_opposite, vertex_flags, vertex_corner, vertex_valence, node_vertex,
+        node_prev, node_next, node_free, node_corner, completion, stack_head, stack_size;
+
+    bool run(const Mesh& mesh, const std::vector<uint8_t>& exploded) {
+        closed = buildClosed(mesh, exploded);
+        const size_t vc = closed.source.size(), tc = closed.corner_vertex.size() / 3;
+        for (auto* v : {&corner_vertex, &corner_opposite}) v->assign(3 * tc, 0);
+        for (auto* v : {&vertex_flags, &vertex_corner, &vertex_valence, &completion}) v->assign(vc, 0);
+        for (auto* v : {&node_vertex, &node_prev, &node_next, &node_free, &node_corner}) v->assign(vc + tc, 0);
+        for (auto* v : {&stack_head, &stack_size}) v->assign(tc, 0);
+        auto& a = engine.a;
+        a.corner_vertex = corner_vertex.data();
+        a.corner_opposite = corner_opposite.data();
+        a.vertex_flags = vertex_flags.data();
+        a.vertex_corner = vertex_corner.data();
+        a.vertex_valence = vertex_valence.data();
+        a.node_vertex = node_vertex.data();
+        a.node_prev = node_prev.data();
+        a.node_next = node_next.data();
+        a.node_free = node_free.data();
+        a.node_corner = node_corner.data();
+        a.completion = completion.data();
+        a.stack_head = stack_head.data();
+        a.stack_size = stack_size.data();
+        a.max_vertices = uint32_t(vc);
+        a.max_triangles = uint32_t(tc);
+        io.m = &closed;
+        io.engine = &engine;
+        io.re = &conn;
+        io.failure = &failure;
+        io.init();
+        io.real_of.reserve(3 * tc);
+        lodrt::Result r = engine.run(io);
+        if (r != lodrt::Result::Ok && !failure.failed) {
+            // The engine refused a step (e.g. a front pinched onto itself): blame the last triangle.
+            failure.failed = true;
+            failure.culprit_a = io.last_vertices[0];
+            failure.culprit_b = io.last_vertices[1];
+            failure.culprit_c = io.last_vertices[2];
+        }
+        if (!failure.failed &&
+            (engine.vertex_count != vc || engine.triangle_count != tc || engine.completion_count != vc))
+            failure.failed = true;
+        return !failure.failed;
+    }
+};
+
 std::string describe(lodrt::Result r) {
     const char* what = "";
     switch (r) {
@@ -265,7 +412,7 @@ std::string describe(lodrt::Result r) {
         what = "not an .lbm file (bad magic)";
         break;
     case lodrt::Result::UnsupportedVersion:
-        what = "format version other than 1";
+        what = "format version other than 2";
         break;
     case lodrt::Result::TrailingBytes:
         what = "bytes after the streams the header announces";
@@ -280,6 +427,7 @@ std::string describe(lodrt::Result r) {
     return std::string(what) + " (" + lodrt::resultName(r) + ")";
 }
 
+
 } // namespace
 
 Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeOptions& options) {
@@ -291,9 +439,10 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
     if (normals && (options.normal_bits < kValenceMinNormalBits || options.normal_bits > kValenceMaxNormalBits))
         return invalidInput("valence encoder: normal bits " + std::to_string(options.normal_bits) + " outside [4, 16]");
     const size_t vn = mesh.vertexCount(), fn = mesh.faceCount();
-    if (vn > kValenceMaxCount || fn > kValenceMaxCount)
+    // Cutting can copy each corner's vertex and cap each boundary edge: keep the closed counts in range.
+    if (vn > kValenceMaxCount / 4 || fn > kValenceMaxCount / 4)
         return invalidInput("valence encoder: " + std::to_string(vn) + " vertices / " + std::to_string(fn) +
-                            " triangles exceed the format limit of 2^28");
+                            " triangles exceed the format limit of 2^26");
     for (size_t i = 0; i < vn; ++i) {
         const Vec3f& p = mesh.positions[i];
         if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
@@ -309,95 +458,195 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
             if (i == 0 || c[j] > hi[j]) hi[j] = c[j];
         }
     }
-    float cube = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2], 0.0f});
+    const float cube = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2], 0.0f});
     if (!std::isfinite(cube)) return invalidInput("valence encoder: bounding box extent overflows a float");
     const uint32_t qmax = (1u << options.position_bits) - 1;
     const float step = cube / float(qmax);
-
-    Encoder e;
-    e.mesh = &mesh;
-    e.options = &options;
-    e.normals = normals;
-    e.init();
-    e.new_of.assign(vn, kUnassigned);
-    e.qpos_old.resize(3 * vn);
-    e.qpos.resize(3 * vn);
     ValenceEncodeResult result;
+    std::vector<int32_t> qpos_in(3 * vn);
     for (size_t i = 0; i < vn; ++i) {
         const float c[3] = {mesh.positions[i].x, mesh.positions[i].y, mesh.positions[i].z};
         for (int j = 0; j < 3; ++j) {
-            double t = cube > 0.0f ? double(c[j] - lo[j]) / double(cube) * qmax : 0.0;
-            long q = std::lround(std::floor(t + 0.5));
-            q = std::clamp<long>(q, 0, long(qmax));
-            e.qpos_old[3 * i + j] = uint16_t(q);
-            double decoded = double(lo[j] + float(q) * step);
+            const double t = cube > 0.0f ? double(c[j] - lo[j]) / double(cube) * qmax : 0.0;
+            const long q = std::clamp<long>(std::lround(std::floor(t + 0.5)), 0, long(qmax));
+            qpos_in[3 * i + size_t(j)] = int32_t(q);
+            const double decoded = double(lo[j] + float(q) * step);
             result.max_position_error = std::max(result.max_position_error, std::fabs(decoded - double(c[j])));
         }
     }
+
+    // Conquest, cutting more of the mesh loose while a decoder assumption fails.
+    std::vector<uint8_t> exploded(fn, 0);
+    std::unique_ptr<Attempt> attempt;
+    for (int round = 0;; ++round) {
+        attempt = std::make_unique<Attempt>();
+        if (attempt->run(mesh, exploded)) break;
+        const bool all = std::all_of(exploded.begin(), exploded.end(), [](uint8_t e) { return e != 0; });
+        if (all) return internalError("valence encoder: conquest failed on fully cut mesh");
+        bool changed = false;
+        if (round < kMaxRestarts) {
+            const Failure& f = attempt->failure;
+            std::vector<uint8_t> culprit(vn, 0);
+            for (uint32_t cv : {f.culprit_a, f.culprit_b, f.culprit_c})
+                if (cv != kNone && attempt->closed.source[cv] != kNone) culprit[attempt->closed.source[cv]] = 1;
+            for (size_t t = 0; t < fn; ++t) {
+                if (exploded[t]) continue;
+                const uint32_t* tri = &mesh.indices[3 * t];
+                if (culprit[tri[0]] || culprit[tri[1]] || culprit[tri[2]]) exploded[t] = changed = true;
+            }
+        }
+        if (!changed) std::fill(exploded.begin(), exploded.end(), uint8_t(1));
+    }
+    const ClosedMesh& cm = attempt->closed;
+    const auto& a = attempt->engine.a;
+    EncoderIo& io = attempt->io;
+    RangeEncoder& conn = attempt->conn;
+    const uint32_t vc = uint32_t(cm.source.size()), tc = uint32_t(cm.corner_vertex.size() / 3);
+
+    // Final vertex order: conquest order without dummies and copies, then unreferenced vertices.
+    std::vector<uint32_t> closed_of_engine(vc);
+    for (uint32_t v = 0; v < vc; ++v) closed_of_engine[io.engine_id[v]] = v;
+    std::vector<uint32_t> final_of(vc, kNone), new_of(vn, kNone);
+    std::vector<std::pair<uint32_t, uint32_t>> dups; // (rank among non-dummies, final id of the original)
+    uint32_t final_count = 0, rank = 0;
+    for (uint32_t ev = 0; ev < vc; ++ev) {
+        const uint32_t src = cm.source[closed_of_engine[ev]];
+        if (src == kNone) continue;
+        if (new_of[src] != kNone) {
+            dups.push_back({rank, new_of[src]});
+            final_of[ev] = new_of[src];
+        } else {
+            new_of[src] = final_of[ev] = final_count++;
+        }
+        ++rank;
+    }
+    conn.uint(io.dup.klass, io.dup.top, dups.size());
+    for (size_t i = 0; i < dups.size(); ++i) {
+        const uint32_t gap = i == 0 ? dups[i].first : dups[i].first - dups[i - 1].first - 1;
+        const uint32_t back = (dups[i].first - uint32_t(i)) - 1 - dups[i].second;
+        conn.uint(io.dup.klass, io.dup.top, gap);
+        conn.uint(io.dup.klass, io.dup.top, back);
+    }
+    const uint32_t referenced = final_count;
+    for (size_t v = 0; v < vn; ++v)
+        if (new_of[v] == kNone) new_of[v] = final_count++;
+
+    std::vector<uint32_t> triangles;
+    triangles.reserve(3 * fn);
+    for (uint32_t t = 0; t < tc; ++t) {
+        const uint32_t* cv = &a.corner_vertex[3 * size_t(t)];
+        if ((a.vertex_flags[cv[0]] | a.vertex_flags[cv[1]] | a.vertex_flags[cv[2]]) & lodrt::detail::kFlagDummy)
+            continue;
+        triangles.insert(triangles.end(), {final_of[cv[0]], final_of[cv[1]], final_of[cv[2]]});
+        result.old_face_of.push_back(io.real_of[3 * size_t(t)] / 3);
+    }
+    if (result.old_face_of.size() != fn) return internalError("valence encoder: triangle count mismatch");
+
+    // Positions in the order positionOrder gives, predicted exactly as the decoder will.
+    RangeEncoder pos;
+    ResidualModel<3, lodrt::detail::kPositionContexts> pos_model;
+    pos_model.init();
+    std::vector<int32_t> qpos(3 * size_t(vc), 0), qpos_final(3 * vn);
+    std::vector<uint8_t> decoded(vc, 0);
+    int32_t last[3] = {int32_t(qmax + 1) / 2, int32_t(qmax + 1) / 2, int32_t(qmax + 1) / 2};
+    std::vector<uint32_t> order(vc), degree(vc), stack0(vc), stack1(vc), stack2(vc);
+    const uint32_t ordered_count =
+        lodrt::detail::positionOrder(a.corner_vertex, a.corner_opposite, a.vertex_corner, a.vertex_flags,
+                                     a.vertex_valence, vc, order.data(), decoded.data(), degree.data(), stack0.data(),
+                                     stack1.data(), stack2.data());
+    if (ordered_count == kNone) return internalError("valence encoder: broken corner cycle");
+    std::fill(decoded.begin(), decoded.end(), uint8_t(0));
+    std::vector<uint8_t> final_done(vn, 0);
+    for (uint32_t i = 0; i < ordered_count; ++i) {
+        const uint32_t ev = order[i];
+        const uint32_t fid = final_of[ev];
+        if (fid == kNone) continue;
+        const uint32_t src = cm.source[closed_of_engine[ev]];
+        int32_t* q = &qpos[3 * size_t(ev)];
+        for (int j = 0; j < 3; ++j) q[j] = qpos_in[3 * size_t(src) + size_t(j)];
+        if (!final_done[fid]) {
+            int32_t pred[3];
+            uint32_t scale = 0, count = 0;
+            if (!lodrt::detail::predictPosition(a.corner_vertex, a.corner_opposite, a.vertex_corner, decoded.data(),
+                                                qpos.data(), ev, last, a.vertex_valence[ev], pred, &scale, &count))
+                return internalError("valence encoder: broken corner cycle");
+            const uint32_t ctx = lodrt::detail::scaleContext(scale, count);
+            for (int j = 0; j < 3; ++j) pos.residual(pos_model, j, ctx, q[j] - pred[j]);
+            for (int j = 0; j < 3; ++j) qpos_final[3 * size_t(fid) + size_t(j)] = q[j];
+            final_done[fid] = 1;
+        }
+        for (int j = 0; j < 3; ++j) last[j] = q[j];
+        decoded[ev] = 1;
+    }
+    {
+        std::vector<uint32_t> isolated(vn - referenced);
+        for (size_t v = 0; v < vn; ++v)
+            if (new_of[v] >= referenced) isolated[new_of[v] - referenced] = uint32_t(v);
+        for (uint32_t v : isolated) {
+            const uint32_t ctx = lodrt::detail::scaleContext(0, 0);
+            for (int j = 0; j < 3; ++j) {
+                const int32_t q = qpos_in[3 * size_t(v) + size_t(j)];
+                pos.residual(pos_model, j, ctx, q - last[j]);
+                last[j] = q;
+                qpos_final[3 * size_t(new_of[v]) + size_t(j)] = q;
+            }
+        }
+    }
+
+    // Normals after all positions, in final order, each predicted from the exact sum of its faces'
+    // normals on the quantized positions (the decoder's step 3).
+    RangeEncoder nrm;
     if (normals) {
-        e.qnorm_old.resize(2 * vn);
-        e.qnorm.resize(2 * vn);
+        std::vector<uint32_t> qnorm(2 * vn);
         for (size_t i = 0; i < vn; ++i) {
             const float n[3] = {mesh.normals[i].x, mesh.normals[i].y, mesh.normals[i].z};
             uint32_t q[2];
             lodrt::octahedralEncode(n, options.normal_bits, q);
-            e.qnorm_old[2 * i] = uint16_t(q[0]);
-            e.qnorm_old[2 * i + 1] = uint16_t(q[1]);
+            qnorm[2 * size_t(new_of[i])] = q[0];
+            qnorm[2 * size_t(new_of[i]) + 1] = q[1];
         }
-    }
-
-    result.old_face_of = traversalOrder(mesh.indices, vn);
-    uint32_t previous_edge = kValenceEdgeFifo;
-    std::vector<uint32_t> triangles; // as decoded, new vertex indices
-    triangles.reserve(mesh.indices.size());
-    for (uint32_t f : result.old_face_of) {
-        const uint32_t o[3] = {mesh.indices[3 * size_t(f)], mesh.indices[3 * size_t(f) + 1],
-                               mesh.indices[3 * size_t(f) + 2]};
-        // The first FIFO edge a->b that this face contains as a directed edge.
-        uint32_t es = kValenceEdgeFifo, rot = 0;
-        for (uint32_t i = 0; i < e.edge_a.count && es == kValenceEdgeFifo; ++i) {
-            for (uint32_t r = 0; r < 3; ++r) {
-                if (e.new_of[o[r]] == e.edge_a.at(i) && e.new_of[o[(r + 1) % 3]] == e.edge_b.at(i)) {
-                    es = i;
-                    rot = r;
-                    break;
-                }
+        std::vector<int64_t> sum(3 * vn, 0);
+        for (size_t t = 0; t + 2 < triangles.size(); t += 3) {
+            const uint32_t* f = &triangles[t];
+            const int32_t* p0 = &qpos_final[3 * size_t(f[0])];
+            const int32_t* p1 = &qpos_final[3 * size_t(f[1])];
+            const int32_t* p2 = &qpos_final[3 * size_t(f[2])];
+            const int64_t e1[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
+            const int64_t e2[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
+            const int64_t n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+                                  e1[0] * e2[1] - e1[1] * e2[0]};
+            for (int c = 0; c < 3; ++c)
+                for (int j = 0; j < 3; ++j) sum[3 * size_t(f[c]) + size_t(j)] += n[j];
+        }
+        ResidualModel<2, kValenceNormalContexts> nrm_model;
+        nrm_model.init();
+        const uint32_t nb = options.normal_bits;
+        const uint32_t mask = (1u << nb) - 1;
+        const int32_t half = int32_t(1) << (nb - 1);
+        uint32_t nrm_length[2] = {0, 0};
+        for (size_t x = 0; x < vn; ++x) {
+            const int64_t* s3 = &sum[3 * x];
+            uint32_t p[2];
+            if (s3[0] != 0 || s3[1] != 0 || s3[2] != 0) {
+                const float fs[3] = {float(s3[0]), float(s3[1]), float(s3[2])};
+                lodrt::octahedralEncode(fs, nb, p);
+            } else if (x > 0) {
+                p[0] = qnorm[2 * (x - 1)];
+                p[1] = qnorm[2 * (x - 1) + 1];
+            } else {
+                p[0] = p[1] = uint32_t(half);
+            }
+            for (int j = 0; j < 2; ++j) {
+                int32_t r = int32_t((qnorm[2 * x + size_t(j)] - p[j]) & mask);
+                if (r >= half) r -= int32_t(mask) + 1;
+                const uint32_t ctx = std::min(nrm_length[j], kValenceNormalContexts - 1);
+                nrm_length[j] = nrm.residual(nrm_model, j, ctx, r);
             }
         }
-        e.conn.tree(e.edge_probs[previous_edge], kValenceSymbolTreeBits, es);
-        previous_edge = es;
-        uint32_t v[3];
-        if (es < kValenceEdgeFifo) {
-            v[0] = e.edge_a.at(es);
-            v[1] = e.edge_b.at(es);
-            v[2] = e.encodeVertex(0, o[(rot + 2) % 3], v[0], v[1], e.edge_c.at(es));
-        } else {
-            for (int i = 0; i < 3; ++i) v[i] = e.encodeVertex(1, o[i], kNone, kNone, kNone);
-        }
-        for (int i = es < kValenceEdgeFifo ? 1 : 0; i < 3; ++i) {
-            e.edge_a.push(v[(i + 1) % 3]);
-            e.edge_b.push(v[i]);
-            e.edge_c.push(v[(i + 2) % 3]);
-        }
-        for (int i = 0; i < 3; ++i) e.vertices.touch(v[i]);
-        triangles.insert(triangles.end(), {v[0], v[1], v[2]});
-    }
-    for (size_t i = 0; i < vn; ++i) {
-        if (e.new_of[i] != kUnassigned) continue;
-        uint32_t x = e.next_new++;
-        e.new_of[i] = x;
-        e.encodeAttributes(uint32_t(i), x, kNone, kNone, kNone);
-    }
-    if (normals) {
-        for (size_t i = 0; i < vn; ++i) {
-            e.qnorm[2 * size_t(e.new_of[i])] = e.qnorm_old[2 * i];
-            e.qnorm[2 * size_t(e.new_of[i]) + 1] = e.qnorm_old[2 * i + 1];
-        }
-        e.encodeNormals(triangles);
     }
 
-    std::vector<uint8_t> conn = e.conn.finish(), pos = e.pos.finish(), nrm;
-    if (normals) nrm = e.nrm.finish();
+    std::vector<uint8_t> conn_bytes = conn.finish(), pos_bytes = pos.finish(), nrm_bytes;
+    if (normals) nrm_bytes = nrm.finish();
     std::vector<uint8_t>& out = result.bytes;
     out.assign(kValenceHeaderSize, 0);
     put32(out, 0, kValenceMagic);
@@ -406,21 +655,25 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
     out[6] = normals ? uint8_t(kValenceFlagNormals) : 0;
     put32(out, 8, uint32_t(vn));
     put32(out, 12, uint32_t(fn));
-    out[16] = uint8_t(options.position_bits);
-    out[17] = normals ? uint8_t(options.normal_bits) : 0;
-    for (int j = 0; j < 3; ++j) putFloat(out, 20 + 4 * j, lo[j]);
-    putFloat(out, 32, cube);
-    put32(out, 36, uint32_t(conn.size()));
-    put32(out, 40, uint32_t(pos.size()));
-    put32(out, 44, uint32_t(nrm.size()));
-    out.insert(out.end(), conn.begin(), conn.end());
-    out.insert(out.end(), pos.begin(), pos.end());
-    out.insert(out.end(), nrm.begin(), nrm.end());
+    put32(out, 16, vc);
+    put32(out, 20, tc);
+    out[24] = uint8_t(options.position_bits);
+    out[25] = normals ? uint8_t(options.normal_bits) : 0;
+    for (int j = 0; j < 3; ++j) putFloat(out, 28 + 4 * size_t(j), lo[j]);
+    putFloat(out, 40, cube);
+    put32(out, 44, uint32_t(conn_bytes.size()));
+    put32(out, 48, uint32_t(pos_bytes.size()));
+    put32(out, 52, uint32_t(nrm_bytes.size()));
+    out.insert(out.end(), conn_bytes.begin(), conn_bytes.end());
+    out.insert(out.end(), pos_bytes.begin(), pos_bytes.end());
+    out.insert(out.end(), nrm_bytes.begin(), nrm_bytes.end());
     result.header_bytes = kValenceHeaderSize;
-    result.connectivity_bytes = conn.size();
-    result.position_bytes = pos.size();
-    result.normal_bytes = nrm.size();
-    result.new_vertex_of = std::move(e.new_of);
+    result.connectivity_bytes = conn_bytes.size();
+    result.position_bytes = pos_bytes.size();
+    result.normal_bytes = nrm_bytes.size();
+    result.cut_vertex_copies = dups.size();
+    result.dummy_vertices = vc - rank;
+    result.new_vertex_of = std::move(new_of);
     return result;
 }
 

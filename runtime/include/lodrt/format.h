@@ -41,31 +41,43 @@ constexpr uint32_t kPfrepLogCodeSteps = 8;
 // Compressed mesh (.lbm), docs/format/valence.md. Little-endian header of kValenceHeaderSize bytes,
 // then the connectivity, position and normal range-coded streams, back to back.
 constexpr uint32_t kValenceMagic = 0x4D42424Cu; // "LBBM" little-endian
-constexpr uint16_t kValenceVersion = 1;
-constexpr uint32_t kValenceHeaderSize = 48;
+constexpr uint16_t kValenceVersion = 2;
+constexpr uint32_t kValenceHeaderSize = 56;
+// Header fields (byte offset: type): 0 u32 magic, 4 u16 version, 6 u16 flags, 8 u32 vertex_count,
+// 12 u32 triangle_count, 16 u32 closed_vertex_count, 20 u32 closed_triangle_count, 24 u8 position_bits,
+// 25 u8 normal_bits, 26 u16 zero, 28 f32[3] bounds_min, 40 f32 cube_size, 44 u32 connectivity_bytes,
+// 48 u32 position_bytes, 52 u32 normal_bytes.
 constexpr uint16_t kValenceFlagNormals = 1u;
 constexpr uint32_t kValenceMinPositionBits = 8;
 constexpr uint32_t kValenceMaxPositionBits = 16;
 constexpr uint32_t kValenceMinNormalBits = 4;
 constexpr uint32_t kValenceMaxNormalBits = 16;
 constexpr uint32_t kValenceMaxCount = 1u << 28; // vertex and triangle counts
-// Header plausibility: counts above these multiples of their stream's byte length are refused.
-constexpr uint32_t kValenceTrianglesPerByte = 128; // of the connectivity stream
-constexpr uint32_t kValenceVerticesPerByte = 64;   // of the position stream (and of the normal stream)
-// Binary range coder (LZMA style): 11-bit probabilities, adaptation shift 5, 32-bit range.
-constexpr uint32_t kRangeProbBits = 11;
+// Header plausibility: counts above these multiples of their stream's byte length are refused before
+// anything is allocated (every coded symbol costs more than 1/256 of a byte).
+constexpr uint32_t kValenceTrianglesPerByte = 512; // closed triangles per connectivity byte
+constexpr uint32_t kValenceVerticesPerByte = 256;  // closed vertices per connectivity byte, vertices per
+                                                   // position (and normal) byte
+// Binary range coder (LZMA style): 12-bit probabilities, adaptation shift 5, 32-bit range.
+constexpr uint32_t kRangeProbBits = 12;
 constexpr uint32_t kRangeProbInit = 1u << (kRangeProbBits - 1);
 constexpr uint32_t kRangeAdaptShift = 5;
 constexpr uint32_t kRangeTopValue = 1u << 24;
-// Connectivity model: a FIFO of recent edges and a move-to-front cache of recent vertices.
-constexpr uint32_t kValenceEdgeFifo = 32;   // edge symbol 0..31 = FIFO slot, 32 = no shared edge
-constexpr uint32_t kValenceVertexFifo = 32; // vertex symbol 0 = new, 1..32 = cache slot + 1, 33 = explicit
-constexpr uint32_t kValenceSymbolTreeBits = 6; // edge and vertex symbols are 6-bit trees
-constexpr uint32_t kValenceVertexSymbolNew = 0;
-constexpr uint32_t kValenceVertexSymbolExplicit = kValenceVertexFifo + 1;
-// Integer coding: the bit length class k (0..32) of value+1 as a 6-bit tree, then k low bits.
+// Connectivity symbols: a 5-bit tree per context. 0 = valence escape (then the valence as an integer),
+// 1 = split, 2 = merge, 3 = dummy vertex (then its valence as an integer), 4..31 = valence symbol - 1.
+constexpr uint32_t kValenceSymbolTreeBits = 5;
+constexpr uint32_t kValenceSymbolEscape = 0;
+constexpr uint32_t kValenceSymbolSplit = 1;
+constexpr uint32_t kValenceSymbolMerge = 2;
+constexpr uint32_t kValenceSymbolDummy = 3;
+constexpr uint32_t kValenceSymbolFirstValence = 4; // codes valence 3
+// Integer coding: the bit length class k (0..32) of value+1 as a 6-bit tree, then k low bits (the top
+// one modelled per class, the rest direct).
 constexpr uint32_t kValenceClassTreeBits = 6;
-constexpr uint32_t kValenceResidualContexts = 18; // previous class of the same component, clamped
+// Residual coding: bit length of |r| as a 5-bit tree per context, sign, top mantissa bit modelled per
+// length, the rest direct.
+constexpr uint32_t kValenceResidualTreeBits = 5;
+constexpr uint32_t kValenceNormalContexts = 17; // bit length of the same component's previous residual
 
 } // namespace format
 } // namespace lodrt

@@ -13,8 +13,10 @@
 namespace lodrt {
 
 struct ValenceInfo {
-    uint32_t vertex_count = 0;
-    uint32_t triangle_count = 0;
+    uint32_t vertex_count = 0;   // decoded vertices
+    uint32_t triangle_count = 0; // decoded triangles
+    uint32_t closed_vertex_count = 0;   // coded vertices: decoded ones, their cut copies and dummy vertices
+    uint32_t closed_triangle_count = 0; // coded triangles: decoded ones and the dummy triangles closing holes
     uint32_t position_bits = 0; // quantization bits per coordinate
     uint32_t normal_bits = 0;   // octahedral bits per component; 0 when the stream has no normals
     bool has_normals = false;
@@ -29,8 +31,9 @@ struct ValenceInfo {
 /// up to exactly `size`). Does not decode the streams.
 LODRT_API Result valenceReadInfo(const uint8_t* data, size_t size, ValenceInfo* info);
 
-/// Bytes of scratch valenceDecode needs (quantized positions and normals, and 64-bit face-normal sums
-/// when the stream has normals), a multiple of 8.
+/// Bytes of scratch valenceDecode needs (the conquest's corner table, active lists and quantized
+/// attributes; about 53 bytes per closed vertex plus 52 per closed triangle, plus 12 per vertex and
+/// 32 more with normals), a multiple of 8.
 LODRT_API size_t valenceScratchSize(const ValenceInfo& info);
 
 /// Caller-owned buffers. Capacities are in elements of the pointed-to type.

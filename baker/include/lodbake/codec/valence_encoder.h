@@ -2,16 +2,16 @@
 // Encoder of the .lbm compressed mesh (docs/format/valence.md); runtime/include/lodrt/valence.h
 // decodes it.
 //
-// What is coded: triangles (lossless as index triples over the decoded vertex order, each triangle
-// possibly rotated cyclically, which keeps its orientation; triangles may be reordered), positions
+// What is coded: triangles (lossless as index triples over the decoded vertex order; each triangle
+// possibly rotated cyclically, which keeps its orientation; triangles are reordered), positions
 // quantized in the bounding cube, optional octahedral normals. UV sets, colours, tangents and
 // sub-meshes are NOT coded (the CLI warns). Any triangle soup is accepted: non-manifold and
-// inconsistently oriented input costs more bits but needs no cutting and no duplicated vertices.
+// inconsistently oriented parts are cut into manifold pieces (vertex copies, recorded in the stream so
+// that the decoder merges them back), which costs bits but loses nothing.
 //
-// Status: connectivity is coded with an edge-FIFO coder over a vertex-cache-optimized triangle order
-// (each triangle names a recently seen edge and its apex: a new vertex, a cached one or an explicit
-// back-reference), not yet with Touma-Gotsman valence conquest; see docs/format/valence.md
-// "Limitations".
+// Connectivity: Touma-Gotsman valence-driven conquest with the Alliez-Desbrun focus choice and
+// adaptive context range coding; positions: multi-parallelogram prediction; normals: predicted from the
+// face normals of the decoded geometry. See docs/format/valence.md.
 
 #include <cstdint>
 #include <vector>
@@ -38,6 +38,8 @@ struct ValenceEncodeResult {
     size_t position_bytes = 0;
     size_t normal_bytes = 0;
     size_t header_bytes = 0;
+    size_t cut_vertex_copies = 0; // vertex copies the manifold cut made (merged back by the decoder)
+    size_t dummy_vertices = 0;    // one per boundary loop of the cut mesh
     /// Largest |decoded - input| over all position coordinates (the quantization error).
     double max_position_error = 0.0;
 };
