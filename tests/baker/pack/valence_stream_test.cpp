@@ -22,6 +22,7 @@
 #include "lodbake/pack/pack.h"
 #include "lodrt/pack.h"
 #include "lodrt/valence.h"
+#include "data_uri.h"
 #include "mesh_builders.h"
 #include "test_paths.h"
 
@@ -324,6 +325,39 @@ TEST(ValenceStreamSharedMeshesTest, EveryScanRoundTripsThroughTheRuntimeDecoder)
     std::ofstream(files.back()) << example.dump();
     const CommandResult v = validateObjects(files);
     EXPECT_EQ(v.exit_code, 0) << v.output;
+}
+
+// The example's stream must decode with the current format version: a codec change that bumps the
+// version has to regenerate it (`lodbake encode tet.obj --bits 14 --no-normals`).
+TEST(ValenceStreamSchemaTest, ExampleStreamDecodesToItsTetrahedron) {
+    const nlohmann::json doc =
+        nlohmann::json::parse(std::ifstream(src("schemas/LODBAKE_valence_compression/examples/minimal.gltf")));
+    std::vector<uint8_t> buffer;
+    ASSERT_TRUE(lodbake_test::dataUriBytes(doc["buffers"][0]["uri"].get<std::string>(), buffer));
+    const nlohmann::json& object = doc["meshes"][0]["primitives"][0]["extensions"][kExt];
+    const nlohmann::json& view = doc["bufferViews"][object["bufferView"].get<size_t>()];
+    const size_t offset = view.value("byteOffset", size_t(0)), length = view["byteLength"].get<size_t>();
+    ASSERT_LE(offset + length, buffer.size());
+    lodrt::ValenceInfo info;
+    ASSERT_EQ(lodrt::valenceReadInfo(buffer.data() + offset, length, &info), lodrt::Result::Ok);
+    EXPECT_EQ(info.vertex_count, doc["accessors"][0]["count"].get<uint32_t>());
+    EXPECT_EQ(info.triangle_count * 3, doc["accessors"][1]["count"].get<uint32_t>());
+    EXPECT_EQ(info.position_bits, object["positionBits"].get<uint32_t>());
+    std::vector<uint32_t> indices(3 * info.triangle_count);
+    std::vector<float> positions(3 * info.vertex_count);
+    std::vector<uint64_t> scratch(lodrt::valenceScratchSize(info) / 8 + 1);
+    lodrt::ValenceOutput out;
+    out.indices = indices.data();
+    out.index_capacity = indices.size();
+    out.positions = positions.data();
+    out.position_capacity = positions.size();
+    out.scratch = scratch.data();
+    out.scratch_size = scratch.size() * 8;
+    ASSERT_EQ(lodrt::valenceDecode(buffer.data() + offset, length, out), lodrt::Result::Ok);
+    for (size_t i = 0; i < positions.size(); ++i) {
+        EXPECT_GE(positions[i], doc["accessors"][0]["min"][i % 3].get<float>() - 1e-4f);
+        EXPECT_LE(positions[i], doc["accessors"][0]["max"][i % 3].get<float>() + 1e-4f);
+    }
 }
 
 TEST(ValenceStreamSchemaTest, SchemaRejectsBrokenObjects) {

@@ -17,6 +17,7 @@
 #include "lodbake/io/mesh_io.h"
 #include "lodbake/pfrep/pfrep_extension.h"
 #include "lodrt/pfrep.h"
+#include "data_uri.h"
 #include "test_paths.h"
 
 namespace {
@@ -236,22 +237,8 @@ TEST(PfrepPackTest, SchemaExampleIsValidAndItsBlobOpens) {
     const json& object = doc["meshes"][0]["extensions"][kExtension];
     EXPECT_EQ(validate(object, "example.json"), "");
     const std::string uri = doc["buffers"][0]["uri"].get<std::string>();
-    const std::string prefix = "data:application/octet-stream;base64,";
-    ASSERT_EQ(uri.compare(0, prefix.size(), prefix), 0);
     std::vector<uint8_t> buffer;
-    uint32_t acc = 0;
-    int bits = 0;
-    for (size_t i = prefix.size(); i < uri.size() && uri[i] != '='; ++i) {
-        const std::string alphabet = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-        const size_t v = alphabet.find(uri[i]);
-        ASSERT_NE(v, std::string::npos);
-        acc = (acc << 6) | uint32_t(v);
-        bits += 6;
-        if (bits >= 8) {
-            bits -= 8;
-            buffer.push_back(uint8_t(acc >> bits));
-        }
-    }
+    ASSERT_TRUE(lodbake_test::dataUriBytes(uri, buffer)) << uri.substr(0, 64);
     ASSERT_EQ(buffer.size(), doc["buffers"][0]["byteLength"].get<size_t>());
     const json& view = doc["bufferViews"][object["bufferView"].get<size_t>()];
     const size_t offset = view.value("byteOffset", size_t(0));
