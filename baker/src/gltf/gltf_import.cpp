@@ -18,6 +18,7 @@
 
 #include "gltf/draco_decode.h"
 #include "lodbake/core/file_io.h"
+#include "lodbake/core/json_limits.h"
 
 namespace lodbake {
 
@@ -744,7 +745,9 @@ Result<PrimitiveData> readPrimitive(const tinygltf::Model& model, const tinygltf
         if (s.semantic == "POSITION") {
             out.positions.resize(vertex_count);
             for (size_t i = 0; i < vertex_count; ++i) {
-                const Vec3f p(float(v[i * 3]), float(v[i * 3 + 1]), float(v[i * 3 + 2]));
+                // static_cast: "p(float(v[i * 3]), ...)" parses as a function declaration (Clang).
+                const Vec3f p(static_cast<float>(v[i * 3]), static_cast<float>(v[i * 3 + 1]),
+                              static_cast<float>(v[i * 3 + 2]));
                 if (!isFinite(p) || !std::isfinite(v[i * 3]) || !std::isfinite(v[i * 3 + 1]) ||
                     !std::isfinite(v[i * 3 + 2]))
                     return invalidInput(aw + ": vertex " + std::to_string(i) + " is not finite (NaN or Inf)");
@@ -969,6 +972,10 @@ Result<LoadedMesh> readGltfImpl(const uint8_t* data, size_t size, const std::str
     size_t json_size = size;
     if (is_glb) LODBAKE_RETURN_IF_ERROR(checkGlbContainer(data, size, name, &json, &json_size));
     if (json_size == 0) return invalidInput(name + ": JSON: the document is empty");
+    const JsonDepthScan depth = scanJsonDepth(json, json_size, options.max_json_depth);
+    if (depth.is_too_deep)
+        return resourceLimit(name + ": JSON: byte " + std::to_string(depth.offset) + ": expected at most " +
+                             std::to_string(options.max_json_depth) + " levels of nested arrays and objects");
     JsonPrepass prepass;
     LODBAKE_RETURN_IF_ERROR(checkJsonReferences(json, json_size, name, prepass));
     if (size > std::numeric_limits<unsigned int>::max()) return resourceLimit(name + ": file larger than 4 GiB");
