@@ -76,7 +76,9 @@ Status applyObject(const Json& object, const std::string& file, const std::strin
                    const std::map<std::string, Handler>& handlers) {
     if (!object.is_object()) return expected(file + ": " + (pointer.empty() ? "/" : pointer), "an object", object);
     for (auto it = object.begin(); it != object.end(); ++it) {
-        const std::string member = pointer + "/" + it.key();
+        // Keys are quoted the JSON way (control characters escaped) so that a message stays one line.
+        const std::string quoted = Json(it.key()).dump();
+        const std::string member = pointer + "/" + quoted.substr(1, quoted.size() - 2);
         const auto h = handlers.find(it.key());
         if (h == handlers.end()) {
             std::string known;
