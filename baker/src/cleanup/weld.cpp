@@ -1,6 +1,7 @@
 // Vertex welding: exact (bit-identical positions, by sorting) or within a tolerance relative to the
 // bounding-box diagonal (uniform grid hash with cells of the tolerance size, 27-cell lookup).
 #include <algorithm>
+#include <climits>
 #include <cmath>
 #include <cstring>
 #include <unordered_map>
@@ -83,10 +84,13 @@ WeldReport weldVertices(Mesh& mesh, const WeldOptions& options) {
     } else {
         // The hash map is only looked up, never iterated, so its order cannot reach the output.
         const double inv = 1.0 / tol;
+        // Converting NaN (0 * inf) or an out-of-range double to int is undefined (UBSan): such cells
+        // map to INT_MIN, which is what x86 produced before, so results do not change.
+        auto toCell = [](double c) { return c >= -2147483648.0 && c < 2147483648.0 ? int(c) : INT_MIN; };
         auto cellOf = [&](const Vec3f& p, int d[3]) {
-            d[0] = int(std::floor(p.x * inv));
-            d[1] = int(std::floor(p.y * inv));
-            d[2] = int(std::floor(p.z * inv));
+            d[0] = toCell(std::floor(p.x * inv));
+            d[1] = toCell(std::floor(p.y * inv));
+            d[2] = toCell(std::floor(p.z * inv));
         };
         auto cellKey = [](int x, int y, int z) {
             return (uint64_t(uint32_t(x) & 0x1FFFFF) << 42) | (uint64_t(uint32_t(y) & 0x1FFFFF) << 21) |
