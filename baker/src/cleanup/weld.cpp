@@ -92,9 +92,9 @@ WeldReport weldVertices(Mesh& mesh, const WeldOptions& options) {
             d[1] = toCell(std::floor(p.y * inv));
             d[2] = toCell(std::floor(p.z * inv));
         };
-        auto cellKey = [](int x, int y, int z) {
-            return (uint64_t(uint32_t(x) & 0x1FFFFF) << 42) | (uint64_t(uint32_t(y) & 0x1FFFFF) << 21) |
-                   uint64_t(uint32_t(z) & 0x1FFFFF);
+        // Unsigned: neighbour cells of INT_MIN/INT_MAX wrap instead of overflowing (same key bits).
+        auto cellKey = [](uint32_t x, uint32_t y, uint32_t z) {
+            return (uint64_t(x & 0x1FFFFF) << 42) | (uint64_t(y & 0x1FFFFF) << 21) | uint64_t(z & 0x1FFFFF);
         };
         std::unordered_map<uint64_t, std::vector<uint32_t>> reps;
         reps.reserve(n);
@@ -109,7 +109,8 @@ WeldReport weldVertices(Mesh& mesh, const WeldOptions& options) {
             for (int dx = -1; dx <= 1; ++dx)
                 for (int dy = -1; dy <= 1; ++dy)
                     for (int dz = -1; dz <= 1; ++dz) {
-                        auto it = reps.find(cellKey(c[0] + dx, c[1] + dy, c[2] + dz));
+                        auto it = reps.find(cellKey(uint32_t(c[0]) + uint32_t(dx), uint32_t(c[1]) + uint32_t(dy),
+                                                      uint32_t(c[2]) + uint32_t(dz)));
                         if (it == reps.end()) continue;
                         for (uint32_t rep : it->second) {
                             if (rep >= best) continue;
@@ -126,7 +127,7 @@ WeldReport weldVertices(Mesh& mesh, const WeldOptions& options) {
                 target[v] = best;
             } else {
                 r.seam_pairs_kept += seam;
-                reps[cellKey(c[0], c[1], c[2])].push_back(v);
+                reps[cellKey(uint32_t(c[0]), uint32_t(c[1]), uint32_t(c[2]))].push_back(v);
             }
         }
     }
