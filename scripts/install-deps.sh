@@ -1,13 +1,15 @@
 #!/usr/bin/env bash
-# Installs everything lodbake needs on a Debian (bookworm) machine: compilers and CMake, the
-# libraries (tinygltf, Draco, OpenImageIO, oneTBB, GoogleTest, nlohmann-json), the tools the tests
-# and benchmarks run (Draco CLI, meshoptimizer, Open3D for ../shared/eval) and the Khronos
-# glTF-Validator from npm. Safe to run again: it installs only what is missing.
+# Installs everything lodbake needs on a Debian (bookworm) machine: compilers and CMake (GCC, and
+# Clang with libclang-rt-14-dev, its sanitizer and libFuzzer runtimes, which --no-install-recommends
+# would leave out, for the sanitizer job and the fuzzers), the libraries (tinygltf, Draco,
+# OpenImageIO, oneTBB, GoogleTest, nlohmann-json), the tools the tests and benchmarks run (Draco
+# CLI, meshoptimizer, Open3D for ../shared/eval) and the Khronos glTF-Validator from npm. Safe to run again: it installs only what is missing.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 packages=(
     build-essential cmake ninja-build pkg-config git
+    clang libclang-rt-14-dev
     libtinygltf-dev nlohmann-json3-dev
     libdraco-dev draco
     libopenimageio-dev openimageio-tools

@@ -1,13 +1,67 @@
 #!/usr/bin/env bash
-# One command from a fresh Debian machine to a green test suite: install dependencies, configure a
-# Release build with warnings as errors, build everything, run every test with CTest.
+# One command from a fresh Debian machine to a green test suite (the CI job, .ci/run):
+#  1. install dependencies (scripts/install-deps.sh; only what is missing);
+#  2. Release build with warnings as errors, every test with CTest;
+#  3. sanitizer build (Clang, AddressSanitizer + UndefinedBehaviorSanitizer, findings abort; the
+#     runtime still without exceptions), every test again, plus the libFuzzer targets;
+#  4. fuzz smoke: each fuzz target for LODBAKE_FUZZ_SMOKE_SECONDS (default 15) from its seeds.
+# Set LODBAKE_SKIP_SANITIZERS=1 to stop after step 2. Timings of each step are printed at the end.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
+t0=$(date +%s)
+timings=()
+step() { # NAME: records the time since the previous step
+    local now
+    now=$(date +%s)
+    timings+=("$(printf '%-28s %5d s' "$1" $((now - t0)))")
+    t0=$now
+}
+
 scripts/install-deps.sh
+step "install-deps"
 
 build_dir=${LODBAKE_BUILD_DIR:-build}
 jobs=$(nproc 2>/dev/null || echo 2)
 cmake -S . -B "$build_dir" -G Ninja -DCMAKE_BUILD_TYPE=Release -DLODBAKE_WERROR=ON
 cmake --build "$build_dir" --parallel "$jobs"
+step "release build"
 ctest --test-dir "$build_dir" --output-on-failure --parallel "$jobs" --timeout 900
+step "release tests"
+
+if [ "${LODBAKE_SKIP_SANITIZERS:-0}" != 1 ]; then
+    # One instrumented tree serves both the test suite and the fuzzers: -fsanitize=fuzzer-no-link
+    # (added by LODBAKE_BUILD_FUZZERS to lodbake_lib and lodrt) only adds coverage counters.
+    asan_dir=${LODBAKE_ASAN_BUILD_DIR:-build-asan}
+    sanitize="-fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer"
+    CC=clang CXX=clang++ cmake -S . -B "$asan_dir" -G Ninja -DCMAKE_BUILD_TYPE=Release \
+        -DCMAKE_CXX_FLAGS_RELEASE="-O2" -DCMAKE_C_FLAGS_RELEASE="-O2" \
+        -DCMAKE_CXX_FLAGS="$sanitize" -DCMAKE_C_FLAGS="$sanitize" \
+        -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined" \
+        -DCMAKE_SHARED_LINKER_FLAGS="-fsanitize=address,undefined" \
+        -DCMAKE_MODULE_LINKER_FLAGS="-fsanitize=address,undefined" \
+        -DLODBAKE_BUILD_FUZZERS=ON -DLODBAKE_BUILD_BENCHMARKS=OFF
+    cmake --build "$asan_dir" --parallel "$jobs"
+    step "sanitizer build"
+    # Asserts stay on in this build (no NDEBUG). Leaks are reported too.
+    ASAN_OPTIONS=abort_on_error=1:detect_leaks=1:strict_string_checks=1:detect_stack_use_after_return=1 \
+        UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+        ctest --test-dir "$asan_dir" --output-on-failure --parallel "$jobs" --timeout 1800
+    step "sanitizer tests"
+
+    smoke=${LODBAKE_FUZZ_SMOKE_SECONDS:-15}
+    for target in ply obj off gltf preset pack pfrep valence; do
+        echo "fuzz smoke: $target ${smoke}s"
+        LODBAKE_FUZZ_BUILD_DIR="$asan_dir" LODBAKE_FUZZ_NO_BUILD=1 LODBAKE_CLI="$build_dir/baker/lodbake" \
+            scripts/fuzz.sh "$target" "$smoke" >"$asan_dir/fuzz-smoke-$target.log" 2>&1 || {
+            tail -n 60 "$asan_dir/fuzz-smoke-$target.log"
+            echo "fuzz smoke: $target failed (log: $asan_dir/fuzz-smoke-$target.log)" >&2
+            exit 1
+        }
+        grep -E '^(stat::number_of_executed_units|stat::peak_rss_mb)' "$asan_dir/fuzz-smoke-$target.log" | tr '\n' ' '
+        echo
+    done
+    step "fuzz smoke"
+fi
+
+printf '%s\n' "timings:" "${timings[@]}"

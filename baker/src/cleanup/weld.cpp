@@ -1,6 +1,7 @@
 // Vertex welding: exact (bit-identical positions, by sorting) or within a tolerance relative to the
 // bounding-box diagonal (cells of the tolerance size, sorted, 27-cell lookup).
 #include <algorithm>
+#include <climits>
 #include <cmath>
 #include <cstdint>
 #include <cstring>

@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "lodbake/core/file_io.h"
+#include "lodbake/core/json_limits.h"
 #include "lodbake/core/json_writer.h"
 
 namespace lodbake {
@@ -28,8 +29,16 @@ std::string typeName(const Json& v) {
                             : "null";
 }
 
+// The offending value as JSON text, cut short so that one huge value cannot make a huge message.
+std::string shortDump(const Json& v) {
+    std::string text = v.dump();
+    constexpr size_t kMaxChars = 80;
+    if (text.size() > kMaxChars) text = text.substr(0, kMaxChars - 3) + "...";
+    return text;
+}
+
 Status expected(const std::string& where, const std::string& what, const Json& got) {
-    return invalidInput(where + ": expected " + what + ", got " + typeName(got) + " " + got.dump());
+    return invalidInput(where + ": expected " + what + ", got " + typeName(got) + " " + shortDump(got));
 }
 
 Status readNumber(const Json& v, const std::string& where, double lo, double hi, bool lo_exclusive, double& out) {
@@ -37,7 +46,7 @@ Status readNumber(const Json& v, const std::string& where, double lo, double hi,
     const double d = v.get<double>();
     if (!std::isfinite(d) || (lo_exclusive ? !(d > lo) : !(d >= lo)) || !(d <= hi))
         return invalidInput(where + ": expected a number in " + (lo_exclusive ? "(" : "[") +
-                            JsonWriter::formatNumber(lo) + ", " + JsonWriter::formatNumber(hi) + "], got " + v.dump());
+                            JsonWriter::formatNumber(lo) + ", " + JsonWriter::formatNumber(hi) + "], got " + shortDump(v));
     out = d;
     return Status::okStatus();
 }
@@ -48,7 +57,7 @@ Status readUint(const Json& v, const std::string& where, uint32_t lo, uint32_t h
     const double d = v.get<double>();
     if (!(d >= lo && d <= hi))
         return invalidInput(where + ": expected an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) +
-                            "], got " + v.dump());
+                            "], got " + shortDump(v));
     out = uint32_t(d);
     return Status::okStatus();
 }
@@ -67,7 +76,9 @@ Status applyObject(const Json& object, const std::string& file, const std::strin
                    const std::map<std::string, Handler>& handlers) {
     if (!object.is_object()) return expected(file + ": " + (pointer.empty() ? "/" : pointer), "an object", object);
     for (auto it = object.begin(); it != object.end(); ++it) {
-        const std::string member = pointer + "/" + it.key();
+        // Keys are quoted the JSON way (control characters escaped) so that a message stays one line.
+        const std::string quoted = Json(it.key()).dump();
+        const std::string member = pointer + "/" + quoted.substr(1, quoted.size() - 2);
         const auto h = handlers.find(it.key());
         if (h == handlers.end()) {
             std::string known;
@@ -85,7 +96,7 @@ Status applyImpl(const Json& root, const std::string& name, BakeSettings& s) {
     const Json& version = root["version"];
     if (!version.is_number_integer() || version.get<int64_t>() != kBakePresetVersion)
         return invalidInput(name + ": /version: expected " + std::to_string(kBakePresetVersion) + ", got " +
-                            version.dump());
+                            shortDump(version));
     TextureLodSettings& t = s.textures;
     const std::map<std::string, Handler> texture_handlers{
         {"enabled", [&](const Json& v, const std::string& w) { return readBool(v, w, t.enabled); }},
@@ -130,6 +141,13 @@ Status applyImpl(const Json& root, const std::string& name, BakeSettings& s) {
 
 Status applyPresetJson(const std::string& json_text, const std::string& name, BakeSettings& settings) {
     BakeSettings updated = settings; // all or nothing
+    // A preset nests two levels; refuse deep documents before nlohmann-json's recursion sees them.
+    constexpr uint32_t kMaxPresetDepth = 16;
+    const JsonDepthScan depth =
+        scanJsonDepth(reinterpret_cast<const uint8_t*>(json_text.data()), json_text.size(), kMaxPresetDepth);
+    if (depth.is_too_deep)
+        return invalidInput(name + ": byte " + std::to_string(depth.offset) + ": expected at most " +
+                            std::to_string(kMaxPresetDepth) + " levels of nested arrays and objects");
     try {
         const Json root = Json::parse(json_text);
         LODBAKE_RETURN_IF_ERROR(applyImpl(root, name, updated));

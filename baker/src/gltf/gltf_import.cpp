@@ -18,6 +18,7 @@
 
 #include "gltf/draco_decode.h"
 #include "lodbake/core/file_io.h"
+#include "lodbake/core/json_limits.h"
 
 namespace lodbake {
 
@@ -28,6 +29,7 @@ constexpr uint32_t kChunkJson = 0x4E4F534A; // "JSON"
 constexpr uint32_t kChunkBin = 0x004E4942;  // "BIN\0"
 constexpr const char* kDracoExtension = "KHR_draco_mesh_compression";
 constexpr uint64_t kMaxViewlessCount = uint64_t(1) << 20; // elements of an accessor without a bufferView
+constexpr uint64_t kMaxDracoPointsPerByte = 32; // real meshes need well over 2 bits of Draco data per point
 
 uint32_t readU32(const uint8_t* p) {
     return uint32_t(p[0]) | uint32_t(p[1]) << 8 | uint32_t(p[2]) << 16 | uint32_t(p[3]) << 24;
@@ -677,6 +679,19 @@ Result<PrimitiveData> readPrimitive(const tinygltf::Model& model, const tinygltf
             semantics.push_back(key);
         }
         LODBAKE_ASSIGN_OR_RETURN(auto bytes, viewBytes(model, view, dw));
+        // The declared counts must match what Draco decodes; refusing absurd ones before decoding
+        // bounds what a small bitstream can make us allocate (decompression bombs).
+        for (const std::string& semantic : semantics) {
+            const int a = primitive.attributes.at(semantic);
+            if (a < 0 || size_t(a) >= model.accessors.size()) continue; // reported after decoding
+            const uint64_t count = model.accessors[size_t(a)].count;
+            const uint64_t plausible = kMaxDracoPointsPerByte * uint64_t(bytes.second) + 64;
+            if (count > options.max_vertex_count || count > plausible)
+                return resourceLimit(dw + ": accessor " + std::to_string(a) + " (" + semantic + "): count " +
+                                     std::to_string(count) + ", expected at most " +
+                                     std::to_string(std::min<uint64_t>(options.max_vertex_count, plausible)) +
+                                     " for " + std::to_string(bytes.second) + " bytes of Draco data");
+        }
         LODBAKE_ASSIGN_OR_RETURN(gltf_detail::DracoMeshData decoded,
                                  gltf_detail::decodeDracoMesh(bytes.first, bytes.second, ids, dw));
         for (size_t i = 0; i < semantics.size(); ++i) {
@@ -744,7 +759,9 @@ Result<PrimitiveData> readPrimitive(const tinygltf::Model& model, const tinygltf
         if (s.semantic == "POSITION") {
             out.positions.resize(vertex_count);
             for (size_t i = 0; i < vertex_count; ++i) {
-                const Vec3f p(float(v[i * 3]), float(v[i * 3 + 1]), float(v[i * 3 + 2]));
+                // static_cast: "p(float(v[i * 3]), ...)" parses as a function declaration (Clang).
+                const Vec3f p(static_cast<float>(v[i * 3]), static_cast<float>(v[i * 3 + 1]),
+                              static_cast<float>(v[i * 3 + 2]));
                 if (!isFinite(p) || !std::isfinite(v[i * 3]) || !std::isfinite(v[i * 3 + 1]) ||
                     !std::isfinite(v[i * 3 + 2]))
                     return invalidInput(aw + ": vertex " + std::to_string(i) + " is not finite (NaN or Inf)");
@@ -969,6 +986,10 @@ Result<LoadedMesh> readGltfImpl(const uint8_t* data, size_t size, const std::str
     size_t json_size = size;
     if (is_glb) LODBAKE_RETURN_IF_ERROR(checkGlbContainer(data, size, name, &json, &json_size));
     if (json_size == 0) return invalidInput(name + ": JSON: the document is empty");
+    const JsonDepthScan depth = scanJsonDepth(json, json_size, options.max_json_depth);
+    if (depth.is_too_deep)
+        return resourceLimit(name + ": JSON: byte " + std::to_string(depth.offset) + ": expected at most " +
+                             std::to_string(options.max_json_depth) + " levels of nested arrays and objects");
     JsonPrepass prepass;
     LODBAKE_RETURN_IF_ERROR(checkJsonReferences(json, json_size, name, prepass));
     if (size > std::numeric_limits<unsigned int>::max()) return resourceLimit(name + ": file larger than 4 GiB");

@@ -107,6 +107,12 @@ Result<std::vector<std::vector<uint8_t>>> resizeEncodedImageLevels(const std::ve
     if (!isPngOrJpeg(encoded)) return invalidInput(name + ": not a PNG or JPEG image");
     const Loaded& module = loadModule();
     if (!module.api) return unsupported(name + ": " + module.error);
+    // A few bytes of PNG or JPEG can claim gigapixels: refuse before the module decodes anything.
+    LODBAKE_ASSIGN_OR_RETURN(const ImageSize source, probeImageSize(encoded, name));
+    if (uint64_t(source.width) * source.height > options.max_source_pixels)
+        return resourceLimit(name + ": image header: " + std::to_string(source.width) + " x " +
+                             std::to_string(source.height) + " pixels, expected at most " +
+                             std::to_string(options.max_source_pixels));
     std::vector<uint32_t> flat;
     for (const ImageSize& s : sizes) {
         flat.push_back(s.width);

@@ -167,6 +167,41 @@ d["images"] = [{"bufferView": 2, "mimeType": "image/png"}]; d["textures"] = [{"s
 write_bytes("short_side.bin", blob)
 write_json("external_bin_too_short.gltf", d); cases.append(("external_bin_too_short.gltf", "short_side.bin"))
 sides = ["short_side.bin"]
+# Written by hand (not generated here): an image file that cannot be read.
+cases.append(("missing_image_file.gltf", 'image 0: "missing_texture.png": cannot read'))
+
+# A decompression bomb: a 107-byte Draco stream (a tetrahedron made by draco_encoder -cl 0) whose
+# accessors claim 50 million points; refused from the declared counts before Draco decodes anything.
+TET_DRC = bytes.fromhex(
+    "445241434f0202010000000404010002010001030003020102030102000903000002020401010201000101000303"
+    "012001200300208488810100000000ff070000000101000303012001200300f08369803100000000ff00000000000000"
+    "00000000000000000000803f0b")
+d = copy.deepcopy(doc)
+d["extensionsUsed"] = ["KHR_draco_mesh_compression"]; d["extensionsRequired"] = ["KHR_draco_mesh_compression"]
+d["accessors"] = [{"componentType": 5126, "count": 50000000, "type": "VEC3"},
+                  {"componentType": 5125, "count": 12, "type": "SCALAR"}]
+d["bufferViews"] = [{"buffer": 0, "byteOffset": 0, "byteLength": len(TET_DRC)}]
+d["meshes"][0]["primitives"][0]["extensions"] = {
+    "KHR_draco_mesh_compression": {"bufferView": 0, "attributes": {"POSITION": 0}}}
+d["buffers"][0]["byteLength"] = len(TET_DRC)
+write_bytes("draco_count_bomb.glb", glb_bytes(d, TET_DRC))
+cases.append(("draco_count_bomb.glb", "count 50000000, expected at most"))
+
+# Resource limits and self reference: a buffer that names the .gltf itself (read once, too short),
+# JSON nested past the reader's depth limit (would overflow the stack of a recursive parser), and
+# a GLB whose JSON chunk is nested the same way.
+d = copy.deepcopy(doc); d["buffers"][0]["uri"] = "self_buffer.gltf"; d["buffers"][0]["byteLength"] = 1 << 20
+write_json("self_buffer.gltf", d); cases.append(("self_buffer.gltf", "self_buffer.gltf"))
+d = copy.deepcopy(doc); d["extras"] = "@NEST@"
+text = json.dumps(d, sort_keys=True).replace('"@NEST@"', "[" * 100 + "]" * 100)
+write_bytes("deep_extras.gltf", (text + "\n").encode()); cases.append(("deep_extras.gltf", "levels of nested arrays and objects"))
+d = copy.deepcopy(doc); d["extras"] = "@NEST@"
+js = json.dumps({k: v for k, v in d.items() if k != "buffers"} | {"buffers": [{"byteLength": len(blob)}]},
+                sort_keys=True).replace('"@NEST@"', '{"a":' * 100 + "1" + "}" * 100).encode()
+js += b" " * (-len(js) % 4)
+body = struct.pack("<II", len(js), 0x4E4F534A) + js + struct.pack("<II", len(blob), 0x004E4942) + blob
+write_bytes("deep_extras.glb", struct.pack("<III", 0x46546C67, 2, 12 + len(body)) + body)
+cases.append(("deep_extras.glb", "levels of nested arrays and objects"))
 
 with open(os.path.join(HERE, "expect.tsv"), "w") as f:
     f.write("# Inputs every command must refuse: file<TAB>substring the one-line error must contain.\n")

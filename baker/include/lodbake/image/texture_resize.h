@@ -29,12 +29,14 @@ struct TextureResizeOptions {
     bool is_srgb = true;             // colour data (base colour, emissive): filter in linear light, store sRGB again
     int jpeg_quality = 92;           // JPEG output quality, 1..100
     std::string filter = "lanczos3"; // OpenImageIO filter name
+    uint64_t max_source_pixels = uint64_t(1) << 28; // refuse sources with more pixels (16384 x 16384) before decoding
 };
 
 /// Several sizes of one image at once (texture levels): decodes and linearises once, then halves
 /// repeatedly (each step a 2:1 filter, like mipmap generation), taking every requested size from the
 /// nearest larger step. Returns one encoded image per entry of `sizes`, in order; options.size is
-/// ignored. Sizes larger than the source are an error.
+/// ignored. Sizes larger than the source are an error, and so is a source whose header claims more
+/// than options.max_source_pixels pixels (ResourceLimit, checked before anything is decoded).
 Result<std::vector<std::vector<uint8_t>>> resizeEncodedImageLevels(const std::vector<uint8_t>& encoded,
                                                                    const std::string& name,
                                                                    const std::vector<ImageSize>& sizes,

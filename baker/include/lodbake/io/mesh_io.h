@@ -25,6 +25,7 @@ struct ReadOptions {
     uint64_t max_vertex_count = uint64_t(1) << 28; // refuse files claiming more vertices
     uint64_t max_face_count = uint64_t(1) << 28;   // refuse files claiming more faces (after triangulation)
     uint32_t max_polygon_vertices = 1024;          // refuse polygons (PLY lists, OBJ/OFF faces) larger than this
+    uint32_t max_json_depth = 64;                  // glTF: refuse JSON nested deeper than this (arrays and objects)
     double range_grid_max_edge_factor = 4.0;       // range grids: drop triangles with an edge longer than this × median grid spacing
     bool load_textures = true;                     // read referenced texture files into Texture::bytes
 };

@@ -1,0 +1,67 @@
+#!/usr/bin/env bash
+# Runs one libFuzzer target for a set time.
+# usage: scripts/fuzz.sh TARGET SECONDS [libFuzzer options...]
+#   TARGET: ply obj off gltf preset (baker readers, tests/fuzz/) or pack pfrep valence (runtime,
+#   runtime/tools/fuzz_*.cpp).
+# Configures and builds $LODBAKE_FUZZ_BUILD_DIR (default build-fuzz) with Clang and
+# -DLODBAKE_BUILD_FUZZERS=ON unless LODBAKE_FUZZ_NO_BUILD=1, builds the seed corpora once
+# (scripts/fuzz-seeds.sh, with $LODBAKE_CLI or build/baker/lodbake, else the fuzz build's own CLI),
+# and fuzzes on one core into $build/corpus/TARGET (kept between runs) with crashes written to
+# $build/artifacts/TARGET/. Exit status is libFuzzer's: non-zero on a crash, leak, timeout or
+# sanitizer report. A crash input belongs in tests/fuzz/regressions/TARGET/ once fixed.
+set -euo pipefail
+if [ $# -lt 2 ]; then
+    echo "usage: scripts/fuzz.sh TARGET SECONDS [libFuzzer options...]" >&2
+    exit 2
+fi
+target=$1
+seconds=$2
+shift 2
+root=$(cd "$(dirname "$0")/.." && pwd)
+cd "$root"
+build=${LODBAKE_FUZZ_BUILD_DIR:-build-fuzz}
+
+case "$target" in
+ply | obj | off | gltf | preset) exe="$build/tests/fuzz/lodbake_fuzz_$target" cmake_target=lodbake_fuzz_$target ;;
+pack | pfrep | valence) exe="$build/runtime/lodrt_fuzz_$target" cmake_target=lodrt_fuzz_$target ;;
+*)
+    echo "fuzz.sh: unknown target '$target' (ply obj off gltf preset pack pfrep valence)" >&2
+    exit 2
+    ;;
+esac
+dict=
+case "$target" in
+ply | obj | off | gltf | preset) dict=tests/fuzz/dict/$target.dict ;;
+pack) dict=tests/fuzz/dict/gltf.dict ;;
+esac
+
+if [ "${LODBAKE_FUZZ_NO_BUILD:-0}" != 1 ]; then
+    if [ ! -f "$build/CMakeCache.txt" ]; then
+        launcher=()
+        command -v ccache >/dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+        CC=clang CXX=clang++ cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+            -DLODBAKE_BUILD_FUZZERS=ON -DLODBAKE_BUILD_TESTS=OFF -DLODBAKE_BUILD_BENCHMARKS=OFF \
+            "${launcher[@]}" >/dev/null
+    fi
+    cmake --build "$build" --target "$cmake_target" --parallel 2 >/dev/null
+fi
+
+seeds="$build/seeds"
+if [ ! -f "$seeds/.done" ]; then
+    cli=${LODBAKE_CLI:-build/baker/lodbake}
+    if [ ! -x "$cli" ]; then
+        cmake --build "$build" --target lodbake --parallel 2 >/dev/null
+        cli="$build/baker/lodbake"
+    fi
+    rm -rf "$seeds"
+    ASAN_OPTIONS=detect_leaks=0 scripts/fuzz-seeds.sh "$seeds" "$cli"
+    touch "$seeds/.done"
+fi
+
+corpus="$build/corpus/$target"
+artifacts="$build/artifacts/$target"
+mkdir -p "$corpus" "$artifacts"
+args=("$corpus" "$seeds/$target" -max_total_time="$seconds" -max_len=65536 -timeout=20 -rss_limit_mb=2048
+    -print_final_stats=1 -artifact_prefix="$artifacts/")
+[ -n "$dict" ] && args+=(-dict="$dict")
+exec "$exe" "${args[@]}" "$@"
