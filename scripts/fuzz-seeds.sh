@@ -11,7 +11,7 @@ root=$(cd "$(dirname "$0")/.." && pwd)
 mkdir -p "$out"
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
-for t in gltf obj off ply preset pack pfrep valence; do mkdir -p "$out/$t"; done
+for t in gltf obj off ply preset lod pack pfrep valence; do mkdir -p "$out/$t"; done
 
 cp "$root"/tests/malformed/ply/*.ply "$out/ply/"
 cp "$root"/tests/malformed/off/*.off "$out/off/"
@@ -107,3 +107,5 @@ fi
 "$lodbake" encode "$tmp/tet.off" -o "$out/valence/tet.lbm" --bits 10 >/dev/null
 "$lodbake" encode "$tmp/rock.ply" -o "$out/valence/rock.lbm" --bits 8 >/dev/null
 cp "$out"/gltf/*.glb "$out/pack/" 2>/dev/null || true
+# The LOD runtime (models, streaming) reads the same packs.
+cp "$out"/pack/* "$out/lod/"
