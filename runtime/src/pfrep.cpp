@@ -290,6 +290,14 @@ Result openPfrep(const void* data, size_t size, PfrepModel* model) {
     }
     if (original != m.level0_triangles) return Result::BadStructure;
     m.max_fan_neighbours = max_neighbours;
+    uint32_t max_radius_code = 0, max_error_code = 0;
+    for (uint32_t v = 0; v < m.vertex_count; ++v) {
+        const uint8_t* r = m.data + m.vertex_records_offset + size_t(v) * format::kPfrepVertexRecordSize;
+        max_radius_code = std::max<uint32_t>(max_radius_code, r[6]);
+        max_error_code = std::max<uint32_t>(max_error_code, r[7]);
+    }
+    m.max_radius = logValue(m, max_radius_code);
+    m.max_error = logValue(m, max_error_code);
     *model = m;
     return Result::Ok;
 }
@@ -574,6 +582,7 @@ struct Criterion {
     float reach_per_error = 0.0f; // pixels_per_unit_at_distance_one / tolerance_px (when tolerance_px > 0)
     float band = 0.0f;            // radians
     float sin_band = 0.0f, cos_band = 1.0f;
+    uint32_t planes = 0x3f; // frustum planes to test (bit p: plane p); the others hold for the whole instance
 };
 
 Criterion criterion(const PfrepView& view, float error_scale, float band) {
@@ -612,9 +621,13 @@ Test test(const PfrepModel& m, const PfrepView& view, const Criterion& c, uint32
     }
     // The band turns each plane outwards about the eye by `band`: a sphere that left the frustum
     // by less than that angle is still inside for a vertex already present.
-    const float slack = radius + (c.sin_band > 0.0f ? c.sin_band * std::sqrt(dist2) : 0.0f);
-    for (const auto& plane : view.planes)
-        if (plane[0] * p[0] + plane[1] * p[1] + plane[2] * p[2] + plane[3] < -slack) return Test::Bounds;
+    if (c.planes != 0) {
+        const float slack = radius + (c.sin_band > 0.0f ? c.sin_band * std::sqrt(dist2) : 0.0f);
+        for (uint32_t todo = c.planes; todo; todo &= todo - 1) {
+            const float* plane = view.planes[__builtin_ctz(todo)];
+            if (plane[0] * p[0] + plane[1] * p[1] + plane[2] * p[2] + plane[3] < -slack) return Test::Bounds;
+        }
+    }
     if (!outside_sphere) return Test::Wanted;
     const uint16_t cone = loadU16(r + 8);
     const uint32_t a = cone >> 12;
@@ -633,6 +646,65 @@ Test test(const PfrepModel& m, const PfrepView& view, const Criterion& c, uint32
 
 bool wanted(const PfrepModel& m, const PfrepView& view, const Criterion& c, uint32_t vertex) {
     return test(m, view, c, vertex) == Test::Wanted;
+}
+
+// The instance as a whole against the view. Every vertex position lies in the quantization box
+// [position_min, position_min + 65535 step] and every radius / error is at most max_radius /
+// max_error, so one box test settles a plane for all vertices, or all vertices at once.
+struct InstanceBox {
+    float lo[3], hi[3];
+};
+
+InstanceBox instanceBox(const PfrepModel& m) {
+    InstanceBox b;
+    for (int k = 0; k < 3; ++k) {
+        b.lo[k] = m.position_min[k];
+        b.hi[k] = m.position_min[k] + 65535.0f * m.position_step[k];
+    }
+    return b;
+}
+
+// Relative margin that absorbs the rounding differences between box and per-vertex arithmetic.
+constexpr float kBoxMargin = 1e-4f;
+
+// Clears the bits of the planes every point of the box is inside of (their test cannot fail: the
+// slack is never negative).
+void dropContainingPlanes(const PfrepView& view, const InstanceBox& b, Criterion& c) {
+    for (int p = 0; p < 6; ++p) {
+        const float* plane = view.planes[p];
+        float low = plane[3], scale = std::fabs(plane[3]);
+        for (int k = 0; k < 3; ++k) {
+            low += plane[k] * (plane[k] >= 0 ? b.lo[k] : b.hi[k]);
+            scale += std::fabs(plane[k]) * std::max(std::fabs(b.lo[k]), std::fabs(b.hi[k]));
+        }
+        if (low > kBoxMargin * scale) c.planes &= ~(1u << p);
+    }
+}
+
+// True when every vertex fails the bounds test of `c` (and so of any stricter criterion): the box
+// is beyond the reach of the largest error, or entirely outside a plane by more than the largest slack.
+bool instanceRejected(const PfrepModel& m, const PfrepView& view, const InstanceBox& b, const Criterion& c) {
+    if (!(c.tolerance_px > 0.0f)) return false;
+    float near2 = 0.0f, far2 = 0.0f;
+    for (int k = 0; k < 3; ++k) {
+        const float e = view.eye[k];
+        const float in = e < b.lo[k] ? b.lo[k] - e : (e > b.hi[k] ? e - b.hi[k] : 0.0f);
+        const float out = std::max(std::fabs(e - b.lo[k]), std::fabs(e - b.hi[k]));
+        near2 += in * in;
+        far2 += out * out;
+    }
+    const float reach = m.max_radius + m.max_error * c.reach_per_error;
+    if (near2 > reach * reach * (1.0f + kBoxMargin)) return true;
+    const float slack = m.max_radius + c.sin_band * std::sqrt(far2);
+    for (const auto& plane : view.planes) {
+        float high = plane[3], scale = std::fabs(plane[3]);
+        for (int k = 0; k < 3; ++k) {
+            high += plane[k] * (plane[k] >= 0 ? b.hi[k] : b.lo[k]);
+            scale += std::fabs(plane[k]) * std::max(std::fabs(b.lo[k]), std::fabs(b.hi[k]));
+        }
+        if (high < -slack - kBoxMargin * (scale + slack)) return true;
+    }
+    return false;
 }
 
 float keepScale(const PfrepView& view) {
@@ -668,10 +740,66 @@ Result pfrepRefine(const PfrepModel& m, const PfrepView& view, uint8_t* mask, ui
                    size_t scratch_capacity, size_t* changes) {
     if (!mask || !scratch || !changes || scratch_capacity < pfrepScratchValues(m)) return Result::InvalidArgument;
     const uint8_t* s = m.data + m.entries_offset;
-    const Criterion insert = criterion(view, 1.0f, 0.0f);
-    const Criterion keep = criterion(view, keepScale(view), cullBand(view));
+    Criterion insert = criterion(view, 1.0f, 0.0f);
+    Criterion keep = criterion(view, keepScale(view), cullBand(view));
     const size_t budget = view.max_changed_bits;
     size_t changed = 0;
+    const InstanceBox box = instanceBox(m);
+    if (instanceRejected(m, view, box, keep)) {
+        // Every vertex fails the bounds test at both thresholds: the pass below would simplify each
+        // present removable vertex in increasing rank (no veto, and each closure is that vertex
+        // alone: its lower-ranked dependencies were simplified before it) and insert nothing.
+        // Same result, without the per-vertex tests.
+        const uint32_t end = m.removed_count;
+        // Adds the present vertices among `valid` bits of word `w` (lowest ranks first, within the
+        // budget); returns false once the budget is spent.
+        auto take = [&](uint64_t& w, uint64_t valid) {
+            uint64_t present = ~w & valid;
+            if (budget > 0) {
+                const size_t left = budget - changed;
+                while (size_t(__builtin_popcountll(present)) > left)
+                    present &= ~(uint64_t(1) << (63 - __builtin_clzll(present)));
+            }
+            changed += size_t(__builtin_popcountll(present));
+            w |= present;
+            return !(budget > 0 && changed >= budget);
+        };
+        const size_t full_words = end / 64;
+        bool more = true;
+        for (size_t word = 0; word < full_words && more;) {
+            // Already coarse (the usual case): runs of all-ones are skipped 64 bytes at a time.
+            if (word + 8 <= full_words) {
+                uint64_t all = ~uint64_t(0);
+                for (int k = 0; k < 8; ++k) {
+                    uint64_t x;
+                    std::memcpy(&x, mask + (word + size_t(k)) * 8, 8);
+                    all &= x;
+                }
+                if (all == ~uint64_t(0)) {
+                    word += 8;
+                    continue;
+                }
+            }
+            uint64_t w;
+            std::memcpy(&w, mask + word * 8, 8);
+            if (w != ~uint64_t(0)) {
+                more = take(w, ~uint64_t(0));
+                std::memcpy(mask + word * 8, &w, 8);
+            }
+            ++word;
+        }
+        if (more && end % 64 != 0) {
+            const size_t bytes = (end % 64 + 7) / 8;
+            uint64_t w = 0;
+            std::memcpy(&w, mask + full_words * 8, bytes);
+            take(w, (uint64_t(1) << (end % 64)) - 1);
+            std::memcpy(mask + full_words * 8, &w, bytes);
+        }
+        *changes = changed;
+        return Result::Ok;
+    }
+    dropContainingPlanes(view, box, insert);
+    keep.planes = insert.planes;
     forEachPresent(m, mask, [&](uint32_t i) {
         if (budget > 0 && changed >= budget) return false;
         if (maskBit(mask, i)) return true; // simplified earlier in this pass

@@ -35,6 +35,10 @@ struct PfrepModel {
     uint32_t entries_offset = 0;
     uint32_t entries_size = 0; // without the padding
     uint32_t max_fan_neighbours = 0;
+    /// Largest bounding-sphere radius and removal error of any vertex (openPfrep computes them):
+    /// with the position box they bound a whole instance, so pfrepRefine can decide it at once.
+    float max_radius = 0;
+    float max_error = 0;
 };
 
 /// Validates the whole blob. Truncated / BadMagic / UnsupportedVersion / OutOfBounds /

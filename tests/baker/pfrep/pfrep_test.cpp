@@ -508,3 +508,41 @@ TEST(PfrepBuilderTest, RefusesFullEdgeSequences) {
 }
 
 } // namespace
+
+// An instance out of reach (behind the camera, or so far that its largest error is below a pixel)
+// is decided as a whole; the result must be what the vertex-by-vertex pass gives: the present
+// removable vertices simplified in increasing rank, within the budget, nothing inserted.
+TEST_F(PfrepTest, InstanceOutOfReachIsCoarsenedLikeTheVertexPass) {
+    LODBAKE_REQUIRE_SHARED_MESHES();
+    ASSERT_NE(rocker_, nullptr);
+    const lodrt::PfrepModel& m = rocker_->model;
+    std::vector<uint8_t> start(lodrt::pfrepMaskBytes(m));
+    std::vector<uint32_t> scratch(lodrt::pfrepScratchValues(m));
+    lodrt::pfrepMaskCoarsest(m, start.data());
+    size_t changes = 1;
+    for (int step = 0; step < 50 && changes > 0; ++step)
+        ASSERT_EQ(lodrt::pfrepRefine(m, rockerView(m, 0.3f, 0.1f), start.data(), scratch.data(), scratch.size(), &changes),
+                  lodrt::Result::Ok);
+    size_t present = 0;
+    for (uint32_t v = 0; v < m.removed_count; ++v) present += ((start[v >> 3] >> (v & 7)) & 1) == 0;
+    ASSERT_GT(present, 200u);
+    for (float dist : {-5.0f, 1e6f}) {
+        const lodrt::PfrepView base = rockerView(m, dist, 0.1f);
+        for (uint32_t v = 0; v < m.vertex_count; ++v) ASSERT_FALSE(lodrt::pfrepWanted(m, base, v)) << dist << " " << v;
+        for (uint32_t budget : {0u, 37u, 1000u}) {
+            lodrt::PfrepView view = base;
+            view.max_changed_bits = budget;
+            std::vector<uint8_t> expected = start;
+            size_t expected_changes = 0;
+            for (uint32_t v = 0; v < m.removed_count && (budget == 0 || expected_changes < budget); ++v)
+                if (((expected[v >> 3] >> (v & 7)) & 1) == 0) {
+                    expected[v >> 3] = uint8_t(expected[v >> 3] | (1u << (v & 7)));
+                    ++expected_changes;
+                }
+            std::vector<uint8_t> mask = start;
+            ASSERT_EQ(lodrt::pfrepRefine(m, view, mask.data(), scratch.data(), scratch.size(), &changes), lodrt::Result::Ok);
+            EXPECT_EQ(changes, expected_changes) << dist << " " << budget;
+            EXPECT_TRUE(mask == expected) << dist << " " << budget;
+        }
+    }
+}
