@@ -190,7 +190,7 @@ Result<BakeOutput> bake(std::vector<BakeInput> inputs, const BakeSettings& setti
     }
     LODBAKE_RETURN_IF_ERROR(checkCompact(description));
     StageTimer pack_timer(hooks, kWholePack, BakeStage::Pack);
-    LODBAKE_ASSIGN_OR_RETURN(output.glb, writePackGlb(description));
+    LODBAKE_ASSIGN_OR_RETURN(output.glb, writePackGlb(std::move(description)));
     return output;
 }
 
