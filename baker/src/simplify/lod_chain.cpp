@@ -9,6 +9,10 @@
 
 #include "simplify/edge_collapse.h"
 
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
+
 namespace lodbake {
 
 double switchDistance(double error, const ScreenParams& screen) {
@@ -65,8 +69,11 @@ Result<LodChain> buildLodChain(const Mesh& mesh, const LodChainOptions& options,
             level.quadric_error = engine.maxCollapseError();
             level.mesh = engine.extract();
             chain.levels.push_back(std::move(level));
+        }
     }
-    }
+#if defined(__GLIBC__)
+    malloc_trim(0); // glibc would otherwise keep most of the engine's freed pages resident
+#endif
     if (options.measure_error) {
         // The input's BVH is built once for all levels.
         Result<DistanceReference> reference = DistanceReference::prepare(mesh);
