@@ -4,6 +4,9 @@
 
 #include <cmath>
 #include <map>
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
 #include <memory>
 #include <set>
 
@@ -36,6 +39,17 @@ std::vector<bool> srgbTextures(const Mesh& mesh) {
     return srgb;
 }
 
+// Between stages, the large arrays of the stage just finished are free but glibc keeps most of them
+// (its heap is not returned to the system while fragmented, and freeing a large block raises its
+// mmap threshold, so the next stage's arrays come from the heap too): without this the resident
+// size of the next stage adds to that of the last one. Releasing the free pages keeps the peak at
+// the largest single stage.
+void releaseFreeMemory() {
+#if defined(__GLIBC__)
+    malloc_trim(0);
+#endif
+}
+
 struct AssetSlot {
     Status status = Status::okStatus();
     Diagnostics diagnostics;
@@ -53,6 +67,7 @@ Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vect
         StageTimer timer(hooks, index, BakeStage::Repair);
         LODBAKE_ASSIGN_OR_RETURN(RepairReport repair, repairMesh(mesh, RepairOptions{}, input.name, slot.diagnostics));
         slot.report.repair_unresolved = repair.unresolved;
+        releaseFreeMemory();
     }
     const ScreenParams screen = screenParams(settings);
     LodChainOptions chain_options;
@@ -66,6 +81,7 @@ Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vect
     if (!chain_result.ok())
         return Status(chain_result.status().code(), input.name + ": " + chain_result.status().message());
     LodChain chain = std::move(chain_result).value();
+    releaseFreeMemory();
     const LodMetrics metrics = lodMetrics(mesh, chain, screen, settings.hysteresis);
     slot.report.metrics = metrics;
     chain_timer.finish();
@@ -139,9 +155,11 @@ Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vect
     texture_timer.finish();
 
     StageTimer encode_timer(hooks, index, BakeStage::Encode);
-    for (const PackStreamEncoder& encoder : encoders)
+    for (const PackStreamEncoder& encoder : encoders) {
         for (size_t l = 0; l < asset.levels.size(); ++l)
             LODBAKE_RETURN_IF_ERROR(encoder.encode(chain, l, asset.levels[l]));
+        releaseFreeMemory();
+    }
     return Status::okStatus();
 }
 
@@ -189,8 +207,9 @@ Result<BakeOutput> bake(std::vector<BakeInput> inputs, const BakeSettings& setti
         output.assets.push_back(std::move(slot.report));
     }
     LODBAKE_RETURN_IF_ERROR(checkCompact(description));
+    releaseFreeMemory();
     StageTimer pack_timer(hooks, kWholePack, BakeStage::Pack);
-    LODBAKE_ASSIGN_OR_RETURN(output.glb, writePackGlb(description));
+    LODBAKE_ASSIGN_OR_RETURN(output.glb, writePackGlb(std::move(description)));
     return output;
 }
 

@@ -2,8 +2,9 @@
 // node (https://github.com/KhronosGroup/glTF/tree/main/extensions/2.0/Vendor/MSFT_lod) with the
 // MSFT_screencoverage array in the node's extras, as that extension specifies.
 #include <exception>
+#include <ostream>
 #include <set>
-#include <sstream>
+#include <streambuf>
 
 #include <nlohmann/json.hpp>
 #include <tiny_gltf.h>
@@ -139,7 +140,38 @@ std::vector<uint8_t> dropStreamedAccessors(tinygltf::Model& model, const std::se
     return out;
 }
 
-Result<std::vector<uint8_t>> writeImpl(const PackDescription& description) {
+// An output stream buffer that appends to a byte vector: the GLB is written once, straight into the
+// vector returned, rather than into a stringstream that is then copied twice.
+class VectorStreamBuf : public std::streambuf {
+public:
+    explicit VectorStreamBuf(std::vector<uint8_t>& out) : out_(out) {}
+
+protected:
+    std::streamsize xsputn(const char* s, std::streamsize n) override {
+        const auto* p = reinterpret_cast<const uint8_t*>(s);
+        out_.insert(out_.end(), p, p + n);
+        return n;
+    }
+    int_type overflow(int_type c) override {
+        if (!traits_type::eq_int_type(c, traits_type::eof())) out_.push_back(uint8_t(traits_type::to_char_type(c)));
+        return traits_type::not_eof(c);
+    }
+
+private:
+    std::vector<uint8_t>& out_;
+};
+
+// Frees what a level no longer needs once it is in the model (its mesh and extension blobs).
+void releaseLevel(PackLevel& level) {
+    level.mesh = Mesh();
+    for (PackExtension& e : level.mesh_extensions) std::vector<std::vector<uint8_t>>().swap(e.blobs);
+    for (auto& list : level.primitive_extensions)
+        for (PackExtension& e : list) std::vector<std::vector<uint8_t>>().swap(e.blobs);
+}
+
+// `owned`, when set, is `description` itself: each level's data is released as soon as the model
+// holds a copy, so the pack's bytes never exist twice beside all the meshes.
+Result<std::vector<uint8_t>> writeImpl(const PackDescription& description, PackDescription* owned) {
     tinygltf::Model model;
     model.asset.version = "2.0";
     model.asset.generator = std::string("lodbake ") + kVersionString;
@@ -148,7 +180,8 @@ Result<std::vector<uint8_t>> writeImpl(const PackDescription& description) {
     std::set<std::string> used, streams;
     std::vector<ViewPatch> patches;
     tinygltf::Scene scene;
-    for (const PackAsset& asset : description.assets) {
+    for (size_t a = 0; a < description.assets.size(); ++a) {
+        const PackAsset& asset = description.assets[a];
         if (asset.levels.empty()) return invalidInput("pack: asset \"" + asset.name + "\" has no levels");
         dedupe.first_material = model.materials.size(); // share materials within one asset only
         std::vector<int> nodes;
@@ -173,6 +206,7 @@ Result<std::vector<uint8_t>> writeImpl(const PackDescription& description) {
                     LODBAKE_RETURN_IF_ERROR(
                         addExtension(e, buffer, gmesh.primitives[p].extensions, used, streams, where, patches));
             }
+            if (owned) releaseLevel(owned->assets[a].levels[l]);
             tinygltf::Node node;
             node.name = l == 0 ? asset.name : level_name;
             node.mesh = *mesh_index;
@@ -211,19 +245,34 @@ Result<std::vector<uint8_t>> writeImpl(const PackDescription& description) {
     tinygltf::Buffer gbuffer;
     gbuffer.data = buffer.finish();
     if (description.compact) gbuffer.data = dropStreamedAccessors(model, streams, gbuffer.data, patches);
+    gbuffer.data.shrink_to_fit(); // the builder's spare capacity (up to the size again)
+    const size_t bin_size = gbuffer.data.size();
     model.buffers.push_back(std::move(gbuffer));
     tinygltf::TinyGLTF writer;
-    std::ostringstream stream;
-    if (!writer.WriteGltfSceneToStream(&model, stream, false, true)) return internalError("pack: tinygltf failed");
-    const std::string s = stream.str();
-    return std::vector<uint8_t>(s.begin(), s.end());
+    std::vector<uint8_t> glb;
+    glb.reserve(bin_size + bin_size / 64 + (size_t(1) << 16)); // the binary chunk plus room for the JSON
+    VectorStreamBuf sink(glb);
+    std::ostream stream(&sink);
+    if (!writer.WriteGltfSceneToStream(&model, stream, false, true) || !stream)
+        return internalError("pack: tinygltf failed");
+    return glb;
 }
 
 } // namespace
 
 Result<std::vector<uint8_t>> writePackGlb(const PackDescription& description) {
     try {
-        return writeImpl(description);
+        return writeImpl(description, nullptr);
+    } catch (const nlohmann::json::exception& e) {
+        return invalidInput(std::string("pack: malformed extension JSON: ") + e.what());
+    } catch (const std::exception& e) {
+        return internalError(std::string("pack: glTF writing failed: ") + e.what());
+    }
+}
+
+Result<std::vector<uint8_t>> writePackGlb(PackDescription&& description) {
+    try {
+        return writeImpl(description, &description);
     } catch (const nlohmann::json::exception& e) {
         return invalidInput(std::string("pack: malformed extension JSON: ") + e.what());
     } catch (const std::exception& e) {

@@ -9,6 +9,10 @@
 
 #include "simplify/edge_collapse.h"
 
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
+
 namespace lodbake {
 
 double switchDistance(double error, const ScreenParams& screen) {
@@ -37,43 +41,51 @@ Result<LodChain> buildLodChain(const Mesh& mesh, const LodChainOptions& options,
     std::sort(ratios.begin(), ratios.end(), [](double a, double b) { return a > b; });
     ratios.erase(std::unique(ratios.begin(), ratios.end()), ratios.end());
 
-    detail::EdgeCollapser engine;
-    LODBAKE_RETURN_IF_ERROR(engine.init(mesh, options.simplify, diagnostics));
     LodChain chain;
     const Aabb box = computeBounds(mesh);
     chain.bounding_radius = box.isEmpty() ? 0.0 : box.diagonal() * 0.5;
-    CollapseSequence* sequence = options.record_collapses ? &chain.sequence : nullptr;
-    if (sequence) engine.describe(*sequence);
-    const size_t faces = engine.initialFaceCount();
-    bool stuck = false;
-    for (double ratio : ratios) {
-        LodLevel level;
-        level.target_ratio = ratio;
-        const size_t target = size_t(std::ceil(ratio * double(faces)));
-        level.reached_target = !stuck && engine.run(target, HUGE_VAL, sequence);
-        if (!level.reached_target) {
-            stuck = true;
-            diagnostics.note("lod chain: level ratio " + std::to_string(ratio) + " stopped at " +
-                             std::to_string(engine.faceCount()) + " triangles (target " + std::to_string(target) +
-                             "): no valid collapse left");
+    {
+        // The engine's working arrays (several times the input's size) are released at the end of this
+        // block, before the error measurement builds its BVHs: peak memory is the larger of the two, not
+        // their sum.
+        detail::EdgeCollapser engine;
+        LODBAKE_RETURN_IF_ERROR(engine.init(mesh, options.simplify, diagnostics));
+        CollapseSequence* sequence = options.record_collapses ? &chain.sequence : nullptr;
+        if (sequence) engine.describe(*sequence);
+        const size_t faces = engine.initialFaceCount();
+        bool stuck = false;
+        for (double ratio : ratios) {
+            LodLevel level;
+            level.target_ratio = ratio;
+            const size_t target = size_t(std::ceil(ratio * double(faces)));
+            level.reached_target = !stuck && engine.run(target, HUGE_VAL, sequence);
+            if (!level.reached_target) {
+                stuck = true;
+                diagnostics.note("lod chain: level ratio " + std::to_string(ratio) + " stopped at " +
+                                 std::to_string(engine.faceCount()) + " triangles (target " + std::to_string(target) +
+                                 "): no valid collapse left");
+            }
+            level.collapse_count = engine.collapseCount();
+            level.quadric_error = engine.maxCollapseError();
+            level.mesh = engine.extract();
+            chain.levels.push_back(std::move(level));
         }
-        level.collapse_count = engine.collapseCount();
-        level.quadric_error = engine.maxCollapseError();
-        level.mesh = engine.extract();
-        chain.levels.push_back(std::move(level));
     }
+#if defined(__GLIBC__)
+    malloc_trim(0); // glibc would otherwise keep most of the engine's freed pages resident
+#endif
     if (options.measure_error) {
         // The input's BVH is built once for all levels.
         Result<DistanceReference> reference = DistanceReference::prepare(mesh);
         if (!reference.ok()) diagnostics.warn("lod chain: errors not measured: " + reference.status().message());
-        std::vector<const Mesh*> meshes;
-        for (const LodLevel& level : chain.levels) meshes.push_back(&level.mesh);
-        // All levels at once: they are measured in parallel, the reference's samples drawn once.
-        std::vector<Result<DistanceResult>> measured;
-        if (reference.ok()) measured = measureSurfaceDistances(*reference, meshes, options.distance);
-        for (size_t i = 0; i < measured.size(); ++i) {
+        // One level at a time, so only one level's BVH and samples exist at once (each measurement is
+        // parallel inside). The reference's samples are drawn again per level: the same points each
+        // time, so the results do not depend on this.
+        for (size_t i = 0; reference.ok() && i < chain.levels.size(); ++i) {
             LodLevel& level = chain.levels[i];
-            const Result<DistanceResult>& d = measured[i];
+            std::vector<Result<DistanceResult>> measured =
+                measureSurfaceDistances(*reference, {&level.mesh}, options.distance);
+            const Result<DistanceResult>& d = measured.at(0);
             if (!d.ok()) {
                 diagnostics.warn("lod chain: level ratio " + std::to_string(level.target_ratio) +
                                  ": error not measured: " + d.status().message());

@@ -61,5 +61,7 @@ struct PackDescription;
 /// in extensionsRequired when the description is compact. Deterministic bytes; passes the Khronos
 /// validator. Errors: a level without triangles or non-finite data, malformed extension JSON.
 Result<std::vector<uint8_t>> writePackGlb(const PackDescription& description);
+/// The same bytes; frees each level's mesh and blobs once the pack holds them (lower peak memory).
+Result<std::vector<uint8_t>> writePackGlb(PackDescription&& description);
 
 } // namespace lodbake
