@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <functional>
 #include <map>
 #include <string>
 #include <tuple>
@@ -89,6 +90,38 @@ void printDistance(const Result<DistanceResult>& distance) {
                     distance->hausdorffRel(), distance->mean, distance->meanRel());
 }
 
+// Writes the simplified mesh, measures its distance to the input and reports both, as text or as
+// one JSON object (`extra_json` adds the method's own fields after the common ones).
+int finishSimplified(const std::string& in, const std::string& out, const Mesh& input, const Mesh& output,
+                     size_t input_triangles, bool reached_target, bool json, Diagnostics& diagnostics,
+                     const std::string& text_extra, const std::function<void(JsonWriter&)>& extra_json) {
+    const Status written = writeMesh(output, out, WriteOptions(), diagnostics);
+    if (!written.ok()) {
+        printDiagnostics(diagnostics);
+        return reportError(written);
+    }
+    Result<DistanceResult> distance = measureSurfaceDistance(input, output);
+    printDiagnostics(diagnostics);
+    if (json) {
+        JsonWriter j;
+        j.beginObject();
+        j.field("input", in).field("output", out);
+        j.field("input_triangles", uint64_t(input_triangles));
+        j.field("triangles", uint64_t(output.faceCount()));
+        j.field("vertices", uint64_t(output.vertexCount()));
+        j.field("reached_target", reached_target);
+        extra_json(j);
+        if (distance.ok()) writeDistanceJson(j, *distance);
+        j.endObject();
+        std::fputs(j.str().c_str(), stdout);
+        return kExitOk;
+    }
+    std::printf("wrote %s: %zu vertices, %zu triangles (from %zu)%s%s\n", out.c_str(), output.vertexCount(),
+                output.faceCount(), input_triangles, text_extra.c_str(), reached_target ? "" : ", target not reached");
+    printDistance(distance);
+    return kExitOk;
+}
+
 int runMultilevel(Args& args, const std::string& in, const std::string& out) {
     if (args.values.count("--error")) return usageError("--error applies to --method qem only");
     const int targets =
@@ -153,37 +186,17 @@ int runMultilevel(Args& args, const std::string& in, const std::string& out) {
         printDiagnostics(diagnostics);
         return reportError(result.status().withPrefix(in));
     }
-    const Status written = writeMesh(result->mesh, out, WriteOptions(), diagnostics);
-    if (!written.ok()) {
-        printDiagnostics(diagnostics);
-        return reportError(written);
-    }
-    Result<DistanceResult> distance = measureSurfaceDistance(loaded->mesh, result->mesh);
-    printDiagnostics(diagnostics);
-    if (args.flags.count("--json")) {
-        JsonWriter j;
-        j.beginObject();
-        j.field("input", in).field("output", out);
-        j.field("method", "multilevel");
-        j.field("input_triangles", uint64_t(result->input_triangles));
-        j.field("triangles", uint64_t(result->mesh.faceCount()));
-        j.field("vertices", uint64_t(result->mesh.vertexCount()));
-        j.field("reached_target", result->reached_target);
-        j.field("percentage", options.percentage);
-        j.field("collapses", uint64_t(result->collapses));
-        j.field("collapses_requested", uint64_t(result->collapses_requested));
-        j.field("collapses_refused", uint64_t(result->collapses_refused));
-        j.field("length_threshold", result->length_threshold);
-        if (distance.ok()) writeDistanceJson(j, *distance);
-        j.endObject();
-        std::fputs(j.str().c_str(), stdout);
-        return kExitOk;
-    }
-    std::printf("wrote %s: %zu vertices, %zu triangles (from %zu), %zu of %zu collapses%s\n", out.c_str(),
-                result->mesh.vertexCount(), result->mesh.faceCount(), result->input_triangles, result->collapses,
-                result->collapses_requested, result->reached_target ? "" : ", target not reached");
-    printDistance(distance);
-    return kExitOk;
+    char summary[160];
+    std::snprintf(summary, sizeof summary, ", %zu of %zu collapses", result->collapses, result->collapses_requested);
+    return finishSimplified(in, out, loaded->mesh, result->mesh, result->input_triangles, result->reached_target,
+                            args.flags.count("--json") > 0, diagnostics, summary, [&](JsonWriter& j) {
+                                j.field("method", "multilevel");
+                                j.field("percentage", options.percentage);
+                                j.field("collapses", uint64_t(result->collapses));
+                                j.field("collapses_requested", uint64_t(result->collapses_requested));
+                                j.field("collapses_refused", uint64_t(result->collapses_refused));
+                                j.field("length_threshold", result->length_threshold);
+                            });
 }
 
 } // namespace
@@ -260,32 +273,9 @@ int runSimplify(int argc, char** argv) {
         printDiagnostics(diagnostics);
         return reportError(result.status().withPrefix(in));
     }
-    const Status written = writeMesh(result->mesh, out, WriteOptions(), diagnostics);
-    if (!written.ok()) {
-        printDiagnostics(diagnostics);
-        return reportError(written);
-    }
-    Result<DistanceResult> distance = measureSurfaceDistance(loaded->mesh, result->mesh);
-    printDiagnostics(diagnostics);
-    if (args.flags.count("--json")) {
-        JsonWriter j;
-        j.beginObject();
-        j.field("input", in).field("output", out);
-        j.field("input_triangles", uint64_t(result->input_triangles));
-        j.field("triangles", uint64_t(result->mesh.faceCount()));
-        j.field("vertices", uint64_t(result->mesh.vertexCount()));
-        j.field("reached_target", result->reached_target);
-        j.field("quadric_error", result->max_collapse_error);
-        if (distance.ok()) writeDistanceJson(j, *distance);
-        j.endObject();
-        std::fputs(j.str().c_str(), stdout);
-        return kExitOk;
-    }
-    std::printf("wrote %s: %zu vertices, %zu triangles (from %zu)%s\n", out.c_str(), result->mesh.vertexCount(),
-                result->mesh.faceCount(), result->input_triangles,
-                result->reached_target ? "" : ", target not reached");
-    printDistance(distance);
-    return kExitOk;
+    return finishSimplified(in, out, loaded->mesh, result->mesh, result->input_triangles, result->reached_target,
+                            args.flags.count("--json") > 0, diagnostics, "",
+                            [&](JsonWriter& j) { j.field("quadric_error", result->max_collapse_error); });
 }
 
 int runLods(int argc, char** argv) {
