@@ -457,8 +457,9 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
     // encoder runs them separately; the round-trip tests hold the two to the same result). The node
     // arrays are free again: they hold the order's degree counts and stacks.
     uint8_t* final_done = base + l.final_done;
-    std::memset(final_done, 0, vn);
-    std::memset(decoded, 0, vc);
+    // An empty mesh has no scratch (null base): memset's pointer must not be null even for 0 bytes.
+    if (vn > 0) std::memset(final_done, 0, vn);
+    if (vc > 0) std::memset(decoded, 0, vc);
     uint32_t* degree = a.node_free;
     for (uint32_t v = 0; v < vc; ++v) degree[v] = 0;
     uint32_t* stack[3] = {a.node_vertex, a.node_prev, a.node_next};
