@@ -26,26 +26,12 @@
 #include <string>
 #include <vector>
 
+#include "shared_mesh_list.h"
+
 namespace {
 
 namespace fs = std::filesystem;
 
-const std::vector<std::string> kAllMeshes = {"bunny_scan_bun000.ply",
-                                             "bunny_scan_bun000_tri.ply",
-                                             "bunny_zipper.ply",
-                                             "dragon_poisson.ply",
-                                             "dragon_scan_stand0_tri.ply",
-                                             "dragon_stand_merged.ply",
-                                             "fandisk.obj",
-                                             "igea.ply",
-                                             "igea_tristrips.ply",
-                                             "lee_perry_smith/LeePerrySmith.glb",
-                                             "lucy100k.ply",
-                                             "nefertiti.obj",
-                                             "nefertiti_fraunhofer_textured.glb",
-                                             "range_scans/dragon_stand/dragonStandRight.conf",
-                                             "rocker_arm.obj",
-                                             "spot.obj"};
 // The largest shared scan by triangle count (1,067,852).
 constexpr const char* kLargest = "dragon_poisson.ply";
 
@@ -124,7 +110,7 @@ bool bestBatch(const std::vector<std::string>& base, const std::string& out_dir,
 int main(int argc, char** argv) {
     int runs = 1;
     std::string preset = std::string(LODBAKE_BENCH_SOURCE_DIR) + "/configs/desktop.json";
-    std::vector<std::string> meshes = kAllMeshes;
+    std::vector<std::string> meshes = lodbake_test::allSharedMeshNames();
     bool do_threads = true, do_cache = true, do_memory = true;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];

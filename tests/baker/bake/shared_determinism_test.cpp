@@ -13,6 +13,7 @@
 #include "../gltf/gltf_test_util.h"
 #include "lodbake/core/file_io.h"
 #include "lodbake/core/hash.h"
+#include "shared_mesh_list.h"
 #include "test_paths.h"
 
 namespace {
@@ -20,29 +21,11 @@ namespace {
 namespace fs = std::filesystem;
 using lodbake_test::shellQuote;
 
-// Every mesh file of ../shared/meshes that lodbake reads (bun.conf names scans that are not there).
-std::vector<std::string> allSharedInputs() {
-    return {"bunny_scan_bun000.ply",
-            "bunny_scan_bun000_tri.ply",
-            "bunny_zipper.ply",
-            "dragon_poisson.ply",
-            "dragon_scan_stand0_tri.ply",
-            "dragon_stand_merged.ply",
-            "fandisk.obj",
-            "igea.ply",
-            "igea_tristrips.ply",
-            "lee_perry_smith/LeePerrySmith.glb",
-            "lucy100k.ply",
-            "nefertiti.obj",
-            "nefertiti_fraunhofer_textured.glb",
-            "range_scans/dragon_stand/dragonStandRight.conf",
-            "rocker_arm.obj",
-            "spot.obj"};
-}
-
+// A representative subset of the shared meshes, or all of them (allSharedMeshNames; bun.conf is left
+// out there because it names scans that are not present) with LODBAKE_TEST_ALL_SHARED_MESHES=1.
 std::vector<std::string> sharedInputs() {
     const char* all = std::getenv("LODBAKE_TEST_ALL_SHARED_MESHES");
-    if (all && std::string(all) == "1") return allSharedInputs();
+    if (all && std::string(all) == "1") return lodbake_test::allSharedMeshNames();
     return {"bunny_scan_bun000.ply",
             "dragon_scan_stand0_tri.ply",
             "fandisk.obj",
