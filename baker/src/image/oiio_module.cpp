@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <exception>
+#include <memory>
 
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imagebuf.h>
@@ -23,6 +24,28 @@ const char* codecName(const uint8_t* b, size_t size) {
 bool fail(std::string* error, const std::string& message) {
     *error = message;
     return false;
+}
+
+// OpenImageIO works on the caller's thread only: the baker parallelises across textures itself, and no
+// pool threads are left running when the process exits. Set once, when the module is first used.
+void configureOnce() {
+    static const bool configured = [] {
+        OIIO::attribute("threads", 1);
+        return true;
+    }();
+    (void)configured;
+}
+
+// An ImageInput reading the encoded bytes from memory (no file, no ImageCache).
+bool openInput(const char* codec, OIIO::Filesystem::IOMemReader* reader, std::unique_ptr<OIIO::ImageInput>* input,
+               std::string* error) {
+    configureOnce();
+    OIIO::ImageSpec config;
+    void* proxy = reader;
+    config.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &proxy);
+    *input = OIIO::ImageInput::open(codec, &config);
+    if (!*input) return fail(error, "cannot read the image header: " + OIIO::geterror());
+    return true;
 }
 
 bool encode(const OIIO::ImageBuf& linear, bool convert, const char* codec, const OIIO::TypeDesc& source_format,
@@ -65,10 +88,20 @@ bool resizeLevelsImpl(const uint8_t* data, size_t size, const uint32_t* sizes, s
                       std::string* error) {
     const char* codec = codecName(data, size);
     if (!codec) return fail(error, "not a PNG or JPEG image");
+    // Decoded through ImageInput into a buffer this call owns: an ImageBuf opened by name would go
+    // through OpenImageIO's process-wide ImageCache, where every texture is "texture.png" and the
+    // memory reader of an earlier call may be looked up after it is gone.
     OIIO::Filesystem::IOMemReader reader(const_cast<uint8_t*>(data), size);
-    OIIO::ImageBuf src(codec, 0, 0, nullptr, nullptr, &reader);
-    if (!src.read(0, 0, true, OIIO::TypeDesc::FLOAT)) return fail(error, "cannot decode the image: " + src.geterror());
-    const OIIO::TypeDesc source_format = src.spec().format;
+    std::unique_ptr<OIIO::ImageInput> input;
+    if (!openInput(codec, &reader, &input, error)) return false;
+    OIIO::ImageSpec float_spec = input->spec();
+    const OIIO::TypeDesc source_format = float_spec.format;
+    float_spec.set_format(OIIO::TypeDesc::FLOAT);
+    OIIO::ImageBuf src(float_spec, OIIO::InitializePixels::No);
+    if (!input->read_image(0, 0, 0, float_spec.nchannels, OIIO::TypeDesc::FLOAT, src.localpixels()))
+        return fail(error, "cannot decode the image: " + input->geterror());
+    input->close();
+    input.reset();
     const int channels = src.spec().nchannels;
     const uint32_t width = uint32_t(src.spec().width), height = uint32_t(src.spec().height);
     for (size_t i = 0; i < count; ++i)
@@ -124,11 +157,8 @@ bool probe(const uint8_t* data, size_t size, uint32_t* width, uint32_t* height, 
     if (!codec) return fail(error, "not a PNG or JPEG image");
     try {
         OIIO::Filesystem::IOMemReader reader(const_cast<uint8_t*>(data), size);
-        OIIO::ImageSpec config;
-        void* proxy = &reader;
-        config.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &proxy);
-        auto input = OIIO::ImageInput::open(codec, &config);
-        if (!input) return fail(error, "cannot read the image header: " + OIIO::geterror());
+        std::unique_ptr<OIIO::ImageInput> input;
+        if (!openInput(codec, &reader, &input, error)) return false;
         const OIIO::ImageSpec& spec = input->spec();
         if (spec.width <= 0 || spec.height <= 0) return fail(error, "image has no pixels");
         *width = uint32_t(spec.width);
