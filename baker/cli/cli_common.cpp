@@ -35,9 +35,38 @@ int usageError(const std::string& message) {
 }
 
 // Returns false (after printing) on a usage error.
+const char* const kReaderLimitHelp =
+    "Input limits (any subcommand; files claiming more are refused before anything is allocated):\n"
+    "  --max-vertices N            most vertices an input may declare (default 268435456)\n"
+    "  --max-faces N               most faces an input may declare, after triangulation (default 268435456)\n";
+
+namespace {
+
+// "--max-vertices N" / "--max-faces N": a whole number from 1 to 2^32.
+bool parseReaderLimit(const std::string& name, const std::string& text, uint64_t& out, int& exit_code) {
+    double v = 0;
+    if (!parseNumber(text, v) || v < 1 || v > 4294967296.0 || v != double(uint64_t(v))) {
+        exit_code = usageError(name + " expects a whole number from 1 to 4294967296, got '" + text + "'");
+        return false;
+    }
+    out = uint64_t(v);
+    return true;
+}
+
+} // namespace
+
 bool parseArgs(int argc, char** argv, int first, const std::vector<OptionSpec>& specs, Args& args, int& exit_code) {
     for (int i = first; i < argc; ++i) {
         const std::string a = argv[i];
+        if (a == "--max-vertices" || a == "--max-faces") {
+            if (i + 1 >= argc) {
+                exit_code = usageError("option " + a + " needs a value");
+                return false;
+            }
+            uint64_t& limit = a == "--max-vertices" ? args.read.max_vertex_count : args.read.max_face_count;
+            if (!parseReaderLimit(a, argv[++i], limit, exit_code)) return false;
+            continue;
+        }
         if (a.size() > 1 && a[0] == '-') {
             const OptionSpec* spec = nullptr;
             for (const OptionSpec& s : specs)

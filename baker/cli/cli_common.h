@@ -11,6 +11,7 @@
 #include "lodbake/core/json_writer.h"
 #include "lodbake/core/mesh.h"
 #include "lodbake/core/status.h"
+#include "lodbake/io/mesh_io.h"
 #include "lodbake/simplify/mesh_distance.h"
 
 namespace lodbake::cli {
@@ -24,7 +25,12 @@ struct Args {
     std::vector<std::string> positional;
     std::map<std::string, std::string> values;
     std::map<std::string, bool> flags;
+    /// Reader limits, from the options every subcommand accepts (kReaderLimitHelp); defaults otherwise.
+    ReadOptions read;
 };
+
+/// Help text of the reader-limit options parseArgs accepts for every subcommand.
+extern const char* const kReaderLimitHelp;
 
 struct OptionSpec {
     const char* long_name;

@@ -62,6 +62,7 @@ int runEncode(int argc, char** argv) {
         return code;
     if (args.flags.count("--help")) {
         std::fputs(kEncodeHelp, stdout);
+        std::fputs(kReaderLimitHelp, stdout);
         return kExitOk;
     }
     if (args.positional.size() != 1) return usageError("encode takes exactly one input file");
@@ -83,7 +84,7 @@ int runEncode(int argc, char** argv) {
     options.encode_normals = !args.flags.count("--no-normals");
 
     Diagnostics diagnostics;
-    Result<LoadedMesh> loaded = readMesh(in, ReadOptions(), diagnostics);
+    Result<LoadedMesh> loaded = readMesh(in, args.read, diagnostics);
     printDiagnostics(diagnostics);
     if (!loaded.ok()) return reportError(loaded.status());
     const Mesh& mesh = loaded->mesh;

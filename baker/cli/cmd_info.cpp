@@ -70,13 +70,14 @@ int runInfo(int argc, char** argv) {
     if (!parseArgs(argc, argv, 2, {{"--json", nullptr, false}, {"--help", "-h", false}}, args, code)) return code;
     if (args.flags.count("--help")) {
         std::fputs(kInfoHelp, stdout);
+        std::fputs(kReaderLimitHelp, stdout);
         return kExitOk;
     }
     if (args.positional.size() != 1) return usageError("info takes exactly one input file");
     const std::string& path = args.positional[0];
 
     Diagnostics diagnostics;
-    Result<LoadedMesh> loaded = readMesh(path, ReadOptions(), diagnostics);
+    Result<LoadedMesh> loaded = readMesh(path, args.read, diagnostics);
     printDiagnostics(diagnostics);
     if (!loaded.ok()) return reportError(loaded.status());
     const Mesh& mesh = loaded->mesh;
@@ -150,6 +151,7 @@ int runConvert(int argc, char** argv) {
         return code;
     if (args.flags.count("--help")) {
         std::fputs(kConvertHelp, stdout);
+        std::fputs(kReaderLimitHelp, stdout);
         return kExitOk;
     }
     if (args.positional.size() != 1) return usageError("convert takes exactly one input file");
@@ -161,7 +163,7 @@ int runConvert(int argc, char** argv) {
     if (isSameFile(in, out)) return usageError("output '" + out + "' is the input file; the input is never modified");
 
     Diagnostics diagnostics;
-    Result<LoadedMesh> loaded = readMesh(in, ReadOptions(), diagnostics);
+    Result<LoadedMesh> loaded = readMesh(in, args.read, diagnostics);
     if (!loaded.ok()) {
         printDiagnostics(diagnostics);
         return reportError(loaded.status());

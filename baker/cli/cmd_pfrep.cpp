@@ -57,6 +57,7 @@ int runPfrep(int argc, char** argv) {
         return code;
     if (args.flags.count("--help")) {
         std::fputs(kPfrepHelp, stdout);
+        std::fputs(kReaderLimitHelp, stdout);
         return kExitOk;
     }
     if (args.positional.size() != 1) return usageError("pfrep takes exactly one input file");
@@ -116,7 +117,7 @@ int runPfrep(int argc, char** argv) {
             return usageError("--ratio expects a number in [0, 1], got '" + args.values["--ratio"] + "'");
         options.target_ratio = float(value);
     }
-    Result<LoadedMesh> loaded = readMesh(in, ReadOptions(), diagnostics);
+    Result<LoadedMesh> loaded = readMesh(in, args.read, diagnostics);
     if (!loaded.ok()) {
         printDiagnostics(diagnostics);
         return reportError(loaded.status());

@@ -106,6 +106,7 @@ int runRepair(int argc, char** argv) {
     if (!parseArgs(argc, argv, 2, specs, args, code)) return code;
     if (args.flags.count("--help")) {
         std::fputs(kRepairHelp, stdout);
+        std::fputs(kReaderLimitHelp, stdout);
         return kExitOk;
     }
     if (args.positional.size() != 1) return usageError("repair takes exactly one input file");
@@ -180,7 +181,7 @@ int runRepair(int argc, char** argv) {
     opt.normals = !args.flags.count("--no-normals");
 
     Diagnostics diagnostics;
-    Result<LoadedMesh> loaded = readMesh(in, ReadOptions(), diagnostics);
+    Result<LoadedMesh> loaded = readMesh(in, args.read, diagnostics);
     if (!loaded.ok()) {
         printDiagnostics(diagnostics);
         return reportError(loaded.status());

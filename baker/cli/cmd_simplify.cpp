@@ -172,7 +172,7 @@ int runMultilevel(Args& args, const std::string& in, const std::string& out) {
     options.has_decimation = !args.flags.count("--no-decimation");
 
     Diagnostics diagnostics;
-    Result<LoadedMesh> loaded = readMesh(in, ReadOptions(), diagnostics);
+    Result<LoadedMesh> loaded = readMesh(in, args.read, diagnostics);
     if (!loaded.ok()) {
         printDiagnostics(diagnostics);
         return reportError(loaded.status());
@@ -225,6 +225,7 @@ int runSimplify(int argc, char** argv) {
         return code;
     if (args.flags.count("--help")) {
         std::fputs(kSimplifyHelp, stdout);
+        std::fputs(kReaderLimitHelp, stdout);
         return kExitOk;
     }
     if (args.positional.size() != 1) return usageError("simplify takes exactly one input file");
@@ -263,7 +264,7 @@ int runSimplify(int argc, char** argv) {
     }
 
     Diagnostics diagnostics;
-    Result<LoadedMesh> loaded = readMesh(in, ReadOptions(), diagnostics);
+    Result<LoadedMesh> loaded = readMesh(in, args.read, diagnostics);
     if (!loaded.ok()) {
         printDiagnostics(diagnostics);
         return reportError(loaded.status());
@@ -294,6 +295,7 @@ int runLods(int argc, char** argv) {
         return code;
     if (args.flags.count("--help")) {
         std::fputs(kLodsHelp, stdout);
+        std::fputs(kReaderLimitHelp, stdout);
         return kExitOk;
     }
     if (args.positional.size() != 1) return usageError("lods takes exactly one input file");
@@ -332,7 +334,7 @@ int runLods(int argc, char** argv) {
     options.screen.vertical_fov_rad = fov_deg * 3.14159265358979323846 / 180.0;
 
     Diagnostics diagnostics;
-    Result<LoadedMesh> loaded = readMesh(in, ReadOptions(), diagnostics);
+    Result<LoadedMesh> loaded = readMesh(in, args.read, diagnostics);
     if (!loaded.ok()) {
         printDiagnostics(diagnostics);
         return reportError(loaded.status());

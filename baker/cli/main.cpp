@@ -29,6 +29,8 @@ commands:
 options:
   -h, --help         show help (also: lodbake <command> --help)
   --version          print the version
+  --max-vertices N, --max-faces N
+                     refuse inputs that declare more (every command that reads a mesh; default 2^28 each)
 
 exit codes: 0 success, 1 input or processing error, 2 usage error
 )";

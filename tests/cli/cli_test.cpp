@@ -140,6 +140,28 @@ TEST(CliTest, ConvertRefusesToOverwriteInput) {
     EXPECT_EQ(readTextFile(path), text);
 }
 
+TEST(CliTest, ReaderLimitsComeFromTheCommandLine) {
+    const std::string path = lodbake_test::scratchDir() + "/two_faces.off";
+    const std::string text = "OFF\n4 2 0\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n3 0 1 2\n3 1 3 2\n";
+    ASSERT_TRUE(lodbake::writeFileAtomic(path, text.data(), text.size()).ok());
+    const std::string out = lodbake_test::scratchDir() + "/two_faces_limited.ply";
+    std::remove(out.c_str());
+    EXPECT_EQ(runCli({"convert", path, "-o", out, "--max-faces", "2"}).exit_code, 0);
+    std::remove(out.c_str());
+    for (const char* limit : {"--max-faces", "--max-vertices"}) {
+        const RunResult r = runCli({"convert", path, "-o", out, limit, limit[6] == 'f' ? "1" : "3"});
+        EXPECT_EQ(r.exit_code, 1) << limit;
+        const auto err = lines(r.err);
+        ASSERT_EQ(err.size(), 1u) << r.err;
+        EXPECT_NE(err[0].find(path), std::string::npos) << err[0];
+        EXPECT_FALSE(fs::exists(out)) << limit;
+    }
+    EXPECT_EQ(runCli({"info", path, "--max-faces", "0"}).exit_code, 2);
+    EXPECT_EQ(runCli({"info", path, "--max-vertices", "1.5"}).exit_code, 2);
+    EXPECT_EQ(runCli({"info", path, "--max-vertices"}).exit_code, 2);
+    EXPECT_EQ(readTextFile(path), text);
+}
+
 class MalformedInputTest : public testing::TestWithParam<MalformedCase> {};
 
 TEST_P(MalformedInputTest, FailsCleanlyWithoutOutput) {
