@@ -226,15 +226,48 @@ int main(int argc, char** argv) {
         }
     }
 
+    // --blob-cache PATH: lucy100k's blob is read from PATH when it holds one this reader opens,
+    // else baked and written there (repeated --refine runs skip the bake).
+    const char* cache = nullptr;
+    for (int a = 1; a + 1 < argc; ++a)
+        if (std::strcmp(argv[a], "--blob-cache") == 0) cache = argv[a + 1];
+    if (lucy.blob.empty() && cache) {
+        if (FILE* f = std::fopen(cache, "rb")) {
+            std::vector<uint8_t> bytes;
+            uint8_t buf[65536];
+            size_t got = 0;
+            while ((got = std::fread(buf, 1, sizeof(buf), f)) > 0) bytes.insert(bytes.end(), buf, buf + got);
+            std::fclose(f);
+            lodrt::PfrepModel probe;
+            if (lodrt::openPfrep(bytes.data(), bytes.size(), &probe) == lodrt::Result::Ok) lucy.blob = std::move(bytes);
+        }
+    }
     lodbake::Mesh lucy_mesh;
     if (lucy.blob.empty() && load("lucy100k.ply", lucy_mesh)) {
         double seconds = 0;
         bake(lucy_mesh, lucy, seconds);
+        if (cache && !lucy.blob.empty())
+            if (FILE* f = std::fopen(cache, "wb")) {
+                std::fwrite(lucy.blob.data(), 1, lucy.blob.size(), f);
+                std::fclose(f);
+            }
     }
     if (!lucy.blob.empty()) {
         std::printf("== 3. selective refinement, 1000 lucy100k instances, moving camera (bar: < 2 ms/frame)\n");
         lodrt::PfrepModel m;
+        std::vector<float> criterion_table;
         if (lodrt::openPfrep(lucy.blob.data(), lucy.blob.size(), &m) == lodrt::Result::Ok) {
+            // --no-table: criteria decoded from the vertex records (the model's only data) instead of
+            // the per-model float table.
+            bool use_table = true;
+            for (int a = 1; a < argc; ++a)
+                if (std::strcmp(argv[a], "--no-table") == 0) use_table = false;
+            if (use_table) {
+                criterion_table.resize(lodrt::pfrepCriterionTableFloats(m));
+                lodrt::pfrepAttachCriterionTable(&m, criterion_table.data(), criterion_table.size());
+            }
+            std::printf("  criterion table: %s (%zu bytes per model)\n", use_table ? "yes" : "no",
+                        use_table ? criterion_table.size() * sizeof(float) : size_t(0));
             const int kInstances = 1000;
             const size_t mask_bytes = lodrt::pfrepMaskBytes(m);
             std::vector<uint8_t> masks(mask_bytes * kInstances);
