@@ -9,6 +9,10 @@
 
 #include "lodrt/format.h"
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 namespace lodrt {
 namespace {
 
@@ -198,34 +202,58 @@ inline bool visitEntry(const PfrepModel& m, const uint8_t* s, uint32_t i, Keep&&
     return ok;
 }
 
+// True when the 64 mask bytes at p are all ones (every vertex removed): 4 vector loads with SSE2, 8
+// word loads otherwise. Mask scans are most of a step's memory traffic.
+inline bool allRemoved64(const uint8_t* p) {
+#if defined(__SSE2__)
+    const __m128i a = _mm_loadu_si128(reinterpret_cast<const __m128i*>(p));
+    const __m128i b = _mm_loadu_si128(reinterpret_cast<const __m128i*>(p + 16));
+    const __m128i c = _mm_loadu_si128(reinterpret_cast<const __m128i*>(p + 32));
+    const __m128i d = _mm_loadu_si128(reinterpret_cast<const __m128i*>(p + 48));
+    const __m128i x = _mm_and_si128(_mm_and_si128(a, b), _mm_and_si128(c, d));
+    return _mm_movemask_epi8(_mm_cmpeq_epi8(x, _mm_set1_epi8(char(-1)))) == 0xffff;
+#else
+    uint64_t all = ~uint64_t(0);
+    for (int k = 0; k < 8; ++k) {
+        uint64_t x;
+        std::memcpy(&x, p + 8 * k, 8);
+        all &= x;
+    }
+    return all == ~uint64_t(0);
+#endif
+}
+
 // Calls fn(i) for every vertex whose mask bit is 0 (present), 64 bits at a time; fn may change the
 // mask (a bit cleared ahead in the current word is then skipped until the next pass).
 template <typename Fn> inline bool forEachPresent(const PfrepModel& m, const uint8_t* mask, Fn&& fn) {
     const size_t bytes = pfrepMaskBytes(m);
-    size_t b = 0;
-    for (; b + 8 <= bytes; b += 8) {
-        // Runs of removed vertices (the usual case far from the camera) are skipped 64 bytes at a time.
-        while (b + 64 <= bytes) {
-            uint64_t all = ~uint64_t(0);
-            for (int k = 0; k < 8; ++k) {
-                uint64_t x;
-                std::memcpy(&x, mask + b + 8 * k, 8);
-                all &= x;
-            }
-            if (all != ~uint64_t(0)) break;
-            b += 64;
-        }
-        if (b + 8 > bytes) break;
+    // Start at the first loaded vertex's word: the bits below are set in a well-formed mask.
+    size_t b = size_t(m.loaded_from / 64) * 8;
+    auto word = [&](size_t at) {
         uint64_t w;
-        std::memcpy(&w, mask + b, 8);
+        std::memcpy(&w, mask + at, 8);
         uint64_t present = ~w;
         while (present) {
-            const uint32_t i = uint32_t(b * 8) + uint32_t(__builtin_ctzll(present));
+            const uint32_t i = uint32_t(at * 8) + uint32_t(__builtin_ctzll(present));
             present &= present - 1;
-            if (i >= m.vertex_count) return true;
+            if (i >= m.vertex_count) return 1;
             if (i < m.loaded_from) continue; // not loaded (a well-formed mask has these bits set)
-            if (!fn(i)) return false;
+            if (!fn(i)) return 0;
         }
+        return 2;
+    };
+    // Groups of 8 words: a group of removed vertices (the usual case far from the camera) costs one
+    // test; in any other group each word is read when it is reached (fn may have changed it).
+    for (; b + 64 <= bytes; b += 64) {
+        if (allRemoved64(mask + b)) continue;
+        for (size_t k = 0; k < 64; k += 8) {
+            const int r = word(b + k);
+            if (r != 2) return r == 1;
+        }
+    }
+    for (; b + 8 <= bytes; b += 8) {
+        const int r = word(b);
+        if (r != 2) return r == 1;
     }
     for (; b < bytes; ++b) {
         uint32_t present = uint32_t(~mask[b]) & 0xffu;
@@ -233,7 +261,7 @@ template <typename Fn> inline bool forEachPresent(const PfrepModel& m, const uin
             const uint32_t i = uint32_t(b * 8) + uint32_t(__builtin_ctz(present));
             present &= present - 1;
             if (i >= m.vertex_count) return true;
-            if (i < m.loaded_from) continue; // not loaded (a well-formed mask has these bits set)
+            if (i < m.loaded_from) continue;
             if (!fn(i)) return false;
         }
     }
@@ -718,6 +746,8 @@ Criterion criterion(const PfrepView& view, float error_scale, float band) {
 // so they fail too. Facing: back-facing only (says nothing about the dependencies).
 enum class Test { Wanted, Bounds, Facing };
 
+// kBoundsOnly: only the sphere tests (frustum and screen error), never Facing.
+template <bool kBoundsOnly = false>
 Test test(const PfrepModel& m, const PfrepView& view, const Criterion& c, uint32_t vertex) {
     // From the criterion table when one is attached (8 floats per vertex, the values below
     // exactly), else from the vertex record.
@@ -757,7 +787,7 @@ Test test(const PfrepModel& m, const PfrepView& view, const Criterion& c, uint32
             if (plane[0] * p[0] + plane[1] * p[1] + plane[2] * p[2] + plane[3] < -slack) return Test::Bounds;
         }
     }
-    if (!outside_sphere) return Test::Wanted;
+    if (kBoundsOnly || !outside_sphere) return Test::Wanted;
     const uint16_t cone = t ? 0 : loadU16(r + 8);
     const uint32_t a = t ? criterionConeCodes(m)[vertex] : uint32_t(cone >> 12);
     const ConeTable& table = coneTable();
@@ -924,17 +954,9 @@ Result pfrepRefine(const PfrepModel& m, const PfrepView& view, uint8_t* mask, ui
         bool more = true;
         for (size_t word = 0; word < full_words && more;) {
             // Already coarse (the usual case): runs of all-ones are skipped 64 bytes at a time.
-            if (word + 8 <= full_words) {
-                uint64_t all = ~uint64_t(0);
-                for (int k = 0; k < 8; ++k) {
-                    uint64_t x;
-                    std::memcpy(&x, mask + (word + size_t(k)) * 8, 8);
-                    all &= x;
-                }
-                if (all == ~uint64_t(0)) {
-                    word += 8;
-                    continue;
-                }
+            if (word + 8 <= full_words && allRemoved64(mask + word * 8)) {
+                word += 8;
+                continue;
             }
             uint64_t w;
             std::memcpy(&w, mask + word * 8, 8);
@@ -974,6 +996,9 @@ Result pfrepRefine(const PfrepModel& m, const PfrepView& view, uint8_t* mask, ui
             }
         }
         if (kept == Test::Bounds) return true;
+        // Between the thresholds: i passes the keep test, but when its sphere fails the stricter
+        // insert test, so do the contained spheres of all its dependencies; skip decoding them.
+        if (i < m.removed_count && test<true>(m, view, insert, i) == Test::Bounds) return true;
         const Entry e = decodeHeader(s, entryStart(m, i));
         uint64_t bit = e.first_mask_bit + (e.has_original ? e.neighbours : 0);
         for (uint32_t k = 0; k < e.dependencies; ++k) {
