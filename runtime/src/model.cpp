@@ -27,7 +27,57 @@ bool finiteFloat(double v) {
     return std::isfinite(v) && std::fabs(v) <= double(std::numeric_limits<float>::max());
 }
 
+// Column-major 4x4 product out = a * b (doubles, so chains of transforms round once, at the end).
+void multiply(const double a[16], const double b[16], double out[16]) {
+    for (int c = 0; c < 4; ++c)
+        for (int r = 0; r < 4; ++r) {
+            double v = 0;
+            for (int k = 0; k < 4; ++k) v += a[k * 4 + r] * b[c * 4 + k];
+            out[c * 4 + r] = v;
+        }
+}
+
+void identity(double m[16]) {
+    for (int k = 0; k < 16; ++k) m[k] = (k % 5 == 0) ? 1.0 : 0.0;
+}
+
+// Reads `count` finite numbers of `array` into out; false when it is not such an array.
+bool readNumbers(JsonValue array, uint32_t count, double* out) {
+    if (!array.isArray() || array.size() != count) return false;
+    for (uint32_t k = 0; k < count; ++k) {
+        if (!array.at(k).isNumber() || !finiteFloat(array.at(k).number())) return false;
+        out[k] = array.at(k).number();
+    }
+    return true;
+}
+
 } // namespace
+
+float maxAxisScale(const float m[16]) {
+    float best = 0;
+    for (int c = 0; c < 3; ++c) {
+        const float x = m[c * 4], y = m[c * 4 + 1], z = m[c * 4 + 2];
+        best = std::fmax(best, std::sqrt(x * x + y * y + z * z));
+    }
+    return best;
+}
+
+void multiplyTransforms(const float a[16], const float b[16], float out[16]) {
+    double da[16], db[16], dout[16];
+    for (int k = 0; k < 16; ++k) {
+        da[k] = a[k];
+        db[k] = b[k];
+    }
+    multiply(da, db, dout);
+    for (int k = 0; k < 16; ++k) out[k] = float(dout[k]);
+}
+
+void transformSphere(const float m[16], const float center[3], float radius, float out_center[3], float* out_radius) {
+    float c[3];
+    for (int r = 0; r < 3; ++r) c[r] = m[r] * center[0] + m[4 + r] * center[1] + m[8 + r] * center[2] + m[12 + r];
+    for (int r = 0; r < 3; ++r) out_center[r] = c[r];
+    *out_radius = radius * maxAxisScale(m);
+}
 
 struct ModelBuilder {
     const Pack* pack;
@@ -35,6 +85,7 @@ struct ModelBuilder {
     char* error;
     size_t error_size;
     uint32_t* owner = nullptr; // per node: chain root owning it, or kNoIndex
+    double* world = nullptr;   // per node: 16 doubles, its world transform
 
 #if defined(__GNUC__)
     __attribute__((format(printf, 3, 4)))
@@ -55,6 +106,95 @@ struct ModelBuilder {
     }
     static bool hasLod(const NodeInfo& node) {
         return node.json.find("extensions").find("MSFT_lod").isValid();
+    }
+
+    // Local transform of a node (glTF 2.0 §5.25: matrix, or T * R * S), column-major.
+    Result localTransform(uint32_t i, double out[16]) {
+        const JsonValue node = pack->node(i).json;
+        const JsonValue matrix = node.find("matrix"), t = node.find("translation"), r = node.find("rotation"),
+                        s = node.find("scale");
+        identity(out);
+        if (matrix.isValid()) {
+            if (t.isValid() || r.isValid() || s.isValid())
+                return fail(Result::BadGltf, "/nodes/%u: expected either matrix or translation/rotation/scale, not both",
+                            i);
+            if (!readNumbers(matrix, 16, out))
+                return fail(Result::BadGltf, "/nodes/%u/matrix: expected 16 finite numbers", i);
+            if (out[3] != 0 || out[7] != 0 || out[11] != 0 || out[15] != 1)
+                return fail(Result::BadGltf, "/nodes/%u/matrix: expected an affine matrix (last row 0 0 0 1)", i);
+            return Result::Ok;
+        }
+        double tv[3] = {0, 0, 0}, q[4] = {0, 0, 0, 1}, sv[3] = {1, 1, 1};
+        if (t.isValid() && !readNumbers(t, 3, tv))
+            return fail(Result::BadGltf, "/nodes/%u/translation: expected 3 finite numbers", i);
+        if (s.isValid() && !readNumbers(s, 3, sv))
+            return fail(Result::BadGltf, "/nodes/%u/scale: expected 3 finite numbers", i);
+        if (r.isValid()) {
+            if (!readNumbers(r, 4, q)) return fail(Result::BadGltf, "/nodes/%u/rotation: expected 4 finite numbers", i);
+            const double len = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+            if (!(std::fabs(len - 1.0) <= 1e-3))
+                return fail(Result::BadGltf, "/nodes/%u/rotation: expected a unit quaternion (length %g)", i, len);
+            for (double& c : q) c /= len;
+        }
+        const double x = q[0], y = q[1], z = q[2], w = q[3];
+        const double rot[9] = {1 - 2 * (y * y + z * z), 2 * (x * y + z * w),     2 * (x * z - y * w),
+                               2 * (x * y - z * w),     1 - 2 * (x * x + z * z), 2 * (y * z + x * w),
+                               2 * (x * z + y * w),     2 * (y * z - x * w),     1 - 2 * (x * x + y * y)};
+        for (int c = 0; c < 3; ++c)
+            for (int k = 0; k < 3; ++k) out[c * 4 + k] = rot[c * 3 + k] * sv[c];
+        for (int k = 0; k < 3; ++k) out[12 + k] = tv[k];
+        return Result::Ok;
+    }
+
+    // World transforms of every node, composed through the parents. The pack refuses cyclic
+    // hierarchies already; the walk refuses them again rather than trusting it (a path longer than
+    // the node count, or a node met twice on one path).
+    Result computeWorldTransforms() {
+        const uint32_t node_count = pack->nodeCount();
+        world = detail::allocateArray<double>(allocator, size_t(node_count) * 16);
+        uint8_t* state = detail::allocateArray<uint8_t>(allocator, node_count); // 0 todo, 1 on path, 2 done
+        uint32_t* path = detail::allocateArray<uint32_t>(allocator, node_count);
+        Result result = Result::Ok;
+        if (!world || !state || !path) result = Result::OutOfMemory;
+        if (result == Result::Ok) std::memset(state, 0, node_count);
+        for (uint32_t i = 0; i < node_count && result == Result::Ok; ++i) {
+            uint32_t depth = 0;
+            uint32_t k = i;
+            while (k != kNoIndex && state[k] != 2) {
+                if (state[k] == 1 || depth == node_count) {
+                    result = fail(Result::BadGltf, "/nodes/%u: node hierarchy contains a cycle", k);
+                    break;
+                }
+                state[k] = 1;
+                path[depth++] = k;
+                k = pack->node(k).parent;
+                if (k != kNoIndex && k >= node_count) {
+                    result = fail(Result::BadGltf, "/nodes/%u: parent out of range", path[depth - 1]);
+                    break;
+                }
+            }
+            // path[depth - 1] is the topmost node not yet done; its parent (k) is done or none.
+            while (result == Result::Ok && depth > 0) {
+                const uint32_t n = path[--depth];
+                double local[16];
+                result = localTransform(n, local);
+                if (result != Result::Ok) break;
+                const uint32_t parent = pack->node(n).parent;
+                if (parent == kNoIndex)
+                    std::memcpy(world + size_t(n) * 16, local, sizeof(local));
+                else
+                    multiply(world + size_t(parent) * 16, local, world + size_t(n) * 16);
+                for (int c = 0; c < 16; ++c)
+                    if (!finiteFloat(world[size_t(n) * 16 + c])) {
+                        result = fail(Result::BadGltf, "/nodes/%u: world transform overflows", n);
+                        break;
+                    }
+                state[n] = 2;
+            }
+        }
+        detail::deallocateBytes(allocator, state);
+        detail::deallocateBytes(allocator, path);
+        return result;
     }
 
     // Validates the chain rooted at `root` and marks its nodes as owned.
@@ -111,6 +251,7 @@ struct ModelBuilder {
                         level_index, model_index);
         level->node = node;
         level->mesh = n.mesh;
+        for (int k = 0; k < 16; ++k) level->world_transform[k] = float(world[size_t(node) * 16 + k]);
         const MeshInfo& mesh = pack->mesh(n.mesh);
         uint64_t lo = UINT64_MAX, hi = 0;
         bool streamable = true;
@@ -176,6 +317,10 @@ struct ModelBuilder {
                 r2 += half * half;
             }
             model->sphere_radius = float(std::sqrt(r2));
+            std::memcpy(model->world_transform, level->world_transform, sizeof(model->world_transform));
+            model->max_axis_scale = maxAxisScale(model->world_transform);
+            transformSphere(model->world_transform, model->sphere_center, model->sphere_radius,
+                            model->world_sphere_center, &model->world_sphere_radius);
         }
         return Result::Ok;
     }
@@ -271,6 +416,8 @@ struct ModelBuilder {
         Result r = run(out);
         detail::deallocateBytes(allocator, owner);
         owner = nullptr;
+        detail::deallocateBytes(allocator, world);
+        world = nullptr;
         if (r == Result::OutOfMemory && error && error_size > 0 && error[0] == '\0') fail(r, "out of memory");
         if (r != Result::Ok) out->release();
         return r;
@@ -282,6 +429,8 @@ struct ModelBuilder {
         owner = detail::allocateArray<uint32_t>(allocator, node_count);
         if (!owner) return Result::OutOfMemory;
         for (uint32_t i = 0; i < node_count; ++i) owner[i] = kNoIndex;
+        Result wr = computeWorldTransforms();
+        if (wr != Result::Ok) return wr;
         for (uint32_t i = 0; i < node_count; ++i) {
             if (!hasLod(pack->node(i))) continue;
             Result r = claimChain(i);

@@ -9,6 +9,10 @@
 
 #include "lodrt/format.h"
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 namespace lodrt {
 namespace {
 
@@ -48,12 +52,29 @@ struct Entry {
     uint64_t end_bit = 0;
 };
 
+inline uint32_t blockOffset(const PfrepModel& m, uint32_t b) {
+    return loadU32(m.data + format::kPfrepHeaderSize + size_t(b) * 4);
+}
+inline uint32_t blockVertices(const PfrepModel& m, uint32_t b) {
+    return std::min(uint32_t(1) << m.block_shift, m.vertex_count - (b << m.block_shift));
+}
+// Where block b ends: the start of block b - 1 (stored after it), or the blob's end.
+inline uint64_t blockEnd(const PfrepModel& m, uint32_t b) { return b > 0 ? blockOffset(m, b - 1) : m.blob_size; }
+
+// Vertex record of v (v must be loaded).
+inline const uint8_t* record(const PfrepModel& m, uint32_t v) {
+    const uint32_t b = v >> m.block_shift;
+    return m.data + blockOffset(m, b) + size_t(v - (b << m.block_shift)) * format::kPfrepVertexRecordSize;
+}
+
+// Bit position (from m.data) of entry i (i must be loaded).
 inline uint64_t entryStart(const PfrepModel& m, uint32_t i) {
-    const uint8_t* table = m.data + m.offset_table_offset;
-    const uint32_t base = loadU32(table + size_t(i >> m.block_shift) * 4);
-    const size_t blocks = (size_t(m.vertex_count) + (size_t(1) << m.block_shift) - 1) >> m.block_shift;
-    const uint16_t rel = loadU16(table + blocks * 4 + size_t(i) * 2);
-    return (uint64_t(base) + rel) * 8;
+    const uint32_t b = i >> m.block_shift;
+    const uint64_t base = blockOffset(m, b);
+    const uint32_t count = blockVertices(m, b);
+    const uint16_t rel = loadU16(m.data + base + size_t(count) * format::kPfrepVertexRecordSize +
+                                 size_t(i - (b << m.block_shift)) * 2);
+    return (base + uint64_t(count) * (format::kPfrepVertexRecordSize + 2) + rel) * 8;
 }
 
 inline Entry decodeHeader(const uint8_t* s, uint64_t bit) {
@@ -105,10 +126,11 @@ template <typename Fn> inline void forEachSlot(const uint8_t* s, uint64_t bit, u
     }
 }
 
-Result validateEntry(const PfrepModel& m, uint32_t i, uint64_t& original_triangles) {
-    const uint8_t* s = m.data + m.entries_offset;
-    const uint64_t limit = uint64_t(m.entries_size) * 8;
-    const uint64_t start = entryStart(m, i);
+// Entry i starts at bit `start` and must end by `limit` (bits from m.data; the block's padding
+// follows `limit`).
+Result validateEntry(const PfrepModel& m, uint32_t i, uint64_t start, uint64_t limit, uint64_t& original_triangles,
+                     Entry& out) {
+    const uint8_t* s = m.data;
     // The header is at most 6+16+3+16+1+5+5 bits: reading it stays in the padding.
     if (start >= limit) return Result::OutOfBounds;
     const Entry e = decodeHeader(s, start);
@@ -119,6 +141,7 @@ Result validateEntry(const PfrepModel& m, uint32_t i, uint64_t& original_triangl
         const uint64_t a = uint64_t(i) + 1 + bitsAt(s, e.neighbour_bit + uint64_t(j) * e.neighbour_width, e.neighbour_width);
         if (a >= m.vertex_count) return Result::OutOfBounds;
     }
+    out = e;
     bool degenerate = false;
     auto check = [&](uint32_t j) {
         const uint32_t next = j + 1 == e.neighbours ? 0 : j + 1;
@@ -179,33 +202,58 @@ inline bool visitEntry(const PfrepModel& m, const uint8_t* s, uint32_t i, Keep&&
     return ok;
 }
 
+// True when the 64 mask bytes at p are all ones (every vertex removed): 4 vector loads with SSE2, 8
+// word loads otherwise. Mask scans are most of a step's memory traffic.
+inline bool allRemoved64(const uint8_t* p) {
+#if defined(__SSE2__)
+    const __m128i a = _mm_loadu_si128(reinterpret_cast<const __m128i*>(p));
+    const __m128i b = _mm_loadu_si128(reinterpret_cast<const __m128i*>(p + 16));
+    const __m128i c = _mm_loadu_si128(reinterpret_cast<const __m128i*>(p + 32));
+    const __m128i d = _mm_loadu_si128(reinterpret_cast<const __m128i*>(p + 48));
+    const __m128i x = _mm_and_si128(_mm_and_si128(a, b), _mm_and_si128(c, d));
+    return _mm_movemask_epi8(_mm_cmpeq_epi8(x, _mm_set1_epi8(char(-1)))) == 0xffff;
+#else
+    uint64_t all = ~uint64_t(0);
+    for (int k = 0; k < 8; ++k) {
+        uint64_t x;
+        std::memcpy(&x, p + 8 * k, 8);
+        all &= x;
+    }
+    return all == ~uint64_t(0);
+#endif
+}
+
 // Calls fn(i) for every vertex whose mask bit is 0 (present), 64 bits at a time; fn may change the
 // mask (a bit cleared ahead in the current word is then skipped until the next pass).
 template <typename Fn> inline bool forEachPresent(const PfrepModel& m, const uint8_t* mask, Fn&& fn) {
     const size_t bytes = pfrepMaskBytes(m);
-    size_t b = 0;
-    for (; b + 8 <= bytes; b += 8) {
-        // Runs of removed vertices (the usual case far from the camera) are skipped 64 bytes at a time.
-        while (b + 64 <= bytes) {
-            uint64_t all = ~uint64_t(0);
-            for (int k = 0; k < 8; ++k) {
-                uint64_t x;
-                std::memcpy(&x, mask + b + 8 * k, 8);
-                all &= x;
-            }
-            if (all != ~uint64_t(0)) break;
-            b += 64;
-        }
-        if (b + 8 > bytes) break;
+    // Start at the first loaded vertex's word: the bits below are set in a well-formed mask.
+    size_t b = size_t(m.loaded_from / 64) * 8;
+    auto word = [&](size_t at) {
         uint64_t w;
-        std::memcpy(&w, mask + b, 8);
+        std::memcpy(&w, mask + at, 8);
         uint64_t present = ~w;
         while (present) {
-            const uint32_t i = uint32_t(b * 8) + uint32_t(__builtin_ctzll(present));
+            const uint32_t i = uint32_t(at * 8) + uint32_t(__builtin_ctzll(present));
             present &= present - 1;
-            if (i >= m.vertex_count) return true;
-            if (!fn(i)) return false;
+            if (i >= m.vertex_count) return 1;
+            if (i < m.loaded_from) continue; // not loaded (a well-formed mask has these bits set)
+            if (!fn(i)) return 0;
         }
+        return 2;
+    };
+    // Groups of 8 words: a group of removed vertices (the usual case far from the camera) costs one
+    // test; in any other group each word is read when it is reached (fn may have changed it).
+    for (; b + 64 <= bytes; b += 64) {
+        if (allRemoved64(mask + b)) continue;
+        for (size_t k = 0; k < 64; k += 8) {
+            const int r = word(b + k);
+            if (r != 2) return r == 1;
+        }
+    }
+    for (; b + 8 <= bytes; b += 8) {
+        const int r = word(b);
+        if (r != 2) return r == 1;
     }
     for (; b < bytes; ++b) {
         uint32_t present = uint32_t(~mask[b]) & 0xffu;
@@ -213,6 +261,7 @@ template <typename Fn> inline bool forEachPresent(const PfrepModel& m, const uin
             const uint32_t i = uint32_t(b * 8) + uint32_t(__builtin_ctz(present));
             present &= present - 1;
             if (i >= m.vertex_count) return true;
+            if (i < m.loaded_from) continue;
             if (!fn(i)) return false;
         }
     }
@@ -227,22 +276,21 @@ struct LogTable {
     }
 };
 
-float logValue(const PfrepModel& m, uint32_t code) {
-    static const LogTable table;
-    return m.error_unit * table.value[code & 255];
-}
+// Built once at load time (constant afterwards): no initialisation guard on the per-vertex path.
+const LogTable kLogTable;
+
+float logValue(const PfrepModel& m, uint32_t code) { return m.error_unit * kLogTable.value[code & 255]; }
 
 } // namespace
 
-Result openPfrep(const void* data, size_t size, PfrepModel* model) {
-    if (!data || !model) return Result::InvalidArgument;
-    const uint8_t* p = static_cast<const uint8_t*>(data);
+namespace {
+
+// Header and directory of data[0, size): everything but the blocks. Truncated when they are cut.
+Result openHeader(const uint8_t* p, size_t size, PfrepModel& m) {
     if (size < format::kPfrepHeaderSize) return Result::Truncated;
     if (loadU32(p) != format::kPfrepMagic) return Result::BadMagic;
     if (loadU32(p + 4) != format::kPfrepVersion) return Result::UnsupportedVersion;
-    PfrepModel m;
     m.data = p;
-    m.size = size;
     m.vertex_count = loadU32(p + 8);
     m.removed_count = loadU32(p + 12);
     m.block_shift = loadU32(p + 16);
@@ -255,66 +303,146 @@ Result openPfrep(const void* data, size_t size, PfrepModel* model) {
     }
     m.error_unit = loadF32(p + 48);
     if (!std::isfinite(m.error_unit) || m.error_unit < 0) return Result::BadStructure;
-    m.vertex_records_offset = loadU32(p + 52);
-    m.offset_table_offset = loadU32(p + 56);
-    m.entries_offset = loadU32(p + 60);
+    m.blob_size = loadU32(p + 52);
+    m.block_count = loadU32(p + 56);
     if (m.vertex_count > format::kPfrepMaxVertices || m.removed_count > m.vertex_count ||
-        m.block_shift > format::kPfrepMaxBlockShift)
+        m.block_shift > format::kPfrepMaxBlockShift || loadU32(p + 60) != 0)
         return Result::BadStructure;
-    const uint64_t n = m.vertex_count;
-    const uint64_t blocks = (n + (uint64_t(1) << m.block_shift) - 1) >> m.block_shift;
-    // Sections in order: header, vertex records, offset table, entries, padding.
-    if (m.vertex_records_offset != format::kPfrepHeaderSize) return Result::OutOfBounds;
-    const uint64_t records_end = uint64_t(m.vertex_records_offset) + n * format::kPfrepVertexRecordSize;
-    if (records_end > size) return Result::Truncated;
-    if (m.offset_table_offset != records_end) return Result::OutOfBounds;
-    const uint64_t table_end = records_end + blocks * 4 + n * 2;
-    if (table_end > size) return Result::Truncated;
-    if (m.entries_offset != table_end) return Result::OutOfBounds;
-    if (size < table_end + format::kPfrepStreamPadding) return Result::Truncated;
-    const uint64_t entries_size = size - table_end - format::kPfrepStreamPadding;
-    if (entries_size > 0xffffffffu) return Result::OutOfBounds;
-    m.entries_size = uint32_t(entries_size);
-    uint64_t original = 0;
-    uint32_t max_neighbours = 0;
-    if (m.vertex_count > 0 && entryStart(m, 0) != 0) return Result::BadStructure;
-    for (uint32_t i = 0; i < m.vertex_count; ++i) {
-        const Result r = validateEntry(m, i, original);
-        if (r != Result::Ok) return r;
-        const Entry e = decodeHeader(m.data + m.entries_offset, entryStart(m, i));
-        max_neighbours = std::max(max_neighbours, e.neighbours);
-        // Entries are contiguous (each starts at the byte after the previous one ends), so
-        // progressive extraction walks the stream without the offset table.
-        const uint64_t next = i + 1 < m.vertex_count ? entryStart(m, i + 1) : uint64_t(m.entries_size) * 8;
-        if (next != ((e.end_bit + 7) & ~uint64_t(7))) return Result::BadStructure;
+    const uint64_t blocks = (uint64_t(m.vertex_count) + (uint64_t(1) << m.block_shift) - 1) >> m.block_shift;
+    if (m.block_count != blocks) return Result::BadStructure;
+    const uint64_t directory_end = format::kPfrepHeaderSize + blocks * 4;
+    if (directory_end > m.blob_size) return Result::OutOfBounds;
+    if (size > m.blob_size) return Result::TrailingBytes;
+    if (size < directory_end) return Result::Truncated;
+    // Blocks back to back in decreasing b, each at least as long as its records, offsets and padding.
+    uint64_t at = directory_end;
+    for (uint32_t b = m.block_count; b-- > 0;) {
+        if (blockOffset(m, b) != at) return Result::OutOfBounds;
+        const uint64_t end = blockEnd(m, b);
+        if (end < at + uint64_t(blockVertices(m, b)) * (format::kPfrepVertexRecordSize + 2) + format::kPfrepStreamPadding)
+            return Result::OutOfBounds;
+        at = end;
     }
-    if (original != m.level0_triangles) return Result::BadStructure;
-    m.max_fan_neighbours = max_neighbours;
+    m.size = size_t(directory_end);
+    m.loaded_blocks = 0;
+    m.loaded_from = m.vertex_count;
+    m.loaded_original_triangles = 0;
+    m.max_fan_neighbours = 0;
+    m.max_radius = 0;
+    m.max_error = 0;
+    return Result::Ok;
+}
+
+// Validates the blocks that data[0, size) holds beyond those already loaded into m.
+Result loadBlocks(PfrepModel& m, size_t size) {
+    uint64_t original = m.loaded_original_triangles;
+    uint32_t max_neighbours = m.max_fan_neighbours;
     uint32_t max_radius_code = 0, max_error_code = 0;
-    for (uint32_t v = 0; v < m.vertex_count; ++v) {
-        const uint8_t* r = m.data + m.vertex_records_offset + size_t(v) * format::kPfrepVertexRecordSize;
-        max_radius_code = std::max<uint32_t>(max_radius_code, r[6]);
-        max_error_code = std::max<uint32_t>(max_error_code, r[7]);
+    uint32_t loaded = m.loaded_blocks;
+    while (loaded < m.block_count) {
+        const uint32_t b = m.block_count - 1 - loaded;
+        const uint64_t start = blockOffset(m, b), end = blockEnd(m, b);
+        if (end > size) break;
+        const uint32_t first = b << m.block_shift, count = blockVertices(m, b);
+        const uint64_t stream = start + uint64_t(count) * (format::kPfrepVertexRecordSize + 2);
+        const uint64_t stream_end = end - format::kPfrepStreamPadding;
+        for (uint64_t k = stream_end; k < end; ++k)
+            if (m.data[k] != 0) return Result::BadStructure;
+        // Entries are contiguous inside a block (each starts at the byte after the previous one
+        // ends), so progressive extraction walks a block's stream without its offsets.
+        uint64_t expected = stream * 8;
+        for (uint32_t i = first; i < first + count; ++i) {
+            if (entryStart(m, i) != expected) return Result::BadStructure;
+            Entry e;
+            const Result r = validateEntry(m, i, expected, stream_end * 8, original, e);
+            if (r != Result::Ok) return r;
+            max_neighbours = std::max(max_neighbours, e.neighbours);
+            expected = (e.end_bit + 7) & ~uint64_t(7);
+            const uint8_t* rec = record(m, i);
+            max_radius_code = std::max<uint32_t>(max_radius_code, rec[6]);
+            max_error_code = std::max<uint32_t>(max_error_code, rec[7]);
+        }
+        if (expected != stream_end * 8) return Result::BadStructure;
+        if (original > m.level0_triangles) return Result::BadStructure;
+        ++loaded;
     }
-    m.max_radius = logValue(m, max_radius_code);
-    m.max_error = logValue(m, max_error_code);
+    if (loaded == m.block_count && original != m.level0_triangles) return Result::BadStructure;
+    m.loaded_blocks = loaded;
+    m.loaded_from = loaded == 0 ? m.vertex_count : (m.block_count - loaded) << m.block_shift;
+    m.loaded_original_triangles = uint32_t(original);
+    m.max_fan_neighbours = max_neighbours;
+    m.max_radius = std::max(m.max_radius, logValue(m, max_radius_code));
+    m.max_error = std::max(m.max_error, logValue(m, max_error_code));
+    m.size = size;
+    return Result::Ok;
+}
+
+} // namespace
+
+Result openPfrepPrefix(const void* data, size_t size, PfrepModel* model) {
+    if (!model || (!data && size > 0)) return Result::InvalidArgument;
+    if (size < format::kPfrepHeaderSize) return Result::Truncated;
+    PfrepModel m;
+    Result r = openHeader(static_cast<const uint8_t*>(data), size, m);
+    if (r != Result::Ok) return r;
+    r = loadBlocks(m, size);
+    if (r != Result::Ok) return r;
     *model = m;
     return Result::Ok;
+}
+
+Result openPfrep(const void* data, size_t size, PfrepModel* model) {
+    if (!data || !model) return Result::InvalidArgument;
+    PfrepModel m;
+    Result r = openHeader(static_cast<const uint8_t*>(data), size, m);
+    if (r != Result::Ok) return r;
+    if (size < m.blob_size) return Result::Truncated;
+    r = loadBlocks(m, size);
+    if (r != Result::Ok) return r;
+    *model = m;
+    return Result::Ok;
+}
+
+Result pfrepExtendPrefix(PfrepModel* model, const void* data, size_t size) {
+    if (!model || !data || size < model->size || model->data == nullptr) return Result::InvalidArgument;
+    if (size > model->blob_size) return Result::TrailingBytes;
+    PfrepModel m = *model;
+    m.data = static_cast<const uint8_t*>(data);
+    m.criterion_table = nullptr; // it does not cover the new blocks: attach it again
+    const Result r = loadBlocks(m, size);
+    if (r != Result::Ok) return r;
+    *model = m;
+    return Result::Ok;
+}
+
+uint64_t pfrepPrefixBytesForLevel(const PfrepModel& m, uint32_t level) {
+    if (level >= m.vertex_count) return format::kPfrepHeaderSize + uint64_t(m.block_count) * 4;
+    return blockEnd(m, level >> m.block_shift);
+}
+
+uint64_t pfrepDirectoryBytes(const void* header, size_t size) {
+    if (!header || size < format::kPfrepHeaderSize) return 0;
+    const uint8_t* p = static_cast<const uint8_t*>(header);
+    if (loadU32(p) != format::kPfrepMagic || loadU32(p + 4) != format::kPfrepVersion) return 0;
+    return format::kPfrepHeaderSize + uint64_t(loadU32(p + 56)) * 4;
 }
 
 Result pfrepDecodePositions(const PfrepModel& m, float* out, size_t capacity) {
     if (!out && m.vertex_count > 0) return Result::InvalidArgument;
     if (capacity < size_t(m.vertex_count) * 3) return Result::BufferTooSmall;
-    const uint8_t* r = m.data + m.vertex_records_offset;
-    for (uint32_t v = 0; v < m.vertex_count; ++v, r += format::kPfrepVertexRecordSize)
+    std::fill(out, out + size_t(m.loaded_from) * 3, 0.0f);
+    for (uint32_t v = m.loaded_from; v < m.vertex_count; ++v) {
+        const uint8_t* r = record(m, v);
         for (int k = 0; k < 3; ++k) out[size_t(v) * 3 + k] = m.position_min[k] + float(loadU16(r + 2 * k)) * m.position_step[k];
+    }
     return Result::Ok;
 }
 
 Result pfrepExtractLevel(const PfrepModel& m, uint32_t level, uint32_t* indices, size_t capacity,
                          size_t* triangle_count) {
     if (!triangle_count || (!indices && capacity > 0) || level > m.removed_count) return Result::InvalidArgument;
-    const uint8_t* s = m.data + m.entries_offset;
+    if (level < m.loaded_from) return Result::NotLoaded;
+    const uint8_t* s = m.data;
     size_t count = 0;
     if (level >= m.vertex_count) {
         *triangle_count = 0;
@@ -322,7 +450,10 @@ Result pfrepExtractLevel(const PfrepModel& m, uint32_t level, uint32_t* indices,
     }
     uint64_t bit = entryStart(m, level);
     uint32_t ring[65];
+    const uint32_t block_mask = (uint32_t(1) << m.block_shift) - 1;
     for (uint32_t i = level; i < m.vertex_count; ++i) {
+        // Blocks are stored in decreasing order: the next block's stream is elsewhere.
+        if ((i & block_mask) == 0) bit = entryStart(m, i);
         const Entry e = decodeHeader(s, bit);
         bit = (e.end_bit + 7) & ~uint64_t(7);
         const uint32_t n = e.neighbours;
@@ -391,7 +522,8 @@ Result pfrepExtractLevel(const PfrepModel& m, uint32_t level, uint32_t* indices,
 Result pfrepExtractLevelFans(const PfrepModel& m, uint32_t level, uint32_t* values, size_t capacity,
                              size_t* value_count) {
     if (!value_count || (!values && capacity > 0) || level > m.removed_count) return Result::InvalidArgument;
-    const uint8_t* s = m.data + m.entries_offset;
+    if (level < m.loaded_from) return Result::NotLoaded;
+    const uint8_t* s = m.data;
     size_t used = 0;
     bool fits = true;
     for (uint32_t i = level; i < m.vertex_count && fits; ++i) {
@@ -421,16 +553,22 @@ Result pfrepExtractLevelFans(const PfrepModel& m, uint32_t level, uint32_t* valu
     return fits ? Result::Ok : Result::BufferTooSmall;
 }
 
+namespace {
+// Mask with exactly the ranks below `end` set.
+void maskBelow(const PfrepModel& m, uint8_t* mask, uint32_t end) {
+    std::memset(mask, 0, pfrepMaskBytes(m));
+    const uint32_t full = end >> 3;
+    std::memset(mask, 0xff, full);
+    for (uint32_t v = full * 8; v < end; ++v) setBit(mask, v);
+}
+} // namespace
+
 void pfrepMaskFinest(const PfrepModel& m, uint8_t* mask) {
-    if (mask) std::memset(mask, 0, pfrepMaskBytes(m));
+    if (mask) maskBelow(m, mask, m.loaded_from);
 }
 
 void pfrepMaskCoarsest(const PfrepModel& m, uint8_t* mask) {
-    if (!mask) return;
-    std::memset(mask, 0, pfrepMaskBytes(m));
-    const uint32_t full = m.removed_count >> 3;
-    std::memset(mask, 0xff, full);
-    for (uint32_t v = full * 8; v < m.removed_count; ++v) setBit(mask, v);
+    if (mask) maskBelow(m, mask, std::max(m.removed_count, m.loaded_from));
 }
 
 namespace {
@@ -441,12 +579,13 @@ namespace {
 // set is cleared again and 0 is returned. Returns n otherwise.
 template <typename Veto>
 size_t simplifyClosure(const PfrepModel& m, uint8_t* mask, uint32_t vertex, uint32_t* scratch, Veto&& veto) {
-    const uint8_t* s = m.data + m.entries_offset;
+    const uint8_t* s = m.data;
     size_t queued = 0, next = 0;
     setBit(mask, vertex);
     scratch[queued++] = vertex;
     while (next < queued) {
         const uint32_t x = scratch[next++];
+        if (x < m.loaded_from) continue; // not loaded: its dependencies are not loaded either
         const Entry e = decodeHeader(s, entryStart(m, x));
         uint64_t bit = e.first_mask_bit + (e.has_original ? e.neighbours : 0);
         for (uint32_t k = 0; k < e.dependencies; ++k) {
@@ -466,7 +605,7 @@ size_t simplifyClosure(const PfrepModel& m, uint8_t* mask, uint32_t vertex, uint
 
 // Inserts `vertex` (removed) and its insertion closure; returns the number of bits cleared.
 size_t insertClosure(const PfrepModel& m, uint8_t* mask, uint32_t vertex, uint32_t* scratch) {
-    const uint8_t* s = m.data + m.entries_offset;
+    const uint8_t* s = m.data;
     // A min-heap: vertices are processed in increasing rank, and every insertion pushes only higher
     // ranks, so a dependency's state is final when its triangles are examined.
     size_t top = 0, cleared = 1;
@@ -509,6 +648,7 @@ Result pfrepInsertVertex(const PfrepModel& m, uint8_t* mask, uint32_t vertex, ui
     if (!mask || !scratch || scratch_capacity < pfrepScratchValues(m) || vertex >= m.vertex_count)
         return Result::InvalidArgument;
     if (!maskBit(mask, vertex)) return Result::Ok;
+    if (vertex < m.loaded_from) return Result::NotLoaded;
     insertClosure(m, mask, vertex, scratch);
     return Result::Ok;
 }
@@ -516,7 +656,8 @@ Result pfrepInsertVertex(const PfrepModel& m, uint8_t* mask, uint32_t vertex, ui
 Result pfrepExtractSelective(const PfrepModel& m, const uint8_t* mask, uint32_t* indices, size_t capacity,
                              size_t* triangle_count) {
     if (!mask || !triangle_count || (!indices && capacity > 0)) return Result::InvalidArgument;
-    const uint8_t* s = m.data + m.entries_offset;
+    if (m.loaded_from > m.removed_count) return Result::NotLoaded;
+    const uint8_t* s = m.data;
     size_t count = 0;
     bool fits = true;
     fits = forEachPresent(m, mask, [&](uint32_t i) {
@@ -541,6 +682,12 @@ Result pfrepExtractSelective(const PfrepModel& m, const uint8_t* mask, uint32_t*
 namespace {
 
 constexpr float kHalfPi = 1.5707963f;
+constexpr size_t kCriterionStride = 8; // floats per vertex: x, y, z, radius, error, cone axis x, y, z
+
+// Cone half-angle codes (one byte per vertex) after the 8 V floats of a criterion table.
+const uint8_t* criterionConeCodes(const PfrepModel& m) {
+    return reinterpret_cast<const uint8_t*>(m.criterion_table + size_t(m.vertex_count) * kCriterionStride);
+}
 
 // Cone half-angles of the 4-bit code (c / 15 · π) with their sine and cosine.
 struct ConeTable {
@@ -554,10 +701,9 @@ struct ConeTable {
     }
 };
 
-const ConeTable& coneTable() {
-    static const ConeTable table;
-    return table;
-}
+const ConeTable kConeTable;
+
+const ConeTable& coneTable() { return kConeTable; }
 
 // Octahedral axis, 6 bits per coordinate (bits 0-11 of the cone code), normalized.
 void decodeConeAxis(uint16_t cone, float axis[3]) {
@@ -600,17 +746,30 @@ Criterion criterion(const PfrepView& view, float error_scale, float band) {
 // so they fail too. Facing: back-facing only (says nothing about the dependencies).
 enum class Test { Wanted, Bounds, Facing };
 
+// kBoundsOnly: only the sphere tests (frustum and screen error), never Facing.
+template <bool kBoundsOnly = false>
 Test test(const PfrepModel& m, const PfrepView& view, const Criterion& c, uint32_t vertex) {
-    const uint8_t* r = m.data + m.vertex_records_offset + size_t(vertex) * format::kPfrepVertexRecordSize;
-    float p[3];
-    for (int k = 0; k < 3; ++k) p[k] = m.position_min[k] + float(loadU16(r + 2 * k)) * m.position_step[k];
-    const float radius = logValue(m, r[6]);
+    // From the criterion table when one is attached (8 floats per vertex, the values below
+    // exactly), else from the vertex record.
+    const float* t = m.criterion_table ? m.criterion_table + size_t(vertex) * kCriterionStride : nullptr;
+    const uint8_t* r = t ? nullptr : record(m, vertex);
+    float p[3], radius, error;
+    if (t) {
+        p[0] = t[0];
+        p[1] = t[1];
+        p[2] = t[2];
+        radius = t[3];
+        error = t[4];
+    } else {
+        for (int k = 0; k < 3; ++k) p[k] = m.position_min[k] + float(loadU16(r + 2 * k)) * m.position_step[k];
+        radius = logValue(m, r[6]);
+        error = logValue(m, r[7]);
+    }
     const float dx = p[0] - view.eye[0], dy = p[1] - view.eye[1], dz = p[2] - view.eye[2];
     const float dist2 = dx * dx + dy * dy + dz * dz;
     const bool outside_sphere = dist2 > radius * radius;
     // Screen-space error first, without a square root: it rejects most vertices of distant
     // instances. error · ppu > tolerance · (dist − radius)  <=>  dist < radius + error · ppu / tolerance.
-    const float error = logValue(m, r[7]);
     if (outside_sphere) {
         if (c.tolerance_px > 0.0f) {
             const float reach = radius + error * c.reach_per_error;
@@ -628,15 +787,21 @@ Test test(const PfrepModel& m, const PfrepView& view, const Criterion& c, uint32
             if (plane[0] * p[0] + plane[1] * p[1] + plane[2] * p[2] + plane[3] < -slack) return Test::Bounds;
         }
     }
-    if (!outside_sphere) return Test::Wanted;
-    const uint16_t cone = loadU16(r + 8);
-    const uint32_t a = cone >> 12;
+    if (kBoundsOnly || !outside_sphere) return Test::Wanted;
+    const uint16_t cone = t ? 0 : loadU16(r + 8);
+    const uint32_t a = t ? criterionConeCodes(m)[vertex] : uint32_t(cone >> 12);
     const ConeTable& table = coneTable();
     if (table.angle[a] + c.band < kHalfPi) {
         // Back-facing when every normal of the cone, widened by the band, points away from the eye
         // (Hoppe 1997 §4.2): the view direction is within pi/2 - angle of the axis.
         float axis[3];
-        decodeConeAxis(cone, axis);
+        if (t) {
+            axis[0] = t[5];
+            axis[1] = t[6];
+            axis[2] = t[7];
+        } else {
+            decodeConeAxis(cone, axis);
+        }
         const float along = axis[0] * dx + axis[1] * dy + axis[2] * dz;
         const float sin_a = table.sin[a] * c.cos_band + table.cos[a] * c.sin_band;
         if (along > 0 && along * along > dist2 * sin_a * sin_a) return Test::Facing;
@@ -721,7 +886,8 @@ float cullBand(const PfrepView& view) {
 
 Result pfrepVertexBounds(const PfrepModel& m, uint32_t vertex, PfrepVertexBounds* out) {
     if (!out || vertex >= m.vertex_count) return Result::InvalidArgument;
-    const uint8_t* r = m.data + m.vertex_records_offset + size_t(vertex) * format::kPfrepVertexRecordSize;
+    if (vertex < m.loaded_from) return Result::NotLoaded;
+    const uint8_t* r = record(m, vertex);
     for (int k = 0; k < 3; ++k) out->position[k] = m.position_min[k] + float(loadU16(r + 2 * k)) * m.position_step[k];
     out->radius = logValue(m, r[6]);
     out->error = logValue(m, r[7]);
@@ -731,15 +897,35 @@ Result pfrepVertexBounds(const PfrepModel& m, uint32_t vertex, PfrepVertexBounds
     return Result::Ok;
 }
 
+Result pfrepAttachCriterionTable(PfrepModel* model, float* table, size_t capacity) {
+    if (!model || (!table && model->vertex_count > 0)) return Result::InvalidArgument;
+    const PfrepModel& m = *model;
+    if (capacity < pfrepCriterionTableFloats(m)) return Result::BufferTooSmall;
+    uint8_t* codes = reinterpret_cast<uint8_t*>(table + size_t(m.vertex_count) * kCriterionStride);
+    for (uint32_t v = m.loaded_from; v < m.vertex_count; ++v) {
+        const uint8_t* r = record(m, v);
+        float* t = table + size_t(v) * kCriterionStride;
+        for (int k = 0; k < 3; ++k) t[k] = m.position_min[k] + float(loadU16(r + 2 * k)) * m.position_step[k];
+        t[3] = logValue(m, r[6]);
+        t[4] = logValue(m, r[7]);
+        const uint16_t cone = loadU16(r + 8);
+        decodeConeAxis(cone, t + 5);
+        codes[v] = uint8_t(cone >> 12);
+    }
+    model->criterion_table = table;
+    return Result::Ok;
+}
+
 bool pfrepWanted(const PfrepModel& m, const PfrepView& view, uint32_t vertex) {
-    if (vertex >= m.vertex_count) return false;
+    if (vertex >= m.vertex_count || vertex < m.loaded_from) return false;
     return wanted(m, view, criterion(view, 1.0f, 0.0f), vertex);
 }
 
 Result pfrepRefine(const PfrepModel& m, const PfrepView& view, uint8_t* mask, uint32_t* scratch,
                    size_t scratch_capacity, size_t* changes) {
     if (!mask || !scratch || !changes || scratch_capacity < pfrepScratchValues(m)) return Result::InvalidArgument;
-    const uint8_t* s = m.data + m.entries_offset;
+    if (m.loaded_from > m.removed_count) return Result::NotLoaded;
+    const uint8_t* s = m.data;
     Criterion insert = criterion(view, 1.0f, 0.0f);
     Criterion keep = criterion(view, keepScale(view), cullBand(view));
     const size_t budget = view.max_changed_bits;
@@ -768,17 +954,9 @@ Result pfrepRefine(const PfrepModel& m, const PfrepView& view, uint8_t* mask, ui
         bool more = true;
         for (size_t word = 0; word < full_words && more;) {
             // Already coarse (the usual case): runs of all-ones are skipped 64 bytes at a time.
-            if (word + 8 <= full_words) {
-                uint64_t all = ~uint64_t(0);
-                for (int k = 0; k < 8; ++k) {
-                    uint64_t x;
-                    std::memcpy(&x, mask + (word + size_t(k)) * 8, 8);
-                    all &= x;
-                }
-                if (all == ~uint64_t(0)) {
-                    word += 8;
-                    continue;
-                }
+            if (word + 8 <= full_words && allRemoved64(mask + word * 8)) {
+                word += 8;
+                continue;
             }
             uint64_t w;
             std::memcpy(&w, mask + word * 8, 8);
@@ -811,19 +989,22 @@ Result pfrepRefine(const PfrepModel& m, const PfrepView& view, uint8_t* mask, ui
             // is abandoned as soon as it meets one: otherwise the next pass would insert it again
             // and a static camera would toggle the same vertices every frame.
             const size_t n =
-                simplifyClosure(m, mask, i, scratch, [&](uint32_t d) { return wanted(m, view, keep, d); });
+                simplifyClosure(m, mask, i, scratch, [&](uint32_t d) { return d >= m.loaded_from && wanted(m, view, keep, d); });
             if (n > 0) {
                 changed += n;
                 return true;
             }
         }
         if (kept == Test::Bounds) return true;
+        // Between the thresholds: i passes the keep test, but when its sphere fails the stricter
+        // insert test, so do the contained spheres of all its dependencies; skip decoding them.
+        if (i < m.removed_count && test<true>(m, view, insert, i) == Test::Bounds) return true;
         const Entry e = decodeHeader(s, entryStart(m, i));
         uint64_t bit = e.first_mask_bit + (e.has_original ? e.neighbours : 0);
         for (uint32_t k = 0; k < e.dependencies; ++k) {
             const uint32_t d = i - 1 - bitsAt(s, bit, e.dependency_width);
             bit += e.dependency_width + e.neighbours;
-            if (maskBit(mask, d) && wanted(m, view, insert, d)) {
+            if (maskBit(mask, d) && d >= m.loaded_from && wanted(m, view, insert, d)) {
                 changed += insertClosure(m, mask, d, scratch);
                 if (budget > 0 && changed >= budget) return false;
             }

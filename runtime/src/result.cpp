@@ -40,6 +40,8 @@ const char* resultName(Result result) {
         return "CorruptStream";
     case Result::BufferTooSmall:
         return "BufferTooSmall";
+    case Result::NotLoaded:
+        return "NotLoaded";
     }
     return "Unknown";
 }

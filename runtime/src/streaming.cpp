@@ -215,6 +215,20 @@ Result PackSource::readLevel(uint32_t model, uint32_t level, uint8_t* dst, size_
     return checkLevelIndices(pack_, info, dst);
 }
 
+Result PackSource::readBufferView(uint32_t view, uint64_t offset, uint8_t* dst, size_t size) const {
+    if (view >= pack_.bufferViewCount() || (!dst && size > 0)) return Result::InvalidArgument;
+    const BufferViewInfo& info = pack_.bufferView(view);
+    if (!pack_.buffer(info.buffer).is_glb_bin) return Result::BadGltf;
+    if (offset > info.byte_length || size > info.byte_length - offset) return Result::OutOfBounds;
+    if (size == 0) return Result::Ok;
+    if (bin_) {
+        std::memcpy(dst, bin_ + info.byte_offset + offset, size);
+        return Result::Ok;
+    }
+    if (reader_.read) return reader_.read(reader_.user, bin_offset_ + info.byte_offset + offset, dst, size);
+    return Result::InvalidArgument;
+}
+
 const uint8_t* PackSource::accessorData(uint32_t model, uint32_t level, const uint8_t* level_bytes,
                                         uint32_t accessor) const {
     if (!level_bytes || model >= models_.modelCount() || level >= models_.model(model).level_count ||

@@ -105,6 +105,52 @@ TEST(PfrepInstanceTest, PlacedInstanceRefinesLikeModelSpaceCamera) {
     EXPECT_EQ(a, b); // the |V|-bit mask is the whole per-instance state
 }
 
+// A general transform: uniform scale + translation as a matrix gives the placement's view; a rotation
+// about z moves the eye with it; a non-uniform scale raises pixels per unit by max / min axis scale.
+TEST(PfrepInstanceTest, TransformViewMatchesPlacementAndHandlesNonUniformScale) {
+    const float world_eye[3] = {12, 7, -17};
+    lodrt::InstancePlacement placement;
+    placement.translation[0] = 10;
+    placement.translation[1] = 5;
+    placement.translation[2] = -20;
+    placement.scale = 4;
+    lodrt::PfrepView by_placement, by_matrix;
+    ASSERT_EQ(lodrt::pfrepInstanceView(frustumAt(world_eye), world_eye, placement, 1000, 1, 0.5f, &by_placement),
+              lodrt::Result::Ok);
+    const float uniform[16] = {4, 0, 0, 0, 0, 4, 0, 0, 0, 0, 4, 0, 10, 5, -20, 1};
+    ASSERT_EQ(lodrt::pfrepInstanceViewTransform(frustumAt(world_eye), world_eye, uniform, 1000, 1, 0.5f, &by_matrix),
+              lodrt::Result::Ok);
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(by_matrix.eye[k], by_placement.eye[k], 1e-5);
+    for (int p = 0; p < 6; ++p)
+        for (int k = 0; k < 4; ++k) EXPECT_NEAR(by_matrix.planes[p][k], by_placement.planes[p][k], 1e-4) << p << " " << k;
+    EXPECT_FLOAT_EQ(by_matrix.pixels_per_unit_at_distance_one, 1000.0f);
+    // Rotation by 90 degrees about z, scaled (1, 2, 8): world (x, y, z) = (-2 y_m, x_m, 8 z_m).
+    const float rotated[16] = {0, 1, 0, 0, -2, 0, 0, 0, 0, 0, 8, 0, 0, 0, 0, 1};
+    const float eye[3] = {-4, 3, 16};
+    lodrt::PfrepView v;
+    ASSERT_EQ(lodrt::pfrepInstanceViewTransform(frustumAt(eye), eye, rotated, 1000, 1, 0.5f, &v), lodrt::Result::Ok);
+    EXPECT_NEAR(v.eye[0], 3.0f, 1e-5);
+    EXPECT_NEAR(v.eye[1], 2.0f, 1e-5);
+    EXPECT_NEAR(v.eye[2], 2.0f, 1e-5);
+    EXPECT_NEAR(v.pixels_per_unit_at_distance_one, 8000.0f, 1e-2);
+    for (int p = 0; p < 6; ++p) {
+        const float len = std::sqrt(v.planes[p][0] * v.planes[p][0] + v.planes[p][1] * v.planes[p][1] +
+                                    v.planes[p][2] * v.planes[p][2]);
+        EXPECT_NEAR(len, 1.0f, 1e-5);
+        // Side planes pass through the eye in model space too.
+        if (p < 4) {
+            EXPECT_NEAR(v.planes[p][0] * v.eye[0] + v.planes[p][1] * v.eye[1] + v.planes[p][2] * v.eye[2] + v.planes[p][3],
+                        0.0f, 1e-4);
+        }
+    }
+    const float singular[16] = {1, 0, 0, 0, 0, 0, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+    EXPECT_EQ(lodrt::pfrepInstanceViewTransform(frustumAt(eye), eye, singular, 1000, 1, 0.5f, &v),
+              lodrt::Result::InvalidArgument);
+    const float projective[16] = {1, 0, 0, 1, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+    EXPECT_EQ(lodrt::pfrepInstanceViewTransform(frustumAt(eye), eye, projective, 1000, 1, 0.5f, &v),
+              lodrt::Result::InvalidArgument);
+}
+
 TEST(PfrepInstanceTest, FarInstanceKeepsFewerTriangles) {
     const lodrt::PfrepModel& model = blob().model;
     std::vector<uint32_t> indices(3 * lodrt::pfrepMaxTriangles(model));

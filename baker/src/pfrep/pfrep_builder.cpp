@@ -391,7 +391,7 @@ Result<PfrepBuild> buildPfrepFromSequence(const CollapseSequence& sequence, cons
     stream.alignByte();
     const size_t entries_size = stream.byteSize();
 
-    // Offset table: the largest block that keeps every in-block offset within 16 bits.
+    // Blocks: the largest that keeps every in-block offset within 16 bits.
     uint32_t shift = fmt::kPfrepMaxBlockShift;
     for (;; --shift) {
         bool fits = true;
@@ -400,10 +400,20 @@ Result<PfrepBuild> buildPfrepFromSequence(const CollapseSequence& sequence, cons
         if (fits || shift == 0) break;
     }
     const size_t blocks = (size_t(vertex_count) + (size_t(1) << shift) - 1) >> shift;
-    const size_t records_offset = fmt::kPfrepHeaderSize;
-    const size_t table_offset = records_offset + size_t(vertex_count) * fmt::kPfrepVertexRecordSize;
-    const size_t entries_offset = table_offset + blocks * 4 + size_t(vertex_count) * 2;
-    const size_t total = entries_offset + entries_size + fmt::kPfrepStreamPadding;
+    auto blockFirst = [&](size_t b) { return uint32_t(b << shift); };
+    auto blockLast = [&](size_t b) { return uint32_t(std::min<size_t>((b + 1) << shift, vertex_count)); };
+    auto entryEnd = [&](uint32_t i) { return i + 1 < vertex_count ? size_t(entry_offset[i + 1]) : entries_size; };
+    // Blocks are stored coarse end first (decreasing b), so a prefix of the blob holds the highest
+    // ranks: a usable coarse mesh that refines as more bytes arrive.
+    const size_t directory_offset = fmt::kPfrepHeaderSize;
+    std::vector<size_t> block_offset(blocks);
+    size_t total = directory_offset + blocks * 4;
+    for (size_t b = blocks; b-- > 0;) {
+        block_offset[b] = total;
+        const size_t count = blockLast(b) - blockFirst(b);
+        total += count * (fmt::kPfrepVertexRecordSize + 2) + (entryEnd(blockLast(b) - 1) - entry_offset[blockFirst(b)]) +
+                 fmt::kPfrepStreamPadding;
+    }
     if (total > 0xffffffffu) return resourceLimit("pfrep: blob larger than 4 GiB");
     std::vector<uint8_t>& blob = build.blob;
     blob.assign(total, 0);
@@ -433,27 +443,31 @@ Result<PfrepBuild> buildPfrepFromSequence(const CollapseSequence& sequence, cons
         putF32(blob, 36 + 4 * k, step[k]);
     }
     putF32(blob, 48, error_unit);
-    put32(blob, 52, uint32_t(records_offset));
-    put32(blob, 56, uint32_t(table_offset));
-    put32(blob, 60, uint32_t(entries_offset));
-    for (uint32_t i = 0; i < vertex_count; ++i) {
-        uint8_t* r = blob.data() + records_offset + size_t(i) * fmt::kPfrepVertexRecordSize;
-        const Vec3f& p = sequence.point_positions[rank_point[i]];
-        for (int k = 0; k < 3; ++k) {
-            const uint16_t q = step[k] > 0 ? uint16_t(std::clamp(std::lround((p[k] - lo[k]) / step[k]), 0L, 65535L)) : 0;
-            std::memcpy(r + 2 * k, &q, 2);
+    put32(blob, 52, uint32_t(total));
+    put32(blob, 56, uint32_t(blocks));
+    put32(blob, 60, 0);
+    for (size_t b = 0; b < blocks; ++b) {
+        put32(blob, directory_offset + b * 4, uint32_t(block_offset[b]));
+        const uint32_t first = blockFirst(b), last = blockLast(b), count = last - first;
+        uint8_t* records = blob.data() + block_offset[b];
+        for (uint32_t i = first; i < last; ++i) {
+            uint8_t* r = records + size_t(i - first) * fmt::kPfrepVertexRecordSize;
+            const Vec3f& p = sequence.point_positions[rank_point[i]];
+            for (int k = 0; k < 3; ++k) {
+                const uint16_t q =
+                    step[k] > 0 ? uint16_t(std::clamp(std::lround((p[k] - lo[k]) / step[k]), 0L, 65535L)) : 0;
+                std::memcpy(r + 2 * k, &q, 2);
+            }
+            r[6] = logCode(radius[i], error_unit);
+            r[7] = logCode(err[i], error_unit);
+            const uint16_t cone = coneCode(axis[i], cone_angle[i]);
+            std::memcpy(r + 8, &cone, 2);
+            const uint16_t rel = uint16_t(entry_offset[i] - entry_offset[first]);
+            std::memcpy(records + size_t(count) * fmt::kPfrepVertexRecordSize + size_t(i - first) * 2, &rel, 2);
         }
-        r[6] = logCode(radius[i], error_unit);
-        r[7] = logCode(err[i], error_unit);
-        const uint16_t cone = coneCode(axis[i], cone_angle[i]);
-        std::memcpy(r + 8, &cone, 2);
+        std::memcpy(records + size_t(count) * (fmt::kPfrepVertexRecordSize + 2),
+                    stream.bytes().data() + entry_offset[first], entryEnd(last - 1) - entry_offset[first]);
     }
-    for (size_t b = 0; b < blocks; ++b) put32(blob, table_offset + b * 4, entry_offset[b << shift]);
-    for (uint32_t i = 0; i < vertex_count; ++i) {
-        const uint16_t rel = uint16_t(entry_offset[i] - entry_offset[(i >> shift) << shift]);
-        std::memcpy(blob.data() + table_offset + blocks * 4 + size_t(i) * 2, &rel, 2);
-    }
-    std::memcpy(blob.data() + entries_offset, stream.bytes().data(), entries_size);
 
     build.rank_point = std::move(rank_point);
     build.removed = removed;

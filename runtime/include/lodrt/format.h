@@ -19,15 +19,18 @@ constexpr uint32_t kGlbChunkHeaderSize = 8;
 // start of the blob. Vertex ids are removal ranks: vertex i is the i-th vertex removed by the
 // half-edge-collapse sequence, ids >= removed_count are never removed.
 constexpr uint32_t kPfrepMagic = 0x31524650u; // "PFR1"
-constexpr uint32_t kPfrepVersion = 1;
+constexpr uint32_t kPfrepVersion = 2;           // 2: blocks stored coarse end first (prefix streaming)
 constexpr uint32_t kPfrepHeaderSize = 64;
 // Header fields (byte offset: type):
 //   0 u32 magic, 4 u32 version, 8 u32 vertex_count, 12 u32 removed_count, 16 u32 block_shift,
 //   20 u32 level0_triangles, 24 f32[3] position_min, 36 f32[3] position_step,
-//   48 f32 error_unit, 52 u32 vertex_records_offset, 56 u32 offset_table_offset, 60 u32 entries_offset.
+//   48 f32 error_unit, 52 u32 blob_size, 56 u32 block_count, 60 u32 zero.
+// Then the block directory (block_count u32: byte offset of block b), then the blocks in DECREASING
+// b (the coarse end first). Block b (vertices [b << block_shift, ...)): its vertex records, its u16
+// entry offsets (relative to its entry stream), its entry stream, kPfrepStreamPadding zero bytes.
 constexpr uint32_t kPfrepVertexRecordSize = 10; // u16 q[3], u8 radius, u8 error, u16 cone
 constexpr uint32_t kPfrepMaxBlockShift = 8;
-constexpr uint32_t kPfrepStreamPadding = 16;    // zero bytes after the entry stream (64-bit bit reads)
+constexpr uint32_t kPfrepStreamPadding = 16;    // zero bytes after each block's entry stream (64-bit bit reads)
 constexpr uint32_t kPfrepMaxVertices = 0x40000000u;
 // Entry bit fields (LSB first): neighbour count (6 bits, 63 = 63 + next 16 bits), dependency count
 // (3 bits, 7 = 7 + next 16 bits), has_original (1), neighbour width (5), dependency width (5, only

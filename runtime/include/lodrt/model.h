@@ -45,6 +45,9 @@ struct LevelInfo {
     float band_far = 0;          // ... switch to this level beyond band_far
     uint64_t data_offset = 0;    // byte range of the BIN chunk covering every buffer view the level uses
     uint64_t data_size = 0;      // 0 when the level's data is not in the GLB BIN chunk
+    /// World transform of the level's node (glTF: local TRS or matrix composed through every
+    /// parent), column-major 4x4 affine, world = world_transform * object. Identity without one.
+    float world_transform[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
 };
 
 struct ModelInfo {
@@ -57,7 +60,25 @@ struct ModelInfo {
     float aabb_max[3] = {0, 0, 0};
     float sphere_center[3] = {0, 0, 0}; // bounding sphere around the box
     float sphere_radius = 0;
+    /// Level 0's node placement (LevelInfo::world_transform of level 0) and what it does to the
+    /// bounds: the sphere centre transformed, the radius times the largest axis scale (so a
+    /// non-uniform scale never shrinks the sphere below the scaled mesh).
+    float world_transform[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+    float max_axis_scale = 1; // maxAxisScale(world_transform)
+    float world_sphere_center[3] = {0, 0, 0};
+    float world_sphere_radius = 0;
 };
+
+/// Largest factor by which the affine column-major transform m stretches a length: the largest
+/// column norm of its upper 3x3 (exact for rotation times non-uniform scale, the glTF TRS case).
+LODRT_API float maxAxisScale(const float m[16]);
+/// out = a * b (column-major 4x4; out may alias neither input).
+LODRT_API void multiplyTransforms(const float a[16], const float b[16], float out[16]);
+/// Sphere (center, radius) of object space placed by m: centre transformed, radius * maxAxisScale(m).
+/// Use it for InstanceArrays (radius) with maxAxisScale(m) as the instance's scale: screen-space
+/// errors grow at most by that factor, so selection stays conservative under non-uniform scale.
+LODRT_API void transformSphere(const float m[16], const float center[3], float radius, float out_center[3],
+                               float* out_radius);
 
 /// Options; zero-initialised means defaults.
 struct ModelOptions {
@@ -96,7 +117,9 @@ private:
 /// Builds the models of `pack`. On failure *out is empty and error_message (if not null) receives
 /// one line "<json pointer>: <what was expected>". Returns Ok; BadGltf (bad MSFT_lod ids, a node in
 /// two chains, nested or cyclic chains, more than kMaxLevels levels, a level node without a mesh,
-/// metrics that break the LODBAKE_lod_metrics rules, POSITION without min/max); OutOfMemory;
+/// metrics that break the LODBAKE_lod_metrics rules, POSITION without min/max, a node with both
+/// matrix and TRS, non-finite or malformed transforms, a matrix whose last row is not 0 0 0 1, a
+/// rotation that is not a unit quaternion, a cycle in the node hierarchy); OutOfMemory;
 /// InvalidArgument when out is null.
 LODRT_API Result buildModels(const Pack& pack, const ModelOptions* options, ModelSet* out,
                              char* error_message = nullptr, size_t error_message_size = 0);

@@ -19,10 +19,17 @@
 
 namespace lodrt {
 
-/// A validated view of a PFRep blob (the blob must outlive it). Plain data; copy freely.
+/// A validated view of a PFRep blob or of a prefix of it (the bytes must outlive it). Plain data;
+/// copy freely.
+///
+/// Prefix streaming (format version 2): the blob stores its blocks of 2^block_shift vertices coarse
+/// end first, so a prefix holds the header, the block directory and the blocks of the highest ranks.
+/// Vertices [loaded_from, vertex_count) are then loaded and validated; levels k >= loaded_from
+/// (k <= removed_count) can be extracted exactly as from the whole blob, and selective refinement
+/// keeps every vertex below loaded_from removed. Nothing ever reads beyond `size`.
 struct PfrepModel {
     const uint8_t* data = nullptr;
-    size_t size = 0;
+    size_t size = 0; // bytes available (validated); blob_size once complete
     uint32_t vertex_count = 0;
     uint32_t removed_count = 0; // vertices [0, removed_count) can be removed, in this order
     uint32_t block_shift = 0;
@@ -30,23 +37,48 @@ struct PfrepModel {
     float position_min[3] = {0, 0, 0};
     float position_step[3] = {0, 0, 0};
     float error_unit = 0;
-    uint32_t vertex_records_offset = 0;
-    uint32_t offset_table_offset = 0;
-    uint32_t entries_offset = 0;
-    uint32_t entries_size = 0; // without the padding
+    uint32_t blob_size = 0;   // bytes of the whole blob
+    uint32_t block_count = 0; // ceil(vertex_count / 2^block_shift)
+    uint32_t loaded_blocks = 0; // blocks validated: block_count - loaded_blocks .. block_count - 1
+    uint32_t loaded_from = 0;   // lowest loaded vertex (vertex_count when no block is loaded; 0 = complete)
+    uint32_t loaded_original_triangles = 0; // input triangles stored in the loaded blocks
     uint32_t max_fan_neighbours = 0;
-    /// Largest bounding-sphere radius and removal error of any vertex (openPfrep computes them):
-    /// with the position box they bound a whole instance, so pfrepRefine can decide it at once.
+    /// Largest bounding-sphere radius and removal error of any loaded vertex: with the position box
+    /// they bound a whole instance, so pfrepRefine can decide it at once.
     float max_radius = 0;
     float max_error = 0;
+    /// Optional criterion table (pfrepAttachCriterionTable; caller-owned, shared by every instance).
+    /// pfrepExtendPrefix detaches it (the new vertices are not in it): attach it again.
+    const float* criterion_table = nullptr;
 };
 
-/// Validates the whole blob. Truncated / BadMagic / UnsupportedVersion / OutOfBounds /
-/// BadStructure on bad input; `model` is only written on Ok.
+/// Validates the whole blob (size must equal its blob_size). Truncated / TrailingBytes / BadMagic /
+/// UnsupportedVersion / OutOfBounds / BadStructure on bad input; `model` is only written on Ok.
 LODRT_API Result openPfrep(const void* data, size_t size, PfrepModel* model);
 
+/// Opens a prefix data[0, size) of a blob: validates the header, the block directory and every
+/// block wholly inside the prefix (a block cut by the end of the prefix is ignored until more bytes
+/// arrive). Truncated when the header or the directory is cut; TrailingBytes when size exceeds
+/// the header's blob_size; otherwise openPfrep's codes for what the prefix holds.
+LODRT_API Result openPfrepPrefix(const void* data, size_t size, PfrepModel* model);
+
+/// More bytes arrived: data[0, size) (size >= model->size; data may have moved, the first
+/// model->size bytes must be the ones validated before) is validated from the first block not yet
+/// loaded. On error *model is unchanged. When the blob becomes complete, the input-triangle count is
+/// checked against the header (BadStructure).
+LODRT_API Result pfrepExtendPrefix(PfrepModel* model, const void* data, size_t size);
+
+/// Bytes of prefix needed before level `level` (<= removed_count) can be extracted, i.e. before
+/// vertex `level` and every higher rank are loaded. Needs only the header and directory (a model
+/// from openPfrepPrefix). Returns blob_size for level 0.
+LODRT_API uint64_t pfrepPrefixBytesForLevel(const PfrepModel& model, uint32_t level);
+
+/// Bytes of header and block directory, the smallest prefix openPfrepPrefix accepts. `header` must
+/// hold kPfrepHeaderSize bytes; 0 when they are not a PFRep header of a supported version.
+LODRT_API uint64_t pfrepDirectoryBytes(const void* header, size_t size);
+
 /// Dequantized positions of every vertex (3 floats each) into `out` of `capacity` floats
-/// (needs 3 * vertex_count).
+/// (needs 3 * vertex_count). Vertices not loaded yet get 0.
 LODRT_API Result pfrepDecodePositions(const PfrepModel& model, float* out, size_t capacity);
 
 /// Bytes of one instance mask: exactly vertex_count bits, rounded up to whole bytes.
@@ -59,7 +91,8 @@ inline size_t pfrepMaxFanValues(const PfrepModel& model) { return size_t(model.l
 
 /// The mesh after the first `level` removals (0: full detail; removed_count: coarsest) as an
 /// indexed triangle list of vertex ids (3 per triangle). `*triangle_count` receives the count.
-/// BufferTooSmall when `capacity` (in triangles) is short; InvalidArgument when level > removed_count.
+/// BufferTooSmall when `capacity` (in triangles) is short; InvalidArgument when level > removed_count;
+/// NotLoaded when level < loaded_from.
 LODRT_API Result pfrepExtractLevel(const PfrepModel& model, uint32_t level, uint32_t* indices, size_t capacity,
                                    size_t* triangle_count);
 
@@ -71,6 +104,8 @@ LODRT_API Result pfrepExtractLevelFans(const PfrepModel& model, uint32_t level, 
 // ---- Selective refinement: one bit per vertex per instance, 1 = removed. ----
 
 /// Sets the mask to the full-detail mesh (all zero) or to the coarsest one (ranks < removed_count set).
+/// For a prefix, both also set every rank below loaded_from (not loaded = removed); every selective
+/// function expects those bits set, and never reads the entry of a vertex below loaded_from.
 LODRT_API void pfrepMaskFinest(const PfrepModel& model, uint8_t* mask);
 LODRT_API void pfrepMaskCoarsest(const PfrepModel& model, uint8_t* mask);
 
@@ -123,6 +158,17 @@ struct PfrepVertexBounds {
 };
 LODRT_API Result pfrepVertexBounds(const PfrepModel& model, uint32_t vertex, PfrepVertexBounds* out);
 LODRT_API bool pfrepWanted(const PfrepModel& model, const PfrepView& view, uint32_t vertex);
+
+/// Floats of a criterion table: 8 per vertex (bounding-sphere centre and radius, removal error, normal
+/// cone axis) plus one cone-angle byte per vertex, rounded up to floats.
+inline size_t pfrepCriterionTableFloats(const PfrepModel& model) {
+    return size_t(model.vertex_count) * 8 + (size_t(model.vertex_count) + 3) / 4;
+}
+/// Fills table[0, capacity) with the dequantized refinement criterion of every loaded vertex and
+/// attaches it to *model, so pfrepRefine reads each vertex's criterion from 32 contiguous bytes
+/// instead of decoding its record (same values, same decisions; measured in pfrep_bench). Costs
+/// 32.25 bytes per vertex per model, not per instance. InvalidArgument / BufferTooSmall.
+LODRT_API Result pfrepAttachCriterionTable(PfrepModel* model, float* table, size_t capacity);
 
 /// One adaptation step of an instance towards `view`, in increasing rank: a present removable vertex
 /// is simplified when the criterion fails at tolerance pixel_tolerance * hysteresis AND it fails

@@ -28,6 +28,17 @@ LODRT_API Result pfrepInstanceView(const Frustum& world_frustum, const float wor
                                    const InstancePlacement& placement, float pixels_per_unit_at_distance_one,
                                    float pixel_tolerance, float hysteresis, PfrepView* out);
 
+/// Model-space view of an instance placed by an affine model -> world transform (column-major 4x4,
+/// e.g. multiplyTransforms(instance, ModelInfo::world_transform)), which may rotate and scale
+/// non-uniformly: the eye is brought back by the inverse, each frustum plane is pulled back and
+/// renormalised (exact for model-space spheres), and pixels_per_unit is multiplied by
+/// maxAxisScale / minAxisScale, so an error stretched by the largest axis and seen along the most
+/// shrunk one is never under-estimated (conservative up to each vertex's own bounding radius).
+/// Returns InvalidArgument for a singular, non-affine or non-finite transform.
+LODRT_API Result pfrepInstanceViewTransform(const Frustum& world_frustum, const float world_eye[3],
+                                            const float model_to_world[16], float pixels_per_unit_at_distance_one,
+                                            float pixel_tolerance, float hysteresis, PfrepView* out);
+
 /// One adaptation step of the instance's mask towards `view` (pfrepRefine), then its current mesh as
 /// a triangle list into indices[0, 3 * capacity) (pfrepExtractSelective; capacity in triangles,
 /// pfrepMaxTriangles(model) always suffices). scratch: pfrepScratchValues(model) values, shareable

@@ -27,6 +27,7 @@ enum class Result : int {
     BadStructure,       // PFRep: an entry breaks an ordering rule (dependency cycle, degenerate fan, bad count)
     BufferTooSmall,     // a caller-owned output buffer is smaller than the result
     CorruptStream,      // a compressed stream decodes to something impossible (index out of range, overrun)
+    NotLoaded,          // PFRep prefix: the request needs bytes that have not been loaded yet
 };
 
 /// Stable name of a result code, e.g. "Truncated"; "Unknown" for values outside the enum.

@@ -67,6 +67,13 @@ public:
     /// for an index out of range; the reader's error.
     Result readLevel(uint32_t model, uint32_t level, uint8_t* dst, size_t capacity) const;
 
+    /// Reads bytes [offset, offset + size) of buffer view `view` into dst: part of a blob fetched on
+    /// demand, e.g. a growing prefix of a LODBAKE_progressive_fans PFRep blob (openPfrepPrefix /
+    /// pfrepExtendPrefix). Thread-safe like readLevel. Returns Ok; InvalidArgument (view out of
+    /// range, null dst with size > 0); OutOfBounds when the range leaves the view; BadGltf when the
+    /// view's bytes are not in the GLB BIN chunk; the reader's error.
+    Result readBufferView(uint32_t view, uint64_t offset, uint8_t* dst, size_t size) const;
+
     /// Pointer to accessor `accessor`'s first element inside a level's bytes as readLevel wrote them
     /// (`level_bytes`); null when the accessor has no buffer view or lies outside the level's range.
     const uint8_t* accessorData(uint32_t model, uint32_t level, const uint8_t* level_bytes, uint32_t accessor) const;

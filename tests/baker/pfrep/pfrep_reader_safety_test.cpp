@@ -3,6 +3,7 @@
 // outside it; crafted bad offsets, dependency cycles and out-of-range indices give their codes.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstring>
 #include <random>
 
@@ -81,8 +82,8 @@ TEST(PfrepReaderSafetyTest, RandomCorruptionNeverCrashes) {
         std::vector<uint8_t> bad = blob;
         const int flips = 1 + int(rng() % 8);
         for (int f = 0; f < flips; ++f) {
-            // Half of the trials hit the header and offset table, where damage is most structural.
-            const size_t span = trial % 2 ? bad.size() : std::min<size_t>(bad.size(), 64 + 640 * 10 + 2000);
+            // Half of the trials hit the header and block directory, where damage is most structural.
+            const size_t span = trial % 2 ? bad.size() : std::min<size_t>(bad.size(), 64 + 64);
             bad[rng() % span] = uint8_t(rng());
         }
         lodrt::PfrepModel m;
@@ -116,17 +117,15 @@ TEST(PfrepReaderSafetyTest, CraftedDamageGivesItsCode) {
     }
     {
         auto b = blob;
-        set32(b, 4, 2);
+        set32(b, 4, 1); // version 1 (global tables, coarse end last) is no longer read
         EXPECT_EQ(open(b), lodrt::Result::UnsupportedVersion);
     }
     {
         auto b = blob;
         set32(b, 8, 0xfffffff0u); // absurd vertex count: refused before anything is read
         EXPECT_NE(open(b), lodrt::Result::Ok);
-        set32(b, 8, get32(blob, 8) + 100); // the offset table no longer starts where the header says
-        EXPECT_EQ(open(b), lodrt::Result::OutOfBounds);
-        set32(b, 8, get32(blob, 8) + 100000); // sections no longer fit
-        EXPECT_EQ(open(b), lodrt::Result::Truncated);
+        set32(b, 8, get32(blob, 8) + 1000); // the block count no longer matches
+        EXPECT_EQ(open(b), lodrt::Result::BadStructure);
     }
     {
         auto b = blob;
@@ -135,29 +134,40 @@ TEST(PfrepReaderSafetyTest, CraftedDamageGivesItsCode) {
     }
     {
         auto b = blob;
-        set32(b, 60, get32(blob, 60) + 4); // entries section moved
-        EXPECT_EQ(open(b), lodrt::Result::OutOfBounds);
+        set32(b, 60, 1); // reserved field
+        EXPECT_EQ(open(b), lodrt::Result::BadStructure);
+    }
+    {
+        auto b = blob;
+        set32(b, 52, get32(blob, 52) - 1); // the blob announces one byte less than it has
+        EXPECT_EQ(open(b), lodrt::Result::TrailingBytes);
+        set32(b, 52, get32(blob, 52) + 1);
+        EXPECT_EQ(open(b), lodrt::Result::Truncated);
     }
     const uint32_t vertex_count = get32(blob, 8);
     const uint32_t shift = get32(blob, 16);
-    const size_t table = get32(blob, 56);
-    const size_t blocks = (size_t(vertex_count) + (size_t(1) << shift) - 1) >> shift;
+    const size_t blocks = get32(blob, 56);
+    ASSERT_EQ(blocks, (size_t(vertex_count) + (size_t(1) << shift) - 1) >> shift);
     {
         auto b = blob;
-        set32(b, table + 4 * (blocks - 1), 0x7fffffffu); // block base past the stream
-        const lodrt::Result r = open(b);
-        // Either the entry lies outside the stream or the previous one no longer ends where it starts.
-        EXPECT_TRUE(r == lodrt::Result::OutOfBounds || r == lodrt::Result::BadStructure) << lodrt::resultName(r);
-        set32(b, table, 1); // first entry no longer at the start of the stream
-        EXPECT_NE(open(b), lodrt::Result::Ok);
+        set32(b, 64 + 4 * (blocks - 1), get32(blob, 64 + 4 * (blocks - 1)) + 4); // first stored block moved
+        EXPECT_EQ(open(b), lodrt::Result::OutOfBounds);
+        b = blob;
+        set32(b, 64, 0x7fffffffu); // block 0 (stored last) past the blob
+        EXPECT_EQ(open(b), lodrt::Result::OutOfBounds);
     }
-    // Entry 1 rewritten by hand: one neighbour, one dependency on itself (a cycle) or on a
-    // higher rank, or a neighbour past the last vertex.
-    const size_t entries = get32(blob, 60);
-    const size_t rel1 = table + blocks * 4 + 2;
+    {
+        auto b = blob;
+        b[blob.size() - 1] = 1; // padding after block 0's stream
+        EXPECT_EQ(open(b), lodrt::Result::BadStructure);
+    }
+    // Entry 1 (in block 0) rewritten by hand: one neighbour, one dependency on itself (a cycle) or
+    // on a higher rank, or a neighbour past the last vertex.
+    const size_t block0 = get32(blob, 64);
+    const size_t count0 = std::min<size_t>(size_t(1) << shift, vertex_count);
     uint16_t rel;
-    std::memcpy(&rel, blob.data() + rel1, 2);
-    const size_t entry1 = entries + get32(blob, table) + rel;
+    std::memcpy(&rel, blob.data() + block0 + count0 * 10 + 2, 2);
+    const size_t entry1 = block0 + count0 * 12 + rel;
     auto writeEntry = [&](std::vector<uint8_t>& b, uint32_t neighbour_delta, uint32_t dependency_delta) {
         // 2 neighbours, 1 dependency, no originals, widths 20 / 20, then A, the dependency, its mask.
         std::vector<int> bits;

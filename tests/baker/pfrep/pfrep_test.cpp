@@ -546,3 +546,41 @@ TEST_F(PfrepTest, InstanceOutOfReachIsCoarsenedLikeTheVertexPass) {
         }
     }
 }
+
+// The per-model criterion table holds the record's values exactly: a camera path refines every mask
+// bit the same with and without it, and pfrepVertexBounds agrees with the table.
+TEST_F(PfrepTest, CriterionTableDecidesExactlyLikeTheRecords) {
+    LODBAKE_REQUIRE_SHARED_MESHES();
+    ASSERT_NE(rocker_, nullptr);
+    const lodrt::PfrepModel& plain = rocker_->model;
+    lodrt::PfrepModel tabled = plain;
+    std::vector<float> table(lodrt::pfrepCriterionTableFloats(plain));
+    EXPECT_EQ(lodrt::pfrepAttachCriterionTable(&tabled, table.data(), table.size() - 1), lodrt::Result::BufferTooSmall);
+    ASSERT_EQ(lodrt::pfrepAttachCriterionTable(&tabled, table.data(), table.size()), lodrt::Result::Ok);
+    ASSERT_EQ(tabled.criterion_table, table.data());
+    for (uint32_t v = 0; v < plain.vertex_count; v += 97) {
+        lodrt::PfrepVertexBounds b;
+        ASSERT_EQ(lodrt::pfrepVertexBounds(plain, v, &b), lodrt::Result::Ok);
+        EXPECT_EQ(b.position[0], table[size_t(v) * 8]);
+        EXPECT_EQ(b.radius, table[size_t(v) * 8 + 3]);
+        EXPECT_EQ(b.error, table[size_t(v) * 8 + 4]);
+        EXPECT_EQ(b.cone_axis[2], table[size_t(v) * 8 + 7]);
+    }
+    std::vector<uint8_t> a(lodrt::pfrepMaskBytes(plain)), b(a.size());
+    std::vector<uint32_t> scratch(lodrt::pfrepScratchValues(plain));
+    lodrt::pfrepMaskCoarsest(plain, a.data());
+    lodrt::pfrepMaskCoarsest(plain, b.data());
+    size_t total = 0;
+    for (int frame = 0; frame < 60; ++frame) {
+        const float dist = 3.0f - 0.045f * float(frame), dx = 0.02f * float(frame % 17) - 0.15f;
+        lodrt::PfrepView view = rockerView(plain, dist, dx);
+        view.max_changed_bits = frame % 5 == 0 ? 64 : 0;
+        size_t ca = 0, cb = 0;
+        ASSERT_EQ(lodrt::pfrepRefine(plain, view, a.data(), scratch.data(), scratch.size(), &ca), lodrt::Result::Ok);
+        ASSERT_EQ(lodrt::pfrepRefine(tabled, view, b.data(), scratch.data(), scratch.size(), &cb), lodrt::Result::Ok);
+        ASSERT_EQ(ca, cb) << "frame " << frame;
+        ASSERT_EQ(a, b) << "frame " << frame;
+        total += ca;
+    }
+    EXPECT_GT(total, 100u); // the path did refine
+}
