@@ -1,18 +1,17 @@
-// libFuzzer target for the PFRep reader (lodrt/pfrep.h): open, then every extraction and refinement
-// entry point on whatever opened. Build with -DLODRT_BUILD_FUZZERS=ON and Clang; run as
-// `lodrt_fuzz_pfrep CORPUS_DIR` (blobs written by `lodbake pfrep` make a good seed corpus).
+// libFuzzer target for the PFRep reader (lodrt/pfrep.h): open (whole, and as a prefix that then
+// grows to the whole input), then every extraction and refinement entry point on whatever opened.
+// Build with -DLODRT_BUILD_FUZZERS=ON and Clang; run as `lodrt_fuzz_pfrep CORPUS_DIR` (blobs written by `lodbake pfrep` make a good seed corpus).
 #include <cstddef>
 #include <cstdint>
 #include <vector>
 
 #include "lodrt/pfrep.h"
 
-extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
-    // The reader copies nothing; a copy of exactly `size` bytes lets ASan see any read past the end.
-    std::vector<uint8_t> blob(data, data + size);
-    lodrt::PfrepModel model;
-    if (lodrt::openPfrep(blob.data(), blob.size(), &model) != lodrt::Result::Ok) return 0;
-    if (model.vertex_count > (1u << 20) || model.level0_triangles > (1u << 22)) return 0;
+namespace {
+
+// Every extraction and refinement entry point on an opened (whole or prefix) model.
+void exercise(const lodrt::PfrepModel& model) {
+    if (model.vertex_count > (1u << 20) || model.level0_triangles > (1u << 22)) return;
     std::vector<uint32_t> indices(lodrt::pfrepMaxTriangles(model) * 3 + 3);
     std::vector<uint32_t> fans(lodrt::pfrepMaxFanValues(model) + 4);
     std::vector<float> positions(size_t(model.vertex_count) * 3);
@@ -41,5 +40,23 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     view.cull_hysteresis = 0.2f;
     (void)lodrt::pfrepRefine(model, view, mask.data(), scratch.data(), scratch.size(), &n);
     (void)lodrt::pfrepExtractSelective(model, mask.data(), indices.data(), indices.size() / 3, &n);
+}
+
+} // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+    // The reader copies nothing; a copy of exactly `size` bytes lets ASan see any read past the end.
+    std::vector<uint8_t> blob(data, data + size);
+    lodrt::PfrepModel model;
+    if (lodrt::openPfrep(blob.data(), blob.size(), &model) == lodrt::Result::Ok) exercise(model);
+    // Streaming: a prefix (cut where the last byte says), then the rest arriving in a moved buffer.
+    if (size < 2) return 0;
+    const size_t cut = size_t(uint64_t(size) * data[size - 1] / 255);
+    std::vector<uint8_t> prefix(data, data + cut);
+    lodrt::PfrepModel partial;
+    if (lodrt::openPfrepPrefix(prefix.data(), prefix.size(), &partial) != lodrt::Result::Ok) return 0;
+    exercise(partial);
+    std::vector<uint8_t> whole(data, data + size);
+    if (lodrt::pfrepExtendPrefix(&partial, whole.data(), whole.size()) == lodrt::Result::Ok) exercise(partial);
     return 0;
 }
