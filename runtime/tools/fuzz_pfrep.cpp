@@ -1,6 +1,7 @@
 // libFuzzer target for the PFRep reader (lodrt/pfrep.h): open (whole, and as a prefix that then
 // grows to the whole input), then every extraction and refinement entry point on whatever opened.
-// Build with -DLODRT_BUILD_FUZZERS=ON and Clang; run as `lodrt_fuzz_pfrep CORPUS_DIR` (blobs written by `lodbake pfrep` make a good seed corpus).
+// Build with -DLODRT_BUILD_FUZZERS=ON and Clang; run as `lodrt_fuzz_pfrep CORPUS_DIR` (blobs written
+// by `lodbake pfrep` make a good seed corpus).
 #include <cstddef>
 #include <cstdint>
 #include <vector>
