@@ -416,8 +416,8 @@ int runBake(int argc, char** argv) {
             std::string packs;
             for (size_t i = 0; i < jobs.size(); ++i) packs += (i ? ",\n" : "") + jobReport(jobs[i], results[i]);
             report = "{\n\"totalSeconds\": " + JsonWriter::formatNumber(total_seconds) +
-                     ",\n\"totalCpuSeconds\": " + JsonWriter::formatNumber(total_cpu_seconds) + ",\n\"packs\": [\n" + packs +
-                     "\n]\n}\n";
+                     ",\n\"totalCpuSeconds\": " + JsonWriter::formatNumber(total_cpu_seconds) + ",\n\"packs\": [\n" +
+                     packs + "\n]\n}\n";
         }
         status = writer.add(args.values["--report"], report);
     }

@@ -94,7 +94,8 @@ template <class F> void step(const char* name, F&& f) {
     const double rss0 = statusMiB("VmRSS:");
     const double w0 = now(), p0 = cpuClock(CLOCK_PROCESS_CPUTIME_ID), t0 = cpuClock(CLOCK_THREAD_CPUTIME_ID);
     f();
-    const double w = now() - w0, p = cpuClock(CLOCK_PROCESS_CPUTIME_ID) - p0, t = cpuClock(CLOCK_THREAD_CPUTIME_ID) - t0;
+    const double w = now() - w0, p = cpuClock(CLOCK_PROCESS_CPUTIME_ID) - p0,
+                 t = cpuClock(CLOCK_THREAD_CPUTIME_ID) - t0;
     std::printf("  %-34s wall %7.3f s  cpu %7.3f s  this thread %7.3f s  peak RSS %7.1f MiB (start %7.1f)\n", name, w,
                 p, t, statusMiB("VmHWM:"), rss0);
     std::fflush(stdout);

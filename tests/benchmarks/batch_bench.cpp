@@ -213,7 +213,8 @@ int main(int argc, char** argv) {
         const double speedup = t1.best_seconds / t2.best_seconds;
         std::printf(
             "threads: 1 thread %.2f s, 2 threads %.2f s, speedup %.2fx (bar >= 1.70: %s); packs identical: %s\n",
-            t1.best_seconds, t2.best_seconds, speedup, speedup >= 1.7 ? "met" : "NOT met", differing == 0 ? "yes" : "NO");
+            t1.best_seconds, t2.best_seconds, speedup, speedup >= 1.7 ? "met" : "NOT met",
+            differing == 0 ? "yes" : "NO");
         // On a loaded machine the wall times say more about the other jobs than about ours. CPU time
         // hardly depends on the load: the 2-thread batch cannot finish before its CPU time over 2,
         // nor before its longest pack's critical path, so the speedup an idle machine would show is
@@ -225,9 +226,8 @@ int main(int argc, char** argv) {
                     "(%.0f %% of 2 x wall); longest pack %s, critical path %.2f s; estimated idle 2-thread wall "
                     "%.2f s, speedup %.2fx (bar >= 1.70: %s); load average %.1f before, %.1f after\n",
                     t1.cpu_seconds, 100.0 * t1.cpu_seconds / t1.best_seconds, t2.cpu_seconds,
-                    50.0 * t2.cpu_seconds / t2.best_seconds, longest_pack.c_str(), path, bound,
-                    t1.cpu_seconds / bound, t1.cpu_seconds / bound >= 1.7 ? "met" : "NOT met", load_before,
-                    loadAverage());
+                    50.0 * t2.cpu_seconds / t2.best_seconds, longest_pack.c_str(), path, bound, t1.cpu_seconds / bound,
+                    t1.cpu_seconds / bound >= 1.7 ? "met" : "NOT met", load_before, loadAverage());
         if (differing) ++failures;
     }
 

@@ -49,8 +49,9 @@ struct AssetSlot {
 // Texture levels: LOD0 keeps the sources; level l's textures are sized for the object's projected
 // size at its switch distance. Equal sizes share one resized image (and so one glTF image).
 struct TextureLevels {
-    std::vector<std::vector<ImageSize>> sizes;                                            // per level, per texture
-    std::map<std::pair<size_t, std::pair<uint32_t, uint32_t>>, std::vector<uint8_t>> resized; // (texture, size) -> bytes
+    std::vector<std::vector<ImageSize>> sizes; // per level, per texture
+    std::map<std::pair<size_t, std::pair<uint32_t, uint32_t>>, std::vector<uint8_t>>
+        resized; // (texture, size) -> bytes
 };
 
 Result<TextureLevels> textureLevels(const Mesh& lod0, size_t level_count, const LodMetrics& metrics,
@@ -190,7 +191,7 @@ Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vect
         for (size_t e = 0; e < encoders.size(); ++e) {
             StageTimer timer(hooks, index,
                              encoders[e].extension_name == "LODBAKE_progressive_fans" ? BakeStage::Pfrep
-                                                                                       : BakeStage::Encode);
+                                                                                      : BakeStage::Encode);
             commits[e * level_count + l] = encoders[e].prepare(chain, l, levelMesh(l));
         }
     };
@@ -224,7 +225,8 @@ Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vect
             const auto found = textures->resized.find({t, {size.width, size.height}});
             if (found == textures->resized.end()) continue;
             level_textures[t].bytes = found->second;
-            level_textures[t].name = sources[t].name + "_" + std::to_string(size.width) + "x" + std::to_string(size.height);
+            level_textures[t].name =
+                sources[t].name + "_" + std::to_string(size.width) + "x" + std::to_string(size.height);
         }
     }
     for (size_t e = 0; e < encoders.size(); ++e)
@@ -264,8 +266,9 @@ Result<BakeOutput> bake(std::vector<BakeInput> inputs, const BakeSettings& setti
     if (settings.compact && encoders.empty()) LODBAKE_RETURN_IF_ERROR(checkCompact(description));
 
     std::vector<AssetSlot> slots(inputs.size());
-    LODBAKE_RETURN_IF_ERROR(parallelFor(
-        inputs.size(), 1, [&](size_t i) { slots[i].status = bakeAsset(inputs[i], settings, encoders, slots[i], i, hooks); }));
+    LODBAKE_RETURN_IF_ERROR(parallelFor(inputs.size(), 1, [&](size_t i) {
+        slots[i].status = bakeAsset(inputs[i], settings, encoders, slots[i], i, hooks);
+    }));
     BakeOutput output;
     for (AssetSlot& slot : slots) {
         for (const Diagnostic& d : slot.diagnostics.items()) {

@@ -18,8 +18,7 @@ namespace lodbake {
 
 namespace {
 
-template <typename T>
-void permute(std::vector<T>& stream, const std::vector<uint32_t>& new_of_old) {
+template <typename T> void permute(std::vector<T>& stream, const std::vector<uint32_t>& new_of_old) {
     if (stream.empty()) return;
     std::vector<T> out(stream.size());
     for (size_t v = 0; v < stream.size(); ++v) out[new_of_old[v]] = std::move(stream[v]);

@@ -56,8 +56,9 @@ struct BatchHooks {
 /// Bakes every job (each reads its inputs, bakes them into one pack and stages `output` in
 /// BakeJobResult::staged; nothing is renamed into place here, so an interrupted run leaves no
 /// output), at most options.threads workers. Jobs start largest first (by input bytes), so the
-/// longest one does not start last and leave the other workers idle at the end. Results come back in job order; one failing job does not stop the
-/// others. The caller checks outputs for clashes with inputs and with each other beforehand.
+/// longest one does not start last and leave the other workers idle at the end. Results come back in job order; one
+/// failing job does not stop the others. The caller checks outputs for clashes with inputs and with each other
+/// beforehand.
 std::vector<BakeJobResult> runBakeJobs(const std::vector<BakeJob>& jobs, const BatchOptions& options,
                                        const BatchHooks& hooks);
 
