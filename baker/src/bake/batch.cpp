@@ -4,8 +4,11 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cctype>
 #include <chrono>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <memory>
 #include <mutex>
 
@@ -20,11 +23,29 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-// 0 when the file cannot be stat'ed (the job then fails when it reads it).
-uint64_t inputBytes(const std::string& path) {
+uint64_t fileBytes(const std::filesystem::path& path) {
     std::error_code ec;
     const uintmax_t size = std::filesystem::file_size(path, ec);
     return ec ? 0 : uint64_t(size);
+}
+
+// How much an input weighs when ordering jobs: its size, plus for a `.conf` scan set the sizes of the
+// scans its `bmesh` lines name (the .conf itself is a few lines). Only an estimate: 0 for files that
+// cannot be read (the job then fails when it reads them).
+uint64_t inputBytes(const std::string& path) {
+    const std::filesystem::path p(path);
+    uint64_t bytes = fileBytes(p);
+    std::string extension = p.extension().string();
+    for (char& c : extension) c = char(std::tolower(static_cast<unsigned char>(c)));
+    if (extension != ".conf" || bytes > (1u << 20)) return bytes;
+    std::ifstream in(p);
+    std::string line;
+    while (std::getline(in, line)) {
+        std::istringstream words(line);
+        std::string keyword, scan;
+        if (words >> keyword >> scan && keyword == "bmesh") bytes += fileBytes(p.parent_path() / scan);
+    }
+    return bytes;
 }
 
 double secondsSince(Clock::time_point t) {
@@ -156,8 +177,8 @@ std::vector<BakeJobResult> runBakeJobs(const std::vector<BakeJob>& jobs, const B
     std::vector<BakeJobResult> results(jobs.size());
     std::unique_ptr<ScopedThreadLimit> limit;
     if (options.threads > 0) limit = std::make_unique<ScopedThreadLimit>(options.threads);
-    // Largest first (longest-processing-time order): a worker that becomes free takes the next job
-    // of this list, so the big scans start at once and the small ones fill the gaps at the end. Which
+    // Largest first (longest-processing-time order, by input bytes): a worker that becomes free takes
+    // the next job of this list, so the big scans start at once and the small ones fill the gaps at the end. Which
     // worker bakes a job, and when, never changes its bytes.
     std::vector<uint64_t> bytes(jobs.size(), 0);
     for (size_t j = 0; j < jobs.size(); ++j)
