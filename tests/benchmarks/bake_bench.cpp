@@ -3,11 +3,16 @@
 // meshopt_simplify (Debian libmeshoptimizer, options 0, no error limit) building the same 5 levels
 // from the original on 2 threads, in the same run. Prints both times and the ratio; the bar is ≤ 3.
 //
-// usage: bake_bench [--runs N] [MESH]   (default dragon_poisson.ply from ../shared/meshes)
+// usage: bake_bench [--runs N] [--stages] [MESH]   (default dragon_poisson.ply from ../shared/meshes)
+// --stages: instead, every stage of a bake run on its own in process, at 1 and 2 threads, with its
+// wall time, process and thread CPU time and peak resident size (what each stage costs alone).
 // Not a ctest: these machines are noisy, so the best of N runs of each side is compared.
+
+#include <time.h>
 
 #include <algorithm>
 #include <cfloat>
+#include <fstream>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -23,7 +28,11 @@
 #include "lodbake/config/bake_config.h"
 #include "lodbake/simplify/lod_chain.h"
 #include "lodbake/core/diagnostics.h"
+#include "lodbake/gltf/gltf_io.h"
 #include "lodbake/io/mesh_io.h"
+#include "lodbake/pack/pack.h"
+#include "lodbake/pfrep/pfrep_extension.h"
+#include "lodbake/simplify/mesh_distance.h"
 
 namespace {
 
@@ -57,19 +66,103 @@ double nativeSeconds(const lodbake::Mesh& mesh, const std::vector<double>& ratio
     return now() - start;
 }
 
+double cpuClock(clockid_t id) {
+    timespec ts{};
+    ::clock_gettime(id, &ts);
+    return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
+}
+
+// Resident set size fields of /proc/self/status in MiB ("VmRSS", "VmHWM").
+double statusMiB(const char* field) {
+    std::ifstream in("/proc/self/status");
+    std::string line;
+    while (std::getline(in, line))
+        if (line.rfind(field, 0) == 0) return std::atof(line.c_str() + std::string(field).size() + 1) / 1024.0;
+    return 0;
+}
+
+// Resets the peak resident size to the current one (Linux: write 5 to clear_refs).
+void resetPeak() {
+    std::ofstream out("/proc/self/clear_refs");
+    out << "5";
+}
+
+// One step of the in-process breakdown: wall, process CPU (all threads), CPU of this thread, and
+// the peak resident size reached during the step.
+template <class F> void step(const char* name, F&& f) {
+    resetPeak();
+    const double rss0 = statusMiB("VmRSS:");
+    const double w0 = now(), p0 = cpuClock(CLOCK_PROCESS_CPUTIME_ID), t0 = cpuClock(CLOCK_THREAD_CPUTIME_ID);
+    f();
+    const double w = now() - w0, p = cpuClock(CLOCK_PROCESS_CPUTIME_ID) - p0,
+                 t = cpuClock(CLOCK_THREAD_CPUTIME_ID) - t0;
+    std::printf("  %-34s wall %7.3f s  cpu %7.3f s  this thread %7.3f s  peak RSS %7.1f MiB (start %7.1f)\n", name, w,
+                p, t, statusMiB("VmHWM:"), rss0);
+    std::fflush(stdout);
+}
+
+// Every stage of a bake separately, in process, so that CPU time and memory can be attributed.
+void stageBreakdown(const lodbake::Mesh& input, const lodbake::BakeSettings& settings, size_t threads) {
+    using namespace lodbake;
+    ScopedThreadLimit limit(threads);
+    std::printf("stage breakdown (in process, %zu threads):\n", threads);
+    Diagnostics d;
+    Mesh mesh;
+    step("copy input", [&] { mesh = input; });
+    step("repair", [&] { (void)repairMesh(mesh, RepairOptions{}, "bench", d); });
+    LodChainOptions chain_options;
+    chain_options.ratios = settings.lod_ratios;
+    chain_options.record_collapses = false;
+    chain_options.measure_error = false;
+    Result<LodChain> chain = invalidInput("not built");
+    step("lod chain (no measurement)", [&] { chain = buildLodChain(mesh, chain_options, d); });
+    if (!chain.ok()) return;
+    std::vector<double> ratios{1.0};
+    for (const LodLevel& l : chain->levels) ratios.push_back(l.target_ratio);
+    step("pfrep (LOD0)", [&] { (void)buildPfrepExtension(mesh, ratios, PfrepOptions{}, d); });
+    step("measure: reference BVH + all levels", [&] {
+        Result<DistanceReference> reference = DistanceReference::prepare(mesh);
+        if (!reference.ok()) return;
+        DistanceOptions options;
+        options.sample_count = settings.error_samples;
+        std::vector<const Mesh*> levels;
+        for (const LodLevel& l : chain->levels) levels.push_back(&l.mesh);
+        (void)measureSurfaceDistances(*reference, levels, options);
+    });
+    const PackStreamEncoder valence = valenceStreamEncoder();
+    std::vector<PackLevel> packed(chain->levels.size() + 1);
+    packed[0].mesh = mesh;
+    for (size_t l = 0; l < chain->levels.size(); ++l) packed[l + 1].mesh = chain->levels[l].mesh;
+    for (size_t l = 0; l < packed.size(); ++l) {
+        const std::string name = "valence level " + std::to_string(l);
+        step(name.c_str(), [&] { (void)valence.encode(*chain, l, packed[l]); });
+    }
+    PackDescription description;
+    PackAsset asset;
+    asset.name = "bench";
+    asset.levels = std::move(packed);
+    const LodMetrics metrics = lodMetrics(mesh, *chain, ScreenParams{}, settings.hysteresis);
+    asset.screen_coverage = msftScreenCoverage(metrics);
+    description.assets.push_back(std::move(asset));
+    step("pack writing (writePackGlb)", [&] { (void)writePackGlb(std::move(description)); });
+}
+
 } // namespace
 
 int main(int argc, char** argv) {
     std::string mesh_path = std::string(LODBAKE_BENCH_MESHES_DIR) + "/dragon_poisson.ply";
     int runs = 3;
+    bool stages_only = false;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
         if (a == "--runs" && i + 1 < argc) {
             runs = std::max(1, std::atoi(argv[++i]));
+        } else if (a == "--stages") {
+            stages_only = true;
         } else if (!a.empty() && a[0] != '-') {
             mesh_path = a;
         } else {
-            std::fprintf(stderr, "usage: bake_bench [--runs N] [MESH]\n");
+            std::fprintf(stderr, "usage: bake_bench [--runs N] [--stages] [MESH]\n");
             return 2;
         }
     }
@@ -91,6 +184,11 @@ int main(int argc, char** argv) {
     for (double r : settings.lod_ratios) std::printf(" %g", r);
     std::printf("\n");
 
+    if (stages_only) {
+        stageBreakdown(mesh, settings, 1);
+        stageBreakdown(mesh, settings, 2);
+        return 0;
+    }
     const std::string out = std::string(LODBAKE_BENCH_OUT_DIR) + "/bake_bench.glb";
     const std::string command = shellQuote(LODBAKE_BENCH_CLI) + " bake " + shellQuote(mesh_path) + " --preset " +
                                 shellQuote(preset) + " --threads 2 -o " + shellQuote(out) + " > /dev/null 2>&1";

@@ -2,11 +2,10 @@
 // Diagnostics), and everything is serialised in input order on one thread (STYLE.md §7).
 #include "lodbake/bake/bake.h"
 
+#include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <map>
-#if defined(__GLIBC__)
-#include <malloc.h>
-#endif
 #include <memory>
 #include <set>
 
@@ -15,6 +14,7 @@
 #include "lodbake/core/json_writer.h"
 #include "lodbake/gltf/gltf_io.h"
 #include "lodbake/simplify/lod_chain.h"
+#include "lodbake/simplify/mesh_distance.h"
 
 namespace lodbake {
 
@@ -39,17 +39,6 @@ std::vector<bool> srgbTextures(const Mesh& mesh) {
     return srgb;
 }
 
-// Between stages, the large arrays of the stage just finished are free but glibc keeps most of them
-// (its heap is not returned to the system while fragmented, and freeing a large block raises its
-// mmap threshold, so the next stage's arrays come from the heap too): without this the resident
-// size of the next stage adds to that of the last one. Releasing the free pages keeps the peak at
-// the largest single stage.
-void releaseFreeMemory() {
-#if defined(__GLIBC__)
-    malloc_trim(0);
-#endif
-}
-
 struct AssetSlot {
     Status status = Status::okStatus();
     Diagnostics diagnostics;
@@ -57,6 +46,98 @@ struct AssetSlot {
     BakeAssetReport report;
 };
 
+// Texture levels: LOD0 keeps the sources; level l's textures are sized for the object's projected
+// size at its switch distance. Equal sizes share one resized image (and so one glTF image).
+struct TextureLevels {
+    std::vector<std::vector<ImageSize>> sizes; // per level, per texture
+    std::map<std::pair<size_t, std::pair<uint32_t, uint32_t>>, std::vector<uint8_t>>
+        resized; // (texture, size) -> bytes
+};
+
+Result<TextureLevels> textureLevels(const Mesh& lod0, size_t level_count, const LodMetrics& metrics,
+                                    const BakeSettings& settings, const std::string& name, Diagnostics& diagnostics) {
+    TextureLevels out;
+    const std::vector<Texture>& sources = lod0.textures;
+    const std::vector<bool> srgb = srgbTextures(lod0);
+    std::vector<ImageSize> source_sizes(sources.size());
+    std::vector<bool> resizable(sources.size(), false);
+    for (size_t t = 0; t < sources.size(); ++t) {
+        Result<ImageSize> size = probeImageSize(sources[t].bytes, name + ": texture " + std::to_string(t));
+        if (size.ok()) {
+            source_sizes[t] = *size;
+            resizable[t] = settings.textures.enabled;
+        } else if (!sources[t].bytes.empty()) {
+            diagnostics.warn(size.status().message() + "; kept as is in every level");
+        }
+    }
+    out.sizes.assign(level_count, std::vector<ImageSize>(sources.size()));
+    for (size_t l = 0; l < level_count; ++l)
+        for (size_t t = 0; t < sources.size(); ++t) {
+            out.sizes[l][t] = source_sizes[t];
+            if (l == 0 || !resizable[t]) continue;
+            const double target =
+                metrics.levels[l].screen_coverage * settings.viewport_height_px * settings.textures.texels_per_pixel;
+            out.sizes[l][t] =
+                levelTextureSize(source_sizes[t], target, settings.textures.min_size_px, settings.textures.max_size_px);
+            if (out.sizes[l][t].width != source_sizes[t].width || out.sizes[l][t].height != source_sizes[t].height)
+                out.resized[{t, {out.sizes[l][t].width, out.sizes[l][t].height}}];
+        }
+    // One job per texture: decode and linearise once, then every size it needs (a halving chain).
+    std::vector<std::vector<ImageSize>> wanted(sources.size());
+    for (const auto& entry : out.resized)
+        wanted[entry.first.first].push_back({entry.first.second.first, entry.first.second.second});
+    std::vector<Result<std::vector<std::vector<uint8_t>>>> job_results(
+        sources.size(), Result<std::vector<std::vector<uint8_t>>>(std::vector<std::vector<uint8_t>>()));
+    LODBAKE_RETURN_IF_ERROR(parallelFor(sources.size(), 1, [&](size_t t) {
+        if (wanted[t].empty()) return;
+        TextureResizeOptions options;
+        options.is_srgb = srgb[t];
+        job_results[t] =
+            resizeEncodedImageLevels(sources[t].bytes, name + ": texture " + std::to_string(t), wanted[t], options);
+    }));
+    for (size_t t = 0; t < sources.size(); ++t) {
+        if (!job_results[t].ok()) return job_results[t].status();
+        for (size_t k = 0; k < wanted[t].size(); ++k)
+            out.resized[{t, {wanted[t][k].width, wanted[t][k].height}}] = std::move(job_results[t].value()[k]);
+    }
+    return out;
+}
+
+// Measures every level against LOD0 (one level at a time, each in parallel inside, so only one
+// level's BVH and samples exist at once) and derives the switch distances as buildLodChain does
+// when it measures: from the measured Hausdorff error, else the quadric estimate, non-decreasing.
+void measureLevels(const Mesh& lod0, LodChain& chain, const LodChainOptions& options, Diagnostics& diagnostics) {
+    Result<DistanceReference> reference = DistanceReference::prepare(lod0);
+    if (!reference.ok()) diagnostics.warn("lod chain: errors not measured: " + reference.status().message());
+    for (size_t i = 0; reference.ok() && i < chain.levels.size(); ++i) {
+        LodLevel& level = chain.levels[i];
+        std::vector<Result<DistanceResult>> measured =
+            measureSurfaceDistances(*reference, {&level.mesh}, options.distance);
+        const Result<DistanceResult>& d = measured.at(0);
+        if (!d.ok()) {
+            diagnostics.warn("lod chain: level ratio " + std::to_string(level.target_ratio) +
+                             ": error not measured: " + d.status().message());
+            continue;
+        }
+        level.has_distance = true;
+        level.distance = *d;
+    }
+    double previous = 0.0;
+    for (LodLevel& level : chain.levels) {
+        const double e = level.has_distance ? level.distance.hausdorff : level.quadric_error;
+        level.switch_distance = std::max(previous, switchDistance(e, options.screen));
+        previous = level.switch_distance;
+        level.screen_coverage = screenCoverage(chain.bounding_radius, level.switch_distance, options.screen);
+    }
+}
+
+// After the chain, the remaining work of an asset is a fixed set of tasks that only read the
+// meshes (STYLE.md §7: each writes its own slot; which thread runs which, and when, changes no
+// byte): the error measurement (then the metrics and texture levels that follow from it), and the
+// stream encoders' prepare steps per level. With 2 threads the PFRep build (one long
+// single-threaded simplification) runs beside the measurement and the valence coding of the levels
+// instead of before them. The commits (cheap; the valence commit renumbers its level) then run in
+// encoder and level order on this thread.
 Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vector<PackStreamEncoder>& encoders,
                  AssetSlot& slot, size_t index, const BakeHooks& hooks) {
     Mesh& mesh = input.mesh;
@@ -67,13 +148,13 @@ Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vect
         StageTimer timer(hooks, index, BakeStage::Repair);
         LODBAKE_ASSIGN_OR_RETURN(RepairReport repair, repairMesh(mesh, RepairOptions{}, input.name, slot.diagnostics));
         slot.report.repair_unresolved = repair.unresolved;
-        releaseFreeMemory();
     }
     const ScreenParams screen = screenParams(settings);
     LodChainOptions chain_options;
     chain_options.ratios = settings.lod_ratios;
     chain_options.screen = screen;
     chain_options.distance.sample_count = settings.error_samples;
+    chain_options.measure_error = false; // measured below, beside the stream encoders
     chain_options.record_collapses = false;
     for (const PackStreamEncoder& encoder : encoders) chain_options.record_collapses |= encoder.needs_collapses;
     StageTimer chain_timer(hooks, index, BakeStage::LodChain);
@@ -81,85 +162,78 @@ Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vect
     if (!chain_result.ok())
         return Status(chain_result.status().code(), input.name + ": " + chain_result.status().message());
     LodChain chain = std::move(chain_result).value();
-    releaseFreeMemory();
-    const LodMetrics metrics = lodMetrics(mesh, chain, screen, settings.hysteresis);
-    slot.report.metrics = metrics;
     chain_timer.finish();
 
+    const size_t level_count = chain.levels.size() + 1;
+    auto levelMesh = [&](size_t l) -> const Mesh& { return l == 0 ? mesh : chain.levels[l - 1].mesh; };
+    // Task 0 measures (and sizes the textures); task 1 + l runs every encoder's prepare for level l.
+    // LOD0's prepares are the big ones (each holds several times LOD0's size in working memory: the
+    // PFRep build its own simplifier, the valence coder its tables), so they run one after the other
+    // in one task; the measurement and the smaller levels run beside them. Started in this order
+    // from one shared counter: LOD0, the measurement, then the other levels, largest first.
+    const size_t task_count = 1 + level_count;
+    std::vector<Result<PackStreamCommit>> commits(encoders.size() * level_count, PackStreamCommit());
+    Diagnostics measure_diagnostics;
+    LodMetrics metrics;
+    Result<TextureLevels> textures = TextureLevels{};
+    auto runTask = [&](size_t task) {
+        if (task == 0) {
+            {
+                StageTimer timer(hooks, index, BakeStage::Measure);
+                measureLevels(mesh, chain, chain_options, measure_diagnostics);
+                metrics = lodMetrics(mesh, chain, screen, settings.hysteresis);
+            }
+            StageTimer timer(hooks, index, BakeStage::Textures);
+            textures = textureLevels(mesh, level_count, metrics, settings, input.name, measure_diagnostics);
+            return;
+        }
+        const size_t l = task - 1;
+        for (size_t e = 0; e < encoders.size(); ++e) {
+            StageTimer timer(hooks, index,
+                             encoders[e].extension_name == "LODBAKE_progressive_fans" ? BakeStage::Pfrep
+                                                                                      : BakeStage::Encode);
+            commits[e * level_count + l] = encoders[e].prepare(chain, l, levelMesh(l));
+        }
+    };
+    std::vector<size_t> order{1, 0};
+    for (size_t l = 1; l < level_count; ++l) order.push_back(1 + l);
+    std::atomic<size_t> next{0};
+    LODBAKE_RETURN_IF_ERROR(parallelFor(task_count, 1, [&](size_t) { runTask(order[next.fetch_add(1)]); }));
+    for (const Diagnostic& d : measure_diagnostics.items()) {
+        if (d.severity == Severity::Warning)
+            slot.diagnostics.warn(d.message);
+        else
+            slot.diagnostics.note(d.message);
+    }
+    if (!textures.ok()) return textures.status();
+    for (const Result<PackStreamCommit>& commit : commits) LODBAKE_RETURN_IF_ERROR(commit.status());
+
+    slot.report.metrics = metrics;
+    slot.report.texture_sizes = textures->sizes;
     PackAsset& asset = slot.asset;
     asset.name = input.name;
     asset.screen_coverage = msftScreenCoverage(metrics);
     asset.node_extensions.push_back(lodMetricsExtension(metrics));
-    asset.levels.resize(chain.levels.size() + 1);
+    asset.levels.resize(level_count);
     asset.levels[0].mesh = std::move(mesh);
-    for (size_t l = 0; l < chain.levels.size(); ++l) asset.levels[l + 1].mesh = std::move(chain.levels[l].mesh);
-
-    // Texture levels: LOD0 keeps the sources; level l's textures are sized for the object's projected
-    // size at its switch distance. Equal sizes share one resized image (and so one glTF image).
-    StageTimer texture_timer(hooks, index, BakeStage::Textures);
+    for (size_t l = 1; l < level_count; ++l) asset.levels[l].mesh = std::move(chain.levels[l - 1].mesh);
     const std::vector<Texture>& sources = asset.levels[0].mesh.textures;
-    const std::vector<bool> srgb = srgbTextures(asset.levels[0].mesh);
-    std::vector<ImageSize> source_sizes(sources.size());
-    std::vector<bool> resizable(sources.size(), false);
-    for (size_t t = 0; t < sources.size(); ++t) {
-        Result<ImageSize> size = probeImageSize(sources[t].bytes, input.name + ": texture " + std::to_string(t));
-        if (size.ok()) {
-            source_sizes[t] = *size;
-            resizable[t] = settings.textures.enabled;
-        } else if (!sources[t].bytes.empty()) {
-            slot.diagnostics.warn(size.status().message() + "; kept as is in every level");
+    for (size_t l = 1; l < level_count; ++l) {
+        std::vector<Texture>& level_textures = asset.levels[l].mesh.textures;
+        for (size_t t = 0; t < level_textures.size() && t < sources.size(); ++t) {
+            const ImageSize& size = textures->sizes[l][t];
+            const auto found = textures->resized.find({t, {size.width, size.height}});
+            if (found == textures->resized.end()) continue;
+            level_textures[t].bytes = found->second;
+            level_textures[t].name =
+                sources[t].name + "_" + std::to_string(size.width) + "x" + std::to_string(size.height);
         }
     }
-    std::map<std::pair<size_t, std::pair<uint32_t, uint32_t>>, std::vector<uint8_t>> resized;
-    std::vector<std::vector<ImageSize>> sizes(asset.levels.size(), std::vector<ImageSize>(sources.size()));
-    for (size_t l = 0; l < asset.levels.size(); ++l)
-        for (size_t t = 0; t < sources.size(); ++t) {
-            sizes[l][t] = source_sizes[t];
-            if (l == 0 || !resizable[t]) continue;
-            const double target =
-                metrics.levels[l].screen_coverage * settings.viewport_height_px * settings.textures.texels_per_pixel;
-            sizes[l][t] =
-                levelTextureSize(source_sizes[t], target, settings.textures.min_size_px, settings.textures.max_size_px);
-            if (sizes[l][t].width != source_sizes[t].width || sizes[l][t].height != source_sizes[t].height)
-                resized[{t, {sizes[l][t].width, sizes[l][t].height}}];
+    for (size_t e = 0; e < encoders.size(); ++e)
+        for (size_t l = 0; l < level_count; ++l) {
+            const PackStreamCommit& commit = *commits[e * level_count + l];
+            if (commit) LODBAKE_RETURN_IF_ERROR(commit(asset.levels[l]));
         }
-    // One job per texture: decode and linearise once, then every size it needs (a halving chain).
-    std::vector<std::vector<ImageSize>> wanted(sources.size());
-    for (const auto& entry : resized)
-        wanted[entry.first.first].push_back({entry.first.second.first, entry.first.second.second});
-    std::vector<Result<std::vector<std::vector<uint8_t>>>> job_results(
-        sources.size(), Result<std::vector<std::vector<uint8_t>>>(std::vector<std::vector<uint8_t>>()));
-    LODBAKE_RETURN_IF_ERROR(parallelFor(sources.size(), 1, [&](size_t t) {
-        if (wanted[t].empty()) return;
-        TextureResizeOptions options;
-        options.is_srgb = srgb[t];
-        job_results[t] = resizeEncodedImageLevels(sources[t].bytes, input.name + ": texture " + std::to_string(t),
-                                                  wanted[t], options);
-    }));
-    for (size_t t = 0; t < sources.size(); ++t) {
-        if (!job_results[t].ok()) return job_results[t].status();
-        for (size_t k = 0; k < wanted[t].size(); ++k)
-            resized[{t, {wanted[t][k].width, wanted[t][k].height}}] = std::move(job_results[t].value()[k]);
-    }
-    for (size_t l = 1; l < asset.levels.size(); ++l) {
-        std::vector<Texture>& textures = asset.levels[l].mesh.textures;
-        for (size_t t = 0; t < textures.size() && t < sources.size(); ++t) {
-            const auto found = resized.find({t, {sizes[l][t].width, sizes[l][t].height}});
-            if (found == resized.end()) continue;
-            textures[t].bytes = found->second;
-            textures[t].name =
-                sources[t].name + "_" + std::to_string(sizes[l][t].width) + "x" + std::to_string(sizes[l][t].height);
-        }
-    }
-    slot.report.texture_sizes = sizes;
-    texture_timer.finish();
-
-    StageTimer encode_timer(hooks, index, BakeStage::Encode);
-    for (const PackStreamEncoder& encoder : encoders) {
-        for (size_t l = 0; l < asset.levels.size(); ++l)
-            LODBAKE_RETURN_IF_ERROR(encoder.encode(chain, l, asset.levels[l]));
-        releaseFreeMemory();
-    }
     return Status::okStatus();
 }
 
@@ -192,8 +266,9 @@ Result<BakeOutput> bake(std::vector<BakeInput> inputs, const BakeSettings& setti
     if (settings.compact && encoders.empty()) LODBAKE_RETURN_IF_ERROR(checkCompact(description));
 
     std::vector<AssetSlot> slots(inputs.size());
-    LODBAKE_RETURN_IF_ERROR(parallelFor(
-        inputs.size(), 1, [&](size_t i) { slots[i].status = bakeAsset(inputs[i], settings, encoders, slots[i], i, hooks); }));
+    LODBAKE_RETURN_IF_ERROR(parallelFor(inputs.size(), 1, [&](size_t i) {
+        slots[i].status = bakeAsset(inputs[i], settings, encoders, slots[i], i, hooks);
+    }));
     BakeOutput output;
     for (AssetSlot& slot : slots) {
         for (const Diagnostic& d : slot.diagnostics.items()) {
@@ -207,7 +282,6 @@ Result<BakeOutput> bake(std::vector<BakeInput> inputs, const BakeSettings& setti
         output.assets.push_back(std::move(slot.report));
     }
     LODBAKE_RETURN_IF_ERROR(checkCompact(description));
-    releaseFreeMemory();
     StageTimer pack_timer(hooks, kWholePack, BakeStage::Pack);
     LODBAKE_ASSIGN_OR_RETURN(output.glb, writePackGlb(std::move(description)));
     return output;

@@ -2,7 +2,13 @@
 // over its inputs and texture jobs. Nothing a job produces depends on which worker ran it or when.
 #include "lodbake/bake/batch.h"
 
+#include <algorithm>
+#include <atomic>
+#include <cctype>
 #include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <memory>
 #include <mutex>
 
@@ -17,6 +23,31 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
+uint64_t fileBytes(const std::filesystem::path& path) {
+    std::error_code ec;
+    const uintmax_t size = std::filesystem::file_size(path, ec);
+    return ec ? 0 : uint64_t(size);
+}
+
+// How much an input weighs when ordering jobs: its size, plus for a `.conf` scan set the sizes of the
+// scans its `bmesh` lines name (the .conf itself is a few lines). Only an estimate: 0 for files that
+// cannot be read (the job then fails when it reads them).
+uint64_t inputBytes(const std::string& path) {
+    const std::filesystem::path p(path);
+    uint64_t bytes = fileBytes(p);
+    std::string extension = p.extension().string();
+    for (char& c : extension) c = char(std::tolower(static_cast<unsigned char>(c)));
+    if (extension != ".conf" || bytes > (1u << 20)) return bytes;
+    std::ifstream in(p);
+    std::string line;
+    while (std::getline(in, line)) {
+        std::istringstream words(line);
+        std::string keyword, scan;
+        if (words >> keyword >> scan && keyword == "bmesh") bytes += fileBytes(p.parent_path() / scan);
+    }
+    return bytes;
+}
+
 double secondsSince(Clock::time_point t) {
     return std::chrono::duration<double>(Clock::now() - t).count();
 }
@@ -25,12 +56,23 @@ void runJob(const BakeJob& job, size_t index, const BatchOptions& options, const
             BakeJobResult& result) {
     const Clock::time_point start = Clock::now();
     std::mutex mutex; // bake() reports the stages of a job's inputs from several workers
-    auto stageDone = [&](size_t input, BakeStage stage, double seconds) {
+    auto stageDone = [&](size_t input, BakeStage stage, const StageTime& time) {
         {
             std::lock_guard<std::mutex> lock(mutex);
-            result.stage_seconds[size_t(stage)] += seconds;
+            StageTime& sum = result.stage_times[size_t(stage)];
+            sum.wall_seconds += time.wall_seconds;
+            sum.cpu_seconds += time.cpu_seconds;
+            sum.thread_cpu_seconds += time.thread_cpu_seconds;
         }
-        if (hooks.stage_done) hooks.stage_done(index, input, stage, seconds);
+        if (hooks.stage_done) hooks.stage_done(index, input, stage, time);
+    };
+    // Stages timed here (not by bake()) run on this thread alone.
+    auto timed = [&](size_t input, BakeStage stage, Clock::time_point wall, double cpu, double thread_cpu) {
+        StageTime time;
+        time.wall_seconds = secondsSince(wall);
+        time.cpu_seconds = processCpuSeconds() - cpu;
+        time.thread_cpu_seconds = threadCpuSeconds() - thread_cpu;
+        stageDone(input, stage, time);
     };
     std::vector<std::string> names;
     for (const std::string& in : job.inputs) names.push_back(inputGroupName(in));
@@ -39,8 +81,9 @@ void runJob(const BakeJob& job, size_t index, const BatchOptions& options, const
     const bool use_cache = !options.cache_dir.empty();
     if (use_cache) {
         const Clock::time_point t = Clock::now();
+        const double cpu = processCpuSeconds(), thread_cpu = threadCpuSeconds();
         Result<CacheLookup> found = cacheLookup(options.cache_dir, job.inputs, names, job.settings);
-        stageDone(kWholePack, BakeStage::Load, secondsSince(t));
+        timed(kWholePack, BakeStage::Load, t, cpu, thread_cpu);
         if (!found.ok()) {
             result.status = found.status();
             return;
@@ -48,9 +91,10 @@ void runJob(const BakeJob& job, size_t index, const BatchOptions& options, const
         lookup = std::move(found).value();
         if (lookup.hit) {
             const Clock::time_point w = Clock::now();
+            const double w_cpu = processCpuSeconds(), w_thread_cpu = threadCpuSeconds();
             result.staged = std::make_unique<AtomicFileWriter>();
             result.status = result.staged->add(job.output, lookup.entry.glb);
-            stageDone(kWholePack, BakeStage::Write, secondsSince(w));
+            timed(kWholePack, BakeStage::Write, w, w_cpu, w_thread_cpu);
             if (!result.status.ok()) return;
             result.cache_hit = true;
             for (const auto& files : lookup.files_read)
@@ -67,8 +111,9 @@ void runJob(const BakeJob& job, size_t index, const BatchOptions& options, const
     std::vector<std::vector<std::string>> files_read;
     for (size_t i = 0; i < job.inputs.size(); ++i) {
         const Clock::time_point t = Clock::now();
+        const double cpu = processCpuSeconds(), thread_cpu = threadCpuSeconds();
         Result<LoadedMesh> loaded = readMesh(job.inputs[i], ReadOptions{}, result.diagnostics);
-        stageDone(i, BakeStage::Load, secondsSince(t));
+        timed(i, BakeStage::Load, t, cpu, thread_cpu);
         if (!loaded.ok()) {
             result.status = loaded.status();
             return;
@@ -91,9 +136,10 @@ void runJob(const BakeJob& job, size_t index, const BatchOptions& options, const
     result.summary = bakeSummaryText(*baked);
     result.pack_bytes = baked->glb.size();
     const Clock::time_point w = Clock::now();
+    const double w_cpu = processCpuSeconds(), w_thread_cpu = threadCpuSeconds();
     result.staged = std::make_unique<AtomicFileWriter>();
     result.status = result.staged->add(job.output, baked->glb);
-    stageDone(kWholePack, BakeStage::Write, secondsSince(w));
+    timed(kWholePack, BakeStage::Write, w, w_cpu, w_thread_cpu);
     if (!result.status.ok()) return;
     if (use_cache) {
         CacheEntry entry;
@@ -131,7 +177,18 @@ std::vector<BakeJobResult> runBakeJobs(const std::vector<BakeJob>& jobs, const B
     std::vector<BakeJobResult> results(jobs.size());
     std::unique_ptr<ScopedThreadLimit> limit;
     if (options.threads > 0) limit = std::make_unique<ScopedThreadLimit>(options.threads);
-    const Status status = parallelFor(jobs.size(), 1, [&](size_t j) {
+    // Largest first (longest-processing-time order, by input bytes): a worker that becomes free takes
+    // the next job of this list, so the big scans start at once and the small ones fill the gaps at the end. Which
+    // worker bakes a job, and when, never changes its bytes.
+    std::vector<uint64_t> bytes(jobs.size(), 0);
+    for (size_t j = 0; j < jobs.size(); ++j)
+        for (const std::string& in : jobs[j].inputs) bytes[j] += inputBytes(in);
+    std::vector<size_t> order(jobs.size());
+    for (size_t j = 0; j < order.size(); ++j) order[j] = j;
+    std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return bytes[a] > bytes[b]; });
+    std::atomic<size_t> next{0};
+    const Status status = parallelFor(jobs.size(), 1, [&](size_t) {
+        const size_t j = order[next.fetch_add(1)];
         runJob(jobs[j], j, options, hooks, results[j]);
         if (hooks.job_done) hooks.job_done(j, results[j]);
     });

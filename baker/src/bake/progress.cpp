@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <ctime>
 
 namespace lodbake {
 
@@ -14,13 +15,31 @@ constexpr double kStageShare[size_t(BakeStage::Count)] = {
     0.05, // Load
     0.15, // Repair
     0.55, // LodChain
-    0.10, // Textures
-    0.10, // Encode
+    0.04, // Measure
+    0.08, // Pfrep
+    0.04, // Textures
+    0.04, // Encode
     0.03, // Pack
     0.02, // Write
 };
 
 } // namespace
+
+double processCpuSeconds() {
+#if defined(CLOCK_PROCESS_CPUTIME_ID)
+    timespec ts{};
+    if (::clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts) == 0) return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
+#endif
+    return double(std::clock()) / CLOCKS_PER_SEC;
+}
+
+double threadCpuSeconds() {
+#if defined(CLOCK_THREAD_CPUTIME_ID)
+    timespec ts{};
+    if (::clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts) == 0) return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
+#endif
+    return 0; // unknown: reported as 0
+}
 
 const char* bakeStageName(BakeStage stage) {
     switch (stage) {
@@ -30,6 +49,10 @@ const char* bakeStageName(BakeStage stage) {
         return "repair";
     case BakeStage::LodChain:
         return "lod_chain";
+    case BakeStage::Measure:
+        return "measure";
+    case BakeStage::Pfrep:
+        return "pfrep";
     case BakeStage::Textures:
         return "textures";
     case BakeStage::Encode:

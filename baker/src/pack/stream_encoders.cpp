@@ -3,6 +3,9 @@
 // here: each adds one PackStreamEncoder to builtinStreamEncoders().
 #include "lodbake/pack/pack.h"
 
+#include <memory>
+#include <utility>
+
 #include "lodbake/pfrep/pfrep_extension.h"
 
 namespace lodbake {
@@ -15,34 +18,49 @@ namespace {
 // LODBAKE_progressive_fans on the full-detail mesh: its PFRep blob and the PFRep level matching each
 // level of the chain (schemas/LODBAKE_progressive_fans).
 PackStreamEncoder progressiveFansEncoder() {
-    PackStreamEncoder encoder;
-    encoder.extension_name = "LODBAKE_progressive_fans";
-    encoder.encode = [](const LodChain& chain, size_t level_index, PackLevel& level) -> Status {
-                if (level_index != 0 || level.mesh.faceCount() == 0) return Status::okStatus();
-                std::vector<double> ratios{1.0};
-                for (const LodLevel& l : chain.levels) ratios.push_back(l.target_ratio);
-                Diagnostics diagnostics; // notes only (e.g. nothing removable); the blob is valid either way
-                LODBAKE_ASSIGN_OR_RETURN(PfrepExtensionObject object,
-                                         buildPfrepExtension(level.mesh, ratios, PfrepOptions{}, diagnostics));
-                PackExtension e;
-                e.name = "LODBAKE_progressive_fans";
-                e.json = std::move(object.json);
-                e.blobs.push_back(std::move(object.blob));
-                e.blob_view_members.push_back(kPfrepExtensionViewMember);
-                // Extra data beside the plain levels, never a replacement for them: a viewer that
-                // ignores it loses nothing, so it is not a stream --compact makes required.
-                e.is_stream = false;
-                level.mesh_extensions.push_back(std::move(e));
+    return makeStreamEncoder(
+        "LODBAKE_progressive_fans",
+        [](const LodChain& chain, size_t level_index, const Mesh& mesh) -> Result<PackStreamCommit> {
+            if (level_index != 0 || mesh.faceCount() == 0) return PackStreamCommit();
+            std::vector<double> ratios{1.0};
+            for (const LodLevel& l : chain.levels) ratios.push_back(l.target_ratio);
+            Diagnostics diagnostics; // notes only (e.g. nothing removable); the blob is valid either way
+            LODBAKE_ASSIGN_OR_RETURN(PfrepExtensionObject object,
+                                     buildPfrepExtension(mesh, ratios, PfrepOptions{}, diagnostics));
+            auto e = std::make_shared<PackExtension>();
+            e->name = "LODBAKE_progressive_fans";
+            e->json = std::move(object.json);
+            e->blobs.push_back(std::move(object.blob));
+            e->blob_view_members.push_back(kPfrepExtensionViewMember);
+            // Extra data beside the plain levels, never a replacement for them: a viewer that
+            // ignores it loses nothing, so it is not a stream --compact makes required.
+            e->is_stream = false;
+            return PackStreamCommit([e](PackLevel& level) {
+                level.mesh_extensions.push_back(std::move(*e));
                 return Status::okStatus();
-            };
-    return encoder;
+            });
+        });
 }
 
 } // namespace
 
+PackStreamEncoder makeStreamEncoder(
+    std::string extension_name,
+    std::function<Result<PackStreamCommit>(const LodChain& chain, size_t level_index, const Mesh& mesh)> prepare) {
+    PackStreamEncoder encoder;
+    encoder.extension_name = std::move(extension_name);
+    encoder.prepare = std::move(prepare);
+    encoder.encode = [prepare = encoder.prepare](const LodChain& chain, size_t level_index,
+                                                 PackLevel& level) -> Status {
+        LODBAKE_ASSIGN_OR_RETURN(PackStreamCommit commit, prepare(chain, level_index, level.mesh));
+        return commit ? commit(level) : Status::okStatus();
+    };
+    return encoder;
+}
+
 std::vector<PackStreamEncoder> builtinStreamEncoders() {
-    // PFRep first: it builds its blob from LOD0 as baked, before the valence encoder renumbers the
-    // levels into its decoded vertex order.
+    // Both prepare from the levels as baked (PFRep from LOD0 before the valence commit renumbers it
+    // into the decoded vertex order); commits run in this order.
     std::vector<PackStreamEncoder> encoders;
     encoders.push_back(progressiveFansEncoder());
     encoders.push_back(valenceStreamEncoder());

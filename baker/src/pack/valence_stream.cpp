@@ -7,6 +7,7 @@
 // and attributes the codec does not code (UVs, colours, tangents) stay valid as plain accessors.
 #include "lodbake/pack/pack.h"
 
+#include <memory>
 #include <string>
 #include <utility>
 
@@ -17,8 +18,7 @@ namespace lodbake {
 
 namespace {
 
-template <typename T>
-void permute(std::vector<T>& stream, const std::vector<uint32_t>& new_of_old) {
+template <typename T> void permute(std::vector<T>& stream, const std::vector<uint32_t>& new_of_old) {
     if (stream.empty()) return;
     std::vector<T> out(stream.size());
     for (size_t v = 0; v < stream.size(); ++v) out[new_of_old[v]] = std::move(stream[v]);
@@ -50,9 +50,10 @@ size_t primitiveCount(const Mesh& mesh) {
     return n;
 }
 
-Status encodeLevel(const ValenceStreamOptions& options, size_t level_index, PackLevel& level) {
-    Mesh& mesh = level.mesh;
-    if (primitiveCount(mesh) != 1) return Status::okStatus();
+// The codec's work for one level (read-only): the stream, checked by decoding it, and the
+// renumbering that its commit applies to the level.
+Result<PackStreamCommit> prepareLevel(const ValenceStreamOptions& options, size_t level_index, const Mesh& mesh) {
+    if (primitiveCount(mesh) != 1) return PackStreamCommit();
     const std::string where = "level " + std::to_string(level_index) + ": LODBAKE_valence_compression";
     codec::ValenceEncodeOptions encode_options;
     encode_options.position_bits = options.position_bits;
@@ -67,51 +68,63 @@ Status encodeLevel(const ValenceStreamOptions& options, size_t level_index, Pack
     if (decoded->vertexCount() != mesh.vertexCount() || encoded->new_vertex_of.size() != mesh.vertexCount() ||
         !sameTriangles(mesh, *encoded, decoded->indices))
         return internalError(where + ": the decoded triangles differ from the level's");
+    struct Prepared {
+        std::vector<uint32_t> new_vertex_of;
+        std::vector<uint32_t> indices; // the decoder's
+        std::vector<uint8_t> bytes;
+    };
+    auto prepared = std::make_shared<Prepared>();
+    prepared->new_vertex_of = std::move(encoded->new_vertex_of);
+    prepared->indices = std::move(decoded->indices);
+    prepared->bytes = std::move(encoded->bytes);
+    const size_t vertex_count = mesh.vertexCount();
+    return PackStreamCommit([options, prepared, vertex_count, where](PackLevel& level) -> Status {
+        Mesh& m = level.mesh;
+        if (m.vertexCount() != vertex_count) return internalError(where + ": the level changed after it was coded");
+        const std::vector<uint32_t>& new_vertex_of = prepared->new_vertex_of;
+        permute(m.positions, new_vertex_of);
+        permute(m.normals, new_vertex_of);
+        permute(m.tangents, new_vertex_of);
+        for (std::vector<Vec2f>& uv : m.uvs) permute(uv, new_vertex_of);
+        permute(m.colors, new_vertex_of);
+        m.indices = std::move(prepared->indices);
+        // The single non-empty sub-mesh covers every index (empty ones before it start at 0, after it at the end).
+        uint32_t offset = 0;
+        for (SubMesh& s : m.submeshes) {
+            s.first_index = offset;
+            if (s.index_count > 0) s.index_count = uint32_t(m.indices.size());
+            offset += s.index_count;
+        }
 
-    permute(mesh.positions, encoded->new_vertex_of);
-    permute(mesh.normals, encoded->new_vertex_of);
-    permute(mesh.tangents, encoded->new_vertex_of);
-    for (std::vector<Vec2f>& uv : mesh.uvs) permute(uv, encoded->new_vertex_of);
-    permute(mesh.colors, encoded->new_vertex_of);
-    mesh.indices = std::move(decoded->indices);
-    // The single non-empty sub-mesh covers every index (empty ones before it start at 0, after it at the end).
-    uint32_t offset = 0;
-    for (SubMesh& s : mesh.submeshes) {
-        s.first_index = offset;
-        if (s.index_count > 0) s.index_count = uint32_t(mesh.indices.size());
-        offset += s.index_count;
-    }
-
-    const bool has_normals = mesh.hasNormals();
-    JsonWriter j(0);
-    j.beginObject();
-    j.key("attributes").beginObject();
-    if (has_normals) j.field("NORMAL", uint64_t(1));
-    j.field("POSITION", uint64_t(0));
-    j.endObject();
-    if (has_normals) j.field("normalBits", uint64_t(options.normal_bits));
-    j.field("positionBits", uint64_t(options.position_bits));
-    j.endObject();
-    PackExtension e;
-    e.name = "LODBAKE_valence_compression";
-    e.json = j.str();
-    e.blobs.push_back(std::move(encoded->bytes));
-    e.blob_view_members.push_back("bufferView");
-    e.is_stream = true;
-    level.primitive_extensions.assign(1, {});
-    level.primitive_extensions[0].push_back(std::move(e));
-    return Status::okStatus();
+        const bool has_normals = m.hasNormals();
+        JsonWriter j(0);
+        j.beginObject();
+        j.key("attributes").beginObject();
+        if (has_normals) j.field("NORMAL", uint64_t(1));
+        j.field("POSITION", uint64_t(0));
+        j.endObject();
+        if (has_normals) j.field("normalBits", uint64_t(options.normal_bits));
+        j.field("positionBits", uint64_t(options.position_bits));
+        j.endObject();
+        PackExtension e;
+        e.name = "LODBAKE_valence_compression";
+        e.json = j.str();
+        e.blobs.push_back(std::move(prepared->bytes));
+        e.blob_view_members.push_back("bufferView");
+        e.is_stream = true;
+        level.primitive_extensions.assign(1, {});
+        level.primitive_extensions[0].push_back(std::move(e));
+        return Status::okStatus();
+    });
 }
 
 } // namespace
 
 PackStreamEncoder valenceStreamEncoder(const ValenceStreamOptions& options) {
-    PackStreamEncoder encoder;
-    encoder.extension_name = "LODBAKE_valence_compression";
-    encoder.encode = [options](const LodChain&, size_t level_index, PackLevel& level) {
-        return encodeLevel(options, level_index, level);
-    };
-    return encoder;
+    return makeStreamEncoder("LODBAKE_valence_compression",
+                             [options](const LodChain&, size_t level_index, const Mesh& mesh) {
+                                 return prepareLevel(options, level_index, mesh);
+                             });
 }
 
 } // namespace lodbake

@@ -40,7 +40,7 @@ struct BakeJobResult {
     std::string report_json;             // bakeReportJson of the pack
     std::string summary;                 // bakeSummaryText of the pack
     uint64_t pack_bytes = 0;
-    double stage_seconds[size_t(BakeStage::Count)] = {}; // summed over the job's inputs
+    StageTime stage_times[size_t(BakeStage::Count)] = {}; // summed over the job's inputs
     double wall_seconds = 0;
     /// The pack, written to its temporary but not yet renamed into place (null on failure): the
     /// caller commits it (after staging its own report and depfile), or drops it to discard the pack.
@@ -49,14 +49,16 @@ struct BakeJobResult {
 
 /// Observers of runBakeJobs, called from worker threads (the callee synchronises).
 struct BatchHooks {
-    std::function<void(size_t job, size_t input, BakeStage stage, double seconds)> stage_done;
+    std::function<void(size_t job, size_t input, BakeStage stage, const StageTime& time)> stage_done;
     std::function<void(size_t job, const BakeJobResult& result)> job_done;
 };
 
 /// Bakes every job (each reads its inputs, bakes them into one pack and stages `output` in
 /// BakeJobResult::staged; nothing is renamed into place here, so an interrupted run leaves no
-/// output), at most options.threads workers. Results come back in job order; one failing job does not stop the
-/// others. The caller checks outputs for clashes with inputs and with each other beforehand.
+/// output), at most options.threads workers. Jobs start largest first (by input bytes), so the
+/// longest one does not start last and leave the other workers idle at the end. Results come back in job order; one
+/// failing job does not stop the others. The caller checks outputs for clashes with inputs and with each other
+/// beforehand.
 std::vector<BakeJobResult> runBakeJobs(const std::vector<BakeJob>& jobs, const BatchOptions& options,
                                        const BatchHooks& hooks);
 

@@ -11,37 +11,59 @@ namespace lodbake {
 enum class BakeStage {
     Load,     // reading the input files (batch runner)
     Repair,   // repairMesh
-    LodChain, // simplification and error measurement of every level
+    LodChain, // simplification of every level
+    Measure,  // error measurement of every level against LOD0 (switch distances)
+    Pfrep,    // the LODBAKE_progressive_fans blob of LOD0 (its own half-edge simplification)
     Textures, // texture levels
-    Encode,   // compressed streams (PFRep, valence, ...)
+    Encode,   // compressed level streams (LODBAKE_valence_compression)
     Pack,     // GLB serialisation of the whole pack
     Write,    // atomic write of the outputs (batch runner)
     Count
 };
 
-/// Stable lower-case name ("load", "repair", "lod_chain", "textures", "encode", "pack", "write").
+/// Stable lower-case name ("load", "repair", "lod_chain", "measure", "pfrep", "textures", "encode",
+/// "pack", "write").
 const char* bakeStageName(BakeStage stage);
 
 /// Sentinel input index for stages that concern the whole pack (Pack, Write).
 constexpr size_t kWholePack = size_t(-1);
 
-/// Observers of bake(). Called from worker threads, concurrently: the callee synchronises.
-struct BakeHooks {
-    /// `stage` of input `input` (or kWholePack) finished after `seconds` of wall time.
-    std::function<void(size_t input, BakeStage stage, double seconds)> stage_done;
+/// CPU seconds used so far by the whole process (all threads) and by the calling thread.
+double processCpuSeconds();
+double threadCpuSeconds();
+
+/// What one stage cost. Stages of one input run one after the other except Measure, Textures and
+/// Encode, which run beside Pfrep (docs/bake.md); inputs of a pack and packs of a batch run
+/// concurrently. So `cpu_seconds` (the whole process's CPU time during the stage) is the stage's own
+/// cost only when nothing else runs; `thread_cpu_seconds` (CPU time of the thread that ran the stage)
+/// is exact for single-threaded stages (Pfrep, Encode, LodChain) and a lower bound otherwise.
+struct StageTime {
+    double wall_seconds = 0;
+    double cpu_seconds = 0;
+    double thread_cpu_seconds = 0;
 };
 
-/// Reports a stage's wall time to the hooks when it goes out of scope (or at finish()).
+/// Observers of bake(). Called from worker threads, concurrently: the callee synchronises.
+struct BakeHooks {
+    /// `stage` of input `input` (or kWholePack) finished.
+    std::function<void(size_t input, BakeStage stage, const StageTime& time)> stage_done;
+};
+
+/// Reports a stage's wall and CPU time to the hooks when it goes out of scope (or at finish()).
 class StageTimer {
 public:
     StageTimer(const BakeHooks& hooks, size_t input, BakeStage stage)
-        : hooks_(hooks), input_(input), stage_(stage), start_(std::chrono::steady_clock::now()) {}
+        : hooks_(hooks), input_(input), stage_(stage), start_(std::chrono::steady_clock::now()),
+          cpu_start_(processCpuSeconds()), thread_cpu_start_(threadCpuSeconds()) {}
     ~StageTimer() { finish(); }
     void finish() {
         if (done_ || !hooks_.stage_done) return;
         done_ = true;
-        hooks_.stage_done(input_, stage_,
-                          std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count());
+        StageTime time;
+        time.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+        time.cpu_seconds = processCpuSeconds() - cpu_start_;
+        time.thread_cpu_seconds = threadCpuSeconds() - thread_cpu_start_;
+        hooks_.stage_done(input_, stage_, time);
     }
 
 private:
@@ -49,6 +71,8 @@ private:
     size_t input_;
     BakeStage stage_;
     std::chrono::steady_clock::time_point start_;
+    double cpu_start_;
+    double thread_cpu_start_;
     bool done_ = false;
 };
 

@@ -82,12 +82,27 @@ PackExtension lodMetricsExtension(const LodMetrics& metrics);
 /// level i+1's switch distance; the last level's value is 0 (never culled). Non-increasing.
 std::vector<double> msftScreenCoverage(const LodMetrics& metrics);
 
+/// Writes a prepared stream into its level (attaches the extension; may renumber the level's mesh).
+/// Empty when the encoder has nothing to add to that level.
+using PackStreamCommit = std::function<Status(PackLevel& level)>;
+
 /// A compressed-stream encoder: adds its extension to level `level_index` of an asset.
+///
+/// Two steps, so that the costly one can run while other stages still read the meshes: `prepare`
+/// only reads `mesh` (the level as baked, before any encoder's commit; it must stay unchanged until
+/// prepare returns) and does all the coding; the commit it returns is cheap and runs later, one
+/// level and one encoder at a time, in encoder order. `encode` is prepare followed by its commit.
 struct PackStreamEncoder {
     std::string extension_name;
     bool needs_collapses = false; // reads chain.sequence (the chain then records its collapses)
+    std::function<Result<PackStreamCommit>(const LodChain& chain, size_t level_index, const Mesh& mesh)> prepare;
     std::function<Status(const LodChain& chain, size_t level_index, PackLevel& level)> encode;
 };
+
+/// An encoder whose `encode` is `prepare` followed by the commit it returns.
+PackStreamEncoder makeStreamEncoder(
+    std::string extension_name,
+    std::function<Result<PackStreamCommit>(const LodChain& chain, size_t level_index, const Mesh& mesh)> prepare);
 
 /// Quantization of the LODBAKE_valence_compression streams. The defaults match gltfpack's default
 /// quantization (14-bit positions, 8-bit normals), so pack sizes compare like for like.

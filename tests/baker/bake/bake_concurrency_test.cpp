@@ -1,0 +1,125 @@
+// The bake's concurrent phase (docs/bake.md, "Concurrency"): stream encoders in two steps, the same
+// bytes for any thread count, and per-stage CPU accounting in the hooks.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <mutex>
+#include <set>
+#include <vector>
+
+#include "lodbake/bake/bake.h"
+#include "lodbake/bake/stages.h"
+#include "lodbake/core/diagnostics.h"
+#include "lodbake/pack/pack.h"
+
+namespace {
+
+using namespace lodbake;
+
+// A bumpy (n x n)-cell grid with normals: every level of a chain differs from the last.
+Mesh bumpyGrid(int n) {
+    Mesh mesh;
+    for (int y = 0; y <= n; ++y)
+        for (int x = 0; x <= n; ++x) {
+            const float z = 0.05f * std::sin(0.7f * float(x)) * std::cos(0.45f * float(y));
+            mesh.positions.push_back({float(x) / float(n), float(y) / float(n), z});
+            mesh.normals.push_back({0, 0, 1});
+        }
+    for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x) {
+            const uint32_t a = uint32_t(y * (n + 1) + x), b = a + 1, c = a + uint32_t(n + 1), d = c + 1;
+            mesh.indices.insert(mesh.indices.end(), {a, b, d, a, d, c});
+        }
+    return mesh;
+}
+
+bool sameLevel(const PackLevel& a, const PackLevel& b) {
+    if (a.mesh.indices != b.mesh.indices || a.mesh.positions.size() != b.mesh.positions.size()) return false;
+    for (size_t v = 0; v < a.mesh.positions.size(); ++v)
+        if (!(a.mesh.positions[v] == b.mesh.positions[v])) return false;
+    auto same = [](const PackExtension& x, const PackExtension& y) {
+        return x.name == y.name && x.json == y.json && x.blobs == y.blobs && x.is_stream == y.is_stream;
+    };
+    if (a.mesh_extensions.size() != b.mesh_extensions.size() ||
+        a.primitive_extensions.size() != b.primitive_extensions.size())
+        return false;
+    for (size_t i = 0; i < a.mesh_extensions.size(); ++i)
+        if (!same(a.mesh_extensions[i], b.mesh_extensions[i])) return false;
+    for (size_t p = 0; p < a.primitive_extensions.size(); ++p) {
+        if (a.primitive_extensions[p].size() != b.primitive_extensions[p].size()) return false;
+        for (size_t i = 0; i < a.primitive_extensions[p].size(); ++i)
+            if (!same(a.primitive_extensions[p][i], b.primitive_extensions[p][i])) return false;
+    }
+    return true;
+}
+
+TEST(StreamEncoderTest, PrepareThenCommitIsEncode) {
+    LodChain chain;
+    chain.levels.resize(2);
+    chain.levels[0].target_ratio = 0.5;
+    chain.levels[1].target_ratio = 0.1;
+    for (const PackStreamEncoder& encoder : builtinStreamEncoders()) {
+        SCOPED_TRACE(encoder.extension_name);
+        ASSERT_TRUE(encoder.prepare && encoder.encode);
+        PackLevel encoded, committed;
+        encoded.mesh = committed.mesh = bumpyGrid(12);
+        ASSERT_TRUE(encoder.encode(chain, 0, encoded).ok());
+        Result<PackStreamCommit> commit = encoder.prepare(chain, 0, committed.mesh);
+        ASSERT_TRUE(commit.ok()) << commit.status().message();
+        ASSERT_TRUE(bool(*commit)); // both encoders code LOD0 of a one-primitive mesh
+        ASSERT_TRUE((*commit)(committed).ok());
+        EXPECT_TRUE(sameLevel(encoded, committed));
+        EXPECT_FALSE(encoded.mesh_extensions.empty() && encoded.primitive_extensions.empty());
+    }
+}
+
+TEST(StreamEncoderTest, PrepareLeavesTheMeshAlone) {
+    const Mesh original = bumpyGrid(8);
+    for (const PackStreamEncoder& encoder : builtinStreamEncoders()) {
+        Mesh mesh = original;
+        ASSERT_TRUE(encoder.prepare(LodChain{}, 0, mesh).ok());
+        EXPECT_EQ(mesh.indices, original.indices) << encoder.extension_name;
+    }
+}
+
+TEST(BakeConcurrencyTest, SameBytesForOneAndTwoThreadsAndEveryStageTimed) {
+    std::vector<std::vector<uint8_t>> packs;
+    for (uint32_t threads : {1u, 2u, 4u}) {
+        BakeSettings settings;
+        settings.threads = threads;
+        settings.lod_ratios = {0.5, 0.2, 0.05};
+        settings.error_samples = 5000;
+        std::vector<BakeInput> inputs{{"a", bumpyGrid(40)}, {"b", bumpyGrid(24)}};
+        std::mutex mutex;
+        std::set<BakeStage> seen;
+        bool cpu_consistent = true;
+        BakeHooks hooks;
+        hooks.stage_done = [&](size_t, BakeStage stage, const StageTime& time) {
+            std::lock_guard<std::mutex> lock(mutex);
+            seen.insert(stage);
+            // The process's CPU time includes that of the thread that ran the stage (clock ticks aside).
+            cpu_consistent = cpu_consistent && time.wall_seconds >= 0 && time.thread_cpu_seconds >= 0 &&
+                             time.thread_cpu_seconds <= time.cpu_seconds + 0.02;
+        };
+        Diagnostics diagnostics;
+        Result<BakeOutput> out = bake(std::move(inputs), settings, diagnostics, hooks);
+        ASSERT_TRUE(out.ok()) << out.status().message();
+        ASSERT_EQ(out->assets.size(), 2u);
+        for (const BakeAssetReport& a : out->assets) {
+            ASSERT_EQ(a.metrics.levels.size(), 4u);
+            for (size_t l = 1; l < 4; ++l) {
+                EXPECT_GT(a.metrics.levels[l].hausdorff_error, 0.0);
+                EXPECT_GE(a.metrics.levels[l].switch_distance, a.metrics.levels[l - 1].switch_distance);
+            }
+        }
+        for (BakeStage stage : {BakeStage::Repair, BakeStage::LodChain, BakeStage::Measure, BakeStage::Pfrep,
+                                BakeStage::Textures, BakeStage::Encode, BakeStage::Pack})
+            EXPECT_TRUE(seen.count(stage)) << bakeStageName(stage);
+        EXPECT_TRUE(cpu_consistent);
+        packs.push_back(std::move(out->glb));
+    }
+    EXPECT_EQ(packs[0], packs[1]);
+    EXPECT_EQ(packs[0], packs[2]);
+}
+
+} // namespace
