@@ -253,6 +253,7 @@ int runBake(int argc, char** argv) {
         return code;
     if (args.flags.count("--help")) {
         std::fputs(kBakeHelp, stdout);
+        std::fputs(kReaderLimitHelp, stdout);
         return kExitOk;
     }
     const bool quiet = args.flags.count("--quiet") > 0;
@@ -370,6 +371,7 @@ int runBake(int argc, char** argv) {
     installTempFileSignalCleanup();
     BatchOptions options;
     options.threads = overrides.has_threads ? overrides.threads : base.threads;
+    options.read = args.read;
     if (args.values.count("--cache-dir")) options.cache_dir = args.values["--cache-dir"];
     ProgressPrinter printer(jobs, quiet);
     BatchHooks hooks;

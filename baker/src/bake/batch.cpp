@@ -112,7 +112,7 @@ void runJob(const BakeJob& job, size_t index, const BatchOptions& options, const
     for (size_t i = 0; i < job.inputs.size(); ++i) {
         const Clock::time_point t = Clock::now();
         const double cpu = processCpuSeconds(), thread_cpu = threadCpuSeconds();
-        Result<LoadedMesh> loaded = readMesh(job.inputs[i], ReadOptions{}, result.diagnostics);
+        Result<LoadedMesh> loaded = readMesh(job.inputs[i], options.read, result.diagnostics);
         timed(i, BakeStage::Load, t, cpu, thread_cpu);
         if (!loaded.ok()) {
             result.status = loaded.status();

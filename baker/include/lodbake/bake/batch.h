@@ -16,6 +16,7 @@
 #include "lodbake/core/diagnostics.h"
 #include "lodbake/core/file_io.h"
 #include "lodbake/core/status.h"
+#include "lodbake/io/mesh_io.h"
 
 namespace lodbake {
 
@@ -29,6 +30,7 @@ struct BakeJob {
 struct BatchOptions {
     std::string cache_dir; // content-hash cache folder; empty: no cache
     uint32_t threads = 0;  // worker threads for the whole batch; 0: all cores (job settings.threads is ignored)
+    ReadOptions read;      // reader limits for every input (a pack that reads fine does not depend on them)
 };
 
 struct BakeJobResult {
