@@ -44,16 +44,14 @@ public:
     }
     // Branch-free: the decoded bits of well-mixed contexts are unpredictable, so select instead of
     // branching on them.
-    inline uint32_t bit(uint16_t& prob) {
-        const uint32_t p = prob;
+    inline uint32_t bit(uint32_t& prob) {
+        const uint32_t p = detail::rangeProb(prob);
         const uint32_t bound = (range_ >> kRangeProbBits) * p;
         const uint32_t result = code_ >= bound ? 1u : 0u;
         const uint32_t mask = 0u - result;
         code_ -= bound & mask;
         range_ = result ? range_ - bound : bound;
-        const uint32_t up = p + (((1u << kRangeProbBits) - p) >> kRangeAdaptShift);
-        const uint32_t down = p - (p >> kRangeAdaptShift);
-        prob = uint16_t(result ? down : up);
+        prob = detail::rangeUpdate(prob, result);
         if (range_ < kRangeTopValue) {
             range_ <<= 8;
             code_ = (code_ << 8) | next();
@@ -74,14 +72,14 @@ public:
         }
         return v;
     }
-    inline uint32_t tree(uint16_t* probs, uint32_t bits) {
+    inline uint32_t tree(uint32_t* probs, uint32_t bits) {
         uint32_t m = 1;
         for (uint32_t i = 0; i < bits; ++i) m = (m << 1) | bit(probs[m]);
         return m - (1u << bits);
     }
     // Bit-length class k of value+1 (6-bit tree), its top bit below the leading one modelled, the rest
     // direct. False for a class above 32 bits.
-    bool uint(uint16_t* class_probs, uint16_t* top_probs, uint64_t* value) {
+    bool uint(uint32_t* class_probs, uint32_t* top_probs, uint64_t* value) {
         const uint32_t k = tree(class_probs, kValenceClassTreeBits);
         if (k > 32) return false;
         uint64_t v = 1;
@@ -114,8 +112,8 @@ constexpr uint32_t kClassProbs = 1u << kValenceClassTreeBits;
 constexpr uint32_t kTopProbs = 33;
 
 struct UintModel {
-    uint16_t klass[kClassProbs];
-    uint16_t top[kTopProbs];
+    uint32_t klass[kClassProbs];
+    uint32_t top[kTopProbs];
     void init() {
         detail::initRangeProbs(klass, kClassProbs);
         detail::initRangeProbs(top, kTopProbs);
@@ -126,13 +124,13 @@ struct UintModel {
 // then the sign and the top mantissa bit.
 template <int Components, int Contexts> struct ResidualModel {
     static constexpr uint32_t kTree = 1u << kValenceResidualTreeBits;
-    uint16_t length[Components][Contexts][kTree];
-    uint16_t sign[Components];
-    uint16_t top[Components][kTree];
+    uint32_t length[Components][Contexts][kTree];
+    uint32_t sign[Components];
+    uint32_t top[Components][kTree];
     void init() {
-        detail::initRangeProbs(&length[0][0][0], sizeof(length) / 2);
+        detail::initRangeProbs(&length[0][0][0], sizeof(length) / 4);
         detail::initRangeProbs(sign, Components);
-        detail::initRangeProbs(&top[0][0], sizeof(top) / 2);
+        detail::initRangeProbs(&top[0][0], sizeof(top) / 4);
     }
     // Residual of component j in context ctx; *length_out = bit length of |r|. False when corrupt.
     inline bool decode(RangeDecoder& rd, int j, uint32_t ctx, int32_t* r, uint32_t* length_out) {
@@ -155,13 +153,13 @@ template <int Components, int Contexts> struct ResidualModel {
 // The stream side of the conquest engine.
 struct ConnectivityReader {
     RangeDecoder rd;
-    uint16_t more;
-    uint16_t symbols[detail::kValenceContexts][1u << kValenceSymbolTreeBits];
+    uint32_t more;
+    uint32_t symbols[detail::kValenceContexts][1u << kValenceSymbolTreeBits];
     UintModel escape, offset, list, free_a, dup;
 
     void init() {
-        more = uint16_t(kRangeProbInit);
-        detail::initRangeProbs(&symbols[0][0], sizeof(symbols) / 2);
+        more = kRangeStateInit;
+        detail::initRangeProbs(&symbols[0][0], sizeof(symbols) / 4);
         escape.init();
         offset.init();
         list.init();
@@ -543,10 +541,13 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
                 for (int k = 0; k < 3; ++k) pred[k] = last[k];
             }
             const uint32_t ctx = detail::scaleContext(scale, count);
+            uint32_t earlier = kNone;
             for (int j = 0; j < 3; ++j) {
                 int32_t res;
                 uint32_t length;
-                if (!pos_model.decode(pos, j, ctx, &res, &length)) return Result::CorruptStream;
+                if (!pos_model.decode(pos, j, detail::positionContext(ctx, earlier), &res, &length))
+                    return Result::CorruptStream;
+                earlier = earlier == kNone || length > earlier ? length : earlier;
                 const int32_t value = pred[j] + res;
                 if (value < 0 || value > qmax) return Result::CorruptStream;
                 q[j] = value;
@@ -564,11 +565,13 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
     }
     for (size_t fid = final_count; fid < vn; ++fid) {
         const uint32_t ctx = detail::scaleContext(0, 0);
+        uint32_t earlier = kNone;
         for (int j = 0; j < 3; ++j) {
             int32_t res;
             uint32_t length;
-            if (!pos_model.decode(pos, j, ctx, &res, &length))
+            if (!pos_model.decode(pos, j, detail::positionContext(ctx, earlier), &res, &length))
                 return Result::CorruptStream;
+            earlier = earlier == kNone || length > earlier ? length : earlier;
             const int32_t value = last[j] + res;
             if (value < 0 || value > qmax) return Result::CorruptStream;
             qpos_final[3 * fid + size_t(j)] = last[j] = value;

@@ -36,8 +36,8 @@ inline uint32_t nextCorner(uint32_t c) { return c % 3 == 2 ? c - 2 : c + 1; }
 inline uint32_t prevCorner(uint32_t c) { return c % 3 == 0 ? c + 2 : c - 1; }
 
 struct UintModel {
-    uint16_t klass[kClassProbs];
-    uint16_t top[kTopProbs];
+    uint32_t klass[kClassProbs];
+    uint32_t top[kTopProbs];
     void init() {
         initRangeProbs(klass, kClassProbs);
         initRangeProbs(top, kTopProbs);
@@ -46,13 +46,13 @@ struct UintModel {
 
 template <int Components, int Contexts> struct ResidualModel {
     static constexpr uint32_t kTree = 1u << kValenceResidualTreeBits;
-    uint16_t length[Components][Contexts][kTree];
-    uint16_t sign[Components];
-    uint16_t top[Components][kTree];
+    uint32_t length[Components][Contexts][kTree];
+    uint32_t sign[Components];
+    uint32_t top[Components][kTree];
     void init() {
-        initRangeProbs(&length[0][0][0], sizeof(length) / 2);
+        initRangeProbs(&length[0][0][0], sizeof(length) / 4);
         initRangeProbs(sign, Components);
-        initRangeProbs(&top[0][0], sizeof(top) / 2);
+        initRangeProbs(&top[0][0], sizeof(top) / 4);
     }
 };
 
@@ -197,13 +197,13 @@ struct EncoderIo {
     uint32_t next_engine_vertex = 0;
     size_t scan = 0;
     uint32_t seed = kNone;
-    uint16_t more;
-    uint16_t symbols[lodrt::detail::kValenceContexts][1u << kValenceSymbolTreeBits];
+    uint32_t more;
+    uint32_t symbols[lodrt::detail::kValenceContexts][1u << kValenceSymbolTreeBits];
     UintModel escape, offset, list, free_a, dup;
 
     void init() {
-        more = uint16_t(kRangeProbInit);
-        initRangeProbs(&symbols[0][0], sizeof(symbols) / 2);
+        more = kRangeStateInit;
+        initRangeProbs(&symbols[0][0], sizeof(symbols) / 4);
         escape.init();
         offset.init();
         list.init();
@@ -412,7 +412,7 @@ std::string describe(lodrt::Result r) {
         what = "not an .lbm file (bad magic)";
         break;
     case lodrt::Result::UnsupportedVersion:
-        what = "format version other than 2";
+        what = "format version other than 3";
         break;
     case lodrt::Result::TrailingBytes:
         what = "bytes after the streams the header announces";
@@ -571,7 +571,12 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
                                                 qpos.data(), ev, last, a.vertex_valence[ev], pred, &scale, &count))
                 return internalError("valence encoder: broken corner cycle");
             const uint32_t ctx = lodrt::detail::scaleContext(scale, count);
-            for (int j = 0; j < 3; ++j) pos.residual(pos_model, j, ctx, q[j] - pred[j]);
+            uint32_t earlier = kNone;
+            for (int j = 0; j < 3; ++j) {
+                const uint32_t k =
+                    pos.residual(pos_model, j, lodrt::detail::positionContext(ctx, earlier), q[j] - pred[j]);
+                earlier = earlier == kNone ? k : std::max(earlier, k);
+            }
             for (int j = 0; j < 3; ++j) qpos_final[3 * size_t(fid) + size_t(j)] = q[j];
             final_done[fid] = 1;
         }
@@ -584,9 +589,12 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
             if (new_of[v] >= referenced) isolated[new_of[v] - referenced] = uint32_t(v);
         for (uint32_t v : isolated) {
             const uint32_t ctx = lodrt::detail::scaleContext(0, 0);
+            uint32_t earlier = kNone;
             for (int j = 0; j < 3; ++j) {
                 const int32_t q = qpos_in[3 * size_t(v) + size_t(j)];
-                pos.residual(pos_model, j, ctx, q - last[j]);
+                const uint32_t k =
+                    pos.residual(pos_model, j, lodrt::detail::positionContext(ctx, earlier), q - last[j]);
+                earlier = earlier == kNone ? k : std::max(earlier, k);
                 last[j] = q;
                 qpos_final[3 * size_t(new_of[v]) + size_t(j)] = q;
             }

@@ -33,8 +33,28 @@ namespace detail {
 constexpr uint32_t kNone = 0xFFFFFFFFu;
 
 /// Sets every adaptive binary probability to its initial value.
-inline void initRangeProbs(uint16_t* probs, size_t n) {
-    for (size_t i = 0; i < n; ++i) probs[i] = uint16_t(format::kRangeProbInit);
+inline void initRangeProbs(uint32_t* probs, size_t n) {
+    for (size_t i = 0; i < n; ++i) probs[i] = format::kRangeStateInit;
+}
+
+/// The 12-bit probability of a 0 bit that model state `s` codes with (format.h, "Binary range coder").
+/// Clamped so that either outcome leaves range >= 2^16: one byte of renormalisation always suffices.
+inline uint32_t rangeProb(uint32_t s) {
+    const uint32_t p = ((s & 0xFFFFu) + (s >> 16)) >> (17 - format::kRangeProbBits);
+    return p < format::kRangeProbMin ? format::kRangeProbMin : (p > format::kRangeProbMax ? format::kRangeProbMax : p);
+}
+
+/// Model state after coding bit b.
+inline uint32_t rangeUpdate(uint32_t s, uint32_t b) {
+    uint32_t fast = s & 0xFFFFu, slow = s >> 16;
+    if (b) {
+        fast -= fast >> format::kRangeFastShift;
+        slow -= slow >> format::kRangeSlowShift;
+    } else {
+        fast += (0x10000u - fast) >> format::kRangeFastShift;
+        slow += (0x10000u - slow) >> format::kRangeSlowShift;
+    }
+    return fast | (slow << 16);
 }
 
 /// What sits across the focus's front edge.
@@ -461,7 +481,18 @@ inline uint32_t scaleContext(uint32_t scale, uint32_t count) {
     b = b > 9 ? 9 : b;
     return count >= 2 ? b + 10 : b; // 20 contexts
 }
-constexpr uint32_t kPositionContexts = 20;
+constexpr uint32_t kPositionLengthBuckets = 12;
+constexpr uint32_t kPositionContexts = 20 + 2 * kPositionLengthBuckets;
+
+/// Context of a position residual. x (earlier_length == kNone): the gate-edge context. y and z: the
+/// bit length of the vertex's earlier components' largest residual (capped at 11), and whether two or
+/// more parallelograms were averaged. The three errors come from one misprediction of the vertex, so
+/// the earlier magnitude predicts the later ones better than the gate edge does.
+inline uint32_t positionContext(uint32_t scale_ctx, uint32_t earlier_length) {
+    if (earlier_length == kNone) return scale_ctx;
+    const uint32_t b = earlier_length < kPositionLengthBuckets ? earlier_length : kPositionLengthBuckets - 1;
+    return 20 + (scale_ctx >= 10 ? kPositionLengthBuckets : 0) + b;
+}
 
 } // namespace detail
 } // namespace lodrt
