@@ -44,8 +44,9 @@ public:
     }
     // Branch-free: the decoded bits of well-mixed contexts are unpredictable, so select instead of
     // branching on them.
-    inline uint32_t bit(uint32_t& prob) {
-        const uint32_t p = detail::rangeProb(prob);
+    inline uint32_t bit(uint32_t& prob) { return bitWith(detail::rangeProb(prob), prob); }
+    // bit() with the probability already computed from the model (p == rangeProb(prob)).
+    inline uint32_t bitWith(uint32_t p, uint32_t& prob) {
         const uint32_t bound = (range_ >> kRangeProbBits) * p;
         const uint32_t result = code_ >= bound ? 1u : 0u;
         const uint32_t mask = 0u - result;
@@ -72,9 +73,18 @@ public:
         }
         return v;
     }
+    // Same bits as a loop of bit(probs[m]), but both children's probabilities are computed before the
+    // current bit is known, which takes the load and the mixing off the serial chain of decoded bits.
     inline uint32_t tree(uint32_t* probs, uint32_t bits) {
         uint32_t m = 1;
-        for (uint32_t i = 0; i < bits; ++i) m = (m << 1) | bit(probs[m]);
+        uint32_t p = detail::rangeProb(probs[1]);
+        for (uint32_t i = 1; i < bits; ++i) {
+            const uint32_t p0 = detail::rangeProb(probs[2 * m]), p1 = detail::rangeProb(probs[2 * m + 1]);
+            const uint32_t b = bitWith(p, probs[m]);
+            m = (m << 1) | b;
+            p = b ? p1 : p0;
+        }
+        m = (m << 1) | bitWith(p, probs[m]);
         return m - (1u << bits);
     }
     // Bit-length class k of value+1 (6-bit tree), its top bit below the leading one modelled, the rest

@@ -45,16 +45,13 @@ inline uint32_t rangeProb(uint32_t s) {
 }
 
 /// Model state after coding bit b.
+/// Both outcomes are computed and one selected: the bits are unpredictable, so no branch.
 inline uint32_t rangeUpdate(uint32_t s, uint32_t b) {
-    uint32_t fast = s & 0xFFFFu, slow = s >> 16;
-    if (b) {
-        fast -= fast >> format::kRangeFastShift;
-        slow -= slow >> format::kRangeSlowShift;
-    } else {
-        fast += (0x10000u - fast) >> format::kRangeFastShift;
-        slow += (0x10000u - slow) >> format::kRangeSlowShift;
-    }
-    return fast | (slow << 16);
+    const uint32_t fast = s & 0xFFFFu, slow = s >> 16;
+    const uint32_t one = (fast - (fast >> format::kRangeFastShift)) | ((slow - (slow >> format::kRangeSlowShift)) << 16);
+    const uint32_t zero = (fast + ((0x10000u - fast) >> format::kRangeFastShift)) |
+                          ((slow + ((0x10000u - slow) >> format::kRangeSlowShift)) << 16);
+    return b ? one : zero;
 }
 
 /// What sits across the focus's front edge.
