@@ -131,19 +131,22 @@ struct UintModel {
 };
 
 // Residual models of one attribute: per component and context, the bit length of |r| as a tree,
-// then the sign and the top mantissa bit.
+// then the sign (in a sign context), the top two mantissa bits modelled, the rest direct.
 template <int Components, int Contexts> struct ResidualModel {
     static constexpr uint32_t kTree = 1u << kValenceResidualTreeBits;
     uint32_t length[Components][Contexts][kTree];
-    uint32_t sign[Components];
+    uint32_t sign[Components][detail::kSignContexts];
+    uint32_t second[Components][2 * kTree];
     uint32_t top[Components][kTree];
     void init() {
         detail::initRangeProbs(&length[0][0][0], sizeof(length) / 4);
-        detail::initRangeProbs(sign, Components);
+        detail::initRangeProbs(&sign[0][0], sizeof(sign) / 4);
+        detail::initRangeProbs(&second[0][0], sizeof(second) / 4);
         detail::initRangeProbs(&top[0][0], sizeof(top) / 4);
     }
     // Residual of component j in context ctx; *length_out = bit length of |r|. False when corrupt.
-    inline bool decode(RangeDecoder& rd, int j, uint32_t ctx, int32_t* r, uint32_t* length_out) {
+    inline bool decode(RangeDecoder& rd, int j, uint32_t ctx, int32_t* r, uint32_t* length_out,
+                       uint32_t sign_ctx = 0) {
         const uint32_t k = rd.tree(length[j][ctx], kValenceResidualTreeBits);
         *length_out = k;
         if (k == 0) {
@@ -151,10 +154,11 @@ template <int Components, int Contexts> struct ResidualModel {
             return true;
         }
         if (k > 17) return false;
-        const uint32_t negative = rd.bit(sign[j]);
+        const uint32_t negative = rd.bit(sign[j][sign_ctx]);
         uint32_t m = 1;
         if (k >= 2) m = (m << 1) | rd.bit(top[j][k]);
-        if (k >= 3) m = (m << (k - 2)) | rd.direct(k - 2);
+        if (k >= 3) m = (m << 1) | rd.bit(second[j][2 * k + (m & 1u)]);
+        if (k >= 4) m = (m << (k - 3)) | rd.direct(k - 3);
         *r = negative ? -int32_t(m) : int32_t(m);
         return true;
     }
@@ -461,6 +465,7 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
     uint8_t* decoded = base + l.decoded;
     const int32_t qmax = int32_t((1u << info.position_bits) - 1);
     int32_t last[3] = {(qmax + 1) / 2, (qmax + 1) / 2, (qmax + 1) / 2};
+    uint32_t prev_sign[3] = {0, 0, 0};
     // detail::positionOrder and detail::predictPosition fused into one walk around each vertex (the
     // encoder runs them separately; the round-trip tests hold the two to the same result). The node
     // arrays are free again: they hold the order's degree counts and stacks.
@@ -551,12 +556,15 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
                 for (int k = 0; k < 3; ++k) pred[k] = last[k];
             }
             const uint32_t ctx = detail::scaleContext(scale, count);
-            uint32_t earlier = kNone;
+            uint32_t earlier = kNone, x_sign = 0;
             for (int j = 0; j < 3; ++j) {
                 int32_t res;
                 uint32_t length;
-                if (!pos_model.decode(pos, j, detail::positionContext(ctx, earlier), &res, &length))
+                if (!pos_model.decode(pos, j, detail::positionContext(ctx, earlier), &res, &length,
+                                      prev_sign[j] * 3 + x_sign))
                     return Result::CorruptStream;
+                prev_sign[j] = detail::signClass(res);
+                if (j == 0) x_sign = prev_sign[0];
                 earlier = earlier == kNone || length > earlier ? length : earlier;
                 const int32_t value = pred[j] + res;
                 if (value < 0 || value > qmax) return Result::CorruptStream;
@@ -575,12 +583,15 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
     }
     for (size_t fid = final_count; fid < vn; ++fid) {
         const uint32_t ctx = detail::scaleContext(0, 0);
-        uint32_t earlier = kNone;
+        uint32_t earlier = kNone, x_sign = 0;
         for (int j = 0; j < 3; ++j) {
             int32_t res;
             uint32_t length;
-            if (!pos_model.decode(pos, j, detail::positionContext(ctx, earlier), &res, &length))
+            if (!pos_model.decode(pos, j, detail::positionContext(ctx, earlier), &res, &length,
+                                  prev_sign[j] * 3 + x_sign))
                 return Result::CorruptStream;
+            prev_sign[j] = detail::signClass(res);
+            if (j == 0) x_sign = prev_sign[0];
             earlier = earlier == kNone || length > earlier ? length : earlier;
             const int32_t value = last[j] + res;
             if (value < 0 || value > qmax) return Result::CorruptStream;

@@ -59,15 +59,16 @@ public:
     }
     /// Residual r of component j in context ctx (docs/format/valence.md "Residuals"); returns the bit
     /// length of |r|.
-    template <class Model> uint32_t residual(Model& m, int j, uint32_t ctx, int32_t r) {
+    template <class Model> uint32_t residual(Model& m, int j, uint32_t ctx, int32_t r, uint32_t sign_ctx = 0) {
         const uint32_t mag = uint32_t(r < 0 ? -r : r);
         uint32_t k = 0;
         while ((mag >> k) != 0) ++k;
         tree(m.length[j][ctx], lodrt::format::kValenceResidualTreeBits, k);
         if (k == 0) return 0;
-        bit(m.sign[j], r < 0 ? 1u : 0u);
+        bit(m.sign[j][sign_ctx], r < 0 ? 1u : 0u);
         if (k >= 2) bit(m.top[j][k], (mag >> (k - 2)) & 1u);
-        if (k >= 3) direct(mag & ((1u << (k - 2)) - 1), k - 2);
+        if (k >= 3) bit(m.second[j][2 * k + ((mag >> (k - 2)) & 1u)], (mag >> (k - 3)) & 1u);
+        if (k >= 4) direct(mag & ((1u << (k - 3)) - 1), k - 3);
         return k;
     }
     std::vector<uint8_t> finish() {

@@ -47,11 +47,13 @@ struct UintModel {
 template <int Components, int Contexts> struct ResidualModel {
     static constexpr uint32_t kTree = 1u << kValenceResidualTreeBits;
     uint32_t length[Components][Contexts][kTree];
-    uint32_t sign[Components];
+    uint32_t sign[Components][lodrt::detail::kSignContexts];
+    uint32_t second[Components][2 * kTree];
     uint32_t top[Components][kTree];
     void init() {
         initRangeProbs(&length[0][0][0], sizeof(length) / 4);
-        initRangeProbs(sign, Components);
+        initRangeProbs(&sign[0][0], sizeof(sign) / 4);
+        initRangeProbs(&second[0][0], sizeof(second) / 4);
         initRangeProbs(&top[0][0], sizeof(top) / 4);
     }
 };
@@ -581,6 +583,7 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
     std::vector<int32_t> qpos(3 * size_t(vc), 0), qpos_final(3 * vn);
     std::vector<uint8_t> decoded(vc, 0);
     int32_t last[3] = {int32_t(qmax + 1) / 2, int32_t(qmax + 1) / 2, int32_t(qmax + 1) / 2};
+    uint32_t prev_sign[3] = {0, 0, 0};
     std::vector<uint32_t> order(vc), degree(vc), stack0(vc), stack1(vc), stack2(vc);
     const uint32_t ordered_count =
         lodrt::detail::positionOrder(a.corner_vertex, a.corner_opposite, a.vertex_corner, a.vertex_flags,
@@ -603,10 +606,13 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
                                                 qpos.data(), ev, last, a.vertex_valence[ev], pred, &scale, &count))
                 return internalError("valence encoder: broken corner cycle");
             const uint32_t ctx = lodrt::detail::scaleContext(scale, count);
-            uint32_t earlier = kNone;
+            uint32_t earlier = kNone, x_sign = 0;
             for (int j = 0; j < 3; ++j) {
-                const uint32_t k =
-                    pos.residual(pos_model, j, lodrt::detail::positionContext(ctx, earlier), q[j] - pred[j]);
+                const int32_t r = q[j] - pred[j];
+                const uint32_t k = pos.residual(pos_model, j, lodrt::detail::positionContext(ctx, earlier), r,
+                                                prev_sign[j] * 3 + x_sign);
+                prev_sign[j] = lodrt::detail::signClass(r);
+                if (j == 0) x_sign = prev_sign[0];
                 earlier = earlier == kNone ? k : std::max(earlier, k);
             }
             for (int j = 0; j < 3; ++j) qpos_final[3 * size_t(fid) + size_t(j)] = q[j];
@@ -621,11 +627,13 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
             if (new_of[v] >= referenced) isolated[new_of[v] - referenced] = uint32_t(v);
         for (uint32_t v : isolated) {
             const uint32_t ctx = lodrt::detail::scaleContext(0, 0);
-            uint32_t earlier = kNone;
+            uint32_t earlier = kNone, x_sign = 0;
             for (int j = 0; j < 3; ++j) {
                 const int32_t q = qpos_in[3 * size_t(v) + size_t(j)];
-                const uint32_t k =
-                    pos.residual(pos_model, j, lodrt::detail::positionContext(ctx, earlier), q - last[j]);
+                const uint32_t k = pos.residual(pos_model, j, lodrt::detail::positionContext(ctx, earlier), q - last[j],
+                                                prev_sign[j] * 3 + x_sign);
+                prev_sign[j] = lodrt::detail::signClass(q - last[j]);
+                if (j == 0) x_sign = prev_sign[0];
                 earlier = earlier == kNone ? k : std::max(earlier, k);
                 last[j] = q;
                 qpos_final[3 * size_t(new_of[v]) + size_t(j)] = q;

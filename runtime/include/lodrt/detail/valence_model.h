@@ -491,5 +491,11 @@ inline uint32_t positionContext(uint32_t scale_ctx, uint32_t earlier_length) {
     return 20 + (scale_ctx >= 10 ? kPositionLengthBuckets : 0) + b;
 }
 
+/// Sign contexts of a residual: the sign class (0 zero, 1 positive, 2 negative) of the same component's
+/// residual at the previously coded vertex, times 3, plus the class of this vertex's x residual (0 for
+/// x itself). Parallelogram errors follow the local curvature, so neighbouring signs agree.
+constexpr uint32_t kSignContexts = 9;
+inline uint32_t signClass(int32_t r) { return r > 0 ? 1u : (r < 0 ? 2u : 0u); }
+
 } // namespace detail
 } // namespace lodrt
