@@ -62,11 +62,11 @@ constexpr uint32_t kValenceTrianglesPerByte = 1024; // closed triangles per conn
 constexpr uint32_t kValenceVerticesPerByte = 512;   // closed vertices per connectivity byte, vertices per
                                                     // position (and normal) byte
 // Binary range coder (LZMA style, 32-bit range). Each adaptive model holds two estimates of P(bit = 0)
-// in 16-bit fixed point, a fast one (low half of a u32, shift 4) and a slow one (high half, shift 7);
-// a bit is coded with their sum >> 5, a 12-bit probability, clamped to [16, 4080].
+// in 16-bit fixed point, a fast one (low half of a u32, shift 4) and a slow one (high half, shift 6),
+// each kept in [256, 65280]; a bit is coded with their sum >> 5, a 12-bit probability in [16, 4080].
 constexpr uint32_t kRangeProbBits = 12;
-constexpr uint32_t kRangeProbMin = 16;
-constexpr uint32_t kRangeProbMax = 4080;
+constexpr uint32_t kRangeStateMin = 256;
+constexpr uint32_t kRangeStateMax = 65280;
 constexpr uint32_t kRangeFastShift = 4;
 constexpr uint32_t kRangeSlowShift = 6;
 constexpr uint32_t kRangeStateInit = 0x80008000u; // both estimates 1/2

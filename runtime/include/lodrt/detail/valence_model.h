@@ -38,19 +38,22 @@ inline void initRangeProbs(uint32_t* probs, size_t n) {
 }
 
 /// The 12-bit probability of a 0 bit that model state `s` codes with (format.h, "Binary range coder").
-/// Clamped so that either outcome leaves range >= 2^16: one byte of renormalisation always suffices.
+/// The estimates stay in [kRangeStateMin, kRangeStateMax], so p is in [16, 4080] without a clamp and
+/// either outcome leaves range >= 2^16: one byte of renormalisation always suffices.
 inline uint32_t rangeProb(uint32_t s) {
-    const uint32_t p = ((s & 0xFFFFu) + (s >> 16)) >> (17 - format::kRangeProbBits);
-    return p < format::kRangeProbMin ? format::kRangeProbMin : (p > format::kRangeProbMax ? format::kRangeProbMax : p);
+    return ((s & 0xFFFFu) + (s >> 16)) >> (17 - format::kRangeProbBits);
 }
 
 /// Model state after coding bit b.
 /// Both outcomes are computed and one selected: the bits are unpredictable, so no branch.
 inline uint32_t rangeUpdate(uint32_t s, uint32_t b) {
     const uint32_t fast = s & 0xFFFFu, slow = s >> 16;
-    const uint32_t one = (fast - (fast >> format::kRangeFastShift)) | ((slow - (slow >> format::kRangeSlowShift)) << 16);
-    const uint32_t zero = (fast + ((0x10000u - fast) >> format::kRangeFastShift)) |
-                          ((slow + ((0x10000u - slow) >> format::kRangeSlowShift)) << 16);
+    using format::kRangeStateMax;
+    using format::kRangeStateMin;
+    const uint32_t one = (fast - ((fast - kRangeStateMin) >> format::kRangeFastShift)) |
+                         ((slow - ((slow - kRangeStateMin) >> format::kRangeSlowShift)) << 16);
+    const uint32_t zero = (fast + ((kRangeStateMax - fast) >> format::kRangeFastShift)) |
+                          ((slow + ((kRangeStateMax - slow) >> format::kRangeSlowShift)) << 16);
     return b ? one : zero;
 }
 
