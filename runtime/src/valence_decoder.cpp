@@ -44,16 +44,15 @@ public:
     }
     // Branch-free: the decoded bits of well-mixed contexts are unpredictable, so select instead of
     // branching on them.
-    inline uint32_t bit(uint16_t& prob) {
-        const uint32_t p = prob;
+    inline uint32_t bit(uint32_t& prob) { return bitWith(detail::rangeProb(prob), prob); }
+    // bit() with the probability already computed from the model (p == rangeProb(prob)).
+    inline uint32_t bitWith(uint32_t p, uint32_t& prob) {
         const uint32_t bound = (range_ >> kRangeProbBits) * p;
         const uint32_t result = code_ >= bound ? 1u : 0u;
         const uint32_t mask = 0u - result;
         code_ -= bound & mask;
         range_ = result ? range_ - bound : bound;
-        const uint32_t up = p + (((1u << kRangeProbBits) - p) >> kRangeAdaptShift);
-        const uint32_t down = p - (p >> kRangeAdaptShift);
-        prob = uint16_t(result ? down : up);
+        prob = detail::rangeUpdate(prob, result);
         if (range_ < kRangeTopValue) {
             range_ <<= 8;
             code_ = (code_ << 8) | next();
@@ -74,14 +73,23 @@ public:
         }
         return v;
     }
-    inline uint32_t tree(uint16_t* probs, uint32_t bits) {
+    // Same bits as a loop of bit(probs[m]), but both children's probabilities are computed before the
+    // current bit is known, which takes the load and the mixing off the serial chain of decoded bits.
+    inline uint32_t tree(uint32_t* probs, uint32_t bits) {
         uint32_t m = 1;
-        for (uint32_t i = 0; i < bits; ++i) m = (m << 1) | bit(probs[m]);
+        uint32_t p = detail::rangeProb(probs[1]);
+        for (uint32_t i = 1; i < bits; ++i) {
+            const uint32_t p0 = detail::rangeProb(probs[2 * m]), p1 = detail::rangeProb(probs[2 * m + 1]);
+            const uint32_t b = bitWith(p, probs[m]);
+            m = (m << 1) | b;
+            p = b ? p1 : p0;
+        }
+        m = (m << 1) | bitWith(p, probs[m]);
         return m - (1u << bits);
     }
     // Bit-length class k of value+1 (6-bit tree), its top bit below the leading one modelled, the rest
     // direct. False for a class above 32 bits.
-    bool uint(uint16_t* class_probs, uint16_t* top_probs, uint64_t* value) {
+    bool uint(uint32_t* class_probs, uint32_t* top_probs, uint64_t* value) {
         const uint32_t k = tree(class_probs, kValenceClassTreeBits);
         if (k > 32) return false;
         uint64_t v = 1;
@@ -114,8 +122,8 @@ constexpr uint32_t kClassProbs = 1u << kValenceClassTreeBits;
 constexpr uint32_t kTopProbs = 33;
 
 struct UintModel {
-    uint16_t klass[kClassProbs];
-    uint16_t top[kTopProbs];
+    uint32_t klass[kClassProbs];
+    uint32_t top[kTopProbs];
     void init() {
         detail::initRangeProbs(klass, kClassProbs);
         detail::initRangeProbs(top, kTopProbs);
@@ -123,19 +131,22 @@ struct UintModel {
 };
 
 // Residual models of one attribute: per component and context, the bit length of |r| as a tree,
-// then the sign and the top mantissa bit.
+// then the sign (in a sign context), the top two mantissa bits modelled, the rest direct.
 template <int Components, int Contexts> struct ResidualModel {
     static constexpr uint32_t kTree = 1u << kValenceResidualTreeBits;
-    uint16_t length[Components][Contexts][kTree];
-    uint16_t sign[Components];
-    uint16_t top[Components][kTree];
+    uint32_t length[Components][Contexts][kTree];
+    uint32_t sign[Components][detail::kSignContexts];
+    uint32_t second[Components][2 * kTree];
+    uint32_t top[Components][kTree];
     void init() {
-        detail::initRangeProbs(&length[0][0][0], sizeof(length) / 2);
-        detail::initRangeProbs(sign, Components);
-        detail::initRangeProbs(&top[0][0], sizeof(top) / 2);
+        detail::initRangeProbs(&length[0][0][0], sizeof(length) / 4);
+        detail::initRangeProbs(&sign[0][0], sizeof(sign) / 4);
+        detail::initRangeProbs(&second[0][0], sizeof(second) / 4);
+        detail::initRangeProbs(&top[0][0], sizeof(top) / 4);
     }
     // Residual of component j in context ctx; *length_out = bit length of |r|. False when corrupt.
-    inline bool decode(RangeDecoder& rd, int j, uint32_t ctx, int32_t* r, uint32_t* length_out) {
+    inline bool decode(RangeDecoder& rd, int j, uint32_t ctx, int32_t* r, uint32_t* length_out,
+                       uint32_t sign_ctx = 0) {
         const uint32_t k = rd.tree(length[j][ctx], kValenceResidualTreeBits);
         *length_out = k;
         if (k == 0) {
@@ -143,10 +154,11 @@ template <int Components, int Contexts> struct ResidualModel {
             return true;
         }
         if (k > 17) return false;
-        const uint32_t negative = rd.bit(sign[j]);
+        const uint32_t negative = rd.bit(sign[j][sign_ctx]);
         uint32_t m = 1;
         if (k >= 2) m = (m << 1) | rd.bit(top[j][k]);
-        if (k >= 3) m = (m << (k - 2)) | rd.direct(k - 2);
+        if (k >= 3) m = (m << 1) | rd.bit(second[j][2 * k + (m & 1u)]);
+        if (k >= 4) m = (m << (k - 3)) | rd.direct(k - 3);
         *r = negative ? -int32_t(m) : int32_t(m);
         return true;
     }
@@ -155,13 +167,13 @@ template <int Components, int Contexts> struct ResidualModel {
 // The stream side of the conquest engine.
 struct ConnectivityReader {
     RangeDecoder rd;
-    uint16_t more;
-    uint16_t symbols[detail::kValenceContexts][1u << kValenceSymbolTreeBits];
+    uint32_t more;
+    uint32_t symbols[detail::kValenceContexts][1u << kValenceSymbolTreeBits];
     UintModel escape, offset, list, free_a, dup;
 
     void init() {
-        more = uint16_t(kRangeProbInit);
-        detail::initRangeProbs(&symbols[0][0], sizeof(symbols) / 2);
+        more = kRangeStateInit;
+        detail::initRangeProbs(&symbols[0][0], sizeof(symbols) / 4);
         escape.init();
         offset.init();
         list.init();
@@ -453,6 +465,7 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
     uint8_t* decoded = base + l.decoded;
     const int32_t qmax = int32_t((1u << info.position_bits) - 1);
     int32_t last[3] = {(qmax + 1) / 2, (qmax + 1) / 2, (qmax + 1) / 2};
+    uint32_t prev_sign[3] = {0, 0, 0};
     // detail::positionOrder and detail::predictPosition fused into one walk around each vertex (the
     // encoder runs them separately; the round-trip tests hold the two to the same result). The node
     // arrays are free again: they hold the order's degree counts and stacks.
@@ -543,10 +556,16 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
                 for (int k = 0; k < 3; ++k) pred[k] = last[k];
             }
             const uint32_t ctx = detail::scaleContext(scale, count);
+            uint32_t earlier = kNone, x_sign = 0;
             for (int j = 0; j < 3; ++j) {
                 int32_t res;
                 uint32_t length;
-                if (!pos_model.decode(pos, j, ctx, &res, &length)) return Result::CorruptStream;
+                if (!pos_model.decode(pos, j, detail::positionContext(ctx, earlier), &res, &length,
+                                      prev_sign[j] * 3 + x_sign))
+                    return Result::CorruptStream;
+                prev_sign[j] = detail::signClass(res);
+                if (j == 0) x_sign = prev_sign[0];
+                earlier = earlier == kNone || length > earlier ? length : earlier;
                 const int32_t value = pred[j] + res;
                 if (value < 0 || value > qmax) return Result::CorruptStream;
                 q[j] = value;
@@ -564,11 +583,16 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
     }
     for (size_t fid = final_count; fid < vn; ++fid) {
         const uint32_t ctx = detail::scaleContext(0, 0);
+        uint32_t earlier = kNone, x_sign = 0;
         for (int j = 0; j < 3; ++j) {
             int32_t res;
             uint32_t length;
-            if (!pos_model.decode(pos, j, ctx, &res, &length))
+            if (!pos_model.decode(pos, j, detail::positionContext(ctx, earlier), &res, &length,
+                                  prev_sign[j] * 3 + x_sign))
                 return Result::CorruptStream;
+            prev_sign[j] = detail::signClass(res);
+            if (j == 0) x_sign = prev_sign[0];
+            earlier = earlier == kNone || length > earlier ? length : earlier;
             const int32_t value = last[j] + res;
             if (value < 0 || value > qmax) return Result::CorruptStream;
             qpos_final[3 * fid + size_t(j)] = last[j] = value;

@@ -6,23 +6,23 @@
 #include <cstdint>
 #include <vector>
 
+#include "lodrt/detail/valence_model.h"
 #include "lodrt/format.h"
 
 namespace lodbake::codec {
 
 class RangeEncoder {
 public:
-    void bit(uint16_t& prob, uint32_t b) {
+    void bit(uint32_t& prob, uint32_t b) {
         using namespace lodrt::format;
-        uint32_t bound = (range_ >> kRangeProbBits) * prob;
+        uint32_t bound = (range_ >> kRangeProbBits) * lodrt::detail::rangeProb(prob);
         if (b == 0) {
             range_ = bound;
-            prob = uint16_t(prob + (((1u << kRangeProbBits) - prob) >> kRangeAdaptShift));
         } else {
             low_ += bound;
             range_ -= bound;
-            prob = uint16_t(prob - (prob >> kRangeAdaptShift));
         }
+        prob = lodrt::detail::rangeUpdate(prob, b);
         while (range_ < kRangeTopValue) {
             range_ <<= 8;
             shiftLow();
@@ -38,7 +38,7 @@ public:
             }
         }
     }
-    void tree(uint16_t* probs, uint32_t bits, uint32_t value) {
+    void tree(uint32_t* probs, uint32_t bits, uint32_t value) {
         uint32_t m = 1;
         for (uint32_t i = bits; i-- > 0;) {
             uint32_t b = (value >> i) & 1u;
@@ -48,7 +48,7 @@ public:
     }
     /// Bit-length class of value+1, then its bits below the leading one (first modelled, rest direct).
     /// Returns the class.
-    uint32_t uint(uint16_t* class_probs, uint16_t* top_probs, uint64_t value) {
+    uint32_t uint(uint32_t* class_probs, uint32_t* top_probs, uint64_t value) {
         uint64_t v = value + 1;
         uint32_t k = 0;
         while ((v >> (k + 1)) != 0) ++k;
@@ -59,15 +59,16 @@ public:
     }
     /// Residual r of component j in context ctx (docs/format/valence.md "Residuals"); returns the bit
     /// length of |r|.
-    template <class Model> uint32_t residual(Model& m, int j, uint32_t ctx, int32_t r) {
+    template <class Model> uint32_t residual(Model& m, int j, uint32_t ctx, int32_t r, uint32_t sign_ctx = 0) {
         const uint32_t mag = uint32_t(r < 0 ? -r : r);
         uint32_t k = 0;
         while ((mag >> k) != 0) ++k;
         tree(m.length[j][ctx], lodrt::format::kValenceResidualTreeBits, k);
         if (k == 0) return 0;
-        bit(m.sign[j], r < 0 ? 1u : 0u);
+        bit(m.sign[j][sign_ctx], r < 0 ? 1u : 0u);
         if (k >= 2) bit(m.top[j][k], (mag >> (k - 2)) & 1u);
-        if (k >= 3) direct(mag & ((1u << (k - 2)) - 1), k - 2);
+        if (k >= 3) bit(m.second[j][2 * k + ((mag >> (k - 2)) & 1u)], (mag >> (k - 3)) & 1u);
+        if (k >= 4) direct(mag & ((1u << (k - 3)) - 1), k - 3);
         return k;
     }
     std::vector<uint8_t> finish() {

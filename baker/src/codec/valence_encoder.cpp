@@ -36,8 +36,8 @@ inline uint32_t nextCorner(uint32_t c) { return c % 3 == 2 ? c - 2 : c + 1; }
 inline uint32_t prevCorner(uint32_t c) { return c % 3 == 0 ? c + 2 : c - 1; }
 
 struct UintModel {
-    uint16_t klass[kClassProbs];
-    uint16_t top[kTopProbs];
+    uint32_t klass[kClassProbs];
+    uint32_t top[kTopProbs];
     void init() {
         initRangeProbs(klass, kClassProbs);
         initRangeProbs(top, kTopProbs);
@@ -46,13 +46,15 @@ struct UintModel {
 
 template <int Components, int Contexts> struct ResidualModel {
     static constexpr uint32_t kTree = 1u << kValenceResidualTreeBits;
-    uint16_t length[Components][Contexts][kTree];
-    uint16_t sign[Components];
-    uint16_t top[Components][kTree];
+    uint32_t length[Components][Contexts][kTree];
+    uint32_t sign[Components][lodrt::detail::kSignContexts];
+    uint32_t second[Components][2 * kTree];
+    uint32_t top[Components][kTree];
     void init() {
-        initRangeProbs(&length[0][0][0], sizeof(length) / 2);
-        initRangeProbs(sign, Components);
-        initRangeProbs(&top[0][0], sizeof(top) / 2);
+        initRangeProbs(&length[0][0][0], sizeof(length) / 4);
+        initRangeProbs(&sign[0][0], sizeof(sign) / 4);
+        initRangeProbs(&second[0][0], sizeof(second) / 4);
+        initRangeProbs(&top[0][0], sizeof(top) / 4);
     }
 };
 
@@ -101,25 +103,43 @@ ClosedMesh buildClosed(const Mesh& mesh, const std::vector<uint8_t>& exploded) {
     }
     // Pair half-edges: an undirected edge with exactly one half-edge each way is interior; every
     // other half-edge becomes a boundary. Corner c is opposite the half-edge next(c) -> prev(c).
+    // Half-edges are bucketed by their smaller vertex (counting sort, 4 bytes per corner instead of a
+    // sorted 16-byte key per corner), each bucket ordered by (larger vertex, corner).
     m.opposite.assign(cn, kNone);
     {
-        std::vector<std::pair<uint64_t, uint32_t>> keys(cn);
-        for (uint32_t c = 0; c < cn; ++c) {
-            const uint64_t u = work[nextCorner(c)], w = work[prevCorner(c)];
-            keys[c] = {std::min(u, w) << 32 | std::max(u, w), c};
+        const size_t wn = work_source.size();
+        auto lower = [&](uint32_t c) { return std::min(work[nextCorner(c)], work[prevCorner(c)]); };
+        auto upper = [&](uint32_t c) { return std::max(work[nextCorner(c)], work[prevCorner(c)]); };
+        std::vector<uint32_t> start(wn + 1, 0), bucket(cn);
+        for (uint32_t c = 0; c < cn; ++c) ++start[lower(c) + 1];
+        for (size_t v = 0; v < wn; ++v) start[v + 1] += start[v];
+        {
+            std::vector<uint32_t> fill(start.begin(), start.end() - 1);
+            for (uint32_t c = 0; c < cn; ++c) bucket[fill[lower(c)]++] = c;
         }
-        std::sort(keys.begin(), keys.end());
-        for (size_t i = 0; i < cn;) {
-            size_t j = i;
-            while (j < cn && keys[j].first == keys[i].first) ++j;
-            if (j - i == 2) {
-                const uint32_t c = keys[i].second, d = keys[i + 1].second;
-                if (work[nextCorner(c)] == work[prevCorner(d)]) {
-                    m.opposite[c] = d;
-                    m.opposite[d] = c;
-                }
+        for (size_t v = 0; v < wn; ++v) {
+            uint32_t* b = bucket.data() + start[v];
+            const size_t n = start[v + 1] - start[v];
+            // Corners were filled in increasing order, so a stable sort by the upper vertex gives
+            // (upper, corner) order. Buckets are small (about a valence): insertion sort.
+            for (size_t i = 1; i < n; ++i) {
+                const uint32_t x = b[i], ux = upper(x);
+                size_t j = i;
+                for (; j > 0 && upper(b[j - 1]) > ux; --j) b[j] = b[j - 1];
+                b[j] = x;
             }
-            i = j;
+            for (size_t i = 0; i < n;) {
+                size_t j = i;
+                while (j < n && upper(b[j]) == upper(b[i])) ++j;
+                if (j - i == 2) {
+                    const uint32_t c = b[i], d = b[i + 1];
+                    if (work[nextCorner(c)] == work[prevCorner(d)]) {
+                        m.opposite[c] = d;
+                        m.opposite[d] = c;
+                    }
+                }
+                i = j;
+            }
         }
     }
     // Split vertices into fans: corners around one working vertex joined across paired edges.
@@ -197,13 +217,13 @@ struct EncoderIo {
     uint32_t next_engine_vertex = 0;
     size_t scan = 0;
     uint32_t seed = kNone;
-    uint16_t more;
-    uint16_t symbols[lodrt::detail::kValenceContexts][1u << kValenceSymbolTreeBits];
+    uint32_t more;
+    uint32_t symbols[lodrt::detail::kValenceContexts][1u << kValenceSymbolTreeBits];
     UintModel escape, offset, list, free_a, dup;
 
     void init() {
-        more = uint16_t(kRangeProbInit);
-        initRangeProbs(&symbols[0][0], sizeof(symbols) / 2);
+        more = kRangeStateInit;
+        initRangeProbs(&symbols[0][0], sizeof(symbols) / 4);
         escape.init();
         offset.init();
         list.init();
@@ -400,6 +420,17 @@ struct Attempt {
             failure.failed = true;
         return !failure.failed;
     }
+
+    // After a successful run: frees what only the conquest needed (the closed mesh, the active lists,
+    // the encoder's bookkeeping), keeping the engine's corner table, vertex arrays, real_of and the
+    // connectivity coder for the steps after it.
+    void releaseConquestState() {
+        for (auto* v : {&node_vertex, &node_prev, &node_next, &node_free, &node_corner, &completion, &stack_head,
+                        &stack_size, &closed.corner_vertex, &closed.opposite, &closed.source, &closed.valence,
+                        &io.engine_id})
+            std::vector<uint32_t>().swap(*v);
+        std::vector<uint8_t>().swap(io.conquered);
+    }
 };
 
 std::string describe(lodrt::Result r) {
@@ -412,7 +443,7 @@ std::string describe(lodrt::Result r) {
         what = "not an .lbm file (bad magic)";
         break;
     case lodrt::Result::UnsupportedVersion:
-        what = "format version other than 2";
+        what = "format version other than 3";
         break;
     case lodrt::Result::TrailingBytes:
         what = "bytes after the streams the header announces";
@@ -497,20 +528,20 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
         }
         if (!changed) std::fill(exploded.begin(), exploded.end(), uint8_t(1));
     }
-    const ClosedMesh& cm = attempt->closed;
     const auto& a = attempt->engine.a;
     EncoderIo& io = attempt->io;
     RangeEncoder& conn = attempt->conn;
-    const uint32_t vc = uint32_t(cm.source.size()), tc = uint32_t(cm.corner_vertex.size() / 3);
+    const uint32_t vc = uint32_t(attempt->closed.source.size()), tc = uint32_t(attempt->closed.corner_vertex.size() / 3);
 
     // Final vertex order: conquest order without dummies and copies, then unreferenced vertices.
-    std::vector<uint32_t> closed_of_engine(vc);
-    for (uint32_t v = 0; v < vc; ++v) closed_of_engine[io.engine_id[v]] = v;
+    std::vector<uint32_t> source_of_engine(vc); // input vertex per engine vertex, kNone for dummies
+    for (uint32_t v = 0; v < vc; ++v) source_of_engine[io.engine_id[v]] = attempt->closed.source[v];
+    attempt->releaseConquestState();
     std::vector<uint32_t> final_of(vc, kNone), new_of(vn, kNone);
     std::vector<std::pair<uint32_t, uint32_t>> dups; // (rank among non-dummies, final id of the original)
     uint32_t final_count = 0, rank = 0;
     for (uint32_t ev = 0; ev < vc; ++ev) {
-        const uint32_t src = cm.source[closed_of_engine[ev]];
+        const uint32_t src = source_of_engine[ev];
         if (src == kNone) continue;
         if (new_of[src] != kNone) {
             dups.push_back({rank, new_of[src]});
@@ -531,15 +562,18 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
     for (size_t v = 0; v < vn; ++v)
         if (new_of[v] == kNone) new_of[v] = final_count++;
 
+    // Output triangles (only the normal predictor needs them as index triples).
     std::vector<uint32_t> triangles;
-    triangles.reserve(3 * fn);
+    if (normals) triangles.reserve(3 * fn);
+    result.old_face_of.reserve(fn);
     for (uint32_t t = 0; t < tc; ++t) {
         const uint32_t* cv = &a.corner_vertex[3 * size_t(t)];
         if ((a.vertex_flags[cv[0]] | a.vertex_flags[cv[1]] | a.vertex_flags[cv[2]]) & lodrt::detail::kFlagDummy)
             continue;
-        triangles.insert(triangles.end(), {final_of[cv[0]], final_of[cv[1]], final_of[cv[2]]});
+        if (normals) triangles.insert(triangles.end(), {final_of[cv[0]], final_of[cv[1]], final_of[cv[2]]});
         result.old_face_of.push_back(io.real_of[3 * size_t(t)] / 3);
     }
+    std::vector<uint32_t>().swap(io.real_of);
     if (result.old_face_of.size() != fn) return internalError("valence encoder: triangle count mismatch");
 
     // Positions in the order positionOrder gives, predicted exactly as the decoder will.
@@ -549,6 +583,7 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
     std::vector<int32_t> qpos(3 * size_t(vc), 0), qpos_final(3 * vn);
     std::vector<uint8_t> decoded(vc, 0);
     int32_t last[3] = {int32_t(qmax + 1) / 2, int32_t(qmax + 1) / 2, int32_t(qmax + 1) / 2};
+    uint32_t prev_sign[3] = {0, 0, 0};
     std::vector<uint32_t> order(vc), degree(vc), stack0(vc), stack1(vc), stack2(vc);
     const uint32_t ordered_count =
         lodrt::detail::positionOrder(a.corner_vertex, a.corner_opposite, a.vertex_corner, a.vertex_flags,
@@ -561,7 +596,7 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
         const uint32_t ev = order[i];
         const uint32_t fid = final_of[ev];
         if (fid == kNone) continue;
-        const uint32_t src = cm.source[closed_of_engine[ev]];
+        const uint32_t src = source_of_engine[ev];
         int32_t* q = &qpos[3 * size_t(ev)];
         for (int j = 0; j < 3; ++j) q[j] = qpos_in[3 * size_t(src) + size_t(j)];
         if (!final_done[fid]) {
@@ -571,7 +606,15 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
                                                 qpos.data(), ev, last, a.vertex_valence[ev], pred, &scale, &count))
                 return internalError("valence encoder: broken corner cycle");
             const uint32_t ctx = lodrt::detail::scaleContext(scale, count);
-            for (int j = 0; j < 3; ++j) pos.residual(pos_model, j, ctx, q[j] - pred[j]);
+            uint32_t earlier = kNone, x_sign = 0;
+            for (int j = 0; j < 3; ++j) {
+                const int32_t r = q[j] - pred[j];
+                const uint32_t k = pos.residual(pos_model, j, lodrt::detail::positionContext(ctx, earlier), r,
+                                                prev_sign[j] * 3 + x_sign);
+                prev_sign[j] = lodrt::detail::signClass(r);
+                if (j == 0) x_sign = prev_sign[0];
+                earlier = earlier == kNone ? k : std::max(earlier, k);
+            }
             for (int j = 0; j < 3; ++j) qpos_final[3 * size_t(fid) + size_t(j)] = q[j];
             final_done[fid] = 1;
         }
@@ -584,9 +627,14 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
             if (new_of[v] >= referenced) isolated[new_of[v] - referenced] = uint32_t(v);
         for (uint32_t v : isolated) {
             const uint32_t ctx = lodrt::detail::scaleContext(0, 0);
+            uint32_t earlier = kNone, x_sign = 0;
             for (int j = 0; j < 3; ++j) {
                 const int32_t q = qpos_in[3 * size_t(v) + size_t(j)];
-                pos.residual(pos_model, j, ctx, q - last[j]);
+                const uint32_t k = pos.residual(pos_model, j, lodrt::detail::positionContext(ctx, earlier), q - last[j],
+                                                prev_sign[j] * 3 + x_sign);
+                prev_sign[j] = lodrt::detail::signClass(q - last[j]);
+                if (j == 0) x_sign = prev_sign[0];
+                earlier = earlier == kNone ? k : std::max(earlier, k);
                 last[j] = q;
                 qpos_final[3 * size_t(new_of[v]) + size_t(j)] = q;
             }

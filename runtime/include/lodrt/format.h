@@ -44,7 +44,7 @@ constexpr uint32_t kPfrepLogCodeSteps = 8;
 // Compressed mesh (.lbm), docs/format/valence.md. Little-endian header of kValenceHeaderSize bytes,
 // then the connectivity, position and normal range-coded streams, back to back.
 constexpr uint32_t kValenceMagic = 0x4D42424Cu; // "LBBM" little-endian
-constexpr uint16_t kValenceVersion = 2;
+constexpr uint16_t kValenceVersion = 3;
 constexpr uint32_t kValenceHeaderSize = 56;
 // Header fields (byte offset: type): 0 u32 magic, 4 u16 version, 6 u16 flags, 8 u32 vertex_count,
 // 12 u32 triangle_count, 16 u32 closed_vertex_count, 20 u32 closed_triangle_count, 24 u8 position_bits,
@@ -57,14 +57,22 @@ constexpr uint32_t kValenceMinNormalBits = 4;
 constexpr uint32_t kValenceMaxNormalBits = 16;
 constexpr uint32_t kValenceMaxCount = 1u << 28; // vertex and triangle counts
 // Header plausibility: counts above these multiples of their stream's byte length are refused before
-// anything is allocated (every coded symbol costs more than 1/256 of a byte).
-constexpr uint32_t kValenceTrianglesPerByte = 512; // closed triangles per connectivity byte
-constexpr uint32_t kValenceVerticesPerByte = 256;  // closed vertices per connectivity byte, vertices per
-                                                   // position (and normal) byte
-// Binary range coder (LZMA style): 12-bit probabilities, adaptation shift 5, 32-bit range.
+// anything is allocated. A coded binary decision costs at least -log2(4080/4096) > 0.0056 bits, so a
+// byte holds fewer than 1430 of them; every closed vertex costs a 5-decision symbol (< 286 per byte),
+// every closed triangle follows a symbol or closes a node (< 2 per symbol), every coded position 15
+// decisions and every normal 10.
+constexpr uint32_t kValenceTrianglesPerByte = 1024; // closed triangles per connectivity byte
+constexpr uint32_t kValenceVerticesPerByte = 512;   // closed vertices per connectivity byte, vertices per
+                                                    // position (and normal) byte
+// Binary range coder (LZMA style, 32-bit range). Each adaptive model holds two estimates of P(bit = 0)
+// in 16-bit fixed point, a fast one (low half of a u32, shift 4) and a slow one (high half, shift 6),
+// each kept in [256, 65280]; a bit is coded with their sum >> 5, a 12-bit probability in [16, 4080].
 constexpr uint32_t kRangeProbBits = 12;
-constexpr uint32_t kRangeProbInit = 1u << (kRangeProbBits - 1);
-constexpr uint32_t kRangeAdaptShift = 5;
+constexpr uint32_t kRangeStateMin = 256;
+constexpr uint32_t kRangeStateMax = 65280;
+constexpr uint32_t kRangeFastShift = 4;
+constexpr uint32_t kRangeSlowShift = 6;
+constexpr uint32_t kRangeStateInit = 0x80008000u; // both estimates 1/2
 constexpr uint32_t kRangeTopValue = 1u << 24;
 // Connectivity symbols: a 5-bit tree per context. 0 = valence escape (then the valence as an integer),
 // 1 = split, 2 = merge, 3 = dummy vertex (then its valence as an integer), 4..31 = valence symbol - 1.

@@ -388,7 +388,7 @@ TEST(ValenceDecoderSafetyTest, TrailingBytesBadMagicUnknownVersion) {
     magic[0] ^= 0x20;
     EXPECT_EQ(decodeChecked(magic), lodrt::Result::BadMagic);
     auto version = bytes;
-    version[4] = 3;
+    version[4] = uint8_t(lodrt::format::kValenceVersion + 1);
     EXPECT_EQ(decodeChecked(version), lodrt::Result::UnsupportedVersion);
     auto bits = bytes;
     bits[24] = 17;

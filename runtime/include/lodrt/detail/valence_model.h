@@ -33,8 +33,28 @@ namespace detail {
 constexpr uint32_t kNone = 0xFFFFFFFFu;
 
 /// Sets every adaptive binary probability to its initial value.
-inline void initRangeProbs(uint16_t* probs, size_t n) {
-    for (size_t i = 0; i < n; ++i) probs[i] = uint16_t(format::kRangeProbInit);
+inline void initRangeProbs(uint32_t* probs, size_t n) {
+    for (size_t i = 0; i < n; ++i) probs[i] = format::kRangeStateInit;
+}
+
+/// The 12-bit probability of a 0 bit that model state `s` codes with (format.h, "Binary range coder").
+/// The estimates stay in [kRangeStateMin, kRangeStateMax], so p is in [16, 4080] without a clamp and
+/// either outcome leaves range >= 2^16: one byte of renormalisation always suffices.
+inline uint32_t rangeProb(uint32_t s) {
+    return ((s & 0xFFFFu) + (s >> 16)) >> (17 - format::kRangeProbBits);
+}
+
+/// Model state after coding bit b.
+/// Both outcomes are computed and one selected: the bits are unpredictable, so no branch.
+inline uint32_t rangeUpdate(uint32_t s, uint32_t b) {
+    const uint32_t fast = s & 0xFFFFu, slow = s >> 16;
+    using format::kRangeStateMax;
+    using format::kRangeStateMin;
+    const uint32_t one = (fast - ((fast - kRangeStateMin) >> format::kRangeFastShift)) |
+                         ((slow - ((slow - kRangeStateMin) >> format::kRangeSlowShift)) << 16);
+    const uint32_t zero = (fast + ((kRangeStateMax - fast) >> format::kRangeFastShift)) |
+                          ((slow + ((kRangeStateMax - slow) >> format::kRangeSlowShift)) << 16);
+    return b ? one : zero;
 }
 
 /// What sits across the focus's front edge.
@@ -461,7 +481,24 @@ inline uint32_t scaleContext(uint32_t scale, uint32_t count) {
     b = b > 9 ? 9 : b;
     return count >= 2 ? b + 10 : b; // 20 contexts
 }
-constexpr uint32_t kPositionContexts = 20;
+constexpr uint32_t kPositionLengthBuckets = 12;
+constexpr uint32_t kPositionContexts = 20 + 2 * kPositionLengthBuckets;
+
+/// Context of a position residual. x (earlier_length == kNone): the gate-edge context. y and z: the
+/// bit length of the vertex's earlier components' largest residual (capped at 11), and whether two or
+/// more parallelograms were averaged. The three errors come from one misprediction of the vertex, so
+/// the earlier magnitude predicts the later ones better than the gate edge does.
+inline uint32_t positionContext(uint32_t scale_ctx, uint32_t earlier_length) {
+    if (earlier_length == kNone) return scale_ctx;
+    const uint32_t b = earlier_length < kPositionLengthBuckets ? earlier_length : kPositionLengthBuckets - 1;
+    return 20 + (scale_ctx >= 10 ? kPositionLengthBuckets : 0) + b;
+}
+
+/// Sign contexts of a residual: the sign class (0 zero, 1 positive, 2 negative) of the same component's
+/// residual at the previously coded vertex, times 3, plus the class of this vertex's x residual (0 for
+/// x itself). Parallelogram errors follow the local curvature, so neighbouring signs agree.
+constexpr uint32_t kSignContexts = 9;
+inline uint32_t signClass(int32_t r) { return r > 0 ? 1u : (r < 0 ? 2u : 0u); }
 
 } // namespace detail
 } // namespace lodrt
