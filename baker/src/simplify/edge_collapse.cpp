@@ -889,47 +889,6 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
                          " faces with repeated positions dropped (zero area)");
     const uint32_t face_count = uint32_t(face_source_.size());
     const uint32_t he_count = face_count * 3;
-    // Faces renumbered by their lowest point (so along the same curve), within their sub-mesh:
-    // fan walks and the queue slots of neighbouring edges then stay close in memory. Two stable
-    // counting sorts (by lowest point, then by sub-mesh), so ties keep input order. face_source_
-    // becomes the inverse: the face at each input position, which extract() follows to keep the
-    // output in input order.
-    {
-        std::vector<uint32_t> count(size_t(point_count) + 1, 0);
-        auto lowest = [&](uint32_t f) {
-            return std::min({corner_point_[f * 3], corner_point_[f * 3 + 1], corner_point_[f * 3 + 2]});
-        };
-        for (uint32_t f = 0; f < face_count; ++f) ++count[lowest(f) + 1];
-        for (uint32_t p = 0; p < point_count; ++p) count[p + 1] += count[p];
-        std::vector<uint32_t> by_point(face_count);
-        for (uint32_t f = 0; f < face_count; ++f) by_point[count[lowest(f)]++] = f;
-        std::vector<uint32_t>().swap(count);
-        std::vector<uint32_t> face_order; // new face -> old face
-        if (multi_group) {
-            std::vector<uint32_t> fill(group_first_face_.begin(), group_first_face_.end() - 1);
-            face_order.resize(face_count);
-            for (uint32_t f : by_point) face_order[fill[face_group_[f]]++] = f;
-            std::vector<uint32_t>().swap(by_point);
-        } else {
-            face_order.swap(by_point);
-        }
-        std::vector<uint32_t> moved(size_t(face_count) * 3);
-        for (uint32_t f = 0; f < face_count; ++f)
-            for (uint32_t k = 0; k < 3; ++k) moved[f * 3 + k] = corner_point_[face_order[f] * 3 + k];
-        corner_point_.swap(moved);
-        if (has_wedges) {
-            for (uint32_t f = 0; f < face_count; ++f)
-                for (uint32_t k = 0; k < 3; ++k) moved[f * 3 + k] = corner_wedge_[face_order[f] * 3 + k];
-            corner_wedge_.swap(moved);
-        }
-        std::vector<uint32_t>().swap(moved);
-        if (multi_group) {
-            std::vector<uint32_t> group_of(face_count);
-            for (uint32_t f = 0; f < face_count; ++f) group_of[f] = face_group_[face_order[f]];
-            face_group_.swap(group_of);
-        }
-        for (uint32_t f = 0; f < face_count; ++f) face_source_[face_order[f]] = f;
-    }
     initial_faces_ = face_count;
     alive_faces_ = face_count;
     collapses_ = 0;
@@ -1092,8 +1051,7 @@ Mesh EdgeCollapser::extract() const {
         const uint32_t first = group_count ? group_first_face_[g] : 0;
         const uint32_t last = group_count ? group_first_face_[g + 1] : uint32_t(face_source_.size());
         const size_t first_index = out.indices.size();
-        for (uint32_t i = first; i < last; ++i) {
-            const uint32_t f = face_source_[i];
+        for (uint32_t f = first; f < last; ++f) {
             if (corner_point_[f * 3] == kNone) continue;
             for (uint32_t k = 0; k < 3; ++k) {
                 const uint32_t w = wedgeAt(f * 3 + k);

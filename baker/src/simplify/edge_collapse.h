@@ -126,7 +126,7 @@ private:
     std::vector<uint32_t> corner_wedge_; // empty when there are no attribute streams
     std::vector<uint32_t> twin_;
     std::vector<uint32_t> face_group_;  // sub-mesh per face; empty with a single sub-mesh
-    std::vector<uint32_t> face_source_; // per kept input face, in input order: its (renumbered) face
+    std::vector<uint32_t> face_source_; // input face index per face
     std::vector<uint32_t> group_first_face_;
 
     CollapseQueue queue_;

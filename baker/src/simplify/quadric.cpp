@@ -33,21 +33,6 @@ Quadric Quadric::fromTriangle(const Vec3d& p0, const Vec3d& p1, const Vec3d& p2)
     return fromPlane(unit, -dot(unit, p0), 0.5 * len);
 }
 
-Quadric& Quadric::operator+=(const Quadric& o) {
-    a00 += o.a00;
-    a01 += o.a01;
-    a02 += o.a02;
-    a11 += o.a11;
-    a12 += o.a12;
-    a22 += o.a22;
-    b0 += o.b0;
-    b1 += o.b1;
-    b2 += o.b2;
-    c += o.c;
-    weight += o.weight;
-    return *this;
-}
-
 Quadric& Quadric::operator*=(double s) {
     a00 *= s;
     a01 *= s;
@@ -61,13 +46,6 @@ Quadric& Quadric::operator*=(double s) {
     c *= s;
     weight *= s;
     return *this;
-}
-
-double Quadric::evaluate(const Vec3d& p) const {
-    const double x = p.x, y = p.y, z = p.z;
-    const double r = a00 * x * x + a11 * y * y + a22 * z * z + 2.0 * (a01 * x * y + a02 * x * z + a12 * y * z) +
-                     2.0 * (b0 * x + b1 * y + b2 * z) + c;
-    return r > 0.0 ? r : 0.0;
 }
 
 bool solveQuadric(const Quadric& q, Vec3d& out, double min_condition) {

@@ -23,10 +23,28 @@ struct Quadric {
     /// Plane through p0,p1,p2 weighted by the triangle's area. Zero for a degenerate triangle.
     static Quadric fromTriangle(const Vec3d& p0, const Vec3d& p1, const Vec3d& p2);
 
-    Quadric& operator+=(const Quadric& o);
+    Quadric& operator+=(const Quadric& o) { // inline: the collapse loop sums two per evaluated edge
+        a00 += o.a00;
+        a01 += o.a01;
+        a02 += o.a02;
+        a11 += o.a11;
+        a12 += o.a12;
+        a22 += o.a22;
+        b0 += o.b0;
+        b1 += o.b1;
+        b2 += o.b2;
+        c += o.c;
+        weight += o.weight;
+        return *this;
+    }
     Quadric& operator*=(double s);
     /// Q(p); clamped at 0 (rounding can make it slightly negative).
-    double evaluate(const Vec3d& p) const;
+    double evaluate(const Vec3d& p) const {
+        const double x = p.x, y = p.y, z = p.z;
+        const double r = a00 * x * x + a11 * y * y + a22 * z * z + 2.0 * (a01 * x * y + a02 * x * z + a12 * y * z) +
+                         2.0 * (b0 * x + b1 * y + b2 * z) + c;
+        return r > 0.0 ? r : 0.0;
+    }
 };
 
 /// Solves A p = -b for the minimiser of q. Returns false, leaving `out` untouched, when A is
