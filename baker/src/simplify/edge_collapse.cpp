@@ -795,45 +795,30 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
         }
     }
     std::vector<uint32_t>().swap(order);
-    // Points renumbered along a Morton curve of their positions: a collapse touches a few dozen
-    // points that are close in space, and scans often list their vertices in an order far from
-    // spatial (lucy100k's faces span 9,500 vertex ids at the 90th percentile), so every quadric,
-    // position and kind lookup was a cache miss. Only storage moves: no decision depends on point
-    // ids, so the simplified meshes are the same bits (wedges keep their numbering by first vertex;
-    // without attributes a wedge is its point and moves with it).
+    // Points renumbered in order of first use by the faces: a collapse touches a few dozen points
+    // and faces that are neighbours on the surface, and scans often list their vertices far from
+    // the order of their faces (lucy100k's faces span 9,500 vertex ids at the 90th percentile).
+    // Face order is kept, so points and faces then advance together. (A Morton curve of the
+    // positions was 30 % slower on dragon_stand_merged: its 15 overlapping sheets interleave
+    // points of different sheets.) Only storage moves: no decision depends on point ids, so the
+    // simplified meshes are the same bits (wedges keep their numbering by first vertex; without
+    // attributes a wedge is its point and moves with it).
     {
         const uint32_t n = uint32_t(position_.size());
-        const Vec3f lo = box.isEmpty() ? Vec3f(0, 0, 0) : box.min;
-        const Vec3f ext = box.isEmpty() ? Vec3f(0, 0, 0) : box.extent();
-        auto cell = [](float x, float l, float e) -> uint64_t {
-            if (!(e > 0.0f)) return 0;
-            const double t = (double(x) - double(l)) / double(e);
-            return uint64_t(std::clamp(t, 0.0, 1.0) * 2097151.0); // 21 bits per axis
-        };
-        auto spread = [](uint64_t x) {
-            x &= 0x1fffff;
-            x = (x | x << 32) & 0x1f00000000ffffull;
-            x = (x | x << 16) & 0x1f0000ff0000ffull;
-            x = (x | x << 8) & 0x100f00f00f00f00full;
-            x = (x | x << 4) & 0x10c30c30c30c30c3ull;
-            x = (x | x << 2) & 0x1249249249249249ull;
-            return x;
-        };
-        std::vector<std::pair<uint64_t, uint32_t>> keyed(n);
-        for (uint32_t p = 0; p < n; ++p) {
-            const Vec3f& q = position_[p];
-            keyed[p] = {spread(cell(q.x, lo.x, ext.x)) | spread(cell(q.y, lo.y, ext.y)) << 1 |
-                            spread(cell(q.z, lo.z, ext.z)) << 2,
-                        p};
+        std::vector<uint32_t> first_use(n, kNone);
+        uint32_t next = 0;
+        for (size_t f = 0; f < mesh.faceCount(); ++f) {
+            const uint32_t p0 = vertex_point[mesh.indices[f * 3]], p1 = vertex_point[mesh.indices[f * 3 + 1]],
+                           p2 = vertex_point[mesh.indices[f * 3 + 2]];
+            if (p0 == p1 || p1 == p2 || p0 == p2) continue; // dropped below
+            for (uint32_t p : {p0, p1, p2})
+                if (first_use[p] == kNone) first_use[p] = next++;
         }
-        std::sort(keyed.begin(), keyed.end()); // ties by old id: deterministic
-        std::vector<uint32_t> new_id(n);
+        for (uint32_t p = 0; p < n; ++p) // points only on dropped faces, after the others
+            if (first_use[p] == kNone) first_use[p] = next++;
+        const std::vector<uint32_t>& new_id = first_use;
         std::vector<Vec3f> moved(n);
-        for (uint32_t i = 0; i < n; ++i) {
-            new_id[keyed[i].second] = i;
-            moved[i] = position_[keyed[i].second];
-        }
-        std::vector<std::pair<uint64_t, uint32_t>>().swap(keyed);
+        for (uint32_t p = 0; p < n; ++p) moved[new_id[p]] = position_[p];
         position_.swap(moved);
         std::vector<Vec3f>().swap(moved);
         for (uint32_t& p : vertex_point)

@@ -71,7 +71,7 @@ TEST(LodChainTest, ErrorIsMonotoneAcrossTheChain) {
 
 TEST(LodChainTest, CollapseSequenceReplaysToEveryLevel) {
     // Sphere vertices are all distinct and referenced, so each is one point; the engine numbers
-    // points in its own (spatial) order, so they are matched by position.
+    // points in its own order (first use by the faces), so they are matched by position.
     const Mesh sphere = lodbake_test::icosphere(4);
     LodChainOptions o = quick();
     o.measure_error = false;
