@@ -93,6 +93,7 @@ private:
     void updateEdgesInFan(); // the edges of the fan in fan_tmp_
     void requeueAll();
     Quadric combinedQuadric(uint32_t edge, uint32_t removed) const;
+    const double* wedgeBlock(uint32_t wedge) const { return &wedge_block_[size_t(wedge) * block_size_]; }
 
     const Mesh* source_ = nullptr;
     SimplifyOptions options_;
@@ -117,7 +118,8 @@ private:
     uint32_t channel_count_ = 0;                  // scalar attribute channels per wedge
     std::vector<float> channel_weight_;           // per channel, squared weight × scale²
     std::vector<float> wedge_value_;              // wedge_count × channel_count_
-    std::vector<AttributeQuadric> wedge_quadric_; // wedge_count × channel_count_
+    size_t block_size_ = 0;             // attributeBlockSize(channel_count_), 0 without attributes
+    std::vector<double> wedge_block_;   // wedge_count × block_size_: each wedge's attribute quadrics
 
     // Corner table: half-edge h goes from corner_point_[h] to corner_point_[nextHe(h)].
     std::vector<uint32_t> corner_point_; // kNone for dead faces

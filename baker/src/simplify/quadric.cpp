@@ -33,21 +33,6 @@ Quadric Quadric::fromTriangle(const Vec3d& p0, const Vec3d& p1, const Vec3d& p2)
     return fromPlane(unit, -dot(unit, p0), 0.5 * len);
 }
 
-Quadric& Quadric::operator+=(const Quadric& o) {
-    a00 += o.a00;
-    a01 += o.a01;
-    a02 += o.a02;
-    a11 += o.a11;
-    a12 += o.a12;
-    a22 += o.a22;
-    b0 += o.b0;
-    b1 += o.b1;
-    b2 += o.b2;
-    c += o.c;
-    weight += o.weight;
-    return *this;
-}
-
 Quadric& Quadric::operator*=(double s) {
     a00 *= s;
     a01 *= s;
@@ -61,13 +46,6 @@ Quadric& Quadric::operator*=(double s) {
     c *= s;
     weight *= s;
     return *this;
-}
-
-double Quadric::evaluate(const Vec3d& p) const {
-    const double x = p.x, y = p.y, z = p.z;
-    const double r = a00 * x * x + a11 * y * y + a22 * z * z + 2.0 * (a01 * x * y + a02 * x * z + a12 * y * z) +
-                     2.0 * (b0 * x + b1 * y + b2 * z) + c;
-    return r > 0.0 ? r : 0.0;
 }
 
 bool solveQuadric(const Quadric& q, Vec3d& out, double min_condition) {
@@ -173,6 +151,96 @@ void AttributeQuadric::addTo(Quadric& q) const {
     q.b1 += e1 - d * h1 * inv;
     q.b2 += e2 - d * h2 * inv;
     q.c += dd - d * d * inv;
+}
+
+void addTriangleToAttributeBlock(double* block, size_t channel_count, const Vec3d& p0, const Vec3d& p1,
+                                 const Vec3d& p2, const float* s0, const float* s1, const float* s2,
+                                 const float* weight) {
+    const Vec3d edge1 = p1 - p0;
+    const Vec3d edge2 = p2 - p0;
+    const Vec3d n = cross(edge1, edge2);
+    const double n2 = dot(n, n);
+    if (!(n2 > 0.0)) return;
+    const Vec3d grad1 = cross(edge2, n), grad2 = cross(n, edge1);
+    const double a = 0.5 * std::sqrt(n2);
+    for (size_t k = 0; k < channel_count; ++k) {
+        // As AttributeQuadric::addTriangle: the face's linear field g·p + dv.
+        const Vec3d g = (grad1 * (double(s1[k]) - double(s0[k])) + grad2 * (double(s2[k]) - double(s0[k]))) / n2;
+        const double dv = double(s0[k]) - dot(g, p0);
+        const double aw = a * double(weight[k]);
+        block[0] += aw * g.x * g.x;
+        block[1] += aw * g.x * g.y;
+        block[2] += aw * g.x * g.z;
+        block[3] += aw * g.y * g.y;
+        block[4] += aw * g.y * g.z;
+        block[5] += aw * g.z * g.z;
+        block[6] += aw * dv * g.x;
+        block[7] += aw * dv * g.y;
+        block[8] += aw * dv * g.z;
+        block[9] += aw * dv * dv;
+        double* c = block + 11 + 4 * k;
+        c[0] += a * g.x;
+        c[1] += a * g.y;
+        c[2] += a * g.z;
+        c[3] += a * dv;
+    }
+    block[10] += a;
+}
+
+double attributeBlockOptimalValue(const double* a, const double* b, size_t channel, const Vec3d& p) {
+    const double* ca = a + 11 + 4 * channel;
+    double area = a[10], h0 = ca[0], h1 = ca[1], h2 = ca[2], d = ca[3];
+    if (b) {
+        const double* cb = b + 11 + 4 * channel;
+        area += b[10];
+        h0 += cb[0];
+        h1 += cb[1];
+        h2 += cb[2];
+        d += cb[3];
+    }
+    if (!(area > 0.0)) return 0.0;
+    return (h0 * p.x + h1 * p.y + h2 * p.z + d) / area;
+}
+
+void addAttributeBlockTo(const double* a, const double* b, size_t channel_count, const float* weight, Quadric& q) {
+    const double area = b ? a[10] + b[10] : a[10];
+    if (!(area > 0.0)) return;
+    double sum[10];
+    for (int i = 0; i < 10; ++i) sum[i] = b ? a[i] + b[i] : a[i];
+    // Per channel E(p) = pᵀ(G − w h hᵀ/A) p + 2 (e − w D h / A)·p + (F − w D²/A); the G, e, F
+    // parts are already summed.
+    for (size_t k = 0; k < channel_count; ++k) {
+        const double* ca = a + 11 + 4 * k;
+        double h0 = ca[0], h1 = ca[1], h2 = ca[2], d = ca[3];
+        if (b) {
+            const double* cb = b + 11 + 4 * k;
+            h0 += cb[0];
+            h1 += cb[1];
+            h2 += cb[2];
+            d += cb[3];
+        }
+        const double inv = double(weight[k]) / area;
+        sum[0] -= h0 * h0 * inv;
+        sum[1] -= h0 * h1 * inv;
+        sum[2] -= h0 * h2 * inv;
+        sum[3] -= h1 * h1 * inv;
+        sum[4] -= h1 * h2 * inv;
+        sum[5] -= h2 * h2 * inv;
+        sum[6] -= d * h0 * inv;
+        sum[7] -= d * h1 * inv;
+        sum[8] -= d * h2 * inv;
+        sum[9] -= d * d * inv;
+    }
+    q.a00 += sum[0];
+    q.a01 += sum[1];
+    q.a02 += sum[2];
+    q.a11 += sum[3];
+    q.a12 += sum[4];
+    q.a22 += sum[5];
+    q.b0 += sum[6];
+    q.b1 += sum[7];
+    q.b2 += sum[8];
+    q.c += sum[9];
 }
 
 } // namespace lodbake

@@ -70,13 +70,24 @@ TEST(LodChainTest, ErrorIsMonotoneAcrossTheChain) {
 }
 
 TEST(LodChainTest, CollapseSequenceReplaysToEveryLevel) {
-    // Sphere vertices are all distinct and referenced, so points are the input vertices in order.
+    // Sphere vertices are all distinct and referenced, so each is one point; the engine numbers
+    // points in its own order (first use by the faces), so they are matched by position.
     const Mesh sphere = lodbake_test::icosphere(4);
     LodChainOptions o = quick();
     o.measure_error = false;
     const LodChain chain = build(sphere, o);
     const lodbake::CollapseSequence& s = chain.sequence;
     ASSERT_EQ(s.point_positions.size(), sphere.vertexCount());
+    std::map<std::array<float, 3>, uint32_t> point_at;
+    for (uint32_t p = 0; p < s.point_positions.size(); ++p)
+        point_at[{s.point_positions[p].x, s.point_positions[p].y, s.point_positions[p].z}] = p;
+    ASSERT_EQ(point_at.size(), sphere.vertexCount());
+    std::vector<uint32_t> point_of(sphere.vertexCount());
+    for (uint32_t v = 0; v < sphere.vertexCount(); ++v) {
+        const auto it = point_at.find({sphere.positions[v].x, sphere.positions[v].y, sphere.positions[v].z});
+        ASSERT_NE(it, point_at.end());
+        point_of[v] = it->second;
+    }
     std::vector<uint32_t> parent(sphere.vertexCount());
     for (uint32_t i = 0; i < parent.size(); ++i) parent[i] = i;
     std::vector<Vec3f> pos = s.point_positions;
@@ -95,8 +106,8 @@ TEST(LodChainTest, CollapseSequenceReplaysToEveryLevel) {
         }
         std::vector<std::array<float, 9>> replayed, actual;
         for (size_t f = 0; f < sphere.faceCount(); ++f) {
-            const uint32_t a = find(sphere.indices[f * 3]), b = find(sphere.indices[f * 3 + 1]),
-                           c = find(sphere.indices[f * 3 + 2]);
+            const uint32_t a = find(point_of[sphere.indices[f * 3]]), b = find(point_of[sphere.indices[f * 3 + 1]]),
+                           c = find(point_of[sphere.indices[f * 3 + 2]]);
             if (a == b || b == c || a == c) continue;
             replayed.push_back(
                 {pos[a].x, pos[a].y, pos[a].z, pos[b].x, pos[b].y, pos[b].z, pos[c].x, pos[c].y, pos[c].z});

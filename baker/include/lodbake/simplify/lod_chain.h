@@ -6,7 +6,8 @@
 //
 // Collapse record format (CollapseSequence):
 //   Vertex ids in records are POINT ids: indices into CollapseSequence::point_positions, the
-//   distinct positions of the input (bit-identical positions share a point).
+//   distinct positions of the input (bit-identical positions share a point), numbered in the
+//   engine's own order (first use by the faces; match them to input vertices by position).
 //   Attribute corners are WEDGE ids: indices into wedge_point, one per distinct
 //   (position, attributes) vertex of the input; wedge w lies on point wedge_point[w].
 //   records[i] is the i-th collapse in execution order:

@@ -6,6 +6,8 @@
 // set of planes. `weight` is the summed weight of those planes (the face AREA for face planes),
 // so Q(p) / weight is a mean squared distance in object units².
 
+#include <cstddef>
+
 #include "lodbake/core/math.h"
 
 namespace lodbake {
@@ -21,10 +23,28 @@ struct Quadric {
     /// Plane through p0,p1,p2 weighted by the triangle's area. Zero for a degenerate triangle.
     static Quadric fromTriangle(const Vec3d& p0, const Vec3d& p1, const Vec3d& p2);
 
-    Quadric& operator+=(const Quadric& o);
+    Quadric& operator+=(const Quadric& o) { // inline: the collapse loop sums two per evaluated edge
+        a00 += o.a00;
+        a01 += o.a01;
+        a02 += o.a02;
+        a11 += o.a11;
+        a12 += o.a12;
+        a22 += o.a22;
+        b0 += o.b0;
+        b1 += o.b1;
+        b2 += o.b2;
+        c += o.c;
+        weight += o.weight;
+        return *this;
+    }
     Quadric& operator*=(double s);
     /// Q(p); clamped at 0 (rounding can make it slightly negative).
-    double evaluate(const Vec3d& p) const;
+    double evaluate(const Vec3d& p) const {
+        const double x = p.x, y = p.y, z = p.z;
+        const double r = a00 * x * x + a11 * y * y + a22 * z * z + 2.0 * (a01 * x * y + a02 * x * z + a12 * y * z) +
+                         2.0 * (b0 * x + b1 * y + b2 * z) + c;
+        return r > 0.0 ? r : 0.0;
+    }
 };
 
 /// Solves A p = -b for the minimiser of q. Returns false, leaving `out` untouched, when A is
@@ -56,5 +76,27 @@ struct AttributeQuadric {
     /// Adds the post-elimination error quadric to `q` (its weight is left unchanged).
     void addTo(Quadric& q) const;
 };
+
+/// The attribute quadrics of `channel_count` channels over the same faces, packed into
+/// attributeBlockSize(channel_count) doubles instead of 16 per channel. The error parts
+/// (Σ w a g gᵀ, Σ w a d g, Σ w a d², w the channel weight) only ever enter the collapse cost summed
+/// over the channels, so they are stored once, summed; per channel only what the optimal value
+/// needs is kept (Σ a g, Σ a d, unweighted), plus the faces' area Σ a shared by all channels.
+/// The result equals the sum of one AttributeQuadric per channel (up to rounding), except that a
+/// channel of weight 0 still gets its area-weighted mean as optimal value.
+/// Layout: [0..5] summed G (00 01 02 11 12 22), [6..8] summed e, [9] summed F, [10] area,
+/// then per channel k: [11 + 4k .. 13 + 4k] h, [14 + 4k] D.
+inline size_t attributeBlockSize(size_t channel_count) {
+    return 11 + 4 * channel_count;
+}
+/// Adds the face (p0,p1,p2) with corner values s0[k], s1[k], s2[k] and channel weights weight[k].
+void addTriangleToAttributeBlock(double* block, size_t channel_count, const Vec3d& p0, const Vec3d& p1,
+                                 const Vec3d& p2, const float* s0, const float* s1, const float* s2,
+                                 const float* weight);
+/// The optimal value of `channel` at p for the block a, or for a + b when b is not null (the same
+/// bits as adding b into a first).
+double attributeBlockOptimalValue(const double* a, const double* b, size_t channel, const Vec3d& p);
+/// Adds the post-elimination error quadric of a (or a + b when b is not null) to `q`.
+void addAttributeBlockTo(const double* a, const double* b, size_t channel_count, const float* weight, Quadric& q);
 
 } // namespace lodbake
