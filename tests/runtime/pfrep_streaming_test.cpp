@@ -196,6 +196,7 @@ TEST(PfrepStreamingTest, PrefixGrowsWithDemandAndMatchesWholeBlob) {
     // bytes that level needs, and every covered level extracts as from the whole blob.
     std::vector<ModelDemand> demand(2);
     uint64_t previous = directory->size;
+    std::vector<uint64_t> sizes;
     for (uint32_t wanted = levels; wanted-- > 0;) {
         SCOPED_TRACE("wanted level " + std::to_string(wanted));
         demand[0] = {uint8_t(wanted), 5.0f};
@@ -217,11 +218,13 @@ TEST(PfrepStreamingTest, PrefixGrowsWithDemandAndMatchesWholeBlob) {
         EXPECT_EQ(file.watched_bytes, m->size + lodrt::format::kPfrepHeaderSize);
         expectCoveredLevelsMatch(streamer, 0, blob);
         previous = m->size;
+        if (sizes.empty() || sizes.back() != m->size) sizes.push_back(m->size);
         // Model 1 had no demand: directory only.
         EXPECT_EQ(streamer.pfrepLevel(1), kNoLevel);
     }
     EXPECT_LT(lodrt::pfrepPrefixBytesForLevel(blob.whole, blob.removals[levels - 1]), blob.bytes.size());
     EXPECT_EQ(previous, blob.bytes.size());
+    EXPECT_GE(sizes.size(), 3u); // the prefix really grew in steps, not in one read
     EXPECT_EQ(streamer.pfrepModel(0)->loaded_from, 0u); // complete
     // One buffer per model: model 0's whole blob, model 1's directory.
     EXPECT_EQ(streamer.stats().pfrep_resident_bytes,

@@ -175,6 +175,8 @@ public:
     /// refinement can use as is. Null when the model has no PFRep or its directory has not arrived.
     /// The model and the bytes it points to are valid until the next update() (a step that arrives
     /// moves the bytes); criterion_table is always null (attach a table per prefix if wanted).
+    /// Instance masks stay valid while the prefix grows; when loaded_from rises (the prefix was
+    /// shrunk for the budget) reset them (pfrepMaskCoarsest) before refining again.
     const PfrepModel* pfrepModel(uint32_t model) const;
     PfrepStreamState pfrepState(uint32_t model) const;
     /// Finest chain level whose PFRep level (`levels[l].removals` of the extension) the resident
