@@ -9,6 +9,7 @@
 #include <cstring>
 #include <deque>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "lodbake/bake/bake.h"
@@ -392,4 +393,35 @@ TEST(PfrepStreamingTest, CorruptBlobsAndObjectsNeverCrash) {
     EXPECT_EQ(streamer.pfrepLevel(bad), kNoLevel);
     EXPECT_EQ(streamer.pfrepState(1 - bad), PfrepStreamState::Resident);
     EXPECT_EQ(streamer.pfrepLevel(1 - bad), 0);
+}
+
+TEST(PfrepStreamingTest, WorkerThreadsReachTheSameResult) {
+    const std::vector<uint8_t>& bytes = bakedPack();
+    ASSERT_FALSE(bytes.empty());
+    PackSource source;
+    ASSERT_EQ(source.openBytes(bytes.data(), bytes.size(), nullptr), Result::Ok);
+    const Blob blob = blobOf(source, 1);
+    // Each job on its own thread: steps complete while the frame keeps calling update().
+    struct Threads {
+        std::vector<std::thread> running;
+        static void submit(void* user, void (*run)(void*), void* task) {
+            static_cast<Threads*>(user)->running.emplace_back(run, task);
+        }
+    } threads;
+    const lodrt::JobSystem system{&Threads::submit, &threads};
+    {
+        Streamer streamer;
+        ASSERT_EQ(streamer.init(&source, &system, nullptr), Result::Ok);
+        std::vector<ModelDemand> demand(2);
+        demand[1] = {0, 3.0f};
+        for (int frame = 0; frame < 20000 && streamer.pfrepLevel(1) != 0; ++frame) {
+            streamer.update(demand.data());
+            std::this_thread::yield();
+        }
+        ASSERT_EQ(streamer.pfrepLevel(1), 0);
+        EXPECT_EQ(streamer.pfrepModel(1)->size, blob.bytes.size());
+        expectCoveredLevelsMatch(streamer, 1, blob);
+        EXPECT_EQ(streamer.pfrepLevel(0), kNoLevel);
+    } // the destructor waits for jobs still running
+    for (std::thread& t : threads.running) t.join();
 }
