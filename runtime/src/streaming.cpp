@@ -630,7 +630,8 @@ void Streamer::update(const ModelDemand* demand) {
         uint32_t target = 0;
         float priority = 0;
         if (demand && demand[m].wanted_level != kNoLevel && demand[m].priority > 0) {
-            const uint32_t wanted = demand[m].wanted_level < ps.step_count - 1 ? demand[m].wanted_level : ps.step_count - 2;
+            const uint32_t wanted =
+                demand[m].wanted_level < ps.step_count - 1 ? demand[m].wanted_level : ps.step_count - 2;
             target = ps.step_count - 1 - wanted;
             priority = demand[m].priority;
         }

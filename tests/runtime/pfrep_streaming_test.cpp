@@ -225,7 +225,7 @@ TEST(PfrepStreamingTest, PrefixGrowsWithDemandAndMatchesWholeBlob) {
     }
     EXPECT_LT(lodrt::pfrepPrefixBytesForLevel(blob.whole, blob.removals[levels - 1]), blob.bytes.size());
     EXPECT_EQ(previous, blob.bytes.size());
-    EXPECT_GE(sizes.size(), 3u); // the prefix really grew in steps, not in one read
+    EXPECT_GE(sizes.size(), 3u);                        // the prefix really grew in steps, not in one read
     EXPECT_EQ(streamer.pfrepModel(0)->loaded_from, 0u); // complete
     // One buffer per model: model 0's whole blob, model 1's directory.
     EXPECT_EQ(streamer.stats().pfrep_resident_bytes,
@@ -346,7 +346,8 @@ TEST(PfrepStreamingTest, CorruptBlobsAndObjectsNeverCrash) {
         std::vector<uint8_t> bytes = good;
         // Flip bytes inside model 0's blob, mostly in its header and directory.
         const uint64_t span = iteration % 2 ? blob.bytes.size() : std::min<uint64_t>(blob.bytes.size(), 256);
-        for (int e = 0; e < 1 + iteration % 3; ++e) bytes[blob.file_offset + next() % span] ^= uint8_t(1 + next() % 255);
+        for (int e = 0; e < 1 + iteration % 3; ++e)
+            bytes[blob.file_offset + next() % span] ^= uint8_t(1 + next() % 255);
         PackSource source;
         ASSERT_EQ(source.openBytes(bytes.data(), bytes.size(), nullptr), Result::Ok);
         Streamer streamer;
