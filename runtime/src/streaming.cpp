@@ -292,18 +292,44 @@ Result PackSource::copyLevelIndices(uint32_t model, uint32_t level, const uint8_
 // ---- Streamer ----
 
 struct Streamer::Task {
+    enum class Kind : uint8_t { Level, PfrepHeader, PfrepStep };
     const PackSource* source = nullptr;
+    Kind kind = Kind::Level;
     uint32_t model = 0, level = 0;
     uint8_t* dst = nullptr;
     size_t size = 0;
-    uint32_t slot = 0;
+    uint32_t slot = 0; // level slot, or the model of a PFRep task
+    // PFRep step: buffer view, the prefix held so far (copied into dst first) and its validated model.
+    uint32_t view = 0;
+    const uint8_t* old_data = nullptr;
+    size_t old_size = 0;
+    bool has_prefix = false;
+    PfrepModel pfrep; // in: the model of old_data (has_prefix); out: the model of dst
     bool is_busy = false; // frame-thread view
     Result result = Result::Ok;
     std::atomic<uint32_t> done{0};
 
+    static Result runPfrepStep(Task& t) {
+        if (t.old_size > 0) std::memcpy(t.dst, t.old_data, t.old_size);
+        Result r = t.source->readBufferView(t.view, t.old_size, t.dst + t.old_size, t.size - t.old_size);
+        if (r != Result::Ok) return r;
+        if (!t.has_prefix) return openPfrepPrefix(t.dst, t.size, &t.pfrep);
+        return pfrepExtendPrefix(&t.pfrep, t.dst, t.size); // leaves t.pfrep unchanged on error
+    }
+
     static void run(void* task) {
         Task* t = static_cast<Task*>(task);
-        t->result = t->source->readLevel(t->model, t->level, t->dst, t->size);
+        switch (t->kind) {
+        case Kind::Level:
+            t->result = t->source->readLevel(t->model, t->level, t->dst, t->size);
+            break;
+        case Kind::PfrepHeader:
+            t->result = t->source->readBufferView(t->view, 0, t->dst, t->size);
+            break;
+        case Kind::PfrepStep:
+            t->result = runPfrepStep(*t);
+            break;
+        }
         t->done.store(1, std::memory_order_release);
     }
 };
@@ -318,18 +344,24 @@ void Streamer::release() {
         while (tasks_[i].is_busy && tasks_[i].done.load(std::memory_order_acquire) == 0) std::this_thread::yield();
     const Allocator& a = options_.allocator;
     for (uint32_t i = 0; i < slot_count_; ++i) detail::deallocateBytes(a, slots_[i].data);
+    // A finished but uncollected PFRep step owns its new buffer.
+    for (uint32_t i = 0; i < task_count_; ++i)
+        if (tasks_[i].is_busy && tasks_[i].kind == Task::Kind::PfrepStep) detail::deallocateBytes(a, tasks_[i].dst);
+    for (uint32_t i = 0; i < pfrep_count_; ++i) detail::deallocateBytes(a, pfrep_[i].data);
     for (uint32_t i = 0; i < task_count_; ++i) tasks_[i].~Task();
     detail::deallocateBytes(a, tasks_);
     detail::deallocateBytes(a, slots_);
     detail::deallocateBytes(a, slot_model_);
     detail::deallocateBytes(a, candidates_);
     detail::deallocateBytes(a, resident_table_);
+    detail::deallocateBytes(a, pfrep_);
     tasks_ = nullptr;
     slots_ = nullptr;
     slot_model_ = nullptr;
     candidates_ = nullptr;
     resident_table_ = nullptr;
-    task_count_ = slot_count_ = busy_tasks_ = 0;
+    pfrep_ = nullptr;
+    task_count_ = slot_count_ = busy_tasks_ = pfrep_count_ = 0;
     stats_ = StreamStats();
 }
 
@@ -346,10 +378,11 @@ Result Streamer::init(const PackSource* source, const JobSystem* jobs, const Str
     const size_t model_count = models.modelCount();
     slots_ = detail::allocateArray<Slot>(a, slot_count_);
     slot_model_ = detail::allocateArray<uint32_t>(a, slot_count_);
-    candidates_ = detail::allocateArray<uint32_t>(a, slot_count_);
+    candidates_ = detail::allocateArray<uint32_t>(a, slot_count_ + model_count);
     resident_table_ = detail::allocateArray<uint8_t>(a, model_count * kMaxLevels);
+    pfrep_ = detail::allocateArray<PfrepStream>(a, model_count);
     void* task_memory = detail::allocateBytes(a, sizeof(Task) * options_.max_in_flight);
-    if (!slots_ || !slot_model_ || !candidates_ || !resident_table_ || !task_memory) {
+    if (!slots_ || !slot_model_ || !candidates_ || !resident_table_ || !pfrep_ || !task_memory) {
         detail::deallocateBytes(a, task_memory);
         slot_count_ = 0;
         release();
@@ -371,8 +404,47 @@ Result Streamer::init(const PackSource* source, const JobSystem* jobs, const Str
             slot_model_[model.first_level + l] = m;
         }
     }
+    pfrep_count_ = uint32_t(model_count);
+    for (uint32_t m = 0; m < pfrep_count_; ++m) initPfrepStream(m);
     rebuildResidentTable();
     return Result::Ok;
+}
+
+void Streamer::initPfrepStream(uint32_t m) {
+    PfrepStream& ps = *new (&pfrep_[m]) PfrepStream();
+    ps.data = nullptr;
+    ps.step = -1;
+    ps.state = PfrepStreamState::None;
+    const ModelSet& models = source_->models();
+    const Pack& pack = source_->pack();
+    const ModelInfo& info = models.model(m);
+    const LevelInfo& level0 = models.level(info.first_level);
+    if (level0.mesh == kNoIndex || level0.mesh >= pack.meshCount()) return;
+    const JsonValue ext = pack.mesh(level0.mesh).json.find("extensions").find("LODBAKE_progressive_fans");
+    if (!ext.isObject()) return;
+    ps.state = PfrepStreamState::Absent;
+    ps.step_count = info.level_count + 1;
+    // The extension object is as hostile as the blob: a bad one fails the stream, not the model.
+    uint64_t view = 0;
+    bool is_ok = ext.find("bufferView").asUint64(&view) && view < pack.bufferViewCount();
+    const JsonValue levels = ext.find("levels");
+    is_ok = is_ok && levels.isArray() && levels.size() >= info.level_count;
+    for (uint32_t l = 0; is_ok && l < info.level_count; ++l) {
+        uint64_t removals = 0;
+        is_ok = levels.at(l).find("removals").asUint64(&removals) && removals <= 0xffffffffu;
+        ps.removals[l] = uint32_t(removals);
+    }
+    if (is_ok) {
+        const BufferViewInfo& info_view = pack.bufferView(uint32_t(view));
+        ps.view = uint32_t(view);
+        ps.view_size = info_view.byte_length;
+        is_ok = pack.buffer(info_view.buffer).is_glb_bin && ps.view_size >= format::kPfrepHeaderSize;
+    }
+    if (!is_ok) {
+        ps.state = PfrepStreamState::Failed;
+        ps.is_failed = 1;
+        ++stats_.failures;
+    }
 }
 
 void Streamer::rebuildResidentTable() {
@@ -403,25 +475,99 @@ const uint8_t* Streamer::levelData(uint32_t model, uint32_t level, size_t* size)
     return s.data;
 }
 
+const PfrepModel* Streamer::pfrepModel(uint32_t model) const {
+    if (model >= pfrep_count_ || pfrep_[model].step < 0) return nullptr;
+    return &pfrep_[model].steps[pfrep_[model].step];
+}
+
+PfrepStreamState Streamer::pfrepState(uint32_t model) const {
+    return model < pfrep_count_ ? pfrep_[model].state : PfrepStreamState::None;
+}
+
+uint8_t Streamer::pfrepLevel(uint32_t model) const {
+    if (model >= pfrep_count_ || pfrep_[model].step <= 0) return kNoLevel;
+    return uint8_t(pfrep_[model].step_count - 1 - uint32_t(pfrep_[model].step));
+}
+
+namespace {
+
+void pointStepsAt(PfrepModel* steps, int32_t top, const uint8_t* data) {
+    for (int32_t p = 0; p <= top; ++p) steps[p].data = data;
+}
+
+} // namespace
+
 void Streamer::collect() {
+    const Allocator& a = options_.allocator;
     for (uint32_t i = 0; i < task_count_; ++i) {
         Task& t = tasks_[i];
         if (!t.is_busy || t.done.load(std::memory_order_acquire) == 0) continue;
-        Slot& s = slots_[t.slot];
-        stats_.in_flight_bytes -= s.size;
-        if (t.result == Result::Ok) {
-            s.state = LevelState::Resident;
-            stats_.resident_bytes += s.size;
-            stats_.streamed_bytes += s.size;
-            ++stats_.resident_levels;
-        } else {
-            detail::deallocateBytes(options_.allocator, s.data);
-            s.data = nullptr;
-            s.state = LevelState::Failed;
-            ++stats_.failures;
-        }
         t.is_busy = false;
         --busy_tasks_;
+        if (t.kind == Task::Kind::Level) {
+            Slot& s = slots_[t.slot];
+            stats_.in_flight_bytes -= s.size;
+            if (t.result == Result::Ok) {
+                s.state = LevelState::Resident;
+                stats_.resident_bytes += s.size;
+                stats_.streamed_bytes += s.size;
+                ++stats_.resident_levels;
+            } else {
+                detail::deallocateBytes(a, s.data);
+                s.data = nullptr;
+                s.state = LevelState::Failed;
+                ++stats_.failures;
+            }
+            continue;
+        }
+        PfrepStream& ps = pfrep_[t.slot];
+        Result r = t.result;
+        if (t.kind == Task::Kind::PfrepHeader) {
+            if (r == Result::Ok) {
+                stats_.streamed_bytes += t.size;
+                ps.directory_bytes = pfrepDirectoryBytes(ps.header, sizeof(ps.header));
+                if (ps.directory_bytes == 0 || ps.directory_bytes > ps.view_size) r = Result::BadStructure;
+            }
+        } else {
+            stats_.in_flight_bytes -= t.size;
+            if (r == Result::Ok && !t.has_prefix) {
+                // The directory arrived: the prefix each chain level needs, in step order (coarse first).
+                const PfrepModel& d = t.pfrep;
+                if (d.blob_size != ps.view_size) r = Result::BadStructure;
+                ps.step_bytes[0] = t.size;
+                for (uint32_t p = 1; r == Result::Ok && p < ps.step_count; ++p) {
+                    const uint32_t removals = ps.removals[ps.step_count - 1 - p];
+                    if (removals > d.removed_count) {
+                        r = Result::BadStructure;
+                        break;
+                    }
+                    const uint64_t bytes = pfrepPrefixBytesForLevel(d, removals);
+                    ps.step_bytes[p] = bytes > ps.step_bytes[p - 1] ? bytes : ps.step_bytes[p - 1];
+                    if (ps.step_bytes[p] > ps.view_size) r = Result::BadStructure;
+                }
+            }
+            if (r == Result::Ok) {
+                stats_.streamed_bytes += t.size - t.old_size;
+                detail::deallocateBytes(a, ps.data);
+                stats_.resident_bytes += t.size - t.old_size;
+                stats_.pfrep_resident_bytes += t.size - t.old_size;
+                ps.data = t.dst;
+                ++ps.step;
+                ps.steps[ps.step] = t.pfrep;
+                ps.steps[ps.step].criterion_table = nullptr;
+                pointStepsAt(ps.steps, ps.step, ps.data);
+            } else {
+                detail::deallocateBytes(a, t.dst);
+            }
+        }
+        t.dst = nullptr;
+        if (r == Result::Ok) {
+            ps.state = ps.step < 0 ? PfrepStreamState::Absent : PfrepStreamState::Resident;
+        } else {
+            ps.state = PfrepStreamState::Failed;
+            ps.is_failed = 1;
+            ++stats_.failures;
+        }
     }
 }
 
@@ -434,6 +580,26 @@ void Streamer::evict(uint32_t slot) {
     stats_.resident_bytes -= s.size;
     --stats_.resident_levels;
     ++stats_.evictions;
+}
+
+bool Streamer::shrinkPfrep(uint32_t stream) {
+    PfrepStream& ps = pfrep_[stream];
+    assert(ps.step > 0 && ps.state != PfrepStreamState::Loading);
+    const uint64_t from = ps.step_bytes[ps.step], to = ps.step_bytes[ps.step - 1];
+    if (to < from) {
+        // The shorter prefix is the same bytes: move them to a buffer of the shorter size.
+        uint8_t* data = static_cast<uint8_t*>(detail::allocateBytes(options_.allocator, size_t(to)));
+        if (!data) return false;
+        std::memcpy(data, ps.data, size_t(to));
+        detail::deallocateBytes(options_.allocator, ps.data);
+        ps.data = data;
+        stats_.resident_bytes -= from - to;
+        stats_.pfrep_resident_bytes -= from - to;
+    }
+    --ps.step;
+    pointStepsAt(ps.steps, ps.step, ps.data);
+    ++stats_.pfrep_shrinks;
+    return true;
 }
 
 void Streamer::update(const ModelDemand* demand) {
@@ -453,64 +619,166 @@ void Streamer::update(const ModelDemand* demand) {
         if (d.wanted_level == kNoLevel || l < d.wanted_level || !(d.priority > 0)) continue;
         s.usefulness = d.priority / float(1 + l - d.wanted_level);
     }
+    // PFRep prefixes: the directory is pinned; every step up to the one the wanted chain level needs
+    // is worth the model's priority (each is a prerequisite of the next, so they are not discounted
+    // by distance like levels); steps beyond it are worth nothing and are shrunk first.
+    for (uint32_t m = 0; m < pfrep_count_; ++m) {
+        PfrepStream& ps = pfrep_[m];
+        ps.usefulness = 0;
+        ps.held_usefulness = 0;
+        if (ps.state == PfrepStreamState::None) continue;
+        uint32_t target = 0;
+        float priority = 0;
+        if (demand && demand[m].wanted_level != kNoLevel && demand[m].priority > 0) {
+            const uint32_t wanted =
+                demand[m].wanted_level < ps.step_count - 1 ? demand[m].wanted_level : ps.step_count - 2;
+            target = ps.step_count - 1 - wanted;
+            priority = demand[m].priority;
+        }
+        if (ps.state == PfrepStreamState::Loading) continue;
+        // A step that adds no bytes (two chain levels in one block) needs no read.
+        while (!ps.is_failed && ps.step >= 0 && uint32_t(ps.step) < target &&
+               ps.step_bytes[ps.step + 1] == ps.step_bytes[ps.step]) {
+            ps.steps[ps.step + 1] = ps.steps[ps.step];
+            ++ps.step;
+        }
+        ps.held_usefulness = ps.step > 0 && uint32_t(ps.step) <= target ? priority : 0.0f;
+        if (ps.is_failed) continue;
+        if (ps.step < 0)
+            ps.usefulness = INFINITY;
+        else if (uint32_t(ps.step) < target)
+            ps.usefulness = priority;
+    }
+    const uint32_t stream_base = slot_count_;
+    auto usefulness = [this](uint32_t id) {
+        return id < slot_count_ ? slots_[id].usefulness : pfrep_[id - slot_count_].usefulness;
+    };
     uint32_t candidate_count = 0;
     for (uint32_t i = 0; i < slot_count_; ++i)
         if (slots_[i].state == LevelState::Absent && slots_[i].usefulness > 0 && slots_[i].size > 0)
             candidates_[candidate_count++] = i;
-    // Most useful first; ties by slot index so the order does not depend on the sort.
-    std::sort(candidates_, candidates_ + candidate_count, [this](uint32_t a, uint32_t b) {
-        if (slots_[a].usefulness != slots_[b].usefulness) return slots_[a].usefulness > slots_[b].usefulness;
+    for (uint32_t m = 0; m < pfrep_count_; ++m)
+        if (pfrep_[m].usefulness > 0) candidates_[candidate_count++] = stream_base + m;
+    // Most useful first; ties by id (levels before prefixes) so the order does not depend on the sort.
+    std::sort(candidates_, candidates_ + candidate_count, [&usefulness](uint32_t a, uint32_t b) {
+        const float ua = usefulness(a), ub = usefulness(b);
+        if (ua != ub) return ua > ub;
         return a < b;
     });
     uint32_t next_task = 0;
     for (uint32_t c = 0; c < candidate_count; ++c) {
         while (next_task < task_count_ && tasks_[next_task].is_busy) ++next_task;
         if (next_task == task_count_) break;
-        const uint32_t slot = candidates_[c];
-        Slot& s = slots_[slot];
+        const uint32_t id = candidates_[c];
+        const bool is_level = id < stream_base;
+        const float useful = usefulness(id);
+        PfrepStream* ps = is_level ? nullptr : &pfrep_[id - stream_base];
+        if (ps && ps->state == PfrepStreamState::Loading) continue; // collected inline and resubmitted
+        // Bytes held while the request runs: a level's buffer, or a prefix step's whole new buffer.
+        uint64_t size = 0;
+        bool is_pinned = false;
+        if (is_level) {
+            size = slots_[id].size;
+            is_pinned = slots_[id].is_coarsest != 0;
+        } else if (ps->step < 0) {
+            size = ps->directory_bytes; // 0 for the header, which lives in the stream itself
+            is_pinned = true;
+        } else {
+            size = ps->step_bytes[ps->step + 1];
+        }
         const uint64_t budget = options_.budget_bytes;
-        if (budget > 0 && !s.is_coarsest) {
-            // Evict the least useful resident levels that are worth less than this one, but only when
-            // that makes enough room: evicting and then skipping would reload the victims next frame.
+        if (budget > 0 && !is_pinned) {
+            // Evict the least useful resident levels (or shrink prefixes) that are worth less than
+            // this one, but only when that makes enough room: evicting and then skipping would reload
+            // the victims next frame.
             uint64_t reclaimable = 0;
             for (uint32_t i = 0; i < slot_count_; ++i) {
                 const Slot& v = slots_[i];
-                if (v.state == LevelState::Resident && !v.is_coarsest && v.usefulness < s.usefulness)
-                    reclaimable += v.size;
+                if (v.state == LevelState::Resident && !v.is_coarsest && v.usefulness < useful) reclaimable += v.size;
+            }
+            for (uint32_t m = 0; m < pfrep_count_; ++m) {
+                const PfrepStream& v = pfrep_[m];
+                if (v.step > 0 && v.state != PfrepStreamState::Loading && v.held_usefulness < useful)
+                    reclaimable += v.step_bytes[v.step] - v.step_bytes[0];
             }
             const uint64_t used = stats_.resident_bytes + stats_.in_flight_bytes;
-            if (used + s.size > budget + reclaimable) continue;
-            while (stats_.resident_bytes + stats_.in_flight_bytes + s.size > budget) {
-                uint32_t victim = slot_count_;
+            if (used + size > budget + reclaimable) continue;
+            while (stats_.resident_bytes + stats_.in_flight_bytes + size > budget) {
+                uint32_t victim = UINT32_MAX;
+                float victim_usefulness = 0;
                 for (uint32_t i = 0; i < slot_count_; ++i) {
                     const Slot& v = slots_[i];
-                    if (v.state != LevelState::Resident || v.is_coarsest || !(v.usefulness < s.usefulness)) continue;
-                    if (victim == slot_count_ || v.usefulness < slots_[victim].usefulness) victim = i;
+                    if (v.state != LevelState::Resident || v.is_coarsest || !(v.usefulness < useful)) continue;
+                    if (victim == UINT32_MAX || v.usefulness < victim_usefulness) {
+                        victim = i;
+                        victim_usefulness = v.usefulness;
+                    }
                 }
-                if (victim == slot_count_) break;
-                evict(victim);
+                for (uint32_t m = 0; m < pfrep_count_; ++m) {
+                    const PfrepStream& v = pfrep_[m];
+                    if (v.step <= 0 || v.state == PfrepStreamState::Loading || !(v.held_usefulness < useful)) continue;
+                    if (victim == UINT32_MAX || v.held_usefulness < victim_usefulness) {
+                        victim = stream_base + m;
+                        victim_usefulness = v.held_usefulness;
+                    }
+                }
+                if (victim == UINT32_MAX) break;
+                if (victim < stream_base) {
+                    evict(victim);
+                } else if (!shrinkPfrep(victim - stream_base)) {
+                    break;
+                }
             }
-            if (stats_.resident_bytes + stats_.in_flight_bytes + s.size > budget) continue;
+            if (stats_.resident_bytes + stats_.in_flight_bytes + size > budget) continue;
         }
-        uint8_t* data = static_cast<uint8_t*>(detail::allocateBytes(options_.allocator, size_t(s.size)));
-        if (!data) {
-            s.state = LevelState::Failed;
-            ++stats_.failures;
-            continue;
-        }
-        s.data = data;
-        s.state = LevelState::Loading;
-        s.task = next_task;
-        stats_.in_flight_bytes += s.size;
-        ++stats_.requests;
         Task& t = tasks_[next_task];
         t.source = source_;
-        t.model = slot_model_[slot];
-        t.level = slot - models.model(t.model).first_level;
-        t.dst = data;
-        t.size = size_t(s.size);
-        t.slot = slot;
         t.result = Result::Ok;
+        if (is_level) {
+            Slot& s = slots_[id];
+            uint8_t* data = static_cast<uint8_t*>(detail::allocateBytes(options_.allocator, size_t(s.size)));
+            if (!data) {
+                s.state = LevelState::Failed;
+                ++stats_.failures;
+                continue;
+            }
+            s.data = data;
+            s.state = LevelState::Loading;
+            s.task = next_task;
+            t.kind = Task::Kind::Level;
+            t.model = slot_model_[id];
+            t.level = id - models.model(t.model).first_level;
+            t.dst = data;
+            t.size = size_t(s.size);
+            t.slot = id;
+        } else {
+            t.slot = id - stream_base;
+            t.view = ps->view;
+            if (ps->step < 0 && ps->directory_bytes == 0) {
+                t.kind = Task::Kind::PfrepHeader;
+                t.dst = ps->header;
+                t.size = sizeof(ps->header);
+            } else {
+                uint8_t* data = static_cast<uint8_t*>(detail::allocateBytes(options_.allocator, size_t(size)));
+                if (!data) {
+                    ps->state = PfrepStreamState::Failed;
+                    ps->is_failed = 1;
+                    ++stats_.failures;
+                    continue;
+                }
+                t.kind = Task::Kind::PfrepStep;
+                t.dst = data;
+                t.size = size_t(size);
+                t.has_prefix = ps->step >= 0;
+                t.old_data = t.has_prefix ? ps->data : nullptr;
+                t.old_size = t.has_prefix ? size_t(ps->step_bytes[ps->step]) : 0;
+                if (t.has_prefix) t.pfrep = ps->steps[ps->step];
+                stats_.in_flight_bytes += size;
+            }
+            ps->state = PfrepStreamState::Loading;
+        }
+        if (is_level) stats_.in_flight_bytes += size;
+        ++stats_.requests;
         t.done.store(0, std::memory_order_relaxed);
         t.is_busy = true;
         ++busy_tasks_;

@@ -12,15 +12,25 @@
 // by how far the level is from the wanted one) and the least useful resident levels are evicted
 // to make room. Reads and copies run through the engine's job callback on its worker threads;
 // the frame only calls update() (request/poll), which never waits.
+//
+// A model whose level-0 mesh carries LODBAKE_progressive_fans also gets its PFRep blob streamed
+// as a growing prefix (format v2 stores the coarse end first): the header and block directory are
+// read first (pinned, like coarsest levels), then one step per job towards the prefix that holds
+// the PFRep level of the chain level the demand wants (pfrepPrefixBytesForLevel of that level's
+// `removals`). Each step is read with PackSource::readBufferView and validated by pfrepExtendPrefix
+// on the job. Prefix bytes count towards the budget; to make room the least useful prefix is
+// shrunk one step at a time (a shorter prefix stays valid), never below the directory.
 
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
 
 #include "lodrt/allocator.h"
+#include "lodrt/format.h"
 #include "lodrt/export.h"
 #include "lodrt/model.h"
 #include "lodrt/pack.h"
+#include "lodrt/pfrep.h"
 #include "lodrt/result.h"
 #include "lodrt/selection.h"
 
@@ -109,22 +119,32 @@ struct JobSystem {
 /// Zero-initialised means defaults.
 struct StreamerOptions {
     Allocator allocator;        // level memory and the streamer's tables
-    uint64_t budget_bytes = 0;  // resident + in-flight level bytes; 0 = unlimited. Coarsest levels
-                                // are always loaded and count towards it, but are never evicted.
+    uint64_t budget_bytes = 0;  // resident + in-flight level and PFRep prefix bytes; 0 = unlimited.
+                                // Coarsest levels and PFRep directories are always loaded and count
+                                // towards it, but are never evicted. A growing prefix holds its old
+                                // and its new buffer while the step is read: both count.
     uint32_t max_in_flight = 0; // jobs outstanding at once; 0 means 4
 };
 
 struct StreamStats {
-    uint64_t resident_bytes = 0;  // level bytes held now
-    uint64_t in_flight_bytes = 0; // level bytes being read
+    uint64_t resident_bytes = 0;  // level and PFRep prefix bytes held now
+    uint64_t in_flight_bytes = 0; // level and PFRep prefix buffer bytes being read
     uint64_t streamed_bytes = 0;  // total bytes read since init
     uint32_t resident_levels = 0;
     uint32_t requests = 0;  // jobs submitted since init
     uint32_t evictions = 0; // levels dropped since init
-    uint32_t failures = 0;  // levels whose read or check failed (never retried)
+    uint32_t failures = 0;  // levels or PFRep steps whose read or check failed (never retried)
+    uint64_t pfrep_resident_bytes = 0; // PFRep prefix bytes held now (part of resident_bytes)
+    uint32_t pfrep_shrinks = 0;        // PFRep prefixes shortened by one step to make room
 };
 
 enum class LevelState : uint8_t { Absent, Loading, Resident, Failed };
+
+/// None: the model has no LODBAKE_progressive_fans. Absent: not even the directory is resident yet.
+/// Loading: a step is being read (the previous prefix stays usable). Resident: a prefix is held.
+/// Failed: the header, directory, extension object or a step was bad; a prefix validated before
+/// the failure stays usable, but the stream never grows again.
+enum class PfrepStreamState : uint8_t { None, Absent, Loading, Resident, Failed };
 
 class LODRT_API Streamer {
 public:
@@ -150,6 +170,18 @@ public:
     /// Bytes of a resident level (as PackSource::readLevel wrote them), or null.
     const uint8_t* levelData(uint32_t model, uint32_t level, size_t* size) const;
     StreamStats stats() const { return stats_; }
+    /// The model's PFRep as streamed so far: a validated prefix (lodrt/pfrep.h) whose levels
+    /// k >= loaded_from can be extracted exactly as from the whole blob, and which selective
+    /// refinement can use as is. Null when the model has no PFRep or its directory has not arrived.
+    /// The model and the bytes it points to are valid until the next update() (a step that arrives
+    /// moves the bytes); criterion_table is always null (attach a table per prefix if wanted).
+    /// Instance masks stay valid while the prefix grows; when loaded_from rises (the prefix was
+    /// shrunk for the budget) reset them (pfrepMaskCoarsest) before refining again.
+    const PfrepModel* pfrepModel(uint32_t model) const;
+    PfrepStreamState pfrepState(uint32_t model) const;
+    /// Finest chain level whose PFRep level (`levels[l].removals` of the extension) the resident
+    /// prefix covers, or kNoLevel (directory only, no PFRep, bad model id).
+    uint8_t pfrepLevel(uint32_t model) const;
     /// True when no job is outstanding.
     bool idle() const { return busy_tasks_ == 0; }
 
@@ -164,8 +196,26 @@ private:
         LevelState state;
         uint8_t is_coarsest;
     };
+    struct PfrepStream {
+        PfrepModel steps[kMaxLevels + 1]; // validated prefix per step 0..step (0: directory only)
+        uint64_t step_bytes[kMaxLevels + 1]; // prefix bytes of each step, non-decreasing
+        uint32_t removals[kMaxLevels];        // PFRep level of each chain level
+        uint8_t header[format::kPfrepHeaderSize];
+        uint8_t* data;          // the resident prefix, step_bytes[step] bytes
+        uint32_t view;          // buffer view of the blob
+        uint64_t view_size;
+        uint64_t directory_bytes; // 0 until the header arrived
+        float usefulness;       // of the next step (candidate)
+        float held_usefulness;  // of the resident top step (eviction)
+        int32_t step;           // -1: no prefix yet
+        uint32_t step_count;    // chain levels + 1
+        PfrepStreamState state;
+        uint8_t is_failed;
+    };
     void collect();
     void evict(uint32_t slot);
+    bool shrinkPfrep(uint32_t stream);
+    void initPfrepStream(uint32_t model);
     void rebuildResidentTable();
     void release();
     const PackSource* source_ = nullptr;
@@ -179,6 +229,8 @@ private:
     uint32_t task_count_ = 0;
     uint32_t busy_tasks_ = 0;
     uint8_t* resident_table_ = nullptr;
+    PfrepStream* pfrep_ = nullptr; // one per model
+    uint32_t pfrep_count_ = 0;
     StreamStats stats_;
 };
 

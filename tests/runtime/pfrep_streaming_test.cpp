@@ -1,0 +1,428 @@
+// PfrepStreamingTest: the Streamer streams a model's LODBAKE_progressive_fans blob as a growing
+// prefix (lodrt/streaming.h). Lives in lodbake_tests because the pack is baked with the baker; the
+// code under test is runtime code only.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <deque>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "lodbake/bake/bake.h"
+#include "lodrt/pfrep.h"
+#include "lodrt/streaming.h"
+
+namespace {
+
+using lodrt::kNoLevel;
+using lodrt::ModelDemand;
+using lodrt::PackSource;
+using lodrt::PfrepStreamState;
+using lodrt::Result;
+using lodrt::Streamer;
+
+// A wavy height field of n x n vertices.
+lodbake::Mesh heightField(int n, float phase) {
+    lodbake::Mesh mesh;
+    for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x)
+            mesh.positions.push_back({float(x) / float(n - 1), float(y) / float(n - 1),
+                                      0.05f * std::sin(0.3f * float(x) + phase) * std::cos(0.25f * float(y))});
+    for (int y = 0; y + 1 < n; ++y)
+        for (int x = 0; x + 1 < n; ++x) {
+            const uint32_t a = uint32_t(y * n + x), b = a + 1, c = a + uint32_t(n), d = c + 1;
+            mesh.indices.insert(mesh.indices.end(), {a, b, d, a, d, c});
+        }
+    return mesh;
+}
+
+// Two models, each with a multi-block PFRep blob; baked once for the suite.
+const std::vector<uint8_t>& bakedPack() {
+    static const std::vector<uint8_t>* glb = [] {
+        lodbake::BakeSettings settings;
+        settings.lod_ratios = {0.5, 0.25, 0.1, 0.03};
+        settings.error_samples = 2000;
+        settings.threads = 2;
+        std::vector<lodbake::BakeInput> inputs(2);
+        inputs[0].name = "a";
+        inputs[0].mesh = heightField(64, 0.0f);
+        inputs[1].name = "b";
+        inputs[1].mesh = heightField(64, 1.0f);
+        lodbake::Diagnostics diagnostics;
+        auto baked = lodbake::bake(std::move(inputs), settings, diagnostics);
+        EXPECT_TRUE(baked.ok()) << baked.status().message();
+        return new std::vector<uint8_t>(baked.ok() ? baked->glb : std::vector<uint8_t>());
+    }();
+    return *glb;
+}
+
+// A range reader over a file in memory that counts the bytes it serves inside [watch_begin,
+// watch_end) and fails every read that reaches past `cut` and starts before watch_end (a blob cut
+// short, or a failing disk).
+struct File {
+    std::vector<uint8_t> bytes;
+    uint64_t cut = UINT64_MAX;
+    uint64_t watch_begin = 0, watch_end = 0;
+    uint64_t watched_bytes = 0;
+    static Result read(void* user, uint64_t offset, void* dst, size_t size) {
+        File* f = static_cast<File*>(user);
+        if (offset > f->bytes.size() || size > f->bytes.size() - offset) return Result::Truncated;
+        if (offset + size > f->cut && offset < f->watch_end) return Result::Truncated;
+        const uint64_t lo = std::max(offset, f->watch_begin), hi = std::min(offset + size, f->watch_end);
+        if (hi > lo) f->watched_bytes += hi - lo;
+        std::memcpy(dst, f->bytes.data() + offset, size);
+        return Result::Ok;
+    }
+    lodrt::RangeReader reader() { return lodrt::RangeReader{&File::read, this}; }
+};
+
+struct ManualJobs {
+    std::deque<std::pair<void (*)(void*), void*>> queue;
+    static void submit(void* user, void (*run)(void*), void* task) {
+        static_cast<ManualJobs*>(user)->queue.push_back({run, task});
+    }
+    void runAll() {
+        while (!queue.empty()) {
+            auto job = queue.front();
+            queue.pop_front();
+            job.first(job.second);
+        }
+    }
+    lodrt::JobSystem system() { return lodrt::JobSystem{&ManualJobs::submit, this}; }
+};
+
+// What the test knows about one model's blob, read straight from the pack.
+struct Blob {
+    uint32_t view = 0;
+    uint64_t file_offset = 0; // of the view's first byte in the GLB
+    std::vector<uint8_t> bytes;
+    lodrt::PfrepModel whole;
+    std::vector<uint32_t> removals; // per chain level
+};
+
+Blob blobOf(const PackSource& source, uint32_t model) {
+    Blob b;
+    const lodrt::Pack& pack = source.pack();
+    const lodrt::LevelInfo& level0 = source.models().modelLevel(model, 0);
+    const lodrt::JsonValue ext = pack.mesh(level0.mesh).json.find("extensions").find("LODBAKE_progressive_fans");
+    uint64_t view = 0;
+    EXPECT_TRUE(ext.find("bufferView").asUint64(&view));
+    b.view = uint32_t(view);
+    for (uint32_t l = 0; l < source.models().model(model).level_count; ++l) {
+        uint64_t k = 0;
+        EXPECT_TRUE(ext.find("levels").at(l).find("removals").asUint64(&k));
+        b.removals.push_back(uint32_t(k));
+    }
+    b.bytes.resize(pack.bufferView(b.view).byte_length);
+    EXPECT_EQ(source.readBufferView(b.view, 0, b.bytes.data(), b.bytes.size()), Result::Ok);
+    EXPECT_EQ(lodrt::openPfrep(b.bytes.data(), b.bytes.size(), &b.whole), Result::Ok);
+    uint32_t json_length = 0;
+    std::memcpy(&json_length, bakedPack().data() + 12, 4);
+    b.file_offset = 20 + uint64_t(json_length) + 8 + pack.bufferView(b.view).byte_offset;
+    return b;
+}
+
+std::vector<uint32_t> extract(const lodrt::PfrepModel& model, uint32_t level) {
+    std::vector<uint32_t> tris(3 * lodrt::pfrepMaxTriangles(model));
+    size_t count = 0;
+    EXPECT_EQ(lodrt::pfrepExtractLevel(model, level, tris.data(), tris.size() / 3, &count), Result::Ok);
+    tris.resize(3 * count);
+    return tris;
+}
+
+// Every chain level the streamed prefix claims to cover extracts exactly as from the whole blob.
+void expectCoveredLevelsMatch(const Streamer& streamer, uint32_t model, const Blob& blob) {
+    const lodrt::PfrepModel* m = streamer.pfrepModel(model);
+    ASSERT_NE(m, nullptr);
+    const uint8_t covered = streamer.pfrepLevel(model);
+    if (covered == kNoLevel) return;
+    for (uint32_t l = covered; l < blob.removals.size(); ++l) {
+        SCOPED_TRACE("chain level " + std::to_string(l));
+        ASSERT_GE(blob.removals[l], m->loaded_from);
+        EXPECT_EQ(extract(*m, blob.removals[l]), extract(blob.whole, blob.removals[l]));
+    }
+}
+
+void settle(Streamer& streamer, const ModelDemand* demand, uint64_t budget) {
+    for (int i = 0; i < 60; ++i) {
+        streamer.update(demand);
+        if (budget > 0) {
+            const lodrt::StreamStats s = streamer.stats();
+            EXPECT_LE(s.resident_bytes + s.in_flight_bytes, budget) << "update " << i;
+        }
+    }
+}
+
+} // namespace
+
+TEST(PfrepStreamingTest, PrefixGrowsWithDemandAndMatchesWholeBlob) {
+    File file;
+    file.bytes = bakedPack();
+    ASSERT_FALSE(file.bytes.empty());
+    PackSource source;
+    ASSERT_EQ(source.openReader(file.reader(), file.bytes.size(), nullptr), Result::Ok);
+    ASSERT_EQ(source.models().modelCount(), 2u);
+    const Blob blob = blobOf(source, 0);
+    const uint32_t levels = source.models().model(0).level_count;
+    ASSERT_GE(levels, 4u);
+    ASSERT_GT(blob.whole.block_count, 4u); // enough blocks for prefixes to differ
+    file.watch_begin = blob.file_offset;
+    file.watch_end = blob.file_offset + blob.bytes.size();
+
+    ManualJobs jobs;
+    const lodrt::JobSystem system = jobs.system();
+    Streamer streamer;
+    ASSERT_EQ(streamer.init(&source, &system, nullptr), Result::Ok);
+    // No demand: only the header, then the directory (pinned, like coarsest levels); never blocks.
+    streamer.update(nullptr);
+    EXPECT_EQ(streamer.pfrepState(0), PfrepStreamState::Loading);
+    EXPECT_EQ(streamer.pfrepModel(0), nullptr);
+    EXPECT_EQ(file.watched_bytes, 0u); // submitted, not run
+    for (int i = 0; i < 4; ++i) {
+        jobs.runAll();
+        streamer.update(nullptr);
+    }
+    ASSERT_EQ(streamer.pfrepState(0), PfrepStreamState::Resident);
+    const lodrt::PfrepModel* directory = streamer.pfrepModel(0);
+    ASSERT_NE(directory, nullptr);
+    EXPECT_EQ(directory->size, lodrt::pfrepDirectoryBytes(blob.bytes.data(), blob.bytes.size()));
+    EXPECT_EQ(streamer.pfrepLevel(0), kNoLevel);
+    EXPECT_EQ(file.watched_bytes, directory->size + lodrt::format::kPfrepHeaderSize);
+
+    // Demand rises from the coarsest chain level to full detail: the prefix grows to exactly the
+    // bytes that level needs, and every covered level extracts as from the whole blob.
+    std::vector<ModelDemand> demand(2);
+    uint64_t previous = directory->size;
+    std::vector<uint64_t> sizes;
+    for (uint32_t wanted = levels; wanted-- > 0;) {
+        SCOPED_TRACE("wanted level " + std::to_string(wanted));
+        demand[0] = {uint8_t(wanted), 5.0f};
+        for (int i = 0; i < 12; ++i) {
+            streamer.update(demand.data());
+            jobs.runAll();
+        }
+        streamer.update(demand.data());
+        ASSERT_EQ(streamer.pfrepState(0), PfrepStreamState::Resident);
+        EXPECT_EQ(streamer.pfrepLevel(0), wanted);
+        const lodrt::PfrepModel* m = streamer.pfrepModel(0);
+        ASSERT_NE(m, nullptr);
+        uint64_t needed = lodrt::pfrepPrefixBytesForLevel(blob.whole, blob.removals[wanted]);
+        if (needed < previous) needed = previous;
+        EXPECT_EQ(m->size, needed);
+        EXPECT_GE(m->size, previous);
+        EXPECT_EQ(std::memcmp(m->data, blob.bytes.data(), m->size), 0);
+        // Nothing beyond the prefix was read, and nothing twice.
+        EXPECT_EQ(file.watched_bytes, m->size + lodrt::format::kPfrepHeaderSize);
+        expectCoveredLevelsMatch(streamer, 0, blob);
+        previous = m->size;
+        if (sizes.empty() || sizes.back() != m->size) sizes.push_back(m->size);
+        // Model 1 had no demand: directory only.
+        EXPECT_EQ(streamer.pfrepLevel(1), kNoLevel);
+    }
+    EXPECT_LT(lodrt::pfrepPrefixBytesForLevel(blob.whole, blob.removals[levels - 1]), blob.bytes.size());
+    EXPECT_EQ(previous, blob.bytes.size());
+    EXPECT_GE(sizes.size(), 3u);                        // the prefix really grew in steps, not in one read
+    EXPECT_EQ(streamer.pfrepModel(0)->loaded_from, 0u); // complete
+    // One buffer per model: model 0's whole blob, model 1's directory.
+    EXPECT_EQ(streamer.stats().pfrep_resident_bytes,
+              blob.bytes.size() + lodrt::pfrepDirectoryBytes(blobOf(source, 1).bytes.data(), 64));
+}
+
+TEST(PfrepStreamingTest, BudgetShrinksLeastUsefulPrefix) {
+    const std::vector<uint8_t>& bytes = bakedPack();
+    ASSERT_FALSE(bytes.empty());
+    PackSource source;
+    ASSERT_EQ(source.openBytes(bytes.data(), bytes.size(), nullptr), Result::Ok);
+    const Blob blob0 = blobOf(source, 0), blob1 = blobOf(source, 1);
+    // Pinned bytes first (coarsest levels and directories), measured without a budget.
+    uint64_t pinned = 0;
+    {
+        Streamer probe;
+        ASSERT_EQ(probe.init(&source, nullptr, nullptr), Result::Ok);
+        for (int i = 0; i < 4; ++i) probe.update(nullptr);
+        pinned = probe.stats().resident_bytes;
+    }
+    // Room for one model's finest level and the growth of one blob (old and new buffers), not two.
+    lodrt::StreamerOptions options;
+    options.budget_bytes = pinned + std::max(source.levelBytes(0, 0), source.levelBytes(1, 0)) +
+                           2 * std::max(blob0.bytes.size(), blob1.bytes.size());
+    Streamer streamer;
+    ASSERT_EQ(streamer.init(&source, nullptr, &options), Result::Ok); // inline jobs
+    std::vector<ModelDemand> demand(2);
+    demand[0] = {0, 10.0f};
+    settle(streamer, demand.data(), options.budget_bytes);
+    EXPECT_EQ(streamer.pfrepLevel(0), 0);
+    EXPECT_EQ(streamer.pfrepLevel(1), kNoLevel);
+    EXPECT_EQ(streamer.stats().pfrep_shrinks, 0u);
+    expectCoveredLevelsMatch(streamer, 0, blob0);
+
+    // The camera turns: model 1 wants full detail, model 0 nothing. Model 0's prefix is shrunk step
+    // by step to make room, stays valid, and model 1's grows to the whole blob.
+    demand[0] = {kNoLevel, 0.0f};
+    demand[1] = {0, 10.0f};
+    settle(streamer, demand.data(), options.budget_bytes);
+    EXPECT_EQ(streamer.pfrepLevel(1), 0);
+    EXPECT_GT(streamer.stats().pfrep_shrinks, 0u);
+    EXPECT_NE(streamer.pfrepLevel(0), 0);
+    ASSERT_NE(streamer.pfrepModel(0), nullptr); // the directory is never dropped
+    EXPECT_LT(streamer.pfrepModel(0)->size, blob0.bytes.size());
+    expectCoveredLevelsMatch(streamer, 0, blob0);
+    expectCoveredLevelsMatch(streamer, 1, blob1);
+    // And back: the shrunk prefix grows again from where it stopped.
+    demand[0] = {0, 10.0f};
+    demand[1] = {kNoLevel, 0.0f};
+    settle(streamer, demand.data(), options.budget_bytes);
+    EXPECT_EQ(streamer.pfrepLevel(0), 0);
+    expectCoveredLevelsMatch(streamer, 0, blob0);
+}
+
+TEST(PfrepStreamingTest, TruncatedReadsFailTheStreamNotTheFrame) {
+    File good;
+    good.bytes = bakedPack();
+    ASSERT_FALSE(good.bytes.empty());
+    PackSource probe;
+    ASSERT_EQ(probe.openReader(good.reader(), good.bytes.size(), nullptr), Result::Ok);
+    const Blob blob = blobOf(probe, 0);
+    const uint64_t directory = lodrt::pfrepDirectoryBytes(blob.bytes.data(), blob.bytes.size());
+    // The file is cut (reads fail) at points across model 0's blob: the stream keeps the longest
+    // prefix it validated before the cut, reports Failed, and never reads or grows again.
+    std::vector<uint64_t> cuts;
+    for (uint64_t cut = 0; cut < blob.bytes.size(); cut += 97) cuts.push_back(cut);
+    cuts.insert(cuts.end(), {directory - 1, directory, blob.bytes.size() - 1, blob.bytes.size()});
+    int failed = 0, resident = 0;
+    for (const uint64_t cut : cuts) {
+        File file = good;
+        file.cut = blob.file_offset + cut;
+        file.watch_begin = blob.file_offset;
+        file.watch_end = blob.file_offset + blob.bytes.size();
+        PackSource source;
+        ASSERT_EQ(source.openReader(file.reader(), file.bytes.size(), nullptr), Result::Ok);
+        Streamer streamer;
+        ASSERT_EQ(streamer.init(&source, nullptr, nullptr), Result::Ok);
+        std::vector<ModelDemand> demand(2, ModelDemand{0, 1.0f});
+        for (int i = 0; i < 20; ++i) streamer.update(demand.data());
+        const PfrepStreamState state = streamer.pfrepState(0);
+        const lodrt::PfrepModel* m = streamer.pfrepModel(0);
+        if (cut < blob.bytes.size()) {
+            EXPECT_EQ(state, PfrepStreamState::Failed) << cut;
+            ++failed;
+        } else {
+            EXPECT_EQ(state, PfrepStreamState::Resident);
+            ++resident;
+        }
+        if (cut < directory) {
+            EXPECT_EQ(m, nullptr) << cut;
+        } else {
+            ASSERT_NE(m, nullptr) << cut;
+            EXPECT_LE(m->size, cut);
+            expectCoveredLevelsMatch(streamer, 0, blob);
+        }
+        EXPECT_EQ(streamer.pfrepLevel(1), 0); // the other model is not affected
+        if (cut < blob.bytes.size()) {
+            EXPECT_GT(streamer.stats().failures, 0u);
+        }
+    }
+    EXPECT_GT(failed, 5);
+    EXPECT_EQ(resident, 1);
+}
+
+TEST(PfrepStreamingTest, CorruptBlobsAndObjectsNeverCrash) {
+    const std::vector<uint8_t>& good = bakedPack();
+    ASSERT_FALSE(good.empty());
+    PackSource probe;
+    ASSERT_EQ(probe.openBytes(good.data(), good.size(), nullptr), Result::Ok);
+    const Blob blob = blobOf(probe, 0);
+    uint32_t seed = 99;
+    auto next = [&seed] {
+        seed = seed * 1664525u + 1013904223u;
+        return seed >> 8;
+    };
+    int failed = 0;
+    for (int iteration = 0; iteration < 300; ++iteration) {
+        std::vector<uint8_t> bytes = good;
+        // Flip bytes inside model 0's blob, mostly in its header and directory.
+        const uint64_t span = iteration % 2 ? blob.bytes.size() : std::min<uint64_t>(blob.bytes.size(), 256);
+        for (int e = 0; e < 1 + iteration % 3; ++e)
+            bytes[blob.file_offset + next() % span] ^= uint8_t(1 + next() % 255);
+        PackSource source;
+        ASSERT_EQ(source.openBytes(bytes.data(), bytes.size(), nullptr), Result::Ok);
+        Streamer streamer;
+        ASSERT_EQ(streamer.init(&source, nullptr, nullptr), Result::Ok);
+        std::vector<ModelDemand> demand(2, ModelDemand{0, 1.0f});
+        for (int i = 0; i < 20; ++i) streamer.update(demand.data());
+        const lodrt::PfrepModel* m = streamer.pfrepModel(0);
+        if (streamer.pfrepState(0) == PfrepStreamState::Failed) ++failed;
+        if (!m) continue;
+        // Whatever was accepted was validated: extracting its loaded levels stays inside the bytes.
+        std::vector<uint32_t> tris(3 * lodrt::pfrepMaxTriangles(*m));
+        size_t count = 0;
+        for (uint32_t k = m->loaded_from; k <= m->removed_count; k += 1 + m->removed_count / 8)
+            EXPECT_EQ(lodrt::pfrepExtractLevel(*m, k, tris.data(), tris.size() / 3, &count), Result::Ok);
+    }
+    EXPECT_GT(failed, 10);
+
+    // A hostile extension object (removals past the blob's removed count) fails the stream only.
+    const std::string needle = "\"removals\":";
+    std::vector<uint8_t> bytes = good;
+    auto at = std::search(bytes.begin(), bytes.end(), needle.begin(), needle.end());
+    ASSERT_NE(at, bytes.end());
+    // The first entry is level 0 ("removals":0); make it 9 (still valid JSON, same length).
+    ASSERT_EQ(*(at + long(needle.size())), '0');
+    const std::string level1 = "\"removals\":";
+    auto second = std::search(at + 1, bytes.end(), level1.begin(), level1.end());
+    ASSERT_NE(second, bytes.end());
+    // Give chain level 1 more removals than the blob has by rewriting its digits to 9s.
+    std::string digits;
+    for (auto p = second + long(level1.size()); p != bytes.end() && *p >= '0' && *p <= '9'; ++p) {
+        *p = '9';
+        digits += '9';
+    }
+    ASSERT_GT(std::stoull(digits), uint64_t(blob.whole.removed_count));
+    PackSource source;
+    ASSERT_EQ(source.openBytes(bytes.data(), bytes.size(), nullptr), Result::Ok);
+    Streamer streamer;
+    ASSERT_EQ(streamer.init(&source, nullptr, nullptr), Result::Ok);
+    std::vector<ModelDemand> demand(2, ModelDemand{0, 1.0f});
+    for (int i = 0; i < 20; ++i) streamer.update(demand.data());
+    // Whichever model's object was edited fails when its directory arrives; the other streams on.
+    const uint32_t bad = streamer.pfrepState(0) == PfrepStreamState::Failed ? 0 : 1;
+    EXPECT_EQ(streamer.pfrepState(bad), PfrepStreamState::Failed);
+    EXPECT_EQ(streamer.pfrepLevel(bad), kNoLevel);
+    EXPECT_EQ(streamer.pfrepState(1 - bad), PfrepStreamState::Resident);
+    EXPECT_EQ(streamer.pfrepLevel(1 - bad), 0);
+}
+
+TEST(PfrepStreamingTest, WorkerThreadsReachTheSameResult) {
+    const std::vector<uint8_t>& bytes = bakedPack();
+    ASSERT_FALSE(bytes.empty());
+    PackSource source;
+    ASSERT_EQ(source.openBytes(bytes.data(), bytes.size(), nullptr), Result::Ok);
+    const Blob blob = blobOf(source, 1);
+    // Each job on its own thread: steps complete while the frame keeps calling update().
+    struct Threads {
+        std::vector<std::thread> running;
+        static void submit(void* user, void (*run)(void*), void* task) {
+            static_cast<Threads*>(user)->running.emplace_back(run, task);
+        }
+    } threads;
+    const lodrt::JobSystem system{&Threads::submit, &threads};
+    {
+        Streamer streamer;
+        ASSERT_EQ(streamer.init(&source, &system, nullptr), Result::Ok);
+        std::vector<ModelDemand> demand(2);
+        demand[1] = {0, 3.0f};
+        for (int frame = 0; frame < 20000 && streamer.pfrepLevel(1) != 0; ++frame) {
+            streamer.update(demand.data());
+            std::this_thread::yield();
+        }
+        ASSERT_EQ(streamer.pfrepLevel(1), 0);
+        EXPECT_EQ(streamer.pfrepModel(1)->size, blob.bytes.size());
+        expectCoveredLevelsMatch(streamer, 1, blob);
+        EXPECT_EQ(streamer.pfrepLevel(0), kNoLevel);
+    } // the destructor waits for jobs still running
+    for (std::thread& t : threads.running) t.join();
+}
