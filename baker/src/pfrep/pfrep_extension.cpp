@@ -17,7 +17,18 @@ Result<PfrepExtensionObject> buildPfrepExtension(const Mesh& lod0, const std::ve
             return invalidInput("LODBAKE_progressive_fans: level " + std::to_string(l) +
                                 ": ratio: expected a value in (0, 1]");
     if (lod0.faceCount() == 0) return invalidInput("LODBAKE_progressive_fans: the mesh has no triangle");
-    LODBAKE_ASSIGN_OR_RETURN(PfrepBuild build, buildPfrep(lod0, options, diagnostics));
+    // The blob stores positions only, so its collapse order is chosen on the geometry alone: the
+    // attributes' quadrics and seams would cost time and memory (per-wedge quadrics of the whole
+    // full-detail mesh) and only steer the order towards data the blob does not keep. Materials go
+    // too: the blob is one set of triangles.
+    Mesh geometry;
+    const bool has_attributes = lod0.hasNormals() || lod0.hasTangents() || lod0.hasColors() || !lod0.uvs.empty() ||
+                                !lod0.submeshes.empty();
+    if (has_attributes) {
+        geometry.positions = lod0.positions;
+        geometry.indices = lod0.indices;
+    }
+    LODBAKE_ASSIGN_OR_RETURN(PfrepBuild build, buildPfrep(has_attributes ? geometry : lod0, options, diagnostics));
     PfrepExtensionObject out;
     out.vertex_count = uint32_t(build.rank_point.size());
     out.removed_count = uint32_t(build.removed);
