@@ -103,34 +103,6 @@ Result<TextureLevels> textureLevels(const Mesh& lod0, size_t level_count, const 
     return out;
 }
 
-// Measures every level against LOD0 (one level at a time, each in parallel inside, so only one
-// level's BVH and samples exist at once) and derives the switch distances as buildLodChain does
-// when it measures: from the measured Hausdorff error, else the quadric estimate, non-decreasing.
-void measureLevels(const Mesh& lod0, LodChain& chain, const LodChainOptions& options, Diagnostics& diagnostics) {
-    Result<DistanceReference> reference = DistanceReference::prepare(lod0);
-    if (!reference.ok()) diagnostics.warn("lod chain: errors not measured: " + reference.status().message());
-    for (size_t i = 0; reference.ok() && i < chain.levels.size(); ++i) {
-        LodLevel& level = chain.levels[i];
-        std::vector<Result<DistanceResult>> measured =
-            measureSurfaceDistances(*reference, {&level.mesh}, options.distance);
-        const Result<DistanceResult>& d = measured.at(0);
-        if (!d.ok()) {
-            diagnostics.warn("lod chain: level ratio " + std::to_string(level.target_ratio) +
-                             ": error not measured: " + d.status().message());
-            continue;
-        }
-        level.has_distance = true;
-        level.distance = *d;
-    }
-    double previous = 0.0;
-    for (LodLevel& level : chain.levels) {
-        const double e = level.has_distance ? level.distance.hausdorff : level.quadric_error;
-        level.switch_distance = std::max(previous, switchDistance(e, options.screen));
-        previous = level.switch_distance;
-        level.screen_coverage = screenCoverage(chain.bounding_radius, level.switch_distance, options.screen);
-    }
-}
-
 // After the chain, the remaining work of an asset is a fixed set of tasks that only read the
 // meshes (STYLE.md §7: each writes its own slot; which thread runs which, and when, changes no
 // byte): the error measurement (then the metrics and texture levels that follow from it), and the
@@ -180,7 +152,7 @@ Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vect
         if (task == 0) {
             {
                 StageTimer timer(hooks, index, BakeStage::Measure);
-                measureLevels(mesh, chain, chain_options, measure_diagnostics);
+                measureLodChain(mesh, chain, chain_options, measure_diagnostics);
                 metrics = lodMetrics(mesh, chain, screen, settings.hysteresis);
             }
             StageTimer timer(hooks, index, BakeStage::Textures);

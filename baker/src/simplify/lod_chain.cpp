@@ -74,37 +74,44 @@ Result<LodChain> buildLodChain(const Mesh& mesh, const LodChainOptions& options,
 #if defined(__GLIBC__)
     malloc_trim(0); // glibc would otherwise keep most of the engine's freed pages resident
 #endif
-    if (options.measure_error) {
-        // The input's BVH is built once for all levels.
-        Result<DistanceReference> reference = DistanceReference::prepare(mesh);
-        if (!reference.ok()) diagnostics.warn("lod chain: errors not measured: " + reference.status().message());
-        // One level at a time, so only one level's BVH and samples exist at once (each measurement is
-        // parallel inside). The reference's samples are drawn again per level: the same points each
-        // time, so the results do not depend on this.
-        for (size_t i = 0; reference.ok() && i < chain.levels.size(); ++i) {
-            LodLevel& level = chain.levels[i];
-            std::vector<Result<DistanceResult>> measured =
-                measureSurfaceDistances(*reference, {&level.mesh}, options.distance);
-            const Result<DistanceResult>& d = measured.at(0);
-            if (!d.ok()) {
-                diagnostics.warn("lod chain: level ratio " + std::to_string(level.target_ratio) +
-                                 ": error not measured: " + d.status().message());
-                continue;
-            }
-            level.has_distance = true;
-            level.distance = *d;
+    if (options.measure_error)
+        measureLodChain(mesh, chain, options, diagnostics);
+    else
+        updateSwitchDistances(chain, options.screen);
+    return chain;
+}
+
+void measureLodChain(const Mesh& mesh, LodChain& chain, const LodChainOptions& options, Diagnostics& diagnostics) {
+    // The input's BVH is built once for all levels.
+    Result<DistanceReference> reference = DistanceReference::prepare(mesh);
+    if (!reference.ok()) diagnostics.warn("lod chain: errors not measured: " + reference.status().message());
+    // One level at a time, so only one level's BVH and samples exist at once (each measurement is
+    // parallel inside). The reference's samples are drawn again per level: the same points each
+    // time, so the results do not depend on this.
+    for (size_t i = 0; reference.ok() && i < chain.levels.size(); ++i) {
+        LodLevel& level = chain.levels[i];
+        std::vector<Result<DistanceResult>> measured =
+            measureSurfaceDistances(*reference, {&level.mesh}, options.distance);
+        const Result<DistanceResult>& d = measured.at(0);
+        if (!d.ok()) {
+            diagnostics.warn("lod chain: level ratio " + std::to_string(level.target_ratio) +
+                             ": error not measured: " + d.status().message());
+            continue;
         }
+        level.has_distance = true;
+        level.distance = *d;
     }
-    // Switch distances use the measured Hausdorff error when there is one, else the quadric
-    // estimate; they are made non-decreasing down the chain so selection by distance is monotone.
+    updateSwitchDistances(chain, options.screen);
+}
+
+void updateSwitchDistances(LodChain& chain, const ScreenParams& screen) {
     double previous = 0.0;
     for (LodLevel& level : chain.levels) {
         const double e = level.has_distance ? level.distance.hausdorff : level.quadric_error;
-        level.switch_distance = std::max(previous, switchDistance(e, options.screen));
+        level.switch_distance = std::max(previous, switchDistance(e, screen));
         previous = level.switch_distance;
-        level.screen_coverage = screenCoverage(chain.bounding_radius, level.switch_distance, options.screen);
+        level.screen_coverage = screenCoverage(chain.bounding_radius, level.switch_distance, screen);
     }
-    return chain;
 }
 
 } // namespace lodbake

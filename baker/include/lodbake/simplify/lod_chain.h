@@ -102,4 +102,15 @@ double screenCoverage(double radius, double distance, const ScreenParams& screen
 /// reached_target = false and a note. Fails on invalid input or options.
 Result<LodChain> buildLodChain(const Mesh& mesh, const LodChainOptions& options, Diagnostics& diagnostics);
 
+/// Measures every level of `chain` against `mesh` (what buildLodChain does when options.measure_error
+/// is set; one level at a time, each in parallel inside, so only one level's BVH and samples exist at
+/// once), then derives the switch distances and coverages as updateSwitchDistances does. A level
+/// that cannot be measured keeps its quadric estimate, with a warning.
+void measureLodChain(const Mesh& mesh, LodChain& chain, const LodChainOptions& options, Diagnostics& diagnostics);
+
+/// Switch distance and screen coverage of every level: from its measured Hausdorff error when there
+/// is one, else its quadric estimate, made non-decreasing down the chain so selection by distance is
+/// monotone.
+void updateSwitchDistances(LodChain& chain, const ScreenParams& screen);
+
 } // namespace lodbake
