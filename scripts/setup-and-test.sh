@@ -4,7 +4,7 @@
 #  2. Release build with warnings as errors, every test with CTest;
 #  3. sanitizer build (Clang, AddressSanitizer + UndefinedBehaviorSanitizer, findings abort; the
 #     runtime still without exceptions), every test again, plus the libFuzzer targets;
-#  4. fuzz smoke: each fuzz target for LODBAKE_FUZZ_SMOKE_SECONDS (default 15) from its seeds.
+#  4. fuzz smoke: each fuzz target for LODBAKE_FUZZ_SMOKE_SECONDS (default 8) from its seeds.
 # Set LODBAKE_SKIP_SANITIZERS=1 to stop after step 2. Timings of each step are printed at the end.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -49,7 +49,7 @@ if [ "${LODBAKE_SKIP_SANITIZERS:-0}" != 1 ]; then
         ctest --test-dir "$asan_dir" --output-on-failure --parallel "$jobs" --timeout 1800
     step "sanitizer tests"
 
-    smoke=${LODBAKE_FUZZ_SMOKE_SECONDS:-15}
+    smoke=${LODBAKE_FUZZ_SMOKE_SECONDS:-8}
     for target in ply obj off gltf preset lod pack pfrep valence; do
         echo "fuzz smoke: $target ${smoke}s"
         LODBAKE_FUZZ_BUILD_DIR="$asan_dir" LODBAKE_FUZZ_NO_BUILD=1 LODBAKE_CLI="$build_dir/baker/lodbake" \
