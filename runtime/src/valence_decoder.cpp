@@ -466,6 +466,25 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
     const int32_t qmax = int32_t((1u << info.position_bits) - 1);
     int32_t last[3] = {(qmax + 1) / 2, (qmax + 1) / 2, (qmax + 1) / 2};
     uint32_t prev_sign[3] = {0, 0, 0};
+    // One vertex: x, then y and z in the context of the earlier residual lengths and signs, each
+    // residual added to `pred`. False on a corrupt stream or a coordinate outside [0, qmax].
+    auto decodeVertex = [&](uint32_t ctx, const int32_t* pred, int32_t* out) {
+        uint32_t earlier = kNone, x_sign = 0;
+        for (int j = 0; j < 3; ++j) {
+            int32_t res;
+            uint32_t length;
+            if (!pos_model.decode(pos, j, detail::positionContext(ctx, earlier), &res, &length,
+                                  prev_sign[j] * 3 + x_sign))
+                return false;
+            prev_sign[j] = detail::signClass(res);
+            if (j == 0) x_sign = prev_sign[0];
+            earlier = earlier == kNone || length > earlier ? length : earlier;
+            const int32_t value = pred[j] + res;
+            if (value < 0 || value > qmax) return false;
+            out[j] = value;
+        }
+        return true;
+    };
     // detail::positionOrder and detail::predictPosition fused into one walk around each vertex (the
     // encoder runs them separately; the round-trip tests hold the two to the same result). The node
     // arrays are free again: they hold the order's degree counts and stacks.
@@ -555,21 +574,7 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
             } else {
                 for (int k = 0; k < 3; ++k) pred[k] = last[k];
             }
-            const uint32_t ctx = detail::scaleContext(scale, count);
-            uint32_t earlier = kNone, x_sign = 0;
-            for (int j = 0; j < 3; ++j) {
-                int32_t res;
-                uint32_t length;
-                if (!pos_model.decode(pos, j, detail::positionContext(ctx, earlier), &res, &length,
-                                      prev_sign[j] * 3 + x_sign))
-                    return Result::CorruptStream;
-                prev_sign[j] = detail::signClass(res);
-                if (j == 0) x_sign = prev_sign[0];
-                earlier = earlier == kNone || length > earlier ? length : earlier;
-                const int32_t value = pred[j] + res;
-                if (value < 0 || value > qmax) return Result::CorruptStream;
-                q[j] = value;
-            }
+            if (!decodeVertex(detail::scaleContext(scale, count), pred, q)) return Result::CorruptStream;
             qf[0] = q[0];
             qf[1] = q[1];
             qf[2] = q[2];
@@ -582,21 +587,11 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
         if (pos.overrun()) return Result::CorruptStream;
     }
     for (size_t fid = final_count; fid < vn; ++fid) {
-        const uint32_t ctx = detail::scaleContext(0, 0);
-        uint32_t earlier = kNone, x_sign = 0;
-        for (int j = 0; j < 3; ++j) {
-            int32_t res;
-            uint32_t length;
-            if (!pos_model.decode(pos, j, detail::positionContext(ctx, earlier), &res, &length,
-                                  prev_sign[j] * 3 + x_sign))
-                return Result::CorruptStream;
-            prev_sign[j] = detail::signClass(res);
-            if (j == 0) x_sign = prev_sign[0];
-            earlier = earlier == kNone || length > earlier ? length : earlier;
-            const int32_t value = last[j] + res;
-            if (value < 0 || value > qmax) return Result::CorruptStream;
-            qpos_final[3 * fid + size_t(j)] = last[j] = value;
-        }
+        int32_t* qf = &qpos_final[3 * fid];
+        if (!decodeVertex(detail::scaleContext(0, 0), last, qf)) return Result::CorruptStream;
+        last[0] = qf[0];
+        last[1] = qf[1];
+        last[2] = qf[2];
     }
     if (!pos.finishedExactly()) return Result::CorruptStream;
     const float step = qmax > 0 ? info.cube_size / float(qmax) : 0.0f;

@@ -15,6 +15,7 @@
 #include "lodbake/bake/bake.h"
 #include "lodrt/pfrep.h"
 #include "lodrt/streaming.h"
+#include "manual_jobs.h"
 
 namespace {
 
@@ -24,6 +25,7 @@ using lodrt::PackSource;
 using lodrt::PfrepStreamState;
 using lodrt::Result;
 using lodrt::Streamer;
+using lodrt_test::ManualJobs;
 
 // A wavy height field of n x n vertices.
 lodbake::Mesh heightField(int n, float phase) {
@@ -78,21 +80,6 @@ struct File {
         return Result::Ok;
     }
     lodrt::RangeReader reader() { return lodrt::RangeReader{&File::read, this}; }
-};
-
-struct ManualJobs {
-    std::deque<std::pair<void (*)(void*), void*>> queue;
-    static void submit(void* user, void (*run)(void*), void* task) {
-        static_cast<ManualJobs*>(user)->queue.push_back({run, task});
-    }
-    void runAll() {
-        while (!queue.empty()) {
-            auto job = queue.front();
-            queue.pop_front();
-            job.first(job.second);
-        }
-    }
-    lodrt::JobSystem system() { return lodrt::JobSystem{&ManualJobs::submit, this}; }
 };
 
 // What the test knows about one model's blob, read straight from the pack.

@@ -8,6 +8,7 @@
 
 #include "lod_pack_builder.h"
 #include "lodrt/streaming.h"
+#include "manual_jobs.h"
 
 using lodrt::kMaxLevels;
 using lodrt::kNoLevel;
@@ -20,6 +21,8 @@ using lodrt::Streamer;
 
 namespace {
 
+using lodrt_test::ManualJobs;
+
 struct File {
     std::vector<uint8_t> bytes;
     std::vector<std::pair<uint64_t, size_t>> reads;
@@ -31,22 +34,6 @@ struct File {
         return Result::Ok;
     }
     RangeReader reader() { return RangeReader{&File::read, this}; }
-};
-
-// A job system whose queue the test drains by hand, to show update() never waits.
-struct ManualJobs {
-    std::deque<std::pair<void (*)(void*), void*>> queue;
-    static void submit(void* user, void (*run)(void*), void* task) {
-        static_cast<ManualJobs*>(user)->queue.push_back({run, task});
-    }
-    void runAll() {
-        while (!queue.empty()) {
-            auto job = queue.front();
-            queue.pop_front();
-            job.first(job.second);
-        }
-    }
-    lodrt::JobSystem system() { return lodrt::JobSystem{&ManualJobs::submit, this}; }
 };
 
 } // namespace
