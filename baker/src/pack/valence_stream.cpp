@@ -172,6 +172,8 @@ Result<PackStreamCommit> prepareMulti(const ValencePrecision& precision, const s
                                    mesh.indices.begin() + range.first_index + range.index_count);
         std::sort(used.begin(), used.end());
         used.erase(std::unique(used.begin(), used.end()), used.end());
+        if (!used.empty() && used.back() >= mesh.vertexCount())
+            return internalError(where + ": sub-mesh " + std::to_string(p) + " uses a vertex the level does not have");
         for (size_t i = 0; i < used.size(); ++i) local_of[used[i]] = uint32_t(i);
         Mesh local;
         local.positions = gather(mesh.positions, used);
