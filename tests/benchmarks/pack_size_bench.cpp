@@ -64,7 +64,10 @@ void printLevels(const std::vector<uint8_t>& glb, const lodbake::LodMetrics& met
         const lodrt::MeshInfo& mesh = pack.mesh(m);
         for (uint32_t p = mesh.first_primitive; p < mesh.first_primitive + mesh.primitive_count; ++p) {
             uint64_t view = 0;
-            if (!pack.primitive(p).json.find("extensions").find("LODBAKE_valence_compression").find("bufferView")
+            if (!pack.primitive(p)
+                     .json.find("extensions")
+                     .find("LODBAKE_valence_compression")
+                     .find("bufferView")
                      .asUint64(&view))
                 continue;
             const lodrt::BufferViewInfo& v = pack.bufferView(uint32_t(view));
@@ -77,9 +80,9 @@ void printLevels(const std::vector<uint8_t>& glb, const lodbake::LodMetrics& met
             const double diagonal = 2.0 * metrics.bounding_radius;
             auto ratio = [q](double e) { return e > 0.0 ? q / e : 0.0; };
             std::printf("  %5u %9llu %5u %5u %9llu %11.3g %11.3g %11.3g %10.3g\n", m,
-                        static_cast<unsigned long long>(pack.primitive(p).triangle_count),
-                        info.position_bits, info.normal_bits, static_cast<unsigned long long>(v.byte_length),
-                        q / diagonal, ratio(l.mean_error), ratio(l.hausdorff_error),
+                        static_cast<unsigned long long>(pack.primitive(p).triangle_count), info.position_bits,
+                        info.normal_bits, static_cast<unsigned long long>(v.byte_length), q / diagonal,
+                        ratio(l.mean_error), ratio(l.hausdorff_error),
                         info.has_normals ? lodbake::octahedralMaxAngle(info.normal_bits) * 180.0 / pi : 0.0);
         }
     }

@@ -46,7 +46,8 @@ Status readNumber(const Json& v, const std::string& where, double lo, double hi,
     const double d = v.get<double>();
     if (!std::isfinite(d) || (lo_exclusive ? !(d > lo) : !(d >= lo)) || !(d <= hi))
         return invalidInput(where + ": expected a number in " + (lo_exclusive ? "(" : "[") +
-                            JsonWriter::formatNumber(lo) + ", " + JsonWriter::formatNumber(hi) + "], got " + shortDump(v));
+                            JsonWriter::formatNumber(lo) + ", " + JsonWriter::formatNumber(hi) + "], got " +
+                            shortDump(v));
     out = d;
     return Status::okStatus();
 }

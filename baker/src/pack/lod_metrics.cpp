@@ -68,8 +68,12 @@ double roundDigits(double x, bool up) {
     return (up ? v >= x : v <= x) ? v : x; // x itself when the decimal cannot bound it (never in practice)
 }
 
-double up(double x) { return roundDigits(x, true); }
-double down(double x) { return roundDigits(x, false); }
+double up(double x) {
+    return roundDigits(x, true);
+}
+double down(double x) {
+    return roundDigits(x, false);
+}
 
 } // namespace
 

@@ -17,8 +17,9 @@ std::string presetPath(const std::string& name) {
 }
 
 std::string schemaCheck(const std::string& schema, const std::string& args) {
-    return lodbake_test::python() + " " + lodbake_test::shellQuote(lodbake_test::sourceDir() + "/tests/support/validate_schema.py") +
-           " " + lodbake_test::shellQuote(lodbake_test::sourceDir() + "/schemas/" + schema) + " " + args;
+    return lodbake_test::python() + " " +
+           lodbake_test::shellQuote(lodbake_test::sourceDir() + "/tests/support/validate_schema.py") + " " +
+           lodbake_test::shellQuote(lodbake_test::sourceDir() + "/schemas/" + schema) + " " + args;
 }
 
 TEST(BakeConfigTest, EveryBundledPresetParsesAndMatchesTheSchema) {
@@ -81,7 +82,8 @@ TEST(BakeConfigTest, WrongTypesRangesAndVersionsAreErrors) {
          "/stream_precision/position_bits: expected an integer in [8, 16]"},
         {R"({"version": 1, "stream_precision": {"error_fraction": 0}})",
          "/stream_precision/error_fraction: expected a number in (0, 1]"},
-        {R"({"version": 1, "stream_precision": {"adaptive": 1}})", "/stream_precision/adaptive: expected true or false"},
+        {R"({"version": 1, "stream_precision": {"adaptive": 1}})",
+         "/stream_precision/adaptive: expected true or false"},
         {R"({"version": 1, "stream_precision": {"bits": 8}})", "/stream_precision/bits: unknown key"},
         {R"([1, 2])", "expected a JSON object"},
         {R"({"version": 1,)", "not valid JSON"},

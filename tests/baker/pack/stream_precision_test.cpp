@@ -159,8 +159,8 @@ TEST(StreamPrecisionTest, OctahedralMaxAngleBoundsRandomDirections) {
 TEST(StreamPrecisionTest, BakeCodesCoarseLevelsWithFewerBitsWithinTheirError) {
     auto bakeRock = [](bool adaptive, bool compact) {
         Diagnostics diagnostics;
-        Result<LoadedMesh> loaded = readMesh(lodbake_test::sourceDir() + "/assets/samples/rock_scan/rock_000.ply",
-                                             ReadOptions{}, diagnostics);
+        Result<LoadedMesh> loaded =
+            readMesh(lodbake_test::sourceDir() + "/assets/samples/rock_scan/rock_000.ply", ReadOptions{}, diagnostics);
         EXPECT_TRUE(loaded.ok());
         BakeSettings settings;
         settings.lod_ratios = {0.5, 0.1, 0.03};

@@ -156,9 +156,8 @@ Mesh twoPrimitiveGrid(int n) {
     m.materials[0].name = "a";
     m.materials[1].name = "b";
     m.materials[1].base_color_factor = {0.5f, 0.25f, 1.0f, 1.0f};
-    m.submeshes = {{"a", 0, half, MaterialId(0)},
-                   {"empty", half, 0, MaterialId::invalid()},
-                   {"b", half, half, MaterialId(1)}};
+    m.submeshes = {
+        {"a", 0, half, MaterialId(0)}, {"empty", half, 0, MaterialId::invalid()}, {"b", half, half, MaterialId(1)}};
     m.positions.push_back({5, 5, 5});
     m.normals.push_back({0, 0, 1});
     m.uvs[0].push_back({0, 0});
@@ -337,7 +336,6 @@ size_t checkRoundTrip(const std::vector<uint8_t>& glb, const std::string& name, 
             worst = std::max(worst, std::fabs(double(f) - double(d.positions[i])));
         }
         EXPECT_LE(worst, step) << name << " primitive " << p;
-
     }
     for (const nlohmann::json& mesh : doc["meshes"])
         for (const nlohmann::json& prim : mesh["primitives"])
@@ -399,8 +397,10 @@ TEST(ValenceStreamTest, MultiPrimitivePacksRoundTripAndValidate) {
                 EXPECT_TRUE(accessors.insert(it.value().get<size_t>()).second) << "accessor shared by two primitives";
         }
     }
-    const std::string plain_path = outDir() + "/two_primitives.glb", compact_path = outDir() + "/two_primitives_compact.glb";
-    std::ofstream(plain_path, std::ios::binary).write(reinterpret_cast<const char*>(plain->data()), std::streamsize(plain->size()));
+    const std::string plain_path = outDir() + "/two_primitives.glb",
+                      compact_path = outDir() + "/two_primitives_compact.glb";
+    std::ofstream(plain_path, std::ios::binary)
+        .write(reinterpret_cast<const char*>(plain->data()), std::streamsize(plain->size()));
     std::ofstream(compact_path, std::ios::binary)
         .write(reinterpret_cast<const char*>(compact->data()), std::streamsize(compact->size()));
     for (const std::string& path : {plain_path, compact_path}) {
@@ -455,8 +455,8 @@ TEST(ValenceStreamTest, ScanSetLevelsGetAStreamPerScan) {
 }
 
 // Every shared scan, baked with a light preset (no repair, one coarse level, few error samples): every
-// level carries a stream (every scan is one primitive), and every stream round-trips. The extension objects of all packs
-// are checked against the schema.
+// level carries a stream (every scan is one primitive), and every stream round-trips. The extension objects of all
+// packs are checked against the schema.
 TEST(ValenceStreamSharedMeshesTest, EveryScanRoundTripsThroughTheRuntimeDecoder) {
     LODBAKE_REQUIRE_SHARED_MESHES();
     BakeSettings settings;
@@ -466,10 +466,10 @@ TEST(ValenceStreamSharedMeshesTest, EveryScanRoundTripsThroughTheRuntimeDecoder)
     settings.textures.enabled = false;
     settings.threads = 2;
     std::vector<nlohmann::json> objects;
-    for (const char* name : {"bunny_zipper.ply", "igea.ply", "igea_tristrips.ply", "lucy100k.ply", "nefertiti.obj",
-                             "rocker_arm.obj", "dragon_poisson.ply", "bunny_scan_bun000_tri.ply",
-                             "dragon_scan_stand0_tri.ply", "dragon_stand_merged.ply", "fandisk.obj", "spot.obj",
-                             "lee_perry_smith/LeePerrySmith.glb", "nefertiti_fraunhofer_textured.glb"}) {
+    for (const char* name :
+         {"bunny_zipper.ply", "igea.ply", "igea_tristrips.ply", "lucy100k.ply", "nefertiti.obj", "rocker_arm.obj",
+          "dragon_poisson.ply", "bunny_scan_bun000_tri.ply", "dragon_scan_stand0_tri.ply", "dragon_stand_merged.ply",
+          "fandisk.obj", "spot.obj", "lee_perry_smith/LeePerrySmith.glb", "nefertiti_fraunhofer_textured.glb"}) {
         Diagnostics diagnostics;
         Result<LoadedMesh> loaded = readMesh(lodbake_test::sharedMesh(name), ReadOptions{}, diagnostics);
         ASSERT_TRUE(loaded.ok()) << name << ": " << loaded.status().message();
@@ -534,7 +534,8 @@ TEST(ValenceStreamSchemaTest, SchemaRejectsBrokenObjects) {
         {"no_view", R"({"attributes": {"POSITION": 0}, "positionBits": 14})"},
         {"bits", R"({"bufferView": 0, "attributes": {"POSITION": 0}, "positionBits": 20})"},
         {"normal_bits_missing", R"({"bufferView": 0, "attributes": {"POSITION": 0, "NORMAL": 1}, "positionBits": 14})"},
-        {"unknown_attribute", R"({"bufferView": 0, "attributes": {"POSITION": 0, "TEXCOORD_0": 2}, "positionBits": 14})"},
+        {"unknown_attribute",
+         R"({"bufferView": 0, "attributes": {"POSITION": 0, "TEXCOORD_0": 2}, "positionBits": 14})"},
     };
     for (const auto& [name, text] : bad) {
         const std::string file = outDir() + "/bad_" + name + ".json";

@@ -23,9 +23,9 @@ struct TextureLodSettings {
 
 /// Quantization of the LODBAKE_valence_compression streams (ValenceStreamOptions, docs/bake.md).
 struct StreamPrecisionSettings {
-    uint32_t position_bits = 14; // LOD0's (and every level's without `adaptive`), 8..16
-    uint32_t normal_bits = 8;    // octahedral bits per component, 4..16
-    bool adaptive = false;       // levels after LOD0: bits from their own measured error
+    uint32_t position_bits = 14;  // LOD0's (and every level's without `adaptive`), 8..16
+    uint32_t normal_bits = 8;     // octahedral bits per component, 4..16
+    bool adaptive = false;        // levels after LOD0: bits from their own measured error
     double error_fraction = 0.25; // adaptive: largest quantization displacement / the level's mean error
 };
 
@@ -40,8 +40,8 @@ struct BakeSettings {
     bool repair = true;              // run the default repair pipeline before simplifying
     uint32_t error_samples = 200000; // area-uniform samples per side when measuring each level's error
     TextureLodSettings textures;
-    uint32_t threads = 0; // worker threads; 0: all cores (the output does not depend on it)
-    bool compact = false; // list our stream extensions in extensionsRequired
+    uint32_t threads = 0;         // worker threads; 0: all cores (the output does not depend on it)
+    bool compact = false;         // list our stream extensions in extensionsRequired
     bool progressive_fans = true; // embed LOD0's PFRep blob (LODBAKE_progressive_fans) in the pack
     StreamPrecisionSettings stream_precision;
 };
