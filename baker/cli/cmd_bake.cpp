@@ -61,6 +61,9 @@ options:
   --pixels P            override pixel_threshold
   --compact             compressed-only pack: valence streams replace the plain level data
   --no-progressive-fans do not embed LOD0's PFRep blob (preset key progressive_fans)
+  --adaptive-precision  levels after LOD0 coded with position/normal bits from their own measured
+                        error (preset key stream_precision.adaptive; on in desktop, mobile, vr)
+  --no-adaptive-precision  every level coded with LOD0's bits (archive's default)
   --report R.json       write per-level metrics, texture sizes, cache use and stage timings as JSON
   --depfile OUT.d       write a Makefile-syntax depfile listing every file read
   --cache-dir DIR       reuse packs whose inputs, settings and baker version are unchanged
@@ -79,6 +82,8 @@ struct CliOverrides {
     double pixels = 0;
     bool compact = false;
     bool no_progressive_fans = false;
+    bool adaptive_precision = false;
+    bool no_adaptive_precision = false;
 };
 
 void applyOverrides(const CliOverrides& o, BakeSettings& s) {
@@ -87,6 +92,8 @@ void applyOverrides(const CliOverrides& o, BakeSettings& s) {
     if (o.has_pixels) s.pixel_threshold = o.pixels;
     if (o.compact) s.compact = true;
     if (o.no_progressive_fans) s.progressive_fans = false;
+    if (o.adaptive_precision) s.stream_precision.adaptive = true;
+    if (o.no_adaptive_precision) s.stream_precision.adaptive = false;
 }
 
 bool isFolderTarget(const std::string& out) {
@@ -243,6 +250,8 @@ int runBake(int argc, char** argv) {
                     {"--pixels", nullptr, true},
                     {"--compact", nullptr, false},
                     {"--no-progressive-fans", nullptr, false},
+                    {"--adaptive-precision", nullptr, false},
+                    {"--no-adaptive-precision", nullptr, false},
                     {"--report", nullptr, true},
                     {"--depfile", nullptr, true},
                     {"--cache-dir", nullptr, true},
@@ -292,6 +301,10 @@ int runBake(int argc, char** argv) {
     }
     overrides.compact = args.flags.count("--compact") > 0;
     overrides.no_progressive_fans = args.flags.count("--no-progressive-fans") > 0;
+    overrides.adaptive_precision = args.flags.count("--adaptive-precision") > 0;
+    overrides.no_adaptive_precision = args.flags.count("--no-adaptive-precision") > 0;
+    if (overrides.adaptive_precision && overrides.no_adaptive_precision)
+        return usageError("--adaptive-precision and --no-adaptive-precision exclude each other");
     applyOverrides(overrides, base);
 
     // The jobs.

@@ -5,13 +5,19 @@
 // gltfpack reads the repaired scan (the pack's LOD0: repairMesh, as bake runs it) as a plain GLB
 // written by lodbake, so both sides code the same streams (positions, the normals repair computes,
 // UVs where the scan has them; textures and materials dropped on both sides). Prints both totals and
-// our/gltfpack per scan; the bar is <= 0.5.
+// our/gltfpack per scan; the bar is <= 0.5. With --levels, also each level's stream: triangles, position
+// and normal bits (adaptive precision, docs/bake.md), bytes, the largest distance quantization can move
+// a vertex (sqrt(3)/2 * cube / (2^bits - 1), from the stream header) relative to the level's reported
+// mean and Hausdorff error, and the largest angle the normal quantization can turn a normal.
 //
-// usage: pack_size_bench [MESH...]   (default: the untextured shared scans)
+// usage: pack_size_bench [--levels] [--preset FILE] [--no-adaptive] [MESH...]
+//        (default: configs/desktop.json, the untextured shared scans)
 // Not a ctest. Needs `npm ci` in scripts/node-bench.
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <cstdlib>
 #include <filesystem>
 #include <string>
@@ -24,6 +30,9 @@
 #include "lodbake/core/file_io.h"
 #include "lodbake/gltf/gltf_io.h"
 #include "lodbake/io/mesh_io.h"
+#include "lodbake/pack/pack.h"
+#include "lodrt/pack.h"
+#include "lodrt/valence.h"
 
 namespace {
 
@@ -41,16 +50,63 @@ void stripMaterials(lodbake::Mesh& mesh) {
     for (lodbake::SubMesh& s : mesh.submeshes) s.material = lodbake::MaterialId::invalid();
 }
 
+// One line per level of the pack: its streams' precision and what it costs in accuracy.
+void printLevels(const std::vector<uint8_t>& glb, const lodbake::LodMetrics& metrics) {
+    lodrt::Pack pack;
+    if (lodrt::loadPack(glb.data(), glb.size(), nullptr, &pack) != lodrt::Result::Ok) {
+        std::printf("  (the pack does not load)\n");
+        return;
+    }
+    const double pi = 3.14159265358979323846;
+    std::printf("  %5s %9s %5s %5s %9s %11s %11s %11s %10s\n", "level", "triangles", "pbits", "nbits", "bytes",
+                "q/diagonal", "q/mean_err", "q/hausdorff", "normal_deg");
+    for (uint32_t m = 0; m < pack.meshCount() && m < metrics.levels.size(); ++m) {
+        const lodrt::MeshInfo& mesh = pack.mesh(m);
+        for (uint32_t p = mesh.first_primitive; p < mesh.first_primitive + mesh.primitive_count; ++p) {
+            uint64_t view = 0;
+            if (!pack.primitive(p)
+                     .json.find("extensions")
+                     .find("LODBAKE_valence_compression")
+                     .find("bufferView")
+                     .asUint64(&view))
+                continue;
+            const lodrt::BufferViewInfo& v = pack.bufferView(uint32_t(view));
+            lodrt::ValenceInfo info;
+            if (lodrt::valenceReadInfo(pack.container().bin + v.byte_offset, size_t(v.byte_length), &info) !=
+                lodrt::Result::Ok)
+                continue;
+            const lodbake::LodMetricsLevel& l = metrics.levels[m];
+            const double q = std::sqrt(3.0) / 2.0 * double(info.cube_size) / double((1u << info.position_bits) - 1);
+            const double diagonal = 2.0 * metrics.bounding_radius;
+            auto ratio = [q](double e) { return e > 0.0 ? q / e : 0.0; };
+            std::printf("  %5u %9llu %5u %5u %9llu %11.3g %11.3g %11.3g %10.3g\n", m,
+                        static_cast<unsigned long long>(pack.primitive(p).triangle_count), info.position_bits,
+                        info.normal_bits, static_cast<unsigned long long>(v.byte_length), q / diagonal,
+                        ratio(l.mean_error), ratio(l.hausdorff_error),
+                        info.has_normals ? lodbake::octahedralMaxAngle(info.normal_bits) * 180.0 / pi : 0.0);
+        }
+    }
+}
+
 } // namespace
 
 int main(int argc, char** argv) {
     std::vector<std::string> meshes;
+    bool levels = false, no_adaptive = false;
+    std::string preset_path = std::string(LODBAKE_BENCH_SOURCE_DIR) + "/configs/desktop.json";
     for (int i = 1; i < argc; ++i) {
-        if (argv[i][0] == '-') {
-            std::fprintf(stderr, "usage: pack_size_bench [MESH...]\n");
+        if (std::strcmp(argv[i], "--levels") == 0) {
+            levels = true;
+        } else if (std::strcmp(argv[i], "--no-adaptive") == 0) {
+            no_adaptive = true;
+        } else if (std::strcmp(argv[i], "--preset") == 0 && i + 1 < argc) {
+            preset_path = argv[++i];
+        } else if (argv[i][0] == '-') {
+            std::fprintf(stderr, "usage: pack_size_bench [--levels] [--preset FILE] [--no-adaptive] [MESH...]\n");
             return 2;
+        } else {
+            meshes.push_back(argv[i]);
         }
-        meshes.push_back(argv[i]);
     }
     if (meshes.empty())
         for (const char* name : {"bunny_zipper.ply", "igea.ply", "lucy100k.ply", "nefertiti.obj", "rocker_arm.obj",
@@ -66,8 +122,7 @@ int main(int argc, char** argv) {
     fs::create_directories(out_dir);
 
     lodbake::BakeSettings settings;
-    const lodbake::Status preset =
-        lodbake::applyPresetFile(std::string(LODBAKE_BENCH_SOURCE_DIR) + "/configs/desktop.json", settings);
+    const lodbake::Status preset = lodbake::applyPresetFile(preset_path, settings);
     if (!preset.ok()) {
         std::fprintf(stderr, "error: %s\n", preset.message().c_str());
         return 1;
@@ -77,6 +132,7 @@ int main(int argc, char** argv) {
     // counterpart there, so the like-for-like pack leaves it out.
     settings.progressive_fans = false;
     settings.textures.enabled = false;
+    if (no_adaptive) settings.stream_precision.adaptive = false;
     const double ratios[] = {1.0, 0.5, 0.25, 0.1, 0.03, 0.01};
 
     std::printf("%-28s %10s %12s %12s %8s\n", "scan", "triangles", "ours_bytes", "gltfpack", "ratio");
@@ -137,6 +193,7 @@ int main(int argc, char** argv) {
         const double ratio = double(ours->glb.size()) / double(theirs);
         worst = std::max(worst, ratio);
         std::printf("%-28s %10zu %12zu %12ju %8.3f\n", stem.c_str(), triangles, ours->glb.size(), theirs, ratio);
+        if (levels && !ours->assets.empty()) printLevels(ours->glb, ours->assets[0].metrics);
         std::fflush(stdout);
     }
     std::printf("worst ratio %.3f (bar <= 0.5): %s\n", worst, worst <= 0.5 ? "met" : "NOT met");

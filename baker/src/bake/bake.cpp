@@ -148,6 +148,7 @@ Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vect
     Diagnostics measure_diagnostics;
     LodMetrics metrics;
     Result<TextureLevels> textures = TextureLevels{};
+    Status deferred = Status::okStatus();
     auto runTask = [&](size_t task) {
         if (task == 0) {
             {
@@ -155,12 +156,22 @@ Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vect
                 measureLodChain(mesh, chain, chain_options, measure_diagnostics);
                 metrics = lodMetrics(mesh, chain, screen, settings.hysteresis);
             }
+            // Encoders that read the measured errors (adaptive stream precision) code the levels after
+            // LOD0 now, in a nested loop that idle threads join.
+            deferred = parallelFor(level_count - 1, 1, [&](size_t i) {
+                for (size_t e = 0; e < encoders.size(); ++e) {
+                    if (!encoders[e].needs_measurement) continue;
+                    StageTimer timer(hooks, index, BakeStage::Encode);
+                    commits[e * level_count + 1 + i] = encoders[e].prepare(chain, 1 + i, levelMesh(1 + i));
+                }
+            });
             StageTimer timer(hooks, index, BakeStage::Textures);
             textures = textureLevels(mesh, level_count, metrics, settings, input.name, measure_diagnostics);
             return;
         }
         const size_t l = task - 1;
         for (size_t e = 0; e < encoders.size(); ++e) {
+            if (l > 0 && encoders[e].needs_measurement) continue; // after the measurement, above
             StageTimer timer(hooks, index,
                              encoders[e].extension_name == "LODBAKE_progressive_fans" ? BakeStage::Pfrep
                                                                                       : BakeStage::Encode);
@@ -171,6 +182,7 @@ Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vect
     for (size_t l = 1; l < level_count; ++l) order.push_back(1 + l);
     std::atomic<size_t> next{0};
     LODBAKE_RETURN_IF_ERROR(parallelFor(task_count, 1, [&](size_t) { runTask(order[next.fetch_add(1)]); }));
+    LODBAKE_RETURN_IF_ERROR(deferred);
     for (const Diagnostic& d : measure_diagnostics.items()) {
         if (d.severity == Severity::Warning)
             slot.diagnostics.warn(d.message);
@@ -229,7 +241,12 @@ Result<BakeOutput> bake(std::vector<BakeInput> inputs, const BakeSettings& setti
         if (n > 0) input.name += "_" + std::to_string(n);
     }
     std::vector<PackStreamEncoder> encoders;
-    for (PackStreamEncoder& encoder : builtinStreamEncoders())
+    ValenceStreamOptions valence;
+    valence.position_bits = settings.stream_precision.position_bits;
+    valence.normal_bits = settings.stream_precision.normal_bits;
+    valence.adaptive = settings.stream_precision.adaptive;
+    valence.error_fraction = settings.stream_precision.error_fraction;
+    for (PackStreamEncoder& encoder : builtinStreamEncoders(valence))
         if (settings.progressive_fans || encoder.extension_name != "LODBAKE_progressive_fans")
             encoders.push_back(std::move(encoder));
     PackDescription description;

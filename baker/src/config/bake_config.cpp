@@ -46,7 +46,8 @@ Status readNumber(const Json& v, const std::string& where, double lo, double hi,
     const double d = v.get<double>();
     if (!std::isfinite(d) || (lo_exclusive ? !(d > lo) : !(d >= lo)) || !(d <= hi))
         return invalidInput(where + ": expected a number in " + (lo_exclusive ? "(" : "[") +
-                            JsonWriter::formatNumber(lo) + ", " + JsonWriter::formatNumber(hi) + "], got " + shortDump(v));
+                            JsonWriter::formatNumber(lo) + ", " + JsonWriter::formatNumber(hi) + "], got " +
+                            shortDump(v));
     out = d;
     return Status::okStatus();
 }
@@ -105,6 +106,14 @@ Status applyImpl(const Json& root, const std::string& name, BakeSettings& s) {
         {"texels_per_pixel",
          [&](const Json& v, const std::string& w) { return readNumber(v, w, 0.0, 64.0, true, t.texels_per_pixel); }},
     };
+    StreamPrecisionSettings& q = s.stream_precision;
+    const std::map<std::string, Handler> precision_handlers{
+        {"adaptive", [&](const Json& v, const std::string& w) { return readBool(v, w, q.adaptive); }},
+        {"error_fraction",
+         [&](const Json& v, const std::string& w) { return readNumber(v, w, 0.0, 1.0, true, q.error_fraction); }},
+        {"normal_bits", [&](const Json& v, const std::string& w) { return readUint(v, w, 4, 16, q.normal_bits); }},
+        {"position_bits", [&](const Json& v, const std::string& w) { return readUint(v, w, 8, 16, q.position_bits); }},
+    };
     const std::map<std::string, Handler> handlers{
         {"version", [&](const Json&, const std::string&) { return Status::okStatus(); }},
         {"lod_ratios",
@@ -133,6 +142,10 @@ Status applyImpl(const Json& root, const std::string& name, BakeSettings& s) {
         {"threads", [&](const Json& v, const std::string& w) { return readUint(v, w, 0, 1024, s.threads); }},
         {"compact", [&](const Json& v, const std::string& w) { return readBool(v, w, s.compact); }},
         {"progressive_fans", [&](const Json& v, const std::string& w) { return readBool(v, w, s.progressive_fans); }},
+        {"stream_precision",
+         [&](const Json& v, const std::string&) {
+             return applyObject(v, name, "/stream_precision", precision_handlers);
+         }},
     };
     return applyObject(root, name, "", handlers);
 }
@@ -192,6 +205,10 @@ std::string settingsToJson(const BakeSettings& s) {
         j["threads"] = s.threads;
         j["compact"] = s.compact;
         j["progressive_fans"] = s.progressive_fans;
+        j["stream_precision"] = {{"adaptive", s.stream_precision.adaptive},
+                                 {"error_fraction", s.stream_precision.error_fraction},
+                                 {"normal_bits", s.stream_precision.normal_bits},
+                                 {"position_bits", s.stream_precision.position_bits}};
         return j.dump(2) + "\n";
     } catch (const std::exception&) {
         return "{}\n"; // dump only throws on invalid UTF-8, which these keys cannot contain

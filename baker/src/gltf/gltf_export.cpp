@@ -9,6 +9,8 @@
 #include <cstring>
 #include <exception>
 #include <sstream>
+#include <type_traits>
+#include <utility>
 
 #include <nlohmann/json.hpp>
 #include <tiny_gltf.h>
@@ -116,7 +118,8 @@ std::vector<Vec4f> exportTangents(const Mesh& mesh, const std::vector<Vec3f>& no
 
 } // namespace
 
-Result<int> addMeshToModel(tinygltf::Model& model, BufferBuilder& buffer, const Mesh& mesh, ModelDedupe* dedupe) {
+Result<int> addMeshToModel(tinygltf::Model& model, BufferBuilder& buffer, const Mesh& mesh, ModelDedupe* dedupe,
+                           const std::vector<std::pair<uint32_t, uint32_t>>* vertex_ranges) {
     if (mesh.faceCount() == 0) return invalidInput("glTF export: the mesh has no triangles");
     for (size_t i = 0; i < mesh.positions.size(); ++i)
         if (!finite3(mesh.positions[i]))
@@ -126,38 +129,83 @@ Result<int> addMeshToModel(tinygltf::Model& model, BufferBuilder& buffer, const 
             if (!std::isfinite(set[i].x) || !std::isfinite(set[i].y))
                 return invalidInput("glTF export: vertex " + std::to_string(i) + ": texture coordinate is not finite");
 
-    tinygltf::Primitive base;
-    base.mode = TINYGLTF_MODE_TRIANGLES;
-    base.attributes["POSITION"] = addFloatAccessor(model, buffer, mesh.positions, 3, TINYGLTF_TYPE_VEC3, true);
     std::vector<Vec3f> normals;
+    std::vector<Vec4f> tangents, colors;
     if (mesh.hasNormals()) {
         normals = exportNormals(mesh);
-        base.attributes["NORMAL"] = addFloatAccessor(model, buffer, normals, 3, TINYGLTF_TYPE_VEC3, false);
-        if (mesh.hasTangents())
-            base.attributes["TANGENT"] =
-                addFloatAccessor(model, buffer, exportTangents(mesh, normals), 4, TINYGLTF_TYPE_VEC4, false);
+        if (mesh.hasTangents()) tangents = exportTangents(mesh, normals);
     }
-    for (size_t s = 0; s < mesh.uvs.size(); ++s)
-        base.attributes["TEXCOORD_" + std::to_string(s)] =
-            addFloatAccessor(model, buffer, mesh.uvs[s], 2, TINYGLTF_TYPE_VEC2, false);
     if (mesh.hasColors()) {
-        std::vector<Vec4f> colors = mesh.colors;
+        colors = mesh.colors;
         for (Vec4f& c : colors)
             for (float* f : {&c.x, &c.y, &c.z, &c.w})
                 *f = std::isfinite(*f) ? std::min(std::max(*f, 0.0f), 1.0f) : 0.0f;
-        base.attributes["COLOR_0"] = addFloatAccessor(model, buffer, colors, 4, TINYGLTF_TYPE_VEC4, false);
+    }
+    // The attribute accessors of vertices [first, first + count).
+    auto addAttributes = [&](size_t first, size_t count) {
+        const bool whole = first == 0 && count == mesh.vertexCount();
+        auto add = [&](const auto& values, int components, int type, bool with_bounds) {
+            if (whole) return addFloatAccessor(model, buffer, values, components, type, with_bounds);
+            const std::vector<typename std::decay_t<decltype(values)>::value_type> part(
+                values.begin() + std::ptrdiff_t(first), values.begin() + std::ptrdiff_t(first + count));
+            return addFloatAccessor(model, buffer, part, components, type, with_bounds);
+        };
+        tinygltf::Primitive primitive;
+        primitive.mode = TINYGLTF_MODE_TRIANGLES;
+        primitive.attributes["POSITION"] = add(mesh.positions, 3, TINYGLTF_TYPE_VEC3, true);
+        if (!normals.empty()) {
+            primitive.attributes["NORMAL"] = add(normals, 3, TINYGLTF_TYPE_VEC3, false);
+            if (!tangents.empty()) primitive.attributes["TANGENT"] = add(tangents, 4, TINYGLTF_TYPE_VEC4, false);
+        }
+        for (size_t s = 0; s < mesh.uvs.size(); ++s)
+            primitive.attributes["TEXCOORD_" + std::to_string(s)] = add(mesh.uvs[s], 2, TINYGLTF_TYPE_VEC2, false);
+        if (!colors.empty()) primitive.attributes["COLOR_0"] = add(colors, 4, TINYGLTF_TYPE_VEC4, false);
+        return primitive;
+    };
+    std::vector<SubMesh> submeshes = mesh.submeshes;
+    if (submeshes.empty()) {
+        SubMesh all;
+        all.index_count = uint32_t(mesh.indices.size());
+        submeshes.push_back(all);
+    }
+    // Per non-empty sub-mesh: the first vertex its indices are relative to, and its primitive's attributes.
+    std::vector<uint32_t> sub_first(submeshes.size(), 0);
+    std::vector<tinygltf::Primitive> bases;
+    if (vertex_ranges) {
+        size_t p = 0;
+        for (size_t s = 0; s < submeshes.size(); ++s) {
+            if (submeshes[s].index_count == 0) continue;
+            if (p >= vertex_ranges->size()) return internalError("glTF export: fewer vertex ranges than primitives");
+            const auto [first, count] = (*vertex_ranges)[p++];
+            if (size_t(first) + count > mesh.vertexCount())
+                return internalError("glTF export: a primitive's vertex range exceeds the vertices");
+            for (uint32_t i = submeshes[s].first_index; i < submeshes[s].first_index + submeshes[s].index_count; ++i)
+                if (i >= mesh.indices.size() || mesh.indices[i] < first || mesh.indices[i] - first >= count)
+                    return internalError("glTF export: a primitive's index lies outside its vertex range");
+            sub_first[s] = first;
+            bases.push_back(addAttributes(first, count));
+        }
+        if (p != vertex_ranges->size()) return internalError("glTF export: more vertex ranges than primitives");
+    } else {
+        bases.push_back(addAttributes(0, mesh.vertexCount()));
     }
 
     // Indices: one view, one accessor per sub-mesh.
     const bool short_indices = mesh.vertexCount() < 65536;
     const int index_size = short_indices ? 2 : 4;
     std::vector<uint8_t> index_bytes(mesh.indices.size() * size_t(index_size));
+    std::vector<uint32_t> index_base(vertex_ranges ? mesh.indices.size() : 0, 0); // only with vertex ranges
+    for (size_t s = 0; s < submeshes.size() && vertex_ranges; ++s)
+        for (size_t i = submeshes[s].first_index;
+             i < size_t(submeshes[s].first_index) + submeshes[s].index_count && i < mesh.indices.size(); ++i)
+            index_base[i] = sub_first[s];
     for (size_t i = 0; i < mesh.indices.size(); ++i) {
+        const uint32_t index = mesh.indices[i] - (vertex_ranges ? index_base[i] : 0);
         if (short_indices) {
-            const auto v = uint16_t(mesh.indices[i]);
+            const auto v = uint16_t(index);
             std::memcpy(&index_bytes[i * 2], &v, 2);
         } else {
-            std::memcpy(&index_bytes[i * 4], &mesh.indices[i], 4);
+            std::memcpy(&index_bytes[i * 4], &index, 4);
         }
     }
     const int index_view = buffer.addView(index_bytes.data(), index_bytes.size(), TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER);
@@ -236,12 +284,7 @@ Result<int> addMeshToModel(tinygltf::Model& model, BufferBuilder& buffer, const 
     }
 
     tinygltf::Mesh gmesh;
-    std::vector<SubMesh> submeshes = mesh.submeshes;
-    if (submeshes.empty()) {
-        SubMesh all;
-        all.index_count = uint32_t(mesh.indices.size());
-        submeshes.push_back(all);
-    }
+    size_t primitive_index = 0;
     for (const SubMesh& sub : submeshes) {
         if (sub.index_count == 0) continue;
         tinygltf::Accessor accessor;
@@ -252,7 +295,7 @@ Result<int> addMeshToModel(tinygltf::Model& model, BufferBuilder& buffer, const 
         accessor.count = sub.index_count;
         accessor.type = TINYGLTF_TYPE_SCALAR;
         model.accessors.push_back(std::move(accessor));
-        tinygltf::Primitive primitive = base;
+        tinygltf::Primitive primitive = bases[vertex_ranges ? primitive_index++ : 0];
         primitive.indices = int(model.accessors.size() - 1);
         if (sub.material.isValid() && sub.material.value < material_map.size())
             primitive.material = material_map[sub.material.value];
@@ -270,7 +313,7 @@ Result<tinygltf::Model> buildModel(const Mesh& mesh, std::vector<uint8_t>& buffe
     model.asset.version = "2.0";
     model.asset.generator = std::string("lodbake ") + kVersionString;
     BufferBuilder buffer(model);
-    LODBAKE_RETURN_IF_ERROR(addMeshToModel(model, buffer, mesh, nullptr).status());
+    LODBAKE_RETURN_IF_ERROR(addMeshToModel(model, buffer, mesh, nullptr, nullptr).status());
 
     tinygltf::Node node;
     node.mesh = 0;

@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <map>
+#include <utility>
 #include <vector>
 
 #include <tiny_gltf.h>
@@ -50,6 +51,10 @@ struct ModelDedupe {
 
 /// Appends `mesh` (attribute streams, indices, its images, materials, one primitive per non-empty
 /// sub-mesh) to `model`; returns the new mesh's index. `dedupe` may be null (no sharing).
-Result<int> addMeshToModel(tinygltf::Model& model, BufferBuilder& buffer, const Mesh& mesh, ModelDedupe* dedupe);
+/// `vertex_ranges`, when set, gives each non-empty sub-mesh its own vertices (first, count): its
+/// primitive gets attribute accessors over that range only and indices relative to `first` (an
+/// index outside the range is an internal error). Null: every primitive shares all vertices.
+Result<int> addMeshToModel(tinygltf::Model& model, BufferBuilder& buffer, const Mesh& mesh, ModelDedupe* dedupe,
+                           const std::vector<std::pair<uint32_t, uint32_t>>* vertex_ranges = nullptr);
 
 } // namespace lodbake

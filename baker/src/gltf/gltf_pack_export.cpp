@@ -101,7 +101,10 @@ std::vector<uint8_t> dropStreamedAccessors(tinygltf::Model& model, const std::se
             if (primitive.indices >= 0) (has_stream ? covered : needed).insert(primitive.indices);
         }
     for (int a : covered)
-        if (!needed.count(a)) model.accessors[size_t(a)].bufferView = -1;
+        if (!needed.count(a)) {
+            model.accessors[size_t(a)].bufferView = -1;
+            model.accessors[size_t(a)].byteOffset = 0; // only allowed with a buffer view
+        }
 
     std::vector<int> views_used(model.bufferViews.size(), 0);
     for (const tinygltf::Accessor& a : model.accessors)
@@ -188,7 +191,10 @@ Result<std::vector<uint8_t>> writeImpl(const PackDescription& description, PackD
         for (size_t l = 0; l < asset.levels.size(); ++l) {
             const PackLevel& level = asset.levels[l];
             const std::string level_name = asset.name + "_lod" + std::to_string(l);
-            Result<int> mesh_index = addMeshToModel(model, buffer, level.mesh, &dedupe);
+            std::vector<std::pair<uint32_t, uint32_t>> ranges;
+            for (const PackLevel::VertexRange& r : level.primitive_vertex_ranges) ranges.emplace_back(r.first, r.count);
+            Result<int> mesh_index =
+                addMeshToModel(model, buffer, level.mesh, &dedupe, ranges.empty() ? nullptr : &ranges);
             if (!mesh_index.ok())
                 return Status(mesh_index.status().code(), level_name + ": " + mesh_index.status().message());
             tinygltf::Mesh& gmesh = model.meshes[size_t(*mesh_index)];

@@ -4,6 +4,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
 
 #include "lodbake/core/json_writer.h"
 
@@ -45,20 +48,49 @@ LodMetrics lodMetrics(const Mesh& full, const LodChain& chain, const ScreenParam
     return m;
 }
 
+namespace {
+
+// `x` to 7 significant digits (float precision, far finer than the sampling noise of a measured
+// error), rounded up or down so that a written bound never claims more than was measured: errors,
+// distances and far band edges round up, coverages and near band edges down. Monotone, so the
+// orderings the metrics keep (errors non-decreasing, near <= distance <= far) survive. Cuts each
+// number from up to 17 digits to 7 in the pack's JSON.
+double roundDigits(double x, bool up) {
+    if (x == 0.0 || !std::isfinite(x)) return x;
+    char text[40];
+    std::snprintf(text, sizeof(text), "%.6e", x);
+    double v = std::strtod(text, nullptr);
+    if (up ? v >= x : v <= x) return v;
+    const char* e = std::strchr(text, 'e');
+    const double unit = std::pow(10.0, double(std::atoi(e + 1)) - 6.0); // one unit in the 7th digit
+    std::snprintf(text, sizeof(text), "%.6e", up ? v + unit : v - unit);
+    v = std::strtod(text, nullptr);
+    return (up ? v >= x : v <= x) ? v : x; // x itself when the decimal cannot bound it (never in practice)
+}
+
+double up(double x) {
+    return roundDigits(x, true);
+}
+double down(double x) {
+    return roundDigits(x, false);
+}
+
+} // namespace
+
 PackExtension lodMetricsExtension(const LodMetrics& m) {
     JsonWriter j(0);
     j.beginObject();
-    j.field("boundingRadius", m.bounding_radius);
+    j.field("boundingRadius", up(m.bounding_radius));
     j.key("levels").beginArray();
     for (const LodMetricsLevel& l : m.levels) {
         j.beginObject();
-        j.field("hausdorffError", l.hausdorff_error);
-        j.field("hausdorffErrorRelative", l.hausdorff_error_rel);
-        j.key("hysteresisBand").beginArray().value(l.hysteresis_near).value(l.hysteresis_far).endArray();
-        j.field("meanError", l.mean_error);
-        j.field("meanErrorRelative", l.mean_error_rel);
-        j.field("screenCoverage", l.screen_coverage);
-        j.field("switchDistance", l.switch_distance);
+        j.field("hausdorffError", up(l.hausdorff_error));
+        j.field("hausdorffErrorRelative", up(l.hausdorff_error_rel));
+        j.key("hysteresisBand").beginArray().value(down(l.hysteresis_near)).value(up(l.hysteresis_far)).endArray();
+        j.field("meanError", up(l.mean_error));
+        j.field("meanErrorRelative", up(l.mean_error_rel));
+        j.field("screenCoverage", down(l.screen_coverage));
+        j.field("switchDistance", up(l.switch_distance));
         j.field("triangles", l.triangles);
         j.field("vertices", l.vertices);
         j.endObject();
@@ -76,7 +108,7 @@ PackExtension lodMetricsExtension(const LodMetrics& m) {
 
 std::vector<double> msftScreenCoverage(const LodMetrics& m) {
     std::vector<double> out(m.levels.size(), 0.0);
-    for (size_t i = 0; i + 1 < m.levels.size(); ++i) out[i] = m.levels[i + 1].screen_coverage;
+    for (size_t i = 0; i + 1 < m.levels.size(); ++i) out[i] = down(m.levels[i + 1].screen_coverage);
     for (size_t i = 1; i < out.size(); ++i) out[i] = std::min(out[i], out[i - 1]);
     return out;
 }

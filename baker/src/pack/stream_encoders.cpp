@@ -58,12 +58,12 @@ PackStreamEncoder makeStreamEncoder(
     return encoder;
 }
 
-std::vector<PackStreamEncoder> builtinStreamEncoders() {
+std::vector<PackStreamEncoder> builtinStreamEncoders(const ValenceStreamOptions& valence) {
     // Both prepare from the levels as baked (PFRep from LOD0 before the valence commit renumbers it
     // into the decoded vertex order); commits run in this order.
     std::vector<PackStreamEncoder> encoders;
     encoders.push_back(progressiveFansEncoder());
-    encoders.push_back(valenceStreamEncoder());
+    encoders.push_back(valenceStreamEncoder(valence));
     return encoders;
 }
 
@@ -80,8 +80,7 @@ Status checkCompact(const PackDescription& description) {
     std::string names;
     for (const char* name : kStreamExtensions) names += (names.empty() ? "" : " or ") + std::string(name);
     return unsupported("--compact needs compressed streams (" + names +
-                       "), but no level got one (the valence stream codes single-primitive levels only); bake "
-                       "without --compact");
+                       "), but no level got one; bake without --compact");
 }
 
 } // namespace lodbake

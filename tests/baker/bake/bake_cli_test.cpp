@@ -198,6 +198,13 @@ TEST(BakeCliUsageTest, PresetErrorsAndOverrides) {
     r = bake("--print-config --no-progressive-fans");
     ASSERT_EQ(r.exit_code, 0) << r.output;
     EXPECT_FALSE(nlohmann::json::parse(r.output)["progressive_fans"].get<bool>());
+    r = bake("--print-config --preset " + shellQuote(src("configs/archive.json")) + " --adaptive-precision");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_TRUE(nlohmann::json::parse(r.output)["stream_precision"]["adaptive"].get<bool>());
+    r = bake("--print-config --preset " + shellQuote(src("configs/desktop.json")) + " --no-adaptive-precision");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_FALSE(nlohmann::json::parse(r.output)["stream_precision"]["adaptive"].get<bool>());
+    EXPECT_EQ(bake("--print-config --adaptive-precision --no-adaptive-precision").exit_code, 2);
     EXPECT_EQ(bake("x.ply -o out.gltf").exit_code, 2);
     EXPECT_EQ(bake("-o out.glb").exit_code, 2);
 }

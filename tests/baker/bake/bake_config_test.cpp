@@ -17,8 +17,9 @@ std::string presetPath(const std::string& name) {
 }
 
 std::string schemaCheck(const std::string& schema, const std::string& args) {
-    return lodbake_test::python() + " " + lodbake_test::shellQuote(lodbake_test::sourceDir() + "/tests/support/validate_schema.py") +
-           " " + lodbake_test::shellQuote(lodbake_test::sourceDir() + "/schemas/" + schema) + " " + args;
+    return lodbake_test::python() + " " +
+           lodbake_test::shellQuote(lodbake_test::sourceDir() + "/tests/support/validate_schema.py") + " " +
+           lodbake_test::shellQuote(lodbake_test::sourceDir() + "/schemas/" + schema) + " " + args;
 }
 
 TEST(BakeConfigTest, EveryBundledPresetParsesAndMatchesTheSchema) {
@@ -45,6 +46,18 @@ TEST(BakeConfigTest, PresetOverridesOnlyWhatItNames) {
     EXPECT_EQ(settings.textures.min_size_px, defaults.textures.min_size_px);
 }
 
+// Adaptive stream precision is on in the size-minded presets and off in archive (docs/bake.md).
+TEST(BakeConfigTest, AdaptivePrecisionIsOnExceptInArchive) {
+    EXPECT_FALSE(BakeSettings{}.stream_precision.adaptive);
+    for (const char* name : {"desktop", "mobile", "vr", "archive"}) {
+        BakeSettings settings;
+        ASSERT_TRUE(applyPresetFile(presetPath(name), settings).ok()) << name;
+        EXPECT_EQ(settings.stream_precision.adaptive, std::string(name) != "archive") << name;
+        EXPECT_EQ(settings.stream_precision.position_bits, 14u) << name;
+        EXPECT_EQ(settings.stream_precision.normal_bits, 8u) << name;
+    }
+}
+
 TEST(BakeConfigTest, UnknownKeyIsAnErrorNamingKeyAndFile) {
     BakeSettings settings;
     Status s = applyPresetJson(R"({"version": 1, "pixel_treshold": 2})", "my.json", settings);
@@ -65,6 +78,13 @@ TEST(BakeConfigTest, WrongTypesRangesAndVersionsAreErrors) {
         {R"({"version": 1, "lod_ratios": []})", "/lod_ratios: expected an array"},
         {R"({"version": 1, "threads": 1.5})", "/threads: expected an integer"},
         {R"({"version": 1, "textures": {"min_size_px": 64, "max_size_px": 32}})", "min_size_px 64 must not exceed"},
+        {R"({"version": 1, "stream_precision": {"position_bits": 20}})",
+         "/stream_precision/position_bits: expected an integer in [8, 16]"},
+        {R"({"version": 1, "stream_precision": {"error_fraction": 0}})",
+         "/stream_precision/error_fraction: expected a number in (0, 1]"},
+        {R"({"version": 1, "stream_precision": {"adaptive": 1}})",
+         "/stream_precision/adaptive: expected true or false"},
+        {R"({"version": 1, "stream_precision": {"bits": 8}})", "/stream_precision/bits: unknown key"},
         {R"([1, 2])", "expected a JSON object"},
         {R"({"version": 1,)", "not valid JSON"},
     };
@@ -86,7 +106,7 @@ TEST(BakeConfigTest, PrintedConfigHasSortedKeysRoundTripsAndMatchesTheSchema) {
     std::istringstream lines(text);
     for (std::string line; std::getline(lines, line);)
         if (line.rfind("  \"", 0) == 0) keys.push_back(line.substr(3, line.find('"', 3) - 3));
-    ASSERT_EQ(keys.size(), 12u) << text;
+    ASSERT_EQ(keys.size(), 13u) << text;
     EXPECT_TRUE(std::is_sorted(keys.begin(), keys.end())) << text;
     BakeSettings again;
     ASSERT_TRUE(applyPresetJson(text, "printed", again).ok());
@@ -104,10 +124,10 @@ TEST(BakeConfigTest, SchemaDefaultsMirrorTheCode) {
     const nlohmann::json printed = nlohmann::json::parse(settingsToJson(BakeSettings{}));
     for (auto it = printed.begin(); it != printed.end(); ++it) {
         if (it.key() == "version") continue;
-        if (it.key() == "textures") {
-            const nlohmann::json& props = schema["$defs"]["textures"]["properties"];
+        if (it.key() == "textures" || it.key() == "stream_precision") {
+            const nlohmann::json& props = schema["$defs"][it.key()]["properties"];
             for (auto t = it.value().begin(); t != it.value().end(); ++t)
-                EXPECT_EQ(props[t.key()]["default"], t.value()) << "textures." << t.key();
+                EXPECT_EQ(props[t.key()]["default"], t.value()) << it.key() << "." << t.key();
             EXPECT_EQ(props.size(), it.value().size());
             continue;
         }

@@ -121,6 +121,7 @@ TEST(BakeManifestTest, SchemaSettingsRepeatThePresetSchema) {
     props.erase("version");
     EXPECT_EQ(manifest["$defs"]["settings"]["properties"], props);
     EXPECT_EQ(manifest["$defs"]["textures"], preset["$defs"]["textures"]);
+    EXPECT_EQ(manifest["$defs"]["stream_precision"], preset["$defs"]["stream_precision"]);
     EXPECT_EQ(manifest["properties"]["version"]["enum"][0].get<int>(), lodbake::kBakeManifestVersion);
 }
 

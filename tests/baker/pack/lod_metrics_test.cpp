@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <string>
+
 #include <nlohmann/json.hpp>
 
 #include "lodbake/pack/pack.h"
@@ -39,6 +41,62 @@ TEST(LodMetricsTest, ExtensionJsonHasEveryLevel) {
     ASSERT_EQ(j["levels"].size(), 4u);
     EXPECT_EQ(j["levels"][3]["hausdorffError"].get<double>(), 0.05);
     EXPECT_EQ(j["levels"][0]["hysteresisBand"].size(), 2u);
+}
+
+// Pack JSON keeps 7 significant digits, rounded so that no written error or distance is below the
+// measured one and no coverage above it; orderings survive.
+TEST(LodMetricsTest, WrittenNumbersAreShortAndNeverClaimMore) {
+    LodMetrics m;
+    m.bounding_radius = 0.5825002115210216;
+    const double errors[] = {0.0, 0.0025755927661294583, 0.0025755927661294584, 0.04051941208522528};
+    for (double e : errors) {
+        LodMetricsLevel l;
+        l.hausdorff_error = e;
+        l.mean_error = e / 7.0;
+        l.hausdorff_error_rel = e / 1.1650004230420432;
+        l.mean_error_rel = l.mean_error / 1.1650004230420432;
+        l.switch_distance = e * 935.3074360871938;
+        l.hysteresis_near = l.switch_distance * 0.9;
+        l.hysteresis_far = l.switch_distance * 1.1;
+        l.screen_coverage = e > 0.0 ? 0.0010787 / e : 1.0;
+        m.levels.push_back(l);
+    }
+    const nlohmann::json j = nlohmann::json::parse(lodMetricsExtension(m).json);
+    auto digits = [](double v) {
+        const std::string text = nlohmann::json(v).dump();
+        size_t n = 0;
+        bool leading = true;
+        for (char c : text) {
+            if (c == 'e' || c == 'E') break;
+            if (c < '0' || c > '9') continue;
+            if (leading && c == '0') continue;
+            leading = false;
+            ++n;
+        }
+        return n;
+    };
+    EXPECT_GE(j["boundingRadius"].get<double>(), m.bounding_radius);
+    EXPECT_LE(digits(j["boundingRadius"].get<double>()), 7u);
+    for (size_t i = 0; i < m.levels.size(); ++i) {
+        SCOPED_TRACE(i);
+        const nlohmann::json& l = j["levels"][i];
+        const LodMetricsLevel& in = m.levels[i];
+        EXPECT_GE(l["hausdorffError"].get<double>(), in.hausdorff_error);
+        EXPECT_GE(l["meanError"].get<double>(), in.mean_error);
+        EXPECT_GE(l["hausdorffErrorRelative"].get<double>(), in.hausdorff_error_rel);
+        EXPECT_GE(l["meanErrorRelative"].get<double>(), in.mean_error_rel);
+        EXPECT_GE(l["switchDistance"].get<double>(), in.switch_distance);
+        EXPECT_LE(l["screenCoverage"].get<double>(), in.screen_coverage);
+        EXPECT_LE(l["hysteresisBand"][0].get<double>(), l["switchDistance"].get<double>());
+        EXPECT_GE(l["hysteresisBand"][1].get<double>(), l["switchDistance"].get<double>());
+        EXPECT_NEAR(l["hausdorffError"].get<double>(), in.hausdorff_error, 1e-6 * in.hausdorff_error);
+        for (const char* key : {"hausdorffError", "meanError", "switchDistance", "screenCoverage"})
+            EXPECT_LE(digits(l[key].get<double>()), 7u) << key << " " << l[key];
+        if (i > 0) {
+            EXPECT_GE(l["hausdorffError"].get<double>(), j["levels"][i - 1]["hausdorffError"].get<double>());
+        }
+    }
+    EXPECT_EQ(j["levels"][0]["hausdorffError"].get<double>(), 0.0);
 }
 
 TEST(LodMetricsTest, CompactWithoutStreamsNamesTheMissingExtensions) {

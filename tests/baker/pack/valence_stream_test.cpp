@@ -147,16 +147,84 @@ TEST(ValenceStreamTest, LevelIsRenumberedIntoTheDecodedOrder) {
     EXPECT_EQ(again.primitive_extensions[0][0].blobs[0], e.blobs[0]);
 }
 
-TEST(ValenceStreamTest, MultiPrimitiveLevelsAreLeftPlain) {
+// A grid split into two primitives (rows [0, n/2) and [n/2, n), sharing the middle row of vertices)
+// with an empty sub-mesh between them, two materials, and one vertex no triangle uses.
+Mesh twoPrimitiveGrid(int n) {
+    Mesh m = grid(n);
+    const auto half = uint32_t(m.indices.size() / 2);
+    m.materials.resize(2);
+    m.materials[0].name = "a";
+    m.materials[1].name = "b";
+    m.materials[1].base_color_factor = {0.5f, 0.25f, 1.0f, 1.0f};
+    m.submeshes = {
+        {"a", 0, half, MaterialId(0)}, {"empty", half, 0, MaterialId::invalid()}, {"b", half, half, MaterialId(1)}};
+    m.positions.push_back({5, 5, 5});
+    m.normals.push_back({0, 0, 1});
+    m.uvs[0].push_back({0, 0});
+    return m;
+}
+
+// Every triangle of sub-mesh s as its three corners (position and UV), corner order normalised.
+std::multiset<std::array<float, 15>> subMeshCorners(const Mesh& m, const SubMesh& s) {
+    std::multiset<std::array<float, 15>> out;
+    for (uint32_t i = s.first_index; i < s.first_index + s.index_count; i += 3) {
+        std::array<std::array<float, 5>, 3> c;
+        for (uint32_t k = 0; k < 3; ++k) {
+            const uint32_t v = m.indices[i + k];
+            c[k] = {m.positions[v].x, m.positions[v].y, m.positions[v].z, m.uvs[0][v].x, m.uvs[0][v].y};
+        }
+        std::sort(c.begin(), c.end());
+        std::array<float, 15> flat;
+        for (size_t k = 0; k < 15; ++k) flat[k] = c[k / 5][k % 5];
+        out.insert(flat);
+    }
+    return out;
+}
+
+TEST(ValenceStreamTest, MultiPrimitiveLevelGetsOneStreamPerPrimitive) {
     PackLevel level;
-    level.mesh = grid(4);
-    const size_t half = level.mesh.indices.size() / 2;
-    level.mesh.submeshes = {{"a", 0, uint32_t(half), MaterialId::invalid()},
-                            {"b", uint32_t(half), uint32_t(half), MaterialId::invalid()}};
+    level.mesh = twoPrimitiveGrid(8);
     const Mesh original = level.mesh;
     ASSERT_TRUE(valenceStreamEncoder().encode(LodChain{}, 0, level).ok());
-    EXPECT_TRUE(level.primitive_extensions.empty());
-    EXPECT_EQ(level.mesh.indices, original.indices);
+    const Mesh& m = level.mesh;
+    // Sub-meshes keep their order, names, materials and triangle counts; the empty one stays empty.
+    ASSERT_EQ(m.submeshes.size(), 3u);
+    for (size_t s = 0; s < 3; ++s) {
+        EXPECT_EQ(m.submeshes[s].name, original.submeshes[s].name);
+        EXPECT_EQ(m.submeshes[s].material, original.submeshes[s].material);
+        EXPECT_EQ(m.submeshes[s].index_count, original.submeshes[s].index_count);
+    }
+    // One stream and one vertex range per non-empty sub-mesh; the shared middle row (9 vertices) is
+    // copied into both ranges and the unused vertex is gone.
+    ASSERT_EQ(level.primitive_extensions.size(), 2u);
+    ASSERT_EQ(level.primitive_vertex_ranges.size(), 2u);
+    EXPECT_EQ(level.primitive_vertex_ranges[0].first, 0u);
+    EXPECT_EQ(level.primitive_vertex_ranges[0].count, 45u);
+    EXPECT_EQ(level.primitive_vertex_ranges[1].first, 45u);
+    EXPECT_EQ(level.primitive_vertex_ranges[1].count, 45u);
+    EXPECT_EQ(m.vertexCount(), 90u);
+    EXPECT_EQ(m.uvs[0].size(), 90u);
+    EXPECT_EQ(m.normals.size(), 90u);
+    const SubMesh* primitives[2] = {&m.submeshes[0], &m.submeshes[2]};
+    const SubMesh* before[2] = {&original.submeshes[0], &original.submeshes[2]};
+    for (size_t p = 0; p < 2; ++p) {
+        SCOPED_TRACE("primitive " + std::to_string(p));
+        const PackLevel::VertexRange range = level.primitive_vertex_ranges[p];
+        ASSERT_EQ(level.primitive_extensions[p].size(), 1u);
+        const PackExtension& e = level.primitive_extensions[p][0];
+        EXPECT_EQ(e.name, kExt);
+        EXPECT_TRUE(e.is_stream);
+        const Decoded d = decode(e.blobs[0].data(), e.blobs[0].size());
+        EXPECT_EQ(d.info.vertex_count, range.count);
+        ASSERT_EQ(d.indices.size(), primitives[p]->index_count);
+        for (size_t i = 0; i < d.indices.size(); ++i)
+            ASSERT_EQ(d.indices[i] + range.first, m.indices[primitives[p]->first_index + i]) << i;
+        const double step = quantizationStep(d.info);
+        for (uint32_t v = 0; v < range.count; ++v)
+            for (int k = 0; k < 3; ++k)
+                ASSERT_NEAR(d.positions[v * 3 + uint32_t(k)], (&m.positions[range.first + v].x)[k], step) << v;
+        EXPECT_EQ(subMeshCorners(m, *primitives[p]), subMeshCorners(original, *before[p]));
+    }
 }
 
 PackDescription onePack(bool compact) {
@@ -268,7 +336,6 @@ size_t checkRoundTrip(const std::vector<uint8_t>& glb, const std::string& name, 
             worst = std::max(worst, std::fabs(double(f) - double(d.positions[i])));
         }
         EXPECT_LE(worst, step) << name << " primitive " << p;
-
     }
     for (const nlohmann::json& mesh : doc["meshes"])
         for (const nlohmann::json& prim : mesh["primitives"])
@@ -285,9 +352,111 @@ CommandResult validateObjects(const std::vector<std::string>& files) {
     return runCommand(command);
 }
 
+CommandResult validateGltf(const std::vector<std::string>& files) {
+    std::string command = shellQuote(LODBAKE_TEST_NODE) + " " + shellQuote(src("scripts/node/validate-gltf.js"));
+    for (const std::string& f : files) command += " " + shellQuote(f);
+    return runCommand(command);
+}
+
+PackDescription twoPrimitivePack(bool compact) {
+    PackDescription description;
+    description.compact = compact;
+    PackAsset asset;
+    asset.name = "grids";
+    asset.levels.resize(2);
+    asset.levels[0].mesh = twoPrimitiveGrid(16);
+    asset.levels[1].mesh = twoPrimitiveGrid(6);
+    asset.screen_coverage = {0.5, 0.0};
+    const PackStreamEncoder encoder = valenceStreamEncoder();
+    for (size_t l = 0; l < 2; ++l) EXPECT_TRUE(encoder.encode(LodChain{}, l, asset.levels[l]).ok());
+    description.assets.push_back(std::move(asset));
+    return description;
+}
+
+// Packs of multi-primitive levels: every primitive's stream round-trips against its own accessors,
+// the compact pack keeps only the UVs as plain data, loddump decodes it, and the validator accepts both.
+TEST(ValenceStreamTest, MultiPrimitivePacksRoundTripAndValidate) {
+    Result<std::vector<uint8_t>> plain = writePackGlb(twoPrimitivePack(false));
+    Result<std::vector<uint8_t>> compact = writePackGlb(twoPrimitivePack(true));
+    ASSERT_TRUE(plain.ok()) << plain.status().message();
+    ASSERT_TRUE(compact.ok()) << compact.status().message();
+    std::vector<nlohmann::json> objects;
+    EXPECT_EQ(checkRoundTrip(*plain, "plain", objects), 4u);
+    const nlohmann::json c = lodbake_test::glbJson(*compact);
+    EXPECT_EQ(c["extensionsRequired"], nlohmann::json::array({kExt}));
+    std::set<size_t> accessors;
+    for (const nlohmann::json& mesh : c["meshes"]) {
+        ASSERT_EQ(mesh["primitives"].size(), 2u);
+        for (const nlohmann::json& prim : mesh["primitives"]) {
+            EXPECT_TRUE(prim["extensions"].contains(kExt));
+            for (const char* dropped : {"POSITION", "NORMAL"})
+                EXPECT_FALSE(c["accessors"][prim["attributes"][dropped].get<size_t>()].contains("bufferView"));
+            EXPECT_FALSE(c["accessors"][prim["indices"].get<size_t>()].contains("bufferView"));
+            EXPECT_TRUE(c["accessors"][prim["attributes"]["TEXCOORD_0"].get<size_t>()].contains("bufferView"));
+            for (auto it = prim["attributes"].begin(); it != prim["attributes"].end(); ++it)
+                EXPECT_TRUE(accessors.insert(it.value().get<size_t>()).second) << "accessor shared by two primitives";
+        }
+    }
+    const std::string plain_path = outDir() + "/two_primitives.glb",
+                      compact_path = outDir() + "/two_primitives_compact.glb";
+    std::ofstream(plain_path, std::ios::binary)
+        .write(reinterpret_cast<const char*>(plain->data()), std::streamsize(plain->size()));
+    std::ofstream(compact_path, std::ios::binary)
+        .write(reinterpret_cast<const char*>(compact->data()), std::streamsize(compact->size()));
+    for (const std::string& path : {plain_path, compact_path}) {
+        const CommandResult d = runCommand(shellQuote(LODBAKE_TEST_LODDUMP) + " " + shellQuote(path));
+        EXPECT_EQ(d.exit_code, 0) << path << ": " << d.output;
+    }
+    const CommandResult v = validateGltf({plain_path, compact_path});
+    EXPECT_EQ(v.exit_code, 0) << v.output;
+}
+
+// The rock sample is a scan set: six primitives per level, one per scan. A compact bake codes each
+// primitive; the plain bake's streams round-trip; loddump reads both and the validator accepts them.
+TEST(ValenceStreamTest, ScanSetLevelsGetAStreamPerScan) {
+    std::vector<std::string> paths;
+    for (bool compact : {false, true}) {
+        Diagnostics diagnostics;
+        Result<LoadedMesh> loaded = readMesh(src("assets/samples/rock_scan/rock.conf"), ReadOptions{}, diagnostics);
+        ASSERT_TRUE(loaded.ok()) << loaded.status().message();
+        BakeSettings settings;
+        settings.lod_ratios = {0.1};
+        settings.error_samples = 1000;
+        settings.textures.enabled = false;
+        settings.stream_precision.adaptive = true;
+        settings.compact = compact;
+        std::vector<BakeInput> inputs(1);
+        inputs[0].name = "rock";
+        inputs[0].mesh = std::move(loaded->mesh);
+        Result<BakeOutput> out = bake(std::move(inputs), settings, diagnostics);
+        ASSERT_TRUE(out.ok()) << out.status().message();
+        const nlohmann::json doc = lodbake_test::glbJson(out->glb);
+        size_t primitives = 0, streams = 0;
+        for (const nlohmann::json& mesh : doc["meshes"])
+            for (const nlohmann::json& prim : mesh["primitives"]) {
+                ++primitives;
+                streams += prim.contains("extensions") && prim["extensions"].contains(kExt) ? 1 : 0;
+            }
+        EXPECT_EQ(primitives, 12u);
+        EXPECT_EQ(streams, 12u);
+        if (!compact) {
+            std::vector<nlohmann::json> objects;
+            EXPECT_EQ(checkRoundTrip(out->glb, "rock", objects), 12u);
+        }
+        paths.push_back(outDir() + (compact ? "/rock_compact.glb" : "/rock_plain.glb"));
+        std::ofstream(paths.back(), std::ios::binary)
+            .write(reinterpret_cast<const char*>(out->glb.data()), std::streamsize(out->glb.size()));
+        const CommandResult d = runCommand(shellQuote(LODBAKE_TEST_LODDUMP) + " " + shellQuote(paths.back()));
+        EXPECT_EQ(d.exit_code, 0) << d.output;
+        EXPECT_EQ(d.output.find("error"), std::string::npos) << d.output;
+    }
+    const CommandResult v = validateGltf(paths);
+    EXPECT_EQ(v.exit_code, 0) << v.output;
+}
+
 // Every shared scan, baked with a light preset (no repair, one coarse level, few error samples): every
-// level carries a stream (every scan is one primitive), and every stream round-trips. The extension objects of all packs
-// are checked against the schema.
+// level carries a stream (every scan is one primitive), and every stream round-trips. The extension objects of all
+// packs are checked against the schema.
 TEST(ValenceStreamSharedMeshesTest, EveryScanRoundTripsThroughTheRuntimeDecoder) {
     LODBAKE_REQUIRE_SHARED_MESHES();
     BakeSettings settings;
@@ -297,10 +466,10 @@ TEST(ValenceStreamSharedMeshesTest, EveryScanRoundTripsThroughTheRuntimeDecoder)
     settings.textures.enabled = false;
     settings.threads = 2;
     std::vector<nlohmann::json> objects;
-    for (const char* name : {"bunny_zipper.ply", "igea.ply", "igea_tristrips.ply", "lucy100k.ply", "nefertiti.obj",
-                             "rocker_arm.obj", "dragon_poisson.ply", "bunny_scan_bun000_tri.ply",
-                             "dragon_scan_stand0_tri.ply", "dragon_stand_merged.ply", "fandisk.obj", "spot.obj",
-                             "lee_perry_smith/LeePerrySmith.glb", "nefertiti_fraunhofer_textured.glb"}) {
+    for (const char* name :
+         {"bunny_zipper.ply", "igea.ply", "igea_tristrips.ply", "lucy100k.ply", "nefertiti.obj", "rocker_arm.obj",
+          "dragon_poisson.ply", "bunny_scan_bun000_tri.ply", "dragon_scan_stand0_tri.ply", "dragon_stand_merged.ply",
+          "fandisk.obj", "spot.obj", "lee_perry_smith/LeePerrySmith.glb", "nefertiti_fraunhofer_textured.glb"}) {
         Diagnostics diagnostics;
         Result<LoadedMesh> loaded = readMesh(lodbake_test::sharedMesh(name), ReadOptions{}, diagnostics);
         ASSERT_TRUE(loaded.ok()) << name << ": " << loaded.status().message();
@@ -365,7 +534,8 @@ TEST(ValenceStreamSchemaTest, SchemaRejectsBrokenObjects) {
         {"no_view", R"({"attributes": {"POSITION": 0}, "positionBits": 14})"},
         {"bits", R"({"bufferView": 0, "attributes": {"POSITION": 0}, "positionBits": 20})"},
         {"normal_bits_missing", R"({"bufferView": 0, "attributes": {"POSITION": 0, "NORMAL": 1}, "positionBits": 14})"},
-        {"unknown_attribute", R"({"bufferView": 0, "attributes": {"POSITION": 0, "TEXCOORD_0": 2}, "positionBits": 14})"},
+        {"unknown_attribute",
+         R"({"bufferView": 0, "attributes": {"POSITION": 0, "TEXCOORD_0": 2}, "positionBits": 14})"},
     };
     for (const auto& [name, text] : bad) {
         const std::string file = outDir() + "/bad_" + name + ".json";

@@ -21,6 +21,14 @@ struct TextureLodSettings {
     double texels_per_pixel = 1.0; // texels per screen pixel of the object's projected size at the switch distance
 };
 
+/// Quantization of the LODBAKE_valence_compression streams (ValenceStreamOptions, docs/bake.md).
+struct StreamPrecisionSettings {
+    uint32_t position_bits = 14;  // LOD0's (and every level's without `adaptive`), 8..16
+    uint32_t normal_bits = 8;     // octahedral bits per component, 4..16
+    bool adaptive = false;        // levels after LOD0: bits from their own measured error
+    double error_fraction = 0.25; // adaptive: largest quantization displacement / the level's mean error
+};
+
 struct BakeSettings {
     int version = kBakePresetVersion;
     std::vector<double> lod_ratios{0.5, 0.25, 0.1, 0.03,
@@ -32,9 +40,10 @@ struct BakeSettings {
     bool repair = true;              // run the default repair pipeline before simplifying
     uint32_t error_samples = 200000; // area-uniform samples per side when measuring each level's error
     TextureLodSettings textures;
-    uint32_t threads = 0; // worker threads; 0: all cores (the output does not depend on it)
-    bool compact = false; // list our stream extensions in extensionsRequired
+    uint32_t threads = 0;         // worker threads; 0: all cores (the output does not depend on it)
+    bool compact = false;         // list our stream extensions in extensionsRequired
     bool progressive_fans = true; // embed LOD0's PFRep blob (LODBAKE_progressive_fans) in the pack
+    StreamPrecisionSettings stream_precision;
 };
 
 /// Applies the preset text `json_text` (from file `name`, used in messages) over `settings`. Keys are

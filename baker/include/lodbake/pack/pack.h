@@ -35,6 +35,14 @@ struct PackLevel {
     Mesh mesh;
     std::vector<PackExtension> mesh_extensions;
     std::vector<std::vector<PackExtension>> primitive_extensions; // per non-empty sub-mesh (glTF primitive), or empty
+    /// Empty: the primitives share all of the mesh's vertices (one accessor per attribute). Else one
+    /// range per non-empty sub-mesh: primitive p uses only vertices [first, first + count) and the
+    /// writer gives it accessors over that range (its indices relative to `first`).
+    struct VertexRange {
+        uint32_t first = 0;
+        uint32_t count = 0;
+    };
+    std::vector<VertexRange> primitive_vertex_ranges;
 };
 
 struct PackAsset {
@@ -95,6 +103,9 @@ using PackStreamCommit = std::function<Status(PackLevel& level)>;
 struct PackStreamEncoder {
     std::string extension_name;
     bool needs_collapses = false; // reads chain.sequence (the chain then records its collapses)
+    /// Reads the measured errors of chain.levels: the prepare steps of the levels after LOD0 run after
+    /// the measurement (LOD0's prepare still runs beside it).
+    bool needs_measurement = false;
     std::function<Result<PackStreamCommit>(const LodChain& chain, size_t level_index, const Mesh& mesh)> prepare;
     std::function<Status(const LodChain& chain, size_t level_index, PackLevel& level)> encode;
 };
@@ -106,23 +117,53 @@ PackStreamEncoder makeStreamEncoder(
 
 /// Quantization of the LODBAKE_valence_compression streams. The defaults match gltfpack's default
 /// quantization (14-bit positions, 8-bit normals), so pack sizes compare like for like.
+///
+/// Adaptive precision (`adaptive`): LOD0 keeps these bits; every other level whose error was measured
+/// (chain.levels[l - 1].has_distance) gets the fewest position bits whose quantization moves no vertex
+/// by more than `error_fraction` of the level's own measured mean distance e to LOD0, and the fewest
+/// normal bits whose octahedral quantization turns no normal by more than `error_fraction` of
+/// atan(e / L), L the level's median edge length (how far its faces already lean against LOD0's).
+/// Never more than the bits above, never fewer than the format's minimum.
 struct ValenceStreamOptions {
     uint32_t position_bits = 14; // 8..16, per coordinate in the bounding cube
     uint32_t normal_bits = 8;    // octahedral bits per component, 4..16
+    bool adaptive = false;
+    double error_fraction = 0.25; // (0, 1]: largest quantization displacement / the level's mean error
 };
 
-/// The LODBAKE_valence_compression encoder (schemas/LODBAKE_valence_compression): codes a level
-/// whose mesh has a single primitive (at most one non-empty sub-mesh) with codec::encodeValence
-/// into one buffer view, and reorders the level's vertices and triangles into the decoded order, so
-/// the plain accessors and the decoded stream hold the same triangles with the same indices (uncoded
-/// attributes such as UVs stay plain and line up with the decoded vertices). Levels with several
-/// primitives are left without the extension. Fails when the codec rejects the mesh or when the
-/// decoded triangles are not the input's (an internal error).
+/// The precision one level is coded with, and why.
+struct ValencePrecision {
+    uint32_t position_bits = 14;
+    uint32_t normal_bits = 8;
+    double max_displacement = 0; // largest distance quantization can move a vertex: sqrt(3)/2 * step
+    double max_normal_angle = 0; // largest angle (radians) the normal quantization can turn a unit normal
+};
+
+/// Largest angle (radians) between a unit normal and its octahedral quantization with `bits` bits per
+/// component, as the codec quantizes (round to nearest), measured once on a dense set of directions
+/// and cached per bit depth.
+double octahedralMaxAngle(uint32_t bits);
+
+/// The precision `options` give level `level_index` of a chain whose mesh is `mesh` (its measured
+/// errors in chain.levels[level_index - 1]). Without adaptive precision, for LOD0, or for a level
+/// without a measured error: options' bits.
+ValencePrecision valencePrecision(const ValenceStreamOptions& options, const LodChain& chain, size_t level_index,
+                                  const Mesh& mesh);
+
+/// The LODBAKE_valence_compression encoder (schemas/LODBAKE_valence_compression): codes each primitive
+/// (non-empty sub-mesh) of a level with codec::encodeValence into its own buffer view, at the
+/// precision valencePrecision gives the level, and reorders the level into the decoded order, so the
+/// plain accessors and the decoded streams hold the same triangles with the same indices (uncoded
+/// attributes such as UVs stay plain and line up with the decoded vertices). A level with one
+/// primitive keeps all its vertices; a level with several is laid out primitive by primitive, each
+/// primitive's vertices a range of its own (PackLevel::primitive_vertex_ranges; vertices two
+/// primitives shared are copied, unreferenced ones dropped). Fails when the codec rejects the mesh or
+/// when the decoded triangles are not the input's (an internal error).
 PackStreamEncoder valenceStreamEncoder(const ValenceStreamOptions& options = {});
 
 /// The stream encoders built into this baker, in the order they run (valence last: it renumbers the
 /// level's vertices).
-std::vector<PackStreamEncoder> builtinStreamEncoders();
+std::vector<PackStreamEncoder> builtinStreamEncoders(const ValenceStreamOptions& valence = {});
 
 /// Compact packs need compressed streams: fails (Unsupported) naming the stream extensions that are
 /// missing when `description.compact` is set and no stream extension is present.
