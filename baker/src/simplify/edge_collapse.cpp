@@ -47,6 +47,10 @@ constexpr double kRecheckFactor = 4.0;
 // Below this fraction of the input's faces the simplifier is in its late stage (see run()): few
 // collapses are left and each decides much of the Hausdorff error of the coarse levels.
 constexpr double kLateFraction = 0.05;
+// fartherFromNewFan skips a triangle whose plane is further than the nearest triangle so far (no
+// region test needed); the margin keeps rounding from deciding, since the plane distance and the
+// region test's distance differ in the last bits.
+constexpr double kPlaneMargin = 1.0 + 1e-9;
 
 uint32_t floatBits(float f) {
     uint32_t b;
@@ -599,12 +603,13 @@ double EdgeCollapser::endpointDistance2(const Candidate& c, double floor2) const
 }
 
 bool EdgeCollapser::fartherFromNewFan(const Vec3d& a, const Vec3d& b, const Candidate& c) const {
-    // b's distance first; a's search stops at the first face no further than that.
+    // Both distances in one walk of the new fan, skipping faces by their planes (kPlaneMargin).
     const uint32_t f0 = c.edge / 3;
     const uint32_t t = twin_[c.edge];
     const uint32_t f1 = t == kNone ? kNone : t / 3;
     const Vec3d& p = c.position;
-    double db = std::numeric_limits<double>::infinity();
+    const Vec3d pa = a - p, pb = b - p;
+    double da = std::numeric_limits<double>::infinity(), db = da;
     for (const std::vector<uint32_t>* fan : {&fan_u_, &fan_v_}) {
         for (uint32_t h : *fan) {
             const uint32_t f = h / 3;
@@ -612,21 +617,18 @@ bool EdgeCollapser::fartherFromNewFan(const Vec3d& a, const Vec3d& b, const Cand
             const Vec3d ox = toD(position_[corner_point_[nextHe(h)]]);
             const Vec3d oy = toD(position_[corner_point_[prevHe(h)]]);
             const Vec3d ab = ox - p, ac = oy - p;
-            db = std::min(db, triangleDistance2(b, p, ox, oy, ab, ac, !(length2(cross(ab, ac)) > 0.0)));
+            const Vec3d n = cross(ab, ac);
+            const double n2 = length2(n);
+            const bool degenerate = !(n2 > 0.0);
+            const double ha = dot(pa, n), hb = dot(pb, n);
+            if (degenerate || !(ha * ha > da * kPlaneMargin * n2))
+                da = std::min(da, triangleDistance2(a, p, ox, oy, ab, ac, degenerate));
+            if (degenerate || !(hb * hb > db * kPlaneMargin * n2))
+                db = std::min(db, triangleDistance2(b, p, ox, oy, ab, ac, degenerate));
         }
     }
     if (!std::isfinite(db)) return false; // no face left around v
-    for (const std::vector<uint32_t>* fan : {&fan_u_, &fan_v_}) {
-        for (uint32_t h : *fan) {
-            const uint32_t f = h / 3;
-            if (f == f0 || f == f1) continue;
-            const Vec3d ox = toD(position_[corner_point_[nextHe(h)]]);
-            const Vec3d oy = toD(position_[corner_point_[prevHe(h)]]);
-            const Vec3d ab = ox - p, ac = oy - p;
-            if (triangleDistance2(a, p, ox, oy, ab, ac, !(length2(cross(ab, ac)) > 0.0)) <= db) return false;
-        }
-    }
-    return true;
+    return da > db;
 }
 
 double EdgeCollapser::distanceBound2(const Candidate& c) const {
