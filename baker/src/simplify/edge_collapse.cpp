@@ -44,6 +44,13 @@ constexpr double kReliableQuality = 0.05;
 // A popped collapse whose point-distance penalty grows its key by more than this many times its
 // quadric part is re-queued.
 constexpr double kRecheckFactor = 4.0;
+// Below this fraction of the input's faces the simplifier is in its late stage (see run()): few
+// collapses are left and each decides much of the Hausdorff error of the coarse levels.
+constexpr double kLateFraction = 0.05;
+// fartherFromNewFan skips a triangle whose plane is further than the nearest triangle so far (no
+// region test needed); the margin keeps rounding from deciding, since the plane distance and the
+// region test's distance differ in the last bits.
+constexpr double kPlaneMargin = 1.0 + 1e-9;
 
 uint32_t floatBits(float f) {
     uint32_t b;
@@ -462,6 +469,10 @@ void EdgeCollapser::collapse(const Candidate& c, const WedgePair* pairs, int pai
         }
     }
     if (sequence) sequence->records.push_back(record);
+    if (has_penalty_) {
+        // v now stands for the input points of both; it keeps the one further from its new fan.
+        if (fartherFromNewFan(toD(far_[u]), toD(far_[v]), c)) far_[v] = far_[u];
+    }
     position_[v] = p;
 
     for (uint32_t he : fan_u_) {
@@ -534,7 +545,12 @@ double EdgeCollapser::endpointDistance2(const Candidate& c, double floor2) const
     const uint32_t f1 = t == kNone ? kNone : t / 3;
     const Vec3d pu = toD(position_[c.removed]), pv = toD(position_[c.kept]);
     const Vec3d& p = c.position;
-    double du = std::numeric_limits<double>::infinity(), dv = du, dp = du;
+    // Late stage: also the input points the two ends stand for (far_), whose distances add up over
+    // many collapses, and the new faces' centroids.
+    const Vec3d fu = toD(far_[c.removed]), fv = toD(far_[c.kept]);
+    const double inf = std::numeric_limits<double>::infinity();
+    double du = inf, dv = inf, dp = inf;
+    double dfu = late_ ? inf : 0.0, dfv = dfu;
     for (const std::vector<uint32_t>* fan : {&fan_u_, &fan_v_}) {
         for (uint32_t h : *fan) {
             const uint32_t f = h / 3;
@@ -545,17 +561,74 @@ double EdgeCollapser::endpointDistance2(const Candidate& c, double floor2) const
                 const Vec3d ab = ox - o, ac = oy - o;
                 dp = std::min(dp, triangleDistance2(p, o, ox, oy, ab, ac, !(length2(cross(ab, ac)) > 0.0)));
             }
-            if (f == f0 || f == f1 || (du <= floor2 && dv <= floor2)) continue;
+            if (f == f0 || f == f1 || (du <= floor2 && dv <= floor2 && dfu <= floor2 && dfv <= floor2)) continue;
             const Vec3d ab = ox - p, ac = oy - p;
             const bool degenerate = !(length2(cross(ab, ac)) > 0.0);
             if (du > floor2) du = std::min(du, triangleDistance2(pu, p, ox, oy, ab, ac, degenerate));
             if (dv > floor2) dv = std::min(dv, triangleDistance2(pv, p, ox, oy, ab, ac, degenerate));
+            if (dfu > floor2) dfu = std::min(dfu, triangleDistance2(fu, p, ox, oy, ab, ac, degenerate));
+            if (dfv > floor2) dfv = std::min(dfv, triangleDistance2(fv, p, ox, oy, ab, ac, degenerate));
         }
     }
-    if (!std::isfinite(du)) du = 0;
-    if (!std::isfinite(dv)) dv = 0;
-    if (!std::isfinite(dp)) dp = 0;
-    return std::max(std::max(du, dv), dp);
+    double dc = 0; // a new face that bridges a concave region leaves the surface between its corners
+    if (late_) {
+        for (const std::vector<uint32_t>* fan : {&fan_u_, &fan_v_}) {
+            for (uint32_t h : *fan) {
+                const uint32_t f = h / 3;
+                if (f == f0 || f == f1) continue;
+                const Vec3d o = toD(position_[corner_point_[h]]);
+                const Vec3d ox = toD(position_[corner_point_[nextHe(h)]]);
+                const Vec3d oy = toD(position_[corner_point_[prevHe(h)]]);
+                const Vec3d centroid = (p + ox + oy) * (1.0 / 3.0);
+                // Its own old face first (usually the nearest), then both old fans.
+                double d = triangleDistance2(centroid, o, ox, oy, ox - o, oy - o, !(length2(cross(ox - o, oy - o)) > 0.0));
+                for (const std::vector<uint32_t>* old_fan : {&fan_u_, &fan_v_}) {
+                    for (uint32_t g : *old_fan) {
+                        if (d <= std::max(floor2, dc)) break;
+                        const Vec3d go = toD(position_[corner_point_[g]]);
+                        const Vec3d gx = toD(position_[corner_point_[nextHe(g)]]);
+                        const Vec3d gy = toD(position_[corner_point_[prevHe(g)]]);
+                        d = std::min(d, triangleDistance2(centroid, go, gx, gy, gx - go, gy - go,
+                                                          !(length2(cross(gx - go, gy - go)) > 0.0)));
+                    }
+                }
+                dc = std::max(dc, d);
+            }
+        }
+    }
+    double result = 0;
+    for (double d : {du, dv, dp, dfu, dfv, dc})
+        if (std::isfinite(d)) result = std::max(result, d);
+    return result;
+}
+
+bool EdgeCollapser::fartherFromNewFan(const Vec3d& a, const Vec3d& b, const Candidate& c) const {
+    // Both distances in one walk of the new fan, skipping faces by their planes (kPlaneMargin).
+    const uint32_t f0 = c.edge / 3;
+    const uint32_t t = twin_[c.edge];
+    const uint32_t f1 = t == kNone ? kNone : t / 3;
+    const Vec3d& p = c.position;
+    const Vec3d pa = a - p, pb = b - p;
+    double da = std::numeric_limits<double>::infinity(), db = da;
+    for (const std::vector<uint32_t>* fan : {&fan_u_, &fan_v_}) {
+        for (uint32_t h : *fan) {
+            const uint32_t f = h / 3;
+            if (f == f0 || f == f1) continue;
+            const Vec3d ox = toD(position_[corner_point_[nextHe(h)]]);
+            const Vec3d oy = toD(position_[corner_point_[prevHe(h)]]);
+            const Vec3d ab = ox - p, ac = oy - p;
+            const Vec3d n = cross(ab, ac);
+            const double n2 = length2(n);
+            const bool degenerate = !(n2 > 0.0);
+            const double ha = dot(pa, n), hb = dot(pb, n);
+            if (degenerate || !(ha * ha > da * kPlaneMargin * n2))
+                da = std::min(da, triangleDistance2(a, p, ox, oy, ab, ac, degenerate));
+            if (degenerate || !(hb * hb > db * kPlaneMargin * n2))
+                db = std::min(db, triangleDistance2(b, p, ox, oy, ab, ac, degenerate));
+        }
+    }
+    if (!std::isfinite(db)) return false; // no face left around v
+    return da > db;
 }
 
 double EdgeCollapser::distanceBound2(const Candidate& c) const {
@@ -571,7 +644,18 @@ double EdgeCollapser::distanceBound2(const Candidate& c) const {
         du = std::min(du, segmentDistance2(pu, c.position, pw1));
         dv = std::min(dv, segmentDistance2(pv, c.position, pw1));
     }
-    const double dp = segmentDistance2(c.position, pu, pv);
+    double dp = segmentDistance2(c.position, pu, pv);
+    if (late_) {
+        // The input points of both ends: as du and dv. A new face's centroid is within a third of
+        // the moved corner's displacement of its old face.
+        for (uint32_t point : {c.removed, c.kept}) {
+            const Vec3d f = toD(far_[point]);
+            double d = segmentDistance2(f, c.position, pw0);
+            if (t != kNone) d = std::min(d, segmentDistance2(f, c.position, toD(position_[corner_point_[prevHe(t)]])));
+            dp = std::max(dp, d);
+        }
+        dp = std::max(dp, std::max(length2(c.position - pu), length2(c.position - pv)) * (1.0 / 9.0));
+    }
     return std::max(std::max(du, dv), dp);
 }
 
@@ -618,6 +702,7 @@ bool EdgeCollapser::run(size_t target_faces, double max_error, CollapseSequence*
     size_t collapses_at_requeue = collapses_;
     bool requeued = false;
     while (alive_faces_ > target_faces) {
+        late_ = alive_faces_ <= late_faces_;
         if (queue_.empty()) {
             // Rejected edges leave the queue until a collapse next to them re-evaluates them; an
             // empty queue may still hide collapses made valid by changes further away.
@@ -646,8 +731,12 @@ bool EdgeCollapser::run(size_t target_faces, double max_error, CollapseSequence*
             // grows by more than kRecheckFactor × its quadric part the edge competes again.
             const double base = c.cost - double(queue_.payload(e));
             const double floor2 = c.error * c.error;
-            const double scale =
-                double(options_.tip_distance_weight) * std::sqrt(quadric_[c.removed].weight + quadric_[c.kept].weight);
+            // The price of a distance is × sqrt(area) of the merged quadric, as the key; in the late
+            // stage × sqrt of the mean area of an edge's two points instead, so a thin feature is
+            // not cheaper to flatten than a broad one with the same distance (Hausdorff error).
+            const double area = late_ ? 4.0 * total_weight_ / double(alive_faces_)
+                                      : quadric_[c.removed].weight + quadric_[c.kept].weight;
+            const double scale = double(options_.tip_distance_weight) * std::sqrt(area);
             const double limit = c.cost + kRecheckFactor * std::max(base, 0.0);
             // Cheap upper bounds of the three distances: the new fan contains the segments from the
             // new position to w0 (and w1), the old fans contain the edge itself. When even they
@@ -977,6 +1066,16 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
     }
 
     has_penalty_ = options.tip_distance_weight > 0;
+    // Late stage (see run()): the penalty also measures each point's far input point, so far_ is
+    // kept from the start. The quadric weights sum to three times the surface area whatever collapses.
+    late_ = false;
+    late_faces_ = size_t(kLateFraction * double(initial_faces_));
+    total_weight_ = 0;
+    for (const Quadric& q : quadric_) total_weight_ += q.weight;
+    if (has_penalty_)
+        far_ = position_;
+    else
+        std::vector<Vec3f>().swap(far_);
     // UV charts: faces joined across edges whose two corners share wedges (union-find).
     uv_set_count_ = uint32_t(mesh.uvs.size());
     uv_channel_ = uv_set_count_ > 0 ? (mesh.hasNormals() ? 3u : 0u) : kNone;

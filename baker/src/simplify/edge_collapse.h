@@ -82,6 +82,9 @@ private:
     // Largest squared point distance of a valid collapse (fans from isValid): the endpoints' old
     // positions to the new fan, and the new position to the old fans.
     double endpointDistance2(const Candidate& c, double floor2) const;
+    // True when a is strictly further than b from the fan v will have after the collapse c (fans
+    // from isValid).
+    bool fartherFromNewFan(const Vec3d& a, const Vec3d& b, const Candidate& c) const;
     // An upper bound of endpointDistance2 from a few point-segment distances.
     double distanceBound2(const Candidate& c) const;
     // False when a face of `fan` (other than f0/f1) would flip or degenerate in any UV set.
@@ -103,11 +106,19 @@ private:
     uint32_t uv_set_count_ = 0;
     std::vector<uint32_t> face_chart_;  // UV chart (representative face) per face
     std::vector<uint32_t> chart_alive_; // alive faces per chart representative
+    // Below late_faces_ faces (kLateFraction of the input) the point-distance penalty also
+    // measures far_ points and face centroids, and prices distances by the mean area (run()).
+    size_t late_faces_ = 0;
+    bool late_ = false;
+    double total_weight_ = 0; // sum of the points' quadric weights (three times the surface area)
     bool has_penalty_ = false; // tip_distance_weight > 0: the queue payload of an edge is its point-distance
                                // price from its last pop (run())
 
     // Points (distinct positions) and wedges (distinct position + attributes).
     std::vector<Vec3f> position_;
+    // Per point, one input point it stands for: of the two merged by each collapse, the one
+    // further from the new fan (with tip_distance_weight > 0 only).
+    std::vector<Vec3f> far_;
     std::vector<uint32_t> point_he_; // an outgoing half-edge of an alive face, or kNone
     std::vector<uint8_t> kind_;
     std::vector<uint32_t> mark_; // scratch stamps for the link condition
