@@ -349,7 +349,7 @@ Result valenceReadInfo(const uint8_t* data, size_t size, ValenceInfo* info) {
     const uint64_t conn = v.connectivity_bytes;
     if (v.closed_triangle_count > uint64_t(kValenceTrianglesPerByte) * (conn + 1) ||
         v.closed_vertex_count > uint64_t(kValenceVerticesPerByte) * (conn + 1) ||
-        v.vertex_count > uint64_t(kValenceVerticesPerByte) * (uint64_t(v.position_bytes) + 1) ||
+        v.vertex_count > uint64_t(kValencePositionsPerByte) * (uint64_t(v.position_bytes) + 1) ||
         (v.has_normals && v.vertex_count > uint64_t(kValenceNormalsPerByte) * (uint64_t(v.normal_bytes) + 1)))
         return Result::CorruptStream;
     const uint64_t total = uint64_t(kValenceHeaderSize) + v.connectivity_bytes + v.position_bytes +

@@ -59,14 +59,15 @@ constexpr uint32_t kValenceMinNormalBits = 4;
 constexpr uint32_t kValenceMaxNormalBits = 16;
 constexpr uint32_t kValenceMaxCount = 1u << 28; // vertex and triangle counts
 // Header plausibility: counts above these multiples of their stream's byte length are refused before
-// anything is allocated. A coded binary decision costs at least -log2(4080/4096) > 0.0056 bits, so a
-// byte holds fewer than 1430 of them; every closed vertex costs a 5-decision symbol (< 286 per byte),
-// every closed triangle follows a symbol or closes a node (< 2 per symbol), every coded position 15
-// decisions and every normal 10.
-constexpr uint32_t kValenceTrianglesPerByte = 1024; // closed triangles per connectivity byte
-constexpr uint32_t kValenceVerticesPerByte = 512;   // closed vertices per connectivity byte, vertices per
-                                                    // position byte
-constexpr uint32_t kValenceNormalsPerByte = 1024;   // vertices per normal byte
+// anything is allocated. A binary decision costs at least -log2(4080/4096) > 0.0056 bits, a value of
+// an 18-symbol model at least -log2(32632/32768) > 0.0059 and of a 32-symbol model at least
+// -log2(32520/32768) > 0.0109. Every closed vertex costs a 32-symbol value (< 734 per byte) and a
+// closed triangle follows a value or closes a node (< 2 per value); every coded position costs three
+// 18-symbol values (< 452 per byte), every normal two (< 678 per byte).
+constexpr uint32_t kValenceTrianglesPerByte = 2048; // closed triangles per connectivity byte
+constexpr uint32_t kValenceVerticesPerByte = 1024;  // closed vertices per connectivity byte
+constexpr uint32_t kValencePositionsPerByte = 512;  // vertices per position range-coded byte
+constexpr uint32_t kValenceNormalsPerByte = 1024;   // vertices per normal range-coded byte
 // Binary range coder (LZMA style, 32-bit range). Each adaptive model holds two estimates of P(bit = 0)
 // in 16-bit fixed point, a fast one (low half of a u32, shift 4) and a slow one (high half, shift 6),
 // each kept in [256, 65280]; a bit is coded with their sum >> 5, a 12-bit probability in [16, 4080].
