@@ -1,7 +1,8 @@
 // Decoder for the .lbm compressed mesh (docs/format/valence.md). The connectivity is rebuilt by the
 // conquest engine shared with the encoder (lodrt/detail/valence_model.h); this file supplies the
 // stream reading side of it, then decodes positions (multi-parallelogram prediction over the decoded
-// corner table) and normals. Everything lives in caller memory; every value read is checked.
+// corner table: the order and parallelograms planned from the connectivity first, then the residuals
+// in one sequential pass) and normals. Everything lives in caller memory; every value read is checked.
 
 #include <cmath>
 #include <cstring>
@@ -199,10 +200,6 @@ private:
     uint64_t window_ = 0;
     uint32_t avail_ = 0;
 };
-
-// Corner arithmetic without a hardware divide (exact for every 32-bit corner number).
-inline uint32_t div3(uint32_t c) { return uint32_t((uint64_t(c) * 0xAAAAAAABull) >> 33); }
-inline uint32_t mul3(uint32_t t) { return t * 3; }
 
 constexpr uint32_t kClassProbs = 1u << kValenceClassTreeBits;
 constexpr uint32_t kTopProbs = 33;
