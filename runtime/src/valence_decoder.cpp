@@ -62,7 +62,7 @@ public:
     }
     // Multi-symbol decode (docs/format/valence.md "Range coder", `symbol`): one division finds the
     // slot, a branch-free count over the cumulative table the symbol.
-    template <uint32_t N> inline uint32_t symbol(detail::CdfModel<N>& m) {
+    template <uint32_t N, uint32_t R> inline uint32_t symbol(detail::CdfModel<N, R>& m) {
         constexpr uint32_t n = N;
         const uint32_t r = range_ >> kRangeCdfBits;
         const uint32_t slot = code_ / r;
@@ -217,7 +217,7 @@ struct UintModel {
 // then the sign (in a sign context), the top two mantissa bits modelled, the rest direct.
 template <int Components, int Contexts> struct ResidualModel {
     static constexpr uint32_t kTree = 1u << kValenceResidualTreeBits;
-    using LengthModel = detail::CdfModel<kValenceResidualSymbols>;
+    using LengthModel = detail::ResidualLengthModel;
     LengthModel length[Components][Contexts];
     uint32_t sign[Components][detail::kSignContexts];
     uint32_t second[Components][2 * kTree];
@@ -252,7 +252,7 @@ template <int Components, int Contexts> struct ResidualModel {
 struct ConnectivityReader {
     RangeDecoder rd;
     uint32_t more;
-    detail::CdfModel<1u << kValenceSymbolTreeBits> symbols[detail::kValenceContexts];
+    detail::ConnectivitySymbolModel symbols[detail::kValenceContexts];
     UintModel escape, offset, list, free_a, dup;
 
     void init() {

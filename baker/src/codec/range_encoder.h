@@ -29,7 +29,7 @@ public:
         }
     }
     /// Multi-symbol adaptive coding of s < N (docs/format/valence.md "Range coder").
-    template <uint32_t N> void symbol(lodrt::detail::CdfModel<N>& m, uint32_t s) {
+    template <uint32_t N, uint32_t R> void symbol(lodrt::detail::CdfModel<N, R>& m, uint32_t s) {
         using namespace lodrt::format;
         constexpr uint32_t n = N;
         const uint32_t r = range_ >> kRangeCdfBits;

@@ -46,7 +46,7 @@ struct UintModel {
 
 template <int Components, int Contexts> struct ResidualModel {
     static constexpr uint32_t kTree = 1u << kValenceResidualTreeBits;
-    using LengthModel = lodrt::detail::CdfModel<kValenceResidualSymbols>;
+    using LengthModel = lodrt::detail::ResidualLengthModel;
     LengthModel length[Components][Contexts];
     uint32_t sign[Components][lodrt::detail::kSignContexts];
     uint32_t second[Components][2 * kTree];
@@ -220,7 +220,7 @@ struct EncoderIo {
     size_t scan = 0;
     uint32_t seed = kNone;
     uint32_t more;
-    lodrt::detail::CdfModel<1u << kValenceSymbolTreeBits> symbols[lodrt::detail::kValenceContexts];
+    lodrt::detail::ConnectivitySymbolModel symbols[lodrt::detail::kValenceContexts];
     UintModel escape, offset, list, free_a, dup;
 
     void init() {

@@ -100,7 +100,8 @@ constexpr uint32_t kRangeCdfBits = 15;
 constexpr uint32_t kValenceResidualSymbols = 18;
 constexpr uint32_t kRangeCdfMinFreq = 8;
 constexpr uint32_t kRangeCdfRateFirst = 3;  // shift for the first kRangeCdfRateStep uses
-constexpr uint32_t kRangeCdfRateLast = 6;   // shift from 2 * kRangeCdfRateStep uses on (one step between)
+constexpr uint32_t kRangeCdfRateLast = 6;   // residual lengths: shift from 2 * kRangeCdfRateStep uses on
+constexpr uint32_t kRangeCdfRateLastConnectivity = 7; // connectivity symbols: the same
 constexpr uint32_t kRangeCdfRateStep = 16;
 constexpr uint32_t kValenceNormalContexts = 17; // bit length of the same component's previous residual
 

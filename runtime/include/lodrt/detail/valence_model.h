@@ -61,7 +61,7 @@ inline uint32_t rangeUpdate(uint32_t s, uint32_t b) {
 /// cumulative frequency of symbols < i out of 2^kRangeCdfBits (cum[0] = 0, cum[N] = 2^kRangeCdfBits);
 /// symbol i codes with width cum[i+1] - cum[i] >= kRangeCdfMinFreq (the last one also gets the range
 /// coder's rounding slack).
-template <uint32_t N> struct CdfModel {
+template <uint32_t N, uint32_t LastRate> struct CdfModel {
     static constexpr uint32_t kN = N;
     uint16_t cum[kN + 1];
     uint16_t uses;
@@ -78,7 +78,7 @@ template <uint32_t N> struct CdfModel {
         using namespace format;
         const uint32_t rate = uses < kRangeCdfRateStep ? kRangeCdfRateFirst
                               : uses < 2 * kRangeCdfRateStep ? kRangeCdfRateFirst + 1
-                                                             : kRangeCdfRateLast;
+                                                             : LastRate;
         uses = uint16_t(uses < 2 * kRangeCdfRateStep ? uses + 1 : uses);
         for (uint32_t i = 1; i < kN; ++i) {
             const int32_t c = cum[i];
@@ -89,6 +89,10 @@ template <uint32_t N> struct CdfModel {
         }
     }
 };
+
+using ResidualLengthModel = CdfModel<format::kValenceResidualSymbols, format::kRangeCdfRateLast>;
+using ConnectivitySymbolModel =
+    CdfModel<(1u << format::kValenceSymbolTreeBits), format::kRangeCdfRateLastConnectivity>;
 
 /// What sits across the focus's front edge.
 enum class VertexKind : uint32_t { Add = 0, Dummy = 1, Split = 2, Merge = 3 };
