@@ -423,6 +423,15 @@ struct Attempt {
         return !failure.failed;
     }
 
+    // Back to a new attempt's state for a restart, keeping the conquest arrays' memory (run() refills
+    // them; fresh pages for a second copy cost the dragon's encode about as much as filling them).
+    void reset() {
+        engine = lodrt::detail::Conquest<EncoderIo>();
+        io = EncoderIo();
+        conn = RangeEncoder();
+        failure = Failure();
+    }
+
     // After a successful run: frees what only the conquest needed (the closed mesh, the active lists,
     // the encoder's bookkeeping), keeping the engine's corner table, vertex arrays, real_of and the
     // connectivity coder for the steps after it.
@@ -510,9 +519,9 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
 
     // Conquest, cutting more of the mesh loose while a decoder assumption fails.
     std::vector<uint8_t> exploded(fn, 0);
-    std::unique_ptr<Attempt> attempt;
+    auto attempt = std::make_unique<Attempt>();
     for (int round = 0;; ++round) {
-        attempt = std::make_unique<Attempt>();
+        if (round > 0) attempt->reset();
         if (attempt->run(mesh, exploded)) break;
         const bool all = std::all_of(exploded.begin(), exploded.end(), [](uint8_t e) { return e != 0; });
         if (all) return internalError("valence encoder: conquest failed on fully cut mesh");
