@@ -1,7 +1,8 @@
 // Decoder for the .lbm compressed mesh (docs/format/valence.md). The connectivity is rebuilt by the
 // conquest engine shared with the encoder (lodrt/detail/valence_model.h); this file supplies the
 // stream reading side of it, then decodes positions (multi-parallelogram prediction over the decoded
-// corner table) and normals. Everything lives in caller memory; every value read is checked.
+// corner table: the order and parallelograms planned from the connectivity first, then the residuals
+// in one sequential pass) and normals. Everything lives in caller memory; every value read is checked.
 
 #include <cmath>
 #include <cstring>
@@ -59,6 +60,30 @@ public:
         }
         return result;
     }
+    // Multi-symbol decode (docs/format/valence.md "Range coder", `symbol`): one division finds the
+    // slot, a branch-free count over the cumulative table the symbol.
+    template <uint32_t N, uint32_t R> inline uint32_t symbol(detail::CdfModel<N, R>& m) {
+        constexpr uint32_t n = N;
+        const uint32_t r = range_ >> kRangeCdfBits;
+        const uint32_t slot = code_ / r;
+        uint32_t s = 0;
+        for (uint32_t i = 1; i < n; ++i) s += m.cum[i] <= slot ? 1u : 0u;
+        const uint32_t low = r * m.cum[s];
+        const uint32_t high = s + 1 < n ? r * m.cum[s + 1] : range_;
+        code_ -= low;
+        range_ = high - low;
+        m.update(s);
+        // A symbol is at least kRangeCdfMinFreq / 2^15 of a range >= 2^24: two bytes always suffice.
+        if (range_ < kRangeTopValue) {
+            range_ <<= 8;
+            code_ = (code_ << 8) | next();
+            if (range_ < kRangeTopValue) {
+                range_ <<= 8;
+                code_ = (code_ << 8) | next();
+            }
+        }
+        return s;
+    }
     inline uint32_t direct(uint32_t count) {
         uint32_t v = 0;
         for (uint32_t i = 0; i < count; ++i) {
@@ -114,9 +139,67 @@ private:
     uint32_t overrun_ = 0;
 };
 
-// Corner arithmetic without a hardware divide (exact for every 32-bit corner number).
-inline uint32_t div3(uint32_t c) { return uint32_t((uint64_t(c) * 0xAAAAAAABull) >> 33); }
-inline uint32_t mul3(uint32_t t) { return t * 3; }
+// Raw bit part (docs/format/valence.md "Raw bits"): bits packed least significant first, read through a
+// 64-bit window. Reading past the end yields zeros and is remembered; finishedExactly() checks that
+// the part is consumed to its last byte and that the unused high bits of that byte are zero.
+class BitReader {
+public:
+    void init(const uint8_t* data, size_t size) {
+        p_ = data;
+        end_ = data + size;
+        size_ = size;
+    }
+    // count <= 24.
+    inline uint32_t read(uint32_t count) {
+        if (avail_ < count) refill();
+        const uint32_t v = uint32_t(window_) & ((1u << count) - 1u);
+        window_ >>= count;
+        avail_ -= count;
+        return v;
+    }
+    bool overrun() const { return fetched_ > size_ + 8; }
+    bool finishedExactly() const {
+        const uint64_t used_bits = uint64_t(fetched_) * 8 - avail_;
+        return (used_bits + 7) / 8 == size_ && window_ == 0;
+    }
+
+private:
+    void refill() {
+        if (end_ - p_ >= 8) {
+            uint64_t w;
+            std::memcpy(&w, p_, 8);
+            w = toLittle(w);
+            window_ |= w << avail_;
+            const uint32_t bytes = (63 - avail_) >> 3;
+            p_ += bytes;
+            fetched_ += bytes;
+            avail_ += bytes * 8;
+            if (avail_ < 64) window_ &= (uint64_t(1) << avail_) - 1;
+            return;
+        }
+        while (avail_ <= 56) {
+            const uint64_t byte = p_ < end_ ? *p_++ : 0;
+            window_ |= byte << avail_;
+            avail_ += 8;
+            ++fetched_;
+        }
+    }
+    static uint64_t toLittle(uint64_t w) {
+        const uint16_t probe = 1;
+        uint8_t first;
+        std::memcpy(&first, &probe, 1);
+        if (first == 1) return w;
+        uint64_t r = 0;
+        for (int i = 0; i < 8; ++i) r |= ((w >> (8 * i)) & 0xFFu) << (8 * (7 - i));
+        return r;
+    }
+    const uint8_t* p_ = nullptr;
+    const uint8_t* end_ = nullptr;
+    size_t size_ = 0;
+    size_t fetched_ = 0; // bytes moved into the window, zeros past the end included
+    uint64_t window_ = 0;
+    uint32_t avail_ = 0;
+};
 
 constexpr uint32_t kClassProbs = 1u << kValenceClassTreeBits;
 constexpr uint32_t kTopProbs = 33;
@@ -134,31 +217,32 @@ struct UintModel {
 // then the sign (in a sign context), the top two mantissa bits modelled, the rest direct.
 template <int Components, int Contexts> struct ResidualModel {
     static constexpr uint32_t kTree = 1u << kValenceResidualTreeBits;
-    uint32_t length[Components][Contexts][kTree];
+    using LengthModel = detail::ResidualLengthModel;
+    LengthModel length[Components][Contexts];
     uint32_t sign[Components][detail::kSignContexts];
     uint32_t second[Components][2 * kTree];
     uint32_t top[Components][kTree];
     void init() {
-        detail::initRangeProbs(&length[0][0][0], sizeof(length) / 4);
+        for (auto& per_component : length)
+            for (LengthModel& m : per_component) m.init();
         detail::initRangeProbs(&sign[0][0], sizeof(sign) / 4);
         detail::initRangeProbs(&second[0][0], sizeof(second) / 4);
         detail::initRangeProbs(&top[0][0], sizeof(top) / 4);
     }
     // Residual of component j in context ctx; *length_out = bit length of |r|. False when corrupt.
-    inline bool decode(RangeDecoder& rd, int j, uint32_t ctx, int32_t* r, uint32_t* length_out,
+    inline bool decode(RangeDecoder& rd, BitReader& raw, int j, uint32_t ctx, int32_t* r, uint32_t* length_out,
                        uint32_t sign_ctx = 0) {
-        const uint32_t k = rd.tree(length[j][ctx], kValenceResidualTreeBits);
+        const uint32_t k = rd.symbol(length[j][ctx]); // 0..17
         *length_out = k;
         if (k == 0) {
             *r = 0;
             return true;
         }
-        if (k > 17) return false;
         const uint32_t negative = rd.bit(sign[j][sign_ctx]);
         uint32_t m = 1;
         if (k >= 2) m = (m << 1) | rd.bit(top[j][k]);
         if (k >= 3) m = (m << 1) | rd.bit(second[j][2 * k + (m & 1u)]);
-        if (k >= 4) m = (m << (k - 3)) | rd.direct(k - 3);
+        if (k >= 4) m = (m << (k - 3)) | raw.read(k - 3);
         *r = negative ? -int32_t(m) : int32_t(m);
         return true;
     }
@@ -168,12 +252,12 @@ template <int Components, int Contexts> struct ResidualModel {
 struct ConnectivityReader {
     RangeDecoder rd;
     uint32_t more;
-    uint32_t symbols[detail::kValenceContexts][1u << kValenceSymbolTreeBits];
+    detail::ConnectivitySymbolModel symbols[detail::kValenceContexts];
     UintModel escape, offset, list, free_a, dup;
 
     void init() {
         more = kRangeStateInit;
-        detail::initRangeProbs(&symbols[0][0], sizeof(symbols) / 4);
+        for (auto& m : symbols) m.init();
         escape.init();
         offset.init();
         list.init();
@@ -189,7 +273,7 @@ struct ConnectivityReader {
     }
     Result symbol(uint32_t ctx, VertexSymbol* s) {
         if (rd.overrun()) return Result::CorruptStream;
-        const uint32_t sym = rd.tree(symbols[ctx], kValenceSymbolTreeBits);
+        const uint32_t sym = rd.symbol(symbols[ctx]);
         bool ok = true;
         if (sym >= kValenceSymbolFirstValence) {
             s->kind = VertexKind::Add;
@@ -241,6 +325,8 @@ Result valenceReadInfo(const uint8_t* data, size_t size, ValenceInfo* info) {
     v.connectivity_bytes = read32(data + 44);
     v.position_bytes = read32(data + 48);
     v.normal_bytes = read32(data + 52);
+    v.position_raw_bytes = read32(data + 56);
+    v.normal_raw_bytes = read32(data + 60);
     v.has_normals = (flags & kValenceFlagNormals) != 0;
     if (v.vertex_count > kValenceMaxCount || v.triangle_count > kValenceMaxCount ||
         v.closed_vertex_count > kValenceMaxCount || v.closed_triangle_count > kValenceMaxCount)
@@ -249,7 +335,7 @@ Result valenceReadInfo(const uint8_t* data, size_t size, ValenceInfo* info) {
     if (v.position_bits < kValenceMinPositionBits || v.position_bits > kValenceMaxPositionBits)
         return Result::CorruptStream;
     if (v.has_normals ? (v.normal_bits < kValenceMinNormalBits || v.normal_bits > kValenceMaxNormalBits)
-                      : (v.normal_bits != 0 || v.normal_bytes != 0))
+                      : (v.normal_bits != 0 || v.normal_bytes != 0 || v.normal_raw_bytes != 0))
         return Result::CorruptStream;
     for (int j = 0; j < 3; ++j)
         if (!std::isfinite(v.bounds_min[j])) return Result::CorruptStream;
@@ -260,11 +346,11 @@ Result valenceReadInfo(const uint8_t* data, size_t size, ValenceInfo* info) {
     const uint64_t conn = v.connectivity_bytes;
     if (v.closed_triangle_count > uint64_t(kValenceTrianglesPerByte) * (conn + 1) ||
         v.closed_vertex_count > uint64_t(kValenceVerticesPerByte) * (conn + 1) ||
-        v.vertex_count > uint64_t(kValenceVerticesPerByte) * (uint64_t(v.position_bytes) + 1) ||
-        (v.has_normals && v.vertex_count > uint64_t(kValenceVerticesPerByte) * (uint64_t(v.normal_bytes) + 1)))
+        v.vertex_count > uint64_t(kValencePositionsPerByte) * (uint64_t(v.position_bytes) + 1) ||
+        (v.has_normals && v.vertex_count > uint64_t(kValenceNormalsPerByte) * (uint64_t(v.normal_bytes) + 1)))
         return Result::CorruptStream;
-    const uint64_t total =
-        uint64_t(kValenceHeaderSize) + v.connectivity_bytes + v.position_bytes + uint64_t(v.normal_bytes);
+    const uint64_t total = uint64_t(kValenceHeaderSize) + v.connectivity_bytes + v.position_bytes +
+                           uint64_t(v.position_raw_bytes) + v.normal_bytes + uint64_t(v.normal_raw_bytes);
     if (size < total) return Result::Truncated;
     if (size > total) return Result::TrailingBytes;
     *info = v;
@@ -277,7 +363,7 @@ namespace {
 struct ScratchLayout {
     size_t corner_vertex, corner_opposite, vertex_flags, vertex_corner, vertex_valence, node_vertex, node_prev,
         node_next, node_free, node_corner, completion, stack_head, stack_size, final_of, final_done, qpos, qpos_final,
-        decoded, normal_sum, qnorm, total;
+        decoded, plan_neighbour, plan_triples, normal_sum, qnorm, total;
 };
 
 ScratchLayout layout(const ValenceInfo& info) {
@@ -308,6 +394,8 @@ ScratchLayout layout(const ValenceInfo& info) {
     l.qpos = take(3 * vc * 4);
     l.qpos_final = take(3 * vn * 4);
     l.decoded = take(vc);
+    l.plan_neighbour = take(vc * 4);
+    l.plan_triples = take(9 * tc * 4);
     l.normal_sum = take(info.has_normals ? 3 * vn * 8 : 0);
     l.qnorm = take(info.has_normals ? 2 * vn * 4 : 0);
     l.total = at;
@@ -458,6 +546,9 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
     RangeDecoder pos;
     if (!pos.init(stream, info.position_bytes)) return Result::CorruptStream;
     stream += info.position_bytes;
+    BitReader pos_raw;
+    pos_raw.init(stream, info.position_raw_bytes);
+    stream += info.position_raw_bytes;
     ResidualModel<3, detail::kPositionContexts> pos_model;
     pos_model.init();
     int32_t* qpos = reinterpret_cast<int32_t*>(base + l.qpos);
@@ -473,7 +564,7 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
         for (int j = 0; j < 3; ++j) {
             int32_t res;
             uint32_t length;
-            if (!pos_model.decode(pos, j, detail::positionContext(ctx, earlier), &res, &length,
+            if (!pos_model.decode(pos, pos_raw, j, detail::positionContext(ctx, earlier), &res, &length,
                                   prev_sign[j] * 3 + x_sign))
                 return false;
             prev_sign[j] = detail::signClass(res);
@@ -485,79 +576,23 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
         }
         return true;
     };
-    // detail::positionOrder and detail::predictPosition fused into one walk around each vertex (the
-    // encoder runs them separately; the round-trip tests hold the two to the same result). The node
-    // arrays are free again: they hold the order's degree counts and stacks.
+    // The plan (order and prediction triples) from the connectivity alone, then one sequential pass
+    // of residuals. The node arrays are free again: they hold the order's degree counts and stacks.
     uint8_t* final_done = base + l.final_done;
     // An empty mesh has no scratch (null base): memset's pointer must not be null even for 0 bytes.
     if (vn > 0) std::memset(final_done, 0, vn);
-    if (vc > 0) std::memset(decoded, 0, vc);
-    uint32_t* degree = a.node_free;
-    for (uint32_t v = 0; v < vc; ++v) degree[v] = 0;
-    uint32_t* stack[3] = {a.node_vertex, a.node_prev, a.node_next};
-    uint32_t top[3] = {0, 0, 0};
-    const uint32_t* cv = a.corner_vertex;
-    const uint32_t* opp = a.corner_opposite;
-    uint32_t scan = 0;
-    for (;;) {
-        uint32_t v = kNone;
-        for (int level = 2; level >= 0 && v == kNone; --level) {
-            while (top[level] > 0) {
-                const uint32_t u = stack[level][--top[level]];
-                if (!decoded[u]) {
-                    v = u;
-                    break;
-                }
-            }
-        }
-        if (v == kNone) {
-            while (scan < vc && (decoded[scan] || (a.vertex_flags[scan] & detail::kFlagDummy))) ++scan;
-            if (scan == vc) break;
-            v = scan;
-        }
-        const uint32_t c0 = a.vertex_corner[v];
-        if (c0 == kNone) return Result::CorruptStream;
-        int64_t sum[3] = {0, 0, 0};
-        uint32_t count = 0, neighbour = kNone, scale = 0;
-        const uint32_t max_steps = a.vertex_valence[v];
-        uint32_t c = c0;
-        for (uint32_t steps = 0;; ++steps) {
-            if (steps > max_steps) return Result::CorruptStream;
-            const uint32_t t3 = mul3(div3(c)), cm = c - t3;
-            const uint32_t cn = cm == 2 ? t3 : c + 1, cp = cm == 0 ? t3 + 2 : c - 1;
-            const uint32_t va = cv[cn], vb = cv[cp];
-            const uint32_t da = decoded[va], db = decoded[vb];
-            if (da & db) {
-                if (opp[c] == kNone) return Result::CorruptStream;
-                const uint32_t w = cv[opp[c]];
-                if (decoded[w]) {
-                    const int32_t* pa = &qpos[3 * size_t(va)];
-                    const int32_t* pb = &qpos[3 * size_t(vb)];
-                    const int32_t* pw = &qpos[3 * size_t(w)];
-                    sum[0] += int64_t(pa[0]) + pb[0] - pw[0];
-                    sum[1] += int64_t(pa[1]) + pb[1] - pw[1];
-                    sum[2] += int64_t(pa[2]) + pb[2] - pw[2];
-                    if (count == 0) {
-                        for (int k = 0; k < 3; ++k) {
-                            const uint32_t d = uint32_t(pa[k] > pb[k] ? pa[k] - pb[k] : pb[k] - pa[k]);
-                            if (d > scale) scale = d;
-                        }
-                    }
-                    ++count;
-                }
-            } else if (da | db) {
-                const uint32_t u = da ? vb : va;
-                if (!(a.vertex_flags[u] & detail::kFlagDummy)) {
-                    const uint32_t d = ++degree[u];
-                    if (d <= 3) stack[d - 1][top[d - 1]++] = u;
-                }
-            }
-            if (neighbour == kNone && da) neighbour = va;
-            const uint32_t o = opp[cn];
-            if (o == kNone) return Result::CorruptStream;
-            c = o - mul3(div3(o)) == 2 ? o - 2 : o + 1;
-            if (c == c0) break;
-        }
+    detail::PositionPlan plan;
+    plan.order = a.completion;
+    plan.count = a.node_corner;
+    plan.neighbour = u32(l.plan_neighbour);
+    plan.triples = u32(l.plan_triples);
+    plan.max_triples = 3 * tc;
+    if (!detail::planPositions(a.corner_vertex, a.corner_opposite, a.vertex_corner, a.vertex_flags, a.vertex_valence,
+                               vc, decoded, a.node_free, a.node_vertex, a.node_prev, a.node_next, &plan))
+        return Result::CorruptStream;
+    const uint32_t* triple = plan.triples;
+    for (uint32_t i = 0; i < plan.ordered; ++i) {
+        const uint32_t v = plan.order[i], n = plan.count[i];
         const uint32_t fid = final_of[v];
         int32_t* q = &qpos[3 * size_t(v)];
         int32_t* qf = &qpos_final[3 * size_t(fid)];
@@ -567,24 +602,19 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
             q[2] = qf[2];
         } else {
             int32_t pred[3];
-            if (count > 0) {
-                for (int k = 0; k < 3; ++k) pred[k] = int32_t(detail::divRound(sum[k], count));
-            } else if (neighbour != kNone) {
-                for (int k = 0; k < 3; ++k) pred[k] = qpos[3 * size_t(neighbour) + size_t(k)];
-            } else {
-                for (int k = 0; k < 3; ++k) pred[k] = last[k];
-            }
-            if (!decodeVertex(detail::scaleContext(scale, count), pred, q)) return Result::CorruptStream;
+            uint32_t scale;
+            detail::predictFromPlan(qpos, triple, n, plan.neighbour[i], last, pred, &scale);
+            if (!decodeVertex(detail::scaleContext(scale, n), pred, q)) return Result::CorruptStream;
             qf[0] = q[0];
             qf[1] = q[1];
             qf[2] = q[2];
             final_done[fid] = 1;
         }
+        triple += 3 * size_t(n);
         last[0] = q[0];
         last[1] = q[1];
         last[2] = q[2];
-        decoded[v] = 1;
-        if (pos.overrun()) return Result::CorruptStream;
+        if (pos.overrun() || pos_raw.overrun()) return Result::CorruptStream;
     }
     for (size_t fid = final_count; fid < vn; ++fid) {
         int32_t* qf = &qpos_final[3 * fid];
@@ -593,7 +623,7 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
         last[1] = qf[1];
         last[2] = qf[2];
     }
-    if (!pos.finishedExactly()) return Result::CorruptStream;
+    if (!pos.finishedExactly() || !pos_raw.finishedExactly()) return Result::CorruptStream;
     const float step = qmax > 0 ? info.cube_size / float(qmax) : 0.0f;
     for (size_t i = 0; i < 3 * vn; ++i) output.positions[i] = info.bounds_min[i % 3] + float(qpos_final[i]) * step;
 
@@ -602,6 +632,8 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
     if (info.has_normals) {
         RangeDecoder nrm;
         if (!nrm.init(stream, info.normal_bytes)) return Result::CorruptStream;
+        BitReader nrm_raw;
+        nrm_raw.init(stream + info.normal_bytes, info.normal_raw_bytes);
         int64_t* sum = reinterpret_cast<int64_t*>(base + l.normal_sum);
         uint32_t* qnorm = u32(l.qnorm);
         for (size_t i = 0; i < 3 * vn; ++i) sum[i] = 0;
@@ -640,14 +672,14 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
                 uint32_t length;
                 const uint32_t ctx = nrm_length[j] < kValenceNormalContexts ? nrm_length[j]
                                                                                  : kValenceNormalContexts - 1;
-                if (!nrm_model.decode(nrm, j, ctx, &res, &length)) return Result::CorruptStream;
+                if (!nrm_model.decode(nrm, nrm_raw, j, ctx, &res, &length)) return Result::CorruptStream;
                 if (res < -half || res >= half) return Result::CorruptStream;
                 nrm_length[j] = length;
                 qnorm[2 * x + size_t(j)] = (p[j] + uint32_t(res)) & mask;
             }
-            if (nrm.overrun()) return Result::CorruptStream;
+            if (nrm.overrun() || nrm_raw.overrun()) return Result::CorruptStream;
         }
-        if (!nrm.finishedExactly()) return Result::CorruptStream;
+        if (!nrm.finishedExactly() || !nrm_raw.finishedExactly()) return Result::CorruptStream;
         if (output.normals) {
             for (size_t i = 0; i < vn; ++i) octahedralDecode(&qnorm[2 * i], info.normal_bits, &output.normals[3 * i]);
         }

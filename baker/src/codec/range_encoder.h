@@ -1,5 +1,5 @@
 #pragma once
-// LZMA-style binary range encoder, the twin of RangeDecoder in runtime/src/valence_decoder.cpp
+// LZMA-style binary range encoder (and the raw bit writer beside it), the twin of RangeDecoder in runtime/src/valence_decoder.cpp
 // (docs/format/valence.md "Range coder"). Adaptive 11-bit probabilities, 32-bit range, carry via a
 // cached byte.
 
@@ -23,6 +23,21 @@ public:
             range_ -= bound;
         }
         prob = lodrt::detail::rangeUpdate(prob, b);
+        while (range_ < kRangeTopValue) {
+            range_ <<= 8;
+            shiftLow();
+        }
+    }
+    /// Multi-symbol adaptive coding of s < N (docs/format/valence.md "Range coder").
+    template <uint32_t N, uint32_t R> void symbol(lodrt::detail::CdfModel<N, R>& m, uint32_t s) {
+        using namespace lodrt::format;
+        constexpr uint32_t n = N;
+        const uint32_t r = range_ >> kRangeCdfBits;
+        const uint32_t low = r * m.cum[s];
+        const uint32_t high = s + 1 < n ? r * m.cum[s + 1] : range_;
+        low_ += low;
+        range_ = high - low;
+        m.update(s);
         while (range_ < kRangeTopValue) {
             range_ <<= 8;
             shiftLow();
@@ -59,16 +74,17 @@ public:
     }
     /// Residual r of component j in context ctx (docs/format/valence.md "Residuals"); returns the bit
     /// length of |r|.
-    template <class Model> uint32_t residual(Model& m, int j, uint32_t ctx, int32_t r, uint32_t sign_ctx = 0) {
+    template <class Model, class Raw>
+    uint32_t residual(Model& m, Raw& raw, int j, uint32_t ctx, int32_t r, uint32_t sign_ctx = 0) {
         const uint32_t mag = uint32_t(r < 0 ? -r : r);
         uint32_t k = 0;
         while ((mag >> k) != 0) ++k;
-        tree(m.length[j][ctx], lodrt::format::kValenceResidualTreeBits, k);
+        symbol(m.length[j][ctx], k);
         if (k == 0) return 0;
         bit(m.sign[j][sign_ctx], r < 0 ? 1u : 0u);
         if (k >= 2) bit(m.top[j][k], (mag >> (k - 2)) & 1u);
         if (k >= 3) bit(m.second[j][2 * k + ((mag >> (k - 2)) & 1u)], (mag >> (k - 3)) & 1u);
-        if (k >= 4) direct(mag & ((1u << (k - 3)) - 1), k - 3);
+        if (k >= 4) raw.write(mag & ((1u << (k - 3)) - 1), k - 3);
         return k;
     }
     std::vector<uint8_t> finish() {
@@ -94,6 +110,32 @@ private:
     uint32_t range_ = 0xFFFFFFFFu;
     uint8_t cache_ = 0;
     uint64_t cache_size_ = 1;
+    std::vector<uint8_t> out_;
+};
+
+/// Raw bit part of an attribute stream (docs/format/valence.md "Raw bits"): bits packed least
+/// significant first, the last byte padded with zeros; the twin of BitReader in the decoder.
+class BitWriter {
+public:
+    void write(uint32_t value, uint32_t count) {
+        window_ |= uint64_t(value) << avail_;
+        avail_ += count;
+        while (avail_ >= 8) {
+            out_.push_back(uint8_t(window_));
+            window_ >>= 8;
+            avail_ -= 8;
+        }
+    }
+    std::vector<uint8_t> finish() {
+        if (avail_ > 0) out_.push_back(uint8_t(window_));
+        window_ = 0;
+        avail_ = 0;
+        return std::move(out_);
+    }
+
+private:
+    uint64_t window_ = 0;
+    uint32_t avail_ = 0;
     std::vector<uint8_t> out_;
 };
 

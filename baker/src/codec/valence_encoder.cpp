@@ -46,12 +46,14 @@ struct UintModel {
 
 template <int Components, int Contexts> struct ResidualModel {
     static constexpr uint32_t kTree = 1u << kValenceResidualTreeBits;
-    uint32_t length[Components][Contexts][kTree];
+    using LengthModel = lodrt::detail::ResidualLengthModel;
+    LengthModel length[Components][Contexts];
     uint32_t sign[Components][lodrt::detail::kSignContexts];
     uint32_t second[Components][2 * kTree];
     uint32_t top[Components][kTree];
     void init() {
-        initRangeProbs(&length[0][0][0], sizeof(length) / 4);
+        for (auto& per_component : length)
+            for (LengthModel& m : per_component) m.init();
         initRangeProbs(&sign[0][0], sizeof(sign) / 4);
         initRangeProbs(&second[0][0], sizeof(second) / 4);
         initRangeProbs(&top[0][0], sizeof(top) / 4);
@@ -218,12 +220,12 @@ struct EncoderIo {
     size_t scan = 0;
     uint32_t seed = kNone;
     uint32_t more;
-    uint32_t symbols[lodrt::detail::kValenceContexts][1u << kValenceSymbolTreeBits];
+    lodrt::detail::ConnectivitySymbolModel symbols[lodrt::detail::kValenceContexts];
     UintModel escape, offset, list, free_a, dup;
 
     void init() {
         more = kRangeStateInit;
-        initRangeProbs(&symbols[0][0], sizeof(symbols) / 4);
+        for (auto& model : symbols) model.init();
         escape.init();
         offset.init();
         list.init();
@@ -249,12 +251,12 @@ struct EncoderIo {
     void writeNew(uint32_t ctx, uint32_t v) {
         const uint32_t val = m->valence[v];
         if (m->source[v] == kNone) {
-            re->tree(symbols[ctx], kValenceSymbolTreeBits, kValenceSymbolDummy);
+            re->symbol(symbols[ctx], kValenceSymbolDummy);
             re->uint(escape.klass, escape.top, val);
         } else if (val >= 3 && val - 3 + kValenceSymbolFirstValence < (1u << kValenceSymbolTreeBits)) {
-            re->tree(symbols[ctx], kValenceSymbolTreeBits, val - 3 + kValenceSymbolFirstValence);
+            re->symbol(symbols[ctx], val - 3 + kValenceSymbolFirstValence);
         } else {
-            re->tree(symbols[ctx], kValenceSymbolTreeBits, kValenceSymbolEscape);
+            re->symbol(symbols[ctx], kValenceSymbolEscape);
             re->uint(escape.klass, escape.top, val);
         }
         engine_id[v] = next_engine_vertex++;
@@ -302,7 +304,7 @@ struct EncoderIo {
             if (isTarget(k)) {
                 s->kind = VertexKind::Split;
                 s->offset = d;
-                re->tree(symbols[ctx], kValenceSymbolTreeBits, kValenceSymbolSplit);
+                re->symbol(symbols[ctx], kValenceSymbolSplit);
                 if (d < 3) return fail(x, kNone);
                 re->uint(offset.klass, offset.top, d - 3);
                 re->uint(free_a.klass, free_a.top, s->free_a);
@@ -319,7 +321,7 @@ struct EncoderIo {
                 s->kind = VertexKind::Merge;
                 s->list = li;
                 s->offset = d;
-                re->tree(symbols[ctx], kValenceSymbolTreeBits, kValenceSymbolMerge);
+                re->symbol(symbols[ctx], kValenceSymbolMerge);
                 re->uint(list.klass, list.top, li);
                 re->uint(offset.klass, offset.top, d);
                 re->uint(free_a.klass, free_a.top, s->free_a);
@@ -421,6 +423,15 @@ struct Attempt {
         return !failure.failed;
     }
 
+    // Back to a new attempt's state for a restart, keeping the conquest arrays' memory (run() refills
+    // them; fresh pages for a second copy cost the dragon's encode about as much as filling them).
+    void reset() {
+        engine = lodrt::detail::Conquest<EncoderIo>();
+        io = EncoderIo();
+        conn = RangeEncoder();
+        failure = Failure();
+    }
+
     // After a successful run: frees what only the conquest needed (the closed mesh, the active lists,
     // the encoder's bookkeeping), keeping the engine's corner table, vertex arrays, real_of and the
     // connectivity coder for the steps after it.
@@ -443,7 +454,7 @@ std::string describe(lodrt::Result r) {
         what = "not an .lbm file (bad magic)";
         break;
     case lodrt::Result::UnsupportedVersion:
-        what = "format version other than 3";
+        what = "format version other than 4";
         break;
     case lodrt::Result::TrailingBytes:
         what = "bytes after the streams the header announces";
@@ -508,9 +519,9 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
 
     // Conquest, cutting more of the mesh loose while a decoder assumption fails.
     std::vector<uint8_t> exploded(fn, 0);
-    std::unique_ptr<Attempt> attempt;
+    auto attempt = std::make_unique<Attempt>();
     for (int round = 0;; ++round) {
-        attempt = std::make_unique<Attempt>();
+        if (round > 0) attempt->reset();
         if (attempt->run(mesh, exploded)) break;
         const bool all = std::all_of(exploded.begin(), exploded.end(), [](uint8_t e) { return e != 0; });
         if (all) return internalError("valence encoder: conquest failed on fully cut mesh");
@@ -578,22 +589,31 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
 
     // Positions in the order positionOrder gives, predicted exactly as the decoder will.
     RangeEncoder pos;
+    BitWriter pos_raw;
     ResidualModel<3, lodrt::detail::kPositionContexts> pos_model;
     pos_model.init();
     std::vector<int32_t> qpos(3 * size_t(vc), 0), qpos_final(3 * vn);
-    std::vector<uint8_t> decoded(vc, 0);
     int32_t last[3] = {int32_t(qmax + 1) / 2, int32_t(qmax + 1) / 2, int32_t(qmax + 1) / 2};
     uint32_t prev_sign[3] = {0, 0, 0};
-    std::vector<uint32_t> order(vc), degree(vc), stack0(vc), stack1(vc), stack2(vc);
-    const uint32_t ordered_count =
-        lodrt::detail::positionOrder(a.corner_vertex, a.corner_opposite, a.vertex_corner, a.vertex_flags,
-                                     a.vertex_valence, vc, order.data(), decoded.data(), degree.data(), stack0.data(),
-                                     stack1.data(), stack2.data());
-    if (ordered_count == kNone) return internalError("valence encoder: broken corner cycle");
-    std::fill(decoded.begin(), decoded.end(), uint8_t(0));
+    std::vector<uint8_t> ordered(vc);
+    std::vector<uint32_t> order(vc), count(vc), neighbour(vc), triples(9 * size_t(tc)), degree(vc), stack0(vc),
+        stack1(vc), stack2(vc);
+    lodrt::detail::PositionPlan plan;
+    plan.order = order.data();
+    plan.count = count.data();
+    plan.neighbour = neighbour.data();
+    plan.triples = triples.data();
+    plan.max_triples = 3 * tc;
+    if (!lodrt::detail::planPositions(a.corner_vertex, a.corner_opposite, a.vertex_corner, a.vertex_flags,
+                                      a.vertex_valence, vc, ordered.data(), degree.data(), stack0.data(),
+                                      stack1.data(), stack2.data(), &plan))
+        return internalError("valence encoder: broken corner cycle");
     std::vector<uint8_t> final_done(vn, 0);
-    for (uint32_t i = 0; i < ordered_count; ++i) {
-        const uint32_t ev = order[i];
+    const uint32_t* triple = plan.triples;
+    for (uint32_t i = 0; i < plan.ordered; ++i) {
+        const uint32_t ev = order[i], n = count[i];
+        const uint32_t* t = triple;
+        triple += 3 * size_t(n);
         const uint32_t fid = final_of[ev];
         if (fid == kNone) continue;
         const uint32_t src = source_of_engine[ev];
@@ -601,15 +621,13 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
         for (int j = 0; j < 3; ++j) q[j] = qpos_in[3 * size_t(src) + size_t(j)];
         if (!final_done[fid]) {
             int32_t pred[3];
-            uint32_t scale = 0, count = 0;
-            if (!lodrt::detail::predictPosition(a.corner_vertex, a.corner_opposite, a.vertex_corner, decoded.data(),
-                                                qpos.data(), ev, last, a.vertex_valence[ev], pred, &scale, &count))
-                return internalError("valence encoder: broken corner cycle");
-            const uint32_t ctx = lodrt::detail::scaleContext(scale, count);
+            uint32_t scale = 0;
+            lodrt::detail::predictFromPlan(qpos.data(), t, n, neighbour[i], last, pred, &scale);
+            const uint32_t ctx = lodrt::detail::scaleContext(scale, n);
             uint32_t earlier = kNone, x_sign = 0;
             for (int j = 0; j < 3; ++j) {
                 const int32_t r = q[j] - pred[j];
-                const uint32_t k = pos.residual(pos_model, j, lodrt::detail::positionContext(ctx, earlier), r,
+                const uint32_t k = pos.residual(pos_model, pos_raw, j, lodrt::detail::positionContext(ctx, earlier), r,
                                                 prev_sign[j] * 3 + x_sign);
                 prev_sign[j] = lodrt::detail::signClass(r);
                 if (j == 0) x_sign = prev_sign[0];
@@ -619,7 +637,6 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
             final_done[fid] = 1;
         }
         for (int j = 0; j < 3; ++j) last[j] = q[j];
-        decoded[ev] = 1;
     }
     {
         std::vector<uint32_t> isolated(vn - referenced);
@@ -630,7 +647,7 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
             uint32_t earlier = kNone, x_sign = 0;
             for (int j = 0; j < 3; ++j) {
                 const int32_t q = qpos_in[3 * size_t(v) + size_t(j)];
-                const uint32_t k = pos.residual(pos_model, j, lodrt::detail::positionContext(ctx, earlier), q - last[j],
+                const uint32_t k = pos.residual(pos_model, pos_raw, j, lodrt::detail::positionContext(ctx, earlier), q - last[j],
                                                 prev_sign[j] * 3 + x_sign);
                 prev_sign[j] = lodrt::detail::signClass(q - last[j]);
                 if (j == 0) x_sign = prev_sign[0];
@@ -644,6 +661,7 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
     // Normals after all positions, in final order, each predicted from the exact sum of its faces'
     // normals on the quantized positions (the decoder's step 3).
     RangeEncoder nrm;
+    BitWriter nrm_raw;
     if (normals) {
         std::vector<uint32_t> qnorm(2 * vn);
         for (size_t i = 0; i < vn; ++i) {
@@ -688,13 +706,17 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
                 int32_t r = int32_t((qnorm[2 * x + size_t(j)] - p[j]) & mask);
                 if (r >= half) r -= int32_t(mask) + 1;
                 const uint32_t ctx = std::min(nrm_length[j], kValenceNormalContexts - 1);
-                nrm_length[j] = nrm.residual(nrm_model, j, ctx, r);
+                nrm_length[j] = nrm.residual(nrm_model, nrm_raw, j, ctx, r);
             }
         }
     }
 
-    std::vector<uint8_t> conn_bytes = conn.finish(), pos_bytes = pos.finish(), nrm_bytes;
-    if (normals) nrm_bytes = nrm.finish();
+    std::vector<uint8_t> conn_bytes = conn.finish(), pos_bytes = pos.finish(), pos_raw_bytes = pos_raw.finish(),
+                         nrm_bytes, nrm_raw_bytes;
+    if (normals) {
+        nrm_bytes = nrm.finish();
+        nrm_raw_bytes = nrm_raw.finish();
+    }
     std::vector<uint8_t>& out = result.bytes;
     out.assign(kValenceHeaderSize, 0);
     put32(out, 0, kValenceMagic);
@@ -712,13 +734,14 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
     put32(out, 44, uint32_t(conn_bytes.size()));
     put32(out, 48, uint32_t(pos_bytes.size()));
     put32(out, 52, uint32_t(nrm_bytes.size()));
-    out.insert(out.end(), conn_bytes.begin(), conn_bytes.end());
-    out.insert(out.end(), pos_bytes.begin(), pos_bytes.end());
-    out.insert(out.end(), nrm_bytes.begin(), nrm_bytes.end());
+    put32(out, 56, uint32_t(pos_raw_bytes.size()));
+    put32(out, 60, uint32_t(nrm_raw_bytes.size()));
+    for (const std::vector<uint8_t>* part : {&conn_bytes, &pos_bytes, &pos_raw_bytes, &nrm_bytes, &nrm_raw_bytes})
+        out.insert(out.end(), part->begin(), part->end());
     result.header_bytes = kValenceHeaderSize;
     result.connectivity_bytes = conn_bytes.size();
-    result.position_bytes = pos_bytes.size();
-    result.normal_bytes = nrm_bytes.size();
+    result.position_bytes = pos_bytes.size() + pos_raw_bytes.size();
+    result.normal_bytes = nrm_bytes.size() + nrm_raw_bytes.size();
     result.cut_vertex_copies = dups.size();
     result.dummy_vertices = vc - rank;
     result.new_vertex_of = std::move(new_of);

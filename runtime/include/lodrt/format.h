@@ -42,14 +42,16 @@ constexpr uint32_t kPfrepWidthBits = 5;
 // Log-scale codes: value(code) = 0 for code 0, else error_unit * 2^((code - 1) / 8).
 constexpr uint32_t kPfrepLogCodeSteps = 8;
 // Compressed mesh (.lbm), docs/format/valence.md. Little-endian header of kValenceHeaderSize bytes,
-// then the connectivity, position and normal range-coded streams, back to back.
+// then the connectivity, position and normal streams, back to back; the position and normal streams
+// each have a range-coded part followed by a raw bit part (the low mantissa bits of the residuals).
 constexpr uint32_t kValenceMagic = 0x4D42424Cu; // "LBBM" little-endian
-constexpr uint16_t kValenceVersion = 3;
-constexpr uint32_t kValenceHeaderSize = 56;
+constexpr uint16_t kValenceVersion = 4;         // 4: raw bit parts for residual mantissas
+constexpr uint32_t kValenceHeaderSize = 64;
 // Header fields (byte offset: type): 0 u32 magic, 4 u16 version, 6 u16 flags, 8 u32 vertex_count,
 // 12 u32 triangle_count, 16 u32 closed_vertex_count, 20 u32 closed_triangle_count, 24 u8 position_bits,
 // 25 u8 normal_bits, 26 u16 zero, 28 f32[3] bounds_min, 40 f32 cube_size, 44 u32 connectivity_bytes,
-// 48 u32 position_bytes, 52 u32 normal_bytes.
+// 48 u32 position_bytes, 52 u32 normal_bytes (range-coded parts), 56 u32 position_raw_bytes,
+// 60 u32 normal_raw_bytes (raw bit parts, bits packed least significant first).
 constexpr uint16_t kValenceFlagNormals = 1u;
 constexpr uint32_t kValenceMinPositionBits = 8;
 constexpr uint32_t kValenceMaxPositionBits = 16;
@@ -57,13 +59,15 @@ constexpr uint32_t kValenceMinNormalBits = 4;
 constexpr uint32_t kValenceMaxNormalBits = 16;
 constexpr uint32_t kValenceMaxCount = 1u << 28; // vertex and triangle counts
 // Header plausibility: counts above these multiples of their stream's byte length are refused before
-// anything is allocated. A coded binary decision costs at least -log2(4080/4096) > 0.0056 bits, so a
-// byte holds fewer than 1430 of them; every closed vertex costs a 5-decision symbol (< 286 per byte),
-// every closed triangle follows a symbol or closes a node (< 2 per symbol), every coded position 15
-// decisions and every normal 10.
-constexpr uint32_t kValenceTrianglesPerByte = 1024; // closed triangles per connectivity byte
-constexpr uint32_t kValenceVerticesPerByte = 512;   // closed vertices per connectivity byte, vertices per
-                                                    // position (and normal) byte
+// anything is allocated. A binary decision costs at least -log2(4080/4096) > 0.0056 bits, a value of
+// an 18-symbol model at least -log2(32632/32768) > 0.0059 and of a 32-symbol model at least
+// -log2(32520/32768) > 0.0109. Every closed vertex costs a 32-symbol value (< 734 per byte) and a
+// closed triangle follows a value or closes a node (< 2 per value); every coded position costs three
+// 18-symbol values (< 452 per byte), every normal two (< 678 per byte).
+constexpr uint32_t kValenceTrianglesPerByte = 2048; // closed triangles per connectivity byte
+constexpr uint32_t kValenceVerticesPerByte = 1024;  // closed vertices per connectivity byte
+constexpr uint32_t kValencePositionsPerByte = 512;  // vertices per position range-coded byte
+constexpr uint32_t kValenceNormalsPerByte = 1024;   // vertices per normal range-coded byte
 // Binary range coder (LZMA style, 32-bit range). Each adaptive model holds two estimates of P(bit = 0)
 // in 16-bit fixed point, a fast one (low half of a u32, shift 4) and a slow one (high half, shift 6),
 // each kept in [256, 65280]; a bit is coded with their sum >> 5, a 12-bit probability in [16, 4080].
@@ -85,9 +89,20 @@ constexpr uint32_t kValenceSymbolFirstValence = 4; // codes valence 3
 // Integer coding: the bit length class k (0..32) of value+1 as a 6-bit tree, then k low bits (the top
 // one modelled per class, the rest direct).
 constexpr uint32_t kValenceClassTreeBits = 6;
-// Residual coding: bit length of |r| as a 5-bit tree per context, sign, top mantissa bit modelled per
-// length, the rest direct.
-constexpr uint32_t kValenceResidualTreeBits = 5;
+// Residual coding: the bit length k of |r| (0..17) as one adaptive multi-symbol value per context
+// (kValenceResidualSymbols), then the sign, the two mantissa bits below the leading one modelled per
+// length, the rest raw bits.
+constexpr uint32_t kValenceResidualTreeBits = 5; // size of the per-length mantissa model tables
+// Multi-symbol adaptive models (docs/format/valence.md "Range coder", `symbol`): a cumulative table of
+// N entries with total 2^kRangeCdfBits, every symbol at least kRangeCdfMinFreq wide,
+// adapted after each use at a rate (shift) that slows down with the model's use count.
+constexpr uint32_t kRangeCdfBits = 15;
+constexpr uint32_t kValenceResidualSymbols = 18;
+constexpr uint32_t kRangeCdfMinFreq = 8;
+constexpr uint32_t kRangeCdfRateFirst = 3;  // shift for the first kRangeCdfRateStep uses
+constexpr uint32_t kRangeCdfRateLast = 6;   // residual lengths: shift from 2 * kRangeCdfRateStep uses on
+constexpr uint32_t kRangeCdfRateLastConnectivity = 7; // connectivity symbols: the same
+constexpr uint32_t kRangeCdfRateStep = 16;
 constexpr uint32_t kValenceNormalContexts = 17; // bit length of the same component's previous residual
 
 } // namespace format

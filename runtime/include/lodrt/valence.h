@@ -25,15 +25,17 @@ struct ValenceInfo {
     uint32_t connectivity_bytes = 0;
     uint32_t position_bytes = 0;
     uint32_t normal_bytes = 0;
+    uint32_t position_raw_bytes = 0; // raw bit part after the position range-coded part
+    uint32_t normal_raw_bytes = 0;
 };
 
 /// Parses and validates the header (magic, version, bit depths, counts, that the stream lengths add
 /// up to exactly `size`). Does not decode the streams.
 LODRT_API Result valenceReadInfo(const uint8_t* data, size_t size, ValenceInfo* info);
 
-/// Bytes of scratch valenceDecode needs (the conquest's corner table, active lists and quantized
-/// attributes; about 53 bytes per closed vertex plus 52 per closed triangle, plus 12 per vertex and
-/// 32 more with normals), a multiple of 8.
+/// Bytes of scratch valenceDecode needs (the conquest's corner table, active lists, the position plan
+/// and quantized attributes; about 57 bytes per closed vertex plus 88 per closed triangle, plus 13 per
+/// vertex and 32 more with normals), a multiple of 8.
 LODRT_API size_t valenceScratchSize(const ValenceInfo& info);
 
 /// Caller-owned buffers. Capacities are in elements of the pointed-to type.

@@ -207,6 +207,19 @@ TEST(ValenceCodecTest, RandomTriangleSoupsRoundTripExactly) {
         if (::testing::Test::HasFatalFailure()) return;
     }
 }
+// A large regular mesh codes its connectivity in a few hundredths of a bit per vertex: the header's
+// plausibility bounds (format.h, kValenceVerticesPerByte ...) must still accept it.
+TEST(ValenceCodecTest, RegularTorusFitsThePlausibilityBounds) {
+    Mesh m = torus(300, 200);
+    ValenceEncodeOptions o;
+    o.position_bits = 12;
+    ValenceEncodeResult r;
+    expectRoundTrip(m, o, &r);
+    const double conn_bpv = double(r.connectivity_bytes) * 8.0 / double(m.vertexCount());
+    EXPECT_LT(conn_bpv, 0.1);
+    EXPECT_LE(double(m.vertexCount()), double(lodrt::format::kValenceVerticesPerByte) * double(r.connectivity_bytes + 1));
+}
+
 TEST(ValenceCodecTest, TorusWithNormals) {
     for (uint32_t nb : {6u, 10u, 16u}) {
         ValenceEncodeOptions o;
@@ -393,6 +406,44 @@ TEST(ValenceDecoderSafetyTest, TrailingBytesBadMagicUnknownVersion) {
     auto bits = bytes;
     bits[24] = 17;
     EXPECT_EQ(decodeChecked(bits), lodrt::Result::CorruptStream);
+}
+
+// Version 4's raw bit parts: no bit of the last raw byte is ignored (a flipped data bit changes the
+// decoded positions, a set padding bit is corrupt), and a byte moved from the raw part to the
+// range-coded part (same total size) is corrupt.
+TEST(ValenceDecoderSafetyTest, RawBitPartsMustBeExact) {
+    std::vector<uint8_t> bytes = sampleStream();
+    auto get32 = [&](size_t at) {
+        return uint32_t(bytes[at]) | uint32_t(bytes[at + 1]) << 8 | uint32_t(bytes[at + 2]) << 16 |
+               uint32_t(bytes[at + 3]) << 24;
+    };
+    const uint32_t conn = get32(44), pos = get32(48), nrm = get32(52), pos_raw = get32(56), nrm_raw = get32(60);
+    ASSERT_GT(pos_raw, 0u);
+    ASSERT_EQ(bytes.size(), lodrt::format::kValenceHeaderSize + conn + pos + pos_raw + nrm + nrm_raw);
+    auto original = decodeValence(bytes, "sample");
+    ASSERT_TRUE(original.ok());
+    const size_t last_raw = lodrt::format::kValenceHeaderSize + conn + pos + pos_raw - 1;
+    int corrupt = 0, changed = 0;
+    for (int bit = 0; bit < 8; ++bit) {
+        auto bad = bytes;
+        bad[last_raw] = uint8_t(bad[last_raw] ^ (1u << bit));
+        auto decoded = decodeValence(bad, "flipped");
+        if (!decoded.ok()) {
+            EXPECT_EQ(decodeChecked(bad), lodrt::Result::CorruptStream) << "bit " << bit;
+            ++corrupt;
+        } else {
+            EXPECT_NE(decoded->positions, original->positions) << "bit " << bit << " ignored";
+            ++changed;
+        }
+    }
+    EXPECT_EQ(corrupt + changed, 8);
+    auto moved = bytes;
+    const uint32_t pos_more = pos + 1, raw_less = pos_raw - 1;
+    for (int i = 0; i < 4; ++i) {
+        moved[48 + size_t(i)] = uint8_t(pos_more >> (8 * i));
+        moved[56 + size_t(i)] = uint8_t(raw_less >> (8 * i));
+    }
+    EXPECT_EQ(decodeChecked(moved), lodrt::Result::CorruptStream);
 }
 
 TEST(ValenceDecoderSafetyTest, SmallBuffersAreRefused) {

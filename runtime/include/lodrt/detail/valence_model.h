@@ -57,6 +57,43 @@ inline uint32_t rangeUpdate(uint32_t s, uint32_t b) {
     return b ? one : zero;
 }
 
+/// Adaptive multi-symbol model (format.h, "Multi-symbol adaptive models"): cum[i] is the coded
+/// cumulative frequency of symbols < i out of 2^kRangeCdfBits (cum[0] = 0, cum[N] = 2^kRangeCdfBits);
+/// symbol i codes with width cum[i+1] - cum[i] >= kRangeCdfMinFreq (the last one also gets the range
+/// coder's rounding slack).
+template <uint32_t N, uint32_t LastRate> struct CdfModel {
+    static constexpr uint32_t kN = N;
+    uint16_t cum[kN + 1];
+    uint16_t uses;
+    void init() {
+        using namespace format;
+        constexpr uint32_t spare = (1u << kRangeCdfBits) - kN * kRangeCdfMinFreq;
+        for (uint32_t i = 0; i <= kN; ++i) cum[i] = uint16_t(spare * i / kN + kRangeCdfMinFreq * i);
+        uses = 0;
+    }
+    /// After coding symbol s: every cum[i] (0 < i < N) moves a 2^-rate step toward its bound,
+    /// the upper one (2^kRangeCdfBits - kRangeCdfMinFreq * (N - i)) for i > s, the lower one
+    /// (kRangeCdfMinFreq * i) for i <= s. Order and minimum widths are kept.
+    inline void update(uint32_t s) {
+        using namespace format;
+        const uint32_t rate = uses < kRangeCdfRateStep ? kRangeCdfRateFirst
+                              : uses < 2 * kRangeCdfRateStep ? kRangeCdfRateFirst + 1
+                                                             : LastRate;
+        uses = uint16_t(uses < 2 * kRangeCdfRateStep ? uses + 1 : uses);
+        for (uint32_t i = 1; i < kN; ++i) {
+            const int32_t c = cum[i];
+            const int32_t hi = int32_t((1u << kRangeCdfBits) - kRangeCdfMinFreq * (kN - i));
+            const int32_t lo = int32_t(kRangeCdfMinFreq * i);
+            const int32_t up = c + ((hi - c) >> rate), down = c - ((c - lo) >> rate);
+            cum[i] = uint16_t(i > s ? up : down);
+        }
+    }
+};
+
+using ResidualLengthModel = CdfModel<format::kValenceResidualSymbols, format::kRangeCdfRateLast>;
+using ConnectivitySymbolModel =
+    CdfModel<(1u << format::kValenceSymbolTreeBits), format::kRangeCdfRateLastConnectivity>;
+
 /// What sits across the focus's front edge.
 enum class VertexKind : uint32_t { Add = 0, Dummy = 1, Split = 2, Merge = 3 };
 struct VertexSymbol {
@@ -349,80 +386,39 @@ inline int64_t divRound(int64_t sum, int64_t count) {
     return sum >= 0 ? (sum + count / 2) / count : -((-sum + count / 2) / count);
 }
 
-/// Position prediction of conquest vertex v (docs/format/valence.md "Positions"): the mean of every
-/// parallelogram a + b - w over the triangles (v, a, b) around v whose a, b and opposite vertex w are
-/// decoded; else a decoded neighbour; else `fallback`. `decoded[u]` is nonzero once u's position is
-/// known (never for dummies). Also returns in *scale the largest coordinate difference of the first
-/// parallelogram's gate edge (a context for the residual), 0 when there is none. Returns false when
-/// the corner cycle around v is broken (corrupt stream).
-inline bool predictPosition(const uint32_t* cv, const uint32_t* opp, const uint32_t* vertex_corner,
-                            const uint8_t* decoded, const int32_t* qpos, uint32_t v, const int32_t fallback[3],
-                            uint32_t max_steps, int32_t out[3], uint32_t* scale, uint32_t* count_out) {
-    int64_t sum[3] = {0, 0, 0};
-    uint32_t count = 0, neighbour = kNone, sc = 0;
-    const uint32_t c0 = vertex_corner[v];
-    uint32_t c = c0;
-    for (uint32_t step = 0;; ++step) {
-        if (step > max_steps) return false;
-        const uint32_t t3 = c - c % 3;
-        const uint32_t cn = t3 + (c % 3 == 2 ? 0 : c % 3 + 1), cp = t3 + (c % 3 == 0 ? 2 : c % 3 - 1);
-        const uint32_t va = cv[cn], vb = cv[cp];
-        if (decoded[va] && decoded[vb]) {
-            const uint32_t o = opp[c];
-            if (o == kNone) return false;
-            const uint32_t w = cv[o];
-            if (decoded[w]) {
-                const int32_t* pa = &qpos[3 * size_t(va)];
-                const int32_t* pb = &qpos[3 * size_t(vb)];
-                const int32_t* pw = &qpos[3 * size_t(w)];
-                for (int j = 0; j < 3; ++j) sum[j] += int64_t(pa[j]) + pb[j] - pw[j];
-                if (count == 0) {
-                    for (int j = 0; j < 3; ++j) {
-                        const uint32_t d = uint32_t(pa[j] > pb[j] ? pa[j] - pb[j] : pb[j] - pa[j]);
-                        if (d > sc) sc = d;
-                    }
-                }
-                ++count;
-            }
-        }
-        if (neighbour == kNone && decoded[va]) neighbour = va;
-        // Swing to the next corner around v: next(opposite(next(c))).
-        const uint32_t o = opp[cn];
-        if (o == kNone) return false;
-        const uint32_t o3 = o - o % 3;
-        c = o3 + (o % 3 == 2 ? 0 : o % 3 + 1);
-        if (c == c0) break;
-    }
-    *scale = sc;
-    *count_out = count;
-    if (count > 0) {
-        for (int j = 0; j < 3; ++j) out[j] = int32_t(divRound(sum[j], count));
-    } else if (neighbour != kNone) {
-        for (int j = 0; j < 3; ++j) out[j] = qpos[3 * size_t(neighbour) + j];
-    } else {
-        for (int j = 0; j < 3; ++j) out[j] = fallback[j];
-    }
-    return true;
-}
+/// Where the position pass finds each coded vertex's prediction, computed from the connectivity
+/// alone (docs/format/valence.md "Positions", Order and Prediction) so that the residual pass reads
+/// it sequentially instead of walking the corner table between two residual decodes.
+/// Capacities (elements): order, count, neighbour: vertex_count; triples: 3 * max_triples.
+struct PositionPlan {
+    uint32_t* order = nullptr;     // coded vertices in coding order
+    uint32_t* count = nullptr;     // per entry of order: its parallelograms (triples)
+    uint32_t* neighbour = nullptr; // per entry: the first known neighbour a met in the walk, kNone if none
+    uint32_t* triples = nullptr;   // (a, b, w) of every parallelogram a + b - w, entry after entry
+    uint32_t max_triples = 0;
+    uint32_t ordered = 0;       // entries of order filled
+    uint32_t triple_count = 0;  // triples filled
+};
 
-/// Order in which positions are coded (docs/format/valence.md "Position order"), computed from the
-/// connectivity alone. Like Draco's prediction-degree traversal: the next vertex is taken from the
+/// Fills `plan`. Order (like Draco's prediction-degree traversal): the next vertex is taken from the
 /// highest non-empty of three stacks, where a vertex is pushed on stack d when d of its triangles
 /// have both other vertices already ordered (d = 1, 2, 3+); when all are empty, the first unordered
-/// vertex in conquest order. Dummy vertices are never ordered. `degree`, `stack0..2` and `ordered`
-/// (vertex_count each) are scratch. Returns the number of vertices ordered,
-/// or kNone when the corner cycles are broken.
-inline uint32_t positionOrder(const uint32_t* cv, const uint32_t* opp, const uint32_t* vertex_corner,
-                              const uint32_t* vertex_flags, const uint32_t* valence, uint32_t vertex_count,
-                              uint32_t* order, uint8_t* ordered, uint32_t* degree, uint32_t* stack0,
-                              uint32_t* stack1, uint32_t* stack2) {
+/// vertex in conquest order. Dummy vertices are never ordered. Prediction of v, over the same walk
+/// around v with "known" = ordered before v: every corner whose a, b and opposite vertex w are known
+/// gives a triple; the first known a is the neighbour. `ordered` (bytes), `degree`, `stack0..2`
+/// (vertex_count each) are scratch. False when the corner cycles are broken or the triples overflow
+/// (a corrupt stream).
+inline bool planPositions(const uint32_t* cv, const uint32_t* opp, const uint32_t* vertex_corner,
+                          const uint32_t* vertex_flags, const uint32_t* valence, uint32_t vertex_count,
+                          uint8_t* ordered, uint32_t* degree, uint32_t* stack0, uint32_t* stack1, uint32_t* stack2,
+                          PositionPlan* plan) {
     for (uint32_t v = 0; v < vertex_count; ++v) {
         ordered[v] = 0;
         degree[v] = 0;
     }
     uint32_t top[3] = {0, 0, 0};
     uint32_t* stack[3] = {stack0, stack1, stack2};
-    uint32_t count = 0, scan = 0;
+    uint32_t count = 0, scan = 0, triples = 0;
     for (;;) {
         uint32_t v = kNone;
         for (int level = 2; level >= 0 && v == kNone; --level) {
@@ -436,33 +432,95 @@ inline uint32_t positionOrder(const uint32_t* cv, const uint32_t* opp, const uin
         }
         if (v == kNone) {
             while (scan < vertex_count && (ordered[scan] || (vertex_flags[scan] & kFlagDummy))) ++scan;
-            if (scan == vertex_count) return count;
+            if (scan == vertex_count) break;
             v = scan;
         }
         ordered[v] = 1;
-        order[count++] = v;
+        plan->order[count] = v;
+        uint32_t n = 0, neighbour = kNone;
         // Each triangle (v, a, b) with exactly one of a, b ordered now has both others of the
         // unordered one ordered.
         const uint32_t c0 = vertex_corner[v];
-        if (c0 == kNone) return kNone;
+        if (c0 == kNone) return false;
         uint32_t c = c0;
         for (uint32_t step = 0;; ++step) {
-            if (step > valence[v]) return kNone;
+            if (step > valence[v]) return false;
             const uint32_t t3 = c - c % 3;
             const uint32_t cn = t3 + (c % 3 == 2 ? 0 : c % 3 + 1), cp = t3 + (c % 3 == 0 ? 2 : c % 3 - 1);
             const uint32_t va = cv[cn], vb = cv[cp];
-            const uint32_t u = ordered[va] ? (ordered[vb] ? kNone : vb) : (ordered[vb] ? va : kNone);
-            if (u != kNone && !(vertex_flags[u] & kFlagDummy)) {
-                const uint32_t d = ++degree[u];
-                if (d <= 3) stack[d - 1][top[d - 1]++] = u;
+            const uint32_t oa = ordered[va], ob = ordered[vb];
+            if (oa != ob) {
+                const uint32_t u = oa ? vb : va;
+                if (!(vertex_flags[u] & kFlagDummy)) {
+                    const uint32_t d = ++degree[u];
+                    if (d <= 3) stack[d - 1][top[d - 1]++] = u;
+                }
+            } else if (oa && va != v && vb != v) {
+                const uint32_t o = opp[c];
+                if (o == kNone) return false;
+                const uint32_t w = cv[o];
+                if (ordered[w] && w != v) {
+                    if (triples >= plan->max_triples) return false;
+                    uint32_t* t = &plan->triples[3 * size_t(triples++)];
+                    t[0] = va;
+                    t[1] = vb;
+                    t[2] = w;
+                    ++n;
+                }
             }
+            if (neighbour == kNone && oa && va != v) neighbour = va;
+            // Swing to the next corner around v: next(opposite(next(c))).
             const uint32_t o = opp[cn];
-            if (o == kNone) return kNone;
+            if (o == kNone) return false;
             const uint32_t o3 = o - o % 3;
             c = o3 + (o % 3 == 2 ? 0 : o % 3 + 1);
             if (c == c0) break;
         }
+        plan->count[count] = n;
+        plan->neighbour[count] = neighbour;
+        ++count;
     }
+    plan->ordered = count;
+    plan->triple_count = triples;
+    return true;
+}
+
+/// Prediction of a vertex from its plan entry (`n` triples at `t`, `neighbour`): the mean of the
+/// parallelograms rounded half away from zero, else the neighbour's position, else `fallback`. *scale
+/// is the largest coordinate difference between a and b of the first triple (0 without triples).
+inline void predictFromPlan(const int32_t* qpos, const uint32_t* t, uint32_t n, uint32_t neighbour,
+                            const int32_t fallback[3], int32_t out[3], uint32_t* scale) {
+    uint32_t sc = 0;
+    if (n > 0) {
+        int64_t sum[3] = {0, 0, 0};
+        for (uint32_t i = 0; i < n; ++i, t += 3) {
+            const int32_t* pa = &qpos[3 * size_t(t[0])];
+            const int32_t* pb = &qpos[3 * size_t(t[1])];
+            const int32_t* pw = &qpos[3 * size_t(t[2])];
+            for (int j = 0; j < 3; ++j) sum[j] += int64_t(pa[j]) + pb[j] - pw[j];
+            if (i == 0) {
+                for (int j = 0; j < 3; ++j) {
+                    const uint32_t d = uint32_t(pa[j] > pb[j] ? pa[j] - pb[j] : pb[j] - pa[j]);
+                    if (d > sc) sc = d;
+                }
+            }
+        }
+        if (n == 1) {
+            for (int j = 0; j < 3; ++j) out[j] = int32_t(sum[j]);
+        } else {
+            for (int j = 0; j < 3; ++j) {
+                // divRound, with a 32-bit division whenever the magnitude fits (always, unless n is huge).
+                const uint64_t mag = uint64_t(sum[j] >= 0 ? sum[j] : -sum[j]) + n / 2;
+                const uint64_t q = mag <= 0xFFFFFFFFu ? uint64_t(uint32_t(mag) / n) : mag / n;
+                out[j] = sum[j] >= 0 ? int32_t(q) : -int32_t(q);
+            }
+        }
+    } else if (neighbour != kNone) {
+        for (int j = 0; j < 3; ++j) out[j] = qpos[3 * size_t(neighbour) + size_t(j)];
+    } else {
+        for (int j = 0; j < 3; ++j) out[j] = fallback[j];
+    }
+    *scale = sc;
 }
 
 /// Bit length of x (0 for 0).
