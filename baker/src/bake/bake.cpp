@@ -103,13 +103,65 @@ Result<TextureLevels> textureLevels(const Mesh& lod0, size_t level_count, const 
     return out;
 }
 
+// Working memory of the concurrent tasks, in bytes per triangle of the mesh a task reads (measured
+// on dragon_poisson, 1.07M triangles, with the glibc allocator: resident size above what the bake
+// already holds). Only used to decide which tasks may run side by side; never changes a byte.
+constexpr double kPfrepBytesPerTriangle = 250;   // the PFRep build's own simplifier (geometry only)
+constexpr double kEncodeBytesPerTriangle = 230;  // the valence coder's tables
+constexpr double kMeasureBytesPerTriangle = 160; // LOD0's BVH and points, then one level's (per LOD0 triangle)
+// Tasks run side by side only while their estimates add up to at most this. Small assets (up to about
+// 200,000 triangles) run all their tasks at once; large ones run the big tasks one at a time, so the
+// peak is that of the largest task, not a sum (issue #9: <= 300 bytes per input triangle).
+constexpr double kConcurrentBudgetBytes = 192.0 * 1024 * 1024;
+
+// One task of the concurrent phase: the measurement (then the metrics and texture levels that follow
+// from it), one encoder's prepare on LOD0 (these are the big ones), or every encoder's prepare on
+// one other level.
+struct PhaseTask {
+    enum class Kind { Measure, Lod0Encoder, Level } kind = Kind::Measure;
+    size_t index = 0; // encoder (Lod0Encoder) or level (Level)
+    double bytes = 0; // working-memory estimate
+};
+
+// The tasks in their start order, cut into consecutive phases whose estimates fit the budget (a task
+// above it runs alone). The order: the PFRep build (the longest, single-threaded) first; then LOD0's
+// other encoders and the other levels, largest first; the measurement (parallel inside, so it fills
+// the threads that the others leave) last. The big tasks come first because what they leave behind
+// (blobs, renumbered indices) is small next to what the measurement leaves in the allocator. The
+// decomposition and the order depend only on the meshes, never on the thread count.
+std::vector<std::vector<PhaseTask>> concurrentPhases(const std::vector<PackStreamEncoder>& encoders,
+                                                     const std::vector<size_t>& level_triangles) {
+    auto isPfrep = [&](size_t e) { return encoders[e].extension_name == "LODBAKE_progressive_fans"; };
+    const double lod0 = double(level_triangles[0]);
+    std::vector<PhaseTask> tasks;
+    for (size_t e = 0; e < encoders.size(); ++e)
+        if (isPfrep(e)) tasks.push_back({PhaseTask::Kind::Lod0Encoder, e, kPfrepBytesPerTriangle * lod0});
+    for (size_t e = 0; e < encoders.size(); ++e)
+        if (!isPfrep(e)) tasks.push_back({PhaseTask::Kind::Lod0Encoder, e, kEncodeBytesPerTriangle * lod0});
+    for (size_t l = 1; l < level_triangles.size(); ++l)
+        tasks.push_back({PhaseTask::Kind::Level, l, kEncodeBytesPerTriangle * double(level_triangles[l])});
+    tasks.push_back({PhaseTask::Kind::Measure, 0, kMeasureBytesPerTriangle * lod0});
+    std::vector<std::vector<PhaseTask>> phases;
+    double sum = 0;
+    for (const PhaseTask& task : tasks) {
+        if (phases.empty() || sum + task.bytes > kConcurrentBudgetBytes) {
+            phases.emplace_back();
+            sum = 0;
+        }
+        phases.back().push_back(task);
+        sum += task.bytes;
+    }
+    return phases;
+}
+
 // After the chain, the remaining work of an asset is a fixed set of tasks that only read the
 // meshes (STYLE.md §7: each writes its own slot; which thread runs which, and when, changes no
 // byte): the error measurement (then the metrics and texture levels that follow from it), and the
-// stream encoders' prepare steps per level. With 2 threads the PFRep build (one long
-// single-threaded simplification) runs beside the measurement and the valence coding of the levels
-// instead of before them. The commits (cheap; the valence commit renumbers its level) then run in
-// encoder and level order on this thread.
+// stream encoders' prepare steps. They run in phases (concurrentPhases): with 2 threads a small
+// asset's PFRep build (one long single-threaded simplification) runs beside the measurement and the
+// valence coding of the levels; a large asset's big tasks run one after the other, each alone (the
+// measurement is parallel inside). The commits (cheap; the valence commit renumbers its level) then
+// run in encoder and level order on this thread.
 Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vector<PackStreamEncoder>& encoders,
                  AssetSlot& slot, size_t index, const BakeHooks& hooks) {
     Mesh& mesh = input.mesh;
@@ -138,18 +190,18 @@ Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vect
 
     const size_t level_count = chain.levels.size() + 1;
     auto levelMesh = [&](size_t l) -> const Mesh& { return l == 0 ? mesh : chain.levels[l - 1].mesh; };
-    // Task 0 measures (and sizes the textures); task 1 + l runs every encoder's prepare for level l.
-    // LOD0's prepares are the big ones (each holds several times LOD0's size in working memory: the
-    // PFRep build its own simplifier, the valence coder its tables), so they run one after the other
-    // in one task; the measurement and the smaller levels run beside them. Started in this order
-    // from one shared counter: LOD0, the measurement, then the other levels, largest first.
-    const size_t task_count = 1 + level_count;
+    std::vector<size_t> level_triangles(level_count);
+    for (size_t l = 0; l < level_count; ++l) level_triangles[l] = levelMesh(l).faceCount();
     std::vector<Result<PackStreamCommit>> commits(encoders.size() * level_count, PackStreamCommit());
     Diagnostics measure_diagnostics;
     LodMetrics metrics;
     Result<TextureLevels> textures = TextureLevels{};
-    auto runTask = [&](size_t task) {
-        if (task == 0) {
+    auto stageOf = [&](size_t e) {
+        return encoders[e].extension_name == "LODBAKE_progressive_fans" ? BakeStage::Pfrep : BakeStage::Encode;
+    };
+    auto runTask = [&](const PhaseTask& task, bool alone) {
+        switch (task.kind) {
+        case PhaseTask::Kind::Measure: {
             {
                 StageTimer timer(hooks, index, BakeStage::Measure);
                 measureLodChain(mesh, chain, chain_options, measure_diagnostics);
@@ -159,18 +211,38 @@ Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vect
             textures = textureLevels(mesh, level_count, metrics, settings, input.name, measure_diagnostics);
             return;
         }
-        const size_t l = task - 1;
-        for (size_t e = 0; e < encoders.size(); ++e) {
-            StageTimer timer(hooks, index,
-                             encoders[e].extension_name == "LODBAKE_progressive_fans" ? BakeStage::Pfrep
-                                                                                      : BakeStage::Encode);
-            commits[e * level_count + l] = encoders[e].prepare(chain, l, levelMesh(l));
+        case PhaseTask::Kind::Lod0Encoder: {
+            const size_t e = task.index;
+            StageTimer timer(hooks, index, stageOf(e));
+            if (alone && stageOf(e) == BakeStage::Pfrep) {
+                // The PFRep build reads positions and indices only (it would copy them out of a mesh
+                // with attributes). Running alone, nothing else reads LOD0 meanwhile, so they are lent
+                // to a geometry-only mesh instead of copied: the same input, one copy less at the peak.
+                Mesh geometry;
+                geometry.positions = std::move(mesh.positions);
+                geometry.indices = std::move(mesh.indices);
+                commits[e * level_count] = encoders[e].prepare(chain, 0, geometry);
+                mesh.positions = std::move(geometry.positions);
+                mesh.indices = std::move(geometry.indices);
+            } else {
+                commits[e * level_count] = encoders[e].prepare(chain, 0, mesh);
+            }
+            return;
+        }
+        case PhaseTask::Kind::Level:
+            for (size_t e = 0; e < encoders.size(); ++e) {
+                StageTimer timer(hooks, index, stageOf(e));
+                commits[e * level_count + task.index] = encoders[e].prepare(chain, task.index, levelMesh(task.index));
+            }
+            return;
         }
     };
-    std::vector<size_t> order{1, 0};
-    for (size_t l = 1; l < level_count; ++l) order.push_back(1 + l);
-    std::atomic<size_t> next{0};
-    LODBAKE_RETURN_IF_ERROR(parallelFor(task_count, 1, [&](size_t) { runTask(order[next.fetch_add(1)]); }));
+    for (const std::vector<PhaseTask>& phase : concurrentPhases(encoders, level_triangles)) {
+        std::atomic<size_t> next{0};
+        const bool alone = phase.size() == 1;
+        LODBAKE_RETURN_IF_ERROR(
+            parallelFor(phase.size(), 1, [&](size_t) { runTask(phase[next.fetch_add(1)], alone); }));
+    }
     for (const Diagnostic& d : measure_diagnostics.items()) {
         if (d.severity == Severity::Warning)
             slot.diagnostics.warn(d.message);
