@@ -170,7 +170,9 @@ Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vect
     slot.report.input_vertices = mesh.vertexCount();
     if (settings.repair) {
         StageTimer timer(hooks, index, BakeStage::Repair);
-        LODBAKE_ASSIGN_OR_RETURN(RepairReport repair, repairMesh(mesh, RepairOptions{}, input.name, slot.diagnostics));
+        RepairOptions repair_options;
+        repair_options.report_welded = false; // only `unresolved` goes into the bake's report
+        LODBAKE_ASSIGN_OR_RETURN(RepairReport repair, repairMesh(mesh, repair_options, input.name, slot.diagnostics));
         slot.report.repair_unresolved = repair.unresolved;
     }
     const ScreenParams screen = screenParams(settings);
