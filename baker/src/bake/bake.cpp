@@ -9,6 +9,7 @@
 #include <memory>
 #include <set>
 
+#include "bake/phases.h"
 #include "core/parallel.h"
 #include "lodbake/cleanup/repair.h"
 #include "lodbake/core/json_writer.h"
@@ -19,6 +20,9 @@
 namespace lodbake {
 
 namespace {
+
+using bake_detail::concurrentPhases;
+using bake_detail::PhaseTask;
 
 constexpr double kPi = 3.14159265358979323846;
 
@@ -101,57 +105,6 @@ Result<TextureLevels> textureLevels(const Mesh& lod0, size_t level_count, const 
             out.resized[{t, {wanted[t][k].width, wanted[t][k].height}}] = std::move(job_results[t].value()[k]);
     }
     return out;
-}
-
-// Working memory of the concurrent tasks, in bytes per triangle of the mesh a task reads (measured
-// on dragon_poisson, 1.07M triangles, with the glibc allocator: resident size above what the bake
-// already holds). Only used to decide which tasks may run side by side; never changes a byte.
-constexpr double kPfrepBytesPerTriangle = 250;   // the PFRep build's own simplifier (geometry only)
-constexpr double kEncodeBytesPerTriangle = 230;  // the valence coder's tables
-constexpr double kMeasureBytesPerTriangle = 160; // LOD0's BVH and points, then one level's (per LOD0 triangle)
-// Tasks run side by side only while their estimates add up to at most this. Small assets (up to about
-// 200,000 triangles) run all their tasks at once; large ones run the big tasks one at a time, so the
-// peak is that of the largest task, not a sum (issue #9: <= 300 bytes per input triangle).
-constexpr double kConcurrentBudgetBytes = 192.0 * 1024 * 1024;
-
-// One task of the concurrent phase: the measurement (then the metrics and texture levels that follow
-// from it), one encoder's prepare on LOD0 (these are the big ones), or every encoder's prepare on
-// one other level.
-struct PhaseTask {
-    enum class Kind { Measure, Lod0Encoder, Level } kind = Kind::Measure;
-    size_t index = 0; // encoder (Lod0Encoder) or level (Level)
-    double bytes = 0; // working-memory estimate
-};
-
-// The tasks in their start order, cut into consecutive phases whose estimates fit the budget (a task
-// above it runs alone). The order: the PFRep build (the longest, single-threaded) first; then LOD0's
-// other encoders and the other levels, largest first; the measurement (parallel inside, so it fills
-// the threads that the others leave) last. The big tasks come first because what they leave behind
-// (blobs, renumbered indices) is small next to what the measurement leaves in the allocator. The
-// decomposition and the order depend only on the meshes, never on the thread count.
-std::vector<std::vector<PhaseTask>> concurrentPhases(const std::vector<PackStreamEncoder>& encoders,
-                                                     const std::vector<size_t>& level_triangles) {
-    auto isPfrep = [&](size_t e) { return encoders[e].extension_name == "LODBAKE_progressive_fans"; };
-    const double lod0 = double(level_triangles[0]);
-    std::vector<PhaseTask> tasks;
-    for (size_t e = 0; e < encoders.size(); ++e)
-        if (isPfrep(e)) tasks.push_back({PhaseTask::Kind::Lod0Encoder, e, kPfrepBytesPerTriangle * lod0});
-    for (size_t e = 0; e < encoders.size(); ++e)
-        if (!isPfrep(e)) tasks.push_back({PhaseTask::Kind::Lod0Encoder, e, kEncodeBytesPerTriangle * lod0});
-    for (size_t l = 1; l < level_triangles.size(); ++l)
-        tasks.push_back({PhaseTask::Kind::Level, l, kEncodeBytesPerTriangle * double(level_triangles[l])});
-    tasks.push_back({PhaseTask::Kind::Measure, 0, kMeasureBytesPerTriangle * lod0});
-    std::vector<std::vector<PhaseTask>> phases;
-    double sum = 0;
-    for (const PhaseTask& task : tasks) {
-        if (phases.empty() || sum + task.bytes > kConcurrentBudgetBytes) {
-            phases.emplace_back();
-            sum = 0;
-        }
-        phases.back().push_back(task);
-        sum += task.bytes;
-    }
-    return phases;
 }
 
 // After the chain, the remaining work of an asset is a fixed set of tasks that only read the
@@ -239,7 +192,9 @@ Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vect
             return;
         }
     };
-    for (const std::vector<PhaseTask>& phase : concurrentPhases(encoders, level_triangles)) {
+    std::vector<bool> encoder_is_pfrep;
+    for (size_t e = 0; e < encoders.size(); ++e) encoder_is_pfrep.push_back(stageOf(e) == BakeStage::Pfrep);
+    for (const std::vector<PhaseTask>& phase : concurrentPhases(encoder_is_pfrep, level_triangles)) {
         std::atomic<size_t> next{0};
         const bool alone = phase.size() == 1;
         LODBAKE_RETURN_IF_ERROR(
