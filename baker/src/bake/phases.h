@@ -30,8 +30,10 @@ struct PhaseTask {
 };
 
 /// The tasks in their start order -- the PFRep encoders on LOD0 (the longest, single-threaded),
-/// the other encoders on LOD0, the other levels (largest first), the measurement (parallel inside,
-/// so it fills the threads the others leave) -- cut into consecutive phases that fit the budget.
+/// the other encoders on LOD0, the measurement (parallel inside), the other levels (largest first)
+/// -- cut into consecutive phases that fit the budget. The biggest working sets come first, while
+/// the least is resident: what each task leaves behind (blobs, renumbered indices, heap pages the
+/// allocator keeps) adds to every later task's peak.
 /// `encoder_is_pfrep[e]` tells which encoders build PFRep; `level_triangles[0]` is LOD0's count.
 std::vector<std::vector<PhaseTask>> concurrentPhases(const std::vector<bool>& encoder_is_pfrep,
                                                      const std::vector<size_t>& level_triangles,

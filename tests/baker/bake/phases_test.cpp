@@ -48,12 +48,12 @@ std::vector<size_t> desktopLevels(size_t lod0) {
 const std::vector<bool> kBuiltin{true, false}; // PFRep, then valence (builtinStreamEncoders order)
 
 TEST(BakePhasesTest, SmallAssetRunsEveryTaskAtOnce) {
-    EXPECT_EQ(describe(concurrentPhases(kBuiltin, desktopLevels(70000))), "p0 e1 L1 L2 L3 L4 L5 M");
+    EXPECT_EQ(describe(concurrentPhases(kBuiltin, desktopLevels(70000))), "p0 e1 M L1 L2 L3 L4 L5");
 }
 
 TEST(BakePhasesTest, LargeAssetRunsItsBigTasksAlone) {
-    // dragon_poisson: PFRep, LOD0's coding and the measurement alone, the levels in two groups.
-    EXPECT_EQ(describe(concurrentPhases(kBuiltin, desktopLevels(1067852))), "p0 | e1 | L1 L2 | L3 L4 L5 | M");
+    // dragon_poisson: PFRep, LOD0's coding and the measurement alone, then the levels in two groups.
+    EXPECT_EQ(describe(concurrentPhases(kBuiltin, desktopLevels(1067852))), "p0 | e1 | M | L1 L2 | L3 L4 L5");
 }
 
 TEST(BakePhasesTest, OrderAndTasksDoNotDependOnTheCut) {
@@ -61,15 +61,15 @@ TEST(BakePhasesTest, OrderAndTasksDoNotDependOnTheCut) {
         std::string all;
         for (const auto& phase : concurrentPhases(kBuiltin, desktopLevels(lod0)))
             for (const PhaseTask& task : phase) all += describe({{task}}) + " ";
-        EXPECT_EQ(all, "p0 e1 L1 L2 L3 L4 L5 M ") << lod0;
+        EXPECT_EQ(all, "p0 e1 M L1 L2 L3 L4 L5 ") << lod0;
     }
     PhaseEstimates tiny;
     tiny.budget_bytes = 1;
-    EXPECT_EQ(describe(concurrentPhases(kBuiltin, desktopLevels(1000), tiny)), "p0 | e1 | L1 | L2 | L3 | L4 | L5 | M");
+    EXPECT_EQ(describe(concurrentPhases(kBuiltin, desktopLevels(1000), tiny)), "p0 | e1 | M | L1 | L2 | L3 | L4 | L5");
 }
 
 TEST(BakePhasesTest, NoStreamEncoders) {
-    EXPECT_EQ(describe(concurrentPhases({}, {5000000, 100})), "L1 | M");
+    EXPECT_EQ(describe(concurrentPhases({}, {5000000, 100})), "M | L1");
     EXPECT_EQ(describe(concurrentPhases({}, {100})), "M");
 }
 
