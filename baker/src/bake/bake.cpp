@@ -9,6 +9,7 @@
 #include <memory>
 #include <set>
 
+#include "bake/phases.h"
 #include "core/parallel.h"
 #include "lodbake/cleanup/repair.h"
 #include "lodbake/core/json_writer.h"
@@ -19,6 +20,9 @@
 namespace lodbake {
 
 namespace {
+
+using bake_detail::concurrentPhases;
+using bake_detail::PhaseTask;
 
 constexpr double kPi = 3.14159265358979323846;
 
@@ -106,10 +110,11 @@ Result<TextureLevels> textureLevels(const Mesh& lod0, size_t level_count, const 
 // After the chain, the remaining work of an asset is a fixed set of tasks that only read the
 // meshes (STYLE.md §7: each writes its own slot; which thread runs which, and when, changes no
 // byte): the error measurement (then the metrics and texture levels that follow from it), and the
-// stream encoders' prepare steps per level. With 2 threads the PFRep build (one long
-// single-threaded simplification) runs beside the measurement and the valence coding of the levels
-// instead of before them. The commits (cheap; the valence commit renumbers its level) then run in
-// encoder and level order on this thread.
+// stream encoders' prepare steps. They run in phases (concurrentPhases): with 2 threads a small
+// asset's PFRep build (one long single-threaded simplification) runs beside the measurement and the
+// valence coding of the levels; a large asset's big tasks run one after the other, each alone (the
+// measurement is parallel inside). The commits (cheap; the valence commit renumbers its level) then
+// run in encoder and level order on this thread.
 Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vector<PackStreamEncoder>& encoders,
                  AssetSlot& slot, size_t index, const BakeHooks& hooks) {
     Mesh& mesh = input.mesh;
@@ -118,7 +123,9 @@ Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vect
     slot.report.input_vertices = mesh.vertexCount();
     if (settings.repair) {
         StageTimer timer(hooks, index, BakeStage::Repair);
-        LODBAKE_ASSIGN_OR_RETURN(RepairReport repair, repairMesh(mesh, RepairOptions{}, input.name, slot.diagnostics));
+        RepairOptions repair_options;
+        repair_options.report_welded = false; // only `unresolved` goes into the bake's report
+        LODBAKE_ASSIGN_OR_RETURN(RepairReport repair, repairMesh(mesh, repair_options, input.name, slot.diagnostics));
         slot.report.repair_unresolved = repair.unresolved;
     }
     const ScreenParams screen = screenParams(settings);
@@ -138,19 +145,19 @@ Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vect
 
     const size_t level_count = chain.levels.size() + 1;
     auto levelMesh = [&](size_t l) -> const Mesh& { return l == 0 ? mesh : chain.levels[l - 1].mesh; };
-    // Task 0 measures (and sizes the textures); task 1 + l runs every encoder's prepare for level l.
-    // LOD0's prepares are the big ones (each holds several times LOD0's size in working memory: the
-    // PFRep build its own simplifier, the valence coder its tables), so they run one after the other
-    // in one task; the measurement and the smaller levels run beside them. Started in this order
-    // from one shared counter: LOD0, the measurement, then the other levels, largest first.
-    const size_t task_count = 1 + level_count;
+    std::vector<size_t> level_triangles(level_count);
+    for (size_t l = 0; l < level_count; ++l) level_triangles[l] = levelMesh(l).faceCount();
     std::vector<Result<PackStreamCommit>> commits(encoders.size() * level_count, PackStreamCommit());
     Diagnostics measure_diagnostics;
     LodMetrics metrics;
     Result<TextureLevels> textures = TextureLevels{};
     Status deferred = Status::okStatus();
-    auto runTask = [&](size_t task) {
-        if (task == 0) {
+    auto stageOf = [&](size_t e) {
+        return encoders[e].extension_name == "LODBAKE_progressive_fans" ? BakeStage::Pfrep : BakeStage::Encode;
+    };
+    auto runTask = [&](const PhaseTask& task, bool alone) {
+        switch (task.kind) {
+        case PhaseTask::Kind::Measure: {
             {
                 StageTimer timer(hooks, index, BakeStage::Measure);
                 measureLodChain(mesh, chain, chain_options, measure_diagnostics);
@@ -169,19 +176,41 @@ Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vect
             textures = textureLevels(mesh, level_count, metrics, settings, input.name, measure_diagnostics);
             return;
         }
-        const size_t l = task - 1;
-        for (size_t e = 0; e < encoders.size(); ++e) {
-            if (l > 0 && encoders[e].needs_measurement) continue; // after the measurement, above
-            StageTimer timer(hooks, index,
-                             encoders[e].extension_name == "LODBAKE_progressive_fans" ? BakeStage::Pfrep
-                                                                                      : BakeStage::Encode);
-            commits[e * level_count + l] = encoders[e].prepare(chain, l, levelMesh(l));
+        case PhaseTask::Kind::Lod0Encoder: {
+            const size_t e = task.index;
+            StageTimer timer(hooks, index, stageOf(e));
+            if (alone && stageOf(e) == BakeStage::Pfrep) {
+                // The PFRep build reads positions and indices only (it would copy them out of a mesh
+                // with attributes). Running alone, nothing else reads LOD0 meanwhile, so they are lent
+                // to a geometry-only mesh instead of copied: the same input, one copy less at the peak.
+                Mesh geometry;
+                geometry.positions = std::move(mesh.positions);
+                geometry.indices = std::move(mesh.indices);
+                commits[e * level_count] = encoders[e].prepare(chain, 0, geometry);
+                mesh.positions = std::move(geometry.positions);
+                mesh.indices = std::move(geometry.indices);
+            } else {
+                commits[e * level_count] = encoders[e].prepare(chain, 0, mesh);
+            }
+            return;
+        }
+        case PhaseTask::Kind::Level:
+            for (size_t e = 0; e < encoders.size(); ++e) {
+                if (encoders[e].needs_measurement) continue; // after the measurement, above
+                StageTimer timer(hooks, index, stageOf(e));
+                commits[e * level_count + task.index] = encoders[e].prepare(chain, task.index, levelMesh(task.index));
+            }
+            return;
         }
     };
-    std::vector<size_t> order{1, 0};
-    for (size_t l = 1; l < level_count; ++l) order.push_back(1 + l);
-    std::atomic<size_t> next{0};
-    LODBAKE_RETURN_IF_ERROR(parallelFor(task_count, 1, [&](size_t) { runTask(order[next.fetch_add(1)]); }));
+    std::vector<bool> encoder_is_pfrep;
+    for (size_t e = 0; e < encoders.size(); ++e) encoder_is_pfrep.push_back(stageOf(e) == BakeStage::Pfrep);
+    for (const std::vector<PhaseTask>& phase : concurrentPhases(encoder_is_pfrep, level_triangles)) {
+        std::atomic<size_t> next{0};
+        const bool alone = phase.size() == 1;
+        LODBAKE_RETURN_IF_ERROR(
+            parallelFor(phase.size(), 1, [&](size_t) { runTask(phase[next.fetch_add(1)], alone); }));
+    }
     LODBAKE_RETURN_IF_ERROR(deferred);
     for (const Diagnostic& d : measure_diagnostics.items()) {
         if (d.severity == Severity::Warning)

@@ -145,11 +145,13 @@ Result<RepairReport> repairMesh(Mesh& mesh, const RepairOptions& options, const 
     report.after = same_faces ? report.before : validate(mesh);
     const std::vector<uint32_t> weld = cleanup_detail::positionWeldMap(mesh);
     const bool shared = hasSharedPositions(weld);
-    if (shared) {
+    // The welded report is information only (`unresolved` takes rims and components from
+    // openRimsAndSurfaces below), so callers that need just `unresolved` skip that validate() pass.
+    if (options.report_welded && shared) {
         ValidateOptions welded;
         welded.weld_by_position = true;
         report.after_welded = validate(mesh, welded);
-    } else {
+    } else if (options.report_welded) {
         report.after_welded = report.after; // nothing to weld
     }
 

@@ -172,6 +172,48 @@ void releaseLevel(PackLevel& level) {
         for (PackExtension& e : list) std::vector<std::vector<uint8_t>>().swap(e.blobs);
 }
 
+void appendU32(std::vector<uint8_t>& out, uint32_t v) {
+    for (int k = 0; k < 4; ++k) out.push_back(uint8_t(v >> (8 * k)));
+}
+
+// The GLB tinygltf writes for a model whose only buffer holds `bin`, given `shell`: what it wrote for
+// the same model with that buffer empty (its JSON then says "byteLength":0 and it has no BIN chunk).
+// Same layout as tinygltf's WriteBinaryGltfStream: 12-byte header, the JSON chunk padded with spaces
+// to 4 bytes, the BIN chunk padded with zeros. `bin` becomes the result (its bytes move once).
+Result<std::vector<uint8_t>> assembleGlb(const std::vector<uint8_t>& shell, std::vector<uint8_t> bin) {
+    if (shell.size() < 20) return internalError("pack: tinygltf wrote no GLB header");
+    uint32_t json_chunk = 0;
+    for (int k = 0; k < 4; ++k) json_chunk |= uint32_t(shell[12 + size_t(k)]) << (8 * k);
+    if (size_t(json_chunk) + 20 > shell.size()) return internalError("pack: tinygltf wrote a short JSON chunk");
+    std::string json(shell.begin() + 20, shell.begin() + 20 + std::ptrdiff_t(json_chunk));
+    while (!json.empty() && json.back() == ' ') json.pop_back();
+    const std::string empty = "\"buffers\":[{\"byteLength\":0}]";
+    const size_t at = json.find(empty);
+    if (at == std::string::npos || json.find(empty, at + 1) != std::string::npos)
+        return internalError("pack: the GLB's buffer entry was not found");
+    const uint64_t bin_size = bin.size();
+    if (bin_size > 0xffffffffull - 64 - json.size()) return resourceLimit("pack: GLB larger than 4 GiB");
+    if (bin_size > 0) json.replace(at, empty.size(), "\"buffers\":[{\"byteLength\":" + std::to_string(bin_size) + "}]");
+    const uint32_t json_pad = uint32_t((4 - json.size() % 4) % 4), bin_pad = uint32_t((4 - bin_size % 4) % 4);
+    const uint32_t json_length = uint32_t(json.size()) + json_pad;
+    const uint32_t total = 12 + 8 + json_length + (bin_size ? 8 + uint32_t(bin_size) + bin_pad : 0);
+    std::vector<uint8_t> head;
+    head.reserve(28 + json_length);
+    head.insert(head.end(), {'g', 'l', 'T', 'F'});
+    appendU32(head, 2);
+    appendU32(head, total);
+    appendU32(head, json_length);
+    appendU32(head, 0x4E4F534Au); // "JSON"
+    head.insert(head.end(), json.begin(), json.end());
+    head.insert(head.end(), json_pad, uint8_t(' '));
+    if (bin_size == 0) return head;
+    appendU32(head, uint32_t(bin_size) + bin_pad);
+    appendU32(head, 0x004E4942u); // "BIN\0"
+    bin.insert(bin.end(), bin_pad, uint8_t(0));
+    bin.insert(bin.begin(), head.begin(), head.end());
+    return bin;
+}
+
 // `owned`, when set, is `description` itself: each level's data is released as soon as the model
 // holds a copy, so the pack's bytes never exist twice beside all the meshes.
 Result<std::vector<uint8_t>> writeImpl(const PackDescription& description, PackDescription* owned) {
@@ -248,20 +290,21 @@ Result<std::vector<uint8_t>> writeImpl(const PackDescription& description, PackD
     model.extensionsUsed.assign(used.begin(), used.end());
     if (description.compact) model.extensionsRequired.assign(streams.begin(), streams.end());
 
-    tinygltf::Buffer gbuffer;
-    gbuffer.data = buffer.finish();
-    if (description.compact) gbuffer.data = dropStreamedAccessors(model, streams, gbuffer.data, patches);
-    gbuffer.data.shrink_to_fit(); // the builder's spare capacity (up to the size again)
-    const size_t bin_size = gbuffer.data.size();
-    model.buffers.push_back(std::move(gbuffer));
+    std::vector<uint8_t> bin = buffer.finish();
+    if (description.compact) bin = dropStreamedAccessors(model, streams, bin, patches);
+    // tinygltf copies a buffer's data before writing it (and the GLB holds it a third time), so the
+    // model is written with an empty buffer and the GLB is assembled here around the binary chunk,
+    // byte for byte as tinygltf lays it out: the pack's bytes exist at most twice, briefly.
+    model.buffers.push_back(tinygltf::Buffer());
     tinygltf::TinyGLTF writer;
-    std::vector<uint8_t> glb;
-    glb.reserve(bin_size + bin_size / 64 + (size_t(1) << 16)); // the binary chunk plus room for the JSON
-    VectorStreamBuf sink(glb);
-    std::ostream stream(&sink);
-    if (!writer.WriteGltfSceneToStream(&model, stream, false, true) || !stream)
-        return internalError("pack: tinygltf failed");
-    return glb;
+    std::vector<uint8_t> shell;
+    {
+        VectorStreamBuf sink(shell);
+        std::ostream stream(&sink);
+        if (!writer.WriteGltfSceneToStream(&model, stream, false, true) || !stream)
+            return internalError("pack: tinygltf failed");
+    }
+    return assembleGlb(shell, std::move(bin));
 }
 
 } // namespace

@@ -26,10 +26,17 @@ uint32_t bitWidth(uint32_t v) { return v == 0 ? 0 : 32 - uint32_t(__builtin_clz(
 
 class BitWriter {
 public:
+    // The low `bits` bits of value, least significant first; a byte at a time.
     void write(uint64_t value, uint32_t bits) {
-        for (uint32_t k = 0; k < bits; ++k, ++bit_) {
-            if ((bit_ & 7) == 0) bytes_.push_back(0);
-            if ((value >> k) & 1) bytes_.back() = uint8_t(bytes_.back() | (1u << (bit_ & 7)));
+        if (bits < 64) value &= (uint64_t(1) << bits) - 1;
+        while (bits > 0) {
+            const uint32_t used = uint32_t(bit_ & 7);
+            if (used == 0) bytes_.push_back(0);
+            const uint32_t take = std::min(bits, 8 - used);
+            bytes_.back() = uint8_t(bytes_.back() | ((value & ((1u << take) - 1)) << used));
+            value >>= take;
+            bits -= take;
+            bit_ += take;
         }
     }
     void alignByte() { bit_ = (bit_ + 7) & ~uint64_t(7); }
@@ -266,12 +273,13 @@ Result<PfrepBuild> buildPfrepFromSequence(const CollapseSequence& sequence, cons
     std::vector<double> err(vertex_count, 0.0), radius(vertex_count, 0.0), cone_angle(vertex_count, 0.0);
     std::vector<Vec3d> axis(vertex_count);
     auto pos = [&](uint32_t rank) { return toD(sequence.point_positions[rank_point[rank]]); };
+    std::vector<Vec3d> normals;
     for (uint32_t i = 0; i < vertex_count; ++i) {
         const Vec3d pi = pos(i);
         double e = i < removed ? removal_error[rank_point[i]] : 0.0;
         double rad = 0;
         Vec3d sum;
-        std::vector<Vec3d> normals;
+        normals.clear();
         for (uint32_t s = fan_first[i]; s < fan_first[i + 1]; ++s) {
             const Vec3d pa = pos(slots[s].a), pb = pos(slots[s].b);
             rad = std::max({rad, length(pa - pi), length(pb - pi)});
@@ -303,7 +311,7 @@ Result<PfrepBuild> buildPfrepFromSequence(const CollapseSequence& sequence, cons
     BitWriter stream;
     std::vector<uint32_t> entry_offset(vertex_count);
     PfrepBuild build;
-    std::vector<uint8_t> used;
+    std::vector<uint8_t> used, bits;
     std::vector<uint32_t> seq, slot_of_edge, deps;
     for (uint32_t i = 0; i < vertex_count; ++i) {
         stream.alignByte();
@@ -373,12 +381,17 @@ Result<PfrepBuild> buildPfrepFromSequence(const CollapseSequence& sequence, cons
         stream.write(wa, fmt::kPfrepWidthBits);
         if (!deps.empty()) stream.write(wd, fmt::kPfrepWidthBits);
         for (uint32_t a : seq) stream.write(a - i - 1, wa);
-        std::vector<uint8_t> bits(n);
+        bits.assign(n, 0);
         auto writeMask = [&](uint32_t dep) {
             std::fill(bits.begin(), bits.end(), 0);
             for (uint32_t e = 0; e < count; ++e)
                 if (slots[first + e].dep == dep) bits[slot_of_edge[e]] = 1;
-            for (uint32_t j = 0; j < n; ++j) stream.write(bits[j], 1);
+            for (uint32_t j = 0; j < n; j += 32) { // 32 mask bits per write
+                const uint32_t take = std::min(32u, n - j);
+                uint64_t word = 0;
+                for (uint32_t k = 0; k < take; ++k) word |= uint64_t(bits[j + k]) << k;
+                stream.write(word, take);
+            }
         };
         if (has_original) writeMask(kNone);
         for (uint32_t d : deps) {

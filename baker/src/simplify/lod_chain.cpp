@@ -9,10 +9,6 @@
 
 #include "simplify/edge_collapse.h"
 
-#if defined(__GLIBC__)
-#include <malloc.h>
-#endif
-
 namespace lodbake {
 
 double switchDistance(double error, const ScreenParams& screen) {
@@ -71,9 +67,6 @@ Result<LodChain> buildLodChain(const Mesh& mesh, const LodChainOptions& options,
             chain.levels.push_back(std::move(level));
         }
     }
-#if defined(__GLIBC__)
-    malloc_trim(0); // glibc would otherwise keep most of the engine's freed pages resident
-#endif
     if (options.measure_error)
         measureLodChain(mesh, chain, options, diagnostics);
     else
@@ -85,14 +78,15 @@ void measureLodChain(const Mesh& mesh, LodChain& chain, const LodChainOptions& o
     // The input's BVH is built once for all levels.
     Result<DistanceReference> reference = DistanceReference::prepare(mesh);
     if (!reference.ok()) diagnostics.warn("lod chain: errors not measured: " + reference.status().message());
-    // One level at a time, so only one level's BVH and samples exist at once (each measurement is
-    // parallel inside). The reference's samples are drawn again per level: the same points each
-    // time, so the results do not depend on this.
-    for (size_t i = 0; reference.ok() && i < chain.levels.size(); ++i) {
+    // The reference's points are drawn once; the levels are measured one at a time (each in parallel
+    // inside), so only one level's BVH and samples exist at once.
+    std::vector<const Mesh*> meshes;
+    for (const LodLevel& level : chain.levels) meshes.push_back(&level.mesh);
+    std::vector<Result<DistanceResult>> measured;
+    if (reference.ok()) measured = measureSurfaceDistances(*reference, meshes, options.distance);
+    for (size_t i = 0; i < measured.size(); ++i) {
         LodLevel& level = chain.levels[i];
-        std::vector<Result<DistanceResult>> measured =
-            measureSurfaceDistances(*reference, {&level.mesh}, options.distance);
-        const Result<DistanceResult>& d = measured.at(0);
+        const Result<DistanceResult>& d = measured[i];
         if (!d.ok()) {
             diagnostics.warn("lod chain: level ratio " + std::to_string(level.target_ratio) +
                              ": error not measured: " + d.status().message());

@@ -32,6 +32,7 @@ struct RepairOptions {
     DenoiseOptions denoise_options;
     bool normals = true;
     NormalOptions normal_options;
+    bool report_welded = true; // fill RepairReport::after_welded (one more validate() of the whole mesh)
 };
 
 struct PassSummary {
@@ -44,6 +45,7 @@ struct RepairReport {
     ValidationReport before;
     ValidationReport after;
     ValidationReport after_welded;       // `after` with bit-identical positions merged: UV/normal seams are not rims
+                                         // (left empty when RepairOptions::report_welded is false)
     std::vector<PassSummary> passes;
     std::vector<std::string> unresolved; // what the pipeline could not fix, one line each
 };

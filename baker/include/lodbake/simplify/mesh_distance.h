@@ -61,8 +61,8 @@ Result<DistanceResult> measureSurfaceDistance(const DistanceReference& reference
 
 /// Measures every approximation against one reference: results[i] is exactly (bit for bit) what
 /// measureSurfaceDistance(reference, *approximations[i], options) returns, including its error. The
-/// reference side's points are drawn once, and the approximations are measured in parallel (the
-/// result does not depend on the thread count). Pointers must not be null.
+/// reference side's points are drawn once, and the approximations are measured one after the other,
+/// each in parallel inside (the result does not depend on the thread count). Pointers must not be null.
 std::vector<Result<DistanceResult>> measureSurfaceDistances(const DistanceReference& reference,
                                                             const std::vector<const Mesh*>& approximations,
                                                             const DistanceOptions& options = {});

@@ -1,0 +1,43 @@
+#pragma once
+// Which of an asset's post-chain tasks may run side by side (docs/bake.md, "Concurrency"): the
+// tasks in their fixed start order, cut into consecutive phases by a working-memory estimate.
+// Internal to the bake; the cut never changes a byte of the output, only the peak memory.
+
+#include <cstddef>
+#include <vector>
+
+namespace lodbake {
+namespace bake_detail {
+
+/// Working memory of a task in bytes per triangle of the mesh it reads, measured on
+/// dragon_poisson (1.07M triangles, glibc allocator: resident size above what the bake holds).
+struct PhaseEstimates {
+    double pfrep_bytes_per_triangle = 250;   // the PFRep build's own simplifier (geometry only)
+    double encode_bytes_per_triangle = 230;  // the valence coder's tables
+    double measure_bytes_per_triangle = 160; // LOD0's BVH and points, then one level's (per LOD0 triangle)
+    /// Tasks share a phase only while their estimates add up to at most this; a task above it runs
+    /// alone. Small assets (up to about 200,000 triangles) run every task at once.
+    double budget_bytes = 192.0 * 1024 * 1024;
+};
+
+/// One task: the measurement (then the metrics and texture levels), one encoder's prepare on LOD0,
+/// or every encoder's prepare on one other level.
+struct PhaseTask {
+    enum class Kind { Measure, Lod0Encoder, Level };
+    Kind kind = Kind::Measure;
+    size_t index = 0; // encoder (Lod0Encoder) or level (Level)
+    double bytes = 0; // working-memory estimate
+};
+
+/// The tasks in their start order -- the PFRep encoders on LOD0 (the longest, single-threaded),
+/// the other encoders on LOD0, the measurement (parallel inside), the other levels (largest first)
+/// -- cut into consecutive phases that fit the budget. The biggest working sets come first, while
+/// the least is resident: what each task leaves behind (blobs, renumbered indices, heap pages the
+/// allocator keeps) adds to every later task's peak.
+/// `encoder_is_pfrep[e]` tells which encoders build PFRep; `level_triangles[0]` is LOD0's count.
+std::vector<std::vector<PhaseTask>> concurrentPhases(const std::vector<bool>& encoder_is_pfrep,
+                                                     const std::vector<size_t>& level_triangles,
+                                                     const PhaseEstimates& estimates = {});
+
+} // namespace bake_detail
+} // namespace lodbake

@@ -1,0 +1,76 @@
+// The phase cut of the bake's post-chain tasks (baker/src/bake/phases.h; docs/bake.md,
+// "Concurrency"): every task once, in the fixed start order; small assets in one phase, the big
+// tasks of a large asset each alone.
+#include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
+
+#include "bake/phases.h"
+
+namespace {
+
+using lodbake::bake_detail::concurrentPhases;
+using lodbake::bake_detail::PhaseEstimates;
+using lodbake::bake_detail::PhaseTask;
+
+// "p0" PFRep encoder e on LOD0, "e1" other encoder 1 on LOD0, "L3" level 3, "M" measurement; phases
+// separated by '|'.
+std::string describe(const std::vector<std::vector<PhaseTask>>& phases) {
+    std::string s;
+    for (size_t p = 0; p < phases.size(); ++p) {
+        if (p) s += " | ";
+        for (size_t t = 0; t < phases[p].size(); ++t) {
+            const PhaseTask& task = phases[p][t];
+            if (t) s += " ";
+            switch (task.kind) {
+            case PhaseTask::Kind::Measure:
+                s += "M";
+                break;
+            case PhaseTask::Kind::Lod0Encoder:
+                s += (task.index == 0 ? "p" : "e") + std::to_string(task.index);
+                break;
+            case PhaseTask::Kind::Level:
+                s += "L" + std::to_string(task.index);
+                break;
+            }
+        }
+    }
+    return s;
+}
+
+std::vector<size_t> desktopLevels(size_t lod0) {
+    std::vector<size_t> t{lod0};
+    for (double r : {0.5, 0.25, 0.1, 0.03, 0.01}) t.push_back(size_t(r * double(lod0)));
+    return t;
+}
+
+const std::vector<bool> kBuiltin{true, false}; // PFRep, then valence (builtinStreamEncoders order)
+
+TEST(BakePhasesTest, SmallAssetRunsEveryTaskAtOnce) {
+    EXPECT_EQ(describe(concurrentPhases(kBuiltin, desktopLevels(70000))), "p0 e1 M L1 L2 L3 L4 L5");
+}
+
+TEST(BakePhasesTest, LargeAssetRunsItsBigTasksAlone) {
+    // dragon_poisson: PFRep, LOD0's coding and the measurement alone, then the levels in two groups.
+    EXPECT_EQ(describe(concurrentPhases(kBuiltin, desktopLevels(1067852))), "p0 | e1 | M | L1 L2 | L3 L4 L5");
+}
+
+TEST(BakePhasesTest, OrderAndTasksDoNotDependOnTheCut) {
+    for (size_t lod0 : {0ul, 1000ul, 250000ul, 600000ul, 5000000ul}) {
+        std::string all;
+        for (const auto& phase : concurrentPhases(kBuiltin, desktopLevels(lod0)))
+            for (const PhaseTask& task : phase) all += describe({{task}}) + " ";
+        EXPECT_EQ(all, "p0 e1 M L1 L2 L3 L4 L5 ") << lod0;
+    }
+    PhaseEstimates tiny;
+    tiny.budget_bytes = 1;
+    EXPECT_EQ(describe(concurrentPhases(kBuiltin, desktopLevels(1000), tiny)), "p0 | e1 | M | L1 | L2 | L3 | L4 | L5");
+}
+
+TEST(BakePhasesTest, NoStreamEncoders) {
+    EXPECT_EQ(describe(concurrentPhases({}, {5000000, 100})), "M | L1");
+    EXPECT_EQ(describe(concurrentPhases({}, {100})), "M");
+}
+
+} // namespace
