@@ -381,6 +381,7 @@ struct Attempt {
         node_prev, node_next, node_free, node_corner, completion, stack_head, stack_size;
 
     bool run(const Mesh& mesh, const std::vector<uint8_t>& exploded) {
+        closed = ClosedMesh(); // a restart's previous closed mesh goes before the new one is built
         closed = buildClosed(mesh, exploded);
         const size_t vc = closed.source.size(), tc = closed.corner_vertex.size() / 3;
         for (auto* v : {&corner_vertex, &corner_opposite}) v->assign(3 * tc, 0);
@@ -596,13 +597,15 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
     int32_t last[3] = {int32_t(qmax + 1) / 2, int32_t(qmax + 1) / 2, int32_t(qmax + 1) / 2};
     uint32_t prev_sign[3] = {0, 0, 0};
     std::vector<uint8_t> ordered(vc);
-    std::vector<uint32_t> order(vc), count(vc), neighbour(vc), triples(9 * size_t(tc)), degree(vc), stack0(vc),
-        stack1(vc), stack2(vc);
+    std::vector<uint32_t> order(vc), count(vc), neighbour(vc), degree(vc), stack0(vc), stack1(vc), stack2(vc);
+    // Sized for the worst case and filled only as far as the plan goes: left uninitialised, so the
+    // untouched tail costs no resident memory.
+    std::unique_ptr<uint32_t[]> triples(new uint32_t[9 * size_t(tc)]);
     lodrt::detail::PositionPlan plan;
     plan.order = order.data();
     plan.count = count.data();
     plan.neighbour = neighbour.data();
-    plan.triples = triples.data();
+    plan.triples = triples.get();
     plan.max_triples = 3 * tc;
     if (!lodrt::detail::planPositions(a.corner_vertex, a.corner_opposite, a.vertex_corner, a.vertex_flags,
                                       a.vertex_valence, vc, ordered.data(), degree.data(), stack0.data(),
@@ -756,7 +759,10 @@ Result<Mesh> decodeValence(const std::vector<uint8_t>& bytes, const std::string&
     std::vector<float> positions(3 * size_t(info.vertex_count)), normals;
     if (info.has_normals) normals.resize(3 * size_t(info.vertex_count));
     mesh.indices.resize(3 * size_t(info.triangle_count));
-    std::vector<uint64_t> scratch((lodrt::valenceScratchSize(info) + 7) / 8);
+    // Not value-initialised: the decoder writes every scratch word before it reads it, and the parts
+    // sized for the worst case (the prediction triples) stay untouched and so cost no resident memory.
+    const size_t scratch_words = (lodrt::valenceScratchSize(info) + 7) / 8;
+    std::unique_ptr<uint64_t[]> scratch(new uint64_t[scratch_words]);
     lodrt::ValenceOutput output;
     output.indices = mesh.indices.data();
     output.index_capacity = mesh.indices.size();
@@ -764,8 +770,8 @@ Result<Mesh> decodeValence(const std::vector<uint8_t>& bytes, const std::string&
     output.position_capacity = positions.size();
     output.normals = info.has_normals ? normals.data() : nullptr;
     output.normal_capacity = normals.size();
-    output.scratch = scratch.data();
-    output.scratch_size = scratch.size() * 8;
+    output.scratch = scratch.get();
+    output.scratch_size = scratch_words * 8;
     r = lodrt::valenceDecode(bytes.data(), bytes.size(), output);
     if (r != lodrt::Result::Ok) return invalidInput(name + ": streams: " + describe(r));
     mesh.positions.resize(info.vertex_count);
