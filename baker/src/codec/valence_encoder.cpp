@@ -773,10 +773,12 @@ Result<Mesh> decodeValence(const std::vector<uint8_t>& bytes, const std::string&
     output.scratch = scratch.get();
     output.scratch_size = scratch_words * 8;
     r = lodrt::valenceDecode(bytes.data(), bytes.size(), output);
+    scratch.reset(); // before the copies below: they need no scratch
     if (r != lodrt::Result::Ok) return invalidInput(name + ": streams: " + describe(r));
     mesh.positions.resize(info.vertex_count);
     for (size_t i = 0; i < info.vertex_count; ++i)
         mesh.positions[i] = Vec3f{positions[3 * i], positions[3 * i + 1], positions[3 * i + 2]};
+    std::vector<float>().swap(positions);
     if (info.has_normals) {
         mesh.normals.resize(info.vertex_count);
         for (size_t i = 0; i < info.vertex_count; ++i)
