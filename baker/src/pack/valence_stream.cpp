@@ -257,15 +257,13 @@ double medianEdgeLength(const Mesh& mesh) {
     return lengths[lengths.size() / 2];
 }
 
-// Largest extent of the bounding box (the codec's quantization cube edge).
+// Largest extent of the bounding box of every vertex, unreferenced ones too (the codec's
+// quantization cube edge; computeBounds would leave strays out).
 double cubeSize(const Mesh& mesh) {
-    if (mesh.positions.empty()) return 0.0;
-    Vec3f lo = mesh.positions[0], hi = lo;
-    for (const Vec3f& p : mesh.positions) {
-        lo = Vec3f(std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z));
-        hi = Vec3f(std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z));
-    }
-    return std::max({double(hi.x) - lo.x, double(hi.y) - lo.y, double(hi.z) - lo.z, 0.0});
+    Aabb box;
+    for (const Vec3f& p : mesh.positions) box.expand(p);
+    if (box.isEmpty()) return 0.0;
+    return std::max({double(box.max.x) - box.min.x, double(box.max.y) - box.min.y, double(box.max.z) - box.min.z});
 }
 
 double displacementBound(double cube, uint32_t bits) {
