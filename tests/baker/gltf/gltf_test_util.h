@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "lodbake/core/mesh.h"
+#include "cli_runner.h"
 
 namespace lodbake_test {
 
@@ -159,17 +160,6 @@ inline CommandResult runCommand(const std::string& command) {
 /// it; outside sanitizer builds the variable is ignored.
 inline std::string withoutLeakCheck() {
     return "ASAN_OPTIONS=\"${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0\" ";
-}
-
-inline std::string shellQuote(const std::string& s) {
-    std::string out = "'";
-    for (char c : s) {
-        if (c == '\'')
-            out += "'\\''";
-        else
-            out.push_back(c);
-    }
-    return out + "'";
 }
 
 } // namespace lodbake_test
