@@ -160,14 +160,22 @@ Result<std::vector<uint32_t>> pointTriangles(const Mesh& mesh, const CollapseSeq
     std::unordered_map<Key, uint32_t, KeyHash> point_of;
     point_of.reserve(sequence.point_positions.size() * 2);
     for (uint32_t p = 0; p < sequence.point_positions.size(); ++p) point_of.emplace(key(sequence.point_positions[p]), p);
+    // One look-up per referenced vertex (not per corner).
+    std::vector<uint32_t> point_of_vertex(mesh.positions.size(), kNone);
     std::vector<uint32_t> out;
     out.reserve(mesh.indices.size());
     for (size_t f = 0; f < mesh.faceCount(); ++f) {
         uint32_t t[3];
         for (int k = 0; k < 3; ++k) {
-            auto it = point_of.find(key(mesh.positions[mesh.indices[f * 3 + k]]));
-            if (it == point_of.end()) return invalidInput("pfrep: face " + std::to_string(f) + ": position not in the collapse sequence");
-            t[k] = it->second;
+            const uint32_t vertex = mesh.indices[f * 3 + k];
+            uint32_t& point = point_of_vertex[vertex];
+            if (point == kNone) {
+                auto it = point_of.find(key(mesh.positions[vertex]));
+                if (it == point_of.end())
+                    return invalidInput("pfrep: face " + std::to_string(f) + ": position not in the collapse sequence");
+                point = it->second;
+            }
+            t[k] = point;
         }
         if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue;
         out.insert(out.end(), t, t + 3);
