@@ -26,26 +26,45 @@ uint32_t bitWidth(uint32_t v) { return v == 0 ? 0 : 32 - uint32_t(__builtin_clz(
 
 class BitWriter {
 public:
-    // The low `bits` bits of value, least significant first; a byte at a time.
+    // The low `bits` bits of value, least significant first, through a 64-bit accumulator that is
+    // flushed a byte at a time.
     void write(uint64_t value, uint32_t bits) {
-        if (bits < 64) value &= (uint64_t(1) << bits) - 1;
-        while (bits > 0) {
-            const uint32_t used = uint32_t(bit_ & 7);
-            if (used == 0) bytes_.push_back(0);
-            const uint32_t take = std::min(bits, 8 - used);
-            bytes_.back() = uint8_t(bytes_.back() | ((value & ((1u << take) - 1)) << used));
-            value >>= take;
-            bits -= take;
-            bit_ += take;
+        while (bits > 32) {
+            put(uint32_t(value), 32);
+            value >>= 32;
+            bits -= 32;
+        }
+        put(uint32_t(value), bits);
+    }
+    void alignByte() {
+        if (pending_bits_ > 0) {
+            bytes_.push_back(uint8_t(pending_));
+            pending_ = 0;
+            pending_bits_ = 0;
         }
     }
-    void alignByte() { bit_ = (bit_ + 7) & ~uint64_t(7); }
-    size_t byteSize() const { return bytes_.size(); }
-    std::vector<uint8_t>& bytes() { return bytes_; }
+    size_t byteSize() const { return bytes_.size() + (pending_bits_ > 0 ? 1 : 0); }
+    std::vector<uint8_t>& bytes() {
+        alignByte();
+        return bytes_;
+    }
 
 private:
+    void put(uint32_t value, uint32_t bits) {
+        if (bits == 0) return;
+        if (bits < 32) value &= (1u << bits) - 1;
+        pending_ |= uint64_t(value) << pending_bits_;
+        pending_bits_ += bits;
+        while (pending_bits_ >= 8) {
+            bytes_.push_back(uint8_t(pending_));
+            pending_ >>= 8;
+            pending_bits_ -= 8;
+        }
+    }
+
     std::vector<uint8_t> bytes_;
-    uint64_t bit_ = 0;
+    uint64_t pending_ = 0;      // bits not yet in bytes_ (fewer than 8 between calls)
+    uint32_t pending_bits_ = 0;
 };
 
 void writeCount(BitWriter& w, uint32_t count, uint32_t bits) {
@@ -141,14 +160,22 @@ Result<std::vector<uint32_t>> pointTriangles(const Mesh& mesh, const CollapseSeq
     std::unordered_map<Key, uint32_t, KeyHash> point_of;
     point_of.reserve(sequence.point_positions.size() * 2);
     for (uint32_t p = 0; p < sequence.point_positions.size(); ++p) point_of.emplace(key(sequence.point_positions[p]), p);
+    // One look-up per referenced vertex (not per corner).
+    std::vector<uint32_t> point_of_vertex(mesh.positions.size(), kNone);
     std::vector<uint32_t> out;
     out.reserve(mesh.indices.size());
     for (size_t f = 0; f < mesh.faceCount(); ++f) {
         uint32_t t[3];
         for (int k = 0; k < 3; ++k) {
-            auto it = point_of.find(key(mesh.positions[mesh.indices[f * 3 + k]]));
-            if (it == point_of.end()) return invalidInput("pfrep: face " + std::to_string(f) + ": position not in the collapse sequence");
-            t[k] = it->second;
+            const uint32_t vertex = mesh.indices[f * 3 + k];
+            uint32_t& point = point_of_vertex[vertex];
+            if (point == kNone) {
+                auto it = point_of.find(key(mesh.positions[vertex]));
+                if (it == point_of.end())
+                    return invalidInput("pfrep: face " + std::to_string(f) + ": position not in the collapse sequence");
+                point = it->second;
+            }
+            t[k] = point;
         }
         if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue;
         out.insert(out.end(), t, t + 3);
@@ -163,18 +190,50 @@ Result<PfrepBuild> buildPfrepFromSequence(const CollapseSequence& sequence, cons
     if (point_triangles.size() % 3 != 0) return invalidInput("pfrep: point triangle list is not a multiple of 3");
     std::vector<Triangle> tris;
     tris.reserve(point_triangles.size() / 3 * 3);
-    std::vector<std::vector<uint32_t>> incident(point_count);
+    // Alive incident triangles of every point, in insertion order, as ranges of one pool: laid out
+    // point after point for the input, a range moves to the pool's end when it outgrows its capacity.
+    // A triangle leaves its corners' ranges when it dies, so a removed point's range is its ring.
+    const size_t input_count = point_triangles.size() / 3;
+    for (size_t c = 0; c < point_triangles.size(); ++c)
+        if (point_triangles[c] >= point_count)
+            return invalidInput("pfrep: triangle " + std::to_string(c / 3) + ": point out of range");
+    struct Range {
+        uint32_t offset = 0, size = 0, capacity = 0;
+    };
+    std::vector<Range> incident(point_count);
+    for (uint32_t p : point_triangles) ++incident[p].capacity;
     std::vector<uint8_t> referenced(point_count, 0);
-    for (size_t t = 0; t < point_triangles.size() / 3; ++t) {
-        Triangle tri{{point_triangles[t * 3], point_triangles[t * 3 + 1], point_triangles[t * 3 + 2]}, kNone};
-        for (uint32_t p : tri.p) {
-            if (p >= point_count) return invalidInput("pfrep: triangle " + std::to_string(t) + ": point out of range");
-            incident[p].push_back(uint32_t(tris.size()));
-            referenced[p] = 1;
+    size_t pool_size = 0;
+    for (uint32_t p = 0; p < point_count; ++p) {
+        referenced[p] = incident[p].capacity > 0;
+        incident[p].offset = uint32_t(pool_size);
+        incident[p].capacity += 4; // room for the triangles a neighbour's removal brings
+        pool_size += incident[p].capacity;
+    }
+    if (pool_size > 0xffffffffu / 2) return resourceLimit("pfrep: too many triangles");
+    std::vector<uint32_t> pool(pool_size);
+    pool.reserve(pool_size + pool_size / 2);
+    auto link = [&](uint32_t p, uint32_t t) {
+        Range& r = incident[p];
+        if (r.size == r.capacity) {
+            const uint32_t offset = uint32_t(pool.size());
+            pool.resize(pool.size() + size_t(r.capacity) * 2);
+            std::copy(pool.begin() + r.offset, pool.begin() + r.offset + r.size, pool.begin() + offset);
+            r.offset = offset;
+            r.capacity *= 2;
         }
+        pool[r.offset + r.size++] = t;
+    };
+    auto unlink = [&](uint32_t p, uint32_t t) {
+        Range& r = incident[p];
+        uint32_t* first = pool.data() + r.offset;
+        r.size = uint32_t(std::remove(first, first + r.size, t) - first);
+    };
+    for (size_t t = 0; t < input_count; ++t) {
+        Triangle tri{{point_triangles[t * 3], point_triangles[t * 3 + 1], point_triangles[t * 3 + 2]}, kNone};
+        for (uint32_t p : tri.p) link(p, uint32_t(tris.size()));
         tris.push_back(tri);
     }
-    std::vector<uint8_t> alive(tris.size(), 1);
 
     // Replay: ranks in removal order, then the survivors that have faces, by point id.
     std::vector<uint32_t> rank_of(point_count, kNone);
@@ -192,16 +251,15 @@ Result<PfrepBuild> buildPfrepFromSequence(const CollapseSequence& sequence, cons
                                 ": the kept point moves (full-edge collapse); PFRep needs placement KeepEndpoint");
         rank_of[u] = uint32_t(rank_point.size());
         rank_point.push_back(u);
-        ring.clear();
-        for (uint32_t t : incident[u])
-            if (alive[t]) ring.push_back(t);
+        ring.assign(pool.begin() + incident[u].offset, pool.begin() + incident[u].offset + incident[u].size);
         if (ring.empty()) return invalidInput("pfrep: collapse " + std::to_string(r) + ": removed point has no faces");
-        std::vector<uint32_t>().swap(incident[u]);
+        incident[u].size = 0;
         double err = HUGE_VAL;
         bool created = false;
         const Vec3d pu = toD(sequence.point_positions[u]);
         for (uint32_t t : ring) {
-            alive[t] = 0;
+            for (uint32_t p : tris[t].p)
+                if (p != u) unlink(p, t);
             const Triangle& old = tris[t];
             if (old.p[0] == v || old.p[1] == v || old.p[2] == v) continue;
             Triangle fresh = old;
@@ -210,20 +268,16 @@ Result<PfrepBuild> buildPfrepFromSequence(const CollapseSequence& sequence, cons
             fresh.dependency = u;
             const uint32_t id = uint32_t(tris.size());
             tris.push_back(fresh);
-            alive.push_back(1);
-            for (uint32_t p : fresh.p) incident[p].push_back(id);
+            for (uint32_t p : fresh.p) link(p, id);
             err = std::min(err, pointTriangleDistance(pu, toD(sequence.point_positions[fresh.p[0]]),
                                                       toD(sequence.point_positions[fresh.p[1]]),
                                                       toD(sequence.point_positions[fresh.p[2]])));
             created = true;
         }
         removal_error[u] = created ? err : 0.0;
-        // Compact the incident list of v now and then (dead faces accumulate there).
-        if (incident[v].size() > 64) {
-            auto& list = incident[v];
-            list.erase(std::remove_if(list.begin(), list.end(), [&](uint32_t t) { return !alive[t]; }), list.end());
-        }
     }
+    std::vector<uint32_t>().swap(pool);
+    std::vector<Range>().swap(incident);
     const uint32_t removed = uint32_t(rank_point.size());
     for (uint32_t p = 0; p < point_count; ++p) {
         if (rank_of[p] != kNone || !referenced[p]) continue;
@@ -273,19 +327,15 @@ Result<PfrepBuild> buildPfrepFromSequence(const CollapseSequence& sequence, cons
     std::vector<double> err(vertex_count, 0.0), radius(vertex_count, 0.0), cone_angle(vertex_count, 0.0);
     std::vector<Vec3d> axis(vertex_count);
     auto pos = [&](uint32_t rank) { return toD(sequence.point_positions[rank_point[rank]]); };
-    std::vector<Vec3d> normals;
     for (uint32_t i = 0; i < vertex_count; ++i) {
         const Vec3d pi = pos(i);
         double e = i < removed ? removal_error[rank_point[i]] : 0.0;
         double rad = 0;
         Vec3d sum;
-        normals.clear();
         for (uint32_t s = fan_first[i]; s < fan_first[i + 1]; ++s) {
             const Vec3d pa = pos(slots[s].a), pb = pos(slots[s].b);
             rad = std::max({rad, length(pa - pi), length(pb - pi)});
-            const Vec3d n = cross(pa - pi, pb - pi);
-            sum += n;
-            normals.push_back(normalize(n));
+            sum += cross(pa - pi, pb - pi);
             if (slots[s].dep != kNone) {
                 const uint32_t d = slots[s].dep;
                 e = std::max(e, err[d]);
@@ -295,7 +345,13 @@ Result<PfrepBuild> buildPfrepFromSequence(const CollapseSequence& sequence, cons
         Vec3d ax = normalize(sum);
         double angle = 0;
         if (length(ax) == 0) angle = M_PI;
-        for (const Vec3d& n : normals) angle = std::max(angle, std::acos(std::clamp(dot(ax, n), -1.0, 1.0)));
+        // The widest face normal: acos decreases, so one acos of the smallest cosine.
+        double min_cos = HUGE_VAL;
+        for (uint32_t s = fan_first[i]; s < fan_first[i + 1]; ++s) {
+            const Vec3d pa = pos(slots[s].a), pb = pos(slots[s].b);
+            min_cos = std::min(min_cos, std::clamp(dot(ax, normalize(cross(pa - pi, pb - pi))), -1.0, 1.0));
+        }
+        if (min_cos != HUGE_VAL) angle = std::max(angle, std::acos(min_cos));
         for (uint32_t s = fan_first[i]; s < fan_first[i + 1]; ++s) {
             const uint32_t d = slots[s].dep;
             if (d == kNone) continue;

@@ -5,6 +5,10 @@
 //
 // Speed: the points of a side are measured in Morton (Z-curve) order of their position, so
 // consecutive queries are close in space and the previous answer bounds the next query tightly.
+// The index (DistanceIndex) is a 4-wide BVH: four child boxes are tested at once in float, with
+// boxes widened at build time so that rounding can only make the float test visit more, never less;
+// leaf triangles are measured exactly in double. The result is the minimum of the exact distance over
+// all triangles whatever the tree, so it equals what any exact search returns.
 // measureSurfaceDistances draws the reference side's points once for all levels and measures the
 // levels one after the other (each level's chunks in parallel), so one level's BVH and points exist
 // at a time.
@@ -23,6 +27,10 @@
 #include <utility>
 #include <vector>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include "core/parallel.h"
 #include "lodbake/core/bvh.h"
 
@@ -32,15 +40,6 @@ namespace {
 constexpr size_t kChunkSize = 2048; // points per task; fixed so the reduction order never changes
 constexpr uint64_t kReferenceStream = 0x5265664d65736821ull; // decorrelates the two sides' samples
 constexpr uint64_t kApproxStream = 0x417070726f782121ull;
-
-// Leaves of up to kLeafTriangles triangles: fewer, smaller nodes than the default at about the same
-// query cost (Morton-ordered queries start with a tight bound). The tree's shape never changes a
-// result: the closest distance is exact.
-TriangleBvhOptions bvhOptions() {
-    TriangleBvhOptions options;
-    options.max_leaf_triangles = 8;
-    return options;
-}
 
 uint64_t splitmix64(uint64_t x) {
     x += 0x9e3779b97f4a7c15ull;
@@ -108,6 +107,142 @@ Status checkSurface(const Mesh& mesh, const char* role) {
     return invalidInput(std::string(role) + " mesh: expected at least one triangle of non-zero area, found " +
                         (mesh.faceCount() == 0 ? std::string("no triangles") : std::string("only degenerate ones")));
 }
+
+constexpr uint32_t kLeafBit = 0x80000000u;
+constexpr uint32_t kEmptyChild = 0xffffffffu;
+constexpr uint32_t kLeafTriangles = 4;   // a range this small becomes a leaf
+constexpr uint32_t kMaxSlots = 1u << 28; // slot field of a leaf reference
+constexpr size_t kStackSize = 3 * 96; // at most 3 pushes per node level; every level splits once or more (63 code bits + 28 halvings)
+// Relative slack of the pruning test: far above the float test's rounding (about 4e-7 relative) and
+// the exact test's (a few ulps of the coordinates, covered by the absolute term).
+constexpr double kPruneRelative = 1.0 + 1.0 / (1 << 20);
+
+bool isLeaf(uint32_t ref) { return ref != kEmptyChild && (ref & kLeafBit) != 0; }
+
+// Exactly lodbake::closestPointOnTriangle (same operations in the same order, so the same bits),
+// inlined, returning the squared distance as the measurement always computed it: dot(p - q, p - q).
+inline double exactDistanceSq(const Vec3d& p, const Vec3d& a, const Vec3d& b, const Vec3d& c) {
+    const Vec3d ab = b - a, ac = c - a;
+    const Vec3d n = cross(ab, ac);
+    Vec3d q;
+    if (!(dot(n, n) > 0.0)) {
+        q = closestPointOnTriangle(p, a, b, c); // degenerate: rare, out of line
+    } else {
+        const Vec3d ap = p - a;
+        const double d1 = dot(ab, ap), d2 = dot(ac, ap);
+        const Vec3d bp = p - b;
+        const double d3 = dot(ab, bp), d4 = dot(ac, bp);
+        const Vec3d cp = p - c;
+        const double d5 = dot(ab, cp), d6 = dot(ac, cp);
+        double vc = 0, vb = 0, va = 0;
+        if (d1 <= 0.0 && d2 <= 0.0) {
+            q = a;
+        } else if (d3 >= 0.0 && d4 <= d3) {
+            q = b;
+        } else if ((vc = d1 * d4 - d3 * d2) <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {
+            q = a + ab * (d1 / (d1 - d3));
+        } else if (d6 >= 0.0 && d5 <= d6) {
+            q = c;
+        } else if ((vb = d5 * d2 - d1 * d6) <= 0.0 && d2 >= 0.0 && d6 <= 0.0) {
+            q = a + ac * (d2 / (d2 - d6));
+        } else if ((va = d3 * d6 - d5 * d4) <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0) {
+            q = b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+        } else {
+            const double denom = 1.0 / (va + vb + vc);
+            const double v = vb * denom, w = vc * denom;
+            q = a + ab * v + ac * w;
+        }
+    }
+    const Vec3d d = p - q;
+    return dot(d, d);
+}
+
+struct BuildBox {
+    float lo[3] = {HUGE_VALF, HUGE_VALF, HUGE_VALF};
+    float hi[3] = {-HUGE_VALF, -HUGE_VALF, -HUGE_VALF};
+    void expand(const float* plo, const float* phi) {
+        for (int k = 0; k < 3; ++k) {
+            lo[k] = std::min(lo[k], plo[k]);
+            hi[k] = std::max(hi[k], phi[k]);
+        }
+    }
+    void expand(const BuildBox& b) { expand(b.lo, b.hi); }
+    double halfArea() const {
+        if (lo[0] > hi[0]) return 0.0;
+        const double dx = double(hi[0]) - lo[0], dy = double(hi[1]) - lo[1], dz = double(hi[2]) - lo[2];
+        return dx * dy + dy * dz + dz * dx;
+    }
+};
+
+// Bottom-up boxes over a Morton-sorted triangle order (Lauterbach et al., "Fast BVH construction on
+// GPUs", 2009): a range is split where the highest differing bit of its codes flips (in the middle
+// when all codes are equal), twice per node for four children. No pass over the triangles per level,
+// only a binary search per split, so the build costs about one sort; the tree depends on the input only.
+class IndexBuilder {
+public:
+    IndexBuilder(const std::vector<uint64_t>& codes, const std::vector<Vec3f>& corners,
+                 std::vector<DistanceIndex::Node>& nodes, double slack)
+        : codes_(codes), corners_(corners), nodes_(nodes), slack_(slack) {}
+
+    uint32_t build(uint32_t begin, uint32_t end, BuildBox& box) {
+        const uint32_t count = end - begin;
+        if (count <= kLeafTriangles) {
+            for (size_t c = size_t(begin) * 3; c < size_t(end) * 3; ++c) {
+                const float xyz[3] = {corners_[c].x, corners_[c].y, corners_[c].z};
+                box.expand(xyz, xyz);
+            }
+            return kLeafBit | (begin << 3) | (count - 1);
+        }
+        uint32_t bounds[5] = {begin, end, end, end, end}; // children [bounds[i], bounds[i + 1])
+        int n = 1;
+        while (n < 4) {
+            int widest = -1;
+            for (int i = 0; i < n; ++i) {
+                const uint32_t c = bounds[i + 1] - bounds[i];
+                if (c > kLeafTriangles && (widest < 0 || c > bounds[widest + 1] - bounds[widest])) widest = i;
+            }
+            if (widest < 0) break;
+            const uint32_t mid = splitPoint(bounds[widest], bounds[widest + 1]);
+            for (int i = n + 1; i > widest + 1; --i) bounds[i] = bounds[i - 1];
+            bounds[widest + 1] = mid;
+            ++n;
+        }
+        const uint32_t index = uint32_t(nodes_.size());
+        nodes_.emplace_back();
+        uint32_t refs[4] = {kEmptyChild, kEmptyChild, kEmptyChild, kEmptyChild};
+        BuildBox boxes[4];
+        for (int i = 0; i < n; ++i) {
+            refs[i] = build(bounds[i], bounds[i + 1], boxes[i]);
+            box.expand(boxes[i]);
+        }
+        DistanceIndex::Node& node = nodes_[index];
+        for (int i = 0; i < 4; ++i) {
+            node.child[i] = refs[i];
+            for (int k = 0; k < 3; ++k) {
+                // Widened outwards by the slack (an empty child keeps an empty box: +inf / -inf).
+                node.lo[k][i] = i < n ? float(double(boxes[i].lo[k]) - slack_) : HUGE_VALF;
+                node.hi[k][i] = i < n ? float(double(boxes[i].hi[k]) + slack_) : -HUGE_VALF;
+            }
+        }
+        return index;
+    }
+
+private:
+    uint32_t splitPoint(uint32_t begin, uint32_t end) const {
+        const uint64_t first = codes_[begin], last = codes_[end - 1];
+        if (first == last) return begin + (end - begin) / 2;
+        const int bit = 63 - __builtin_clzll(first ^ last);
+        // Codes are sorted and share every bit above `bit`: the first one with it set starts the right part.
+        return uint32_t(std::partition_point(codes_.begin() + begin, codes_.begin() + end,
+                                             [bit](uint64_t c) { return ((c >> bit) & 1) == 0; }) -
+                        codes_.begin());
+    }
+
+    const std::vector<uint64_t>& codes_;
+    const std::vector<Vec3f>& corners_;
+    std::vector<DistanceIndex::Node>& nodes_;
+    double slack_;
+};
 
 struct SideStats {
     double max = 0.0;
@@ -210,35 +345,19 @@ Result<std::vector<Vec3d>> samplePoints(const Mesh& from, const DistanceOptions&
     return points;
 }
 
-// Distances from `points` to the surface in `to`.
-Result<SideStats> measurePoints(const std::vector<Vec3d>& points, const Mesh& to_mesh, const TriangleBvh& to) {
+// Distances from `points` to the surface indexed by `to`.
+Result<SideStats> measurePoints(const std::vector<Vec3d>& points, const DistanceIndex& to) {
     const size_t point_count = points.size();
     const size_t chunk_count = (point_count + kChunkSize - 1) / kChunkSize;
     std::vector<SideStats> chunks(chunk_count);
     LODBAKE_RETURN_IF_ERROR(parallelFor(chunk_count, 1, [&](size_t chunk) {
         SideStats s;
         const size_t end = std::min(point_count, (chunk + 1) * kChunkSize);
-        FaceId previous = FaceId::invalid();
+        // Consecutive points (Morton order) are near each other: the previous answer's triangle gives
+        // a tight first bound that prunes most of the tree. The minimum found is the same either way.
+        uint32_t hint = DistanceIndex::kNoHint;
         for (size_t k = chunk * kChunkSize; k < end; ++k) {
-            const Vec3d& p = points[k];
-            // Consecutive points (Morton order) are near each other: the previous answer's distance
-            // is a tight bound that prunes most of the tree. The minimum found is the same either way.
-            double previous_sq = std::numeric_limits<double>::infinity();
-            if (previous.isValid()) {
-                const uint32_t* tri = &to_mesh.indices[size_t(previous.value) * 3];
-                Vec3d q =
-                    closestPointOnTriangle(p, toDouble(to_mesh.positions[tri[0]]), toDouble(to_mesh.positions[tri[1]]),
-                                           toDouble(to_mesh.positions[tri[2]]));
-                previous_sq = dot(p - q, p - q);
-            }
-            ClosestHit hit = to.closest(p, std::nextafter(previous_sq, std::numeric_limits<double>::infinity()));
-            // Not found only if rounding let a box prune the previous triangle itself: keep it.
-            double distance_sq = previous_sq;
-            if (hit.isFound()) {
-                previous = hit.face;
-                distance_sq = hit.distance_sq;
-            }
-            double d = std::sqrt(distance_sq);
+            const double d = std::sqrt(to.closestDistanceSq(points[k], hint));
             s.max = std::max(s.max, d);
             s.sum += d;
             s.sum_sq += d * d;
@@ -270,12 +389,11 @@ Result<DistanceResult> measureWithReferencePoints(const DistanceReference& refer
                                                   const DistanceOptions& options) {
     LODBAKE_RETURN_IF_ERROR(checkSurface(approx, "approximation"));
     const Mesh& ref_mesh = reference.mesh();
-    LODBAKE_ASSIGN_OR_RETURN(TriangleBvh approx_bvh,
-                             TriangleBvh::build(approx.positions, approx.indices, bvhOptions()));
-    LODBAKE_ASSIGN_OR_RETURN(SideStats ref_to_approx, measurePoints(reference_points, approx, approx_bvh));
+    LODBAKE_ASSIGN_OR_RETURN(DistanceIndex approx_index, DistanceIndex::build(approx.positions, approx.indices));
+    LODBAKE_ASSIGN_OR_RETURN(SideStats ref_to_approx, measurePoints(reference_points, approx_index));
     LODBAKE_ASSIGN_OR_RETURN(std::vector<Vec3d> approx_points,
                              samplePoints(approx, options, kApproxStream, "approximation"));
-    LODBAKE_ASSIGN_OR_RETURN(SideStats approx_to_ref, measurePoints(approx_points, ref_mesh, reference.bvh()));
+    LODBAKE_ASSIGN_OR_RETURN(SideStats approx_to_ref, measurePoints(approx_points, reference.index()));
 
     DistanceResult r;
     r.max_ref_to_approx = ref_to_approx.max;
@@ -290,11 +408,173 @@ Result<DistanceResult> measureWithReferencePoints(const DistanceReference& refer
 
 } // namespace
 
+Result<DistanceIndex> DistanceIndex::build(const std::vector<Vec3f>& positions, const std::vector<uint32_t>& indices) {
+    DistanceIndex index;
+    const size_t tri_count = indices.size() / 3;
+    if (tri_count == 0) return index;
+    if (tri_count >= kMaxSlots) {
+        return resourceLimit("distance index: " + std::to_string(tri_count) + " triangles, expected fewer than 2^28");
+    }
+    // Box centres and their bounds, the largest coordinate magnitude.
+    std::vector<Vec3f> centres(tri_count);
+    BuildBox centre_box;
+    float magnitude = 0.0f;
+    for (size_t t = 0; t < tri_count; ++t) {
+        BuildBox box;
+        for (int k = 0; k < 3; ++k) {
+            const Vec3f& v = positions[indices[t * 3 + k]];
+            const float xyz[3] = {v.x, v.y, v.z};
+            box.expand(xyz, xyz);
+        }
+        float c[3];
+        for (int k = 0; k < 3; ++k) {
+            c[k] = (box.lo[k] + box.hi[k]) * 0.5f;
+            magnitude = std::max({magnitude, std::fabs(box.lo[k]), std::fabs(box.hi[k])});
+        }
+        centres[t] = Vec3f(c[0], c[1], c[2]);
+        centre_box.expand(c, c);
+    }
+    // Triangles in Morton order of their box centre, ties by triangle index.
+    std::vector<std::pair<uint64_t, uint32_t>> order(tri_count);
+    {
+        const Vec3d lo(centre_box.lo[0], centre_box.lo[1], centre_box.lo[2]);
+        const double extent = std::max({double(centre_box.hi[0]) - lo.x, double(centre_box.hi[1]) - lo.y,
+                                        double(centre_box.hi[2]) - lo.z, 1e-300});
+        const double scale = double(kMortonCells - 1) / extent;
+        for (size_t t = 0; t < tri_count; ++t) order[t] = {mortonCode((toDouble(centres[t]) - lo) * scale), uint32_t(t)};
+    }
+    std::vector<Vec3f>().swap(centres);
+    std::sort(order.begin(), order.end());
+    std::vector<uint64_t> codes(tri_count);
+    index.face_of_slot_.resize(tri_count);
+    index.corners_.resize(tri_count * 3);
+    for (size_t s = 0; s < tri_count; ++s) {
+        const uint32_t t = order[s].second;
+        codes[s] = order[s].first;
+        index.face_of_slot_[s] = t;
+        for (int k = 0; k < 3; ++k) index.corners_[s * 3 + k] = positions[indices[size_t(t) * 3 + k]];
+    }
+    std::vector<std::pair<uint64_t, uint32_t>>().swap(order);
+    // The float box test is exact enough only for queries whose coordinates are at most twice the
+    // mesh's largest (the rounding of the query point to float is then below a quarter of the slack);
+    // others, and meshes of extreme scale, take the double test. The slack is M * 2^-21.
+    const bool float_ok = magnitude > 1e-12f && magnitude < 1e12f;
+    const double slack = double(magnitude) * std::ldexp(1.0, -21);
+    index.magnitude_ = float_ok ? magnitude : 0.0f;
+    index.nodes_.reserve(tri_count / (2 * kLeafTriangles) + 2);
+    IndexBuilder builder(codes, index.corners_, index.nodes_, slack);
+    BuildBox root_box;
+    index.root_ = builder.build(0, uint32_t(tri_count), root_box);
+    return index;
+}
+
+double DistanceIndex::scalarBoxDistanceSq(const Node& node, int child, const Vec3d& p) const {
+    double d = 0.0;
+    for (int k = 0; k < 3; ++k) {
+        const double lo = node.lo[k][child], hi = node.hi[k][child], v = p[k];
+        const double e = v < lo ? lo - v : (v > hi ? v - hi : 0.0);
+        d += e * e;
+    }
+    return d;
+}
+
+double DistanceIndex::closestDistanceSq(const Vec3d& p, uint32_t& hint) const {
+    double best = std::numeric_limits<double>::infinity();
+    if (root_ == kEmptyChild) return best;
+    auto measureSlot = [&](uint32_t s) {
+        const Vec3f* c = &corners_[size_t(s) * 3];
+        return exactDistanceSq(p, toDouble(c[0]), toDouble(c[1]), toDouble(c[2]));
+    };
+    if (hint != kNoHint) best = measureSlot(hint);
+    // A box is skipped only when its (widened, rounded) distance exceeds the best exact distance by the
+    // relative slack plus an absolute term far below float resolution: no triangle whose exact
+    // distance could be the minimum is ever skipped.
+    const double absolute = double(magnitude_) * std::ldexp(1.0, -24);
+    const double tiny = absolute * absolute;
+    const float mag = magnitude_;
+    const bool use_float = std::fabs(p.x) <= 2.0 * mag && std::fabs(p.y) <= 2.0 * mag && std::fabs(p.z) <= 2.0 * mag;
+    const float px = float(p.x), py = float(p.y), pz = float(p.z);
+#if defined(__SSE2__)
+    const __m128 vx = _mm_set1_ps(px), vy = _mm_set1_ps(py), vz = _mm_set1_ps(pz);
+#endif
+
+    struct Entry {
+        uint32_t ref;
+        float dist;
+    };
+    Entry stack[kStackSize];
+    size_t top = 0;
+    stack[top++] = {root_, 0.0f};
+    double limit = best * kPruneRelative + tiny;
+    float limit_f = float(limit);
+    while (top > 0) {
+        const Entry e = stack[--top];
+        if (e.dist > limit_f) continue;
+        if (isLeaf(e.ref)) {
+            const uint32_t first = (e.ref & ~kLeafBit) >> 3, count = (e.ref & 7u) + 1;
+            for (uint32_t s = first; s < first + count; ++s) {
+                const double d = measureSlot(s);
+                if (d < best) {
+                    best = d;
+                    hint = s;
+                }
+            }
+            limit = best * kPruneRelative + tiny;
+            limit_f = float(limit);
+            continue;
+        }
+        const Node& node = nodes_[e.ref];
+        float dist[4];
+        if (use_float) {
+#if defined(__SSE2__)
+            const __m128 zero = _mm_setzero_ps();
+            const __m128 dx = _mm_max_ps(_mm_max_ps(_mm_sub_ps(_mm_loadu_ps(node.lo[0]), vx),
+                                                    _mm_sub_ps(vx, _mm_loadu_ps(node.hi[0]))), zero);
+            const __m128 dy = _mm_max_ps(_mm_max_ps(_mm_sub_ps(_mm_loadu_ps(node.lo[1]), vy),
+                                                    _mm_sub_ps(vy, _mm_loadu_ps(node.hi[1]))), zero);
+            const __m128 dz = _mm_max_ps(_mm_max_ps(_mm_sub_ps(_mm_loadu_ps(node.lo[2]), vz),
+                                                    _mm_sub_ps(vz, _mm_loadu_ps(node.hi[2]))), zero);
+            _mm_storeu_ps(dist, _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz)));
+#else
+            for (int i = 0; i < 4; ++i) {
+                const float dx = std::max(std::max(node.lo[0][i] - px, px - node.hi[0][i]), 0.0f);
+                const float dy = std::max(std::max(node.lo[1][i] - py, py - node.hi[1][i]), 0.0f);
+                const float dz = std::max(std::max(node.lo[2][i] - pz, pz - node.hi[2][i]), 0.0f);
+                dist[i] = dx * dx + dy * dy + dz * dz;
+            }
+#endif
+        } else {
+            // Rounded down to float so the float comparison below stays conservative.
+            for (int i = 0; i < 4; ++i) {
+                const double d = scalarBoxDistanceSq(node, i, p);
+                float f = float(d);
+                if (double(f) > d) f = std::nextafter(f, 0.0f);
+                dist[i] = double(f) > limit ? HUGE_VALF : f;
+            }
+        }
+        // Children within the limit, nearest pushed last (visited first).
+        Entry keep[4];
+        int n = 0;
+        for (int i = 0; i < 4; ++i) {
+            if (node.child[i] == kEmptyChild || dist[i] > limit_f) continue;
+            Entry x{node.child[i], dist[i]};
+            int j = n++;
+            while (j > 0 && keep[j - 1].dist < x.dist) {
+                keep[j] = keep[j - 1];
+                --j;
+            }
+            keep[j] = x;
+        }
+        for (int i = 0; i < n; ++i) stack[top++] = keep[i];
+    }
+    return best;
+}
+
 Result<DistanceReference> DistanceReference::prepare(const Mesh& reference) {
     LODBAKE_RETURN_IF_ERROR(checkSurface(reference, "reference"));
     DistanceReference prepared;
     prepared.mesh_ = &reference;
-    LODBAKE_ASSIGN_OR_RETURN(prepared.bvh_, TriangleBvh::build(reference.positions, reference.indices, bvhOptions()));
+    LODBAKE_ASSIGN_OR_RETURN(prepared.index_, DistanceIndex::build(reference.positions, reference.indices));
     return prepared;
 }
 

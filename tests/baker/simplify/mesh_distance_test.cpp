@@ -1,5 +1,6 @@
 #include "lodbake/simplify/mesh_distance.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -233,6 +234,60 @@ TEST(MeshDistanceTest, BatchOfLevelsEqualsOneByOneForAnyThreadCount) {
             EXPECT_EQ(batch[i]->rms, single->rms) << i;
         }
     }
+}
+
+// Brute force: the exact distance the index computes, over every triangle.
+double bruteForceDistanceSq(const Mesh& m, const lodbake::Vec3d& p) {
+    double best = HUGE_VAL;
+    for (size_t t = 0; t < m.faceCount(); ++t) {
+        const lodbake::Vec3d a = lodbake::toDouble(m.positions[m.indices[t * 3]]);
+        const lodbake::Vec3d b = lodbake::toDouble(m.positions[m.indices[t * 3 + 1]]);
+        const lodbake::Vec3d c = lodbake::toDouble(m.positions[m.indices[t * 3 + 2]]);
+        const lodbake::Vec3d q = lodbake::closestPointOnTriangle(p, a, b, c);
+        best = std::min(best, lodbake::dot(p - q, p - q));
+    }
+    return best;
+}
+
+// The index returns exactly the brute-force minimum (same bits), with or without a hint, for points on,
+// near and far from the surface, coordinates beyond the float test's range, and degenerate triangles.
+TEST(MeshDistanceTest, IndexEqualsBruteForceExactly) {
+    for (float scale : {1.0f, 1e-3f, 3e4f}) {
+        Mesh m = perturbed(icosphere(3), 0.05f, 31);
+        // Degenerate triangles: a sliver with coincident corners and a collinear one.
+        m.positions.push_back(Vec3f(0.2f, 0.1f, 1.5f));
+        m.positions.push_back(Vec3f(0.4f, 0.3f, 1.7f));
+        const uint32_t base = uint32_t(m.positions.size() - 2);
+        m.positions.push_back(Vec3f(0.6f, 0.5f, 1.9f));
+        m.indices.insert(m.indices.end(), {base, base, base + 1, base, base + 1, base + 2});
+        for (Vec3f& p : m.positions) p = p * scale;
+        auto index = lodbake::DistanceIndex::build(m.positions, m.indices);
+        ASSERT_TRUE(index.ok());
+        EXPECT_EQ(index->triangleCount(), m.faceCount());
+        uint64_t state = 77;
+        auto next = [&state]() {
+            state = state * 6364136223846793005ull + 1442695040888963407ull;
+            return double(state >> 11) * (1.0 / 9007199254740992.0) * 2.0 - 1.0;
+        };
+        uint32_t hint = lodbake::DistanceIndex::kNoHint;
+        for (int i = 0; i < 3000; ++i) {
+            // Mostly near the unit sphere, some far away (beyond twice the mesh's largest coordinate).
+            const double radius = i % 10 == 0 ? 5.0 + 50.0 * (next() + 1.0) : 1.0 + 0.1 * next();
+            lodbake::Vec3d dir(next(), next(), next());
+            if (lodbake::length(dir) == 0) continue;
+            const lodbake::Vec3d p = lodbake::normalize(dir) * (radius * scale);
+            const double want = bruteForceDistanceSq(m, p);
+            uint32_t cold = lodbake::DistanceIndex::kNoHint;
+            EXPECT_EQ(index->closestDistanceSq(p, cold), want) << "scale " << scale << " point " << i;
+            EXPECT_EQ(index->closestDistanceSq(p, hint), want) << "scale " << scale << " point " << i;
+            ASSERT_NE(hint, lodbake::DistanceIndex::kNoHint);
+            ASSERT_LT(hint, index->triangleCount());
+        }
+    }
+    auto empty = lodbake::DistanceIndex::build({}, {});
+    ASSERT_TRUE(empty.ok());
+    uint32_t hint = lodbake::DistanceIndex::kNoHint;
+    EXPECT_EQ(empty->closestDistanceSq(lodbake::Vec3d(0, 0, 0), hint), HUGE_VAL);
 }
 
 TEST(MeshDistanceTest, RejectsDegenerateInput) {

@@ -39,6 +39,46 @@ struct DistanceResult {
 Result<DistanceResult> measureSurfaceDistance(const Mesh& reference, const Mesh& approx,
                                               const DistanceOptions& options = {});
 
+/// Nearest-surface index used by the measurement: a 4-wide BVH whose child boxes are tested four at a
+/// time in float (boxes widened so the float test never prunes a triangle that could be nearest), and
+/// whose leaf triangles are measured exactly in double (closestPointOnTriangle, lodbake/core/bvh.h).
+/// The distance returned is the minimum of that exact computation over every triangle, so it does not
+/// depend on the tree's shape or on the hint.
+class DistanceIndex {
+public:
+    DistanceIndex() = default;
+
+    /// \pre indices.size() % 3 == 0, every index < positions.size(), positions finite.
+    /// Fails only when resources run out (2^28 triangles or more, or a failed allocation).
+    static Result<DistanceIndex> build(const std::vector<Vec3f>& positions, const std::vector<uint32_t>& indices);
+
+    /// Squared distance from `p` to the nearest triangle (infinity for an empty index). `hint` is a
+    /// triangle slot near the last query (kNoHint at first): its distance starts the search; it is
+    /// updated to the nearest triangle's slot. Thread-safe with one hint per thread.
+    double closestDistanceSq(const Vec3d& p, uint32_t& hint) const;
+    /// The input triangle of a slot.
+    uint32_t faceOfSlot(uint32_t slot) const { return face_of_slot_[slot]; }
+
+    size_t triangleCount() const { return face_of_slot_.size(); }
+    size_t nodeCount() const { return nodes_.size(); }
+    static constexpr uint32_t kNoHint = 0xffffffffu;
+
+    struct Node {
+        float lo[3][4]; // lo[axis][child]: box minimum, widened (see mesh_distance.cpp)
+        float hi[3][4];
+        uint32_t child[4]; // node index, leaf (kLeafBit | first slot << 3 | count - 1) or kEmpty
+    };
+
+private:
+    double scalarBoxDistanceSq(const Node& node, int child, const Vec3d& p) const;
+
+    std::vector<Node> nodes_;
+    std::vector<Vec3f> corners_;         // 3 per slot, leaf order
+    std::vector<uint32_t> face_of_slot_; // input triangle of every slot
+    uint32_t root_ = 0xffffffffu;        // child reference of the root (see mesh_distance.cpp)
+    float magnitude_ = 0.0f;             // queries with a larger coordinate take the double box test
+};
+
 /// A reference surface checked and indexed once, for measuring several approximations against it
 /// (every level of an LOD chain) without rebuilding its BVH each time. Keeps a pointer to the mesh:
 /// `reference` must outlive this object and stay unchanged.
@@ -48,11 +88,11 @@ public:
     static Result<DistanceReference> prepare(const Mesh& reference);
 
     const Mesh& mesh() const { return *mesh_; }
-    const TriangleBvh& bvh() const { return bvh_; }
+    const DistanceIndex& index() const { return index_; }
 
 private:
     const Mesh* mesh_ = nullptr;
-    TriangleBvh bvh_;
+    DistanceIndex index_;
 };
 
 /// Same as measureSurfaceDistance(reference.mesh(), approx, options), with the same result.

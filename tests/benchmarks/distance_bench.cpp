@@ -1,0 +1,114 @@
+// distance_bench: cost of the surface-distance measurement the bake runs for every level
+// (docs/surface_distance.md), on one thread, in thread CPU time.
+//   - our figure: DistanceReference::prepare + measureSurfaceDistances over the chain's 5 levels;
+//   - anchor, same run: the core TriangleBvh (lodbake/core/bvh.h) built over the same meshes and queried
+//     from every vertex of both sides, cold (no warm start), per query.
+// Prints every result with 17 significant digits so two builds can be compared exactly.
+// usage: distance_bench [MESH (default dragon_poisson.ply)] [--runs N]
+#include <algorithm>
+#include <cstdio>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include <time.h>
+
+#include "core/parallel.h"
+#include "lodbake/core/bvh.h"
+#include "lodbake/io/mesh_io.h"
+#include "lodbake/simplify/lod_chain.h"
+#include "lodbake/simplify/mesh_distance.h"
+
+namespace {
+
+double cpuSeconds() {
+    timespec ts;
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+    return double(ts.tv_sec) + double(ts.tv_nsec) * 1e-9;
+}
+
+// Anchor: every referenced vertex of `from` queried against a core TriangleBvh of `to`.
+double anchorSeconds(const lodbake::Mesh& from, const lodbake::Mesh& to, size_t& queries, double& checksum) {
+    const double c0 = cpuSeconds();
+    auto bvh = lodbake::TriangleBvh::build(to.positions, to.indices);
+    if (!bvh.ok()) return 0;
+    std::vector<uint8_t> used(from.positions.size(), 0);
+    for (uint32_t v : from.indices) used[v] = 1;
+    for (size_t v = 0; v < used.size(); ++v) {
+        if (!used[v]) continue;
+        checksum += bvh->closest(lodbake::toDouble(from.positions[v])).distance_sq;
+        ++queries;
+    }
+    return cpuSeconds() - c0;
+}
+
+} // namespace
+
+int main(int argc, char** argv) {
+    std::string name = "dragon_poisson.ply";
+    int runs = 3;
+    for (int a = 1; a < argc; ++a) {
+        if (std::strcmp(argv[a], "--runs") == 0 && a + 1 < argc)
+            runs = std::max(1, std::atoi(argv[++a]));
+        else
+            name = argv[a];
+    }
+    lodbake::ScopedThreadLimit one_thread(1);
+    lodbake::Diagnostics d;
+    auto loaded = lodbake::readMesh(std::string(LODBAKE_BENCH_MESHES_DIR) + "/" + name, {}, d);
+    if (!loaded.ok()) {
+        std::printf("%s: %s\n", name.c_str(), loaded.status().message().c_str());
+        return 1;
+    }
+    const lodbake::Mesh& mesh = loaded->mesh;
+    lodbake::LodChainOptions options;
+    options.measure_error = false;
+    options.record_collapses = false;
+    auto chain = lodbake::buildLodChain(mesh, options, d);
+    if (!chain.ok()) {
+        std::printf("chain: %s\n", chain.status().message().c_str());
+        return 1;
+    }
+    std::vector<const lodbake::Mesh*> levels;
+    for (const auto& level : chain->levels) levels.push_back(&level.mesh);
+    std::printf("%s: %zu triangles, %zu levels; 1 thread, thread CPU time, best of %d\n", name.c_str(),
+                mesh.faceCount(), levels.size(), runs);
+
+    double best_prepare = 1e300, best_measure = 1e300;
+    std::vector<lodbake::Result<lodbake::DistanceResult>> results;
+    for (int r = 0; r < runs; ++r) {
+        const double c0 = cpuSeconds();
+        auto reference = lodbake::DistanceReference::prepare(mesh);
+        const double c1 = cpuSeconds();
+        if (!reference.ok()) return 1;
+        results = lodbake::measureSurfaceDistances(*reference, levels, options.distance);
+        const double c2 = cpuSeconds();
+        best_prepare = std::min(best_prepare, c1 - c0);
+        best_measure = std::min(best_measure, c2 - c1);
+    }
+    size_t points = 0;
+    for (size_t l = 0; l < levels.size(); ++l) {
+        if (!results[l].ok()) {
+            std::printf("  level %zu: %s\n", l + 1, results[l].status().message().c_str());
+            continue;
+        }
+        const lodbake::DistanceResult& r = *results[l];
+        std::printf("  level %zu (%8zu tris): hausdorff %.17g mean %.17g rms %.17g\n", l + 1, levels[l]->faceCount(),
+                    r.hausdorff, r.mean, r.rms);
+        points += 2 * options.distance.sample_count + mesh.vertexCount() + levels[l]->vertexCount();
+    }
+    double anchor = 0, checksum = 0;
+    size_t queries = 0;
+    for (const lodbake::Mesh* level : levels) {
+        anchor += anchorSeconds(mesh, *level, queries, checksum);
+        anchor += anchorSeconds(*level, mesh, queries, checksum);
+    }
+    const double ours = best_prepare + best_measure;
+    std::printf("ours: prepare %.3f s + measure %.3f s = %.3f s for about %zu points (%.3f us/point)\n", best_prepare,
+                best_measure, ours, points, ours / double(points) * 1e6);
+    std::printf("anchor (core TriangleBvh, cold vertex queries incl. builds): %.3f s for %zu queries (%.3f us/query) "
+                "[%g]\n",
+                anchor, queries, anchor / double(queries) * 1e6, checksum);
+    std::printf("per point, ours / anchor: %.2f\n", (ours / double(points)) / (anchor / double(queries)));
+    return 0;
+}
