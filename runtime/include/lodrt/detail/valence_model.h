@@ -76,7 +76,7 @@ template <uint32_t N, uint32_t LastRate> struct CdfModel {
     /// (kRangeCdfMinFreq * i) for i <= s. Order and minimum widths are kept.
     inline void update(uint32_t s) {
         using namespace format;
-        const uint32_t rate = uses < kRangeCdfRateStep ? kRangeCdfRateFirst
+        const uint32_t rate = uses < kRangeCdfRateStep       ? kRangeCdfRateFirst
                               : uses < 2 * kRangeCdfRateStep ? kRangeCdfRateFirst + 1
                                                              : LastRate;
         uses = uint16_t(uses < 2 * kRangeCdfRateStep ? uses + 1 : uses);
@@ -91,8 +91,7 @@ template <uint32_t N, uint32_t LastRate> struct CdfModel {
 };
 
 using ResidualLengthModel = CdfModel<format::kValenceResidualSymbols, format::kRangeCdfRateLast>;
-using ConnectivitySymbolModel =
-    CdfModel<(1u << format::kValenceSymbolTreeBits), format::kRangeCdfRateLastConnectivity>;
+using ConnectivitySymbolModel = CdfModel<(1u << format::kValenceSymbolTreeBits), format::kRangeCdfRateLastConnectivity>;
 
 /// What sits across the focus's front edge.
 enum class VertexKind : uint32_t { Add = 0, Dummy = 1, Split = 2, Merge = 3 };
@@ -396,8 +395,8 @@ struct PositionPlan {
     uint32_t* neighbour = nullptr; // per entry: the first known neighbour a met in the walk, kNone if none
     uint32_t* triples = nullptr;   // (a, b, w) of every parallelogram a + b - w, entry after entry
     uint32_t max_triples = 0;
-    uint32_t ordered = 0;       // entries of order filled
-    uint32_t triple_count = 0;  // triples filled
+    uint32_t ordered = 0;      // entries of order filled
+    uint32_t triple_count = 0; // triples filled
 };
 
 /// Fills `plan`. Order (like Draco's prediction-degree traversal): the next vertex is taken from the
@@ -552,11 +551,57 @@ inline uint32_t positionContext(uint32_t scale_ctx, uint32_t earlier_length) {
     return 20 + (scale_ctx >= 10 ? kPositionLengthBuckets : 0) + b;
 }
 
+/// Neighbour-coordinate ("snap") candidate of position component j (docs/format/valence.md
+/// "Positions"): among the a and b of the vertex's triples (in plan order), then its neighbour, the
+/// coordinate nearest the prediction `pred` (ties: the smaller value). False without any. *ctx is the
+/// snap context: the bit length of |candidate - pred| (capped at 15) times 5 plus the number of triple
+/// entries holding the candidate value (1 without triples, capped at 4). Iso-surface meshes put every
+/// vertex on a grid edge, so two of its coordinates are grid planes it shares with neighbours.
+inline bool snapCandidate(const int32_t* qpos, const uint32_t* t, uint32_t n, uint32_t neighbour, int j, int32_t pred,
+                          int32_t* candidate, uint32_t* ctx) {
+    int32_t best = 0;
+    uint32_t best_d = kNone, mult = 0;
+    const uint32_t* end = t + 3 * size_t(n);
+    for (; t != end; t += 3) {
+        for (int e = 0; e < 2; ++e) {
+            const int32_t c = qpos[3 * size_t(t[e]) + size_t(j)];
+            const uint32_t d = uint32_t(c > pred ? int64_t(c) - pred : int64_t(pred) - c);
+            if (d < best_d || (d == best_d && c < best)) {
+                best = c;
+                best_d = d;
+                mult = 1;
+            } else if (c == best) {
+                ++mult;
+            }
+        }
+    }
+    if (neighbour != kNone) {
+        const int32_t c = qpos[3 * size_t(neighbour) + size_t(j)];
+        const uint32_t d = uint32_t(c > pred ? int64_t(c) - pred : int64_t(pred) - c);
+        if (d < best_d || (d == best_d && c < best)) {
+            best = c;
+            best_d = d;
+            mult = 0;
+        }
+    }
+    if (best_d == kNone) return false;
+    if (n == 0) mult = 1;
+    uint32_t b = 0;
+    for (uint32_t x = best_d; x != 0; x >>= 1) ++b;
+    b = b < format::kValenceSnapDistanceBuckets ? b : format::kValenceSnapDistanceBuckets - 1;
+    *candidate = best;
+    *ctx = b * format::kValenceSnapMultiplicity +
+           (mult < format::kValenceSnapMultiplicity ? mult : format::kValenceSnapMultiplicity - 1);
+    return true;
+}
+
 /// Sign contexts of a residual: the sign class (0 zero, 1 positive, 2 negative) of the same component's
 /// residual at the previously coded vertex, times 3, plus the class of this vertex's x residual (0 for
 /// x itself). Parallelogram errors follow the local curvature, so neighbouring signs agree.
 constexpr uint32_t kSignContexts = 9;
-inline uint32_t signClass(int32_t r) { return r > 0 ? 1u : (r < 0 ? 2u : 0u); }
+inline uint32_t signClass(int32_t r) {
+    return r > 0 ? 1u : (r < 0 ? 2u : 0u);
+}
 
 } // namespace detail
 } // namespace lodrt
