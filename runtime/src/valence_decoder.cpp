@@ -566,14 +566,15 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
     auto decodeVertex = [&](uint32_t ctx, const int32_t* pred, int32_t* out, const uint32_t* t, uint32_t n,
                             uint32_t nb) {
         uint32_t earlier = kNone, x_sign = 0;
+        int32_t candidate[3];
+        uint32_t snap_ctx[3];
+        const uint32_t snap =
+            snap_flags != 0 && detail::snapCandidates(qpos, t, n, nb, pred, candidate, snap_ctx) ? snap_flags : 0u;
         for (int j = 0; j < 3; ++j) {
             int32_t res;
             uint32_t length;
-            int32_t candidate;
-            uint32_t snap_ctx;
-            if ((snap_flags >> j) & 1u && detail::snapCandidate(qpos, t, n, nb, j, pred[j], &candidate, &snap_ctx) &&
-                pos.bit(snap_models[j][snap_ctx])) {
-                res = candidate - pred[j];
+            if ((snap >> j) & 1u && pos.bit(snap_models[j][snap_ctx[j]])) {
+                res = candidate[j] - pred[j];
                 length = detail::bitLength(uint32_t(res < 0 ? -res : res));
             } else if (!pos_model.decode(pos, pos_raw, j, detail::positionContext(ctx, earlier), &res, &length,
                                          prev_sign[j] * 3 + x_sign)) {

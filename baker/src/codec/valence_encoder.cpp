@@ -654,6 +654,9 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
         auto vertex = [&](const int32_t* q, const int32_t* pred, uint32_t ctx, const uint32_t* t, uint32_t n,
                           uint32_t nb) {
             uint32_t earlier = kNone, x_sign = 0;
+            int32_t candidate[3];
+            uint32_t snap_ctx[3];
+            const bool has_candidate = lodrt::detail::snapCandidates(qpos.data(), t, n, nb, pred, candidate, snap_ctx);
             for (int j = 0; j < 3; ++j) {
                 const int32_t r = q[j] - pred[j];
                 PositionValue value;
@@ -661,8 +664,9 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
                 value.r = r;
                 value.ctx = lodrt::detail::positionContext(ctx, earlier);
                 value.sign_ctx = prev_sign[j] * 3 + x_sign;
-                value.has_candidate =
-                    lodrt::detail::snapCandidate(qpos.data(), t, n, nb, j, pred[j], &value.candidate, &value.snap_ctx);
+                value.has_candidate = has_candidate;
+                value.candidate = has_candidate ? candidate[j] : 0;
+                value.snap_ctx = has_candidate ? snap_ctx[j] : 0;
                 value.hit = value.has_candidate && value.candidate == q[j];
                 code(value);
                 prev_sign[j] = lodrt::detail::signClass(r);

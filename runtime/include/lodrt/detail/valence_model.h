@@ -551,47 +551,57 @@ inline uint32_t positionContext(uint32_t scale_ctx, uint32_t earlier_length) {
     return 20 + (scale_ctx >= 10 ? kPositionLengthBuckets : 0) + b;
 }
 
-/// Neighbour-coordinate ("snap") candidate of position component j (docs/format/valence.md
-/// "Positions"): among the a and b of the vertex's triples (in plan order), then its neighbour, the
-/// coordinate nearest the prediction `pred` (ties: the smaller value). False without any. *ctx is the
-/// snap context: the bit length of |candidate - pred| (capped at 15) times 5 plus the number of triple
-/// entries holding the candidate value (1 without triples, capped at 4). Iso-surface meshes put every
-/// vertex on a grid edge, so two of its coordinates are grid planes it shares with neighbours.
-inline bool snapCandidate(const int32_t* qpos, const uint32_t* t, uint32_t n, uint32_t neighbour, int j, int32_t pred,
-                          int32_t* candidate, uint32_t* ctx) {
-    int32_t best = 0;
-    uint32_t best_d = kNone, mult = 0;
+/// Neighbour-coordinate ("snap") candidates of the three position components (docs/format/valence.md
+/// "Positions"): for component j, among the a and b of the vertex's triples, then its neighbour, the
+/// coordinate nearest the prediction pred[j] (ties: the smaller value). False without any (then for
+/// every component). ctx[j] is the snap context: the bit length of |candidate - pred| (capped at 15)
+/// times 5 plus the number of triple entries holding the candidate value (1 without triples, capped
+/// at 4). Iso-surface meshes put every vertex on a grid edge, so two of its coordinates are grid
+/// planes it shares with neighbours.
+inline bool snapCandidates(const int32_t* qpos, const uint32_t* t, uint32_t n, uint32_t neighbour,
+                           const int32_t pred[3], int32_t candidate[3], uint32_t ctx[3]) {
+    if (n == 0 && neighbour == kNone) return false;
+    // Key: distance above, value below (values are < 2^16), so the smallest key is the nearest value,
+    // ties to the smaller one. Branch-free minimum over the 2n triple entries and the neighbour.
+    uint64_t best[3] = {~uint64_t(0), ~uint64_t(0), ~uint64_t(0)};
+    auto key = [&](const int32_t* p, int j) {
+        const int64_t d = int64_t(p[j]) - pred[j];
+        return (uint64_t(d < 0 ? -d : d) << 17) | uint64_t(uint32_t(p[j]));
+    };
     const uint32_t* end = t + 3 * size_t(n);
-    for (; t != end; t += 3) {
-        for (int e = 0; e < 2; ++e) {
-            const int32_t c = qpos[3 * size_t(t[e]) + size_t(j)];
-            const uint32_t d = uint32_t(c > pred ? int64_t(c) - pred : int64_t(pred) - c);
-            if (d < best_d || (d == best_d && c < best)) {
-                best = c;
-                best_d = d;
-                mult = 1;
-            } else if (c == best) {
-                ++mult;
-            }
+    for (const uint32_t* e = t; e != end; e += 3) {
+        const int32_t* pa = &qpos[3 * size_t(e[0])];
+        const int32_t* pb = &qpos[3 * size_t(e[1])];
+        for (int j = 0; j < 3; ++j) {
+            const uint64_t ka = key(pa, j), kb = key(pb, j);
+            const uint64_t k = ka < kb ? ka : kb;
+            best[j] = k < best[j] ? k : best[j];
         }
     }
     if (neighbour != kNone) {
-        const int32_t c = qpos[3 * size_t(neighbour) + size_t(j)];
-        const uint32_t d = uint32_t(c > pred ? int64_t(c) - pred : int64_t(pred) - c);
-        if (d < best_d || (d == best_d && c < best)) {
-            best = c;
-            best_d = d;
-            mult = 0;
+        const int32_t* pn = &qpos[3 * size_t(neighbour)];
+        for (int j = 0; j < 3; ++j) {
+            const uint64_t k = key(pn, j);
+            best[j] = k < best[j] ? k : best[j];
         }
     }
-    if (best_d == kNone) return false;
-    if (n == 0) mult = 1;
-    uint32_t b = 0;
-    for (uint32_t x = best_d; x != 0; x >>= 1) ++b;
-    b = b < format::kValenceSnapDistanceBuckets ? b : format::kValenceSnapDistanceBuckets - 1;
-    *candidate = best;
-    *ctx = b * format::kValenceSnapMultiplicity +
-           (mult < format::kValenceSnapMultiplicity ? mult : format::kValenceSnapMultiplicity - 1);
+    uint32_t mult[3] = {1, 1, 1};
+    if (n > 0) {
+        mult[0] = mult[1] = mult[2] = 0;
+        for (int j = 0; j < 3; ++j) candidate[j] = int32_t(best[j] & 0x1FFFFu);
+        for (const uint32_t* e = t; e != end; e += 3) {
+            const int32_t* pa = &qpos[3 * size_t(e[0])];
+            const int32_t* pb = &qpos[3 * size_t(e[1])];
+            for (int j = 0; j < 3; ++j) mult[j] += uint32_t(pa[j] == candidate[j]) + uint32_t(pb[j] == candidate[j]);
+        }
+    }
+    for (int j = 0; j < 3; ++j) {
+        candidate[j] = int32_t(best[j] & 0x1FFFFu);
+        uint32_t d = uint32_t(best[j] >> 17), b = 0;
+        for (; d != 0 && b < format::kValenceSnapDistanceBuckets - 1; d >>= 1) ++b;
+        const uint32_t m = mult[j] < format::kValenceSnapMultiplicity ? mult[j] : format::kValenceSnapMultiplicity - 1;
+        ctx[j] = b * format::kValenceSnapMultiplicity + m;
+    }
     return true;
 }
 
