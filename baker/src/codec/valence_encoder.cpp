@@ -407,7 +407,12 @@ struct Attempt {
         node_prev, node_next, node_free, node_corner, completion, stack_head, stack_size;
 
     bool run(const Mesh& mesh, const std::vector<uint8_t>& exploded) {
-        closed = ClosedMesh(); // a restart's previous closed mesh goes before the new one is built
+        // A restart's previous closed mesh and conquest arrays go before the new mesh is built: its
+        // temporaries on top of them made the restart the encoder's peak.
+        closed = ClosedMesh();
+        for (auto* v : {&corner_vertex, &corner_opposite, &vertex_flags, &vertex_corner, &vertex_valence, &node_vertex,
+                        &node_prev, &node_next, &node_free, &node_corner, &completion, &stack_head, &stack_size})
+            std::vector<uint32_t>().swap(*v);
         closed = buildClosed(mesh, exploded);
         const size_t vc = closed.source.size(), tc = closed.corner_vertex.size() / 3;
         for (auto* v : {&corner_vertex, &corner_opposite}) v->assign(3 * tc, 0);
@@ -450,8 +455,7 @@ struct Attempt {
         return !failure.failed;
     }
 
-    // Back to a new attempt's state for a restart, keeping the conquest arrays' memory (run() refills
-    // them; fresh pages for a second copy cost the dragon's encode about as much as filling them).
+    // Back to a new attempt's state for a restart (run() frees and refills the conquest arrays).
     void reset() {
         engine = lodrt::detail::Conquest<EncoderIo>();
         io = EncoderIo();
