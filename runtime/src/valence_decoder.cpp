@@ -566,10 +566,12 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
     auto decodeVertex = [&](uint32_t ctx, const int32_t* pred, int32_t* out, const uint32_t* t, uint32_t n,
                             uint32_t nb) {
         uint32_t earlier = kNone, x_sign = 0;
-        int32_t candidate[3];
-        uint32_t snap_ctx[3];
+        int32_t candidate[3] = {0, 0, 0};
+        uint32_t snap_ctx[3] = {0, 0, 0};
         const uint32_t snap =
-            snap_flags != 0 && detail::snapCandidates(qpos, t, n, nb, pred, candidate, snap_ctx) ? snap_flags : 0u;
+            snap_flags != 0 && detail::snapCandidates(qpos, t, n, nb, pred, snap_flags, candidate, snap_ctx)
+                ? snap_flags
+                : 0u;
         for (int j = 0; j < 3; ++j) {
             int32_t res;
             uint32_t length;

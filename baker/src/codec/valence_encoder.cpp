@@ -660,7 +660,8 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
             uint32_t earlier = kNone, x_sign = 0;
             int32_t candidate[3];
             uint32_t snap_ctx[3];
-            const bool has_candidate = lodrt::detail::snapCandidates(qpos.data(), t, n, nb, pred, candidate, snap_ctx);
+            const bool has_candidate =
+                lodrt::detail::snapCandidatesOf<7>(qpos.data(), t, n, nb, pred, candidate, snap_ctx);
             for (int j = 0; j < 3; ++j) {
                 const int32_t r = q[j] - pred[j];
                 PositionValue value;

@@ -558,8 +558,10 @@ inline uint32_t positionContext(uint32_t scale_ctx, uint32_t earlier_length) {
 /// times 5 plus the number of triple entries holding the candidate value (1 without triples, capped
 /// at 4). Iso-surface meshes put every vertex on a grid edge, so two of its coordinates are grid
 /// planes it shares with neighbours.
-inline bool snapCandidates(const int32_t* qpos, const uint32_t* t, uint32_t n, uint32_t neighbour,
-                           const int32_t pred[3], int32_t candidate[3], uint32_t ctx[3]) {
+/// Only the components in `Mask` (bit j: component j) are computed; the others are left unset.
+template <uint32_t Mask>
+inline bool snapCandidatesOf(const int32_t* qpos, const uint32_t* t, uint32_t n, uint32_t neighbour,
+                             const int32_t pred[3], int32_t candidate[3], uint32_t ctx[3]) {
     if (n == 0 && neighbour == kNone) return false;
     // Key: distance above, value below (values are < 2^16), so the smallest key is the nearest value,
     // ties to the smaller one. Branch-free minimum over the 2n triple entries and the neighbour.
@@ -573,6 +575,7 @@ inline bool snapCandidates(const int32_t* qpos, const uint32_t* t, uint32_t n, u
         const int32_t* pa = &qpos[3 * size_t(e[0])];
         const int32_t* pb = &qpos[3 * size_t(e[1])];
         for (int j = 0; j < 3; ++j) {
+            if (!((Mask >> j) & 1u)) continue;
             const uint64_t ka = key(pa, j), kb = key(pb, j);
             const uint64_t k = ka < kb ? ka : kb;
             best[j] = k < best[j] ? k : best[j];
@@ -581,6 +584,7 @@ inline bool snapCandidates(const int32_t* qpos, const uint32_t* t, uint32_t n, u
     if (neighbour != kNone) {
         const int32_t* pn = &qpos[3 * size_t(neighbour)];
         for (int j = 0; j < 3; ++j) {
+            if (!((Mask >> j) & 1u)) continue;
             const uint64_t k = key(pn, j);
             best[j] = k < best[j] ? k : best[j];
         }
@@ -592,10 +596,12 @@ inline bool snapCandidates(const int32_t* qpos, const uint32_t* t, uint32_t n, u
         for (const uint32_t* e = t; e != end; e += 3) {
             const int32_t* pa = &qpos[3 * size_t(e[0])];
             const int32_t* pb = &qpos[3 * size_t(e[1])];
-            for (int j = 0; j < 3; ++j) mult[j] += uint32_t(pa[j] == candidate[j]) + uint32_t(pb[j] == candidate[j]);
+            for (int j = 0; j < 3; ++j)
+                if ((Mask >> j) & 1u) mult[j] += uint32_t(pa[j] == candidate[j]) + uint32_t(pb[j] == candidate[j]);
         }
     }
     for (int j = 0; j < 3; ++j) {
+        if (!((Mask >> j) & 1u)) continue;
         candidate[j] = int32_t(best[j] & 0x1FFFFu);
         uint32_t d = uint32_t(best[j] >> 17), b = 0;
         for (; d != 0 && b < format::kValenceSnapDistanceBuckets - 1; d >>= 1) ++b;
@@ -603,6 +609,29 @@ inline bool snapCandidates(const int32_t* qpos, const uint32_t* t, uint32_t n, u
         ctx[j] = b * format::kValenceSnapMultiplicity + m;
     }
     return true;
+}
+
+/// snapCandidatesOf for a run-time component mask (1..7; 0 computes nothing and returns false).
+inline bool snapCandidates(const int32_t* qpos, const uint32_t* t, uint32_t n, uint32_t neighbour,
+                           const int32_t pred[3], uint32_t mask, int32_t candidate[3], uint32_t ctx[3]) {
+    switch (mask & 7u) {
+    case 1:
+        return snapCandidatesOf<1>(qpos, t, n, neighbour, pred, candidate, ctx);
+    case 2:
+        return snapCandidatesOf<2>(qpos, t, n, neighbour, pred, candidate, ctx);
+    case 3:
+        return snapCandidatesOf<3>(qpos, t, n, neighbour, pred, candidate, ctx);
+    case 4:
+        return snapCandidatesOf<4>(qpos, t, n, neighbour, pred, candidate, ctx);
+    case 5:
+        return snapCandidatesOf<5>(qpos, t, n, neighbour, pred, candidate, ctx);
+    case 6:
+        return snapCandidatesOf<6>(qpos, t, n, neighbour, pred, candidate, ctx);
+    case 7:
+        return snapCandidatesOf<7>(qpos, t, n, neighbour, pred, candidate, ctx);
+    default:
+        return false;
+    }
 }
 
 /// Sign contexts of a residual: the sign class (0 zero, 1 positive, 2 negative) of the same component's
