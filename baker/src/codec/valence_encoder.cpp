@@ -650,7 +650,9 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
     // Visits every coded coordinate in stream order with everything its coding needs. The contexts do
     // not depend on how a coordinate is coded (a snapped one counts with the length and sign of
     // candidate - prediction), so each component's values can be coded into a stream of its own.
-    auto walkPositions = [&](auto&& code) {
+    // `mask`: the components whose snap candidates are needed (bit j); `limit`: plan entries to visit
+    // (all of them, then the vertices no triangle uses, unless fewer).
+    auto walkPositions = [&](uint32_t mask, uint32_t limit, auto&& code) {
         std::fill(final_done.begin(), final_done.end(), uint8_t(0));
         int32_t last[3] = {int32_t(qmax + 1) / 2, int32_t(qmax + 1) / 2, int32_t(qmax + 1) / 2};
         uint32_t prev_sign[3] = {0, 0, 0};
@@ -658,10 +660,10 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
         auto vertex = [&](const int32_t* q, const int32_t* pred, uint32_t ctx, const uint32_t* t, uint32_t n,
                           uint32_t nb) {
             uint32_t earlier = kNone, x_sign = 0;
-            int32_t candidate[3];
-            uint32_t snap_ctx[3];
+            int32_t candidate[3] = {0, 0, 0};
+            uint32_t snap_ctx[3] = {0, 0, 0};
             const bool has_candidate =
-                lodrt::detail::snapCandidatesOf<7>(qpos.data(), t, n, nb, pred, candidate, snap_ctx);
+                lodrt::detail::snapCandidates(qpos.data(), t, n, nb, pred, mask, candidate, snap_ctx);
             for (int j = 0; j < 3; ++j) {
                 const int32_t r = q[j] - pred[j];
                 PositionValue value;
@@ -669,9 +671,9 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
                 value.r = r;
                 value.ctx = lodrt::detail::positionContext(ctx, earlier);
                 value.sign_ctx = prev_sign[j] * 3 + x_sign;
-                value.has_candidate = has_candidate;
-                value.candidate = has_candidate ? candidate[j] : 0;
-                value.snap_ctx = has_candidate ? snap_ctx[j] : 0;
+                value.has_candidate = has_candidate && ((mask >> j) & 1u);
+                value.candidate = candidate[j];
+                value.snap_ctx = snap_ctx[j];
                 value.hit = value.has_candidate && value.candidate == q[j];
                 code(value);
                 prev_sign[j] = lodrt::detail::signClass(r);
@@ -681,7 +683,8 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
             }
         };
         const uint32_t* triple = plan.triples;
-        for (uint32_t i = 0; i < plan.ordered; ++i) {
+        const uint32_t entries = std::min(limit, plan.ordered);
+        for (uint32_t i = 0; i < entries; ++i) {
             const uint32_t ev = order[i], n = count[i];
             const uint32_t* t = triple;
             triple += 3 * size_t(n);
@@ -700,6 +703,7 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
             }
             for (int j = 0; j < 3; ++j) last[j] = q[j];
         }
+        if (entries < plan.ordered) return;
         for (uint32_t v : isolated) {
             const int32_t* q = &qpos_in[3 * size_t(v)];
             const int32_t pred[3] = {last[0], last[1], last[2]};
@@ -720,14 +724,15 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
         PositionModel plain_model, snap_model;
         plain_model.init();
         snap_model.init();
+        // Without a sizeable share of hits the flag cannot pay: skip the estimate. The share is
+        // counted on the first eighth of the plan (at least 4096 vertices).
         size_t candidates = 0, hits = 0;
-        walkPositions([&](const PositionValue& v) {
+        walkPositions(7u, std::max(plan.ordered / 8, 4096u), [&](const PositionValue& v) {
             candidates += v.has_candidate;
             hits += v.hit;
         });
-        // Without a sizeable share of hits the flag cannot pay: skip the estimate.
         if (hits * 16 >= candidates && hits > 0) {
-            walkPositions([&](const PositionValue& v) {
+            walkPositions(7u, kNone, [&](const PositionValue& v) {
                 est[v.j][0].residual(plain_model.residuals, est_raw[v.j][0], v.j, v.ctx, v.r, v.sign_ctx);
                 if (v.has_candidate) {
                     est[v.j][1].bit(snap_model.snap[v.j][v.snap_ctx], v.hit ? 1u : 0u);
@@ -747,8 +752,8 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
     {
         PositionModel model;
         model.init();
-        walkPositions([&](const PositionValue& v) {
-            if (v.has_candidate && (snap_flags & (kValenceFlagSnapX << v.j))) {
+        walkPositions(uint32_t(snap_flags / kValenceFlagSnapX), kNone, [&](const PositionValue& v) {
+            if (v.has_candidate) {
                 pos.bit(model.snap[v.j][v.snap_ctx], v.hit ? 1u : 0u);
                 if (v.hit) return;
             }
