@@ -232,6 +232,7 @@ ClosedMesh buildClosed(const Mesh& mesh, const std::vector<uint8_t>& exploded) {
 struct Failure {
     bool failed = false;
     uint32_t culprit_a = kNone, culprit_b = kNone, culprit_c = kNone;
+    std::vector<uint32_t> culprit_sources; // input vertices to cut loose (the pre-cut below)
 };
 
 struct EncoderIo {
@@ -403,6 +404,7 @@ struct Attempt {
     EncoderIo io;
     RangeEncoder conn;
     Failure failure;
+    bool precut = false; // cut vertices with several fans loose instead of conquering (first round)
     std::vector<uint32_t> corner_vertex, corner_opposite, vertex_flags, vertex_corner, vertex_valence, node_vertex,
         node_prev, node_next, node_free, node_corner, completion, stack_head, stack_size;
 
@@ -414,6 +416,22 @@ struct Attempt {
                         &node_prev, &node_next, &node_free, &node_corner, &completion, &stack_head, &stack_size})
             std::vector<uint32_t>().swap(*v);
         closed = buildClosed(mesh, exploded);
+        if (precut) {
+            // Vertices with several fans (non-manifold vertices and edges) pinch the front where
+            // their copies meet, and the conquest fails there, often near its end (the dragon at
+            // 1,071,828 of 1,071,852 triangles). Cutting their triangles loose before the first
+            // conquest costs a few copies and saves the restart.
+            std::vector<uint8_t> fans(mesh.vertexCount(), 0);
+            for (uint32_t src : closed.source) {
+                if (src == kNone) continue;
+                if (fans[src] == 1) failure.culprit_sources.push_back(src);
+                if (fans[src] < 2) ++fans[src];
+            }
+            if (!failure.culprit_sources.empty()) {
+                failure.failed = true;
+                return false;
+            }
+        }
         const size_t vc = closed.source.size(), tc = closed.corner_vertex.size() / 3;
         for (auto* v : {&corner_vertex, &corner_opposite}) v->assign(3 * tc, 0);
         for (auto* v : {&vertex_flags, &vertex_corner, &vertex_valence, &completion}) v->assign(vc, 0);
@@ -555,6 +573,7 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
     auto attempt = std::make_unique<Attempt>();
     for (int round = 0;; ++round) {
         if (round > 0) attempt->reset();
+        attempt->precut = round == 0;
         if (attempt->run(mesh, exploded)) break;
         const bool all = std::all_of(exploded.begin(), exploded.end(), [](uint8_t e) { return e != 0; });
         if (all) return internalError("valence encoder: conquest failed on fully cut mesh");
@@ -564,6 +583,7 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
             std::vector<uint8_t> culprit(vn, 0);
             for (uint32_t cv : {f.culprit_a, f.culprit_b, f.culprit_c})
                 if (cv != kNone && attempt->closed.source[cv] != kNone) culprit[attempt->closed.source[cv]] = 1;
+            for (uint32_t src : f.culprit_sources) culprit[src] = 1;
             for (size_t t = 0; t < fn; ++t) {
                 if (exploded[t]) continue;
                 const uint32_t* tri = &mesh.indices[3 * t];
