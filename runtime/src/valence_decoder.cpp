@@ -311,7 +311,7 @@ Result valenceReadInfo(const uint8_t* data, size_t size, ValenceInfo* info) {
     if (read16(data + 4) != kValenceVersion) return Result::UnsupportedVersion;
     if (size < kValenceHeaderSize) return Result::Truncated;
     const uint16_t flags = read16(data + 6);
-    if (flags & ~kValenceFlagNormals) return Result::CorruptStream;
+    if (flags & ~kValenceKnownFlags) return Result::CorruptStream;
     ValenceInfo v;
     v.vertex_count = read32(data + 8);
     v.triangle_count = read32(data + 12);
@@ -557,16 +557,31 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
     const int32_t qmax = int32_t((1u << info.position_bits) - 1);
     int32_t last[3] = {(qmax + 1) / 2, (qmax + 1) / 2, (qmax + 1) / 2};
     uint32_t prev_sign[3] = {0, 0, 0};
+    uint32_t snap_models[3][kValenceSnapContexts];
+    detail::initRangeProbs(&snap_models[0][0], sizeof(snap_models) / 4);
+    const uint32_t snap_flags = uint32_t(read16(data + 6) / kValenceFlagSnapX) & 7u; // header checked above
     // One vertex: x, then y and z in the context of the earlier residual lengths and signs, each
-    // residual added to `pred`. False on a corrupt stream or a coordinate outside [0, qmax].
-    auto decodeVertex = [&](uint32_t ctx, const int32_t* pred, int32_t* out) {
+    // residual added to `pred`; a snapped component first reads whether it is its candidate. `t`, `n`,
+    // `nb`: the plan entry (none: 0, kNone). False on a corrupt stream or a coordinate outside [0, qmax].
+    auto decodeVertex = [&](uint32_t ctx, const int32_t* pred, int32_t* out, const uint32_t* t, uint32_t n,
+                            uint32_t nb) {
         uint32_t earlier = kNone, x_sign = 0;
+        int32_t candidate[3] = {0, 0, 0};
+        uint32_t snap_ctx[3] = {0, 0, 0};
+        const uint32_t snap =
+            snap_flags != 0 && detail::snapCandidates(qpos, t, n, nb, pred, snap_flags, candidate, snap_ctx)
+                ? snap_flags
+                : 0u;
         for (int j = 0; j < 3; ++j) {
             int32_t res;
             uint32_t length;
-            if (!pos_model.decode(pos, pos_raw, j, detail::positionContext(ctx, earlier), &res, &length,
-                                  prev_sign[j] * 3 + x_sign))
+            if ((snap >> j) & 1u && pos.bit(snap_models[j][snap_ctx[j]])) {
+                res = candidate[j] - pred[j];
+                length = detail::bitLength(uint32_t(res < 0 ? -res : res));
+            } else if (!pos_model.decode(pos, pos_raw, j, detail::positionContext(ctx, earlier), &res, &length,
+                                         prev_sign[j] * 3 + x_sign)) {
                 return false;
+            }
             prev_sign[j] = detail::signClass(res);
             if (j == 0) x_sign = prev_sign[0];
             earlier = earlier == kNone || length > earlier ? length : earlier;
@@ -604,7 +619,8 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
             int32_t pred[3];
             uint32_t scale;
             detail::predictFromPlan(qpos, triple, n, plan.neighbour[i], last, pred, &scale);
-            if (!decodeVertex(detail::scaleContext(scale, n), pred, q)) return Result::CorruptStream;
+            if (!decodeVertex(detail::scaleContext(scale, n), pred, q, triple, n, plan.neighbour[i]))
+                return Result::CorruptStream;
             qf[0] = q[0];
             qf[1] = q[1];
             qf[2] = q[2];
@@ -618,7 +634,7 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
     }
     for (size_t fid = final_count; fid < vn; ++fid) {
         int32_t* qf = &qpos_final[3 * fid];
-        if (!decodeVertex(detail::scaleContext(0, 0), last, qf)) return Result::CorruptStream;
+        if (!decodeVertex(detail::scaleContext(0, 0), last, qf, nullptr, 0, kNone)) return Result::CorruptStream;
         last[0] = qf[0];
         last[1] = qf[1];
         last[2] = qf[2];
@@ -670,8 +686,8 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
             for (int j = 0; j < 2; ++j) {
                 int32_t res;
                 uint32_t length;
-                const uint32_t ctx = nrm_length[j] < kValenceNormalContexts ? nrm_length[j]
-                                                                                 : kValenceNormalContexts - 1;
+                const uint32_t ctx =
+                    nrm_length[j] < kValenceNormalContexts ? nrm_length[j] : kValenceNormalContexts - 1;
                 if (!nrm_model.decode(nrm, nrm_raw, j, ctx, &res, &length)) return Result::CorruptStream;
                 if (res < -half || res >= half) return Result::CorruptStream;
                 nrm_length[j] = length;

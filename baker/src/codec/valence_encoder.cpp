@@ -32,8 +32,12 @@ constexpr uint32_t kClassProbs = 1u << kValenceClassTreeBits;
 constexpr uint32_t kTopProbs = 33;
 constexpr int kMaxRestarts = 12;
 
-inline uint32_t nextCorner(uint32_t c) { return c % 3 == 2 ? c - 2 : c + 1; }
-inline uint32_t prevCorner(uint32_t c) { return c % 3 == 0 ? c + 2 : c - 1; }
+inline uint32_t nextCorner(uint32_t c) {
+    return c % 3 == 2 ? c - 2 : c + 1;
+}
+inline uint32_t prevCorner(uint32_t c) {
+    return c % 3 == 0 ? c + 2 : c - 1;
+}
 
 struct UintModel {
     uint32_t klass[kClassProbs];
@@ -58,6 +62,28 @@ template <int Components, int Contexts> struct ResidualModel {
         initRangeProbs(&second[0][0], sizeof(second) / 4);
         initRangeProbs(&top[0][0], sizeof(top) / 4);
     }
+};
+
+// Models of the position stream: the residuals and the per-component snap decisions.
+struct PositionModel {
+    ResidualModel<3, lodrt::detail::kPositionContexts> residuals;
+    uint32_t snap[3][kValenceSnapContexts];
+    void init() {
+        residuals.init();
+        initRangeProbs(&snap[0][0], sizeof(snap) / 4);
+    }
+};
+
+// One position coordinate as the position pass codes it.
+struct PositionValue {
+    int j = 0;        // component
+    int32_t r = 0;    // residual (value - prediction)
+    uint32_t ctx = 0; // length context
+    uint32_t sign_ctx = 0;
+    bool has_candidate = false;
+    bool hit = false;      // the value equals the candidate
+    int32_t candidate = 0; // snap candidate (has_candidate)
+    uint32_t snap_ctx = 0;
 };
 
 // The closed manifold the conquest runs on: a corner table whose first 3 * face_count corners are the
@@ -206,6 +232,7 @@ ClosedMesh buildClosed(const Mesh& mesh, const std::vector<uint8_t>& exploded) {
 struct Failure {
     bool failed = false;
     uint32_t culprit_a = kNone, culprit_b = kNone, culprit_c = kNone;
+    std::vector<uint32_t> culprit_sources; // input vertices to cut loose (the pre-cut below)
 };
 
 struct EncoderIo {
@@ -377,12 +404,34 @@ struct Attempt {
     EncoderIo io;
     RangeEncoder conn;
     Failure failure;
+    bool precut = false; // cut vertices with several fans loose instead of conquering (first round)
     std::vector<uint32_t> corner_vertex, corner_opposite, vertex_flags, vertex_corner, vertex_valence, node_vertex,
         node_prev, node_next, node_free, node_corner, completion, stack_head, stack_size;
 
     bool run(const Mesh& mesh, const std::vector<uint8_t>& exploded) {
-        closed = ClosedMesh(); // a restart's previous closed mesh goes before the new one is built
+        // A restart's previous closed mesh and conquest arrays go before the new mesh is built: its
+        // temporaries on top of them made the restart the encoder's peak.
+        closed = ClosedMesh();
+        for (auto* v : {&corner_vertex, &corner_opposite, &vertex_flags, &vertex_corner, &vertex_valence, &node_vertex,
+                        &node_prev, &node_next, &node_free, &node_corner, &completion, &stack_head, &stack_size})
+            std::vector<uint32_t>().swap(*v);
         closed = buildClosed(mesh, exploded);
+        if (precut) {
+            // Vertices with several fans (non-manifold vertices and edges) pinch the front where
+            // their copies meet, and the conquest fails there, often near its end (the dragon at
+            // 1,071,828 of 1,071,852 triangles). Cutting their triangles loose before the first
+            // conquest costs a few copies and saves the restart.
+            std::vector<uint8_t> fans(mesh.vertexCount(), 0);
+            for (uint32_t src : closed.source) {
+                if (src == kNone) continue;
+                if (fans[src] == 1) failure.culprit_sources.push_back(src);
+                if (fans[src] < 2) ++fans[src];
+            }
+            if (!failure.culprit_sources.empty()) {
+                failure.failed = true;
+                return false;
+            }
+        }
         const size_t vc = closed.source.size(), tc = closed.corner_vertex.size() / 3;
         for (auto* v : {&corner_vertex, &corner_opposite}) v->assign(3 * tc, 0);
         for (auto* v : {&vertex_flags, &vertex_corner, &vertex_valence, &completion}) v->assign(vc, 0);
@@ -424,8 +473,7 @@ struct Attempt {
         return !failure.failed;
     }
 
-    // Back to a new attempt's state for a restart, keeping the conquest arrays' memory (run() refills
-    // them; fresh pages for a second copy cost the dragon's encode about as much as filling them).
+    // Back to a new attempt's state for a restart (run() frees and refills the conquest arrays).
     void reset() {
         engine = lodrt::detail::Conquest<EncoderIo>();
         io = EncoderIo();
@@ -437,16 +485,17 @@ struct Attempt {
     // the encoder's bookkeeping), keeping the engine's corner table, vertex arrays, real_of and the
     // connectivity coder for the steps after it.
     void releaseConquestState() {
-        for (auto* v : {&node_vertex, &node_prev, &node_next, &node_free, &node_corner, &completion, &stack_head,
-                        &stack_size, &closed.corner_vertex, &closed.opposite, &closed.source, &closed.valence,
-                        &io.engine_id})
+        for (auto* v :
+             {&node_vertex, &node_prev, &node_next, &node_free, &node_corner, &completion, &stack_head, &stack_size,
+              &closed.corner_vertex, &closed.opposite, &closed.source, &closed.valence, &io.engine_id})
             std::vector<uint32_t>().swap(*v);
         std::vector<uint8_t>().swap(io.conquered);
     }
 };
 
-std::string describe(lodrt::Result r) {
-    const char* what = "";
+// `bytes`: the stream, for the version it names.
+std::string describe(lodrt::Result r, const std::vector<uint8_t>& bytes) {
+    std::string what;
     switch (r) {
     case lodrt::Result::Truncated:
         what = "the file ends before the lengths its header gives";
@@ -455,7 +504,9 @@ std::string describe(lodrt::Result r) {
         what = "not an .lbm file (bad magic)";
         break;
     case lodrt::Result::UnsupportedVersion:
-        what = "format version other than 4";
+        what = "format version " + std::to_string(bytes.size() >= 6 ? bytes[4] | (bytes[5] << 8) : 0) +
+               " is not supported (this decoder reads version " + std::to_string(kValenceVersion) +
+               "; re-encode the mesh)";
         break;
     case lodrt::Result::TrailingBytes:
         what = "bytes after the streams the header announces";
@@ -467,9 +518,8 @@ std::string describe(lodrt::Result r) {
         what = "cannot decode";
         break;
     }
-    return std::string(what) + " (" + lodrt::resultName(r) + ")";
+    return what + " (" + lodrt::resultName(r) + ")";
 }
-
 
 } // namespace
 
@@ -523,6 +573,7 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
     auto attempt = std::make_unique<Attempt>();
     for (int round = 0;; ++round) {
         if (round > 0) attempt->reset();
+        attempt->precut = round == 0;
         if (attempt->run(mesh, exploded)) break;
         const bool all = std::all_of(exploded.begin(), exploded.end(), [](uint8_t e) { return e != 0; });
         if (all) return internalError("valence encoder: conquest failed on fully cut mesh");
@@ -532,6 +583,7 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
             std::vector<uint8_t> culprit(vn, 0);
             for (uint32_t cv : {f.culprit_a, f.culprit_b, f.culprit_c})
                 if (cv != kNone && attempt->closed.source[cv] != kNone) culprit[attempt->closed.source[cv]] = 1;
+            for (uint32_t src : f.culprit_sources) culprit[src] = 1;
             for (size_t t = 0; t < fn; ++t) {
                 if (exploded[t]) continue;
                 const uint32_t* tri = &mesh.indices[3 * t];
@@ -543,7 +595,8 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
     const auto& a = attempt->engine.a;
     EncoderIo& io = attempt->io;
     RangeEncoder& conn = attempt->conn;
-    const uint32_t vc = uint32_t(attempt->closed.source.size()), tc = uint32_t(attempt->closed.corner_vertex.size() / 3);
+    const uint32_t vc = uint32_t(attempt->closed.source.size()),
+                   tc = uint32_t(attempt->closed.corner_vertex.size() / 3);
 
     // Final vertex order: conquest order without dummies and copies, then unreferenced vertices.
     std::vector<uint32_t> source_of_engine(vc); // input vertex per engine vertex, kNone for dummies
@@ -588,14 +641,8 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
     std::vector<uint32_t>().swap(io.real_of);
     if (result.old_face_of.size() != fn) return internalError("valence encoder: triangle count mismatch");
 
-    // Positions in the order positionOrder gives, predicted exactly as the decoder will.
-    RangeEncoder pos;
-    BitWriter pos_raw;
-    ResidualModel<3, lodrt::detail::kPositionContexts> pos_model;
-    pos_model.init();
+    // Positions in the plan's order, predicted exactly as the decoder will.
     std::vector<int32_t> qpos(3 * size_t(vc), 0), qpos_final(3 * vn);
-    int32_t last[3] = {int32_t(qmax + 1) / 2, int32_t(qmax + 1) / 2, int32_t(qmax + 1) / 2};
-    uint32_t prev_sign[3] = {0, 0, 0};
     std::vector<uint8_t> ordered(vc);
     std::vector<uint32_t> order(vc), count(vc), neighbour(vc), degree(vc), stack0(vc), stack1(vc), stack2(vc);
     // Sized for the worst case and filled only as far as the plan goes: left uninitialised, so the
@@ -608,58 +655,132 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
     plan.triples = triples.get();
     plan.max_triples = 3 * tc;
     if (!lodrt::detail::planPositions(a.corner_vertex, a.corner_opposite, a.vertex_corner, a.vertex_flags,
-                                      a.vertex_valence, vc, ordered.data(), degree.data(), stack0.data(),
-                                      stack1.data(), stack2.data(), &plan))
+                                      a.vertex_valence, vc, ordered.data(), degree.data(), stack0.data(), stack1.data(),
+                                      stack2.data(), &plan))
         return internalError("valence encoder: broken corner cycle");
+    std::vector<uint32_t>().swap(degree);
+    std::vector<uint32_t>().swap(stack0);
+    std::vector<uint32_t>().swap(stack1);
+    std::vector<uint32_t>().swap(stack2);
+    std::vector<uint8_t>().swap(ordered);
+    std::vector<uint32_t> isolated(vn - referenced);
+    for (size_t v = 0; v < vn; ++v)
+        if (new_of[v] >= referenced) isolated[new_of[v] - referenced] = uint32_t(v);
     std::vector<uint8_t> final_done(vn, 0);
-    const uint32_t* triple = plan.triples;
-    for (uint32_t i = 0; i < plan.ordered; ++i) {
-        const uint32_t ev = order[i], n = count[i];
-        const uint32_t* t = triple;
-        triple += 3 * size_t(n);
-        const uint32_t fid = final_of[ev];
-        if (fid == kNone) continue;
-        const uint32_t src = source_of_engine[ev];
-        int32_t* q = &qpos[3 * size_t(ev)];
-        for (int j = 0; j < 3; ++j) q[j] = qpos_in[3 * size_t(src) + size_t(j)];
-        if (!final_done[fid]) {
-            int32_t pred[3];
-            uint32_t scale = 0;
-            lodrt::detail::predictFromPlan(qpos.data(), t, n, neighbour[i], last, pred, &scale);
-            const uint32_t ctx = lodrt::detail::scaleContext(scale, n);
+    // Visits every coded coordinate in stream order with everything its coding needs. The contexts do
+    // not depend on how a coordinate is coded (a snapped one counts with the length and sign of
+    // candidate - prediction), so each component's values can be coded into a stream of its own.
+    // `mask`: the components whose snap candidates are needed (bit j); `limit`: plan entries to visit
+    // (all of them, then the vertices no triangle uses, unless fewer).
+    auto walkPositions = [&](uint32_t mask, uint32_t limit, auto&& code) {
+        std::fill(final_done.begin(), final_done.end(), uint8_t(0));
+        int32_t last[3] = {int32_t(qmax + 1) / 2, int32_t(qmax + 1) / 2, int32_t(qmax + 1) / 2};
+        uint32_t prev_sign[3] = {0, 0, 0};
+        // One vertex: `q` its coordinates, `t`/`n`/`nb` its plan entry (n = 0, nb = kNone: none).
+        auto vertex = [&](const int32_t* q, const int32_t* pred, uint32_t ctx, const uint32_t* t, uint32_t n,
+                          uint32_t nb) {
             uint32_t earlier = kNone, x_sign = 0;
+            int32_t candidate[3] = {0, 0, 0};
+            uint32_t snap_ctx[3] = {0, 0, 0};
+            const bool has_candidate =
+                lodrt::detail::snapCandidates(qpos.data(), t, n, nb, pred, mask, candidate, snap_ctx);
             for (int j = 0; j < 3; ++j) {
                 const int32_t r = q[j] - pred[j];
-                const uint32_t k = pos.residual(pos_model, pos_raw, j, lodrt::detail::positionContext(ctx, earlier), r,
-                                                prev_sign[j] * 3 + x_sign);
+                PositionValue value;
+                value.j = j;
+                value.r = r;
+                value.ctx = lodrt::detail::positionContext(ctx, earlier);
+                value.sign_ctx = prev_sign[j] * 3 + x_sign;
+                value.has_candidate = has_candidate && ((mask >> j) & 1u);
+                value.candidate = candidate[j];
+                value.snap_ctx = snap_ctx[j];
+                value.hit = value.has_candidate && value.candidate == q[j];
+                code(value);
                 prev_sign[j] = lodrt::detail::signClass(r);
                 if (j == 0) x_sign = prev_sign[0];
+                const uint32_t k = lodrt::detail::bitLength(uint32_t(r < 0 ? -r : r));
                 earlier = earlier == kNone ? k : std::max(earlier, k);
             }
-            for (int j = 0; j < 3; ++j) qpos_final[3 * size_t(fid) + size_t(j)] = q[j];
-            final_done[fid] = 1;
+        };
+        const uint32_t* triple = plan.triples;
+        const uint32_t entries = std::min(limit, plan.ordered);
+        for (uint32_t i = 0; i < entries; ++i) {
+            const uint32_t ev = order[i], n = count[i];
+            const uint32_t* t = triple;
+            triple += 3 * size_t(n);
+            const uint32_t fid = final_of[ev];
+            if (fid == kNone) continue;
+            const uint32_t src = source_of_engine[ev];
+            int32_t* q = &qpos[3 * size_t(ev)];
+            for (int j = 0; j < 3; ++j) q[j] = qpos_in[3 * size_t(src) + size_t(j)];
+            if (!final_done[fid]) {
+                int32_t pred[3];
+                uint32_t scale = 0;
+                lodrt::detail::predictFromPlan(qpos.data(), t, n, neighbour[i], last, pred, &scale);
+                vertex(q, pred, lodrt::detail::scaleContext(scale, n), t, n, neighbour[i]);
+                for (int j = 0; j < 3; ++j) qpos_final[3 * size_t(fid) + size_t(j)] = q[j];
+                final_done[fid] = 1;
+            }
+            for (int j = 0; j < 3; ++j) last[j] = q[j];
         }
-        for (int j = 0; j < 3; ++j) last[j] = q[j];
-    }
-    {
-        std::vector<uint32_t> isolated(vn - referenced);
-        for (size_t v = 0; v < vn; ++v)
-            if (new_of[v] >= referenced) isolated[new_of[v] - referenced] = uint32_t(v);
+        if (entries < plan.ordered) return;
         for (uint32_t v : isolated) {
-            const uint32_t ctx = lodrt::detail::scaleContext(0, 0);
-            uint32_t earlier = kNone, x_sign = 0;
+            const int32_t* q = &qpos_in[3 * size_t(v)];
+            const int32_t pred[3] = {last[0], last[1], last[2]};
+            vertex(q, pred, lodrt::detail::scaleContext(0, 0), nullptr, 0, kNone);
             for (int j = 0; j < 3; ++j) {
-                const int32_t q = qpos_in[3 * size_t(v) + size_t(j)];
-                const uint32_t k = pos.residual(pos_model, pos_raw, j, lodrt::detail::positionContext(ctx, earlier), q - last[j],
-                                                prev_sign[j] * 3 + x_sign);
-                prev_sign[j] = lodrt::detail::signClass(q - last[j]);
-                if (j == 0) x_sign = prev_sign[0];
-                earlier = earlier == kNone ? k : std::max(earlier, k);
-                last[j] = q;
-                qpos_final[3 * size_t(new_of[v]) + size_t(j)] = q;
+                last[j] = q[j];
+                qpos_final[3 * size_t(new_of[v]) + size_t(j)] = q[j];
+            }
+        }
+    };
+    // Which components to snap: every component coded both ways into streams of its own (exact
+    // sizes, since a component's values and contexts do not depend on the other components' choice);
+    // snap where that is strictly smaller.
+    uint16_t snap_flags = 0;
+    {
+        RangeEncoder est[3][2];
+        BitWriter est_raw[3][2];
+        PositionModel plain_model, snap_model;
+        plain_model.init();
+        snap_model.init();
+        // Without a sizeable share of hits the flag cannot pay: skip the estimate. The share is
+        // counted on the first eighth of the plan (at least 4096 vertices).
+        size_t candidates = 0, hits = 0;
+        walkPositions(7u, std::max(plan.ordered / 8, 4096u), [&](const PositionValue& v) {
+            candidates += v.has_candidate;
+            hits += v.hit;
+        });
+        if (hits * 16 >= candidates && hits > 0) {
+            walkPositions(7u, kNone, [&](const PositionValue& v) {
+                est[v.j][0].residual(plain_model.residuals, est_raw[v.j][0], v.j, v.ctx, v.r, v.sign_ctx);
+                if (v.has_candidate) {
+                    est[v.j][1].bit(snap_model.snap[v.j][v.snap_ctx], v.hit ? 1u : 0u);
+                    if (v.hit) return;
+                }
+                est[v.j][1].residual(snap_model.residuals, est_raw[v.j][1], v.j, v.ctx, v.r, v.sign_ctx);
+            });
+            for (int j = 0; j < 3; ++j) {
+                const size_t plain = est[j][0].finish().size() + est_raw[j][0].finish().size();
+                const size_t snapped = est[j][1].finish().size() + est_raw[j][1].finish().size();
+                if (snapped < plain) snap_flags = uint16_t(snap_flags | (kValenceFlagSnapX << j));
             }
         }
     }
+    RangeEncoder pos;
+    BitWriter pos_raw;
+    {
+        PositionModel model;
+        model.init();
+        walkPositions(uint32_t(snap_flags / kValenceFlagSnapX), kNone, [&](const PositionValue& v) {
+            if (v.has_candidate) {
+                pos.bit(model.snap[v.j][v.snap_ctx], v.hit ? 1u : 0u);
+                if (v.hit) return;
+            }
+            pos.residual(model.residuals, pos_raw, v.j, v.ctx, v.r, v.sign_ctx);
+        });
+    }
+    std::unique_ptr<uint32_t[]>().swap(triples);
 
     // Normals after all positions, in final order, each predicted from the exact sum of its faces'
     // normals on the quantized positions (the decoder's step 3).
@@ -725,7 +846,9 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
     put32(out, 0, kValenceMagic);
     out[4] = uint8_t(kValenceVersion);
     out[5] = uint8_t(kValenceVersion >> 8);
-    out[6] = normals ? uint8_t(kValenceFlagNormals) : 0;
+    const uint16_t flags = uint16_t((normals ? kValenceFlagNormals : 0) | snap_flags);
+    out[6] = uint8_t(flags);
+    out[7] = uint8_t(flags >> 8);
     put32(out, 8, uint32_t(vn));
     put32(out, 12, uint32_t(fn));
     put32(out, 16, vc);
@@ -754,7 +877,7 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
 Result<Mesh> decodeValence(const std::vector<uint8_t>& bytes, const std::string& name) {
     lodrt::ValenceInfo info;
     lodrt::Result r = lodrt::valenceReadInfo(bytes.data(), bytes.size(), &info);
-    if (r != lodrt::Result::Ok) return invalidInput(name + ": header: " + describe(r));
+    if (r != lodrt::Result::Ok) return invalidInput(name + ": header: " + describe(r, bytes));
     Mesh mesh;
     std::vector<float> positions(3 * size_t(info.vertex_count)), normals;
     if (info.has_normals) normals.resize(3 * size_t(info.vertex_count));
@@ -774,7 +897,7 @@ Result<Mesh> decodeValence(const std::vector<uint8_t>& bytes, const std::string&
     output.scratch_size = scratch_words * 8;
     r = lodrt::valenceDecode(bytes.data(), bytes.size(), output);
     scratch.reset(); // before the copies below: they need no scratch
-    if (r != lodrt::Result::Ok) return invalidInput(name + ": streams: " + describe(r));
+    if (r != lodrt::Result::Ok) return invalidInput(name + ": streams: " + describe(r, bytes));
     mesh.positions.resize(info.vertex_count);
     for (size_t i = 0; i < info.vertex_count; ++i)
         mesh.positions[i] = Vec3f{positions[3 * i], positions[3 * i + 1], positions[3 * i + 2]};

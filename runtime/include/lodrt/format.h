@@ -8,7 +8,7 @@ namespace lodrt {
 namespace format {
 
 // glTF binary container (glTF 2.0 spec, "GLB File Format Specification").
-constexpr uint32_t kGlbMagic = 0x46546C67u;     // "glTF" little-endian
+constexpr uint32_t kGlbMagic = 0x46546C67u; // "glTF" little-endian
 constexpr uint32_t kGlbVersion = 2;
 constexpr uint32_t kGlbChunkJson = 0x4E4F534Au; // "JSON"
 constexpr uint32_t kGlbChunkBin = 0x004E4942u;  // "BIN\0"
@@ -19,7 +19,7 @@ constexpr uint32_t kGlbChunkHeaderSize = 8;
 // start of the blob. Vertex ids are removal ranks: vertex i is the i-th vertex removed by the
 // half-edge-collapse sequence, ids >= removed_count are never removed.
 constexpr uint32_t kPfrepMagic = 0x31524650u; // "PFR1"
-constexpr uint32_t kPfrepVersion = 2;           // 2: blocks stored coarse end first (prefix streaming)
+constexpr uint32_t kPfrepVersion = 2;         // 2: blocks stored coarse end first (prefix streaming)
 constexpr uint32_t kPfrepHeaderSize = 64;
 // Header fields (byte offset: type):
 //   0 u32 magic, 4 u32 version, 8 u32 vertex_count, 12 u32 removed_count, 16 u32 block_shift,
@@ -30,7 +30,7 @@ constexpr uint32_t kPfrepHeaderSize = 64;
 // entry offsets (relative to its entry stream), its entry stream, kPfrepStreamPadding zero bytes.
 constexpr uint32_t kPfrepVertexRecordSize = 10; // u16 q[3], u8 radius, u8 error, u16 cone
 constexpr uint32_t kPfrepMaxBlockShift = 8;
-constexpr uint32_t kPfrepStreamPadding = 16;    // zero bytes after each block's entry stream (64-bit bit reads)
+constexpr uint32_t kPfrepStreamPadding = 16; // zero bytes after each block's entry stream (64-bit bit reads)
 constexpr uint32_t kPfrepMaxVertices = 0x40000000u;
 // Entry bit fields (LSB first): neighbour count (6 bits, 63 = 63 + next 16 bits), dependency count
 // (3 bits, 7 = 7 + next 16 bits), has_original (1), neighbour width (5), dependency width (5, only
@@ -45,7 +45,7 @@ constexpr uint32_t kPfrepLogCodeSteps = 8;
 // then the connectivity, position and normal streams, back to back; the position and normal streams
 // each have a range-coded part followed by a raw bit part (the low mantissa bits of the residuals).
 constexpr uint32_t kValenceMagic = 0x4D42424Cu; // "LBBM" little-endian
-constexpr uint16_t kValenceVersion = 4;         // 4: raw bit parts for residual mantissas
+constexpr uint16_t kValenceVersion = 5;         // 5: neighbour-coordinate (snap) flags per position component
 constexpr uint32_t kValenceHeaderSize = 64;
 // Header fields (byte offset: type): 0 u32 magic, 4 u16 version, 6 u16 flags, 8 u32 vertex_count,
 // 12 u32 triangle_count, 16 u32 closed_vertex_count, 20 u32 closed_triangle_count, 24 u8 position_bits,
@@ -53,6 +53,15 @@ constexpr uint32_t kValenceHeaderSize = 64;
 // 48 u32 position_bytes, 52 u32 normal_bytes (range-coded parts), 56 u32 position_raw_bytes,
 // 60 u32 normal_raw_bytes (raw bit parts, bits packed least significant first).
 constexpr uint16_t kValenceFlagNormals = 1u;
+// Flags bits 1..3: position component j (x, y, z) is coded with the neighbour-coordinate flag ("snap"):
+// before its residual, one binary decision says whether the coordinate equals the known neighbour
+// coordinate nearest the prediction (docs/format/valence.md "Positions"). The encoder sets a bit when
+// it makes that component smaller (iso-surface meshes: vertices on grid edges share grid planes).
+constexpr uint16_t kValenceFlagSnapX = 2u; // component j: kValenceFlagSnapX << j
+constexpr uint16_t kValenceKnownFlags = 15u;
+constexpr uint32_t kValenceSnapDistanceBuckets = 16; // bit length of |candidate - prediction|, capped
+constexpr uint32_t kValenceSnapMultiplicity = 5;     // 0..4 triple entries holding the candidate value
+constexpr uint32_t kValenceSnapContexts = kValenceSnapDistanceBuckets * kValenceSnapMultiplicity;
 constexpr uint32_t kValenceMinPositionBits = 8;
 constexpr uint32_t kValenceMaxPositionBits = 16;
 constexpr uint32_t kValenceMinNormalBits = 4;
@@ -63,7 +72,7 @@ constexpr uint32_t kValenceMaxCount = 1u << 28; // vertex and triangle counts
 // an 18-symbol model at least -log2(32632/32768) > 0.0059 and of a 32-symbol model at least
 // -log2(32520/32768) > 0.0109. Every closed vertex costs a 32-symbol value (< 734 per byte) and a
 // closed triangle follows a value or closes a node (< 2 per value); every coded position costs three
-// 18-symbol values (< 452 per byte), every normal two (< 678 per byte).
+// 18-symbol values or snap decisions (< 473 per byte), every normal two (< 678 per byte).
 constexpr uint32_t kValenceTrianglesPerByte = 2048; // closed triangles per connectivity byte
 constexpr uint32_t kValenceVerticesPerByte = 1024;  // closed vertices per connectivity byte
 constexpr uint32_t kValencePositionsPerByte = 512;  // vertices per position range-coded byte
@@ -99,8 +108,8 @@ constexpr uint32_t kValenceResidualTreeBits = 5; // size of the per-length manti
 constexpr uint32_t kRangeCdfBits = 15;
 constexpr uint32_t kValenceResidualSymbols = 18;
 constexpr uint32_t kRangeCdfMinFreq = 8;
-constexpr uint32_t kRangeCdfRateFirst = 3;  // shift for the first kRangeCdfRateStep uses
-constexpr uint32_t kRangeCdfRateLast = 6;   // residual lengths: shift from 2 * kRangeCdfRateStep uses on
+constexpr uint32_t kRangeCdfRateFirst = 3;            // shift for the first kRangeCdfRateStep uses
+constexpr uint32_t kRangeCdfRateLast = 6;             // residual lengths: shift from 2 * kRangeCdfRateStep uses on
 constexpr uint32_t kRangeCdfRateLastConnectivity = 7; // connectivity symbols: the same
 constexpr uint32_t kRangeCdfRateStep = 16;
 constexpr uint32_t kValenceNormalContexts = 17; // bit length of the same component's previous residual

@@ -175,7 +175,8 @@ TEST(ValenceCodecTest, MoebiusStripAndClosedManifoldsNeedNoCopies) {
         const float u = 2 * kPi * float(i) / float(n);
         for (int s = -1; s <= 1; s += 2) {
             const float w = 0.3f * float(s) * std::cos(u / 2);
-            strip.positions.push_back(Vec3f{(1 + w) * std::cos(u), (1 + w) * std::sin(u), 0.3f * float(s) * std::sin(u / 2)});
+            strip.positions.push_back(
+                Vec3f{(1 + w) * std::cos(u), (1 + w) * std::sin(u), 0.3f * float(s) * std::sin(u / 2)});
         }
     }
     for (int i = 0; i < n; ++i) {
@@ -217,7 +218,8 @@ TEST(ValenceCodecTest, RegularTorusFitsThePlausibilityBounds) {
     expectRoundTrip(m, o, &r);
     const double conn_bpv = double(r.connectivity_bytes) * 8.0 / double(m.vertexCount());
     EXPECT_LT(conn_bpv, 0.1);
-    EXPECT_LE(double(m.vertexCount()), double(lodrt::format::kValenceVerticesPerByte) * double(r.connectivity_bytes + 1));
+    EXPECT_LE(double(m.vertexCount()),
+              double(lodrt::format::kValenceVerticesPerByte) * double(r.connectivity_bytes + 1));
 }
 
 TEST(ValenceCodecTest, TorusWithNormals) {
@@ -376,20 +378,70 @@ std::vector<uint8_t> sampleStream() {
     return enc->bytes;
 }
 
+// Header flags of a stream (format.h: bit 0 normals, bits 1..3 snapped position components).
+uint32_t streamFlags(const std::vector<uint8_t>& bytes) {
+    return uint32_t(bytes[6]) | uint32_t(bytes[7]) << 8;
+}
+
+// A torus whose coordinates are all moved by random amounts: no two neighbours share one.
+Mesh jitteredTorus(int nu, int nv, uint32_t seed) {
+    std::mt19937 rng(seed);
+    Mesh t = torus(nu, nv);
+    t.normals.clear();
+    for (Vec3f& p : t.positions) {
+        p.x += float(rng() % 1000) * 1e-4f;
+        p.y += float(rng() % 1000) * 1e-4f;
+        p.z += float(rng() % 1000) * 1e-4f;
+    }
+    return t;
+}
+
+// A height field on an integer lattice with random heights and holes, and a jittered torus beside
+// it (a handle: merges): x and y of every lattice vertex equal some neighbour's, z almost never, so
+// the encoder snaps x and y only.
+Mesh latticeMesh() {
+    std::mt19937 rng(99);
+    Mesh m = grid(24, true);
+    for (Vec3f& p : m.positions) p.z = float(rng() % 1000) * 0.013f;
+    lodbake::appendMesh(m, jitteredTorus(16, 10, 5));
+    return m;
+}
+
+std::vector<uint8_t> snapStream() {
+    auto enc = encodeValence(latticeMesh(), {});
+    EXPECT_TRUE(enc.ok());
+    return enc->bytes;
+}
+
+TEST(ValenceCodecTest, SnapFlagsFollowTheGeometry) {
+    const Mesh m = latticeMesh();
+    ValenceEncodeResult r;
+    expectRoundTrip(m, {}, &r);
+    using lodrt::format::kValenceFlagSnapX;
+    EXPECT_EQ(streamFlags(r.bytes), uint32_t(kValenceFlagSnapX | kValenceFlagSnapX << 1)); // x and y
+    // Without shared coordinates no component is snapped: the flag would only cost bits.
+    const Mesh noisy = jitteredTorus(40, 30, 3);
+    ValenceEncodeResult n;
+    expectRoundTrip(noisy, {}, &n);
+    EXPECT_EQ(streamFlags(n.bytes) & ~uint32_t(lodrt::format::kValenceFlagNormals), 0u);
+    // The same mesh codes to the same bytes.
+    EXPECT_EQ(encodeValence(m, {})->bytes, r.bytes);
+}
+
 TEST(ValenceDecoderSafetyTest, ValidStreamDecodes) {
     EXPECT_EQ(decodeChecked(sampleStream()), lodrt::Result::Ok);
 }
 
 TEST(ValenceDecoderSafetyTest, EveryTruncatedPrefixFails) {
-    std::vector<uint8_t> bytes = sampleStream();
-    for (size_t n = 0; n < bytes.size(); ++n) {
-        std::vector<uint8_t> cut(bytes.begin(), bytes.begin() + long(n));
-        lodrt::Result r = decodeChecked(cut);
-        ASSERT_NE(r, lodrt::Result::Ok) << "prefix " << n;
-        if (n < lodrt::format::kValenceHeaderSize && n >= 4) {
-            ASSERT_EQ(r, lodrt::Result::Truncated);
+    for (const std::vector<uint8_t>& bytes : {sampleStream(), snapStream()})
+        for (size_t n = 0; n < bytes.size(); ++n) {
+            std::vector<uint8_t> cut(bytes.begin(), bytes.begin() + long(n));
+            lodrt::Result r = decodeChecked(cut);
+            ASSERT_NE(r, lodrt::Result::Ok) << "prefix " << n;
+            if (n < lodrt::format::kValenceHeaderSize && n >= 4) {
+                ASSERT_EQ(r, lodrt::Result::Truncated);
+            }
         }
-    }
 }
 
 TEST(ValenceDecoderSafetyTest, TrailingBytesBadMagicUnknownVersion) {
@@ -406,6 +458,24 @@ TEST(ValenceDecoderSafetyTest, TrailingBytesBadMagicUnknownVersion) {
     auto bits = bytes;
     bits[24] = 17;
     EXPECT_EQ(decodeChecked(bits), lodrt::Result::CorruptStream);
+    auto flags = bytes;
+    flags[6] |= 16; // no meaning yet
+    EXPECT_EQ(decodeChecked(flags), lodrt::Result::CorruptStream);
+}
+
+// A stream of the previous format version is refused with a message naming both versions.
+TEST(ValenceDecoderSafetyTest, OldVersionIsRefusedClearly) {
+    auto old = sampleStream();
+    old[4] = uint8_t(lodrt::format::kValenceVersion - 1);
+    EXPECT_EQ(decodeChecked(old), lodrt::Result::UnsupportedVersion);
+    auto dec = decodeValence(old, "old.lbm");
+    ASSERT_FALSE(dec.ok());
+    const std::string& msg = dec.status().message();
+    EXPECT_NE(msg.find("old.lbm: header: format version " + std::to_string(lodrt::format::kValenceVersion - 1) +
+                       " is not supported (this decoder reads version " +
+                       std::to_string(lodrt::format::kValenceVersion)),
+              std::string::npos)
+        << msg;
 }
 
 // Version 4's raw bit parts: no bit of the last raw byte is ignored (a flipped data bit changes the
@@ -469,22 +539,23 @@ TEST(ValenceDecoderSafetyTest, SmallBuffersAreRefused) {
 }
 
 TEST(ValenceDecoderSafetyTest, RandomCorruptionNeverCrashes) {
-    std::vector<uint8_t> bytes = sampleStream();
-    std::mt19937 rng(12345);
-    int failures = 0;
-    for (int trial = 0; trial < 3000; ++trial) {
-        auto bad = bytes;
-        int flips = 1 + int(rng() % 4);
-        for (int k = 0; k < flips; ++k) {
-            // Mostly the streams; sometimes the header.
-            size_t at = (rng() % 8 == 0) ? rng() % lodrt::format::kValenceHeaderSize : rng() % bad.size();
-            bad[at] = uint8_t(rng());
+    for (const std::vector<uint8_t>& bytes : {sampleStream(), snapStream()}) {
+        std::mt19937 rng(12345);
+        int failures = 0;
+        for (int trial = 0; trial < 3000; ++trial) {
+            auto bad = bytes;
+            int flips = 1 + int(rng() % 4);
+            for (int k = 0; k < flips; ++k) {
+                // Mostly the streams; sometimes the header.
+                size_t at = (rng() % 8 == 0) ? rng() % lodrt::format::kValenceHeaderSize : rng() % bad.size();
+                bad[at] = uint8_t(rng());
+            }
+            if (bad == bytes) continue;
+            if (decodeChecked(bad) != lodrt::Result::Ok) ++failures;
         }
-        if (bad == bytes) continue;
-        if (decodeChecked(bad) != lodrt::Result::Ok) ++failures;
+        // Most corruptions are detected (the rest decode to some in-range mesh, which is allowed).
+        EXPECT_GT(failures, 1500);
     }
-    // Most corruptions are detected (the rest decode to some in-range mesh, which is allowed).
-    EXPECT_GT(failures, 1500);
 }
 
 } // namespace

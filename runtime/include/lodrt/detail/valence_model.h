@@ -76,7 +76,7 @@ template <uint32_t N, uint32_t LastRate> struct CdfModel {
     /// (kRangeCdfMinFreq * i) for i <= s. Order and minimum widths are kept.
     inline void update(uint32_t s) {
         using namespace format;
-        const uint32_t rate = uses < kRangeCdfRateStep ? kRangeCdfRateFirst
+        const uint32_t rate = uses < kRangeCdfRateStep       ? kRangeCdfRateFirst
                               : uses < 2 * kRangeCdfRateStep ? kRangeCdfRateFirst + 1
                                                              : LastRate;
         uses = uint16_t(uses < 2 * kRangeCdfRateStep ? uses + 1 : uses);
@@ -91,8 +91,7 @@ template <uint32_t N, uint32_t LastRate> struct CdfModel {
 };
 
 using ResidualLengthModel = CdfModel<format::kValenceResidualSymbols, format::kRangeCdfRateLast>;
-using ConnectivitySymbolModel =
-    CdfModel<(1u << format::kValenceSymbolTreeBits), format::kRangeCdfRateLastConnectivity>;
+using ConnectivitySymbolModel = CdfModel<(1u << format::kValenceSymbolTreeBits), format::kRangeCdfRateLastConnectivity>;
 
 /// What sits across the focus's front edge.
 enum class VertexKind : uint32_t { Add = 0, Dummy = 1, Split = 2, Merge = 3 };
@@ -396,8 +395,8 @@ struct PositionPlan {
     uint32_t* neighbour = nullptr; // per entry: the first known neighbour a met in the walk, kNone if none
     uint32_t* triples = nullptr;   // (a, b, w) of every parallelogram a + b - w, entry after entry
     uint32_t max_triples = 0;
-    uint32_t ordered = 0;       // entries of order filled
-    uint32_t triple_count = 0;  // triples filled
+    uint32_t ordered = 0;      // entries of order filled
+    uint32_t triple_count = 0; // triples filled
 };
 
 /// Fills `plan`. Order (like Draco's prediction-degree traversal): the next vertex is taken from the
@@ -552,11 +551,96 @@ inline uint32_t positionContext(uint32_t scale_ctx, uint32_t earlier_length) {
     return 20 + (scale_ctx >= 10 ? kPositionLengthBuckets : 0) + b;
 }
 
+/// Neighbour-coordinate ("snap") candidates of the three position components (docs/format/valence.md
+/// "Positions"): for component j, among the a and b of the vertex's triples, then its neighbour, the
+/// coordinate nearest the prediction pred[j] (ties: the smaller value). False without any (then for
+/// every component). ctx[j] is the snap context: the bit length of |candidate - pred| (capped at 15)
+/// times 5 plus the number of triple entries holding the candidate value (1 without triples, capped
+/// at 4). Iso-surface meshes put every vertex on a grid edge, so two of its coordinates are grid
+/// planes it shares with neighbours.
+/// Only the components in `Mask` (bit j: component j) are computed; the others are left unset.
+template <uint32_t Mask>
+inline bool snapCandidatesOf(const int32_t* qpos, const uint32_t* t, uint32_t n, uint32_t neighbour,
+                             const int32_t pred[3], int32_t candidate[3], uint32_t ctx[3]) {
+    if (n == 0 && neighbour == kNone) return false;
+    // Key: distance above, value below (values are < 2^16), so the smallest key is the nearest value,
+    // ties to the smaller one. Branch-free minimum over the 2n triple entries and the neighbour.
+    uint64_t best[3] = {~uint64_t(0), ~uint64_t(0), ~uint64_t(0)};
+    auto key = [&](const int32_t* p, int j) {
+        const int64_t d = int64_t(p[j]) - pred[j];
+        return (uint64_t(d < 0 ? -d : d) << 17) | uint64_t(uint32_t(p[j]));
+    };
+    const uint32_t* end = t + 3 * size_t(n);
+    for (const uint32_t* e = t; e != end; e += 3) {
+        const int32_t* pa = &qpos[3 * size_t(e[0])];
+        const int32_t* pb = &qpos[3 * size_t(e[1])];
+        for (int j = 0; j < 3; ++j) {
+            if (!((Mask >> j) & 1u)) continue;
+            const uint64_t ka = key(pa, j), kb = key(pb, j);
+            const uint64_t k = ka < kb ? ka : kb;
+            best[j] = k < best[j] ? k : best[j];
+        }
+    }
+    if (neighbour != kNone) {
+        const int32_t* pn = &qpos[3 * size_t(neighbour)];
+        for (int j = 0; j < 3; ++j) {
+            if (!((Mask >> j) & 1u)) continue;
+            const uint64_t k = key(pn, j);
+            best[j] = k < best[j] ? k : best[j];
+        }
+    }
+    uint32_t mult[3] = {1, 1, 1};
+    if (n > 0) {
+        mult[0] = mult[1] = mult[2] = 0;
+        for (int j = 0; j < 3; ++j) candidate[j] = int32_t(best[j] & 0x1FFFFu);
+        for (const uint32_t* e = t; e != end; e += 3) {
+            const int32_t* pa = &qpos[3 * size_t(e[0])];
+            const int32_t* pb = &qpos[3 * size_t(e[1])];
+            for (int j = 0; j < 3; ++j)
+                if ((Mask >> j) & 1u) mult[j] += uint32_t(pa[j] == candidate[j]) + uint32_t(pb[j] == candidate[j]);
+        }
+    }
+    for (int j = 0; j < 3; ++j) {
+        if (!((Mask >> j) & 1u)) continue;
+        candidate[j] = int32_t(best[j] & 0x1FFFFu);
+        uint32_t d = uint32_t(best[j] >> 17), b = 0;
+        for (; d != 0 && b < format::kValenceSnapDistanceBuckets - 1; d >>= 1) ++b;
+        const uint32_t m = mult[j] < format::kValenceSnapMultiplicity ? mult[j] : format::kValenceSnapMultiplicity - 1;
+        ctx[j] = b * format::kValenceSnapMultiplicity + m;
+    }
+    return true;
+}
+
+/// snapCandidatesOf for a run-time component mask (1..7; 0 computes nothing and returns false).
+inline bool snapCandidates(const int32_t* qpos, const uint32_t* t, uint32_t n, uint32_t neighbour,
+                           const int32_t pred[3], uint32_t mask, int32_t candidate[3], uint32_t ctx[3]) {
+    switch (mask & 7u) {
+    case 1:
+        return snapCandidatesOf<1>(qpos, t, n, neighbour, pred, candidate, ctx);
+    case 2:
+        return snapCandidatesOf<2>(qpos, t, n, neighbour, pred, candidate, ctx);
+    case 3:
+        return snapCandidatesOf<3>(qpos, t, n, neighbour, pred, candidate, ctx);
+    case 4:
+        return snapCandidatesOf<4>(qpos, t, n, neighbour, pred, candidate, ctx);
+    case 5:
+        return snapCandidatesOf<5>(qpos, t, n, neighbour, pred, candidate, ctx);
+    case 6:
+        return snapCandidatesOf<6>(qpos, t, n, neighbour, pred, candidate, ctx);
+    case 7:
+        return snapCandidatesOf<7>(qpos, t, n, neighbour, pred, candidate, ctx);
+    default:
+        return false;
+    }
+}
+
 /// Sign contexts of a residual: the sign class (0 zero, 1 positive, 2 negative) of the same component's
 /// residual at the previously coded vertex, times 3, plus the class of this vertex's x residual (0 for
 /// x itself). Parallelogram errors follow the local curvature, so neighbouring signs agree.
 constexpr uint32_t kSignContexts = 9;
-inline uint32_t signClass(int32_t r) { return r > 0 ? 1u : (r < 0 ? 2u : 0u); }
+inline uint32_t signClass(int32_t r) {
+    return r > 0 ? 1u : (r < 0 ? 2u : 0u);
+}
 
 } // namespace detail
 } // namespace lodrt
