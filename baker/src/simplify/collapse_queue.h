@@ -13,6 +13,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "simplify/large_array.h"
+
 namespace lodbake::detail {
 
 class CollapseQueue {
@@ -155,8 +157,8 @@ private:
         setPos(e.id, i);
     }
 
-    std::vector<Entry> heap_;
-    std::vector<Slot> slot_;
+    LargeArray<Entry> heap_;
+    LargeArray<Slot> slot_;
 };
 
 } // namespace lodbake::detail

@@ -774,9 +774,9 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
     cos_max_normal_change_ = std::cos(std::min(double(options.max_normal_change_deg), 180.0) * kPi / 180.0);
 
     const uint32_t vertex_count = uint32_t(mesh.vertexCount());
-    std::vector<uint8_t> referenced(vertex_count, 0);
+    LargeArray<uint8_t> referenced(vertex_count, 0);
     for (uint32_t i : mesh.indices) referenced[i] = 1;
-    std::vector<uint32_t> order;
+    LargeArray<uint32_t> order;
     order.reserve(vertex_count);
     for (uint32_t v = 0; v < vertex_count; ++v)
         if (referenced[v]) order.push_back(v);
@@ -830,13 +830,13 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
     size_t table_size = 16;
     while (table_size < size_t(order.size()) * 2) table_size *= 2;
     const size_t mask = table_size - 1;
-    std::vector<uint32_t> vertex_point(vertex_count, kNone), vertex_wedge(vertex_count, kNone);
+    LargeArray<uint32_t> vertex_point(vertex_count, kNone), vertex_wedge(vertex_count, kNone);
     position_.clear();
     wedge_vertex_.clear();
     wedge_point_.clear();
     {
-        std::vector<uint32_t> point_table(table_size, kNone); // first vertex of each point
-        std::vector<uint32_t> wedge_table(has_wedges ? table_size : 0, kNone);
+        LargeArray<uint32_t> point_table(table_size, kNone); // first vertex of each point
+        LargeArray<uint32_t> wedge_table(has_wedges ? table_size : 0, kNone);
         for (uint32_t v : order) {
             const uint64_t ph = posHash(v);
             size_t i = size_t(finish(ph)) & mask;
@@ -883,7 +883,7 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
             }
         }
     }
-    std::vector<uint32_t>().swap(order);
+    LargeArray<uint32_t>().swap(order);
     // Points renumbered in order of first use by the faces: a collapse touches a few dozen points
     // and faces that are neighbours on the surface, and scans often list their vertices far from
     // the order of their faces (lucy100k's faces span 9,500 vertex ids at the 90th percentile).
@@ -894,7 +894,7 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
     // attributes a wedge is its point and moves with it).
     {
         const uint32_t n = uint32_t(position_.size());
-        std::vector<uint32_t> first_use(n, kNone);
+        LargeArray<uint32_t> first_use(n, kNone);
         uint32_t next = 0;
         for (size_t f = 0; f < mesh.faceCount(); ++f) {
             const uint32_t p0 = vertex_point[mesh.indices[f * 3]], p1 = vertex_point[mesh.indices[f * 3 + 1]],
@@ -905,17 +905,17 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
         }
         for (uint32_t p = 0; p < n; ++p) // points only on dropped faces, after the others
             if (first_use[p] == kNone) first_use[p] = next++;
-        const std::vector<uint32_t>& new_id = first_use;
-        std::vector<Vec3f> moved(n);
+        const LargeArray<uint32_t>& new_id = first_use;
+        LargeArray<Vec3f> moved(n);
         for (uint32_t p = 0; p < n; ++p) moved[new_id[p]] = position_[p];
         position_.swap(moved);
-        std::vector<Vec3f>().swap(moved);
+        LargeArray<Vec3f>().swap(moved);
         for (uint32_t& p : vertex_point)
             if (p != kNone) p = new_id[p];
         if (has_wedges) {
             for (uint32_t& p : wedge_point_) p = new_id[p];
         } else {
-            std::vector<uint32_t> wedge_vertex(n);
+            LargeArray<uint32_t> wedge_vertex(n);
             for (uint32_t w = 0; w < n; ++w) wedge_vertex[new_id[w]] = wedge_vertex_[w];
             wedge_vertex_.swap(wedge_vertex);
             for (uint32_t w = 0; w < n; ++w) wedge_point_[w] = w;
@@ -971,13 +971,13 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
     // Twins: pair a->b with b->a when each occurs exactly once; otherwise lock both points.
     kind_.assign(point_count, kFree);
     {
-        std::vector<uint32_t> start(size_t(point_count) + 1, 0);
+        LargeArray<uint32_t> start(size_t(point_count) + 1, 0);
         for (uint32_t h = 0; h < he_count; ++h) ++start[corner_point_[h] + 1];
         for (uint32_t p = 0; p < point_count; ++p) start[p + 1] += start[p];
-        std::vector<uint32_t> list(he_count);
-        std::vector<uint32_t> fill(start.begin(), start.end() - 1);
+        LargeArray<uint32_t> list(he_count);
+        LargeArray<uint32_t> fill(start.begin(), start.end() - 1);
         for (uint32_t h = 0; h < he_count; ++h) list[fill[corner_point_[h]]++] = h;
-        std::vector<uint32_t>().swap(fill);
+        LargeArray<uint32_t>().swap(fill);
         twin_.assign(he_count, kNone);
         for (uint32_t h = 0; h < he_count; ++h) {
             const uint32_t a = corner_point_[h], b = corner_point_[nextHe(h)];
@@ -1075,7 +1075,7 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
     if (has_penalty_)
         far_ = position_;
     else
-        std::vector<Vec3f>().swap(far_);
+        LargeArray<Vec3f>().swap(far_);
     // UV charts: faces joined across edges whose two corners share wedges (union-find).
     uv_set_count_ = uint32_t(mesh.uvs.size());
     uv_channel_ = uv_set_count_ > 0 ? (mesh.hasNormals() ? 3u : 0u) : kNone;
@@ -1114,8 +1114,8 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
 }
 
 void EdgeCollapser::describe(CollapseSequence& sequence) const {
-    sequence.point_positions = position_;
-    sequence.wedge_point = wedge_point_;
+    sequence.point_positions.assign(position_.begin(), position_.end());
+    sequence.wedge_point.assign(wedge_point_.begin(), wedge_point_.end());
     sequence.attribute_stride = channel_count_;
     sequence.records.clear();
     sequence.wedge_updates.clear();

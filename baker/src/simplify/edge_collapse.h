@@ -14,6 +14,7 @@
 #include "lodbake/simplify/quadric.h"
 #include "lodbake/simplify/simplify.h"
 #include "simplify/collapse_queue.h"
+#include "simplify/large_array.h"
 
 namespace lodbake::detail {
 
@@ -104,8 +105,8 @@ private:
     double attribute_scale_ = 1;
     uint32_t uv_channel_ = 0xffffffffu; // first UV channel, none without UV sets
     uint32_t uv_set_count_ = 0;
-    std::vector<uint32_t> face_chart_;  // UV chart (representative face) per face
-    std::vector<uint32_t> chart_alive_; // alive faces per chart representative
+    LargeArray<uint32_t> face_chart_;  // UV chart (representative face) per face
+    LargeArray<uint32_t> chart_alive_; // alive faces per chart representative
     // Below late_faces_ faces (kLateFraction of the input) the point-distance penalty also
     // measures far_ points and face centroids, and prices distances by the mean area (run()).
     size_t late_faces_ = 0;
@@ -115,29 +116,29 @@ private:
                                // price from its last pop (run())
 
     // Points (distinct positions) and wedges (distinct position + attributes).
-    std::vector<Vec3f> position_;
+    LargeArray<Vec3f> position_;
     // Per point, one input point it stands for: of the two merged by each collapse, the one
     // further from the new fan (with tip_distance_weight > 0 only).
-    std::vector<Vec3f> far_;
-    std::vector<uint32_t> point_he_; // an outgoing half-edge of an alive face, or kNone
-    std::vector<uint8_t> kind_;
-    std::vector<uint32_t> mark_; // scratch stamps for the link condition
+    LargeArray<Vec3f> far_;
+    LargeArray<uint32_t> point_he_; // an outgoing half-edge of an alive face, or kNone
+    LargeArray<uint8_t> kind_;
+    LargeArray<uint32_t> mark_; // scratch stamps for the link condition
     uint32_t stamp_ = 0;
-    std::vector<Quadric> quadric_;
-    std::vector<uint32_t> wedge_vertex_; // an input vertex carrying the wedge's original attributes
-    std::vector<uint32_t> wedge_point_;
+    LargeArray<Quadric> quadric_;
+    LargeArray<uint32_t> wedge_vertex_; // an input vertex carrying the wedge's original attributes
+    LargeArray<uint32_t> wedge_point_;
     uint32_t channel_count_ = 0;                  // scalar attribute channels per wedge
     std::vector<float> channel_weight_;           // per channel, squared weight × scale²
-    std::vector<float> wedge_value_;              // wedge_count × channel_count_
+    LargeArray<float> wedge_value_;              // wedge_count × channel_count_
     size_t block_size_ = 0;             // attributeBlockSize(channel_count_), 0 without attributes
-    std::vector<double> wedge_block_;   // wedge_count × block_size_: each wedge's attribute quadrics
+    LargeArray<double> wedge_block_;   // wedge_count × block_size_: each wedge's attribute quadrics
 
     // Corner table: half-edge h goes from corner_point_[h] to corner_point_[nextHe(h)].
-    std::vector<uint32_t> corner_point_; // kNone for dead faces
-    std::vector<uint32_t> corner_wedge_; // empty when there are no attribute streams
-    std::vector<uint32_t> twin_;
-    std::vector<uint32_t> face_group_;  // sub-mesh per face; empty with a single sub-mesh
-    std::vector<uint32_t> face_source_; // input face index per face
+    LargeArray<uint32_t> corner_point_; // kNone for dead faces
+    LargeArray<uint32_t> corner_wedge_; // empty when there are no attribute streams
+    LargeArray<uint32_t> twin_;
+    LargeArray<uint32_t> face_group_;  // sub-mesh per face; empty with a single sub-mesh
+    LargeArray<uint32_t> face_source_; // input face index per face
     std::vector<uint32_t> group_first_face_;
 
     CollapseQueue queue_;
