@@ -58,8 +58,11 @@ private:
 
     static uint32_t nextHe(uint32_t h) { return h % 3 == 2 ? h - 2 : h + 1; }
     static uint32_t prevHe(uint32_t h) { return h % 3 == 0 ? h + 2 : h - 1; }
-    uint32_t canonical(uint32_t h) const { return (twin_[h] == kNone || h < twin_[h]) ? h : twin_[h]; }
-    uint32_t wedgeAt(uint32_t h) const { return corner_wedge_.empty() ? corner_point_[h] : corner_wedge_[h]; }
+    uint32_t canonical(uint32_t h) const {
+        const uint32_t t = he_[h].twin;
+        return (t == kNone || h < t) ? h : t;
+    }
+    uint32_t wedgeAt(uint32_t h) const { return corner_wedge_.empty() ? he_[h].point : corner_wedge_[h]; }
     bool isFeature(uint32_t h) const;
     bool canRemove(uint32_t point, bool feature_edge) const;
     // Outgoing half-edges of `point`, one per incident face; returns false if the fan is open.
@@ -97,6 +100,18 @@ private:
     void updateEdgesInFan(); // the edges of the fan in fan_tmp_
     void requeueAll();
     Quadric combinedQuadric(uint32_t edge, uint32_t removed) const;
+    // Hint that the point's quadric and kind are about to be read (random accesses).
+    void prefetchPoint(uint32_t point) const {
+#if defined(__GNUC__)
+        const char* q = reinterpret_cast<const char*>(&quadric_[point]);
+        __builtin_prefetch(q);
+        __builtin_prefetch(q + 64);
+        __builtin_prefetch(q + sizeof(Quadric) - 1);
+        __builtin_prefetch(&kind_[point]);
+#else
+        (void)point;
+#endif
+    }
     const double* wedgeBlock(uint32_t wedge) const { return &wedge_block_[size_t(wedge) * block_size_]; }
 
     const Mesh* source_ = nullptr;
@@ -133,10 +148,14 @@ private:
     size_t block_size_ = 0;             // attributeBlockSize(channel_count_), 0 without attributes
     LargeArray<double> wedge_block_;   // wedge_count × block_size_: each wedge's attribute quadrics
 
-    // Corner table: half-edge h goes from corner_point_[h] to corner_point_[nextHe(h)].
-    LargeArray<uint32_t> corner_point_; // kNone for dead faces
+    // Corner table: half-edge h goes from he_[h].point to he_[nextHe(h)].point; its twin (opposite
+    // half-edge) is he_[h].twin. Point and twin share one array: every fan walk reads both.
+    struct HalfEdge {
+        uint32_t point; // kNone for dead faces
+        uint32_t twin;  // kNone on open or non-manifold edges
+    };
+    LargeArray<HalfEdge> he_;
     LargeArray<uint32_t> corner_wedge_; // empty when there are no attribute streams
-    LargeArray<uint32_t> twin_;
     LargeArray<uint32_t> face_group_;  // sub-mesh per face; empty with a single sub-mesh
     LargeArray<uint32_t> face_source_; // input face index per face
     std::vector<uint32_t> group_first_face_;
