@@ -557,9 +557,9 @@ void EdgeCollapser::collapse(const Candidate& c, const WedgePair* pairs, int pai
     if (w1 != kNone && kind_[w1] != old_w1) updateEdgesAround(w1);
 }
 
-double EdgeCollapser::endpointDistance2(const Candidate& c, double floor2) const {
-    // fan_u_ / fan_v_ hold the fans gathered by isValid. Each distance only matters above floor2
-    // (the quadric estimate), so its search stops as soon as it falls to that.
+double EdgeCollapser::endpointDistance2(const Candidate& c, double stop2) const {
+    // fan_u_ / fan_v_ hold the fans gathered by isValid. Each distance only matters above stop2
+    // (at least the quadric estimate), so its search stops as soon as it falls to that.
     const uint32_t f0 = c.edge / 3;
     const uint32_t t = he_[c.edge].twin;
     const uint32_t f1 = t == kNone ? kNone : t / 3;
@@ -573,21 +573,22 @@ double EdgeCollapser::endpointDistance2(const Candidate& c, double floor2) const
     double dfu = late_ ? inf : 0.0, dfv = dfu;
     for (const std::vector<uint32_t>* fan : {&fan_u_, &fan_v_}) {
         for (uint32_t h : *fan) {
+            if (dp <= stop2 && du <= stop2 && dv <= stop2 && dfu <= stop2 && dfv <= stop2) break;
             const uint32_t f = h / 3;
             const Vec3d ox = toD(position_[he_[nextHe(h)].point]);
             const Vec3d oy = toD(position_[he_[prevHe(h)].point]);
-            if (dp > floor2) {
+            if (dp > stop2) {
                 const Vec3d o = toD(position_[he_[h].point]);
                 const Vec3d ab = ox - o, ac = oy - o;
                 dp = std::min(dp, triangleDistance2(p, o, ox, oy, ab, ac, !(length2(cross(ab, ac)) > 0.0)));
             }
-            if (f == f0 || f == f1 || (du <= floor2 && dv <= floor2 && dfu <= floor2 && dfv <= floor2)) continue;
+            if (f == f0 || f == f1 || (du <= stop2 && dv <= stop2 && dfu <= stop2 && dfv <= stop2)) continue;
             const Vec3d ab = ox - p, ac = oy - p;
             const bool degenerate = !(length2(cross(ab, ac)) > 0.0);
-            if (du > floor2) du = std::min(du, triangleDistance2(pu, p, ox, oy, ab, ac, degenerate));
-            if (dv > floor2) dv = std::min(dv, triangleDistance2(pv, p, ox, oy, ab, ac, degenerate));
-            if (dfu > floor2) dfu = std::min(dfu, triangleDistance2(fu, p, ox, oy, ab, ac, degenerate));
-            if (dfv > floor2) dfv = std::min(dfv, triangleDistance2(fv, p, ox, oy, ab, ac, degenerate));
+            if (du > stop2) du = std::min(du, triangleDistance2(pu, p, ox, oy, ab, ac, degenerate));
+            if (dv > stop2) dv = std::min(dv, triangleDistance2(pv, p, ox, oy, ab, ac, degenerate));
+            if (dfu > stop2) dfu = std::min(dfu, triangleDistance2(fu, p, ox, oy, ab, ac, degenerate));
+            if (dfv > stop2) dfv = std::min(dfv, triangleDistance2(fv, p, ox, oy, ab, ac, degenerate));
         }
     }
     double dc = 0; // a new face that bridges a concave region leaves the surface between its corners
@@ -604,7 +605,7 @@ double EdgeCollapser::endpointDistance2(const Candidate& c, double floor2) const
                 double d = triangleDistance2(centroid, o, ox, oy, ox - o, oy - o, !(length2(cross(ox - o, oy - o)) > 0.0));
                 for (const std::vector<uint32_t>* old_fan : {&fan_u_, &fan_v_}) {
                     for (uint32_t g : *old_fan) {
-                        if (d <= std::max(floor2, dc)) break;
+                        if (d <= std::max(stop2, dc)) break;
                         const Vec3d go = toD(position_[he_[g].point]);
                         const Vec3d gx = toD(position_[he_[nextHe(g)].point]);
                         const Vec3d gy = toD(position_[he_[prevHe(g)].point]);
@@ -761,14 +762,22 @@ bool EdgeCollapser::run(size_t target_faces, double max_error, CollapseSequence*
             // Cheap upper bounds of the three distances: the new fan contains the segments from the
             // new position to w0 (and w1), the old fans contain the edge itself. When even they
             // cannot send the edge back, collapse without measuring.
+            auto requeues = [&](double d2) { return base + scale * std::max(0.0, d2 - floor2) > limit; };
             const double bound = distanceBound2(c);
-            if (base + scale * std::max(0.0, bound - floor2) <= limit) {
+            if (!requeues(bound)) {
                 collapse(c, pairs, pair_count, sequence);
                 continue;
             }
-            const double extra = scale * std::max(0.0, endpointDistance2(c, floor2) - floor2);
-            queue_.setPayload(e, float(extra));
+            // Only whether the distance re-queues the edge matters unless it does (the edge then
+            // collapses and its penalty is never read again), and that is monotone in the distance:
+            // the searches may stop at the largest squared distance that does not re-queue. Above
+            // it they run to the exact minimum, so a re-queued edge gets the exact penalty.
+            double stop2 = floor2 + (limit - base) / scale;
+            for (int i = 0; i < 64 && stop2 > floor2 && requeues(stop2); ++i) stop2 = std::nextafter(stop2, 0.0);
+            if (!(std::isfinite(stop2) && stop2 >= floor2 && !requeues(stop2))) stop2 = floor2;
+            const double extra = scale * std::max(0.0, endpointDistance2(c, stop2) - floor2);
             if (base + extra > limit) {
+                queue_.setPayload(e, float(extra));
                 queue_.set(e, float(base + extra));
                 if (queue_.topId() != e) continue; // still the cheapest: collapse it now
             }
@@ -954,15 +963,14 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
     corner_wedge_.clear();
     if (has_wedges) corner_wedge_.reserve(input_faces * 3);
     face_group_.clear();
-    face_source_.clear();
-    face_source_.reserve(input_faces);
+    uint32_t kept_faces = 0;
     group_first_face_.assign(groups.size() + 1, 0);
     size_t dropped = 0;
     size_t group = 0;
     for (size_t f = 0; f < input_faces; ++f) {
         while (group < groups.size() && f * 3 >= size_t(groups[group].first_index) + groups[group].index_count) {
             ++group;
-            if (group < groups.size()) group_first_face_[group] = uint32_t(face_source_.size());
+            if (group < groups.size()) group_first_face_[group] = kept_faces;
         }
         const uint32_t i0 = mesh.indices[f * 3], i1 = mesh.indices[f * 3 + 1], i2 = mesh.indices[f * 3 + 2];
         const uint32_t p0 = vertex_point[i0], p1 = vertex_point[i1], p2 = vertex_point[i2];
@@ -974,14 +982,14 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
         if (has_wedges)
             corner_wedge_.insert(corner_wedge_.end(), {vertex_wedge[i0], vertex_wedge[i1], vertex_wedge[i2]});
         if (multi_group) face_group_.push_back(uint32_t(std::min(group, groups.size() - 1)));
-        face_source_.push_back(uint32_t(f));
+        ++kept_faces;
     }
-    for (size_t g = group + 1; g < groups.size(); ++g) group_first_face_[g] = uint32_t(face_source_.size());
-    group_first_face_[groups.size()] = uint32_t(face_source_.size());
+    for (size_t g = group + 1; g < groups.size(); ++g) group_first_face_[g] = kept_faces;
+    group_first_face_[groups.size()] = kept_faces;
     if (dropped > 0)
         diagnostics.note("simplify input: " + std::to_string(dropped) +
                          " faces with repeated positions dropped (zero area)");
-    const uint32_t face_count = uint32_t(face_source_.size());
+    const uint32_t face_count = kept_faces;
     const uint32_t he_count = face_count * 3;
     initial_faces_ = face_count;
     alive_faces_ = face_count;
@@ -1152,7 +1160,7 @@ Mesh EdgeCollapser::extract() const {
     out.submeshes = src.submeshes;
     for (size_t g = 0; g < std::max<size_t>(group_count, 1); ++g) {
         const uint32_t first = group_count ? group_first_face_[g] : 0;
-        const uint32_t last = group_count ? group_first_face_[g + 1] : uint32_t(face_source_.size());
+        const uint32_t last = group_count ? group_first_face_[g + 1] : uint32_t(he_.size() / 3);
         const size_t first_index = out.indices.size();
         for (uint32_t f = first; f < last; ++f) {
             if (he_[f * 3].point == kNone) continue;

@@ -84,8 +84,9 @@ private:
     // than max_normal_change_deg.
     bool normalTurnsTooFar(double d, double len2_a, double len2_b) const;
     // Largest squared point distance of a valid collapse (fans from isValid): the endpoints' old
-    // positions to the new fan, and the new position to the old fans.
-    double endpointDistance2(const Candidate& c, double floor2) const;
+    // positions to the new fan, and the new position to the old fans. Exact when above stop2;
+    // otherwise some value no larger than stop2.
+    double endpointDistance2(const Candidate& c, double stop2) const;
     // True when a is strictly further than b from the fan v will have after the collapse c (fans
     // from isValid).
     bool fartherFromNewFan(const Vec3d& a, const Vec3d& b, const Candidate& c) const;
@@ -157,7 +158,6 @@ private:
     LargeArray<HalfEdge> he_;
     LargeArray<uint32_t> corner_wedge_; // empty when there are no attribute streams
     LargeArray<uint32_t> face_group_;  // sub-mesh per face; empty with a single sub-mesh
-    LargeArray<uint32_t> face_source_; // input face index per face
     std::vector<uint32_t> group_first_face_;
 
     CollapseQueue queue_;
