@@ -31,6 +31,16 @@ public:
     size_t size() const { return heap_.size() - kPad; }
     bool contains(uint32_t id) const { return pos(id) != kAbsent; }
     uint32_t topId() const { return at(0).id; }
+    /// The smallest child of the root (the top after a pop if nothing else changes), or kAbsent.
+    uint32_t secondId() const {
+        const uint32_t n = uint32_t(size());
+        if (n < 2) return kAbsent;
+        const uint32_t last = std::min(kArity + 1, n);
+        uint32_t child = 1;
+        for (uint32_t k = 2; k < last; ++k)
+            if (less(at(k), at(child))) child = k;
+        return at(child).id;
+    }
     float topCost() const { return at(0).cost; }
     float cost(uint32_t id) const { return at(pos(id)).cost; }
 

@@ -734,6 +734,11 @@ bool EdgeCollapser::run(size_t target_faces, double max_error, CollapseSequence*
             if (queue_.empty()) break;
         }
         const uint32_t e = queue_.topId();
+        // The next edge to pop is most often the current runner-up. Its half-edge is requested
+        // now and its points' data once that has arrived (below), so that the next evaluate does
+        // not wait for a chain of misses.
+        const uint32_t next = queue_.secondId();
+        if (next != CollapseQueue::kAbsent) prefetch(&he_[next]);
         if (!evaluate(e, c) || c.error > max_error) {
             queue_.remove(e);
             continue;
@@ -743,6 +748,10 @@ bool EdgeCollapser::run(size_t target_faces, double max_error, CollapseSequence*
             // Dropped until a neighbouring collapse changes it and re-queues it.
             queue_.remove(e);
             continue;
+        }
+        if (next != CollapseQueue::kAbsent && he_[next].point != kNone) {
+            prefetchPoint(he_[next].point);
+            prefetchPoint(he_[nextHe(next)].point);
         }
         if (has_penalty_) {
             // Quadrics measure distance to planes: a sharp tip whose faces are nearly parallel to

@@ -109,6 +109,7 @@ private:
         __builtin_prefetch(q + 64);
         __builtin_prefetch(q + sizeof(Quadric) - 1);
         __builtin_prefetch(&kind_[point]);
+        __builtin_prefetch(&position_[point]);
 #else
         (void)point;
 #endif
