@@ -380,21 +380,22 @@ bool EdgeCollapser::isValid(const Candidate& c, int& pair_count, WedgePair* pair
     if (he_[nextHe(h)].twin == kNone && he_[prevHe(h)].twin == kNone) return false;
     if (t != kNone && he_[nextHe(t)].twin == kNone && he_[prevHe(t)].twin == kNone) return false;
 
-    // Link condition, vertices: common neighbours of u and v must be exactly w0 (and w1).
-    if (stamp_ >= 0xfffffff0u) {
-        std::fill(mark_.begin(), mark_.end(), 0u);
-        stamp_ = 0;
-    }
-    ++stamp_;
+    // Link condition, vertices: common neighbours of u and v must be exactly w0 (and w1). The
+    // neighbours are the far ends of the fans' outgoing edges, plus the other corners when a fan
+    // is open (in a closed fan each face's third corner is the next face's far end). A fan has a
+    // handful of points, so a linear search beats marking them in a per-point array (a random
+    // write per neighbour).
+    link_u_.clear();
     for (uint32_t he : fan_u_) {
-        mark_[he_[nextHe(he)].point] = stamp_;
-        mark_[he_[prevHe(he)].point] = stamp_;
+        link_u_.push_back(he_[nextHe(he)].point);
+        if (!u_closed) link_u_.push_back(he_[prevHe(he)].point);
     }
+    auto common = [&](uint32_t x) {
+        return x != w0 && x != w1 && x != u && std::find(link_u_.begin(), link_u_.end(), x) != link_u_.end();
+    };
     for (uint32_t he : fan_v_) {
-        const uint32_t x = he_[nextHe(he)].point;
-        const uint32_t y = he_[prevHe(he)].point;
-        if (mark_[x] == stamp_ && x != w0 && x != w1 && x != u) return false;
-        if (mark_[y] == stamp_ && y != w0 && y != w1 && y != u) return false;
+        if (common(he_[nextHe(he)].point)) return false;
+        if (!v_closed && common(he_[prevHe(he)].point)) return false;
     }
     // Link condition, edges: the edge w0-w1 is in both links iff faces (u,w0,w1) and (v,w0,w1)
     // exist; they are the faces across the other two edges of f0 (the tetrahedron case).
@@ -1137,8 +1138,6 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
         }
     }
     for (uint32_t p = 0; p < point_count; ++p) kind_[p] = classify(p);
-    mark_.assign(point_count, 0);
-    stamp_ = 0;
 
     queue_ = CollapseQueue(he_count);
     queue_.reserve(he_count / 2 + 16);

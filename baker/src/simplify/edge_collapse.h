@@ -139,8 +139,6 @@ private:
     LargeArray<Vec3f> far_;
     LargeArray<uint32_t> point_he_; // an outgoing half-edge of an alive face, or kNone
     LargeArray<uint8_t> kind_;
-    LargeArray<uint32_t> mark_; // scratch stamps for the link condition
-    uint32_t stamp_ = 0;
     LargeArray<Quadric> quadric_;
     LargeArray<uint32_t> wedge_vertex_; // an input vertex carrying the wedge's original attributes
     LargeArray<uint32_t> wedge_point_;
@@ -168,6 +166,7 @@ private:
     double max_error_done_ = 0;
 
     std::vector<uint32_t> fan_u_, fan_v_, fan_tmp_;
+    std::vector<uint32_t> link_u_; // isValid: the neighbours of the removed point
     bool fan_u_closed_ = true, fan_v_closed_ = true; // from the last isValid
 };
 

@@ -50,10 +50,10 @@ Result<LodChain> buildLodChain(const Mesh& mesh, const LodChainOptions& options,
         const size_t faces = engine.initialFaceCount();
         if (sequence) {
             engine.describe(*sequence);
-            // Each collapse removes two faces (one on a border): the record's size is known up to that
-            // factor, and growing it by doubling would copy it and overshoot.
+            // Each collapse removes two faces, or one on a border: reserving for one (pages never
+            // written are never resident) saves growing the record by doubling, which copies it.
             const size_t last_target = size_t(std::ceil(ratios.back() * double(faces)));
-            const size_t collapses = faces > last_target ? (faces - last_target + 1) / 2 : 0;
+            const size_t collapses = faces > last_target ? faces - last_target : 0;
             sequence->records.reserve(collapses);
             if (sequence->attribute_stride > 0) {
                 sequence->wedge_updates.reserve(collapses);
