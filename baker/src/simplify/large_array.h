@@ -8,11 +8,13 @@
 // kHugePageBytes is aligned to 2 MB and marked MADV_HUGEPAGE: the kernel then backs it with 2 MB
 // pages when it can (with THP set to "madvise" or "always"), which removes most TLB misses and
 // page faults (dragon_poisson's chain: docs/simplify.md, "Measured"). Only whole 2 MB pages
-// inside the requested size are advised, so no memory beyond the request becomes resident.
+// inside the requested size are advised, so no memory beyond the request becomes resident, and
+// such blocks are mapped and unmapped directly, so they never sit in malloc's free lists.
 // Elsewhere, or for small arrays, it is plain operator new. Contents and results do not depend on
 // it.
 
 #include <cstddef>
+#include <cstdint>
 #include <cstdlib>
 #include <new>
 #include <vector>
@@ -27,6 +29,7 @@ template <class T>
 struct LargeArrayAllocator {
     using value_type = T;
     static constexpr size_t kHugePageBytes = size_t(2) << 20;
+    static size_t pageRound(size_t bytes) { return (bytes + 4095) & ~size_t(4095); }
 
     LargeArrayAllocator() = default;
     template <class U>
@@ -36,13 +39,22 @@ struct LargeArrayAllocator {
         const size_t bytes = n * sizeof(T);
 #if defined(__linux__) && defined(MADV_HUGEPAGE)
         if (bytes >= kHugePageBytes) {
-            // aligned_alloc wants a multiple of the alignment; the tail past `bytes` is never touched.
-            const size_t rounded = (bytes + kHugePageBytes - 1) & ~(kHugePageBytes - 1);
-            void* p = std::aligned_alloc(kHugePageBytes, rounded);
-            if (!p) throw std::bad_alloc();
-            // Advice only: failure (e.g. THP disabled) leaves ordinary pages.
-            madvise(p, bytes & ~(kHugePageBytes - 1), MADV_HUGEPAGE);
-            return static_cast<T*>(p);
+            // Mapped directly (not through malloc, whose arenas would keep the alignment slack and
+            // freed blocks around): 2 MB more than asked, then the unaligned head and the tail are
+            // unmapped again. Freed blocks go straight back to the OS.
+            const size_t length = pageRound(bytes);
+            void* raw = mmap(nullptr, length + kHugePageBytes, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS,
+                             -1, 0);
+            if (raw == MAP_FAILED) throw std::bad_alloc();
+            const uintptr_t start = reinterpret_cast<uintptr_t>(raw);
+            const uintptr_t aligned = (start + kHugePageBytes - 1) & ~uintptr_t(kHugePageBytes - 1);
+            if (aligned > start) munmap(raw, aligned - start);
+            const uintptr_t end = start + length + kHugePageBytes;
+            if (end > aligned + length) munmap(reinterpret_cast<void*>(aligned + length), end - (aligned + length));
+            // Advice only: failure (e.g. THP disabled) leaves ordinary pages. Only whole 2 MB pages
+            // inside the request, so nothing past it becomes resident.
+            madvise(reinterpret_cast<void*>(aligned), bytes & ~(kHugePageBytes - 1), MADV_HUGEPAGE);
+            return reinterpret_cast<T*>(aligned);
         }
 #endif
         return static_cast<T*>(::operator new(bytes));
@@ -51,7 +63,7 @@ struct LargeArrayAllocator {
     void deallocate(T* p, size_t n) {
 #if defined(__linux__) && defined(MADV_HUGEPAGE)
         if (n * sizeof(T) >= kHugePageBytes) {
-            std::free(p);
+            munmap(p, pageRound(n * sizeof(T)));
             return;
         }
 #endif
