@@ -1017,6 +1017,8 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
         for (uint32_t h = 0; h < he_count; ++h) list[fill[he_[h].point]++] = h;
         LargeArray<uint32_t>().swap(fill);
         for (uint32_t h = 0; h < he_count; ++h) {
+            // Already paired from its twin: the pairing is symmetric (a->b once and b->a once).
+            if (he_[h].twin != kNone) continue;
             const uint32_t a = he_[h].point, b = he_[nextHe(h)].point;
             uint32_t same = 0, reverse = 0, match = kNone;
             for (uint32_t i = start[a]; i < start[a + 1]; ++i)
@@ -1026,9 +1028,10 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
                     ++reverse;
                     match = list[i];
                 }
-            if (same == 1 && reverse == 1)
+            if (same == 1 && reverse == 1) {
                 he_[h].twin = match;
-            else if (same + reverse > 1) {
+                he_[match].twin = h;
+            } else if (same + reverse > 1) {
                 kind_[a] = kLocked;
                 kind_[b] = kLocked;
             }
