@@ -21,6 +21,7 @@
 
 #if defined(__linux__)
 #include <sys/mman.h>
+#include <unistd.h>
 #endif
 
 namespace lodbake::detail {
@@ -29,7 +30,12 @@ template <class T>
 struct LargeArrayAllocator {
     using value_type = T;
     static constexpr size_t kHugePageBytes = size_t(2) << 20;
-    static size_t pageRound(size_t bytes) { return (bytes + 4095) & ~size_t(4095); }
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+    static size_t pageRound(size_t bytes) {
+        const size_t page = size_t(sysconf(_SC_PAGESIZE));
+        return (bytes + page - 1) / page * page;
+    }
+#endif
 
     LargeArrayAllocator() = default;
     template <class U>
