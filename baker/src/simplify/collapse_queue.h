@@ -1,9 +1,11 @@
 #pragma once
 // Indexed min-heap of collapse candidates (Gasparello 2007 §2: each edge stores its heap position
 // so update and remove are O(log n) without searching). Ordered by cost, then by id, so the
-// collapse order never depends on heap layout or insertion history. The heap is 4-ary: half the
-// depth of a binary heap, and the four children of a node share a cache line or two, which
-// matters more than the extra comparisons once a million-edge heap no longer fits in cache.
+// collapse order never depends on heap layout or insertion history. The heap is 8-ary and laid
+// out so that the eight children of a node fill exactly one 64-byte cache line: a third of the
+// depth of a binary heap, one line per level. Once a million-edge heap no longer fits in cache,
+// the lines touched (and the position updates of the entries moved, one per level) are what
+// costs, not the extra comparisons (4-ary with unaligned children: docs/simplify.md).
 //
 // Next to each id's heap position the queue keeps a float the simplifier looks up with it (the
 // edge's point-distance penalty), so one random access serves both.
@@ -13,6 +15,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "simplify/large_array.h"
+
 namespace lodbake::detail {
 
 class CollapseQueue {
@@ -20,15 +24,25 @@ public:
     static constexpr uint32_t kAbsent = 0xffffffffu;
 
     /// Ids are in [0, id_capacity).
-    explicit CollapseQueue(size_t id_capacity = 0) : slot_(id_capacity, Slot{kAbsent, 0.0f}) {}
+    explicit CollapseQueue(size_t id_capacity = 0) : heap_(kPad, Entry{0.0f, 0}), slot_(id_capacity, Slot{kAbsent, 0.0f}) {}
 
-    void reserve(size_t n) { heap_.reserve(n); }
-    bool empty() const { return heap_.empty(); }
-    size_t size() const { return heap_.size(); }
+    void reserve(size_t n) { heap_.reserve(n + kPad); }
+    bool empty() const { return heap_.size() == kPad; }
+    size_t size() const { return heap_.size() - kPad; }
     bool contains(uint32_t id) const { return pos(id) != kAbsent; }
-    uint32_t topId() const { return heap_[0].id; }
-    float topCost() const { return heap_[0].cost; }
-    float cost(uint32_t id) const { return heap_[pos(id)].cost; }
+    uint32_t topId() const { return at(0).id; }
+    /// The smallest child of the root (the top after a pop if nothing else changes), or kAbsent.
+    uint32_t secondId() const {
+        const uint32_t n = uint32_t(size());
+        if (n < 2) return kAbsent;
+        const uint32_t last = std::min(kArity + 1, n);
+        uint32_t child = 1;
+        for (uint32_t k = 2; k < last; ++k)
+            if (less(at(k), at(child))) child = k;
+        return at(child).id;
+    }
+    float topCost() const { return at(0).cost; }
+    float cost(uint32_t id) const { return at(pos(id)).cost; }
 
     /// Per-id value owned by the caller, kept whether or not the id is queued (initially 0).
     float payload(uint32_t id) const { return slot_[id].payload; }
@@ -47,16 +61,16 @@ public:
     void set(uint32_t id, float cost) {
         uint32_t i = pos(id);
         if (i == kAbsent) {
-            i = uint32_t(heap_.size());
+            i = uint32_t(size());
             assert(i < kAbsent);
             heap_.push_back({cost, id});
             slot_[id].pos = i;
             siftUp(i);
             return;
         }
-        const Entry old = heap_[i];
-        heap_[i].cost = cost;
-        if (less(heap_[i], old))
+        const Entry old = at(i);
+        at(i).cost = cost;
+        if (less(at(i), old))
             siftUp(i);
         else
             siftDown(i);
@@ -65,12 +79,12 @@ public:
     /// Bulk construction: append ids that are not yet present with pushUnordered, then call
     /// heapify once (O(n) instead of n sifts). No other call may come in between.
     void pushUnordered(uint32_t id, float cost) {
-        slot_[id].pos = uint32_t(heap_.size());
+        slot_[id].pos = uint32_t(size());
         heap_.push_back({cost, id});
     }
     void heapify() {
-        if (heap_.size() < 2) return;
-        for (uint32_t i = uint32_t((heap_.size() - 2) / kArity + 1); i-- > 0;) siftDown(i);
+        if (size() < 2) return;
+        for (uint32_t i = uint32_t((size() - 2) / kArity + 1); i-- > 0;) siftDown(i);
     }
 
     /// Removes `id` if present.
@@ -78,38 +92,42 @@ public:
         const uint32_t i = pos(id);
         slot_[id].pos = kAbsent;
         if (i == kAbsent) return;
-        const uint32_t last = uint32_t(heap_.size() - 1);
+        const uint32_t last = uint32_t(size() - 1);
         if (i == last) {
             heap_.pop_back();
             return;
         }
-        const Entry moved = heap_[last];
+        const Entry moved = at(last);
         heap_.pop_back();
-        heap_[i] = moved;
+        at(i) = moved;
         setPos(moved.id, i);
-        if (i > 0 && less(moved, heap_[(i - 1) / kArity]))
+        if (i > 0 && less(moved, at((i - 1) / kArity)))
             siftUp(i);
         else
             siftDown(i);
     }
 
     uint32_t pop() {
-        const uint32_t id = heap_[0].id;
+        const uint32_t id = at(0).id;
         remove(id);
         return id;
     }
 
     /// True when the heap order and the position index agree (for tests).
     bool isConsistent() const {
-        for (size_t i = 0; i < heap_.size(); ++i) {
-            if (pos(heap_[i].id) != i) return false;
-            if (i > 0 && less(heap_[i], heap_[(i - 1) / kArity])) return false;
+        for (size_t i = 0; i < size(); ++i) {
+            if (pos(at(i).id) != i) return false;
+            if (i > 0 && less(at(i), at((i - 1) / kArity))) return false;
         }
         return true;
     }
 
 private:
-    static constexpr uint32_t kArity = 4;
+    static constexpr uint32_t kArity = 8;
+    // heap_ starts with kPad unused entries: node i is heap_[i + kPad], so the children of node i,
+    // 8i+1 .. 8i+8, sit at heap_[8(i+1) .. 8(i+1)+7], one aligned 64-byte line when heap_'s storage
+    // is 64-byte aligned (LargeArray allocations above 2 MB are; smaller heaps stay in cache).
+    static constexpr uint32_t kPad = 7;
     struct Entry {
         float cost;
         uint32_t id;
@@ -120,43 +138,45 @@ private:
     };
     static bool less(const Entry& a, const Entry& b) { return a.cost < b.cost || (a.cost == b.cost && a.id < b.id); }
 
+    Entry& at(uint32_t i) { return heap_[i + kPad]; }
+    const Entry& at(uint32_t i) const { return heap_[i + kPad]; }
     uint32_t pos(uint32_t id) const { return slot_[id].pos; }
     void setPos(uint32_t id, uint32_t i) { slot_[id].pos = i; }
 
     void siftUp(uint32_t i) {
-        const Entry e = heap_[i];
+        const Entry e = at(i);
         while (i > 0) {
             const uint32_t parent = (i - 1) / kArity;
-            if (!less(e, heap_[parent])) break;
-            heap_[i] = heap_[parent];
-            setPos(heap_[i].id, i);
+            if (!less(e, at(parent))) break;
+            at(i) = at(parent);
+            setPos(at(i).id, i);
             i = parent;
         }
-        heap_[i] = e;
+        at(i) = e;
         setPos(e.id, i);
     }
 
     void siftDown(uint32_t i) {
-        const Entry e = heap_[i];
-        const uint32_t n = uint32_t(heap_.size());
+        const Entry e = at(i);
+        const uint32_t n = uint32_t(size());
         for (;;) {
             const uint32_t first = kArity * i + 1;
             if (first >= n) break;
             const uint32_t last = std::min(first + kArity, n);
             uint32_t child = first;
             for (uint32_t k = first + 1; k < last; ++k)
-                if (less(heap_[k], heap_[child])) child = k;
-            if (!less(heap_[child], e)) break;
-            heap_[i] = heap_[child];
-            setPos(heap_[i].id, i);
+                if (less(at(k), at(child))) child = k;
+            if (!less(at(child), e)) break;
+            at(i) = at(child);
+            setPos(at(i).id, i);
             i = child;
         }
-        heap_[i] = e;
+        at(i) = e;
         setPos(e.id, i);
     }
 
-    std::vector<Entry> heap_;
-    std::vector<Slot> slot_;
+    LargeArray<Entry> heap_;
+    LargeArray<Slot> slot_;
 };
 
 } // namespace lodbake::detail

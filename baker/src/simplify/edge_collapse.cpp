@@ -8,8 +8,8 @@
 //   Constraint planes for borders and the heap with stored positions follow L. Gasparello's thesis
 //   (Pisa 2007), ch. 2 and 4.3.3.
 //
-// Connectivity is a corner table: half-edge h = corner h of the index buffer, from corner_point_[h]
-// to corner_point_[nextHe(h)], twin_[h] the opposite half-edge or kNone. Edges that are not
+// Connectivity is a corner table: half-edge h = corner h of the index buffer, from he_[h].point
+// to he_[nextHe(h)].point, he_[h].twin the opposite half-edge or kNone. Edges that are not
 // 2-manifold with consistent orientation get no twin and lock their endpoints, so non-manifold
 // spots of the input are never touched.
 //
@@ -51,6 +51,15 @@ constexpr double kLateFraction = 0.05;
 // region test needed); the margin keeps rounding from deciding, since the plane distance and the
 // region test's distance differ in the last bits.
 constexpr double kPlaneMargin = 1.0 + 1e-9;
+
+// Hint that *p is about to be read (a random access into a large array).
+inline void prefetch(const void* p) {
+#if defined(__GNUC__)
+    __builtin_prefetch(p);
+#else
+    (void)p;
+#endif
+}
 
 uint32_t floatBits(float f) {
     uint32_t b;
@@ -107,7 +116,7 @@ double segmentDistance2(const Vec3d& p, const Vec3d& a, const Vec3d& b) {
 } // namespace
 
 bool EdgeCollapser::isFeature(uint32_t h) const {
-    const uint32_t t = twin_[h];
+    const uint32_t t = he_[h].twin;
     if (t == kNone) return true;
     if (!face_group_.empty() && face_group_[h / 3] != face_group_[t / 3]) return true;
     if (!corner_wedge_.empty())
@@ -126,11 +135,14 @@ bool EdgeCollapser::gatherFan(uint32_t point, std::vector<uint32_t>& fan) const 
     fan.clear();
     const uint32_t h0 = point_he_[point];
     if (h0 == kNone) return true;
-    const size_t guard = corner_point_.size();
+    const size_t guard = he_.size();
     uint32_t h = h0;
     for (;;) {
         fan.push_back(h);
-        const uint32_t n = twin_[prevHe(h)];
+        // The neighbour's position is read by every user of the fan (flip checks, distances); its
+        // miss overlaps the walk to the next face.
+        prefetch(&position_[he_[nextHe(h)].point]);
+        const uint32_t n = he_[prevHe(h)].twin;
         if (n == h0) return true;
         if (n == kNone || fan.size() > guard) break;
         h = n;
@@ -138,11 +150,12 @@ bool EdgeCollapser::gatherFan(uint32_t point, std::vector<uint32_t>& fan) const 
     // Open fan: walk the other way from h0.
     h = h0;
     for (;;) {
-        const uint32_t t = twin_[h];
+        const uint32_t t = he_[h].twin;
         if (t == kNone) break;
         h = nextHe(t);
         if (h == h0 || fan.size() > guard) break;
         fan.push_back(h);
+        prefetch(&position_[he_[nextHe(h)].point]);
     }
     return false;
 }
@@ -160,7 +173,7 @@ EdgeCollapser::Kind EdgeCollapser::classifyFan(const std::vector<uint32_t>& fan,
     for (uint32_t h : fan) {
         if (isFeature(h)) ++features;
         const uint32_t in = prevHe(h);
-        if (twin_[in] == kNone) ++features; // a boundary edge coming in is nobody's outgoing edge
+        if (he_[in].twin == kNone) ++features; // a boundary edge coming in is nobody's outgoing edge
     }
     if (features == 0) return kFree;
     if (features == 2) return kLine;
@@ -169,11 +182,11 @@ EdgeCollapser::Kind EdgeCollapser::classifyFan(const std::vector<uint32_t>& fan,
 
 void EdgeCollapser::collectPairs(uint32_t edge, uint32_t removed, WedgePair* pairs, int& pair_count) const {
     const uint32_t a_corner = edge, b_corner = nextHe(edge);
-    const bool remove_a = corner_point_[edge] == removed;
+    const bool remove_a = he_[edge].point == removed;
     pairs[0] =
         remove_a ? WedgePair{wedgeAt(a_corner), wedgeAt(b_corner)} : WedgePair{wedgeAt(b_corner), wedgeAt(a_corner)};
     pair_count = 1;
-    const uint32_t t = twin_[edge];
+    const uint32_t t = he_[edge].twin;
     if (t == kNone) return;
     // The twin runs b -> a: corner t is b, corner next(t) is a.
     const WedgePair p =
@@ -182,7 +195,7 @@ void EdgeCollapser::collectPairs(uint32_t edge, uint32_t removed, WedgePair* pai
 }
 
 Quadric EdgeCollapser::combinedQuadric(uint32_t edge, uint32_t removed) const {
-    const uint32_t a = corner_point_[edge], b = corner_point_[nextHe(edge)];
+    const uint32_t a = he_[edge].point, b = he_[nextHe(edge)].point;
     Quadric q = quadric_[a];
     q += quadric_[b];
     if (channel_count_ == 0) return q;
@@ -196,9 +209,9 @@ Quadric EdgeCollapser::combinedQuadric(uint32_t edge, uint32_t removed) const {
 }
 
 bool EdgeCollapser::evaluate(uint32_t edge, Candidate& c) const {
-    const uint32_t a = corner_point_[edge];
+    const uint32_t a = he_[edge].point;
     if (a == kNone) return false;
-    const uint32_t b = corner_point_[nextHe(edge)];
+    const uint32_t b = he_[nextHe(edge)].point;
     if (kind_[a] >= kLocked || kind_[b] >= kLocked) return false;
     const bool feature = isFeature(edge);
     const bool ra = canRemove(a, feature);
@@ -268,8 +281,8 @@ bool EdgeCollapser::evaluate(uint32_t edge, Candidate& c) const {
 Vec3d EdgeCollapser::fanNormal(const std::vector<uint32_t>& fan) const {
     Vec3d sum;
     for (uint32_t h : fan) {
-        const Vec3d p0 = toD(position_[corner_point_[h]]);
-        sum += cross(toD(position_[corner_point_[nextHe(h)]]) - p0, toD(position_[corner_point_[prevHe(h)]]) - p0);
+        const Vec3d p0 = toD(position_[he_[h].point]);
+        sum += cross(toD(position_[he_[nextHe(h)].point]) - p0, toD(position_[he_[prevHe(h)].point]) - p0);
     }
     return sum;
 }
@@ -288,8 +301,8 @@ bool EdgeCollapser::checkFaces(const std::vector<uint32_t>& fan, uint32_t moved,
     const Vec3d pm = toD(position_[moved]);
     for (uint32_t h : fan) {
         const uint32_t f = h / 3;
-        const Vec3d px = toD(position_[corner_point_[nextHe(h)]]);
-        const Vec3d py = toD(position_[corner_point_[prevHe(h)]]);
+        const Vec3d px = toD(position_[he_[nextHe(h)].point]);
+        const Vec3d py = toD(position_[he_[prevHe(h)].point]);
         const Vec3d xy = px - py;
         const double xy2 = length2(xy);
         const Vec3d n_old = cross(px - pm, py - pm);
@@ -348,9 +361,11 @@ bool EdgeCollapser::checkUvFaces(const std::vector<uint32_t>& fan, const Vec3d& 
 
 bool EdgeCollapser::isValid(const Candidate& c, int& pair_count, WedgePair* pairs) {
     const uint32_t u = c.removed, v = c.kept, h = c.edge;
-    const uint32_t t = twin_[h];
+    const uint32_t t = he_[h].twin;
     const uint32_t f0 = h / 3;
     const uint32_t f1 = t == kNone ? kNone : t / 3;
+    // v's first face loads while u's fan is walked.
+    if (point_he_[v] != kNone) prefetch(&he_[point_he_[v]]);
     const bool u_closed = gatherFan(u, fan_u_);
     const bool v_closed = gatherFan(v, fan_v_);
     fan_u_closed_ = u_closed;
@@ -358,34 +373,35 @@ bool EdgeCollapser::isValid(const Candidate& c, int& pair_count, WedgePair* pair
     // An interior edge joining two boundary points would pinch the surface (the hole's virtual
     // vertex is a common neighbour outside the edge's link).
     if (t != kNone && !u_closed && !v_closed) return false;
-    const uint32_t w0 = corner_point_[prevHe(h)];
-    const uint32_t w1 = t == kNone ? kNone : corner_point_[prevHe(t)];
+    const uint32_t w0 = he_[prevHe(h)].point;
+    const uint32_t w1 = t == kNone ? kNone : he_[prevHe(t)].point;
     if (w0 == w1) return false;
     // A face whose two other edges are both open would be left dangling or isolated.
-    if (twin_[nextHe(h)] == kNone && twin_[prevHe(h)] == kNone) return false;
-    if (t != kNone && twin_[nextHe(t)] == kNone && twin_[prevHe(t)] == kNone) return false;
+    if (he_[nextHe(h)].twin == kNone && he_[prevHe(h)].twin == kNone) return false;
+    if (t != kNone && he_[nextHe(t)].twin == kNone && he_[prevHe(t)].twin == kNone) return false;
 
-    // Link condition, vertices: common neighbours of u and v must be exactly w0 (and w1).
-    if (stamp_ >= 0xfffffff0u) {
-        std::fill(mark_.begin(), mark_.end(), 0u);
-        stamp_ = 0;
-    }
-    ++stamp_;
+    // Link condition, vertices: common neighbours of u and v must be exactly w0 (and w1). The
+    // neighbours are the far ends of the fans' outgoing edges, plus the other corners when a fan
+    // is open (in a closed fan each face's third corner is the next face's far end). A fan has a
+    // handful of points, so a linear search beats marking them in a per-point array (a random
+    // write per neighbour).
+    link_u_.clear();
     for (uint32_t he : fan_u_) {
-        mark_[corner_point_[nextHe(he)]] = stamp_;
-        mark_[corner_point_[prevHe(he)]] = stamp_;
+        link_u_.push_back(he_[nextHe(he)].point);
+        if (!u_closed) link_u_.push_back(he_[prevHe(he)].point);
     }
+    auto common = [&](uint32_t x) {
+        return x != w0 && x != w1 && x != u && std::find(link_u_.begin(), link_u_.end(), x) != link_u_.end();
+    };
     for (uint32_t he : fan_v_) {
-        const uint32_t x = corner_point_[nextHe(he)];
-        const uint32_t y = corner_point_[prevHe(he)];
-        if (mark_[x] == stamp_ && x != w0 && x != w1 && x != u) return false;
-        if (mark_[y] == stamp_ && y != w0 && y != w1 && y != u) return false;
+        if (common(he_[nextHe(he)].point)) return false;
+        if (!v_closed && common(he_[prevHe(he)].point)) return false;
     }
     // Link condition, edges: the edge w0-w1 is in both links iff faces (u,w0,w1) and (v,w0,w1)
     // exist; they are the faces across the other two edges of f0 (the tetrahedron case).
     if (t != kNone) {
-        const uint32_t t1 = twin_[nextHe(h)], t2 = twin_[prevHe(h)];
-        if (t1 != kNone && t2 != kNone && corner_point_[prevHe(t1)] == w1 && corner_point_[prevHe(t2)] == w1)
+        const uint32_t t1 = he_[nextHe(h)].twin, t2 = he_[prevHe(h)].twin;
+        if (t1 != kNone && t2 != kNone && he_[prevHe(t1)].point == w1 && he_[prevHe(t2)].point == w1)
             return false;
     }
 
@@ -421,12 +437,17 @@ bool EdgeCollapser::isValid(const Candidate& c, int& pair_count, WedgePair* pair
 
 void EdgeCollapser::collapse(const Candidate& c, const WedgePair* pairs, int pair_count, CollapseSequence* sequence) {
     const uint32_t u = c.removed, v = c.kept, h = c.edge;
-    const uint32_t t = twin_[h];
+    const uint32_t t = he_[h].twin;
     const uint32_t f0 = h / 3;
     const uint32_t f1 = t == kNone ? kNone : t / 3;
-    const uint32_t w0 = corner_point_[prevHe(h)];
-    const uint32_t w1 = t == kNone ? kNone : corner_point_[prevHe(t)];
+    const uint32_t w0 = he_[prevHe(h)].point;
+    const uint32_t w1 = t == kNone ? kNone : he_[prevHe(t)].point;
 
+    // Every neighbour's edge to v is re-evaluated at the end (updateEdgesInFan), which reads the
+    // neighbour's quadric: a random access each. Requesting them all now lets those misses overlap
+    // with each other and with the work below instead of waiting one by one.
+    for (const std::vector<uint32_t>* fan : {&fan_u_, &fan_v_})
+        for (uint32_t he : *fan) prefetchPoint(he_[nextHe(he)].point);
     for (uint32_t k = 0; k < 3; ++k) {
         queue_.remove(canonical(f0 * 3 + k));
         if (f1 != kNone) queue_.remove(canonical(f1 * 3 + k));
@@ -476,7 +497,7 @@ void EdgeCollapser::collapse(const Candidate& c, const WedgePair* pairs, int pai
     position_[v] = p;
 
     for (uint32_t he : fan_u_) {
-        corner_point_[he] = v;
+        he_[he].point = v;
         if (!corner_wedge_.empty()) {
             const uint32_t w = corner_wedge_[he];
             for (int i = 0; i < pair_count; ++i)
@@ -489,16 +510,16 @@ void EdgeCollapser::collapse(const Candidate& c, const WedgePair* pairs, int pai
         const uint32_t hf = side == 0 ? h : t;
         if (hf == kNone) continue;
         const uint32_t e1 = nextHe(hf), e2 = prevHe(hf);
-        const uint32_t t1 = twin_[e1], t2 = twin_[e2];
-        const uint32_t w = corner_point_[e2];
-        if (t1 != kNone) twin_[t1] = t2;
-        if (t2 != kNone) twin_[t2] = t1;
+        const uint32_t t1 = he_[e1].twin, t2 = he_[e2].twin;
+        const uint32_t w = he_[e2].point;
+        if (t1 != kNone) he_[t1].twin = t2;
+        if (t2 != kNone) he_[t2].twin = t1;
         point_he_[w] = t1 != kNone ? t1 : (t2 != kNone ? nextHe(t2) : kNone);
         const uint32_t f = hf / 3;
         if (uv_channel_ != kNone) --chart_alive_[face_chart_[f]];
         for (uint32_t k = 0; k < 3; ++k) {
-            twin_[f * 3 + k] = kNone;
-            corner_point_[f * 3 + k] = kNone;
+            he_[f * 3 + k].twin = kNone;
+            he_[f * 3 + k].point = kNone;
         }
         --alive_faces_;
     }
@@ -506,7 +527,7 @@ void EdgeCollapser::collapse(const Candidate& c, const WedgePair* pairs, int pai
     point_he_[v] = kNone;
     for (const std::vector<uint32_t>* fan : {&fan_v_, &fan_u_}) {
         for (uint32_t he : *fan) {
-            if (corner_point_[he] == v) {
+            if (he_[he].point == v) {
                 point_he_[v] = he;
                 break;
             }
@@ -529,7 +550,7 @@ void EdgeCollapser::collapse(const Candidate& c, const WedgePair* pairs, int pai
     fan_tmp_.clear();
     for (const std::vector<uint32_t>* fan : {&fan_v_, &fan_u_})
         for (uint32_t he : *fan)
-            if (corner_point_[he] == v) fan_tmp_.push_back(he);
+            if (he_[he].point == v) fan_tmp_.push_back(he);
     if (kind_[v] != kLocked && kind_[v] != kDead)
         kind_[v] = point_he_[v] == kNone ? kDead : classifyFan(fan_tmp_, fan_u_closed_ && fan_v_closed_);
     updateEdgesInFan();
@@ -537,11 +558,11 @@ void EdgeCollapser::collapse(const Candidate& c, const WedgePair* pairs, int pai
     if (w1 != kNone && kind_[w1] != old_w1) updateEdgesAround(w1);
 }
 
-double EdgeCollapser::endpointDistance2(const Candidate& c, double floor2) const {
-    // fan_u_ / fan_v_ hold the fans gathered by isValid. Each distance only matters above floor2
-    // (the quadric estimate), so its search stops as soon as it falls to that.
+double EdgeCollapser::endpointDistance2(const Candidate& c, double stop2) const {
+    // fan_u_ / fan_v_ hold the fans gathered by isValid. Each distance only matters above stop2
+    // (at least the quadric estimate), so its search stops as soon as it falls to that.
     const uint32_t f0 = c.edge / 3;
-    const uint32_t t = twin_[c.edge];
+    const uint32_t t = he_[c.edge].twin;
     const uint32_t f1 = t == kNone ? kNone : t / 3;
     const Vec3d pu = toD(position_[c.removed]), pv = toD(position_[c.kept]);
     const Vec3d& p = c.position;
@@ -553,21 +574,22 @@ double EdgeCollapser::endpointDistance2(const Candidate& c, double floor2) const
     double dfu = late_ ? inf : 0.0, dfv = dfu;
     for (const std::vector<uint32_t>* fan : {&fan_u_, &fan_v_}) {
         for (uint32_t h : *fan) {
+            if (dp <= stop2 && du <= stop2 && dv <= stop2 && dfu <= stop2 && dfv <= stop2) break;
             const uint32_t f = h / 3;
-            const Vec3d ox = toD(position_[corner_point_[nextHe(h)]]);
-            const Vec3d oy = toD(position_[corner_point_[prevHe(h)]]);
-            if (dp > floor2) {
-                const Vec3d o = toD(position_[corner_point_[h]]);
+            const Vec3d ox = toD(position_[he_[nextHe(h)].point]);
+            const Vec3d oy = toD(position_[he_[prevHe(h)].point]);
+            if (dp > stop2) {
+                const Vec3d o = toD(position_[he_[h].point]);
                 const Vec3d ab = ox - o, ac = oy - o;
                 dp = std::min(dp, triangleDistance2(p, o, ox, oy, ab, ac, !(length2(cross(ab, ac)) > 0.0)));
             }
-            if (f == f0 || f == f1 || (du <= floor2 && dv <= floor2 && dfu <= floor2 && dfv <= floor2)) continue;
+            if (f == f0 || f == f1 || (du <= stop2 && dv <= stop2 && dfu <= stop2 && dfv <= stop2)) continue;
             const Vec3d ab = ox - p, ac = oy - p;
             const bool degenerate = !(length2(cross(ab, ac)) > 0.0);
-            if (du > floor2) du = std::min(du, triangleDistance2(pu, p, ox, oy, ab, ac, degenerate));
-            if (dv > floor2) dv = std::min(dv, triangleDistance2(pv, p, ox, oy, ab, ac, degenerate));
-            if (dfu > floor2) dfu = std::min(dfu, triangleDistance2(fu, p, ox, oy, ab, ac, degenerate));
-            if (dfv > floor2) dfv = std::min(dfv, triangleDistance2(fv, p, ox, oy, ab, ac, degenerate));
+            if (du > stop2) du = std::min(du, triangleDistance2(pu, p, ox, oy, ab, ac, degenerate));
+            if (dv > stop2) dv = std::min(dv, triangleDistance2(pv, p, ox, oy, ab, ac, degenerate));
+            if (dfu > stop2) dfu = std::min(dfu, triangleDistance2(fu, p, ox, oy, ab, ac, degenerate));
+            if (dfv > stop2) dfv = std::min(dfv, triangleDistance2(fv, p, ox, oy, ab, ac, degenerate));
         }
     }
     double dc = 0; // a new face that bridges a concave region leaves the surface between its corners
@@ -576,18 +598,18 @@ double EdgeCollapser::endpointDistance2(const Candidate& c, double floor2) const
             for (uint32_t h : *fan) {
                 const uint32_t f = h / 3;
                 if (f == f0 || f == f1) continue;
-                const Vec3d o = toD(position_[corner_point_[h]]);
-                const Vec3d ox = toD(position_[corner_point_[nextHe(h)]]);
-                const Vec3d oy = toD(position_[corner_point_[prevHe(h)]]);
+                const Vec3d o = toD(position_[he_[h].point]);
+                const Vec3d ox = toD(position_[he_[nextHe(h)].point]);
+                const Vec3d oy = toD(position_[he_[prevHe(h)].point]);
                 const Vec3d centroid = (p + ox + oy) * (1.0 / 3.0);
                 // Its own old face first (usually the nearest), then both old fans.
                 double d = triangleDistance2(centroid, o, ox, oy, ox - o, oy - o, !(length2(cross(ox - o, oy - o)) > 0.0));
                 for (const std::vector<uint32_t>* old_fan : {&fan_u_, &fan_v_}) {
                     for (uint32_t g : *old_fan) {
-                        if (d <= std::max(floor2, dc)) break;
-                        const Vec3d go = toD(position_[corner_point_[g]]);
-                        const Vec3d gx = toD(position_[corner_point_[nextHe(g)]]);
-                        const Vec3d gy = toD(position_[corner_point_[prevHe(g)]]);
+                        if (d <= std::max(stop2, dc)) break;
+                        const Vec3d go = toD(position_[he_[g].point]);
+                        const Vec3d gx = toD(position_[he_[nextHe(g)].point]);
+                        const Vec3d gy = toD(position_[he_[prevHe(g)].point]);
                         d = std::min(d, triangleDistance2(centroid, go, gx, gy, gx - go, gy - go,
                                                           !(length2(cross(gx - go, gy - go)) > 0.0)));
                     }
@@ -605,7 +627,7 @@ double EdgeCollapser::endpointDistance2(const Candidate& c, double floor2) const
 bool EdgeCollapser::fartherFromNewFan(const Vec3d& a, const Vec3d& b, const Candidate& c) const {
     // Both distances in one walk of the new fan, skipping faces by their planes (kPlaneMargin).
     const uint32_t f0 = c.edge / 3;
-    const uint32_t t = twin_[c.edge];
+    const uint32_t t = he_[c.edge].twin;
     const uint32_t f1 = t == kNone ? kNone : t / 3;
     const Vec3d& p = c.position;
     const Vec3d pa = a - p, pb = b - p;
@@ -614,8 +636,8 @@ bool EdgeCollapser::fartherFromNewFan(const Vec3d& a, const Vec3d& b, const Cand
         for (uint32_t h : *fan) {
             const uint32_t f = h / 3;
             if (f == f0 || f == f1) continue;
-            const Vec3d ox = toD(position_[corner_point_[nextHe(h)]]);
-            const Vec3d oy = toD(position_[corner_point_[prevHe(h)]]);
+            const Vec3d ox = toD(position_[he_[nextHe(h)].point]);
+            const Vec3d oy = toD(position_[he_[prevHe(h)].point]);
             const Vec3d ab = ox - p, ac = oy - p;
             const Vec3d n = cross(ab, ac);
             const double n2 = length2(n);
@@ -635,12 +657,12 @@ double EdgeCollapser::distanceBound2(const Candidate& c) const {
     // isValid refused a face whose two other edges are both open, so each of p–w0 (and p–w1) is an
     // edge of at least one face of the new fan.
     const Vec3d pu = toD(position_[c.removed]), pv = toD(position_[c.kept]);
-    const uint32_t t = twin_[c.edge];
-    const Vec3d pw0 = toD(position_[corner_point_[prevHe(c.edge)]]);
+    const uint32_t t = he_[c.edge].twin;
+    const Vec3d pw0 = toD(position_[he_[prevHe(c.edge)].point]);
     double du = segmentDistance2(pu, c.position, pw0);
     double dv = segmentDistance2(pv, c.position, pw0);
     if (t != kNone) {
-        const Vec3d pw1 = toD(position_[corner_point_[prevHe(t)]]);
+        const Vec3d pw1 = toD(position_[he_[prevHe(t)].point]);
         du = std::min(du, segmentDistance2(pu, c.position, pw1));
         dv = std::min(dv, segmentDistance2(pv, c.position, pw1));
     }
@@ -651,7 +673,7 @@ double EdgeCollapser::distanceBound2(const Candidate& c) const {
         for (uint32_t point : {c.removed, c.kept}) {
             const Vec3d f = toD(far_[point]);
             double d = segmentDistance2(f, c.position, pw0);
-            if (t != kNone) d = std::min(d, segmentDistance2(f, c.position, toD(position_[corner_point_[prevHe(t)]])));
+            if (t != kNone) d = std::min(d, segmentDistance2(f, c.position, toD(position_[he_[prevHe(t)].point])));
             dp = std::max(dp, d);
         }
         dp = std::max(dp, std::max(length2(c.position - pu), length2(c.position - pv)) * (1.0 / 9.0));
@@ -681,14 +703,14 @@ void EdgeCollapser::updateEdgesInFan() {
     for (uint32_t he : fan_tmp_) {
         update(he);
         const uint32_t in = prevHe(he);
-        if (twin_[in] == kNone) update(in);
+        if (he_[in].twin == kNone) update(in);
     }
 }
 
 void EdgeCollapser::requeueAll() {
     Candidate c;
-    for (uint32_t h = 0; h < uint32_t(corner_point_.size()); ++h) {
-        if (corner_point_[h] == kNone || canonical(h) != h) continue;
+    for (uint32_t h = 0; h < uint32_t(he_.size()); ++h) {
+        if (he_[h].point == kNone || canonical(h) != h) continue;
         if (evaluate(h, c))
             queue_.set(h, float(c.cost));
         else
@@ -713,6 +735,11 @@ bool EdgeCollapser::run(size_t target_faces, double max_error, CollapseSequence*
             if (queue_.empty()) break;
         }
         const uint32_t e = queue_.topId();
+        // The next edge to pop is most often the current runner-up. Its half-edge is requested
+        // now and its points' data once that has arrived (below), so that the next evaluate does
+        // not wait for a chain of misses.
+        const uint32_t next = queue_.secondId();
+        if (next != CollapseQueue::kAbsent) prefetch(&he_[next]);
         if (!evaluate(e, c) || c.error > max_error) {
             queue_.remove(e);
             continue;
@@ -722,6 +749,10 @@ bool EdgeCollapser::run(size_t target_faces, double max_error, CollapseSequence*
             // Dropped until a neighbouring collapse changes it and re-queues it.
             queue_.remove(e);
             continue;
+        }
+        if (next != CollapseQueue::kAbsent && he_[next].point != kNone) {
+            prefetchPoint(he_[next].point);
+            prefetchPoint(he_[nextHe(next)].point);
         }
         if (has_penalty_) {
             // Quadrics measure distance to planes: a sharp tip whose faces are nearly parallel to
@@ -741,14 +772,22 @@ bool EdgeCollapser::run(size_t target_faces, double max_error, CollapseSequence*
             // Cheap upper bounds of the three distances: the new fan contains the segments from the
             // new position to w0 (and w1), the old fans contain the edge itself. When even they
             // cannot send the edge back, collapse without measuring.
+            auto requeues = [&](double d2) { return base + scale * std::max(0.0, d2 - floor2) > limit; };
             const double bound = distanceBound2(c);
-            if (base + scale * std::max(0.0, bound - floor2) <= limit) {
+            if (!requeues(bound)) {
                 collapse(c, pairs, pair_count, sequence);
                 continue;
             }
-            const double extra = scale * std::max(0.0, endpointDistance2(c, floor2) - floor2);
-            queue_.setPayload(e, float(extra));
+            // Only whether the distance re-queues the edge matters unless it does (the edge then
+            // collapses and its penalty is never read again), and that is monotone in the distance:
+            // the searches may stop at the largest squared distance that does not re-queue. Above
+            // it they run to the exact minimum, so a re-queued edge gets the exact penalty.
+            double stop2 = floor2 + (limit - base) / scale;
+            for (int i = 0; i < 64 && stop2 > floor2 && requeues(stop2); ++i) stop2 = std::nextafter(stop2, 0.0);
+            if (!(std::isfinite(stop2) && stop2 >= floor2 && !requeues(stop2))) stop2 = floor2;
+            const double extra = scale * std::max(0.0, endpointDistance2(c, stop2) - floor2);
             if (base + extra > limit) {
+                queue_.setPayload(e, float(extra));
                 queue_.set(e, float(base + extra));
                 if (queue_.topId() != e) continue; // still the cheapest: collapse it now
             }
@@ -774,9 +813,9 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
     cos_max_normal_change_ = std::cos(std::min(double(options.max_normal_change_deg), 180.0) * kPi / 180.0);
 
     const uint32_t vertex_count = uint32_t(mesh.vertexCount());
-    std::vector<uint8_t> referenced(vertex_count, 0);
+    LargeArray<uint8_t> referenced(vertex_count, 0);
     for (uint32_t i : mesh.indices) referenced[i] = 1;
-    std::vector<uint32_t> order;
+    LargeArray<uint32_t> order;
     order.reserve(vertex_count);
     for (uint32_t v = 0; v < vertex_count; ++v)
         if (referenced[v]) order.push_back(v);
@@ -830,13 +869,13 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
     size_t table_size = 16;
     while (table_size < size_t(order.size()) * 2) table_size *= 2;
     const size_t mask = table_size - 1;
-    std::vector<uint32_t> vertex_point(vertex_count, kNone), vertex_wedge(vertex_count, kNone);
+    LargeArray<uint32_t> vertex_point(vertex_count, kNone), vertex_wedge(vertex_count, kNone);
     position_.clear();
     wedge_vertex_.clear();
     wedge_point_.clear();
     {
-        std::vector<uint32_t> point_table(table_size, kNone); // first vertex of each point
-        std::vector<uint32_t> wedge_table(has_wedges ? table_size : 0, kNone);
+        LargeArray<uint32_t> point_table(table_size, kNone); // first vertex of each point
+        LargeArray<uint32_t> wedge_table(has_wedges ? table_size : 0, kNone);
         for (uint32_t v : order) {
             const uint64_t ph = posHash(v);
             size_t i = size_t(finish(ph)) & mask;
@@ -883,7 +922,7 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
             }
         }
     }
-    std::vector<uint32_t>().swap(order);
+    LargeArray<uint32_t>().swap(order);
     // Points renumbered in order of first use by the faces: a collapse touches a few dozen points
     // and faces that are neighbours on the surface, and scans often list their vertices far from
     // the order of their faces (lucy100k's faces span 9,500 vertex ids at the 90th percentile).
@@ -894,7 +933,7 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
     // attributes a wedge is its point and moves with it).
     {
         const uint32_t n = uint32_t(position_.size());
-        std::vector<uint32_t> first_use(n, kNone);
+        LargeArray<uint32_t> first_use(n, kNone);
         uint32_t next = 0;
         for (size_t f = 0; f < mesh.faceCount(); ++f) {
             const uint32_t p0 = vertex_point[mesh.indices[f * 3]], p1 = vertex_point[mesh.indices[f * 3 + 1]],
@@ -905,17 +944,17 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
         }
         for (uint32_t p = 0; p < n; ++p) // points only on dropped faces, after the others
             if (first_use[p] == kNone) first_use[p] = next++;
-        const std::vector<uint32_t>& new_id = first_use;
-        std::vector<Vec3f> moved(n);
+        const LargeArray<uint32_t>& new_id = first_use;
+        LargeArray<Vec3f> moved(n);
         for (uint32_t p = 0; p < n; ++p) moved[new_id[p]] = position_[p];
         position_.swap(moved);
-        std::vector<Vec3f>().swap(moved);
+        LargeArray<Vec3f>().swap(moved);
         for (uint32_t& p : vertex_point)
             if (p != kNone) p = new_id[p];
         if (has_wedges) {
             for (uint32_t& p : wedge_point_) p = new_id[p];
         } else {
-            std::vector<uint32_t> wedge_vertex(n);
+            LargeArray<uint32_t> wedge_vertex(n);
             for (uint32_t w = 0; w < n; ++w) wedge_vertex[new_id[w]] = wedge_vertex_[w];
             wedge_vertex_.swap(wedge_vertex);
             for (uint32_t w = 0; w < n; ++w) wedge_point_[w] = w;
@@ -929,20 +968,19 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
     const size_t input_faces = mesh.faceCount();
     std::vector<SubMesh> groups = mesh.submeshes;
     const bool multi_group = groups.size() > 1;
-    corner_point_.clear();
-    corner_point_.reserve(input_faces * 3);
+    he_.clear();
+    he_.reserve(input_faces * 3);
     corner_wedge_.clear();
     if (has_wedges) corner_wedge_.reserve(input_faces * 3);
     face_group_.clear();
-    face_source_.clear();
-    face_source_.reserve(input_faces);
+    uint32_t kept_faces = 0;
     group_first_face_.assign(groups.size() + 1, 0);
     size_t dropped = 0;
     size_t group = 0;
     for (size_t f = 0; f < input_faces; ++f) {
         while (group < groups.size() && f * 3 >= size_t(groups[group].first_index) + groups[group].index_count) {
             ++group;
-            if (group < groups.size()) group_first_face_[group] = uint32_t(face_source_.size());
+            if (group < groups.size()) group_first_face_[group] = kept_faces;
         }
         const uint32_t i0 = mesh.indices[f * 3], i1 = mesh.indices[f * 3 + 1], i2 = mesh.indices[f * 3 + 2];
         const uint32_t p0 = vertex_point[i0], p1 = vertex_point[i1], p2 = vertex_point[i2];
@@ -950,18 +988,18 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
             ++dropped;
             continue;
         }
-        corner_point_.insert(corner_point_.end(), {p0, p1, p2});
+        he_.insert(he_.end(), {HalfEdge{p0, kNone}, HalfEdge{p1, kNone}, HalfEdge{p2, kNone}});
         if (has_wedges)
             corner_wedge_.insert(corner_wedge_.end(), {vertex_wedge[i0], vertex_wedge[i1], vertex_wedge[i2]});
         if (multi_group) face_group_.push_back(uint32_t(std::min(group, groups.size() - 1)));
-        face_source_.push_back(uint32_t(f));
+        ++kept_faces;
     }
-    for (size_t g = group + 1; g < groups.size(); ++g) group_first_face_[g] = uint32_t(face_source_.size());
-    group_first_face_[groups.size()] = uint32_t(face_source_.size());
+    for (size_t g = group + 1; g < groups.size(); ++g) group_first_face_[g] = kept_faces;
+    group_first_face_[groups.size()] = kept_faces;
     if (dropped > 0)
         diagnostics.note("simplify input: " + std::to_string(dropped) +
                          " faces with repeated positions dropped (zero area)");
-    const uint32_t face_count = uint32_t(face_source_.size());
+    const uint32_t face_count = kept_faces;
     const uint32_t he_count = face_count * 3;
     initial_faces_ = face_count;
     alive_faces_ = face_count;
@@ -971,27 +1009,29 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
     // Twins: pair a->b with b->a when each occurs exactly once; otherwise lock both points.
     kind_.assign(point_count, kFree);
     {
-        std::vector<uint32_t> start(size_t(point_count) + 1, 0);
-        for (uint32_t h = 0; h < he_count; ++h) ++start[corner_point_[h] + 1];
+        LargeArray<uint32_t> start(size_t(point_count) + 1, 0);
+        for (uint32_t h = 0; h < he_count; ++h) ++start[he_[h].point + 1];
         for (uint32_t p = 0; p < point_count; ++p) start[p + 1] += start[p];
-        std::vector<uint32_t> list(he_count);
-        std::vector<uint32_t> fill(start.begin(), start.end() - 1);
-        for (uint32_t h = 0; h < he_count; ++h) list[fill[corner_point_[h]]++] = h;
-        std::vector<uint32_t>().swap(fill);
-        twin_.assign(he_count, kNone);
+        LargeArray<uint32_t> list(he_count);
+        LargeArray<uint32_t> fill(start.begin(), start.end() - 1);
+        for (uint32_t h = 0; h < he_count; ++h) list[fill[he_[h].point]++] = h;
+        LargeArray<uint32_t>().swap(fill);
         for (uint32_t h = 0; h < he_count; ++h) {
-            const uint32_t a = corner_point_[h], b = corner_point_[nextHe(h)];
+            // Already paired from its twin: the pairing is symmetric (a->b once and b->a once).
+            if (he_[h].twin != kNone) continue;
+            const uint32_t a = he_[h].point, b = he_[nextHe(h)].point;
             uint32_t same = 0, reverse = 0, match = kNone;
             for (uint32_t i = start[a]; i < start[a + 1]; ++i)
-                if (corner_point_[nextHe(list[i])] == b) ++same;
+                if (he_[nextHe(list[i])].point == b) ++same;
             for (uint32_t i = start[b]; i < start[b + 1]; ++i)
-                if (corner_point_[nextHe(list[i])] == a) {
+                if (he_[nextHe(list[i])].point == a) {
                     ++reverse;
                     match = list[i];
                 }
-            if (same == 1 && reverse == 1)
-                twin_[h] = match;
-            else if (same + reverse > 1) {
+            if (same == 1 && reverse == 1) {
+                he_[h].twin = match;
+                he_[match].twin = h;
+            } else if (same + reverse > 1) {
                 kind_[a] = kLocked;
                 kind_[b] = kLocked;
             }
@@ -1020,24 +1060,24 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
     // Quadrics: area-weighted face planes plus constraint planes along feature edges.
     quadric_.assign(point_count, Quadric());
     for (uint32_t f = 0; f < face_count; ++f) {
-        const Vec3d p0 = toD(position_[corner_point_[f * 3]]);
-        const Vec3d p1 = toD(position_[corner_point_[f * 3 + 1]]);
-        const Vec3d p2 = toD(position_[corner_point_[f * 3 + 2]]);
+        const Vec3d p0 = toD(position_[he_[f * 3].point]);
+        const Vec3d p1 = toD(position_[he_[f * 3 + 1].point]);
+        const Vec3d p2 = toD(position_[he_[f * 3 + 2].point]);
         const Quadric q = Quadric::fromTriangle(p0, p1, p2);
-        for (uint32_t k = 0; k < 3; ++k) quadric_[corner_point_[f * 3 + k]] += q;
+        for (uint32_t k = 0; k < 3; ++k) quadric_[he_[f * 3 + k].point] += q;
         const Vec3d n = normalize(cross(p1 - p0, p2 - p0));
         for (uint32_t k = 0; k < 3; ++k) {
             const uint32_t h = f * 3 + k;
-            if (!isFeature(h) || (twin_[h] != kNone && twin_[h] < h)) continue;
-            const Vec3d a = toD(position_[corner_point_[h]]);
-            const Vec3d b = toD(position_[corner_point_[nextHe(h)]]);
+            if (!isFeature(h) || (he_[h].twin != kNone && he_[h].twin < h)) continue;
+            const Vec3d a = toD(position_[he_[h].point]);
+            const Vec3d b = toD(position_[he_[nextHe(h)].point]);
             const Vec3d e = b - a;
             const Vec3d m = normalize(cross(e, n));
             if (!(length2(m) > 0.0)) continue;
             Quadric cq = Quadric::fromPlane(m, -dot(m, a), double(options.border_weight) * length2(e));
             cq.weight = 0; // constraints steer placement; they are not surface area
-            quadric_[corner_point_[h]] += cq;
-            quadric_[corner_point_[nextHe(h)]] += cq;
+            quadric_[he_[h].point] += cq;
+            quadric_[he_[nextHe(h)].point] += cq;
         }
     }
     wedge_value_.assign(size_t(wedge_count) * channel_count_, 0.0f);
@@ -1049,9 +1089,9 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
             for (uint32_t ch = 0; ch < channel_count_; ++ch)
                 wedge_value_[size_t(w) * channel_count_ + ch] = channelValue(wedge_vertex_[w], ch);
         for (uint32_t f = 0; f < face_count; ++f) {
-            const Vec3d p0 = toD(position_[corner_point_[f * 3]]);
-            const Vec3d p1 = toD(position_[corner_point_[f * 3 + 1]]);
-            const Vec3d p2 = toD(position_[corner_point_[f * 3 + 2]]);
+            const Vec3d p0 = toD(position_[he_[f * 3].point]);
+            const Vec3d p1 = toD(position_[he_[f * 3 + 1].point]);
+            const Vec3d p2 = toD(position_[he_[f * 3 + 2].point]);
             const size_t w0 = size_t(corner_wedge_[f * 3]) * channel_count_;
             const size_t w1 = size_t(corner_wedge_[f * 3 + 1]) * channel_count_;
             const size_t w2 = size_t(corner_wedge_[f * 3 + 2]) * channel_count_;
@@ -1075,7 +1115,7 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
     if (has_penalty_)
         far_ = position_;
     else
-        std::vector<Vec3f>().swap(far_);
+        LargeArray<Vec3f>().swap(far_);
     // UV charts: faces joined across edges whose two corners share wedges (union-find).
     uv_set_count_ = uint32_t(mesh.uvs.size());
     uv_channel_ = uv_set_count_ > 0 ? (mesh.hasNormals() ? 3u : 0u) : kNone;
@@ -1089,7 +1129,7 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
             return x;
         };
         for (uint32_t h = 0; h < he_count; ++h) {
-            const uint32_t t = twin_[h];
+            const uint32_t t = he_[h].twin;
             if (t == kNone || t < h || isFeature(h)) continue;
             const uint32_t a = root(h / 3), b = root(t / 3);
             if (a != b) face_chart_[std::max(a, b)] = std::min(a, b);
@@ -1101,8 +1141,6 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
         }
     }
     for (uint32_t p = 0; p < point_count; ++p) kind_[p] = classify(p);
-    mark_.assign(point_count, 0);
-    stamp_ = 0;
 
     queue_ = CollapseQueue(he_count);
     queue_.reserve(he_count / 2 + 16);
@@ -1114,8 +1152,8 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
 }
 
 void EdgeCollapser::describe(CollapseSequence& sequence) const {
-    sequence.point_positions = position_;
-    sequence.wedge_point = wedge_point_;
+    sequence.point_positions.assign(position_.begin(), position_.end());
+    sequence.wedge_point.assign(wedge_point_.begin(), wedge_point_.end());
     sequence.attribute_stride = channel_count_;
     sequence.records.clear();
     sequence.wedge_updates.clear();
@@ -1133,10 +1171,10 @@ Mesh EdgeCollapser::extract() const {
     out.submeshes = src.submeshes;
     for (size_t g = 0; g < std::max<size_t>(group_count, 1); ++g) {
         const uint32_t first = group_count ? group_first_face_[g] : 0;
-        const uint32_t last = group_count ? group_first_face_[g + 1] : uint32_t(face_source_.size());
+        const uint32_t last = group_count ? group_first_face_[g + 1] : uint32_t(he_.size() / 3);
         const size_t first_index = out.indices.size();
         for (uint32_t f = first; f < last; ++f) {
-            if (corner_point_[f * 3] == kNone) continue;
+            if (he_[f * 3].point == kNone) continue;
             for (uint32_t k = 0; k < 3; ++k) {
                 const uint32_t w = wedgeAt(f * 3 + k);
                 if (remap[w] == kNone) {

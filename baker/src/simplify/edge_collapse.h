@@ -14,6 +14,7 @@
 #include "lodbake/simplify/quadric.h"
 #include "lodbake/simplify/simplify.h"
 #include "simplify/collapse_queue.h"
+#include "simplify/large_array.h"
 
 namespace lodbake::detail {
 
@@ -57,8 +58,11 @@ private:
 
     static uint32_t nextHe(uint32_t h) { return h % 3 == 2 ? h - 2 : h + 1; }
     static uint32_t prevHe(uint32_t h) { return h % 3 == 0 ? h + 2 : h - 1; }
-    uint32_t canonical(uint32_t h) const { return (twin_[h] == kNone || h < twin_[h]) ? h : twin_[h]; }
-    uint32_t wedgeAt(uint32_t h) const { return corner_wedge_.empty() ? corner_point_[h] : corner_wedge_[h]; }
+    uint32_t canonical(uint32_t h) const {
+        const uint32_t t = he_[h].twin;
+        return (t == kNone || h < t) ? h : t;
+    }
+    uint32_t wedgeAt(uint32_t h) const { return corner_wedge_.empty() ? he_[h].point : corner_wedge_[h]; }
     bool isFeature(uint32_t h) const;
     bool canRemove(uint32_t point, bool feature_edge) const;
     // Outgoing half-edges of `point`, one per incident face; returns false if the fan is open.
@@ -80,8 +84,9 @@ private:
     // than max_normal_change_deg.
     bool normalTurnsTooFar(double d, double len2_a, double len2_b) const;
     // Largest squared point distance of a valid collapse (fans from isValid): the endpoints' old
-    // positions to the new fan, and the new position to the old fans.
-    double endpointDistance2(const Candidate& c, double floor2) const;
+    // positions to the new fan, and the new position to the old fans. Exact when above stop2;
+    // otherwise some value no larger than stop2.
+    double endpointDistance2(const Candidate& c, double stop2) const;
     // True when a is strictly further than b from the fan v will have after the collapse c (fans
     // from isValid).
     bool fartherFromNewFan(const Vec3d& a, const Vec3d& b, const Candidate& c) const;
@@ -96,6 +101,19 @@ private:
     void updateEdgesInFan(); // the edges of the fan in fan_tmp_
     void requeueAll();
     Quadric combinedQuadric(uint32_t edge, uint32_t removed) const;
+    // Hint that the point's quadric and kind are about to be read (random accesses).
+    void prefetchPoint(uint32_t point) const {
+#if defined(__GNUC__)
+        const char* q = reinterpret_cast<const char*>(&quadric_[point]);
+        __builtin_prefetch(q);
+        __builtin_prefetch(q + 64);
+        __builtin_prefetch(q + sizeof(Quadric) - 1);
+        __builtin_prefetch(&kind_[point]);
+        __builtin_prefetch(&position_[point]);
+#else
+        (void)point;
+#endif
+    }
     const double* wedgeBlock(uint32_t wedge) const { return &wedge_block_[size_t(wedge) * block_size_]; }
 
     const Mesh* source_ = nullptr;
@@ -104,8 +122,8 @@ private:
     double attribute_scale_ = 1;
     uint32_t uv_channel_ = 0xffffffffu; // first UV channel, none without UV sets
     uint32_t uv_set_count_ = 0;
-    std::vector<uint32_t> face_chart_;  // UV chart (representative face) per face
-    std::vector<uint32_t> chart_alive_; // alive faces per chart representative
+    LargeArray<uint32_t> face_chart_;  // UV chart (representative face) per face
+    LargeArray<uint32_t> chart_alive_; // alive faces per chart representative
     // Below late_faces_ faces (kLateFraction of the input) the point-distance penalty also
     // measures far_ points and face centroids, and prices distances by the mean area (run()).
     size_t late_faces_ = 0;
@@ -115,29 +133,30 @@ private:
                                // price from its last pop (run())
 
     // Points (distinct positions) and wedges (distinct position + attributes).
-    std::vector<Vec3f> position_;
+    LargeArray<Vec3f> position_;
     // Per point, one input point it stands for: of the two merged by each collapse, the one
     // further from the new fan (with tip_distance_weight > 0 only).
-    std::vector<Vec3f> far_;
-    std::vector<uint32_t> point_he_; // an outgoing half-edge of an alive face, or kNone
-    std::vector<uint8_t> kind_;
-    std::vector<uint32_t> mark_; // scratch stamps for the link condition
-    uint32_t stamp_ = 0;
-    std::vector<Quadric> quadric_;
-    std::vector<uint32_t> wedge_vertex_; // an input vertex carrying the wedge's original attributes
-    std::vector<uint32_t> wedge_point_;
+    LargeArray<Vec3f> far_;
+    LargeArray<uint32_t> point_he_; // an outgoing half-edge of an alive face, or kNone
+    LargeArray<uint8_t> kind_;
+    LargeArray<Quadric> quadric_;
+    LargeArray<uint32_t> wedge_vertex_; // an input vertex carrying the wedge's original attributes
+    LargeArray<uint32_t> wedge_point_;
     uint32_t channel_count_ = 0;                  // scalar attribute channels per wedge
     std::vector<float> channel_weight_;           // per channel, squared weight × scale²
-    std::vector<float> wedge_value_;              // wedge_count × channel_count_
+    LargeArray<float> wedge_value_;              // wedge_count × channel_count_
     size_t block_size_ = 0;             // attributeBlockSize(channel_count_), 0 without attributes
-    std::vector<double> wedge_block_;   // wedge_count × block_size_: each wedge's attribute quadrics
+    LargeArray<double> wedge_block_;   // wedge_count × block_size_: each wedge's attribute quadrics
 
-    // Corner table: half-edge h goes from corner_point_[h] to corner_point_[nextHe(h)].
-    std::vector<uint32_t> corner_point_; // kNone for dead faces
-    std::vector<uint32_t> corner_wedge_; // empty when there are no attribute streams
-    std::vector<uint32_t> twin_;
-    std::vector<uint32_t> face_group_;  // sub-mesh per face; empty with a single sub-mesh
-    std::vector<uint32_t> face_source_; // input face index per face
+    // Corner table: half-edge h goes from he_[h].point to he_[nextHe(h)].point; its twin (opposite
+    // half-edge) is he_[h].twin. Point and twin share one array: every fan walk reads both.
+    struct HalfEdge {
+        uint32_t point; // kNone for dead faces
+        uint32_t twin;  // kNone on open or non-manifold edges
+    };
+    LargeArray<HalfEdge> he_;
+    LargeArray<uint32_t> corner_wedge_; // empty when there are no attribute streams
+    LargeArray<uint32_t> face_group_;  // sub-mesh per face; empty with a single sub-mesh
     std::vector<uint32_t> group_first_face_;
 
     CollapseQueue queue_;
@@ -147,6 +166,7 @@ private:
     double max_error_done_ = 0;
 
     std::vector<uint32_t> fan_u_, fan_v_, fan_tmp_;
+    std::vector<uint32_t> link_u_; // isValid: the neighbours of the removed point
     bool fan_u_closed_ = true, fan_v_closed_ = true; // from the last isValid
 };
 

@@ -47,8 +47,19 @@ Result<LodChain> buildLodChain(const Mesh& mesh, const LodChainOptions& options,
         detail::EdgeCollapser engine;
         LODBAKE_RETURN_IF_ERROR(engine.init(mesh, options.simplify, diagnostics));
         CollapseSequence* sequence = options.record_collapses ? &chain.sequence : nullptr;
-        if (sequence) engine.describe(*sequence);
         const size_t faces = engine.initialFaceCount();
+        if (sequence) {
+            engine.describe(*sequence);
+            // Each collapse removes two faces, or one on a border: reserving for one (pages never
+            // written are never resident) saves growing the record by doubling, which copies it.
+            const size_t last_target = size_t(std::ceil(ratios.back() * double(faces)));
+            const size_t collapses = faces > last_target ? faces - last_target : 0;
+            sequence->records.reserve(collapses);
+            if (sequence->attribute_stride > 0) {
+                sequence->wedge_updates.reserve(collapses);
+                sequence->wedge_attributes.reserve(collapses * sequence->attribute_stride);
+            }
+        }
         bool stuck = false;
         for (double ratio : ratios) {
             LodLevel level;

@@ -1,5 +1,7 @@
 #include "lodbake/simplify/quadric.h"
 
+#include <cstdint>
+#include <iterator>
 #include <random>
 #include <set>
 #include <utility>
@@ -8,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "simplify/collapse_queue.h"
+#include "simplify/large_array.h"
 
 namespace {
 
@@ -187,11 +190,49 @@ TEST(CollapseQueueTest, UpdateAndRemoveMatchAReferenceOrdering) {
             cost[top.second] = -1.0f;
         }
         ASSERT_EQ(q.size(), reference.size());
+        if (reference.size() >= 2) {
+            ASSERT_EQ(q.secondId(), std::next(reference.begin())->second); // the runner-up
+        } else {
+            ASSERT_EQ(q.secondId(), lodbake::detail::CollapseQueue::kAbsent);
+        }
         if (step % 997 == 0) {
             ASSERT_TRUE(q.isConsistent());
         }
     }
     ASSERT_TRUE(q.isConsistent());
+}
+
+// A queue large enough for its arrays to take the huge-page path of LargeArray (2 MB-aligned
+// mappings): bulk-built with heapify, it pops in (cost, id) order and its storage is aligned.
+TEST(CollapseQueueTest, LargeHeapifiedQueuePopsInOrder) {
+    constexpr uint32_t kIds = 400000; // slots: 3.2 MB
+    lodbake::detail::CollapseQueue q(kIds);
+    q.reserve(kIds);
+    std::mt19937 rng(7);
+    std::vector<float> cost(kIds);
+    for (uint32_t id = 0; id < kIds; ++id) {
+        cost[id] = float(rng() % 5000);
+        q.pushUnordered(id, cost[id]);
+    }
+    q.heapify();
+    ASSERT_TRUE(q.isConsistent());
+    std::pair<float, uint32_t> previous{-1.0f, 0};
+    for (uint32_t i = 0; i < kIds; ++i) {
+        const uint32_t id = q.pop();
+        const std::pair<float, uint32_t> current{cost[id], id};
+        ASSERT_LT(previous, current);
+        previous = current;
+    }
+    EXPECT_TRUE(q.empty());
+
+    lodbake::detail::LargeArray<uint32_t> big(size_t(3) << 20, 7u); // 12 MB
+#if defined(__linux__)
+    EXPECT_EQ(reinterpret_cast<uintptr_t>(big.data()) % (size_t(2) << 20), 0u);
+#endif
+    big.push_back(9u); // grows into a new mapping
+    EXPECT_EQ(big[0], 7u);
+    EXPECT_EQ(big.back(), 9u);
+    EXPECT_EQ(big.size(), (size_t(3) << 20) + 1);
 }
 
 } // namespace
