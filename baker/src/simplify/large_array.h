@@ -10,8 +10,8 @@
 // page faults (dragon_poisson's chain: docs/simplify.md, "Measured"). Only whole 2 MB pages
 // inside the requested size are advised, so no memory beyond the request becomes resident, and
 // such blocks are mapped and unmapped directly, so they never sit in malloc's free lists.
-// Elsewhere, or for small arrays, it is plain operator new. Contents and results do not depend on
-// it.
+// Elsewhere, for small arrays, and in AddressSanitizer builds it is plain operator new. Contents
+// and results do not depend on it.
 
 #include <cstddef>
 #include <cstdint>
@@ -19,9 +19,22 @@
 #include <new>
 #include <vector>
 
-#if defined(__linux__)
+// AddressSanitizer cannot check accesses inside memory we map ourselves, so sanitizer builds keep
+// every array on operator new.
+#if defined(__SANITIZE_ADDRESS__)
+#define LODBAKE_ASAN_BUILD 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define LODBAKE_ASAN_BUILD 1
+#endif
+#endif
+
+#if defined(__linux__) && !defined(LODBAKE_ASAN_BUILD)
 #include <sys/mman.h>
 #include <unistd.h>
+#if defined(MADV_HUGEPAGE)
+#define LODBAKE_LARGE_ARRAY_MMAP 1
+#endif
 #endif
 
 namespace lodbake::detail {
@@ -30,7 +43,7 @@ template <class T>
 struct LargeArrayAllocator {
     using value_type = T;
     static constexpr size_t kHugePageBytes = size_t(2) << 20;
-#if defined(__linux__) && defined(MADV_HUGEPAGE)
+#if defined(LODBAKE_LARGE_ARRAY_MMAP)
     static size_t pageRound(size_t bytes) {
         const size_t page = size_t(sysconf(_SC_PAGESIZE));
         return (bytes + page - 1) / page * page;
@@ -43,7 +56,7 @@ struct LargeArrayAllocator {
 
     T* allocate(size_t n) {
         const size_t bytes = n * sizeof(T);
-#if defined(__linux__) && defined(MADV_HUGEPAGE)
+#if defined(LODBAKE_LARGE_ARRAY_MMAP)
         if (bytes >= kHugePageBytes) {
             // Mapped directly (not through malloc, whose arenas would keep the alignment slack and
             // freed blocks around): 2 MB more than asked, then the unaligned head and the tail are
@@ -67,7 +80,7 @@ struct LargeArrayAllocator {
     }
 
     void deallocate(T* p, size_t n) {
-#if defined(__linux__) && defined(MADV_HUGEPAGE)
+#if defined(LODBAKE_LARGE_ARRAY_MMAP)
         if (n * sizeof(T) >= kHugePageBytes) {
             munmap(p, pageRound(n * sizeof(T)));
             return;
