@@ -275,6 +275,7 @@ Result<BakeOutput> bake(std::vector<BakeInput> inputs, const BakeSettings& setti
     valence.normal_bits = settings.stream_precision.normal_bits;
     valence.adaptive = settings.stream_precision.adaptive;
     valence.error_fraction = settings.stream_precision.error_fraction;
+    valence.release_memory = hooks.release_memory;
     for (PackStreamEncoder& encoder : builtinStreamEncoders(valence))
         if (settings.progressive_fans || encoder.extension_name != "LODBAKE_progressive_fans")
             encoders.push_back(std::move(encoder));

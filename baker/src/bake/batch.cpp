@@ -127,6 +127,7 @@ void runJob(const BakeJob& job, size_t index, const BatchOptions& options, const
     settings.threads = 0; // the batch's thread limit applies
     BakeHooks bake_hooks;
     bake_hooks.stage_done = stageDone;
+    bake_hooks.release_memory = hooks.release_memory;
     Result<BakeOutput> baked = bake(std::move(inputs), settings, result.diagnostics, bake_hooks);
     if (!baked.ok()) {
         result.status = baked.status();

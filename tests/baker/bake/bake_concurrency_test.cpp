@@ -2,6 +2,7 @@
 // bytes for any thread count, and per-stage CPU accounting in the hooks.
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cmath>
 #include <mutex>
 #include <set>
@@ -80,6 +81,39 @@ TEST(StreamEncoderTest, PrepareLeavesTheMeshAlone) {
         ASSERT_TRUE(encoder.prepare(LodChain{}, 0, mesh).ok());
         EXPECT_EQ(mesh.indices, original.indices) << encoder.extension_name;
     }
+}
+
+// The valence stream hands the coder's freed working set back (release_memory) before its check
+// decodes, on large levels only, and the hook changes no byte.
+TEST(StreamEncoderTest, ValenceReleasesMemoryBetweenCodingAndCheckOnLargeLevels) {
+    for (int n : {256, 40}) { // 131,072 and 3,200 triangles
+        SCOPED_TRACE(n);
+        ValenceStreamOptions options;
+        int calls = 0;
+        options.release_memory = [&] { ++calls; };
+        PackLevel hooked, plain;
+        hooked.mesh = plain.mesh = bumpyGrid(n);
+        ASSERT_TRUE(valenceStreamEncoder(options).encode(LodChain{}, 0, hooked).ok());
+        EXPECT_EQ(calls, n == 256 ? 1 : 0);
+        ASSERT_TRUE(valenceStreamEncoder().encode(LodChain{}, 0, plain).ok());
+        EXPECT_TRUE(sameLevel(hooked, plain));
+    }
+}
+
+// bake() passes BakeHooks::release_memory on to the valence stream: a large asset's LOD0 calls it.
+TEST(BakeConcurrencyTest, LargeAssetReleasesMemoryThroughTheHook) {
+    BakeSettings settings;
+    settings.lod_ratios = {0.1};
+    settings.error_samples = 2000;
+    settings.progressive_fans = false;
+    std::atomic<int> calls{0};
+    BakeHooks hooks;
+    hooks.release_memory = [&] { ++calls; };
+    std::vector<BakeInput> inputs{{"grid", bumpyGrid(256)}};
+    Diagnostics diagnostics;
+    Result<BakeOutput> out = bake(std::move(inputs), settings, diagnostics, hooks);
+    ASSERT_TRUE(out.ok()) << out.status().message();
+    EXPECT_EQ(calls.load(), 1); // LOD0 only: level 1 has 13,108 triangles
 }
 
 TEST(BakeConcurrencyTest, SameBytesForOneAndTwoThreadsAndEveryStageTimed) {

@@ -53,6 +53,7 @@ struct BakeJobResult {
 struct BatchHooks {
     std::function<void(size_t job, size_t input, BakeStage stage, const StageTime& time)> stage_done;
     std::function<void(size_t job, const BakeJobResult& result)> job_done;
+    std::function<void()> release_memory; // passed to bake() as BakeHooks::release_memory
 };
 
 /// Bakes every job (each reads its inputs, bakes them into one pack and stages `output` in

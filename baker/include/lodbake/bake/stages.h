@@ -47,6 +47,11 @@ struct StageTime {
 struct BakeHooks {
     /// `stage` of input `input` (or kWholePack) finished.
     std::function<void(size_t input, BakeStage stage, const StageTime& time)> stage_done;
+    /// A large working set inside a stage was just freed and the next one is about to be built (for
+    /// instance between coding a level and decoding it for the check). A program whose allocator
+    /// keeps freed pages resident can return them here, so the two do not add up; the bake itself
+    /// never touches the allocator's policy. Optional.
+    std::function<void()> release_memory;
 };
 
 /// Reports a stage's wall and CPU time to the hooks when it goes out of scope (or at finish()).

@@ -129,6 +129,9 @@ struct ValenceStreamOptions {
     uint32_t normal_bits = 8;    // octahedral bits per component, 4..16
     bool adaptive = false;
     double error_fraction = 0.25; // (0, 1]: largest quantization displacement / the level's mean error
+    /// Called between coding a primitive and decoding it for the check, when the coder's working set
+    /// has been freed (BakeHooks::release_memory); optional, changes no byte.
+    std::function<void()> release_memory;
 };
 
 /// The precision one level is coded with, and why.
