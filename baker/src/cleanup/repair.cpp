@@ -147,12 +147,14 @@ Result<RepairReport> repairMesh(Mesh& mesh, const RepairOptions& options, const 
     const bool shared = hasSharedPositions(weld);
     // The welded report is information only (`unresolved` takes rims and components from
     // openRimsAndSurfaces below), so callers that need just `unresolved` skip that validate() pass.
-    if (options.report_welded && shared) {
-        ValidateOptions welded;
-        welded.weld_by_position = true;
-        report.after_welded = validate(mesh, welded);
-    } else if (options.report_welded) {
-        report.after_welded = report.after; // nothing to weld
+    if (options.report_welded) {
+        if (shared) {
+            ValidateOptions welded;
+            welded.weld_by_position = true;
+            report.after_welded = validate(mesh, welded);
+        } else {
+            report.after_welded = report.after; // nothing to weld
+        }
     }
 
     const TopologyStats& t = report.after.topology;

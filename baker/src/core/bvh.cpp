@@ -65,42 +65,11 @@ double boxDistanceSq(const Vec3d& p, const Vec3f& bmin, const Vec3f& bmax) {
 
 } // namespace
 
-Vec3d closestPointOnTriangle(const Vec3d& p, const Vec3d& a, const Vec3d& b, const Vec3d& c) {
-    Vec3d ab = b - a, ac = c - a;
-    Vec3d n = cross(ab, ac);
-    if (!(dot(n, n) > 0.0)) {
-        // Collinear or coincident corners: the "triangle" is its longest segment; the region tests
-        // below would divide by zero.
-        Vec3d q0 = closestOnSegment(p, a, b), q1 = closestOnSegment(p, b, c), q2 = closestOnSegment(p, c, a);
-        double d0 = distanceSq(p, q0), d1 = distanceSq(p, q1), d2 = distanceSq(p, q2);
-        if (d0 <= d1 && d0 <= d2) return q0;
-        return d1 <= d2 ? q1 : q2;
-    }
-    Vec3d ap = p - a;
-    double d1 = dot(ab, ap), d2 = dot(ac, ap);
-    if (d1 <= 0.0 && d2 <= 0.0) return a; // vertex region A
-
-    Vec3d bp = p - b;
-    double d3 = dot(ab, bp), d4 = dot(ac, bp);
-    if (d3 >= 0.0 && d4 <= d3) return b; // vertex region B
-
-    double vc = d1 * d4 - d3 * d2;
-    if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) return a + ab * (d1 / (d1 - d3)); // edge AB
-
-    Vec3d cp = p - c;
-    double d5 = dot(ab, cp), d6 = dot(ac, cp);
-    if (d6 >= 0.0 && d5 <= d6) return c; // vertex region C
-
-    double vb = d5 * d2 - d1 * d6;
-    if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) return a + ac * (d2 / (d2 - d6)); // edge AC
-
-    double va = d3 * d6 - d5 * d4;
-    if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0) {
-        return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6))); // edge BC
-    }
-    double denom = 1.0 / (va + vb + vc); // interior
-    double v = vb * denom, w = vc * denom;
-    return a + ab * v + ac * w;
+Vec3d closestPointOnDegenerateTriangle(const Vec3d& p, const Vec3d& a, const Vec3d& b, const Vec3d& c) {
+    const Vec3d q0 = closestOnSegment(p, a, b), q1 = closestOnSegment(p, b, c), q2 = closestOnSegment(p, c, a);
+    const double d0 = distanceSq(p, q0), d1 = distanceSq(p, q1), d2 = distanceSq(p, q2);
+    if (d0 <= d1 && d0 <= d2) return q0;
+    return d1 <= d2 ? q1 : q2;
 }
 
 // Triangles are partitioned in place as one contiguous record each, so every pass over a range reads

@@ -119,41 +119,9 @@ constexpr double kPruneRelative = 1.0 + 1.0 / (1 << 20);
 
 bool isLeaf(uint32_t ref) { return ref != kEmptyChild && (ref & kLeafBit) != 0; }
 
-// Exactly lodbake::closestPointOnTriangle (same operations in the same order, so the same bits),
-// inlined, returning the squared distance as the measurement always computed it: dot(p - q, p - q).
+// Squared distance from p to triangle (a, b, c), exactly as the measurement has always computed it.
 inline double exactDistanceSq(const Vec3d& p, const Vec3d& a, const Vec3d& b, const Vec3d& c) {
-    const Vec3d ab = b - a, ac = c - a;
-    const Vec3d n = cross(ab, ac);
-    Vec3d q;
-    if (!(dot(n, n) > 0.0)) {
-        q = closestPointOnTriangle(p, a, b, c); // degenerate: rare, out of line
-    } else {
-        const Vec3d ap = p - a;
-        const double d1 = dot(ab, ap), d2 = dot(ac, ap);
-        const Vec3d bp = p - b;
-        const double d3 = dot(ab, bp), d4 = dot(ac, bp);
-        const Vec3d cp = p - c;
-        const double d5 = dot(ab, cp), d6 = dot(ac, cp);
-        double vc = 0, vb = 0, va = 0;
-        if (d1 <= 0.0 && d2 <= 0.0) {
-            q = a;
-        } else if (d3 >= 0.0 && d4 <= d3) {
-            q = b;
-        } else if ((vc = d1 * d4 - d3 * d2) <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {
-            q = a + ab * (d1 / (d1 - d3));
-        } else if (d6 >= 0.0 && d5 <= d6) {
-            q = c;
-        } else if ((vb = d5 * d2 - d1 * d6) <= 0.0 && d2 >= 0.0 && d6 <= 0.0) {
-            q = a + ac * (d2 / (d2 - d6));
-        } else if ((va = d3 * d6 - d5 * d4) <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0) {
-            q = b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
-        } else {
-            const double denom = 1.0 / (va + vb + vc);
-            const double v = vb * denom, w = vc * denom;
-            q = a + ab * v + ac * w;
-        }
-    }
-    const Vec3d d = p - q;
+    const Vec3d d = p - closestPointOnTriangle(p, a, b, c);
     return dot(d, d);
 }
 

@@ -32,9 +32,43 @@ struct ClosestHit {
     bool isFound() const { return face.isValid(); }
 };
 
+/// Closest point to `p` on a triangle with no area (collinear or coincident corners): the nearest
+/// point of its three edges. Out of line; closestPointOnTriangle calls it for such triangles.
+Vec3d closestPointOnDegenerateTriangle(const Vec3d& p, const Vec3d& a, const Vec3d& b, const Vec3d& c);
+
 /// Closest point to `p` on triangle (a, b, c), in double (Ericson, Real-Time Collision Detection,
 /// §5.1.5). Degenerate triangles (collinear or coincident corners) are handled as their edges.
-Vec3d closestPointOnTriangle(const Vec3d& p, const Vec3d& a, const Vec3d& b, const Vec3d& c);
+/// Inline: the surface-distance search calls it for every leaf triangle it visits.
+inline Vec3d closestPointOnTriangle(const Vec3d& p, const Vec3d& a, const Vec3d& b, const Vec3d& c) {
+    const Vec3d ab = b - a, ac = c - a;
+    const Vec3d n = cross(ab, ac);
+    // The region tests below would divide by zero.
+    if (!(dot(n, n) > 0.0)) return closestPointOnDegenerateTriangle(p, a, b, c);
+    const Vec3d ap = p - a;
+    const double d1 = dot(ab, ap), d2 = dot(ac, ap);
+    if (d1 <= 0.0 && d2 <= 0.0) return a; // vertex region A
+
+    const Vec3d bp = p - b;
+    const double d3 = dot(ab, bp), d4 = dot(ac, bp);
+    if (d3 >= 0.0 && d4 <= d3) return b; // vertex region B
+
+    const double vc = d1 * d4 - d3 * d2;
+    if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) return a + ab * (d1 / (d1 - d3)); // edge AB
+
+    const Vec3d cp = p - c;
+    const double d5 = dot(ab, cp), d6 = dot(ac, cp);
+    if (d6 >= 0.0 && d5 <= d6) return c; // vertex region C
+
+    const double vb = d5 * d2 - d1 * d6;
+    if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) return a + ac * (d2 / (d2 - d6)); // edge AC
+
+    const double va = d3 * d6 - d5 * d4;
+    if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0)
+        return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6))); // edge BC
+    const double denom = 1.0 / (va + vb + vc); // interior
+    const double v = vb * denom, w = vc * denom;
+    return a + ab * v + ac * w;
+}
 
 class TriangleBvh {
 public:
