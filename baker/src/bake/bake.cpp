@@ -43,6 +43,29 @@ std::vector<bool> srgbTextures(const Mesh& mesh) {
     return srgb;
 }
 
+// measureLodChain (lodbake/simplify/lod_chain.h) with the same results and warnings, through
+// prepareAndMeasureSurfaceDistances: LOD0's index is built beside the sampling, and each level's
+// index and points beside the previous level's queries.
+void measureChain(const Mesh& mesh, LodChain& chain, const LodChainOptions& options, Diagnostics& diagnostics) {
+    std::vector<const Mesh*> meshes;
+    for (const LodLevel& level : chain.levels) meshes.push_back(&level.mesh);
+    Result<std::vector<Result<DistanceResult>>> measured =
+        prepareAndMeasureSurfaceDistances(mesh, meshes, options.distance);
+    if (!measured.ok()) diagnostics.warn("lod chain: errors not measured: " + measured.status().message());
+    for (size_t i = 0; measured.ok() && i < measured->size(); ++i) {
+        LodLevel& level = chain.levels[i];
+        const Result<DistanceResult>& d = (*measured)[i];
+        if (!d.ok()) {
+            diagnostics.warn("lod chain: level ratio " + std::to_string(level.target_ratio) +
+                             ": error not measured: " + d.status().message());
+            continue;
+        }
+        level.has_distance = true;
+        level.distance = *d;
+    }
+    updateSwitchDistances(chain, options.screen);
+}
+
 struct AssetSlot {
     Status status = Status::okStatus();
     Diagnostics diagnostics;
@@ -155,21 +178,24 @@ Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vect
     auto stageOf = [&](size_t e) {
         return encoders[e].extension_name == "LODBAKE_progressive_fans" ? BakeStage::Pfrep : BakeStage::Encode;
     };
+    std::vector<bool> level_with_measure(level_count, false);
+    std::vector<size_t> nested_levels;
     auto runTask = [&](const PhaseTask& task, bool alone) {
         switch (task.kind) {
         case PhaseTask::Kind::Measure: {
             {
                 StageTimer timer(hooks, index, BakeStage::Measure);
-                measureLodChain(mesh, chain, chain_options, measure_diagnostics);
+                measureChain(mesh, chain, chain_options, measure_diagnostics);
                 metrics = lodMetrics(mesh, chain, screen, settings.hysteresis);
             }
-            // Encoders that read the measured errors (adaptive stream precision) code the levels after
-            // LOD0 now, in a nested loop that idle threads join.
-            deferred = parallelFor(level_count - 1, 1, [&](size_t i) {
+            // Encoders that read the measured errors (adaptive stream precision) code the levels of this
+            // phase now, in a nested loop that idle threads join; later phases' Level tasks do it themselves.
+            deferred = parallelFor(nested_levels.size(), 1, [&](size_t i) {
+                const size_t l = nested_levels[i];
                 for (size_t e = 0; e < encoders.size(); ++e) {
                     if (!encoders[e].needs_measurement) continue;
                     StageTimer timer(hooks, index, BakeStage::Encode);
-                    commits[e * level_count + 1 + i] = encoders[e].prepare(chain, 1 + i, levelMesh(1 + i));
+                    commits[e * level_count + l] = encoders[e].prepare(chain, l, levelMesh(l));
                 }
             });
             StageTimer timer(hooks, index, BakeStage::Textures);
@@ -196,7 +222,8 @@ Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vect
         }
         case PhaseTask::Kind::Level:
             for (size_t e = 0; e < encoders.size(); ++e) {
-                if (encoders[e].needs_measurement) continue; // after the measurement, above
+                // In the measurement's phase, the measurement task codes these after it (above).
+                if (encoders[e].needs_measurement && level_with_measure[task.index]) continue;
                 StageTimer timer(hooks, index, stageOf(e));
                 commits[e * level_count + task.index] = encoders[e].prepare(chain, task.index, levelMesh(task.index));
             }
@@ -205,7 +232,19 @@ Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vect
     };
     std::vector<bool> encoder_is_pfrep;
     for (size_t e = 0; e < encoders.size(); ++e) encoder_is_pfrep.push_back(stageOf(e) == BakeStage::Pfrep);
-    for (const std::vector<PhaseTask>& phase : concurrentPhases(encoder_is_pfrep, level_triangles)) {
+    const std::vector<std::vector<PhaseTask>> phases = concurrentPhases(encoder_is_pfrep, level_triangles);
+    // The levels that share the measurement's phase (the measurement precedes every level task).
+    for (const std::vector<PhaseTask>& phase : phases) {
+        bool has_measure = false;
+        for (const PhaseTask& task : phase) {
+            has_measure |= task.kind == PhaseTask::Kind::Measure;
+            if (has_measure && task.kind == PhaseTask::Kind::Level) {
+                level_with_measure[task.index] = true;
+                nested_levels.push_back(task.index);
+            }
+        }
+    }
+    for (const std::vector<PhaseTask>& phase : phases) {
         std::atomic<size_t> next{0};
         const bool alone = phase.size() == 1;
         LODBAKE_RETURN_IF_ERROR(

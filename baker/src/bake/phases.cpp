@@ -12,10 +12,10 @@ std::vector<std::vector<PhaseTask>> concurrentPhases(const std::vector<bool>& en
     for (size_t e = 0; e < encoder_is_pfrep.size(); ++e)
         if (encoder_is_pfrep[e])
             tasks.push_back({PhaseTask::Kind::Lod0Encoder, e, estimates.pfrep_bytes_per_triangle * lod0});
+    tasks.push_back({PhaseTask::Kind::Measure, 0, estimates.measure_bytes_per_triangle * lod0});
     for (size_t e = 0; e < encoder_is_pfrep.size(); ++e)
         if (!encoder_is_pfrep[e])
             tasks.push_back({PhaseTask::Kind::Lod0Encoder, e, estimates.encode_bytes_per_triangle * lod0});
-    tasks.push_back({PhaseTask::Kind::Measure, 0, estimates.measure_bytes_per_triangle * lod0});
     for (size_t l = 1; l < level_triangles.size(); ++l)
         tasks.push_back({PhaseTask::Kind::Level, l, estimates.encode_bytes_per_triangle * double(level_triangles[l])});
     std::vector<std::vector<PhaseTask>> phases;

@@ -10,14 +10,15 @@ namespace lodbake {
 namespace bake_detail {
 
 /// Working memory of a task in bytes per triangle of the mesh it reads, measured on
-/// dragon_poisson (1.07M triangles, glibc allocator: resident size above what the bake holds).
+/// dragon_poisson (1.07M triangles, glibc allocator as the CLI sets it up: resident size above what
+/// the bake holds).
 struct PhaseEstimates {
     double pfrep_bytes_per_triangle = 250;   // the PFRep build's own simplifier (geometry only)
-    double encode_bytes_per_triangle = 230;  // the valence coder's tables
-    double measure_bytes_per_triangle = 160; // LOD0's BVH and points, then one level's (per LOD0 triangle)
+    double encode_bytes_per_triangle = 110;  // the valence coder's tables, then its check's decoder
+    double measure_bytes_per_triangle = 160; // LOD0's BVH and points, then two levels' (per LOD0 triangle)
     /// Tasks share a phase only while their estimates add up to at most this; a task above it runs
-    /// alone. Small assets (up to about 200,000 triangles) run every task at once.
-    double budget_bytes = 192.0 * 1024 * 1024;
+    /// alone. Small assets (up to about 370,000 triangles) run every task at once.
+    double budget_bytes = 224.0 * 1024 * 1024;
 };
 
 /// One task: the measurement (then the metrics and texture levels), one encoder's prepare on LOD0,
@@ -30,10 +31,12 @@ struct PhaseTask {
 };
 
 /// The tasks in their start order -- the PFRep encoders on LOD0 (the longest, single-threaded),
-/// the other encoders on LOD0, the measurement (parallel inside), the other levels (largest first)
+/// the measurement (parallel inside), the other encoders on LOD0, the other levels (largest first)
 /// -- cut into consecutive phases that fit the budget. The biggest working sets come first, while
 /// the least is resident: what each task leaves behind (blobs, renumbered indices, heap pages the
-/// allocator keeps) adds to every later task's peak.
+/// allocator keeps) adds to every later task's peak. LOD0's coding comes after the measurement so
+/// that on a large asset it shares the last phase with the other levels' coding (single-threaded
+/// tasks side by side) rather than running alone, and the measurement's peak holds none of its output.
 /// `encoder_is_pfrep[e]` tells which encoders build PFRep; `level_triangles[0]` is LOD0's count.
 std::vector<std::vector<PhaseTask>> concurrentPhases(const std::vector<bool>& encoder_is_pfrep,
                                                      const std::vector<size_t>& level_triangles,

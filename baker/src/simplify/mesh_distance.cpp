@@ -351,17 +351,40 @@ Status checkOptions(const DistanceOptions& options) {
     return Status::okStatus();
 }
 
-// One approximation against a reference whose side's points are already drawn.
-Result<DistanceResult> measureWithReferencePoints(const DistanceReference& reference,
-                                                  const std::vector<Vec3d>& reference_points, const Mesh& approx,
-                                                  const DistanceOptions& options) {
-    LODBAKE_RETURN_IF_ERROR(checkSurface(approx, "approximation"));
-    const Mesh& ref_mesh = reference.mesh();
-    LODBAKE_ASSIGN_OR_RETURN(DistanceIndex approx_index, DistanceIndex::build(approx.positions, approx.indices));
-    LODBAKE_ASSIGN_OR_RETURN(SideStats ref_to_approx, measurePoints(reference_points, approx_index));
-    LODBAKE_ASSIGN_OR_RETURN(std::vector<Vec3d> approx_points,
-                             samplePoints(approx, options, kApproxStream, "approximation"));
-    LODBAKE_ASSIGN_OR_RETURN(SideStats approx_to_ref, measurePoints(approx_points, reference.index()));
+// What an approximation needs before it is measured: its index and its side's points (each built
+// only from the approximation, so it can be prepared while the previous one is measured).
+struct ApproxSide {
+    Status status = Status::okStatus();
+    DistanceIndex index;
+    std::vector<Vec3d> points;
+};
+
+ApproxSide prepareApprox(const Mesh& approx, const DistanceOptions& options) {
+    ApproxSide side;
+    side.status = checkSurface(approx, "approximation");
+    if (!side.status.ok()) return side;
+    Result<DistanceIndex> index = DistanceIndex::build(approx.positions, approx.indices);
+    if (!index.ok()) {
+        side.status = index.status();
+        return side;
+    }
+    side.index = std::move(index).value();
+    Result<std::vector<Vec3d>> points = samplePoints(approx, options, kApproxStream, "approximation");
+    if (!points.ok()) {
+        side.status = points.status();
+        side.index = DistanceIndex();
+        return side;
+    }
+    side.points = std::move(points).value();
+    return side;
+}
+
+// One prepared approximation against a reference whose side's points are already drawn.
+Result<DistanceResult> measurePrepared(const DistanceReference& reference, const std::vector<Vec3d>& reference_points,
+                                       const ApproxSide& approx) {
+    LODBAKE_RETURN_IF_ERROR(approx.status);
+    LODBAKE_ASSIGN_OR_RETURN(SideStats ref_to_approx, measurePoints(reference_points, approx.index));
+    LODBAKE_ASSIGN_OR_RETURN(SideStats approx_to_ref, measurePoints(approx.points, reference.index()));
 
     DistanceResult r;
     r.max_ref_to_approx = ref_to_approx.max;
@@ -370,8 +393,36 @@ Result<DistanceResult> measureWithReferencePoints(const DistanceReference& refer
     const double n12 = double(ref_to_approx.count), n21 = double(approx_to_ref.count);
     r.mean = (ref_to_approx.sum / n12 + approx_to_ref.sum / n21) / 2.0;
     r.rms = std::sqrt((ref_to_approx.sum_sq / n12 + approx_to_ref.sum_sq / n21) / 2.0);
-    r.diagonal = computeBounds(ref_mesh).diagonal();
+    r.diagonal = computeBounds(reference.mesh()).diagonal();
     return r;
+}
+
+// Measures approximations[i] for every i, each prepared (prepareApprox) while the one before it is
+// measured: two tasks side by side, the next approximation's serial index build and sampling beside the
+// current one's parallel queries, so idle threads join the queries. At most two approximations' indexes
+// and points exist at once. `first` is approximations[0] already prepared (empty when there are none).
+std::vector<Result<DistanceResult>> measurePipelined(const DistanceReference& reference,
+                                                     const std::vector<Vec3d>& reference_points,
+                                                     const std::vector<const Mesh*>& approximations,
+                                                     const DistanceOptions& options, ApproxSide first) {
+    std::vector<Result<DistanceResult>> results(approximations.size(), Result<DistanceResult>(DistanceResult{}));
+    ApproxSide current = std::move(first);
+    for (size_t i = 0; i < approximations.size(); ++i) {
+        ApproxSide next;
+        const bool has_next = i + 1 < approximations.size();
+        const Status run = parallelFor(has_next ? 2 : 1, 1, [&](size_t task) {
+            if (task == 0)
+                results[i] = measurePrepared(reference, reference_points, current);
+            else
+                next = prepareApprox(*approximations[i + 1], options);
+        });
+        if (!run.ok()) {
+            results[i] = run;
+            if (has_next) next.status = run;
+        }
+        current = std::move(next);
+    }
+    return results;
 }
 
 } // namespace
@@ -540,6 +591,10 @@ double DistanceIndex::closestDistanceSq(const Vec3d& p, uint32_t& hint) const {
 
 Result<DistanceReference> DistanceReference::prepare(const Mesh& reference) {
     LODBAKE_RETURN_IF_ERROR(checkSurface(reference, "reference"));
+    return prepareChecked(reference);
+}
+
+Result<DistanceReference> DistanceReference::prepareChecked(const Mesh& reference) {
     DistanceReference prepared;
     prepared.mesh_ = &reference;
     LODBAKE_ASSIGN_OR_RETURN(prepared.index_, DistanceIndex::build(reference.positions, reference.indices));
@@ -552,26 +607,55 @@ Result<DistanceResult> measureSurfaceDistance(const DistanceReference& reference
     LODBAKE_RETURN_IF_ERROR(checkSurface(approx, "approximation"));
     LODBAKE_ASSIGN_OR_RETURN(std::vector<Vec3d> reference_points,
                              samplePoints(reference.mesh(), options, kReferenceStream, "reference"));
-    return measureWithReferencePoints(reference, reference_points, approx, options);
+    return measurePrepared(reference, reference_points, prepareApprox(approx, options));
 }
 
 std::vector<Result<DistanceResult>> measureSurfaceDistances(const DistanceReference& reference,
                                                             const std::vector<const Mesh*>& approximations,
                                                             const DistanceOptions& options) {
     std::vector<Result<DistanceResult>> results(approximations.size(), Result<DistanceResult>(DistanceResult{}));
-    Status status = checkOptions(options);
-    Result<std::vector<Vec3d>> reference_points =
-        status.ok() ? samplePoints(reference.mesh(), options, kReferenceStream, "reference")
-                    : Result<std::vector<Vec3d>>(status);
+    const Status status = checkOptions(options);
+    if (!status.ok()) {
+        for (auto& r : results) r = status;
+        return results;
+    }
+    // The reference's points are drawn while the first approximation is prepared.
+    Result<std::vector<Vec3d>> reference_points = Result<std::vector<Vec3d>>(std::vector<Vec3d>());
+    ApproxSide first;
+    const Status run = parallelFor(approximations.empty() ? 1 : 2, 1, [&](size_t task) {
+        if (task == 0)
+            reference_points = samplePoints(reference.mesh(), options, kReferenceStream, "reference");
+        else
+            first = prepareApprox(*approximations[0], options);
+    });
+    if (!run.ok()) reference_points = run;
     if (!reference_points.ok()) {
         for (auto& r : results) r = reference_points.status();
         return results;
     }
-    // One approximation at a time (each is parallel inside), so only one approximation's BVH and
-    // points exist at once beside the reference's.
-    for (size_t i = 0; i < approximations.size(); ++i)
-        results[i] = measureWithReferencePoints(reference, *reference_points, *approximations[i], options);
-    return results;
+    return measurePipelined(reference, *reference_points, approximations, options, std::move(first));
+}
+
+Result<std::vector<Result<DistanceResult>>> prepareAndMeasureSurfaceDistances(
+    const Mesh& reference, const std::vector<const Mesh*>& approximations, const DistanceOptions& options) {
+    LODBAKE_RETURN_IF_ERROR(checkOptions(options));
+    LODBAKE_RETURN_IF_ERROR(checkSurface(reference, "reference"));
+    // Three independent setup tasks side by side: the reference's index (serial), its points and the
+    // first approximation's index and points.
+    Result<DistanceReference> prepared = internalError("distance reference: not prepared");
+    Result<std::vector<Vec3d>> reference_points = Result<std::vector<Vec3d>>(std::vector<Vec3d>());
+    ApproxSide first;
+    LODBAKE_RETURN_IF_ERROR(parallelFor(approximations.empty() ? 2 : 3, 1, [&](size_t task) {
+        if (task == 0)
+            prepared = DistanceReference::prepareChecked(reference);
+        else if (task == 1)
+            reference_points = samplePoints(reference, options, kReferenceStream, "reference");
+        else
+            first = prepareApprox(*approximations[0], options);
+    }));
+    LODBAKE_RETURN_IF_ERROR(prepared.status());
+    LODBAKE_RETURN_IF_ERROR(reference_points.status());
+    return measurePipelined(*prepared, *reference_points, approximations, options, std::move(first));
 }
 
 Result<DistanceResult> measureSurfaceDistance(const Mesh& reference, const Mesh& approx,

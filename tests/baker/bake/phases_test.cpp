@@ -48,12 +48,15 @@ std::vector<size_t> desktopLevels(size_t lod0) {
 const std::vector<bool> kBuiltin{true, false}; // PFRep, then valence (builtinStreamEncoders order)
 
 TEST(BakePhasesTest, SmallAssetRunsEveryTaskAtOnce) {
-    EXPECT_EQ(describe(concurrentPhases(kBuiltin, desktopLevels(70000))), "p0 e1 M L1 L2 L3 L4 L5");
+    EXPECT_EQ(describe(concurrentPhases(kBuiltin, desktopLevels(70000))), "p0 M e1 L1 L2 L3 L4 L5");
+    EXPECT_EQ(describe(concurrentPhases(kBuiltin, desktopLevels(300000))), "p0 M e1 L1 L2 L3 L4 L5");
 }
 
 TEST(BakePhasesTest, LargeAssetRunsItsBigTasksAlone) {
-    // dragon_poisson: PFRep, LOD0's coding and the measurement alone, then the levels in two groups.
-    EXPECT_EQ(describe(concurrentPhases(kBuiltin, desktopLevels(1067852))), "p0 | e1 | M | L1 L2 | L3 L4 L5");
+    // dragon_poisson: PFRep and the measurement alone, then the coding of every level side by side.
+    EXPECT_EQ(describe(concurrentPhases(kBuiltin, desktopLevels(1067852))), "p0 | M | e1 L1 L2 L3 L4 L5");
+    // A mid-size asset: the PFRep build beside the measurement, then the coding.
+    EXPECT_EQ(describe(concurrentPhases(kBuiltin, desktopLevels(500000))), "p0 M | e1 L1 L2 L3 L4 L5");
 }
 
 TEST(BakePhasesTest, OrderAndTasksDoNotDependOnTheCut) {
@@ -61,11 +64,11 @@ TEST(BakePhasesTest, OrderAndTasksDoNotDependOnTheCut) {
         std::string all;
         for (const auto& phase : concurrentPhases(kBuiltin, desktopLevels(lod0)))
             for (const PhaseTask& task : phase) all += describe({{task}}) + " ";
-        EXPECT_EQ(all, "p0 e1 M L1 L2 L3 L4 L5 ") << lod0;
+        EXPECT_EQ(all, "p0 M e1 L1 L2 L3 L4 L5 ") << lod0;
     }
     PhaseEstimates tiny;
     tiny.budget_bytes = 1;
-    EXPECT_EQ(describe(concurrentPhases(kBuiltin, desktopLevels(1000), tiny)), "p0 | e1 | M | L1 | L2 | L3 | L4 | L5");
+    EXPECT_EQ(describe(concurrentPhases(kBuiltin, desktopLevels(1000), tiny)), "p0 | M | e1 | L1 | L2 | L3 | L4 | L5");
 }
 
 TEST(BakePhasesTest, NoStreamEncoders) {

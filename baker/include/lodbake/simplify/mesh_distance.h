@@ -91,6 +91,10 @@ public:
     const DistanceIndex& index() const { return index_; }
 
 private:
+    friend Result<std::vector<Result<DistanceResult>>> prepareAndMeasureSurfaceDistances(
+        const Mesh& reference, const std::vector<const Mesh*>& approximations, const DistanceOptions& options);
+    static Result<DistanceReference> prepareChecked(const Mesh& reference); // prepare after checkSurface
+
     const Mesh* mesh_ = nullptr;
     DistanceIndex index_;
 };
@@ -102,9 +106,17 @@ Result<DistanceResult> measureSurfaceDistance(const DistanceReference& reference
 /// Measures every approximation against one reference: results[i] is exactly (bit for bit) what
 /// measureSurfaceDistance(reference, *approximations[i], options) returns, including its error. The
 /// reference side's points are drawn once, and the approximations are measured one after the other,
-/// each in parallel inside (the result does not depend on the thread count). Pointers must not be null.
+/// each in parallel inside, the next one's index and points built beside (so at most two
+/// approximations' indexes and points exist at once). The result does not depend on the thread count.
+/// Pointers must not be null.
 std::vector<Result<DistanceResult>> measureSurfaceDistances(const DistanceReference& reference,
                                                             const std::vector<const Mesh*>& approximations,
                                                             const DistanceOptions& options = {});
+
+/// DistanceReference::prepare(reference) followed by measureSurfaceDistances, with the same results, but
+/// the reference's index, its points and the first approximation's index and points are built side by
+/// side. Fails as prepare does for a bad reference, and for options asking for no points.
+Result<std::vector<Result<DistanceResult>>> prepareAndMeasureSurfaceDistances(
+    const Mesh& reference, const std::vector<const Mesh*>& approximations, const DistanceOptions& options = {});
 
 } // namespace lodbake
