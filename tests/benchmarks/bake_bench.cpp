@@ -126,21 +126,41 @@ void stageBreakdown(const lodbake::Mesh& input, const lodbake::BakeSettings& set
     if (!chain.ok()) return;
     std::vector<double> ratios{1.0};
     for (const LodLevel& l : chain->levels) ratios.push_back(l.target_ratio);
-    // In the bake's order (docs/bake.md, "Concurrency"): PFRep, LOD0's coding, the other levels'
-    // coding, the measurement.
+    // In the bake's order (docs/bake.md, "Concurrency"): PFRep, the measurement, then the coding of
+    // every level (with the preset's stream precision, which reads the measured errors).
     step("pfrep (LOD0)", [&] { (void)buildPfrepExtension(mesh, ratios, PfrepOptions{}, d); });
-    const PackStreamEncoder valence = valenceStreamEncoder();
+    step("measure: all levels (as the bake)", [&] {
+        std::vector<const Mesh*> levels;
+        for (const LodLevel& l : chain->levels) levels.push_back(&l.mesh);
+        DistanceOptions distance;
+        distance.sample_count = settings.error_samples;
+        auto measured = prepareAndMeasureSurfaceDistances(mesh, levels, distance);
+        for (size_t i = 0; measured.ok() && i < measured->size(); ++i) {
+            if (!(*measured)[i].ok()) continue;
+            chain->levels[i].has_distance = true;
+            chain->levels[i].distance = *(*measured)[i];
+        }
+    });
+    ValenceStreamOptions valence_options;
+    valence_options.position_bits = settings.stream_precision.position_bits;
+    valence_options.normal_bits = settings.stream_precision.normal_bits;
+    valence_options.adaptive = settings.stream_precision.adaptive;
+    valence_options.error_fraction = settings.stream_precision.error_fraction;
+    const PackStreamEncoder valence = valenceStreamEncoder(valence_options);
     std::vector<PackLevel> packed(chain->levels.size() + 1);
     packed[0].mesh = mesh;
     for (size_t l = 0; l < chain->levels.size(); ++l) packed[l + 1].mesh = chain->levels[l].mesh;
+    if (threads > 1) {
+        // The bake's last phase on a large asset: every level's coding side by side, largest first.
+        std::vector<PackLevel> copies = packed;
+        step("valence, all levels side by side", [&] {
+            (void)parallelFor(copies.size(), 1, [&](size_t l) { (void)valence.encode(*chain, l, copies[l]); });
+        });
+    }
     for (size_t l = 0; l < packed.size(); ++l) {
         const std::string name = "valence level " + std::to_string(l);
         step(name.c_str(), [&] { (void)valence.encode(*chain, l, packed[l]); });
     }
-    step("measure: all levels (measureLodChain)", [&] {
-        chain_options.distance.sample_count = settings.error_samples;
-        measureLodChain(mesh, *chain, chain_options, d);
-    });
     PackDescription description;
     PackAsset asset;
     asset.name = "bench";

@@ -20,6 +20,7 @@
 
 #include "lodbake/codec/valence_encoder.h"
 #include "lodbake/core/json_writer.h"
+#include "lodrt/result.h"
 #include "lodrt/valence.h"
 
 namespace lodbake {
@@ -86,6 +87,36 @@ struct CodedStream {
     bool has_normals = false;
 };
 
+// The check's decode with the runtime decoder: the indices only (the decoder still needs somewhere to
+// put the positions; the normals it skips). Fails (internal error) when the stream does not decode or
+// does not hold `vertex_count` vertices.
+Result<std::vector<uint32_t>> decodeIndices(const std::vector<uint8_t>& bytes, size_t vertex_count,
+                                            const std::string& where) {
+    lodrt::ValenceInfo info;
+    lodrt::Result r = lodrt::valenceReadInfo(bytes.data(), bytes.size(), &info);
+    if (r != lodrt::Result::Ok) return internalError(where + ": header: " + lodrt::resultName(r));
+    if (info.vertex_count != vertex_count)
+        return internalError(where + ": the stream decodes " + std::to_string(info.vertex_count) + " vertices, expected " +
+                             std::to_string(vertex_count));
+    std::vector<uint32_t> indices(3 * size_t(info.triangle_count));
+    std::unique_ptr<float[]> positions(new float[3 * size_t(info.vertex_count) + 1]);
+    // Not value-initialised: the decoder writes every scratch word before it reads it, and the parts
+    // sized for the worst case stay untouched and so cost no resident memory.
+    const size_t scratch_words = (lodrt::valenceScratchSize(info) + 7) / 8;
+    std::unique_ptr<uint64_t[]> scratch(new uint64_t[scratch_words]);
+    lodrt::ValenceOutput output;
+    output.indices = indices.data();
+    output.index_capacity = indices.size();
+    output.positions = positions.get();
+    output.position_capacity = 3 * size_t(info.vertex_count);
+    output.normals = nullptr; // skipped: the check compares triangles
+    output.scratch = scratch.get();
+    output.scratch_size = scratch_words * 8;
+    r = lodrt::valenceDecode(bytes.data(), bytes.size(), output);
+    if (r != lodrt::Result::Ok) return internalError(where + ": streams: " + lodrt::resultName(r));
+    return indices;
+}
+
 // Codes `mesh` (positions, normals, one triangle list) and checks the stream by decoding it with the
 // runtime decoder: the indices written as plain accessors are the decoder's own, and a codec that
 // lost a triangle is caught here rather than in a reader.
@@ -101,15 +132,13 @@ Result<CodedStream> codeStream(const Mesh& mesh, const ValencePrecision& precisi
     // tables may still be resident: without this the check's peak sits on top of the coder's (on
     // dragon_poisson's LOD0 with glibc: 319 instead of 231 MiB). Small meshes are not worth the call.
     if (release_memory && mesh.faceCount() >= kReleaseMemoryTriangles) release_memory();
-    Result<Mesh> decoded = codec::decodeValence(encoded->bytes, where);
-    if (!decoded.ok()) return internalError(decoded.status().message());
-    if (decoded->vertexCount() != mesh.vertexCount() || encoded->new_vertex_of.size() != mesh.vertexCount() ||
-        !sameTriangles(mesh, *encoded, decoded->indices))
+    LODBAKE_ASSIGN_OR_RETURN(std::vector<uint32_t> decoded, decodeIndices(encoded->bytes, mesh.vertexCount(), where));
+    if (encoded->new_vertex_of.size() != mesh.vertexCount() || !sameTriangles(mesh, *encoded, decoded))
         return internalError(where + ": the decoded triangles differ from the level's");
     CodedStream out;
     out.bytes = std::move(encoded->bytes);
     out.new_vertex_of = std::move(encoded->new_vertex_of);
-    out.indices = std::move(decoded->indices);
+    out.indices = std::move(decoded);
     out.has_normals = mesh.hasNormals();
     return out;
 }

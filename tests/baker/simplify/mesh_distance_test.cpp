@@ -236,6 +236,46 @@ TEST(MeshDistanceTest, BatchOfLevelsEqualsOneByOneForAnyThreadCount) {
     }
 }
 
+// prepareAndMeasureSurfaceDistances builds the reference's index, its points and the first level's
+// setup side by side: the same bits as prepare + one call per level, a failing level (degenerate)
+// reported in its slot, and a bad reference or empty options failing the whole call.
+TEST(MeshDistanceTest, PrepareAndMeasureEqualsOneByOneForAnyThreadCount) {
+    Mesh reference = perturbed(icosphere(4), 0.01f, 31);
+    std::vector<Mesh> levels = {perturbed(icosphere(3), 0.01f, 32), lodbake_test::makeMesh({{0, 0, 0}}, {}),
+                                perturbed(icosphere(2), 0.02f, 33)};
+    std::vector<const Mesh*> pointers;
+    for (const Mesh& m : levels) pointers.push_back(&m);
+    lodbake::DistanceOptions options;
+    options.sample_count = 20000;
+    auto prepared = lodbake::DistanceReference::prepare(reference);
+    ASSERT_TRUE(prepared.ok());
+    for (int threads : {1, 2}) {
+        lodbake::ScopedThreadLimit limit(threads);
+        const auto batch = lodbake::prepareAndMeasureSurfaceDistances(reference, pointers, options);
+        ASSERT_TRUE(batch.ok()) << batch.status().message();
+        ASSERT_EQ(batch->size(), levels.size());
+        for (size_t i = 0; i < levels.size(); ++i) {
+            const auto single = lodbake::measureSurfaceDistance(prepared.value(), levels[i], options);
+            ASSERT_EQ((*batch)[i].ok(), single.ok()) << i;
+            if (!single.ok()) {
+                EXPECT_EQ((*batch)[i].status().message(), single.status().message());
+                continue;
+            }
+            EXPECT_EQ((*batch)[i]->hausdorff, single->hausdorff) << i;
+            EXPECT_EQ((*batch)[i]->mean, single->mean) << i;
+            EXPECT_EQ((*batch)[i]->rms, single->rms) << i;
+            EXPECT_EQ((*batch)[i]->diagonal, single->diagonal) << i;
+        }
+        EXPECT_FALSE((*batch)[1].ok());
+        EXPECT_TRUE(lodbake::prepareAndMeasureSurfaceDistances(reference, {}, options)->empty());
+    }
+    EXPECT_FALSE(lodbake::prepareAndMeasureSurfaceDistances(levels[1], pointers, options).ok());
+    lodbake::DistanceOptions none;
+    none.sample_count = 0;
+    none.include_vertices = false;
+    EXPECT_FALSE(lodbake::prepareAndMeasureSurfaceDistances(reference, pointers, none).ok());
+}
+
 // Brute force: the exact distance the index computes, over every triangle.
 double bruteForceDistanceSq(const Mesh& m, const lodbake::Vec3d& p) {
     double best = HUGE_VAL;
