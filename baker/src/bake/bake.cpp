@@ -135,8 +135,8 @@ Result<TextureLevels> textureLevels(const Mesh& lod0, size_t level_count, const 
 // byte): the error measurement (then the metrics and texture levels that follow from it), and the
 // stream encoders' prepare steps. They run in phases (concurrentPhases): with 2 threads a small
 // asset's PFRep build (one long single-threaded simplification) runs beside the measurement and the
-// valence coding of the levels; a large asset's big tasks run one after the other, each alone (the
-// measurement is parallel inside). The commits (cheap; the valence commit renumbers its level) then
+// valence coding of the levels; a large asset's PFRep build and measurement (parallel inside) run one
+// after the other, each alone, then the coding of every level side by side. The commits (cheap; the valence commit renumbers its level) then
 // run in encoder and level order on this thread.
 Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vector<PackStreamEncoder>& encoders,
                  AssetSlot& slot, size_t index, const BakeHooks& hooks) {
