@@ -18,6 +18,7 @@
 #include "lodrt/detail/valence_model.h"
 #include "lodrt/format.h"
 #include "lodrt/valence.h"
+#include "simplify/large_array.h"
 
 namespace lodbake::codec {
 namespace {
@@ -27,6 +28,31 @@ using lodrt::detail::initRangeProbs;
 using lodrt::detail::kNone;
 using lodrt::detail::VertexKind;
 using lodrt::detail::VertexSymbol;
+
+// The encoder's large arrays (a corner or two per input corner, several per vertex) are filled fresh:
+// backed by transparent huge pages where the OS offers them, they cost one page fault per 2 MB instead of
+// one per 4 KB (on dragon_poisson the 4 KB faults were a third of the encode time).
+using U32Array = lodbake::detail::LargeArray<uint32_t>;
+using I32Array = lodbake::detail::LargeArray<int32_t>;
+using U8Array = lodbake::detail::LargeArray<uint8_t>;
+
+// A U32Array's storage without the initialisation: pages nobody writes never become resident.
+class UninitArray {
+public:
+    explicit UninitArray(size_t n) : n_(n), p_(lodbake::detail::LargeArrayAllocator<uint32_t>().allocate(n)) {}
+    ~UninitArray() { reset(); }
+    UninitArray(const UninitArray&) = delete;
+    UninitArray& operator=(const UninitArray&) = delete;
+    uint32_t* get() const { return p_; }
+    void reset() {
+        if (p_) lodbake::detail::LargeArrayAllocator<uint32_t>().deallocate(p_, n_);
+        p_ = nullptr;
+    }
+
+private:
+    size_t n_;
+    uint32_t* p_;
+};
 
 constexpr uint32_t kClassProbs = 1u << kValenceClassTreeBits;
 constexpr uint32_t kTopProbs = 33;
@@ -89,15 +115,16 @@ struct PositionValue {
 // The closed manifold the conquest runs on: a corner table whose first 3 * face_count corners are the
 // input faces (same order and rotation), then the dummy triangles.
 struct ClosedMesh {
-    std::vector<uint32_t> corner_vertex; // closed vertex per corner
-    std::vector<uint32_t> opposite;      // every corner paired
-    std::vector<uint32_t> source;        // closed vertex -> input vertex, kNone for dummies
-    std::vector<uint32_t> valence;       // corners per closed vertex
+    U32Array corner_vertex; // closed vertex per corner
+    U32Array opposite;      // every corner paired
+    U32Array source;        // closed vertex -> input vertex, kNone for dummies
+    U32Array valence;       // corners per closed vertex
     size_t real_triangles = 0;
 };
 
-// Union-find with path halving.
-uint32_t findRoot(std::vector<uint32_t>& parent, uint32_t x) {
+// Union-find with path halving. Every parent has a smaller index than its child (unions hang the larger
+// root under the smaller), so a set's root is its smallest element.
+uint32_t findRoot(U32Array& parent, uint32_t x) {
     while (parent[x] != x) {
         parent[x] = parent[parent[x]];
         x = parent[x];
@@ -105,14 +132,18 @@ uint32_t findRoot(std::vector<uint32_t>& parent, uint32_t x) {
     return x;
 }
 
-// Builds the closed manifold. `exploded[f]` faces get private copies of their three vertices.
-ClosedMesh buildClosed(const Mesh& mesh, const std::vector<uint8_t>& exploded) {
+// Builds the closed manifold. `exploded[f]` faces get private copies of their three vertices. With
+// `several_fans` set, input vertices whose corners fall into several fans (copies included) are listed
+// there, and when there are any the build stops after numbering the fans (the caller cuts them loose and
+// builds again).
+ClosedMesh buildClosed(const Mesh& mesh, const std::vector<uint8_t>& exploded, std::vector<uint32_t>* several_fans) {
     const size_t fn = mesh.faceCount(), cn = 3 * fn;
     ClosedMesh m;
     m.real_triangles = fn;
     // Working vertex per corner: the input vertex, or a private copy for exploded/degenerate faces.
-    std::vector<uint32_t> work(cn), work_source;
-    std::vector<uint32_t> work_of_input(mesh.vertexCount(), kNone);
+    U32Array work(cn), work_source;
+    work_source.reserve(mesh.vertexCount());
+    U32Array work_of_input(mesh.vertexCount(), kNone);
     for (size_t f = 0; f < fn; ++f) {
         const uint32_t* t = &mesh.indices[3 * f];
         const bool own = exploded[f] || t[0] == t[1] || t[1] == t[2] || t[0] == t[2];
@@ -129,6 +160,7 @@ ClosedMesh buildClosed(const Mesh& mesh, const std::vector<uint8_t>& exploded) {
             }
         }
     }
+    U32Array().swap(work_of_input);
     // Pair half-edges: an undirected edge with exactly one half-edge each way is interior; every
     // other half-edge becomes a boundary. Corner c is opposite the half-edge next(c) -> prev(c).
     // Half-edges are bucketed by their smaller vertex (counting sort, 4 bytes per corner instead of a
@@ -138,27 +170,43 @@ ClosedMesh buildClosed(const Mesh& mesh, const std::vector<uint8_t>& exploded) {
         const size_t wn = work_source.size();
         auto lower = [&](uint32_t c) { return std::min(work[nextCorner(c)], work[prevCorner(c)]); };
         auto upper = [&](uint32_t c) { return std::max(work[nextCorner(c)], work[prevCorner(c)]); };
-        std::vector<uint32_t> start(wn + 1, 0), bucket(cn);
+        U32Array start(wn + 1, 0), bucket(cn);
         for (uint32_t c = 0; c < cn; ++c) ++start[lower(c) + 1];
         for (size_t v = 0; v < wn; ++v) start[v + 1] += start[v];
         {
-            std::vector<uint32_t> fill(start.begin(), start.end() - 1);
+            U32Array fill(start.begin(), start.end() - 1);
             for (uint32_t c = 0; c < cn; ++c) bucket[fill[lower(c)]++] = c;
         }
+        // Each bucket's upper vertices are loaded once (the corners of a bucket are scattered over the
+        // mesh, so every load is a cache miss) into a small array sorted along with the corners.
+        constexpr size_t kLocal = 64;
+        uint32_t local_up[kLocal];
+        std::vector<uint32_t> large_up;
         for (size_t v = 0; v < wn; ++v) {
             uint32_t* b = bucket.data() + start[v];
             const size_t n = start[v + 1] - start[v];
+            if (n < 2) continue; // a lone half-edge pairs with nothing
+            uint32_t* up = local_up;
+            if (n > kLocal) {
+                large_up.resize(n);
+                up = large_up.data();
+            }
+            for (size_t i = 0; i < n; ++i) up[i] = upper(b[i]);
             // Corners were filled in increasing order, so a stable sort by the upper vertex gives
             // (upper, corner) order. Buckets are small (about a valence): insertion sort.
             for (size_t i = 1; i < n; ++i) {
-                const uint32_t x = b[i], ux = upper(x);
+                const uint32_t x = b[i], ux = up[i];
                 size_t j = i;
-                for (; j > 0 && upper(b[j - 1]) > ux; --j) b[j] = b[j - 1];
+                for (; j > 0 && up[j - 1] > ux; --j) {
+                    b[j] = b[j - 1];
+                    up[j] = up[j - 1];
+                }
                 b[j] = x;
+                up[j] = ux;
             }
             for (size_t i = 0; i < n;) {
                 size_t j = i;
-                while (j < n && upper(b[j]) == upper(b[i])) ++j;
+                while (j < n && up[j] == up[i]) ++j;
                 if (j - i == 2) {
                     const uint32_t c = b[i], d = b[i + 1];
                     if (work[nextCorner(c)] == work[prevCorner(d)]) {
@@ -171,7 +219,7 @@ ClosedMesh buildClosed(const Mesh& mesh, const std::vector<uint8_t>& exploded) {
         }
     }
     // Split vertices into fans: corners around one working vertex joined across paired edges.
-    std::vector<uint32_t> parent(cn);
+    U32Array parent(cn);
     for (uint32_t c = 0; c < cn; ++c) parent[c] = c;
     for (uint32_t c = 0; c < cn; ++c) {
         const uint32_t o = m.opposite[nextCorner(c)];
@@ -180,23 +228,39 @@ ClosedMesh buildClosed(const Mesh& mesh, const std::vector<uint8_t>& exploded) {
         const uint32_t ra = findRoot(parent, c), rb = findRoot(parent, s);
         if (ra != rb) parent[std::max(ra, rb)] = std::min(ra, rb);
     }
-    // One closed vertex per fan, numbered by the fan's first corner.
-    std::vector<uint32_t> vertex_of_root(cn, kNone);
+    // One closed vertex per fan, numbered by the fan's first corner (its root). In increasing corner
+    // order a non-root's parent is an earlier corner of the same fan, already numbered: no root search.
+    // The dummy triangles are appended below: room for them is reserved up front.
+    size_t boundary = 0;
+    for (uint32_t c = 0; c < cn; ++c) boundary += m.opposite[c] == kNone;
+    m.corner_vertex.reserve(cn + 3 * boundary);
     m.corner_vertex.resize(cn);
+    m.source.reserve(work_source.size() + boundary / 3 + 1);
     for (uint32_t c = 0; c < cn; ++c) {
-        const uint32_t r = findRoot(parent, c);
-        if (vertex_of_root[r] == kNone) {
-            vertex_of_root[r] = uint32_t(m.source.size());
+        if (parent[c] == c) {
+            m.corner_vertex[c] = uint32_t(m.source.size());
             m.source.push_back(work_source[work[c]]);
+        } else {
+            m.corner_vertex[c] = m.corner_vertex[parent[c]];
         }
-        m.corner_vertex[c] = vertex_of_root[r];
     }
+    U32Array().swap(parent);
+    U32Array().swap(work);
+    if (several_fans) {
+        std::vector<uint8_t> fans(mesh.vertexCount(), 0);
+        for (uint32_t src : m.source) {
+            if (fans[src] == 1) several_fans->push_back(src);
+            if (fans[src] < 2) ++fans[src];
+        }
+        if (!several_fans->empty()) return m;
+    }
+    m.opposite.reserve(cn + 3 * boundary);
     // Boundary loops: each vertex now has at most one outgoing boundary half-edge.
     const size_t vn = m.source.size();
-    std::vector<uint32_t> out_boundary(vn, kNone);
+    U32Array out_boundary(vn, kNone);
     for (uint32_t c = 0; c < cn; ++c)
         if (m.opposite[c] == kNone) out_boundary[m.corner_vertex[nextCorner(c)]] = c;
-    std::vector<uint8_t> capped(cn, 0);
+    U8Array capped(cn, 0);
     for (uint32_t c0 = 0; c0 < cn; ++c0) {
         if (m.opposite[c0] != kNone || capped[c0]) continue;
         const uint32_t d = uint32_t(m.source.size());
@@ -240,9 +304,9 @@ struct EncoderIo {
     lodrt::detail::Conquest<EncoderIo>* engine = nullptr;
     RangeEncoder* re = nullptr;
     Failure* failure = nullptr;
-    std::vector<uint32_t> engine_id; // closed vertex -> engine vertex
-    std::vector<uint32_t> real_of;   // engine corner -> closed-mesh corner
-    std::vector<uint8_t> conquered;  // per closed triangle
+    U32Array engine_id; // closed vertex -> engine vertex
+    U32Array real_of;   // engine corner -> closed-mesh corner
+    U8Array conquered;  // per closed triangle
     uint32_t next_engine_vertex = 0;
     size_t scan = 0;
     uint32_t seed = kNone;
@@ -405,7 +469,7 @@ struct Attempt {
     RangeEncoder conn;
     Failure failure;
     bool precut = false; // cut vertices with several fans loose instead of conquering (first round)
-    std::vector<uint32_t> corner_vertex, corner_opposite, vertex_flags, vertex_corner, vertex_valence, node_vertex,
+    U32Array corner_vertex, corner_opposite, vertex_flags, vertex_corner, vertex_valence, node_vertex,
         node_prev, node_next, node_free, node_corner, completion, stack_head, stack_size;
 
     bool run(const Mesh& mesh, const std::vector<uint8_t>& exploded) {
@@ -414,23 +478,15 @@ struct Attempt {
         closed = ClosedMesh();
         for (auto* v : {&corner_vertex, &corner_opposite, &vertex_flags, &vertex_corner, &vertex_valence, &node_vertex,
                         &node_prev, &node_next, &node_free, &node_corner, &completion, &stack_head, &stack_size})
-            std::vector<uint32_t>().swap(*v);
-        closed = buildClosed(mesh, exploded);
-        if (precut) {
-            // Vertices with several fans (non-manifold vertices and edges) pinch the front where
-            // their copies meet, and the conquest fails there, often near its end (the dragon at
-            // 1,071,828 of 1,071,852 triangles). Cutting their triangles loose before the first
-            // conquest costs a few copies and saves the restart.
-            std::vector<uint8_t> fans(mesh.vertexCount(), 0);
-            for (uint32_t src : closed.source) {
-                if (src == kNone) continue;
-                if (fans[src] == 1) failure.culprit_sources.push_back(src);
-                if (fans[src] < 2) ++fans[src];
-            }
-            if (!failure.culprit_sources.empty()) {
-                failure.failed = true;
-                return false;
-            }
+            U32Array().swap(*v);
+        // Vertices with several fans (non-manifold vertices and edges) pinch the front where their
+        // copies meet, and the conquest fails there, often near its end (the dragon at 1,071,828 of
+        // 1,071,852 triangles). Cutting their triangles loose before the first conquest costs a few
+        // copies and saves the restart.
+        closed = buildClosed(mesh, exploded, precut ? &failure.culprit_sources : nullptr);
+        if (!failure.culprit_sources.empty()) {
+            failure.failed = true;
+            return false;
         }
         const size_t vc = closed.source.size(), tc = closed.corner_vertex.size() / 3;
         for (auto* v : {&corner_vertex, &corner_opposite}) v->assign(3 * tc, 0);
@@ -488,8 +544,8 @@ struct Attempt {
         for (auto* v :
              {&node_vertex, &node_prev, &node_next, &node_free, &node_corner, &completion, &stack_head, &stack_size,
               &closed.corner_vertex, &closed.opposite, &closed.source, &closed.valence, &io.engine_id})
-            std::vector<uint32_t>().swap(*v);
-        std::vector<uint8_t>().swap(io.conquered);
+            U32Array().swap(*v);
+        U8Array().swap(io.conquered);
     }
 };
 
@@ -556,7 +612,7 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
     const uint32_t qmax = (1u << options.position_bits) - 1;
     const float step = cube / float(qmax);
     ValenceEncodeResult result;
-    std::vector<int32_t> qpos_in(3 * vn);
+    I32Array qpos_in(3 * vn);
     for (size_t i = 0; i < vn; ++i) {
         const float c[3] = {mesh.positions[i].x, mesh.positions[i].y, mesh.positions[i].z};
         for (int j = 0; j < 3; ++j) {
@@ -599,10 +655,11 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
                    tc = uint32_t(attempt->closed.corner_vertex.size() / 3);
 
     // Final vertex order: conquest order without dummies and copies, then unreferenced vertices.
-    std::vector<uint32_t> source_of_engine(vc); // input vertex per engine vertex, kNone for dummies
+    U32Array source_of_engine(vc); // input vertex per engine vertex, kNone for dummies
     for (uint32_t v = 0; v < vc; ++v) source_of_engine[io.engine_id[v]] = attempt->closed.source[v];
     attempt->releaseConquestState();
-    std::vector<uint32_t> final_of(vc, kNone), new_of(vn, kNone);
+    U32Array final_of(vc, kNone);
+    std::vector<uint32_t> new_of(vn, kNone);
     std::vector<std::pair<uint32_t, uint32_t>> dups; // (rank among non-dummies, final id of the original)
     uint32_t final_count = 0, rank = 0;
     for (uint32_t ev = 0; ev < vc; ++ev) {
@@ -628,7 +685,7 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
         if (new_of[v] == kNone) new_of[v] = final_count++;
 
     // Output triangles (only the normal predictor needs them as index triples).
-    std::vector<uint32_t> triangles;
+    U32Array triangles;
     if (normals) triangles.reserve(3 * fn);
     result.old_face_of.reserve(fn);
     for (uint32_t t = 0; t < tc; ++t) {
@@ -638,16 +695,16 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
         if (normals) triangles.insert(triangles.end(), {final_of[cv[0]], final_of[cv[1]], final_of[cv[2]]});
         result.old_face_of.push_back(io.real_of[3 * size_t(t)] / 3);
     }
-    std::vector<uint32_t>().swap(io.real_of);
+    U32Array().swap(io.real_of);
     if (result.old_face_of.size() != fn) return internalError("valence encoder: triangle count mismatch");
 
     // Positions in the plan's order, predicted exactly as the decoder will.
-    std::vector<int32_t> qpos(3 * size_t(vc), 0), qpos_final(3 * vn);
-    std::vector<uint8_t> ordered(vc);
-    std::vector<uint32_t> order(vc), count(vc), neighbour(vc), degree(vc), stack0(vc), stack1(vc), stack2(vc);
+    I32Array qpos(3 * size_t(vc), 0), qpos_final(3 * vn);
+    U8Array ordered(vc);
+    U32Array order(vc), count(vc), neighbour(vc), degree(vc), stack0(vc), stack1(vc), stack2(vc);
     // Sized for the worst case and filled only as far as the plan goes: left uninitialised, so the
     // untouched tail costs no resident memory.
-    std::unique_ptr<uint32_t[]> triples(new uint32_t[9 * size_t(tc)]);
+    UninitArray triples(9 * size_t(tc));
     lodrt::detail::PositionPlan plan;
     plan.order = order.data();
     plan.count = count.data();
@@ -658,15 +715,15 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
                                       a.vertex_valence, vc, ordered.data(), degree.data(), stack0.data(), stack1.data(),
                                       stack2.data(), &plan))
         return internalError("valence encoder: broken corner cycle");
-    std::vector<uint32_t>().swap(degree);
-    std::vector<uint32_t>().swap(stack0);
-    std::vector<uint32_t>().swap(stack1);
-    std::vector<uint32_t>().swap(stack2);
-    std::vector<uint8_t>().swap(ordered);
+    U32Array().swap(degree);
+    U32Array().swap(stack0);
+    U32Array().swap(stack1);
+    U32Array().swap(stack2);
+    U8Array().swap(ordered);
     std::vector<uint32_t> isolated(vn - referenced);
     for (size_t v = 0; v < vn; ++v)
         if (new_of[v] >= referenced) isolated[new_of[v] - referenced] = uint32_t(v);
-    std::vector<uint8_t> final_done(vn, 0);
+    U8Array final_done(vn, 0);
     // Visits every coded coordinate in stream order with everything its coding needs. The contexts do
     // not depend on how a coordinate is coded (a snapped one counts with the length and sign of
     // candidate - prediction), so each component's values can be coded into a stream of its own.
@@ -780,14 +837,14 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
             pos.residual(model.residuals, pos_raw, v.j, v.ctx, v.r, v.sign_ctx);
         });
     }
-    std::unique_ptr<uint32_t[]>().swap(triples);
+    triples.reset();
 
     // Normals after all positions, in final order, each predicted from the exact sum of its faces'
     // normals on the quantized positions (the decoder's step 3).
     RangeEncoder nrm;
     BitWriter nrm_raw;
     if (normals) {
-        std::vector<uint32_t> qnorm(2 * vn);
+        U32Array qnorm(2 * vn);
         for (size_t i = 0; i < vn; ++i) {
             const float n[3] = {mesh.normals[i].x, mesh.normals[i].y, mesh.normals[i].z};
             uint32_t q[2];
@@ -795,7 +852,7 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
             qnorm[2 * size_t(new_of[i])] = q[0];
             qnorm[2 * size_t(new_of[i]) + 1] = q[1];
         }
-        std::vector<int64_t> sum(3 * vn, 0);
+        lodbake::detail::LargeArray<int64_t> sum(3 * vn, 0);
         for (size_t t = 0; t + 2 < triangles.size(); t += 3) {
             const uint32_t* f = &triangles[t];
             const int32_t* p0 = &qpos_final[3 * size_t(f[0])];
