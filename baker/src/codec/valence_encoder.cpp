@@ -36,22 +36,33 @@ using U32Array = lodbake::detail::LargeArray<uint32_t>;
 using I32Array = lodbake::detail::LargeArray<int32_t>;
 using U8Array = lodbake::detail::LargeArray<uint8_t>;
 
-// A U32Array's storage without the initialisation: pages nobody writes never become resident.
+// A U32Array's storage without the initialisation, for arrays whose every element is written before it
+// is read: no fill pass, and pages nobody writes (the unused tail of a worst-case size) never become
+// resident.
 class UninitArray {
 public:
-    explicit UninitArray(size_t n) : n_(n), p_(lodbake::detail::LargeArrayAllocator<uint32_t>().allocate(n)) {}
+    UninitArray() = default;
+    explicit UninitArray(size_t n) { allocate(n); }
     ~UninitArray() { reset(); }
     UninitArray(const UninitArray&) = delete;
     UninitArray& operator=(const UninitArray&) = delete;
+    void allocate(size_t n) {
+        reset();
+        if (n == 0) return;
+        p_ = lodbake::detail::LargeArrayAllocator<uint32_t>().allocate(n);
+        n_ = n;
+    }
     uint32_t* get() const { return p_; }
+    uint32_t& operator[](size_t i) const { return p_[i]; }
     void reset() {
         if (p_) lodbake::detail::LargeArrayAllocator<uint32_t>().deallocate(p_, n_);
         p_ = nullptr;
+        n_ = 0;
     }
 
 private:
-    size_t n_;
-    uint32_t* p_;
+    size_t n_ = 0;
+    uint32_t* p_ = nullptr;
 };
 
 constexpr uint32_t kClassProbs = 1u << kValenceClassTreeBits;
@@ -112,6 +123,30 @@ struct PositionValue {
     uint32_t snap_ctx = 0;
 };
 
+// A PositionValue packed into 8 bytes (the candidate itself is not kept: coding needs only the hit).
+struct CodedValue {
+    int32_t r;
+    uint32_t meta; // ctx (8 bits), sign_ctx (4), snap_ctx (8), has_candidate (1), hit (1)
+    static CodedValue of(const PositionValue& v) {
+        return {v.r, v.ctx | (v.sign_ctx << 8) | (v.snap_ctx << 12) | (uint32_t(v.has_candidate) << 20) |
+                         (uint32_t(v.hit) << 21)};
+    }
+    PositionValue value(int j) const {
+        PositionValue v;
+        v.j = j;
+        v.r = r;
+        v.ctx = meta & 0xFFu;
+        v.sign_ctx = (meta >> 8) & 0xFu;
+        v.snap_ctx = (meta >> 12) & 0xFFu;
+        v.has_candidate = (meta >> 20) & 1u;
+        v.hit = (meta >> 21) & 1u;
+        return v;
+    }
+};
+static_assert(lodrt::detail::kPositionContexts <= 256 && lodrt::detail::kSignContexts <= 16 &&
+                  kValenceSnapContexts <= 256,
+              "CodedValue's fields");
+
 // The closed manifold the conquest runs on: a corner table whose first 3 * face_count corners are the
 // input faces (same order and rotation), then the dummy triangles.
 struct ClosedMesh {
@@ -124,7 +159,7 @@ struct ClosedMesh {
 
 // Union-find with path halving. Every parent has a smaller index than its child (unions hang the larger
 // root under the smaller), so a set's root is its smallest element.
-uint32_t findRoot(U32Array& parent, uint32_t x) {
+uint32_t findRoot(const UninitArray& parent, uint32_t x) {
     while (parent[x] != x) {
         parent[x] = parent[parent[x]];
         x = parent[x];
@@ -141,7 +176,8 @@ ClosedMesh buildClosed(const Mesh& mesh, const std::vector<uint8_t>& exploded, s
     ClosedMesh m;
     m.real_triangles = fn;
     // Working vertex per corner: the input vertex, or a private copy for exploded/degenerate faces.
-    U32Array work(cn), work_source;
+    UninitArray work(cn);
+    U32Array work_source;
     work_source.reserve(mesh.vertexCount());
     U32Array work_of_input(mesh.vertexCount(), kNone);
     for (size_t f = 0; f < fn; ++f) {
@@ -170,7 +206,8 @@ ClosedMesh buildClosed(const Mesh& mesh, const std::vector<uint8_t>& exploded, s
         const size_t wn = work_source.size();
         auto lower = [&](uint32_t c) { return std::min(work[nextCorner(c)], work[prevCorner(c)]); };
         auto upper = [&](uint32_t c) { return std::max(work[nextCorner(c)], work[prevCorner(c)]); };
-        U32Array start(wn + 1, 0), bucket(cn);
+        U32Array start(wn + 1, 0);
+        UninitArray bucket(cn);
         for (uint32_t c = 0; c < cn; ++c) ++start[lower(c) + 1];
         for (size_t v = 0; v < wn; ++v) start[v + 1] += start[v];
         {
@@ -183,7 +220,7 @@ ClosedMesh buildClosed(const Mesh& mesh, const std::vector<uint8_t>& exploded, s
         uint32_t local_up[kLocal];
         std::vector<uint32_t> large_up;
         for (size_t v = 0; v < wn; ++v) {
-            uint32_t* b = bucket.data() + start[v];
+            uint32_t* b = bucket.get() + start[v];
             const size_t n = start[v + 1] - start[v];
             if (n < 2) continue; // a lone half-edge pairs with nothing
             uint32_t* up = local_up;
@@ -219,7 +256,7 @@ ClosedMesh buildClosed(const Mesh& mesh, const std::vector<uint8_t>& exploded, s
         }
     }
     // Split vertices into fans: corners around one working vertex joined across paired edges.
-    U32Array parent(cn);
+    UninitArray parent(cn);
     for (uint32_t c = 0; c < cn; ++c) parent[c] = c;
     for (uint32_t c = 0; c < cn; ++c) {
         const uint32_t o = m.opposite[nextCorner(c)];
@@ -234,18 +271,17 @@ ClosedMesh buildClosed(const Mesh& mesh, const std::vector<uint8_t>& exploded, s
     size_t boundary = 0;
     for (uint32_t c = 0; c < cn; ++c) boundary += m.opposite[c] == kNone;
     m.corner_vertex.reserve(cn + 3 * boundary);
-    m.corner_vertex.resize(cn);
     m.source.reserve(work_source.size() + boundary / 3 + 1);
     for (uint32_t c = 0; c < cn; ++c) {
         if (parent[c] == c) {
-            m.corner_vertex[c] = uint32_t(m.source.size());
+            m.corner_vertex.push_back(uint32_t(m.source.size()));
             m.source.push_back(work_source[work[c]]);
         } else {
-            m.corner_vertex[c] = m.corner_vertex[parent[c]];
+            m.corner_vertex.push_back(m.corner_vertex[parent[c]]);
         }
     }
-    U32Array().swap(parent);
-    U32Array().swap(work);
+    parent.reset();
+    work.reset();
     if (several_fans) {
         std::vector<uint8_t> fans(mesh.vertexCount(), 0);
         for (uint32_t src : m.source) {
@@ -260,14 +296,13 @@ ClosedMesh buildClosed(const Mesh& mesh, const std::vector<uint8_t>& exploded, s
     U32Array out_boundary(vn, kNone);
     for (uint32_t c = 0; c < cn; ++c)
         if (m.opposite[c] == kNone) out_boundary[m.corner_vertex[nextCorner(c)]] = c;
-    U8Array capped(cn, 0);
+    // A capped boundary corner gets its opposite in the dummy triangle: `opposite` marks what is done.
     for (uint32_t c0 = 0; c0 < cn; ++c0) {
-        if (m.opposite[c0] != kNone || capped[c0]) continue;
+        if (m.opposite[c0] != kNone) continue;
         const uint32_t d = uint32_t(m.source.size());
         m.source.push_back(kNone);
         uint32_t first_tri = kNone, previous_tri = kNone;
         for (uint32_t c = c0;;) {
-            capped[c] = 1;
             const uint32_t u = m.corner_vertex[nextCorner(c)], w = m.corner_vertex[prevCorner(c)];
             const uint32_t t = uint32_t(m.corner_vertex.size() / 3);
             m.corner_vertex.insert(m.corner_vertex.end(), {w, u, d});
@@ -469,7 +504,8 @@ struct Attempt {
     RangeEncoder conn;
     Failure failure;
     bool precut = false; // cut vertices with several fans loose instead of conquering (first round)
-    U32Array corner_vertex, corner_opposite, vertex_flags, vertex_corner, vertex_valence, node_vertex,
+    // The engine writes every element before reading it (the decoder relies on the same).
+    UninitArray corner_vertex, corner_opposite, vertex_flags, vertex_corner, vertex_valence, node_vertex,
         node_prev, node_next, node_free, node_corner, completion, stack_head, stack_size;
 
     bool run(const Mesh& mesh, const std::vector<uint8_t>& exploded) {
@@ -478,7 +514,7 @@ struct Attempt {
         closed = ClosedMesh();
         for (auto* v : {&corner_vertex, &corner_opposite, &vertex_flags, &vertex_corner, &vertex_valence, &node_vertex,
                         &node_prev, &node_next, &node_free, &node_corner, &completion, &stack_head, &stack_size})
-            U32Array().swap(*v);
+            v->reset();
         // Vertices with several fans (non-manifold vertices and edges) pinch the front where their
         // copies meet, and the conquest fails there, often near its end (the dragon at 1,071,828 of
         // 1,071,852 triangles). Cutting their triangles loose before the first conquest costs a few
@@ -489,24 +525,24 @@ struct Attempt {
             return false;
         }
         const size_t vc = closed.source.size(), tc = closed.corner_vertex.size() / 3;
-        for (auto* v : {&corner_vertex, &corner_opposite}) v->assign(3 * tc, 0);
-        for (auto* v : {&vertex_flags, &vertex_corner, &vertex_valence, &completion}) v->assign(vc, 0);
-        for (auto* v : {&node_vertex, &node_prev, &node_next, &node_free, &node_corner}) v->assign(vc + tc, 0);
-        for (auto* v : {&stack_head, &stack_size}) v->assign(tc, 0);
+        for (auto* v : {&corner_vertex, &corner_opposite}) v->allocate(3 * tc);
+        for (auto* v : {&vertex_flags, &vertex_corner, &vertex_valence, &completion}) v->allocate(vc);
+        for (auto* v : {&node_vertex, &node_prev, &node_next, &node_free, &node_corner}) v->allocate(vc + tc);
+        for (auto* v : {&stack_head, &stack_size}) v->allocate(tc);
         auto& a = engine.a;
-        a.corner_vertex = corner_vertex.data();
-        a.corner_opposite = corner_opposite.data();
-        a.vertex_flags = vertex_flags.data();
-        a.vertex_corner = vertex_corner.data();
-        a.vertex_valence = vertex_valence.data();
-        a.node_vertex = node_vertex.data();
-        a.node_prev = node_prev.data();
-        a.node_next = node_next.data();
-        a.node_free = node_free.data();
-        a.node_corner = node_corner.data();
-        a.completion = completion.data();
-        a.stack_head = stack_head.data();
-        a.stack_size = stack_size.data();
+        a.corner_vertex = corner_vertex.get();
+        a.corner_opposite = corner_opposite.get();
+        a.vertex_flags = vertex_flags.get();
+        a.vertex_corner = vertex_corner.get();
+        a.vertex_valence = vertex_valence.get();
+        a.node_vertex = node_vertex.get();
+        a.node_prev = node_prev.get();
+        a.node_next = node_next.get();
+        a.node_free = node_free.get();
+        a.node_corner = node_corner.get();
+        a.completion = completion.get();
+        a.stack_head = stack_head.get();
+        a.stack_size = stack_size.get();
         a.max_vertices = uint32_t(vc);
         a.max_triangles = uint32_t(tc);
         io.m = &closed;
@@ -541,9 +577,9 @@ struct Attempt {
     // the encoder's bookkeeping), keeping the engine's corner table, vertex arrays, real_of and the
     // connectivity coder for the steps after it.
     void releaseConquestState() {
-        for (auto* v :
-             {&node_vertex, &node_prev, &node_next, &node_free, &node_corner, &completion, &stack_head, &stack_size,
-              &closed.corner_vertex, &closed.opposite, &closed.source, &closed.valence, &io.engine_id})
+        for (auto* v : {&node_vertex, &node_prev, &node_next, &node_free, &node_corner, &completion, &stack_head, &stack_size})
+            v->reset();
+        for (auto* v : {&closed.corner_vertex, &closed.opposite, &closed.source, &closed.valence, &io.engine_id})
             U32Array().swap(*v);
         U8Array().swap(io.conquered);
     }
@@ -795,6 +831,9 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
     // sizes, since a component's values and contexts do not depend on the other components' choice);
     // snap where that is strictly smaller.
     uint16_t snap_flags = 0;
+    // The estimate's walk keeps every value it visits (8 bytes each) so that the stream below is coded
+    // from them instead of walking the plan again (the walk is half of a position pass).
+    lodbake::detail::LargeArray<CodedValue> walked;
     {
         RangeEncoder est[3][2];
         BitWriter est_raw[3][2];
@@ -809,7 +848,9 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
             hits += v.hit;
         });
         if (hits * 16 >= candidates && hits > 0) {
+            walked.reserve(3 * vn);
             walkPositions(7u, kNone, [&](const PositionValue& v) {
+                walked.push_back(CodedValue::of(v));
                 est[v.j][0].residual(plain_model.residuals, est_raw[v.j][0], v.j, v.ctx, v.r, v.sign_ctx);
                 if (v.has_candidate) {
                     est[v.j][1].bit(snap_model.snap[v.j][v.snap_ctx], v.hit ? 1u : 0u);
@@ -829,13 +870,26 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
     {
         PositionModel model;
         model.init();
-        walkPositions(uint32_t(snap_flags / kValenceFlagSnapX), kNone, [&](const PositionValue& v) {
+        const uint32_t mask = uint32_t(snap_flags / kValenceFlagSnapX);
+        auto code = [&](const PositionValue& v) {
             if (v.has_candidate) {
                 pos.bit(model.snap[v.j][v.snap_ctx], v.hit ? 1u : 0u);
                 if (v.hit) return;
             }
             pos.residual(model.residuals, pos_raw, v.j, v.ctx, v.r, v.sign_ctx);
-        });
+        };
+        if (walked.empty()) {
+            walkPositions(mask, kNone, code);
+        } else {
+            // Values come in component order x, y, z per vertex; a component that is not snapped
+            // codes without its candidate, exactly as a walk with `mask` would give it.
+            for (size_t i = 0; i < walked.size(); ++i) {
+                PositionValue v = walked[i].value(int(i % 3));
+                v.has_candidate = v.has_candidate && ((mask >> v.j) & 1u);
+                code(v);
+            }
+            lodbake::detail::LargeArray<CodedValue>().swap(walked);
+        }
     }
     triples.reset();
 
