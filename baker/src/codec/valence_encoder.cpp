@@ -15,10 +15,10 @@
 #include <string>
 
 #include "codec/range_encoder.h"
+#include "core/large_array.h"
 #include "lodrt/detail/valence_model.h"
 #include "lodrt/format.h"
 #include "lodrt/valence.h"
-#include "simplify/large_array.h"
 
 namespace lodbake::codec {
 namespace {
@@ -29,12 +29,32 @@ using lodrt::detail::kNone;
 using lodrt::detail::VertexKind;
 using lodrt::detail::VertexSymbol;
 
-// The encoder's large arrays (a corner or two per input corner, several per vertex) are filled fresh:
-// backed by transparent huge pages where the OS offers them, they cost one page fault per 2 MB instead of
-// one per 4 KB (on dragon_poisson the 4 KB faults were a third of the encode time).
-using U32Array = lodbake::detail::LargeArray<uint32_t>;
-using I32Array = lodbake::detail::LargeArray<int32_t>;
-using U8Array = lodbake::detail::LargeArray<uint8_t>;
+// The encoder's large arrays (a corner or two per input corner, several per vertex) are filled fresh.
+// The largest are backed by transparent huge pages where the OS offers them (core/large_array.h): one
+// page fault per 2 MB instead of one per 4 KB, which was a third of dragon_poisson's encode time.
+// Smaller ones stay with malloc, which hands a repeated encode memory already resident.
+// From 8 MB (measured: 2 MB made igea's 3 MB arrays 25 % slower to encode in codec_bench's repeated
+// runs, while dragon_poisson gains the same from 2 or 8 MB).
+constexpr size_t kMapBytes = size_t(8) << 20;
+template <class T> struct CodecAllocator {
+    using value_type = T;
+    CodecAllocator() = default;
+    template <class U> CodecAllocator(const CodecAllocator<U>&) {}
+    T* allocate(size_t n) {
+        if (n * sizeof(T) >= kMapBytes) return lodbake::detail::LargeArrayAllocator<T>().allocate(n);
+        return static_cast<T*>(::operator new(n * sizeof(T)));
+    }
+    void deallocate(T* p, size_t n) {
+        if (n * sizeof(T) >= kMapBytes) return lodbake::detail::LargeArrayAllocator<T>().deallocate(p, n);
+        ::operator delete(p);
+    }
+    template <class U> bool operator==(const CodecAllocator<U>&) const { return true; }
+    template <class U> bool operator!=(const CodecAllocator<U>&) const { return false; }
+};
+template <class T> using CodecArray = std::vector<T, CodecAllocator<T>>;
+using U32Array = CodecArray<uint32_t>;
+using I32Array = CodecArray<int32_t>;
+using U8Array = CodecArray<uint8_t>;
 
 // A U32Array's storage without the initialisation, for arrays whose every element is written before it
 // is read: no fill pass, and pages nobody writes (the unused tail of a worst-case size) never become
@@ -49,13 +69,13 @@ public:
     void allocate(size_t n) {
         reset();
         if (n == 0) return;
-        p_ = lodbake::detail::LargeArrayAllocator<uint32_t>().allocate(n);
+        p_ = CodecAllocator<uint32_t>().allocate(n);
         n_ = n;
     }
     uint32_t* get() const { return p_; }
     uint32_t& operator[](size_t i) const { return p_[i]; }
     void reset() {
-        if (p_) lodbake::detail::LargeArrayAllocator<uint32_t>().deallocate(p_, n_);
+        if (p_) CodecAllocator<uint32_t>().deallocate(p_, n_);
         p_ = nullptr;
         n_ = 0;
     }
@@ -833,7 +853,7 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
     uint16_t snap_flags = 0;
     // The estimate's walk keeps every value it visits (8 bytes each) so that the stream below is coded
     // from them instead of walking the plan again (the walk is half of a position pass).
-    lodbake::detail::LargeArray<CodedValue> walked;
+    CodecArray<CodedValue> walked;
     {
         RangeEncoder est[3][2];
         BitWriter est_raw[3][2];
@@ -888,7 +908,7 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
                 v.has_candidate = v.has_candidate && ((mask >> v.j) & 1u);
                 code(v);
             }
-            lodbake::detail::LargeArray<CodedValue>().swap(walked);
+            CodecArray<CodedValue>().swap(walked);
         }
     }
     triples.reset();
@@ -906,7 +926,7 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
             qnorm[2 * size_t(new_of[i])] = q[0];
             qnorm[2 * size_t(new_of[i]) + 1] = q[1];
         }
-        lodbake::detail::LargeArray<int64_t> sum(3 * vn, 0);
+        CodecArray<int64_t> sum(3 * vn, 0);
         for (size_t t = 0; t + 2 < triangles.size(); t += 3) {
             const uint32_t* f = &triangles[t];
             const int32_t* p0 = &qpos_final[3 * size_t(f[0])];
