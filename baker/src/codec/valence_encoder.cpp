@@ -15,6 +15,7 @@
 #include <string>
 
 #include "codec/range_encoder.h"
+#include "core/large_array.h"
 #include "lodrt/detail/valence_model.h"
 #include "lodrt/format.h"
 #include "lodrt/valence.h"
@@ -27,6 +28,62 @@ using lodrt::detail::initRangeProbs;
 using lodrt::detail::kNone;
 using lodrt::detail::VertexKind;
 using lodrt::detail::VertexSymbol;
+
+// The encoder's large arrays (a corner or two per input corner, several per vertex) are filled fresh.
+// The largest are backed by transparent huge pages where the OS offers them (core/large_array.h): one
+// page fault per 2 MB instead of one per 4 KB, which was a third of dragon_poisson's encode time.
+// Smaller ones stay with malloc, which hands a repeated encode memory already resident.
+// From 8 MB (measured: 2 MB made igea's 3 MB arrays 25 % slower to encode in codec_bench's repeated
+// runs, while dragon_poisson gains the same from 2 or 8 MB).
+constexpr size_t kMapBytes = size_t(8) << 20;
+template <class T> struct CodecAllocator {
+    using value_type = T;
+    CodecAllocator() = default;
+    template <class U> CodecAllocator(const CodecAllocator<U>&) {}
+    T* allocate(size_t n) {
+        if (n * sizeof(T) >= kMapBytes) return lodbake::detail::LargeArrayAllocator<T>().allocate(n);
+        return static_cast<T*>(::operator new(n * sizeof(T)));
+    }
+    void deallocate(T* p, size_t n) {
+        if (n * sizeof(T) >= kMapBytes) return lodbake::detail::LargeArrayAllocator<T>().deallocate(p, n);
+        ::operator delete(p);
+    }
+    template <class U> bool operator==(const CodecAllocator<U>&) const { return true; }
+    template <class U> bool operator!=(const CodecAllocator<U>&) const { return false; }
+};
+template <class T> using CodecArray = std::vector<T, CodecAllocator<T>>;
+using U32Array = CodecArray<uint32_t>;
+using I32Array = CodecArray<int32_t>;
+using U8Array = CodecArray<uint8_t>;
+
+// A U32Array's storage without the initialisation, for arrays whose every element is written before it
+// is read: no fill pass, and pages nobody writes (the unused tail of a worst-case size) never become
+// resident.
+class UninitArray {
+public:
+    UninitArray() = default;
+    explicit UninitArray(size_t n) { allocate(n); }
+    ~UninitArray() { reset(); }
+    UninitArray(const UninitArray&) = delete;
+    UninitArray& operator=(const UninitArray&) = delete;
+    void allocate(size_t n) {
+        reset();
+        if (n == 0) return;
+        p_ = CodecAllocator<uint32_t>().allocate(n);
+        n_ = n;
+    }
+    uint32_t* get() const { return p_; }
+    uint32_t& operator[](size_t i) const { return p_[i]; }
+    void reset() {
+        if (p_) CodecAllocator<uint32_t>().deallocate(p_, n_);
+        p_ = nullptr;
+        n_ = 0;
+    }
+
+private:
+    size_t n_ = 0;
+    uint32_t* p_ = nullptr;
+};
 
 constexpr uint32_t kClassProbs = 1u << kValenceClassTreeBits;
 constexpr uint32_t kTopProbs = 33;
@@ -86,18 +143,43 @@ struct PositionValue {
     uint32_t snap_ctx = 0;
 };
 
+// A PositionValue packed into 8 bytes (the candidate itself is not kept: coding needs only the hit).
+struct CodedValue {
+    int32_t r;
+    uint32_t meta; // ctx (8 bits), sign_ctx (4), snap_ctx (8), has_candidate (1), hit (1)
+    static CodedValue of(const PositionValue& v) {
+        return {v.r, v.ctx | (v.sign_ctx << 8) | (v.snap_ctx << 12) | (uint32_t(v.has_candidate) << 20) |
+                         (uint32_t(v.hit) << 21)};
+    }
+    PositionValue value(int j) const {
+        PositionValue v;
+        v.j = j;
+        v.r = r;
+        v.ctx = meta & 0xFFu;
+        v.sign_ctx = (meta >> 8) & 0xFu;
+        v.snap_ctx = (meta >> 12) & 0xFFu;
+        v.has_candidate = (meta >> 20) & 1u;
+        v.hit = (meta >> 21) & 1u;
+        return v;
+    }
+};
+static_assert(lodrt::detail::kPositionContexts <= 256 && lodrt::detail::kSignContexts <= 16 &&
+                  kValenceSnapContexts <= 256,
+              "CodedValue's fields");
+
 // The closed manifold the conquest runs on: a corner table whose first 3 * face_count corners are the
 // input faces (same order and rotation), then the dummy triangles.
 struct ClosedMesh {
-    std::vector<uint32_t> corner_vertex; // closed vertex per corner
-    std::vector<uint32_t> opposite;      // every corner paired
-    std::vector<uint32_t> source;        // closed vertex -> input vertex, kNone for dummies
-    std::vector<uint32_t> valence;       // corners per closed vertex
+    U32Array corner_vertex; // closed vertex per corner
+    U32Array opposite;      // every corner paired
+    U32Array source;        // closed vertex -> input vertex, kNone for dummies
+    U32Array valence;       // corners per closed vertex
     size_t real_triangles = 0;
 };
 
-// Union-find with path halving.
-uint32_t findRoot(std::vector<uint32_t>& parent, uint32_t x) {
+// Union-find with path halving. Every parent has a smaller index than its child (unions hang the larger
+// root under the smaller), so a set's root is its smallest element.
+uint32_t findRoot(const UninitArray& parent, uint32_t x) {
     while (parent[x] != x) {
         parent[x] = parent[parent[x]];
         x = parent[x];
@@ -105,14 +187,19 @@ uint32_t findRoot(std::vector<uint32_t>& parent, uint32_t x) {
     return x;
 }
 
-// Builds the closed manifold. `exploded[f]` faces get private copies of their three vertices.
-ClosedMesh buildClosed(const Mesh& mesh, const std::vector<uint8_t>& exploded) {
+// Builds the closed manifold. `exploded[f]` faces get private copies of their three vertices. With
+// `several_fans` set, input vertices whose corners fall into several fans (copies included) are listed
+// there, and when there are any the build stops after numbering the fans (the caller cuts them loose and
+// builds again).
+ClosedMesh buildClosed(const Mesh& mesh, const std::vector<uint8_t>& exploded, std::vector<uint32_t>* several_fans) {
     const size_t fn = mesh.faceCount(), cn = 3 * fn;
     ClosedMesh m;
     m.real_triangles = fn;
     // Working vertex per corner: the input vertex, or a private copy for exploded/degenerate faces.
-    std::vector<uint32_t> work(cn), work_source;
-    std::vector<uint32_t> work_of_input(mesh.vertexCount(), kNone);
+    UninitArray work(cn);
+    U32Array work_source;
+    work_source.reserve(mesh.vertexCount());
+    U32Array work_of_input(mesh.vertexCount(), kNone);
     for (size_t f = 0; f < fn; ++f) {
         const uint32_t* t = &mesh.indices[3 * f];
         const bool own = exploded[f] || t[0] == t[1] || t[1] == t[2] || t[0] == t[2];
@@ -129,6 +216,7 @@ ClosedMesh buildClosed(const Mesh& mesh, const std::vector<uint8_t>& exploded) {
             }
         }
     }
+    U32Array().swap(work_of_input);
     // Pair half-edges: an undirected edge with exactly one half-edge each way is interior; every
     // other half-edge becomes a boundary. Corner c is opposite the half-edge next(c) -> prev(c).
     // Half-edges are bucketed by their smaller vertex (counting sort, 4 bytes per corner instead of a
@@ -138,27 +226,44 @@ ClosedMesh buildClosed(const Mesh& mesh, const std::vector<uint8_t>& exploded) {
         const size_t wn = work_source.size();
         auto lower = [&](uint32_t c) { return std::min(work[nextCorner(c)], work[prevCorner(c)]); };
         auto upper = [&](uint32_t c) { return std::max(work[nextCorner(c)], work[prevCorner(c)]); };
-        std::vector<uint32_t> start(wn + 1, 0), bucket(cn);
+        U32Array start(wn + 1, 0);
+        UninitArray bucket(cn);
         for (uint32_t c = 0; c < cn; ++c) ++start[lower(c) + 1];
         for (size_t v = 0; v < wn; ++v) start[v + 1] += start[v];
         {
-            std::vector<uint32_t> fill(start.begin(), start.end() - 1);
+            U32Array fill(start.begin(), start.end() - 1);
             for (uint32_t c = 0; c < cn; ++c) bucket[fill[lower(c)]++] = c;
         }
+        // Each bucket's upper vertices are loaded once (the corners of a bucket are scattered over the
+        // mesh, so every load is a cache miss) into a small array sorted along with the corners.
+        constexpr size_t kLocal = 64;
+        uint32_t local_up[kLocal];
+        std::vector<uint32_t> large_up;
         for (size_t v = 0; v < wn; ++v) {
-            uint32_t* b = bucket.data() + start[v];
+            uint32_t* b = bucket.get() + start[v];
             const size_t n = start[v + 1] - start[v];
+            if (n < 2) continue; // a lone half-edge pairs with nothing
+            uint32_t* up = local_up;
+            if (n > kLocal) {
+                large_up.resize(n);
+                up = large_up.data();
+            }
+            for (size_t i = 0; i < n; ++i) up[i] = upper(b[i]);
             // Corners were filled in increasing order, so a stable sort by the upper vertex gives
             // (upper, corner) order. Buckets are small (about a valence): insertion sort.
             for (size_t i = 1; i < n; ++i) {
-                const uint32_t x = b[i], ux = upper(x);
+                const uint32_t x = b[i], ux = up[i];
                 size_t j = i;
-                for (; j > 0 && upper(b[j - 1]) > ux; --j) b[j] = b[j - 1];
+                for (; j > 0 && up[j - 1] > ux; --j) {
+                    b[j] = b[j - 1];
+                    up[j] = up[j - 1];
+                }
                 b[j] = x;
+                up[j] = ux;
             }
             for (size_t i = 0; i < n;) {
                 size_t j = i;
-                while (j < n && upper(b[j]) == upper(b[i])) ++j;
+                while (j < n && up[j] == up[i]) ++j;
                 if (j - i == 2) {
                     const uint32_t c = b[i], d = b[i + 1];
                     if (work[nextCorner(c)] == work[prevCorner(d)]) {
@@ -171,7 +276,7 @@ ClosedMesh buildClosed(const Mesh& mesh, const std::vector<uint8_t>& exploded) {
         }
     }
     // Split vertices into fans: corners around one working vertex joined across paired edges.
-    std::vector<uint32_t> parent(cn);
+    UninitArray parent(cn);
     for (uint32_t c = 0; c < cn; ++c) parent[c] = c;
     for (uint32_t c = 0; c < cn; ++c) {
         const uint32_t o = m.opposite[nextCorner(c)];
@@ -180,30 +285,44 @@ ClosedMesh buildClosed(const Mesh& mesh, const std::vector<uint8_t>& exploded) {
         const uint32_t ra = findRoot(parent, c), rb = findRoot(parent, s);
         if (ra != rb) parent[std::max(ra, rb)] = std::min(ra, rb);
     }
-    // One closed vertex per fan, numbered by the fan's first corner.
-    std::vector<uint32_t> vertex_of_root(cn, kNone);
-    m.corner_vertex.resize(cn);
+    // One closed vertex per fan, numbered by the fan's first corner (its root). In increasing corner
+    // order a non-root's parent is an earlier corner of the same fan, already numbered: no root search.
+    // The dummy triangles are appended below: room for them is reserved up front.
+    size_t boundary = 0;
+    for (uint32_t c = 0; c < cn; ++c) boundary += m.opposite[c] == kNone;
+    m.corner_vertex.reserve(cn + 3 * boundary);
+    m.source.reserve(work_source.size() + boundary / 3 + 1);
     for (uint32_t c = 0; c < cn; ++c) {
-        const uint32_t r = findRoot(parent, c);
-        if (vertex_of_root[r] == kNone) {
-            vertex_of_root[r] = uint32_t(m.source.size());
+        if (parent[c] == c) {
+            m.corner_vertex.push_back(uint32_t(m.source.size()));
             m.source.push_back(work_source[work[c]]);
+        } else {
+            m.corner_vertex.push_back(m.corner_vertex[parent[c]]);
         }
-        m.corner_vertex[c] = vertex_of_root[r];
     }
+    parent.reset();
+    work.reset();
+    if (several_fans) {
+        std::vector<uint8_t> fans(mesh.vertexCount(), 0);
+        for (uint32_t src : m.source) {
+            if (fans[src] == 1) several_fans->push_back(src);
+            if (fans[src] < 2) ++fans[src];
+        }
+        if (!several_fans->empty()) return m;
+    }
+    m.opposite.reserve(cn + 3 * boundary);
     // Boundary loops: each vertex now has at most one outgoing boundary half-edge.
     const size_t vn = m.source.size();
-    std::vector<uint32_t> out_boundary(vn, kNone);
+    U32Array out_boundary(vn, kNone);
     for (uint32_t c = 0; c < cn; ++c)
         if (m.opposite[c] == kNone) out_boundary[m.corner_vertex[nextCorner(c)]] = c;
-    std::vector<uint8_t> capped(cn, 0);
+    // A capped boundary corner gets its opposite in the dummy triangle: `opposite` marks what is done.
     for (uint32_t c0 = 0; c0 < cn; ++c0) {
-        if (m.opposite[c0] != kNone || capped[c0]) continue;
+        if (m.opposite[c0] != kNone) continue;
         const uint32_t d = uint32_t(m.source.size());
         m.source.push_back(kNone);
         uint32_t first_tri = kNone, previous_tri = kNone;
         for (uint32_t c = c0;;) {
-            capped[c] = 1;
             const uint32_t u = m.corner_vertex[nextCorner(c)], w = m.corner_vertex[prevCorner(c)];
             const uint32_t t = uint32_t(m.corner_vertex.size() / 3);
             m.corner_vertex.insert(m.corner_vertex.end(), {w, u, d});
@@ -240,9 +359,9 @@ struct EncoderIo {
     lodrt::detail::Conquest<EncoderIo>* engine = nullptr;
     RangeEncoder* re = nullptr;
     Failure* failure = nullptr;
-    std::vector<uint32_t> engine_id; // closed vertex -> engine vertex
-    std::vector<uint32_t> real_of;   // engine corner -> closed-mesh corner
-    std::vector<uint8_t> conquered;  // per closed triangle
+    U32Array engine_id; // closed vertex -> engine vertex
+    U32Array real_of;   // engine corner -> closed-mesh corner
+    U8Array conquered;  // per closed triangle
     uint32_t next_engine_vertex = 0;
     size_t scan = 0;
     uint32_t seed = kNone;
@@ -405,7 +524,8 @@ struct Attempt {
     RangeEncoder conn;
     Failure failure;
     bool precut = false; // cut vertices with several fans loose instead of conquering (first round)
-    std::vector<uint32_t> corner_vertex, corner_opposite, vertex_flags, vertex_corner, vertex_valence, node_vertex,
+    // The engine writes every element before reading it (the decoder relies on the same).
+    UninitArray corner_vertex, corner_opposite, vertex_flags, vertex_corner, vertex_valence, node_vertex,
         node_prev, node_next, node_free, node_corner, completion, stack_head, stack_size;
 
     bool run(const Mesh& mesh, const std::vector<uint8_t>& exploded) {
@@ -414,43 +534,35 @@ struct Attempt {
         closed = ClosedMesh();
         for (auto* v : {&corner_vertex, &corner_opposite, &vertex_flags, &vertex_corner, &vertex_valence, &node_vertex,
                         &node_prev, &node_next, &node_free, &node_corner, &completion, &stack_head, &stack_size})
-            std::vector<uint32_t>().swap(*v);
-        closed = buildClosed(mesh, exploded);
-        if (precut) {
-            // Vertices with several fans (non-manifold vertices and edges) pinch the front where
-            // their copies meet, and the conquest fails there, often near its end (the dragon at
-            // 1,071,828 of 1,071,852 triangles). Cutting their triangles loose before the first
-            // conquest costs a few copies and saves the restart.
-            std::vector<uint8_t> fans(mesh.vertexCount(), 0);
-            for (uint32_t src : closed.source) {
-                if (src == kNone) continue;
-                if (fans[src] == 1) failure.culprit_sources.push_back(src);
-                if (fans[src] < 2) ++fans[src];
-            }
-            if (!failure.culprit_sources.empty()) {
-                failure.failed = true;
-                return false;
-            }
+            v->reset();
+        // Vertices with several fans (non-manifold vertices and edges) pinch the front where their
+        // copies meet, and the conquest fails there, often near its end (the dragon at 1,071,828 of
+        // 1,071,852 triangles). Cutting their triangles loose before the first conquest costs a few
+        // copies and saves the restart.
+        closed = buildClosed(mesh, exploded, precut ? &failure.culprit_sources : nullptr);
+        if (!failure.culprit_sources.empty()) {
+            failure.failed = true;
+            return false;
         }
         const size_t vc = closed.source.size(), tc = closed.corner_vertex.size() / 3;
-        for (auto* v : {&corner_vertex, &corner_opposite}) v->assign(3 * tc, 0);
-        for (auto* v : {&vertex_flags, &vertex_corner, &vertex_valence, &completion}) v->assign(vc, 0);
-        for (auto* v : {&node_vertex, &node_prev, &node_next, &node_free, &node_corner}) v->assign(vc + tc, 0);
-        for (auto* v : {&stack_head, &stack_size}) v->assign(tc, 0);
+        for (auto* v : {&corner_vertex, &corner_opposite}) v->allocate(3 * tc);
+        for (auto* v : {&vertex_flags, &vertex_corner, &vertex_valence, &completion}) v->allocate(vc);
+        for (auto* v : {&node_vertex, &node_prev, &node_next, &node_free, &node_corner}) v->allocate(vc + tc);
+        for (auto* v : {&stack_head, &stack_size}) v->allocate(tc);
         auto& a = engine.a;
-        a.corner_vertex = corner_vertex.data();
-        a.corner_opposite = corner_opposite.data();
-        a.vertex_flags = vertex_flags.data();
-        a.vertex_corner = vertex_corner.data();
-        a.vertex_valence = vertex_valence.data();
-        a.node_vertex = node_vertex.data();
-        a.node_prev = node_prev.data();
-        a.node_next = node_next.data();
-        a.node_free = node_free.data();
-        a.node_corner = node_corner.data();
-        a.completion = completion.data();
-        a.stack_head = stack_head.data();
-        a.stack_size = stack_size.data();
+        a.corner_vertex = corner_vertex.get();
+        a.corner_opposite = corner_opposite.get();
+        a.vertex_flags = vertex_flags.get();
+        a.vertex_corner = vertex_corner.get();
+        a.vertex_valence = vertex_valence.get();
+        a.node_vertex = node_vertex.get();
+        a.node_prev = node_prev.get();
+        a.node_next = node_next.get();
+        a.node_free = node_free.get();
+        a.node_corner = node_corner.get();
+        a.completion = completion.get();
+        a.stack_head = stack_head.get();
+        a.stack_size = stack_size.get();
         a.max_vertices = uint32_t(vc);
         a.max_triangles = uint32_t(tc);
         io.m = &closed;
@@ -485,11 +597,11 @@ struct Attempt {
     // the encoder's bookkeeping), keeping the engine's corner table, vertex arrays, real_of and the
     // connectivity coder for the steps after it.
     void releaseConquestState() {
-        for (auto* v :
-             {&node_vertex, &node_prev, &node_next, &node_free, &node_corner, &completion, &stack_head, &stack_size,
-              &closed.corner_vertex, &closed.opposite, &closed.source, &closed.valence, &io.engine_id})
-            std::vector<uint32_t>().swap(*v);
-        std::vector<uint8_t>().swap(io.conquered);
+        for (auto* v : {&node_vertex, &node_prev, &node_next, &node_free, &node_corner, &completion, &stack_head, &stack_size})
+            v->reset();
+        for (auto* v : {&closed.corner_vertex, &closed.opposite, &closed.source, &closed.valence, &io.engine_id})
+            U32Array().swap(*v);
+        U8Array().swap(io.conquered);
     }
 };
 
@@ -556,7 +668,7 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
     const uint32_t qmax = (1u << options.position_bits) - 1;
     const float step = cube / float(qmax);
     ValenceEncodeResult result;
-    std::vector<int32_t> qpos_in(3 * vn);
+    I32Array qpos_in(3 * vn);
     for (size_t i = 0; i < vn; ++i) {
         const float c[3] = {mesh.positions[i].x, mesh.positions[i].y, mesh.positions[i].z};
         for (int j = 0; j < 3; ++j) {
@@ -599,10 +711,11 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
                    tc = uint32_t(attempt->closed.corner_vertex.size() / 3);
 
     // Final vertex order: conquest order without dummies and copies, then unreferenced vertices.
-    std::vector<uint32_t> source_of_engine(vc); // input vertex per engine vertex, kNone for dummies
+    U32Array source_of_engine(vc); // input vertex per engine vertex, kNone for dummies
     for (uint32_t v = 0; v < vc; ++v) source_of_engine[io.engine_id[v]] = attempt->closed.source[v];
     attempt->releaseConquestState();
-    std::vector<uint32_t> final_of(vc, kNone), new_of(vn, kNone);
+    U32Array final_of(vc, kNone);
+    std::vector<uint32_t> new_of(vn, kNone);
     std::vector<std::pair<uint32_t, uint32_t>> dups; // (rank among non-dummies, final id of the original)
     uint32_t final_count = 0, rank = 0;
     for (uint32_t ev = 0; ev < vc; ++ev) {
@@ -628,7 +741,7 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
         if (new_of[v] == kNone) new_of[v] = final_count++;
 
     // Output triangles (only the normal predictor needs them as index triples).
-    std::vector<uint32_t> triangles;
+    U32Array triangles;
     if (normals) triangles.reserve(3 * fn);
     result.old_face_of.reserve(fn);
     for (uint32_t t = 0; t < tc; ++t) {
@@ -638,16 +751,16 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
         if (normals) triangles.insert(triangles.end(), {final_of[cv[0]], final_of[cv[1]], final_of[cv[2]]});
         result.old_face_of.push_back(io.real_of[3 * size_t(t)] / 3);
     }
-    std::vector<uint32_t>().swap(io.real_of);
+    U32Array().swap(io.real_of);
     if (result.old_face_of.size() != fn) return internalError("valence encoder: triangle count mismatch");
 
     // Positions in the plan's order, predicted exactly as the decoder will.
-    std::vector<int32_t> qpos(3 * size_t(vc), 0), qpos_final(3 * vn);
-    std::vector<uint8_t> ordered(vc);
-    std::vector<uint32_t> order(vc), count(vc), neighbour(vc), degree(vc), stack0(vc), stack1(vc), stack2(vc);
+    I32Array qpos(3 * size_t(vc), 0), qpos_final(3 * vn);
+    U8Array ordered(vc);
+    U32Array order(vc), count(vc), neighbour(vc), degree(vc), stack0(vc), stack1(vc), stack2(vc);
     // Sized for the worst case and filled only as far as the plan goes: left uninitialised, so the
     // untouched tail costs no resident memory.
-    std::unique_ptr<uint32_t[]> triples(new uint32_t[9 * size_t(tc)]);
+    UninitArray triples(9 * size_t(tc));
     lodrt::detail::PositionPlan plan;
     plan.order = order.data();
     plan.count = count.data();
@@ -658,15 +771,15 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
                                       a.vertex_valence, vc, ordered.data(), degree.data(), stack0.data(), stack1.data(),
                                       stack2.data(), &plan))
         return internalError("valence encoder: broken corner cycle");
-    std::vector<uint32_t>().swap(degree);
-    std::vector<uint32_t>().swap(stack0);
-    std::vector<uint32_t>().swap(stack1);
-    std::vector<uint32_t>().swap(stack2);
-    std::vector<uint8_t>().swap(ordered);
+    U32Array().swap(degree);
+    U32Array().swap(stack0);
+    U32Array().swap(stack1);
+    U32Array().swap(stack2);
+    U8Array().swap(ordered);
     std::vector<uint32_t> isolated(vn - referenced);
     for (size_t v = 0; v < vn; ++v)
         if (new_of[v] >= referenced) isolated[new_of[v] - referenced] = uint32_t(v);
-    std::vector<uint8_t> final_done(vn, 0);
+    U8Array final_done(vn, 0);
     // Visits every coded coordinate in stream order with everything its coding needs. The contexts do
     // not depend on how a coordinate is coded (a snapped one counts with the length and sign of
     // candidate - prediction), so each component's values can be coded into a stream of its own.
@@ -738,6 +851,9 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
     // sizes, since a component's values and contexts do not depend on the other components' choice);
     // snap where that is strictly smaller.
     uint16_t snap_flags = 0;
+    // The estimate's walk keeps every value it visits (8 bytes each) so that the stream below is coded
+    // from them instead of walking the plan again (the walk is half of a position pass).
+    CodecArray<CodedValue> walked;
     {
         RangeEncoder est[3][2];
         BitWriter est_raw[3][2];
@@ -752,7 +868,9 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
             hits += v.hit;
         });
         if (hits * 16 >= candidates && hits > 0) {
+            walked.reserve(3 * vn);
             walkPositions(7u, kNone, [&](const PositionValue& v) {
+                walked.push_back(CodedValue::of(v));
                 est[v.j][0].residual(plain_model.residuals, est_raw[v.j][0], v.j, v.ctx, v.r, v.sign_ctx);
                 if (v.has_candidate) {
                     est[v.j][1].bit(snap_model.snap[v.j][v.snap_ctx], v.hit ? 1u : 0u);
@@ -772,22 +890,35 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
     {
         PositionModel model;
         model.init();
-        walkPositions(uint32_t(snap_flags / kValenceFlagSnapX), kNone, [&](const PositionValue& v) {
+        const uint32_t mask = uint32_t(snap_flags / kValenceFlagSnapX);
+        auto code = [&](const PositionValue& v) {
             if (v.has_candidate) {
                 pos.bit(model.snap[v.j][v.snap_ctx], v.hit ? 1u : 0u);
                 if (v.hit) return;
             }
             pos.residual(model.residuals, pos_raw, v.j, v.ctx, v.r, v.sign_ctx);
-        });
+        };
+        if (walked.empty()) {
+            walkPositions(mask, kNone, code);
+        } else {
+            // Values come in component order x, y, z per vertex; a component that is not snapped
+            // codes without its candidate, exactly as a walk with `mask` would give it.
+            for (size_t i = 0; i < walked.size(); ++i) {
+                PositionValue v = walked[i].value(int(i % 3));
+                v.has_candidate = v.has_candidate && ((mask >> v.j) & 1u);
+                code(v);
+            }
+            CodecArray<CodedValue>().swap(walked);
+        }
     }
-    std::unique_ptr<uint32_t[]>().swap(triples);
+    triples.reset();
 
     // Normals after all positions, in final order, each predicted from the exact sum of its faces'
     // normals on the quantized positions (the decoder's step 3).
     RangeEncoder nrm;
     BitWriter nrm_raw;
     if (normals) {
-        std::vector<uint32_t> qnorm(2 * vn);
+        U32Array qnorm(2 * vn);
         for (size_t i = 0; i < vn; ++i) {
             const float n[3] = {mesh.normals[i].x, mesh.normals[i].y, mesh.normals[i].z};
             uint32_t q[2];
@@ -795,7 +926,7 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
             qnorm[2 * size_t(new_of[i])] = q[0];
             qnorm[2 * size_t(new_of[i]) + 1] = q[1];
         }
-        std::vector<int64_t> sum(3 * vn, 0);
+        CodecArray<int64_t> sum(3 * vn, 0);
         for (size_t t = 0; t + 2 < triangles.size(); t += 3) {
             const uint32_t* f = &triangles[t];
             const int32_t* p0 = &qpos_final[3 * size_t(f[0])];
