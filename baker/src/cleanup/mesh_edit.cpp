@@ -1,6 +1,8 @@
 #include "mesh_edit.h"
 
 #include <algorithm>
+#include <cmath>
+#include <cstring>
 #include <numeric>
 
 namespace lodbake {
@@ -13,51 +15,78 @@ uint32_t EdgeTable::find(uint32_t a, uint32_t b) const {
 }
 
 EdgeTable buildEdgeTable(const Mesh& mesh) {
+    return buildEdgeTable(mesh.indices, mesh.vertexCount());
+}
+
+namespace {
+// Ascending sort of a short run (a vertex's bucket holds a handful of half-edges).
+void sortRun(uint64_t* first, uint64_t* last) {
+    if (last - first > 32) {
+        std::sort(first, last);
+        return;
+    }
+    for (uint64_t* i = first + 1; i < last; ++i) {
+        const uint64_t x = *i;
+        uint64_t* j = i;
+        for (; j > first && *(j - 1) > x; --j) *j = *(j - 1);
+        *j = x;
+    }
+}
+} // namespace
+
+EdgeTable buildEdgeTable(const std::vector<uint32_t>& indices, size_t vertex_count) {
     // Counting sort by the lower vertex, then a small sort by (upper vertex, corner) inside each
     // bucket: the same order as sorting (key, corner) globally, in linear time for mesh-like input.
     EdgeTable t;
-    const size_t corner_count = mesh.indices.size();
-    const size_t n = mesh.vertexCount();
-    std::vector<uint32_t> bucket(n + 1, 0);
-    for (size_t f = 0; f < mesh.faceCount(); ++f) {
-        if (hasRepeatedIndex(mesh, f)) continue;
+    const size_t corner_count = indices.size();
+    const size_t face_count = corner_count / 3;
+    const size_t n = vertex_count;
+    const uint32_t* ix = indices.data();
+    auto repeated = [ix](size_t f) {
+        const uint32_t* tri = ix + 3 * f;
+        return tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2];
+    };
+    // start[lo + 1] ends up as the first slot of bucket lo (counted at lo + 2, prefix-summed, then
+    // advanced by the scatter), so start[0..n] is the bucket table without a second array.
+    std::vector<uint32_t> start(n + 2, 0);
+    for (size_t f = 0; f < face_count; ++f) {
+        if (repeated(f)) continue;
+        const uint32_t a = ix[3 * f], b = ix[3 * f + 1], c = ix[3 * f + 2];
+        ++start[std::min(a, b) + 2];
+        ++start[std::min(b, c) + 2];
+        ++start[std::min(c, a) + 2];
+    }
+    for (size_t v = 2; v < n + 2; ++v) start[v] += start[v - 1];
+    const size_t half_count = start[n + 1];
+    std::vector<uint64_t> half(half_count); // (upper vertex << 32) | corner
+    for (size_t f = 0; f < face_count; ++f) {
+        if (repeated(f)) continue;
         for (uint32_t k = 0; k < 3; ++k) {
             const uint32_t c = uint32_t(3 * f + k);
-            ++bucket[std::min(halfStart(mesh, c), halfEnd(mesh, c)) + 1];
-        }
-    }
-    for (size_t v = 0; v < n; ++v) bucket[v + 1] += bucket[v];
-    std::vector<std::pair<uint32_t, uint32_t>> half(bucket[n]); // (upper vertex, corner)
-    {
-        std::vector<uint32_t> fill(bucket.begin(), bucket.end() - 1);
-        for (size_t f = 0; f < mesh.faceCount(); ++f) {
-            if (hasRepeatedIndex(mesh, f)) continue;
-            for (uint32_t k = 0; k < 3; ++k) {
-                const uint32_t c = uint32_t(3 * f + k);
-                const uint32_t a = halfStart(mesh, c), b = halfEnd(mesh, c);
-                half[fill[std::min(a, b)]++] = {std::max(a, b), c};
-            }
+            const uint32_t a = ix[c], b = ix[k == 2 ? c - 2 : c + 1];
+            half[start[std::min(a, b) + 1]++] = (uint64_t(std::max(a, b)) << 32) | c;
         }
     }
     t.corner_edge.assign(corner_count, kNone);
-    t.corners.resize(half.size());
-    t.keys.reserve(half.size() / 2 + 1);
-    t.begin.reserve(half.size() / 2 + 2);
+    t.corners.resize(half_count);
+    t.keys.reserve(half_count / 2 + 1);
+    t.begin.reserve(half_count / 2 + 2);
     for (size_t lo = 0; lo < n; ++lo) {
-        const auto first = half.begin() + bucket[lo], last = half.begin() + bucket[lo + 1];
-        std::sort(first, last);
-        for (auto it = first; it != last; ++it) {
-            const size_t i = size_t(it - half.begin());
-            const uint64_t key = (uint64_t(lo) << 32) | it->first;
-            if (t.keys.empty() || t.keys.back() != key) {
-                t.keys.push_back(key);
+        const size_t first = start[lo], last = start[lo + 1];
+        sortRun(half.data() + first, half.data() + last);
+        uint32_t prev_hi = kNone;
+        for (size_t i = first; i < last; ++i) {
+            const uint32_t hi = uint32_t(half[i] >> 32), c = uint32_t(half[i]);
+            if (i == first || hi != prev_hi) {
+                t.keys.push_back((uint64_t(lo) << 32) | hi);
                 t.begin.push_back(uint32_t(i));
+                prev_hi = hi;
             }
-            t.corners[i] = it->second;
-            t.corner_edge[it->second] = uint32_t(t.keys.size() - 1);
+            t.corners[i] = c;
+            t.corner_edge[c] = uint32_t(t.keys.size() - 1);
         }
     }
-    t.begin.push_back(uint32_t(half.size()));
+    t.begin.push_back(uint32_t(half_count));
     return t;
 }
 
@@ -246,12 +275,18 @@ size_t splitVerticesByFans(Mesh& mesh, const std::vector<CornerPair>& joins, siz
 }
 
 std::vector<BoundaryLoop> findBoundaryLoops(const Mesh& mesh, const EdgeTable& table) {
+    return findBoundaryLoops(mesh.indices, table);
+}
+
+std::vector<BoundaryLoop> findBoundaryLoops(const std::vector<uint32_t>& indices, const EdgeTable& table) {
+    auto halfStart = [&](uint32_t c) { return indices[c]; };
+    auto halfEnd = [&](uint32_t c) { return indices[c % 3 == 2 ? c - 2 : c + 1]; };
     // Directed boundary half-edges sorted by start vertex, then corner.
     std::vector<std::pair<uint32_t, uint32_t>> out; // (start vertex, corner)
     for (size_t e = 0; e < table.edgeCount(); ++e)
         if (table.uses(uint32_t(e)) == 1) {
             const uint32_t c = table.corners[table.begin[e]];
-            out.push_back({halfStart(mesh, c), c});
+            out.push_back({halfStart(c), c});
         }
     std::sort(out.begin(), out.end());
     std::vector<uint8_t> used(out.size(), 0);
@@ -272,7 +307,7 @@ std::vector<BoundaryLoop> findBoundaryLoops(const Mesh& mesh, const EdgeTable& t
             used[cur] = 1;
             loop.vertices.push_back(out[cur].first);
             loop.corners.push_back(out[cur].second);
-            const uint32_t end = halfEnd(mesh, out[cur].second);
+            const uint32_t end = halfEnd(out[cur].second);
             if (end == start) {
                 loop.closed = true;
                 break;
@@ -284,8 +319,59 @@ std::vector<BoundaryLoop> findBoundaryLoops(const Mesh& mesh, const EdgeTable& t
     return loops;
 }
 
+namespace {
+
+// Maps every vertex to the lowest vertex whose key (three 32-bit words) equals its own: an
+// open-addressing table of first occurrences, filled in ascending vertex order. The result is a
+// function of the keys alone (no iteration order reaches it).
+template <class KeyFn> std::vector<uint32_t> lowestEqualKey(uint32_t n, KeyFn key) {
+    std::vector<uint32_t> rep(n);
+    size_t capacity = 16;
+    while (capacity < 2 * size_t(n)) capacity *= 2;
+    std::vector<uint32_t> slot(capacity, kNone);
+    const size_t mask = capacity - 1;
+    for (uint32_t v = 0; v < n; ++v) {
+        const std::array<uint32_t, 3> k = key(v);
+        uint64_t h = (uint64_t(k[0]) << 32 | k[1]) * 0x9e3779b97f4a7c15ull;
+        h ^= (h >> 29) ^ (uint64_t(k[2]) * 0xc2b2ae3d27d4eb4full);
+        h ^= h >> 32;
+        for (size_t i = size_t(h) & mask;; i = (i + 1) & mask) {
+            if (slot[i] == kNone) {
+                slot[i] = v;
+                rep[v] = v;
+                break;
+            }
+            if (key(slot[i]) == k) {
+                rep[v] = slot[i];
+                break;
+            }
+        }
+    }
+    return rep;
+}
+
+std::array<uint32_t, 3> positionBits(const Vec3f& p) {
+    std::array<uint32_t, 3> k;
+    std::memcpy(k.data(), &p, sizeof(k));
+    return k;
+}
+
+} // namespace
+
 std::vector<uint32_t> positionWeldMap(const Mesh& mesh) {
     const uint32_t n = uint32_t(mesh.vertexCount());
+    bool has_nan = false;
+    for (const Vec3f& p : mesh.positions) has_nan |= std::isnan(p.x) || std::isnan(p.y) || std::isnan(p.z);
+    if (!has_nan) {
+        // Float equality is bit equality once -0 is read as +0 (and nothing is NaN).
+        return lowestEqualKey(n, [&](uint32_t v) {
+            std::array<uint32_t, 3> k = positionBits(mesh.positions[v]);
+            for (uint32_t& w : k)
+                if (w == 0x80000000u) w = 0;
+            return k;
+        });
+    }
+    // With NaNs, keep the sorted scan this map was first defined by (a NaN never equals its neighbour).
     std::vector<uint32_t> order(n), rep(n);
     std::iota(order.begin(), order.end(), 0u);
     auto less = [&](uint32_t a, uint32_t b) {
@@ -300,6 +386,10 @@ std::vector<uint32_t> positionWeldMap(const Mesh& mesh) {
     for (uint32_t i = 0; i < n; ++i)
         rep[order[i]] = (i > 0 && mesh.positions[order[i]] == mesh.positions[order[i - 1]]) ? rep[order[i - 1]] : order[i];
     return rep;
+}
+
+std::vector<uint32_t> bitwiseWeldMap(const Mesh& mesh) {
+    return lowestEqualKey(uint32_t(mesh.vertexCount()), [&](uint32_t v) { return positionBits(mesh.positions[v]); });
 }
 
 namespace {

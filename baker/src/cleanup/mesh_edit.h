@@ -7,6 +7,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "lodbake/cleanup/topology.h"
+#include "lodbake/cleanup/validate.h"
 #include "lodbake/core/mesh.h"
 
 namespace lodbake {
@@ -32,7 +34,10 @@ struct EdgeTable {
     uint32_t find(uint32_t a, uint32_t b) const;
 };
 
+/// Built in linear time (a counting sort by lower vertex, then a short sort inside each bucket).
 EdgeTable buildEdgeTable(const Mesh& mesh);
+/// The same over a bare index list whose ids are below vertex_count (e.g. indices with welded ids).
+EdgeTable buildEdgeTable(const std::vector<uint32_t>& indices, size_t vertex_count);
 
 /// Start and end vertex of half-edge (corner) c.
 inline uint32_t halfStart(const Mesh& m, uint32_t c) {
@@ -100,10 +105,23 @@ struct BoundaryLoop {
     bool closed = true;
 };
 std::vector<BoundaryLoop> findBoundaryLoops(const Mesh& mesh, const EdgeTable& table);
+std::vector<BoundaryLoop> findBoundaryLoops(const std::vector<uint32_t>& indices, const EdgeTable& table);
 
 /// Every vertex mapped to the lowest-numbered vertex with a bit-identical position, so that attribute
 /// seams (UV or normal splits) can be told apart from real boundaries.
+/// Positions compare as floats (-0 equals +0; a NaN equals nothing). Hashing, linear time.
 std::vector<uint32_t> positionWeldMap(const Mesh& mesh);
+
+/// The same with positions compared bit for bit (-0 and +0 differ; identical NaN bits are equal).
+std::vector<uint32_t> bitwiseWeldMap(const Mesh& mesh);
+
+/// Topology statistics of the triangle list `indices` (ids into mesh.positions, all below
+/// vertexCount(); the caller may have replaced ids by their weld representatives) from its edge
+/// table. `distinct_vertex_count` is the vertex count to report (representatives only when
+/// welded). `components` (sized vertexCount(), fresh) comes back holding the face-connected
+/// components through shared ids, so callers can reuse it.
+TopologyStats topologyFromTable(const Mesh& mesh, const std::vector<uint32_t>& indices,
+                                uint64_t distinct_vertex_count, const EdgeTable& table, UnionFind& components);
 
 /// Per corner: 1 when its half-edge is a boundary edge lying on an attribute seam, that is, another
 /// boundary edge has the same two positions and the vertices there differ in some attribute (UV,
@@ -119,6 +137,10 @@ VertexAdjacency buildVertexAdjacency(const Mesh& mesh);
 
 /// Vertices on an edge used by exactly one face.
 std::vector<uint8_t> boundaryVertices(const Mesh& mesh, const EdgeTable& table);
+
+/// validate() that also hands back the edge table it built (of the welded ids when
+/// options.weld_by_position), for callers that go on to look at the same mesh.
+ValidationReport validateWithTable(const Mesh& mesh, const ValidateOptions& options, EdgeTable* table_out);
 
 } // namespace cleanup_detail
 } // namespace lodbake
