@@ -20,8 +20,8 @@ DegenerateReport removeDegenerateFaces(Mesh& mesh, const DegenerateOptions& opti
     DegenerateReport r;
     const size_t face_count = mesh.faceCount();
     std::vector<uint8_t> keep(face_count, 1);
-    std::vector<std::array<uint32_t, 4>> keys;
-    keys.reserve(face_count);
+    std::vector<std::array<uint32_t, 3>> keys; // sorted vertex sets of the faces that pass the tests above
+    std::vector<uint32_t> key_face;
     for (size_t f = 0; f < face_count; ++f) {
         const uint32_t* t = &mesh.indices[3 * f];
         if (hasRepeatedIndex(mesh, f)) {
@@ -42,15 +42,18 @@ DegenerateReport removeDegenerateFaces(Mesh& mesh, const DegenerateOptions& opti
                 continue;
             }
         }
-        std::array<uint32_t, 4> k = {t[0], t[1], t[2], uint32_t(f)};
-        std::sort(k.begin(), k.begin() + 3);
+        if (!options.remove_duplicates) continue;
+        std::array<uint32_t, 3> k = {t[0], t[1], t[2]};
+        std::sort(k.begin(), k.end());
         keys.push_back(k);
+        key_face.push_back(uint32_t(f));
     }
     if (options.remove_duplicates) {
-        std::sort(keys.begin(), keys.end());
-        for (size_t i = 1; i < keys.size(); ++i)
-            if (keys[i][0] == keys[i - 1][0] && keys[i][1] == keys[i - 1][1] && keys[i][2] == keys[i - 1][2]) {
-                keep[keys[i][3]] = 0; // the earlier face (lower index, sorted first) stays
+        // Faces come in ascending order, so the first of each vertex set (the one that stays) is the earliest.
+        const std::vector<uint32_t> first = lowestEqualKey(uint32_t(keys.size()), [&](uint32_t i) { return keys[i]; });
+        for (uint32_t i = 0; i < first.size(); ++i)
+            if (first[i] != i) {
+                keep[key_face[i]] = 0;
                 ++r.duplicate_faces;
             }
     }

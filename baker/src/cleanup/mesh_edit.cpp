@@ -321,35 +321,6 @@ std::vector<BoundaryLoop> findBoundaryLoops(const std::vector<uint32_t>& indices
 
 namespace {
 
-// Maps every vertex to the lowest vertex whose key (three 32-bit words) equals its own: an
-// open-addressing table of first occurrences, filled in ascending vertex order. The result is a
-// function of the keys alone (no iteration order reaches it).
-template <class KeyFn> std::vector<uint32_t> lowestEqualKey(uint32_t n, KeyFn key) {
-    std::vector<uint32_t> rep(n);
-    size_t capacity = 16;
-    while (capacity < 2 * size_t(n)) capacity *= 2;
-    std::vector<uint32_t> slot(capacity, kNone);
-    const size_t mask = capacity - 1;
-    for (uint32_t v = 0; v < n; ++v) {
-        const std::array<uint32_t, 3> k = key(v);
-        uint64_t h = (uint64_t(k[0]) << 32 | k[1]) * 0x9e3779b97f4a7c15ull;
-        h ^= (h >> 29) ^ (uint64_t(k[2]) * 0xc2b2ae3d27d4eb4full);
-        h ^= h >> 32;
-        for (size_t i = size_t(h) & mask;; i = (i + 1) & mask) {
-            if (slot[i] == kNone) {
-                slot[i] = v;
-                rep[v] = v;
-                break;
-            }
-            if (key(slot[i]) == k) {
-                rep[v] = slot[i];
-                break;
-            }
-        }
-    }
-    return rep;
-}
-
 std::array<uint32_t, 3> positionBits(const Vec3f& p) {
     std::array<uint32_t, 3> k;
     std::memcpy(k.data(), &p, sizeof(k));

@@ -109,6 +109,35 @@ std::vector<BoundaryLoop> findBoundaryLoops(const std::vector<uint32_t>& indices
 
 /// Every vertex mapped to the lowest-numbered vertex with a bit-identical position, so that attribute
 /// seams (UV or normal splits) can be told apart from real boundaries.
+/// rep[i] = the lowest j with key(j) == key(i), for i in [0, n); key(i) is three 32-bit words. An
+/// open-addressing table of first occurrences filled in ascending order (linear time): the result
+/// is a function of the keys alone, no iteration order reaches it.
+template <class KeyFn> std::vector<uint32_t> lowestEqualKey(uint32_t n, KeyFn key) {
+    std::vector<uint32_t> rep(n);
+    size_t capacity = 16;
+    while (capacity < 2 * size_t(n)) capacity *= 2;
+    std::vector<uint32_t> slot(capacity, kNone);
+    const size_t mask = capacity - 1;
+    for (uint32_t i = 0; i < n; ++i) {
+        const std::array<uint32_t, 3> k = key(i);
+        uint64_t h = ((uint64_t(k[0]) << 32) | k[1]) * 0x9e3779b97f4a7c15ull;
+        h ^= (h >> 29) ^ (uint64_t(k[2]) * 0xc2b2ae3d27d4eb4full);
+        h ^= h >> 32;
+        for (size_t s = size_t(h) & mask;; s = (s + 1) & mask) {
+            if (slot[s] == kNone) {
+                slot[s] = i;
+                rep[i] = i;
+                break;
+            }
+            if (key(slot[s]) == k) {
+                rep[i] = slot[s];
+                break;
+            }
+        }
+    }
+    return rep;
+}
+
 /// Positions compare as floats (-0 equals +0; a NaN equals nothing). Hashing, linear time.
 std::vector<uint32_t> positionWeldMap(const Mesh& mesh);
 
