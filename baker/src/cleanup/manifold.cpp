@@ -56,6 +56,32 @@ void pairEdge(const Mesh& m, const uint32_t* corners, uint32_t k, std::vector<Co
         if (!taken[i]) unpaired.push_back(corners[i]);
 }
 
+// Whether some edge of `mesh` may have more than two faces, after splitVerticesByFans turned the
+// mesh `table` was built from (no repeated-index faces, none removed since) into `mesh`. The split
+// moved corners only to new vertices (ids >= vertices_before), so an edge between two older
+// vertices keeps a subset of its half-edges: only the edges over-used in `table` and the edges
+// touching a new vertex can be over-used now. Those are counted exactly.
+bool mayHaveOverusedEdge(const Mesh& mesh, const EdgeTable& table, size_t vertices_before) {
+    std::vector<uint64_t> overused;
+    for (uint32_t e = 0; e < table.edgeCount(); ++e)
+        if (table.uses(e) > 2) overused.push_back(table.keys[e]); // ascending, as the table's keys
+    std::vector<uint64_t> candidates;
+    for (size_t f = 0; f < mesh.faceCount(); ++f) {
+        if (hasRepeatedIndex(mesh, f)) continue;
+        for (uint32_t k = 0; k < 3; ++k) {
+            const uint32_t c = uint32_t(3 * f + k);
+            const uint32_t a = halfStart(mesh, c), b = halfEnd(mesh, c);
+            const uint64_t key = edgeKey(a, b);
+            if (std::max(a, b) >= vertices_before || std::binary_search(overused.begin(), overused.end(), key))
+                candidates.push_back(key);
+        }
+    }
+    std::sort(candidates.begin(), candidates.end());
+    for (size_t i = 2; i < candidates.size(); ++i)
+        if (candidates[i] == candidates[i - 2]) return true;
+    return false;
+}
+
 } // namespace
 
 ManifoldReport makeManifold(Mesh& mesh, const ManifoldOptions& options) {
@@ -110,12 +136,16 @@ ManifoldReport makeManifold(Mesh& mesh, const ManifoldOptions& options) {
             r.faces_removed += removeFaces(mesh, keep2);
         }
     }
+    const size_t vertices_before_split = mesh.vertexCount();
     size_t added = 0;
     r.vertices_split = splitVerticesByFans(mesh, joins, added);
     r.vertices_added = added;
     // A cut face still joined to the kept pair around both ends of the edge keeps using it (splitting
     // vertices cannot separate it): those faces are removed. Bounded; each round removes faces.
-    for (int round = 0; round < 8; ++round) {
+    // The first round's table is skipped when it would find nothing: see mayHaveOverusedEdge.
+    const bool check = options.edge_mode != NonManifoldEdgeMode::Cut ||
+                       mayHaveOverusedEdge(mesh, table, vertices_before_split);
+    for (int round = 0; round < 8 && check; ++round) {
         table = buildEdgeTable(mesh);
         std::vector<uint32_t> extra;
         for (uint32_t e = 0; e < table.edgeCount(); ++e) {

@@ -35,54 +35,71 @@ void sortRun(uint64_t* first, uint64_t* last) {
 } // namespace
 
 EdgeTable buildEdgeTable(const std::vector<uint32_t>& indices, size_t vertex_count) {
-    // Counting sort by the lower vertex, then a small sort by (upper vertex, corner) inside each
-    // bucket: the same order as sorting (key, corner) globally, in linear time for mesh-like input.
+    // Counting sort of the half-edges by lower vertex, then a small sort by (upper vertex, corner)
+    // inside each bucket: the same order as sorting (key, corner) globally, in linear time for
+    // mesh-like input. The corners are scattered straight into `corners`, and `corner_edge` holds each
+    // corner's upper vertex until its edge id replaces it, so no array beyond the table's own is
+    // allocated (fresh pages are what this costs most).
     EdgeTable t;
     const size_t corner_count = indices.size();
     const size_t face_count = corner_count / 3;
     const size_t n = vertex_count;
     const uint32_t* ix = indices.data();
-    auto repeated = [ix](size_t f) {
-        const uint32_t* tri = ix + 3 * f;
-        return tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2];
-    };
     // start[lo + 1] ends up as the first slot of bucket lo (counted at lo + 2, prefix-summed, then
     // advanced by the scatter), so start[0..n] is the bucket table without a second array.
     std::vector<uint32_t> start(n + 2, 0);
+    t.corner_edge.resize(corner_count);
     for (size_t f = 0; f < face_count; ++f) {
-        if (repeated(f)) continue;
         const uint32_t a = ix[3 * f], b = ix[3 * f + 1], c = ix[3 * f + 2];
+        uint32_t* hi = &t.corner_edge[3 * f];
+        if (a == b || b == c || a == c) {
+            hi[0] = hi[1] = hi[2] = kNone;
+            continue;
+        }
+        hi[0] = std::max(a, b);
+        hi[1] = std::max(b, c);
+        hi[2] = std::max(c, a);
         ++start[std::min(a, b) + 2];
         ++start[std::min(b, c) + 2];
         ++start[std::min(c, a) + 2];
     }
     for (size_t v = 2; v < n + 2; ++v) start[v] += start[v - 1];
     const size_t half_count = start[n + 1];
-    std::vector<uint64_t> half(half_count); // (upper vertex << 32) | corner
-    for (size_t f = 0; f < face_count; ++f) {
-        if (repeated(f)) continue;
-        for (uint32_t k = 0; k < 3; ++k) {
-            const uint32_t c = uint32_t(3 * f + k);
-            const uint32_t a = ix[c], b = ix[k == 2 ? c - 2 : c + 1];
-            half[start[std::min(a, b) + 1]++] = (uint64_t(std::max(a, b)) << 32) | c;
-        }
-    }
-    t.corner_edge.assign(corner_count, kNone);
     t.corners.resize(half_count);
+    for (size_t f = 0; f < face_count; ++f) {
+        if (t.corner_edge[3 * f] == kNone) continue;
+        const uint32_t a = ix[3 * f], b = ix[3 * f + 1], c = ix[3 * f + 2];
+        t.corners[start[std::min(a, b) + 1]++] = uint32_t(3 * f);
+        t.corners[start[std::min(b, c) + 1]++] = uint32_t(3 * f + 1);
+        t.corners[start[std::min(c, a) + 1]++] = uint32_t(3 * f + 2);
+    }
     t.keys.reserve(half_count / 2 + 1);
     t.begin.reserve(half_count / 2 + 2);
+    constexpr size_t kRun = 64;
+    uint64_t run[kRun];
+    std::vector<uint64_t> long_run;
     for (size_t lo = 0; lo < n; ++lo) {
-        const size_t first = start[lo], last = start[lo + 1];
-        sortRun(half.data() + first, half.data() + last);
+        const size_t first = start[lo], count = start[lo + 1] - first;
+        if (count == 0) continue;
+        uint64_t* r = run;
+        if (count > kRun) {
+            long_run.resize(count);
+            r = long_run.data();
+        }
+        for (size_t i = 0; i < count; ++i) {
+            const uint32_t c = t.corners[first + i];
+            r[i] = (uint64_t(t.corner_edge[c]) << 32) | c;
+        }
+        sortRun(r, r + count);
         uint32_t prev_hi = kNone;
-        for (size_t i = first; i < last; ++i) {
-            const uint32_t hi = uint32_t(half[i] >> 32), c = uint32_t(half[i]);
-            if (i == first || hi != prev_hi) {
+        for (size_t i = 0; i < count; ++i) {
+            const uint32_t hi = uint32_t(r[i] >> 32), c = uint32_t(r[i]);
+            if (i == 0 || hi != prev_hi) {
                 t.keys.push_back((uint64_t(lo) << 32) | hi);
-                t.begin.push_back(uint32_t(i));
+                t.begin.push_back(uint32_t(first + i));
                 prev_hi = hi;
             }
-            t.corners[i] = c;
+            t.corners[first + i] = c;
             t.corner_edge[c] = uint32_t(t.keys.size() - 1);
         }
     }
