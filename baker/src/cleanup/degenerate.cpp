@@ -22,6 +22,10 @@ DegenerateReport removeDegenerateFaces(Mesh& mesh, const DegenerateOptions& opti
     std::vector<uint8_t> keep(face_count, 1);
     std::vector<std::array<uint32_t, 3>> keys; // sorted vertex sets of the faces that pass the tests above
     std::vector<uint32_t> key_face;
+    if (options.remove_duplicates) {
+        keys.reserve(face_count);
+        key_face.reserve(face_count);
+    }
     for (size_t f = 0; f < face_count; ++f) {
         const uint32_t* t = &mesh.indices[3 * f];
         if (hasRepeatedIndex(mesh, f)) {

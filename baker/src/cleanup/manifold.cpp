@@ -93,6 +93,7 @@ ManifoldReport makeManifold(Mesh& mesh, const ManifoldOptions& options) {
     }
     EdgeTable table = buildEdgeTable(mesh);
     std::vector<CornerPair> joins;
+    joins.reserve(table.edgeCount());
     std::vector<uint32_t> unpaired;
     for (uint32_t e = 0; e < table.edgeCount(); ++e) {
         const uint32_t k = table.uses(e);

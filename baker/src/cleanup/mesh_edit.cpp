@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstring>
 #include <numeric>
+#include <unordered_map>
 
 namespace lodbake {
 namespace cleanup_detail {
@@ -73,8 +74,9 @@ EdgeTable buildEdgeTable(const std::vector<uint32_t>& indices, size_t vertex_cou
         t.corners[start[std::min(b, c) + 1]++] = uint32_t(3 * f + 1);
         t.corners[start[std::min(c, a) + 1]++] = uint32_t(3 * f + 2);
     }
-    t.keys.reserve(half_count / 2 + 1);
-    t.begin.reserve(half_count / 2 + 2);
+    // At most one edge per half-edge (boundary edges have one); pages never written cost nothing.
+    t.keys.reserve(half_count);
+    t.begin.reserve(half_count + 1);
     constexpr size_t kRun = 64;
     uint64_t run[kRun];
     std::vector<uint64_t> long_run;
@@ -269,8 +271,9 @@ size_t splitVerticesByFans(Mesh& mesh, const std::vector<CornerPair>& joins, siz
     // Corners are visited in ascending order, so a vertex's first fan is the one with its lowest corner.
     const size_t n = mesh.vertexCount();
     std::vector<uint32_t> first_root(n, kNone);
-    std::vector<std::pair<uint32_t, uint32_t>> extra; // (root, new vertex), few in practice
-    std::vector<uint32_t> root_vertex(corner_count, kNone);
+    // Fan root -> its new vertex, for the fans that are not their vertex's first: few in practice.
+    // Only looked up, never iterated, so its order cannot reach the output.
+    std::unordered_map<uint32_t, uint32_t> root_vertex;
     std::vector<uint8_t> split(n, 0);
     size_t split_count = 0;
     for (size_t c = 0; c < corner_count; ++c) {
@@ -278,15 +281,16 @@ size_t splitVerticesByFans(Mesh& mesh, const std::vector<CornerPair>& joins, siz
         const uint32_t r = fans.find(uint32_t(c));
         if (first_root[v] == kNone) first_root[v] = r;
         if (r == first_root[v]) continue;
-        if (root_vertex[r] == kNone) {
-            root_vertex[r] = duplicateVertex(mesh, v);
+        auto [it, inserted] = root_vertex.try_emplace(r, 0u);
+        if (inserted) {
+            it->second = duplicateVertex(mesh, v);
             ++added;
             if (!split[v]) {
                 split[v] = 1;
                 ++split_count;
             }
         }
-        mesh.indices[c] = root_vertex[r];
+        mesh.indices[c] = it->second;
     }
     return split_count;
 }
