@@ -317,9 +317,15 @@ void fairPatch(Patch& patch, uint32_t loop_size, uint32_t iterations) {
 } // namespace
 
 HoleFillReport fillHoles(Mesh& mesh, const HoleFillOptions& options) {
+    Scratch scratch;
+    return fillHoles(mesh, options, scratch);
+}
+
+HoleFillReport cleanup_detail::fillHoles(Mesh& mesh, const HoleFillOptions& options, Scratch& scratch) {
     HoleFillReport r;
     if (mesh.faceCount() == 0) return r;
-    const EdgeTable table = buildEdgeTable(mesh);
+    EdgeTable& table = scratch.table;
+    buildEdgeTable(mesh.indices, mesh.vertexCount(), table);
     const std::vector<BoundaryLoop> loops = findBoundaryLoops(mesh, table);
     const std::vector<uint32_t> face_sub = faceSubmeshes(mesh);
     // Boundary edges along an attribute seam (UV island borders) are not holes: loops containing

@@ -85,13 +85,19 @@ bool mayHaveOverusedEdge(const Mesh& mesh, const EdgeTable& table, size_t vertic
 } // namespace
 
 ManifoldReport makeManifold(Mesh& mesh, const ManifoldOptions& options) {
+    Scratch scratch;
+    return makeManifold(mesh, options, scratch);
+}
+
+ManifoldReport cleanup_detail::makeManifold(Mesh& mesh, const ManifoldOptions& options, Scratch& scratch) {
     ManifoldReport r;
     if (countRepeatedIndexFaces(mesh)) {
         std::vector<uint8_t> keep(mesh.faceCount(), 1);
         for (size_t f = 0; f < mesh.faceCount(); ++f) keep[f] = !hasRepeatedIndex(mesh, f);
         r.repeated_index_faces_removed = removeFaces(mesh, keep);
     }
-    EdgeTable table = buildEdgeTable(mesh);
+    EdgeTable& table = scratch.table;
+    buildEdgeTable(mesh.indices, mesh.vertexCount(), table);
     std::vector<CornerPair> joins;
     joins.reserve(table.edgeCount());
     std::vector<uint32_t> unpaired;
@@ -120,7 +126,7 @@ ManifoldReport makeManifold(Mesh& mesh, const ManifoldOptions& options) {
         // Removing faces shifts corners: pair again on the smaller mesh (no edge has > 2 faces now
         // except where a removed face's partner was itself over-used; repeat until stable).
         for (int round = 0; round < 8; ++round) {
-            table = buildEdgeTable(mesh);
+            buildEdgeTable(mesh.indices, mesh.vertexCount(), table);
             joins.clear();
             unpaired.clear();
             for (uint32_t e = 0; e < table.edgeCount(); ++e) {
@@ -147,7 +153,7 @@ ManifoldReport makeManifold(Mesh& mesh, const ManifoldOptions& options) {
     const bool check = options.edge_mode != NonManifoldEdgeMode::Cut ||
                        mayHaveOverusedEdge(mesh, table, vertices_before_split);
     for (int round = 0; round < 8 && check; ++round) {
-        table = buildEdgeTable(mesh);
+        buildEdgeTable(mesh.indices, mesh.vertexCount(), table);
         std::vector<uint32_t> extra;
         for (uint32_t e = 0; e < table.edgeCount(); ++e) {
             const uint32_t k = table.uses(e);
@@ -165,7 +171,7 @@ ManifoldReport makeManifold(Mesh& mesh, const ManifoldOptions& options) {
         r.faces_removed += removed;
         r.faces_cut -= std::min<uint64_t>(r.faces_cut, removed);
         // Removing faces can pinch a vertex again: split once more across the remaining pairs.
-        table = buildEdgeTable(mesh);
+        buildEdgeTable(mesh.indices, mesh.vertexCount(), table);
         joins.clear();
         for (uint32_t e = 0; e < table.edgeCount(); ++e)
             if (table.uses(e) == 2) joins.push_back({table.corners[table.begin[e]], table.corners[table.begin[e] + 1]});

@@ -36,12 +36,19 @@ void sortRun(uint64_t* first, uint64_t* last) {
 } // namespace
 
 EdgeTable buildEdgeTable(const std::vector<uint32_t>& indices, size_t vertex_count) {
+    EdgeTable t;
+    buildEdgeTable(indices, vertex_count, t);
+    return t;
+}
+
+void buildEdgeTable(const std::vector<uint32_t>& indices, size_t vertex_count, EdgeTable& t) {
     // Counting sort of the half-edges by lower vertex, then a small sort by (upper vertex, corner)
     // inside each bucket: the same order as sorting (key, corner) globally, in linear time for
     // mesh-like input. The corners are scattered straight into `corners`, and `corner_edge` holds each
     // corner's upper vertex until its edge id replaces it, so no array beyond the table's own is
     // allocated (fresh pages are what this costs most).
-    EdgeTable t;
+    t.keys.clear();
+    t.begin.clear();
     const size_t corner_count = indices.size();
     const size_t face_count = corner_count / 3;
     const size_t n = vertex_count;
@@ -106,7 +113,6 @@ EdgeTable buildEdgeTable(const std::vector<uint32_t>& indices, size_t vertex_cou
         }
     }
     t.begin.push_back(uint32_t(half_count));
-    return t;
 }
 
 Vec3d faceNormal(const Mesh& m, size_t f) {

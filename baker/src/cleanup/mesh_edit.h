@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "lodbake/cleanup/passes.h"
 #include "lodbake/cleanup/topology.h"
 #include "lodbake/cleanup/validate.h"
 #include "lodbake/core/mesh.h"
@@ -38,6 +39,14 @@ struct EdgeTable {
 EdgeTable buildEdgeTable(const Mesh& mesh);
 /// The same over a bare index list whose ids are below vertex_count (e.g. indices with welded ids).
 EdgeTable buildEdgeTable(const std::vector<uint32_t>& indices, size_t vertex_count);
+/// The same into `out`, reusing its storage (a table rebuilt in place writes to pages already
+/// mapped; fresh pages are most of what a new table of a large mesh costs).
+void buildEdgeTable(const std::vector<uint32_t>& indices, size_t vertex_count, EdgeTable& out);
+
+/// Storage that the passes of one repairMesh call hand on to each other (see buildEdgeTable).
+struct Scratch {
+    EdgeTable table;
+};
 
 /// Start and end vertex of half-edge (corner) c.
 inline uint32_t halfStart(const Mesh& m, uint32_t c) {
@@ -166,6 +175,11 @@ VertexAdjacency buildVertexAdjacency(const Mesh& mesh);
 
 /// Vertices on an edge used by exactly one face.
 std::vector<uint8_t> boundaryVertices(const Mesh& mesh, const EdgeTable& table);
+
+/// The passes as repairMesh runs them: the public functions with storage shared between passes.
+ManifoldReport makeManifold(Mesh& mesh, const ManifoldOptions& options, Scratch& scratch);
+OrientReport orientFaces(Mesh& mesh, const OrientOptions& options, Scratch& scratch);
+HoleFillReport fillHoles(Mesh& mesh, const HoleFillOptions& options, Scratch& scratch);
 
 /// validate() that also hands back the edge table it built (of the welded ids when
 /// options.weld_by_position), for callers that go on to look at the same mesh.

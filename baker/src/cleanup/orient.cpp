@@ -20,10 +20,16 @@ PassCounters OrientReport::counters() const {
 }
 
 OrientReport orientFaces(Mesh& mesh, const OrientOptions& options) {
+    Scratch scratch;
+    return orientFaces(mesh, options, scratch);
+}
+
+OrientReport cleanup_detail::orientFaces(Mesh& mesh, const OrientOptions& options, Scratch& scratch) {
     OrientReport r;
     const size_t face_count = mesh.faceCount();
     if (face_count == 0) return r;
-    const EdgeTable table = buildEdgeTable(mesh);
+    EdgeTable& table = scratch.table;
+    buildEdgeTable(mesh.indices, mesh.vertexCount(), table);
     std::vector<uint8_t> flip(face_count, 0), visited(face_count, 0), cut(table.edgeCount(), 0);
     std::vector<uint32_t> component(face_count, kNone);
     std::vector<uint8_t> component_open;

@@ -60,6 +60,7 @@ Result<RepairReport> repairMesh(Mesh& mesh, const RepairOptions& options, const 
                                 Diagnostics& diagnostics) {
     LODBAKE_RETURN_IF_ERROR(checkMeshConsistency(mesh, name));
     RepairReport report;
+    cleanup_detail::Scratch scratch; // storage the passes below hand on to each other
     // `before` is needed by the skip tests below only while no pass has changed the mesh, so when the
     // caller does not want it reported it is computed at the first such test, from the mesh as it
     // still is then (same indices and positions as the input).
@@ -112,13 +113,13 @@ Result<RepairReport> repairMesh(Mesh& mesh, const RepairOptions& options, const 
     if (options.make_manifold) {
         ManifoldReport m;
         if (!same_faces || b().non_manifold_edge_count || b().non_manifold_vertex_count || b().degenerate_face_count)
-            m = makeManifold(mesh, options.manifold_options);
+            m = cleanup_detail::makeManifold(mesh, options.manifold_options, scratch);
         const bool edited = m.repeated_index_faces_removed + m.faces_cut + m.faces_removed + m.vertices_split != 0;
         changed(edited, edited);
         add("manifold", m.counters());
     }
     if (options.orient) {
-        const OrientReport o = orientFaces(mesh, options.orient_options);
+        const OrientReport o = cleanup_detail::orientFaces(mesh, options.orient_options, scratch);
         changed(o.faces_flipped != 0 || o.vertices_added != 0, o.vertices_added != 0);
         add("orient", o.counters());
     }
@@ -137,7 +138,7 @@ Result<RepairReport> repairMesh(Mesh& mesh, const RepairOptions& options, const 
     }
     if (options.fill_holes) {
         HoleFillReport h;
-        if (!same_connectivity || b().boundary_edge_count) h = fillHoles(mesh, options.hole_options);
+        if (!same_connectivity || b().boundary_edge_count) h = cleanup_detail::fillHoles(mesh, options.hole_options, scratch);
         PassSummary* s = add("holes", h.counters());
         if (!h.filled_lengths.empty())
             s->notes.push_back("filled holes of " + lengthsList(h.filled_lengths) + " edges");
@@ -159,7 +160,7 @@ Result<RepairReport> repairMesh(Mesh& mesh, const RepairOptions& options, const 
         add("normals", n.counters());
     }
     // The edge table of the final mesh, built once for `after` and reused for the open rims below.
-    cleanup_detail::EdgeTable table;
+    cleanup_detail::EdgeTable& table = scratch.table;
     bool have_table = false;
     if (same_faces && have_before) {
         report.after = before;
@@ -195,7 +196,7 @@ Result<RepairReport> repairMesh(Mesh& mesh, const RepairOptions& options, const 
     // Rims and components are judged with attribute seams joined: UV islands are not holes or pieces.
     std::vector<uint32_t> rims, surfaces;
     if (shared) {
-        if (!have_table) table = cleanup_detail::buildEdgeTable(mesh);
+        if (!have_table) cleanup_detail::buildEdgeTable(mesh.indices, mesh.vertexCount(), table);
         openRimsAndSurfaces(mesh, table, weld, rims, surfaces);
     } else { // no two vertices share a position: no seams, so `after` already has both lists
         rims = report.after.boundary_loop_lengths;

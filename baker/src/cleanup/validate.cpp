@@ -50,7 +50,9 @@ ValidationReport validateWithTable(const Mesh& input, const ValidateOptions& opt
         for (size_t c = 0; c < welded.size(); ++c) welded[c] = rep[input.indices[c]];
         indices = &welded;
     }
-    EdgeTable table = buildEdgeTable(*indices, n);
+    EdgeTable local;
+    EdgeTable& table = table_out ? *table_out : local;
+    buildEdgeTable(*indices, n, table);
     UnionFind comps(n);
     if (counts_done) {
         for (size_t f = 0; f < indices->size() / 3; ++f) {
@@ -71,7 +73,6 @@ ValidationReport validateWithTable(const Mesh& input, const ValidateOptions& opt
     for (uint32_t c : faces_of_root)
         if (c) r.component_face_counts.push_back(c);
     std::sort(r.component_face_counts.begin(), r.component_face_counts.end(), std::greater<uint32_t>());
-    if (table_out) *table_out = std::move(table);
     return r;
 }
 
