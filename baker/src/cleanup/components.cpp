@@ -32,12 +32,12 @@ ComponentReport removeSmallComponents(Mesh& mesh, const ComponentOptions& option
     // that meet another boundary edge at the same positions (a seam). A vertex merely shared by
     // position (a pinch the manifold pass split) does not join anything.
     UnionFind uf(mesh.vertexCount());
-    const std::vector<uint32_t> weld = positionWeldMap(mesh);
-    bool shared = false;
-    for (uint32_t v = 0; v < weld.size() && !shared; ++v) shared = weld[v] != v;
     // Seams need an attribute that differs; without any attribute stream there are none to join.
     const bool has_attributes = mesh.hasNormals() || mesh.hasTangents() || mesh.hasColors() || !mesh.uvs.empty();
-    if (shared && has_attributes) {
+    const std::vector<uint32_t> weld = has_attributes ? positionWeldMap(mesh) : std::vector<uint32_t>();
+    bool shared = false;
+    for (uint32_t v = 0; v < weld.size() && !shared; ++v) shared = weld[v] != v;
+    if (shared) {
         const EdgeTable table = buildEdgeTable(mesh);
         const std::vector<uint8_t> seam = seamCorners(mesh, table, weld);
         for (uint32_t c = 0; c < seam.size(); ++c)

@@ -6,6 +6,8 @@
 #include <numeric>
 #include <unordered_map>
 
+#include "core/parallel.h"
+
 namespace lodbake {
 namespace cleanup_detail {
 
@@ -81,38 +83,72 @@ void buildEdgeTable(const std::vector<uint32_t>& indices, size_t vertex_count, E
         t.corners[start[std::min(b, c) + 1]++] = uint32_t(3 * f + 1);
         t.corners[start[std::min(c, a) + 1]++] = uint32_t(3 * f + 2);
     }
-    // At most one edge per half-edge (boundary edges have one); pages never written cost nothing.
-    t.keys.reserve(half_count);
-    t.begin.reserve(half_count + 1);
-    constexpr size_t kRun = 64;
-    uint64_t run[kRun];
-    std::vector<uint64_t> long_run;
-    for (size_t lo = 0; lo < n; ++lo) {
-        const size_t first = start[lo], count = start[lo + 1] - first;
-        if (count == 0) continue;
-        uint64_t* r = run;
-        if (count > kRun) {
-            long_run.resize(count);
-            r = long_run.data();
-        }
-        for (size_t i = 0; i < count; ++i) {
-            const uint32_t c = t.corners[first + i];
-            r[i] = (uint64_t(t.corner_edge[c]) << 32) | c;
-        }
-        sortRun(r, r + count);
-        uint32_t prev_hi = kNone;
-        for (size_t i = 0; i < count; ++i) {
-            const uint32_t hi = uint32_t(r[i] >> 32), c = uint32_t(r[i]);
-            if (i == 0 || hi != prev_hi) {
-                t.keys.push_back((uint64_t(lo) << 32) | hi);
-                t.begin.push_back(uint32_t(first + i));
-                prev_hi = hi;
+    // Then per fixed chunk of vertices (never derived from the thread count), in parallel: sort each
+    // bucket by (upper vertex, corner) in place and count the chunk's distinct edges; from the
+    // chunks' first edge ids, write keys, ranges and corner_edge. A chunk touches only its own
+    // buckets and their corners, so the table does not depend on the schedule.
+    constexpr size_t kChunk = 8192;
+    const size_t chunk_count = (n + kChunk - 1) / kChunk;
+    std::vector<uint32_t> chunk_first_edge(chunk_count + 1, 0);
+    auto sortChunk = [&](size_t chunk) {
+        constexpr size_t kRun = 64;
+        uint64_t run[kRun];
+        std::vector<uint64_t> long_run;
+        uint32_t edges = 0;
+        for (size_t lo = chunk * kChunk; lo < std::min(n, (chunk + 1) * kChunk); ++lo) {
+            const size_t first = start[lo], count = start[lo + 1] - first;
+            uint64_t* r = run;
+            if (count > kRun) {
+                long_run.resize(count);
+                r = long_run.data();
             }
-            t.corners[first + i] = c;
-            t.corner_edge[c] = uint32_t(t.keys.size() - 1);
+            for (size_t i = 0; i < count; ++i) {
+                const uint32_t c = t.corners[first + i];
+                r[i] = (uint64_t(t.corner_edge[c]) << 32) | c; // corner_edge still holds the upper vertex
+            }
+            sortRun(r, r + count);
+            for (size_t i = 0; i < count; ++i) {
+                edges += i == 0 || (r[i] >> 32) != (r[i - 1] >> 32);
+                t.corners[first + i] = uint32_t(r[i]);
+            }
         }
+        chunk_first_edge[chunk + 1] = edges;
+    };
+    auto emitChunk = [&](size_t chunk) {
+        uint32_t e = chunk_first_edge[chunk];
+        for (size_t lo = chunk * kChunk; lo < std::min(n, (chunk + 1) * kChunk); ++lo) {
+            uint32_t prev_hi = kNone;
+            for (size_t i = start[lo]; i < start[lo + 1]; ++i) {
+                const uint32_t c = t.corners[i], hi = t.corner_edge[c];
+                if (i == start[lo] || hi != prev_hi) {
+                    t.keys[e] = (uint64_t(lo) << 32) | hi;
+                    t.begin[e] = uint32_t(i);
+                    ++e;
+                    prev_hi = hi;
+                }
+                t.corner_edge[c] = e - 1;
+            }
+        }
+    };
+    // Sorting is idempotent, so a failed parallel run (out of memory in a worker) is redone here.
+    if (!parallelFor(chunk_count, 1, sortChunk).ok())
+        for (size_t chunk = 0; chunk < chunk_count; ++chunk) sortChunk(chunk);
+    for (size_t chunk = 0; chunk < chunk_count; ++chunk) chunk_first_edge[chunk + 1] += chunk_first_edge[chunk];
+    const size_t edge_count = chunk_first_edge[chunk_count];
+    t.keys.resize(edge_count);
+    t.begin.resize(edge_count + 1);
+    if (!parallelFor(chunk_count, 1, emitChunk).ok()) {
+        // The scheduler failed part-way: restore every corner's upper vertex and emit on this thread.
+        for (size_t f = 0; f < face_count; ++f) {
+            if (t.corner_edge[3 * f] == kNone) continue;
+            const uint32_t a = ix[3 * f], b = ix[3 * f + 1], c = ix[3 * f + 2];
+            t.corner_edge[3 * f] = std::max(a, b);
+            t.corner_edge[3 * f + 1] = std::max(b, c);
+            t.corner_edge[3 * f + 2] = std::max(c, a);
+        }
+        for (size_t chunk = 0; chunk < chunk_count; ++chunk) emitChunk(chunk);
     }
-    t.begin.push_back(uint32_t(half_count));
+    t.begin[edge_count] = uint32_t(half_count);
 }
 
 Vec3d faceNormal(const Mesh& m, size_t f) {
