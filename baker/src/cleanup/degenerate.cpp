@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <array>
 
+#include "core/parallel.h"
 #include "lodbake/cleanup/passes.h"
 #include "mesh_edit.h"
 
@@ -26,27 +27,36 @@ DegenerateReport removeDegenerateFaces(Mesh& mesh, const DegenerateOptions& opti
         keys.reserve(face_count);
         key_face.reserve(face_count);
     }
-    for (size_t f = 0; f < face_count; ++f) {
+    // The per-face tests are independent: run in parallel into per-face slots, counted in face order.
+    enum : uint8_t { kKeep, kRepeated, kNonFinite, kZeroArea };
+    std::vector<uint8_t> verdict(face_count, kKeep);
+    auto test = [&](size_t f) {
         const uint32_t* t = &mesh.indices[3 * f];
         if (hasRepeatedIndex(mesh, f)) {
-            keep[f] = 0;
-            ++r.repeated_index_faces;
-            continue;
-        }
-        if (!isFinite(mesh.positions[t[0]]) || !isFinite(mesh.positions[t[1]]) || !isFinite(mesh.positions[t[2]])) {
-            keep[f] = 0;
-            ++r.non_finite_faces;
-            continue;
-        }
-        if (options.remove_zero_area) {
+            verdict[f] = kRepeated;
+        } else if (!isFinite(mesh.positions[t[0]]) || !isFinite(mesh.positions[t[1]]) ||
+                   !isFinite(mesh.positions[t[2]])) {
+            verdict[f] = kNonFinite;
+        } else if (options.remove_zero_area) {
             const Vec3d n = faceNormal(mesh, f);
-            if (dot(n, n) == 0.0) {
-                keep[f] = 0;
-                ++r.zero_area_faces;
-                continue;
-            }
+            if (dot(n, n) == 0.0) verdict[f] = kZeroArea;
+        }
+    };
+    if (!parallelFor(face_count, 4096, test).ok())
+        for (size_t f = 0; f < face_count; ++f) test(f); // a worker ran out of memory: redo on this thread
+    for (size_t f = 0; f < face_count; ++f) {
+        switch (verdict[f]) {
+        case kRepeated: ++r.repeated_index_faces; break;
+        case kNonFinite: ++r.non_finite_faces; break;
+        case kZeroArea: ++r.zero_area_faces; break;
+        default: break;
+        }
+        if (verdict[f] != kKeep) {
+            keep[f] = 0;
+            continue;
         }
         if (!options.remove_duplicates) continue;
+        const uint32_t* t = &mesh.indices[3 * f];
         std::array<uint32_t, 3> k = {t[0], t[1], t[2]};
         std::sort(k.begin(), k.end());
         keys.push_back(k);
