@@ -3,8 +3,12 @@
 // on the same input (one sort of all half-edges), as a ratio, so a noisy machine shows in both.
 // Also prints what the pipeline left unresolved, a denoise run's roughness before/after, and (with
 // --passes) the time of each pass run on its own, in pipeline order, on one copy.
+// --bake: instead, the pipeline as `lodbake bake` runs it (RepairOptions report_before and
+// report_welded off) at 1 and 2 threads: best-of-3 wall time with the process CPU time of that run.
 //
-// usage: repair_bench [--passes] [DIR] [FILE...]   (DIR defaults to the shared meshes folder)
+// usage: repair_bench [--passes | --bake] [DIR] [FILE...]   (DIR defaults to the shared meshes folder)
+
+#include <time.h>
 
 #include <algorithm>
 #include <chrono>
@@ -14,6 +18,7 @@
 
 #include "bench_timing.h"
 
+#include "core/parallel.h"
 #include "lodbake/cleanup/repair.h"
 #include "lodbake/cleanup/topology.h"
 #include "lodbake/io/mesh_io.h"
@@ -47,15 +52,50 @@ void printPassTimes(const lodbake::Mesh& input) {
     std::printf("\n");
 }
 
+double cpuSeconds() {
+    timespec ts{};
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+    return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
+}
+
+// The bake's repair call (bake.cpp) at 1 and 2 threads: best wall of kRuns, and that run's CPU time.
+void printBakeTimes(const std::string& name, const lodbake::Mesh& input) {
+    using namespace lodbake;
+    RepairOptions o;
+    o.report_welded = false;
+    o.report_before = false;
+    for (size_t threads : {size_t(1), size_t(2)}) {
+        ScopedThreadLimit limit(threads);
+        double best_wall = 1e300, best_cpu = 0.0;
+        for (int run = 0; run < kRuns; ++run) {
+            Mesh m = input;
+            Diagnostics d;
+            const auto t0 = std::chrono::steady_clock::now();
+            const double c0 = cpuSeconds();
+            (void)repairMesh(m, o, name, d);
+            const double cpu = cpuSeconds() - c0;
+            const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+            if (wall < best_wall) {
+                best_wall = wall;
+                best_cpu = cpu;
+            }
+        }
+        std::printf("    bake repair, %zu thread%s: wall %.3f s, cpu %.3f s\n", threads, threads > 1 ? "s" : "",
+                    best_wall, best_cpu);
+    }
+}
+
 } // namespace
 
 int main(int argc, char** argv) {
     using namespace lodbake;
-    bool pass_times = false;
+    bool pass_times = false, bake_times = false;
     std::vector<std::string> args;
     for (int i = 1; i < argc; ++i) {
         if (std::string(argv[i]) == "--passes")
             pass_times = true;
+        else if (std::string(argv[i]) == "--bake")
+            bake_times = true;
         else
             args.push_back(argv[i]);
     }
@@ -77,6 +117,11 @@ int main(int argc, char** argv) {
             continue;
         }
         const Mesh& input = loaded->mesh;
+        if (bake_times) {
+            std::printf("%-28s %9zu\n", name.c_str(), input.faceCount());
+            printBakeTimes(name, input);
+            continue;
+        }
         RepairReport report;
         Mesh out;
         const double repair_ms = bestMs([&] {

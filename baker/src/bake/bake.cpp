@@ -148,6 +148,7 @@ Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vect
         StageTimer timer(hooks, index, BakeStage::Repair);
         RepairOptions repair_options;
         repair_options.report_welded = false; // only `unresolved` goes into the bake's report
+        repair_options.report_before = false; // likewise: the input is validated only if a skip test needs it
         LODBAKE_ASSIGN_OR_RETURN(RepairReport repair, repairMesh(mesh, repair_options, input.name, slot.diagnostics));
         slot.report.repair_unresolved = repair.unresolved;
     }

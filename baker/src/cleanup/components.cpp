@@ -32,7 +32,9 @@ ComponentReport removeSmallComponents(Mesh& mesh, const ComponentOptions& option
     // that meet another boundary edge at the same positions (a seam). A vertex merely shared by
     // position (a pinch the manifold pass split) does not join anything.
     UnionFind uf(mesh.vertexCount());
-    const std::vector<uint32_t> weld = positionWeldMap(mesh);
+    // Seams need an attribute that differs; without any attribute stream there are none to join.
+    const bool has_attributes = mesh.hasNormals() || mesh.hasTangents() || mesh.hasColors() || !mesh.uvs.empty();
+    const std::vector<uint32_t> weld = has_attributes ? positionWeldMap(mesh) : std::vector<uint32_t>();
     bool shared = false;
     for (uint32_t v = 0; v < weld.size() && !shared; ++v) shared = weld[v] != v;
     if (shared) {

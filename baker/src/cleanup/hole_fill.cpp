@@ -317,14 +317,22 @@ void fairPatch(Patch& patch, uint32_t loop_size, uint32_t iterations) {
 } // namespace
 
 HoleFillReport fillHoles(Mesh& mesh, const HoleFillOptions& options) {
+    Scratch scratch;
+    return fillHoles(mesh, options, scratch);
+}
+
+HoleFillReport cleanup_detail::fillHoles(Mesh& mesh, const HoleFillOptions& options, Scratch& scratch) {
     HoleFillReport r;
     if (mesh.faceCount() == 0) return r;
-    const EdgeTable table = buildEdgeTable(mesh);
+    EdgeTable& table = scratch.table;
+    buildEdgeTable(mesh.indices, mesh.vertexCount(), table);
     const std::vector<BoundaryLoop> loops = findBoundaryLoops(mesh, table);
     const std::vector<uint32_t> face_sub = faceSubmeshes(mesh);
     // Boundary edges along an attribute seam (UV island borders) are not holes: loops containing
     // one are left alone.
-    const std::vector<uint8_t> seam = seamCorners(mesh, table, positionWeldMap(mesh));
+    const bool has_attributes = mesh.hasNormals() || mesh.hasTangents() || mesh.hasColors() || !mesh.uvs.empty();
+    const std::vector<uint8_t> seam = has_attributes ? seamCorners(mesh, table, positionWeldMap(mesh))
+                                                     : std::vector<uint8_t>(mesh.indices.size(), 0); // no seams
     auto isSeam = [&](uint32_t c) { return seam[c] != 0; };
     std::vector<Tri> new_faces;
     std::vector<uint32_t> new_face_sub;

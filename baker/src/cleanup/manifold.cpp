@@ -56,17 +56,50 @@ void pairEdge(const Mesh& m, const uint32_t* corners, uint32_t k, std::vector<Co
         if (!taken[i]) unpaired.push_back(corners[i]);
 }
 
+// Whether some edge of `mesh` may have more than two faces, after splitVerticesByFans turned the
+// mesh `table` was built from (no repeated-index faces, none removed since) into `mesh`. The split
+// moved corners only to new vertices (ids >= vertices_before), so an edge between two older
+// vertices keeps a subset of its half-edges: only the edges over-used in `table` and the edges
+// touching a new vertex can be over-used now. Those are counted exactly.
+bool mayHaveOverusedEdge(const Mesh& mesh, const EdgeTable& table, size_t vertices_before) {
+    std::vector<uint64_t> overused;
+    for (uint32_t e = 0; e < table.edgeCount(); ++e)
+        if (table.uses(e) > 2) overused.push_back(table.keys[e]); // ascending, as the table's keys
+    std::vector<uint64_t> candidates;
+    for (size_t f = 0; f < mesh.faceCount(); ++f) {
+        if (hasRepeatedIndex(mesh, f)) continue;
+        for (uint32_t k = 0; k < 3; ++k) {
+            const uint32_t c = uint32_t(3 * f + k);
+            const uint32_t a = halfStart(mesh, c), b = halfEnd(mesh, c);
+            const uint64_t key = edgeKey(a, b);
+            if (std::max(a, b) >= vertices_before || std::binary_search(overused.begin(), overused.end(), key))
+                candidates.push_back(key);
+        }
+    }
+    std::sort(candidates.begin(), candidates.end());
+    for (size_t i = 2; i < candidates.size(); ++i)
+        if (candidates[i] == candidates[i - 2]) return true;
+    return false;
+}
+
 } // namespace
 
 ManifoldReport makeManifold(Mesh& mesh, const ManifoldOptions& options) {
+    Scratch scratch;
+    return makeManifold(mesh, options, scratch);
+}
+
+ManifoldReport cleanup_detail::makeManifold(Mesh& mesh, const ManifoldOptions& options, Scratch& scratch) {
     ManifoldReport r;
     if (countRepeatedIndexFaces(mesh)) {
         std::vector<uint8_t> keep(mesh.faceCount(), 1);
         for (size_t f = 0; f < mesh.faceCount(); ++f) keep[f] = !hasRepeatedIndex(mesh, f);
         r.repeated_index_faces_removed = removeFaces(mesh, keep);
     }
-    EdgeTable table = buildEdgeTable(mesh);
+    EdgeTable& table = scratch.table;
+    buildEdgeTable(mesh.indices, mesh.vertexCount(), table);
     std::vector<CornerPair> joins;
+    joins.reserve(table.edgeCount());
     std::vector<uint32_t> unpaired;
     for (uint32_t e = 0; e < table.edgeCount(); ++e) {
         const uint32_t k = table.uses(e);
@@ -93,7 +126,7 @@ ManifoldReport makeManifold(Mesh& mesh, const ManifoldOptions& options) {
         // Removing faces shifts corners: pair again on the smaller mesh (no edge has > 2 faces now
         // except where a removed face's partner was itself over-used; repeat until stable).
         for (int round = 0; round < 8; ++round) {
-            table = buildEdgeTable(mesh);
+            buildEdgeTable(mesh.indices, mesh.vertexCount(), table);
             joins.clear();
             unpaired.clear();
             for (uint32_t e = 0; e < table.edgeCount(); ++e) {
@@ -110,13 +143,17 @@ ManifoldReport makeManifold(Mesh& mesh, const ManifoldOptions& options) {
             r.faces_removed += removeFaces(mesh, keep2);
         }
     }
+    const size_t vertices_before_split = mesh.vertexCount();
     size_t added = 0;
     r.vertices_split = splitVerticesByFans(mesh, joins, added);
     r.vertices_added = added;
     // A cut face still joined to the kept pair around both ends of the edge keeps using it (splitting
     // vertices cannot separate it): those faces are removed. Bounded; each round removes faces.
-    for (int round = 0; round < 8; ++round) {
-        table = buildEdgeTable(mesh);
+    // The first round's table is skipped when it would find nothing: see mayHaveOverusedEdge.
+    const bool check = options.edge_mode != NonManifoldEdgeMode::Cut ||
+                       mayHaveOverusedEdge(mesh, table, vertices_before_split);
+    for (int round = 0; round < 8 && check; ++round) {
+        buildEdgeTable(mesh.indices, mesh.vertexCount(), table);
         std::vector<uint32_t> extra;
         for (uint32_t e = 0; e < table.edgeCount(); ++e) {
             const uint32_t k = table.uses(e);
@@ -134,7 +171,7 @@ ManifoldReport makeManifold(Mesh& mesh, const ManifoldOptions& options) {
         r.faces_removed += removed;
         r.faces_cut -= std::min<uint64_t>(r.faces_cut, removed);
         // Removing faces can pinch a vertex again: split once more across the remaining pairs.
-        table = buildEdgeTable(mesh);
+        buildEdgeTable(mesh.indices, mesh.vertexCount(), table);
         joins.clear();
         for (uint32_t e = 0; e < table.edgeCount(); ++e)
             if (table.uses(e) == 2) joins.push_back({table.corners[table.begin[e]], table.corners[table.begin[e] + 1]});

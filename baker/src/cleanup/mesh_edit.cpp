@@ -1,7 +1,12 @@
 #include "mesh_edit.h"
 
 #include <algorithm>
+#include <cmath>
+#include <cstring>
 #include <numeric>
+#include <unordered_map>
+
+#include "core/parallel.h"
 
 namespace lodbake {
 namespace cleanup_detail {
@@ -13,52 +18,137 @@ uint32_t EdgeTable::find(uint32_t a, uint32_t b) const {
 }
 
 EdgeTable buildEdgeTable(const Mesh& mesh) {
-    // Counting sort by the lower vertex, then a small sort by (upper vertex, corner) inside each
-    // bucket: the same order as sorting (key, corner) globally, in linear time for mesh-like input.
-    EdgeTable t;
-    const size_t corner_count = mesh.indices.size();
-    const size_t n = mesh.vertexCount();
-    std::vector<uint32_t> bucket(n + 1, 0);
-    for (size_t f = 0; f < mesh.faceCount(); ++f) {
-        if (hasRepeatedIndex(mesh, f)) continue;
-        for (uint32_t k = 0; k < 3; ++k) {
-            const uint32_t c = uint32_t(3 * f + k);
-            ++bucket[std::min(halfStart(mesh, c), halfEnd(mesh, c)) + 1];
-        }
-    }
-    for (size_t v = 0; v < n; ++v) bucket[v + 1] += bucket[v];
-    std::vector<std::pair<uint32_t, uint32_t>> half(bucket[n]); // (upper vertex, corner)
-    {
-        std::vector<uint32_t> fill(bucket.begin(), bucket.end() - 1);
-        for (size_t f = 0; f < mesh.faceCount(); ++f) {
-            if (hasRepeatedIndex(mesh, f)) continue;
-            for (uint32_t k = 0; k < 3; ++k) {
-                const uint32_t c = uint32_t(3 * f + k);
-                const uint32_t a = halfStart(mesh, c), b = halfEnd(mesh, c);
-                half[fill[std::min(a, b)]++] = {std::max(a, b), c};
-            }
-        }
-    }
-    t.corner_edge.assign(corner_count, kNone);
-    t.corners.resize(half.size());
-    t.keys.reserve(half.size() / 2 + 1);
-    t.begin.reserve(half.size() / 2 + 2);
-    for (size_t lo = 0; lo < n; ++lo) {
-        const auto first = half.begin() + bucket[lo], last = half.begin() + bucket[lo + 1];
+    return buildEdgeTable(mesh.indices, mesh.vertexCount());
+}
+
+namespace {
+// Ascending sort of a short run (a vertex's bucket holds a handful of half-edges).
+void sortRun(uint64_t* first, uint64_t* last) {
+    if (last - first > 32) {
         std::sort(first, last);
-        for (auto it = first; it != last; ++it) {
-            const size_t i = size_t(it - half.begin());
-            const uint64_t key = (uint64_t(lo) << 32) | it->first;
-            if (t.keys.empty() || t.keys.back() != key) {
-                t.keys.push_back(key);
-                t.begin.push_back(uint32_t(i));
-            }
-            t.corners[i] = it->second;
-            t.corner_edge[it->second] = uint32_t(t.keys.size() - 1);
-        }
+        return;
     }
-    t.begin.push_back(uint32_t(half.size()));
+    for (uint64_t* i = first + 1; i < last; ++i) {
+        const uint64_t x = *i;
+        uint64_t* j = i;
+        for (; j > first && *(j - 1) > x; --j) *j = *(j - 1);
+        *j = x;
+    }
+}
+} // namespace
+
+EdgeTable buildEdgeTable(const std::vector<uint32_t>& indices, size_t vertex_count) {
+    EdgeTable t;
+    buildEdgeTable(indices, vertex_count, t);
     return t;
+}
+
+void buildEdgeTable(const std::vector<uint32_t>& indices, size_t vertex_count, EdgeTable& t) {
+    // Counting sort of the half-edges by lower vertex, then a small sort by (upper vertex, corner)
+    // inside each bucket: the same order as sorting (key, corner) globally, in linear time for
+    // mesh-like input. The corners are scattered straight into `corners`, and `corner_edge` holds each
+    // corner's upper vertex until its edge id replaces it, so no array beyond the table's own is
+    // allocated (fresh pages are what this costs most).
+    t.keys.clear();
+    t.begin.clear();
+    const size_t corner_count = indices.size();
+    const size_t face_count = corner_count / 3;
+    const size_t n = vertex_count;
+    const uint32_t* ix = indices.data();
+    // start[lo + 1] ends up as the first slot of bucket lo (counted at lo + 2, prefix-summed, then
+    // advanced by the scatter), so start[0..n] is the bucket table without a second array.
+    std::vector<uint32_t> start(n + 2, 0);
+    t.corner_edge.resize(corner_count);
+    for (size_t f = 0; f < face_count; ++f) {
+        const uint32_t a = ix[3 * f], b = ix[3 * f + 1], c = ix[3 * f + 2];
+        uint32_t* hi = &t.corner_edge[3 * f];
+        if (a == b || b == c || a == c) {
+            hi[0] = hi[1] = hi[2] = kNone;
+            continue;
+        }
+        hi[0] = std::max(a, b);
+        hi[1] = std::max(b, c);
+        hi[2] = std::max(c, a);
+        ++start[std::min(a, b) + 2];
+        ++start[std::min(b, c) + 2];
+        ++start[std::min(c, a) + 2];
+    }
+    for (size_t v = 2; v < n + 2; ++v) start[v] += start[v - 1];
+    const size_t half_count = start[n + 1];
+    t.corners.resize(half_count);
+    for (size_t f = 0; f < face_count; ++f) {
+        if (t.corner_edge[3 * f] == kNone) continue;
+        const uint32_t a = ix[3 * f], b = ix[3 * f + 1], c = ix[3 * f + 2];
+        t.corners[start[std::min(a, b) + 1]++] = uint32_t(3 * f);
+        t.corners[start[std::min(b, c) + 1]++] = uint32_t(3 * f + 1);
+        t.corners[start[std::min(c, a) + 1]++] = uint32_t(3 * f + 2);
+    }
+    // Then per fixed chunk of vertices (never derived from the thread count), in parallel: sort each
+    // bucket by (upper vertex, corner) in place and count the chunk's distinct edges; from the
+    // chunks' first edge ids, write keys, ranges and corner_edge. A chunk touches only its own
+    // buckets and their corners, so the table does not depend on the schedule.
+    constexpr size_t kChunk = 8192;
+    const size_t chunk_count = (n + kChunk - 1) / kChunk;
+    std::vector<uint32_t> chunk_first_edge(chunk_count + 1, 0);
+    auto sortChunk = [&](size_t chunk) {
+        constexpr size_t kRun = 64;
+        uint64_t run[kRun];
+        std::vector<uint64_t> long_run;
+        uint32_t edges = 0;
+        for (size_t lo = chunk * kChunk; lo < std::min(n, (chunk + 1) * kChunk); ++lo) {
+            const size_t first = start[lo], count = start[lo + 1] - first;
+            uint64_t* r = run;
+            if (count > kRun) {
+                long_run.resize(count);
+                r = long_run.data();
+            }
+            for (size_t i = 0; i < count; ++i) {
+                const uint32_t c = t.corners[first + i];
+                r[i] = (uint64_t(t.corner_edge[c]) << 32) | c; // corner_edge still holds the upper vertex
+            }
+            sortRun(r, r + count);
+            for (size_t i = 0; i < count; ++i) {
+                edges += i == 0 || (r[i] >> 32) != (r[i - 1] >> 32);
+                t.corners[first + i] = uint32_t(r[i]);
+            }
+        }
+        chunk_first_edge[chunk + 1] = edges;
+    };
+    auto emitChunk = [&](size_t chunk) {
+        uint32_t e = chunk_first_edge[chunk];
+        for (size_t lo = chunk * kChunk; lo < std::min(n, (chunk + 1) * kChunk); ++lo) {
+            uint32_t prev_hi = kNone;
+            for (size_t i = start[lo]; i < start[lo + 1]; ++i) {
+                const uint32_t c = t.corners[i], hi = t.corner_edge[c];
+                if (i == start[lo] || hi != prev_hi) {
+                    t.keys[e] = (uint64_t(lo) << 32) | hi;
+                    t.begin[e] = uint32_t(i);
+                    ++e;
+                    prev_hi = hi;
+                }
+                t.corner_edge[c] = e - 1;
+            }
+        }
+    };
+    // Sorting is idempotent, so a failed parallel run (out of memory in a worker) is redone here.
+    if (!parallelFor(chunk_count, 1, sortChunk).ok())
+        for (size_t chunk = 0; chunk < chunk_count; ++chunk) sortChunk(chunk);
+    for (size_t chunk = 0; chunk < chunk_count; ++chunk) chunk_first_edge[chunk + 1] += chunk_first_edge[chunk];
+    const size_t edge_count = chunk_first_edge[chunk_count];
+    t.keys.resize(edge_count);
+    t.begin.resize(edge_count + 1);
+    if (!parallelFor(chunk_count, 1, emitChunk).ok()) {
+        // The scheduler failed part-way: restore every corner's upper vertex and emit on this thread.
+        for (size_t f = 0; f < face_count; ++f) {
+            if (t.corner_edge[3 * f] == kNone) continue;
+            const uint32_t a = ix[3 * f], b = ix[3 * f + 1], c = ix[3 * f + 2];
+            t.corner_edge[3 * f] = std::max(a, b);
+            t.corner_edge[3 * f + 1] = std::max(b, c);
+            t.corner_edge[3 * f + 2] = std::max(c, a);
+        }
+        for (size_t chunk = 0; chunk < chunk_count; ++chunk) emitChunk(chunk);
+    }
+    t.begin[edge_count] = uint32_t(half_count);
 }
 
 Vec3d faceNormal(const Mesh& m, size_t f) {
@@ -223,8 +313,9 @@ size_t splitVerticesByFans(Mesh& mesh, const std::vector<CornerPair>& joins, siz
     // Corners are visited in ascending order, so a vertex's first fan is the one with its lowest corner.
     const size_t n = mesh.vertexCount();
     std::vector<uint32_t> first_root(n, kNone);
-    std::vector<std::pair<uint32_t, uint32_t>> extra; // (root, new vertex), few in practice
-    std::vector<uint32_t> root_vertex(corner_count, kNone);
+    // Fan root -> its new vertex, for the fans that are not their vertex's first: few in practice.
+    // Only looked up, never iterated, so its order cannot reach the output.
+    std::unordered_map<uint32_t, uint32_t> root_vertex;
     std::vector<uint8_t> split(n, 0);
     size_t split_count = 0;
     for (size_t c = 0; c < corner_count; ++c) {
@@ -232,26 +323,33 @@ size_t splitVerticesByFans(Mesh& mesh, const std::vector<CornerPair>& joins, siz
         const uint32_t r = fans.find(uint32_t(c));
         if (first_root[v] == kNone) first_root[v] = r;
         if (r == first_root[v]) continue;
-        if (root_vertex[r] == kNone) {
-            root_vertex[r] = duplicateVertex(mesh, v);
+        auto [it, inserted] = root_vertex.try_emplace(r, 0u);
+        if (inserted) {
+            it->second = duplicateVertex(mesh, v);
             ++added;
             if (!split[v]) {
                 split[v] = 1;
                 ++split_count;
             }
         }
-        mesh.indices[c] = root_vertex[r];
+        mesh.indices[c] = it->second;
     }
     return split_count;
 }
 
 std::vector<BoundaryLoop> findBoundaryLoops(const Mesh& mesh, const EdgeTable& table) {
+    return findBoundaryLoops(mesh.indices, table);
+}
+
+std::vector<BoundaryLoop> findBoundaryLoops(const std::vector<uint32_t>& indices, const EdgeTable& table) {
+    auto halfStart = [&](uint32_t c) { return indices[c]; };
+    auto halfEnd = [&](uint32_t c) { return indices[c % 3 == 2 ? c - 2 : c + 1]; };
     // Directed boundary half-edges sorted by start vertex, then corner.
     std::vector<std::pair<uint32_t, uint32_t>> out; // (start vertex, corner)
     for (size_t e = 0; e < table.edgeCount(); ++e)
         if (table.uses(uint32_t(e)) == 1) {
             const uint32_t c = table.corners[table.begin[e]];
-            out.push_back({halfStart(mesh, c), c});
+            out.push_back({halfStart(c), c});
         }
     std::sort(out.begin(), out.end());
     std::vector<uint8_t> used(out.size(), 0);
@@ -272,7 +370,7 @@ std::vector<BoundaryLoop> findBoundaryLoops(const Mesh& mesh, const EdgeTable& t
             used[cur] = 1;
             loop.vertices.push_back(out[cur].first);
             loop.corners.push_back(out[cur].second);
-            const uint32_t end = halfEnd(mesh, out[cur].second);
+            const uint32_t end = halfEnd(out[cur].second);
             if (end == start) {
                 loop.closed = true;
                 break;
@@ -284,8 +382,30 @@ std::vector<BoundaryLoop> findBoundaryLoops(const Mesh& mesh, const EdgeTable& t
     return loops;
 }
 
+namespace {
+
+std::array<uint32_t, 3> positionBits(const Vec3f& p) {
+    std::array<uint32_t, 3> k;
+    std::memcpy(k.data(), &p, sizeof(k));
+    return k;
+}
+
+} // namespace
+
 std::vector<uint32_t> positionWeldMap(const Mesh& mesh) {
     const uint32_t n = uint32_t(mesh.vertexCount());
+    bool has_nan = false;
+    for (const Vec3f& p : mesh.positions) has_nan |= std::isnan(p.x) || std::isnan(p.y) || std::isnan(p.z);
+    if (!has_nan) {
+        // Float equality is bit equality once -0 is read as +0 (and nothing is NaN).
+        return lowestEqualKey(n, [&](uint32_t v) {
+            std::array<uint32_t, 3> k = positionBits(mesh.positions[v]);
+            for (uint32_t& w : k)
+                if (w == 0x80000000u) w = 0;
+            return k;
+        });
+    }
+    // With NaNs, keep the sorted scan this map was first defined by (a NaN never equals its neighbour).
     std::vector<uint32_t> order(n), rep(n);
     std::iota(order.begin(), order.end(), 0u);
     auto less = [&](uint32_t a, uint32_t b) {
@@ -300,6 +420,10 @@ std::vector<uint32_t> positionWeldMap(const Mesh& mesh) {
     for (uint32_t i = 0; i < n; ++i)
         rep[order[i]] = (i > 0 && mesh.positions[order[i]] == mesh.positions[order[i - 1]]) ? rep[order[i - 1]] : order[i];
     return rep;
+}
+
+std::vector<uint32_t> bitwiseWeldMap(const Mesh& mesh) {
+    return lowestEqualKey(uint32_t(mesh.vertexCount()), [&](uint32_t v) { return positionBits(mesh.positions[v]); });
 }
 
 namespace {

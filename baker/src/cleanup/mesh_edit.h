@@ -7,6 +7,9 @@
 #include <cstdint>
 #include <vector>
 
+#include "lodbake/cleanup/passes.h"
+#include "lodbake/cleanup/topology.h"
+#include "lodbake/cleanup/validate.h"
 #include "lodbake/core/mesh.h"
 
 namespace lodbake {
@@ -32,7 +35,18 @@ struct EdgeTable {
     uint32_t find(uint32_t a, uint32_t b) const;
 };
 
+/// Built in linear time (a counting sort by lower vertex, then a short sort inside each bucket).
 EdgeTable buildEdgeTable(const Mesh& mesh);
+/// The same over a bare index list whose ids are below vertex_count (e.g. indices with welded ids).
+EdgeTable buildEdgeTable(const std::vector<uint32_t>& indices, size_t vertex_count);
+/// The same into `out`, reusing its storage (a table rebuilt in place writes to pages already
+/// mapped; fresh pages are most of what a new table of a large mesh costs).
+void buildEdgeTable(const std::vector<uint32_t>& indices, size_t vertex_count, EdgeTable& out);
+
+/// Storage that the passes of one repairMesh call hand on to each other (see buildEdgeTable).
+struct Scratch {
+    EdgeTable table;
+};
 
 /// Start and end vertex of half-edge (corner) c.
 inline uint32_t halfStart(const Mesh& m, uint32_t c) {
@@ -100,10 +114,52 @@ struct BoundaryLoop {
     bool closed = true;
 };
 std::vector<BoundaryLoop> findBoundaryLoops(const Mesh& mesh, const EdgeTable& table);
+std::vector<BoundaryLoop> findBoundaryLoops(const std::vector<uint32_t>& indices, const EdgeTable& table);
 
 /// Every vertex mapped to the lowest-numbered vertex with a bit-identical position, so that attribute
 /// seams (UV or normal splits) can be told apart from real boundaries.
+/// rep[i] = the lowest j with key(j) == key(i), for i in [0, n); key(i) is three 32-bit words. An
+/// open-addressing table of first occurrences filled in ascending order (linear time): the result
+/// is a function of the keys alone, no iteration order reaches it.
+template <class KeyFn> std::vector<uint32_t> lowestEqualKey(uint32_t n, KeyFn key) {
+    std::vector<uint32_t> rep(n);
+    size_t capacity = 16;
+    while (capacity < 2 * size_t(n)) capacity *= 2;
+    std::vector<uint32_t> slot(capacity, kNone);
+    const size_t mask = capacity - 1;
+    for (uint32_t i = 0; i < n; ++i) {
+        const std::array<uint32_t, 3> k = key(i);
+        uint64_t h = ((uint64_t(k[0]) << 32) | k[1]) * 0x9e3779b97f4a7c15ull;
+        h ^= (h >> 29) ^ (uint64_t(k[2]) * 0xc2b2ae3d27d4eb4full);
+        h ^= h >> 32;
+        for (size_t s = size_t(h) & mask;; s = (s + 1) & mask) {
+            if (slot[s] == kNone) {
+                slot[s] = i;
+                rep[i] = i;
+                break;
+            }
+            if (key(slot[s]) == k) {
+                rep[i] = slot[s];
+                break;
+            }
+        }
+    }
+    return rep;
+}
+
+/// Positions compare as floats (-0 equals +0; a NaN equals nothing). Hashing, linear time.
 std::vector<uint32_t> positionWeldMap(const Mesh& mesh);
+
+/// The same with positions compared bit for bit (-0 and +0 differ; identical NaN bits are equal).
+std::vector<uint32_t> bitwiseWeldMap(const Mesh& mesh);
+
+/// Topology statistics of the triangle list `indices` (ids into mesh.positions, all below
+/// vertexCount(); the caller may have replaced ids by their weld representatives) from its edge
+/// table. `distinct_vertex_count` is the vertex count to report (representatives only when
+/// welded). `components` (sized vertexCount(), fresh) comes back holding the face-connected
+/// components through shared ids, so callers can reuse it.
+TopologyStats topologyFromTable(const Mesh& mesh, const std::vector<uint32_t>& indices,
+                                uint64_t distinct_vertex_count, const EdgeTable& table, UnionFind& components);
 
 /// Per corner: 1 when its half-edge is a boundary edge lying on an attribute seam, that is, another
 /// boundary edge has the same two positions and the vertices there differ in some attribute (UV,
@@ -119,6 +175,15 @@ VertexAdjacency buildVertexAdjacency(const Mesh& mesh);
 
 /// Vertices on an edge used by exactly one face.
 std::vector<uint8_t> boundaryVertices(const Mesh& mesh, const EdgeTable& table);
+
+/// The passes as repairMesh runs them: the public functions with storage shared between passes.
+ManifoldReport makeManifold(Mesh& mesh, const ManifoldOptions& options, Scratch& scratch);
+OrientReport orientFaces(Mesh& mesh, const OrientOptions& options, Scratch& scratch);
+HoleFillReport fillHoles(Mesh& mesh, const HoleFillOptions& options, Scratch& scratch);
+
+/// validate() that also hands back the edge table it built (of the welded ids when
+/// options.weld_by_position), for callers that go on to look at the same mesh.
+ValidationReport validateWithTable(const Mesh& mesh, const ValidateOptions& options, EdgeTable* table_out);
 
 } // namespace cleanup_detail
 } // namespace lodbake

@@ -22,23 +22,8 @@ NormalsReport computeNormals(Mesh& mesh, const NormalOptions& options) {
     NormalsReport r;
     const size_t n = mesh.vertexCount();
     const size_t face_count = mesh.faceCount();
-    // Welded ids: vertices with bit-identical positions share topology (UV seams do not break fans).
-    std::vector<uint32_t> order(n), weld(n);
-    for (uint32_t v = 0; v < n; ++v) order[v] = v;
-    std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
-        const Vec3f &p = mesh.positions[a], &q = mesh.positions[b];
-        if (p.x != q.x) return p.x < q.x;
-        if (p.y != q.y) return p.y < q.y;
-        if (p.z != q.z) return p.z < q.z;
-        return a < b;
-    });
-    for (size_t i = 0; i < n; ++i)
-        weld[order[i]] =
-            (i > 0 && mesh.positions[order[i]] == mesh.positions[order[i - 1]]) ? weld[order[i - 1]] : order[i];
-    Mesh welded;
-    welded.positions = mesh.positions; // the edge table sizes its buckets by vertex count
-    welded.indices.resize(mesh.indices.size());
-    for (size_t c = 0; c < mesh.indices.size(); ++c) welded.indices[c] = weld[mesh.indices[c]];
+    // Welded ids: vertices with equal positions share topology (UV seams do not break fans).
+    const std::vector<uint32_t> weld = positionWeldMap(mesh);
 
     // Face normals and per-corner weights are independent per face: computed in
     // parallel into per-face/per-corner slots; accumulation below stays sequential in corner order,
@@ -69,11 +54,33 @@ NormalsReport computeNormals(Mesh& mesh, const NormalOptions& options) {
     if (!parallelFor(face_count, 4096, faceWork).ok())
         for (size_t f = 0; f < face_count; ++f) faceWork(f); // a worker ran out of memory: redo on this thread
 
-    UnionFind groups(mesh.indices.size());
+    auto unitOrUp = [](const Vec3d& sum) {
+        const Vec3d nn = normalize(sum);
+        return length(nn) > 0 ? Vec3f(nn) : Vec3f(0, 0, 1);
+    };
     const bool split = options.crease_angle_deg < 180.0;
-    if (split) {
+    if (!split) {
+        // One smooth group per welded position: sums per welded id, corners in ascending order (the
+        // same order as the grouped case below), and no vertex is split.
+        std::vector<Vec3d> acc(n);
+        for (size_t f = 0; f < face_count; ++f) {
+            if (face_area[f] == 0.0) continue;
+            for (size_t c = 3 * f; c < 3 * f + 3; ++c) acc[weld[mesh.indices[c]]] += face_n[f] * corner_weight[c];
+        }
+        std::vector<uint8_t> referenced(n, 0);
+        for (uint32_t v : mesh.indices) referenced[v] = 1;
+        mesh.normals.assign(n, Vec3f(0, 0, 1));
+        for (size_t v = 0; v < n; ++v)
+            if (referenced[v]) mesh.normals[v] = unitOrUp(acc[weld[v]]);
+        return r;
+    }
+
+    std::vector<uint32_t> welded(mesh.indices.size());
+    for (size_t c = 0; c < mesh.indices.size(); ++c) welded[c] = weld[mesh.indices[c]];
+    UnionFind groups(mesh.indices.size());
+    {
         const double cos_limit = std::cos(options.crease_angle_deg * M_PI / 180.0);
-        const EdgeTable table = buildEdgeTable(welded);
+        const EdgeTable table = buildEdgeTable(welded, n);
         for (uint32_t e = 0; e < table.edgeCount(); ++e) {
             if (table.uses(e) != 2) continue;
             const uint32_t a = table.corners[table.begin[e]], b = table.corners[table.begin[e] + 1];
@@ -82,7 +89,7 @@ NormalsReport computeNormals(Mesh& mesh, const NormalOptions& options) {
                 continue;
             }
             const uint32_t an = a % 3 == 2 ? a - 2 : a + 1, bn = b % 3 == 2 ? b - 2 : b + 1;
-            if (welded.indices[a] == welded.indices[b]) {
+            if (welded[a] == welded[b]) {
                 groups.unite(a, b);
                 groups.unite(an, bn);
             } else {
@@ -90,42 +97,37 @@ NormalsReport computeNormals(Mesh& mesh, const NormalOptions& options) {
                 groups.unite(an, b);
             }
         }
-    } else {
-        std::vector<uint32_t> first(n, kNone);
-        for (uint32_t c = 0; c < welded.indices.size(); ++c) {
-            uint32_t& f = first[welded.indices[c]];
-            if (f == kNone)
-                f = c;
-            else
-                groups.unite(f, c);
-        }
     }
-
-    std::vector<Vec3d> acc(mesh.indices.size());
+    // Dense group ids, numbered by lowest corner (a set's root is its lowest corner, so it is met first).
+    std::vector<uint32_t> group(mesh.indices.size());
+    uint32_t group_count = 0;
+    for (uint32_t c = 0; c < group.size(); ++c) {
+        const uint32_t root = groups.find(c);
+        group[c] = root == c ? group_count++ : group[root];
+    }
+    std::vector<Vec3d> acc(group_count);
     for (size_t f = 0; f < face_count; ++f) {
         if (face_area[f] == 0.0) continue;
-        for (uint32_t c = uint32_t(3 * f); c < 3 * f + 3; ++c) acc[groups.find(c)] += face_n[f] * corner_weight[c];
+        for (size_t c = 3 * f; c < 3 * f + 3; ++c) acc[group[c]] += face_n[f] * corner_weight[c];
     }
 
     mesh.normals.assign(n, Vec3f(0, 0, 1));
-    std::vector<uint32_t> first_root(n, kNone);
+    std::vector<uint32_t> first_group(n, kNone);
     std::map<std::pair<uint32_t, uint32_t>, uint32_t> extra; // (vertex, group) -> split copy
     std::vector<uint8_t> was_split(n, 0);
     for (uint32_t c = 0; c < mesh.indices.size(); ++c) {
         const uint32_t v = mesh.indices[c];
-        const uint32_t root = groups.find(c);
-        const Vec3d nn = normalize(acc[root]);
-        const Vec3f normal = length(nn) > 0 ? Vec3f(nn) : Vec3f(0, 0, 1);
-        if (first_root[v] == kNone) {
-            first_root[v] = root;
-            mesh.normals[v] = normal;
+        const uint32_t g = group[c];
+        if (first_group[v] == kNone) {
+            first_group[v] = g;
+            mesh.normals[v] = unitOrUp(acc[g]);
             continue;
         }
-        if (first_root[v] == root) continue;
-        auto [it, inserted] = extra.try_emplace({v, root}, 0u);
+        if (first_group[v] == g) continue;
+        auto [it, inserted] = extra.try_emplace({v, g}, 0u);
         if (inserted) {
             it->second = duplicateVertex(mesh, v);
-            mesh.normals[it->second] = normal;
+            mesh.normals[it->second] = unitOrUp(acc[g]);
             ++r.vertices_added;
             if (!was_split[v]) {
                 was_split[v] = 1;

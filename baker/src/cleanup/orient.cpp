@@ -1,7 +1,7 @@
 // Consistent orientation: breadth-first propagation over manifold edges, cutting conflicting edges
 // in non-orientable components, then outward orientation of closed components by signed volume.
 #include <algorithm>
-#include <deque>
+#include <vector>
 
 #include "lodbake/cleanup/passes.h"
 #include "mesh_edit.h"
@@ -20,15 +20,22 @@ PassCounters OrientReport::counters() const {
 }
 
 OrientReport orientFaces(Mesh& mesh, const OrientOptions& options) {
+    Scratch scratch;
+    return orientFaces(mesh, options, scratch);
+}
+
+OrientReport cleanup_detail::orientFaces(Mesh& mesh, const OrientOptions& options, Scratch& scratch) {
     OrientReport r;
     const size_t face_count = mesh.faceCount();
     if (face_count == 0) return r;
-    const EdgeTable table = buildEdgeTable(mesh);
+    EdgeTable& table = scratch.table;
+    buildEdgeTable(mesh.indices, mesh.vertexCount(), table);
     std::vector<uint8_t> flip(face_count, 0), visited(face_count, 0), cut(table.edgeCount(), 0);
     std::vector<uint32_t> component(face_count, kNone);
     std::vector<uint8_t> component_open;
     std::vector<uint8_t> component_conflict;
-    std::deque<uint32_t> queue;
+    std::vector<uint32_t> queue; // breadth-first: faces are taken from `head` on, in the order queued
+    queue.reserve(face_count);
     for (uint32_t seed = 0; seed < face_count; ++seed) {
         if (visited[seed] || hasRepeatedIndex(mesh, seed)) continue;
         const uint32_t comp = uint32_t(component_open.size());
@@ -36,10 +43,10 @@ OrientReport orientFaces(Mesh& mesh, const OrientOptions& options) {
         component_conflict.push_back(0);
         visited[seed] = 1;
         component[seed] = comp;
+        queue.clear();
         queue.push_back(seed);
-        while (!queue.empty()) {
-            const uint32_t f = queue.front();
-            queue.pop_front();
+        for (size_t head = 0; head < queue.size(); ++head) {
+            const uint32_t f = queue[head];
             for (uint32_t k = 0; k < 3; ++k) {
                 const uint32_t c = 3 * f + k;
                 const uint32_t e = table.corner_edge[c];

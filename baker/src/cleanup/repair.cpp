@@ -14,10 +14,10 @@ namespace {
 
 // Lengths of the boundary loops that are not attribute seams (descending), and the face counts of
 // the components with UV islands joined across seams (descending). `weld` is positionWeldMap(mesh).
-void openRimsAndSurfaces(const Mesh& mesh, const std::vector<uint32_t>& weld, std::vector<uint32_t>& rims,
-                         std::vector<uint32_t>& surfaces) {
+// `table` is buildEdgeTable(mesh).
+void openRimsAndSurfaces(const Mesh& mesh, const cleanup_detail::EdgeTable& table, const std::vector<uint32_t>& weld,
+                         std::vector<uint32_t>& rims, std::vector<uint32_t>& surfaces) {
     using namespace cleanup_detail;
-    const EdgeTable table = buildEdgeTable(mesh);
     const std::vector<uint8_t> seam = seamCorners(mesh, table, weld);
     for (const BoundaryLoop& loop : findBoundaryLoops(mesh, table))
         if (std::none_of(loop.corners.begin(), loop.corners.end(), [&](uint32_t c) { return seam[c] != 0; }))
@@ -60,7 +60,24 @@ Result<RepairReport> repairMesh(Mesh& mesh, const RepairOptions& options, const 
                                 Diagnostics& diagnostics) {
     LODBAKE_RETURN_IF_ERROR(checkMeshConsistency(mesh, name));
     RepairReport report;
-    report.before = validate(mesh);
+    cleanup_detail::Scratch scratch; // storage the passes below hand on to each other
+    // `before` is needed by the skip tests below only while no pass has changed the mesh, so when the
+    // caller does not want it reported it is computed at the first such test, from the mesh as it
+    // still is then (same indices and positions as the input).
+    ValidationReport unchanged_input;
+    bool have_before = false;
+    if (options.report_before) {
+        report.before = validate(mesh);
+        have_before = true;
+    }
+    const ValidationReport& before = options.report_before ? report.before : unchanged_input;
+    auto inputReport = [&]() -> const ValidationReport& {
+        if (!have_before) {
+            unchanged_input = validate(mesh);
+            have_before = true;
+        }
+        return before;
+    };
     auto add = [&](const char* pass, PassCounters counters) {
         report.passes.push_back({pass, std::move(counters), {}});
         return &report.passes.back();
@@ -69,7 +86,7 @@ Result<RepairReport> repairMesh(Mesh& mesh, const RepairOptions& options, const 
     // positions, so a pass whose whole job that report shows to be empty is skipped (its counters
     // are the zeros it would have reported). `same_faces` tracks that; `same_connectivity` also
     // survives orientation flips, which change no adjacency.
-    const TopologyStats& b = report.before.topology;
+    auto b = [&]() -> const TopologyStats& { return inputReport().topology; };
     bool same_faces = true, same_connectivity = true;
     auto changed = [&](bool faces, bool connectivity) {
         same_faces = same_faces && !faces;
@@ -82,7 +99,7 @@ Result<RepairReport> repairMesh(Mesh& mesh, const RepairOptions& options, const 
     }
     if (options.remove_degenerate) {
         DegenerateReport d;
-        if (!same_faces || b.degenerate_face_count || b.duplicate_face_count || b.non_finite_vertex_count)
+        if (!same_faces || b().degenerate_face_count || b().duplicate_face_count || b().non_finite_vertex_count)
             d = removeDegenerateFaces(mesh, options.degenerate_options);
         const bool removed = d.repeated_index_faces + d.zero_area_faces + d.duplicate_faces + d.non_finite_faces != 0;
         changed(removed, removed);
@@ -95,24 +112,24 @@ Result<RepairReport> repairMesh(Mesh& mesh, const RepairOptions& options, const 
     }
     if (options.make_manifold) {
         ManifoldReport m;
-        if (!same_faces || b.non_manifold_edge_count || b.non_manifold_vertex_count || b.degenerate_face_count)
-            m = makeManifold(mesh, options.manifold_options);
+        if (!same_faces || b().non_manifold_edge_count || b().non_manifold_vertex_count || b().degenerate_face_count)
+            m = cleanup_detail::makeManifold(mesh, options.manifold_options, scratch);
         const bool edited = m.repeated_index_faces_removed + m.faces_cut + m.faces_removed + m.vertices_split != 0;
         changed(edited, edited);
         add("manifold", m.counters());
     }
     if (options.orient) {
-        const OrientReport o = orientFaces(mesh, options.orient_options);
+        const OrientReport o = cleanup_detail::orientFaces(mesh, options.orient_options, scratch);
         changed(o.faces_flipped != 0 || o.vertices_added != 0, o.vertices_added != 0);
         add("orient", o.counters());
     }
     if (options.remove_small_components) {
         // The largest component always stays, so one component (as stored) means nothing to do.
         ComponentReport c;
-        if (!same_connectivity || report.before.component_face_counts.size() > 1)
+        if (!same_connectivity || inputReport().component_face_counts.size() > 1)
             c = removeSmallComponents(mesh, options.component_options);
         else
-            c.components_before = report.before.component_face_counts.size();
+            c.components_before = inputReport().component_face_counts.size();
         add("small_components", c.counters());
         UnreferencedReport u;
         if (c.faces_removed) u = removeUnreferencedVertices(mesh);
@@ -121,7 +138,7 @@ Result<RepairReport> repairMesh(Mesh& mesh, const RepairOptions& options, const 
     }
     if (options.fill_holes) {
         HoleFillReport h;
-        if (!same_connectivity || b.boundary_edge_count) h = fillHoles(mesh, options.hole_options);
+        if (!same_connectivity || b().boundary_edge_count) h = cleanup_detail::fillHoles(mesh, options.hole_options, scratch);
         PassSummary* s = add("holes", h.counters());
         if (!h.filled_lengths.empty())
             s->notes.push_back("filled holes of " + lengthsList(h.filled_lengths) + " edges");
@@ -142,7 +159,15 @@ Result<RepairReport> repairMesh(Mesh& mesh, const RepairOptions& options, const 
         changed(n.vertices_added != 0, n.vertices_added != 0);
         add("normals", n.counters());
     }
-    report.after = same_faces ? report.before : validate(mesh);
+    // The edge table of the final mesh, built once for `after` and reused for the open rims below.
+    cleanup_detail::EdgeTable& table = scratch.table;
+    bool have_table = false;
+    if (same_faces && have_before) {
+        report.after = before;
+    } else {
+        have_table = true;
+        report.after = cleanup_detail::validateWithTable(mesh, {}, &table);
+    }
     const std::vector<uint32_t> weld = cleanup_detail::positionWeldMap(mesh);
     const bool shared = hasSharedPositions(weld);
     // The welded report is information only (`unresolved` takes rims and components from
@@ -171,7 +196,8 @@ Result<RepairReport> repairMesh(Mesh& mesh, const RepairOptions& options, const 
     // Rims and components are judged with attribute seams joined: UV islands are not holes or pieces.
     std::vector<uint32_t> rims, surfaces;
     if (shared) {
-        openRimsAndSurfaces(mesh, weld, rims, surfaces);
+        if (!have_table) cleanup_detail::buildEdgeTable(mesh.indices, mesh.vertexCount(), table);
+        openRimsAndSurfaces(mesh, table, weld, rims, surfaces);
     } else { // no two vertices share a position: no seams, so `after` already has both lists
         rims = report.after.boundary_loop_lengths;
         surfaces = report.after.component_face_counts;

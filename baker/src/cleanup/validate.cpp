@@ -1,6 +1,7 @@
 #include "lodbake/cleanup/validate.h"
 
 #include <algorithm>
+#include <cmath>
 #include <functional>
 
 #include "mesh_edit.h"
@@ -21,54 +22,64 @@ bool ValidationReport::isClosedManifold() const {
            t.non_finite_vertex_count == 0;
 }
 
-ValidationReport validate(const Mesh& input, const ValidateOptions& options) {
-    ValidationReport r;
-    TopologyOptions topo;
-    topo.weld_by_position = options.weld_by_position;
-    r.topology = computeTopologyStats(input, topo);
+namespace cleanup_detail {
 
-    // Loops and components are computed on a copy with the same welding as the counts.
-    Mesh welded;
-    const Mesh* m = &input;
+ValidationReport validateWithTable(const Mesh& input, const ValidateOptions& options, EdgeTable* table_out) {
+    ValidationReport r;
+    const size_t n = input.vertexCount();
+    // The counts weld bit-identical positions, the loops and components equal ones (-0 == +0). The
+    // two agree unless some coordinate is -0 or NaN; then each is computed on its own.
+    std::vector<uint32_t> welded;
+    const std::vector<uint32_t>* indices = &input.indices;
+    bool counts_done = false;
+    uint64_t distinct = n;
     if (options.weld_by_position) {
-        welded.positions = input.positions;
-        welded.indices = input.indices;
-        std::vector<uint32_t> order(input.vertexCount());
-        for (uint32_t i = 0; i < order.size(); ++i) order[i] = i;
-        auto less = [&](uint32_t a, uint32_t b) {
-            const Vec3f& p = input.positions[a];
-            const Vec3f& q = input.positions[b];
-            if (p.x != q.x) return p.x < q.x;
-            if (p.y != q.y) return p.y < q.y;
-            if (p.z != q.z) return p.z < q.z;
-            return a < b;
-        };
-        std::sort(order.begin(), order.end(), less);
-        std::vector<uint32_t> rep(order.size());
-        for (size_t i = 0; i < order.size(); ++i)
-            rep[order[i]] =
-                (i > 0 && input.positions[order[i]] == input.positions[order[i - 1]]) ? rep[order[i - 1]] : order[i];
-        for (uint32_t& i : welded.indices) i = rep[i];
-        m = &welded;
+        bool bits_differ = false;
+        for (const Vec3f& p : input.positions)
+            for (float x : {p.x, p.y, p.z}) bits_differ |= std::isnan(x) || (x == 0.0f && std::signbit(x));
+        if (bits_differ) {
+            TopologyOptions topo;
+            topo.weld_by_position = true;
+            r.topology = computeTopologyStats(input, topo);
+            counts_done = true;
+        }
+        const std::vector<uint32_t> rep = positionWeldMap(input);
+        distinct = 0;
+        for (size_t v = 0; v < n; ++v) distinct += rep[v] == v;
+        welded.resize(input.indices.size());
+        for (size_t c = 0; c < welded.size(); ++c) welded[c] = rep[input.indices[c]];
+        indices = &welded;
     }
-    const EdgeTable table = buildEdgeTable(*m);
-    for (const BoundaryLoop& loop : findBoundaryLoops(*m, table)) {
+    EdgeTable local;
+    EdgeTable& table = table_out ? *table_out : local;
+    buildEdgeTable(*indices, n, table);
+    UnionFind comps(n);
+    if (counts_done) {
+        for (size_t f = 0; f < indices->size() / 3; ++f) {
+            comps.unite((*indices)[3 * f], (*indices)[3 * f + 1]);
+            comps.unite((*indices)[3 * f], (*indices)[3 * f + 2]);
+        }
+    } else {
+        r.topology = topologyFromTable(input, *indices, distinct, table, comps);
+    }
+    for (const BoundaryLoop& loop : findBoundaryLoops(*indices, table)) {
         r.boundary_loop_lengths.push_back(uint32_t(loop.vertices.size()));
         r.open_boundary_chains += !loop.closed;
     }
     std::sort(r.boundary_loop_lengths.begin(), r.boundary_loop_lengths.end(), std::greater<uint32_t>());
 
-    UnionFind comps(m->vertexCount());
-    for (size_t f = 0; f < m->faceCount(); ++f) {
-        comps.unite(m->indices[3 * f], m->indices[3 * f + 1]);
-        comps.unite(m->indices[3 * f], m->indices[3 * f + 2]);
-    }
-    std::vector<uint32_t> faces_of_root(m->vertexCount(), 0);
-    for (size_t f = 0; f < m->faceCount(); ++f) ++faces_of_root[comps.find(m->indices[3 * f])];
+    std::vector<uint32_t> faces_of_root(n, 0);
+    for (size_t f = 0; f < indices->size() / 3; ++f) ++faces_of_root[comps.find((*indices)[3 * f])];
     for (uint32_t c : faces_of_root)
         if (c) r.component_face_counts.push_back(c);
     std::sort(r.component_face_counts.begin(), r.component_face_counts.end(), std::greater<uint32_t>());
     return r;
+}
+
+} // namespace cleanup_detail
+
+ValidationReport validate(const Mesh& input, const ValidateOptions& options) {
+    return validateWithTable(input, options, nullptr);
 }
 
 } // namespace lodbake

@@ -33,6 +33,8 @@ struct RepairOptions {
     bool normals = true;
     NormalOptions normal_options;
     bool report_welded = true; // fill RepairReport::after_welded (one more validate() of the whole mesh)
+    bool report_before = true; // fill RepairReport::before; when false the input is validated only if a
+                               // pass's skip test needs it (no pass changed the mesh yet), and `before` stays empty
 };
 
 struct PassSummary {
@@ -42,7 +44,7 @@ struct PassSummary {
 };
 
 struct RepairReport {
-    ValidationReport before;
+    ValidationReport before;             // left empty when RepairOptions::report_before is false
     ValidationReport after;
     ValidationReport after_welded;       // `after` with bit-identical positions merged: UV/normal seams are not rims
                                          // (left empty when RepairOptions::report_welded is false)
