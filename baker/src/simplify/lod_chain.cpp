@@ -73,10 +73,15 @@ Result<LodChain> buildLodChain(const Mesh& mesh, const LodChainOptions& options,
                                  "): no valid collapse left");
             }
             level.collapse_count = engine.collapseCount();
+            level.removal_count = engine.removalCount();
             level.quadric_error = engine.maxCollapseError();
             level.mesh = engine.extract();
             chain.levels.push_back(std::move(level));
         }
+        if (engine.removalCount() > 0)
+            diagnostics.note("lod chain: " + std::to_string(engine.removalCount()) + " covered components (" +
+                             std::to_string(engine.removedFaceCount()) +
+                             " faces) removed (remove_covered_components)");
     }
     if (options.measure_error)
         measureLodChain(mesh, chain, options, diagnostics);

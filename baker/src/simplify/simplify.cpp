@@ -46,6 +46,9 @@ Result<SimplifyOutput> simplify(const Mesh& mesh, const SimplifyOptions& options
                          (has_error_target ? "no valid collapse left within max_error " + formatError(options.max_error)
                                            : std::string("no valid collapse left")));
     }
+    if (engine.removalCount() > 0)
+        diagnostics.note("simplify: " + std::to_string(engine.removalCount()) + " covered components (" +
+                         std::to_string(engine.removedFaceCount()) + " faces) removed (remove_covered_components)");
     out.mesh = engine.extract();
     return out;
 }
