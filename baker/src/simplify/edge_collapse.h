@@ -35,6 +35,11 @@ public:
     void describe(CollapseSequence& sequence) const;
 
     size_t faceCount() const { return alive_faces_; }
+    bool isLate() const { return alive_faces_ <= late_faces_; } // below kLateFraction of the input's faces
+    // refine_late_levels applies to a snapshot taken now.
+    bool refinesSnapshot() const {
+        return options_.refine_late_levels && options_.placement == CollapsePlacement::Optimal && isLate();
+    }
     size_t initialFaceCount() const { return initial_faces_; }
     size_t collapseCount() const { return collapses_; }
     size_t removalCount() const { return removals_; }       // components removed (remove_covered_components)

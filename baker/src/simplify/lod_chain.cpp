@@ -8,6 +8,7 @@
 #include <string>
 
 #include "simplify/edge_collapse.h"
+#include "simplify/level_refine.h"
 
 namespace lodbake {
 
@@ -76,6 +77,8 @@ Result<LodChain> buildLodChain(const Mesh& mesh, const LodChainOptions& options,
             level.removal_count = engine.removalCount();
             level.quadric_error = engine.maxCollapseError();
             level.mesh = engine.extract();
+            level.is_refined = engine.refinesSnapshot();
+            if (level.is_refined) detail::refineLevelPositions(mesh, level.mesh);
             chain.levels.push_back(std::move(level));
         }
         if (engine.removalCount() > 0)

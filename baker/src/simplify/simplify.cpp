@@ -6,6 +6,7 @@
 #include <string>
 
 #include "simplify/edge_collapse.h"
+#include "simplify/level_refine.h"
 
 namespace lodbake {
 
@@ -50,6 +51,7 @@ Result<SimplifyOutput> simplify(const Mesh& mesh, const SimplifyOptions& options
         diagnostics.note("simplify: " + std::to_string(engine.removalCount()) + " covered components (" +
                          std::to_string(engine.removedFaceCount()) + " faces) removed (remove_covered_components)");
     out.mesh = engine.extract();
+    if (engine.refinesSnapshot()) detail::refineLevelPositions(mesh, out.mesh);
     return out;
 }
 

@@ -25,7 +25,8 @@
 //   deletes every face that has a corner in removed_points[first_point .. first_point + point_count)
 //   (all points of the component, ascending); those points disappear.
 //   Level i's mesh is the input after records[0 .. levels[i].collapse_count) interleaved with
-//   removals[0 .. levels[i].removal_count).
+//   removals[0 .. levels[i].removal_count); for a level with is_refined (SimplifyOptions::
+//   refine_late_levels) the faces are those, the positions of its interior vertices differ.
 
 #include <cstdint>
 #include <vector>
@@ -91,6 +92,8 @@ struct LodLevel {
     double target_ratio = 0;
     size_t collapse_count = 0;   // prefix of the collapse sequence that produced this level
     size_t removal_count = 0;    // prefix of sequence.removals included (remove_covered_components)
+    bool is_refined = false;     // refine_late_levels moved its vertices: the sequence's replay gives
+                                 // its faces, with the positions before refinement
     double quadric_error = 0;    // largest estimated collapse error so far (object units)
     bool reached_target = false; // false: could not simplify further (see Diagnostics)
     bool has_distance = false;
