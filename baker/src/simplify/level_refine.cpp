@@ -72,16 +72,29 @@ void refineLevelPositions(const Mesh& input, Mesh& level) {
     const size_t stride = std::max<size_t>(1, (referenced_count + kMaxRefinePoints - 1) / kMaxRefinePoints);
     std::vector<Vec3d> delta(groups);
     std::vector<double> weight(groups);
+    // Each sample's distance from the previous step: no vertex moved further than `moved`, so the
+    // new nearest face is within distance + moved, which bounds (and speeds up) the next search
+    // without changing its result.
+    std::vector<double> previous;
+    double moved = 0.0;
     for (int it = 0; it < kLevelRefineIterations; ++it) {
         Result<TriangleBvh> bvh = TriangleBvh::build(level.positions, level.indices);
         if (!bvh.ok()) return; // out of resources: the level stays as the engine left it
         std::fill(delta.begin(), delta.end(), Vec3d());
         std::fill(weight.begin(), weight.end(), 0.0);
-        size_t seen = 0;
+        size_t seen = 0, sample = 0;
         for (size_t i = 0; i < input.positions.size(); ++i) {
             if (!referenced[i] || seen++ % stride != 0) continue;
             const Vec3d x(input.positions[i]);
-            const ClosestHit hit = bvh->closest(x);
+            const size_t slot = sample++;
+            ClosestHit hit;
+            if (it > 0) {
+                const double bound = previous[slot] + moved;
+                hit = bvh->closest(x, bound * bound * (1.0 + 1e-6) + 1e-300);
+            }
+            if (!hit.isFound()) hit = bvh->closest(x);
+            if (it == 0) previous.push_back(0.0);
+            previous[slot] = std::sqrt(hit.distance_sq);
             if (!hit.isFound()) continue;
             const uint32_t f = hit.face.value;
             const Vec3d a(level.positions[level.indices[f * 3]]), b(level.positions[level.indices[f * 3 + 1]]),
@@ -102,10 +115,14 @@ void refineLevelPositions(const Mesh& input, Mesh& level) {
                 weight[g] += w;
             }
         }
+        moved = 0.0;
         for (size_t v = 0; v < n; ++v) {
             const uint32_t g = group[v];
             if (fixed[g] || !(weight[g] > 0.0)) continue;
-            level.positions[v] = Vec3f(Vec3d(level.positions[v]) + delta[g] * (kDamping / weight[g]));
+            const Vec3d before(level.positions[v]);
+            level.positions[v] = Vec3f(before + delta[g] * (kDamping / weight[g]));
+            const Vec3d step = Vec3d(level.positions[v]) - before;
+            moved = std::max(moved, std::sqrt(dot(step, step)));
         }
     }
 }

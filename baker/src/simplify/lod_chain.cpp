@@ -77,8 +77,7 @@ Result<LodChain> buildLodChain(const Mesh& mesh, const LodChainOptions& options,
             level.removal_count = engine.removalCount();
             level.quadric_error = engine.maxCollapseError();
             level.mesh = engine.extract();
-            level.is_refined = engine.refinesSnapshot();
-            if (level.is_refined) detail::refineLevelPositions(mesh, level.mesh);
+            level.is_refined = engine.refinesSnapshot(); // refined below, once the engine is gone
             chain.levels.push_back(std::move(level));
         }
         if (engine.removalCount() > 0)
@@ -86,6 +85,10 @@ Result<LodChain> buildLodChain(const Mesh& mesh, const LodChainOptions& options,
                              std::to_string(engine.removedFaceCount()) +
                              " faces) removed (remove_covered_components)");
     }
+    // Late levels: vertex refinement of the snapshots (docs/simplify.md, "Level refinement"), after the
+    // engine's arrays are released so that it does not add to the chain's peak memory.
+    for (LodLevel& level : chain.levels)
+        if (level.is_refined) detail::refineLevelPositions(mesh, level.mesh);
     if (options.measure_error)
         measureLodChain(mesh, chain, options, diagnostics);
     else
