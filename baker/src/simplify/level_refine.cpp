@@ -83,16 +83,29 @@ void refineLevelPositions(const Mesh& input, Mesh& level) {
         std::fill(delta.begin(), delta.end(), Vec3d());
         std::fill(weight.begin(), weight.end(), 0.0);
         size_t seen = 0, sample = 0;
+        uint32_t last_face = 0; // the previous sample's face: scans list neighbouring points together
         for (size_t i = 0; i < input.positions.size(); ++i) {
             if (!referenced[i] || seen++ % stride != 0) continue;
             const Vec3d x(input.positions[i]);
             const size_t slot = sample++;
-            ClosestHit hit;
+            // Any face's distance bounds the search; searches that are bounded find the same face
+            // as an unbounded one (they only skip nodes further than the nearest face).
+            double bound2 = HUGE_VAL;
+            if (last_face < level.faceCount()) {
+                const Vec3d la(level.positions[level.indices[last_face * 3]]);
+                const Vec3d lb(level.positions[level.indices[last_face * 3 + 1]]);
+                const Vec3d lc(level.positions[level.indices[last_face * 3 + 2]]);
+                const Vec3d d = x - closestPointOnTriangle(x, la, lb, lc);
+                bound2 = dot(d, d);
+            }
             if (it > 0) {
                 const double bound = previous[slot] + moved;
-                hit = bvh->closest(x, bound * bound * (1.0 + 1e-6) + 1e-300);
+                bound2 = std::min(bound2, bound * bound);
             }
+            ClosestHit hit;
+            if (std::isfinite(bound2)) hit = bvh->closest(x, bound2 * (1.0 + 1e-6) + 1e-300);
             if (!hit.isFound()) hit = bvh->closest(x);
+            if (hit.isFound()) last_face = hit.face.value;
             if (it == 0) previous.push_back(0.0);
             previous[slot] = std::sqrt(hit.distance_sq);
             if (!hit.isFound()) continue;

@@ -62,7 +62,7 @@ struct SimplifyOptions {
                                       // (× sqrt(area)) and it competes again: keeps sharp tips and
                                       // off-surface placements from looking cheap (0: off)
     bool lock_border = false;         // keep open-boundary vertices exactly in place
-    bool refine_late_levels = true;   // a result below 5 % of the input's faces gets its interior vertices
+    bool refine_late_levels = true;   // a result of at most 2.5 % of the input's faces gets its interior vertices
                                       // moved towards the input points nearest to their faces (a copy:
                                       // later levels of a chain are unaffected; Optimal placement only)
     bool remove_covered_components = false; // topology change, off by default: a whole connected component
