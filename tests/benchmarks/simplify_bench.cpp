@@ -13,6 +13,9 @@
 //
 //   quality levels are compared at EQUAL OR FEWER triangles: meshoptimizer 1.3 runs first at the
 //            ratio's target, then our level is made with meshoptimizer's achieved count as target.
+//            Two chains per mesh, both printed for every cell: the defaults (what `lodbake lods`
+//            gives; topology kept, late levels refined) and with remove_covered_components (the
+//            setting a preset for merged scans uses, `--remove-covered-components`).
 //
 // usage: simplify_bench [--meshes DIR] [--out DIR] [--node-bench DIR] [--samples N] [--skip-node]
 //                       [--speed-only] [--runs N] [MESH...]
