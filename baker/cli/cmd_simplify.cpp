@@ -52,6 +52,10 @@ options:
   --ratio R          keep this fraction of the triangles, 0 < R <= 1
   --triangles N      keep about N triangles
   --error E          collapse while the estimated error stays below E (object units; qem only)
+  --remove-covered-components
+                     qem only: may remove a whole connected component whose points all lie within
+                     the error already accepted of the rest of the surface (overlapping scans);
+                     changes the component count, so off by default
   --json             print one JSON object instead of text
 
 multilevel options:
@@ -81,6 +85,9 @@ options:
   --pixels P           screen-space error threshold in pixels (default 1)
   --viewport H         viewport height in pixels (default 1080)
   --fov DEG            vertical field of view in degrees (default 60)
+  --remove-covered-components
+                       a level may lose whole connected components that lie within the error it
+                       already accepts of the rest of the surface (overlapping scans; off by default)
   --json               print PREFIX.json's content instead of text
 )";
 
@@ -124,6 +131,8 @@ int finishSimplified(const std::string& in, const std::string& out, const Mesh& 
 
 int runMultilevel(Args& args, const std::string& in, const std::string& out) {
     if (args.values.count("--error")) return usageError("--error applies to --method qem only");
+    if (args.flags.count("--remove-covered-components"))
+        return usageError("--remove-covered-components applies to --method qem only");
     const int targets =
         int(args.values.count("--ratio") + args.values.count("--triangles") + args.values.count("--percentage"));
     if (targets != 1) return usageError("simplify --method multilevel needs exactly one of --percentage, --ratio, --triangles");
@@ -219,6 +228,7 @@ int runSimplify(int argc, char** argv) {
                     {"--no-sort", nullptr, false},
                     {"--no-smoothing", nullptr, false},
                     {"--no-decimation", nullptr, false},
+                    {"--remove-covered-components", nullptr, false},
                     {"--json", nullptr, false},
                     {"--help", "-h", false}},
                    args, code))
@@ -246,6 +256,7 @@ int runSimplify(int argc, char** argv) {
         int(args.values.count("--ratio") + args.values.count("--triangles") + args.values.count("--error"));
     if (targets != 1) return usageError("simplify needs exactly one of --ratio, --triangles, --error");
     SimplifyOptions options;
+    options.remove_covered_components = args.flags.count("--remove-covered-components") > 0;
     double value = 0;
     if (args.values.count("--ratio")) {
         if (!parseNumber(args.values["--ratio"], value) || !(value > 0.0 && value <= 1.0))
@@ -289,6 +300,7 @@ int runLods(int argc, char** argv) {
                     {"--pixels", nullptr, true},
                     {"--viewport", nullptr, true},
                     {"--fov", nullptr, true},
+                    {"--remove-covered-components", nullptr, false},
                     {"--json", nullptr, false},
                     {"--help", "-h", false}},
                    args, code))
@@ -332,6 +344,7 @@ int runLods(int argc, char** argv) {
     }
     if (!(fov_deg < 180.0)) return usageError("--fov must be below 180 degrees");
     options.screen.vertical_fov_rad = fov_deg * 3.14159265358979323846 / 180.0;
+    options.simplify.remove_covered_components = args.flags.count("--remove-covered-components") > 0;
 
     Diagnostics diagnostics;
     Result<LoadedMesh> loaded = readMesh(in, args.read, diagnostics);

@@ -157,6 +157,7 @@ Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vect
     chain_options.ratios = settings.lod_ratios;
     chain_options.screen = screen;
     chain_options.distance.sample_count = settings.error_samples;
+    chain_options.simplify.remove_covered_components = settings.remove_covered_components;
     chain_options.measure_error = false; // measured below, beside the stream encoders
     chain_options.record_collapses = false;
     for (const PackStreamEncoder& encoder : encoders) chain_options.record_collapses |= encoder.needs_collapses;

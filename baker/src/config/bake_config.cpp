@@ -142,6 +142,8 @@ Status applyImpl(const Json& root, const std::string& name, BakeSettings& s) {
         {"threads", [&](const Json& v, const std::string& w) { return readUint(v, w, 0, 1024, s.threads); }},
         {"compact", [&](const Json& v, const std::string& w) { return readBool(v, w, s.compact); }},
         {"progressive_fans", [&](const Json& v, const std::string& w) { return readBool(v, w, s.progressive_fans); }},
+        {"remove_covered_components",
+         [&](const Json& v, const std::string& w) { return readBool(v, w, s.remove_covered_components); }},
         {"stream_precision",
          [&](const Json& v, const std::string&) {
              return applyObject(v, name, "/stream_precision", precision_handlers);
@@ -205,6 +207,7 @@ std::string settingsToJson(const BakeSettings& s) {
         j["threads"] = s.threads;
         j["compact"] = s.compact;
         j["progressive_fans"] = s.progressive_fans;
+        j["remove_covered_components"] = s.remove_covered_components;
         j["stream_precision"] = {{"adaptive", s.stream_precision.adaptive},
                                  {"error_fraction", s.stream_precision.error_fraction},
                                  {"normal_bits", s.stream_precision.normal_bits},

@@ -51,6 +51,14 @@ constexpr double kLateFraction = 0.05;
 // region test needed); the margin keeps rounding from deciding, since the plane distance and the
 // region test's distance differ in the last bits.
 constexpr double kPlaneMargin = 1.0 + 1e-9;
+// remove_covered_components (docs/simplify.md, "Covered components"): components are checked each
+// time the face count has fallen to kComponentCheckStep of the count at the previous check, with a
+// tolerance of kCoveredComponentFactor × the largest collapse error (quadric RMS estimate) so far.
+// Open border edges lying on another component get kCoveredBorderFactor × the border weight. Both
+// factors were chosen on dragon_stand_merged (factors 0.5–4 and 0–1 measured).
+constexpr double kComponentCheckStep = 0.8;
+constexpr double kCoveredComponentFactor = 1.0;
+constexpr double kCoveredBorderFactor = 0.5;
 
 // Hint that *p is about to be read (a random access into a large array).
 inline void prefetch(const void* p) {
@@ -724,6 +732,11 @@ bool EdgeCollapser::run(size_t target_faces, double max_error, CollapseSequence*
     size_t collapses_at_requeue = collapses_;
     bool requeued = false;
     while (alive_faces_ > target_faces) {
+        if (remove_components_ && alive_faces_ <= next_component_check_ && max_error_done_ > 0.0) {
+            next_component_check_ = size_t(double(alive_faces_) * kComponentCheckStep);
+            removeCoveredComponents(kCoveredComponentFactor * max_error_done_, sequence);
+            continue;
+        }
         late_ = alive_faces_ <= late_faces_;
         if (queue_.empty()) {
             // Rejected edges leave the queue until a collapse next to them re-evaluates them; an
@@ -1057,6 +1070,11 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
                              " points on non-manifold or inconsistently oriented edges/fans are kept unchanged");
     }
 
+    // remove_covered_components: a scan's open border lying on another component (merged
+    // overlapping scans) is not a border of the object; its constraint planes weigh less.
+    remove_components_ = options.remove_covered_components && options.placement == CollapsePlacement::Optimal;
+    std::vector<uint8_t> covered_border;
+    if (remove_components_) markCoveredBorders(covered_border);
     // Quadrics: area-weighted face planes plus constraint planes along feature edges.
     quadric_.assign(point_count, Quadric());
     for (uint32_t f = 0; f < face_count; ++f) {
@@ -1074,7 +1092,9 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
             const Vec3d e = b - a;
             const Vec3d m = normalize(cross(e, n));
             if (!(length2(m) > 0.0)) continue;
-            Quadric cq = Quadric::fromPlane(m, -dot(m, a), double(options.border_weight) * length2(e));
+            double weight = double(options.border_weight) * length2(e);
+            if (!covered_border.empty() && covered_border[h]) weight *= kCoveredBorderFactor;
+            Quadric cq = Quadric::fromPlane(m, -dot(m, a), weight);
             cq.weight = 0; // constraints steer placement; they are not surface area
             quadric_[he_[h].point] += cq;
             quadric_[he_[nextHe(h)].point] += cq;
@@ -1106,6 +1126,10 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
     }
 
     has_penalty_ = options.tip_distance_weight > 0;
+    // A PFRep record is a vertex removal (KeepEndpoint): no component removals there (above).
+    next_component_check_ = size_t(double(face_count) * kComponentCheckStep);
+    removals_ = 0;
+    removed_faces_ = 0;
     // Late stage (see run()): the penalty also measures each point's far input point, so far_ is
     // kept from the start. The quadric weights sum to three times the surface area whatever collapses.
     late_ = false;

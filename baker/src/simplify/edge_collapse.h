@@ -35,8 +35,17 @@ public:
     void describe(CollapseSequence& sequence) const;
 
     size_t faceCount() const { return alive_faces_; }
+    // refine_late_levels applies to a snapshot taken now: at most 2.5 % of the input's faces (the 2 %
+    // and 0.5 % levels it was measured on; a 3 % level is not refined, which halves its cost in the
+    // default 5-level chain).
+    bool refinesSnapshot() const {
+        return options_.refine_late_levels && options_.placement == CollapsePlacement::Optimal &&
+               double(alive_faces_) <= 0.025 * double(initial_faces_);
+    }
     size_t initialFaceCount() const { return initial_faces_; }
     size_t collapseCount() const { return collapses_; }
+    size_t removalCount() const { return removals_; }       // components removed (remove_covered_components)
+    size_t removedFaceCount() const { return removed_faces_; } // faces they had
     double maxCollapseError() const { return max_error_done_; }
 
 private:
@@ -100,6 +109,16 @@ private:
     void updateEdgesAround(uint32_t point);
     void updateEdgesInFan(); // the edges of the fan in fan_tmp_
     void requeueAll();
+    // remove_covered_components (covered_components.cpp): removes every connected component whose
+    // points, far points and face centroids all lie within `tolerance` of the other components'
+    // faces, smallest first; appends each removal to `sequence` when not null.
+    void removeCoveredComponents(double tolerance, CollapseSequence* sequence);
+    struct Components;
+    // Labels the alive faces' components and builds their bounds and BVHs; false with fewer than two.
+    bool findComponents(Components& set) const;
+    // Per half-edge: 1 for an open border edge whose ends and midpoint lie within its length of
+    // another component (a scan's border lying on another scan: not a border of the object).
+    void markCoveredBorders(std::vector<uint8_t>& covered) const;
     Quadric combinedQuadric(uint32_t edge, uint32_t removed) const;
     // Hint that the point's quadric and kind are about to be read (random accesses).
     void prefetchPoint(uint32_t point) const {
@@ -164,6 +183,9 @@ private:
     size_t initial_faces_ = 0;
     size_t collapses_ = 0;
     double max_error_done_ = 0;
+    bool remove_components_ = false;   // remove_covered_components with Optimal placement
+    size_t next_component_check_ = 0; // remove_covered_components: alive-face count of the next check
+    size_t removals_ = 0, removed_faces_ = 0;
 
     std::vector<uint32_t> fan_u_, fan_v_, fan_tmp_;
     std::vector<uint32_t> link_u_; // isValid: the neighbours of the removed point

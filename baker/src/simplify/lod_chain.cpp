@@ -8,6 +8,7 @@
 #include <string>
 
 #include "simplify/edge_collapse.h"
+#include "simplify/level_refine.h"
 
 namespace lodbake {
 
@@ -73,11 +74,21 @@ Result<LodChain> buildLodChain(const Mesh& mesh, const LodChainOptions& options,
                                  "): no valid collapse left");
             }
             level.collapse_count = engine.collapseCount();
+            level.removal_count = engine.removalCount();
             level.quadric_error = engine.maxCollapseError();
             level.mesh = engine.extract();
+            level.is_refined = engine.refinesSnapshot(); // refined below, once the engine is gone
             chain.levels.push_back(std::move(level));
         }
+        if (engine.removalCount() > 0)
+            diagnostics.note("lod chain: " + std::to_string(engine.removalCount()) + " covered components (" +
+                             std::to_string(engine.removedFaceCount()) +
+                             " faces) removed (remove_covered_components)");
     }
+    // Late levels: vertex refinement of the snapshots (docs/simplify.md, "Level refinement"), after the
+    // engine's arrays are released so that it does not add to the chain's peak memory.
+    for (LodLevel& level : chain.levels)
+        if (level.is_refined) detail::refineLevelPositions(mesh, level.mesh);
     if (options.measure_error)
         measureLodChain(mesh, chain, options, diagnostics);
     else

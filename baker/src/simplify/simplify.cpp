@@ -6,6 +6,7 @@
 #include <string>
 
 #include "simplify/edge_collapse.h"
+#include "simplify/level_refine.h"
 
 namespace lodbake {
 
@@ -46,7 +47,11 @@ Result<SimplifyOutput> simplify(const Mesh& mesh, const SimplifyOptions& options
                          (has_error_target ? "no valid collapse left within max_error " + formatError(options.max_error)
                                            : std::string("no valid collapse left")));
     }
+    if (engine.removalCount() > 0)
+        diagnostics.note("simplify: " + std::to_string(engine.removalCount()) + " covered components (" +
+                         std::to_string(engine.removedFaceCount()) + " faces) removed (remove_covered_components)");
     out.mesh = engine.extract();
+    if (engine.refinesSnapshot()) detail::refineLevelPositions(mesh, out.mesh);
     return out;
 }
 

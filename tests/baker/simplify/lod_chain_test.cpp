@@ -75,6 +75,7 @@ TEST(LodChainTest, CollapseSequenceReplaysToEveryLevel) {
     const Mesh sphere = lodbake_test::icosphere(4);
     LodChainOptions o = quick();
     o.measure_error = false;
+    o.simplify.refine_late_levels = false; // positions exactly as the replay (see LateLevelsAreRefinedCopies)
     const LodChain chain = build(sphere, o);
     const lodbake::CollapseSequence& s = chain.sequence;
     ASSERT_EQ(s.point_positions.size(), sphere.vertexCount());
@@ -119,6 +120,37 @@ TEST(LodChainTest, CollapseSequenceReplaysToEveryLevel) {
             actual.push_back({a.x, a.y, a.z, b.x, b.y, b.z, c.x, c.y, c.z});
         }
         EXPECT_EQ(replayed, actual) << "level " << level.target_ratio;
+    }
+}
+
+TEST(LodChainTest, LateLevelsAreRefinedCopies) {
+    // refine_late_levels moves the vertices of levels of at most 2.5 % of the input's faces; it works on the
+    // snapshot, so faces, the collapse record and every later level are those of the unrefined chain.
+    const Mesh sphere = lodbake_test::icosphere(5); // 20480 faces: 0.01 is refined, 0.03 is not
+    LodChainOptions o = quick();
+    const LodChain refined = build(sphere, o);
+    o.simplify.refine_late_levels = false;
+    const LodChain plain = build(sphere, o);
+    ASSERT_EQ(refined.levels.size(), plain.levels.size());
+    EXPECT_EQ(refined.sequence.records.size(), plain.sequence.records.size());
+    for (size_t i = 0; i < refined.levels.size(); ++i) {
+        const lodbake::LodLevel& r = refined.levels[i];
+        const lodbake::LodLevel& p = plain.levels[i];
+        EXPECT_EQ(r.mesh.indices, p.mesh.indices) << r.target_ratio;
+        EXPECT_EQ(r.collapse_count, p.collapse_count);
+        const bool late = double(p.mesh.faceCount()) <= 0.025 * 20480;
+        EXPECT_EQ(r.is_refined, late) << r.target_ratio;
+        EXPECT_FALSE(p.is_refined);
+        if (!late) {
+            EXPECT_TRUE(r.mesh.positions == p.mesh.positions) << r.target_ratio;
+            continue;
+        }
+        EXPECT_FALSE(r.mesh.positions == p.mesh.positions) << r.target_ratio;
+        // A coarse sphere's faces are chords inside it: the refined vertices move out and the
+        // level gets closer to the input.
+        ASSERT_TRUE(r.has_distance && p.has_distance);
+        EXPECT_LT(r.distance.mean, p.distance.mean) << r.target_ratio;
+        EXPECT_LE(r.distance.hausdorff, p.distance.hausdorff) << r.target_ratio;
     }
 }
 

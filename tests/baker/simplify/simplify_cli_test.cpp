@@ -1,6 +1,7 @@
 // The `simplify` and `lods` subcommands, run as a user would (the library is tested elsewhere).
 #include <unistd.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -68,6 +69,44 @@ TEST(SimplifyCliTest, LodsWritesEveryLevelAndTheJsonReport) {
     for (const char* key : {"\"levels\"", "\"triangles\"", "\"vertices\"", "\"hausdorff\"", "\"mean_rel\"",
                             "\"switch_distance\"", "\"screen_coverage\""})
         EXPECT_NE(json.find(key), std::string::npos) << key;
+}
+
+// A flat-then-wavy grid with a flat patch lying 0.0001 above its flat half (covered).
+bool hasPatchVertex(const std::string& path) {
+    lodbake::Diagnostics d;
+    auto m = lodbake::readMesh(path, lodbake::ReadOptions(), d);
+    EXPECT_TRUE(m.ok());
+    if (!m.ok()) return false;
+    for (const lodbake::Vec3f& p : m->mesh.positions)
+        if (p.z > 5e-5f && p.z < 2e-4f && p.x < 0.35f && p.y < 0.35f) return true;
+    return false;
+}
+
+TEST(SimplifyCliTest, RemoveCoveredComponentsFlag) {
+    lodbake::Mesh mesh = lodbake_test::grid(64, [](float x, float y) {
+        return x < 0.5f ? 0.0f : 0.05f * std::sin(20.0f * (x - 0.5f)) * std::cos(12.0f * y);
+    });
+    const lodbake::Mesh patch = lodbake_test::grid(10, [](float, float) { return 0.0f; });
+    const uint32_t base = uint32_t(mesh.positions.size());
+    for (const lodbake::Vec3f& p : patch.positions) mesh.positions.push_back(p * 0.2f + lodbake::Vec3f(0.1f, 0.1f, 1e-4f));
+    for (uint32_t i : patch.indices) mesh.indices.push_back(base + i);
+    const std::string in = lodbake_test::scratchDir() + "/simplify_cli_covered.ply";
+    lodbake::Diagnostics d;
+    ASSERT_TRUE(lodbake::writeMesh(mesh, in, lodbake::WriteOptions(), d).ok());
+    ASSERT_TRUE(hasPatchVertex(in));
+    const std::string prefix = lodbake_test::scratchDir() + "/simplify_cli_covered";
+    ASSERT_EQ(lodbake({"lods", in, "-o", prefix + "_kept", "--levels", "0.05"}).exit_code, 0);
+    EXPECT_TRUE(hasPatchVertex(prefix + "_kept_lod0.ply"));
+    const CliRun r = lodbake({"lods", in, "-o", prefix + "_cov", "--levels", "0.05", "--remove-covered-components"});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_FALSE(hasPatchVertex(prefix + "_cov_lod0.ply"));
+    const std::string out = prefix + "_simplified.ply";
+    ASSERT_EQ(lodbake({"simplify", in, "-o", out, "--ratio", "0.05", "--remove-covered-components"}).exit_code, 0);
+    EXPECT_FALSE(hasPatchVertex(out));
+    EXPECT_EQ(lodbake({"simplify", in, "-o", out, "--method", "multilevel", "--ratio", "0.5",
+                       "--remove-covered-components"})
+                  .exit_code,
+              2);
 }
 
 TEST(SimplifyCliTest, UsageErrorsExitTwo) {

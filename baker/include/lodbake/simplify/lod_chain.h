@@ -19,8 +19,14 @@
 //       whose attributes become the `attribute_stride` floats at
 //       wedge_attributes[(first_wedge_update + k) * attribute_stride] in the layout
 //       [normal xyz][uv0 xy][uv1 xy]...[colour rgba] (only the streams the input has).
-//   The faces removed by a collapse are those that contained both points. Level i's mesh is the
-//   input after records[0 .. levels[i].collapse_count).
+//   The faces removed by a collapse are those that contained both points.
+//   removals (only with SimplifyOptions::remove_covered_components) are whole connected components
+//   dropped between collapses: removals[j] applies after records[0 .. removals[j].record_index) and
+//   deletes every face that has a corner in removed_points[first_point .. first_point + point_count)
+//   (all points of the component, ascending); those points disappear.
+//   Level i's mesh is the input after records[0 .. levels[i].collapse_count) interleaved with
+//   removals[0 .. levels[i].removal_count); for a level with is_refined (SimplifyOptions::
+//   refine_late_levels) the faces are those, the positions of its interior vertices differ.
 
 #include <cstdint>
 #include <vector>
@@ -46,6 +52,12 @@ struct WedgeUpdate {
     uint32_t kept_wedge = 0;
 };
 
+struct ComponentRemoval {
+    uint32_t record_index = 0; // collapses applied before this removal
+    uint32_t first_point = 0;  // range of CollapseSequence::removed_points
+    uint32_t point_count = 0;
+};
+
 struct CollapseSequence {
     std::vector<Vec3f> point_positions;  // initial position of every point
     std::vector<uint32_t> wedge_point;   // point of every wedge
@@ -53,6 +65,8 @@ struct CollapseSequence {
     std::vector<WedgeUpdate> wedge_updates;
     uint32_t attribute_stride = 0; // floats per wedge update in wedge_attributes
     std::vector<float> wedge_attributes;
+    std::vector<ComponentRemoval> removals; // in execution order; empty unless remove_covered_components
+    std::vector<uint32_t> removed_points;
 };
 
 /// How switch distances are derived (docs/simplify.md): the level whose Hausdorff error is e is
@@ -77,6 +91,9 @@ struct LodLevel {
     Mesh mesh;
     double target_ratio = 0;
     size_t collapse_count = 0;   // prefix of the collapse sequence that produced this level
+    size_t removal_count = 0;    // prefix of sequence.removals included (remove_covered_components)
+    bool is_refined = false;     // refine_late_levels moved its vertices: the sequence's replay gives
+                                 // its faces, with the positions before refinement
     double quadric_error = 0;    // largest estimated collapse error so far (object units)
     bool reached_target = false; // false: could not simplify further (see Diagnostics)
     bool has_distance = false;

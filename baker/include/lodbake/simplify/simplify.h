@@ -62,6 +62,15 @@ struct SimplifyOptions {
                                       // (× sqrt(area)) and it competes again: keeps sharp tips and
                                       // off-surface placements from looking cheap (0: off)
     bool lock_border = false;         // keep open-boundary vertices exactly in place
+    bool refine_late_levels = true;   // a result of at most 2.5 % of the input's faces gets its interior vertices
+                                      // moved towards the input points nearest to their faces (a copy:
+                                      // later levels of a chain are unaffected; Optimal placement only)
+    bool remove_covered_components = false; // topology change, off by default: a whole connected component
+                                             // whose points all lie within the error already accepted
+                                             // (kCoveredComponentFactor × the largest collapse error so far)
+                                             // of the REST of the surface is removed, its faces freed for
+                                             // the rest (overlapping scans, docs/simplify.md). Only with
+                                             // Optimal placement (PFRep records are vertex removals)
     CollapsePlacement placement = CollapsePlacement::Optimal;
     AttributeWeights attribute_weights;
 };
