@@ -15,7 +15,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "simplify/large_array.h"
+#include "core/large_array.h"
 
 namespace lodbake::detail {
 

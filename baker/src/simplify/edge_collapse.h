@@ -14,7 +14,7 @@
 #include "lodbake/simplify/quadric.h"
 #include "lodbake/simplify/simplify.h"
 #include "simplify/collapse_queue.h"
-#include "simplify/large_array.h"
+#include "core/large_array.h"
 
 namespace lodbake::detail {
 

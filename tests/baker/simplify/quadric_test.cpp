@@ -10,7 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "simplify/collapse_queue.h"
-#include "simplify/large_array.h"
+#include "core/large_array.h"
 
 namespace {
 
