@@ -64,6 +64,9 @@ options:
   --adaptive-precision  levels after LOD0 coded with position/normal bits from their own measured
                         error (preset key stream_precision.adaptive; on in desktop, mobile, vr)
   --no-adaptive-precision  every level coded with LOD0's bits (archive's default)
+  --remove-covered-components  levels may drop a whole component that lies within their accepted
+                        error of the rest, e.g. merged overlapping scans (preset key
+                        remove_covered_components; off in every shipped preset; docs/simplify.md)
   --report R.json       write per-level metrics, texture sizes, cache use and stage timings as JSON
   --depfile OUT.d       write a Makefile-syntax depfile listing every file read
   --cache-dir DIR       reuse packs whose inputs, settings and baker version are unchanged
@@ -84,6 +87,7 @@ struct CliOverrides {
     bool no_progressive_fans = false;
     bool adaptive_precision = false;
     bool no_adaptive_precision = false;
+    bool remove_covered_components = false;
 };
 
 void applyOverrides(const CliOverrides& o, BakeSettings& s) {
@@ -94,6 +98,7 @@ void applyOverrides(const CliOverrides& o, BakeSettings& s) {
     if (o.no_progressive_fans) s.progressive_fans = false;
     if (o.adaptive_precision) s.stream_precision.adaptive = true;
     if (o.no_adaptive_precision) s.stream_precision.adaptive = false;
+    if (o.remove_covered_components) s.remove_covered_components = true;
 }
 
 bool isFolderTarget(const std::string& out) {
@@ -266,6 +271,7 @@ int runBake(int argc, char** argv) {
                     {"--no-progressive-fans", nullptr, false},
                     {"--adaptive-precision", nullptr, false},
                     {"--no-adaptive-precision", nullptr, false},
+                    {"--remove-covered-components", nullptr, false},
                     {"--report", nullptr, true},
                     {"--depfile", nullptr, true},
                     {"--cache-dir", nullptr, true},
@@ -317,6 +323,7 @@ int runBake(int argc, char** argv) {
     overrides.no_progressive_fans = args.flags.count("--no-progressive-fans") > 0;
     overrides.adaptive_precision = args.flags.count("--adaptive-precision") > 0;
     overrides.no_adaptive_precision = args.flags.count("--no-adaptive-precision") > 0;
+    overrides.remove_covered_components = args.flags.count("--remove-covered-components") > 0;
     if (overrides.adaptive_precision && overrides.no_adaptive_precision)
         return usageError("--adaptive-precision and --no-adaptive-precision exclude each other");
     applyOverrides(overrides, base);

@@ -205,6 +205,12 @@ TEST(BakeCliUsageTest, PresetErrorsAndOverrides) {
     ASSERT_EQ(r.exit_code, 0) << r.output;
     EXPECT_FALSE(nlohmann::json::parse(r.output)["stream_precision"]["adaptive"].get<bool>());
     EXPECT_EQ(bake("--print-config --adaptive-precision --no-adaptive-precision").exit_code, 2);
+    r = bake("--print-config --preset " + shellQuote(src("configs/desktop.json")));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_FALSE(nlohmann::json::parse(r.output)["remove_covered_components"].get<bool>());
+    r = bake("--print-config --preset " + shellQuote(src("configs/desktop.json")) + " --remove-covered-components");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_TRUE(nlohmann::json::parse(r.output)["remove_covered_components"].get<bool>());
     EXPECT_EQ(bake("x.ply -o out.gltf").exit_code, 2);
     EXPECT_EQ(bake("-o out.glb").exit_code, 2);
 }
