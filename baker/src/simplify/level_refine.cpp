@@ -28,8 +28,10 @@ constexpr size_t kMaxRefinePoints = 65536;
 
 } // namespace
 
-void refineLevelPositions(const Mesh& input, Mesh& level) {
+void refineLevelPositions(const Mesh& input, Mesh& level, float max_normal_change_deg) {
     const size_t n = level.positions.size();
+    const double cos_bound = std::cos(double(max_normal_change_deg) * (3.14159265358979323846 / 180.0));
+    const double cos2 = cos_bound * cos_bound;
     if (n == 0 || level.faceCount() == 0) return;
     // Position groups: vertices with bit-identical positions (seams) move together.
     std::vector<std::pair<std::array<uint32_t, 3>, uint32_t>> keys(n);
@@ -128,14 +130,44 @@ void refineLevelPositions(const Mesh& input, Mesh& level) {
                 weight[g] += w;
             }
         }
-        moved = 0.0;
+        // The step, then the normal-rotation bound of a collapse: a group whose move would turn
+        // any of its faces by more than max_normal_change_deg (or make it lose its area) stays put,
+        // and so do, round by round, the groups of faces that staying put turns too far.
+        std::vector<Vec3f> next(level.positions);
         for (size_t v = 0; v < n; ++v) {
             const uint32_t g = group[v];
             if (fixed[g] || !(weight[g] > 0.0)) continue;
-            const Vec3d before(level.positions[v]);
-            level.positions[v] = Vec3f(before + delta[g] * (kDamping / weight[g]));
-            const Vec3d step = Vec3d(level.positions[v]) - before;
+            next[v] = Vec3f(Vec3d(level.positions[v]) + delta[g] * (kDamping / weight[g]));
+        }
+        std::vector<uint8_t> stays(groups, 0);
+        for (bool changed = true; changed;) {
+            changed = false;
+            for (size_t f = 0; f < level.faceCount(); ++f) {
+                const uint32_t* c = &level.indices[f * 3];
+                const Vec3d n0 = cross(Vec3d(level.positions[c[1]]) - Vec3d(level.positions[c[0]]),
+                                       Vec3d(level.positions[c[2]]) - Vec3d(level.positions[c[0]]));
+                const Vec3d n1 = cross(Vec3d(next[c[1]]) - Vec3d(next[c[0]]), Vec3d(next[c[2]]) - Vec3d(next[c[0]]));
+                const double l0 = dot(n0, n0), l1 = dot(n1, n1);
+                if (!(l0 > 0.0)) continue; // already without area: no normal to keep
+                const double d = dot(n0, n1);
+                if (l1 > 0.0 && d > 0.0 && d * d >= cos2 * l0 * l1) continue;
+                for (int k = 0; k < 3; ++k) {
+                    const uint32_t g = group[c[k]];
+                    if (stays[g]) continue;
+                    stays[g] = 1;
+                    changed = true;
+                }
+                for (int k = 0; k < 3; ++k) next[c[k]] = level.positions[c[k]];
+            }
+            if (changed)
+                for (size_t v = 0; v < n; ++v)
+                    if (stays[group[v]]) next[v] = level.positions[v];
+        }
+        moved = 0.0;
+        for (size_t v = 0; v < n; ++v) {
+            const Vec3d step = Vec3d(next[v]) - Vec3d(level.positions[v]);
             moved = std::max(moved, std::sqrt(dot(step, step)));
+            level.positions[v] = next[v];
         }
     }
 }

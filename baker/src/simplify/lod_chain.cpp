@@ -88,7 +88,7 @@ Result<LodChain> buildLodChain(const Mesh& mesh, const LodChainOptions& options,
     // Late levels: vertex refinement of the snapshots (docs/simplify.md, "Level refinement"), after the
     // engine's arrays are released so that it does not add to the chain's peak memory.
     for (LodLevel& level : chain.levels)
-        if (level.is_refined) detail::refineLevelPositions(mesh, level.mesh);
+        if (level.is_refined) detail::refineLevelPositions(mesh, level.mesh, options.simplify.max_normal_change_deg);
     if (options.measure_error)
         measureLodChain(mesh, chain, options, diagnostics);
     else

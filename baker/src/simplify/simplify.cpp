@@ -51,7 +51,7 @@ Result<SimplifyOutput> simplify(const Mesh& mesh, const SimplifyOptions& options
         diagnostics.note("simplify: " + std::to_string(engine.removalCount()) + " covered components (" +
                          std::to_string(engine.removedFaceCount()) + " faces) removed (remove_covered_components)");
     out.mesh = engine.extract();
-    if (engine.refinesSnapshot()) detail::refineLevelPositions(mesh, out.mesh);
+    if (engine.refinesSnapshot()) detail::refineLevelPositions(mesh, out.mesh, options.max_normal_change_deg);
     return out;
 }
 
