@@ -26,9 +26,8 @@ constexpr double kDamping = 0.5;
 // (bounds the cost on million-triangle inputs).
 constexpr size_t kMaxRefinePoints = 65536;
 // On a level with UVs refinement may not change a face's area by more than a factor 1.25 either way
-// from the snapshot's
-// (squared: the cross products' squared lengths are compared): squeezing or stretching a face in
-// 3D distorts its texture (Lee Perry-Smith's 1 % level: stretch 91.6 unrefined, 826 with unbounded
+// from the snapshot's (squared: the cross products' squared lengths are compared): squeezing or
+// stretching a face in 3D distorts its texture (Lee Perry-Smith's 1 % level: stretch 91.6 unrefined, 826 with unbounded
 // area, 77.8 with this bound).
 constexpr double kMinAreaRatio2 = 0.64;
 constexpr double kMaxAreaRatio2 = 1.5625;
