@@ -461,6 +461,11 @@ int main(int argc, char** argv) {
                 args.samples);
     std::vector<MeshResult> results;
     for (const std::string& name : args.meshes) results.push_back(benchMesh(args, name));
+    const bool any = std::any_of(results.begin(), results.end(), [](const MeshResult& r) { return r.triangles > 0; });
+    if (!any) {
+        std::fprintf(stderr, "error: no mesh could be loaded from %s: nothing was measured\n", args.meshes_dir.c_str());
+        return 1;
+    }
     printSummary(results, args.speed_only);
     return 0;
 }
