@@ -86,16 +86,13 @@ void refineLevelPositions(const Mesh& input, Mesh& level, float max_normal_chang
     // without changing its result.
     std::vector<double> previous;
     double moved = 0.0;
-    // Squared cross-product lengths of the snapshot's faces: the textured area bound is relative to them.
-    std::vector<double> snapshot_l;
-    if (textured) {
-        snapshot_l.resize(level.faceCount());
-        for (size_t f = 0; f < level.faceCount(); ++f) {
-            const uint32_t* c = &level.indices[f * 3];
-            const Vec3d nf = cross(Vec3d(level.positions[c[1]]) - Vec3d(level.positions[c[0]]),
+    // The snapshot's face normals (unnormalised): the rotation bound, and on textured levels the
+    // area bound, are relative to them, so three steps cannot add up to more than one step may do.
+    std::vector<Vec3d> snapshot_normal(level.faceCount());
+    for (size_t f = 0; f < level.faceCount(); ++f) {
+        const uint32_t* c = &level.indices[f * 3];
+        snapshot_normal[f] = cross(Vec3d(level.positions[c[1]]) - Vec3d(level.positions[c[0]]),
                                    Vec3d(level.positions[c[2]]) - Vec3d(level.positions[c[0]]));
-            snapshot_l[f] = dot(nf, nf);
-        }
     }
     for (int it = 0; it < kLevelRefineIterations; ++it) {
         Result<TriangleBvh> bvh = TriangleBvh::build(level.positions, level.indices);
@@ -149,8 +146,8 @@ void refineLevelPositions(const Mesh& input, Mesh& level, float max_normal_chang
             }
         }
         // The step, then the normal-rotation bound of a collapse: a group whose move would turn
-        // any of its faces by more than max_normal_change_deg (or make it lose its area, or on a
-        // textured level take it beyond the area factor above of the snapshot's) stays put,
+        // any of its faces by more than max_normal_change_deg from the snapshot (or make it lose its
+        // area, or on a textured level take it beyond the area factor above of the snapshot's) stays put,
         // and so do, round by round, the groups of faces that staying put turns too far.
         std::vector<Vec3f> next(level.positions);
         for (size_t v = 0; v < n; ++v) {
@@ -163,14 +160,12 @@ void refineLevelPositions(const Mesh& input, Mesh& level, float max_normal_chang
             changed = false;
             for (size_t f = 0; f < level.faceCount(); ++f) {
                 const uint32_t* c = &level.indices[f * 3];
-                const Vec3d n0 = cross(Vec3d(level.positions[c[1]]) - Vec3d(level.positions[c[0]]),
-                                       Vec3d(level.positions[c[2]]) - Vec3d(level.positions[c[0]]));
+                const Vec3d& n0 = snapshot_normal[f];
                 const Vec3d n1 = cross(Vec3d(next[c[1]]) - Vec3d(next[c[0]]), Vec3d(next[c[2]]) - Vec3d(next[c[0]]));
                 const double l0 = dot(n0, n0), l1 = dot(n1, n1);
-                if (!(l0 > 0.0)) continue; // already without area: no normal to keep
+                if (!(l0 > 0.0)) continue; // without area in the snapshot: no normal to keep
                 const double d = dot(n0, n1);
-                const bool area_kept =
-                    !textured || (l1 >= kMinAreaRatio2 * snapshot_l[f] && l1 <= kMaxAreaRatio2 * snapshot_l[f]);
+                const bool area_kept = !textured || (l1 >= kMinAreaRatio2 * l0 && l1 <= kMaxAreaRatio2 * l0);
                 if (l1 > 0.0 && area_kept && d > 0.0 && d * d >= cos2 * l0 * l1) continue;
                 for (int k = 0; k < 3; ++k) {
                     const uint32_t g = group[c[k]];
