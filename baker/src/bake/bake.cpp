@@ -15,7 +15,6 @@
 #include "lodbake/core/json_writer.h"
 #include "lodbake/gltf/gltf_io.h"
 #include "lodbake/simplify/lod_chain.h"
-#include "lodbake/simplify/mesh_distance.h"
 
 namespace lodbake {
 
@@ -41,29 +40,6 @@ std::vector<bool> srgbTextures(const Mesh& mesh) {
         for (const TextureSlot* slot : {&m.base_color_texture, &m.emissive_texture})
             if (slot->isSet() && size_t(slot->texture) < srgb.size()) srgb[size_t(slot->texture)] = true;
     return srgb;
-}
-
-// measureLodChain (lodbake/simplify/lod_chain.h) with the same results and warnings, through
-// prepareAndMeasureSurfaceDistances: LOD0's index is built beside the sampling, and each level's
-// index and points beside the previous level's queries.
-void measureChain(const Mesh& mesh, LodChain& chain, const LodChainOptions& options, Diagnostics& diagnostics) {
-    std::vector<const Mesh*> meshes;
-    for (const LodLevel& level : chain.levels) meshes.push_back(&level.mesh);
-    Result<std::vector<Result<DistanceResult>>> measured =
-        prepareAndMeasureSurfaceDistances(mesh, meshes, options.distance);
-    if (!measured.ok()) diagnostics.warn("lod chain: errors not measured: " + measured.status().message());
-    for (size_t i = 0; measured.ok() && i < measured->size(); ++i) {
-        LodLevel& level = chain.levels[i];
-        const Result<DistanceResult>& d = (*measured)[i];
-        if (!d.ok()) {
-            diagnostics.warn("lod chain: level ratio " + std::to_string(level.target_ratio) +
-                             ": error not measured: " + d.status().message());
-            continue;
-        }
-        level.has_distance = true;
-        level.distance = *d;
-    }
-    updateSwitchDistances(chain, options.screen);
 }
 
 struct AssetSlot {
@@ -187,7 +163,7 @@ Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vect
         case PhaseTask::Kind::Measure: {
             {
                 StageTimer timer(hooks, index, BakeStage::Measure);
-                measureChain(mesh, chain, chain_options, measure_diagnostics);
+                measureLodChain(mesh, chain, chain_options, measure_diagnostics);
                 metrics = lodMetrics(mesh, chain, screen, settings.hysteresis);
             }
             // Encoders that read the measured errors (adaptive stream precision) code the levels of this

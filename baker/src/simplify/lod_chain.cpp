@@ -97,18 +97,17 @@ Result<LodChain> buildLodChain(const Mesh& mesh, const LodChainOptions& options,
 }
 
 void measureLodChain(const Mesh& mesh, LodChain& chain, const LodChainOptions& options, Diagnostics& diagnostics) {
-    // The input's BVH is built once for all levels.
-    Result<DistanceReference> reference = DistanceReference::prepare(mesh);
-    if (!reference.ok()) diagnostics.warn("lod chain: errors not measured: " + reference.status().message());
-    // The reference's points are drawn once; the levels are measured one at a time (each in parallel
-    // inside), so only one level's BVH and samples exist at once.
+    // The input's index, its points and the first level's are built side by side; then each level is
+    // measured (in parallel inside) while the next one's index and points are built, so at most two
+    // levels' indexes and points exist at once (mesh_distance.h).
     std::vector<const Mesh*> meshes;
     for (const LodLevel& level : chain.levels) meshes.push_back(&level.mesh);
-    std::vector<Result<DistanceResult>> measured;
-    if (reference.ok()) measured = measureSurfaceDistances(*reference, meshes, options.distance);
-    for (size_t i = 0; i < measured.size(); ++i) {
+    Result<std::vector<Result<DistanceResult>>> measured =
+        prepareAndMeasureSurfaceDistances(mesh, meshes, options.distance);
+    if (!measured.ok()) diagnostics.warn("lod chain: errors not measured: " + measured.status().message());
+    for (size_t i = 0; measured.ok() && i < measured->size(); ++i) {
         LodLevel& level = chain.levels[i];
-        const Result<DistanceResult>& d = measured[i];
+        const Result<DistanceResult>& d = (*measured)[i];
         if (!d.ok()) {
             diagnostics.warn("lod chain: level ratio " + std::to_string(level.target_ratio) +
                              ": error not measured: " + d.status().message());
