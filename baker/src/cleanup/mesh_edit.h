@@ -11,6 +11,7 @@
 #include "lodbake/cleanup/topology.h"
 #include "lodbake/cleanup/validate.h"
 #include "lodbake/core/mesh.h"
+#include "core/large_array.h"
 
 namespace lodbake {
 namespace cleanup_detail {
@@ -24,10 +25,11 @@ inline uint64_t edgeKey(uint32_t a, uint32_t b) {
 /// Every half-edge is a face corner c, running from indices[c] to indices[next(c)]. Faces with a
 /// repeated index contribute no half-edges. Edges are the distinct undirected keys, sorted.
 struct EdgeTable {
-    std::vector<uint64_t> keys;        // per edge, sorted ascending
-    std::vector<uint32_t> begin;       // per edge + 1: range into `corners`
-    std::vector<uint32_t> corners;     // half-edges grouped by edge, ascending corner within an edge
-    std::vector<uint32_t> corner_edge; // per corner: its edge, or kNone (face with a repeated index)
+    // Large arrays (tens of MB on a scan): huge pages where the OS offers them, see large_array.h.
+    detail::LargeArray<uint64_t> keys;        // per edge, sorted ascending
+    detail::LargeArray<uint32_t> begin;       // per edge + 1: range into `corners`
+    detail::LargeArray<uint32_t> corners;     // half-edges grouped by edge, ascending corner within an edge
+    detail::LargeArray<uint32_t> corner_edge; // per corner: its edge, or kNone (face with a repeated index)
 
     size_t edgeCount() const { return keys.size(); }
     uint32_t uses(uint32_t e) const { return begin[e + 1] - begin[e]; }
@@ -93,7 +95,7 @@ public:
     void unite(uint32_t a, uint32_t b);
 
 private:
-    std::vector<uint32_t> parent_;
+    detail::LargeArray<uint32_t> parent_;
 };
 
 /// A pair of half-edges (corners) across which the surface continues.

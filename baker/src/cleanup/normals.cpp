@@ -28,9 +28,10 @@ NormalsReport computeNormals(Mesh& mesh, const NormalOptions& options) {
     // Face normals and per-corner weights are independent per face: computed in
     // parallel into per-face/per-corner slots; accumulation below stays sequential in corner order,
     // so the sums do not depend on the schedule.
-    std::vector<Vec3d> face_n(face_count);
-    std::vector<double> face_area(face_count, 0.0);
-    std::vector<double> corner_weight(mesh.indices.size(), 0.0);
+    // Tens of MB each on a scan: huge pages where the OS offers them (core/large_array.h).
+    detail::LargeArray<Vec3d> face_n(face_count);
+    detail::LargeArray<double> face_area(face_count, 0.0);
+    detail::LargeArray<double> corner_weight(mesh.indices.size(), 0.0);
     auto faceWork = [&](size_t f) {
         if (hasRepeatedIndex(mesh, f)) return;
         const Vec3d nn = faceNormal(mesh, f);
@@ -62,7 +63,7 @@ NormalsReport computeNormals(Mesh& mesh, const NormalOptions& options) {
     if (!split) {
         // One smooth group per welded position: sums per welded id, corners in ascending order (the
         // same order as the grouped case below), and no vertex is split.
-        std::vector<Vec3d> acc(n);
+        detail::LargeArray<Vec3d> acc(n);
         for (size_t f = 0; f < face_count; ++f) {
             if (face_area[f] == 0.0) continue;
             for (size_t c = 3 * f; c < 3 * f + 3; ++c) acc[weld[mesh.indices[c]]] += face_n[f] * corner_weight[c];
@@ -99,13 +100,13 @@ NormalsReport computeNormals(Mesh& mesh, const NormalOptions& options) {
         }
     }
     // Dense group ids, numbered by lowest corner (a set's root is its lowest corner, so it is met first).
-    std::vector<uint32_t> group(mesh.indices.size());
+    detail::LargeArray<uint32_t> group(mesh.indices.size());
     uint32_t group_count = 0;
     for (uint32_t c = 0; c < group.size(); ++c) {
         const uint32_t root = groups.find(c);
         group[c] = root == c ? group_count++ : group[root];
     }
-    std::vector<Vec3d> acc(group_count);
+    detail::LargeArray<Vec3d> acc(group_count);
     for (size_t f = 0; f < face_count; ++f) {
         if (face_area[f] == 0.0) continue;
         for (size_t c = 3 * f; c < 3 * f + 3; ++c) acc[group[c]] += face_n[f] * corner_weight[c];

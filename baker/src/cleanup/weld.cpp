@@ -122,14 +122,44 @@ WeldReport weldVertices(Mesh& mesh, const WeldOptions& options) {
                 }
             }
         };
+        // The pre-pass, per fixed chunk of the sorted list: the start of each x slab's run moves
+        // forward with the cell, so three cursors advance through the list instead of three
+        // binary searches per vertex; the scan stops at the first neighbour in range.
         std::vector<uint8_t> has_neighbour(n, 0);
-        const Status scanned = parallelFor(cells.size(), 4096, [&](size_t i) {
-            forEachInRange(VertexId(cells[i].second), [&](VertexId) { has_neighbour[cells[i].second] = 1; });
-        });
-        if (!scanned.ok()) { // out of memory in a worker: do the same scan on this thread
-            for (const auto& entry : cells)
-                forEachInRange(VertexId(entry.second), [&](VertexId) { has_neighbour[entry.second] = 1; });
-        }
+        constexpr size_t kScanChunk = 4096;
+        auto scanChunk = [&](size_t chunk) {
+            const size_t first = chunk * kScanChunk, last = std::min(cells.size(), first + kScanChunk);
+            size_t cursor[3] = {0, 0, 0};
+            for (size_t i = first; i < last; ++i) {
+                const Cell& c = cells[i].first;
+                const uint32_t v = cells[i].second;
+                const Vec3d p = toDouble(mesh.positions[v]);
+                bool found = false;
+                for (int64_t dx = -1; dx <= 1 && !found; ++dx) {
+                    const Cell lo{c[0] + dx, c[1] - 1, INT64_MIN};
+                    size_t& k = cursor[dx + 1];
+                    if (i == first)
+                        k = size_t(std::lower_bound(cells.begin(), cells.end(), std::make_pair(lo, uint32_t(0))) -
+                                   cells.begin());
+                    else
+                        while (k < cells.size() && cells[k].first < lo) ++k;
+                    for (size_t j = k; j < cells.size() && cells[j].first[0] == lo[0] && cells[j].first[1] <= c[1] + 1;
+                         ++j) {
+                        if (cells[j].second == v || cells[j].first[2] < c[2] - 1 || cells[j].first[2] > c[2] + 1)
+                            continue;
+                        const Vec3d d = toDouble(mesh.positions[cells[j].second]) - p;
+                        if (dot(d, d) <= tol2) {
+                            found = true;
+                            break;
+                        }
+                    }
+                }
+                if (found) has_neighbour[v] = 1;
+            }
+        };
+        const size_t scan_chunks = (cells.size() + kScanChunk - 1) / kScanChunk;
+        if (!parallelFor(scan_chunks, 1, scanChunk).ok()) // out of memory in a worker: the same scan here
+            for (size_t chunk = 0; chunk < scan_chunks; ++chunk) scanChunk(chunk);
         std::vector<uint8_t> is_rep(n, 0);
         for (VertexId v(0); v.value < n; ++v.value) {
             if (cell_index[v.value] == kNone) continue; // non-finite: never merges
