@@ -345,7 +345,7 @@ TEST(CleanupInternalsTest, EdgeTableMatchesGlobalSort) {
     }
     const Mesh empty;
     EXPECT_EQ(buildEdgeTable(empty).edgeCount(), 0u);
-    EXPECT_EQ(buildEdgeTable(empty).begin, std::vector<uint32_t>{0});
+    EXPECT_EQ(buildEdgeTable(empty).begin, detail::LargeArray<uint32_t>{0});
 }
 
 TEST(CleanupInternalsTest, WeldMapsMatchQuadraticScan) {

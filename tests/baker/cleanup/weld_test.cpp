@@ -100,3 +100,50 @@ TEST(WeldTest, EmptyMesh) {
     Mesh m;
     EXPECT_EQ(weldVertices(m).vertices_after, 0u);
 }
+
+TEST(WeldTest, ToleranceMatchesQuadraticScan) {
+    // Clusters of near-copies on a coarse grid, more than one scan chunk (4096 vertices) so the
+    // pre-pass's cursors cross chunk boundaries and x slabs: every vertex must join the lowest
+    // earlier representative within the tolerance, exactly as an all-pairs scan finds it.
+    for (uint32_t seed : {1u, 2u, 3u}) {
+        Mesh m;
+        const uint32_t n = 9000;
+        for (uint32_t v = 0; v < n; ++v) {
+            const uint32_t h = v * 2654435761u + seed * 40503u;
+            const float x = float(h % 23) / 23.0f, y = float((h / 23) % 19) / 19.0f, z = float((h / 437) % 17) / 17.0f;
+            m.positions.push_back({x + 2e-3f * hashNoise(3 * v + seed), y + 2e-3f * hashNoise(3 * v + 1 + seed),
+                                   z + 2e-3f * hashNoise(3 * v + 2 + seed)});
+            m.indices.push_back(v); // every vertex referenced
+        }
+        WeldOptions o;
+        o.tolerance_rel = 1.5e-3;
+        const double tol = o.tolerance_rel * computeBounds(m).diagonal();
+        std::vector<uint32_t> target(n);
+        std::vector<uint8_t> is_rep(n, 0);
+        for (uint32_t v = 0; v < n; ++v) {
+            target[v] = v;
+            for (uint32_t u = 0; u < v; ++u) {
+                if (!is_rep[u]) continue;
+                const Vec3d d = toDouble(m.positions[u]) - toDouble(m.positions[v]);
+                if (dot(d, d) <= tol * tol) {
+                    target[v] = u;
+                    break;
+                }
+            }
+            is_rep[v] = target[v] == v;
+        }
+        std::vector<uint32_t> new_id(n), expected;
+        uint32_t next = 0, merged = 0;
+        for (uint32_t v = 0; v < n; ++v)
+            if (is_rep[v]) new_id[v] = next++;
+        for (uint32_t v = 0; v < n; ++v) {
+            merged += !is_rep[v];
+            expected.push_back(new_id[target[v]]);
+        }
+        ASSERT_GT(merged, 100u) << seed; // the case is not trivial
+        ASSERT_LT(merged, n / 2) << seed;
+        const WeldReport r = weldVertices(m, o);
+        EXPECT_EQ(r.vertices_merged, merged) << seed;
+        EXPECT_EQ(m.indices, expected) << seed;
+    }
+}
