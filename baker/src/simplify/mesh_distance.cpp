@@ -466,6 +466,7 @@ Result<DistanceIndex> DistanceIndex::build(const std::vector<Vec3f>& positions, 
     std::sort(order.begin(), order.end());
     std::vector<uint64_t> codes(tri_count);
     index.face_of_slot_.resize(tri_count);
+    index.corners_.reserve(tri_count * 3 + 1);
     index.corners_.resize(tri_count * 3);
     for (size_t s = 0; s < tri_count; ++s) {
         const uint32_t t = order[s].second;
@@ -474,12 +475,14 @@ Result<DistanceIndex> DistanceIndex::build(const std::vector<Vec3f>& positions, 
         for (int k = 0; k < 3; ++k) index.corners_[s * 3 + k] = positions[indices[size_t(t) * 3 + k]];
     }
     std::vector<std::pair<uint64_t, uint32_t>>().swap(order);
+    index.corners_.push_back(Vec3f(0.0f, 0.0f, 0.0f)); // padding: the query loads 4 floats per corner
     // The float box test is exact enough only for queries whose coordinates are at most twice the
     // mesh's largest (the rounding of the query point to float is then below a quarter of the slack);
     // others, and meshes of extreme scale, take the double test. The slack is M * 2^-21.
     const bool float_ok = magnitude > 1e-12f && magnitude < 1e12f;
     const double slack = double(magnitude) * std::ldexp(1.0, -21);
     index.magnitude_ = float_ok ? magnitude : 0.0f;
+    index.slack_ = slack;
     index.nodes_.reserve(tri_count / (2 * kLeafTriangles) + 2);
     IndexBuilder builder(codes, index.corners_, index.nodes_, slack);
     BuildBox root_box;
@@ -497,6 +500,19 @@ double DistanceIndex::scalarBoxDistanceSq(const Node& node, int child, const Vec
     return d;
 }
 
+double DistanceIndex::triangleBoxDistanceSq(uint32_t slot, const Vec3d& p) const {
+    const Vec3f* c = &corners_[size_t(slot) * 3];
+    double d = 0.0;
+    for (int k = 0; k < 3; ++k) {
+        const double lo = double(std::min(std::min(c[0][k], c[1][k]), c[2][k])) - slack_;
+        const double hi = double(std::max(std::max(c[0][k], c[1][k]), c[2][k])) + slack_;
+        const double v = p[k];
+        const double e = v < lo ? lo - v : (v > hi ? v - hi : 0.0);
+        d += e * e;
+    }
+    return d;
+}
+
 double DistanceIndex::closestDistanceSq(const Vec3d& p, uint32_t& hint) const {
     double best = std::numeric_limits<double>::infinity();
     if (root_ == kEmptyChild) return best;
@@ -504,6 +520,7 @@ double DistanceIndex::closestDistanceSq(const Vec3d& p, uint32_t& hint) const {
         const Vec3f* c = &corners_[size_t(s) * 3];
         return exactDistanceSq(p, toDouble(c[0]), toDouble(c[1]), toDouble(c[2]));
     };
+    const uint32_t start = hint;
     if (hint != kNoHint) best = measureSlot(hint);
     // A box is skipped only when its (widened, rounded) distance exceeds the best exact distance by the
     // relative slack plus an absolute term far below float resolution: no triangle whose exact
@@ -513,9 +530,38 @@ double DistanceIndex::closestDistanceSq(const Vec3d& p, uint32_t& hint) const {
     const float mag = magnitude_;
     const bool use_float = std::fabs(p.x) <= 2.0 * mag && std::fabs(p.y) <= 2.0 * mag && std::fabs(p.z) <= 2.0 * mag;
     const float px = float(p.x), py = float(p.y), pz = float(p.z);
+    // The float limit is at most FLT_MAX, so an empty child (infinite distance) never passes.
+    double limit = 0.0;
+    float limit_f = 0.0f;
+    auto setLimit = [&]() {
+        limit = best * kPruneRelative + tiny;
+        limit_f = std::min(float(limit), std::numeric_limits<float>::max());
+    };
+    setLimit();
 #if defined(__SSE2__)
     const __m128 vx = _mm_set1_ps(px), vy = _mm_set1_ps(py), vz = _mm_set1_ps(pz);
+    const __m128 vp = _mm_setr_ps(px, py, pz, 0.0f);
+    const __m128 slack4 = _mm_set1_ps(float(slack_)); // exact: the magnitude (a float) times 2^-21
+    const __m128 zero = _mm_setzero_ps();
 #endif
+    // Whether slot s's own box, widened like the node boxes, is beyond the limit: the same test as a
+    // node's, so such a triangle cannot be nearer either.
+    auto triangleBeyond = [&](uint32_t s) {
+#if defined(__SSE2__)
+        if (use_float) {
+            // Loads 4 floats per corner (the last one reads the padding after the final slot).
+            const float* c = &corners_[size_t(s) * 3].x;
+            const __m128 c0 = _mm_loadu_ps(c), c1 = _mm_loadu_ps(c + 3), c2 = _mm_loadu_ps(c + 6);
+            const __m128 lo = _mm_sub_ps(_mm_min_ps(_mm_min_ps(c0, c1), c2), slack4);
+            const __m128 hi = _mm_add_ps(_mm_max_ps(_mm_max_ps(c0, c1), c2), slack4);
+            __m128 e = _mm_max_ps(_mm_max_ps(_mm_sub_ps(lo, vp), _mm_sub_ps(vp, hi)), zero);
+            e = _mm_mul_ps(e, e);
+            const __m128 sum = _mm_add_ss(_mm_add_ss(e, _mm_shuffle_ps(e, e, 1)), _mm_movehl_ps(e, e));
+            return _mm_cvtss_f32(sum) > limit_f;
+        }
+#endif
+        return triangleBoxDistanceSq(s, p) > limit;
+    };
 
     struct Entry {
         uint32_t ref;
@@ -523,70 +569,88 @@ double DistanceIndex::closestDistanceSq(const Vec3d& p, uint32_t& hint) const {
     };
     Entry stack[kStackSize];
     size_t top = 0;
-    stack[top++] = {root_, 0.0f};
-    double limit = best * kPruneRelative + tiny;
-    float limit_f = float(limit);
-    while (top > 0) {
-        const Entry e = stack[--top];
-        if (e.dist > limit_f) continue;
-        if (isLeaf(e.ref)) {
-            const uint32_t first = (e.ref & ~kLeafBit) >> 3, count = (e.ref & 7u) + 1;
+    uint32_t ref = root_;
+    for (;;) {
+        if (isLeaf(ref)) {
+            const uint32_t first = (ref & ~kLeafBit) >> 3, count = (ref & 7u) + 1;
             for (uint32_t s = first; s < first + count; ++s) {
+                // The hint's distance is already in `best`.
+                if (s == start || triangleBeyond(s)) continue;
                 const double d = measureSlot(s);
                 if (d < best) {
                     best = d;
                     hint = s;
+                    setLimit();
                 }
             }
-            limit = best * kPruneRelative + tiny;
-            limit_f = float(limit);
-            continue;
-        }
-        const Node& node = nodes_[e.ref];
-        float dist[4];
-        if (use_float) {
-#if defined(__SSE2__)
-            const __m128 zero = _mm_setzero_ps();
-            const __m128 dx = _mm_max_ps(_mm_max_ps(_mm_sub_ps(_mm_loadu_ps(node.lo[0]), vx),
-                                                    _mm_sub_ps(vx, _mm_loadu_ps(node.hi[0]))), zero);
-            const __m128 dy = _mm_max_ps(_mm_max_ps(_mm_sub_ps(_mm_loadu_ps(node.lo[1]), vy),
-                                                    _mm_sub_ps(vy, _mm_loadu_ps(node.hi[1]))), zero);
-            const __m128 dz = _mm_max_ps(_mm_max_ps(_mm_sub_ps(_mm_loadu_ps(node.lo[2]), vz),
-                                                    _mm_sub_ps(vz, _mm_loadu_ps(node.hi[2]))), zero);
-            _mm_storeu_ps(dist, _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz)));
-#else
-            for (int i = 0; i < 4; ++i) {
-                const float dx = std::max(std::max(node.lo[0][i] - px, px - node.hi[0][i]), 0.0f);
-                const float dy = std::max(std::max(node.lo[1][i] - py, py - node.hi[1][i]), 0.0f);
-                const float dz = std::max(std::max(node.lo[2][i] - pz, pz - node.hi[2][i]), 0.0f);
-                dist[i] = dx * dx + dy * dy + dz * dz;
-            }
-#endif
         } else {
-            // Rounded down to float so the float comparison below stays conservative.
-            for (int i = 0; i < 4; ++i) {
-                const double d = scalarBoxDistanceSq(node, i, p);
-                float f = float(d);
-                if (double(f) > d) f = std::nextafter(f, 0.0f);
-                dist[i] = double(f) > limit ? HUGE_VALF : f;
+            const Node& node = nodes_[ref];
+            alignas(16) float dist[4];
+            if (use_float) {
+#if defined(__SSE2__)
+                const __m128 dx = _mm_max_ps(_mm_max_ps(_mm_sub_ps(_mm_loadu_ps(node.lo[0]), vx),
+                                                        _mm_sub_ps(vx, _mm_loadu_ps(node.hi[0]))), zero);
+                const __m128 dy = _mm_max_ps(_mm_max_ps(_mm_sub_ps(_mm_loadu_ps(node.lo[1]), vy),
+                                                        _mm_sub_ps(vy, _mm_loadu_ps(node.hi[1]))), zero);
+                const __m128 dz = _mm_max_ps(_mm_max_ps(_mm_sub_ps(_mm_loadu_ps(node.lo[2]), vz),
+                                                        _mm_sub_ps(vz, _mm_loadu_ps(node.hi[2]))), zero);
+                _mm_store_ps(dist, _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz)));
+#else
+                for (int i = 0; i < 4; ++i) {
+                    const float dx = std::max(std::max(node.lo[0][i] - px, px - node.hi[0][i]), 0.0f);
+                    const float dy = std::max(std::max(node.lo[1][i] - py, py - node.hi[1][i]), 0.0f);
+                    const float dz = std::max(std::max(node.lo[2][i] - pz, pz - node.hi[2][i]), 0.0f);
+                    dist[i] = dx * dx + dy * dy + dz * dz;
+                }
+#endif
+            } else {
+                // Rounded down to float so the float comparison below stays conservative.
+                for (int i = 0; i < 4; ++i) {
+                    const double d = scalarBoxDistanceSq(node, i, p);
+                    float f = float(d);
+                    if (double(f) > d) f = std::nextafter(f, 0.0f);
+                    dist[i] = double(f) > limit ? HUGE_VALF : f;
+                }
+            }
+            unsigned mask = 0;
+#if defined(__SSE2__)
+            mask = unsigned(_mm_movemask_ps(_mm_cmple_ps(_mm_load_ps(dist), _mm_set1_ps(limit_f))));
+#else
+            for (int i = 0; i < 4; ++i) mask |= unsigned(dist[i] <= limit_f) << i;
+#endif
+            if (mask != 0) {
+                if ((mask & (mask - 1)) == 0) { // one child: descend without the stack
+                    ref = node.child[__builtin_ctz(mask)];
+                    continue;
+                }
+                // Nearest child visited next, the others pushed farthest first.
+                Entry keep[4];
+                int n = 0;
+                for (; mask != 0; mask &= mask - 1) {
+                    const int i = __builtin_ctz(mask);
+                    const Entry x{node.child[i], dist[i]};
+                    int j = n++;
+                    while (j > 0 && keep[j - 1].dist < x.dist) {
+                        keep[j] = keep[j - 1];
+                        --j;
+                    }
+                    keep[j] = x;
+                }
+                for (int i = 0; i + 1 < n; ++i) stack[top++] = keep[i];
+                ref = keep[n - 1].ref;
+                continue;
             }
         }
-        // Children within the limit, nearest pushed last (visited first).
-        Entry keep[4];
-        int n = 0;
-        for (int i = 0; i < 4; ++i) {
-            if (node.child[i] == kEmptyChild || dist[i] > limit_f) continue;
-            Entry x{node.child[i], dist[i]};
-            int j = n++;
-            while (j > 0 && keep[j - 1].dist < x.dist) {
-                keep[j] = keep[j - 1];
-                --j;
+        // Next entry still within the limit.
+        for (;;) {
+            if (top == 0) return best;
+            const Entry e = stack[--top];
+            if (e.dist <= limit_f) {
+                ref = e.ref;
+                break;
             }
-            keep[j] = x;
         }
-        for (int i = 0; i < n; ++i) stack[top++] = keep[i];
     }
-    return best;
 }
 
 Result<DistanceReference> DistanceReference::prepare(const Mesh& reference) {
