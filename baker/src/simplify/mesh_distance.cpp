@@ -242,6 +242,7 @@ Result<std::vector<Vec3d>> samplePoints(const Mesh& from, const DistanceOptions&
     if (options.include_vertices) {
         std::vector<uint8_t> used(from.positions.size(), 0);
         for (uint32_t v : from.indices) used[v] = 1;
+        vertices.reserve(size_t(std::count(used.begin(), used.end(), uint8_t(1))));
         for (size_t v = 0; v < used.size(); ++v) {
             if (used[v]) vertices.push_back(uint32_t(v));
         }
@@ -252,29 +253,39 @@ Result<std::vector<Vec3d>> samplePoints(const Mesh& from, const DistanceOptions&
     const size_t chunk_count = (point_count + kChunkSize - 1) / kChunkSize;
     const uint64_t key = splitmix64(options.seed ^ stream);
 
-    auto pointAt = [&](size_t i, size_t& t) -> Vec3d {
-        if (i >= sample_count) return toDouble(from.positions[vertices[i - sample_count]]);
-        uint64_t base = key + uint64_t(i) * 3;
-        double u0 = toUnit(splitmix64(base)), u1 = toUnit(splitmix64(base + 1)), u2 = toUnit(splitmix64(base + 2));
-        // Stratified over the area CDF: sample i falls in the i-th of sample_count equal slices of the
-        // total area. Each sample is still area-uniform and the estimate has less variance.
-        double x = (double(i) + u0) / double(sample_count) * total;
+    // Sample i's point on triangle `tri`; the same arithmetic whenever it is evaluated.
+    auto sampleOn = [&](size_t i, size_t tri) -> Vec3d {
+        const uint64_t base = key + uint64_t(i) * 3;
+        const double u1 = toUnit(splitmix64(base + 1)), u2 = toUnit(splitmix64(base + 2));
+        const Vec3d a = toDouble(from.positions[from.indices[tri * 3]]);
+        const Vec3d b = toDouble(from.positions[from.indices[tri * 3 + 1]]);
+        const Vec3d c = toDouble(from.positions[from.indices[tri * 3 + 2]]);
+        const double r1 = std::sqrt(u1);
+        return a * (1.0 - r1) + b * (r1 * (1.0 - u2)) + c * (r1 * u2);
+    };
+    // Sample i's triangle. Stratified over the area CDF: sample i falls in the i-th of sample_count
+    // equal slices of the total area. Each sample is still area-uniform and the estimate has less variance.
+    auto triangleOf = [&](size_t i, size_t& t) -> size_t {
+        const double u0 = toUnit(splitmix64(key + uint64_t(i) * 3));
+        const double x = (double(i) + u0) / double(sample_count) * total;
         // x grows with i, so the triangle is found by walking forward from the previous sample's
         // (`t`, the first triangle whose CDF exceeds x: what upper_bound returns). Zero-area
         // triangles own an empty interval of the CDF and are never chosen.
         while (t < tri_count && !(cdf[t] > x)) ++t;
-        const size_t tri = t < tri_count ? t : last_positive;
-        Vec3d a = toDouble(from.positions[from.indices[tri * 3]]);
-        Vec3d b = toDouble(from.positions[from.indices[tri * 3 + 1]]);
-        Vec3d c = toDouble(from.positions[from.indices[tri * 3 + 2]]);
-        double r1 = std::sqrt(u1);
-        return a * (1.0 - r1) + b * (r1 * (1.0 - u2)) + c * (r1 * u2);
+        return t < tri_count ? t : last_positive;
     };
 
-    // Points and their Morton codes, then the points put in code order (ties by point index) in
-    // place, following the permutation's cycles: no second array of points at the peak.
-    std::vector<Vec3d> points(point_count);
-    std::vector<std::pair<uint64_t, uint32_t>> order(point_count);
+    // First every point's Morton code (and its triangle, or its vertex), in chunks; then the codes
+    // sorted (ties by point index); then the points computed again, in that order, from the stored
+    // triangle: independent loads in parallel chunks instead of a serial permutation, and no array of
+    // points beside the codes until the codes are sorted.
+    struct Key {
+        uint64_t code;
+        uint32_t point;  // point index: samples first, then vertices
+        uint32_t source; // the sample's triangle, or the vertex
+        bool operator<(const Key& o) const { return code < o.code || (code == o.code && point < o.point); }
+    };
+    std::vector<Key> order(point_count);
     const Aabb box = computeBounds(from);
     const Vec3d box_min = toDouble(box.min);
     const Vec3d extent = toDouble(box.max) - box_min;
@@ -288,28 +299,28 @@ Result<std::vector<Vec3d>> samplePoints(const Mesh& from, const DistanceOptions&
             t = size_t(std::upper_bound(cdf.begin(), cdf.end(), x) - cdf.begin());
         }
         for (size_t i = begin; i < end; ++i) {
-            points[i] = pointAt(i, t);
-            const Vec3d q = (points[i] - box_min) * scale;
-            order[i] = {mortonCode(q), uint32_t(i)};
+            uint32_t source;
+            Vec3d point;
+            if (i < sample_count) {
+                source = uint32_t(triangleOf(i, t));
+                point = sampleOn(i, source);
+            } else {
+                source = vertices[i - sample_count];
+                point = toDouble(from.positions[source]);
+            }
+            order[i] = {mortonCode((point - box_min) * scale), uint32_t(i), source};
         }
     }));
     std::vector<double>().swap(cdf);
     std::sort(order.begin(), order.end());
-    // Sorted slot k takes point order[k].second. Each cycle of that permutation is rotated once;
-    // a finished slot is marked by pointing at itself.
-    for (size_t k = 0; k < point_count; ++k) {
-        if (order[k].second == k) continue;
-        const Vec3d first = points[k];
-        size_t slot = k;
-        while (order[slot].second != k) {
-            const size_t source = order[slot].second;
-            points[slot] = points[source];
-            order[slot].second = uint32_t(slot);
-            slot = source;
+    std::vector<Vec3d> points(point_count);
+    LODBAKE_RETURN_IF_ERROR(parallelFor(chunk_count, 1, [&](size_t chunk) {
+        const size_t end = std::min(point_count, (chunk + 1) * kChunkSize);
+        for (size_t k = chunk * kChunkSize; k < end; ++k) {
+            const Key& o = order[k];
+            points[k] = o.point < sample_count ? sampleOn(o.point, o.source) : toDouble(from.positions[o.source]);
         }
-        points[slot] = first;
-        order[slot].second = uint32_t(slot);
-    }
+    }));
     return points;
 }
 
@@ -467,12 +478,11 @@ Result<DistanceIndex> DistanceIndex::build(const std::vector<Vec3f>& positions, 
     std::vector<uint64_t> codes(tri_count);
     index.face_of_slot_.resize(tri_count);
     index.corners_.reserve(tri_count * 3 + 1);
-    index.corners_.resize(tri_count * 3);
     for (size_t s = 0; s < tri_count; ++s) {
         const uint32_t t = order[s].second;
         codes[s] = order[s].first;
         index.face_of_slot_[s] = t;
-        for (int k = 0; k < 3; ++k) index.corners_[s * 3 + k] = positions[indices[size_t(t) * 3 + k]];
+        for (int k = 0; k < 3; ++k) index.corners_.push_back(positions[indices[size_t(t) * 3 + k]]);
     }
     std::vector<std::pair<uint64_t, uint32_t>>().swap(order);
     index.corners_.push_back(Vec3f(0.0f, 0.0f, 0.0f)); // padding: the query loads 4 floats per corner
