@@ -55,15 +55,23 @@ double toUnit(uint64_t bits) {
 
 constexpr uint32_t kMortonCells = 1u << 21; // per axis: 3 x 21 bits fill a 63-bit code
 
-// Spreads the low 21 bits of x so that bit i lands at bit 3i.
+// Bit i of a 7-bit value moved to bit 3i.
+struct SpreadTable {
+    uint32_t bits[128];
+    constexpr SpreadTable() : bits() {
+        for (uint32_t v = 0; v < 128; ++v) {
+            uint32_t s = 0;
+            for (int i = 0; i < 7; ++i) s |= ((v >> i) & 1u) << (3 * i);
+            bits[v] = s;
+        }
+    }
+};
+constexpr SpreadTable kSpread;
+
+// Spreads the low 21 bits of x so that bit i lands at bit 3i (7 bits per table look-up).
 uint64_t spreadBits(uint64_t x) {
-    x &= 0x1fffffull;
-    x = (x | (x << 32)) & 0x1f00000000ffffull;
-    x = (x | (x << 16)) & 0x1f0000ff0000ffull;
-    x = (x | (x << 8)) & 0x100f00f00f00f00full;
-    x = (x | (x << 4)) & 0x10c30c30c30c30c3ull;
-    x = (x | (x << 2)) & 0x1249249249249249ull;
-    return x;
+    return uint64_t(kSpread.bits[x & 127]) | (uint64_t(kSpread.bits[(x >> 7) & 127]) << 21) |
+           (uint64_t(kSpread.bits[(x >> 14) & 127]) << 42);
 }
 
 // Z-order code of a point already scaled to [0, kMortonCells - 1] per axis (clamped).
@@ -404,7 +412,7 @@ Result<DistanceResult> measurePrepared(const DistanceReference& reference, const
     const double n12 = double(ref_to_approx.count), n21 = double(approx_to_ref.count);
     r.mean = (ref_to_approx.sum / n12 + approx_to_ref.sum / n21) / 2.0;
     r.rms = std::sqrt((ref_to_approx.sum_sq / n12 + approx_to_ref.sum_sq / n21) / 2.0);
-    r.diagonal = computeBounds(reference.mesh()).diagonal();
+    r.diagonal = reference.diagonal();
     return r;
 }
 
@@ -671,6 +679,7 @@ Result<DistanceReference> DistanceReference::prepare(const Mesh& reference) {
 Result<DistanceReference> DistanceReference::prepareChecked(const Mesh& reference) {
     DistanceReference prepared;
     prepared.mesh_ = &reference;
+    prepared.diagonal_ = computeBounds(reference).diagonal();
     LODBAKE_ASSIGN_OR_RETURN(prepared.index_, DistanceIndex::build(reference.positions, reference.indices));
     return prepared;
 }

@@ -91,6 +91,8 @@ public:
 
     const Mesh& mesh() const { return *mesh_; }
     const DistanceIndex& index() const { return index_; }
+    /// Diagonal of the reference's bounding box (what DistanceResult::diagonal reports).
+    double diagonal() const { return diagonal_; }
 
 private:
     friend Result<std::vector<Result<DistanceResult>>> prepareAndMeasureSurfaceDistances(
@@ -99,6 +101,7 @@ private:
 
     const Mesh* mesh_ = nullptr;
     DistanceIndex index_;
+    double diagonal_ = 0.0;
 };
 
 /// Same as measureSurfaceDistance(reference.mesh(), approx, options), with the same result.
