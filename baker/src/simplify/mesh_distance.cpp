@@ -55,15 +55,23 @@ double toUnit(uint64_t bits) {
 
 constexpr uint32_t kMortonCells = 1u << 21; // per axis: 3 x 21 bits fill a 63-bit code
 
-// Spreads the low 21 bits of x so that bit i lands at bit 3i.
+// Bit i of a 7-bit value moved to bit 3i.
+struct SpreadTable {
+    uint32_t bits[128];
+    constexpr SpreadTable() : bits() {
+        for (uint32_t v = 0; v < 128; ++v) {
+            uint32_t s = 0;
+            for (int i = 0; i < 7; ++i) s |= ((v >> i) & 1u) << (3 * i);
+            bits[v] = s;
+        }
+    }
+};
+constexpr SpreadTable kSpread;
+
+// Spreads the low 21 bits of x so that bit i lands at bit 3i (7 bits per table look-up).
 uint64_t spreadBits(uint64_t x) {
-    x &= 0x1fffffull;
-    x = (x | (x << 32)) & 0x1f00000000ffffull;
-    x = (x | (x << 16)) & 0x1f0000ff0000ffull;
-    x = (x | (x << 8)) & 0x100f00f00f00f00full;
-    x = (x | (x << 4)) & 0x10c30c30c30c30c3ull;
-    x = (x | (x << 2)) & 0x1249249249249249ull;
-    return x;
+    return uint64_t(kSpread.bits[x & 127]) | (uint64_t(kSpread.bits[(x >> 7) & 127]) << 21) |
+           (uint64_t(kSpread.bits[(x >> 14) & 127]) << 42);
 }
 
 // Z-order code of a point already scaled to [0, kMortonCells - 1] per axis (clamped).
@@ -242,6 +250,7 @@ Result<std::vector<Vec3d>> samplePoints(const Mesh& from, const DistanceOptions&
     if (options.include_vertices) {
         std::vector<uint8_t> used(from.positions.size(), 0);
         for (uint32_t v : from.indices) used[v] = 1;
+        vertices.reserve(size_t(std::count(used.begin(), used.end(), uint8_t(1))));
         for (size_t v = 0; v < used.size(); ++v) {
             if (used[v]) vertices.push_back(uint32_t(v));
         }
@@ -252,29 +261,39 @@ Result<std::vector<Vec3d>> samplePoints(const Mesh& from, const DistanceOptions&
     const size_t chunk_count = (point_count + kChunkSize - 1) / kChunkSize;
     const uint64_t key = splitmix64(options.seed ^ stream);
 
-    auto pointAt = [&](size_t i, size_t& t) -> Vec3d {
-        if (i >= sample_count) return toDouble(from.positions[vertices[i - sample_count]]);
-        uint64_t base = key + uint64_t(i) * 3;
-        double u0 = toUnit(splitmix64(base)), u1 = toUnit(splitmix64(base + 1)), u2 = toUnit(splitmix64(base + 2));
-        // Stratified over the area CDF: sample i falls in the i-th of sample_count equal slices of the
-        // total area. Each sample is still area-uniform and the estimate has less variance.
-        double x = (double(i) + u0) / double(sample_count) * total;
+    // Sample i's point on triangle `tri`; the same arithmetic whenever it is evaluated.
+    auto sampleOn = [&](size_t i, size_t tri) -> Vec3d {
+        const uint64_t base = key + uint64_t(i) * 3;
+        const double u1 = toUnit(splitmix64(base + 1)), u2 = toUnit(splitmix64(base + 2));
+        const Vec3d a = toDouble(from.positions[from.indices[tri * 3]]);
+        const Vec3d b = toDouble(from.positions[from.indices[tri * 3 + 1]]);
+        const Vec3d c = toDouble(from.positions[from.indices[tri * 3 + 2]]);
+        const double r1 = std::sqrt(u1);
+        return a * (1.0 - r1) + b * (r1 * (1.0 - u2)) + c * (r1 * u2);
+    };
+    // Sample i's triangle. Stratified over the area CDF: sample i falls in the i-th of sample_count
+    // equal slices of the total area. Each sample is still area-uniform and the estimate has less variance.
+    auto triangleOf = [&](size_t i, size_t& t) -> size_t {
+        const double u0 = toUnit(splitmix64(key + uint64_t(i) * 3));
+        const double x = (double(i) + u0) / double(sample_count) * total;
         // x grows with i, so the triangle is found by walking forward from the previous sample's
         // (`t`, the first triangle whose CDF exceeds x: what upper_bound returns). Zero-area
         // triangles own an empty interval of the CDF and are never chosen.
         while (t < tri_count && !(cdf[t] > x)) ++t;
-        const size_t tri = t < tri_count ? t : last_positive;
-        Vec3d a = toDouble(from.positions[from.indices[tri * 3]]);
-        Vec3d b = toDouble(from.positions[from.indices[tri * 3 + 1]]);
-        Vec3d c = toDouble(from.positions[from.indices[tri * 3 + 2]]);
-        double r1 = std::sqrt(u1);
-        return a * (1.0 - r1) + b * (r1 * (1.0 - u2)) + c * (r1 * u2);
+        return t < tri_count ? t : last_positive;
     };
 
-    // Points and their Morton codes, then the points put in code order (ties by point index) in
-    // place, following the permutation's cycles: no second array of points at the peak.
-    std::vector<Vec3d> points(point_count);
-    std::vector<std::pair<uint64_t, uint32_t>> order(point_count);
+    // First every point's Morton code (and its triangle, or its vertex), in chunks; then the codes
+    // sorted (ties by point index); then the points computed again, in that order, from the stored
+    // triangle: independent loads in parallel chunks instead of a serial permutation, and no array of
+    // points beside the codes until the codes are sorted.
+    struct Key {
+        uint64_t code;
+        uint32_t point;  // point index: samples first, then vertices
+        uint32_t source; // the sample's triangle, or the vertex
+        bool operator<(const Key& o) const { return code < o.code || (code == o.code && point < o.point); }
+    };
+    std::vector<Key> order(point_count);
     const Aabb box = computeBounds(from);
     const Vec3d box_min = toDouble(box.min);
     const Vec3d extent = toDouble(box.max) - box_min;
@@ -288,28 +307,28 @@ Result<std::vector<Vec3d>> samplePoints(const Mesh& from, const DistanceOptions&
             t = size_t(std::upper_bound(cdf.begin(), cdf.end(), x) - cdf.begin());
         }
         for (size_t i = begin; i < end; ++i) {
-            points[i] = pointAt(i, t);
-            const Vec3d q = (points[i] - box_min) * scale;
-            order[i] = {mortonCode(q), uint32_t(i)};
+            uint32_t source;
+            Vec3d point;
+            if (i < sample_count) {
+                source = uint32_t(triangleOf(i, t));
+                point = sampleOn(i, source);
+            } else {
+                source = vertices[i - sample_count];
+                point = toDouble(from.positions[source]);
+            }
+            order[i] = {mortonCode((point - box_min) * scale), uint32_t(i), source};
         }
     }));
     std::vector<double>().swap(cdf);
     std::sort(order.begin(), order.end());
-    // Sorted slot k takes point order[k].second. Each cycle of that permutation is rotated once;
-    // a finished slot is marked by pointing at itself.
-    for (size_t k = 0; k < point_count; ++k) {
-        if (order[k].second == k) continue;
-        const Vec3d first = points[k];
-        size_t slot = k;
-        while (order[slot].second != k) {
-            const size_t source = order[slot].second;
-            points[slot] = points[source];
-            order[slot].second = uint32_t(slot);
-            slot = source;
+    std::vector<Vec3d> points(point_count);
+    LODBAKE_RETURN_IF_ERROR(parallelFor(chunk_count, 1, [&](size_t chunk) {
+        const size_t end = std::min(point_count, (chunk + 1) * kChunkSize);
+        for (size_t k = chunk * kChunkSize; k < end; ++k) {
+            const Key& o = order[k];
+            points[k] = o.point < sample_count ? sampleOn(o.point, o.source) : toDouble(from.positions[o.source]);
         }
-        points[slot] = first;
-        order[slot].second = uint32_t(slot);
-    }
+    }));
     return points;
 }
 
@@ -393,7 +412,7 @@ Result<DistanceResult> measurePrepared(const DistanceReference& reference, const
     const double n12 = double(ref_to_approx.count), n21 = double(approx_to_ref.count);
     r.mean = (ref_to_approx.sum / n12 + approx_to_ref.sum / n21) / 2.0;
     r.rms = std::sqrt((ref_to_approx.sum_sq / n12 + approx_to_ref.sum_sq / n21) / 2.0);
-    r.diagonal = computeBounds(reference.mesh()).diagonal();
+    r.diagonal = reference.diagonal();
     return r;
 }
 
@@ -466,20 +485,22 @@ Result<DistanceIndex> DistanceIndex::build(const std::vector<Vec3f>& positions, 
     std::sort(order.begin(), order.end());
     std::vector<uint64_t> codes(tri_count);
     index.face_of_slot_.resize(tri_count);
-    index.corners_.resize(tri_count * 3);
+    index.corners_.reserve(tri_count * 3 + 1);
     for (size_t s = 0; s < tri_count; ++s) {
         const uint32_t t = order[s].second;
         codes[s] = order[s].first;
         index.face_of_slot_[s] = t;
-        for (int k = 0; k < 3; ++k) index.corners_[s * 3 + k] = positions[indices[size_t(t) * 3 + k]];
+        for (int k = 0; k < 3; ++k) index.corners_.push_back(positions[indices[size_t(t) * 3 + k]]);
     }
     std::vector<std::pair<uint64_t, uint32_t>>().swap(order);
+    index.corners_.push_back(Vec3f(0.0f, 0.0f, 0.0f)); // padding: the query loads 4 floats per corner
     // The float box test is exact enough only for queries whose coordinates are at most twice the
     // mesh's largest (the rounding of the query point to float is then below a quarter of the slack);
     // others, and meshes of extreme scale, take the double test. The slack is M * 2^-21.
     const bool float_ok = magnitude > 1e-12f && magnitude < 1e12f;
     const double slack = double(magnitude) * std::ldexp(1.0, -21);
     index.magnitude_ = float_ok ? magnitude : 0.0f;
+    index.slack_ = slack;
     index.nodes_.reserve(tri_count / (2 * kLeafTriangles) + 2);
     IndexBuilder builder(codes, index.corners_, index.nodes_, slack);
     BuildBox root_box;
@@ -497,6 +518,19 @@ double DistanceIndex::scalarBoxDistanceSq(const Node& node, int child, const Vec
     return d;
 }
 
+double DistanceIndex::triangleBoxDistanceSq(uint32_t slot, const Vec3d& p) const {
+    const Vec3f* c = &corners_[size_t(slot) * 3];
+    double d = 0.0;
+    for (int k = 0; k < 3; ++k) {
+        const double lo = double(std::min(std::min(c[0][k], c[1][k]), c[2][k])) - slack_;
+        const double hi = double(std::max(std::max(c[0][k], c[1][k]), c[2][k])) + slack_;
+        const double v = p[k];
+        const double e = v < lo ? lo - v : (v > hi ? v - hi : 0.0);
+        d += e * e;
+    }
+    return d;
+}
+
 double DistanceIndex::closestDistanceSq(const Vec3d& p, uint32_t& hint) const {
     double best = std::numeric_limits<double>::infinity();
     if (root_ == kEmptyChild) return best;
@@ -504,6 +538,7 @@ double DistanceIndex::closestDistanceSq(const Vec3d& p, uint32_t& hint) const {
         const Vec3f* c = &corners_[size_t(s) * 3];
         return exactDistanceSq(p, toDouble(c[0]), toDouble(c[1]), toDouble(c[2]));
     };
+    const uint32_t start = hint;
     if (hint != kNoHint) best = measureSlot(hint);
     // A box is skipped only when its (widened, rounded) distance exceeds the best exact distance by the
     // relative slack plus an absolute term far below float resolution: no triangle whose exact
@@ -513,9 +548,38 @@ double DistanceIndex::closestDistanceSq(const Vec3d& p, uint32_t& hint) const {
     const float mag = magnitude_;
     const bool use_float = std::fabs(p.x) <= 2.0 * mag && std::fabs(p.y) <= 2.0 * mag && std::fabs(p.z) <= 2.0 * mag;
     const float px = float(p.x), py = float(p.y), pz = float(p.z);
+    // The float limit is at most FLT_MAX, so an empty child (infinite distance) never passes.
+    double limit = 0.0;
+    float limit_f = 0.0f;
+    auto setLimit = [&]() {
+        limit = best * kPruneRelative + tiny;
+        limit_f = std::min(float(limit), std::numeric_limits<float>::max());
+    };
+    setLimit();
 #if defined(__SSE2__)
     const __m128 vx = _mm_set1_ps(px), vy = _mm_set1_ps(py), vz = _mm_set1_ps(pz);
+    const __m128 vp = _mm_setr_ps(px, py, pz, 0.0f);
+    const __m128 slack4 = _mm_set1_ps(float(slack_)); // exact: the magnitude (a float) times 2^-21
+    const __m128 zero = _mm_setzero_ps();
 #endif
+    // Whether slot s's own box, widened like the node boxes, is beyond the limit: the same test as a
+    // node's, so such a triangle cannot be nearer either.
+    auto triangleBeyond = [&](uint32_t s) {
+#if defined(__SSE2__)
+        if (use_float) {
+            // Loads 4 floats per corner (the last one reads the padding after the final slot).
+            const float* c = &corners_[size_t(s) * 3].x;
+            const __m128 c0 = _mm_loadu_ps(c), c1 = _mm_loadu_ps(c + 3), c2 = _mm_loadu_ps(c + 6);
+            const __m128 lo = _mm_sub_ps(_mm_min_ps(_mm_min_ps(c0, c1), c2), slack4);
+            const __m128 hi = _mm_add_ps(_mm_max_ps(_mm_max_ps(c0, c1), c2), slack4);
+            __m128 e = _mm_max_ps(_mm_max_ps(_mm_sub_ps(lo, vp), _mm_sub_ps(vp, hi)), zero);
+            e = _mm_mul_ps(e, e);
+            const __m128 sum = _mm_add_ss(_mm_add_ss(e, _mm_shuffle_ps(e, e, 1)), _mm_movehl_ps(e, e));
+            return _mm_cvtss_f32(sum) > limit_f;
+        }
+#endif
+        return triangleBoxDistanceSq(s, p) > limit;
+    };
 
     struct Entry {
         uint32_t ref;
@@ -523,70 +587,88 @@ double DistanceIndex::closestDistanceSq(const Vec3d& p, uint32_t& hint) const {
     };
     Entry stack[kStackSize];
     size_t top = 0;
-    stack[top++] = {root_, 0.0f};
-    double limit = best * kPruneRelative + tiny;
-    float limit_f = float(limit);
-    while (top > 0) {
-        const Entry e = stack[--top];
-        if (e.dist > limit_f) continue;
-        if (isLeaf(e.ref)) {
-            const uint32_t first = (e.ref & ~kLeafBit) >> 3, count = (e.ref & 7u) + 1;
+    uint32_t ref = root_;
+    for (;;) {
+        if (isLeaf(ref)) {
+            const uint32_t first = (ref & ~kLeafBit) >> 3, count = (ref & 7u) + 1;
             for (uint32_t s = first; s < first + count; ++s) {
+                // The hint's distance is already in `best`.
+                if (s == start || triangleBeyond(s)) continue;
                 const double d = measureSlot(s);
                 if (d < best) {
                     best = d;
                     hint = s;
+                    setLimit();
                 }
             }
-            limit = best * kPruneRelative + tiny;
-            limit_f = float(limit);
-            continue;
-        }
-        const Node& node = nodes_[e.ref];
-        float dist[4];
-        if (use_float) {
-#if defined(__SSE2__)
-            const __m128 zero = _mm_setzero_ps();
-            const __m128 dx = _mm_max_ps(_mm_max_ps(_mm_sub_ps(_mm_loadu_ps(node.lo[0]), vx),
-                                                    _mm_sub_ps(vx, _mm_loadu_ps(node.hi[0]))), zero);
-            const __m128 dy = _mm_max_ps(_mm_max_ps(_mm_sub_ps(_mm_loadu_ps(node.lo[1]), vy),
-                                                    _mm_sub_ps(vy, _mm_loadu_ps(node.hi[1]))), zero);
-            const __m128 dz = _mm_max_ps(_mm_max_ps(_mm_sub_ps(_mm_loadu_ps(node.lo[2]), vz),
-                                                    _mm_sub_ps(vz, _mm_loadu_ps(node.hi[2]))), zero);
-            _mm_storeu_ps(dist, _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz)));
-#else
-            for (int i = 0; i < 4; ++i) {
-                const float dx = std::max(std::max(node.lo[0][i] - px, px - node.hi[0][i]), 0.0f);
-                const float dy = std::max(std::max(node.lo[1][i] - py, py - node.hi[1][i]), 0.0f);
-                const float dz = std::max(std::max(node.lo[2][i] - pz, pz - node.hi[2][i]), 0.0f);
-                dist[i] = dx * dx + dy * dy + dz * dz;
-            }
-#endif
         } else {
-            // Rounded down to float so the float comparison below stays conservative.
-            for (int i = 0; i < 4; ++i) {
-                const double d = scalarBoxDistanceSq(node, i, p);
-                float f = float(d);
-                if (double(f) > d) f = std::nextafter(f, 0.0f);
-                dist[i] = double(f) > limit ? HUGE_VALF : f;
+            const Node& node = nodes_[ref];
+            alignas(16) float dist[4];
+            if (use_float) {
+#if defined(__SSE2__)
+                const __m128 dx = _mm_max_ps(_mm_max_ps(_mm_sub_ps(_mm_loadu_ps(node.lo[0]), vx),
+                                                        _mm_sub_ps(vx, _mm_loadu_ps(node.hi[0]))), zero);
+                const __m128 dy = _mm_max_ps(_mm_max_ps(_mm_sub_ps(_mm_loadu_ps(node.lo[1]), vy),
+                                                        _mm_sub_ps(vy, _mm_loadu_ps(node.hi[1]))), zero);
+                const __m128 dz = _mm_max_ps(_mm_max_ps(_mm_sub_ps(_mm_loadu_ps(node.lo[2]), vz),
+                                                        _mm_sub_ps(vz, _mm_loadu_ps(node.hi[2]))), zero);
+                _mm_store_ps(dist, _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz)));
+#else
+                for (int i = 0; i < 4; ++i) {
+                    const float dx = std::max(std::max(node.lo[0][i] - px, px - node.hi[0][i]), 0.0f);
+                    const float dy = std::max(std::max(node.lo[1][i] - py, py - node.hi[1][i]), 0.0f);
+                    const float dz = std::max(std::max(node.lo[2][i] - pz, pz - node.hi[2][i]), 0.0f);
+                    dist[i] = dx * dx + dy * dy + dz * dz;
+                }
+#endif
+            } else {
+                // Rounded down to float so the float comparison below stays conservative.
+                for (int i = 0; i < 4; ++i) {
+                    const double d = scalarBoxDistanceSq(node, i, p);
+                    float f = float(d);
+                    if (double(f) > d) f = std::nextafter(f, 0.0f);
+                    dist[i] = double(f) > limit ? HUGE_VALF : f;
+                }
+            }
+            unsigned mask = 0;
+#if defined(__SSE2__)
+            mask = unsigned(_mm_movemask_ps(_mm_cmple_ps(_mm_load_ps(dist), _mm_set1_ps(limit_f))));
+#else
+            for (int i = 0; i < 4; ++i) mask |= unsigned(dist[i] <= limit_f) << i;
+#endif
+            if (mask != 0) {
+                if ((mask & (mask - 1)) == 0) { // one child: descend without the stack
+                    ref = node.child[__builtin_ctz(mask)];
+                    continue;
+                }
+                // Nearest child visited next, the others pushed farthest first.
+                Entry keep[4];
+                int n = 0;
+                for (; mask != 0; mask &= mask - 1) {
+                    const int i = __builtin_ctz(mask);
+                    const Entry x{node.child[i], dist[i]};
+                    int j = n++;
+                    while (j > 0 && keep[j - 1].dist < x.dist) {
+                        keep[j] = keep[j - 1];
+                        --j;
+                    }
+                    keep[j] = x;
+                }
+                for (int i = 0; i + 1 < n; ++i) stack[top++] = keep[i];
+                ref = keep[n - 1].ref;
+                continue;
             }
         }
-        // Children within the limit, nearest pushed last (visited first).
-        Entry keep[4];
-        int n = 0;
-        for (int i = 0; i < 4; ++i) {
-            if (node.child[i] == kEmptyChild || dist[i] > limit_f) continue;
-            Entry x{node.child[i], dist[i]};
-            int j = n++;
-            while (j > 0 && keep[j - 1].dist < x.dist) {
-                keep[j] = keep[j - 1];
-                --j;
+        // Next entry still within the limit.
+        for (;;) {
+            if (top == 0) return best;
+            const Entry e = stack[--top];
+            if (e.dist <= limit_f) {
+                ref = e.ref;
+                break;
             }
-            keep[j] = x;
         }
-        for (int i = 0; i < n; ++i) stack[top++] = keep[i];
     }
-    return best;
 }
 
 Result<DistanceReference> DistanceReference::prepare(const Mesh& reference) {
@@ -597,6 +679,7 @@ Result<DistanceReference> DistanceReference::prepare(const Mesh& reference) {
 Result<DistanceReference> DistanceReference::prepareChecked(const Mesh& reference) {
     DistanceReference prepared;
     prepared.mesh_ = &reference;
+    prepared.diagonal_ = computeBounds(reference).diagonal();
     LODBAKE_ASSIGN_OR_RETURN(prepared.index_, DistanceIndex::build(reference.positions, reference.indices));
     return prepared;
 }

@@ -71,12 +71,14 @@ public:
 
 private:
     double scalarBoxDistanceSq(const Node& node, int child, const Vec3d& p) const;
+    double triangleBoxDistanceSq(uint32_t slot, const Vec3d& p) const;
 
     std::vector<Node> nodes_;
     std::vector<Vec3f> corners_;         // 3 per slot, leaf order
     std::vector<uint32_t> face_of_slot_; // input triangle of every slot
     uint32_t root_ = 0xffffffffu;        // child reference of the root (see mesh_distance.cpp)
     float magnitude_ = 0.0f;             // queries with a larger coordinate take the double box test
+    double slack_ = 0.0;                 // how far every box is widened (see mesh_distance.cpp)
 };
 
 /// A reference surface checked and indexed once, for measuring several approximations against it
@@ -89,6 +91,8 @@ public:
 
     const Mesh& mesh() const { return *mesh_; }
     const DistanceIndex& index() const { return index_; }
+    /// Diagonal of the reference's bounding box (what DistanceResult::diagonal reports).
+    double diagonal() const { return diagonal_; }
 
 private:
     friend Result<std::vector<Result<DistanceResult>>> prepareAndMeasureSurfaceDistances(
@@ -97,6 +101,7 @@ private:
 
     const Mesh* mesh_ = nullptr;
     DistanceIndex index_;
+    double diagonal_ = 0.0;
 };
 
 /// Same as measureSurfaceDistance(reference.mesh(), approx, options), with the same result.
