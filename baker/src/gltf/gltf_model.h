@@ -32,6 +32,10 @@ public:
         return int(model_.bufferViews.size() - 1);
     }
 
+    // Room for `bytes` in all (an upper bound is fine: capacity never touched costs no memory), so the
+    // buffer grows without copying itself.
+    void reserve(size_t bytes) { bytes_.reserve(bytes); }
+
     std::vector<uint8_t> finish() {
         while (bytes_.size() % 4 != 0) bytes_.push_back(0);
         return std::move(bytes_);

@@ -1,6 +1,7 @@
 // Pack writer: a PackDescription as one GLB through tinygltf. LOD groups use MSFT_lod on the LOD0
 // node (https://github.com/KhronosGroup/glTF/tree/main/extensions/2.0/Vendor/MSFT_lod) with the
 // MSFT_screencoverage array in the node's extras, as that extension specifies.
+#include <algorithm>
 #include <exception>
 #include <ostream>
 #include <set>
@@ -17,6 +18,10 @@
 namespace lodbake {
 
 namespace {
+
+// Room the GLB header and JSON chunk get behind the binary chunk's bytes (assembleGlb inserts them in
+// front, moving the bytes within the vector; a bigger JSON only costs one more copy of the buffer).
+constexpr size_t kGlbHeadRoom = size_t(1) << 20;
 
 tinygltf::Value toValue(const nlohmann::json& j) {
     if (j.is_object()) {
@@ -118,6 +123,7 @@ std::vector<uint8_t> dropStreamedAccessors(tinygltf::Model& model, const std::se
     std::vector<int> new_index(model.bufferViews.size(), -1);
     std::vector<tinygltf::BufferView> views;
     std::vector<uint8_t> out;
+    out.reserve(bytes.size() + kGlbHeadRoom);
     for (size_t i = 0; i < model.bufferViews.size(); ++i) {
         if (!views_used[i]) continue;
         tinygltf::BufferView view = model.bufferViews[i];
@@ -214,6 +220,31 @@ Result<std::vector<uint8_t>> assembleGlb(const std::vector<uint8_t>& shell, std:
     return bin;
 }
 
+// An upper bound of the binary chunk's size: every attribute stream as floats, indices as 32 bits,
+// every texture and extension blob, and the alignment of each buffer view. The buffer is reserved
+// with it, so the pack's bytes are copied into it once (growing by doubling copied each byte about
+// twice more and mapped fresh pages for each copy); the part never written is never touched.
+size_t binaryBound(const PackDescription& description) {
+    size_t bytes = 0;
+    auto blobs = [&](const std::vector<PackExtension>& list) {
+        for (const PackExtension& e : list)
+            for (const std::vector<uint8_t>& b : e.blobs) bytes += b.size() + 4;
+    };
+    for (const PackAsset& asset : description.assets) {
+        blobs(asset.node_extensions);
+        for (const PackLevel& level : asset.levels) {
+            const Mesh& m = level.mesh;
+            const size_t per_vertex = sizeof(Vec3f) * 2 + sizeof(Vec4f) * 2 + sizeof(Vec2f) * m.uvs.size();
+            const size_t primitives = std::max<size_t>(1, m.submeshes.size());
+            bytes += m.vertexCount() * per_vertex + m.indices.size() * sizeof(uint32_t) + 64 * primitives;
+            for (const Texture& t : m.textures) bytes += t.bytes.size() + 4;
+            blobs(level.mesh_extensions);
+            for (const auto& list : level.primitive_extensions) blobs(list);
+        }
+    }
+    return bytes;
+}
+
 // `owned`, when set, is `description` itself: each level's data is released as soon as the model
 // holds a copy, so the pack's bytes never exist twice beside all the meshes.
 Result<std::vector<uint8_t>> writeImpl(const PackDescription& description, PackDescription* owned) {
@@ -221,6 +252,7 @@ Result<std::vector<uint8_t>> writeImpl(const PackDescription& description, PackD
     model.asset.version = "2.0";
     model.asset.generator = std::string("lodbake ") + kVersionString;
     BufferBuilder buffer(model);
+    buffer.reserve(binaryBound(description) + kGlbHeadRoom);
     ModelDedupe dedupe;
     std::set<std::string> used, streams;
     std::vector<ViewPatch> patches;
