@@ -66,8 +66,7 @@ public:
         constexpr uint32_t n = N;
         const uint32_t r = range_ >> kRangeCdfBits;
         const uint32_t slot = code_ / r;
-        uint32_t s = 0;
-        for (uint32_t i = 1; i < n; ++i) s += m.cum[i] <= slot ? 1u : 0u;
+        const uint32_t s = m.find(slot);
         const uint32_t low = r * m.cum[s];
         const uint32_t high = s + 1 < n ? r * m.cum[s + 1] : range_;
         code_ -= low;
@@ -603,7 +602,7 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
     plan.triples = u32(l.plan_triples);
     plan.max_triples = 3 * tc;
     if (!detail::planPositions(a.corner_vertex, a.corner_opposite, a.vertex_corner, a.vertex_flags, a.vertex_valence,
-                               vc, decoded, a.node_free, a.node_vertex, a.node_prev, a.node_next, &plan))
+                               vc, decoded, a.node_vertex, a.node_prev, a.node_next, &plan))
         return Result::CorruptStream;
     const uint32_t* triple = plan.triples;
     for (uint32_t i = 0; i < plan.ordered; ++i) {

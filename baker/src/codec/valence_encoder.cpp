@@ -757,7 +757,7 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
     // Positions in the plan's order, predicted exactly as the decoder will.
     I32Array qpos(3 * size_t(vc), 0), qpos_final(3 * vn);
     U8Array ordered(vc);
-    U32Array order(vc), count(vc), neighbour(vc), degree(vc), stack0(vc), stack1(vc), stack2(vc);
+    U32Array order(vc), count(vc), neighbour(vc), stack0(vc), stack1(vc), stack2(vc);
     // Sized for the worst case and filled only as far as the plan goes: left uninitialised, so the
     // untouched tail costs no resident memory.
     UninitArray triples(9 * size_t(tc));
@@ -768,10 +768,9 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
     plan.triples = triples.get();
     plan.max_triples = 3 * tc;
     if (!lodrt::detail::planPositions(a.corner_vertex, a.corner_opposite, a.vertex_corner, a.vertex_flags,
-                                      a.vertex_valence, vc, ordered.data(), degree.data(), stack0.data(), stack1.data(),
-                                      stack2.data(), &plan))
+                                      a.vertex_valence, vc, ordered.data(), stack0.data(), stack1.data(), stack2.data(),
+                                      &plan))
         return internalError("valence encoder: broken corner cycle");
-    U32Array().swap(degree);
     U32Array().swap(stack0);
     U32Array().swap(stack1);
     U32Array().swap(stack2);

@@ -18,6 +18,7 @@
 #include "lodbake/core/diagnostics.h"
 #include "lodbake/core/file_io.h"
 #include "lodbake/io/mesh_io.h"
+#include "lodrt/detail/valence_model.h"
 #include "lodrt/format.h"
 #include "lodrt/valence.h"
 #include "mesh_builders.h"
@@ -426,6 +427,44 @@ TEST(ValenceCodecTest, SnapFlagsFollowTheGeometry) {
     EXPECT_EQ(streamFlags(n.bytes) & ~uint32_t(lodrt::format::kValenceFlagNormals), 0u);
     // The same mesh codes to the same bytes.
     EXPECT_EQ(encodeValence(m, {})->bytes, r.bytes);
+}
+
+// The multi-symbol model's search and adaptation (vectorised where the compiler targets SSE2) follow
+// the scalar rules of docs/format/valence.md "Range coder" exactly, for both model sizes, through the
+// fast first uses and the slow steady state, with symbols skewed toward both ends.
+template <class Model> void expectCdfModelFollowsTheSpec(uint32_t last_rate, uint32_t seed) {
+    constexpr uint32_t n = Model::kN;
+    Model m;
+    m.init();
+    std::vector<int32_t> cum(n + 1);
+    for (uint32_t i = 0; i <= n; ++i) cum[i] = int32_t(m.cum[i]);
+    std::mt19937 rng(seed);
+    uint32_t uses = 0;
+    for (int step = 0; step < 4000; ++step) {
+        // Every slot the coder can produce (0 .. just above 2^15) finds the spec's symbol.
+        for (int probe = 0; probe < 8; ++probe) {
+            const uint32_t slot = rng() % 32840u;
+            uint32_t expect = 0;
+            for (uint32_t i = 1; i < n; ++i) expect += uint32_t(cum[i]) <= slot ? 1u : 0u;
+            ASSERT_EQ(m.find(slot), expect) << "slot " << slot;
+        }
+        ASSERT_EQ(m.find(uint32_t(cum[n - 1])), n - 1);
+        const uint32_t s = (step / 500) % 2 == 0 ? rng() % 3 : n - 1 - rng() % 3;
+        const uint32_t r = rng() % 4 == 0 ? rng() % n : s;
+        const uint32_t rate = uses < 16 ? 3 : (uses < 32 ? 4 : last_rate);
+        uses = std::min(uses + 1, 32u);
+        for (uint32_t i = 1; i < n; ++i) {
+            const int32_t hi = 32768 - 8 * int32_t(n - i), lo = 8 * int32_t(i);
+            cum[i] = i > r ? cum[i] + ((hi - cum[i]) >> rate) : cum[i] - ((cum[i] - lo) >> rate);
+        }
+        m.update(r);
+        for (uint32_t i = 0; i <= n; ++i) ASSERT_EQ(int32_t(m.cum[i]), cum[i]) << "step " << step << " entry " << i;
+    }
+}
+
+TEST(ValenceCodecTest, MultiSymbolModelsFollowTheSpec) {
+    expectCdfModelFollowsTheSpec<lodrt::detail::ResidualLengthModel>(6, 7);
+    expectCdfModelFollowsTheSpec<lodrt::detail::ConnectivitySymbolModel>(7, 8);
 }
 
 TEST(ValenceDecoderSafetyTest, ValidStreamDecodes) {

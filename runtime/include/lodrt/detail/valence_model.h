@@ -24,6 +24,10 @@
 #include <cstddef>
 #include <cstdint>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include "lodrt/format.h"
 #include "lodrt/result.h"
 
@@ -80,6 +84,30 @@ template <uint32_t N, uint32_t LastRate> struct CdfModel {
                               : uses < 2 * kRangeCdfRateStep ? kRangeCdfRateFirst + 1
                                                              : LastRate;
         uses = uint16_t(uses < 2 * kRangeCdfRateStep ? uses + 1 : uses);
+#if defined(__SSE2__)
+        // The same arithmetic in 16-bit lanes (every intermediate value is in [0, 2^15)): blocks of
+        // 8 entries from cum[1], then one block ending at cum[N - 1] for the rest. All blocks are
+        // computed from the old values; the last block is stored first, so entries it shares with
+        // the one before are overwritten with the same value.
+        const __m128i shift = _mm_cvtsi32_si128(int(rate));
+        const __m128i sv = _mm_set1_epi16(int16_t(s));
+        __m128i out[kBlocks + 1];
+        for (uint32_t b = 0; b <= kBlocks; ++b) {
+            if (b == kBlocks && !kTail) break;
+            const uint32_t start = b < kBlocks ? 1 + 8 * b : kN - 8;
+            const __m128i idx = _mm_add_epi16(_mm_set1_epi16(int16_t(start)), _mm_setr_epi16(0, 1, 2, 3, 4, 5, 6, 7));
+            const __m128i lo = _mm_slli_epi16(idx, 3);
+            const __m128i hi =
+                _mm_add_epi16(lo, _mm_set1_epi16(int16_t((1u << kRangeCdfBits) - kRangeCdfMinFreq * kN)));
+            const __m128i c = _mm_loadu_si128(reinterpret_cast<const __m128i*>(&cum[start]));
+            const __m128i up = _mm_add_epi16(c, _mm_sra_epi16(_mm_sub_epi16(hi, c), shift));
+            const __m128i down = _mm_sub_epi16(c, _mm_sra_epi16(_mm_sub_epi16(c, lo), shift));
+            const __m128i above = _mm_cmpgt_epi16(idx, sv);
+            out[b] = _mm_or_si128(_mm_and_si128(above, up), _mm_andnot_si128(above, down));
+        }
+        if (kTail) _mm_storeu_si128(reinterpret_cast<__m128i*>(&cum[kN - 8]), out[kBlocks]);
+        for (uint32_t b = 0; b < kBlocks; ++b) _mm_storeu_si128(reinterpret_cast<__m128i*>(&cum[1 + 8 * b]), out[b]);
+#else
         for (uint32_t i = 1; i < kN; ++i) {
             const int32_t c = cum[i];
             const int32_t hi = int32_t((1u << kRangeCdfBits) - kRangeCdfMinFreq * (kN - i));
@@ -87,7 +115,40 @@ template <uint32_t N, uint32_t LastRate> struct CdfModel {
             const int32_t up = c + ((hi - c) >> rate), down = c - ((c - lo) >> rate);
             cum[i] = uint16_t(i > s ? up : down);
         }
+#endif
     }
+    /// The number of i in 1..N-1 with cum[i] <= slot: the symbol whose interval holds `slot`.
+    inline uint32_t find(uint32_t slot) const {
+#if defined(__SSE2__)
+        // Every cum[i] (i < N) is at most 2^15 - kRangeCdfMinFreq, so a slot clamped to 2^15 - 2 gives the
+        // same count in signed 16-bit lanes.
+        const uint32_t clamped = slot < 0x7FFEu ? slot : 0x7FFEu;
+        const __m128i limit = _mm_set1_epi16(int16_t(clamped + 1));
+        __m128i acc = _mm_setzero_si128();
+        for (uint32_t b = 0; b < kBlocks; ++b) {
+            const __m128i c = _mm_loadu_si128(reinterpret_cast<const __m128i*>(&cum[1 + 8 * b]));
+            acc = _mm_sub_epi16(acc, _mm_cmplt_epi16(c, limit));
+        }
+        if (kTail) {
+            // Lanes of the last block that an earlier block already counted are masked off.
+            const __m128i idx = _mm_add_epi16(_mm_set1_epi16(int16_t(kN - 8)), _mm_setr_epi16(0, 1, 2, 3, 4, 5, 6, 7));
+            const __m128i fresh = _mm_cmpgt_epi16(idx, _mm_set1_epi16(int16_t(8 * kBlocks)));
+            const __m128i c = _mm_loadu_si128(reinterpret_cast<const __m128i*>(&cum[kN - 8]));
+            acc = _mm_sub_epi16(acc, _mm_and_si128(fresh, _mm_cmplt_epi16(c, limit)));
+        }
+        const __m128i sums = _mm_sad_epu8(acc, _mm_setzero_si128());
+        return uint32_t(_mm_cvtsi128_si32(sums)) + uint32_t(_mm_extract_epi16(sums, 4));
+#else
+        uint32_t s = 0;
+        for (uint32_t i = 1; i < kN; ++i) s += cum[i] <= slot ? 1u : 0u;
+        return s;
+#endif
+    }
+
+private:
+    static_assert(kN >= 9 && kN <= 256, "blocks of 8 entries");
+    static constexpr uint32_t kBlocks = (kN - 1) / 8;           // full blocks from cum[1]
+    static constexpr bool kTail = (kN - 1) % 8 != 0;            // entries left after them
 };
 
 using ResidualLengthModel = CdfModel<format::kValenceResidualSymbols, format::kRangeCdfRateLast>;
@@ -404,17 +465,17 @@ struct PositionPlan {
 /// have both other vertices already ordered (d = 1, 2, 3+); when all are empty, the first unordered
 /// vertex in conquest order. Dummy vertices are never ordered. Prediction of v, over the same walk
 /// around v with "known" = ordered before v: every corner whose a, b and opposite vertex w are known
-/// gives a triple; the first known a is the neighbour. `ordered` (bytes), `degree`, `stack0..2`
-/// (vertex_count each) are scratch. False when the corner cycles are broken or the triples overflow
-/// (a corrupt stream).
+/// gives a triple; the first known a is the neighbour. `state` (bytes), `stack0..2` (vertex_count
+/// each) are scratch. False when the corner cycles are broken or the triples overflow (a corrupt
+/// stream).
 inline bool planPositions(const uint32_t* cv, const uint32_t* opp, const uint32_t* vertex_corner,
                           const uint32_t* vertex_flags, const uint32_t* valence, uint32_t vertex_count,
-                          uint8_t* ordered, uint32_t* degree, uint32_t* stack0, uint32_t* stack1, uint32_t* stack2,
-                          PositionPlan* plan) {
-    for (uint32_t v = 0; v < vertex_count; ++v) {
-        ordered[v] = 0;
-        degree[v] = 0;
-    }
+                          uint8_t* state, uint32_t* stack0, uint32_t* stack1, uint32_t* stack2, PositionPlan* plan) {
+    // One byte per vertex, so a neighbour costs one load: bit 7 ordered, bit 6 dummy (never ordered,
+    // never pushed: it reads as ordered for the triples test below only through bit 7, which it never
+    // gets), bits 0..2 the count of its triangles with both other vertices ordered, saturated at 4.
+    constexpr uint8_t kOrdered = 0x80, kDummy = 0x40, kDegree = 0x07;
+    for (uint32_t v = 0; v < vertex_count; ++v) state[v] = (vertex_flags[v] & kFlagDummy) ? kDummy : 0;
     uint32_t top[3] = {0, 0, 0};
     uint32_t* stack[3] = {stack0, stack1, stack2};
     uint32_t count = 0, scan = 0, triples = 0;
@@ -423,42 +484,46 @@ inline bool planPositions(const uint32_t* cv, const uint32_t* opp, const uint32_
         for (int level = 2; level >= 0 && v == kNone; --level) {
             while (top[level] > 0) {
                 const uint32_t u = stack[level][--top[level]];
-                if (!ordered[u]) {
+                if (!(state[u] & kOrdered)) {
                     v = u;
                     break;
                 }
             }
         }
         if (v == kNone) {
-            while (scan < vertex_count && (ordered[scan] || (vertex_flags[scan] & kFlagDummy))) ++scan;
+            while (scan < vertex_count && (state[scan] & (kOrdered | kDummy))) ++scan;
             if (scan == vertex_count) break;
             v = scan;
         }
-        ordered[v] = 1;
+        state[v] |= kOrdered;
         plan->order[count] = v;
         uint32_t n = 0, neighbour = kNone;
         // Each triangle (v, a, b) with exactly one of a, b ordered now has both others of the
         // unordered one ordered.
         const uint32_t c0 = vertex_corner[v];
         if (c0 == kNone) return false;
-        uint32_t c = c0;
+        const uint32_t steps = valence[v];
+        uint32_t c = c0, i3 = c0 % 3; // i3: c's place in its triangle, carried along the walk
         for (uint32_t step = 0;; ++step) {
-            if (step > valence[v]) return false;
-            const uint32_t t3 = c - c % 3;
-            const uint32_t cn = t3 + (c % 3 == 2 ? 0 : c % 3 + 1), cp = t3 + (c % 3 == 0 ? 2 : c % 3 - 1);
+            if (step > steps) return false;
+            const uint32_t t3 = c - i3;
+            const uint32_t cn = i3 == 2 ? t3 : c + 1, cp = i3 == 0 ? t3 + 2 : c - 1;
             const uint32_t va = cv[cn], vb = cv[cp];
-            const uint32_t oa = ordered[va], ob = ordered[vb];
+            const uint32_t sa = state[va], sb = state[vb];
+            const uint32_t oa = sa & kOrdered, ob = sb & kOrdered;
             if (oa != ob) {
                 const uint32_t u = oa ? vb : va;
-                if (!(vertex_flags[u] & kFlagDummy)) {
-                    const uint32_t d = ++degree[u];
+                const uint32_t su = oa ? sb : sa;
+                if (!(su & kDummy)) {
+                    const uint32_t d = (su & kDegree) + 1;
+                    if (d <= 4) state[u] = uint8_t((su & ~uint32_t(kDegree)) | d);
                     if (d <= 3) stack[d - 1][top[d - 1]++] = u;
                 }
             } else if (oa && va != v && vb != v) {
                 const uint32_t o = opp[c];
                 if (o == kNone) return false;
                 const uint32_t w = cv[o];
-                if (ordered[w] && w != v) {
+                if ((state[w] & kOrdered) && w != v) {
                     if (triples >= plan->max_triples) return false;
                     uint32_t* t = &plan->triples[3 * size_t(triples++)];
                     t[0] = va;
@@ -471,8 +536,9 @@ inline bool planPositions(const uint32_t* cv, const uint32_t* opp, const uint32_
             // Swing to the next corner around v: next(opposite(next(c))).
             const uint32_t o = opp[cn];
             if (o == kNone) return false;
-            const uint32_t o3 = o - o % 3;
-            c = o3 + (o % 3 == 2 ? 0 : o % 3 + 1);
+            const uint32_t o3 = o % 3;
+            c = o3 == 2 ? o - 2 : o + 1;
+            i3 = o3 == 2 ? 0 : o3 + 1;
             if (c == c0) break;
         }
         plan->count[count] = n;
@@ -524,12 +590,16 @@ inline void predictFromPlan(const int32_t* qpos, const uint32_t* t, uint32_t n, 
 
 /// Bit length of x (0 for 0).
 inline uint32_t bitLength(uint32_t x) {
+#if defined(__GNUC__) || defined(__clang__)
+    return x == 0 ? 0u : 32u - uint32_t(__builtin_clz(x));
+#else
     uint32_t k = 0;
     while (x != 0) {
         ++k;
         x >>= 1;
     }
     return k;
+#endif
 }
 
 /// Context of a position residual from the gate-edge scale (bit length, 0..11).
@@ -603,8 +673,9 @@ inline bool snapCandidatesOf(const int32_t* qpos, const uint32_t* t, uint32_t n,
     for (int j = 0; j < 3; ++j) {
         if (!((Mask >> j) & 1u)) continue;
         candidate[j] = int32_t(best[j] & 0x1FFFFu);
-        uint32_t d = uint32_t(best[j] >> 17), b = 0;
-        for (; d != 0 && b < format::kValenceSnapDistanceBuckets - 1; d >>= 1) ++b;
+        const uint64_t d = best[j] >> 17;
+        uint32_t b = bitLength(d > 0xFFFFFFFFu ? 0xFFFFFFFFu : uint32_t(d));
+        b = b < format::kValenceSnapDistanceBuckets - 1 ? b : format::kValenceSnapDistanceBuckets - 1;
         const uint32_t m = mult[j] < format::kValenceSnapMultiplicity ? mult[j] : format::kValenceSnapMultiplicity - 1;
         ctx[j] = b * format::kValenceSnapMultiplicity + m;
     }
