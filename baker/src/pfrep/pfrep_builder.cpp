@@ -186,8 +186,13 @@ Result<std::vector<uint32_t>> pointTriangles(const Mesh& mesh, const CollapseSeq
     return out;
 }
 
-Result<PfrepBuild> buildPfrepFromSequence(const CollapseSequence& sequence, const std::vector<uint32_t>& point_triangles,
-                                          Diagnostics& diagnostics) {
+namespace {
+
+// buildPfrepFromSequence; when `releasable` is not null (buildPfrep's own sequence and triangles),
+// the triangle lists are released as soon as the blob's own list of triangles holds them.
+Result<PfrepBuild> buildBlob(const CollapseSequence& sequence, const std::vector<uint32_t>& point_triangles,
+                             Diagnostics& diagnostics, CollapseSequence* releasable,
+                             std::vector<uint32_t>* releasable_triangles) {
     namespace fmt = lodrt::format;
     const uint32_t point_count = uint32_t(sequence.point_positions.size());
     if (point_triangles.size() % 3 != 0) return invalidInput("pfrep: point triangle list is not a multiple of 3");
@@ -250,6 +255,10 @@ Result<PfrepBuild> buildPfrepFromSequence(const CollapseSequence& sequence, cons
             }
             removal_error[u] = hi > lo ? err : 0.0;
         }));
+        if (releasable) {
+            std::vector<uint32_t>().swap(releasable->created_triangles);
+            std::vector<uint32_t>().swap(*releasable_triangles);
+        }
     } else {
         tris.reserve(point_triangles.size() / 3 * 3);
         // Alive incident triangles of every point, in insertion order, as ranges of one pool: laid out
@@ -655,6 +664,13 @@ Result<PfrepBuild> buildPfrepFromSequence(const CollapseSequence& sequence, cons
     return build;
 }
 
+} // namespace
+
+Result<PfrepBuild> buildPfrepFromSequence(const CollapseSequence& sequence, const std::vector<uint32_t>& point_triangles,
+                                          Diagnostics& diagnostics) {
+    return buildBlob(sequence, point_triangles, diagnostics, nullptr, nullptr);
+}
+
 Result<PfrepBuild> buildPfrep(const Mesh& mesh, const PfrepOptions& options, Diagnostics& diagnostics) {
     if (!(options.target_ratio >= 0.0f && options.target_ratio <= 1.0f))
         return invalidInput("pfrep options: ratio: expected a value in [0, 1]");
@@ -671,7 +687,7 @@ Result<PfrepBuild> buildPfrep(const Mesh& mesh, const PfrepOptions& options, Dia
     if (triangles.empty()) {
         LODBAKE_ASSIGN_OR_RETURN(triangles, pointTriangles(mesh, chain.sequence));
     }
-    return buildPfrepFromSequence(chain.sequence, triangles, diagnostics);
+    return buildBlob(chain.sequence, triangles, diagnostics, &chain.sequence, &triangles);
 }
 
 } // namespace lodbake

@@ -249,7 +249,8 @@ bool EdgeCollapser::evaluate(uint32_t edge, Candidate& c) const {
         // Half-edge collapse: the kept point stays where it is. When either end may go, the
         // direction with the lower cost is taken (ties: remove the first end, a).
         if (ra && rb) {
-            Quadric q_other = combinedQuadric(edge, b);
+            // Without attributes both directions have the same quadric (the points' sum).
+            Quadric q_other = channel_count_ == 0 ? q : combinedQuadric(edge, b);
             if (q_other.evaluate(pr) < q.evaluate(pk)) {
                 std::swap(c.removed, c.kept);
                 std::swap(pk, pr);
@@ -1119,28 +1120,57 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
     std::vector<uint8_t> covered_border;
     if (remove_components_) markCoveredBorders(covered_border);
     // Quadrics: area-weighted face planes plus constraint planes along feature edges.
+    // Each face's quadric and its feature edges' constraint quadrics are computed in parallel (fixed
+    // chunks of a batch of faces, into a small buffer) and added to the points in face order: the
+    // same sums as a serial loop.
     quadric_.assign(point_count, Quadric());
-    for (uint32_t f = 0; f < face_count; ++f) {
-        const Vec3d p0 = toD(position_[he_[f * 3].point]);
-        const Vec3d p1 = toD(position_[he_[f * 3 + 1].point]);
-        const Vec3d p2 = toD(position_[he_[f * 3 + 2].point]);
-        const Quadric q = Quadric::fromTriangle(p0, p1, p2);
-        for (uint32_t k = 0; k < 3; ++k) quadric_[he_[f * 3 + k].point] += q;
-        const Vec3d n = normalize(cross(p1 - p0, p2 - p0));
-        for (uint32_t k = 0; k < 3; ++k) {
-            const uint32_t h = f * 3 + k;
-            if (!isFeature(h) || (he_[h].twin != kNone && he_[h].twin < h)) continue;
-            const Vec3d a = toD(position_[he_[h].point]);
-            const Vec3d b = toD(position_[he_[nextHe(h)].point]);
-            const Vec3d e = b - a;
-            const Vec3d m = normalize(cross(e, n));
-            if (!(length2(m) > 0.0)) continue;
-            double weight = double(options.border_weight) * length2(e);
-            if (!covered_border.empty() && covered_border[h]) weight *= kCoveredBorderFactor;
-            Quadric cq = Quadric::fromPlane(m, -dot(m, a), weight);
-            cq.weight = 0; // constraints steer placement; they are not surface area
-            quadric_[he_[h].point] += cq;
-            quadric_[he_[nextHe(h)].point] += cq;
+    {
+        constexpr uint32_t kBatch = 4 * kInitChunk;
+        struct FaceQuadrics {
+            Quadric face;
+            Quadric constraint[3];
+            uint8_t has_constraint[3];
+        };
+        std::vector<FaceQuadrics> batch(kBatch);
+        for (uint32_t base = 0; base < face_count; base += kBatch) {
+            const uint32_t count = std::min(kBatch, face_count - base);
+            LODBAKE_RETURN_IF_ERROR(forChunks(count, [&](size_t, uint32_t first, uint32_t last) {
+                for (uint32_t i = first; i < last; ++i) {
+                    const uint32_t f = base + i;
+                    FaceQuadrics& out = batch[i];
+                    const Vec3d p0 = toD(position_[he_[f * 3].point]);
+                    const Vec3d p1 = toD(position_[he_[f * 3 + 1].point]);
+                    const Vec3d p2 = toD(position_[he_[f * 3 + 2].point]);
+                    out.face = Quadric::fromTriangle(p0, p1, p2);
+                    const Vec3d n = normalize(cross(p1 - p0, p2 - p0));
+                    for (uint32_t k = 0; k < 3; ++k) {
+                        out.has_constraint[k] = 0;
+                        const uint32_t h = f * 3 + k;
+                        if (!isFeature(h) || (he_[h].twin != kNone && he_[h].twin < h)) continue;
+                        const Vec3d a = toD(position_[he_[h].point]);
+                        const Vec3d b = toD(position_[he_[nextHe(h)].point]);
+                        const Vec3d e = b - a;
+                        const Vec3d m = normalize(cross(e, n));
+                        if (!(length2(m) > 0.0)) continue;
+                        double weight = double(options.border_weight) * length2(e);
+                        if (!covered_border.empty() && covered_border[h]) weight *= kCoveredBorderFactor;
+                        out.constraint[k] = Quadric::fromPlane(m, -dot(m, a), weight);
+                        out.constraint[k].weight = 0; // constraints steer placement; they are not surface area
+                        out.has_constraint[k] = 1;
+                    }
+                }
+            }));
+            for (uint32_t i = 0; i < count; ++i) {
+                const uint32_t f = base + i;
+                const FaceQuadrics& in = batch[i];
+                for (uint32_t k = 0; k < 3; ++k) quadric_[he_[f * 3 + k].point] += in.face;
+                for (uint32_t k = 0; k < 3; ++k) {
+                    if (!in.has_constraint[k]) continue;
+                    const uint32_t h = f * 3 + k;
+                    quadric_[he_[h].point] += in.constraint[k];
+                    quadric_[he_[nextHe(h)].point] += in.constraint[k];
+                }
+            }
         }
     }
     wedge_value_.assign(size_t(wedge_count) * channel_count_, 0.0f);
