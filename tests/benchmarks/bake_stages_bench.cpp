@@ -38,8 +38,7 @@ Clock now() {
     timespec ts;
     clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
     const double cpu = double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
-    const double wall =
-        std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
     return {wall, cpu};
 }
 
@@ -125,9 +124,10 @@ int main(int argc, char** argv) {
             Result<LodChain> c = buildLodChain(geometry, options, d);
             const Clock b = now();
             if (!c.ok()) return 1;
-            Result<std::vector<uint32_t>> t = c->sequence.point_triangles.empty()
-                                                  ? pointTriangles(geometry, c->sequence)
-                                                  : Result<std::vector<uint32_t>>(std::move(c->sequence.point_triangles));
+            Result<std::vector<uint32_t>> t =
+                c->sequence.point_triangles.empty()
+                    ? pointTriangles(geometry, c->sequence)
+                    : Result<std::vector<uint32_t>>(std::move(c->sequence.point_triangles));
             const Clock e = now();
             if (!t.ok()) return 1;
             Result<PfrepBuild> built = buildPfrepFromSequence(c->sequence, *t, d);

@@ -25,7 +25,9 @@ struct Triangle {
     uint32_t dependency; // point whose removal created it, kNone for input triangles
 };
 
-uint32_t bitWidth(uint32_t v) { return v == 0 ? 0 : 32 - uint32_t(__builtin_clz(v)); }
+uint32_t bitWidth(uint32_t v) {
+    return v == 0 ? 0 : 32 - uint32_t(__builtin_clz(v));
+}
 
 class BitWriter {
 public:
@@ -66,7 +68,7 @@ private:
     }
 
     std::vector<uint8_t> bytes_;
-    uint64_t pending_ = 0;      // bits not yet in bytes_ (fewer than 8 between calls)
+    uint64_t pending_ = 0; // bits not yet in bytes_ (fewer than 8 between calls)
     uint32_t pending_bits_ = 0;
 };
 
@@ -80,10 +82,16 @@ void writeCount(BitWriter& w, uint32_t count, uint32_t bits) {
     }
 }
 
-void put32(std::vector<uint8_t>& b, size_t at, uint32_t v) { std::memcpy(b.data() + at, &v, 4); }
-void putF32(std::vector<uint8_t>& b, size_t at, float v) { std::memcpy(b.data() + at, &v, 4); }
+void put32(std::vector<uint8_t>& b, size_t at, uint32_t v) {
+    std::memcpy(b.data() + at, &v, 4);
+}
+void putF32(std::vector<uint8_t>& b, size_t at, float v) {
+    std::memcpy(b.data() + at, &v, 4);
+}
 
-Vec3d toD(const Vec3f& v) { return Vec3d(v); }
+Vec3d toD(const Vec3f& v) {
+    return Vec3d(v);
+}
 
 double pointTriangleDistance(const Vec3d& p, const Vec3d& a, const Vec3d& b, const Vec3d& c) {
     // Closest point on a triangle (Ericson, Real-Time Collision Detection §5.1.5).
@@ -162,7 +170,8 @@ Result<std::vector<uint32_t>> pointTriangles(const Mesh& mesh, const CollapseSeq
     };
     std::unordered_map<Key, uint32_t, KeyHash> point_of;
     point_of.reserve(sequence.point_positions.size() * 2);
-    for (uint32_t p = 0; p < sequence.point_positions.size(); ++p) point_of.emplace(key(sequence.point_positions[p]), p);
+    for (uint32_t p = 0; p < sequence.point_positions.size(); ++p)
+        point_of.emplace(key(sequence.point_positions[p]), p);
     // One look-up per referenced vertex (not per corner).
     std::vector<uint32_t> point_of_vertex(mesh.positions.size(), kNone);
     std::vector<uint32_t> out;
@@ -314,7 +323,8 @@ Result<PfrepBuild> buildBlob(const CollapseSequence& sequence, const std::vector
             rank_of[u] = uint32_t(rank_point.size());
             rank_point.push_back(u);
             ring.assign(pool.begin() + incident[u].offset, pool.begin() + incident[u].offset + incident[u].size);
-            if (ring.empty()) return invalidInput("pfrep: collapse " + std::to_string(r) + ": removed point has no faces");
+            if (ring.empty())
+                return invalidInput("pfrep: collapse " + std::to_string(r) + ": removed point has no faces");
             incident[u].size = 0;
             double err = HUGE_VAL;
             bool created = false;
@@ -457,102 +467,102 @@ Result<PfrepBuild> buildBlob(const CollapseSequence& sequence, const std::vector
     std::vector<uint32_t> entry_offset(vertex_count);
     PfrepBuild build;
     LODBAKE_RETURN_IF_ERROR(parallelFor(chunks.size(), 1, [&](size_t chunk) {
-    EntryChunk& out = chunks[chunk];
-    std::vector<uint8_t> used, bits;
-    std::vector<uint32_t> seq, slot_of_edge, deps;
-    const uint32_t chunk_end = uint32_t(std::min<size_t>((chunk + 1) * kChunk, vertex_count));
-    for (uint32_t i = uint32_t(chunk * kChunk); i < chunk_end; ++i) {
-        out.stream.alignByte();
-        entry_offset[i] = uint32_t(out.stream.byteSize()); // within the chunk; made absolute below
-        const uint32_t first = fan_first[i], count = fan_first[i + 1] - first;
-        // Walks over the directed opposite edges a -> b; a walk starts where more edges leave
-        // than arrive when there is such a vertex.
-        used.assign(count, 0);
-        seq.clear();
-        slot_of_edge.assign(count, 0);
-        uint32_t remaining = count;
-        while (remaining > 0) {
-            uint32_t start = kNone;
-            // (quadratic: only for fans of ordinary size)
-            for (uint32_t e = 0; e < count && start == kNone && count <= 256; ++e) {
-                if (used[e]) continue;
-                int balance = 0;
-                for (uint32_t f = 0; f < count; ++f) {
-                    if (used[f]) continue;
-                    balance += slots[first + f].a == slots[first + e].a;
-                    balance -= slots[first + f].b == slots[first + e].a;
+        EntryChunk& out = chunks[chunk];
+        std::vector<uint8_t> used, bits;
+        std::vector<uint32_t> seq, slot_of_edge, deps;
+        const uint32_t chunk_end = uint32_t(std::min<size_t>((chunk + 1) * kChunk, vertex_count));
+        for (uint32_t i = uint32_t(chunk * kChunk); i < chunk_end; ++i) {
+            out.stream.alignByte();
+            entry_offset[i] = uint32_t(out.stream.byteSize()); // within the chunk; made absolute below
+            const uint32_t first = fan_first[i], count = fan_first[i + 1] - first;
+            // Walks over the directed opposite edges a -> b; a walk starts where more edges leave
+            // than arrive when there is such a vertex.
+            used.assign(count, 0);
+            seq.clear();
+            slot_of_edge.assign(count, 0);
+            uint32_t remaining = count;
+            while (remaining > 0) {
+                uint32_t start = kNone;
+                // (quadratic: only for fans of ordinary size)
+                for (uint32_t e = 0; e < count && start == kNone && count <= 256; ++e) {
+                    if (used[e]) continue;
+                    int balance = 0;
+                    for (uint32_t f = 0; f < count; ++f) {
+                        if (used[f]) continue;
+                        balance += slots[first + f].a == slots[first + e].a;
+                        balance -= slots[first + f].b == slots[first + e].a;
+                    }
+                    if (balance > 0) start = e;
                 }
-                if (balance > 0) start = e;
+                if (start == kNone)
+                    for (uint32_t e = 0; e < count; ++e)
+                        if (!used[e]) {
+                            start = e;
+                            break;
+                        }
+                seq.push_back(slots[first + start].a);
+                uint32_t e = start;
+                while (e != kNone) {
+                    used[e] = 1;
+                    --remaining;
+                    slot_of_edge[e] = uint32_t(seq.size() - 1);
+                    seq.push_back(slots[first + e].b);
+                    const uint32_t end = slots[first + e].b;
+                    e = kNone;
+                    for (uint32_t f = 0; f < count; ++f)
+                        if (!used[f] && slots[first + f].a == end) {
+                            e = f;
+                            break;
+                        }
+                }
             }
-            if (start == kNone)
+            if (seq.size() > 1 && seq.back() == seq.front()) seq.pop_back();
+            const uint32_t n = uint32_t(seq.size());
+            if (n > 63 + 65535) {
+                out.status = resourceLimit("pfrep: vertex with more than 65598 fan neighbours");
+                return;
+            }
+            deps.clear();
+            bool has_original = false;
+            for (uint32_t e = 0; e < count; ++e) {
+                if (slots[first + e].dep == kNone)
+                    has_original = true;
+                else
+                    deps.push_back(slots[first + e].dep);
+            }
+            std::sort(deps.begin(), deps.end());
+            deps.erase(std::unique(deps.begin(), deps.end()), deps.end());
+            uint32_t max_neighbour = 0, max_dep = 0;
+            for (uint32_t a : seq) max_neighbour = std::max(max_neighbour, a - i - 1);
+            for (uint32_t d : deps) max_dep = std::max(max_dep, i - 1 - d);
+            writeCount(out.stream, n, fmt::kPfrepCountBits);
+            writeCount(out.stream, uint32_t(deps.size()), fmt::kPfrepDependencyCountBits);
+            out.stream.write(has_original ? 1 : 0, 1);
+            const uint32_t wa = bitWidth(max_neighbour), wd = bitWidth(max_dep);
+            out.stream.write(wa, fmt::kPfrepWidthBits);
+            if (!deps.empty()) out.stream.write(wd, fmt::kPfrepWidthBits);
+            for (uint32_t a : seq) out.stream.write(a - i - 1, wa);
+            bits.assign(n, 0);
+            auto writeMask = [&](uint32_t dep) {
+                std::fill(bits.begin(), bits.end(), 0);
                 for (uint32_t e = 0; e < count; ++e)
-                    if (!used[e]) {
-                        start = e;
-                        break;
-                    }
-            seq.push_back(slots[first + start].a);
-            uint32_t e = start;
-            while (e != kNone) {
-                used[e] = 1;
-                --remaining;
-                slot_of_edge[e] = uint32_t(seq.size() - 1);
-                seq.push_back(slots[first + e].b);
-                const uint32_t end = slots[first + e].b;
-                e = kNone;
-                for (uint32_t f = 0; f < count; ++f)
-                    if (!used[f] && slots[first + f].a == end) {
-                        e = f;
-                        break;
-                    }
+                    if (slots[first + e].dep == dep) bits[slot_of_edge[e]] = 1;
+                for (uint32_t j = 0; j < n; j += 32) { // 32 mask bits per write
+                    const uint32_t take = std::min(32u, n - j);
+                    uint64_t word = 0;
+                    for (uint32_t k = 0; k < take; ++k) word |= uint64_t(bits[j + k]) << k;
+                    out.stream.write(word, take);
+                }
+            };
+            if (has_original) writeMask(kNone);
+            for (uint32_t d : deps) {
+                out.stream.write(i - 1 - d, wd);
+                writeMask(d);
             }
+            out.dependency_groups += deps.size();
+            out.neighbour_slots += n;
         }
-        if (seq.size() > 1 && seq.back() == seq.front()) seq.pop_back();
-        const uint32_t n = uint32_t(seq.size());
-        if (n > 63 + 65535) {
-            out.status = resourceLimit("pfrep: vertex with more than 65598 fan neighbours");
-            return;
-        }
-        deps.clear();
-        bool has_original = false;
-        for (uint32_t e = 0; e < count; ++e) {
-            if (slots[first + e].dep == kNone)
-                has_original = true;
-            else
-                deps.push_back(slots[first + e].dep);
-        }
-        std::sort(deps.begin(), deps.end());
-        deps.erase(std::unique(deps.begin(), deps.end()), deps.end());
-        uint32_t max_neighbour = 0, max_dep = 0;
-        for (uint32_t a : seq) max_neighbour = std::max(max_neighbour, a - i - 1);
-        for (uint32_t d : deps) max_dep = std::max(max_dep, i - 1 - d);
-        writeCount(out.stream, n, fmt::kPfrepCountBits);
-        writeCount(out.stream, uint32_t(deps.size()), fmt::kPfrepDependencyCountBits);
-        out.stream.write(has_original ? 1 : 0, 1);
-        const uint32_t wa = bitWidth(max_neighbour), wd = bitWidth(max_dep);
-        out.stream.write(wa, fmt::kPfrepWidthBits);
-        if (!deps.empty()) out.stream.write(wd, fmt::kPfrepWidthBits);
-        for (uint32_t a : seq) out.stream.write(a - i - 1, wa);
-        bits.assign(n, 0);
-        auto writeMask = [&](uint32_t dep) {
-            std::fill(bits.begin(), bits.end(), 0);
-            for (uint32_t e = 0; e < count; ++e)
-                if (slots[first + e].dep == dep) bits[slot_of_edge[e]] = 1;
-            for (uint32_t j = 0; j < n; j += 32) { // 32 mask bits per write
-                const uint32_t take = std::min(32u, n - j);
-                uint64_t word = 0;
-                for (uint32_t k = 0; k < take; ++k) word |= uint64_t(bits[j + k]) << k;
-                out.stream.write(word, take);
-            }
-        };
-        if (has_original) writeMask(kNone);
-        for (uint32_t d : deps) {
-            out.stream.write(i - 1 - d, wd);
-            writeMask(d);
-        }
-        out.dependency_groups += deps.size();
-        out.neighbour_slots += n;
-    }
-    out.stream.alignByte();
+        out.stream.alignByte();
     }));
     BitWriter stream;
     std::vector<uint8_t>& stream_bytes = stream.bytes();
@@ -598,8 +608,8 @@ Result<PfrepBuild> buildBlob(const CollapseSequence& sequence, const std::vector
     for (size_t b = blocks; b-- > 0;) {
         block_offset[b] = total;
         const size_t count = blockLast(b) - blockFirst(b);
-        total += count * (fmt::kPfrepVertexRecordSize + 2) + (entryEnd(blockLast(b) - 1) - entry_offset[blockFirst(b)]) +
-                 fmt::kPfrepStreamPadding;
+        total += count * (fmt::kPfrepVertexRecordSize + 2) +
+                 (entryEnd(blockLast(b) - 1) - entry_offset[blockFirst(b)]) + fmt::kPfrepStreamPadding;
     }
     if (total > 0xffffffffu) return resourceLimit("pfrep: blob larger than 4 GiB");
     std::vector<uint8_t>& blob = build.blob;
@@ -666,8 +676,8 @@ Result<PfrepBuild> buildBlob(const CollapseSequence& sequence, const std::vector
 
 } // namespace
 
-Result<PfrepBuild> buildPfrepFromSequence(const CollapseSequence& sequence, const std::vector<uint32_t>& point_triangles,
-                                          Diagnostics& diagnostics) {
+Result<PfrepBuild> buildPfrepFromSequence(const CollapseSequence& sequence,
+                                          const std::vector<uint32_t>& point_triangles, Diagnostics& diagnostics) {
     return buildBlob(sequence, point_triangles, diagnostics, nullptr, nullptr);
 }
 
