@@ -10,19 +10,24 @@
 #include <string>
 #include <unordered_map>
 
+#include "core/parallel.h"
 #include "lodrt/format.h"
 
 namespace lodbake {
 namespace {
 
 constexpr uint32_t kNone = 0xffffffffu;
+// Items per task of the parallel loops (fixed, so nothing depends on the thread count).
+constexpr size_t kChunk = 4096;
 
 struct Triangle {
     uint32_t p[3];
     uint32_t dependency; // point whose removal created it, kNone for input triangles
 };
 
-uint32_t bitWidth(uint32_t v) { return v == 0 ? 0 : 32 - uint32_t(__builtin_clz(v)); }
+uint32_t bitWidth(uint32_t v) {
+    return v == 0 ? 0 : 32 - uint32_t(__builtin_clz(v));
+}
 
 class BitWriter {
 public:
@@ -63,7 +68,7 @@ private:
     }
 
     std::vector<uint8_t> bytes_;
-    uint64_t pending_ = 0;      // bits not yet in bytes_ (fewer than 8 between calls)
+    uint64_t pending_ = 0; // bits not yet in bytes_ (fewer than 8 between calls)
     uint32_t pending_bits_ = 0;
 };
 
@@ -77,10 +82,16 @@ void writeCount(BitWriter& w, uint32_t count, uint32_t bits) {
     }
 }
 
-void put32(std::vector<uint8_t>& b, size_t at, uint32_t v) { std::memcpy(b.data() + at, &v, 4); }
-void putF32(std::vector<uint8_t>& b, size_t at, float v) { std::memcpy(b.data() + at, &v, 4); }
+void put32(std::vector<uint8_t>& b, size_t at, uint32_t v) {
+    std::memcpy(b.data() + at, &v, 4);
+}
+void putF32(std::vector<uint8_t>& b, size_t at, float v) {
+    std::memcpy(b.data() + at, &v, 4);
+}
 
-Vec3d toD(const Vec3f& v) { return Vec3d(v); }
+Vec3d toD(const Vec3f& v) {
+    return Vec3d(v);
+}
 
 double pointTriangleDistance(const Vec3d& p, const Vec3d& a, const Vec3d& b, const Vec3d& c) {
     // Closest point on a triangle (Ericson, Real-Time Collision Detection §5.1.5).
@@ -159,7 +170,8 @@ Result<std::vector<uint32_t>> pointTriangles(const Mesh& mesh, const CollapseSeq
     };
     std::unordered_map<Key, uint32_t, KeyHash> point_of;
     point_of.reserve(sequence.point_positions.size() * 2);
-    for (uint32_t p = 0; p < sequence.point_positions.size(); ++p) point_of.emplace(key(sequence.point_positions[p]), p);
+    for (uint32_t p = 0; p < sequence.point_positions.size(); ++p)
+        point_of.emplace(key(sequence.point_positions[p]), p);
     // One look-up per referenced vertex (not per corner).
     std::vector<uint32_t> point_of_vertex(mesh.positions.size(), kNone);
     std::vector<uint32_t> out;
@@ -183,101 +195,162 @@ Result<std::vector<uint32_t>> pointTriangles(const Mesh& mesh, const CollapseSeq
     return out;
 }
 
-Result<PfrepBuild> buildPfrepFromSequence(const CollapseSequence& sequence, const std::vector<uint32_t>& point_triangles,
-                                          Diagnostics& diagnostics) {
+namespace {
+
+// buildPfrepFromSequence; when `releasable` is not null (buildPfrep's own sequence and triangles),
+// the triangle lists are released as soon as the blob's own list of triangles holds them.
+Result<PfrepBuild> buildBlob(const CollapseSequence& sequence, const std::vector<uint32_t>& point_triangles,
+                             Diagnostics& diagnostics, CollapseSequence* releasable,
+                             std::vector<uint32_t>* releasable_triangles) {
     namespace fmt = lodrt::format;
     const uint32_t point_count = uint32_t(sequence.point_positions.size());
     if (point_triangles.size() % 3 != 0) return invalidInput("pfrep: point triangle list is not a multiple of 3");
     std::vector<Triangle> tris;
-    tris.reserve(point_triangles.size() / 3 * 3);
-    // Alive incident triangles of every point, in insertion order, as ranges of one pool: laid out
-    // point after point for the input, a range moves to the pool's end when it outgrows its capacity.
-    // A triangle leaves its corners' ranges when it dies, so a removed point's range is its ring.
     const size_t input_count = point_triangles.size() / 3;
     for (size_t c = 0; c < point_triangles.size(); ++c)
         if (point_triangles[c] >= point_count)
             return invalidInput("pfrep: triangle " + std::to_string(c / 3) + ": point out of range");
-    struct Range {
-        uint32_t offset = 0, size = 0, capacity = 0;
-    };
-    std::vector<Range> incident(point_count);
-    for (uint32_t p : point_triangles) ++incident[p].capacity;
-    std::vector<uint8_t> referenced(point_count, 0);
-    size_t pool_size = 0;
-    for (uint32_t p = 0; p < point_count; ++p) {
-        referenced[p] = incident[p].capacity > 0;
-        incident[p].offset = uint32_t(pool_size);
-        incident[p].capacity += 4; // room for the triangles a neighbour's removal brings
-        pool_size += incident[p].capacity;
-    }
-    if (pool_size > 0xffffffffu / 2) return resourceLimit("pfrep: too many triangles");
-    std::vector<uint32_t> pool(pool_size);
-    pool.reserve(pool_size + pool_size / 2);
-    auto link = [&](uint32_t p, uint32_t t) {
-        Range& r = incident[p];
-        if (r.size == r.capacity) {
-            const uint32_t offset = uint32_t(pool.size());
-            pool.resize(pool.size() + size_t(r.capacity) * 2);
-            std::copy(pool.begin() + r.offset, pool.begin() + r.offset + r.size, pool.begin() + offset);
-            r.offset = offset;
-            r.capacity *= 2;
-        }
-        pool[r.offset + r.size++] = t;
-    };
-    auto unlink = [&](uint32_t p, uint32_t t) {
-        Range& r = incident[p];
-        uint32_t* first = pool.data() + r.offset;
-        r.size = uint32_t(std::remove(first, first + r.size, t) - first);
-    };
-    for (size_t t = 0; t < input_count; ++t) {
-        Triangle tri{{point_triangles[t * 3], point_triangles[t * 3 + 1], point_triangles[t * 3 + 2]}, kNone};
-        for (uint32_t p : tri.p) link(p, uint32_t(tris.size()));
-        tris.push_back(tri);
-    }
-
-    // Replay: ranks in removal order, then the survivors that have faces, by point id.
     std::vector<uint32_t> rank_of(point_count, kNone);
     std::vector<uint32_t> rank_point;
     rank_point.reserve(point_count);
     std::vector<double> removal_error(point_count, 0.0);
-    std::vector<uint32_t> ring;
-    for (size_t r = 0; r < sequence.records.size(); ++r) {
-        const CollapseRecord& rec = sequence.records[r];
-        const uint32_t u = rec.removed_point, v = rec.kept_point;
-        if (u >= point_count || v >= point_count || u == v || rank_of[u] != kNone || rank_of[v] != kNone)
-            return invalidInput("pfrep: collapse " + std::to_string(r) + ": bad points");
-        if (rec.position != sequence.point_positions[v])
-            return invalidInput("pfrep: collapse " + std::to_string(r) +
-                                ": the kept point moves (full-edge collapse); PFRep needs placement KeepEndpoint");
-        rank_of[u] = uint32_t(rank_point.size());
-        rank_point.push_back(u);
-        ring.assign(pool.begin() + incident[u].offset, pool.begin() + incident[u].offset + incident[u].size);
-        if (ring.empty()) return invalidInput("pfrep: collapse " + std::to_string(r) + ": removed point has no faces");
-        incident[u].size = 0;
-        double err = HUGE_VAL;
-        bool created = false;
-        const Vec3d pu = toD(sequence.point_positions[u]);
-        for (uint32_t t : ring) {
-            for (uint32_t p : tris[t].p)
-                if (p != u) unlink(p, t);
-            const Triangle& old = tris[t];
-            if (old.p[0] == v || old.p[1] == v || old.p[2] == v) continue;
-            Triangle fresh = old;
-            for (uint32_t& p : fresh.p)
-                if (p == u) p = v;
-            fresh.dependency = u;
-            const uint32_t id = uint32_t(tris.size());
-            tris.push_back(fresh);
-            for (uint32_t p : fresh.p) link(p, id);
-            err = std::min(err, pointTriangleDistance(pu, toD(sequence.point_positions[fresh.p[0]]),
-                                                      toD(sequence.point_positions[fresh.p[1]]),
-                                                      toD(sequence.point_positions[fresh.p[2]])));
-            created = true;
+    std::vector<uint8_t> referenced(point_count, 0);
+    // The simplifier logs the triangles each record re-creates (CollapseSequence::created_triangles):
+    // then the list of every triangle is the input's followed by the log, and no replay is needed.
+    const bool logged = !sequence.records.empty() && sequence.created_end.size() == sequence.records.size();
+    if (logged) {
+        const size_t created_count = sequence.created_end.back();
+        if (sequence.created_triangles.size() != created_count * 3)
+            return invalidInput("pfrep: the re-created triangle log does not match its ranges");
+        for (uint32_t p : point_triangles) referenced[p] = 1;
+        tris.reserve(input_count + created_count);
+        for (size_t t = 0; t < input_count; ++t)
+            tris.push_back({{point_triangles[t * 3], point_triangles[t * 3 + 1], point_triangles[t * 3 + 2]}, kNone});
+        size_t first = 0;
+        for (size_t r = 0; r < sequence.records.size(); ++r) {
+            const CollapseRecord& rec = sequence.records[r];
+            const uint32_t u = rec.removed_point, v = rec.kept_point;
+            if (u >= point_count || v >= point_count || u == v || rank_of[u] != kNone || rank_of[v] != kNone)
+                return invalidInput("pfrep: collapse " + std::to_string(r) + ": bad points");
+            if (rec.position != sequence.point_positions[v])
+                return invalidInput("pfrep: collapse " + std::to_string(r) +
+                                    ": the kept point moves (full-edge collapse); PFRep needs placement KeepEndpoint");
+            const size_t last = sequence.created_end[r];
+            if (last < first || last > created_count)
+                return invalidInput("pfrep: collapse " + std::to_string(r) + ": bad re-created triangle range");
+            rank_of[u] = uint32_t(rank_point.size());
+            rank_point.push_back(u);
+            for (size_t t = first; t < last; ++t) {
+                const uint32_t* c = &sequence.created_triangles[t * 3];
+                if (c[0] >= point_count || c[1] >= point_count || c[2] >= point_count)
+                    return invalidInput("pfrep: collapse " + std::to_string(r) +
+                                        ": re-created triangle point out of range");
+                tris.push_back({{c[0], c[1], c[2]}, u});
+            }
+            first = last;
         }
-        removal_error[u] = created ? err : 0.0;
+        // Each removed point's error: its distance to the nearest triangle its removal creates (0
+        // when it creates none). Independent per record: fixed chunks in parallel.
+        LODBAKE_RETURN_IF_ERROR(parallelFor(sequence.records.size(), kChunk, [&](size_t r) {
+            const uint32_t u = sequence.records[r].removed_point;
+            const size_t lo = r == 0 ? 0 : sequence.created_end[r - 1], hi = sequence.created_end[r];
+            double err = HUGE_VAL;
+            const Vec3d pu = toD(sequence.point_positions[u]);
+            for (size_t t = lo; t < hi; ++t) {
+                const uint32_t* c = &sequence.created_triangles[t * 3];
+                err = std::min(err, pointTriangleDistance(pu, toD(sequence.point_positions[c[0]]),
+                                                          toD(sequence.point_positions[c[1]]),
+                                                          toD(sequence.point_positions[c[2]])));
+            }
+            removal_error[u] = hi > lo ? err : 0.0;
+        }));
+        if (releasable) {
+            std::vector<uint32_t>().swap(releasable->created_triangles);
+            std::vector<uint32_t>().swap(*releasable_triangles);
+        }
+    } else {
+        tris.reserve(point_triangles.size() / 3 * 3);
+        // Alive incident triangles of every point, in insertion order, as ranges of one pool: laid out
+        // point after point for the input, a range moves to the pool's end when it outgrows its capacity.
+        // A triangle leaves its corners' ranges when it dies, so a removed point's range is its ring.
+        struct Range {
+            uint32_t offset = 0, size = 0, capacity = 0;
+        };
+        std::vector<Range> incident(point_count);
+        for (uint32_t p : point_triangles) ++incident[p].capacity;
+        size_t pool_size = 0;
+        for (uint32_t p = 0; p < point_count; ++p) {
+            referenced[p] = incident[p].capacity > 0;
+            incident[p].offset = uint32_t(pool_size);
+            incident[p].capacity += 4; // room for the triangles a neighbour's removal brings
+            pool_size += incident[p].capacity;
+        }
+        if (pool_size > 0xffffffffu / 2) return resourceLimit("pfrep: too many triangles");
+        std::vector<uint32_t> pool(pool_size);
+        pool.reserve(pool_size + pool_size / 2);
+        auto link = [&](uint32_t p, uint32_t t) {
+            Range& r = incident[p];
+            if (r.size == r.capacity) {
+                const uint32_t offset = uint32_t(pool.size());
+                pool.resize(pool.size() + size_t(r.capacity) * 2);
+                std::copy(pool.begin() + r.offset, pool.begin() + r.offset + r.size, pool.begin() + offset);
+                r.offset = offset;
+                r.capacity *= 2;
+            }
+            pool[r.offset + r.size++] = t;
+        };
+        auto unlink = [&](uint32_t p, uint32_t t) {
+            Range& r = incident[p];
+            uint32_t* first = pool.data() + r.offset;
+            r.size = uint32_t(std::remove(first, first + r.size, t) - first);
+        };
+        for (size_t t = 0; t < input_count; ++t) {
+            Triangle tri{{point_triangles[t * 3], point_triangles[t * 3 + 1], point_triangles[t * 3 + 2]}, kNone};
+            for (uint32_t p : tri.p) link(p, uint32_t(tris.size()));
+            tris.push_back(tri);
+        }
+
+        // Replay: ranks in removal order, then the survivors that have faces, by point id.
+        std::vector<uint32_t> ring;
+        for (size_t r = 0; r < sequence.records.size(); ++r) {
+            const CollapseRecord& rec = sequence.records[r];
+            const uint32_t u = rec.removed_point, v = rec.kept_point;
+            if (u >= point_count || v >= point_count || u == v || rank_of[u] != kNone || rank_of[v] != kNone)
+                return invalidInput("pfrep: collapse " + std::to_string(r) + ": bad points");
+            if (rec.position != sequence.point_positions[v])
+                return invalidInput("pfrep: collapse " + std::to_string(r) +
+                                    ": the kept point moves (full-edge collapse); PFRep needs placement KeepEndpoint");
+            rank_of[u] = uint32_t(rank_point.size());
+            rank_point.push_back(u);
+            ring.assign(pool.begin() + incident[u].offset, pool.begin() + incident[u].offset + incident[u].size);
+            if (ring.empty())
+                return invalidInput("pfrep: collapse " + std::to_string(r) + ": removed point has no faces");
+            incident[u].size = 0;
+            double err = HUGE_VAL;
+            bool created = false;
+            const Vec3d pu = toD(sequence.point_positions[u]);
+            for (uint32_t t : ring) {
+                for (uint32_t p : tris[t].p)
+                    if (p != u) unlink(p, t);
+                const Triangle& old = tris[t];
+                if (old.p[0] == v || old.p[1] == v || old.p[2] == v) continue;
+                Triangle fresh = old;
+                for (uint32_t& p : fresh.p)
+                    if (p == u) p = v;
+                fresh.dependency = u;
+                const uint32_t id = uint32_t(tris.size());
+                tris.push_back(fresh);
+                for (uint32_t p : fresh.p) link(p, id);
+                err = std::min(err, pointTriangleDistance(pu, toD(sequence.point_positions[fresh.p[0]]),
+                                                          toD(sequence.point_positions[fresh.p[1]]),
+                                                          toD(sequence.point_positions[fresh.p[2]])));
+                created = true;
+            }
+            removal_error[u] = created ? err : 0.0;
+        }
+        std::vector<uint32_t>().swap(pool);
+        std::vector<Range>().swap(incident);
     }
-    std::vector<uint32_t>().swap(pool);
-    std::vector<Range>().swap(incident);
     const uint32_t removed = uint32_t(rank_point.size());
     for (uint32_t p = 0; p < point_count; ++p) {
         if (rank_of[p] != kNone || !referenced[p]) continue;
@@ -287,9 +360,24 @@ Result<PfrepBuild> buildPfrepFromSequence(const CollapseSequence& sequence, cons
     const uint32_t vertex_count = uint32_t(rank_point.size());
     if (vertex_count >= fmt::kPfrepMaxVertices) return resourceLimit("pfrep: too many vertices");
 
-    // Every triangle goes to the fan of its lowest-ranked corner, rotated to start there.
+    // Every triangle goes to the fan of its lowest-ranked corner, rotated to start there. The rank
+    // look-ups (random accesses) are done in parallel, in place: each triangle becomes its corners'
+    // ranks rotated to start at the lowest, and its dependency's rank.
+    size_t level0 = 0;
+    for (const Triangle& t : tris) level0 += t.dependency == kNone;
+    LODBAKE_RETURN_IF_ERROR(parallelFor((tris.size() + kChunk - 1) / kChunk, 1, [&](size_t chunk) {
+        const size_t last = std::min(tris.size(), (chunk + 1) * kChunk);
+        for (size_t i = chunk * kChunk; i < last; ++i) {
+            Triangle& t = tris[i];
+            const uint32_t r[3] = {rank_of[t.p[0]], rank_of[t.p[1]], rank_of[t.p[2]]};
+            int m = 0;
+            if (r[1] < r[m]) m = 1;
+            if (r[2] < r[m]) m = 2;
+            t = {{r[m], r[(m + 1) % 3], r[(m + 2) % 3]}, t.dependency == kNone ? kNone : rank_of[t.dependency]};
+        }
+    }));
     std::vector<uint32_t> fan_first(vertex_count + 1, 0);
-    for (const Triangle& t : tris) ++fan_first[std::min({rank_of[t.p[0]], rank_of[t.p[1]], rank_of[t.p[2]]}) + 1];
+    for (const Triangle& t : tris) ++fan_first[t.p[0] + 1];
     for (uint32_t i = 0; i < vertex_count; ++i) fan_first[i + 1] += fan_first[i];
     struct Slot {
         uint32_t a, b, dep; // ranks; dep kNone for input triangles
@@ -297,15 +385,10 @@ Result<PfrepBuild> buildPfrepFromSequence(const CollapseSequence& sequence, cons
     std::vector<Slot> slots(tris.size());
     {
         std::vector<uint32_t> fill(fan_first.begin(), fan_first.end() - 1);
-        for (const Triangle& t : tris) {
-            uint32_t r[3] = {rank_of[t.p[0]], rank_of[t.p[1]], rank_of[t.p[2]]};
-            int m = 0;
-            if (r[1] < r[m]) m = 1;
-            if (r[2] < r[m]) m = 2;
-            const uint32_t dep = t.dependency == kNone ? kNone : rank_of[t.dependency];
-            slots[fill[r[m]]++] = {r[(m + 1) % 3], r[(m + 2) % 3], dep};
-        }
+        for (const Triangle& t : tris) slots[fill[t.p[0]]++] = {t.p[1], t.p[2], t.dependency};
     }
+    const size_t stored_triangles = tris.size();
+    std::vector<Triangle>().swap(tris); // the slots hold everything from here on
 
     // Triangles per level: the slot at entry c with dependency d lives in levels (d, c] (from 0 for
     // input triangles), capped at the last level.
@@ -324,23 +407,20 @@ Result<PfrepBuild> buildPfrepFromSequence(const CollapseSequence& sequence, cons
 
     // Per-vertex bounds for the view-dependent criterion, accumulated over dependencies (whose
     // ranks are lower, so already final): error and sphere grow monotonically up the hierarchy.
+    // Each vertex's own fan is measured in parallel (fixed chunks); then one pass in rank order adds
+    // what the dependencies bring. Every value is a maximum, so splitting the two changes no bit.
     std::vector<double> err(vertex_count, 0.0), radius(vertex_count, 0.0), cone_angle(vertex_count, 0.0);
     std::vector<Vec3d> axis(vertex_count);
     auto pos = [&](uint32_t rank) { return toD(sequence.point_positions[rank_point[rank]]); };
-    for (uint32_t i = 0; i < vertex_count; ++i) {
+    LODBAKE_RETURN_IF_ERROR(parallelFor(vertex_count, kChunk, [&](size_t vi) {
+        const uint32_t i = uint32_t(vi);
         const Vec3d pi = pos(i);
-        double e = i < removed ? removal_error[rank_point[i]] : 0.0;
         double rad = 0;
         Vec3d sum;
         for (uint32_t s = fan_first[i]; s < fan_first[i + 1]; ++s) {
             const Vec3d pa = pos(slots[s].a), pb = pos(slots[s].b);
             rad = std::max({rad, length(pa - pi), length(pb - pi)});
             sum += cross(pa - pi, pb - pi);
-            if (slots[s].dep != kNone) {
-                const uint32_t d = slots[s].dep;
-                e = std::max(e, err[d]);
-                rad = std::max(rad, length(pos(d) - pi) + radius[d]);
-            }
         }
         Vec3d ax = normalize(sum);
         double angle = 0;
@@ -352,113 +432,161 @@ Result<PfrepBuild> buildPfrepFromSequence(const CollapseSequence& sequence, cons
             min_cos = std::min(min_cos, std::clamp(dot(ax, normalize(cross(pa - pi, pb - pi))), -1.0, 1.0));
         }
         if (min_cos != HUGE_VAL) angle = std::max(angle, std::acos(min_cos));
-        for (uint32_t s = fan_first[i]; s < fan_first[i + 1]; ++s) {
-            const uint32_t d = slots[s].dep;
-            if (d == kNone) continue;
-            angle = std::max(angle, std::acos(std::clamp(dot(ax, axis[d]), -1.0, 1.0)) + cone_angle[d]);
+        err[i] = i < removed ? removal_error[rank_point[i]] : 0.0;
+        radius[i] = rad;
+        axis[i] = ax;
+        cone_angle[i] = angle;
+    }));
+    for (uint32_t i = 0; i < vertex_count; ++i) {
+        double e = err[i], rad = radius[i], angle = cone_angle[i];
+        const uint32_t s_end = fan_first[i + 1];
+        if (fan_first[i] < s_end) {
+            const Vec3d pi = pos(i);
+            const Vec3d& ax = axis[i];
+            for (uint32_t s = fan_first[i]; s < s_end; ++s) {
+                const uint32_t d = slots[s].dep;
+                if (d == kNone) continue;
+                e = std::max(e, err[d]);
+                rad = std::max(rad, length(pos(d) - pi) + radius[d]);
+                angle = std::max(angle, std::acos(std::clamp(dot(ax, axis[d]), -1.0, 1.0)) + cone_angle[d]);
+            }
         }
         err[i] = e;
         radius[i] = rad;
-        axis[i] = ax;
         cone_angle[i] = std::min(angle, M_PI);
     }
-
-    // Entries.
-    BitWriter stream;
+    // Entries. Each starts on a byte boundary and depends only on its own fan, so fixed chunks of
+    // vertices are written in parallel, each into its own stream, and concatenated in order: the
+    // same bytes as one stream written entry after entry.
+    struct EntryChunk {
+        BitWriter stream;
+        Status status = Status::okStatus();
+        size_t dependency_groups = 0, neighbour_slots = 0;
+    };
+    std::vector<EntryChunk> chunks((size_t(vertex_count) + kChunk - 1) / kChunk);
     std::vector<uint32_t> entry_offset(vertex_count);
     PfrepBuild build;
-    std::vector<uint8_t> used, bits;
-    std::vector<uint32_t> seq, slot_of_edge, deps;
-    for (uint32_t i = 0; i < vertex_count; ++i) {
-        stream.alignByte();
-        entry_offset[i] = uint32_t(stream.byteSize());
-        const uint32_t first = fan_first[i], count = fan_first[i + 1] - first;
-        // Walks over the directed opposite edges a -> b; a walk starts where more edges leave
-        // than arrive when there is such a vertex.
-        used.assign(count, 0);
-        seq.clear();
-        slot_of_edge.assign(count, 0);
-        uint32_t remaining = count;
-        while (remaining > 0) {
-            uint32_t start = kNone;
-            // (quadratic: only for fans of ordinary size)
-            for (uint32_t e = 0; e < count && start == kNone && count <= 256; ++e) {
-                if (used[e]) continue;
-                int balance = 0;
-                for (uint32_t f = 0; f < count; ++f) {
-                    if (used[f]) continue;
-                    balance += slots[first + f].a == slots[first + e].a;
-                    balance -= slots[first + f].b == slots[first + e].a;
+    LODBAKE_RETURN_IF_ERROR(parallelFor(chunks.size(), 1, [&](size_t chunk) {
+        EntryChunk& out = chunks[chunk];
+        std::vector<uint8_t> used, bits;
+        std::vector<uint32_t> seq, slot_of_edge, deps;
+        const uint32_t chunk_end = uint32_t(std::min<size_t>((chunk + 1) * kChunk, vertex_count));
+        for (uint32_t i = uint32_t(chunk * kChunk); i < chunk_end; ++i) {
+            out.stream.alignByte();
+            entry_offset[i] = uint32_t(out.stream.byteSize()); // within the chunk; made absolute below
+            const uint32_t first = fan_first[i], count = fan_first[i + 1] - first;
+            // Walks over the directed opposite edges a -> b; a walk starts where more edges leave
+            // than arrive when there is such a vertex.
+            used.assign(count, 0);
+            seq.clear();
+            slot_of_edge.assign(count, 0);
+            uint32_t remaining = count;
+            while (remaining > 0) {
+                uint32_t start = kNone;
+                // (quadratic: only for fans of ordinary size)
+                for (uint32_t e = 0; e < count && start == kNone && count <= 256; ++e) {
+                    if (used[e]) continue;
+                    int balance = 0;
+                    for (uint32_t f = 0; f < count; ++f) {
+                        if (used[f]) continue;
+                        balance += slots[first + f].a == slots[first + e].a;
+                        balance -= slots[first + f].b == slots[first + e].a;
+                    }
+                    if (balance > 0) start = e;
                 }
-                if (balance > 0) start = e;
+                if (start == kNone)
+                    for (uint32_t e = 0; e < count; ++e)
+                        if (!used[e]) {
+                            start = e;
+                            break;
+                        }
+                seq.push_back(slots[first + start].a);
+                uint32_t e = start;
+                while (e != kNone) {
+                    used[e] = 1;
+                    --remaining;
+                    slot_of_edge[e] = uint32_t(seq.size() - 1);
+                    seq.push_back(slots[first + e].b);
+                    const uint32_t end = slots[first + e].b;
+                    e = kNone;
+                    for (uint32_t f = 0; f < count; ++f)
+                        if (!used[f] && slots[first + f].a == end) {
+                            e = f;
+                            break;
+                        }
+                }
             }
-            if (start == kNone)
+            if (seq.size() > 1 && seq.back() == seq.front()) seq.pop_back();
+            const uint32_t n = uint32_t(seq.size());
+            if (n > 63 + 65535) {
+                out.status = resourceLimit("pfrep: vertex with more than 65598 fan neighbours");
+                return;
+            }
+            deps.clear();
+            bool has_original = false;
+            for (uint32_t e = 0; e < count; ++e) {
+                if (slots[first + e].dep == kNone)
+                    has_original = true;
+                else
+                    deps.push_back(slots[first + e].dep);
+            }
+            std::sort(deps.begin(), deps.end());
+            deps.erase(std::unique(deps.begin(), deps.end()), deps.end());
+            uint32_t max_neighbour = 0, max_dep = 0;
+            for (uint32_t a : seq) max_neighbour = std::max(max_neighbour, a - i - 1);
+            for (uint32_t d : deps) max_dep = std::max(max_dep, i - 1 - d);
+            writeCount(out.stream, n, fmt::kPfrepCountBits);
+            writeCount(out.stream, uint32_t(deps.size()), fmt::kPfrepDependencyCountBits);
+            out.stream.write(has_original ? 1 : 0, 1);
+            const uint32_t wa = bitWidth(max_neighbour), wd = bitWidth(max_dep);
+            out.stream.write(wa, fmt::kPfrepWidthBits);
+            if (!deps.empty()) out.stream.write(wd, fmt::kPfrepWidthBits);
+            for (uint32_t a : seq) out.stream.write(a - i - 1, wa);
+            bits.assign(n, 0);
+            auto writeMask = [&](uint32_t dep) {
+                std::fill(bits.begin(), bits.end(), 0);
                 for (uint32_t e = 0; e < count; ++e)
-                    if (!used[e]) {
-                        start = e;
-                        break;
-                    }
-            seq.push_back(slots[first + start].a);
-            uint32_t e = start;
-            while (e != kNone) {
-                used[e] = 1;
-                --remaining;
-                slot_of_edge[e] = uint32_t(seq.size() - 1);
-                seq.push_back(slots[first + e].b);
-                const uint32_t end = slots[first + e].b;
-                e = kNone;
-                for (uint32_t f = 0; f < count; ++f)
-                    if (!used[f] && slots[first + f].a == end) {
-                        e = f;
-                        break;
-                    }
+                    if (slots[first + e].dep == dep) bits[slot_of_edge[e]] = 1;
+                for (uint32_t j = 0; j < n; j += 32) { // 32 mask bits per write
+                    const uint32_t take = std::min(32u, n - j);
+                    uint64_t word = 0;
+                    for (uint32_t k = 0; k < take; ++k) word |= uint64_t(bits[j + k]) << k;
+                    out.stream.write(word, take);
+                }
+            };
+            if (has_original) writeMask(kNone);
+            for (uint32_t d : deps) {
+                out.stream.write(i - 1 - d, wd);
+                writeMask(d);
             }
+            out.dependency_groups += deps.size();
+            out.neighbour_slots += n;
         }
-        if (seq.size() > 1 && seq.back() == seq.front()) seq.pop_back();
-        const uint32_t n = uint32_t(seq.size());
-        if (n > 63 + 65535) return resourceLimit("pfrep: vertex with more than 65598 fan neighbours");
-        deps.clear();
-        bool has_original = false;
-        for (uint32_t e = 0; e < count; ++e) {
-            if (slots[first + e].dep == kNone)
-                has_original = true;
-            else
-                deps.push_back(slots[first + e].dep);
+        out.stream.alignByte();
+    }));
+    BitWriter stream;
+    std::vector<uint8_t>& stream_bytes = stream.bytes();
+    {
+        size_t total_bytes = 0;
+        for (EntryChunk& chunk : chunks) {
+            LODBAKE_RETURN_IF_ERROR(chunk.status);
+            total_bytes += chunk.stream.byteSize();
         }
-        std::sort(deps.begin(), deps.end());
-        deps.erase(std::unique(deps.begin(), deps.end()), deps.end());
-        uint32_t max_neighbour = 0, max_dep = 0;
-        for (uint32_t a : seq) max_neighbour = std::max(max_neighbour, a - i - 1);
-        for (uint32_t d : deps) max_dep = std::max(max_dep, i - 1 - d);
-        writeCount(stream, n, fmt::kPfrepCountBits);
-        writeCount(stream, uint32_t(deps.size()), fmt::kPfrepDependencyCountBits);
-        stream.write(has_original ? 1 : 0, 1);
-        const uint32_t wa = bitWidth(max_neighbour), wd = bitWidth(max_dep);
-        stream.write(wa, fmt::kPfrepWidthBits);
-        if (!deps.empty()) stream.write(wd, fmt::kPfrepWidthBits);
-        for (uint32_t a : seq) stream.write(a - i - 1, wa);
-        bits.assign(n, 0);
-        auto writeMask = [&](uint32_t dep) {
-            std::fill(bits.begin(), bits.end(), 0);
-            for (uint32_t e = 0; e < count; ++e)
-                if (slots[first + e].dep == dep) bits[slot_of_edge[e]] = 1;
-            for (uint32_t j = 0; j < n; j += 32) { // 32 mask bits per write
-                const uint32_t take = std::min(32u, n - j);
-                uint64_t word = 0;
-                for (uint32_t k = 0; k < take; ++k) word |= uint64_t(bits[j + k]) << k;
-                stream.write(word, take);
-            }
-        };
-        if (has_original) writeMask(kNone);
-        for (uint32_t d : deps) {
-            stream.write(i - 1 - d, wd);
-            writeMask(d);
+        if (total_bytes > 0xffffffffu) return resourceLimit("pfrep: blob larger than 4 GiB");
+        stream_bytes.reserve(total_bytes);
+        for (size_t c = 0; c < chunks.size(); ++c) {
+            const uint32_t base = uint32_t(stream_bytes.size());
+            const uint32_t chunk_end = uint32_t(std::min<size_t>((c + 1) * kChunk, vertex_count));
+            for (uint32_t i = uint32_t(c * kChunk); i < chunk_end; ++i) entry_offset[i] += base;
+            std::vector<uint8_t>& bytes = chunks[c].stream.bytes();
+            stream_bytes.insert(stream_bytes.end(), bytes.begin(), bytes.end());
+            std::vector<uint8_t>().swap(bytes);
+            build.dependency_groups += chunks[c].dependency_groups;
+            build.neighbour_slots += chunks[c].neighbour_slots;
         }
-        build.dependency_groups += deps.size();
-        build.neighbour_slots += n;
+        std::vector<EntryChunk>().swap(chunks);
     }
-    stream.alignByte();
-    const size_t entries_size = stream.byteSize();
+    const size_t entries_size = stream_bytes.size();
 
     // Blocks: the largest that keeps every in-block offset within 16 bits.
     uint32_t shift = fmt::kPfrepMaxBlockShift;
@@ -480,8 +608,8 @@ Result<PfrepBuild> buildPfrepFromSequence(const CollapseSequence& sequence, cons
     for (size_t b = blocks; b-- > 0;) {
         block_offset[b] = total;
         const size_t count = blockLast(b) - blockFirst(b);
-        total += count * (fmt::kPfrepVertexRecordSize + 2) + (entryEnd(blockLast(b) - 1) - entry_offset[blockFirst(b)]) +
-                 fmt::kPfrepStreamPadding;
+        total += count * (fmt::kPfrepVertexRecordSize + 2) +
+                 (entryEnd(blockLast(b) - 1) - entry_offset[blockFirst(b)]) + fmt::kPfrepStreamPadding;
     }
     if (total > 0xffffffffu) return resourceLimit("pfrep: blob larger than 4 GiB");
     std::vector<uint8_t>& blob = build.blob;
@@ -499,8 +627,6 @@ Result<PfrepBuild> buildPfrepFromSequence(const CollapseSequence& sequence, cons
     const double diag = length(toD(hi) - toD(lo));
     const float error_unit = diag > 0 ? float(diag * std::ldexp(1.0, -24)) : 1e-30f;
 
-    size_t level0 = 0;
-    for (const Triangle& t : tris) level0 += t.dependency == kNone;
     put32(blob, 0, fmt::kPfrepMagic);
     put32(blob, 4, fmt::kPfrepVersion);
     put32(blob, 8, vertex_count);
@@ -515,7 +641,8 @@ Result<PfrepBuild> buildPfrepFromSequence(const CollapseSequence& sequence, cons
     put32(blob, 52, uint32_t(total));
     put32(blob, 56, uint32_t(blocks));
     put32(blob, 60, 0);
-    for (size_t b = 0; b < blocks; ++b) {
+    // Blocks own disjoint byte ranges: written in parallel, 16 per task.
+    LODBAKE_RETURN_IF_ERROR(parallelFor(blocks, 16, [&](size_t b) {
         put32(blob, directory_offset + b * 4, uint32_t(block_offset[b]));
         const uint32_t first = blockFirst(b), last = blockLast(b), count = last - first;
         uint8_t* records = blob.data() + block_offset[b];
@@ -535,16 +662,23 @@ Result<PfrepBuild> buildPfrepFromSequence(const CollapseSequence& sequence, cons
             std::memcpy(records + size_t(count) * fmt::kPfrepVertexRecordSize + size_t(i - first) * 2, &rel, 2);
         }
         std::memcpy(records + size_t(count) * (fmt::kPfrepVertexRecordSize + 2),
-                    stream.bytes().data() + entry_offset[first], entryEnd(last - 1) - entry_offset[first]);
-    }
+                    stream_bytes.data() + entry_offset[first], entryEnd(last - 1) - entry_offset[first]);
+    }));
 
     build.rank_point = std::move(rank_point);
     build.removed = removed;
     build.level0_triangles = level0;
-    build.stored_triangles = tris.size();
+    build.stored_triangles = stored_triangles;
     build.level_triangles = std::move(level_triangles);
     if (removed == 0) diagnostics.note("pfrep: no vertex could be removed; the blob holds the input only");
     return build;
+}
+
+} // namespace
+
+Result<PfrepBuild> buildPfrepFromSequence(const CollapseSequence& sequence,
+                                          const std::vector<uint32_t>& point_triangles, Diagnostics& diagnostics) {
+    return buildBlob(sequence, point_triangles, diagnostics, nullptr, nullptr);
 }
 
 Result<PfrepBuild> buildPfrep(const Mesh& mesh, const PfrepOptions& options, Diagnostics& diagnostics) {
@@ -558,8 +692,12 @@ Result<PfrepBuild> buildPfrep(const Mesh& mesh, const PfrepOptions& options, Dia
     chain_options.measure_error = false;
     chain_options.record_collapses = true;
     LODBAKE_ASSIGN_OR_RETURN(LodChain chain, buildLodChain(mesh, chain_options, diagnostics));
-    LODBAKE_ASSIGN_OR_RETURN(std::vector<uint32_t> triangles, pointTriangles(mesh, chain.sequence));
-    return buildPfrepFromSequence(chain.sequence, triangles, diagnostics);
+    // The simplifier lists the point triangles it started from (no look-up of every vertex by position).
+    std::vector<uint32_t> triangles = std::move(chain.sequence.point_triangles);
+    if (triangles.empty()) {
+        LODBAKE_ASSIGN_OR_RETURN(triangles, pointTriangles(mesh, chain.sequence));
+    }
+    return buildBlob(chain.sequence, triangles, diagnostics, &chain.sequence, &triangles);
 }
 
 } // namespace lodbake

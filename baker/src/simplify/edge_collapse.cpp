@@ -34,6 +34,8 @@
 #include <string>
 #include <utility>
 
+#include "core/parallel.h"
+
 namespace lodbake::detail {
 
 namespace {
@@ -67,6 +69,18 @@ inline void prefetch(const void* p) {
 #else
     (void)p;
 #endif
+}
+
+// Items per task of init's parallel loops: fixed, so no result depends on the thread count.
+constexpr uint32_t kInitChunk = 4096;
+
+// Calls fn(chunk, first, last) for consecutive ranges of kInitChunk items of [0, count), in parallel.
+template <class Fn> Status forChunks(uint32_t count, Fn&& fn) {
+    const size_t chunks = (size_t(count) + kInitChunk - 1) / kInitChunk;
+    return parallelFor(chunks, 1, [&](size_t chunk) {
+        const uint32_t first = uint32_t(chunk * kInitChunk);
+        fn(chunk, first, uint32_t(std::min<size_t>(size_t(first) + kInitChunk, count)));
+    });
 }
 
 uint32_t floatBits(float f) {
@@ -235,7 +249,8 @@ bool EdgeCollapser::evaluate(uint32_t edge, Candidate& c) const {
         // Half-edge collapse: the kept point stays where it is. When either end may go, the
         // direction with the lower cost is taken (ties: remove the first end, a).
         if (ra && rb) {
-            Quadric q_other = combinedQuadric(edge, b);
+            // Without attributes both directions have the same quadric (the points' sum).
+            Quadric q_other = channel_count_ == 0 ? q : combinedQuadric(edge, b);
             if (q_other.evaluate(pr) < q.evaluate(pk)) {
                 std::swap(c.removed, c.kept);
                 std::swap(pk, pr);
@@ -504,6 +519,16 @@ void EdgeCollapser::collapse(const Candidate& c, const WedgePair* pairs, int pai
     }
     position_[v] = p;
 
+    // Half-edge sequence: the faces of u other than f0/f1 are re-created with v, oldest first.
+    const bool log_triangles = sequence && !face_triangle_.empty();
+    if (log_triangles) {
+        created_tmp_.clear();
+        for (uint32_t he : fan_u_) {
+            const uint32_t f = he / 3;
+            if (f != f0 && f != f1) created_tmp_.push_back({face_triangle_[f], f});
+        }
+        std::sort(created_tmp_.begin(), created_tmp_.end());
+    }
     for (uint32_t he : fan_u_) {
         he_[he].point = v;
         if (!corner_wedge_.empty()) {
@@ -530,6 +555,15 @@ void EdgeCollapser::collapse(const Candidate& c, const WedgePair* pairs, int pai
             he_[f * 3 + k].point = kNone;
         }
         --alive_faces_;
+    }
+
+    if (log_triangles) {
+        for (const auto& [id, f] : created_tmp_) {
+            (void)id;
+            for (uint32_t k = 0; k < 3; ++k) sequence->created_triangles.push_back(he_[f * 3 + k].point);
+            face_triangle_[f] = triangle_count_++;
+        }
+        sequence->created_end.push_back(uint32_t(sequence->created_triangles.size() / 3));
     }
 
     point_he_[v] = kNone;
@@ -1029,42 +1063,52 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
         LargeArray<uint32_t> fill(start.begin(), start.end() - 1);
         for (uint32_t h = 0; h < he_count; ++h) list[fill[he_[h].point]++] = h;
         LargeArray<uint32_t>().swap(fill);
-        for (uint32_t h = 0; h < he_count; ++h) {
-            // Already paired from its twin: the pairing is symmetric (a->b once and b->a once).
-            if (he_[h].twin != kNone) continue;
-            const uint32_t a = he_[h].point, b = he_[nextHe(h)].point;
-            uint32_t same = 0, reverse = 0, match = kNone;
-            for (uint32_t i = start[a]; i < start[a + 1]; ++i)
-                if (he_[nextHe(list[i])].point == b) ++same;
-            for (uint32_t i = start[b]; i < start[b + 1]; ++i)
-                if (he_[nextHe(list[i])].point == a) {
-                    ++reverse;
-                    match = list[i];
+        // Each half-edge finds its own twin (the pairing is symmetric: a->b once and b->a once), in
+        // parallel over fixed chunks; the points to lock are collected per chunk.
+        std::vector<std::vector<uint32_t>> lock_points((he_count + kInitChunk - 1) / kInitChunk);
+        LODBAKE_RETURN_IF_ERROR(forChunks(he_count, [&](size_t chunk, uint32_t first, uint32_t last) {
+            for (uint32_t h = first; h < last; ++h) {
+                const uint32_t a = he_[h].point, b = he_[nextHe(h)].point;
+                uint32_t same = 0, reverse = 0, match = kNone;
+                for (uint32_t i = start[a]; i < start[a + 1]; ++i)
+                    if (he_[nextHe(list[i])].point == b) ++same;
+                for (uint32_t i = start[b]; i < start[b + 1]; ++i)
+                    if (he_[nextHe(list[i])].point == a) {
+                        ++reverse;
+                        match = list[i];
+                    }
+                if (same == 1 && reverse == 1) {
+                    he_[h].twin = match;
+                } else if (same + reverse > 1) {
+                    lock_points[chunk].push_back(a);
+                    lock_points[chunk].push_back(b);
                 }
-            if (same == 1 && reverse == 1) {
-                he_[h].twin = match;
-                he_[match].twin = h;
-            } else if (same + reverse > 1) {
-                kind_[a] = kLocked;
-                kind_[b] = kLocked;
             }
-        }
+        }));
+        for (const std::vector<uint32_t>& points : lock_points)
+            for (uint32_t point : points) kind_[point] = kLocked;
+        std::vector<std::vector<uint32_t>>().swap(lock_points);
         point_he_.assign(point_count, kNone);
         for (uint32_t p = 0; p < point_count; ++p)
             if (start[p] < start[p + 1]) point_he_[p] = list[start[p]];
         // A point whose faces form more than one fan (a bow-tie) is non-manifold: lock it.
+        std::vector<size_t> locked_in_chunk((point_count + kInitChunk - 1) / kInitChunk, 0);
+        LODBAKE_RETURN_IF_ERROR(forChunks(point_count, [&](size_t chunk, uint32_t first, uint32_t last) {
+            std::vector<uint32_t> fan;
+            for (uint32_t p = first; p < last; ++p) {
+                if (point_he_[p] == kNone) {
+                    kind_[p] = kDead;
+                    continue;
+                }
+                if (kind_[p] != kLocked) {
+                    gatherFan(p, fan);
+                    if (fan.size() != start[p + 1] - start[p]) kind_[p] = kLocked;
+                }
+                if (kind_[p] == kLocked) ++locked_in_chunk[chunk];
+            }
+        }));
         size_t locked = 0;
-        for (uint32_t p = 0; p < point_count; ++p) {
-            if (point_he_[p] == kNone) {
-                kind_[p] = kDead;
-                continue;
-            }
-            if (kind_[p] != kLocked) {
-                gatherFan(p, fan_tmp_);
-                if (fan_tmp_.size() != start[p + 1] - start[p]) kind_[p] = kLocked;
-            }
-            if (kind_[p] == kLocked) ++locked;
-        }
+        for (size_t n : locked_in_chunk) locked += n;
         if (locked > 0)
             diagnostics.note("simplify input: " + std::to_string(locked) +
                              " points on non-manifold or inconsistently oriented edges/fans are kept unchanged");
@@ -1076,55 +1120,97 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
     std::vector<uint8_t> covered_border;
     if (remove_components_) markCoveredBorders(covered_border);
     // Quadrics: area-weighted face planes plus constraint planes along feature edges.
+    // Each face's quadric and its feature edges' constraint quadrics are computed in parallel (fixed
+    // chunks of a batch of faces, into a small buffer) and added to the points in face order: the
+    // same sums as a serial loop.
     quadric_.assign(point_count, Quadric());
-    for (uint32_t f = 0; f < face_count; ++f) {
-        const Vec3d p0 = toD(position_[he_[f * 3].point]);
-        const Vec3d p1 = toD(position_[he_[f * 3 + 1].point]);
-        const Vec3d p2 = toD(position_[he_[f * 3 + 2].point]);
-        const Quadric q = Quadric::fromTriangle(p0, p1, p2);
-        for (uint32_t k = 0; k < 3; ++k) quadric_[he_[f * 3 + k].point] += q;
-        const Vec3d n = normalize(cross(p1 - p0, p2 - p0));
-        for (uint32_t k = 0; k < 3; ++k) {
-            const uint32_t h = f * 3 + k;
-            if (!isFeature(h) || (he_[h].twin != kNone && he_[h].twin < h)) continue;
-            const Vec3d a = toD(position_[he_[h].point]);
-            const Vec3d b = toD(position_[he_[nextHe(h)].point]);
-            const Vec3d e = b - a;
-            const Vec3d m = normalize(cross(e, n));
-            if (!(length2(m) > 0.0)) continue;
-            double weight = double(options.border_weight) * length2(e);
-            if (!covered_border.empty() && covered_border[h]) weight *= kCoveredBorderFactor;
-            Quadric cq = Quadric::fromPlane(m, -dot(m, a), weight);
-            cq.weight = 0; // constraints steer placement; they are not surface area
-            quadric_[he_[h].point] += cq;
-            quadric_[he_[nextHe(h)].point] += cq;
+    {
+        constexpr uint32_t kBatch = 4 * kInitChunk;
+        struct FaceQuadrics {
+            Quadric face;
+            Quadric constraint[3];
+            uint8_t has_constraint[3];
+        };
+        std::vector<FaceQuadrics> batch(kBatch);
+        for (uint32_t base = 0; base < face_count; base += kBatch) {
+            const uint32_t count = std::min(kBatch, face_count - base);
+            LODBAKE_RETURN_IF_ERROR(forChunks(count, [&](size_t, uint32_t first, uint32_t last) {
+                for (uint32_t i = first; i < last; ++i) {
+                    const uint32_t f = base + i;
+                    FaceQuadrics& out = batch[i];
+                    const Vec3d p0 = toD(position_[he_[f * 3].point]);
+                    const Vec3d p1 = toD(position_[he_[f * 3 + 1].point]);
+                    const Vec3d p2 = toD(position_[he_[f * 3 + 2].point]);
+                    out.face = Quadric::fromTriangle(p0, p1, p2);
+                    const Vec3d n = normalize(cross(p1 - p0, p2 - p0));
+                    for (uint32_t k = 0; k < 3; ++k) {
+                        out.has_constraint[k] = 0;
+                        const uint32_t h = f * 3 + k;
+                        if (!isFeature(h) || (he_[h].twin != kNone && he_[h].twin < h)) continue;
+                        const Vec3d a = toD(position_[he_[h].point]);
+                        const Vec3d b = toD(position_[he_[nextHe(h)].point]);
+                        const Vec3d e = b - a;
+                        const Vec3d m = normalize(cross(e, n));
+                        if (!(length2(m) > 0.0)) continue;
+                        double weight = double(options.border_weight) * length2(e);
+                        if (!covered_border.empty() && covered_border[h]) weight *= kCoveredBorderFactor;
+                        out.constraint[k] = Quadric::fromPlane(m, -dot(m, a), weight);
+                        out.constraint[k].weight = 0; // constraints steer placement; they are not surface area
+                        out.has_constraint[k] = 1;
+                    }
+                }
+            }));
+            for (uint32_t i = 0; i < count; ++i) {
+                const uint32_t f = base + i;
+                const FaceQuadrics& in = batch[i];
+                for (uint32_t k = 0; k < 3; ++k) quadric_[he_[f * 3 + k].point] += in.face;
+                for (uint32_t k = 0; k < 3; ++k) {
+                    if (!in.has_constraint[k]) continue;
+                    const uint32_t h = f * 3 + k;
+                    quadric_[he_[h].point] += in.constraint[k];
+                    quadric_[he_[nextHe(h)].point] += in.constraint[k];
+                }
+            }
         }
     }
     wedge_value_.assign(size_t(wedge_count) * channel_count_, 0.0f);
     block_size_ = channel_count_ > 0 ? attributeBlockSize(channel_count_) : 0;
     wedge_block_.assign(size_t(wedge_count) * block_size_, 0.0);
     if (channel_count_ > 0) {
-        std::vector<double> face_block(block_size_);
         for (uint32_t w = 0; w < wedge_count; ++w)
             for (uint32_t ch = 0; ch < channel_count_; ++ch)
                 wedge_value_[size_t(w) * channel_count_ + ch] = channelValue(wedge_vertex_[w], ch);
-        for (uint32_t f = 0; f < face_count; ++f) {
-            const Vec3d p0 = toD(position_[he_[f * 3].point]);
-            const Vec3d p1 = toD(position_[he_[f * 3 + 1].point]);
-            const Vec3d p2 = toD(position_[he_[f * 3 + 2].point]);
-            const size_t w0 = size_t(corner_wedge_[f * 3]) * channel_count_;
-            const size_t w1 = size_t(corner_wedge_[f * 3 + 1]) * channel_count_;
-            const size_t w2 = size_t(corner_wedge_[f * 3 + 2]) * channel_count_;
-            std::fill(face_block.begin(), face_block.end(), 0.0);
-            addTriangleToAttributeBlock(face_block.data(), channel_count_, p0, p1, p2, &wedge_value_[w0],
-                                        &wedge_value_[w1], &wedge_value_[w2], channel_weight_.data());
-            for (uint32_t k = 0; k < 3; ++k) {
-                double* block = &wedge_block_[size_t(corner_wedge_[f * 3 + k]) * block_size_];
-                for (size_t i = 0; i < block_size_; ++i) block[i] += face_block[i];
+        // Each face's attribute block is computed in parallel (fixed chunks of a batch of faces, into
+        // a small buffer) and added to its wedges in face order: the same sums as a serial loop.
+        constexpr uint32_t kBatch = 4 * kInitChunk;
+        std::vector<double> face_blocks(size_t(kBatch) * block_size_);
+        for (uint32_t base = 0; base < face_count; base += kBatch) {
+            const uint32_t count = std::min(kBatch, face_count - base);
+            LODBAKE_RETURN_IF_ERROR(forChunks(count, [&](size_t, uint32_t first, uint32_t last) {
+                for (uint32_t i = first; i < last; ++i) {
+                    const uint32_t f = base + i;
+                    const Vec3d p0 = toD(position_[he_[f * 3].point]);
+                    const Vec3d p1 = toD(position_[he_[f * 3 + 1].point]);
+                    const Vec3d p2 = toD(position_[he_[f * 3 + 2].point]);
+                    const size_t w0 = size_t(corner_wedge_[f * 3]) * channel_count_;
+                    const size_t w1 = size_t(corner_wedge_[f * 3 + 1]) * channel_count_;
+                    const size_t w2 = size_t(corner_wedge_[f * 3 + 2]) * channel_count_;
+                    double* face_block = &face_blocks[size_t(i) * block_size_];
+                    std::fill(face_block, face_block + block_size_, 0.0);
+                    addTriangleToAttributeBlock(face_block, channel_count_, p0, p1, p2, &wedge_value_[w0],
+                                                &wedge_value_[w1], &wedge_value_[w2], channel_weight_.data());
+                }
+            }));
+            for (uint32_t i = 0; i < count; ++i) {
+                const uint32_t f = base + i;
+                const double* face_block = &face_blocks[size_t(i) * block_size_];
+                for (uint32_t k = 0; k < 3; ++k) {
+                    double* block = &wedge_block_[size_t(corner_wedge_[f * 3 + k]) * block_size_];
+                    for (size_t j = 0; j < block_size_; ++j) block[j] += face_block[j];
+                }
             }
         }
     }
-
     has_penalty_ = options.tip_distance_weight > 0;
     // A PFRep record is a vertex removal (KeepEndpoint): no component removals there (above).
     next_component_check_ = size_t(double(face_count) * kComponentCheckStep);
@@ -1164,18 +1250,60 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
             ++chart_alive_[face_chart_[f]];
         }
     }
-    for (uint32_t p = 0; p < point_count; ++p) kind_[p] = classify(p);
+    // Every point's kind from its fan: independent, in parallel over fixed chunks.
+    LODBAKE_RETURN_IF_ERROR(forChunks(point_count, [&](size_t, uint32_t first, uint32_t last) {
+        std::vector<uint32_t> fan;
+        for (uint32_t p = first; p < last; ++p) {
+            if (kind_[p] == kLocked || kind_[p] == kDead) continue;
+            if (point_he_[p] == kNone) {
+                kind_[p] = kDead;
+                continue;
+            }
+            const bool closed = gatherFan(p, fan);
+            kind_[p] = classifyFan(fan, closed);
+        }
+    }));
 
     queue_ = CollapseQueue(he_count);
     queue_.reserve(he_count / 2 + 16);
-    Candidate c;
-    for (uint32_t h = 0; h < he_count; ++h)
-        if (canonical(h) == h && evaluate(h, c)) queue_.pushUnordered(h, float(c.cost));
+    // Initial keys: evaluated in parallel over fixed chunks of a batch into a small buffer, pushed in
+    // half-edge order (the heap's content and so its layout are those of a serial build).
+    {
+        constexpr uint32_t kBatch = 64 * kInitChunk;
+        std::vector<float> batch_cost(kBatch);
+        std::vector<uint8_t> batch_valid(kBatch);
+        for (uint32_t base = 0; base < he_count; base += kBatch) {
+            const uint32_t count = std::min(kBatch, he_count - base);
+            LODBAKE_RETURN_IF_ERROR(forChunks(count, [&](size_t, uint32_t first, uint32_t last) {
+                Candidate c;
+                for (uint32_t i = first; i < last; ++i) {
+                    const uint32_t h = base + i;
+                    batch_valid[i] = canonical(h) == h && evaluate(h, c);
+                    batch_cost[i] = batch_valid[i] ? float(c.cost) : 0.0f;
+                }
+            }));
+            for (uint32_t i = 0; i < count; ++i)
+                if (batch_valid[i]) queue_.pushUnordered(base + i, batch_cost[i]);
+        }
+    }
     queue_.heapify();
     return Status::okStatus();
 }
 
-void EdgeCollapser::describe(CollapseSequence& sequence) const {
+void EdgeCollapser::describe(CollapseSequence& sequence) {
+    sequence.point_triangles.clear();
+    sequence.created_triangles.clear();
+    sequence.created_end.clear();
+    face_triangle_.clear();
+    triangle_count_ = 0;
+    if (options_.placement == CollapsePlacement::KeepEndpoint && !remove_components_) {
+        const uint32_t face_count = uint32_t(he_.size() / 3);
+        sequence.point_triangles.resize(he_.size());
+        face_triangle_.resize(face_count);
+        for (uint32_t h = 0; h < uint32_t(he_.size()); ++h) sequence.point_triangles[h] = he_[h].point;
+        for (uint32_t f = 0; f < face_count; ++f) face_triangle_[f] = f;
+        triangle_count_ = face_count;
+    }
     sequence.point_positions.assign(position_.begin(), position_.end());
     sequence.wedge_point.assign(wedge_point_.begin(), wedge_point_.end());
     sequence.attribute_stride = channel_count_;

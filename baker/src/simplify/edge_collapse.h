@@ -31,8 +31,9 @@ public:
     /// The current mesh (alive faces in input order, referenced wedges in first-use order).
     Mesh extract() const;
 
-    /// Points, wedges and attribute layout of the sequence (before any record).
-    void describe(CollapseSequence& sequence) const;
+    /// Points, wedges and attribute layout of the sequence (before any record); for a half-edge
+    /// sequence (KeepEndpoint) also its point triangles, and later runs log the re-created triangles.
+    void describe(CollapseSequence& sequence);
 
     size_t faceCount() const { return alive_faces_; }
     // refine_late_levels applies to a snapshot taken now: at most 2.5 % of the input's faces (the 2 %
@@ -186,6 +187,13 @@ private:
     bool remove_components_ = false;   // remove_covered_components with Optimal placement
     size_t next_component_check_ = 0; // remove_covered_components: alive-face count of the next check
     size_t removals_ = 0, removed_faces_ = 0;
+
+    // Half-edge sequences (describe()): the triangle id of every face (an input face is its index, a
+    // face re-created by a collapse gets the next id), so that each record lists the triangles it
+    // re-creates in the order of the ones they replace (CollapseSequence::created_triangles).
+    LargeArray<uint32_t> face_triangle_;
+    uint32_t triangle_count_ = 0;
+    std::vector<std::pair<uint32_t, uint32_t>> created_tmp_; // (triangle id, face)
 
     std::vector<uint32_t> fan_u_, fan_v_, fan_tmp_;
     std::vector<uint32_t> link_u_; // isValid: the neighbours of the removed point

@@ -13,6 +13,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/parallel.h"
 #include "lodbake/core/bvh.h"
 
 namespace lodbake::detail {
@@ -31,6 +32,9 @@ constexpr size_t kMaxRefinePoints = 65536;
 // area, 77.8 with this bound).
 constexpr double kMinAreaRatio2 = 0.64;
 constexpr double kMaxAreaRatio2 = 1.5625;
+// Samples per task of the parallel nearest-face searches (fixed: nothing depends on the thread count).
+constexpr size_t kRefineChunk = 1024;
+constexpr size_t kRefineBlock = 16 * kRefineChunk;
 
 } // namespace
 
@@ -79,12 +83,21 @@ void refineLevelPositions(const Mesh& input, Mesh& level, float max_normal_chang
         referenced[i] = 1;
     }
     const size_t stride = std::max<size_t>(1, (referenced_count + kMaxRefinePoints - 1) / kMaxRefinePoints);
+    // The samples: every stride-th referenced vertex.
+    std::vector<uint32_t> sample_vertex;
+    {
+        size_t seen = 0;
+        for (size_t i = 0; i < input.positions.size(); ++i)
+            if (referenced[i] && seen++ % stride == 0) sample_vertex.push_back(uint32_t(i));
+    }
+    const size_t sample_count = sample_vertex.size();
+    std::vector<ClosestHit> hits(std::min(sample_count, kRefineBlock));
     std::vector<Vec3d> delta(groups);
     std::vector<double> weight(groups);
     // Each sample's distance from the previous step: no vertex moved further than `moved`, so the
     // new nearest face is within distance + moved, which bounds (and speeds up) the next search
     // without changing its result.
-    std::vector<double> previous;
+    std::vector<double> previous(sample_count, 0.0);
     double moved = 0.0;
     // The snapshot's face normals (unnormalised): the rotation bound, and on textured levels the
     // area bound, are relative to them, so three steps cannot add up to more than one step may do.
@@ -99,50 +112,63 @@ void refineLevelPositions(const Mesh& input, Mesh& level, float max_normal_chang
         if (!bvh.ok()) return; // out of resources: the level stays as the engine left it
         std::fill(delta.begin(), delta.end(), Vec3d());
         std::fill(weight.begin(), weight.end(), 0.0);
-        size_t seen = 0, sample = 0;
-        uint32_t last_face = 0; // the previous sample's face: scans list neighbouring points together
-        for (size_t i = 0; i < input.positions.size(); ++i) {
-            if (!referenced[i] || seen++ % stride != 0) continue;
-            const Vec3d x(input.positions[i]);
-            const size_t slot = sample++;
-            // Any face's distance bounds the search; searches that are bounded find the same face
-            // as an unbounded one (they only skip nodes further than the nearest face).
-            double bound2 = HUGE_VAL;
-            if (last_face < level.faceCount()) {
-                const Vec3d la(level.positions[level.indices[last_face * 3]]);
-                const Vec3d lb(level.positions[level.indices[last_face * 3 + 1]]);
-                const Vec3d lc(level.positions[level.indices[last_face * 3 + 2]]);
-                const Vec3d d = x - closestPointOnTriangle(x, la, lb, lc);
-                bound2 = dot(d, d);
-            }
-            if (it > 0) {
-                const double bound = previous[slot] + moved;
-                bound2 = std::min(bound2, bound * bound);
-            }
-            ClosestHit hit;
-            if (std::isfinite(bound2)) hit = bvh->closest(x, bound2 * (1.0 + 1e-6) + 1e-300);
-            if (!hit.isFound()) hit = bvh->closest(x);
-            if (hit.isFound()) last_face = hit.face.value;
-            if (it == 0) previous.push_back(0.0);
-            previous[slot] = std::sqrt(hit.distance_sq);
-            if (!hit.isFound()) continue;
-            const uint32_t f = hit.face.value;
-            const Vec3d a(level.positions[level.indices[f * 3]]), b(level.positions[level.indices[f * 3 + 1]]),
-                c(level.positions[level.indices[f * 3 + 2]]);
-            const Vec3d normal = cross(b - a, c - a);
-            const double area2 = dot(normal, normal);
-            if (!(area2 > 0.0)) continue;
-            const Vec3d& q = hit.point;
-            const double b0 = dot(cross(b - q, c - q), normal) / area2;
-            const double b1 = dot(cross(c - q, a - q), normal) / area2;
-            const double bary[3] = {b0, b1, 1.0 - b0 - b1};
-            const Vec3d unit = normal * (1.0 / std::sqrt(area2));
-            const double s = dot(x - q, unit);
-            for (int k = 0; k < 3; ++k) {
-                const uint32_t g = group[level.indices[f * 3 + k]];
-                const double w = std::max(0.0, bary[k]);
-                delta[g] += unit * (s * w);
-                weight[g] += w;
+        // The nearest level face of every sample, in parallel over fixed chunks of samples (each
+        // chunk starts its "previous face" hint afresh: a bound only speeds a search up, the face
+        // found is the same); the pulls are then added in sample order, as a serial loop adds them.
+        // A block of samples at a time, so the hits buffer stays small.
+        for (size_t block = 0; block < sample_count; block += kRefineBlock) {
+            const size_t block_end = std::min(block + kRefineBlock, sample_count);
+            const Status searched =
+                parallelFor((block_end - block + kRefineChunk - 1) / kRefineChunk, 1, [&](size_t chunk) {
+                    const size_t first = block + chunk * kRefineChunk, last = std::min(first + kRefineChunk, block_end);
+                    uint32_t last_face = 0; // the previous sample's face: scans list neighbouring points together
+                    for (size_t slot = first; slot < last; ++slot) {
+                        const Vec3d x(input.positions[sample_vertex[slot]]);
+                        // Any face's distance bounds the search; searches that are bounded find the same face
+                        // as an unbounded one (they only skip nodes further than the nearest face).
+                        double bound2 = HUGE_VAL;
+                        if (last_face < level.faceCount()) {
+                            const Vec3d la(level.positions[level.indices[last_face * 3]]);
+                            const Vec3d lb(level.positions[level.indices[last_face * 3 + 1]]);
+                            const Vec3d lc(level.positions[level.indices[last_face * 3 + 2]]);
+                            const Vec3d d = x - closestPointOnTriangle(x, la, lb, lc);
+                            bound2 = dot(d, d);
+                        }
+                        if (it > 0) {
+                            const double bound = previous[slot] + moved;
+                            bound2 = std::min(bound2, bound * bound);
+                        }
+                        ClosestHit hit;
+                        if (std::isfinite(bound2)) hit = bvh->closest(x, bound2 * (1.0 + 1e-6) + 1e-300);
+                        if (!hit.isFound()) hit = bvh->closest(x);
+                        if (hit.isFound()) last_face = hit.face.value;
+                        previous[slot] = std::sqrt(hit.distance_sq);
+                        hits[slot - block] = hit;
+                    }
+                });
+            if (!searched.ok()) return; // out of resources: the level keeps the previous step
+            for (size_t slot = block; slot < block_end; ++slot) {
+                const ClosestHit& hit = hits[slot - block];
+                if (!hit.isFound()) continue;
+                const Vec3d x(input.positions[sample_vertex[slot]]);
+                const uint32_t f = hit.face.value;
+                const Vec3d a(level.positions[level.indices[f * 3]]), b(level.positions[level.indices[f * 3 + 1]]),
+                    c(level.positions[level.indices[f * 3 + 2]]);
+                const Vec3d normal = cross(b - a, c - a);
+                const double area2 = dot(normal, normal);
+                if (!(area2 > 0.0)) continue;
+                const Vec3d& q = hit.point;
+                const double b0 = dot(cross(b - q, c - q), normal) / area2;
+                const double b1 = dot(cross(c - q, a - q), normal) / area2;
+                const double bary[3] = {b0, b1, 1.0 - b0 - b1};
+                const Vec3d unit = normal * (1.0 / std::sqrt(area2));
+                const double s = dot(x - q, unit);
+                for (int k = 0; k < 3; ++k) {
+                    const uint32_t g = group[level.indices[f * 3 + k]];
+                    const double w = std::max(0.0, bary[k]);
+                    delta[g] += unit * (s * w);
+                    weight[g] += w;
+                }
             }
         }
         // The step, then the normal-rotation bound of a collapse: a group whose move would turn

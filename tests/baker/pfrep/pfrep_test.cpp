@@ -11,6 +11,7 @@
 #include <random>
 #include <set>
 
+#include "core/parallel.h"
 #include "lodbake/io/mesh_io.h"
 #include "lodbake/pfrep/pfrep_builder.h"
 #include "lodbake/simplify/lod_chain.h"
@@ -505,6 +506,52 @@ TEST(PfrepBuilderTest, RefusesFullEdgeSequences) {
     auto r = lodbake::buildPfrepFromSequence(seq, {0, 1, 2, 1, 3, 2}, d);
     ASSERT_FALSE(r.ok());
     EXPECT_NE(r.status().message().find("KeepEndpoint"), std::string::npos);
+}
+
+// The simplifier logs the point triangles and the triangles each half-edge collapse re-creates; the
+// builder then needs no replay. Both ways must give the same bytes, at any thread count.
+TEST(PfrepBuilderTest, LoggedSequenceBuildsTheReplayedBlob) {
+    LODBAKE_REQUIRE_SHARED_MESHES();
+    lodbake::Diagnostics d;
+    auto loaded = lodbake::readMesh(lodbake_test::sharedMesh("rocker_arm.obj"), {}, d);
+    ASSERT_TRUE(loaded.ok());
+    lodbake::Mesh geometry;
+    geometry.positions = loaded->mesh.positions;
+    geometry.indices = loaded->mesh.indices;
+    lodbake::LodChainOptions options;
+    options.ratios = {1e-9};
+    options.measure_error = false;
+    options.record_collapses = true;
+    options.simplify.placement = lodbake::CollapsePlacement::KeepEndpoint;
+    auto chain = lodbake::buildLodChain(geometry, options, d);
+    ASSERT_TRUE(chain.ok());
+    const CollapseSequence& logged = chain->sequence;
+    ASSERT_EQ(logged.created_end.size(), logged.records.size());
+    ASSERT_GT(logged.records.size(), 1000u);
+    auto tris = lodbake::pointTriangles(geometry, logged);
+    ASSERT_TRUE(tris.ok());
+    EXPECT_EQ(logged.point_triangles, *tris);
+    CollapseSequence replayed = logged;
+    replayed.created_triangles.clear();
+    replayed.created_end.clear();
+    std::vector<uint8_t> blobs[3];
+    for (int variant = 0; variant < 3; ++variant) {
+        lodbake::ScopedThreadLimit limit(variant == 2 ? 2 : 1);
+        auto build = lodbake::buildPfrepFromSequence(variant == 0 ? replayed : logged, *tris, d);
+        ASSERT_TRUE(build.ok()) << build.status().message();
+        blobs[variant] = std::move(build->blob);
+    }
+    EXPECT_TRUE(blobs[0] == blobs[1]);
+    EXPECT_TRUE(blobs[0] == blobs[2]);
+    // And through buildPfrep (the bake's path).
+    lodbake::PfrepOptions pfrep_options;
+    auto direct = lodbake::buildPfrep(geometry, pfrep_options, d);
+    ASSERT_TRUE(direct.ok());
+    EXPECT_TRUE(direct->blob == blobs[0]);
+    // A log that does not match its ranges is refused.
+    CollapseSequence broken = logged;
+    broken.created_triangles.pop_back();
+    EXPECT_FALSE(lodbake::buildPfrepFromSequence(broken, *tris, d).ok());
 }
 
 } // namespace

@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include "core/parallel.h"
 #include "lodbake/cleanup/topology.h"
 #include "lodbake/io/mesh_io.h"
 #include "simplify_test_meshes.h"
@@ -173,6 +174,29 @@ TEST(LodChainTest, ChainIsDeterministicAndMatchesSingleSimplify) {
     ASSERT_TRUE(single.ok());
     EXPECT_EQ(single->mesh.indices, a.levels[2].mesh.indices);
     EXPECT_EQ(single->mesh.positions, a.levels[2].mesh.positions);
+}
+
+TEST(LodChainTest, ChainDoesNotDependOnTheThreadCount) {
+    // The engine's set-up (twins, kinds, attribute quadrics, initial keys) and the level refinement
+    // run in parallel over fixed chunks: 10,242 points and 20,480 faces span several chunks, and the
+    // 1 % level is refined (10,242 samples).
+    Mesh sphere = lodbake_test::icosphere(5);
+    sphere.normals.resize(sphere.positions.size());
+    for (size_t v = 0; v < sphere.positions.size(); ++v) sphere.normals[v] = lodbake::normalize(sphere.positions[v]);
+    LodChainOptions o = quick();
+    o.measure_error = false;
+    LodChain chains[2];
+    for (int threads = 1; threads <= 2; ++threads) {
+        lodbake::ScopedThreadLimit limit{size_t(threads)};
+        chains[threads - 1] = build(sphere, o);
+    }
+    ASSERT_EQ(chains[0].levels.size(), chains[1].levels.size());
+    EXPECT_TRUE(chains[0].levels.back().is_refined);
+    for (size_t i = 0; i < chains[0].levels.size(); ++i) {
+        EXPECT_EQ(chains[0].levels[i].mesh.indices, chains[1].levels[i].mesh.indices);
+        EXPECT_TRUE(chains[0].levels[i].mesh.positions == chains[1].levels[i].mesh.positions);
+        EXPECT_TRUE(chains[0].levels[i].mesh.normals == chains[1].levels[i].mesh.normals);
+    }
 }
 
 TEST(LodChainTest, SwitchDistanceFollowsTheProjectionFormula) {

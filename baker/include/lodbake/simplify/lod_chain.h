@@ -67,6 +67,20 @@ struct CollapseSequence {
     std::vector<float> wedge_attributes;
     std::vector<ComponentRemoval> removals; // in execution order; empty unless remove_covered_components
     std::vector<uint32_t> removed_points;
+    // Half-edge sequences only (placement KeepEndpoint), for the PFRep builder, which then needs no
+    // replay of its own (pfrep_builder.h):
+    //   point_triangles    3 points per face the simplifier starts from (input order, faces with a
+    //                      repeated point dropped: pointTriangles() of the input);
+    //   created_triangles  3 points per triangle a record re-creates (each face of removed_point
+    //                      without kept_point, removed_point replaced by kept_point, corner order
+    //                      kept), record after record; within a record in the order of the triangles
+    //                      they replace, oldest first (input triangles by index, then re-created ones
+    //                      in creation order);
+    //   created_end        per record, the end of its range of created_triangles, in triangles.
+    // All three are empty for other sequences.
+    std::vector<uint32_t> point_triangles;
+    std::vector<uint32_t> created_triangles;
+    std::vector<uint32_t> created_end;
 };
 
 /// How switch distances are derived (docs/simplify.md): the level whose Hausdorff error is e is

@@ -1,0 +1,151 @@
+// The two single-threaded stages of a bake on the critical path, split into their steps: the LOD
+// chain (engine init, the collapse runs, the snapshots, the level refinement) and the PFRep build
+// (half-edge simplification, point triangles, blob). The input is repaired as the bake repairs it;
+// the chain gets the bake's options (desktop ratios, no measurement), the PFRep build the bake's
+// geometry-only copy of LOD0. Prints wall and thread CPU seconds per step (best of --runs) and a
+// hash of every level and of the blob, so that a change meant to keep output identical can be
+// checked in seconds instead of a whole bake.
+//
+// usage: bake_stages_bench [--threads N] [--runs N] [--chain-only | --pfrep-only] MESH
+
+#include <time.h>
+
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "core/parallel.h"
+#include "lodbake/cleanup/repair.h"
+#include "lodbake/core/diagnostics.h"
+#include "lodbake/core/hash.h"
+#include "lodbake/io/mesh_io.h"
+#include "lodbake/pfrep/pfrep_builder.h"
+#include "lodbake/simplify/lod_chain.h"
+
+namespace {
+
+using namespace lodbake;
+
+struct Clock {
+    double wall;
+    double cpu;
+};
+
+Clock now() {
+    timespec ts;
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+    const double cpu = double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+    return {wall, cpu};
+}
+
+struct Best {
+    double wall = 1e300, cpu = 1e300;
+    void take(const Clock& a, const Clock& b) {
+        wall = std::min(wall, b.wall - a.wall);
+        cpu = std::min(cpu, b.cpu - a.cpu);
+    }
+};
+
+} // namespace
+
+int main(int argc, char** argv) {
+    size_t threads = 2;
+    int runs = 1;
+    bool chain = true, pfrep = true;
+    std::string path;
+    for (int a = 1; a < argc; ++a) {
+        if (std::strcmp(argv[a], "--threads") == 0 && a + 1 < argc)
+            threads = size_t(std::atoi(argv[++a]));
+        else if (std::strcmp(argv[a], "--runs") == 0 && a + 1 < argc)
+            runs = std::max(1, std::atoi(argv[++a]));
+        else if (std::strcmp(argv[a], "--chain-only") == 0)
+            pfrep = false;
+        else if (std::strcmp(argv[a], "--pfrep-only") == 0)
+            chain = false;
+        else
+            path = argv[a];
+    }
+    if (path.empty()) {
+        std::fprintf(stderr, "usage: bake_stages_bench [--threads N] [--runs N] [--chain-only | --pfrep-only] MESH\n");
+        return 2;
+    }
+    ScopedThreadLimit limit(threads);
+    Diagnostics diagnostics;
+    Result<LoadedMesh> loaded = readMesh(path, ReadOptions{}, diagnostics);
+    if (!loaded.ok()) {
+        std::fprintf(stderr, "error: %s\n", loaded.status().message().c_str());
+        return 1;
+    }
+    Mesh mesh = std::move(loaded->mesh);
+    RepairOptions repair_options;
+    repair_options.report_welded = false;
+    repair_options.report_before = false;
+    if (!repairMesh(mesh, repair_options, "input", diagnostics).ok()) return 1;
+    std::printf("%s: %zu triangles after repair, %zu thread(s)\n", path.c_str(), mesh.faceCount(), threads);
+
+    if (chain) {
+        Best total;
+        uint64_t hash = 0;
+        for (int r = 0; r < runs; ++r) {
+            LodChainOptions options;
+            options.ratios = {0.5, 0.25, 0.1, 0.03, 0.01};
+            options.measure_error = false;
+            Diagnostics d;
+            const Clock a = now();
+            Result<LodChain> c = buildLodChain(mesh, options, d);
+            const Clock b = now();
+            if (!c.ok()) return 1;
+            total.take(a, b);
+            Hasher h;
+            for (const LodLevel& level : c->levels) h.addU64(hashMesh(level.mesh));
+            hash = h.digest();
+        }
+        std::printf("lod_chain  wall %.3f s  thread cpu %.3f s  levels %s\n", total.wall, total.cpu,
+                    hashToHex(hash).c_str());
+    }
+    if (pfrep) {
+        Mesh geometry;
+        geometry.positions = mesh.positions;
+        geometry.indices = mesh.indices;
+        Best simplify, triangles, blob, total;
+        uint64_t hash = 0;
+        for (int r = 0; r < runs; ++r) {
+            LodChainOptions options;
+            options.simplify.placement = CollapsePlacement::KeepEndpoint;
+            options.ratios = {1e-9};
+            options.measure_error = false;
+            options.record_collapses = true;
+            Diagnostics d;
+            const Clock a = now();
+            Result<LodChain> c = buildLodChain(geometry, options, d);
+            const Clock b = now();
+            if (!c.ok()) return 1;
+            Result<std::vector<uint32_t>> t =
+                c->sequence.point_triangles.empty()
+                    ? pointTriangles(geometry, c->sequence)
+                    : Result<std::vector<uint32_t>>(std::move(c->sequence.point_triangles));
+            const Clock e = now();
+            if (!t.ok()) return 1;
+            Result<PfrepBuild> built = buildPfrepFromSequence(c->sequence, *t, d);
+            const Clock f = now();
+            if (!built.ok()) return 1;
+            simplify.take(a, b);
+            triangles.take(b, e);
+            blob.take(e, f);
+            total.take(a, f);
+            Hasher h;
+            h.addBytes(built->blob.data(), built->blob.size());
+            for (uint32_t k : built->level_triangles) h.addU32(k);
+            hash = h.digest();
+        }
+        std::printf("pfrep      wall %.3f s  thread cpu %.3f s  (simplify %.3f / %.3f, point triangles %.3f / %.3f, "
+                    "blob %.3f / %.3f)  blob %s\n",
+                    total.wall, total.cpu, simplify.wall, simplify.cpu, triangles.wall, triangles.cpu, blob.wall,
+                    blob.cpu, hashToHex(hash).c_str());
+    }
+    return 0;
+}
