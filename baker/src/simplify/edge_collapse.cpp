@@ -1125,7 +1125,7 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
     // same sums as a serial loop.
     quadric_.assign(point_count, Quadric());
     {
-        constexpr uint32_t kBatch = 4 * kInitChunk;
+        constexpr uint32_t kBatch = 2 * kInitChunk;
         struct FaceQuadrics {
             Quadric face;
             Quadric constraint[3];
@@ -1182,7 +1182,7 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
                 wedge_value_[size_t(w) * channel_count_ + ch] = channelValue(wedge_vertex_[w], ch);
         // Each face's attribute block is computed in parallel (fixed chunks of a batch of faces, into
         // a small buffer) and added to its wedges in face order: the same sums as a serial loop.
-        constexpr uint32_t kBatch = 4 * kInitChunk;
+        constexpr uint32_t kBatch = 2 * kInitChunk;
         std::vector<double> face_blocks(size_t(kBatch) * block_size_);
         for (uint32_t base = 0; base < face_count; base += kBatch) {
             const uint32_t count = std::min(kBatch, face_count - base);
