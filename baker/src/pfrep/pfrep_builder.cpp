@@ -215,6 +215,17 @@ Result<PfrepBuild> buildBlob(const CollapseSequence& sequence, const std::vector
     rank_point.reserve(point_count);
     std::vector<double> removal_error(point_count, 0.0);
     std::vector<uint8_t> referenced(point_count, 0);
+    // Record r, before it is ranked: both points valid and not yet removed, the kept point unmoved.
+    auto checkRecord = [&](size_t r) -> Status {
+        const CollapseRecord& rec = sequence.records[r];
+        const uint32_t u = rec.removed_point, v = rec.kept_point;
+        if (u >= point_count || v >= point_count || u == v || rank_of[u] != kNone || rank_of[v] != kNone)
+            return invalidInput("pfrep: collapse " + std::to_string(r) + ": bad points");
+        if (rec.position != sequence.point_positions[v])
+            return invalidInput("pfrep: collapse " + std::to_string(r) +
+                                ": the kept point moves (full-edge collapse); PFRep needs placement KeepEndpoint");
+        return Status::okStatus();
+    };
     // The simplifier logs the triangles each record re-creates (CollapseSequence::created_triangles):
     // then the list of every triangle is the input's followed by the log, and no replay is needed.
     const bool logged = !sequence.records.empty() && sequence.created_end.size() == sequence.records.size();
@@ -228,13 +239,8 @@ Result<PfrepBuild> buildBlob(const CollapseSequence& sequence, const std::vector
             tris.push_back({{point_triangles[t * 3], point_triangles[t * 3 + 1], point_triangles[t * 3 + 2]}, kNone});
         size_t first = 0;
         for (size_t r = 0; r < sequence.records.size(); ++r) {
-            const CollapseRecord& rec = sequence.records[r];
-            const uint32_t u = rec.removed_point, v = rec.kept_point;
-            if (u >= point_count || v >= point_count || u == v || rank_of[u] != kNone || rank_of[v] != kNone)
-                return invalidInput("pfrep: collapse " + std::to_string(r) + ": bad points");
-            if (rec.position != sequence.point_positions[v])
-                return invalidInput("pfrep: collapse " + std::to_string(r) +
-                                    ": the kept point moves (full-edge collapse); PFRep needs placement KeepEndpoint");
+            LODBAKE_RETURN_IF_ERROR(checkRecord(r));
+            const uint32_t u = sequence.records[r].removed_point;
             const size_t last = sequence.created_end[r];
             if (last < first || last > created_count)
                 return invalidInput("pfrep: collapse " + std::to_string(r) + ": bad re-created triangle range");
@@ -315,11 +321,7 @@ Result<PfrepBuild> buildBlob(const CollapseSequence& sequence, const std::vector
         for (size_t r = 0; r < sequence.records.size(); ++r) {
             const CollapseRecord& rec = sequence.records[r];
             const uint32_t u = rec.removed_point, v = rec.kept_point;
-            if (u >= point_count || v >= point_count || u == v || rank_of[u] != kNone || rank_of[v] != kNone)
-                return invalidInput("pfrep: collapse " + std::to_string(r) + ": bad points");
-            if (rec.position != sequence.point_positions[v])
-                return invalidInput("pfrep: collapse " + std::to_string(r) +
-                                    ": the kept point moves (full-edge collapse); PFRep needs placement KeepEndpoint");
+            LODBAKE_RETURN_IF_ERROR(checkRecord(r));
             rank_of[u] = uint32_t(rank_point.size());
             rank_point.push_back(u);
             ring.assign(pool.begin() + incident[u].offset, pool.begin() + incident[u].offset + incident[u].size);
