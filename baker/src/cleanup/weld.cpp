@@ -127,8 +127,7 @@ WeldReport weldVertices(Mesh& mesh, const WeldOptions& options) {
         // binary searches per vertex; the scan stops at the first neighbour in range.
         std::vector<uint8_t> has_neighbour(n, 0);
         constexpr size_t kScanChunk = 4096;
-        auto scanChunk = [&](size_t chunk) {
-            const size_t first = chunk * kScanChunk, last = std::min(cells.size(), first + kScanChunk);
+        auto scanChunk = [&](size_t, size_t first, size_t last) {
             size_t cursor[3] = {0, 0, 0};
             for (size_t i = first; i < last; ++i) {
                 const Cell& c = cells[i].first;
@@ -157,9 +156,8 @@ WeldReport weldVertices(Mesh& mesh, const WeldOptions& options) {
                 if (found) has_neighbour[v] = 1;
             }
         };
-        const size_t scan_chunks = (cells.size() + kScanChunk - 1) / kScanChunk;
-        if (!parallelFor(scan_chunks, 1, scanChunk).ok()) // out of memory in a worker: the same scan here
-            for (size_t chunk = 0; chunk < scan_chunks; ++chunk) scanChunk(chunk);
+        // Out of memory in a worker: the same scan on this thread, as one chunk.
+        if (!parallelForChunks(cells.size(), kScanChunk, scanChunk).ok()) scanChunk(0, 0, cells.size());
         std::vector<uint8_t> is_rep(n, 0);
         for (VertexId v(0); v.value < n; ++v.value) {
             if (cell_index[v.value] == kNone) continue; // non-finite: never merges

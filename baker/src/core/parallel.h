@@ -17,6 +17,11 @@
 
 namespace lodbake {
 
+/// Number of chunks of `chunk_size` items covering `count` items.
+inline size_t chunkCount(size_t count, size_t chunk_size) {
+    return (count + chunk_size - 1) / chunk_size;
+}
+
 /// Calls fn(i) for every i in [0, count), `grain` consecutive items per task. fn must only write
 /// state owned by item i. TBB task exceptions (bad_alloc) are caught here and become a Status;
 /// fn itself must not throw.
@@ -35,6 +40,17 @@ template <class Fn> Status parallelFor(size_t count, size_t grain, Fn&& fn) {
         return internalError(std::string("parallel task failed: ") + e.what());
     }
     return Status::okStatus();
+}
+
+/// Calls fn(chunk, first, last) for the consecutive ranges [first, last) of `chunk_size` items
+/// (the last one shorter) that cover [0, count), one task per range. The ranges depend on count and
+/// chunk_size alone, so per-chunk results (counts, buffers, cursors) are the same at any thread count.
+template <class Fn> Status parallelForChunks(size_t count, size_t chunk_size, Fn&& fn) {
+    const size_t size = chunk_size > 0 ? chunk_size : 1;
+    return parallelFor(chunkCount(count, size), 1, [&](size_t chunk) {
+        const size_t first = chunk * size;
+        fn(chunk, first, first + size < count ? first + size : count);
+    });
 }
 
 /// Limits the worker threads TBB may use while it is alive (CLI --threads, determinism tests).

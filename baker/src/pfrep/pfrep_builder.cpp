@@ -367,9 +367,8 @@ Result<PfrepBuild> buildBlob(const CollapseSequence& sequence, const std::vector
     // ranks rotated to start at the lowest, and its dependency's rank.
     size_t level0 = 0;
     for (const Triangle& t : tris) level0 += t.dependency == kNone;
-    LODBAKE_RETURN_IF_ERROR(parallelFor((tris.size() + kChunk - 1) / kChunk, 1, [&](size_t chunk) {
-        const size_t last = std::min(tris.size(), (chunk + 1) * kChunk);
-        for (size_t i = chunk * kChunk; i < last; ++i) {
+    LODBAKE_RETURN_IF_ERROR(parallelForChunks(tris.size(), kChunk, [&](size_t, size_t first, size_t last) {
+        for (size_t i = first; i < last; ++i) {
             Triangle& t = tris[i];
             const uint32_t r[3] = {rank_of[t.p[0]], rank_of[t.p[1]], rank_of[t.p[2]]};
             int m = 0;
@@ -465,15 +464,14 @@ Result<PfrepBuild> buildBlob(const CollapseSequence& sequence, const std::vector
         Status status = Status::okStatus();
         size_t dependency_groups = 0, neighbour_slots = 0;
     };
-    std::vector<EntryChunk> chunks((size_t(vertex_count) + kChunk - 1) / kChunk);
+    std::vector<EntryChunk> chunks(chunkCount(vertex_count, kChunk));
     std::vector<uint32_t> entry_offset(vertex_count);
     PfrepBuild build;
-    LODBAKE_RETURN_IF_ERROR(parallelFor(chunks.size(), 1, [&](size_t chunk) {
+    LODBAKE_RETURN_IF_ERROR(parallelForChunks(vertex_count, kChunk, [&](size_t chunk, size_t lo, size_t hi) {
         EntryChunk& out = chunks[chunk];
         std::vector<uint8_t> used, bits;
         std::vector<uint32_t> seq, slot_of_edge, deps;
-        const uint32_t chunk_end = uint32_t(std::min<size_t>((chunk + 1) * kChunk, vertex_count));
-        for (uint32_t i = uint32_t(chunk * kChunk); i < chunk_end; ++i) {
+        for (uint32_t i = uint32_t(lo); i < uint32_t(hi); ++i) {
             out.stream.alignByte();
             entry_offset[i] = uint32_t(out.stream.byteSize()); // within the chunk; made absolute below
             const uint32_t first = fan_first[i], count = fan_first[i + 1] - first;

@@ -76,10 +76,8 @@ constexpr uint32_t kInitChunk = 4096;
 
 // Calls fn(chunk, first, last) for consecutive ranges of kInitChunk items of [0, count), in parallel.
 template <class Fn> Status forChunks(uint32_t count, Fn&& fn) {
-    const size_t chunks = (size_t(count) + kInitChunk - 1) / kInitChunk;
-    return parallelFor(chunks, 1, [&](size_t chunk) {
-        const uint32_t first = uint32_t(chunk * kInitChunk);
-        fn(chunk, first, uint32_t(std::min<size_t>(size_t(first) + kInitChunk, count)));
+    return parallelForChunks(count, kInitChunk, [&](size_t chunk, size_t first, size_t last) {
+        fn(chunk, uint32_t(first), uint32_t(last));
     });
 }
 
@@ -1065,7 +1063,7 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
         LargeArray<uint32_t>().swap(fill);
         // Each half-edge finds its own twin (the pairing is symmetric: a->b once and b->a once), in
         // parallel over fixed chunks; the points to lock are collected per chunk.
-        std::vector<std::vector<uint32_t>> lock_points((he_count + kInitChunk - 1) / kInitChunk);
+        std::vector<std::vector<uint32_t>> lock_points(chunkCount(he_count, kInitChunk));
         LODBAKE_RETURN_IF_ERROR(forChunks(he_count, [&](size_t chunk, uint32_t first, uint32_t last) {
             for (uint32_t h = first; h < last; ++h) {
                 const uint32_t a = he_[h].point, b = he_[nextHe(h)].point;
@@ -1092,7 +1090,7 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
         for (uint32_t p = 0; p < point_count; ++p)
             if (start[p] < start[p + 1]) point_he_[p] = list[start[p]];
         // A point whose faces form more than one fan (a bow-tie) is non-manifold: lock it.
-        std::vector<size_t> locked_in_chunk((point_count + kInitChunk - 1) / kInitChunk, 0);
+        std::vector<size_t> locked_in_chunk(chunkCount(point_count, kInitChunk), 0);
         LODBAKE_RETURN_IF_ERROR(forChunks(point_count, [&](size_t chunk, uint32_t first, uint32_t last) {
             std::vector<uint32_t> fan;
             for (uint32_t p = first; p < last; ++p) {

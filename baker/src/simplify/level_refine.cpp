@@ -119,8 +119,8 @@ void refineLevelPositions(const Mesh& input, Mesh& level, float max_normal_chang
         for (size_t block = 0; block < sample_count; block += kRefineBlock) {
             const size_t block_end = std::min(block + kRefineBlock, sample_count);
             const Status searched =
-                parallelFor((block_end - block + kRefineChunk - 1) / kRefineChunk, 1, [&](size_t chunk) {
-                    const size_t first = block + chunk * kRefineChunk, last = std::min(first + kRefineChunk, block_end);
+                parallelForChunks(block_end - block, kRefineChunk, [&](size_t, size_t chunk_first, size_t chunk_last) {
+                    const size_t first = block + chunk_first, last = block + chunk_last;
                     uint32_t last_face = 0; // the previous sample's face: scans list neighbouring points together
                     for (size_t slot = first; slot < last; ++slot) {
                         const Vec3d x(input.positions[sample_vertex[slot]]);

@@ -258,7 +258,6 @@ Result<std::vector<Vec3d>> samplePoints(const Mesh& from, const DistanceOptions&
 
     const size_t sample_count = options.sample_count;
     const size_t point_count = sample_count + vertices.size();
-    const size_t chunk_count = (point_count + kChunkSize - 1) / kChunkSize;
     const uint64_t key = splitmix64(options.seed ^ stream);
 
     // Sample i's point on triangle `tri`; the same arithmetic whenever it is evaluated.
@@ -299,8 +298,7 @@ Result<std::vector<Vec3d>> samplePoints(const Mesh& from, const DistanceOptions&
     const Vec3d extent = toDouble(box.max) - box_min;
     const double max_extent = std::max({extent.x, extent.y, extent.z, 1e-300});
     const double scale = double(kMortonCells - 1) / max_extent;
-    LODBAKE_RETURN_IF_ERROR(parallelFor(chunk_count, 1, [&](size_t chunk) {
-        const size_t begin = chunk * kChunkSize, end = std::min(point_count, (chunk + 1) * kChunkSize);
+    LODBAKE_RETURN_IF_ERROR(parallelForChunks(point_count, kChunkSize, [&](size_t, size_t begin, size_t end) {
         size_t t = 0;
         if (begin < sample_count) {
             const double x = double(begin) / double(sample_count) * total;
@@ -322,9 +320,8 @@ Result<std::vector<Vec3d>> samplePoints(const Mesh& from, const DistanceOptions&
     std::vector<double>().swap(cdf);
     std::sort(order.begin(), order.end());
     std::vector<Vec3d> points(point_count);
-    LODBAKE_RETURN_IF_ERROR(parallelFor(chunk_count, 1, [&](size_t chunk) {
-        const size_t end = std::min(point_count, (chunk + 1) * kChunkSize);
-        for (size_t k = chunk * kChunkSize; k < end; ++k) {
+    LODBAKE_RETURN_IF_ERROR(parallelForChunks(point_count, kChunkSize, [&](size_t, size_t first, size_t end) {
+        for (size_t k = first; k < end; ++k) {
             const Key& o = order[k];
             points[k] = o.point < sample_count ? sampleOn(o.point, o.source) : toDouble(from.positions[o.source]);
         }
@@ -335,15 +332,13 @@ Result<std::vector<Vec3d>> samplePoints(const Mesh& from, const DistanceOptions&
 // Distances from `points` to the surface indexed by `to`.
 Result<SideStats> measurePoints(const std::vector<Vec3d>& points, const DistanceIndex& to) {
     const size_t point_count = points.size();
-    const size_t chunk_count = (point_count + kChunkSize - 1) / kChunkSize;
-    std::vector<SideStats> chunks(chunk_count);
-    LODBAKE_RETURN_IF_ERROR(parallelFor(chunk_count, 1, [&](size_t chunk) {
+    std::vector<SideStats> chunks(chunkCount(point_count, kChunkSize));
+    LODBAKE_RETURN_IF_ERROR(parallelForChunks(point_count, kChunkSize, [&](size_t chunk, size_t first, size_t end) {
         SideStats s;
-        const size_t end = std::min(point_count, (chunk + 1) * kChunkSize);
         // Consecutive points (Morton order) are near each other: the previous answer's triangle gives
         // a tight first bound that prunes most of the tree. The minimum found is the same either way.
         uint32_t hint = DistanceIndex::kNoHint;
-        for (size_t k = chunk * kChunkSize; k < end; ++k) {
+        for (size_t k = first; k < end; ++k) {
             const double d = std::sqrt(to.closestDistanceSq(points[k], hint));
             s.max = std::max(s.max, d);
             s.sum += d;
