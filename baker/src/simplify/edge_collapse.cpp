@@ -469,6 +469,14 @@ void EdgeCollapser::collapse(const Candidate& c, const WedgePair* pairs, int pai
     // with each other and with the work below instead of waiting one by one.
     for (const std::vector<uint32_t>* fan : {&fan_u_, &fan_v_})
         for (uint32_t he : *fan) prefetchPoint(he_[nextHe(he)].point);
+    // Those evaluations also read the attribute blocks of the neighbours' wedges (the one at the
+    // neighbour's corner of each fan face; its twin's corner is most often the same wedge).
+    if (block_size_ > 0)
+        for (const std::vector<uint32_t>* fan : {&fan_u_, &fan_v_})
+            for (uint32_t he : *fan) prefetchWedgeBlock(corner_wedge_[nextHe(he)]);
+    // A half-edge sequence reads the triangle ids of u's faces (below).
+    if (sequence && !face_triangle_.empty())
+        for (uint32_t he : fan_u_) prefetch(&face_triangle_[he / 3]);
     for (uint32_t k = 0; k < 3; ++k) {
         queue_.remove(canonical(f0 * 3 + k));
         if (f1 != kNone) queue_.remove(canonical(f1 * 3 + k));
@@ -798,6 +806,10 @@ bool EdgeCollapser::run(size_t target_faces, double max_error, CollapseSequence*
         if (next != CollapseQueue::kAbsent && he_[next].point != kNone) {
             prefetchPoint(he_[next].point);
             prefetchPoint(he_[nextHe(next)].point);
+            if (block_size_ > 0) {
+                prefetchWedgeBlock(corner_wedge_[next]);
+                prefetchWedgeBlock(corner_wedge_[nextHe(next)]);
+            }
         }
         if (has_penalty_) {
             // Quadrics measure distance to planes: a sharp tip whose faces are nearly parallel to
