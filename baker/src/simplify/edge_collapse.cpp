@@ -160,8 +160,10 @@ bool EdgeCollapser::gatherFan(uint32_t point, std::vector<uint32_t>& fan) const 
     for (;;) {
         fan.push_back(h);
         // The neighbour's position is read by every user of the fan (flip checks, distances); its
-        // miss overlaps the walk to the next face.
+        // miss overlaps the walk to the next face. So are the face's corner wedges when there are
+        // attributes (seam checks, the neighbours' attribute blocks in collapse()).
         prefetch(&position_[he_[nextHe(h)].point]);
+        if (!corner_wedge_.empty()) prefetch(&corner_wedge_[h]);
         const uint32_t n = he_[prevHe(h)].twin;
         if (n == h0) return true;
         if (n == kNone || fan.size() > guard) break;
@@ -176,6 +178,7 @@ bool EdgeCollapser::gatherFan(uint32_t point, std::vector<uint32_t>& fan) const 
         if (h == h0 || fan.size() > guard) break;
         fan.push_back(h);
         prefetch(&position_[he_[nextHe(h)].point]);
+        if (!corner_wedge_.empty()) prefetch(&corner_wedge_[h]);
     }
     return false;
 }
@@ -792,7 +795,10 @@ bool EdgeCollapser::run(size_t target_faces, double max_error, CollapseSequence*
         // now and its points' data once that has arrived (below), so that the next evaluate does
         // not wait for a chain of misses.
         const uint32_t next = queue_.secondId();
-        if (next != CollapseQueue::kAbsent) prefetch(&he_[next]);
+        if (next != CollapseQueue::kAbsent) {
+            prefetch(&he_[next]);
+            if (block_size_ > 0) prefetch(&corner_wedge_[next]);
+        }
         if (!evaluate(e, c) || c.error > max_error) {
             queue_.remove(e);
             continue;
@@ -1275,7 +1281,13 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
     }));
 
     queue_ = CollapseQueue(he_count);
-    queue_.reserve(he_count / 2 + 16);
+    // Room for every canonical half-edge (half the interior ones plus the open ones): the queue never
+    // holds more, and growing it by doubling would copy it and keep up to twice the memory.
+    {
+        size_t canonical_count = 0;
+        for (uint32_t h = 0; h < he_count; ++h) canonical_count += canonical(h) == h;
+        queue_.reserve(canonical_count);
+    }
     // Initial keys: evaluated in parallel over fixed chunks of a batch into a small buffer, pushed in
     // half-edge order (the heap's content and so its layout are those of a serial build).
     {
