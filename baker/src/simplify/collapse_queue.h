@@ -57,6 +57,17 @@ public:
 #endif
     }
 
+    /// Hint that the heap entry of `id` is about to be read (set() or remove() of a queued id reads
+    /// it first: a random access into the heap). Reads the id's slot, so prefetch() that first.
+    void prefetchEntry(uint32_t id) const {
+#if defined(__GNUC__)
+        const uint32_t i = pos(id);
+        if (i != kAbsent) __builtin_prefetch(&at(i));
+#else
+        (void)id;
+#endif
+    }
+
     /// Inserts `id` or changes its cost if present.
     void set(uint32_t id, float cost) {
         uint32_t i = pos(id);

@@ -470,8 +470,13 @@ void EdgeCollapser::collapse(const Candidate& c, const WedgePair* pairs, int pai
     // Every neighbour's edge to v is re-evaluated at the end (updateEdgesInFan), which reads the
     // neighbour's quadric: a random access each. Requesting them all now lets those misses overlap
     // with each other and with the work below instead of waiting one by one.
+    // The same goes for the queue slots of those edges (their twins are known since the fan walks;
+    // only the two glued edges change their canonical half-edge below).
     for (const std::vector<uint32_t>* fan : {&fan_u_, &fan_v_})
-        for (uint32_t he : *fan) prefetchPoint(he_[nextHe(he)].point);
+        for (uint32_t he : *fan) {
+            prefetchPoint(he_[nextHe(he)].point);
+            queue_.prefetch(canonical(he));
+        }
     // Those evaluations also read the attribute blocks of the neighbours' wedges (the one at the
     // neighbour's corner of each fan face; its twin's corner is most often the same wedge).
     if (block_size_ > 0)
@@ -749,8 +754,10 @@ void EdgeCollapser::updateEdgesInFan() {
         else
             queue_.remove(e);
     };
-    // The queue slots are far apart: request them all before the first lookup waits for one.
+    // The queue slots are far apart: request them all before the first lookup waits for one, then
+    // the heap entries they point to (after a collapse the slots were requested at its start).
     for (uint32_t he : fan_tmp_) queue_.prefetch(canonical(he));
+    for (uint32_t he : fan_tmp_) queue_.prefetchEntry(canonical(he));
     for (uint32_t he : fan_tmp_) {
         update(he);
         const uint32_t in = prevHe(he);
@@ -812,6 +819,10 @@ bool EdgeCollapser::run(size_t target_faces, double max_error, CollapseSequence*
         if (next != CollapseQueue::kAbsent && he_[next].point != kNone) {
             prefetchPoint(he_[next].point);
             prefetchPoint(he_[nextHe(next)].point);
+            // Its fans are walked first thing (isValid): their starting half-edges and the twin face.
+            prefetch(&point_he_[he_[next].point]);
+            prefetch(&point_he_[he_[nextHe(next)].point]);
+            if (he_[next].twin != kNone) prefetch(&he_[he_[next].twin]);
             if (block_size_ > 0) {
                 prefetchWedgeBlock(corner_wedge_[next]);
                 prefetchWedgeBlock(corner_wedge_[nextHe(next)]);
