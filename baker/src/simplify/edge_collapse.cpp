@@ -135,15 +135,6 @@ double segmentDistance2(const Vec3d& p, const Vec3d& a, const Vec3d& b) {
 
 } // namespace
 
-bool EdgeCollapser::isFeature(uint32_t h) const {
-    const uint32_t t = he_[h].twin;
-    if (t == kNone) return true;
-    if (!face_group_.empty() && face_group_[h / 3] != face_group_[t / 3]) return true;
-    if (!corner_wedge_.empty())
-        return corner_wedge_[h] != corner_wedge_[nextHe(t)] || corner_wedge_[nextHe(h)] != corner_wedge_[t];
-    return false;
-}
-
 bool EdgeCollapser::canRemove(uint32_t point, bool feature_edge) const {
     const uint8_t k = kind_[point];
     if (k == kFree) return true;
@@ -217,10 +208,8 @@ void EdgeCollapser::collectPairs(uint32_t edge, uint32_t removed, WedgePair* pai
     if (p.removed != pairs[0].removed || p.kept != pairs[0].kept) pairs[pair_count++] = p;
 }
 
-Quadric EdgeCollapser::combinedQuadric(uint32_t edge, uint32_t removed) const {
-    const uint32_t a = he_[edge].point, b = he_[nextHe(edge)].point;
-    Quadric q = quadric_[a];
-    q += quadric_[b];
+Quadric EdgeCollapser::combinedQuadric(const Quadric& geometric, uint32_t edge, uint32_t removed) const {
+    Quadric q = geometric;
     if (channel_count_ == 0) return q;
     WedgePair pairs[2];
     int count = 0;
@@ -243,7 +232,10 @@ bool EdgeCollapser::evaluate(uint32_t edge, Candidate& c) const {
     c.edge = edge;
     c.removed = ra ? a : b;
     c.kept = ra ? b : a;
-    Quadric q = combinedQuadric(edge, c.removed);
+    // The points' quadrics summed (the geometric error), then with the attribute quadrics.
+    Quadric geometric = quadric_[a];
+    geometric += quadric_[b];
+    Quadric q = combinedQuadric(geometric, edge, c.removed);
     Vec3d pk = toD(position_[c.kept]);
     Vec3d pr = toD(position_[c.removed]);
     if (options_.placement == CollapsePlacement::KeepEndpoint) {
@@ -251,7 +243,7 @@ bool EdgeCollapser::evaluate(uint32_t edge, Candidate& c) const {
         // direction with the lower cost is taken (ties: remove the first end, a).
         if (ra && rb) {
             // Without attributes both directions have the same quadric (the points' sum).
-            Quadric q_other = channel_count_ == 0 ? q : combinedQuadric(edge, b);
+            Quadric q_other = channel_count_ == 0 ? q : combinedQuadric(geometric, edge, b);
             if (q_other.evaluate(pr) < q.evaluate(pk)) {
                 std::swap(c.removed, c.kept);
                 std::swap(pk, pr);
@@ -282,11 +274,7 @@ bool EdgeCollapser::evaluate(uint32_t edge, Candidate& c) const {
     // geometric error is the cost itself.
     const double weight = q.weight;
     double geometric_cost = c.cost;
-    if (channel_count_ > 0) {
-        Quadric geometric = quadric_[a];
-        geometric += quadric_[b];
-        geometric_cost = geometric.evaluate(c.position);
-    }
+    if (channel_count_ > 0) geometric_cost = geometric.evaluate(c.position);
     c.error = weight > 0 ? std::sqrt(geometric_cost / weight) : 0.0;
     // Queue key: area-weighted cost divided by area^exponent (see SimplifyOptions).
     if (weight > 0) {

@@ -73,7 +73,16 @@ private:
         return (t == kNone || h < t) ? h : t;
     }
     uint32_t wedgeAt(uint32_t h) const { return corner_wedge_.empty() ? he_[h].point : corner_wedge_[h]; }
-    bool isFeature(uint32_t h) const;
+    // An open edge, a sub-mesh border or an attribute seam (inline: every key evaluation and fan
+    // classification asks).
+    bool isFeature(uint32_t h) const {
+        const uint32_t t = he_[h].twin;
+        if (t == kNone) return true;
+        if (!face_group_.empty() && face_group_[h / 3] != face_group_[t / 3]) return true;
+        if (!corner_wedge_.empty())
+            return corner_wedge_[h] != corner_wedge_[nextHe(t)] || corner_wedge_[nextHe(h)] != corner_wedge_[t];
+        return false;
+    }
     bool canRemove(uint32_t point, bool feature_edge) const;
     // Outgoing half-edges of `point`, one per incident face; returns false if the fan is open.
     bool gatherFan(uint32_t point, std::vector<uint32_t>& fan) const;
@@ -120,7 +129,9 @@ private:
     // Per half-edge: 1 for an open border edge whose ends and midpoint lie within its length of
     // another component (a scan's border lying on another scan: not a border of the object).
     void markCoveredBorders(std::vector<uint8_t>& covered) const;
-    Quadric combinedQuadric(uint32_t edge, uint32_t removed) const;
+    // `geometric` (the edge's two point quadrics summed) plus the attribute quadrics of the wedge
+    // pairs the collapse removing `removed` merges.
+    Quadric combinedQuadric(const Quadric& geometric, uint32_t edge, uint32_t removed) const;
     // Hint that the point's quadric and kind are about to be read (random accesses).
     void prefetchPoint(uint32_t point) const {
 #if defined(__GNUC__)
