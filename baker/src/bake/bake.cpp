@@ -136,7 +136,11 @@ Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vect
     chain_options.simplify.remove_covered_components = settings.remove_covered_components;
     chain_options.measure_error = false; // measured below, beside the stream encoders
     chain_options.record_collapses = false;
-    for (const PackStreamEncoder& encoder : encoders) chain_options.record_collapses |= encoder.needs_collapses;
+    for (const PackStreamEncoder& encoder : encoders) {
+        chain_options.record_collapses |= encoder.needs_collapses;
+        // The PFRep blob is built from the chain's own pass, read as vertex removals (docs/bake.md).
+        chain_options.record_removals |= encoder.extension_name == "LODBAKE_progressive_fans";
+    }
     StageTimer chain_timer(hooks, index, BakeStage::LodChain);
     Result<LodChain> chain_result = buildLodChain(mesh, chain_options, slot.diagnostics);
     if (!chain_result.ok())

@@ -511,6 +511,7 @@ void EdgeCollapser::collapse(const Candidate& c, const WedgePair* pairs, int pai
         }
     }
     if (sequence) sequence->records.push_back(record);
+    if (removal_log_) removal_log_->add(u, v);
     if (has_penalty_) {
         // v now stands for the input points of both; it keeps the one further from its new fan.
         if (fartherFromNewFan(toD(far_[u]), toD(far_[v]), c)) far_[v] = far_[u];

@@ -48,6 +48,28 @@ Result<std::vector<uint32_t>> pointTriangles(const Mesh& mesh, const CollapseSeq
 Result<PfrepBuild> buildPfrepFromSequence(const CollapseSequence& sequence, const std::vector<uint32_t>& point_triangles,
                                           Diagnostics& diagnostics);
 
+/// Points of `mesh` as the simplifier numbers them (lod_chain.h: bit-identical positions welded,
+/// numbered in order of first use by the faces not degenerate by position) and those faces' points.
+Status chainPoints(const Mesh& mesh, std::vector<Vec3f>& positions, std::vector<uint32_t>& triangles);
+
+/// Which end of a chain's full-edge collapse the blob keeps (at its original position).
+enum class ChainEndRule {
+    LowerQuadric, // the end with the lower error for the merged point's face-plane quadric (default)
+    EngineKept,   // the end the simplifier names as kept
+    NearerMerged, // the end nearer the chain's merged position (needs those positions)
+};
+
+/// Builds the blob from a discrete chain's own simplification pass (LodChain::removals, recorded with
+/// LodChainOptions::record_removals) over `mesh`, the chain's input: each full-edge collapse is read
+/// as the half-edge collapse that removes one end and keeps the other at its ORIGINAL position, so
+/// level k of the blob has exactly the chain's faces after k collapses (positions differ: the chain
+/// moved its points). Which end stays: `rule` (docs/format/pfrep.md measures all three);
+/// NearerMerged needs `merged_positions`, the chain's new position per collapse (CollapseRecord::
+/// position of a chain recorded with record_collapses too).
+Result<PfrepBuild> buildPfrepFromChain(const Mesh& mesh, const CollapsePairLog& removals, Diagnostics& diagnostics,
+                                       ChainEndRule rule = ChainEndRule::LowerQuadric,
+                                       const std::vector<Vec3f>* merged_positions = nullptr);
+
 /// Runs the half-edge simplifier on `mesh` and builds the blob.
 Result<PfrepBuild> buildPfrep(const Mesh& mesh, const PfrepOptions& options, Diagnostics& diagnostics);
 
