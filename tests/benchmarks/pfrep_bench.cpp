@@ -18,6 +18,7 @@
 #include "lodbake/io/mesh_io.h"
 #include "lodbake/pfrep/pfrep_builder.h"
 #include "lodbake/simplify/lod_chain.h"
+#include "lodbake/simplify/mesh_distance.h"
 #include "lodrt/pfrep.h"
 
 namespace {
@@ -67,6 +68,20 @@ lodbake::Mesh levelMesh(const lodrt::PfrepModel& m, uint32_t k) {
     for (uint32_t v = 0; v < m.vertex_count; ++v) mesh.positions.push_back({pos[v * 3], pos[v * 3 + 1], pos[v * 3 + 2]});
     mesh.indices.assign(idx.begin(), idx.begin() + std::ptrdiff_t(count * 3));
     return mesh;
+}
+
+// levelMesh without the vertices no triangle of the level uses.
+lodbake::Mesh compactLevelMesh(const lodrt::PfrepModel& m, uint32_t k) {
+    lodbake::Mesh full = levelMesh(m, k), out;
+    std::vector<uint32_t> remap(full.positions.size(), 0xffffffffu);
+    for (uint32_t& i : full.indices) {
+        if (remap[i] == 0xffffffffu) {
+            remap[i] = uint32_t(out.positions.size());
+            out.positions.push_back(full.positions[i]);
+        }
+        out.indices.push_back(remap[i]);
+    }
+    return out;
 }
 
 size_t levelTriangles(const lodrt::PfrepModel& m, uint32_t k, std::vector<uint32_t>& idx) {
@@ -153,7 +168,8 @@ int qualityVariants() {
             for (const auto& r : shared->sequence.records) merged.push_back(r.position);
             using Rule = lodbake::ChainEndRule;
             const std::pair<Rule, const char*> rules[] = {
-                {Rule::LowerQuadric, "shared"}, {Rule::EngineKept, "sharedengine"}, {Rule::NearerMerged, "sharednear"}};
+                {Rule::LowerQuadric, "sharedquadric"}, {Rule::EngineKept, "sharedengine"},
+                {Rule::NearerMerged, "sharednear"}, {Rule::EngineNearer, "sharedenear"}};
             for (const auto& [rule, rule_name] : rules) {
                 auto b = lodbake::buildPfrepFromChain(mesh, shared->removals, d, rule, &merged);
                 lodrt::PfrepModel m;
@@ -197,16 +213,22 @@ int qualityVariants() {
     return 0;
 }
 
-// --shared NAME: the bake's chain (default ratios, no repair) with its vertex-removal log, the blob
+// --shared NAME [quadric|engine|near]: the bake's chain (default ratios, no repair) with its vertex-removal log, the blob
 // read from it and the blob of the separate half-edge pass: log size, times (thread CPU), blob sizes,
 // and both blobs' levels at the chain's 50 % and 10 % levels written for meshdist.py.
-int sharedChain(const char* name) {
+int sharedChain(const char* name, const char* rule_name) {
+    using Rule = lodbake::ChainEndRule;
+    const std::string rn = rule_name ? rule_name : "quadric";
+    const Rule rule = rn == "engine"  ? Rule::EngineKept
+                      : rn == "near"  ? Rule::NearerMerged
+                      : rn == "enear" ? Rule::EngineNearer
+                                      : Rule::LowerQuadric;
     lodbake::Mesh mesh;
     if (!load(name, mesh)) return 1;
     lodbake::Diagnostics d;
     lodbake::LodChainOptions options;
     options.measure_error = false;
-    options.record_collapses = false;
+    options.record_collapses = rule == Rule::NearerMerged; // the merged positions
     options.record_removals = true;
     double t0 = cpuSeconds();
     auto chain = lodbake::buildLodChain(mesh, options, d);
@@ -217,7 +239,9 @@ int sharedChain(const char* name) {
                 name, chain_s, chain->removals.size(), chain->levels.back().collapse_count,
                 chain->removals.byteSize(), double(chain->removals.byteSize()) / double(chain->removals.size()));
     t0 = cpuSeconds();
-    auto shared = lodbake::buildPfrepFromChain(mesh, chain->removals, d);
+    std::vector<lodbake::Vec3f> merged;
+    for (const auto& r : chain->sequence.records) merged.push_back(r.position);
+    auto shared = lodbake::buildPfrepFromChain(mesh, chain->removals, d, rule, &merged);
     const double shared_s = cpuSeconds() - t0;
     t0 = cpuSeconds();
     auto own = lodbake::buildPfrep(mesh, {}, d);
@@ -235,8 +259,28 @@ int sharedChain(const char* name) {
         for (size_t l : {size_t(0), size_t(2)}) {
             const size_t target = chain->levels[l].mesh.faceCount();
             const uint32_t k = b == &*shared ? uint32_t(chain->levels[l].collapse_count) : levelFor(m, target, idx);
-            lodbake::writeMesh(levelMesh(m, k),
+            lodbake::writeMesh(compactLevelMesh(m, k),
                                stem + "_" + std::to_string(target) + (b == &*shared ? "_shared.ply" : "_own.ply"), {}, d);
+        }
+    }
+    // Distances to the input (the bake's measurement, normalized by the bounding-box diagonal).
+    const double diagonal = lodbake::computeBounds(mesh).diagonal();
+    for (size_t l : {size_t(0), size_t(2)}) {
+        const std::string base = stem + "_" + std::to_string(chain->levels[l].mesh.faceCount());
+        for (const char* variant : {"_chain", "_own", "_shared"}) {
+            lodbake::Mesh level;
+            if (std::string(variant) == "_chain") {
+                level = chain->levels[l].mesh;
+            } else {
+                auto read = lodbake::readMesh(base + variant + ".ply", {}, d);
+                if (!read.ok()) continue;
+                level = std::move(read->mesh);
+            }
+            auto dist = lodbake::measureSurfaceDistance(mesh, level);
+            if (dist.ok())
+                std::printf("  %zu triangles %s: %zu triangles, mean %.3e, Hausdorff %.3e\n",
+                            chain->levels[l].mesh.faceCount(), variant + 1, level.faceCount(), dist->mean / diagonal,
+                            dist->hausdorff / diagonal);
         }
     }
     for (size_t l : {size_t(0), size_t(2)})
@@ -248,7 +292,7 @@ int sharedChain(const char* name) {
 } // namespace
 
 int main(int argc, char** argv) {
-    if (argc > 2 && std::strcmp(argv[1], "--shared") == 0) return sharedChain(argv[2]);
+    if (argc > 2 && std::strcmp(argv[1], "--shared") == 0) return sharedChain(argv[2], argc > 3 ? argv[3] : nullptr);
     const bool quick = argc > 1 && std::strcmp(argv[1], "--quick") == 0;
     const bool refine_only = argc > 1 && std::strcmp(argv[1], "--refine") == 0;
     if (argc > 1 && std::strcmp(argv[1], "--quality") == 0) return qualityVariants();

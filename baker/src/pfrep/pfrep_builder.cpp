@@ -762,8 +762,9 @@ Result<PfrepBuild> buildPfrepFromChain(const Mesh& mesh, const CollapsePairLog& 
     sequence.records.reserve(removals.size());
     CollapsePairLog::Reader reader(removals);
     uint32_t u = 0, v = 0;
+    bool kept_stays = false, removed_nearer = false;
     for (size_t r = 0; r < removals.size(); ++r) {
-        if (!reader.next(u, v) || u >= point_count || v >= point_count || u == v)
+        if (!reader.next(u, v, kept_stays, removed_nearer) || u >= point_count || v >= point_count || u == v)
             return invalidInput("pfrep: collapse " + std::to_string(r) + ": bad points in the chain's log");
         uint32_t removed = rep[u], kept = rep[v];
         if (rule == ChainEndRule::NearerMerged) {
@@ -772,10 +773,14 @@ Result<PfrepBuild> buildPfrepFromChain(const Mesh& mesh, const CollapsePairLog& 
             if (dot(dk, dk) > dot(dr, dr))
                 std::swap(removed, kept);
         }
+        if (rule == ChainEndRule::EngineNearer && !kept_stays && removed_nearer) std::swap(removed, kept);
         if (by_quadric) {
+            // When the chain did not move its kept point (a corner, or a border or seam point whose
+            // edge leaves its line: the quadric has no constraint planes here), that end stays.
             Quadric q = quadric[removed];
             q += quadric[kept];
-            if (q.evaluate(toD(sequence.point_positions[removed])) < q.evaluate(toD(sequence.point_positions[kept])))
+            if (!kept_stays &&
+                q.evaluate(toD(sequence.point_positions[removed])) < q.evaluate(toD(sequence.point_positions[kept])))
                 std::swap(removed, kept);
             quadric[kept] = q;
         }

@@ -33,6 +33,26 @@ Tri canonical(uint32_t a, uint32_t b, uint32_t c) {
 
 bool sameBits(const lodbake::Vec3f& a, const lodbake::Vec3f& b) { return std::memcmp(&a, &b, sizeof a) == 0; }
 
+// The log's flags against a replay of the full records: kept_stays says the merged position is the
+// kept point's position before the collapse, removed_nearer that the removed point was nearer to it.
+// Returns how many collapses kept their point in place.
+size_t checkFlags(const lodbake::LodChain& chain) {
+    std::vector<lodbake::Vec3f> at = chain.sequence.point_positions;
+    lodbake::CollapsePairLog::Reader reader(chain.removals);
+    size_t stays_count = 0;
+    for (const lodbake::CollapseRecord& r : chain.sequence.records) {
+        uint32_t u = 0, v = 0;
+        bool stays = false, nearer = false;
+        EXPECT_TRUE(reader.next(u, v, stays, nearer));
+        EXPECT_EQ(stays, sameBits(at[v], r.position));
+        const lodbake::Vec3d p(r.position), du = lodbake::Vec3d(at[u]) - p, dv = lodbake::Vec3d(at[v]) - p;
+        EXPECT_EQ(nearer, dot(du, du) < dot(dv, dv));
+        stays_count += stays;
+        at[v] = r.position;
+    }
+    return stays_count;
+}
+
 class PfrepChainTest : public ::testing::Test {
 protected:
     static void SetUpTestSuite() {
@@ -76,6 +96,18 @@ TEST(CollapsePairLogTest, RoundTripsPairsInBothDirectionsAndRefusesACutStream) {
     }
     uint32_t a = 0, b = 0;
     EXPECT_FALSE(reader.next(a, b));
+    // The two flags travel with their entry.
+    lodbake::CollapsePairLog flagged;
+    for (uint32_t i = 0; i < 8; ++i) flagged.add(1000 + i, 999 - i * 100, i & 1, (i >> 1) & 1);
+    lodbake::CollapsePairLog::Reader flags(flagged);
+    for (uint32_t i = 0; i < 8; ++i) {
+        bool stays = false, nearer = false;
+        ASSERT_TRUE(flags.next(a, b, stays, nearer));
+        EXPECT_EQ(a, 1000 + i);
+        EXPECT_EQ(b, 999 - i * 100);
+        EXPECT_EQ(stays, bool(i & 1));
+        EXPECT_EQ(nearer, bool((i >> 1) & 1));
+    }
 }
 
 TEST(PfrepChainPointsTest, NumbersPointsLikeTheSimplifier) {
@@ -139,7 +171,7 @@ TEST_F(PfrepChainTest, BlobLevelsAreTheChainsFacesForEveryRule) {
     std::vector<uint32_t> triangles;
     ASSERT_TRUE(lodbake::chainPoints(*mesh_, positions, triangles).ok());
     using Rule = lodbake::ChainEndRule;
-    for (Rule rule : {Rule::LowerQuadric, Rule::EngineKept, Rule::NearerMerged}) {
+    for (Rule rule : {Rule::LowerQuadric, Rule::EngineKept, Rule::NearerMerged, Rule::EngineNearer}) {
         lodbake::Diagnostics d;
         auto build = lodbake::buildPfrepFromChain(*mesh_, chain_->removals, d, rule, &merged);
         ASSERT_TRUE(build.ok()) << build.status().message();
@@ -189,6 +221,23 @@ TEST_F(PfrepChainTest, ExtensionListsTheChainLevelsExactly) {
         EXPECT_EQ(object->levels[l + 1].removals, chain_->levels[l].collapse_count);
         EXPECT_EQ(object->levels[l + 1].triangles, chain_->levels[l].mesh.faceCount());
     }
+}
+
+TEST_F(PfrepChainTest, FlagsAgreeWithTheRecordedPositions) {
+    LODBAKE_REQUIRE_SHARED_MESHES();
+    checkFlags(*chain_);
+    // An open grid: its corners never move, nor do border points whose edge leaves the border.
+    lodbake::Diagnostics d;
+    lodbake::LodChainOptions options;
+    options.ratios = {0.5, 0.1};
+    options.measure_error = false;
+    options.record_removals = true;
+    auto grid = lodbake::buildLodChain(lodbake_test::flatGrid(16), options, d);
+    ASSERT_TRUE(grid.ok());
+    ASSERT_EQ(grid->removals.size(), grid->sequence.records.size());
+    const size_t stays = checkFlags(*grid);
+    EXPECT_GT(stays, 0u);
+    EXPECT_LT(stays, grid->sequence.records.size());
 }
 
 TEST(PfrepChainFallbackTest, CoveredComponentRemovalLeavesNoLogAndTheExtensionSimplifiesItself) {

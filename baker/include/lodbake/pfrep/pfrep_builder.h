@@ -57,6 +57,7 @@ enum class ChainEndRule {
     LowerQuadric, // the end with the lower error for the merged point's face-plane quadric (default)
     EngineKept,   // the end the simplifier names as kept
     NearerMerged, // the end nearer the chain's merged position (needs those positions)
+    EngineNearer, // the end whose engine point was nearer the merged position (the log's bit)
 };
 
 /// Builds the blob from a discrete chain's own simplification pass (LodChain::removals, recorded with

@@ -90,22 +90,25 @@ struct CollapseSequence {
 /// point) in execution order, as the engine names them: point ids are CollapseSequence point ids
 /// (the input's distinct positions, bit-identical positions welded, numbered in order of first use
 /// by the faces that are not degenerate by position), and after a collapse the merged point carries
-/// the kept id. Stored as a byte stream (about 5 bytes per collapse instead of 8): per entry, the
-/// removed point and the zigzag difference kept - removed, each as an LEB128 varint.
+/// the kept id; `kept_stays` says the kept point did not move (a corner, a border or seam point whose
+/// edge leaves its line, or a collapse whose optimum is the kept end). Stored as a byte stream (about
+/// 4.5 bytes per collapse instead of 8): per entry, the removed point, then the zigzag difference
+/// kept - removed times 2 plus kept_stays, each as an LEB128 varint (ids below 2^30).
 class CollapsePairLog {
 public:
-    void add(uint32_t removed, uint32_t kept) {
+    void add(uint32_t removed, uint32_t kept, bool kept_stays = false, bool removed_nearer = false) {
         putVarint(removed);
         const int64_t d = int64_t(kept) - int64_t(removed);
-        putVarint(uint32_t(d < 0 ? ((-d) << 1) - 1 : d << 1));
+        putVarint(uint64_t(d < 0 ? ((-d) << 1) - 1 : d << 1) << 2 | uint64_t(removed_nearer) << 1 |
+                  uint64_t(kept_stays));
         ++count_;
     }
     size_t size() const { return count_; }
     bool empty() const { return count_ == 0; }
     size_t byteSize() const { return bytes_.size(); }
-    /// Room for `entries` entries of the largest size (10 bytes), so the stream never grows by copying
+    /// Room for `entries` entries of the largest size (11 bytes), so the stream never grows by copying
     /// (pages not yet written are not resident).
-    void reserve(size_t entries) { bytes_.reserve(entries * 10); }
+    void reserve(size_t entries) { bytes_.reserve(entries * 11); }
     void clear() {
         std::vector<uint8_t>().swap(bytes_);
         count_ = 0;
@@ -116,9 +119,17 @@ public:
     public:
         explicit Reader(const CollapsePairLog& log) : p_(log.bytes_.data()), end_(log.bytes_.data() + log.bytes_.size()) {}
         bool next(uint32_t& removed, uint32_t& kept) {
-            uint32_t z = 0;
-            if (!getVarint(removed) || !getVarint(z)) return false;
-            const int64_t d = (z & 1) ? -int64_t((uint64_t(z) + 1) >> 1) : int64_t(z >> 1);
+            bool stays = false, nearer = false;
+            return next(removed, kept, stays, nearer);
+        }
+        bool next(uint32_t& removed, uint32_t& kept, bool& kept_stays, bool& removed_nearer) {
+            uint64_t r = 0, f = 0;
+            if (!getVarint(r) || !getVarint(f) || r > 0xffffffffu) return false;
+            removed = uint32_t(r);
+            kept_stays = f & 1;
+            removed_nearer = (f >> 1) & 1;
+            const uint64_t z = f >> 2;
+            const int64_t d = (z & 1) ? -int64_t((z + 1) >> 1) : int64_t(z >> 1);
             const int64_t k = int64_t(removed) + d;
             if (k < 0 || k > int64_t(0xffffffffu)) return false;
             kept = uint32_t(k);
@@ -126,11 +137,11 @@ public:
         }
 
     private:
-        bool getVarint(uint32_t& v) {
+        bool getVarint(uint64_t& v) {
             v = 0;
-            for (uint32_t shift = 0; shift < 35 && p_ < end_; shift += 7) {
+            for (uint32_t shift = 0; shift < 42 && p_ < end_; shift += 7) {
                 const uint8_t b = *p_++;
-                v |= uint32_t(b & 0x7f) << shift;
+                v |= uint64_t(b & 0x7f) << shift;
                 if (!(b & 0x80)) return true;
             }
             return false;
@@ -140,7 +151,7 @@ public:
     };
 
 private:
-    void putVarint(uint32_t v) {
+    void putVarint(uint64_t v) {
         while (v >= 0x80) {
             bytes_.push_back(uint8_t(v | 0x80));
             v >>= 7;
