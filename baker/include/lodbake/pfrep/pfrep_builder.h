@@ -7,7 +7,8 @@
 // removed point u goes, its faces that contain the kept point v die, the others are re-created with
 // u replaced by v, tagged with u as their dependency. No point ever moves, so level k of the blob is
 // exactly the simplifier's mesh after k collapses (triangle for triangle, by position); full-edge
-// sequences (kept point moved) are refused.
+// sequences (kept point moved) are refused. The bake instead reads its discrete chain's full-edge
+// collapses as vertex removals (buildPfrepFromChain): one simplification for both.
 //
 // Vertex ids in the blob are removal ranks; positions are quantized to 16 bits per axis over the
 // bounding box. Only positions are stored (no normals, UVs or colours).
