@@ -317,8 +317,10 @@ Result<PfrepBuild> buildBlob(const CollapseSequence& sequence, const std::vector
             tris.push_back(tri);
         }
 
-        // Replay: ranks in removal order, then the survivors that have faces, by point id.
+        // Replay: ranks in removal order, then the survivors that have faces, by point id. The
+        // triangles record r re-creates are tris[created_end[r - 1], created_end[r]).
         std::vector<uint32_t> ring;
+        std::vector<uint32_t> created_end(sequence.records.size());
         for (size_t r = 0; r < sequence.records.size(); ++r) {
             const CollapseRecord& rec = sequence.records[r];
             const uint32_t u = rec.removed_point, v = rec.kept_point;
@@ -329,9 +331,6 @@ Result<PfrepBuild> buildBlob(const CollapseSequence& sequence, const std::vector
             if (ring.empty())
                 return invalidInput("pfrep: collapse " + std::to_string(r) + ": removed point has no faces");
             incident[u].size = 0;
-            double err = HUGE_VAL;
-            bool created = false;
-            const Vec3d pu = toD(sequence.point_positions[u]);
             for (uint32_t t : ring) {
                 for (uint32_t p : tris[t].p)
                     if (p != u) unlink(p, t);
@@ -344,15 +343,24 @@ Result<PfrepBuild> buildBlob(const CollapseSequence& sequence, const std::vector
                 const uint32_t id = uint32_t(tris.size());
                 tris.push_back(fresh);
                 for (uint32_t p : fresh.p) link(p, id);
-                err = std::min(err, pointTriangleDistance(pu, toD(sequence.point_positions[fresh.p[0]]),
-                                                          toD(sequence.point_positions[fresh.p[1]]),
-                                                          toD(sequence.point_positions[fresh.p[2]])));
-                created = true;
             }
-            removal_error[u] = created ? err : 0.0;
+            created_end[r] = uint32_t(tris.size());
         }
         std::vector<uint32_t>().swap(pool);
         std::vector<Range>().swap(incident);
+        // Each removed point's error (its distance to the nearest triangle its removal creates, 0 when
+        // it creates none), after the replay: independent per record, fixed chunks in parallel.
+        LODBAKE_RETURN_IF_ERROR(parallelFor(sequence.records.size(), kChunk, [&](size_t r) {
+            const uint32_t u = sequence.records[r].removed_point;
+            const size_t lo = r == 0 ? input_count : created_end[r - 1], hi = created_end[r];
+            double err = HUGE_VAL;
+            const Vec3d pu = toD(sequence.point_positions[u]);
+            for (size_t t = lo; t < hi; ++t)
+                err = std::min(err, pointTriangleDistance(pu, toD(sequence.point_positions[tris[t].p[0]]),
+                                                          toD(sequence.point_positions[tris[t].p[1]]),
+                                                          toD(sequence.point_positions[tris[t].p[2]])));
+            removal_error[u] = hi > lo ? err : 0.0;
+        }));
     }
     const uint32_t removed = uint32_t(rank_point.size());
     for (uint32_t p = 0; p < point_count; ++p) {
