@@ -35,8 +35,9 @@ public:
     /// sequence (KeepEndpoint) also its point triangles, and later runs log the re-created triangles.
     void describe(CollapseSequence& sequence);
 
-    /// Appends (removed point, kept point) of every later collapse to `log` (null: stop), for the
-    /// chain's vertex-removal reading (LodChainOptions::record_removals).
+    /// Appends (removed point, kept point, kept point unmoved, removed point nearer the merged
+    /// position) of every later collapse to `log` (null: stop), for the chain's vertex-removal
+    /// reading (LodChainOptions::record_removals).
     void setRemovalLog(CollapsePairLog* log) { removal_log_ = log; }
 
     size_t faceCount() const { return alive_faces_; }
