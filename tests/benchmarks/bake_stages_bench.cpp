@@ -1,8 +1,8 @@
-// The two single-threaded stages of a bake on the critical path, split into their steps: the LOD
-// chain (engine init, the collapse runs, the snapshots, the level refinement) and the PFRep build
-// (half-edge simplification, point triangles, blob). The input is repaired as the bake repairs it;
-// the chain gets the bake's options (desktop ratios, no measurement), the PFRep build the bake's
-// geometry-only copy of LOD0. Prints wall and thread CPU seconds per step (best of --runs) and a
+// The two single-threaded stages of a bake on the critical path: the LOD chain (as the bake runs it,
+// logging its collapses as vertex removals) and the PFRep build (as the bake runs it, from that log;
+// then, for comparison, the separate half-edge pass it replaced: simplification, point triangles,
+// blob). The input is repaired as the bake repairs it; the chain gets the bake's options (desktop
+// ratios, no measurement), the separate PFRep pass the bake's former geometry-only copy of LOD0. Prints wall and thread CPU seconds per step (best of --runs) and a
 // hash of every level and of the blob, so that a change meant to keep output identical can be
 // checked in seconds instead of a whole bake.
 //
@@ -14,6 +14,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -87,25 +88,58 @@ int main(int argc, char** argv) {
     if (!repairMesh(mesh, repair_options, "input", diagnostics).ok()) return 1;
     std::printf("%s: %zu triangles after repair, %zu thread(s)\n", path.c_str(), mesh.faceCount(), threads);
 
+    // The chain as the bake runs it: its collapses logged as vertex removals for the PFRep build
+    // (record_removals; the pass runs on to the end of valid collapses).
+    auto bakeChain = [&](Diagnostics& d) {
+        LodChainOptions options;
+        options.ratios = {0.5, 0.25, 0.1, 0.03, 0.01};
+        options.measure_error = false;
+        options.record_collapses = false;
+        options.record_removals = true;
+        return buildLodChain(mesh, options, d);
+    };
+    std::unique_ptr<LodChain> last_chain;
     if (chain) {
         Best total;
         uint64_t hash = 0;
         for (int r = 0; r < runs; ++r) {
-            LodChainOptions options;
-            options.ratios = {0.5, 0.25, 0.1, 0.03, 0.01};
-            options.measure_error = false;
             Diagnostics d;
             const Clock a = now();
-            Result<LodChain> c = buildLodChain(mesh, options, d);
+            Result<LodChain> c = bakeChain(d);
             const Clock b = now();
             if (!c.ok()) return 1;
             total.take(a, b);
             Hasher h;
             for (const LodLevel& level : c->levels) h.addU64(hashMesh(level.mesh));
             hash = h.digest();
+            last_chain = std::make_unique<LodChain>(std::move(*c));
         }
-        std::printf("lod_chain  wall %.3f s  thread cpu %.3f s  levels %s\n", total.wall, total.cpu,
-                    hashToHex(hash).c_str());
+        std::printf("lod_chain  wall %.3f s  thread cpu %.3f s  levels %s  (removal log %zu bytes)\n", total.wall,
+                    total.cpu, hashToHex(hash).c_str(), last_chain->removals.byteSize());
+    }
+    if (pfrep) {
+        // The bake's PFRep build: the blob from the chain's log (no simplification of its own).
+        if (!last_chain) {
+            Diagnostics d;
+            Result<LodChain> c = bakeChain(d);
+            if (!c.ok()) return 1;
+            last_chain = std::make_unique<LodChain>(std::move(*c));
+        }
+        Best from_chain;
+        uint64_t hash = 0;
+        for (int r = 0; r < runs; ++r) {
+            Diagnostics d;
+            const Clock a = now();
+            Result<PfrepBuild> built = buildPfrepFromChain(mesh, last_chain->removals, d);
+            const Clock b = now();
+            if (!built.ok()) return 1;
+            from_chain.take(a, b);
+            Hasher h;
+            h.addBytes(built->blob.data(), built->blob.size());
+            hash = h.digest();
+        }
+        std::printf("pfrep      wall %.3f s  thread cpu %.3f s  (from the chain's log)  blob %s\n", from_chain.wall,
+                    from_chain.cpu, hashToHex(hash).c_str());
     }
     if (pfrep) {
         Mesh geometry;
@@ -142,7 +176,7 @@ int main(int argc, char** argv) {
             for (uint32_t k : built->level_triangles) h.addU32(k);
             hash = h.digest();
         }
-        std::printf("pfrep      wall %.3f s  thread cpu %.3f s  (simplify %.3f / %.3f, point triangles %.3f / %.3f, "
+        std::printf("pfrep own  wall %.3f s  thread cpu %.3f s  (simplify %.3f / %.3f, point triangles %.3f / %.3f, "
                     "blob %.3f / %.3f)  blob %s\n",
                     total.wall, total.cpu, simplify.wall, simplify.cpu, triangles.wall, triangles.cpu, blob.wall,
                     blob.cpu, hashToHex(hash).c_str());

@@ -4,7 +4,7 @@
 //   3. selective refinement of 1,000 lucy100k instances from a moving camera (bar: < 2 ms per frame),
 //      instance state exactly |V| bits;
 //   4. writes PFRep levels and full-edge discrete levels at equal triangle counts for meshdist.py.
-// usage: pfrep_bench [--quick | --refine] (quick: skips the largest scans in part 1; refine: part 3 only)
+// usage: pfrep_bench [--quick | --refine | --quality | --shared MESH] (quick: skips the largest scans in part 1; refine: part 3 only)
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -18,6 +18,7 @@
 #include "lodbake/io/mesh_io.h"
 #include "lodbake/pfrep/pfrep_builder.h"
 #include "lodbake/simplify/lod_chain.h"
+#include "lodbake/simplify/mesh_distance.h"
 #include "lodrt/pfrep.h"
 
 namespace {
@@ -69,6 +70,20 @@ lodbake::Mesh levelMesh(const lodrt::PfrepModel& m, uint32_t k) {
     return mesh;
 }
 
+// levelMesh without the vertices no triangle of the level uses.
+lodbake::Mesh compactLevelMesh(const lodrt::PfrepModel& m, uint32_t k) {
+    lodbake::Mesh full = levelMesh(m, k), out;
+    std::vector<uint32_t> remap(full.positions.size(), 0xffffffffu);
+    for (uint32_t& i : full.indices) {
+        if (remap[i] == 0xffffffffu) {
+            remap[i] = uint32_t(out.positions.size());
+            out.positions.push_back(full.positions[i]);
+        }
+        out.indices.push_back(remap[i]);
+    }
+    return out;
+}
+
 size_t levelTriangles(const lodrt::PfrepModel& m, uint32_t k, std::vector<uint32_t>& idx) {
     size_t count = 0;
     lodrt::pfrepExtractLevel(m, k, idx.data(), idx.size() / 3, &count);
@@ -86,6 +101,36 @@ uint32_t levelFor(const lodrt::PfrepModel& m, size_t target, std::vector<uint32_
             lo = mid + 1;
     }
     return lo;
+}
+
+// Area-weighted normal of every point of `mesh` (the simplifier's point numbering, chainPoints).
+std::vector<lodbake::Vec3d> pointNormals(const lodbake::Mesh& mesh) {
+    std::vector<lodbake::Vec3f> positions;
+    std::vector<uint32_t> tris;
+    if (!lodbake::chainPoints(mesh, positions, tris).ok()) return {};
+    std::vector<lodbake::Vec3d> n(positions.size());
+    for (size_t t = 0; t < tris.size(); t += 3) {
+        const lodbake::Vec3d a(positions[tris[t]]), b(positions[tris[t + 1]]), c(positions[tris[t + 2]]);
+        const lodbake::Vec3d fn = cross(b - a, c - a);
+        for (int k = 0; k < 3; ++k) n[tris[t + k]] += fn;
+    }
+    return n;
+}
+
+// Faces of a PFRep level (blob vertex ids, original positions) whose normal points against the
+// input surface's normal at their corners (the sum of the corners' area-weighted point normals).
+size_t flippedFaces(const lodbake::Mesh& level, const std::vector<uint32_t>& rank_point,
+                    const std::vector<lodbake::Vec3d>& point_normals) {
+    size_t flipped = 0;
+    for (size_t t = 0; t + 2 < level.indices.size(); t += 3) {
+        const uint32_t* c = &level.indices[t];
+        const lodbake::Vec3d a(level.positions[c[0]]), b(level.positions[c[1]]), e(level.positions[c[2]]);
+        const lodbake::Vec3d fn = cross(b - a, e - a);
+        lodbake::Vec3d surface;
+        for (int k = 0; k < 3; ++k) surface += point_normals[rank_point[c[k]]];
+        flipped += dot(fn, surface) < 0;
+    }
+    return flipped;
 }
 
 // --quality: the chain's levels and, for several collapse-ordering options of the half-edge
@@ -111,6 +156,42 @@ int qualityVariants() {
         if (!chain.ok()) continue;
         for (const auto& level : chain->levels)
             lodbake::writeMesh(level.mesh, stem + "_" + std::to_string(level.mesh.faceCount()) + "_chain.ply", {}, d);
+        std::vector<lodbake::Vec3d> point_normals = pointNormals(mesh);
+        // The PFRep read from the chain's own pass (the bake's), one blob per ChainEndRule: level k of
+        // the blob is the chain's level topology at its collapse count, at the original positions.
+        {
+            lodbake::LodChainOptions shared_options = options;
+            shared_options.record_removals = true;
+            auto shared = lodbake::buildLodChain(mesh, shared_options, d);
+            if (!shared.ok()) continue;
+            std::vector<lodbake::Vec3f> merged;
+            for (const auto& r : shared->sequence.records) merged.push_back(r.position);
+            using Rule = lodbake::ChainEndRule;
+            const std::pair<Rule, const char*> rules[] = {
+                {Rule::LowerQuadric, "sharedquadric"}, {Rule::EngineKept, "sharedengine"},
+                {Rule::NearerMerged, "sharednear"}, {Rule::EngineNearer, "sharedenear"}};
+            for (const auto& [rule, rule_name] : rules) {
+                auto b = lodbake::buildPfrepFromChain(mesh, shared->removals, d, rule, &merged);
+                lodrt::PfrepModel m;
+                if (!b.ok() || lodrt::openPfrep(b->blob.data(), b->blob.size(), &m) != lodrt::Result::Ok) {
+                    std::printf("  %s %s: %s\n", name, rule_name, b.ok() ? "blob refused" : b.status().message().c_str());
+                    continue;
+                }
+                std::vector<uint32_t> idx(lodrt::pfrepMaxTriangles(m) * 3);
+                for (size_t l = 0; l < shared->levels.size(); ++l) {
+                    const auto& level = shared->levels[l];
+                    const uint32_t k = uint32_t(level.collapse_count);
+                    const lodbake::Mesh pm = levelMesh(m, k);
+                    lodbake::writeMesh(pm, stem + "_" + std::to_string(level.mesh.faceCount()) + "_" +
+                                               rule_name + ".ply", {}, d);
+                    std::printf("  %s %s level %zu: k %u, %zu triangles (chain %zu), %zu flipped\n", name,
+                                rule_name, l, k, pm.faceCount(), level.mesh.faceCount(),
+                                flippedFaces(pm, b->rank_point, point_normals));
+                }
+                std::printf("  %s %s: %.1f bytes/vertex, %u removed of %u\n", name, rule_name,
+                            double(b->blob.size()) / double(m.vertex_count), m.removed_count, m.vertex_count);
+            }
+        }
         for (const Variant& v : variants) {
             lodbake::PfrepOptions po;
             po.simplify.cost_area_exponent = v.area_exponent;
@@ -121,8 +202,10 @@ int qualityVariants() {
             std::vector<uint32_t> idx(lodrt::pfrepMaxTriangles(m) * 3);
             for (const auto& level : chain->levels) {
                 const uint32_t k = levelFor(m, level.mesh.faceCount(), idx);
-                lodbake::writeMesh(levelMesh(m, k),
-                                   stem + "_" + std::to_string(level.mesh.faceCount()) + "_" + v.name + ".ply", {}, d);
+                const lodbake::Mesh pm = levelMesh(m, k);
+                lodbake::writeMesh(pm, stem + "_" + std::to_string(level.mesh.faceCount()) + "_" + v.name + ".ply", {}, d);
+                std::printf("  %s %s: k %u, %zu triangles, %zu flipped\n", name, v.name, k, pm.faceCount(),
+                            flippedFaces(pm, b->rank_point, point_normals));
             }
             std::printf("  %s %s: %.1f bytes/vertex\n", name, v.name, double(b->blob.size()) / double(m.vertex_count));
         }
@@ -130,9 +213,86 @@ int qualityVariants() {
     return 0;
 }
 
+// --shared NAME [quadric|engine|near]: the bake's chain (default ratios, no repair) with its vertex-removal log, the blob
+// read from it and the blob of the separate half-edge pass: log size, times (thread CPU), blob sizes,
+// and both blobs' levels at the chain's 50 % and 10 % levels written for meshdist.py.
+int sharedChain(const char* name, const char* rule_name) {
+    using Rule = lodbake::ChainEndRule;
+    const std::string rn = rule_name ? rule_name : "quadric";
+    const Rule rule = rn == "engine"  ? Rule::EngineKept
+                      : rn == "near"  ? Rule::NearerMerged
+                      : rn == "enear" ? Rule::EngineNearer
+                                      : Rule::LowerQuadric;
+    lodbake::Mesh mesh;
+    if (!load(name, mesh)) return 1;
+    lodbake::Diagnostics d;
+    lodbake::LodChainOptions options;
+    options.measure_error = false;
+    options.record_collapses = rule == Rule::NearerMerged; // the merged positions
+    options.record_removals = true;
+    double t0 = cpuSeconds();
+    auto chain = lodbake::buildLodChain(mesh, options, d);
+    const double chain_s = cpuSeconds() - t0;
+    if (!chain.ok()) return 1;
+    std::printf("%s: chain %.2f s thread CPU, %zu collapses (%zu up to the last level), log %zu bytes (%.2f per "
+                "collapse)\n",
+                name, chain_s, chain->removals.size(), chain->levels.back().collapse_count,
+                chain->removals.byteSize(), double(chain->removals.byteSize()) / double(chain->removals.size()));
+    t0 = cpuSeconds();
+    std::vector<lodbake::Vec3f> merged;
+    for (const auto& r : chain->sequence.records) merged.push_back(r.position);
+    auto shared = lodbake::buildPfrepFromChain(mesh, chain->removals, d, rule, &merged);
+    const double shared_s = cpuSeconds() - t0;
+    t0 = cpuSeconds();
+    auto own = lodbake::buildPfrep(mesh, {}, d);
+    const double own_s = cpuSeconds() - t0;
+    if (!shared.ok() || !own.ok()) return 1;
+    std::printf("  from the chain: %.2f s, %zu bytes (%.1f per vertex); own half-edge pass: %.2f s, %zu bytes (%.1f "
+                "per vertex)\n",
+                shared_s, shared->blob.size(), double(shared->blob.size()) / double(shared->rank_point.size()), own_s,
+                own->blob.size(), double(own->blob.size()) / double(own->rank_point.size()));
+    const std::string stem = std::string(LODBAKE_BENCH_OUT_DIR) + "/s_" + std::string(name).substr(0, std::string(name).find('.'));
+    for (const auto* b : {&*shared, &*own}) {
+        lodrt::PfrepModel m;
+        if (lodrt::openPfrep(b->blob.data(), b->blob.size(), &m) != lodrt::Result::Ok) return 1;
+        std::vector<uint32_t> idx(lodrt::pfrepMaxTriangles(m) * 3);
+        for (size_t l : {size_t(0), size_t(2)}) {
+            const size_t target = chain->levels[l].mesh.faceCount();
+            const uint32_t k = b == &*shared ? uint32_t(chain->levels[l].collapse_count) : levelFor(m, target, idx);
+            lodbake::writeMesh(compactLevelMesh(m, k),
+                               stem + "_" + std::to_string(target) + (b == &*shared ? "_shared.ply" : "_own.ply"), {}, d);
+        }
+    }
+    // Distances to the input (the bake's measurement, normalized by the bounding-box diagonal).
+    const double diagonal = lodbake::computeBounds(mesh).diagonal();
+    for (size_t l : {size_t(0), size_t(2)}) {
+        const std::string base = stem + "_" + std::to_string(chain->levels[l].mesh.faceCount());
+        for (const char* variant : {"_chain", "_own", "_shared"}) {
+            lodbake::Mesh level;
+            if (std::string(variant) == "_chain") {
+                level = chain->levels[l].mesh;
+            } else {
+                auto read = lodbake::readMesh(base + variant + ".ply", {}, d);
+                if (!read.ok()) continue;
+                level = std::move(read->mesh);
+            }
+            auto dist = lodbake::measureSurfaceDistance(mesh, level);
+            if (dist.ok())
+                std::printf("  %zu triangles %s: %zu triangles, mean %.3e, Hausdorff %.3e\n",
+                            chain->levels[l].mesh.faceCount(), variant + 1, level.faceCount(), dist->mean / diagonal,
+                            dist->hausdorff / diagonal);
+        }
+    }
+    for (size_t l : {size_t(0), size_t(2)})
+        lodbake::writeMesh(chain->levels[l].mesh,
+                           stem + "_" + std::to_string(chain->levels[l].mesh.faceCount()) + "_chain.ply", {}, d);
+    return 0;
+}
+
 } // namespace
 
 int main(int argc, char** argv) {
+    if (argc > 2 && std::strcmp(argv[1], "--shared") == 0) return sharedChain(argv[2], argc > 3 ? argv[3] : nullptr);
     const bool quick = argc > 1 && std::strcmp(argv[1], "--quick") == 0;
     const bool refine_only = argc > 1 && std::strcmp(argv[1], "--refine") == 0;
     if (argc > 1 && std::strcmp(argv[1], "--quality") == 0) return qualityVariants();

@@ -110,7 +110,7 @@ Result<TextureLevels> textureLevels(const Mesh& lod0, size_t level_count, const 
 // meshes (STYLE.md §7: each writes its own slot; which thread runs which, and when, changes no
 // byte): the error measurement (then the metrics and texture levels that follow from it), and the
 // stream encoders' prepare steps. They run in phases (concurrentPhases): with 2 threads a small
-// asset's PFRep build (one long single-threaded simplification) runs beside the measurement and the
+// asset's PFRep build (a replay of the chain's logged collapses, then the blob) runs beside the measurement and the
 // valence coding of the levels; a large asset's PFRep build and measurement (parallel inside) run one
 // after the other, each alone, then the coding of every level side by side. The commits (cheap; the valence commit renumbers its level) then
 // run in encoder and level order on this thread.
@@ -136,7 +136,11 @@ Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vect
     chain_options.simplify.remove_covered_components = settings.remove_covered_components;
     chain_options.measure_error = false; // measured below, beside the stream encoders
     chain_options.record_collapses = false;
-    for (const PackStreamEncoder& encoder : encoders) chain_options.record_collapses |= encoder.needs_collapses;
+    for (const PackStreamEncoder& encoder : encoders) {
+        chain_options.record_collapses |= encoder.needs_collapses;
+        // The PFRep blob is built from the chain's own pass, read as vertex removals (docs/bake.md).
+        chain_options.record_removals |= encoder.extension_name == "LODBAKE_progressive_fans";
+    }
     StageTimer chain_timer(hooks, index, BakeStage::LodChain);
     Result<LodChain> chain_result = buildLodChain(mesh, chain_options, slot.diagnostics);
     if (!chain_result.ok())

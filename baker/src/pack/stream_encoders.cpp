@@ -22,11 +22,11 @@ PackStreamEncoder progressiveFansEncoder() {
         "LODBAKE_progressive_fans",
         [](const LodChain& chain, size_t level_index, const Mesh& mesh) -> Result<PackStreamCommit> {
             if (level_index != 0 || mesh.faceCount() == 0) return PackStreamCommit();
-            std::vector<double> ratios{1.0};
-            for (const LodLevel& l : chain.levels) ratios.push_back(l.target_ratio);
             Diagnostics diagnostics; // notes only (e.g. nothing removable); the blob is valid either way
+            // From the chain's own collapses when it recorded them (LodChain::removals), else its own
+            // half-edge simplification.
             LODBAKE_ASSIGN_OR_RETURN(PfrepExtensionObject object,
-                                     buildPfrepExtension(mesh, ratios, PfrepOptions{}, diagnostics));
+                                     buildPfrepExtension(mesh, chain, PfrepOptions{}, diagnostics));
             auto e = std::make_shared<PackExtension>();
             e->name = "LODBAKE_progressive_fans";
             e->json = std::move(object.json);

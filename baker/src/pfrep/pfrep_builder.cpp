@@ -11,6 +11,7 @@
 #include <unordered_map>
 
 #include "core/parallel.h"
+#include "lodbake/simplify/quadric.h"
 #include "lodrt/format.h"
 
 namespace lodbake {
@@ -316,8 +317,10 @@ Result<PfrepBuild> buildBlob(const CollapseSequence& sequence, const std::vector
             tris.push_back(tri);
         }
 
-        // Replay: ranks in removal order, then the survivors that have faces, by point id.
+        // Replay: ranks in removal order, then the survivors that have faces, by point id. The
+        // triangles record r re-creates are tris[created_end[r - 1], created_end[r]).
         std::vector<uint32_t> ring;
+        std::vector<uint32_t> created_end(sequence.records.size());
         for (size_t r = 0; r < sequence.records.size(); ++r) {
             const CollapseRecord& rec = sequence.records[r];
             const uint32_t u = rec.removed_point, v = rec.kept_point;
@@ -328,9 +331,6 @@ Result<PfrepBuild> buildBlob(const CollapseSequence& sequence, const std::vector
             if (ring.empty())
                 return invalidInput("pfrep: collapse " + std::to_string(r) + ": removed point has no faces");
             incident[u].size = 0;
-            double err = HUGE_VAL;
-            bool created = false;
-            const Vec3d pu = toD(sequence.point_positions[u]);
             for (uint32_t t : ring) {
                 for (uint32_t p : tris[t].p)
                     if (p != u) unlink(p, t);
@@ -343,15 +343,24 @@ Result<PfrepBuild> buildBlob(const CollapseSequence& sequence, const std::vector
                 const uint32_t id = uint32_t(tris.size());
                 tris.push_back(fresh);
                 for (uint32_t p : fresh.p) link(p, id);
-                err = std::min(err, pointTriangleDistance(pu, toD(sequence.point_positions[fresh.p[0]]),
-                                                          toD(sequence.point_positions[fresh.p[1]]),
-                                                          toD(sequence.point_positions[fresh.p[2]])));
-                created = true;
             }
-            removal_error[u] = created ? err : 0.0;
+            created_end[r] = uint32_t(tris.size());
         }
         std::vector<uint32_t>().swap(pool);
         std::vector<Range>().swap(incident);
+        // Each removed point's error (its distance to the nearest triangle its removal creates, 0 when
+        // it creates none), after the replay: independent per record, fixed chunks in parallel.
+        LODBAKE_RETURN_IF_ERROR(parallelFor(sequence.records.size(), kChunk, [&](size_t r) {
+            const uint32_t u = sequence.records[r].removed_point;
+            const size_t lo = r == 0 ? input_count : created_end[r - 1], hi = created_end[r];
+            double err = HUGE_VAL;
+            const Vec3d pu = toD(sequence.point_positions[u]);
+            for (size_t t = lo; t < hi; ++t)
+                err = std::min(err, pointTriangleDistance(pu, toD(sequence.point_positions[tris[t].p[0]]),
+                                                          toD(sequence.point_positions[tris[t].p[1]]),
+                                                          toD(sequence.point_positions[tris[t].p[2]])));
+            removal_error[u] = hi > lo ? err : 0.0;
+        }));
     }
     const uint32_t removed = uint32_t(rank_point.size());
     for (uint32_t p = 0; p < point_count; ++p) {
@@ -679,6 +688,120 @@ Result<PfrepBuild> buildBlob(const CollapseSequence& sequence, const std::vector
 Result<PfrepBuild> buildPfrepFromSequence(const CollapseSequence& sequence,
                                           const std::vector<uint32_t>& point_triangles, Diagnostics& diagnostics) {
     return buildBlob(sequence, point_triangles, diagnostics, nullptr, nullptr);
+}
+
+Status chainPoints(const Mesh& mesh, std::vector<Vec3f>& positions, std::vector<uint32_t>& triangles) {
+    // Weld by bit-identical position (each vertex to the first vertex at its position, by sorting), then
+    // number the points in order of first use by the faces that are not degenerate by position: the
+    // simplifier's own numbering (lod_chain.h).
+    const size_t vertex_count = mesh.positions.size();
+    if (vertex_count >= kNone) return resourceLimit("pfrep: too many vertices");
+    for (uint32_t i : mesh.indices)
+        if (i >= vertex_count) return invalidInput("pfrep: index out of range");
+    std::vector<uint32_t> weld(vertex_count, kNone);
+    {
+        struct Key {
+            uint32_t bits[3];
+            uint32_t vertex;
+        };
+        std::vector<Key> keys(vertex_count);
+        for (uint32_t v = 0; v < vertex_count; ++v) {
+            std::memcpy(keys[v].bits, &mesh.positions[v].x, 12);
+            keys[v].vertex = v;
+        }
+        std::sort(keys.begin(), keys.end(), [](const Key& a, const Key& b) {
+            if (a.bits[0] != b.bits[0]) return a.bits[0] < b.bits[0];
+            if (a.bits[1] != b.bits[1]) return a.bits[1] < b.bits[1];
+            if (a.bits[2] != b.bits[2]) return a.bits[2] < b.bits[2];
+            return a.vertex < b.vertex;
+        });
+        for (size_t i = 0; i < vertex_count;) {
+            size_t j = i + 1;
+            while (j < vertex_count && std::memcmp(keys[j].bits, keys[i].bits, 12) == 0) ++j;
+            for (size_t k = i; k < j; ++k) weld[keys[k].vertex] = keys[i].vertex;
+            i = j;
+        }
+    }
+    std::vector<uint32_t> point_of(vertex_count, kNone); // per welded (first) vertex
+    positions.clear();
+    triangles.clear();
+    triangles.reserve(mesh.indices.size());
+    for (size_t f = 0; f < mesh.faceCount(); ++f) {
+        const uint32_t w0 = weld[mesh.indices[f * 3]], w1 = weld[mesh.indices[f * 3 + 1]],
+                       w2 = weld[mesh.indices[f * 3 + 2]];
+        if (w0 == w1 || w1 == w2 || w0 == w2) continue;
+        for (uint32_t w : {w0, w1, w2}) {
+            if (point_of[w] == kNone) {
+                point_of[w] = uint32_t(positions.size());
+                positions.push_back(mesh.positions[w]);
+            }
+            triangles.push_back(point_of[w]);
+        }
+    }
+    return Status::okStatus();
+}
+
+Result<PfrepBuild> buildPfrepFromChain(const Mesh& mesh, const CollapsePairLog& removals, Diagnostics& diagnostics,
+                                       ChainEndRule rule, const std::vector<Vec3f>* merged_positions) {
+    if (rule == ChainEndRule::NearerMerged && (!merged_positions || merged_positions->size() != removals.size()))
+        return invalidInput("pfrep: one merged position per collapse expected");
+    CollapseSequence sequence;
+    std::vector<uint32_t> triangles;
+    LODBAKE_RETURN_IF_ERROR(chainPoints(mesh, sequence.point_positions, triangles));
+    const uint32_t point_count = uint32_t(sequence.point_positions.size());
+    // The engine names the merged point by its kept id; the blob keeps one of the two original points
+    // for it: rep[engine point] is that point.
+    std::vector<uint32_t> rep(point_count);
+    for (uint32_t p = 0; p < point_count; ++p) rep[p] = p;
+    // LowerQuadric: the end whose original position has the lower error for the merged point's quadric
+    // (face planes, area-weighted, summed over the points merged into it), as the half-edge simplifier
+    // chooses its direction.
+    std::vector<Quadric> quadric;
+    const bool by_quadric = rule == ChainEndRule::LowerQuadric;
+    if (by_quadric) {
+        quadric.resize(point_count);
+        for (size_t t = 0; t < triangles.size(); t += 3) {
+            const Quadric q = Quadric::fromTriangle(toD(sequence.point_positions[triangles[t]]),
+                                                    toD(sequence.point_positions[triangles[t + 1]]),
+                                                    toD(sequence.point_positions[triangles[t + 2]]));
+            for (int k = 0; k < 3; ++k) quadric[triangles[t + k]] += q;
+        }
+    }
+    sequence.records.reserve(removals.size());
+    CollapsePairLog::Reader reader(removals);
+    uint32_t u = 0, v = 0;
+    bool kept_stays = false, removed_nearer = false;
+    for (size_t r = 0; r < removals.size(); ++r) {
+        if (!reader.next(u, v, kept_stays, removed_nearer) || u >= point_count || v >= point_count || u == v)
+            return invalidInput("pfrep: collapse " + std::to_string(r) + ": bad points in the chain's log");
+        uint32_t removed = rep[u], kept = rep[v];
+        if (rule == ChainEndRule::NearerMerged) {
+            const Vec3d p = toD((*merged_positions)[r]);
+            const Vec3d dk = toD(sequence.point_positions[kept]) - p, dr = toD(sequence.point_positions[removed]) - p;
+            if (dot(dk, dk) > dot(dr, dr))
+                std::swap(removed, kept);
+        }
+        if (rule == ChainEndRule::EngineNearer && !kept_stays && removed_nearer) std::swap(removed, kept);
+        if (by_quadric) {
+            // When the chain did not move its kept point (a corner, or a border or seam point whose
+            // edge leaves its line: the quadric has no constraint planes here), that end stays.
+            Quadric q = quadric[removed];
+            q += quadric[kept];
+            if (!kept_stays &&
+                q.evaluate(toD(sequence.point_positions[removed])) < q.evaluate(toD(sequence.point_positions[kept])))
+                std::swap(removed, kept);
+            quadric[kept] = q;
+        }
+        rep[v] = kept;
+        CollapseRecord record;
+        record.removed_point = removed;
+        record.kept_point = kept;
+        record.position = sequence.point_positions[kept];
+        sequence.records.push_back(record);
+    }
+    std::vector<uint32_t>().swap(rep);
+    std::vector<Quadric>().swap(quadric);
+    return buildBlob(sequence, triangles, diagnostics, nullptr, nullptr);
 }
 
 Result<PfrepBuild> buildPfrep(const Mesh& mesh, const PfrepOptions& options, Diagnostics& diagnostics) {

@@ -10,6 +10,38 @@
 
 namespace lodbake {
 
+namespace {
+
+PfrepExtensionObject finishObject(PfrepBuild build, PfrepExtensionObject out) {
+    JsonWriter j(0);
+    j.beginObject();
+    j.key("levels").beginArray();
+    for (const PfrepExtensionLevel& level : out.levels) {
+        j.beginObject();
+        j.field("removals", uint64_t(level.removals));
+        j.field("triangles", level.triangles);
+        j.endObject();
+    }
+    j.endArray();
+    j.field("removedCount", uint64_t(out.removed_count));
+    j.field("triangleCount", out.triangle_count);
+    j.field("vertexCount", uint64_t(out.vertex_count));
+    j.endObject();
+    out.json = j.str();
+    out.blob = std::move(build.blob);
+    return out;
+}
+
+PfrepExtensionObject headerObject(const PfrepBuild& build) {
+    PfrepExtensionObject out;
+    out.vertex_count = uint32_t(build.rank_point.size());
+    out.removed_count = uint32_t(build.removed);
+    out.triangle_count = build.level0_triangles;
+    return out;
+}
+
+} // namespace
+
 Result<PfrepExtensionObject> buildPfrepExtension(const Mesh& lod0, const std::vector<double>& level_ratios,
                                                  const PfrepOptions& options, Diagnostics& diagnostics) {
     for (size_t l = 0; l < level_ratios.size(); ++l)
@@ -29,10 +61,7 @@ Result<PfrepExtensionObject> buildPfrepExtension(const Mesh& lod0, const std::ve
         geometry.indices = lod0.indices;
     }
     LODBAKE_ASSIGN_OR_RETURN(PfrepBuild build, buildPfrep(has_attributes ? geometry : lod0, options, diagnostics));
-    PfrepExtensionObject out;
-    out.vertex_count = uint32_t(build.rank_point.size());
-    out.removed_count = uint32_t(build.removed);
-    out.triangle_count = build.level0_triangles;
+    PfrepExtensionObject out = headerObject(build);
     const std::vector<uint32_t>& counts = build.level_triangles;
     for (double ratio : level_ratios) {
         const double budget = ratio * double(out.triangle_count);
@@ -43,23 +72,31 @@ Result<PfrepExtensionObject> buildPfrepExtension(const Mesh& lod0, const std::ve
         const uint32_t k = it == counts.end() ? uint32_t(counts.size() - 1) : uint32_t(it - counts.begin());
         out.levels.push_back({k, counts[k]});
     }
-    JsonWriter j(0);
-    j.beginObject();
-    j.key("levels").beginArray();
-    for (const PfrepExtensionLevel& level : out.levels) {
-        j.beginObject();
-        j.field("removals", uint64_t(level.removals));
-        j.field("triangles", level.triangles);
-        j.endObject();
+    return finishObject(std::move(build), std::move(out));
+}
+
+Result<PfrepExtensionObject> buildPfrepExtension(const Mesh& lod0, const LodChain& chain, const PfrepOptions& options,
+                                                 Diagnostics& diagnostics) {
+    if (!chain.removals_complete) {
+        std::vector<double> ratios{1.0};
+        for (const LodLevel& level : chain.levels) ratios.push_back(level.target_ratio);
+        return buildPfrepExtension(lod0, ratios, options, diagnostics);
     }
-    j.endArray();
-    j.field("removedCount", uint64_t(out.removed_count));
-    j.field("triangleCount", out.triangle_count);
-    j.field("vertexCount", uint64_t(out.vertex_count));
-    j.endObject();
-    out.json = j.str();
-    out.blob = std::move(build.blob);
-    return out;
+    if (lod0.faceCount() == 0) return invalidInput("LODBAKE_progressive_fans: the mesh has no triangle");
+    LODBAKE_ASSIGN_OR_RETURN(PfrepBuild build, buildPfrepFromChain(lod0, chain.removals, diagnostics));
+    // Level k of the blob has the chain's faces after k collapses: each chain level is the blob level
+    // at its collapse count, with exactly its triangles.
+    PfrepExtensionObject out = headerObject(build);
+    out.levels.push_back({0, build.level0_triangles});
+    for (const LodLevel& level : chain.levels) {
+        const size_t k = level.collapse_count;
+        if (k >= build.level_triangles.size() || build.level_triangles[k] != level.mesh.faceCount())
+            return internalError("LODBAKE_progressive_fans: PFRep level " + std::to_string(k) +
+                                 " does not have the chain level's " + std::to_string(level.mesh.faceCount()) +
+                                 " triangles");
+        out.levels.push_back({uint32_t(k), build.level_triangles[k]});
+    }
+    return finishObject(std::move(build), std::move(out));
 }
 
 } // namespace lodbake

@@ -515,6 +515,11 @@ void EdgeCollapser::collapse(const Candidate& c, const WedgePair* pairs, int pai
         }
     }
     if (sequence) sequence->records.push_back(record);
+    if (removal_log_) {
+        const Vec3d pv = toD(position_[v]) - c.position, pu = toD(position_[u]) - c.position;
+        removal_log_->add(u, v, p.x == position_[v].x && p.y == position_[v].y && p.z == position_[v].z,
+                          dot(pu, pu) < dot(pv, pv));
+    }
     if (has_penalty_) {
         // v now stands for the input points of both; it keeps the one further from its new fan.
         if (fartherFromNewFan(toD(far_[u]), toD(far_[v]), c)) far_[v] = far_[u];

@@ -35,6 +35,11 @@ public:
     /// sequence (KeepEndpoint) also its point triangles, and later runs log the re-created triangles.
     void describe(CollapseSequence& sequence);
 
+    /// Appends (removed point, kept point, kept point unmoved, removed point nearer the merged
+    /// position) of every later collapse to `log` (null: stop), for the chain's vertex-removal
+    /// reading (LodChainOptions::record_removals).
+    void setRemovalLog(CollapsePairLog* log) { removal_log_ = log; }
+
     size_t faceCount() const { return alive_faces_; }
     // refine_late_levels applies to a snapshot taken now: at most 2.5 % of the input's faces (the 2 %
     // and 0.5 % levels it was measured on; a 3 % level is not refined, which halves its cost in the
@@ -217,6 +222,8 @@ private:
     LargeArray<uint32_t> face_triangle_;
     uint32_t triangle_count_ = 0;
     std::vector<std::pair<uint32_t, uint32_t>> created_tmp_; // (triangle id, face)
+
+    CollapsePairLog* removal_log_ = nullptr; // setRemovalLog
 
     std::vector<uint32_t> fan_u_, fan_v_, fan_tmp_;
     std::vector<uint32_t> link_u_; // isValid: the neighbours of the removed point

@@ -67,6 +67,12 @@ Result<LodChain> buildLodChain(const Mesh& mesh, const LodChainOptions& options,
                 sequence->wedge_attributes.reserve(collapses * sequence->attribute_stride);
             }
         }
+        const bool record_removals = options.record_removals && !options.simplify.remove_covered_components;
+        if (record_removals) {
+            // Every collapse removes at least one face.
+            chain.removals.reserve(faces);
+            engine.setRemovalLog(&chain.removals);
+        }
         bool stuck = false;
         for (double ratio : ratios) {
             LodLevel level;
@@ -85,6 +91,13 @@ Result<LodChain> buildLodChain(const Mesh& mesh, const LodChainOptions& options,
             level.mesh = engine.extract();
             level.is_refined = engine.refinesSnapshot(); // refined below, once the engine is gone
             chain.levels.push_back(std::move(level));
+        }
+        if (record_removals) {
+            // The vertex-removal reading goes on to the end of valid collapses (PFRep wants every level
+            // there is); nothing is snapshotted any more.
+            if (!stuck) engine.run(0, HUGE_VAL, sequence);
+            chain.removals_complete = true;
+            engine.setRemovalLog(nullptr);
         }
         if (engine.removalCount() > 0)
             diagnostics.note("lod chain: " + std::to_string(engine.removalCount()) + " covered components (" +

@@ -189,13 +189,16 @@ void checkPack(const BakedPack& pack, bool require_manifold_input) {
     const std::vector<uint8_t> blob = viewBytes(pack.glb, doc, object["bufferView"].get<int>());
     ASSERT_FALSE(blob.empty());
     checkObjectAgainstBlob(object, blob, ids.size() + 1, require_manifold_input);
-    // PFRep levels do not exceed their chain level's triangle budget unless the sequence ends first.
+    // The blob is read from the chain's own pass: each PFRep level named has exactly the triangles of
+    // its plain chain level.
     const json& levels = object["levels"];
-    for (size_t l = 1; l < levels.size(); ++l) {
-        const double budget = pack.ratios[l - 1] * object["triangleCount"].get<double>();
-        if (levels[l]["removals"].get<uint32_t>() < object["removedCount"].get<uint32_t>()) {
-            EXPECT_LE(levels[l]["triangles"].get<double>(), budget) << "level " << l;
-        }
+    ASSERT_EQ(levels.size(), ids.size() + 1);
+    for (size_t l = 0; l < levels.size(); ++l) {
+        const size_t level_mesh = l == 0 ? mesh : doc["nodes"][ids[l - 1].get<size_t>()]["mesh"].get<size_t>();
+        uint64_t triangles = 0;
+        for (const json& primitive : doc["meshes"][level_mesh]["primitives"])
+            triangles += doc["accessors"][primitive["indices"].get<size_t>()]["count"].get<uint64_t>() / 3;
+        EXPECT_EQ(levels[l]["triangles"].get<uint64_t>(), triangles) << "level " << l;
     }
 }
 

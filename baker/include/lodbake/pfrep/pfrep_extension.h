@@ -39,4 +39,12 @@ struct PfrepExtensionObject {
 Result<PfrepExtensionObject> buildPfrepExtension(const Mesh& lod0, const std::vector<double>& level_ratios,
                                                  const PfrepOptions& options, Diagnostics& diagnostics);
 
+/// The same from a discrete chain of `lod0` (its input): when the chain recorded its collapses as
+/// vertex removals (LodChainOptions::record_removals, LodChain::removals_complete) the blob is built
+/// from them (buildPfrepFromChain: no simplification of its own) and chain level i is the blob level
+/// at its collapse count, with exactly its triangles; otherwise buildPfrepExtension(lod0, ratios of
+/// 1 and the chain's levels, options). `options` only applies to that fallback.
+Result<PfrepExtensionObject> buildPfrepExtension(const Mesh& lod0, const LodChain& chain, const PfrepOptions& options,
+                                                 Diagnostics& diagnostics);
+
 } // namespace lodbake

@@ -83,6 +83,85 @@ struct CollapseSequence {
     std::vector<uint32_t> created_end;
 };
 
+/// The chain's collapses read as vertex removals (LodChainOptions::record_removals), for the PFRep
+/// builder (pfrep_builder.h, buildPfrepFromChain). A full-edge collapse (a, b) -> p is, topologically,
+/// the half-edge collapse that removes one end into the other: same link condition, same faces die,
+/// the others are re-created with the removed point replaced. Each entry is (removed point, kept
+/// point) in execution order, as the engine names them: point ids are CollapseSequence point ids
+/// (the input's distinct positions, bit-identical positions welded, numbered in order of first use
+/// by the faces that are not degenerate by position), and after a collapse the merged point carries
+/// the kept id; `kept_stays` says the kept point did not move (a corner, a border or seam point whose
+/// edge leaves its line, or a collapse whose optimum is the kept end). Stored as a byte stream (about
+/// 4.5 bytes per collapse instead of 8): per entry, the removed point, then the zigzag difference
+/// kept - removed times 2 plus kept_stays, each as an LEB128 varint (ids below 2^30).
+class CollapsePairLog {
+public:
+    void add(uint32_t removed, uint32_t kept, bool kept_stays = false, bool removed_nearer = false) {
+        putVarint(removed);
+        const int64_t d = int64_t(kept) - int64_t(removed);
+        putVarint(uint64_t(d < 0 ? ((-d) << 1) - 1 : d << 1) << 2 | uint64_t(removed_nearer) << 1 |
+                  uint64_t(kept_stays));
+        ++count_;
+    }
+    size_t size() const { return count_; }
+    bool empty() const { return count_ == 0; }
+    size_t byteSize() const { return bytes_.size(); }
+    /// Room for `entries` entries of the largest size (11 bytes), so the stream never grows by copying
+    /// (pages not yet written are not resident).
+    void reserve(size_t entries) { bytes_.reserve(entries * 11); }
+    void clear() {
+        std::vector<uint8_t>().swap(bytes_);
+        count_ = 0;
+    }
+    /// Sequential reader: next() gives the entries in order; false once past the last (or on a
+    /// malformed stream).
+    class Reader {
+    public:
+        explicit Reader(const CollapsePairLog& log) : p_(log.bytes_.data()), end_(log.bytes_.data() + log.bytes_.size()) {}
+        bool next(uint32_t& removed, uint32_t& kept) {
+            bool stays = false, nearer = false;
+            return next(removed, kept, stays, nearer);
+        }
+        bool next(uint32_t& removed, uint32_t& kept, bool& kept_stays, bool& removed_nearer) {
+            uint64_t r = 0, f = 0;
+            if (!getVarint(r) || !getVarint(f) || r > 0xffffffffu) return false;
+            removed = uint32_t(r);
+            kept_stays = f & 1;
+            removed_nearer = (f >> 1) & 1;
+            const uint64_t z = f >> 2;
+            const int64_t d = (z & 1) ? -int64_t((z + 1) >> 1) : int64_t(z >> 1);
+            const int64_t k = int64_t(removed) + d;
+            if (k < 0 || k > int64_t(0xffffffffu)) return false;
+            kept = uint32_t(k);
+            return true;
+        }
+
+    private:
+        bool getVarint(uint64_t& v) {
+            v = 0;
+            for (uint32_t shift = 0; shift < 42 && p_ < end_; shift += 7) {
+                const uint8_t b = *p_++;
+                v |= uint64_t(b & 0x7f) << shift;
+                if (!(b & 0x80)) return true;
+            }
+            return false;
+        }
+        const uint8_t* p_;
+        const uint8_t* end_;
+    };
+
+private:
+    void putVarint(uint64_t v) {
+        while (v >= 0x80) {
+            bytes_.push_back(uint8_t(v | 0x80));
+            v >>= 7;
+        }
+        bytes_.push_back(uint8_t(v));
+    }
+    std::vector<uint8_t> bytes_;
+    size_t count_ = 0;
+};
+
 /// How switch distances are derived (docs/simplify.md): the level whose Hausdorff error is e is
 /// used from the distance d at which e projects to `pixel_threshold` pixels,
 /// d = e · viewport_height_px / (2 · pixel_threshold · tan(vertical_fov_rad / 2)).
@@ -99,6 +178,11 @@ struct LodChainOptions {
     DistanceOptions distance;
     ScreenParams screen;
     bool record_collapses = true; // fill LodChain::sequence
+    // Fill LodChain::removals, and run the collapses on past the last level to the end of valid ones
+    // (the tail is short: the last level is usually 1 % of the input). Ignored (removals left empty)
+    // with simplify.remove_covered_components, whose component removals are not vertex removals.
+    // With record_collapses the sequence then also holds the tail's records.
+    bool record_removals = false;
 };
 
 struct LodLevel {
@@ -119,6 +203,11 @@ struct LodLevel {
 struct LodChain {
     std::vector<LodLevel> levels; // in order of decreasing detail (ratios sorted descending)
     CollapseSequence sequence;
+    // With LodChainOptions::record_removals: every collapse of the pass, the levels' ones
+    // (levels[i].collapse_count is a prefix) and then the tail's; removals_complete says the pass ran
+    // to the end of valid collapses.
+    CollapsePairLog removals;
+    bool removals_complete = false;
     double bounding_radius = 0; // input bounding sphere radius (half the box diagonal)
 };
 
