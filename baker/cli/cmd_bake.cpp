@@ -61,6 +61,9 @@ options:
   --pixels P            override pixel_threshold
   --compact             compressed-only pack: valence streams replace the plain level data
   --no-progressive-fans do not embed LOD0's PFRep blob (preset key progressive_fans)
+  --pfrep-from-chain    build that blob from the LOD chain's own collapses: one simplification
+                        instead of two (about 1 s less on a 1 M-triangle scan), coarser PFRep
+                        levels (preset key pfrep_from_chain; off in every shipped preset)
   --adaptive-precision  levels after LOD0 coded with position/normal bits from their own measured
                         error (preset key stream_precision.adaptive; on in desktop, mobile, vr)
   --no-adaptive-precision  every level coded with LOD0's bits (archive's default)
@@ -85,6 +88,7 @@ struct CliOverrides {
     double pixels = 0;
     bool compact = false;
     bool no_progressive_fans = false;
+    bool pfrep_from_chain = false;
     bool adaptive_precision = false;
     bool no_adaptive_precision = false;
     bool remove_covered_components = false;
@@ -96,6 +100,7 @@ void applyOverrides(const CliOverrides& o, BakeSettings& s) {
     if (o.has_pixels) s.pixel_threshold = o.pixels;
     if (o.compact) s.compact = true;
     if (o.no_progressive_fans) s.progressive_fans = false;
+    if (o.pfrep_from_chain) s.pfrep_from_chain = true;
     if (o.adaptive_precision) s.stream_precision.adaptive = true;
     if (o.no_adaptive_precision) s.stream_precision.adaptive = false;
     if (o.remove_covered_components) s.remove_covered_components = true;
@@ -269,6 +274,7 @@ int runBake(int argc, char** argv) {
                     {"--pixels", nullptr, true},
                     {"--compact", nullptr, false},
                     {"--no-progressive-fans", nullptr, false},
+                    {"--pfrep-from-chain", nullptr, false},
                     {"--adaptive-precision", nullptr, false},
                     {"--no-adaptive-precision", nullptr, false},
                     {"--remove-covered-components", nullptr, false},
@@ -321,6 +327,7 @@ int runBake(int argc, char** argv) {
     }
     overrides.compact = args.flags.count("--compact") > 0;
     overrides.no_progressive_fans = args.flags.count("--no-progressive-fans") > 0;
+    overrides.pfrep_from_chain = args.flags.count("--pfrep-from-chain") > 0;
     overrides.adaptive_precision = args.flags.count("--adaptive-precision") > 0;
     overrides.no_adaptive_precision = args.flags.count("--no-adaptive-precision") > 0;
     overrides.remove_covered_components = args.flags.count("--remove-covered-components") > 0;

@@ -138,8 +138,10 @@ Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vect
     chain_options.record_collapses = false;
     for (const PackStreamEncoder& encoder : encoders) {
         chain_options.record_collapses |= encoder.needs_collapses;
-        // The PFRep blob is built from the chain's own pass, read as vertex removals (docs/bake.md).
-        chain_options.record_removals |= encoder.extension_name == "LODBAKE_progressive_fans";
+        // pfrep_from_chain: the PFRep blob is built from the chain's own pass, read as vertex removals
+        // (docs/bake.md); otherwise it runs a half-edge simplification of its own.
+        chain_options.record_removals |=
+            settings.pfrep_from_chain && encoder.extension_name == "LODBAKE_progressive_fans";
     }
     StageTimer chain_timer(hooks, index, BakeStage::LodChain);
     Result<LodChain> chain_result = buildLodChain(mesh, chain_options, slot.diagnostics);

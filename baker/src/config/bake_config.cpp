@@ -142,6 +142,7 @@ Status applyImpl(const Json& root, const std::string& name, BakeSettings& s) {
         {"threads", [&](const Json& v, const std::string& w) { return readUint(v, w, 0, 1024, s.threads); }},
         {"compact", [&](const Json& v, const std::string& w) { return readBool(v, w, s.compact); }},
         {"progressive_fans", [&](const Json& v, const std::string& w) { return readBool(v, w, s.progressive_fans); }},
+        {"pfrep_from_chain", [&](const Json& v, const std::string& w) { return readBool(v, w, s.pfrep_from_chain); }},
         {"remove_covered_components",
          [&](const Json& v, const std::string& w) { return readBool(v, w, s.remove_covered_components); }},
         {"stream_precision",
@@ -207,6 +208,7 @@ std::string settingsToJson(const BakeSettings& s) {
         j["threads"] = s.threads;
         j["compact"] = s.compact;
         j["progressive_fans"] = s.progressive_fans;
+        j["pfrep_from_chain"] = s.pfrep_from_chain;
         j["remove_covered_components"] = s.remove_covered_components;
         j["stream_precision"] = {{"adaptive", s.stream_precision.adaptive},
                                  {"error_fraction", s.stream_precision.error_fraction},

@@ -147,9 +147,10 @@ struct BakedPack {
     std::vector<uint8_t> glb;
     json doc;
     std::vector<double> ratios;
+    bool pfrep_from_chain = false;
 };
 
-BakedPack bakePack(const std::string& path, uint32_t error_samples) {
+BakedPack bakePack(const std::string& path, uint32_t error_samples, bool pfrep_from_chain) {
     BakedPack out;
     lodbake::Diagnostics diagnostics;
     auto loaded = lodbake::readMesh(path, {}, diagnostics);
@@ -157,6 +158,7 @@ BakedPack bakePack(const std::string& path, uint32_t error_samples) {
     if (!loaded.ok()) return out;
     lodbake::BakeSettings settings;
     settings.error_samples = error_samples;
+    settings.pfrep_from_chain = pfrep_from_chain;
     std::vector<lodbake::BakeInput> inputs(1);
     inputs[0].name = "scan";
     inputs[0].mesh = std::move(loaded->mesh);
@@ -166,6 +168,7 @@ BakedPack bakePack(const std::string& path, uint32_t error_samples) {
     out.glb = std::move(baked->glb);
     out.doc = lodbake_test::glbJson(out.glb);
     out.ratios = settings.lod_ratios;
+    out.pfrep_from_chain = pfrep_from_chain;
     return out;
 }
 
@@ -189,8 +192,6 @@ void checkPack(const BakedPack& pack, bool require_manifold_input) {
     const std::vector<uint8_t> blob = viewBytes(pack.glb, doc, object["bufferView"].get<int>());
     ASSERT_FALSE(blob.empty());
     checkObjectAgainstBlob(object, blob, ids.size() + 1, require_manifold_input);
-    // The blob is read from the chain's own pass: each PFRep level named has exactly the triangles of
-    // its plain chain level.
     const json& levels = object["levels"];
     ASSERT_EQ(levels.size(), ids.size() + 1);
     for (size_t l = 0; l < levels.size(); ++l) {
@@ -198,19 +199,35 @@ void checkPack(const BakedPack& pack, bool require_manifold_input) {
         uint64_t triangles = 0;
         for (const json& primitive : doc["meshes"][level_mesh]["primitives"])
             triangles += doc["accessors"][primitive["indices"].get<size_t>()]["count"].get<uint64_t>() / 3;
-        EXPECT_EQ(levels[l]["triangles"].get<uint64_t>(), triangles) << "level " << l;
+        if (pack.pfrep_from_chain || l == 0) {
+            // From the chain's own pass each PFRep level named has exactly the triangles of its plain
+            // chain level (and LOD0 is the full mesh either way).
+            EXPECT_EQ(levels[l]["triangles"].get<uint64_t>(), triangles) << "level " << l;
+        } else if (levels[l]["removals"].get<uint32_t>() < object["removedCount"].get<uint32_t>()) {
+            // From its own half-edge pass a PFRep level does not exceed its chain level's triangle
+            // budget unless the sequence ends first.
+            const double budget = pack.ratios[l - 1] * object["triangleCount"].get<double>();
+            EXPECT_LE(levels[l]["triangles"].get<double>(), budget) << "level " << l;
+        }
     }
 }
 
 TEST(PfrepPackTest, RockSamplePackCarriesAValidProgressiveFansObject) {
-    const BakedPack pack = bakePack(lodbake_test::sourceDir() + "/assets/samples/rock_scan/rock_000.ply", 20000);
-    checkPack(pack, false); // a raw scan: overlapping sheets survive the repair
+    for (bool from_chain : {false, true}) {
+        SCOPED_TRACE(from_chain ? "pfrep_from_chain" : "own half-edge pass");
+        const BakedPack pack =
+            bakePack(lodbake_test::sourceDir() + "/assets/samples/rock_scan/rock_000.ply", 20000, from_chain);
+        checkPack(pack, false); // a raw scan: overlapping sheets survive the repair
+    }
 }
 
 TEST(PfrepPackTest, RockerArmPackLevelsAreManifold) {
     LODBAKE_REQUIRE_SHARED_MESHES();
-    const BakedPack pack = bakePack(lodbake_test::sharedMesh("rocker_arm.obj"), 20000);
-    checkPack(pack, true);
+    for (bool from_chain : {false, true}) {
+        SCOPED_TRACE(from_chain ? "pfrep_from_chain" : "own half-edge pass");
+        const BakedPack pack = bakePack(lodbake_test::sharedMesh("rocker_arm.obj"), 20000, from_chain);
+        checkPack(pack, true);
+    }
 }
 
 TEST(PfrepPackTest, ExtensionObjectRejectsBadRatiosAndEmptyMeshes) {

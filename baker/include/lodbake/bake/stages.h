@@ -13,7 +13,8 @@ enum class BakeStage {
     Repair,   // repairMesh
     LodChain, // simplification of every level
     Measure,  // error measurement of every level against LOD0 (switch distances)
-    Pfrep,    // the LODBAKE_progressive_fans blob of LOD0 (its own half-edge simplification)
+    Pfrep,    // the LODBAKE_progressive_fans blob of LOD0 (its own half-edge simplification, or a replay
+              // of the chain's collapses with pfrep_from_chain)
     Textures, // texture levels
     Encode,   // compressed level streams (LODBAKE_valence_compression)
     Pack,     // GLB serialisation of the whole pack

@@ -43,6 +43,8 @@ struct BakeSettings {
     uint32_t threads = 0;         // worker threads; 0: all cores (the output does not depend on it)
     bool compact = false;         // list our stream extensions in extensionsRequired
     bool progressive_fans = true; // embed LOD0's PFRep blob (LODBAKE_progressive_fans) in the pack
+    bool pfrep_from_chain = false; // build that blob from the chain's own collapses (one simplification,
+                                   // faster, coarser PFRep levels) instead of its own half-edge pass
     bool remove_covered_components = false; // levels may drop whole components lying within their accepted
                                             // error of the rest (SimplifyOptions::remove_covered_components)
     StreamPrecisionSettings stream_precision;
