@@ -87,6 +87,8 @@ public:
         if (k >= 4) raw.write(mag & ((1u << (k - 3)) - 1), k - 3);
         return k;
     }
+    /// Bytes written so far plus the ones held back for a carry (the size so far, to within 5 bytes).
+    size_t bytesSoFar() const { return out_.size() + size_t(cache_size_); }
     std::vector<uint8_t> finish() {
         for (int i = 0; i < 5; ++i) shiftLow();
         return std::move(out_);
@@ -126,6 +128,8 @@ public:
             avail_ -= 8;
         }
     }
+    /// Whole bytes written so far.
+    size_t bytesSoFar() const { return out_.size(); }
     std::vector<uint8_t> finish() {
         if (avail_ > 0) out_.push_back(uint8_t(window_));
         window_ = 0;

@@ -135,7 +135,8 @@ struct PositionModel {
 struct PositionValue {
     int j = 0;        // component
     int32_t r = 0;    // residual (value - prediction)
-    uint32_t ctx = 0; // length context
+    uint32_t ctx = 0;        // length context
+    uint32_t spread_ctx = 0; // length context with spread contexts (kValenceFlagSpreadX)
     uint32_t sign_ctx = 0;
     bool has_candidate = false;
     bool hit = false;      // the value equals the candidate
@@ -146,25 +147,26 @@ struct PositionValue {
 // A PositionValue packed into 8 bytes (the candidate itself is not kept: coding needs only the hit).
 struct CodedValue {
     int32_t r;
-    uint32_t meta; // ctx (8 bits), sign_ctx (4), snap_ctx (8), has_candidate (1), hit (1)
+    uint32_t meta; // ctx (8 bits), spread_ctx (8), sign_ctx (4), snap_ctx (7), has_candidate (1), hit (1)
     static CodedValue of(const PositionValue& v) {
-        return {v.r, v.ctx | (v.sign_ctx << 8) | (v.snap_ctx << 12) | (uint32_t(v.has_candidate) << 20) |
-                         (uint32_t(v.hit) << 21)};
+        return {v.r, v.ctx | (v.spread_ctx << 8) | (v.sign_ctx << 16) | (v.snap_ctx << 20) |
+                         (uint32_t(v.has_candidate) << 27) | (uint32_t(v.hit) << 28)};
     }
     PositionValue value(int j) const {
         PositionValue v;
         v.j = j;
         v.r = r;
         v.ctx = meta & 0xFFu;
-        v.sign_ctx = (meta >> 8) & 0xFu;
-        v.snap_ctx = (meta >> 12) & 0xFFu;
-        v.has_candidate = (meta >> 20) & 1u;
-        v.hit = (meta >> 21) & 1u;
+        v.spread_ctx = (meta >> 8) & 0xFFu;
+        v.sign_ctx = (meta >> 16) & 0xFu;
+        v.snap_ctx = (meta >> 20) & 0x7Fu;
+        v.has_candidate = (meta >> 27) & 1u;
+        v.hit = (meta >> 28) & 1u;
         return v;
     }
 };
 static_assert(lodrt::detail::kPositionContexts <= 256 && lodrt::detail::kSignContexts <= 16 &&
-                  kValenceSnapContexts <= 256,
+                  kValenceSnapContexts <= 128,
               "CodedValue's fields");
 
 // The closed manifold the conquest runs on: a corner table whose first 3 * face_count corners are the
@@ -789,8 +791,8 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
         int32_t last[3] = {int32_t(qmax + 1) / 2, int32_t(qmax + 1) / 2, int32_t(qmax + 1) / 2};
         uint32_t prev_sign[3] = {0, 0, 0};
         // One vertex: `q` its coordinates, `t`/`n`/`nb` its plan entry (n = 0, nb = kNone: none).
-        auto vertex = [&](const int32_t* q, const int32_t* pred, uint32_t ctx, const uint32_t* t, uint32_t n,
-                          uint32_t nb) {
+        auto vertex = [&](const int32_t* q, const int32_t* pred, uint32_t ctx, const uint32_t* spread,
+                          const uint32_t* t, uint32_t n, uint32_t nb) {
             uint32_t earlier = kNone, x_sign = 0;
             int32_t candidate[3] = {0, 0, 0};
             uint32_t snap_ctx[3] = {0, 0, 0};
@@ -802,6 +804,7 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
                 value.j = j;
                 value.r = r;
                 value.ctx = lodrt::detail::positionContext(ctx, earlier);
+                value.spread_ctx = lodrt::detail::spreadContext(ctx, earlier, spread[j]);
                 value.sign_ctx = prev_sign[j] * 3 + x_sign;
                 value.has_candidate = has_candidate && ((mask >> j) & 1u);
                 value.candidate = candidate[j];
@@ -827,9 +830,9 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
             for (int j = 0; j < 3; ++j) q[j] = qpos_in[3 * size_t(src) + size_t(j)];
             if (!final_done[fid]) {
                 int32_t pred[3];
-                uint32_t scale = 0;
-                lodrt::detail::predictFromPlan(qpos.data(), t, n, neighbour[i], last, pred, &scale);
-                vertex(q, pred, lodrt::detail::scaleContext(scale, n), t, n, neighbour[i]);
+                uint32_t scale = 0, spread[3];
+                lodrt::detail::predictFromPlan(qpos.data(), t, n, neighbour[i], last, pred, &scale, spread);
+                vertex(q, pred, lodrt::detail::scaleContext(scale, n), spread, t, n, neighbour[i]);
                 for (int j = 0; j < 3; ++j) qpos_final[3 * size_t(fid) + size_t(j)] = q[j];
                 final_done[fid] = 1;
             }
@@ -839,49 +842,84 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
         for (uint32_t v : isolated) {
             const int32_t* q = &qpos_in[3 * size_t(v)];
             const int32_t pred[3] = {last[0], last[1], last[2]};
-            vertex(q, pred, lodrt::detail::scaleContext(0, 0), nullptr, 0, kNone);
+            const uint32_t spread[3] = {0, 0, 0};
+            vertex(q, pred, lodrt::detail::scaleContext(0, 0), spread, nullptr, 0, kNone);
             for (int j = 0; j < 3; ++j) {
                 last[j] = q[j];
                 qpos_final[3 * size_t(new_of[v]) + size_t(j)] = q[j];
             }
         }
     };
-    // Which components to snap: every component coded both ways into streams of its own (exact
-    // sizes, since a component's values and contexts do not depend on the other components' choice);
-    // snap where that is strictly smaller.
-    uint16_t snap_flags = 0;
+    // Which components to snap and which to code with spread contexts: every component coded all four
+    // ways (two without a sizeable share of snap hits) into streams of its own (exact sizes, since a
+    // component's values and contexts do not depend on the other components' choices), ways far
+    // behind after the first eighth dropped; the smallest of the rest wins (ties: fewer flags).
+    uint16_t flags_pos = 0;
     // The estimate's walk keeps every value it visits (8 bytes each) so that the stream below is coded
     // from them instead of walking the plan again (the walk is half of a position pass).
     CodecArray<CodedValue> walked;
     {
-        RangeEncoder est[3][2];
-        BitWriter est_raw[3][2];
-        PositionModel plain_model, snap_model;
-        plain_model.init();
-        snap_model.init();
-        // Without a sizeable share of hits the flag cannot pay: skip the estimate. The share is
+        // Without a sizeable share of hits the snap flag cannot pay: no snap estimate. The share is
         // counted on the first eighth of the plan (at least 4096 vertices).
         size_t candidates = 0, hits = 0;
         walkPositions(7u, std::max(plan.ordered / 8, 4096u), [&](const PositionValue& v) {
             candidates += v.has_candidate;
             hits += v.hit;
         });
-        if (hits * 16 >= candidates && hits > 0) {
-            walked.reserve(3 * vn);
-            walkPositions(7u, kNone, [&](const PositionValue& v) {
-                walked.push_back(CodedValue::of(v));
-                est[v.j][0].residual(plain_model.residuals, est_raw[v.j][0], v.j, v.ctx, v.r, v.sign_ctx);
-                if (v.has_candidate) {
-                    est[v.j][1].bit(snap_model.snap[v.j][v.snap_ctx], v.hit ? 1u : 0u);
-                    if (v.hit) return;
+        const bool try_snap = hits * 16 >= candidates && hits > 0;
+        const int ways = try_snap ? 4 : 2; // way w: snap (w & 2), spread contexts (w & 1)
+        walked.reserve(3 * vn);
+        walkPositions(try_snap ? 7u : 0u, kNone, [&](const PositionValue& v) { walked.push_back(CodedValue::of(v)); });
+        RangeEncoder est[3][4];
+        BitWriter est_raw[3][4];
+        std::vector<PositionModel> est_model(4); // 4 x 30 KB: not on the stack of a pool thread
+        for (PositionModel& m : est_model) m.init();
+        bool alive[3][4] = {};
+        for (int j = 0; j < 3; ++j)
+            for (int w = 0; w < ways; ++w) alive[j][w] = true;
+        // Values [begin, end) (component order x, y, z per vertex) into every way still alive.
+        auto estimate = [&](size_t begin, size_t end) {
+            for (size_t i = begin; i < end; ++i) {
+                const PositionValue v = walked[i].value(int(i % 3));
+                for (int w = 0; w < ways; ++w) {
+                    if (!alive[v.j][w]) continue;
+                    if ((w & 2) && v.has_candidate) {
+                        est[v.j][w].bit(est_model[w].snap[v.j][v.snap_ctx], v.hit ? 1u : 0u);
+                        if (v.hit) continue;
+                    }
+                    est[v.j][w].residual(est_model[w].residuals, est_raw[v.j][w], v.j,
+                                         (w & 1) ? v.spread_ctx : v.ctx, v.r, v.sign_ctx);
                 }
-                est[v.j][1].residual(snap_model.residuals, est_raw[v.j][1], v.j, v.ctx, v.r, v.sign_ctx);
-            });
-            for (int j = 0; j < 3; ++j) {
-                const size_t plain = est[j][0].finish().size() + est_raw[j][0].finish().size();
-                const size_t snapped = est[j][1].finish().size() + est_raw[j][1].finish().size();
-                if (snapped < plain) snap_flags = uint16_t(snap_flags | (kValenceFlagSnapX << j));
             }
+        };
+        // The first eighth in every way; a way already 2 % (and 256 bytes) larger than the best there
+        // is dropped (on snapped Poisson meshes the unsnapped ways are 15-20 % larger), the others run
+        // to the end and the smallest is exact.
+        const size_t prefix = 3 * (walked.size() / 24);
+        estimate(0, prefix);
+        for (int j = 0; j < 3; ++j) {
+            size_t so_far[4] = {0, 0, 0, 0}, best = ~size_t(0);
+            for (int w = 0; w < ways; ++w) {
+                so_far[w] = est[j][w].bytesSoFar() + est_raw[j][w].bytesSoFar();
+                best = std::min(best, so_far[w]);
+            }
+            for (int w = 0; w < ways; ++w)
+                if (so_far[w] > best + std::max<size_t>(256, best / 50)) alive[j][w] = false;
+        }
+        estimate(prefix, walked.size());
+        for (int j = 0; j < 3; ++j) {
+            int best = -1;
+            size_t best_size = 0;
+            for (int w = 0; w < ways; ++w) {
+                if (!alive[j][w]) continue;
+                const size_t size = est[j][w].finish().size() + est_raw[j][w].finish().size();
+                if (best < 0 || size < best_size) {
+                    best = w;
+                    best_size = size;
+                }
+            }
+            if (best & 2) flags_pos = uint16_t(flags_pos | (kValenceFlagSnapX << j));
+            if (best & 1) flags_pos = uint16_t(flags_pos | (kValenceFlagSpreadX << j));
         }
     }
     RangeEncoder pos;
@@ -889,26 +927,20 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
     {
         PositionModel model;
         model.init();
-        const uint32_t mask = uint32_t(snap_flags / kValenceFlagSnapX);
-        auto code = [&](const PositionValue& v) {
-            if (v.has_candidate) {
+        const uint32_t snap_mask = uint32_t(flags_pos / kValenceFlagSnapX) & 7u;
+        const uint32_t spread_mask = uint32_t(flags_pos / kValenceFlagSpreadX) & 7u;
+        // Values come in component order x, y, z per vertex; a component that is not snapped codes
+        // without its candidate, exactly as a walk with its mask would give it.
+        for (size_t i = 0; i < walked.size(); ++i) {
+            const PositionValue v = walked[i].value(int(i % 3));
+            if (v.has_candidate && ((snap_mask >> v.j) & 1u)) {
                 pos.bit(model.snap[v.j][v.snap_ctx], v.hit ? 1u : 0u);
-                if (v.hit) return;
+                if (v.hit) continue;
             }
-            pos.residual(model.residuals, pos_raw, v.j, v.ctx, v.r, v.sign_ctx);
-        };
-        if (walked.empty()) {
-            walkPositions(mask, kNone, code);
-        } else {
-            // Values come in component order x, y, z per vertex; a component that is not snapped
-            // codes without its candidate, exactly as a walk with `mask` would give it.
-            for (size_t i = 0; i < walked.size(); ++i) {
-                PositionValue v = walked[i].value(int(i % 3));
-                v.has_candidate = v.has_candidate && ((mask >> v.j) & 1u);
-                code(v);
-            }
-            CodecArray<CodedValue>().swap(walked);
+            pos.residual(model.residuals, pos_raw, v.j, ((spread_mask >> v.j) & 1u) ? v.spread_ctx : v.ctx, v.r,
+                         v.sign_ctx);
         }
+        CodecArray<CodedValue>().swap(walked);
     }
     triples.reset();
 
@@ -976,7 +1008,7 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
     put32(out, 0, kValenceMagic);
     out[4] = uint8_t(kValenceVersion);
     out[5] = uint8_t(kValenceVersion >> 8);
-    const uint16_t flags = uint16_t((normals ? kValenceFlagNormals : 0) | snap_flags);
+    const uint16_t flags = uint16_t((normals ? kValenceFlagNormals : 0) | flags_pos);
     out[6] = uint8_t(flags);
     out[7] = uint8_t(flags >> 8);
     put32(out, 8, uint32_t(vn));

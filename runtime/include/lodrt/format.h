@@ -45,7 +45,7 @@ constexpr uint32_t kPfrepLogCodeSteps = 8;
 // then the connectivity, position and normal streams, back to back; the position and normal streams
 // each have a range-coded part followed by a raw bit part (the low mantissa bits of the residuals).
 constexpr uint32_t kValenceMagic = 0x4D42424Cu; // "LBBM" little-endian
-constexpr uint16_t kValenceVersion = 5;         // 5: neighbour-coordinate (snap) flags per position component
+constexpr uint16_t kValenceVersion = 6; // 5: neighbour-coordinate (snap) flags; 6: spread contexts flags
 constexpr uint32_t kValenceHeaderSize = 64;
 // Header fields (byte offset: type): 0 u32 magic, 4 u16 version, 6 u16 flags, 8 u32 vertex_count,
 // 12 u32 triangle_count, 16 u32 closed_vertex_count, 20 u32 closed_triangle_count, 24 u8 position_bits,
@@ -58,7 +58,11 @@ constexpr uint16_t kValenceFlagNormals = 1u;
 // coordinate nearest the prediction (docs/format/valence.md "Positions"). The encoder sets a bit when
 // it makes that component smaller (iso-surface meshes: vertices on grid edges share grid planes).
 constexpr uint16_t kValenceFlagSnapX = 2u; // component j: kValenceFlagSnapX << j
-constexpr uint16_t kValenceKnownFlags = 15u;
+// Flags bits 4..6: position component j is coded with spread contexts: a vertex predicted from two or
+// more parallelograms reads its residual length in a context of how far those parallelograms disagree
+// on the component (docs/format/valence.md "Positions"). Set where it makes the component smaller.
+constexpr uint16_t kValenceFlagSpreadX = 16u; // component j: kValenceFlagSpreadX << j
+constexpr uint16_t kValenceKnownFlags = 127u;
 constexpr uint32_t kValenceSnapDistanceBuckets = 16; // bit length of |candidate - prediction|, capped
 constexpr uint32_t kValenceSnapMultiplicity = 5;     // 0..4 triple entries holding the candidate value
 constexpr uint32_t kValenceSnapContexts = kValenceSnapDistanceBuckets * kValenceSnapMultiplicity;

@@ -429,6 +429,53 @@ TEST(ValenceCodecTest, SnapFlagsFollowTheGeometry) {
     EXPECT_EQ(encodeValence(m, {})->bytes, r.bytes);
 }
 
+// A height field on an integer lattice, a tilted plane on its left half and random heights on its
+// right half: where a vertex's parallelograms agree on z its residual is about 0, where they disagree
+// it is large, so spread contexts (format version 6) pay for z.
+Mesh flatAndRoughTerrain() {
+    std::mt19937 rng(7);
+    const int n = 40;
+    Mesh m = grid(n, false);
+    for (size_t i = 0; i < m.positions.size(); ++i)
+        m.positions[i].z = int(i % size_t(n + 1)) < n / 2 ? 0.37f * m.positions[i].x + 0.21f * m.positions[i].y
+                                                          : float(rng() % 1000) * 0.01f;
+    return m;
+}
+
+std::vector<uint8_t> spreadStream() {
+    auto enc = encodeValence(flatAndRoughTerrain(), {});
+    EXPECT_TRUE(enc.ok());
+    return enc->bytes;
+}
+
+TEST(ValenceCodecTest, SpreadContextFlagsFollowTheGeometry) {
+    const Mesh m = flatAndRoughTerrain();
+    using lodrt::format::kValenceFlagSpreadX;
+    ValenceEncodeResult r;
+    expectRoundTrip(m, {}, &r);
+    EXPECT_NE(streamFlags(r.bytes) & uint32_t(kValenceFlagSpreadX << 2), 0u); // z
+    // The decoder follows the flag: the same bytes read without z's spread contexts do not give the
+    // mesh back (an error, or other z values).
+    std::vector<uint8_t> cleared = r.bytes;
+    cleared[6] = uint8_t(cleared[6] & ~(kValenceFlagSpreadX << 2));
+    auto wrong = lodbake::codec::decodeValence(cleared, "cleared.lbm");
+    auto right = lodbake::codec::decodeValence(r.bytes, "right.lbm");
+    ASSERT_TRUE(right.ok());
+    if (wrong.ok()) {
+        ASSERT_EQ(wrong->positions.size(), right->positions.size());
+        bool same = true;
+        for (size_t i = 0; i < right->positions.size(); ++i) same = same && wrong->positions[i].z == right->positions[i].z;
+        EXPECT_FALSE(same);
+    }
+    // With normals too, and at other bit counts, every component's choice decodes.
+    for (uint32_t bits : {11u, 16u}) {
+        ValenceEncodeOptions o;
+        o.position_bits = bits;
+        expectRoundTrip(torus(48, 32), o);
+        expectRoundTrip(m, o);
+    }
+}
+
 // The multi-symbol model's search and adaptation (vectorised where the compiler targets SSE2) follow
 // the scalar rules of docs/format/valence.md "Range coder" exactly, for both model sizes, through the
 // fast first uses and the slow steady state, with symbols skewed toward both ends.
@@ -472,7 +519,7 @@ TEST(ValenceDecoderSafetyTest, ValidStreamDecodes) {
 }
 
 TEST(ValenceDecoderSafetyTest, EveryTruncatedPrefixFails) {
-    for (const std::vector<uint8_t>& bytes : {sampleStream(), snapStream()})
+    for (const std::vector<uint8_t>& bytes : {sampleStream(), snapStream(), spreadStream()})
         for (size_t n = 0; n < bytes.size(); ++n) {
             std::vector<uint8_t> cut(bytes.begin(), bytes.begin() + long(n));
             lodrt::Result r = decodeChecked(cut);
@@ -578,7 +625,7 @@ TEST(ValenceDecoderSafetyTest, SmallBuffersAreRefused) {
 }
 
 TEST(ValenceDecoderSafetyTest, RandomCorruptionNeverCrashes) {
-    for (const std::vector<uint8_t>& bytes : {sampleStream(), snapStream()}) {
+    for (const std::vector<uint8_t>& bytes : {sampleStream(), snapStream(), spreadStream()}) {
         std::mt19937 rng(12345);
         int failures = 0;
         for (int trial = 0; trial < 3000; ++trial) {

@@ -553,20 +553,39 @@ inline bool planPositions(const uint32_t* cv, const uint32_t* opp, const uint32_
 /// Prediction of a vertex from its plan entry (`n` triples at `t`, `neighbour`): the mean of the
 /// parallelograms rounded half away from zero, else the neighbour's position, else `fallback`. *scale
 /// is the largest coordinate difference between a and b of the first triple (0 without triples).
-inline void predictFromPlan(const int32_t* qpos, const uint32_t* t, uint32_t n, uint32_t neighbour,
-                            const int32_t fallback[3], int32_t out[3], uint32_t* scale) {
+/// With `Spread`, spread[j] is the largest minus the smallest parallelogram value of component j (0
+/// when n < 2); without it, spread is not written.
+template <bool Spread>
+inline void predictFromPlanOf(const int32_t* qpos, const uint32_t* t, uint32_t n, uint32_t neighbour,
+                              const int32_t fallback[3], int32_t out[3], uint32_t* scale, uint32_t spread[3]) {
     uint32_t sc = 0;
     if (n > 0) {
+        // Coordinates are below 2^16, so a parallelogram a + b - w lies in (-2^16, 2^17): 32 bits.
         int64_t sum[3] = {0, 0, 0};
-        for (uint32_t i = 0; i < n; ++i, t += 3) {
+        int32_t lo[3], hi[3];
+        {
             const int32_t* pa = &qpos[3 * size_t(t[0])];
             const int32_t* pb = &qpos[3 * size_t(t[1])];
             const int32_t* pw = &qpos[3 * size_t(t[2])];
-            for (int j = 0; j < 3; ++j) sum[j] += int64_t(pa[j]) + pb[j] - pw[j];
-            if (i == 0) {
-                for (int j = 0; j < 3; ++j) {
-                    const uint32_t d = uint32_t(pa[j] > pb[j] ? pa[j] - pb[j] : pb[j] - pa[j]);
-                    if (d > sc) sc = d;
+            for (int j = 0; j < 3; ++j) {
+                const int32_t p = pa[j] + pb[j] - pw[j];
+                sum[j] = p;
+                lo[j] = hi[j] = p;
+                const uint32_t d = uint32_t(pa[j] > pb[j] ? pa[j] - pb[j] : pb[j] - pa[j]);
+                if (d > sc) sc = d;
+            }
+        }
+        for (uint32_t i = 1; i < n; ++i) {
+            const uint32_t* e = t + 3 * size_t(i);
+            const int32_t* pa = &qpos[3 * size_t(e[0])];
+            const int32_t* pb = &qpos[3 * size_t(e[1])];
+            const int32_t* pw = &qpos[3 * size_t(e[2])];
+            for (int j = 0; j < 3; ++j) {
+                const int32_t p = pa[j] + pb[j] - pw[j];
+                sum[j] += p;
+                if (Spread) {
+                    lo[j] = p < lo[j] ? p : lo[j];
+                    hi[j] = p > hi[j] ? p : hi[j];
                 }
             }
         }
@@ -580,12 +599,23 @@ inline void predictFromPlan(const int32_t* qpos, const uint32_t* t, uint32_t n, 
                 out[j] = sum[j] >= 0 ? int32_t(q) : -int32_t(q);
             }
         }
-    } else if (neighbour != kNone) {
-        for (int j = 0; j < 3; ++j) out[j] = qpos[3 * size_t(neighbour) + size_t(j)];
+        if (Spread)
+            for (int j = 0; j < 3; ++j) spread[j] = uint32_t(hi[j] - lo[j]);
     } else {
-        for (int j = 0; j < 3; ++j) out[j] = fallback[j];
+        if (neighbour != kNone) {
+            for (int j = 0; j < 3; ++j) out[j] = qpos[3 * size_t(neighbour) + size_t(j)];
+        } else {
+            for (int j = 0; j < 3; ++j) out[j] = fallback[j];
+        }
+        if (Spread) spread[0] = spread[1] = spread[2] = 0;
     }
     *scale = sc;
+}
+
+/// predictFromPlanOf with the spreads.
+inline void predictFromPlan(const int32_t* qpos, const uint32_t* t, uint32_t n, uint32_t neighbour,
+                            const int32_t fallback[3], int32_t out[3], uint32_t* scale, uint32_t spread[3]) {
+    predictFromPlanOf<true>(qpos, t, n, neighbour, fallback, out, scale, spread);
 }
 
 /// Bit length of x (0 for 0).
@@ -609,7 +639,13 @@ inline uint32_t scaleContext(uint32_t scale, uint32_t count) {
     return count >= 2 ? b + 10 : b; // 20 contexts
 }
 constexpr uint32_t kPositionLengthBuckets = 12;
-constexpr uint32_t kPositionContexts = 20 + 2 * kPositionLengthBuckets;
+constexpr uint32_t kPositionBaseContexts = 20 + 2 * kPositionLengthBuckets;
+/// Spread contexts (format version 6, per component when its header flag is set, for vertices with
+/// two or more parallelograms): the bit length of the component's parallelogram spread (capped at 11)
+/// for x, and that times the earlier components' largest residual length (capped at 11) for y and z.
+constexpr uint32_t kPositionSpreadBuckets = 12;
+constexpr uint32_t kPositionContexts =
+    kPositionBaseContexts + kPositionSpreadBuckets + kPositionLengthBuckets * kPositionSpreadBuckets;
 
 /// Context of a position residual. x (earlier_length == kNone): the gate-edge context. y and z: the
 /// bit length of the vertex's earlier components' largest residual (capped at 11), and whether two or
@@ -619,6 +655,19 @@ inline uint32_t positionContext(uint32_t scale_ctx, uint32_t earlier_length) {
     if (earlier_length == kNone) return scale_ctx;
     const uint32_t b = earlier_length < kPositionLengthBuckets ? earlier_length : kPositionLengthBuckets - 1;
     return 20 + (scale_ctx >= 10 ? kPositionLengthBuckets : 0) + b;
+}
+
+/// Context of a position residual of a component coded with spread contexts (its header flag set):
+/// positionContext for a vertex with fewer than two parallelograms (scale_ctx < 10); else from
+/// `spread`, the component's parallelogram spread (predictFromPlan), and for y and z the earlier
+/// components' largest residual length. Where the parallelograms agree, the prediction is good.
+inline uint32_t spreadContext(uint32_t scale_ctx, uint32_t earlier_length, uint32_t spread) {
+    if (scale_ctx < 10) return positionContext(scale_ctx, earlier_length);
+    uint32_t s = bitLength(spread);
+    s = s < kPositionSpreadBuckets ? s : kPositionSpreadBuckets - 1;
+    if (earlier_length == kNone) return kPositionBaseContexts + s;
+    const uint32_t b = earlier_length < kPositionLengthBuckets ? earlier_length : kPositionLengthBuckets - 1;
+    return kPositionBaseContexts + kPositionSpreadBuckets + b * kPositionSpreadBuckets + s;
 }
 
 /// Neighbour-coordinate ("snap") candidates of the three position components (docs/format/valence.md
