@@ -1,12 +1,14 @@
-// The two single-threaded stages of a bake on the critical path: the LOD chain (as the bake runs it,
-// logging its collapses as vertex removals) and the PFRep build (as the bake runs it, from that log;
-// then, for comparison, the separate half-edge pass it replaced: simplification, point triangles,
-// blob). The input is repaired as the bake repairs it; the chain gets the bake's options (desktop
-// ratios, no measurement), the separate PFRep pass the bake's former geometry-only copy of LOD0. Prints wall and thread CPU seconds per step (best of --runs) and a
-// hash of every level and of the blob, so that a change meant to keep output identical can be
-// checked in seconds instead of a whole bake.
+// The two single-threaded stages of a bake on the critical path: the LOD chain and the PFRep build,
+// each as the bake runs it. By default (every shipped preset) the chain records nothing and the PFRep
+// build runs its own half-edge pass (simplification, point triangles, blob). With --from-chain (preset
+// key pfrep_from_chain) the chain logs its collapses as vertex removals and runs on to the end of
+// valid collapses, the PFRep blob is built from that log, and the separate pass follows for
+// comparison. The input is repaired as the bake repairs it; the chain gets the bake's options
+// (desktop ratios, no measurement), the separate PFRep pass a geometry-only copy of LOD0. Prints wall
+// and thread CPU seconds per step (best of --runs) and a hash of every level and of the blob, so that
+// a change meant to keep output identical can be checked in seconds instead of a whole bake.
 //
-// usage: bake_stages_bench [--threads N] [--runs N] [--chain-only | --pfrep-only] MESH
+// usage: bake_stages_bench [--threads N] [--runs N] [--chain-only | --pfrep-only] [--from-chain] MESH
 
 #include <time.h>
 
@@ -18,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_mesh.h"
 #include "core/parallel.h"
 #include "lodbake/cleanup/repair.h"
 #include "lodbake/core/diagnostics.h"
@@ -57,6 +60,7 @@ int main(int argc, char** argv) {
     size_t threads = 2;
     int runs = 1;
     bool chain = true, pfrep = true;
+    bool from_chain_log = false;
     std::string path;
     for (int a = 1; a < argc; ++a) {
         if (std::strcmp(argv[a], "--threads") == 0 && a + 1 < argc)
@@ -67,35 +71,29 @@ int main(int argc, char** argv) {
             pfrep = false;
         else if (std::strcmp(argv[a], "--pfrep-only") == 0)
             chain = false;
+        else if (std::strcmp(argv[a], "--from-chain") == 0)
+            from_chain_log = true;
         else
             path = argv[a];
     }
     if (path.empty()) {
-        std::fprintf(stderr, "usage: bake_stages_bench [--threads N] [--runs N] [--chain-only | --pfrep-only] MESH\n");
+        std::fprintf(stderr, "usage: bake_stages_bench [--threads N] [--runs N] [--chain-only | --pfrep-only] [--from-chain] MESH\n");
         return 2;
     }
     ScopedThreadLimit limit(threads);
     Diagnostics diagnostics;
-    Result<LoadedMesh> loaded = readMesh(path, ReadOptions{}, diagnostics);
-    if (!loaded.ok()) {
-        std::fprintf(stderr, "error: %s\n", loaded.status().message().c_str());
-        return 1;
-    }
-    Mesh mesh = std::move(loaded->mesh);
-    RepairOptions repair_options;
-    repair_options.report_welded = false;
-    repair_options.report_before = false;
-    if (!repairMesh(mesh, repair_options, "input", diagnostics).ok()) return 1;
+    Mesh mesh;
+    if (!lodbake_bench::loadRepaired(path, mesh, diagnostics)) return 1;
     std::printf("%s: %zu triangles after repair, %zu thread(s)\n", path.c_str(), mesh.faceCount(), threads);
 
-    // The chain as the bake runs it: its collapses logged as vertex removals for the PFRep build
-    // (record_removals; the pass runs on to the end of valid collapses).
+    // The chain as the bake runs it; with --from-chain its collapses are logged as vertex removals for
+    // the PFRep build (record_removals; the pass runs on to the end of valid collapses).
     auto bakeChain = [&](Diagnostics& d) {
         LodChainOptions options;
         options.ratios = {0.5, 0.25, 0.1, 0.03, 0.01};
         options.measure_error = false;
         options.record_collapses = false;
-        options.record_removals = true;
+        options.record_removals = from_chain_log;
         return buildLodChain(mesh, options, d);
     };
     std::unique_ptr<LodChain> last_chain;
@@ -115,10 +113,10 @@ int main(int argc, char** argv) {
             last_chain = std::make_unique<LodChain>(std::move(*c));
         }
         std::printf("lod_chain  wall %.3f s  thread cpu %.3f s  levels %s  (removal log %zu bytes)\n", total.wall,
-                    total.cpu, hashToHex(hash).c_str(), last_chain->removals.byteSize());
+                    total.cpu, hashToHex(hash).c_str(), from_chain_log ? last_chain->removals.byteSize() : size_t(0));
     }
-    if (pfrep) {
-        // The bake's PFRep build: the blob from the chain's log (no simplification of its own).
+    if (pfrep && from_chain_log) {
+        // pfrep_from_chain: the blob from the chain's log (no simplification of its own).
         if (!last_chain) {
             Diagnostics d;
             Result<LodChain> c = bakeChain(d);

@@ -24,6 +24,7 @@
 
 #include <meshoptimizer.h>
 
+#include "bench_mesh.h"
 #include "core/parallel.h"
 #include "lodbake/cleanup/repair.h"
 #include "lodbake/core/diagnostics.h"
@@ -69,16 +70,8 @@ int main(int argc, char** argv) {
     }
     ScopedThreadLimit limit(threads);
     Diagnostics diagnostics;
-    Result<LoadedMesh> loaded = readMesh(path, ReadOptions{}, diagnostics);
-    if (!loaded.ok()) {
-        std::fprintf(stderr, "error: %s\n", loaded.status().message().c_str());
-        return 1;
-    }
-    Mesh mesh = std::move(loaded->mesh);
-    RepairOptions repair_options;
-    repair_options.report_welded = false;
-    repair_options.report_before = false;
-    if (!repairMesh(mesh, repair_options, "input", diagnostics).ok()) return 1;
+    Mesh mesh;
+    if (!lodbake_bench::loadRepaired(path, mesh, diagnostics)) return 1;
     Mesh geometry;
     geometry.positions = mesh.positions;
     geometry.indices = mesh.indices;
