@@ -10,8 +10,6 @@
 //
 // usage: bake_stages_bench [--threads N] [--runs N] [--chain-only | --pfrep-only] [--from-chain] MESH
 
-#include <time.h>
-
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -21,6 +19,7 @@
 #include <vector>
 
 #include "bench_mesh.h"
+#include "bench_timing.h"
 #include "core/parallel.h"
 #include "lodbake/cleanup/repair.h"
 #include "lodbake/core/diagnostics.h"
@@ -39,9 +38,7 @@ struct Clock {
 };
 
 Clock now() {
-    timespec ts;
-    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-    const double cpu = double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
+    const double cpu = lodbake_bench::threadCpuSeconds();
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
     return {wall, cpu};
 }

@@ -1,10 +1,20 @@
 #pragma once
 // Timing helper shared by the benchmark programs.
 
+#include <time.h>
+
 #include <algorithm>
 #include <chrono>
 
 namespace lodbake_bench {
+
+/// CPU time of the calling thread, in seconds: on a loaded shared machine wall time also counts the
+/// time the thread spent descheduled.
+inline double threadCpuSeconds() {
+    timespec ts;
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+    return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
+}
 
 /// Best wall time of `runs` calls of f, in milliseconds (the minimum is the least noisy figure on
 /// a shared machine).

@@ -20,6 +20,7 @@
 #include <draco/compression/encode.h>
 #include <draco/mesh/mesh.h>
 
+#include "bench_timing.h"
 #include "lodbake/cleanup/normals.h"
 #include "lodbake/codec/valence_encoder.h"
 #include "lodbake/io/mesh_io.h"
@@ -31,9 +32,7 @@ constexpr int kRuns = 9;
 constexpr uint32_t kNormalBits = 10;
 
 double threadCpuMs() {
-    timespec ts;
-    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-    return double(ts.tv_sec) * 1e3 + double(ts.tv_nsec) * 1e-6;
+    return 1e3 * lodbake_bench::threadCpuSeconds();
 }
 
 // Runs a and b alternately, kRuns times each, and returns each one's best time. Alternating gives

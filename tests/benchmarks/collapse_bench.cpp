@@ -13,8 +13,6 @@
 //
 // usage: collapse_bench [--threads N] [--runs N] MESH
 
-#include <time.h>
-
 #include <cfloat>
 #include <cstdio>
 #include <cstdlib>
@@ -25,6 +23,7 @@
 #include <meshoptimizer.h>
 
 #include "bench_mesh.h"
+#include "bench_timing.h"
 #include "core/parallel.h"
 #include "lodbake/cleanup/repair.h"
 #include "lodbake/core/diagnostics.h"
@@ -34,13 +33,9 @@
 
 namespace {
 
-using namespace lodbake;
+using lodbake_bench::threadCpuSeconds;
 
-double threadCpu() {
-    timespec ts;
-    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-    return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
-}
+using namespace lodbake;
 
 struct Step {
     double best = 1e300;
@@ -86,9 +81,9 @@ int main(int argc, char** argv) {
             options.ratios = {0.5, 0.25, 0.1, 0.03, 0.01};
             options.measure_error = false;
             Diagnostics d;
-            const double a = threadCpu();
+            const double a = threadCpuSeconds();
             Result<LodChain> c = buildLodChain(mesh, options, d);
-            const double b = threadCpu();
+            const double b = threadCpuSeconds();
             if (!c.ok() || c->levels.empty()) return 1;
             chain.take(b - a);
             chain.collapses = c->levels.back().collapse_count;
@@ -104,9 +99,9 @@ int main(int argc, char** argv) {
             options.measure_error = false;
             options.record_collapses = true;
             Diagnostics d;
-            const double a = threadCpu();
+            const double a = threadCpuSeconds();
             Result<LodChain> c = buildLodChain(geometry, options, d);
-            const double b = threadCpu();
+            const double b = threadCpuSeconds();
             if (!c.ok()) return 1;
             pfrep.take(b - a);
             pfrep.collapses = c->sequence.records.size();
@@ -121,11 +116,11 @@ int main(int argc, char** argv) {
         }
         {
             std::vector<unsigned int> destination(mesh.indices.size());
-            const double a = threadCpu();
+            const double a = threadCpuSeconds();
             const size_t count =
                 meshopt_simplify(destination.data(), mesh.indices.data(), mesh.indices.size(), &mesh.positions[0].x,
                                  mesh.positions.size(), sizeof(Vec3f), native_target * 3, FLT_MAX, 0, nullptr);
-            const double b = threadCpu();
+            const double b = threadCpuSeconds();
             native.take(b - a);
             native.collapses = (mesh.faceCount() - count / 3) / 2;
         }

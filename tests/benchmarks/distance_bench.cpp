@@ -11,8 +11,7 @@
 #include <string>
 #include <vector>
 
-#include <time.h>
-
+#include "bench_timing.h"
 #include "core/parallel.h"
 #include "lodbake/core/bvh.h"
 #include "lodbake/io/mesh_io.h"
@@ -21,15 +20,11 @@
 
 namespace {
 
-double cpuSeconds() {
-    timespec ts;
-    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-    return double(ts.tv_sec) + double(ts.tv_nsec) * 1e-9;
-}
+using lodbake_bench::threadCpuSeconds;
 
 // Anchor: every referenced vertex of `from` queried against a core TriangleBvh of `to`.
 double anchorSeconds(const lodbake::Mesh& from, const lodbake::Mesh& to, size_t& queries, double& checksum) {
-    const double c0 = cpuSeconds();
+    const double c0 = threadCpuSeconds();
     auto bvh = lodbake::TriangleBvh::build(to.positions, to.indices);
     if (!bvh.ok()) return 0;
     std::vector<uint8_t> used(from.positions.size(), 0);
@@ -39,7 +34,7 @@ double anchorSeconds(const lodbake::Mesh& from, const lodbake::Mesh& to, size_t&
         checksum += bvh->closest(lodbake::toDouble(from.positions[v])).distance_sq;
         ++queries;
     }
-    return cpuSeconds() - c0;
+    return threadCpuSeconds() - c0;
 }
 
 } // namespace
@@ -77,12 +72,12 @@ int main(int argc, char** argv) {
     double best_prepare = 1e300, best_measure = 1e300;
     std::vector<lodbake::Result<lodbake::DistanceResult>> results;
     for (int r = 0; r < runs; ++r) {
-        const double c0 = cpuSeconds();
+        const double c0 = threadCpuSeconds();
         auto reference = lodbake::DistanceReference::prepare(mesh);
-        const double c1 = cpuSeconds();
+        const double c1 = threadCpuSeconds();
         if (!reference.ok()) return 1;
         results = lodbake::measureSurfaceDistances(*reference, levels, options.distance);
-        const double c2 = cpuSeconds();
+        const double c2 = threadCpuSeconds();
         best_prepare = std::min(best_prepare, c1 - c0);
         best_measure = std::min(best_measure, c2 - c1);
     }

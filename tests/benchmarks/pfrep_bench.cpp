@@ -13,8 +13,7 @@
 #include <string>
 #include <vector>
 
-#include <time.h>
-
+#include "bench_timing.h"
 #include "lodbake/io/mesh_io.h"
 #include "lodbake/pfrep/pfrep_builder.h"
 #include "lodbake/simplify/lod_chain.h"
@@ -23,15 +22,10 @@
 
 namespace {
 
+using lodbake_bench::threadCpuSeconds;
+
 using Clock = std::chrono::steady_clock;
 double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
-// CPU time of this thread: on a loaded shared machine, wall time also counts time spent descheduled.
-double cpuSeconds() {
-    timespec ts;
-    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-    return double(ts.tv_sec) + double(ts.tv_nsec) * 1e-9;
-}
-
 std::string meshPath(const std::string& name) { return std::string(LODBAKE_BENCH_SHARED_MESHES_DIR) + "/" + name; }
 
 bool load(const std::string& name, lodbake::Mesh& mesh) {
@@ -230,22 +224,22 @@ int sharedChain(const char* name, const char* rule_name) {
     options.measure_error = false;
     options.record_collapses = rule == Rule::NearerMerged; // the merged positions
     options.record_removals = true;
-    double t0 = cpuSeconds();
+    double t0 = threadCpuSeconds();
     auto chain = lodbake::buildLodChain(mesh, options, d);
-    const double chain_s = cpuSeconds() - t0;
+    const double chain_s = threadCpuSeconds() - t0;
     if (!chain.ok()) return 1;
     std::printf("%s: chain %.2f s thread CPU, %zu collapses (%zu up to the last level), log %zu bytes (%.2f per "
                 "collapse)\n",
                 name, chain_s, chain->removals.size(), chain->levels.back().collapse_count,
                 chain->removals.byteSize(), double(chain->removals.byteSize()) / double(chain->removals.size()));
-    t0 = cpuSeconds();
+    t0 = threadCpuSeconds();
     std::vector<lodbake::Vec3f> merged;
     for (const auto& r : chain->sequence.records) merged.push_back(r.position);
     auto shared = lodbake::buildPfrepFromChain(mesh, chain->removals, d, rule, &merged);
-    const double shared_s = cpuSeconds() - t0;
-    t0 = cpuSeconds();
+    const double shared_s = threadCpuSeconds() - t0;
+    t0 = threadCpuSeconds();
     auto own = lodbake::buildPfrep(mesh, {}, d);
-    const double own_s = cpuSeconds() - t0;
+    const double own_s = threadCpuSeconds() - t0;
     if (!shared.ok() || !own.ok()) return 1;
     std::printf("  from the chain: %.2f s, %zu bytes (%.1f per vertex); own half-edge pass: %.2f s, %zu bytes (%.1f "
                 "per vertex)\n",
@@ -349,13 +343,13 @@ int main(int argc, char** argv) {
                 size_t count = 0;
                 int reps = 0;
                 const auto t = Clock::now();
-                const double c0 = cpuSeconds();
+                const double c0 = threadCpuSeconds();
                 do {
                     lodrt::pfrepExtractLevel(m, k, idx.data(), idx.size() / 3, &count);
                     ++reps;
                 } while (secondsSince(t) < 0.3);
                 const double s = secondsSince(t) / reps;
-                const double cpu = (cpuSeconds() - c0) / reps;
+                const double cpu = (threadCpuSeconds() - c0) / reps;
                 worst_cpu = std::min(worst_cpu, count / cpu / 1e6);
                 size_t values = 0;
                 const auto tf = Clock::now();
@@ -465,7 +459,7 @@ int main(int argc, char** argv) {
                 const float cam[3] = {20 * spacing * (0.5f + 0.4f * std::sin(frame * 0.02f)), -5 * spacing + frame * 0.3f * spacing / 3,
                                       2.0f * size};
                 const auto t = Clock::now();
-                const double c0 = cpuSeconds();
+                const double c0 = threadCpuSeconds();
                 size_t changes = 0;
                 // With a frame budget, instances are visited from where the previous frame stopped,
                 // each allowed what is left; the ones not reached keep their (valid) masks.
@@ -503,7 +497,7 @@ int main(int argc, char** argv) {
                 }
                 next_instance = (next_instance + visited) % kInstances;
                 const double s = secondsSince(t);
-                const double frame_cpu = cpuSeconds() - c0;
+                const double frame_cpu = threadCpuSeconds() - c0;
                 total_cpu += frame_cpu;
                 frame_cpu_ms.push_back(frame_cpu * 1e3);
                 if (frame_cpu > worst_cpu) worst_cpu_frame = frame;
@@ -538,7 +532,7 @@ int main(int argc, char** argv) {
                 // Anchor, same run: only reading every instance's mask once per frame (an AND over
                 // its words, the least any step must do to know its state), thread CPU time.
                 uint64_t sink = 0;
-                const double a0 = cpuSeconds();
+                const double a0 = threadCpuSeconds();
                 for (int frame = 0; frame < kFrames; ++frame)
                     for (int i = 0; i < kInstances; ++i) {
                         const uint8_t* mk = masks.data() + mask_bytes * size_t(i);
@@ -550,7 +544,7 @@ int main(int argc, char** argv) {
                         }
                         sink += acc;
                     }
-                const double scan_ms = (cpuSeconds() - a0) / kFrames * 1e3;
+                const double scan_ms = (threadCpuSeconds() - a0) / kFrames * 1e3;
                 std::printf("  anchor: reading all %d masks (%zu bytes each) takes %.3f ms/frame thread CPU time "
                             "(refine / anchor = %.2f) [%llu]\n",
                             kInstances, mask_bytes, scan_ms, total_cpu / kFrames * 1e3 / scan_ms,
