@@ -43,22 +43,21 @@ public:
         for (int i = 0; i < 5; ++i) code_ = (code_ << 8) | next();
         return true;
     }
-    // Branch-free: the decoded bits of well-mixed contexts are unpredictable, so select instead of
-    // branching on them.
+    // Branch-free: the decoded bits of well-mixed contexts are unpredictable, so select with masks
+    // instead of branching on them (a compiler turns a plain `?:` on the comparison into a branch).
+    // (A mispredicted branch costs more than the selects: docs/format/valence.md, "Toward version 7".)
     inline uint32_t bit(uint32_t& prob) { return bitWith(detail::rangeProb(prob), prob); }
     // bit() with the probability already computed from the model (p == rangeProb(prob)).
     inline uint32_t bitWith(uint32_t p, uint32_t& prob) {
         const uint32_t bound = (range_ >> kRangeProbBits) * p;
-        const uint32_t result = code_ >= bound ? 1u : 0u;
-        const uint32_t mask = 0u - result;
+        // All ones when code >= bound (bit 1): the sign of the 64-bit difference.
+        const uint32_t mask = uint32_t((uint64_t(code_) - bound) >> 63) - 1u;
         code_ -= bound & mask;
-        range_ = result ? range_ - bound : bound;
-        prob = detail::rangeUpdate(prob, result);
-        if (range_ < kRangeTopValue) {
-            range_ <<= 8;
-            code_ = (code_ << 8) | next();
-        }
-        return result;
+        range_ = bound ^ ((bound ^ (range_ - bound)) & mask);
+        prob = detail::rangeUpdateMasked(prob, mask);
+        // The bounds on p leave range >= 2^16: at most one byte.
+        renormalizeOnce();
+        return mask & 1u;
     }
     // Multi-symbol decode (docs/format/valence.md "Range coder", `symbol`): one division finds the
     // slot, a branch-free count over the cumulative table the symbol.
@@ -68,19 +67,15 @@ public:
         const uint32_t slot = code_ / r;
         const uint32_t s = m.find(slot);
         const uint32_t low = r * m.cum[s];
-        const uint32_t high = s + 1 < n ? r * m.cum[s + 1] : range_;
+        // cum[N] exists (2^15): the last symbol's high is the whole range instead (its rounding slack).
+        const uint32_t last = 0u - uint32_t(s + 1 == n);
+        const uint32_t high = (r * m.cum[s + 1] & ~last) | (range_ & last);
         code_ -= low;
         range_ = high - low;
         m.update(s);
         // A symbol is at least kRangeCdfMinFreq / 2^15 of a range >= 2^24: two bytes always suffice.
-        if (range_ < kRangeTopValue) {
-            range_ <<= 8;
-            code_ = (code_ << 8) | next();
-            if (range_ < kRangeTopValue) {
-                range_ <<= 8;
-                code_ = (code_ << 8) | next();
-            }
-        }
+        renormalizeOnce();
+        renormalizeOnce();
         return s;
     }
     inline uint32_t direct(uint32_t count) {
@@ -130,6 +125,20 @@ private:
         if (p_ < end_) return *p_++;
         ++overrun_;
         return 0;
+    }
+    // `if (range < 2^24) { range <<= 8; code = (code << 8) | next(); }` without branches: the byte
+    // is loaded from a clamped address (a stream holds at least 5 bytes) and used only when due and
+    // in bounds; past the end it reads as 0 and counts as an overrun, as next() does.
+    inline void renormalizeOnce() {
+        const uint32_t due = uint32_t(range_ < kRangeTopValue);
+        const uint32_t in = uint32_t(p_ < end_);
+        const uint8_t* at = in ? p_ : end_ - 1;
+        const uint32_t byte = uint32_t(*at) & (0u - in);
+        const uint32_t shift = due << 3;
+        range_ <<= shift;
+        code_ = (code_ << shift) | (byte & (0u - due));
+        p_ += due & in;
+        overrun_ += due & (in ^ 1u);
     }
     const uint8_t* p_ = nullptr;
     const uint8_t* end_ = nullptr;
@@ -242,7 +251,8 @@ template <int Components, int Contexts> struct ResidualModel {
         if (k >= 2) m = (m << 1) | rd.bit(top[j][k]);
         if (k >= 3) m = (m << 1) | rd.bit(second[j][2 * k + (m & 1u)]);
         if (k >= 4) m = (m << (k - 3)) | raw.read(k - 3);
-        *r = negative ? -int32_t(m) : int32_t(m);
+        // Branch-free negation (the sign is unpredictable): (m ^ -negative) + negative.
+        *r = int32_t((m ^ (0u - negative)) + negative);
         return true;
     }
 };

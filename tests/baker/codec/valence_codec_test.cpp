@@ -602,6 +602,46 @@ TEST(ValenceDecoderSafetyTest, RawBitPartsMustBeExact) {
     EXPECT_EQ(decodeChecked(moved), lodrt::Result::CorruptStream);
 }
 
+// A range-coded part cut short (its last bytes removed and its header length patched, so the file
+// size matches): the decoder runs past the part's end, reads zeros there without touching the bytes
+// behind it (the next part, or nothing for the last one: ASan sees the exact buffer), and reports the
+// stream corrupt. Connectivity, position and normal parts, 1-6 bytes cut.
+TEST(ValenceDecoderSafetyTest, RangeCodedPartsCutShortAreCorrupt) {
+    Mesh with_normals = torus(24, 12);
+    auto normals_stream = encodeValence(with_normals, {});
+    ASSERT_TRUE(normals_stream.ok());
+    for (const std::vector<uint8_t>& bytes : {sampleStream(), snapStream(), normals_stream->bytes}) {
+        auto get32 = [&](size_t at) {
+            return uint32_t(bytes[at]) | uint32_t(bytes[at + 1]) << 8 | uint32_t(bytes[at + 2]) << 16 |
+                   uint32_t(bytes[at + 3]) << 24;
+        };
+        // Header part lengths (docs/format/valence.md "Header") and the order of the parts in the file.
+        const uint32_t conn = get32(44), pos = get32(48), nrm = get32(52), pos_raw = get32(56);
+        const size_t header = lodrt::format::kValenceHeaderSize;
+        const struct {
+            size_t field;
+            uint32_t length;
+            size_t end; // one past the part's last byte
+        } parts[] = {{44, conn, header + conn},
+                     {48, pos, header + conn + pos},
+                     {52, nrm, header + conn + pos + pos_raw + nrm}};
+        int tested = 0;
+        for (const auto& part : parts) {
+            if (part.length == 0) continue;
+            ++tested;
+            for (uint32_t cut = 1; cut <= 6 && cut <= part.length; ++cut) {
+                std::vector<uint8_t> bad(bytes.begin(), bytes.begin() + long(part.end - cut));
+                bad.insert(bad.end(), bytes.begin() + long(part.end), bytes.end());
+                const uint32_t length = part.length - cut;
+                for (int i = 0; i < 4; ++i) bad[part.field + size_t(i)] = uint8_t(length >> (8 * i));
+                EXPECT_EQ(decodeChecked(bad), lodrt::Result::CorruptStream)
+                    << "part at header offset " << part.field << ", " << cut << " bytes cut";
+            }
+        }
+        EXPECT_GE(tested, 2);
+    }
+}
+
 TEST(ValenceDecoderSafetyTest, SmallBuffersAreRefused) {
     std::vector<uint8_t> bytes = sampleStream();
     lodrt::ValenceInfo info;

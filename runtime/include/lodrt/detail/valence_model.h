@@ -61,6 +61,18 @@ inline uint32_t rangeUpdate(uint32_t s, uint32_t b) {
     return b ? one : zero;
 }
 
+/// rangeUpdate with the bit given as a mask (all ones for 1, zero for 0), selected without a branch.
+inline uint32_t rangeUpdateMasked(uint32_t s, uint32_t mask) {
+    const uint32_t fast = s & 0xFFFFu, slow = s >> 16;
+    using format::kRangeStateMax;
+    using format::kRangeStateMin;
+    const uint32_t one = (fast - ((fast - kRangeStateMin) >> format::kRangeFastShift)) |
+                         ((slow - ((slow - kRangeStateMin) >> format::kRangeSlowShift)) << 16);
+    const uint32_t zero = (fast + ((kRangeStateMax - fast) >> format::kRangeFastShift)) |
+                          ((slow + ((kRangeStateMax - slow) >> format::kRangeSlowShift)) << 16);
+    return zero ^ ((zero ^ one) & mask);
+}
+
 /// Adaptive multi-symbol model (format.h, "Multi-symbol adaptive models"): cum[i] is the coded
 /// cumulative frequency of symbols < i out of 2^kRangeCdfBits (cum[0] = 0, cum[N] = 2^kRangeCdfBits);
 /// symbol i codes with width cum[i+1] - cum[i] >= kRangeCdfMinFreq (the last one also gets the range
