@@ -584,17 +584,16 @@ struct EncoderIo {
     }
     lodrt::Result onTriangle(uint32_t t, uint32_t attach) {
         const auto& a = engine->a;
-        if (real_of.size() < 3 * size_t(t) + 3) real_of.resize(3 * size_t(t) + 3, kNone);
+        // The engine reports its triangles in creation order (t = 0, 1, ...): real_of grows by 3.
+        if (real_of.size() != 3 * size_t(t)) real_of.resize(3 * size_t(t), kNone);
         uint32_t rt;
         if (attach == kNone) {
             rt = seed;
-            for (uint32_t i = 0; i < 3; ++i) real_of[3 * t + i] = 3 * rt + i;
+            real_of.insert(real_of.end(), {3 * rt, 3 * rt + 1, 3 * rt + 2});
         } else {
             const uint32_t ro = m->opposite[real_of[attach]];
             rt = ro / 3;
-            real_of[3 * t + 2] = ro;
-            real_of[3 * t + 0] = nextCorner(ro);
-            real_of[3 * t + 1] = prevCorner(ro);
+            real_of.insert(real_of.end(), {nextCorner(ro), prevCorner(ro), ro});
         }
         if (conquered[rt]) return fail(m->corner_vertex[3 * rt], m->corner_vertex[3 * rt + 1]);
         conquered[rt] = 1;
@@ -779,7 +778,8 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
         const float c[3] = {mesh.positions[i].x, mesh.positions[i].y, mesh.positions[i].z};
         for (int j = 0; j < 3; ++j) {
             const double t = cube > 0.0f ? double(c[j] - lo[j]) / double(cube) * qmax : 0.0;
-            const long q = std::clamp<long>(std::lround(std::floor(t + 0.5)), 0, long(qmax));
+            // t >= 0 (c[j] >= lo[j]), so the truncation is floor(t + 0.5), without two library calls.
+            const long q = std::clamp<long>(long(t + 0.5), 0, long(qmax));
             qpos_in[3 * i + size_t(j)] = int32_t(q);
             const double decoded = double(lo[j] + float(q) * step);
             result.max_position_error = std::max(result.max_position_error, std::fabs(decoded - double(c[j])));
@@ -846,17 +846,13 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
     for (size_t v = 0; v < vn; ++v)
         if (new_of[v] == kNone) new_of[v] = final_count++;
 
-    // Output triangles (only the normal predictor needs them as index triples).
-    U32Array triangles;
-    if (normals) triangles.reserve(3 * fn);
+    // Output triangles: the closed ones without a dummy vertex.
+    auto isOutput = [&](const uint32_t* cv) {
+        return !((a.vertex_flags[cv[0]] | a.vertex_flags[cv[1]] | a.vertex_flags[cv[2]]) & lodrt::detail::kFlagDummy);
+    };
     result.old_face_of.reserve(fn);
-    for (uint32_t t = 0; t < tc; ++t) {
-        const uint32_t* cv = &a.corner_vertex[3 * size_t(t)];
-        if ((a.vertex_flags[cv[0]] | a.vertex_flags[cv[1]] | a.vertex_flags[cv[2]]) & lodrt::detail::kFlagDummy)
-            continue;
-        if (normals) triangles.insert(triangles.end(), {final_of[cv[0]], final_of[cv[1]], final_of[cv[2]]});
-        result.old_face_of.push_back(io.real_of[3 * size_t(t)] / 3);
-    }
+    for (uint32_t t = 0; t < tc; ++t)
+        if (isOutput(&a.corner_vertex[3 * size_t(t)])) result.old_face_of.push_back(io.real_of[3 * size_t(t)] / 3);
     U32Array().swap(io.real_of);
     if (result.old_face_of.size() != fn) return internalError("valence encoder: triangle count mismatch");
 
@@ -1050,9 +1046,13 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
             qnorm[2 * size_t(new_of[i])] = q[0];
             qnorm[2 * size_t(new_of[i]) + 1] = q[1];
         }
+        // Over the output triangles as the engine's corner table holds them (in integers the order of
+        // the sums does not matter).
         CodecArray<int64_t> sum(3 * vn, 0);
-        for (size_t t = 0; t + 2 < triangles.size(); t += 3) {
-            const uint32_t* f = &triangles[t];
+        for (uint32_t t = 0; t < tc; ++t) {
+            const uint32_t* cv = &a.corner_vertex[3 * size_t(t)];
+            if (!isOutput(cv)) continue;
+            const uint32_t f[3] = {final_of[cv[0]], final_of[cv[1]], final_of[cv[2]]};
             const int32_t* p0 = &qpos_final[3 * size_t(f[0])];
             const int32_t* p1 = &qpos_final[3 * size_t(f[1])];
             const int32_t* p2 = &qpos_final[3 * size_t(f[2])];

@@ -343,7 +343,11 @@ double octahedralMaxAngle(uint32_t bits) {
     // Every direction whose octahedral coordinates lie on a grid of a quarter of the coded step: the
     // coded values, the rounding boundaries between them (the worst round-off) and the points between.
     const int steps = 2 * int((1u << bits) - 1); // grid points per unit of u and v
-    double worst = 0.0;
+    // acos is decreasing with a slope of at least 1 in magnitude: a cosine more than kMargin above the
+    // smallest one met so far has an angle smaller than that one's by far more than acos's rounding, so
+    // the acos (most of the time of this loop) is taken only near the smallest cosine.
+    constexpr double kMargin = 1e-9;
+    double worst = 0.0, smallest = 2.0;
     for (int i = 0; i <= 2 * steps; ++i)
         for (int j = 0; j <= 2 * steps; ++j) {
             const double u = -1.0 + double(i) / steps, v = -1.0 + double(j) / steps;
@@ -361,7 +365,10 @@ double octahedralMaxAngle(uint32_t bits) {
             lodrt::octahedralDecode(q, bits, d);
             const double dlen = std::sqrt(double(d[0]) * d[0] + double(d[1]) * d[1] + double(d[2]) * d[2]);
             const double dot = (double(n[0]) * d[0] + double(n[1]) * d[1] + double(n[2]) * d[2]) / dlen;
-            worst = std::max(worst, std::acos(std::min(1.0, std::max(-1.0, dot))));
+            const double c = std::min(1.0, std::max(-1.0, dot));
+            if (c > smallest + kMargin) continue;
+            smallest = std::min(smallest, c);
+            worst = std::max(worst, std::acos(c));
         }
     cache[bits] = worst;
     return worst;
