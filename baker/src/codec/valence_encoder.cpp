@@ -275,11 +275,19 @@ struct ClosedMesh {
     size_t real_triangles = 0;
 };
 
+// The half-edge pairing of an earlier build and the faces it exploded, for a build that explodes more.
+struct PriorPairing {
+    U32Array opposite;
+    std::vector<uint8_t> exploded;
+};
+
 // Builds the closed manifold. `exploded[f]` faces get private copies of their three vertices. With
 // `several_fans` set, input vertices whose corners fall into several fans (copies included) are listed
 // there, and when there are any the build stops after numbering the fans (the caller cuts them loose and
-// builds again).
-ClosedMesh buildClosed(const Mesh& mesh, const std::vector<uint8_t>& exploded, std::vector<uint32_t>* several_fans) {
+// builds again). With `prior` (a build stopped so, with a subset of `exploded`), its pairing is updated
+// instead of computed again: only edges of newly exploded faces change.
+ClosedMesh buildClosed(const Mesh& mesh, const std::vector<uint8_t>& exploded, std::vector<uint32_t>* several_fans,
+                       PriorPairing* prior) {
     const size_t fn = mesh.faceCount(), cn = 3 * fn, inputs = mesh.vertexCount();
     ClosedMesh m;
     m.real_triangles = fn;
@@ -307,8 +315,63 @@ ClosedMesh buildClosed(const Mesh& mesh, const std::vector<uint8_t>& exploded, s
     // Half-edges are bucketed by their smaller vertex (counting sort, 4 bytes per corner instead of a
     // sorted 16-byte key per corner), each bucket grouped by the larger vertex. The half-edges of
     // faces with private vertices are alone in their group: they are left out.
-    m.opposite.assign(cn, kNone);
-    {
+    if (prior) {
+        // A group (the half-edges of one undirected edge between input vertices) changes only by losing
+        // the half-edges of newly exploded faces, whose vertices all get marked here: the groups with
+        // both vertices marked are formed again from their remaining half-edges, every other pair stays.
+        m.opposite.swap(prior->opposite);
+        U8Array marked(inputs, 0);
+        bool any = false;
+        for (size_t f = 0; f < fn; ++f) {
+            if (!own[f] || prior->exploded[f]) continue;
+            const uint32_t* t = &mesh.indices[3 * f];
+            if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue; // had private vertices already
+            any = true;
+            for (int i = 0; i < 3; ++i) {
+                marked[t[i]] = 1;
+                const uint32_t c = uint32_t(3 * f + size_t(i));
+                if (m.opposite[c] != kNone) m.opposite[m.opposite[c]] = kNone;
+                m.opposite[c] = kNone;
+            }
+        }
+        if (any) {
+            struct HalfEdge {
+                uint32_t lower, upper, corner;
+            };
+            std::vector<HalfEdge> regroup;
+            for (size_t f = 0; f < fn; ++f) {
+                if (own[f]) continue;
+                const uint32_t* w = &work[3 * f];
+                for (int i = 0; i < 3; ++i) {
+                    const uint32_t u = w[(i + 1) % 3], v = w[(i + 2) % 3];
+                    if (!marked[u] || !marked[v]) continue;
+                    const uint32_t c = uint32_t(3 * f + size_t(i));
+                    regroup.push_back({std::min(u, v), std::max(u, v), c});
+                    m.opposite[c] = kNone;
+                }
+            }
+            std::sort(regroup.begin(), regroup.end(), [](const HalfEdge& x, const HalfEdge& y) {
+                return x.lower != y.lower   ? x.lower < y.lower
+                       : x.upper != y.upper ? x.upper < y.upper
+                                            : x.corner < y.corner;
+            });
+            for (size_t i = 0; i < regroup.size();) {
+                size_t j = i;
+                while (j < regroup.size() && regroup[j].lower == regroup[i].lower &&
+                       regroup[j].upper == regroup[i].upper)
+                    ++j;
+                if (j - i == 2) {
+                    const uint32_t c = regroup[i].corner, d = regroup[i + 1].corner;
+                    if (work[nextCorner(c)] == work[prevCorner(d)]) {
+                        m.opposite[c] = d;
+                        m.opposite[d] = c;
+                    }
+                }
+                i = j;
+            }
+        }
+    } else {
+        m.opposite.assign(cn, kNone);
         U32Array start(inputs + 1, 0);
         UninitArray bucket(cn);
         for (size_t f = 0; f < fn; ++f) {
@@ -629,11 +692,17 @@ struct Attempt {
     RangeEncoder conn;
     Failure failure;
     bool precut = false; // cut vertices with several fans loose instead of conquering (first round)
+    // After a precut: its pairing and exploded faces, which the next build updates.
+    PriorPairing prior;
+    bool has_prior = false;
     // The engine writes every element before reading it (the decoder relies on the same).
     UninitArray corner_vertex, corner_opposite, vertex_flags, vertex_corner, vertex_valence, node_vertex,
         node_prev, node_next, node_free, node_corner, completion, stack_head, stack_size;
 
     bool run(const Mesh& mesh, const std::vector<uint8_t>& exploded) {
+        const bool use_prior = has_prior && !precut;
+        has_prior = false;
+        if (use_prior) prior.opposite.swap(closed.opposite);
         // A restart's previous closed mesh and conquest arrays go before the new mesh is built: its
         // temporaries on top of them made the restart the encoder's peak.
         closed = ClosedMesh();
@@ -644,9 +713,13 @@ struct Attempt {
         // copies meet, and the conquest fails there, often near its end (the dragon at 1,071,828 of
         // 1,071,852 triangles). Cutting their triangles loose before the first conquest costs a few
         // copies and saves the restart.
-        closed = buildClosed(mesh, exploded, precut ? &failure.culprit_sources : nullptr);
+        closed = buildClosed(mesh, exploded, precut ? &failure.culprit_sources : nullptr, use_prior ? &prior : nullptr);
+        prior = PriorPairing();
         if (!failure.culprit_sources.empty()) {
             failure.failed = true;
+            // The pairing is complete (the build stopped after the fans): the next build updates it.
+            prior.exploded = exploded;
+            has_prior = true;
             return false;
         }
         const size_t vc = closed.source.size(), tc = closed.corner_vertex.size() / 3;
