@@ -1026,10 +1026,10 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
             }
         }
     };
-    // Which components to snap and which to code with spread contexts: every component coded all four
-    // ways (two without a sizeable share of snap hits) into streams of its own (exact sizes, since a
-    // component's values and contexts do not depend on the other components' choices), ways far
-    // behind after the first eighth dropped; the smallest of the rest wins (ties: fewer flags).
+    // Which components to snap and which to code with spread contexts: every component sized all four
+    // ways (two without a sizeable share of snap hits) as streams of its own (exact sizes, since a
+    // component's values and contexts do not depend on the other components' choices; WayPairSizer),
+    // ways far behind after the first eighth dropped; the smallest of the rest wins (ties: fewer flags).
     uint16_t flags_pos = 0;
     // The estimate's walk keeps every value it visits (8 bytes each) so that the stream below is coded
     // from them instead of walking the plan again (the walk is half of a position pass).
