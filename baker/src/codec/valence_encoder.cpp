@@ -33,9 +33,12 @@ using lodrt::detail::VertexSymbol;
 // The largest are backed by transparent huge pages where the OS offers them (core/large_array.h): one
 // page fault per 2 MB instead of one per 4 KB, which was a third of dragon_poisson's encode time.
 // Smaller ones stay with malloc, which hands a repeated encode memory already resident.
-// From 8 MB (measured: 2 MB made igea's 3 MB arrays 25 % slower to encode in codec_bench's repeated
-// runs, while dragon_poisson gains the same from 2 or 8 MB).
-constexpr size_t kMapBytes = size_t(8) << 20;
+// From 2 MB, the smallest size with a whole huge page (session 9: on this VM a 4 KB page fault costs
+// about 13 us of CPU, a 2 MB one about 0.2 ms; the bake codes each level once, into fresh memory, and
+// from 8 MB on only its LOD0 had huge pages: the bake's minor faults went from 238,000 to 209,000.
+// Session 8 had measured igea's 3 MB arrays 25 % slower with 2 MB in codec_bench's repeated runs; in
+// session 9 igea and lucy100k encode as fast or faster with 2 MB there too).
+constexpr size_t kMapBytes = size_t(2) << 20;
 template <class T> struct CodecAllocator {
     using value_type = T;
     CodecAllocator() = default;
@@ -169,6 +172,102 @@ static_assert(lodrt::detail::kPositionContexts <= 256 && lodrt::detail::kSignCon
                   kValenceSnapContexts <= 128,
               "CodedValue's fields");
 
+// The sizes one component's position stream would have, coded two ways that differ only in the residual
+// length contexts (without and with spread contexts), both with snap decisions or both without: what
+// RangeEncoder and BitWriter would write, without writing it. A range coder's output length depends only
+// on its range, not on `low`: each renormalisation shift is one byte and finish() adds 5, so only the
+// range is kept. The two ways code the same snap, sign and mantissa decisions with the same model
+// states (those models see the same values in both), so those models are shared and each decision's
+// probability is computed once; each way keeps its own length models and range. The raw bits are the
+// same in both ways: only counted.
+class WayPairSizer {
+public:
+    using LengthModel = lodrt::detail::ResidualLengthModel;
+    static constexpr uint32_t kTree = 1u << kValenceResidualTreeBits;
+
+    explicit WayPairSizer(bool snap) : snap_(snap) {
+        for (auto& per_way : length_)
+            for (LengthModel& m : per_way) m.init();
+        initRangeProbs(sign_, lodrt::detail::kSignContexts);
+        initRangeProbs(second_, 2 * kTree);
+        initRangeProbs(top_, kTree);
+        initRangeProbs(snap_probs_, kValenceSnapContexts);
+    }
+    bool alive(int way) const { return alive_[way]; }
+    void drop(int way) { alive_[way] = false; }
+    /// Codes values[i] for i in [begin, end) with i % 3 == j (the component's values) into the ways alive.
+    void code(const CodedValue* values, size_t begin, size_t end, int j) {
+        size_t i = begin + size_t((j - int(begin % 3) + 3) % 3);
+        if (alive_[0] && alive_[1])
+            codeWays<3>(values, i, end);
+        else if (alive_[0])
+            codeWays<1>(values, i, end);
+        else if (alive_[1])
+            codeWays<2>(values, i, end);
+    }
+    /// RangeEncoder::bytesSoFar() plus BitWriter::bytesSoFar() of way `way`.
+    size_t bytesSoFar(int way) const { return 1 + shifts_[way] + size_t(raw_bits_ / 8); }
+    /// The size of way `way`'s two finished parts.
+    size_t finishedBytes(int way) const { return shifts_[way] + 5 + size_t((raw_bits_ + 7) / 8); }
+
+private:
+    template <uint32_t Live> void codeWays(const CodedValue* values, size_t i, size_t end) {
+        for (; i < end; i += 3) {
+            const uint32_t meta = values[i].meta;
+            if (snap_ && ((meta >> 27) & 1u)) {
+                const uint32_t hit = (meta >> 28) & 1u;
+                bit<Live>(snap_probs_[(meta >> 20) & 0x7Fu], hit);
+                if (hit) continue;
+            }
+            const int32_t r = values[i].r;
+            const uint32_t mag = uint32_t(r < 0 ? -r : r);
+            const uint32_t k = lodrt::detail::bitLength(mag);
+            if (Live & 1u) symbol(0, length_[0][meta & 0xFFu], k);
+            if (Live & 2u) symbol(1, length_[1][(meta >> 8) & 0xFFu], k);
+            if (k == 0) continue;
+            bit<Live>(sign_[(meta >> 16) & 0xFu], r < 0 ? 1u : 0u);
+            if (k >= 2) bit<Live>(top_[k], (mag >> (k - 2)) & 1u);
+            if (k >= 3) bit<Live>(second_[2 * k + ((mag >> (k - 2)) & 1u)], (mag >> (k - 3)) & 1u);
+            if (k >= 4) raw_bits_ += k - 3;
+        }
+    }
+    template <uint32_t Live> void bit(uint32_t& prob, uint32_t b) {
+        const uint32_t p = lodrt::detail::rangeProb(prob);
+        for (int w = 0; w < 2; ++w) {
+            if (!((Live >> w) & 1u)) continue;
+            const uint32_t bound = (range_[w] >> kRangeProbBits) * p;
+            range_[w] = b ? range_[w] - bound : bound;
+            normalize(w);
+        }
+        prob = lodrt::detail::rangeUpdate(prob, b);
+    }
+    void symbol(int w, LengthModel& m, uint32_t s) {
+        const uint32_t r = range_[w] >> kRangeCdfBits;
+        const uint32_t low = r * m.cum[s];
+        const uint32_t high = s + 1 < LengthModel::kN ? r * m.cum[s + 1] : range_[w];
+        range_[w] = high - low;
+        m.update(s);
+        normalize(w);
+    }
+    void normalize(int w) {
+        while (range_[w] < kRangeTopValue) {
+            range_[w] <<= 8;
+            ++shifts_[w];
+        }
+    }
+
+    bool snap_;
+    bool alive_[2] = {true, true};
+    uint32_t range_[2] = {0xFFFFFFFFu, 0xFFFFFFFFu};
+    size_t shifts_[2] = {0, 0};
+    uint64_t raw_bits_ = 0;
+    LengthModel length_[2][lodrt::detail::kPositionContexts];
+    uint32_t sign_[lodrt::detail::kSignContexts];
+    uint32_t second_[2 * kTree];
+    uint32_t top_[kTree];
+    uint32_t snap_probs_[kValenceSnapContexts];
+};
+
 // The closed manifold the conquest runs on: a corner table whose first 3 * face_count corners are the
 // input faces (same order and rotation), then the dummy triangles.
 struct ClosedMesh {
@@ -179,69 +278,130 @@ struct ClosedMesh {
     size_t real_triangles = 0;
 };
 
-// Union-find with path halving. Every parent has a smaller index than its child (unions hang the larger
-// root under the smaller), so a set's root is its smallest element.
-uint32_t findRoot(const UninitArray& parent, uint32_t x) {
-    while (parent[x] != x) {
-        parent[x] = parent[parent[x]];
-        x = parent[x];
-    }
-    return x;
-}
+// The half-edge pairing of an earlier build and the faces it exploded, for a build that explodes more.
+struct PriorPairing {
+    U32Array opposite;
+    std::vector<uint8_t> exploded;
+};
 
 // Builds the closed manifold. `exploded[f]` faces get private copies of their three vertices. With
 // `several_fans` set, input vertices whose corners fall into several fans (copies included) are listed
 // there, and when there are any the build stops after numbering the fans (the caller cuts them loose and
-// builds again).
-ClosedMesh buildClosed(const Mesh& mesh, const std::vector<uint8_t>& exploded, std::vector<uint32_t>* several_fans) {
-    const size_t fn = mesh.faceCount(), cn = 3 * fn;
+// builds again). With `prior` (a build stopped so, with a subset of `exploded`), its pairing is updated
+// instead of computed again: only edges of newly exploded faces change.
+ClosedMesh buildClosed(const Mesh& mesh, const std::vector<uint8_t>& exploded, std::vector<uint32_t>* several_fans,
+                       PriorPairing* prior) {
+    const size_t fn = mesh.faceCount(), cn = 3 * fn, inputs = mesh.vertexCount();
     ClosedMesh m;
     m.real_triangles = fn;
-    // Working vertex per corner: the input vertex, or a private copy for exploded/degenerate faces.
+    // Working vertex per corner: the input vertex, or for exploded/degenerate faces a private copy
+    // numbered from `inputs` on (private_source: its input vertex). Only which corners share a working
+    // vertex matters below, not the numbering.
     UninitArray work(cn);
-    U32Array work_source;
-    work_source.reserve(mesh.vertexCount());
-    U32Array work_of_input(mesh.vertexCount(), kNone);
+    U8Array own(fn);
+    U32Array private_source;
     for (size_t f = 0; f < fn; ++f) {
         const uint32_t* t = &mesh.indices[3 * f];
-        const bool own = exploded[f] || t[0] == t[1] || t[1] == t[2] || t[0] == t[2];
+        own[f] = exploded[f] || t[0] == t[1] || t[1] == t[2] || t[0] == t[2];
         for (int i = 0; i < 3; ++i) {
-            if (own) {
-                work[3 * f + size_t(i)] = uint32_t(work_source.size());
-                work_source.push_back(t[i]);
+            if (own[f]) {
+                work[3 * f + size_t(i)] = uint32_t(inputs + private_source.size());
+                private_source.push_back(t[i]);
             } else {
-                if (work_of_input[t[i]] == kNone) {
-                    work_of_input[t[i]] = uint32_t(work_source.size());
-                    work_source.push_back(t[i]);
-                }
-                work[3 * f + size_t(i)] = work_of_input[t[i]];
+                work[3 * f + size_t(i)] = t[i];
             }
         }
     }
-    U32Array().swap(work_of_input);
+    auto sourceOf = [&](uint32_t w) { return w < inputs ? w : private_source[w - inputs]; };
     // Pair half-edges: an undirected edge with exactly one half-edge each way is interior; every
     // other half-edge becomes a boundary. Corner c is opposite the half-edge next(c) -> prev(c).
     // Half-edges are bucketed by their smaller vertex (counting sort, 4 bytes per corner instead of a
-    // sorted 16-byte key per corner), each bucket ordered by (larger vertex, corner).
-    m.opposite.assign(cn, kNone);
-    {
-        const size_t wn = work_source.size();
-        auto lower = [&](uint32_t c) { return std::min(work[nextCorner(c)], work[prevCorner(c)]); };
-        auto upper = [&](uint32_t c) { return std::max(work[nextCorner(c)], work[prevCorner(c)]); };
-        U32Array start(wn + 1, 0);
+    // sorted 16-byte key per corner), each bucket grouped by the larger vertex. The half-edges of
+    // faces with private vertices are alone in their group: they are left out.
+    if (prior) {
+        // A group (the half-edges of one undirected edge between input vertices) changes only by losing
+        // the half-edges of newly exploded faces, whose vertices all get marked here: the groups with
+        // both vertices marked are formed again from their remaining half-edges, every other pair stays.
+        m.opposite.swap(prior->opposite);
+        U8Array marked(inputs, 0);
+        bool any = false;
+        for (size_t f = 0; f < fn; ++f) {
+            if (!own[f] || prior->exploded[f]) continue;
+            const uint32_t* t = &mesh.indices[3 * f];
+            if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue; // had private vertices already
+            any = true;
+            for (int i = 0; i < 3; ++i) {
+                marked[t[i]] = 1;
+                const uint32_t c = uint32_t(3 * f + size_t(i));
+                if (m.opposite[c] != kNone) m.opposite[m.opposite[c]] = kNone;
+                m.opposite[c] = kNone;
+            }
+        }
+        if (any) {
+            struct HalfEdge {
+                uint32_t lower, upper, corner;
+            };
+            std::vector<HalfEdge> regroup;
+            for (size_t f = 0; f < fn; ++f) {
+                if (own[f]) continue;
+                const uint32_t* w = &work[3 * f];
+                for (int i = 0; i < 3; ++i) {
+                    const uint32_t u = w[(i + 1) % 3], v = w[(i + 2) % 3];
+                    if (!marked[u] || !marked[v]) continue;
+                    const uint32_t c = uint32_t(3 * f + size_t(i));
+                    regroup.push_back({std::min(u, v), std::max(u, v), c});
+                    m.opposite[c] = kNone;
+                }
+            }
+            std::sort(regroup.begin(), regroup.end(), [](const HalfEdge& x, const HalfEdge& y) {
+                return x.lower != y.lower   ? x.lower < y.lower
+                       : x.upper != y.upper ? x.upper < y.upper
+                                            : x.corner < y.corner;
+            });
+            for (size_t i = 0; i < regroup.size();) {
+                size_t j = i;
+                while (j < regroup.size() && regroup[j].lower == regroup[i].lower &&
+                       regroup[j].upper == regroup[i].upper)
+                    ++j;
+                if (j - i == 2) {
+                    const uint32_t c = regroup[i].corner, d = regroup[i + 1].corner;
+                    if (work[nextCorner(c)] == work[prevCorner(d)]) {
+                        m.opposite[c] = d;
+                        m.opposite[d] = c;
+                    }
+                }
+                i = j;
+            }
+        }
+    } else {
+        m.opposite.assign(cn, kNone);
+        U32Array start(inputs + 1, 0);
         UninitArray bucket(cn);
-        for (uint32_t c = 0; c < cn; ++c) ++start[lower(c) + 1];
-        for (size_t v = 0; v < wn; ++v) start[v + 1] += start[v];
+        for (size_t f = 0; f < fn; ++f) {
+            if (own[f]) continue;
+            const uint32_t* w = &work[3 * f];
+            ++start[std::min(w[1], w[2]) + 1];
+            ++start[std::min(w[2], w[0]) + 1];
+            ++start[std::min(w[0], w[1]) + 1];
+        }
+        for (size_t v = 0; v < inputs; ++v) start[v + 1] += start[v];
         {
             U32Array fill(start.begin(), start.end() - 1);
-            for (uint32_t c = 0; c < cn; ++c) bucket[fill[lower(c)]++] = c;
+            for (size_t f = 0; f < fn; ++f) {
+                if (own[f]) continue;
+                const uint32_t* w = &work[3 * f];
+                const uint32_t c = uint32_t(3 * f);
+                bucket[fill[std::min(w[1], w[2])]++] = c;
+                bucket[fill[std::min(w[2], w[0])]++] = c + 1;
+                bucket[fill[std::min(w[0], w[1])]++] = c + 2;
+            }
         }
         // Each bucket's upper vertices are loaded once (the corners of a bucket are scattered over the
         // mesh, so every load is a cache miss) into a small array sorted along with the corners.
         constexpr size_t kLocal = 64;
         uint32_t local_up[kLocal];
         std::vector<uint32_t> large_up;
-        for (size_t v = 0; v < wn; ++v) {
+        for (size_t v = 0; v < inputs; ++v) {
             uint32_t* b = bucket.get() + start[v];
             const size_t n = start[v + 1] - start[v];
             if (n < 2) continue; // a lone half-edge pairs with nothing
@@ -250,9 +410,8 @@ ClosedMesh buildClosed(const Mesh& mesh, const std::vector<uint8_t>& exploded, s
                 large_up.resize(n);
                 up = large_up.data();
             }
-            for (size_t i = 0; i < n; ++i) up[i] = upper(b[i]);
-            // Corners were filled in increasing order, so a stable sort by the upper vertex gives
-            // (upper, corner) order. Buckets are small (about a valence): insertion sort.
+            for (size_t i = 0; i < n; ++i) up[i] = std::max(work[nextCorner(b[i])], work[prevCorner(b[i])]);
+            // Buckets are small (about a valence): insertion sort by the upper vertex.
             for (size_t i = 1; i < n; ++i) {
                 const uint32_t x = b[i], ux = up[i];
                 size_t j = i;
@@ -277,33 +436,44 @@ ClosedMesh buildClosed(const Mesh& mesh, const std::vector<uint8_t>& exploded, s
             }
         }
     }
-    // Split vertices into fans: corners around one working vertex joined across paired edges.
-    UninitArray parent(cn);
-    for (uint32_t c = 0; c < cn; ++c) parent[c] = c;
-    for (uint32_t c = 0; c < cn; ++c) {
-        const uint32_t o = m.opposite[nextCorner(c)];
-        if (o == kNone) continue;
-        const uint32_t s = nextCorner(o); // the same vertex's corner across the edge
-        const uint32_t ra = findRoot(parent, c), rb = findRoot(parent, s);
-        if (ra != rb) parent[std::max(ra, rb)] = std::min(ra, rb);
-    }
-    // One closed vertex per fan, numbered by the fan's first corner (its root). In increasing corner
-    // order a non-root's parent is an earlier corner of the same fan, already numbered: no root search.
+    U8Array().swap(own);
+    // Split vertices into fans: the corners around one working vertex joined across paired edges, i.e.
+    // the orbits of s(c) = next(opposite[next(c)]) (the same vertex's corner across the edge prev(c) -> c;
+    // its inverse is prev(opposite[prev(c)])), each a chain or a cycle. One closed vertex per fan,
+    // numbered in the order of the fans' first corners: in increasing corner order the first corner not
+    // yet numbered is the first of its fan, which is then walked both ways.
     // The dummy triangles are appended below: room for them is reserved up front.
     size_t boundary = 0;
     for (uint32_t c = 0; c < cn; ++c) boundary += m.opposite[c] == kNone;
     m.corner_vertex.reserve(cn + 3 * boundary);
-    m.source.reserve(work_source.size() + boundary / 3 + 1);
+    m.corner_vertex.assign(cn, kNone);
+    m.source.reserve(inputs + private_source.size() + boundary / 3 + 1);
     for (uint32_t c = 0; c < cn; ++c) {
-        if (parent[c] == c) {
-            m.corner_vertex.push_back(uint32_t(m.source.size()));
-            m.source.push_back(work_source[work[c]]);
-        } else {
-            m.corner_vertex.push_back(m.corner_vertex[parent[c]]);
+        if (m.corner_vertex[c] != kNone) continue;
+        const uint32_t id = uint32_t(m.source.size());
+        m.source.push_back(sourceOf(work[c]));
+        m.corner_vertex[c] = id;
+        bool cycle = false;
+        for (uint32_t x = c;;) {
+            const uint32_t o = m.opposite[nextCorner(x)];
+            if (o == kNone) break;
+            x = nextCorner(o);
+            if (x == c) {
+                cycle = true;
+                break;
+            }
+            m.corner_vertex[x] = id;
+        }
+        if (cycle) continue;
+        for (uint32_t x = c;;) {
+            const uint32_t o = m.opposite[prevCorner(x)];
+            if (o == kNone) break;
+            x = prevCorner(o);
+            m.corner_vertex[x] = id;
         }
     }
-    parent.reset();
     work.reset();
+    U32Array().swap(private_source);
     if (several_fans) {
         std::vector<uint8_t> fans(mesh.vertexCount(), 0);
         for (uint32_t src : m.source) {
@@ -480,17 +650,16 @@ struct EncoderIo {
     }
     lodrt::Result onTriangle(uint32_t t, uint32_t attach) {
         const auto& a = engine->a;
-        if (real_of.size() < 3 * size_t(t) + 3) real_of.resize(3 * size_t(t) + 3, kNone);
+        // The engine reports its triangles in creation order (t = 0, 1, ...): real_of grows by 3.
+        if (real_of.size() != 3 * size_t(t)) real_of.resize(3 * size_t(t), kNone);
         uint32_t rt;
         if (attach == kNone) {
             rt = seed;
-            for (uint32_t i = 0; i < 3; ++i) real_of[3 * t + i] = 3 * rt + i;
+            real_of.insert(real_of.end(), {3 * rt, 3 * rt + 1, 3 * rt + 2});
         } else {
             const uint32_t ro = m->opposite[real_of[attach]];
             rt = ro / 3;
-            real_of[3 * t + 2] = ro;
-            real_of[3 * t + 0] = nextCorner(ro);
-            real_of[3 * t + 1] = prevCorner(ro);
+            real_of.insert(real_of.end(), {nextCorner(ro), prevCorner(ro), ro});
         }
         if (conquered[rt]) return fail(m->corner_vertex[3 * rt], m->corner_vertex[3 * rt + 1]);
         conquered[rt] = 1;
@@ -526,11 +695,17 @@ struct Attempt {
     RangeEncoder conn;
     Failure failure;
     bool precut = false; // cut vertices with several fans loose instead of conquering (first round)
+    // After a precut: its pairing and exploded faces, which the next build updates.
+    PriorPairing prior;
+    bool has_prior = false;
     // The engine writes every element before reading it (the decoder relies on the same).
     UninitArray corner_vertex, corner_opposite, vertex_flags, vertex_corner, vertex_valence, node_vertex,
         node_prev, node_next, node_free, node_corner, completion, stack_head, stack_size;
 
     bool run(const Mesh& mesh, const std::vector<uint8_t>& exploded) {
+        const bool use_prior = has_prior && !precut;
+        has_prior = false;
+        if (use_prior) prior.opposite.swap(closed.opposite);
         // A restart's previous closed mesh and conquest arrays go before the new mesh is built: its
         // temporaries on top of them made the restart the encoder's peak.
         closed = ClosedMesh();
@@ -541,9 +716,13 @@ struct Attempt {
         // copies meet, and the conquest fails there, often near its end (the dragon at 1,071,828 of
         // 1,071,852 triangles). Cutting their triangles loose before the first conquest costs a few
         // copies and saves the restart.
-        closed = buildClosed(mesh, exploded, precut ? &failure.culprit_sources : nullptr);
+        closed = buildClosed(mesh, exploded, precut ? &failure.culprit_sources : nullptr, use_prior ? &prior : nullptr);
+        prior = PriorPairing();
         if (!failure.culprit_sources.empty()) {
             failure.failed = true;
+            // The pairing is complete (the build stopped after the fans): the next build updates it.
+            prior.exploded = exploded;
+            has_prior = true;
             return false;
         }
         const size_t vc = closed.source.size(), tc = closed.corner_vertex.size() / 3;
@@ -675,7 +854,8 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
         const float c[3] = {mesh.positions[i].x, mesh.positions[i].y, mesh.positions[i].z};
         for (int j = 0; j < 3; ++j) {
             const double t = cube > 0.0f ? double(c[j] - lo[j]) / double(cube) * qmax : 0.0;
-            const long q = std::clamp<long>(std::lround(std::floor(t + 0.5)), 0, long(qmax));
+            // t >= 0 (c[j] >= lo[j]), so the truncation is floor(t + 0.5), without two library calls.
+            const long q = std::clamp<long>(long(t + 0.5), 0, long(qmax));
             qpos_in[3 * i + size_t(j)] = int32_t(q);
             const double decoded = double(lo[j] + float(q) * step);
             result.max_position_error = std::max(result.max_position_error, std::fabs(decoded - double(c[j])));
@@ -742,17 +922,13 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
     for (size_t v = 0; v < vn; ++v)
         if (new_of[v] == kNone) new_of[v] = final_count++;
 
-    // Output triangles (only the normal predictor needs them as index triples).
-    U32Array triangles;
-    if (normals) triangles.reserve(3 * fn);
+    // Output triangles: the closed ones without a dummy vertex.
+    auto isOutput = [&](const uint32_t* cv) {
+        return !((a.vertex_flags[cv[0]] | a.vertex_flags[cv[1]] | a.vertex_flags[cv[2]]) & lodrt::detail::kFlagDummy);
+    };
     result.old_face_of.reserve(fn);
-    for (uint32_t t = 0; t < tc; ++t) {
-        const uint32_t* cv = &a.corner_vertex[3 * size_t(t)];
-        if ((a.vertex_flags[cv[0]] | a.vertex_flags[cv[1]] | a.vertex_flags[cv[2]]) & lodrt::detail::kFlagDummy)
-            continue;
-        if (normals) triangles.insert(triangles.end(), {final_of[cv[0]], final_of[cv[1]], final_of[cv[2]]});
-        result.old_face_of.push_back(io.real_of[3 * size_t(t)] / 3);
-    }
+    for (uint32_t t = 0; t < tc; ++t)
+        if (isOutput(&a.corner_vertex[3 * size_t(t)])) result.old_face_of.push_back(io.real_of[3 * size_t(t)] / 3);
     U32Array().swap(io.real_of);
     if (result.old_face_of.size() != fn) return internalError("valence encoder: triangle count mismatch");
 
@@ -850,10 +1026,10 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
             }
         }
     };
-    // Which components to snap and which to code with spread contexts: every component coded all four
-    // ways (two without a sizeable share of snap hits) into streams of its own (exact sizes, since a
-    // component's values and contexts do not depend on the other components' choices), ways far
-    // behind after the first eighth dropped; the smallest of the rest wins (ties: fewer flags).
+    // Which components to snap and which to code with spread contexts: every component sized all four
+    // ways (two without a sizeable share of snap hits) as streams of its own (exact sizes, since a
+    // component's values and contexts do not depend on the other components' choices; WayPairSizer),
+    // ways far behind after the first eighth dropped; the smallest of the rest wins (ties: fewer flags).
     uint16_t flags_pos = 0;
     // The estimate's walk keeps every value it visits (8 bytes each) so that the stream below is coded
     // from them instead of walking the plan again (the walk is half of a position pass).
@@ -870,27 +1046,16 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
         const int ways = try_snap ? 4 : 2; // way w: snap (w & 2), spread contexts (w & 1)
         walked.reserve(3 * vn);
         walkPositions(try_snap ? 7u : 0u, kNone, [&](const PositionValue& v) { walked.push_back(CodedValue::of(v)); });
-        RangeEncoder est[3][4];
-        BitWriter est_raw[3][4];
-        std::vector<PositionModel> est_model(4); // 4 x 30 KB: not on the stack of a pool thread
-        for (PositionModel& m : est_model) m.init();
-        bool alive[3][4] = {};
+        // One sizer per component and snap choice (sizer[j][w >> 1] sizes ways w and w | 1); 6 x 17 KB:
+        // not on the stack of a pool thread.
+        std::vector<std::unique_ptr<WayPairSizer>> sizers;
         for (int j = 0; j < 3; ++j)
-            for (int w = 0; w < ways; ++w) alive[j][w] = true;
+            for (int pair = 0; pair < ways / 2; ++pair) sizers.push_back(std::make_unique<WayPairSizer>(pair == 1));
+        auto sizer = [&](int j, int w) -> WayPairSizer& { return *sizers[size_t(j * (ways / 2) + (w >> 1))]; };
         // Values [begin, end) (component order x, y, z per vertex) into every way still alive.
         auto estimate = [&](size_t begin, size_t end) {
-            for (size_t i = begin; i < end; ++i) {
-                const PositionValue v = walked[i].value(int(i % 3));
-                for (int w = 0; w < ways; ++w) {
-                    if (!alive[v.j][w]) continue;
-                    if ((w & 2) && v.has_candidate) {
-                        est[v.j][w].bit(est_model[w].snap[v.j][v.snap_ctx], v.hit ? 1u : 0u);
-                        if (v.hit) continue;
-                    }
-                    est[v.j][w].residual(est_model[w].residuals, est_raw[v.j][w], v.j,
-                                         (w & 1) ? v.spread_ctx : v.ctx, v.r, v.sign_ctx);
-                }
-            }
+            for (int j = 0; j < 3; ++j)
+                for (int pair = 0; pair < ways / 2; ++pair) sizer(j, 2 * pair).code(walked.data(), begin, end, j);
         };
         // The first eighth in every way; a way already 2 % (and 256 bytes) larger than the best there
         // is dropped (on snapped Poisson meshes the unsnapped ways are 15-20 % larger), the others run
@@ -900,19 +1065,19 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
         for (int j = 0; j < 3; ++j) {
             size_t so_far[4] = {0, 0, 0, 0}, best = ~size_t(0);
             for (int w = 0; w < ways; ++w) {
-                so_far[w] = est[j][w].bytesSoFar() + est_raw[j][w].bytesSoFar();
+                so_far[w] = sizer(j, w).bytesSoFar(w & 1);
                 best = std::min(best, so_far[w]);
             }
             for (int w = 0; w < ways; ++w)
-                if (so_far[w] > best + std::max<size_t>(256, best / 50)) alive[j][w] = false;
+                if (so_far[w] > best + std::max<size_t>(256, best / 50)) sizer(j, w).drop(w & 1);
         }
         estimate(prefix, walked.size());
         for (int j = 0; j < 3; ++j) {
             int best = -1;
             size_t best_size = 0;
             for (int w = 0; w < ways; ++w) {
-                if (!alive[j][w]) continue;
-                const size_t size = est[j][w].finish().size() + est_raw[j][w].finish().size();
+                if (!sizer(j, w).alive(w & 1)) continue;
+                const size_t size = sizer(j, w).finishedBytes(w & 1);
                 if (best < 0 || size < best_size) {
                     best = w;
                     best_size = size;
@@ -957,9 +1122,13 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
             qnorm[2 * size_t(new_of[i])] = q[0];
             qnorm[2 * size_t(new_of[i]) + 1] = q[1];
         }
+        // Over the output triangles as the engine's corner table holds them (in integers the order of
+        // the sums does not matter).
         CodecArray<int64_t> sum(3 * vn, 0);
-        for (size_t t = 0; t + 2 < triangles.size(); t += 3) {
-            const uint32_t* f = &triangles[t];
+        for (uint32_t t = 0; t < tc; ++t) {
+            const uint32_t* cv = &a.corner_vertex[3 * size_t(t)];
+            if (!isOutput(cv)) continue;
+            const uint32_t f[3] = {final_of[cv[0]], final_of[cv[1]], final_of[cv[2]]};
             const int32_t* p0 = &qpos_final[3 * size_t(f[0])];
             const int32_t* p1 = &qpos_final[3 * size_t(f[1])];
             const int32_t* p2 = &qpos_final[3 * size_t(f[2])];
