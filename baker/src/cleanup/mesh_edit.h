@@ -179,7 +179,10 @@ VertexAdjacency buildVertexAdjacency(const Mesh& mesh);
 std::vector<uint8_t> boundaryVertices(const Mesh& mesh, const EdgeTable& table);
 
 /// The passes as repairMesh runs them: the public functions with storage shared between passes.
-ManifoldReport makeManifold(Mesh& mesh, const ManifoldOptions& options, Scratch& scratch);
+/// whole_mesh_recheck: after the first split, find over-used edges and re-split with whole-mesh edge
+/// tables, as the `remove` mode always does (tests compare it with the local re-check of `cut`).
+ManifoldReport makeManifold(Mesh& mesh, const ManifoldOptions& options, Scratch& scratch,
+                            bool whole_mesh_recheck = false);
 OrientReport orientFaces(Mesh& mesh, const OrientOptions& options, Scratch& scratch);
 HoleFillReport fillHoles(Mesh& mesh, const HoleFillOptions& options, Scratch& scratch);
 
