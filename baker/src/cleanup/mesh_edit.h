@@ -3,8 +3,10 @@
 // vertex removal that keeps every attribute stream and sub-mesh range in step, vertex duplication,
 // boundary-loop walking. Not part of the public surface.
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "lodbake/cleanup/passes.h"
@@ -12,6 +14,7 @@
 #include "lodbake/cleanup/validate.h"
 #include "lodbake/core/mesh.h"
 #include "core/large_array.h"
+#include "core/parallel.h"
 
 namespace lodbake {
 namespace cleanup_detail {
@@ -149,6 +152,31 @@ template <class KeyFn> std::vector<uint32_t> lowestEqualKey(uint32_t n, KeyFn ke
     return rep;
 }
 
+/// Sorts `v` ascending when no two of its elements compare equal (so the sorted order is unique):
+/// fixed chunks of `chunk` elements are sorted in parallel, then merged pairwise in rounds, each
+/// round's merges in parallel. The chunks depend on the size alone, and the result is the one sorted
+/// order, whatever the schedule.
+template <class T> void sortDistinct(std::vector<T>& v, size_t chunk = size_t(1) << 16) {
+    const size_t n = v.size();
+    if (n <= chunk) {
+        std::sort(v.begin(), v.end());
+        return;
+    }
+    bool ok = parallelForChunks(n, chunk, [&](size_t, size_t first, size_t last) {
+        std::sort(v.begin() + first, v.begin() + last);
+    }).ok();
+    std::vector<T> merged(ok ? n : 0);
+    for (size_t width = chunk; ok && width < n; width *= 2) {
+        ok = parallelForChunks(n, 2 * width, [&](size_t, size_t first, size_t last) {
+            const size_t mid = std::min(first + width, last);
+            std::merge(v.begin() + first, v.begin() + mid, v.begin() + mid, v.begin() + last, merged.begin() + first);
+        }).ok();
+        if (ok) v.swap(merged);
+    }
+    // A worker ran out of memory: `v` is still a permutation of the input; sort it on this thread.
+    if (!ok) std::sort(v.begin(), v.end());
+}
+
 /// Positions compare as floats (-0 equals +0; a NaN equals nothing). Hashing, linear time.
 std::vector<uint32_t> positionWeldMap(const Mesh& mesh);
 
@@ -159,9 +187,13 @@ std::vector<uint32_t> bitwiseWeldMap(const Mesh& mesh);
 /// vertexCount(); the caller may have replaced ids by their weld representatives) from its edge
 /// table. `distinct_vertex_count` is the vertex count to report (representatives only when
 /// welded). `components` (sized vertexCount(), fresh) comes back holding the face-connected
-/// components through shared ids, so callers can reuse it.
+/// components through shared ids, so callers can reuse it. The counts from the edge table and those
+/// from the faces run side by side; `beside` (if set) runs after the latter, so independent work
+/// of the caller overlaps the edge half. It may run twice (a failed parallel run is redone on one
+/// thread), so it must assign its results, not add to them.
 TopologyStats topologyFromTable(const Mesh& mesh, const std::vector<uint32_t>& indices,
-                                uint64_t distinct_vertex_count, const EdgeTable& table, UnionFind& components);
+                                uint64_t distinct_vertex_count, const EdgeTable& table, UnionFind& components,
+                                const std::function<void()>& beside = {});
 
 /// Per corner: 1 when its half-edge is a boundary edge lying on an attribute seam, that is, another
 /// boundary edge has the same two positions and the vertices there differ in some attribute (UV,
@@ -187,8 +219,10 @@ OrientReport orientFaces(Mesh& mesh, const OrientOptions& options, Scratch& scra
 HoleFillReport fillHoles(Mesh& mesh, const HoleFillOptions& options, Scratch& scratch);
 
 /// validate() that also hands back the edge table it built (of the welded ids when
-/// options.weld_by_position), for callers that go on to look at the same mesh.
-ValidationReport validateWithTable(const Mesh& mesh, const ValidateOptions& options, EdgeTable* table_out);
+/// options.weld_by_position), for callers that go on to look at the same mesh. `beside`: independent
+/// work of the caller, run beside the topology counts (see topologyFromTable).
+ValidationReport validateWithTable(const Mesh& mesh, const ValidateOptions& options, EdgeTable* table_out,
+                                   const std::function<void()>& beside = {});
 
 } // namespace cleanup_detail
 } // namespace lodbake

@@ -162,13 +162,16 @@ Result<RepairReport> repairMesh(Mesh& mesh, const RepairOptions& options, const 
     // The edge table of the final mesh, built once for `after` and reused for the open rims below.
     cleanup_detail::EdgeTable& table = scratch.table;
     bool have_table = false;
+    // The weld map of the final mesh, for the seam checks below: built beside `after`'s counts.
+    std::vector<uint32_t> weld;
+    auto weldMap = [&] { weld = cleanup_detail::positionWeldMap(mesh); };
     if (same_faces && have_before) {
         report.after = before;
+        weldMap();
     } else {
         have_table = true;
-        report.after = cleanup_detail::validateWithTable(mesh, {}, &table);
+        report.after = cleanup_detail::validateWithTable(mesh, {}, &table, weldMap);
     }
-    const std::vector<uint32_t> weld = cleanup_detail::positionWeldMap(mesh);
     const bool shared = hasSharedPositions(weld);
     // The welded report is information only (`unresolved` takes rims and components from
     // openRimsAndSurfaces below), so callers that need just `unresolved` skip that validate() pass.

@@ -46,7 +46,8 @@ WeldReport weldVertices(Mesh& mesh, const WeldOptions& options) {
     std::vector<uint32_t> target(n); // representative (lowest index) of each vertex
     for (uint32_t v = 0; v < n; ++v) target[v] = v;
 
-    const double tol = options.tolerance_rel > 0 ? options.tolerance_rel * computeBounds(mesh).diagonal() : 0.0;
+    const Aabb box = options.tolerance_rel > 0 ? computeBounds(mesh) : Aabb();
+    const double tol = options.tolerance_rel > 0 ? options.tolerance_rel * box.diagonal() : 0.0;
     if (tol <= 0.0) {
         std::vector<uint32_t> order(n);
         for (uint32_t v = 0; v < n; ++v) order[v] = v;
@@ -88,7 +89,6 @@ WeldReport weldVertices(Mesh& mesh, const WeldOptions& options) {
         // A parallel pre-pass finds the vertices with any neighbour in range; only those take part in
         // the sequential index-order rule (join the lowest earlier representative in range, else
         // become one), so clean input costs one sort and a read-only parallel scan.
-        const Aabb box = computeBounds(mesh);
         const double inv = 1.0 / tol;
         using Cell = std::array<int64_t, 3>;
         std::vector<std::pair<Cell, uint32_t>> cells; // (cell, vertex), finite vertices only
@@ -102,7 +102,7 @@ WeldReport weldVertices(Mesh& mesh, const WeldOptions& options) {
             };
             cells.push_back({Cell{cell(p.x, box.min.x), cell(p.y, box.min.y), cell(p.z, box.min.z)}, v.value});
         }
-        std::sort(cells.begin(), cells.end());
+        sortDistinct(cells); // (cell, vertex): no two equal
         std::vector<uint32_t> cell_index(n, kNone); // vertex -> its slot in `cells`
         for (uint32_t i = 0; i < cells.size(); ++i) cell_index[cells[i].second] = i;
         const double tol2 = tol * tol;

@@ -450,6 +450,26 @@ TEST(CleanupInternalsTest, ManifoldLeavesNoOverusedEdge) {
     EXPECT_GT(overused_inputs, 100); // the inputs do exercise the pass
 }
 
+TEST(CleanupInternalsTest, SortDistinctMatchesStdSort) {
+    // Small chunks so that sizes around chunk and merge boundaries (odd chunk counts, a short last
+    // chunk) are covered, at several thread counts.
+    for (size_t threads : {size_t(1), size_t(2), size_t(4)}) {
+        ScopedThreadLimit limit(threads);
+        for (uint32_t seed = 0; seed < 60; ++seed) {
+            std::mt19937 rng(seed);
+            const size_t count = rng() % 400;
+            std::vector<std::pair<std::array<int64_t, 3>, uint32_t>> v(count);
+            for (uint32_t i = 0; i < count; ++i)
+                v[i] = {{int64_t(rng() % 5) - 2, int64_t(rng() % 3), int64_t(rng() % 7)}, i};
+            std::shuffle(v.begin(), v.end(), rng);
+            auto expected = v;
+            std::sort(expected.begin(), expected.end());
+            sortDistinct(v, 1 + seed % 37);
+            EXPECT_EQ(v, expected) << seed;
+        }
+    }
+}
+
 TEST(CleanupInternalsTest, ManifoldLocalRecheckMatchesWholeMesh) {
     // The cut mode re-checks only the edges that can still be over-used and re-splits only the
     // vertices of removed faces; the whole-mesh re-check (edge tables of the whole mesh, every
