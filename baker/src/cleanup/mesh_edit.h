@@ -3,7 +3,6 @@
 // vertex removal that keeps every attribute stream and sub-mesh range in step, vertex duplication,
 // boundary-loop walking. Not part of the public surface.
 
-#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <functional>
@@ -14,7 +13,6 @@
 #include "lodbake/cleanup/validate.h"
 #include "lodbake/core/mesh.h"
 #include "core/large_array.h"
-#include "core/parallel.h"
 
 namespace lodbake {
 namespace cleanup_detail {
@@ -150,31 +148,6 @@ template <class KeyFn> std::vector<uint32_t> lowestEqualKey(uint32_t n, KeyFn ke
         }
     }
     return rep;
-}
-
-/// Sorts `v` ascending when no two of its elements compare equal (so the sorted order is unique):
-/// fixed chunks of `chunk` elements are sorted in parallel, then merged pairwise in rounds, each
-/// round's merges in parallel. The chunks depend on the size alone, and the result is the one sorted
-/// order, whatever the schedule.
-template <class T> void sortDistinct(std::vector<T>& v, size_t chunk = size_t(1) << 16) {
-    const size_t n = v.size();
-    if (n <= chunk) {
-        std::sort(v.begin(), v.end());
-        return;
-    }
-    bool ok = parallelForChunks(n, chunk, [&](size_t, size_t first, size_t last) {
-        std::sort(v.begin() + first, v.begin() + last);
-    }).ok();
-    std::vector<T> merged(ok ? n : 0);
-    for (size_t width = chunk; ok && width < n; width *= 2) {
-        ok = parallelForChunks(n, 2 * width, [&](size_t, size_t first, size_t last) {
-            const size_t mid = std::min(first + width, last);
-            std::merge(v.begin() + first, v.begin() + mid, v.begin() + mid, v.begin() + last, merged.begin() + first);
-        }).ok();
-        if (ok) v.swap(merged);
-    }
-    // A worker ran out of memory: `v` is still a permutation of the input; sort it on this thread.
-    if (!ok) std::sort(v.begin(), v.end());
 }
 
 /// Positions compare as floats (-0 equals +0; a NaN equals nothing). Hashing, linear time.

@@ -102,7 +102,7 @@ WeldReport weldVertices(Mesh& mesh, const WeldOptions& options) {
             };
             cells.push_back({Cell{cell(p.x, box.min.x), cell(p.y, box.min.y), cell(p.z, box.min.z)}, v.value});
         }
-        sortDistinct(cells); // (cell, vertex): no two equal
+        std::sort(cells.begin(), cells.end());
         std::vector<uint32_t> cell_index(n, kNone); // vertex -> its slot in `cells`
         for (uint32_t i = 0; i < cells.size(); ++i) cell_index[cells[i].second] = i;
         const double tol2 = tol * tol;

@@ -412,8 +412,19 @@ TEST(CleanupInternalsTest, ValidateMatchesSeparatePasses) {
 }
 
 TEST(CleanupInternalsTest, DuplicateFacesKeepTheEarliest) {
-    for (uint32_t seed = 0; seed < 100; ++seed) {
+    for (uint32_t seed = 0; seed < 130; ++seed) {
         Mesh m = randomMesh(seed, false);
+        if (seed >= 100) {
+            // A wide fan (over 16 faces grouped at vertex 0) with copies of some of its faces.
+            m = wideFan(20 + seed % 60);
+            std::mt19937 rng(seed);
+            const size_t faces = m.faceCount();
+            for (size_t i = 0; i < faces; ++i) {
+                const size_t g = rng() % faces;
+                const uint32_t a = m.indices[3 * g], b = m.indices[3 * g + 1], c = m.indices[3 * g + 2];
+                if (rng() % 3 == 0) m.indices.insert(m.indices.end(), {c, b, a});
+            }
+        }
         // Expected: of the faces that pass the other tests, the first of each vertex set stays.
         std::vector<std::array<uint32_t, 3>> expected;
         std::vector<std::array<uint32_t, 3>> seen;
@@ -448,26 +459,6 @@ TEST(CleanupInternalsTest, ManifoldLeavesNoOverusedEdge) {
         EXPECT_EQ(computeTopologyStats(m).non_manifold_edge_count, 0u) << seed;
     }
     EXPECT_GT(overused_inputs, 100); // the inputs do exercise the pass
-}
-
-TEST(CleanupInternalsTest, SortDistinctMatchesStdSort) {
-    // Small chunks so that sizes around chunk and merge boundaries (odd chunk counts, a short last
-    // chunk) are covered, at several thread counts.
-    for (size_t threads : {size_t(1), size_t(2), size_t(4)}) {
-        ScopedThreadLimit limit(threads);
-        for (uint32_t seed = 0; seed < 60; ++seed) {
-            std::mt19937 rng(seed);
-            const size_t count = rng() % 400;
-            std::vector<std::pair<std::array<int64_t, 3>, uint32_t>> v(count);
-            for (uint32_t i = 0; i < count; ++i)
-                v[i] = {{int64_t(rng() % 5) - 2, int64_t(rng() % 3), int64_t(rng() % 7)}, i};
-            std::shuffle(v.begin(), v.end(), rng);
-            auto expected = v;
-            std::sort(expected.begin(), expected.end());
-            sortDistinct(v, 1 + seed % 37);
-            EXPECT_EQ(v, expected) << seed;
-        }
-    }
 }
 
 TEST(CleanupInternalsTest, ManifoldLocalRecheckMatchesWholeMesh) {
