@@ -173,14 +173,17 @@ ManifoldReport cleanup_detail::makeManifold(Mesh& mesh, const ManifoldOptions& o
     }
     EdgeTable& table = scratch.table;
     buildEdgeTable(mesh.indices, mesh.vertexCount(), table);
+    // In the cut mode no face is removed before the split, so the split reads the 2-use edges from
+    // the table itself and `joins` holds only the pairs chosen on over-used edges (an array of
+    // every edge's pair costs fresh pages); the remove mode lists every join.
+    const bool joins_from_table = options.edge_mode == NonManifoldEdgeMode::Cut;
     std::vector<CornerPair> joins;
-    joins.reserve(table.edgeCount());
     std::vector<uint32_t> unpaired;
     for (uint32_t e = 0; e < table.edgeCount(); ++e) {
         const uint32_t k = table.uses(e);
         const uint32_t* c = &table.corners[table.begin[e]];
         if (k == 2) {
-            joins.push_back({c[0], c[1]});
+            if (!joins_from_table) joins.push_back({c[0], c[1]});
         } else if (k > 2) {
             ++r.non_manifold_edges;
             const size_t before = unpaired.size();
@@ -220,7 +223,7 @@ ManifoldReport cleanup_detail::makeManifold(Mesh& mesh, const ManifoldOptions& o
     }
     const size_t vertices_before_split = mesh.vertexCount();
     size_t added = 0;
-    r.vertices_split = splitVerticesByFans(mesh, joins, added);
+    r.vertices_split = splitVerticesByFans(mesh, joins, added, joins_from_table ? &table : nullptr);
     r.vertices_added = added;
     // A cut face still joined to the kept pair around both ends of the edge keeps using it (splitting
     // vertices cannot separate it): those faces are removed, and the vertices of removed faces split

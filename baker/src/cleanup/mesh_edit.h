@@ -107,7 +107,9 @@ struct CornerPair {
 /// Groups the corners around each vertex into fans: corners are joined across every pair in
 /// `joins`. A vertex whose corners form k > 1 fans is split into k vertices (the fan holding the
 /// lowest corner keeps the index). Returns the number of vertices split; `added` gets the new count.
-size_t splitVerticesByFans(Mesh& mesh, const std::vector<CornerPair>& joins, size_t& added);
+/// With `table` (an edge table of `mesh` as it is), corners are also joined across its every 2-use edge.
+size_t splitVerticesByFans(Mesh& mesh, const std::vector<CornerPair>& joins, size_t& added,
+                           const EdgeTable* table = nullptr);
 
 /// Directed boundary walk over half-edges used by exactly one face. Each result is a vertex
 /// sequence v0..vn-1 whose faces traverse vi -> vi+1; `closed` tells whether the walk got back to v0.

@@ -461,6 +461,35 @@ TEST(CleanupInternalsTest, ManifoldLeavesNoOverusedEdge) {
     EXPECT_GT(overused_inputs, 100); // the inputs do exercise the pass
 }
 
+TEST(CleanupInternalsTest, SplitJoinsFromTableMatchListedJoins) {
+    // The 2-use edges read from the table, or listed as joins: the same split.
+    int split = 0;
+    for (uint32_t seed = 0; seed < 300; ++seed) {
+        Mesh listed = randomMesh(seed, false);
+        removeDegenerateFaces(listed);
+        Mesh from_table = listed;
+        const EdgeTable table = buildEdgeTable(listed);
+        std::vector<CornerPair> joins, extra;
+        for (uint32_t e = 0; e < table.edgeCount(); ++e) {
+            const uint32_t* c = &table.corners[table.begin[e]];
+            if (table.uses(e) == 2) joins.push_back({c[0], c[1]});
+            if (table.uses(e) == 4) { // some pairs beside the table, as the manifold pass adds them
+                joins.push_back({c[0], c[3]});
+                extra.push_back({c[0], c[3]});
+            }
+        }
+        size_t added_listed = 0, added_table = 0;
+        const size_t a = splitVerticesByFans(listed, joins, added_listed);
+        const size_t b = splitVerticesByFans(from_table, extra, added_table, &table);
+        SCOPED_TRACE(seed);
+        EXPECT_EQ(a, b);
+        EXPECT_EQ(added_listed, added_table);
+        EXPECT_EQ(hashMesh(listed), hashMesh(from_table));
+        split += a != 0;
+    }
+    EXPECT_GT(split, 50);
+}
+
 TEST(CleanupInternalsTest, ManifoldLocalRecheckMatchesWholeMesh) {
     // The cut mode re-checks only the edges that can still be over-used and re-splits only the
     // vertices of removed faces; the whole-mesh re-check (edge tables of the whole mesh, every
