@@ -8,6 +8,7 @@
 #include <functional>
 #include <vector>
 
+#include "lodbake/cleanup/normals.h"
 #include "lodbake/cleanup/passes.h"
 #include "lodbake/cleanup/topology.h"
 #include "lodbake/cleanup/validate.h"
@@ -192,6 +193,9 @@ ManifoldReport makeManifold(Mesh& mesh, const ManifoldOptions& options, Scratch&
                             bool whole_mesh_recheck = false);
 OrientReport orientFaces(Mesh& mesh, const OrientOptions& options, Scratch& scratch);
 HoleFillReport fillHoles(Mesh& mesh, const HoleFillOptions& options, Scratch& scratch);
+/// computeNormals() that hands back the weld map it used (positionWeldMap of the mesh it was given;
+/// the pass moves no position, so when it adds no vertex this is also the result's weld map).
+NormalsReport computeNormals(Mesh& mesh, const NormalOptions& options, std::vector<uint32_t>& weld);
 
 /// validate() that also hands back the edge table it built (of the welded ids when
 /// options.weld_by_position), for callers that go on to look at the same mesh. `beside`: independent

@@ -19,11 +19,16 @@ PassCounters NormalsReport::counters() const {
 }
 
 NormalsReport computeNormals(Mesh& mesh, const NormalOptions& options) {
+    std::vector<uint32_t> weld;
+    return cleanup_detail::computeNormals(mesh, options, weld);
+}
+
+NormalsReport cleanup_detail::computeNormals(Mesh& mesh, const NormalOptions& options, std::vector<uint32_t>& weld) {
     NormalsReport r;
     const size_t n = mesh.vertexCount();
     const size_t face_count = mesh.faceCount();
     // Welded ids: vertices with equal positions share topology (UV seams do not break fans).
-    const std::vector<uint32_t> weld = positionWeldMap(mesh);
+    weld = positionWeldMap(mesh);
 
     // Face normals and per-corner weights are independent per face: computed in parallel into
     // per-face/per-corner slots; accumulation below stays sequential in corner order, so the sums do

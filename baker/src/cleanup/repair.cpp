@@ -154,8 +154,12 @@ Result<RepairReport> repairMesh(Mesh& mesh, const RepairOptions& options, const 
                            std::to_string(d.roughness_after_deg) + " degrees");
         changed(true, false); // positions move: zero-area faces may appear or vanish
     }
+    // The final mesh's weld map, when the normals pass (the last one) leaves one behind.
+    std::vector<uint32_t> final_weld;
+    bool have_final_weld = false;
     if (options.normals) {
-        const NormalsReport n = computeNormals(mesh, options.normal_options);
+        const NormalsReport n = cleanup_detail::computeNormals(mesh, options.normal_options, final_weld);
+        have_final_weld = n.vertices_added == 0; // no vertex added: positions and ids as the map saw them
         changed(n.vertices_added != 0, n.vertices_added != 0);
         add("normals", n.counters());
     }
@@ -163,8 +167,10 @@ Result<RepairReport> repairMesh(Mesh& mesh, const RepairOptions& options, const 
     cleanup_detail::EdgeTable& table = scratch.table;
     bool have_table = false;
     // The weld map of the final mesh, for the seam checks below: built beside `after`'s counts.
-    std::vector<uint32_t> weld;
-    auto weldMap = [&] { weld = cleanup_detail::positionWeldMap(mesh); };
+    std::vector<uint32_t> weld = std::move(final_weld);
+    auto weldMap = [&] {
+        if (!have_final_weld) weld = cleanup_detail::positionWeldMap(mesh);
+    };
     if (same_faces && have_before) {
         report.after = before;
         weldMap();
