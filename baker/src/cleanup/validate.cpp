@@ -65,7 +65,7 @@ ValidationReport validateWithTable(const Mesh& input, const ValidateOptions& opt
     auto loops = [&] {
         r.boundary_loop_lengths.clear();
         r.open_boundary_chains = 0;
-    for (const BoundaryLoop& loop : findBoundaryLoops(*indices, table)) {
+        for (const BoundaryLoop& loop : findBoundaryLoops(*indices, table)) {
             r.boundary_loop_lengths.push_back(uint32_t(loop.vertices.size()));
             r.open_boundary_chains += !loop.closed;
         }
