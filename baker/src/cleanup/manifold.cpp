@@ -56,30 +56,104 @@ void pairEdge(const Mesh& m, const uint32_t* corners, uint32_t k, std::vector<Co
         if (!taken[i]) unpaired.push_back(corners[i]);
 }
 
-// Whether some edge of `mesh` may have more than two faces, after splitVerticesByFans turned the
-// mesh `table` was built from (no repeated-index faces, none removed since) into `mesh`. The split
-// moved corners only to new vertices (ids >= vertices_before), so an edge between two older
-// vertices keeps a subset of its half-edges: only the edges over-used in `table` and the edges
-// touching a new vertex can be over-used now. Those are counted exactly.
-bool mayHaveOverusedEdge(const Mesh& mesh, const EdgeTable& table, size_t vertices_before) {
-    std::vector<uint64_t> overused;
-    for (uint32_t e = 0; e < table.edgeCount(); ++e)
-        if (table.uses(e) > 2) overused.push_back(table.keys[e]); // ascending, as the table's keys
-    std::vector<uint64_t> candidates;
+// The over-used edges of `mesh` (three or more faces; faces with a repeated index have no edges),
+// ascending by key, each with its corners ascending: what an edge table of `mesh` lists for them. It
+// is only valid when `mesh` came from a mesh whose over-used edges had the keys `overused` (ascending)
+// by removing faces and splitting vertices into new ids >= `new_from`, without a repeated-index face:
+// removing faces only takes half-edges away, and a split moves corners only to new vertices, so an
+// edge between two older vertices keeps a subset of its half-edges. Only the half-edges of the
+// edges over-used before and of the edges touching a new vertex are gathered and counted.
+struct OverusedEdge {
+    uint64_t key;
+    std::vector<uint32_t> corners;
+};
+std::vector<OverusedEdge> overusedEdges(const Mesh& mesh, const std::vector<uint64_t>& overused, size_t new_from) {
+    std::vector<std::pair<uint64_t, uint32_t>> candidates; // (key, corner)
     for (size_t f = 0; f < mesh.faceCount(); ++f) {
+        const uint32_t* t = &mesh.indices[3 * f];
+        if (std::max({t[0], t[1], t[2]}) < new_from && overused.empty()) continue;
         if (hasRepeatedIndex(mesh, f)) continue;
         for (uint32_t k = 0; k < 3; ++k) {
             const uint32_t c = uint32_t(3 * f + k);
             const uint32_t a = halfStart(mesh, c), b = halfEnd(mesh, c);
             const uint64_t key = edgeKey(a, b);
-            if (std::max(a, b) >= vertices_before || std::binary_search(overused.begin(), overused.end(), key))
-                candidates.push_back(key);
+            if (std::max(a, b) >= new_from || std::binary_search(overused.begin(), overused.end(), key))
+                candidates.push_back({key, c});
         }
     }
     std::sort(candidates.begin(), candidates.end());
-    for (size_t i = 2; i < candidates.size(); ++i)
-        if (candidates[i] == candidates[i - 2]) return true;
-    return false;
+    std::vector<OverusedEdge> out;
+    for (size_t i = 0; i < candidates.size();) {
+        size_t j = i;
+        while (j < candidates.size() && candidates[j].first == candidates[i].first) ++j;
+        if (j - i > 2) {
+            OverusedEdge e{candidates[i].first, {}};
+            for (size_t x = i; x < j; ++x) e.corners.push_back(candidates[x].second);
+            out.push_back(std::move(e));
+        }
+        i = j;
+    }
+    return out;
+}
+
+// splitVerticesByFans over the 2-use edges of `mesh` (no repeated-index face), when only the
+// vertices marked in `candidate` can have more than one fan: the same vertices split, the same new
+// ids in the same order (one per fan other than a vertex's first, in ascending order of the fan's
+// lowest corner), the same corners rewritten. Only the faces touching a candidate are looked at: every
+// edge at a candidate lies on them, so their table gives those edges' exact uses, hence every join
+// between corners of a candidate.
+size_t splitCandidateVerticesByFans(Mesh& mesh, const std::vector<uint8_t>& candidate, size_t& added) {
+    added = 0;
+    std::vector<uint32_t> local_faces;
+    std::vector<uint32_t> local_indices;
+    for (size_t f = 0; f < mesh.faceCount(); ++f) {
+        const uint32_t* t = &mesh.indices[3 * f];
+        if (!candidate[t[0]] && !candidate[t[1]] && !candidate[t[2]]) continue;
+        local_faces.push_back(uint32_t(f));
+        local_indices.insert(local_indices.end(), t, t + 3);
+    }
+    // Local corner 3i+k is corner 3*local_faces[i]+k: ascending in both numberings, so the lowest
+    // corner of a fan (its union-find root) is the same in either.
+    const EdgeTable table = buildEdgeTable(local_indices, mesh.vertexCount());
+    auto next = [](uint32_t c) { return c % 3 == 2 ? c - 2 : c + 1; };
+    UnionFind fans(local_indices.size());
+    for (uint32_t e = 0; e < table.edgeCount(); ++e) {
+        if (table.uses(e) != 2) continue;
+        const uint64_t key = table.keys[e];
+        // An edge between two non-candidates may have faces outside the local set: its count is not
+        // exact, and it joins no corner of a candidate anyway.
+        if (!candidate[uint32_t(key >> 32)] && !candidate[uint32_t(key)]) continue;
+        const uint32_t a = table.corners[table.begin[e]], b = table.corners[table.begin[e] + 1];
+        if (local_indices[a] == local_indices[b]) {
+            fans.unite(a, b);
+            fans.unite(next(a), next(b));
+        } else {
+            fans.unite(a, next(b));
+            fans.unite(next(a), b);
+        }
+    }
+    // Fans other than the first of their vertex, by lowest corner: new ids in that order.
+    std::vector<uint32_t> first_root(mesh.vertexCount(), kNone);
+    std::vector<uint32_t> root_vertex(local_indices.size(), kNone);
+    std::vector<uint8_t> split(mesh.vertexCount(), 0);
+    size_t split_count = 0;
+    for (uint32_t c = 0; c < local_indices.size(); ++c) {
+        const uint32_t v = local_indices[c];
+        if (!candidate[v]) continue;
+        const uint32_t r = fans.find(c);
+        if (first_root[v] == kNone) first_root[v] = r;
+        if (r == first_root[v]) continue;
+        if (root_vertex[r] == kNone) {
+            root_vertex[r] = duplicateVertex(mesh, v);
+            ++added;
+            if (!split[v]) {
+                split[v] = 1;
+                ++split_count;
+            }
+        }
+        mesh.indices[3 * local_faces[c / 3] + c % 3] = root_vertex[r];
+    }
+    return split_count;
 }
 
 } // namespace
@@ -89,7 +163,8 @@ ManifoldReport makeManifold(Mesh& mesh, const ManifoldOptions& options) {
     return makeManifold(mesh, options, scratch);
 }
 
-ManifoldReport cleanup_detail::makeManifold(Mesh& mesh, const ManifoldOptions& options, Scratch& scratch) {
+ManifoldReport cleanup_detail::makeManifold(Mesh& mesh, const ManifoldOptions& options, Scratch& scratch,
+                                            bool whole_mesh_recheck) {
     ManifoldReport r;
     if (countRepeatedIndexFaces(mesh)) {
         std::vector<uint8_t> keep(mesh.faceCount(), 1);
@@ -98,14 +173,17 @@ ManifoldReport cleanup_detail::makeManifold(Mesh& mesh, const ManifoldOptions& o
     }
     EdgeTable& table = scratch.table;
     buildEdgeTable(mesh.indices, mesh.vertexCount(), table);
+    // In the cut mode no face is removed before the split, so the split reads the 2-use edges from
+    // the table itself and `joins` holds only the pairs chosen on over-used edges (an array of
+    // every edge's pair costs fresh pages); the remove mode lists every join.
+    const bool joins_from_table = options.edge_mode == NonManifoldEdgeMode::Cut;
     std::vector<CornerPair> joins;
-    joins.reserve(table.edgeCount());
     std::vector<uint32_t> unpaired;
     for (uint32_t e = 0; e < table.edgeCount(); ++e) {
         const uint32_t k = table.uses(e);
         const uint32_t* c = &table.corners[table.begin[e]];
         if (k == 2) {
-            joins.push_back({c[0], c[1]});
+            if (!joins_from_table) joins.push_back({c[0], c[1]});
         } else if (k > 2) {
             ++r.non_manifold_edges;
             const size_t before = unpaired.size();
@@ -145,32 +223,60 @@ ManifoldReport cleanup_detail::makeManifold(Mesh& mesh, const ManifoldOptions& o
     }
     const size_t vertices_before_split = mesh.vertexCount();
     size_t added = 0;
-    r.vertices_split = splitVerticesByFans(mesh, joins, added);
+    r.vertices_split = splitVerticesByFans(mesh, joins, added, joins_from_table ? &table : nullptr);
     r.vertices_added = added;
     // A cut face still joined to the kept pair around both ends of the edge keeps using it (splitting
-    // vertices cannot separate it): those faces are removed. Bounded; each round removes faces.
-    // The first round's table is skipped when it would find nothing: see mayHaveOverusedEdge.
-    const bool check = options.edge_mode != NonManifoldEdgeMode::Cut ||
-                       mayHaveOverusedEdge(mesh, table, vertices_before_split);
-    for (int round = 0; round < 8 && check; ++round) {
-        buildEdgeTable(mesh.indices, mesh.vertexCount(), table);
-        std::vector<uint32_t> extra;
-        for (uint32_t e = 0; e < table.edgeCount(); ++e) {
-            const uint32_t k = table.uses(e);
-            if (k <= 2) continue;
-            // Keep only the best-fitting pair on this edge.
-            std::vector<CornerPair> pairs;
-            pairEdge(mesh, &table.corners[table.begin[e]], std::min<uint32_t>(k, 64), pairs, extra);
-            for (size_t i = 1; i < pairs.size(); ++i) extra.insert(extra.end(), {pairs[i].a, pairs[i].b});
-            for (uint32_t i = 64; i < k; ++i) extra.push_back(table.corners[table.begin[e] + i]);
-        }
-        if (extra.empty()) break;
+    // vertices cannot separate it): those faces are removed, and the vertices of removed faces split
+    // again across the remaining pairs (removing faces can pinch a vertex again). Bounded; each
+    // round removes faces.
+    auto removeExtra = [&](const std::vector<uint32_t>& extra) {
         std::vector<uint8_t> keep(mesh.faceCount(), 1);
         for (uint32_t c : extra) keep[c / 3] = 0;
         const size_t removed = removeFaces(mesh, keep);
         r.faces_removed += removed;
         r.faces_cut -= std::min<uint64_t>(r.faces_cut, removed);
-        // Removing faces can pinch a vertex again: split once more across the remaining pairs.
+    };
+    // Pairs the over-used edge with corners c[0..k) again, keeping only the best-fitting pair.
+    auto extraOf = [&](const uint32_t* c, uint32_t k, std::vector<uint32_t>& extra) {
+        std::vector<CornerPair> pairs;
+        pairEdge(mesh, c, std::min<uint32_t>(k, 64), pairs, extra);
+        for (size_t i = 1; i < pairs.size(); ++i) extra.insert(extra.end(), {pairs[i].a, pairs[i].b});
+        for (uint32_t i = 64; i < k; ++i) extra.push_back(c[i]);
+    };
+    if (options.edge_mode == NonManifoldEdgeMode::Cut && !whole_mesh_recheck) {
+        // No whole-mesh table: the edges that can be over-used are found from the previous ones and
+        // the new vertices (overusedEdges), and only the vertices of removed faces can gain a fan,
+        // since every other vertex keeps its corners and its edges' uses, and each was one fan
+        // across joins that are all still 2-use edges.
+        std::vector<uint64_t> overused;
+        for (uint32_t e = 0; e < table.edgeCount(); ++e)
+            if (table.uses(e) > 2) overused.push_back(table.keys[e]); // ascending, as the table's keys
+        size_t new_from = vertices_before_split;
+        for (int round = 0; round < 8; ++round) {
+            const std::vector<OverusedEdge> edges = overusedEdges(mesh, overused, new_from);
+            std::vector<uint32_t> extra;
+            for (const OverusedEdge& e : edges) extraOf(e.corners.data(), uint32_t(e.corners.size()), extra);
+            if (extra.empty()) break;
+            std::vector<uint8_t> candidate(mesh.vertexCount(), 0);
+            for (uint32_t c : extra)
+                for (uint32_t k = 0; k < 3; ++k) candidate[mesh.indices[c / 3 * 3 + k]] = 1;
+            removeExtra(extra);
+            overused.clear();
+            for (const OverusedEdge& e : edges) overused.push_back(e.key);
+            new_from = mesh.vertexCount();
+            size_t more = 0;
+            r.vertices_split += splitCandidateVerticesByFans(mesh, candidate, more);
+            r.vertices_added += more;
+        }
+        return r;
+    }
+    for (int round = 0; round < 8; ++round) {
+        buildEdgeTable(mesh.indices, mesh.vertexCount(), table);
+        std::vector<uint32_t> extra;
+        for (uint32_t e = 0; e < table.edgeCount(); ++e)
+            if (table.uses(e) > 2) extraOf(&table.corners[table.begin[e]], table.uses(e), extra);
+        if (extra.empty()) break;
+        removeExtra(extra);
         buildEdgeTable(mesh.indices, mesh.vertexCount(), table);
         joins.clear();
         for (uint32_t e = 0; e < table.edgeCount(); ++e)

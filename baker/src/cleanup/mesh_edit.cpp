@@ -295,21 +295,26 @@ void UnionFind::unite(uint32_t a, uint32_t b) {
         parent_[a] = b;
 }
 
-size_t splitVerticesByFans(Mesh& mesh, const std::vector<CornerPair>& joins, size_t& added) {
+size_t splitVerticesByFans(Mesh& mesh, const std::vector<CornerPair>& joins, size_t& added, const EdgeTable* table) {
     added = 0;
     const size_t corner_count = mesh.indices.size();
     UnionFind fans(corner_count);
-    for (const CornerPair& p : joins) {
-        const uint32_t an = p.a % 3 == 2 ? p.a - 2 : p.a + 1;
-        const uint32_t bn = p.b % 3 == 2 ? p.b - 2 : p.b + 1;
-        if (mesh.indices[p.a] == mesh.indices[p.b]) { // same direction (orientation not yet consistent)
-            fans.unite(p.a, p.b);
+    // The sets (each rooted at its lowest corner) do not depend on the order of the unions.
+    auto join = [&](uint32_t a, uint32_t b) {
+        const uint32_t an = a % 3 == 2 ? a - 2 : a + 1;
+        const uint32_t bn = b % 3 == 2 ? b - 2 : b + 1;
+        if (mesh.indices[a] == mesh.indices[b]) { // same direction (orientation not yet consistent)
+            fans.unite(a, b);
             fans.unite(an, bn);
         } else {
-            fans.unite(p.a, bn);
-            fans.unite(an, p.b);
+            fans.unite(a, bn);
+            fans.unite(an, b);
         }
-    }
+    };
+    if (table)
+        for (uint32_t e = 0; e < table->edgeCount(); ++e)
+            if (table->uses(e) == 2) join(table->corners[table->begin[e]], table->corners[table->begin[e] + 1]);
+    for (const CornerPair& p : joins) join(p.a, p.b);
     // Corners are visited in ascending order, so a vertex's first fan is the one with its lowest corner.
     const size_t n = mesh.vertexCount();
     std::vector<uint32_t> first_root(n, kNone);

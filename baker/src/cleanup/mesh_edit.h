@@ -5,8 +5,10 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
+#include "lodbake/cleanup/normals.h"
 #include "lodbake/cleanup/passes.h"
 #include "lodbake/cleanup/topology.h"
 #include "lodbake/cleanup/validate.h"
@@ -106,7 +108,9 @@ struct CornerPair {
 /// Groups the corners around each vertex into fans: corners are joined across every pair in
 /// `joins`. A vertex whose corners form k > 1 fans is split into k vertices (the fan holding the
 /// lowest corner keeps the index). Returns the number of vertices split; `added` gets the new count.
-size_t splitVerticesByFans(Mesh& mesh, const std::vector<CornerPair>& joins, size_t& added);
+/// With `table` (an edge table of `mesh` as it is), corners are also joined across its every 2-use edge.
+size_t splitVerticesByFans(Mesh& mesh, const std::vector<CornerPair>& joins, size_t& added,
+                           const EdgeTable* table = nullptr);
 
 /// Directed boundary walk over half-edges used by exactly one face. Each result is a vertex
 /// sequence v0..vn-1 whose faces traverse vi -> vi+1; `closed` tells whether the walk got back to v0.
@@ -159,9 +163,13 @@ std::vector<uint32_t> bitwiseWeldMap(const Mesh& mesh);
 /// vertexCount(); the caller may have replaced ids by their weld representatives) from its edge
 /// table. `distinct_vertex_count` is the vertex count to report (representatives only when
 /// welded). `components` (sized vertexCount(), fresh) comes back holding the face-connected
-/// components through shared ids, so callers can reuse it.
+/// components through shared ids, so callers can reuse it. The counts from the edge table and those
+/// from the faces run side by side; `beside` (if set) runs after the latter, so independent work
+/// of the caller overlaps the edge half. It may run twice (a failed parallel run is redone on one
+/// thread), so it must assign its results, not add to them.
 TopologyStats topologyFromTable(const Mesh& mesh, const std::vector<uint32_t>& indices,
-                                uint64_t distinct_vertex_count, const EdgeTable& table, UnionFind& components);
+                                uint64_t distinct_vertex_count, const EdgeTable& table, UnionFind& components,
+                                const std::function<void()>& beside = {});
 
 /// Per corner: 1 when its half-edge is a boundary edge lying on an attribute seam, that is, another
 /// boundary edge has the same two positions and the vertices there differ in some attribute (UV,
@@ -179,13 +187,21 @@ VertexAdjacency buildVertexAdjacency(const Mesh& mesh);
 std::vector<uint8_t> boundaryVertices(const Mesh& mesh, const EdgeTable& table);
 
 /// The passes as repairMesh runs them: the public functions with storage shared between passes.
-ManifoldReport makeManifold(Mesh& mesh, const ManifoldOptions& options, Scratch& scratch);
+/// whole_mesh_recheck: after the first split, find over-used edges and re-split with whole-mesh edge
+/// tables, as the `remove` mode always does (tests compare it with the local re-check of `cut`).
+ManifoldReport makeManifold(Mesh& mesh, const ManifoldOptions& options, Scratch& scratch,
+                            bool whole_mesh_recheck = false);
 OrientReport orientFaces(Mesh& mesh, const OrientOptions& options, Scratch& scratch);
 HoleFillReport fillHoles(Mesh& mesh, const HoleFillOptions& options, Scratch& scratch);
+/// computeNormals() that hands back the weld map it used (positionWeldMap of the mesh it was given;
+/// the pass moves no position, so when it adds no vertex this is also the result's weld map).
+NormalsReport computeNormals(Mesh& mesh, const NormalOptions& options, std::vector<uint32_t>& weld);
 
 /// validate() that also hands back the edge table it built (of the welded ids when
-/// options.weld_by_position), for callers that go on to look at the same mesh.
-ValidationReport validateWithTable(const Mesh& mesh, const ValidateOptions& options, EdgeTable* table_out);
+/// options.weld_by_position), for callers that go on to look at the same mesh. `beside`: independent
+/// work of the caller, run beside the topology counts (see topologyFromTable).
+ValidationReport validateWithTable(const Mesh& mesh, const ValidateOptions& options, EdgeTable* table_out,
+                                   const std::function<void()>& beside = {});
 
 } // namespace cleanup_detail
 } // namespace lodbake

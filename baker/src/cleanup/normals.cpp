@@ -19,26 +19,33 @@ PassCounters NormalsReport::counters() const {
 }
 
 NormalsReport computeNormals(Mesh& mesh, const NormalOptions& options) {
+    std::vector<uint32_t> weld;
+    return cleanup_detail::computeNormals(mesh, options, weld);
+}
+
+NormalsReport cleanup_detail::computeNormals(Mesh& mesh, const NormalOptions& options, std::vector<uint32_t>& weld) {
     NormalsReport r;
     const size_t n = mesh.vertexCount();
     const size_t face_count = mesh.faceCount();
     // Welded ids: vertices with equal positions share topology (UV seams do not break fans).
-    const std::vector<uint32_t> weld = positionWeldMap(mesh);
+    weld = positionWeldMap(mesh);
 
-    // Face normals and per-corner weights are independent per face: computed in
-    // parallel into per-face/per-corner slots; accumulation below stays sequential in corner order,
-    // so the sums do not depend on the schedule.
+    // Face normals and per-corner weights are independent per face: computed in parallel into
+    // per-face/per-corner slots; accumulation below stays sequential in corner order, so the sums do
+    // not depend on the schedule. faceWork(f, slot) fills slot `slot` with face f's values (area 0:
+    // the face adds nothing).
     // Tens of MB each on a scan: huge pages where the OS offers them (core/large_array.h).
-    detail::LargeArray<Vec3d> face_n(face_count);
-    detail::LargeArray<double> face_area(face_count, 0.0);
-    detail::LargeArray<double> corner_weight(mesh.indices.size(), 0.0);
-    auto faceWork = [&](size_t f) {
+    detail::LargeArray<Vec3d> face_n;
+    detail::LargeArray<double> face_area;
+    detail::LargeArray<double> corner_weight;
+    auto faceWork = [&](size_t f, size_t slot) {
+        face_area[slot] = 0.0;
         if (hasRepeatedIndex(mesh, f)) return;
         const Vec3d nn = faceNormal(mesh, f);
         const double l = length(nn);
         if (!(l > 0.0) || !std::isfinite(l)) return;
-        face_n[f] = nn / l;
-        face_area[f] = 0.5 * l;
+        face_n[slot] = nn / l;
+        face_area[slot] = 0.5 * l;
         for (int k = 0; k < 3; ++k) {
             const size_t c = 3 * f + k;
             double weight = 1.0;
@@ -48,12 +55,15 @@ NormalsReport computeNormals(Mesh& mesh, const NormalOptions& options) {
                 const Vec3d v = normalize(toDouble(mesh.positions[mesh.indices[3 * f + (k + 2) % 3]]) - o);
                 weight = std::acos(std::max(-1.0, std::min(1.0, dot(u, v))));
             }
-            if (options.weighting != NormalWeighting::Angle) weight *= face_area[f];
-            corner_weight[c] = weight;
+            if (options.weighting != NormalWeighting::Angle) weight *= face_area[slot];
+            corner_weight[3 * slot + k] = weight;
         }
     };
-    if (!parallelFor(face_count, 4096, faceWork).ok())
-        for (size_t f = 0; f < face_count; ++f) faceWork(f); // a worker ran out of memory: redo on this thread
+    // Faces [first, last) into slots 0.. in parallel (on this thread if a worker runs out of memory).
+    auto faceRange = [&](size_t first, size_t last) {
+        if (!parallelFor(last - first, 4096, [&](size_t i) { faceWork(first + i, i); }).ok())
+            for (size_t f = first; f < last; ++f) faceWork(f, f - first);
+    };
 
     auto unitOrUp = [](const Vec3d& sum) {
         const Vec3d nn = normalize(sum);
@@ -62,11 +72,24 @@ NormalsReport computeNormals(Mesh& mesh, const NormalOptions& options) {
     const bool split = options.crease_angle_deg < 180.0;
     if (!split) {
         // One smooth group per welded position: sums per welded id, corners in ascending order (the
-        // same order as the grouped case below), and no vertex is split.
+        // same order as the grouped case below), and no vertex is split. The faces go in fixed
+        // blocks whose slots are reused: the same sums in the same order, without arrays of the
+        // whole mesh (fresh pages are slow to fault in).
+        constexpr size_t kBlock = size_t(1) << 16;
+        const size_t block = std::min(face_count, kBlock);
+        face_n.resize(block);
+        face_area.resize(block);
+        corner_weight.resize(3 * block);
         detail::LargeArray<Vec3d> acc(n);
-        for (size_t f = 0; f < face_count; ++f) {
-            if (face_area[f] == 0.0) continue;
-            for (size_t c = 3 * f; c < 3 * f + 3; ++c) acc[weld[mesh.indices[c]]] += face_n[f] * corner_weight[c];
+        for (size_t first = 0; first < face_count; first += block) {
+            const size_t last = std::min(face_count, first + block);
+            faceRange(first, last);
+            for (size_t f = first; f < last; ++f) {
+                const size_t slot = f - first;
+                if (face_area[slot] == 0.0) continue;
+                for (size_t k = 0; k < 3; ++k)
+                    acc[weld[mesh.indices[3 * f + k]]] += face_n[slot] * corner_weight[3 * slot + k];
+            }
         }
         std::vector<uint8_t> referenced(n, 0);
         for (uint32_t v : mesh.indices) referenced[v] = 1;
@@ -76,6 +99,10 @@ NormalsReport computeNormals(Mesh& mesh, const NormalOptions& options) {
         return r;
     }
 
+    face_n.resize(face_count);
+    face_area.resize(face_count);
+    corner_weight.resize(mesh.indices.size());
+    faceRange(0, face_count);
     std::vector<uint32_t> welded(mesh.indices.size());
     for (size_t c = 0; c < mesh.indices.size(); ++c) welded[c] = weld[mesh.indices[c]];
     UnionFind groups(mesh.indices.size());

@@ -6,6 +6,7 @@
 #include <functional>
 #include <string>
 
+#include "core/parallel.h"
 #include "mesh_edit.h"
 
 namespace lodbake {
@@ -154,21 +155,52 @@ Result<RepairReport> repairMesh(Mesh& mesh, const RepairOptions& options, const 
                            std::to_string(d.roughness_after_deg) + " degrees");
         changed(true, false); // positions move: zero-area faces may appear or vanish
     }
-    if (options.normals) {
-        const NormalsReport n = computeNormals(mesh, options.normal_options);
-        changed(n.vertices_added != 0, n.vertices_added != 0);
-        add("normals", n.counters());
-    }
+    // The final mesh's weld map, when the normals pass (the last one) leaves one behind.
+    std::vector<uint32_t> final_weld;
+    bool have_final_weld = false;
     // The edge table of the final mesh, built once for `after` and reused for the open rims below.
     cleanup_detail::EdgeTable& table = scratch.table;
     bool have_table = false;
-    if (same_faces && have_before) {
+    // `after` reads only faces and positions. Without creases the normals pass moves no position and
+    // adds no vertex, so `after` is already the final mesh's and is computed beside that pass (each
+    // task writes only its own results).
+    const bool after_beside_normals = options.normals && !(options.normal_options.crease_angle_deg < 180.0) &&
+                                      !(same_faces && have_before);
+    if (options.normals) {
+        NormalsReport n;
+        if (after_beside_normals) {
+            auto task = [&](size_t i) {
+                if (i == 0)
+                    n = cleanup_detail::computeNormals(mesh, options.normal_options, final_weld);
+                else
+                    report.after = cleanup_detail::validateWithTable(mesh, {}, &table);
+            };
+            if (!parallelFor(2, 1, task).ok()) { // a worker ran out of memory: both again on this thread
+                task(0);
+                task(1);
+            }
+            have_table = true;
+        } else {
+            n = cleanup_detail::computeNormals(mesh, options.normal_options, final_weld);
+        }
+        have_final_weld = n.vertices_added == 0; // no vertex added: positions and ids as the map saw them
+        changed(n.vertices_added != 0, n.vertices_added != 0);
+        add("normals", n.counters());
+    }
+    // The weld map of the final mesh, for the seam checks below: built beside `after`'s counts.
+    std::vector<uint32_t> weld = std::move(final_weld);
+    auto weldMap = [&] {
+        if (!have_final_weld) weld = cleanup_detail::positionWeldMap(mesh);
+    };
+    if (after_beside_normals) {
+        weldMap();
+    } else if (same_faces && have_before) {
         report.after = before;
+        weldMap();
     } else {
         have_table = true;
-        report.after = cleanup_detail::validateWithTable(mesh, {}, &table);
+        report.after = cleanup_detail::validateWithTable(mesh, {}, &table, weldMap);
     }
-    const std::vector<uint32_t> weld = cleanup_detail::positionWeldMap(mesh);
     const bool shared = hasSharedPositions(weld);
     // The welded report is information only (`unresolved` takes rims and components from
     // openRimsAndSurfaces below), so callers that need just `unresolved` skip that validate() pass.

@@ -3,7 +3,10 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <functional>
 #include <vector>
+
+#include "core/parallel.h"
 
 #include "mesh_edit.h"
 
@@ -11,14 +14,16 @@ namespace lodbake {
 
 namespace cleanup_detail {
 
-TopologyStats topologyFromTable(const Mesh& mesh, const std::vector<uint32_t>& indices,
-                                uint64_t distinct_vertex_count, const EdgeTable& table, UnionFind& components) {
-    TopologyStats s;
+namespace {
+
+// The counts that come from the faces and vertices alone: non-finite, referenced and degenerate
+// counts, duplicates among faces with a repeated id, and the components (`components` gets the
+// unions). Also `repeated_faces`, for the Euler characteristic.
+void faceCounts(const Mesh& mesh, const std::vector<uint32_t>& indices, uint64_t distinct_vertex_count,
+                UnionFind& components, TopologyStats& s, uint64_t& repeated_faces) {
     const size_t n = mesh.vertexCount();
     const size_t face_count = indices.size() / 3;
     const uint32_t* ix = indices.data();
-    auto next = [](uint32_t c) { return c % 3 == 2 ? c - 2 : c + 1; };
-
     s.face_count = face_count;
     for (const Vec3f& p : mesh.positions) s.non_finite_vertex_count += !isFinite(p);
 
@@ -30,9 +35,9 @@ TopologyStats topologyFromTable(const Mesh& mesh, const std::vector<uint32_t>& i
 
     // Degenerate faces. Duplicates (same vertex set as an earlier face) are counted as the sum over
     // groups of equal sorted triples of (size - 1): a face with three distinct ids a < b < c is
-    // grouped at its edge (a, b), so only the faces on one edge are compared; faces with a repeated
-    // id, which have no edges, are grouped by sorting their few triples.
-    uint64_t repeated_faces = 0;
+    // grouped at its edge (a, b), so only the faces on one edge are compared (edgeCounts); faces with
+    // a repeated id, which have no edges, are grouped by sorting their few triples.
+    repeated_faces = 0;
     std::vector<std::array<uint32_t, 3>> repeated_keys;
     for (size_t f = 0; f < face_count; ++f) {
         const uint32_t a = ix[3 * f], b = ix[3 * f + 1], c = ix[3 * f + 2];
@@ -50,6 +55,22 @@ TopologyStats topologyFromTable(const Mesh& mesh, const std::vector<uint32_t>& i
     s.degenerate_face_count += repeated_faces;
     std::sort(repeated_keys.begin(), repeated_keys.end());
     for (size_t i = 1; i < repeated_keys.size(); ++i) s.duplicate_face_count += repeated_keys[i] == repeated_keys[i - 1];
+
+    // Components: faces joined through shared vertices.
+    for (size_t f = 0; f < face_count; ++f) {
+        components.unite(ix[3 * f], ix[3 * f + 1]);
+        components.unite(ix[3 * f], ix[3 * f + 2]);
+    }
+    for (size_t v = 0; v < n; ++v) s.component_count += referenced[v] && components.find(uint32_t(v)) == v;
+}
+
+// The counts that come from the edge table: edges, boundary edges and loops, non-manifold edges and
+// vertices, inconsistent edges, duplicates among faces with three distinct ids.
+void edgeCounts(const Mesh& mesh, const std::vector<uint32_t>& indices, const EdgeTable& table, TopologyStats& s) {
+    const size_t n = mesh.vertexCount();
+    const size_t face_count = indices.size() / 3;
+    const uint32_t* ix = indices.data();
+    auto next = [](uint32_t c) { return c % 3 == 2 ? c - 2 : c + 1; };
 
     // Per edge: its uses. One use is a boundary edge (kept directed, as its face runs it); two join the
     // corners at each end into one fan, and tell whether the two faces agree on the direction; three
@@ -129,16 +150,43 @@ TopologyStats topologyFromTable(const Mesh& mesh, const std::vector<uint32_t>& i
             cur = next_from(boundary[cur].second);
         }
     }
+}
 
-    // Components: faces joined through shared vertices.
-    for (size_t f = 0; f < face_count; ++f) {
-        components.unite(ix[3 * f], ix[3 * f + 1]);
-        components.unite(ix[3 * f], ix[3 * f + 2]);
+} // namespace
+
+TopologyStats topologyFromTable(const Mesh& mesh, const std::vector<uint32_t>& indices,
+                                uint64_t distinct_vertex_count, const EdgeTable& table, UnionFind& components,
+                                const std::function<void()>& beside) {
+    // Two independent halves (and the caller's `beside`), run side by side; each writes only its own
+    // report and union-find, so the sums do not depend on the schedule.
+    TopologyStats from_faces, from_edges;
+    uint64_t repeated_faces = 0;
+    auto part = [&](size_t i) {
+        if (i == 0) {
+            edgeCounts(mesh, indices, table, from_edges);
+        } else {
+            faceCounts(mesh, indices, distinct_vertex_count, components, from_faces, repeated_faces);
+            if (beside) beside();
+        }
+    };
+    if (!parallelFor(2, 1, part).ok()) {
+        // A worker ran out of memory: both halves again on this thread, from scratch (the unions
+        // already made are repeated, which changes nothing).
+        from_faces = TopologyStats();
+        from_edges = TopologyStats();
+        part(0);
+        part(1);
     }
-    for (size_t v = 0; v < n; ++v) s.component_count += referenced[v] && components.find(uint32_t(v)) == v;
-
+    TopologyStats s = from_faces;
+    s.edge_count = from_edges.edge_count;
+    s.boundary_edge_count = from_edges.boundary_edge_count;
+    s.boundary_loop_count = from_edges.boundary_loop_count;
+    s.non_manifold_edge_count = from_edges.non_manifold_edge_count;
+    s.non_manifold_vertex_count = from_edges.non_manifold_vertex_count;
+    s.inconsistent_edge_count = from_edges.inconsistent_edge_count;
+    s.duplicate_face_count += from_edges.duplicate_face_count;
     s.euler_characteristic = int64_t(s.referenced_vertex_count) - int64_t(s.edge_count) +
-                             int64_t(face_count - repeated_faces);
+                             int64_t(s.face_count - repeated_faces);
     return s;
 }
 

@@ -24,7 +24,8 @@ bool ValidationReport::isClosedManifold() const {
 
 namespace cleanup_detail {
 
-ValidationReport validateWithTable(const Mesh& input, const ValidateOptions& options, EdgeTable* table_out) {
+ValidationReport validateWithTable(const Mesh& input, const ValidateOptions& options, EdgeTable* table_out,
+                                   const std::function<void()>& beside) {
     ValidationReport r;
     const size_t n = input.vertexCount();
     // The counts weld bit-identical positions, the loops and components equal ones (-0 == +0). The
@@ -59,13 +60,21 @@ ValidationReport validateWithTable(const Mesh& input, const ValidateOptions& opt
             comps.unite((*indices)[3 * f], (*indices)[3 * f + 1]);
             comps.unite((*indices)[3 * f], (*indices)[3 * f + 2]);
         }
-    } else {
-        r.topology = topologyFromTable(input, *indices, distinct, table, comps);
     }
-    for (const BoundaryLoop& loop : findBoundaryLoops(*indices, table)) {
-        r.boundary_loop_lengths.push_back(uint32_t(loop.vertices.size()));
-        r.open_boundary_chains += !loop.closed;
-    }
+    // The boundary loops need the table only: walked beside the counts.
+    auto loops = [&] {
+        r.boundary_loop_lengths.clear();
+        r.open_boundary_chains = 0;
+        for (const BoundaryLoop& loop : findBoundaryLoops(*indices, table)) {
+            r.boundary_loop_lengths.push_back(uint32_t(loop.vertices.size()));
+            r.open_boundary_chains += !loop.closed;
+        }
+        if (beside) beside();
+    };
+    if (counts_done)
+        loops();
+    else
+        r.topology = topologyFromTable(input, *indices, distinct, table, comps, loops);
     std::sort(r.boundary_loop_lengths.begin(), r.boundary_loop_lengths.end(), std::greater<uint32_t>());
 
     std::vector<uint32_t> faces_of_root(n, 0);

@@ -412,8 +412,19 @@ TEST(CleanupInternalsTest, ValidateMatchesSeparatePasses) {
 }
 
 TEST(CleanupInternalsTest, DuplicateFacesKeepTheEarliest) {
-    for (uint32_t seed = 0; seed < 100; ++seed) {
+    for (uint32_t seed = 0; seed < 130; ++seed) {
         Mesh m = randomMesh(seed, false);
+        if (seed >= 100) {
+            // A wide fan (over 16 faces grouped at vertex 0) with copies of some of its faces.
+            m = wideFan(20 + seed % 60);
+            std::mt19937 rng(seed);
+            const size_t faces = m.faceCount();
+            for (size_t i = 0; i < faces; ++i) {
+                const size_t g = rng() % faces;
+                const uint32_t a = m.indices[3 * g], b = m.indices[3 * g + 1], c = m.indices[3 * g + 2];
+                if (rng() % 3 == 0) m.indices.insert(m.indices.end(), {c, b, a});
+            }
+        }
         // Expected: of the faces that pass the other tests, the first of each vertex set stays.
         std::vector<std::array<uint32_t, 3>> expected;
         std::vector<std::array<uint32_t, 3>> seen;
@@ -448,6 +459,65 @@ TEST(CleanupInternalsTest, ManifoldLeavesNoOverusedEdge) {
         EXPECT_EQ(computeTopologyStats(m).non_manifold_edge_count, 0u) << seed;
     }
     EXPECT_GT(overused_inputs, 100); // the inputs do exercise the pass
+}
+
+TEST(CleanupInternalsTest, SplitJoinsFromTableMatchListedJoins) {
+    // The 2-use edges read from the table, or listed as joins: the same split.
+    int split = 0;
+    for (uint32_t seed = 0; seed < 300; ++seed) {
+        Mesh listed = randomMesh(seed, false);
+        removeDegenerateFaces(listed);
+        Mesh from_table = listed;
+        const EdgeTable table = buildEdgeTable(listed);
+        std::vector<CornerPair> joins, extra;
+        for (uint32_t e = 0; e < table.edgeCount(); ++e) {
+            const uint32_t* c = &table.corners[table.begin[e]];
+            if (table.uses(e) == 2) joins.push_back({c[0], c[1]});
+            if (table.uses(e) == 4) { // some pairs beside the table, as the manifold pass adds them
+                joins.push_back({c[0], c[3]});
+                extra.push_back({c[0], c[3]});
+            }
+        }
+        size_t added_listed = 0, added_table = 0;
+        const size_t a = splitVerticesByFans(listed, joins, added_listed);
+        const size_t b = splitVerticesByFans(from_table, extra, added_table, &table);
+        SCOPED_TRACE(seed);
+        EXPECT_EQ(a, b);
+        EXPECT_EQ(added_listed, added_table);
+        EXPECT_EQ(hashMesh(listed), hashMesh(from_table));
+        split += a != 0;
+    }
+    EXPECT_GT(split, 50);
+}
+
+TEST(CleanupInternalsTest, ManifoldLocalRecheckMatchesWholeMesh) {
+    // The cut mode re-checks only the edges that can still be over-used and re-splits only the
+    // vertices of removed faces; the whole-mesh re-check (edge tables of the whole mesh, every
+    // vertex re-split) must give the same mesh and counters.
+    int rounds_run = 0;
+    for (uint32_t seed = 0; seed < 3000; ++seed) {
+        // Few vertices and many faces: edges with several faces that the first split cannot free.
+        std::mt19937 rng(seed);
+        const uint32_t n = 4 + rng() % 8;
+        Mesh m;
+        for (uint32_t v = 0; v < n; ++v)
+            m.positions.push_back(Vec3f(float(rng() % 5), float(rng() % 5), float(rng() % 5)));
+        const uint32_t faces = 2 + rng() % (2 * n);
+        for (uint32_t f = 0; f < faces; ++f)
+            m.indices.insert(m.indices.end(), {uint32_t(rng() % n), uint32_t(rng() % n), uint32_t(rng() % n)});
+        removeDegenerateFaces(m);
+        if (seed % 2) m.uvs.push_back(std::vector<Vec2f>(m.vertexCount(), Vec2f(0.25f * float(seed % 4), 0.5f)));
+        Mesh whole = m;
+        Scratch s1, s2;
+        const ManifoldReport a = makeManifold(m, ManifoldOptions(), s1);
+        const ManifoldReport b = makeManifold(whole, ManifoldOptions(), s2, true);
+        SCOPED_TRACE(seed);
+        EXPECT_EQ(m.indices, whole.indices);
+        EXPECT_EQ(hashMesh(m), hashMesh(whole));
+        EXPECT_EQ(a.counters(), b.counters());
+        rounds_run += b.faces_removed != 0;
+    }
+    EXPECT_GT(rounds_run, 50); // the inputs do reach the re-check rounds
 }
 
 namespace {
