@@ -337,9 +337,9 @@ Result<SideStats> measurePoints(const std::vector<Vec3d>& points, const Distance
         SideStats s;
         // Consecutive points (Morton order) are near each other: the previous answer's triangle gives
         // a tight first bound that prunes most of the tree. The minimum found is the same either way.
-        uint32_t hint = DistanceIndex::kNoHint;
+        DistanceIndex::Cursor cursor;
         for (size_t k = first; k < end; ++k) {
-            const double d = std::sqrt(to.closestDistanceSq(points[k], hint));
+            const double d = std::sqrt(to.closestDistanceSq(points[k], cursor));
             s.max = std::max(s.max, d);
             s.sum += d;
             s.sum_sq += d * d;
@@ -527,8 +527,17 @@ double DistanceIndex::triangleBoxDistanceSq(uint32_t slot, const Vec3d& p) const
 }
 
 double DistanceIndex::closestDistanceSq(const Vec3d& p, uint32_t& hint) const {
+    Cursor cursor;
+    cursor.hint = hint;
+    const double d = closestDistanceSq(p, cursor);
+    hint = cursor.hint;
+    return d;
+}
+
+double DistanceIndex::closestDistanceSq(const Vec3d& p, Cursor& cursor) const {
     double best = std::numeric_limits<double>::infinity();
     if (root_ == kEmptyChild) return best;
+    uint32_t& hint = cursor.hint;
     auto measureSlot = [&](uint32_t s) {
         const Vec3f* c = &corners_[size_t(s) * 3];
         return exactDistanceSq(p, toDouble(c[0]), toDouble(c[1]), toDouble(c[2]));
@@ -582,7 +591,32 @@ double DistanceIndex::closestDistanceSq(const Vec3d& p, uint32_t& hint) const {
     };
     Entry stack[kStackSize];
     size_t top = 0;
-    uint32_t ref = root_;
+    // Where to start (see Cursor): the deepest node of the last query's path whose clearance, less the
+    // distance from the last point, still exceeds the limit. Every triangle outside it is then farther
+    // than the limit from p (triangle inequality), so the search would skip it anyway. The entries kept
+    // are lower bounds for p as well once that distance is taken off; entry 0 is the root (nothing
+    // outside it). Only with the float box test, whose distances the clearances come from.
+    uint32_t depth = 1;
+    if (use_float && cursor.depth > 0) {
+        const Vec3d step = p - cursor.point;
+        // Margins far above the rounding of these few double operations.
+        const double moved = std::sqrt(dot(step, step)) * (1.0 + 0x1p-40) + double(mag) * 0x1p-50;
+        depth = cursor.depth;
+        for (; depth > 1; --depth) {
+            const double c = cursor.clearance[depth - 1] - moved;
+            if (c > 0.0 && c * c * (1.0 - 0x1p-40) > limit) break;
+        }
+        for (uint32_t i = 1; i < depth; ++i) cursor.clearance[i] -= moved;
+    } else {
+        cursor.node[0] = root_;
+        cursor.clearance[0] = std::numeric_limits<double>::infinity();
+    }
+    cursor.depth = use_float ? depth : 0;
+    cursor.point = p;
+    uint32_t ref = cursor.node[depth - 1];
+    // Whether the search is still on a single path from its start (no branch, no pop yet): each node
+    // then joins the cursor's path.
+    bool on_path = use_float;
     for (;;) {
         if (isLeaf(ref)) {
             const uint32_t first = (ref & ~kLeafBit) >> 3, count = (ref & 7u) + 1;
@@ -633,9 +667,28 @@ double DistanceIndex::closestDistanceSq(const Vec3d& p, uint32_t& hint) const {
 #endif
             if (mask != 0) {
                 if ((mask & (mask - 1)) == 0) { // one child: descend without the stack
-                    ref = node.child[__builtin_ctz(mask)];
+                    const int only = __builtin_ctz(mask);
+                    ref = node.child[only];
+                    if (on_path) {
+                        if (cursor.depth < kCursorDepth) {
+                            // The other children's boxes are beyond the limit; their float distance
+                            // bounds the distance from p to their triangles: up to a relative 2^-20 for
+                            // the float arithmetic and |p - float(p)| < M 2^-22 (|p| <= 2M).
+                            float nearest_other = HUGE_VALF;
+                            for (int i = 0; i < 4; ++i)
+                                if (i != only) nearest_other = std::min(nearest_other, dist[i]);
+                            const double bound =
+                                std::sqrt(double(nearest_other) * (1.0 - 0x1p-19)) - double(mag) * 0x1p-22;
+                            cursor.node[cursor.depth] = ref;
+                            cursor.clearance[cursor.depth] = std::min(cursor.clearance[cursor.depth - 1], bound);
+                            ++cursor.depth;
+                        } else {
+                            on_path = false;
+                        }
+                    }
                     continue;
                 }
+                on_path = false;
                 // Nearest child visited next, the others pushed farthest first.
                 Entry keep[4];
                 int n = 0;
@@ -655,6 +708,7 @@ double DistanceIndex::closestDistanceSq(const Vec3d& p, uint32_t& hint) const {
             }
         }
         // Next entry still within the limit.
+        on_path = false;
         for (;;) {
             if (top == 0) return best;
             const Entry e = stack[--top];

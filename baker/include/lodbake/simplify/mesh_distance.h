@@ -52,16 +52,34 @@ public:
     /// Fails only when resources run out (2^28 triangles or more, or a failed allocation).
     static Result<DistanceIndex> build(const std::vector<Vec3f>& positions, const std::vector<uint32_t>& indices);
 
+    static constexpr uint32_t kNoHint = 0xffffffffu;
+    static constexpr uint32_t kCursorDepth = 32;
+
+    /// What one query leaves for the next, nearby one (one cursor per thread, default-constructed at
+    /// first): the nearest triangle's slot, whose distance starts the next search, and the nodes the
+    /// search descended through alone (each the only child of its parent within the bound), each with
+    /// a lower bound on the distance from `point` to every triangle outside it. The next query starts
+    /// at the deepest such node whose bound, less the distance between the two points, still exceeds
+    /// its first bound, instead of at the root.
+    struct Cursor {
+        uint32_t hint = kNoHint;
+        uint32_t depth = 0; // path entries in use
+        Vec3d point;        // the query the clearances are relative to
+        uint32_t node[kCursorDepth];
+        double clearance[kCursorDepth];
+    };
+
     /// Squared distance from `p` to the nearest triangle (infinity for an empty index). `hint` is a
     /// triangle slot near the last query (kNoHint at first): its distance starts the search; it is
     /// updated to the nearest triangle's slot. Thread-safe with one hint per thread.
     double closestDistanceSq(const Vec3d& p, uint32_t& hint) const;
+    /// The same distance; the search starts from `cursor` (see Cursor) and updates it.
+    double closestDistanceSq(const Vec3d& p, Cursor& cursor) const;
     /// The input triangle of a slot.
     uint32_t faceOfSlot(uint32_t slot) const { return face_of_slot_[slot]; }
 
     size_t triangleCount() const { return face_of_slot_.size(); }
     size_t nodeCount() const { return nodes_.size(); }
-    static constexpr uint32_t kNoHint = 0xffffffffu;
 
     struct Node {
         float lo[3][4]; // lo[axis][child]: box minimum, widened (see mesh_distance.cpp)
