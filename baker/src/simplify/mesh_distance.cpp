@@ -552,7 +552,7 @@ double DistanceIndex::closestDistanceSq(const Vec3d& p, Cursor& cursor) const {
     double best = std::numeric_limits<double>::infinity();
     if (root_ == kEmptyChild) return best;
     uint32_t& hint = cursor.hint;
-    auto measureSlot = [&](uint32_t s) {
+    auto measureSlot = [&](uint32_t s) __attribute__((always_inline)) {
         const Vec3f* c = &corners_[size_t(s) * 3];
         return exactDistanceSq(p, toDouble(c[0]), toDouble(c[1]), toDouble(c[2]));
     };
