@@ -31,11 +31,25 @@
 #include <emmintrin.h>
 #endif
 
+#include "core/large_array.h"
 #include "core/parallel.h"
 #include "lodbake/core/bvh.h"
 
 namespace lodbake {
+
+void* detail::allocateDistanceArray(size_t bytes) {
+    return LargeArrayAllocator<unsigned char>().allocate(bytes);
+}
+
+void detail::freeDistanceArray(void* p, size_t bytes) {
+    LargeArrayAllocator<unsigned char>().deallocate(static_cast<unsigned char*>(p), bytes);
+}
+
 namespace {
+
+using detail::LargeArray;
+// A side's points (Morton order); large, filled once, read in order by the queries.
+using PointArray = LargeArray<Vec3d>;
 
 constexpr size_t kChunkSize = 2048; // points per task; fixed so the reduction order never changes
 constexpr uint64_t kReferenceStream = 0x5265664d65736821ull; // decorrelates the two sides' samples
@@ -156,8 +170,8 @@ struct BuildBox {
 // only a binary search per split, so the build costs about one sort; the tree depends on the input only.
 class IndexBuilder {
 public:
-    IndexBuilder(const std::vector<uint64_t>& codes, const std::vector<Vec3f>& corners,
-                 std::vector<DistanceIndex::Node>& nodes, double slack)
+    IndexBuilder(const LargeArray<uint64_t>& codes, const detail::DistanceArray<Vec3f>& corners,
+                 detail::DistanceArray<DistanceIndex::Node>& nodes, double slack)
         : codes_(codes), corners_(corners), nodes_(nodes), slack_(slack) {}
 
     uint32_t build(uint32_t begin, uint32_t end, BuildBox& box) {
@@ -214,9 +228,9 @@ private:
                         codes_.begin());
     }
 
-    const std::vector<uint64_t>& codes_;
-    const std::vector<Vec3f>& corners_;
-    std::vector<DistanceIndex::Node>& nodes_;
+    const LargeArray<uint64_t>& codes_;
+    const detail::DistanceArray<Vec3f>& corners_;
+    detail::DistanceArray<DistanceIndex::Node>& nodes_;
     double slack_;
 };
 
@@ -229,10 +243,10 @@ struct SideStats {
 
 // The points measured from one side: area-uniform stratified samples, then the referenced
 // vertices, stored in Morton order of their position (ties by point index).
-Result<std::vector<Vec3d>> samplePoints(const Mesh& from, const DistanceOptions& options, uint64_t stream,
+Result<PointArray> samplePoints(const Mesh& from, const DistanceOptions& options, uint64_t stream,
                                         const char* role) {
     const size_t tri_count = from.faceCount();
-    std::vector<double> cdf(tri_count);
+    LargeArray<double> cdf(tri_count);
     double total = 0.0;
     size_t last_positive = 0;
     for (size_t t = 0; t < tri_count; ++t) {
@@ -292,7 +306,7 @@ Result<std::vector<Vec3d>> samplePoints(const Mesh& from, const DistanceOptions&
         uint32_t source; // the sample's triangle, or the vertex
         bool operator<(const Key& o) const { return code < o.code || (code == o.code && point < o.point); }
     };
-    std::vector<Key> order(point_count);
+    LargeArray<Key> order(point_count);
     const Aabb box = computeBounds(from);
     const Vec3d box_min = toDouble(box.min);
     const Vec3d extent = toDouble(box.max) - box_min;
@@ -317,9 +331,9 @@ Result<std::vector<Vec3d>> samplePoints(const Mesh& from, const DistanceOptions&
             order[i] = {mortonCode((point - box_min) * scale), uint32_t(i), source};
         }
     }));
-    std::vector<double>().swap(cdf);
+    LargeArray<double>().swap(cdf);
     std::sort(order.begin(), order.end());
-    std::vector<Vec3d> points(point_count);
+    PointArray points(point_count);
     LODBAKE_RETURN_IF_ERROR(parallelForChunks(point_count, kChunkSize, [&](size_t, size_t first, size_t end) {
         for (size_t k = first; k < end; ++k) {
             const Key& o = order[k];
@@ -330,16 +344,16 @@ Result<std::vector<Vec3d>> samplePoints(const Mesh& from, const DistanceOptions&
 }
 
 // Distances from `points` to the surface indexed by `to`.
-Result<SideStats> measurePoints(const std::vector<Vec3d>& points, const DistanceIndex& to) {
+Result<SideStats> measurePoints(const PointArray& points, const DistanceIndex& to) {
     const size_t point_count = points.size();
     std::vector<SideStats> chunks(chunkCount(point_count, kChunkSize));
     LODBAKE_RETURN_IF_ERROR(parallelForChunks(point_count, kChunkSize, [&](size_t chunk, size_t first, size_t end) {
         SideStats s;
         // Consecutive points (Morton order) are near each other: the previous answer's triangle gives
         // a tight first bound that prunes most of the tree. The minimum found is the same either way.
-        uint32_t hint = DistanceIndex::kNoHint;
+        DistanceIndex::Cursor cursor;
         for (size_t k = first; k < end; ++k) {
-            const double d = std::sqrt(to.closestDistanceSq(points[k], hint));
+            const double d = std::sqrt(to.closestDistanceSq(points[k], cursor));
             s.max = std::max(s.max, d);
             s.sum += d;
             s.sum_sq += d * d;
@@ -370,7 +384,7 @@ Status checkOptions(const DistanceOptions& options) {
 struct ApproxSide {
     Status status = Status::okStatus();
     DistanceIndex index;
-    std::vector<Vec3d> points;
+    PointArray points;
 };
 
 ApproxSide prepareApprox(const Mesh& approx, const DistanceOptions& options) {
@@ -383,7 +397,7 @@ ApproxSide prepareApprox(const Mesh& approx, const DistanceOptions& options) {
         return side;
     }
     side.index = std::move(index).value();
-    Result<std::vector<Vec3d>> points = samplePoints(approx, options, kApproxStream, "approximation");
+    Result<PointArray> points = samplePoints(approx, options, kApproxStream, "approximation");
     if (!points.ok()) {
         side.status = points.status();
         side.index = DistanceIndex();
@@ -394,7 +408,7 @@ ApproxSide prepareApprox(const Mesh& approx, const DistanceOptions& options) {
 }
 
 // One prepared approximation against a reference whose side's points are already drawn.
-Result<DistanceResult> measurePrepared(const DistanceReference& reference, const std::vector<Vec3d>& reference_points,
+Result<DistanceResult> measurePrepared(const DistanceReference& reference, const PointArray& reference_points,
                                        const ApproxSide& approx) {
     LODBAKE_RETURN_IF_ERROR(approx.status);
     LODBAKE_ASSIGN_OR_RETURN(SideStats ref_to_approx, measurePoints(reference_points, approx.index));
@@ -416,7 +430,7 @@ Result<DistanceResult> measurePrepared(const DistanceReference& reference, const
 // current one's parallel queries, so idle threads join the queries. At most two approximations' indexes
 // and points exist at once. `first` is approximations[0] already prepared (empty when there are none).
 std::vector<Result<DistanceResult>> measurePipelined(const DistanceReference& reference,
-                                                     const std::vector<Vec3d>& reference_points,
+                                                     const PointArray& reference_points,
                                                      const std::vector<const Mesh*>& approximations,
                                                      const DistanceOptions& options, ApproxSide first) {
     std::vector<Result<DistanceResult>> results(approximations.size(), Result<DistanceResult>(DistanceResult{}));
@@ -449,7 +463,7 @@ Result<DistanceIndex> DistanceIndex::build(const std::vector<Vec3f>& positions, 
         return resourceLimit("distance index: " + std::to_string(tri_count) + " triangles, expected fewer than 2^28");
     }
     // Box centres and their bounds, the largest coordinate magnitude.
-    std::vector<Vec3f> centres(tri_count);
+    LargeArray<Vec3f> centres(tri_count);
     BuildBox centre_box;
     float magnitude = 0.0f;
     for (size_t t = 0; t < tri_count; ++t) {
@@ -468,7 +482,7 @@ Result<DistanceIndex> DistanceIndex::build(const std::vector<Vec3f>& positions, 
         centre_box.expand(c, c);
     }
     // Triangles in Morton order of their box centre, ties by triangle index.
-    std::vector<std::pair<uint64_t, uint32_t>> order(tri_count);
+    LargeArray<std::pair<uint64_t, uint32_t>> order(tri_count);
     {
         const Vec3d lo(centre_box.lo[0], centre_box.lo[1], centre_box.lo[2]);
         const double extent = std::max({double(centre_box.hi[0]) - lo.x, double(centre_box.hi[1]) - lo.y,
@@ -476,9 +490,9 @@ Result<DistanceIndex> DistanceIndex::build(const std::vector<Vec3f>& positions, 
         const double scale = double(kMortonCells - 1) / extent;
         for (size_t t = 0; t < tri_count; ++t) order[t] = {mortonCode((toDouble(centres[t]) - lo) * scale), uint32_t(t)};
     }
-    std::vector<Vec3f>().swap(centres);
+    LargeArray<Vec3f>().swap(centres);
     std::sort(order.begin(), order.end());
-    std::vector<uint64_t> codes(tri_count);
+    LargeArray<uint64_t> codes(tri_count);
     index.face_of_slot_.resize(tri_count);
     index.corners_.reserve(tri_count * 3 + 1);
     for (size_t s = 0; s < tri_count; ++s) {
@@ -487,7 +501,7 @@ Result<DistanceIndex> DistanceIndex::build(const std::vector<Vec3f>& positions, 
         index.face_of_slot_[s] = t;
         for (int k = 0; k < 3; ++k) index.corners_.push_back(positions[indices[size_t(t) * 3 + k]]);
     }
-    std::vector<std::pair<uint64_t, uint32_t>>().swap(order);
+    LargeArray<std::pair<uint64_t, uint32_t>>().swap(order);
     index.corners_.push_back(Vec3f(0.0f, 0.0f, 0.0f)); // padding: the query loads 4 floats per corner
     // The float box test is exact enough only for queries whose coordinates are at most twice the
     // mesh's largest (the rounding of the query point to float is then below a quarter of the slack);
@@ -527,9 +541,18 @@ double DistanceIndex::triangleBoxDistanceSq(uint32_t slot, const Vec3d& p) const
 }
 
 double DistanceIndex::closestDistanceSq(const Vec3d& p, uint32_t& hint) const {
+    Cursor cursor;
+    cursor.hint = hint;
+    const double d = closestDistanceSq(p, cursor);
+    hint = cursor.hint;
+    return d;
+}
+
+double DistanceIndex::closestDistanceSq(const Vec3d& p, Cursor& cursor) const {
     double best = std::numeric_limits<double>::infinity();
     if (root_ == kEmptyChild) return best;
-    auto measureSlot = [&](uint32_t s) {
+    uint32_t& hint = cursor.hint;
+    auto measureSlot = [&](uint32_t s) __attribute__((always_inline)) {
         const Vec3f* c = &corners_[size_t(s) * 3];
         return exactDistanceSq(p, toDouble(c[0]), toDouble(c[1]), toDouble(c[2]));
     };
@@ -582,7 +605,32 @@ double DistanceIndex::closestDistanceSq(const Vec3d& p, uint32_t& hint) const {
     };
     Entry stack[kStackSize];
     size_t top = 0;
-    uint32_t ref = root_;
+    // Where to start (see Cursor): the deepest node of the last query's path whose clearance, less the
+    // distance from the last point, still exceeds the limit. Every triangle outside it is then farther
+    // than the limit from p (triangle inequality), so the search would skip it anyway. The entries kept
+    // are lower bounds for p as well once that distance is taken off; entry 0 is the root (nothing
+    // outside it). Only with the float box test, whose distances the clearances come from.
+    uint32_t depth = 1;
+    if (use_float && cursor.depth > 0) {
+        const Vec3d step = p - cursor.point;
+        // Margins far above the rounding of these few double operations.
+        const double moved = std::sqrt(dot(step, step)) * (1.0 + 0x1p-40) + double(mag) * 0x1p-50;
+        depth = cursor.depth;
+        for (; depth > 1; --depth) {
+            const double c = cursor.clearance[depth - 1] - moved;
+            if (c > 0.0 && c * c * (1.0 - 0x1p-40) > limit) break;
+        }
+        for (uint32_t i = 1; i < depth; ++i) cursor.clearance[i] -= moved;
+    } else {
+        cursor.node[0] = root_;
+        cursor.clearance[0] = std::numeric_limits<double>::infinity();
+    }
+    cursor.depth = use_float ? depth : 0;
+    cursor.point = p;
+    uint32_t ref = cursor.node[depth - 1];
+    // Whether the search is still on a single path from its start (no branch, no pop yet): each node
+    // then joins the cursor's path.
+    bool on_path = use_float;
     for (;;) {
         if (isLeaf(ref)) {
             const uint32_t first = (ref & ~kLeafBit) >> 3, count = (ref & 7u) + 1;
@@ -633,9 +681,28 @@ double DistanceIndex::closestDistanceSq(const Vec3d& p, uint32_t& hint) const {
 #endif
             if (mask != 0) {
                 if ((mask & (mask - 1)) == 0) { // one child: descend without the stack
-                    ref = node.child[__builtin_ctz(mask)];
+                    const int only = __builtin_ctz(mask);
+                    ref = node.child[only];
+                    if (on_path) {
+                        if (cursor.depth < kCursorDepth) {
+                            // The other children's boxes are beyond the limit; their float distance
+                            // bounds the distance from p to their triangles: up to a relative 2^-20 for
+                            // the float arithmetic and |p - float(p)| < M 2^-22 (|p| <= 2M).
+                            float nearest_other = HUGE_VALF;
+                            for (int i = 0; i < 4; ++i)
+                                if (i != only) nearest_other = std::min(nearest_other, dist[i]);
+                            const double bound =
+                                std::sqrt(double(nearest_other) * (1.0 - 0x1p-19)) - double(mag) * 0x1p-22;
+                            cursor.node[cursor.depth] = ref;
+                            cursor.clearance[cursor.depth] = std::min(cursor.clearance[cursor.depth - 1], bound);
+                            ++cursor.depth;
+                        } else {
+                            on_path = false;
+                        }
+                    }
                     continue;
                 }
+                on_path = false;
                 // Nearest child visited next, the others pushed farthest first.
                 Entry keep[4];
                 int n = 0;
@@ -655,6 +722,7 @@ double DistanceIndex::closestDistanceSq(const Vec3d& p, uint32_t& hint) const {
             }
         }
         // Next entry still within the limit.
+        on_path = false;
         for (;;) {
             if (top == 0) return best;
             const Entry e = stack[--top];
@@ -683,7 +751,7 @@ Result<DistanceResult> measureSurfaceDistance(const DistanceReference& reference
                                               const DistanceOptions& options) {
     LODBAKE_RETURN_IF_ERROR(checkOptions(options));
     LODBAKE_RETURN_IF_ERROR(checkSurface(approx, "approximation"));
-    LODBAKE_ASSIGN_OR_RETURN(std::vector<Vec3d> reference_points,
+    LODBAKE_ASSIGN_OR_RETURN(PointArray reference_points,
                              samplePoints(reference.mesh(), options, kReferenceStream, "reference"));
     return measurePrepared(reference, reference_points, prepareApprox(approx, options));
 }
@@ -698,7 +766,7 @@ std::vector<Result<DistanceResult>> measureSurfaceDistances(const DistanceRefere
         return results;
     }
     // The reference's points are drawn while the first approximation is prepared.
-    Result<std::vector<Vec3d>> reference_points = Result<std::vector<Vec3d>>(std::vector<Vec3d>());
+    Result<PointArray> reference_points = Result<PointArray>(PointArray());
     ApproxSide first;
     const Status run = parallelFor(approximations.empty() ? 1 : 2, 1, [&](size_t task) {
         if (task == 0)
@@ -721,7 +789,7 @@ Result<std::vector<Result<DistanceResult>>> prepareAndMeasureSurfaceDistances(
     // Three independent setup tasks side by side: the reference's index (serial), its points and the
     // first approximation's index and points.
     Result<DistanceReference> prepared = internalError("distance reference: not prepared");
-    Result<std::vector<Vec3d>> reference_points = Result<std::vector<Vec3d>>(std::vector<Vec3d>());
+    Result<PointArray> reference_points = Result<PointArray>(PointArray());
     ApproxSide first;
     LODBAKE_RETURN_IF_ERROR(parallelFor(approximations.empty() ? 2 : 3, 1, [&](size_t task) {
         if (task == 0)

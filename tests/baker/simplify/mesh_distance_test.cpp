@@ -330,6 +330,40 @@ TEST(MeshDistanceTest, IndexEqualsBruteForceExactly) {
     EXPECT_EQ(empty->closestDistanceSq(lodbake::Vec3d(0, 0, 0), hint), HUGE_VAL);
 }
 
+// A cursor carried along a walk (small steps near the surface, occasional jumps, points far out) gives
+// exactly the brute-force minimum at every step, like a cold query: starting below the root never
+// skips the nearest triangle.
+TEST(MeshDistanceTest, CursorWalkEqualsBruteForceExactly) {
+    for (float scale : {1.0f, 2.5e-3f}) {
+        Mesh m = perturbed(icosphere(4), 0.03f, 7);
+        for (Vec3f& p : m.positions) p = p * scale;
+        auto index = lodbake::DistanceIndex::build(m.positions, m.indices);
+        ASSERT_TRUE(index.ok());
+        uint64_t state = 5;
+        auto next = [&state]() {
+            state = state * 6364136223846793005ull + 1442695040888963407ull;
+            return double(state >> 11) * (1.0 / 9007199254740992.0) * 2.0 - 1.0;
+        };
+        lodbake::DistanceIndex::Cursor cursor;
+        lodbake::Vec3d dir(1, 0, 0);
+        uint32_t deep = 0;
+        for (int i = 0; i < 4000; ++i) {
+            if (i % 500 == 499)
+                dir = lodbake::Vec3d(next(), next(), next()); // a jump
+            else
+                dir = dir + lodbake::Vec3d(next(), next(), next()) * 0.02; // a step of about one triangle
+            if (lodbake::length(dir) == 0) continue;
+            const double radius = i % 97 == 0 ? 3.0 : 1.0 + 0.04 * next();
+            const lodbake::Vec3d p = lodbake::normalize(dir) * (radius * scale);
+            const double want = bruteForceDistanceSq(m, p);
+            ASSERT_EQ(index->closestDistanceSq(p, cursor), want) << "scale " << scale << " point " << i;
+            ASSERT_LE(cursor.depth, lodbake::DistanceIndex::kCursorDepth);
+            if (cursor.depth > 3) ++deep;
+        }
+        EXPECT_GT(deep, 1000u) << "the walk should keep a path below the root";
+    }
+}
+
 TEST(MeshDistanceTest, RejectsDegenerateInput) {
     Mesh good = lodbake_test::tetrahedron();
     Mesh no_triangles = good;

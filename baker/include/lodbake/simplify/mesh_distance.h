@@ -4,6 +4,7 @@
 // point-to-triangle distance to the other surface through a BVH. Agrees with
 // ../shared/eval/meshdist.py (same definitions) within sampling noise.
 
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -12,6 +13,33 @@
 #include "lodbake/core/status.h"
 
 namespace lodbake {
+
+namespace detail {
+/// Storage of DistanceIndex's arrays: allocations of 2 MB and more are mapped on their own with
+/// transparent huge pages (core/large_array.h), which saves the page faults of filling them and the
+/// TLB misses of the queries' scattered reads. Out of line, so this header needs nothing from src/.
+void* allocateDistanceArray(size_t bytes);
+void freeDistanceArray(void* p, size_t bytes);
+template <class T>
+struct DistanceArrayAllocator {
+    using value_type = T;
+    DistanceArrayAllocator() = default;
+    template <class U>
+    DistanceArrayAllocator(const DistanceArrayAllocator<U>&) {}
+    T* allocate(size_t n) { return static_cast<T*>(allocateDistanceArray(n * sizeof(T))); }
+    void deallocate(T* p, size_t n) { freeDistanceArray(p, n * sizeof(T)); }
+    template <class U>
+    bool operator==(const DistanceArrayAllocator<U>&) const {
+        return true;
+    }
+    template <class U>
+    bool operator!=(const DistanceArrayAllocator<U>&) const {
+        return false;
+    }
+};
+template <class T>
+using DistanceArray = std::vector<T, DistanceArrayAllocator<T>>;
+} // namespace detail
 
 struct DistanceOptions {
     uint32_t sample_count = 200000; // area-uniform samples per side (vertices are added on top)
@@ -52,16 +80,34 @@ public:
     /// Fails only when resources run out (2^28 triangles or more, or a failed allocation).
     static Result<DistanceIndex> build(const std::vector<Vec3f>& positions, const std::vector<uint32_t>& indices);
 
+    static constexpr uint32_t kNoHint = 0xffffffffu;
+    static constexpr uint32_t kCursorDepth = 32;
+
+    /// What one query leaves for the next, nearby one (one cursor per thread, default-constructed at
+    /// first): the nearest triangle's slot, whose distance starts the next search, and the nodes the
+    /// search descended through alone (each the only child of its parent within the bound), each with
+    /// a lower bound on the distance from `point` to every triangle outside it. The next query starts
+    /// at the deepest such node whose bound, less the distance between the two points, still exceeds
+    /// its first bound, instead of at the root.
+    struct Cursor {
+        uint32_t hint = kNoHint;
+        uint32_t depth = 0; // path entries in use
+        Vec3d point;        // the query the clearances are relative to
+        uint32_t node[kCursorDepth];
+        double clearance[kCursorDepth];
+    };
+
     /// Squared distance from `p` to the nearest triangle (infinity for an empty index). `hint` is a
     /// triangle slot near the last query (kNoHint at first): its distance starts the search; it is
     /// updated to the nearest triangle's slot. Thread-safe with one hint per thread.
     double closestDistanceSq(const Vec3d& p, uint32_t& hint) const;
+    /// The same distance; the search starts from `cursor` (see Cursor) and updates it.
+    double closestDistanceSq(const Vec3d& p, Cursor& cursor) const;
     /// The input triangle of a slot.
     uint32_t faceOfSlot(uint32_t slot) const { return face_of_slot_[slot]; }
 
     size_t triangleCount() const { return face_of_slot_.size(); }
     size_t nodeCount() const { return nodes_.size(); }
-    static constexpr uint32_t kNoHint = 0xffffffffu;
 
     struct Node {
         float lo[3][4]; // lo[axis][child]: box minimum, widened (see mesh_distance.cpp)
@@ -73,9 +119,9 @@ private:
     double scalarBoxDistanceSq(const Node& node, int child, const Vec3d& p) const;
     double triangleBoxDistanceSq(uint32_t slot, const Vec3d& p) const;
 
-    std::vector<Node> nodes_;
-    std::vector<Vec3f> corners_;         // 3 per slot, leaf order
-    std::vector<uint32_t> face_of_slot_; // input triangle of every slot
+    detail::DistanceArray<Node> nodes_;
+    detail::DistanceArray<Vec3f> corners_;         // 3 per slot, leaf order
+    detail::DistanceArray<uint32_t> face_of_slot_; // input triangle of every slot
     uint32_t root_ = 0xffffffffu;        // child reference of the root (see mesh_distance.cpp)
     float magnitude_ = 0.0f;             // queries with a larger coordinate take the double box test
     double slack_ = 0.0;                 // how far every box is widened (see mesh_distance.cpp)
