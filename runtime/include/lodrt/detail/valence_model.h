@@ -48,20 +48,8 @@ inline uint32_t rangeProb(uint32_t s) {
     return ((s & 0xFFFFu) + (s >> 16)) >> (17 - format::kRangeProbBits);
 }
 
-/// Model state after coding bit b.
-/// Both outcomes are computed and one selected: the bits are unpredictable, so no branch.
-inline uint32_t rangeUpdate(uint32_t s, uint32_t b) {
-    const uint32_t fast = s & 0xFFFFu, slow = s >> 16;
-    using format::kRangeStateMax;
-    using format::kRangeStateMin;
-    const uint32_t one = (fast - ((fast - kRangeStateMin) >> format::kRangeFastShift)) |
-                         ((slow - ((slow - kRangeStateMin) >> format::kRangeSlowShift)) << 16);
-    const uint32_t zero = (fast + ((kRangeStateMax - fast) >> format::kRangeFastShift)) |
-                          ((slow + ((kRangeStateMax - slow) >> format::kRangeSlowShift)) << 16);
-    return b ? one : zero;
-}
-
-/// rangeUpdate with the bit given as a mask (all ones for 1, zero for 0), selected without a branch.
+/// Model state after coding a bit given as a mask (all ones for 1, zero for 0). Both outcomes are
+/// computed and one selected without a branch: the bits are unpredictable.
 inline uint32_t rangeUpdateMasked(uint32_t s, uint32_t mask) {
     const uint32_t fast = s & 0xFFFFu, slow = s >> 16;
     using format::kRangeStateMax;
@@ -72,6 +60,9 @@ inline uint32_t rangeUpdateMasked(uint32_t s, uint32_t mask) {
                           ((slow + ((kRangeStateMax - slow) >> format::kRangeSlowShift)) << 16);
     return zero ^ ((zero ^ one) & mask);
 }
+
+/// Model state after coding bit b.
+inline uint32_t rangeUpdate(uint32_t s, uint32_t b) { return rangeUpdateMasked(s, 0u - uint32_t(b != 0)); }
 
 /// Adaptive multi-symbol model (format.h, "Multi-symbol adaptive models"): cum[i] is the coded
 /// cumulative frequency of symbols < i out of 2^kRangeCdfBits (cum[0] = 0, cum[N] = 2^kRangeCdfBits);
