@@ -11,6 +11,7 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <thread>
 
 #include <nlohmann/json.hpp>
@@ -54,13 +55,13 @@ struct BakeRun {
     std::string out, err;
 };
 
-BakeRun bakeIn(const std::string& cwd, const std::string& args) {
+BakeRun bakeIn(const std::string& cwd, const std::string& args, const std::string& env = "") {
     static int counter = 0;
     const std::string base =
         lodbake_test::scratchDir() + "/pipeline_run_" + std::to_string(::getpid()) + "_" + std::to_string(++counter);
     // A subshell: runCommand appends its own 2>&1, which must not redirect the bake's stderr.
     const CommandResult r =
-        runCommand("(cd " + shellQuote(cwd) + " && " + shellQuote(lodbake_test::lodbakeCli()) + " bake " + args + " >" +
+        runCommand("(cd " + shellQuote(cwd) + " && " + env + shellQuote(lodbake_test::lodbakeCli()) + " bake " + args + " >" +
                    shellQuote(base + ".out") + " 2>" + shellQuote(base + ".err") + " </dev/null)");
     return {r.exit_code, textOf(base + ".out"), textOf(base + ".err")};
 }
@@ -216,6 +217,37 @@ TEST(PipelineCliTest, BytesDoNotDependOnTheCurrentDirectoryOrTheInputPath) {
     const std::string text(a.begin(), a.end());
     EXPECT_EQ(text.find(abs_assets), std::string::npos) << "the pack names an absolute path";
     EXPECT_EQ(text.find("pipeline_cwd"), std::string::npos) << "the pack names the input folder";
+}
+
+// The CLI restarts itself with glibc's huge-page heap (docs/cli.md, "Memory") unless GLIBC_TUNABLES
+// already names that tunable: the restarted bake must see the same arguments and write the same bytes
+// and the same summary as one that does not restart.
+TEST(PipelineCliTest, HugePageHeapRestartKeepsArgumentsOutputAndBytes) {
+    const std::string d = sampleDir("restart");
+    const std::string args = "assets/crate.obj assets/rock.ply -o 'out dir/' --preset assets/light.json --threads 2";
+    const BakeRun restarted = bakeIn(d, args);
+    ASSERT_EQ(restarted.exit_code, 0) << restarted.err;
+    fs::rename(d + "/out dir", d + "/first");
+    const BakeRun kept = bakeIn(d, args, "GLIBC_TUNABLES=glibc.malloc.hugetlb=0 ");
+    ASSERT_EQ(kept.exit_code, 0) << kept.err;
+    EXPECT_EQ(restarted.out, kept.out);
+    // stderr: the same notes; the progress lines differ only in their times.
+    auto withoutProgress = [](const std::string& err) {
+        std::string kept_lines, line;
+        std::istringstream in(err);
+        while (std::getline(in, line))
+            if (line.rfind("lodbake: [", 0) != 0) kept_lines += line + "\n";
+        return kept_lines;
+    };
+    EXPECT_EQ(withoutProgress(restarted.err), withoutProgress(kept.err));
+    EXPECT_NE(restarted.err.find("note: assets/crate.obj"), std::string::npos) << restarted.err;
+    for (const char* name : {"crate.glb", "rock.glb"}) {
+        const std::vector<uint8_t> a = bytesOf(d + "/first/" + name);
+        EXPECT_FALSE(a.empty()) << name;
+        EXPECT_EQ(a, bytesOf(d + "/out dir/" + name)) << name;
+    }
+    // A usage error still exits 2 after the restart.
+    EXPECT_EQ(bakeIn(d, "assets/crate.obj -o x.glb --threads two").exit_code, 2);
 }
 
 TEST(PipelineCliTest, ExitCodesQuietAndPlainProgress) {
