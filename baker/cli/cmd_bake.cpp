@@ -11,7 +11,6 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
 #include <filesystem>
 #include <map>
 #include <mutex>
@@ -260,37 +259,9 @@ void setAllocatorPolicy() {
 #endif
 }
 
-// Fresh pages are the dearest memory a bake touches: on the virtual machines we measure on, the first
-// write to a 4 KB page costs 10-35 us (a fault the hypervisor also has to serve), a 2 MB page
-// about as much as 30-80 of them, and dragon_poisson's bake took ~240,000 faults, most of them in
-// malloc's memory (the large arrays are on huge pages already, core/large_array.h). glibc (2.35 and
-// later) backs its heap and its mapped blocks with transparent huge pages when the tunable
-// glibc.malloc.hugetlb=1 is set, and tunables are read only at start-up, so the bake starts itself
-// again with it unless GLIBC_TUNABLES already names it (then the user's setting stands). With it the
-// dragon_poisson bake takes ~30,000 faults and 20 % less CPU time, for ~3 MiB more peak resident
-// size (docs/bake.md, "Memory"). If the new start fails, the bake runs on as it is.
-void restartWithHugePageHeap(char** argv) {
-#if defined(__GLIBC__) && defined(__linux__)
-    const char* tunables = std::getenv("GLIBC_TUNABLES");
-    if (tunables != nullptr && std::strstr(tunables, "glibc.malloc.hugetlb") != nullptr) return;
-    std::string value = "glibc.malloc.hugetlb=1";
-    if (tunables != nullptr && tunables[0] != '\0') value = std::string(tunables) + ":" + value;
-    if (setenv("GLIBC_TUNABLES", value.c_str(), 1) != 0) return;
-    execv("/proc/self/exe", argv);
-    // Still here: the restart failed. Drop the setting again so nothing this process starts sees it.
-    if (tunables != nullptr)
-        setenv("GLIBC_TUNABLES", tunables, 1);
-    else
-        unsetenv("GLIBC_TUNABLES");
-#else
-    (void)argv;
-#endif
-}
-
 } // namespace
 
 int runBake(int argc, char** argv) {
-    restartWithHugePageHeap(argv);
     setAllocatorPolicy();
     Args args;
     int code = 0;

@@ -51,6 +51,7 @@ int main(int argc, char** argv) {
         std::printf("lodbake %s\n", lodbake::kVersionString);
         return kExitOk;
     }
+    restartWithHugePageHeap(argv);
     if (cmd == "info") return runInfo(argc, argv);
     if (cmd == "convert") return runConvert(argc, argv);
     if (cmd == "simplify") return runSimplify(argc, argv);
