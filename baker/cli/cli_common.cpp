@@ -9,8 +9,6 @@
 #include <tuple>
 #include <vector>
 
-#include <unistd.h>
-
 #include "lodbake/bake/bake.h"
 #include "lodbake/cleanup/repair.h"
 #include "lodbake/codec/valence_encoder.h"
@@ -174,25 +172,6 @@ void writeDistanceJson(JsonWriter& j, const DistanceResult& d) {
     j.field("hausdorff", d.hausdorff).field("hausdorff_rel", d.hausdorffRel());
     j.field("mean", d.mean).field("mean_rel", d.meanRel());
     j.field("rms", d.rms).field("rms_rel", d.rmsRel());
-}
-
-void restartWithHugePageHeap(char** argv) {
-#if defined(__GLIBC__) && defined(__linux__)
-    const char* found = std::getenv("GLIBC_TUNABLES");
-    if (found != nullptr && std::strstr(found, "glibc.malloc.hugetlb") != nullptr) return;
-    const bool had = found != nullptr;
-    const std::string before = had ? found : "";
-    const std::string value = before.empty() ? "glibc.malloc.hugetlb=1" : before + ":glibc.malloc.hugetlb=1";
-    if (setenv("GLIBC_TUNABLES", value.c_str(), 1) != 0) return;
-    execv("/proc/self/exe", argv);
-    // Still here: the restart failed. Put the variable back so nothing this process starts sees it.
-    if (had)
-        setenv("GLIBC_TUNABLES", before.c_str(), 1);
-    else
-        unsetenv("GLIBC_TUNABLES");
-#else
-    (void)argv;
-#endif
 }
 
 } // namespace lodbake::cli

@@ -38,16 +38,6 @@ struct OptionSpec {
     bool takes_value;
 };
 
-/// Fresh pages are the dearest memory lodbake touches: on the virtual machines we measure on, the
-/// first write to a 4 KB page costs 10-35 us (a fault the hypervisor serves too), and a bake of
-/// dragon_poisson took ~240,000 of them, most in malloc's memory (the large arrays are on huge pages
-/// already, core/large_array.h). glibc 2.35+ backs its heap and mapped blocks with transparent huge
-/// pages under the tunable glibc.malloc.hugetlb=1, read only at start-up, so every command starts
-/// itself again (execv of /proc/self/exe, same arguments) with it added to GLIBC_TUNABLES, unless
-/// GLIBC_TUNABLES already names it (the user's setting stands). dragon_poisson: the bake 10.7 -> 8.4
-/// s, `encode` 0.83 -> 0.65 s, `repair` 1.25 -> 0.89 s, for a few MiB more peak resident size
-/// (docs/cli.md, "Memory"; docs/bake.md). Returns only if no restart happened or it failed.
-void restartWithHugePageHeap(char** argv);
 int usageError(const std::string& message);
 // Returns false (after printing) on a usage error.
 bool parseArgs(int argc, char** argv, int first, const std::vector<OptionSpec>& specs, Args& args, int& exit_code);

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "cli_common.h"
+#include "huge_page_heap.h"
 #include "lodbake/version.h"
 
 namespace {
@@ -51,7 +52,7 @@ int main(int argc, char** argv) {
         std::printf("lodbake %s\n", lodbake::kVersionString);
         return kExitOk;
     }
-    restartWithHugePageHeap(argv);
+    lodtools::restartWithHugePageHeap(argv); // huge_page_heap.h: malloc on huge pages
     if (cmd == "info") return runInfo(argc, argv);
     if (cmd == "convert") return runConvert(argc, argv);
     if (cmd == "simplify") return runSimplify(argc, argv);
