@@ -53,7 +53,7 @@ template <typename T> std::vector<T> gather(const std::vector<T>& in, const std:
 // offers them. In a std::vector they cost a 4 KB page fault per 1,024 indices (about 13 us of CPU each
 // on the session-9 VM: 40 ms for dragon_poisson's LOD0); the commit copies them into the level's own
 // index array, which is already resident and has the same size.
-using DecodedIndices = std::vector<uint32_t, detail::LargeArrayAllocator<uint32_t>>;
+using DecodedIndices = detail::LargeArray<uint32_t>;
 
 // True when decoded triangle t is input triangle old_face_of[t], renumbered, possibly rotated
 // cyclically (which keeps its orientation).
