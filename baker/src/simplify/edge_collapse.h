@@ -40,6 +40,14 @@ public:
     /// reading (LodChainOptions::record_removals).
     void setRemovalLog(CollapsePairLog* log) { removal_log_ = log; }
 
+    /// run() starts with a partitioned round (two parts of the mesh collapsed side by side, then
+    /// merged; docs/simplify.md, "Partitioned rounds") when at least this many faces are alive and
+    /// nothing the parts would share is in use. Default kRoundMinFaces, so that smaller meshes keep
+    /// the serial collapse order; tests lower it to reach rounds on small meshes.
+    void setRoundMinFaces(size_t faces) { round_min_faces_ = faces; }
+    static constexpr size_t kRoundMinFaces = 200000;
+    size_t roundCount() const { return rounds_; } // partitioned rounds run so far
+
     size_t faceCount() const { return alive_faces_; }
     // refine_late_levels applies to a snapshot taken now: at most 2.5 % of the input's faces (the 2 %
     // and 0.5 % levels it was measured on; a 3 % level is not refined, which halves its cost in the
@@ -88,41 +96,80 @@ private:
             return corner_wedge_[h] != corner_wedge_[nextHe(t)] || corner_wedge_[nextHe(h)] != corner_wedge_[t];
         return false;
     }
+    // Scratch, queue and counters of one collapse loop: run()'s serial loop (serial_), or one part of
+    // a partitioned round (parts_), which touches only its part's data, so parts run side by side.
+    struct Worker {
+        std::vector<uint32_t> fan_u, fan_v, fan_tmp;
+        std::vector<uint32_t> link_u;                  // isValid: the neighbours of the removed point
+        bool fan_u_closed = true, fan_v_closed = true; // from the last isValid
+        std::vector<std::pair<uint32_t, uint32_t>> created_tmp; // (triangle id, face)
+        PartHeap* heap = nullptr;       // a part's heap; null: queue_ and the engine's counters
+        uint32_t part = 0;              // with heap: which part (part_points_)
+        std::vector<uint32_t> deferred; // with heap: edges outside the part whose key changed (runRound)
+        size_t faces_removed = 0, collapses = 0; // with heap: the part's counters
+        double max_error = 0;
+    };
+    // Fixed, not the thread count, so that the result is the same at any thread count (one thread
+    // runs the parts one after the other).
+    static constexpr uint32_t kRoundParts = 2;
+    // A round removes this fraction of the faces to its target; the serial loop removes the rest,
+    // the seam band's first (0.95 left a Hausdorff error 11 % above the serial order's on
+    // dragon_poisson's 10 % level; 0.9 none).
+    static constexpr double kRoundShare = 0.9;
+    static constexpr uint32_t kRoundMaxPhases = 16; // key limits per round (runRound)
+    // No round that would remove fewer than alive / this faces (its set-up is a few passes over the mesh).
+    static constexpr size_t kRoundMinRemovedDivisor = 16;
+    bool pointInPart(uint32_t part, uint32_t point) const {
+        return (part_points_[part][point >> 6] >> (point & 63)) & 1;
+    }
+    // Whether an alive edge belongs to the part (both ends in it) during a round.
+    bool inPart(uint32_t part, uint32_t edge) const {
+        const uint32_t a = he_[edge].point;
+        return a != kNone && pointInPart(part, a) && pointInPart(part, he_[nextHe(edge)].point);
+    }
+    bool roundApplies(size_t target_faces, const CollapseSequence* sequence) const;
+    // Collapses kRoundShare of the way to target_faces in kRoundParts parts side by side, then merges
+    // their queues and counters (nothing when the mesh cannot be cut or the parts do not fit).
+    void runRound(size_t target_faces, double max_error);
+    // The top of w's queue: collapsed, re-queued with its distance penalty, or dropped.
+    void step(Worker& w, double max_error, CollapseSequence* sequence);
+    // Removes an edge from w's queue (a part: from its heap, or defers an edge outside it).
+    void queueRemove(Worker& w, uint32_t edge);
     bool canRemove(uint32_t point, bool feature_edge) const;
     // Outgoing half-edges of `point`, one per incident face; returns false if the fan is open.
     bool gatherFan(uint32_t point, std::vector<uint32_t>& fan) const;
-    Kind classify(uint32_t point); // gathers the fan into fan_tmp_
+    Kind classify(Worker& w, uint32_t point); // gathers the fan into w.fan_tmp
     Kind classifyFan(const std::vector<uint32_t>& fan, bool closed) const;
     bool evaluate(uint32_t edge, Candidate& c) const;
     void collectPairs(uint32_t edge, uint32_t removed, WedgePair* pairs, int& pair_count) const;
-    bool isValid(const Candidate& c, int& pair_count, WedgePair* pairs);
+    bool isValid(Worker& w, const Candidate& c, int& pair_count, WedgePair* pairs);
     struct RegionNormal {
         bool ready = false;
         Vec3d normal; // summed face normals of both fans, computed when a sliver needs it
     };
     // Rejects flips and too-large normal rotations; tracks the worst squared face quality of the
     // neighbourhood before (min_old2) and after (min_new2).
-    bool checkFaces(const std::vector<uint32_t>& fan, uint32_t moved, const Vec3d& p, uint32_t f0, uint32_t f1,
-                    RegionNormal& region, double& min_old2, double& min_new2) const;
+    bool checkFaces(const Worker& w, const std::vector<uint32_t>& fan, uint32_t moved, const Vec3d& p, uint32_t f0,
+                    uint32_t f1, RegionNormal& region, double& min_old2, double& min_new2) const;
     // True when two normals with dot product d and squared lengths len2_a, len2_b are further apart
     // than max_normal_change_deg.
     bool normalTurnsTooFar(double d, double len2_a, double len2_b) const;
     // Largest squared point distance of a valid collapse (fans from isValid): the endpoints' old
     // positions to the new fan, and the new position to the old fans. Exact when above stop2;
     // otherwise some value no larger than stop2.
-    double endpointDistance2(const Candidate& c, double stop2) const;
+    double endpointDistance2(const Worker& w, const Candidate& c, double stop2) const;
     // True when a is strictly further than b from the fan v will have after the collapse c (fans
     // from isValid).
-    bool fartherFromNewFan(const Vec3d& a, const Vec3d& b, const Candidate& c) const;
+    bool fartherFromNewFan(const Worker& w, const Vec3d& a, const Vec3d& b, const Candidate& c) const;
     // An upper bound of endpointDistance2 from a few point-segment distances.
     double distanceBound2(const Candidate& c) const;
     // False when a face of `fan` (other than f0/f1) would flip or degenerate in any UV set.
     bool checkUvFaces(const std::vector<uint32_t>& fan, const Vec3d& p, uint32_t f0, uint32_t f1,
                       const WedgePair* pairs, int pair_count) const;
     Vec3d fanNormal(const std::vector<uint32_t>& fan) const;
-    void collapse(const Candidate& c, const WedgePair* pairs, int pair_count, CollapseSequence* sequence);
-    void updateEdgesAround(uint32_t point);
-    void updateEdgesInFan(); // the edges of the fan in fan_tmp_
+    void collapse(Worker& w, const Candidate& c, const WedgePair* pairs, int pair_count, CollapseSequence* sequence);
+    void updateEdgesAround(Worker& w, uint32_t point);
+    void updateEdgesInFan(Worker& w); // the edges of the fan in w.fan_tmp
     void requeueAll();
     // remove_covered_components (covered_components.cpp): removes every connected component whose
     // points, far points and face centroids all lie within `tolerance` of the other components'
@@ -221,13 +268,15 @@ private:
     // re-creates in the order of the ones they replace (CollapseSequence::created_triangles).
     LargeArray<uint32_t> face_triangle_;
     uint32_t triangle_count_ = 0;
-    std::vector<std::pair<uint32_t, uint32_t>> created_tmp_; // (triangle id, face)
 
     CollapsePairLog* removal_log_ = nullptr; // setRemovalLog
 
-    std::vector<uint32_t> fan_u_, fan_v_, fan_tmp_;
-    std::vector<uint32_t> link_u_; // isValid: the neighbours of the removed point
-    bool fan_u_closed_ = true, fan_v_closed_ = true; // from the last isValid
+    Worker serial_;
+    Worker parts_[kRoundParts];
+    std::vector<uint64_t> part_points_[kRoundParts]; // during a round: per point, 1 when in the part
+    size_t round_min_faces_ = kRoundMinFaces;
+    int round_axis_ = -1; // cut axis of the last round
+    size_t rounds_ = 0;
 };
 
 } // namespace lodbake::detail

@@ -1,0 +1,166 @@
+// detail::EdgeCollapser's partitioned rounds (docs/simplify.md, "Partitioned rounds"): two parts of the
+// mesh collapsed side by side, then merged. The result may not depend on the thread count, and must be
+// a valid mesh with the face count asked for.
+#include "simplify/edge_collapse.h"
+
+#include <cmath>
+#include <cstring>
+#include <map>
+#include <utility>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "core/parallel.h"
+#include "simplify/collapse_queue.h"
+#include "simplify_test_meshes.h"
+
+namespace {
+
+using lodbake::Diagnostics;
+using lodbake::Mesh;
+using lodbake::detail::CollapseQueue;
+using lodbake::detail::EdgeCollapser;
+using lodbake::detail::PartHeap;
+
+// A bumpy sphere: regular connectivity, but costs that differ from place to place.
+Mesh bumpySphere() {
+    Mesh m = lodbake_test::icosphere(6); // 81920 faces
+    for (lodbake::Vec3f& p : m.positions) {
+        const float r = 1.0f + 0.05f * std::sin(7.0f * p.x) * std::sin(5.0f * p.y + 1.0f) * std::sin(3.0f * p.z + 2.0f);
+        p = p * r;
+    }
+    return m;
+}
+
+Mesh bumpyGrid() {
+    return lodbake_test::grid(200, [](float x, float y) { return 0.1f * std::sin(9.0f * x) * std::cos(7.0f * y); });
+}
+
+struct Levels {
+    std::vector<Mesh> meshes;
+    size_t rounds = 0;
+    std::vector<size_t> targets;
+};
+
+Levels collapse(const Mesh& mesh, size_t round_min_faces, size_t threads) {
+    lodbake::ScopedThreadLimit limit(threads);
+    Diagnostics d;
+    EdgeCollapser engine;
+    EXPECT_TRUE(engine.init(mesh, lodbake::SimplifyOptions(), d).ok());
+    engine.setRoundMinFaces(round_min_faces);
+    Levels out;
+    for (double ratio : {0.5, 0.25, 0.1}) {
+        const size_t target = size_t(std::ceil(ratio * double(engine.initialFaceCount())));
+        EXPECT_TRUE(engine.run(target, HUGE_VAL, nullptr));
+        // A collapse removes two faces, one on a border: an open mesh may end one below the target.
+        EXPECT_LE(engine.faceCount(), target);
+        EXPECT_GE(engine.faceCount() + 1, target);
+        out.targets.push_back(target);
+        out.meshes.push_back(engine.extract());
+    }
+    out.rounds = engine.roundCount();
+    return out;
+}
+
+// Every directed edge occurs once; on a closed mesh its reverse occurs once too; no face repeats
+// a point.
+void expectManifold(const Mesh& m, bool closed) {
+    std::map<std::pair<uint32_t, uint32_t>, int> directed;
+    for (size_t f = 0; f < m.indices.size(); f += 3) {
+        for (int k = 0; k < 3; ++k) {
+            const uint32_t a = m.indices[f + k], b = m.indices[f + (k + 1) % 3];
+            ASSERT_NE(a, b);
+            ++directed[{a, b}];
+        }
+    }
+    for (const auto& [edge, count] : directed) {
+        ASSERT_EQ(count, 1) << edge.first << "-" << edge.second;
+        if (closed) {
+            ASSERT_EQ(directed.count({edge.second, edge.first}), 1u);
+        }
+    }
+    if (closed) {
+        // Euler characteristic of a sphere: V - E + F = 2.
+        const long long edges = (long long)(directed.size() / 2);
+        EXPECT_EQ((long long)m.vertexCount() - edges + (long long)m.faceCount(), 2);
+    }
+}
+
+TEST(PartitionedRoundTest, SameLevelsAtOneAndTwoThreads) {
+    for (const bool closed : {true, false}) {
+        const Mesh mesh = closed ? bumpySphere() : bumpyGrid();
+        const Levels one = collapse(mesh, 10000, 1);
+        const Levels two = collapse(mesh, 10000, 2);
+        EXPECT_EQ(one.rounds, 3u); // each level starts above 10000 faces
+        EXPECT_EQ(one.rounds, two.rounds);
+        ASSERT_EQ(one.meshes.size(), two.meshes.size());
+        for (size_t i = 0; i < one.meshes.size(); ++i) {
+            EXPECT_LE(one.meshes[i].faceCount(), one.targets[i]);
+            EXPECT_EQ(one.meshes[i].indices, two.meshes[i].indices) << "level " << i;
+            ASSERT_EQ(one.meshes[i].positions.size(), two.meshes[i].positions.size());
+            EXPECT_EQ(std::memcmp(one.meshes[i].positions.data(), two.meshes[i].positions.data(),
+                                  one.meshes[i].positions.size() * sizeof(lodbake::Vec3f)),
+                      0)
+                << "level " << i;
+            expectManifold(one.meshes[i], closed);
+        }
+    }
+}
+
+TEST(PartitionedRoundTest, SmallMeshesKeepTheSerialLoop) {
+    const Mesh mesh = bumpySphere();
+    const Levels serial = collapse(mesh, EdgeCollapser::kRoundMinFaces, 2);
+    EXPECT_EQ(serial.rounds, 0u);
+    // Rounds change the collapse order, so the levels differ (but keep the face counts).
+    const Levels rounds = collapse(mesh, 10000, 2);
+    ASSERT_GT(rounds.rounds, 0u);
+    EXPECT_NE(serial.meshes[0].indices, rounds.meshes[0].indices);
+    EXPECT_EQ(serial.meshes[0].faceCount(), rounds.meshes[0].faceCount());
+}
+
+TEST(PartitionedRoundTest, QueueSplitAndMergeKeepEveryId) {
+    constexpr uint32_t kIds = 5000;
+    CollapseQueue q(kIds);
+    q.reserve(kIds + 64);
+    for (uint32_t id = 0; id < kIds; ++id)
+        if (id % 7 != 3) q.set(id, float((id * 2654435761u) % 1000));
+    // Part 0: ids ≡ 0 mod 3, part 1: ≡ 1 mod 3, the rest stays.
+    const uint32_t capacity[2] = {kIds / 3 + 1, kIds / 3 + 1};
+    PartHeap parts[2];
+    ASSERT_TRUE(q.split([](uint32_t id) { return id % 3; }, capacity, parts, 2));
+    for (const PartHeap& part : parts) EXPECT_TRUE(part.isConsistent());
+    // Pop a few from each part in order, insert one id that was absent.
+    for (uint32_t p = 0; p < 2; ++p) {
+        float last = -1.0f;
+        for (int i = 0; i < 100; ++i) {
+            const uint32_t id = parts[p].topId();
+            EXPECT_EQ(id % 3, p);
+            EXPECT_GE(float((id * 2654435761u) % 1000), last);
+            last = float((id * 2654435761u) % 1000);
+            parts[p].remove(id);
+        }
+        parts[p].set(p == 0 ? 3 : 10, 0.5f); // ≡ 3 mod 7: never queued
+        EXPECT_TRUE(parts[p].isConsistent());
+    }
+    q.merge(parts, 2);
+    EXPECT_TRUE(q.isConsistent());
+    EXPECT_TRUE(q.contains(3));
+    EXPECT_TRUE(q.contains(10));
+    size_t expected = 0;
+    for (uint32_t id = 0; id < kIds; ++id) expected += id % 7 != 3;
+    EXPECT_EQ(q.size(), expected - 200 + 2);
+}
+
+TEST(PartitionedRoundTest, SplitRefusesPartsThatDoNotFit) {
+    CollapseQueue q(100);
+    for (uint32_t id = 0; id < 100; ++id) q.set(id, float(id));
+    const uint32_t capacity[2] = {1000000, 1000000};
+    PartHeap parts[2];
+    EXPECT_FALSE(q.split([](uint32_t id) { return id % 2; }, capacity, parts, 2));
+    EXPECT_TRUE(q.isConsistent());
+    EXPECT_EQ(q.size(), 100u);
+    EXPECT_EQ(q.topId(), 0u);
+}
+
+} // namespace
