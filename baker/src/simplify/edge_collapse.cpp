@@ -925,7 +925,7 @@ void EdgeCollapser::queueRemove(Worker& w, uint32_t edge) {
 bool EdgeCollapser::roundApplies(size_t target_faces, const CollapseSequence* sequence) const {
     // Not below late_faces_ (the late stage prices distances by the whole mesh's mean area), nor with
     // what the parts would share: UV chart counts, component removal, a removal log, a sequence.
-    return alive_faces_ >= round_min_faces_ && target_faces >= late_faces_ &&
+    return alive_faces_ >= round_min_faces_ && target_faces >= late_faces_ && alive_faces_ > target_faces &&
            alive_faces_ - target_faces >= alive_faces_ / kRoundMinRemovedDivisor && !sequence && !removal_log_ &&
            uv_channel_ == kNone && !remove_components_;
 }

@@ -119,6 +119,19 @@ TEST(PartitionedRoundTest, SmallMeshesKeepTheSerialLoop) {
     EXPECT_EQ(serial.meshes[0].faceCount(), rounds.meshes[0].faceCount());
 }
 
+TEST(PartitionedRoundTest, TargetAtOrAboveTheFaceCountCollapsesNothing) {
+    const Mesh mesh = bumpySphere();
+    Diagnostics d;
+    EdgeCollapser engine;
+    ASSERT_TRUE(engine.init(mesh, lodbake::SimplifyOptions(), d).ok());
+    engine.setRoundMinFaces(10000);
+    for (size_t target : {engine.initialFaceCount(), engine.initialFaceCount() + 5}) {
+        EXPECT_TRUE(engine.run(target, HUGE_VAL, nullptr));
+        EXPECT_EQ(engine.faceCount(), engine.initialFaceCount());
+        EXPECT_EQ(engine.roundCount(), 0u);
+    }
+}
+
 TEST(PartitionedRoundTest, QueueSplitAndMergeKeepEveryId) {
     constexpr uint32_t kIds = 5000;
     CollapseQueue q(kIds);
