@@ -800,8 +800,15 @@ bool EdgeCollapser::run(size_t target_faces, double max_error, CollapseSequence*
     // A round removes at most half of the faces alive: its seam band (points next to the other part)
     // keeps its density meanwhile, and the serial loop must catch up on it afterwards (one round from
     // 268 k to 107 k faces, dragon_poisson's 10 % level: Hausdorff error +11 % against the serial order).
-    const size_t round_target = std::max(target_faces, alive_faces_ / 2);
-    if (roundApplies(round_target, sequence)) runRound(round_target, max_error);
+    // A run that goes further takes more rounds, each cut across the last one's seam (not after a
+    // round to the run's own target: the serial loop's share is what catches up on the seam band).
+    for (;;) {
+        const size_t round_target = std::max(target_faces, alive_faces_ / 2);
+        if (!roundApplies(round_target, sequence)) break;
+        const size_t alive = alive_faces_;
+        runRound(round_target, max_error);
+        if (alive_faces_ == alive || round_target == target_faces) break; // (no cut, no room, nothing to collapse)
+    }
     size_t collapses_at_requeue = collapses_;
     bool requeued = false;
     while (alive_faces_ > target_faces) {

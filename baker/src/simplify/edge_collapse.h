@@ -40,8 +40,8 @@ public:
     /// reading (LodChainOptions::record_removals).
     void setRemovalLog(CollapsePairLog* log) { removal_log_ = log; }
 
-    /// run() starts with a partitioned round (two parts of the mesh collapsed side by side, then
-    /// merged; docs/simplify.md, "Partitioned rounds") when at least this many faces are alive and
+    /// run() starts with partitioned rounds (two parts of the mesh collapsed side by side, then
+    /// merged; docs/simplify.md, "Partitioned rounds") while at least this many faces are alive and
     /// nothing the parts would share is in use. Default kRoundMinFaces, so that smaller meshes keep
     /// the serial collapse order; tests lower it to reach rounds on small meshes.
     void setRoundMinFaces(size_t faces) { round_min_faces_ = faces; }

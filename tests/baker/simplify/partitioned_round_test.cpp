@@ -92,7 +92,9 @@ TEST(PartitionedRoundTest, SameLevelsAtOneAndTwoThreads) {
         const Mesh mesh = closed ? bumpySphere() : bumpyGrid();
         const Levels one = collapse(mesh, 10000, 1);
         const Levels two = collapse(mesh, 10000, 2);
-        EXPECT_EQ(one.rounds, 3u); // each level starts above 10000 faces
+        // Each level starts above 10000 faces; the 10 % run (20480 to 8192 faces) takes two rounds, the
+        // first to half the faces alive.
+        EXPECT_EQ(one.rounds, 4u);
         EXPECT_EQ(one.rounds, two.rounds);
         ASSERT_EQ(one.meshes.size(), two.meshes.size());
         for (size_t i = 0; i < one.meshes.size(); ++i) {
