@@ -1052,6 +1052,20 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
     }
     const uint32_t point_count = uint32_t(position_.size());
     const uint32_t wedge_count = uint32_t(wedge_vertex_.size());
+    // The attribute values and blocks, the point quadrics and far_ are large arrays (dragon_poisson:
+    // 6, 98, 47 and 6 MB) that mostly land on fresh pages, whose first touch costs far more than
+    // the filling. Background tasks allocate and fill them while this thread builds the faces, twins
+    // and point kinds. The quadrics start once the twins' corner lists are freed: the memory in use
+    // then stays below that at the end of init, as before.
+    BackgroundTasks fill_attributes, fill_quadrics;
+    block_size_ = channel_count_ > 0 ? attributeBlockSize(channel_count_) : 0;
+    fill_attributes.run([&, wedge_count] {
+        wedge_value_.assign(size_t(wedge_count) * channel_count_, 0.0f);
+        for (uint32_t w = 0; w < wedge_count; ++w)
+            for (uint32_t ch = 0; ch < channel_count_; ++ch)
+                wedge_value_[size_t(w) * channel_count_ + ch] = channelValue(wedge_vertex_[w], ch);
+        wedge_block_.assign(size_t(wedge_count) * block_size_, 0.0);
+    });
 
     // Faces, in input order, without those degenerate by position.
     const size_t input_faces = mesh.faceCount();
@@ -1141,6 +1155,15 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
         for (uint32_t p = 0; p < point_count; ++p)
             if (start[p] < start[p + 1]) point_he_[p] = list[start[p]].he;
         LargeArray<Outgoing>().swap(list);
+        fill_quadrics.run([this, point_count, penalty = options.tip_distance_weight > 0] {
+            quadric_.assign(point_count, Quadric());
+            // Late stage (see run()): the penalty also measures each point's far input point, so far_
+            // is kept from the start.
+            if (penalty)
+                far_ = position_;
+            else
+                LargeArray<Vec3f>().swap(far_);
+        });
         // A point whose faces form more than one fan (a bow-tie) is non-manifold: lock it. Any
         // other point gets its kind from the same fan (classifyFan reads only the corner table, the
         // wedges, the groups and the options, all final here).
@@ -1175,7 +1198,7 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
     // Each face's quadric and its feature edges' constraint quadrics are computed in parallel (fixed
     // chunks of a batch of faces, into a small buffer) and added to the points in face order: the
     // same sums as a serial loop.
-    quadric_.assign(point_count, Quadric());
+    LODBAKE_RETURN_IF_ERROR(fill_quadrics.wait());
     {
         constexpr uint32_t kBatch = 2 * kInitChunk;
         struct FaceQuadrics {
@@ -1225,13 +1248,8 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
             }
         }
     }
-    wedge_value_.assign(size_t(wedge_count) * channel_count_, 0.0f);
-    block_size_ = channel_count_ > 0 ? attributeBlockSize(channel_count_) : 0;
-    wedge_block_.assign(size_t(wedge_count) * block_size_, 0.0);
+    LODBAKE_RETURN_IF_ERROR(fill_attributes.wait());
     if (channel_count_ > 0) {
-        for (uint32_t w = 0; w < wedge_count; ++w)
-            for (uint32_t ch = 0; ch < channel_count_; ++ch)
-                wedge_value_[size_t(w) * channel_count_ + ch] = channelValue(wedge_vertex_[w], ch);
         // Each face's attribute block is computed in parallel (fixed chunks of a batch of faces, into
         // a small buffer) and added to its wedges in face order: the same sums as a serial loop.
         constexpr uint32_t kBatch = 2 * kInitChunk;
@@ -1268,16 +1286,12 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
     next_component_check_ = size_t(double(face_count) * kComponentCheckStep);
     removals_ = 0;
     removed_faces_ = 0;
-    // Late stage (see run()): the penalty also measures each point's far input point, so far_ is
-    // kept from the start. The quadric weights sum to three times the surface area whatever collapses.
+    // Late stage (see run()); far_ is filled above. The quadric weights sum to three times the
+    // surface area whatever collapses.
     late_ = false;
     late_faces_ = size_t(kLateFraction * double(initial_faces_));
     total_weight_ = 0;
     for (const Quadric& q : quadric_) total_weight_ += q.weight;
-    if (has_penalty_)
-        far_ = position_;
-    else
-        LargeArray<Vec3f>().swap(far_);
     // UV charts: faces joined across edges whose two corners share wedges (union-find).
     uv_set_count_ = uint32_t(mesh.uvs.size());
     uv_channel_ = uv_set_count_ > 0 ? (mesh.hasNormals() ? 3u : 0u) : kNone;
