@@ -1052,12 +1052,12 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
     }
     const uint32_t point_count = uint32_t(position_.size());
     const uint32_t wedge_count = uint32_t(wedge_vertex_.size());
-    // The attribute values and blocks, the point quadrics and far_ are large arrays (dragon_poisson:
-    // 6, 98, 47 and 6 MB) that mostly land on fresh pages, whose first touch costs far more than
-    // the filling. Background tasks allocate and fill them while this thread builds the faces, twins
-    // and point kinds. The quadrics start once the twins' corner lists are freed: the memory in use
-    // then stays below that at the end of init, as before.
-    BackgroundTasks fill_attributes, fill_quadrics;
+    // The attribute values and blocks, the point quadrics, far_ and the queue's slots are large
+    // arrays (dragon_poisson: 6, 98, 47, 6 and 26 MB) that mostly land on fresh pages, whose first
+    // touch costs far more than the filling. Background tasks allocate and fill them while this
+    // thread builds the faces, twins and point kinds. The quadrics and the queue start once the
+    // twins' corner lists are freed: the memory in use then stays below that at the end of init.
+    BackgroundTasks fill_attributes, fill_quadrics, fill_queue;
     block_size_ = channel_count_ > 0 ? attributeBlockSize(channel_count_) : 0;
     fill_attributes.run([&, wedge_count] {
         wedge_value_.assign(size_t(wedge_count) * channel_count_, 0.0f);
@@ -1164,6 +1164,7 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
             else
                 LargeArray<Vec3f>().swap(far_);
         });
+        fill_queue.run([this, he_count] { queue_ = CollapseQueue(he_count); });
         // A point whose faces form more than one fan (a bow-tie) is non-manifold: lock it. Any
         // other point gets its kind from the same fan (classifyFan reads only the corner table, the
         // wedges, the groups and the options, all final here).
@@ -1316,7 +1317,7 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
             ++chart_alive_[face_chart_[f]];
         }
     }
-    queue_ = CollapseQueue(he_count);
+    LODBAKE_RETURN_IF_ERROR(fill_queue.wait());
     // Room for every canonical half-edge (half the interior ones plus the open ones): the queue never
     // holds more, and growing it by doubling would copy it and keep up to twice the memory.
     {
