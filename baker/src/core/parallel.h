@@ -7,11 +7,13 @@
 #include <exception>
 #include <new>
 #include <string>
+#include <utility>
 
 #include <tbb/blocked_range.h>
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
 #include <tbb/partitioner.h>
+#include <tbb/task_group.h>
 
 #include "lodbake/core/status.h"
 
@@ -52,6 +54,36 @@ template <class Fn> Status parallelForChunks(size_t count, size_t chunk_size, Fn
         fn(chunk, first, first + size < count ? first + size : count);
     });
 }
+
+/// Runs work that an idle worker thread may pick up while the caller goes on: each fn given to run()
+/// is a task, and wait() returns once every one has run (running those no worker took on the calling
+/// thread, so with one thread they run in wait()). For work whose result does not depend on when or
+/// on which thread it runs, on state the caller leaves alone until wait() (e.g. allocating and
+/// filling an array). fn must not throw; bad_alloc is caught and becomes a Status. The destructor
+/// waits, so an early return cannot leave a task running.
+class BackgroundTasks {
+public:
+    BackgroundTasks() = default;
+    BackgroundTasks(const BackgroundTasks&) = delete;
+    BackgroundTasks& operator=(const BackgroundTasks&) = delete;
+    ~BackgroundTasks() { (void)wait(); }
+
+    template <class Fn> void run(Fn&& fn) { group_.run(std::forward<Fn>(fn)); }
+
+    Status wait() {
+        try {
+            group_.wait();
+        } catch (const std::bad_alloc&) {
+            return resourceLimit("out of memory in a background task");
+        } catch (const std::exception& e) {
+            return internalError(std::string("background task failed: ") + e.what());
+        }
+        return Status::okStatus();
+    }
+
+private:
+    tbb::task_group group_;
+};
 
 /// Limits the worker threads TBB may use while it is alive (CLI --threads, determinism tests).
 class ScopedThreadLimit {

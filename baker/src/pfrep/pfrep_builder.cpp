@@ -453,9 +453,14 @@ Result<PfrepBuild> buildBlob(const CollapseSequence& sequence, const std::vector
         if (fan_first[i] < s_end) {
             const Vec3d pi = pos(i);
             const Vec3d& ax = axis[i];
+            // The triangles one removal re-creates are stored one after the other, so a dependency
+            // often repeats in consecutive slots: each maximum is taken once per run (std::max is
+            // idempotent, so this changes no bit).
+            uint32_t previous = kNone;
             for (uint32_t s = fan_first[i]; s < s_end; ++s) {
                 const uint32_t d = slots[s].dep;
-                if (d == kNone) continue;
+                if (d == kNone || d == previous) continue;
+                previous = d;
                 e = std::max(e, err[d]);
                 rad = std::max(rad, length(pos(d) - pi) + radius[d]);
                 angle = std::max(angle, std::acos(std::clamp(dot(ax, axis[d]), -1.0, 1.0)) + cone_angle[d]);

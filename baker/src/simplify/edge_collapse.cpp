@@ -1183,8 +1183,30 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
     {
         LargeArray<uint32_t> point_table(table_size, kNone); // first vertex of each point
         LargeArray<uint32_t> wedge_table(has_wedges ? table_size : 0, kNone);
-        for (uint32_t v : order) {
+        position_.reserve(order.size());
+        wedge_vertex_.reserve(order.size());
+        wedge_point_.reserve(order.size());
+        // Each vertex's table slots are random accesses: they are hashed kWeldAhead vertices ahead
+        // and prefetched, so the misses overlap (a ring of the hashes, so each is computed once).
+        constexpr size_t kWeldAhead = 16;
+        uint64_t point_hash[kWeldAhead], wedge_hash[kWeldAhead];
+        auto hashAhead = [&](size_t n) {
+            const uint32_t v = order[n];
             const uint64_t ph = posHash(v);
+            point_hash[n % kWeldAhead] = ph;
+            prefetch(&point_table[size_t(finish(ph)) & mask]);
+            if (has_wedges) {
+                const uint64_t wh = finish(attrHash(v, ph));
+                wedge_hash[n % kWeldAhead] = wh;
+                prefetch(&wedge_table[size_t(wh) & mask]);
+            }
+        };
+        for (size_t n = 0; n < std::min(kWeldAhead, order.size()); ++n) hashAhead(n);
+        for (size_t n = 0; n < order.size(); ++n) {
+            const uint32_t v = order[n];
+            const uint64_t ph = point_hash[n % kWeldAhead];
+            const uint64_t wh = has_wedges ? wedge_hash[n % kWeldAhead] : 0;
+            if (n + kWeldAhead < order.size()) hashAhead(n + kWeldAhead);
             size_t i = size_t(finish(ph)) & mask;
             for (;;) {
                 const uint32_t r = point_table[i];
@@ -1211,7 +1233,7 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
                 vertex_wedge[v] = vertex_point[v];
                 continue;
             }
-            size_t j = size_t(finish(attrHash(v, ph))) & mask;
+            size_t j = size_t(wh) & mask;
             for (;;) {
                 const uint32_t r = wedge_table[j];
                 if (r == kNone) {
@@ -1270,6 +1292,20 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
     }
     const uint32_t point_count = uint32_t(position_.size());
     const uint32_t wedge_count = uint32_t(wedge_vertex_.size());
+    // The attribute values and blocks, the point quadrics, far_ and the queue's slots are large
+    // arrays (dragon_poisson: 6, 98, 47, 6 and 26 MB) that mostly land on fresh pages, whose first
+    // touch costs far more than the filling. Background tasks allocate and fill them while this
+    // thread builds the faces, twins and point kinds. The quadrics and the queue start once the
+    // twins' corner lists are freed: the memory in use then stays below that at the end of init.
+    BackgroundTasks fill_attributes, fill_quadrics, fill_queue;
+    block_size_ = channel_count_ > 0 ? attributeBlockSize(channel_count_) : 0;
+    fill_attributes.run([&, wedge_count] {
+        wedge_value_.assign(size_t(wedge_count) * channel_count_, 0.0f);
+        for (uint32_t w = 0; w < wedge_count; ++w)
+            for (uint32_t ch = 0; ch < channel_count_; ++ch)
+                wedge_value_[size_t(w) * channel_count_ + ch] = channelValue(wedge_vertex_[w], ch);
+        wedge_block_.assign(size_t(wedge_count) * block_size_, 0.0);
+    });
 
     // Faces, in input order, without those degenerate by position.
     const size_t input_faces = mesh.faceCount();
@@ -1319,10 +1355,18 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
         LargeArray<uint32_t> start(size_t(point_count) + 1, 0);
         for (uint32_t h = 0; h < he_count; ++h) ++start[he_[h].point + 1];
         for (uint32_t p = 0; p < point_count; ++p) start[p + 1] += start[p];
-        LargeArray<uint32_t> list(he_count);
-        LargeArray<uint32_t> fill(start.begin(), start.end() - 1);
-        for (uint32_t h = 0; h < he_count; ++h) list[fill[he_[h].point]++] = h;
-        LargeArray<uint32_t>().swap(fill);
+        // Each point's outgoing half-edges in half-edge order, with their end points: the twin
+        // search below then reads two short runs of this array instead of one corner of he_ per
+        // candidate (a random access each).
+        struct Outgoing {
+            uint32_t he;
+            uint32_t to;
+        };
+        LargeArray<Outgoing> list(he_count);
+        {
+            LargeArray<uint32_t> fill(start.begin(), start.end() - 1);
+            for (uint32_t h = 0; h < he_count; ++h) list[fill[he_[h].point]++] = {h, he_[nextHe(h)].point};
+        }
         // Each half-edge finds its own twin (the pairing is symmetric: a->b once and b->a once), in
         // parallel over fixed chunks; the points to lock are collected per chunk.
         std::vector<std::vector<uint32_t>> lock_points(chunkCount(he_count, kInitChunk));
@@ -1330,12 +1374,11 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
             for (uint32_t h = first; h < last; ++h) {
                 const uint32_t a = he_[h].point, b = he_[nextHe(h)].point;
                 uint32_t same = 0, reverse = 0, match = kNone;
-                for (uint32_t i = start[a]; i < start[a + 1]; ++i)
-                    if (he_[nextHe(list[i])].point == b) ++same;
+                for (uint32_t i = start[a]; i < start[a + 1]; ++i) same += list[i].to == b;
                 for (uint32_t i = start[b]; i < start[b + 1]; ++i)
-                    if (he_[nextHe(list[i])].point == a) {
+                    if (list[i].to == a) {
                         ++reverse;
-                        match = list[i];
+                        match = list[i].he;
                     }
                 if (same == 1 && reverse == 1) {
                     he_[h].twin = match;
@@ -1350,8 +1393,21 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
         std::vector<std::vector<uint32_t>>().swap(lock_points);
         point_he_.assign(point_count, kNone);
         for (uint32_t p = 0; p < point_count; ++p)
-            if (start[p] < start[p + 1]) point_he_[p] = list[start[p]];
-        // A point whose faces form more than one fan (a bow-tie) is non-manifold: lock it.
+            if (start[p] < start[p + 1]) point_he_[p] = list[start[p]].he;
+        LargeArray<Outgoing>().swap(list);
+        fill_quadrics.run([this, point_count, penalty = options.tip_distance_weight > 0] {
+            quadric_.assign(point_count, Quadric());
+            // Late stage (see run()): the penalty also measures each point's far input point, so far_
+            // is kept from the start.
+            if (penalty)
+                far_ = position_;
+            else
+                LargeArray<Vec3f>().swap(far_);
+        });
+        fill_queue.run([this, he_count] { queue_ = CollapseQueue(he_count); });
+        // A point whose faces form more than one fan (a bow-tie) is non-manifold: lock it. Any
+        // other point gets its kind from the same fan (classifyFan reads only the corner table, the
+        // wedges, the groups and the options, all final here).
         std::vector<size_t> locked_in_chunk(chunkCount(point_count, kInitChunk), 0);
         LODBAKE_RETURN_IF_ERROR(forChunks(point_count, [&](size_t chunk, uint32_t first, uint32_t last) {
             std::vector<uint32_t> fan;
@@ -1361,8 +1417,8 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
                     continue;
                 }
                 if (kind_[p] != kLocked) {
-                    gatherFan(p, fan);
-                    if (fan.size() != start[p + 1] - start[p]) kind_[p] = kLocked;
+                    const bool closed = gatherFan(p, fan);
+                    kind_[p] = fan.size() != start[p + 1] - start[p] ? kLocked : classifyFan(fan, closed);
                 }
                 if (kind_[p] == kLocked) ++locked_in_chunk[chunk];
             }
@@ -1383,7 +1439,7 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
     // Each face's quadric and its feature edges' constraint quadrics are computed in parallel (fixed
     // chunks of a batch of faces, into a small buffer) and added to the points in face order: the
     // same sums as a serial loop.
-    quadric_.assign(point_count, Quadric());
+    LODBAKE_RETURN_IF_ERROR(fill_quadrics.wait());
     {
         constexpr uint32_t kBatch = 2 * kInitChunk;
         struct FaceQuadrics {
@@ -1433,13 +1489,8 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
             }
         }
     }
-    wedge_value_.assign(size_t(wedge_count) * channel_count_, 0.0f);
-    block_size_ = channel_count_ > 0 ? attributeBlockSize(channel_count_) : 0;
-    wedge_block_.assign(size_t(wedge_count) * block_size_, 0.0);
+    LODBAKE_RETURN_IF_ERROR(fill_attributes.wait());
     if (channel_count_ > 0) {
-        for (uint32_t w = 0; w < wedge_count; ++w)
-            for (uint32_t ch = 0; ch < channel_count_; ++ch)
-                wedge_value_[size_t(w) * channel_count_ + ch] = channelValue(wedge_vertex_[w], ch);
         // Each face's attribute block is computed in parallel (fixed chunks of a batch of faces, into
         // a small buffer) and added to its wedges in face order: the same sums as a serial loop.
         constexpr uint32_t kBatch = 2 * kInitChunk;
@@ -1476,16 +1527,12 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
     next_component_check_ = size_t(double(face_count) * kComponentCheckStep);
     removals_ = 0;
     removed_faces_ = 0;
-    // Late stage (see run()): the penalty also measures each point's far input point, so far_ is
-    // kept from the start. The quadric weights sum to three times the surface area whatever collapses.
+    // Late stage (see run()); far_ is filled above. The quadric weights sum to three times the
+    // surface area whatever collapses.
     late_ = false;
     late_faces_ = size_t(kLateFraction * double(initial_faces_));
     total_weight_ = 0;
     for (const Quadric& q : quadric_) total_weight_ += q.weight;
-    if (has_penalty_)
-        far_ = position_;
-    else
-        LargeArray<Vec3f>().swap(far_);
     // UV charts: faces joined across edges whose two corners share wedges (union-find).
     uv_set_count_ = uint32_t(mesh.uvs.size());
     uv_channel_ = uv_set_count_ > 0 ? (mesh.hasNormals() ? 3u : 0u) : kNone;
@@ -1510,21 +1557,7 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
             ++chart_alive_[face_chart_[f]];
         }
     }
-    // Every point's kind from its fan: independent, in parallel over fixed chunks.
-    LODBAKE_RETURN_IF_ERROR(forChunks(point_count, [&](size_t, uint32_t first, uint32_t last) {
-        std::vector<uint32_t> fan;
-        for (uint32_t p = first; p < last; ++p) {
-            if (kind_[p] == kLocked || kind_[p] == kDead) continue;
-            if (point_he_[p] == kNone) {
-                kind_[p] = kDead;
-                continue;
-            }
-            const bool closed = gatherFan(p, fan);
-            kind_[p] = classifyFan(fan, closed);
-        }
-    }));
-
-    queue_ = CollapseQueue(he_count);
+    LODBAKE_RETURN_IF_ERROR(fill_queue.wait());
     // Room for every canonical half-edge (half the interior ones plus the open ones): the queue never
     // holds more, and growing it by doubling would copy it and keep up to twice the memory.
     {
