@@ -234,12 +234,7 @@ private:
     double slack_;
 };
 
-struct SideStats {
-    double max = 0.0;
-    double sum = 0.0;
-    double sum_sq = 0.0;
-    uint64_t count = 0;
-};
+using SideStats = OneSidedDistance;
 
 // The points measured from one side: area-uniform stratified samples, then the referenced
 // vertices, stored in Morton order of their position (ties by point index).
@@ -380,23 +375,26 @@ Status checkOptions(const DistanceOptions& options) {
 }
 
 // What an approximation needs before it is measured: its index and its side's points (each built
-// only from the approximation, so it can be prepared while the previous one is measured).
+// only from the approximation, so it can be prepared while the previous one is measured). No index
+// when the reference side was measured beforehand (measureReferenceSides): nothing else queries it.
 struct ApproxSide {
     Status status = Status::okStatus();
     DistanceIndex index;
     PointArray points;
 };
 
-ApproxSide prepareApprox(const Mesh& approx, const DistanceOptions& options) {
+ApproxSide prepareApprox(const Mesh& approx, const DistanceOptions& options, bool with_index) {
     ApproxSide side;
     side.status = checkSurface(approx, "approximation");
     if (!side.status.ok()) return side;
-    Result<DistanceIndex> index = DistanceIndex::build(approx.positions, approx.indices);
-    if (!index.ok()) {
-        side.status = index.status();
-        return side;
+    if (with_index) {
+        Result<DistanceIndex> index = DistanceIndex::build(approx.positions, approx.indices);
+        if (!index.ok()) {
+            side.status = index.status();
+            return side;
+        }
+        side.index = std::move(index).value();
     }
-    side.index = std::move(index).value();
     Result<PointArray> points = samplePoints(approx, options, kApproxStream, "approximation");
     if (!points.ok()) {
         side.status = points.status();
@@ -407,11 +405,17 @@ ApproxSide prepareApprox(const Mesh& approx, const DistanceOptions& options) {
     return side;
 }
 
-// One prepared approximation against a reference whose side's points are already drawn.
+// One prepared approximation against a reference whose side's points are already drawn, or whose
+// side was measured beforehand (`known`, not null).
 Result<DistanceResult> measurePrepared(const DistanceReference& reference, const PointArray& reference_points,
-                                       const ApproxSide& approx) {
+                                       const ApproxSide& approx, const OneSidedDistance* known) {
     LODBAKE_RETURN_IF_ERROR(approx.status);
-    LODBAKE_ASSIGN_OR_RETURN(SideStats ref_to_approx, measurePoints(reference_points, approx.index));
+    SideStats ref_to_approx;
+    if (known) {
+        ref_to_approx = *known;
+    } else {
+        LODBAKE_ASSIGN_OR_RETURN(ref_to_approx, measurePoints(reference_points, approx.index));
+    }
     LODBAKE_ASSIGN_OR_RETURN(SideStats approx_to_ref, measurePoints(approx.points, reference.index()));
 
     DistanceResult r;
@@ -429,10 +433,13 @@ Result<DistanceResult> measurePrepared(const DistanceReference& reference, const
 // measured: two tasks side by side, the next approximation's serial index build and sampling beside the
 // current one's parallel queries, so idle threads join the queries. At most two approximations' indexes
 // and points exist at once. `first` is approximations[0] already prepared (empty when there are none).
+// `known[i]`, when there and not null, is approximation i's reference side, measured beforehand.
 std::vector<Result<DistanceResult>> measurePipelined(const DistanceReference& reference,
                                                      const PointArray& reference_points,
                                                      const std::vector<const Mesh*>& approximations,
-                                                     const DistanceOptions& options, ApproxSide first) {
+                                                     const DistanceOptions& options, ApproxSide first,
+                                                     const std::vector<const OneSidedDistance*>& known) {
+    auto knownAt = [&](size_t i) { return i < known.size() ? known[i] : nullptr; };
     std::vector<Result<DistanceResult>> results(approximations.size(), Result<DistanceResult>(DistanceResult{}));
     ApproxSide current = std::move(first);
     for (size_t i = 0; i < approximations.size(); ++i) {
@@ -440,9 +447,9 @@ std::vector<Result<DistanceResult>> measurePipelined(const DistanceReference& re
         const bool has_next = i + 1 < approximations.size();
         const Status run = parallelFor(has_next ? 2 : 1, 1, [&](size_t task) {
             if (task == 0)
-                results[i] = measurePrepared(reference, reference_points, current);
+                results[i] = measurePrepared(reference, reference_points, current, knownAt(i));
             else
-                next = prepareApprox(*approximations[i + 1], options);
+                next = prepareApprox(*approximations[i + 1], options, knownAt(i + 1) == nullptr);
         });
         if (!run.ok()) {
             results[i] = run;
@@ -753,7 +760,7 @@ Result<DistanceResult> measureSurfaceDistance(const DistanceReference& reference
     LODBAKE_RETURN_IF_ERROR(checkSurface(approx, "approximation"));
     LODBAKE_ASSIGN_OR_RETURN(PointArray reference_points,
                              samplePoints(reference.mesh(), options, kReferenceStream, "reference"));
-    return measurePrepared(reference, reference_points, prepareApprox(approx, options));
+    return measurePrepared(reference, reference_points, prepareApprox(approx, options, true), nullptr);
 }
 
 std::vector<Result<DistanceResult>> measureSurfaceDistances(const DistanceReference& reference,
@@ -772,20 +779,55 @@ std::vector<Result<DistanceResult>> measureSurfaceDistances(const DistanceRefere
         if (task == 0)
             reference_points = samplePoints(reference.mesh(), options, kReferenceStream, "reference");
         else
-            first = prepareApprox(*approximations[0], options);
+            first = prepareApprox(*approximations[0], options, true);
     });
     if (!run.ok()) reference_points = run;
     if (!reference_points.ok()) {
         for (auto& r : results) r = reference_points.status();
         return results;
     }
-    return measurePipelined(reference, *reference_points, approximations, options, std::move(first));
+    return measurePipelined(reference, *reference_points, approximations, options, std::move(first), {});
+}
+
+Result<std::vector<Result<OneSidedDistance>>> measureReferenceSides(const Mesh& reference,
+                                                                   const std::vector<const Mesh*>& approximations,
+                                                                   const DistanceOptions& options) {
+    LODBAKE_RETURN_IF_ERROR(checkOptions(options));
+    LODBAKE_RETURN_IF_ERROR(checkSurface(reference, "reference"));
+    LODBAKE_ASSIGN_OR_RETURN(PointArray points, samplePoints(reference, options, kReferenceStream, "reference"));
+    // One approximation's index at a time: this side is meant to run where memory is short (beside
+    // another big task), and its index builds are cheap next to the queries.
+    std::vector<Result<OneSidedDistance>> results(approximations.size(), OneSidedDistance{});
+    for (size_t i = 0; i < approximations.size(); ++i) {
+        const Status checked = checkSurface(*approximations[i], "approximation");
+        if (!checked.ok()) {
+            results[i] = checked;
+            continue;
+        }
+        Result<DistanceIndex> index = DistanceIndex::build(approximations[i]->positions, approximations[i]->indices);
+        if (!index.ok()) {
+            results[i] = index.status();
+            continue;
+        }
+        results[i] = measurePoints(points, *index);
+    }
+    return results;
 }
 
 Result<std::vector<Result<DistanceResult>>> prepareAndMeasureSurfaceDistances(
     const Mesh& reference, const std::vector<const Mesh*>& approximations, const DistanceOptions& options) {
+    return prepareAndMeasureSurfaceDistances(reference, approximations, options, {});
+}
+
+Result<std::vector<Result<DistanceResult>>> prepareAndMeasureSurfaceDistances(
+    const Mesh& reference, const std::vector<const Mesh*>& approximations, const DistanceOptions& options,
+    const std::vector<const OneSidedDistance*>& reference_sides) {
     LODBAKE_RETURN_IF_ERROR(checkOptions(options));
     LODBAKE_RETURN_IF_ERROR(checkSurface(reference, "reference"));
+    auto knownAt = [&](size_t i) { return i < reference_sides.size() ? reference_sides[i] : nullptr; };
+    // The reference's points are needed only for the sides not measured beforehand.
+    bool need_points = false;
+    for (size_t i = 0; i < approximations.size(); ++i) need_points |= knownAt(i) == nullptr;
     // Three independent setup tasks side by side: the reference's index (serial), its points and the
     // first approximation's index and points.
     Result<DistanceReference> prepared = internalError("distance reference: not prepared");
@@ -794,14 +836,15 @@ Result<std::vector<Result<DistanceResult>>> prepareAndMeasureSurfaceDistances(
     LODBAKE_RETURN_IF_ERROR(parallelFor(approximations.empty() ? 2 : 3, 1, [&](size_t task) {
         if (task == 0)
             prepared = DistanceReference::prepareChecked(reference);
-        else if (task == 1)
+        else if (task == 1 && need_points)
             reference_points = samplePoints(reference, options, kReferenceStream, "reference");
-        else
-            first = prepareApprox(*approximations[0], options);
+        else if (task == 2)
+            first = prepareApprox(*approximations[0], options, knownAt(0) == nullptr);
     }));
     LODBAKE_RETURN_IF_ERROR(prepared.status());
     LODBAKE_RETURN_IF_ERROR(reference_points.status());
-    return measurePipelined(*prepared, *reference_points, approximations, options, std::move(first));
+    return measurePipelined(*prepared, *reference_points, approximations, options, std::move(first),
+                            reference_sides);
 }
 
 Result<DistanceResult> measureSurfaceDistance(const Mesh& reference, const Mesh& approx,
