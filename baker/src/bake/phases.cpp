@@ -31,8 +31,8 @@ std::vector<std::vector<PhaseTask>> concurrentPhases(const std::vector<bool>& en
         if (encoder_is_pfrep[e])
             tasks.push_back({PhaseTask::Kind::Lod0Encoder, e, estimates.pfrep_bytes_per_triangle * lod0});
     const size_t reference_at = tasks.size();
-    // Levels 2 and on: the first level's index would take as much memory as all of theirs together.
-    constexpr size_t kFirstReferenceLevel = 2;
+    // Every level (1 and on): one index at a time, the first the largest.
+    constexpr size_t kFirstReferenceLevel = 1;
     if (level_triangles.size() > kFirstReferenceLevel)
         tasks.push_back(
             {PhaseTask::Kind::MeasureReference, kFirstReferenceLevel,

@@ -16,10 +16,10 @@ struct PhaseEstimates {
     double pfrep_bytes_per_triangle = 190;   // the PFRep build's own simplifier (geometry only)
     double encode_bytes_per_triangle = 110;  // the valence coder's tables, then its check's decoder
     double measure_bytes_per_triangle = 160; // LOD0's BVH and points, then two levels' (per LOD0 triangle)
-    /// The reference sides measured beforehand (MeasureReference): LOD0's points (per LOD0 triangle),
-    /// then one level's index at a time (per triangle of the largest of its levels).
-    double reference_points_bytes_per_triangle = 20;
-    double reference_index_bytes_per_triangle = 80;
+    /// The reference sides measured beforehand (MeasureReference): LOD0's points as their sources (per
+    /// LOD0 triangle), then one level's index at a time (per triangle of the largest of its levels).
+    double reference_points_bytes_per_triangle = 6;
+    double reference_index_bytes_per_triangle = 70;
     /// Tasks share a phase only while their estimates add up to at most this; a task above it runs
     /// alone. Small assets (up to about 400,000 triangles) run every task at once.
     double budget_bytes = 240.0 * 1024 * 1024;
@@ -41,7 +41,7 @@ struct PhaseTask {
 /// allocator keeps) adds to every later task's peak. LOD0's coding comes after the measurement so
 /// that on a large asset it shares the last phase with the other levels' coding (single-threaded
 /// tasks side by side) rather than running alone, and the measurement's peak holds none of its output.
-/// A MeasureReference task (LOD0's points against every level from the second on, the part of the
+/// A MeasureReference task (LOD0's points against every level, the part of the
 /// measurement that needs neither LOD0's index nor the levels' points) comes between the PFRep build
 /// and the measurement when it shares a phase with the PFRep build and not with the measurement:
 /// the PFRep build is single-threaded and runs alone on a large asset, so with two threads this part of

@@ -11,7 +11,8 @@
 // all triangles whatever the tree, so it equals what any exact search returns.
 // measureSurfaceDistances draws the reference side's points once for all levels and measures the
 // levels one after the other (each level's chunks in parallel), so one level's BVH and points exist
-// at a time.
+// at a time. measureReferenceSides measures the reference side alone, ahead of the rest (the bake runs
+// it beside the PFRep build), with the reference's points kept as their sources and recomputed per query.
 //
 // Determinism: sample k of a side is drawn from a counter-based generator (splitmix64 of seed, side
 // and k), so it does not depend on which thread draws it. Points are processed in chunks of a fixed
@@ -236,10 +237,48 @@ private:
 
 using SideStats = OneSidedDistance;
 
-// The points measured from one side: area-uniform stratified samples, then the referenced
-// vertices, stored in Morton order of their position (ties by point index).
-Result<PointArray> samplePoints(const Mesh& from, const DistanceOptions& options, uint64_t stream,
-                                        const char* role) {
+// How one side's points are drawn: area-uniform stratified samples, then the referenced vertices.
+// Point i is recomputed from (i, its source: the sample's triangle or the vertex) with the same
+// arithmetic wherever it is evaluated, so a stored point and a recomputed one are the same bits.
+class SideSampler {
+public:
+    SideSampler(const Mesh& from, const DistanceOptions& options, uint64_t stream)
+        : from_(from), sample_count_(options.sample_count), key_(splitmix64(options.seed ^ stream)) {}
+
+    size_t sampleCount() const { return sample_count_; }
+    uint64_t key() const { return key_; }
+    // Point `point` (samples first, then vertices) from its source.
+    Vec3d at(uint32_t point, uint32_t source) const {
+        return point < sample_count_ ? sampleOn(point, source) : toDouble(from_.positions[source]);
+    }
+    // Sample i's point on triangle `tri`.
+    Vec3d sampleOn(size_t i, size_t tri) const {
+        const uint64_t base = key_ + uint64_t(i) * 3;
+        const double u1 = toUnit(splitmix64(base + 1)), u2 = toUnit(splitmix64(base + 2));
+        const Vec3d a = toDouble(from_.positions[from_.indices[tri * 3]]);
+        const Vec3d b = toDouble(from_.positions[from_.indices[tri * 3 + 1]]);
+        const Vec3d c = toDouble(from_.positions[from_.indices[tri * 3 + 2]]);
+        const double r1 = std::sqrt(u1);
+        return a * (1.0 - r1) + b * (r1 * (1.0 - u2)) + c * (r1 * u2);
+    }
+
+private:
+    const Mesh& from_;
+    size_t sample_count_;
+    uint64_t key_;
+};
+
+// A point in Morton order: its code, its index (samples first, then vertices) and its source.
+struct PointKey {
+    uint64_t code;
+    uint32_t point;
+    uint32_t source; // the sample's triangle, or the vertex
+    bool operator<(const PointKey& o) const { return code < o.code || (code == o.code && point < o.point); }
+};
+
+// One side's points as keys sorted in Morton order of their position (ties by point index).
+Result<LargeArray<PointKey>> sortedPointKeys(const Mesh& from, const DistanceOptions& options,
+                                             const SideSampler& sampler, const char* role) {
     const size_t tri_count = from.faceCount();
     LargeArray<double> cdf(tri_count);
     double total = 0.0;
@@ -265,20 +304,10 @@ Result<PointArray> samplePoints(const Mesh& from, const DistanceOptions& options
         }
     }
 
-    const size_t sample_count = options.sample_count;
+    const size_t sample_count = sampler.sampleCount();
     const size_t point_count = sample_count + vertices.size();
-    const uint64_t key = splitmix64(options.seed ^ stream);
+    const uint64_t key = sampler.key();
 
-    // Sample i's point on triangle `tri`; the same arithmetic whenever it is evaluated.
-    auto sampleOn = [&](size_t i, size_t tri) -> Vec3d {
-        const uint64_t base = key + uint64_t(i) * 3;
-        const double u1 = toUnit(splitmix64(base + 1)), u2 = toUnit(splitmix64(base + 2));
-        const Vec3d a = toDouble(from.positions[from.indices[tri * 3]]);
-        const Vec3d b = toDouble(from.positions[from.indices[tri * 3 + 1]]);
-        const Vec3d c = toDouble(from.positions[from.indices[tri * 3 + 2]]);
-        const double r1 = std::sqrt(u1);
-        return a * (1.0 - r1) + b * (r1 * (1.0 - u2)) + c * (r1 * u2);
-    };
     // Sample i's triangle. Stratified over the area CDF: sample i falls in the i-th of sample_count
     // equal slices of the total area. Each sample is still area-uniform and the estimate has less variance.
     auto triangleOf = [&](size_t i, size_t& t) -> size_t {
@@ -291,17 +320,11 @@ Result<PointArray> samplePoints(const Mesh& from, const DistanceOptions& options
         return t < tri_count ? t : last_positive;
     };
 
-    // First every point's Morton code (and its triangle, or its vertex), in chunks; then the codes
-    // sorted (ties by point index); then the points computed again, in that order, from the stored
-    // triangle: independent loads in parallel chunks instead of a serial permutation, and no array of
+    // Every point's Morton code (and its triangle, or its vertex), in chunks; then the codes sorted
+    // (ties by point index). The points themselves are computed again from the stored source when they
+    // are needed: independent loads in parallel chunks instead of a serial permutation, and no array of
     // points beside the codes until the codes are sorted.
-    struct Key {
-        uint64_t code;
-        uint32_t point;  // point index: samples first, then vertices
-        uint32_t source; // the sample's triangle, or the vertex
-        bool operator<(const Key& o) const { return code < o.code || (code == o.code && point < o.point); }
-    };
-    LargeArray<Key> order(point_count);
+    LargeArray<PointKey> order(point_count);
     const Aabb box = computeBounds(from);
     const Vec3d box_min = toDouble(box.min);
     const Vec3d extent = toDouble(box.max) - box_min;
@@ -318,7 +341,7 @@ Result<PointArray> samplePoints(const Mesh& from, const DistanceOptions& options
             Vec3d point;
             if (i < sample_count) {
                 source = uint32_t(triangleOf(i, t));
-                point = sampleOn(i, source);
+                point = sampler.sampleOn(i, source);
             } else {
                 source = vertices[i - sample_count];
                 point = toDouble(from.positions[source]);
@@ -328,19 +351,39 @@ Result<PointArray> samplePoints(const Mesh& from, const DistanceOptions& options
     }));
     LargeArray<double>().swap(cdf);
     std::sort(order.begin(), order.end());
+    return order;
+}
+
+// The points measured from one side, stored in Morton order of their position (ties by point index).
+Result<PointArray> samplePoints(const Mesh& from, const DistanceOptions& options, uint64_t stream, const char* role) {
+    const SideSampler sampler(from, options, stream);
+    LODBAKE_ASSIGN_OR_RETURN(LargeArray<PointKey> order, sortedPointKeys(from, options, sampler, role));
+    const size_t point_count = order.size();
     PointArray points(point_count);
     LODBAKE_RETURN_IF_ERROR(parallelForChunks(point_count, kChunkSize, [&](size_t, size_t first, size_t end) {
-        for (size_t k = first; k < end; ++k) {
-            const Key& o = order[k];
-            points[k] = o.point < sample_count ? sampleOn(o.point, o.source) : toDouble(from.positions[o.source]);
-        }
+        for (size_t k = first; k < end; ++k) points[k] = sampler.at(order[k].point, order[k].source);
     }));
     return points;
 }
 
-// Distances from `points` to the surface indexed by `to`.
-Result<SideStats> measurePoints(const PointArray& points, const DistanceIndex& to) {
-    const size_t point_count = points.size();
+// One side's points in the same order as samplePoints gives them, kept as (point, source) pairs, a third of
+// the memory (8 bytes a point instead of 24), each point recomputed by the query that needs it.
+struct PointSources {
+    uint32_t point;
+    uint32_t source;
+};
+
+Result<LargeArray<PointSources>> samplePointSources(const Mesh& from, const DistanceOptions& options,
+                                                    const SideSampler& sampler, const char* role) {
+    LODBAKE_ASSIGN_OR_RETURN(LargeArray<PointKey> order, sortedPointKeys(from, options, sampler, role));
+    LargeArray<PointSources> sources(order.size());
+    for (size_t k = 0; k < order.size(); ++k) sources[k] = {order[k].point, order[k].source};
+    return sources;
+}
+
+// Distances from the points pointAt(0 .. point_count - 1) to the surface indexed by `to`.
+template <class PointAt>
+Result<SideStats> measurePointsAt(size_t point_count, const PointAt& pointAt, const DistanceIndex& to) {
     std::vector<SideStats> chunks(chunkCount(point_count, kChunkSize));
     LODBAKE_RETURN_IF_ERROR(parallelForChunks(point_count, kChunkSize, [&](size_t chunk, size_t first, size_t end) {
         SideStats s;
@@ -348,7 +391,7 @@ Result<SideStats> measurePoints(const PointArray& points, const DistanceIndex& t
         // a tight first bound that prunes most of the tree. The minimum found is the same either way.
         DistanceIndex::Cursor cursor;
         for (size_t k = first; k < end; ++k) {
-            const double d = std::sqrt(to.closestDistanceSq(points[k], cursor));
+            const double d = std::sqrt(to.closestDistanceSq(pointAt(k), cursor));
             s.max = std::max(s.max, d);
             s.sum += d;
             s.sum_sq += d * d;
@@ -365,6 +408,12 @@ Result<SideStats> measurePoints(const PointArray& points, const DistanceIndex& t
         total_stats.count += s.count;
     }
     return total_stats;
+}
+
+// Distances from `points` to the surface indexed by `to`.
+Result<SideStats> measurePoints(const PointArray& points, const DistanceIndex& to) {
+    return measurePointsAt(
+        points.size(), [&](size_t k) -> const Vec3d& { return points[k]; }, to);
 }
 
 Status checkOptions(const DistanceOptions& options) {
@@ -794,9 +843,13 @@ Result<std::vector<Result<OneSidedDistance>>> measureReferenceSides(const Mesh& 
                                                                    const DistanceOptions& options) {
     LODBAKE_RETURN_IF_ERROR(checkOptions(options));
     LODBAKE_RETURN_IF_ERROR(checkSurface(reference, "reference"));
-    LODBAKE_ASSIGN_OR_RETURN(PointArray points, samplePoints(reference, options, kReferenceStream, "reference"));
-    // One approximation's index at a time: this side is meant to run where memory is short (beside
-    // another big task), and its index builds are cheap next to the queries.
+    // The points as their sources (8 bytes each instead of 24) and one approximation's index at a time:
+    // this side is meant to run where memory is short (beside another big task); recomputing a point
+    // costs little next to its query, and the index builds little next to the queries.
+    const SideSampler sampler(reference, options, kReferenceStream);
+    LODBAKE_ASSIGN_OR_RETURN(LargeArray<PointSources> points,
+                             samplePointSources(reference, options, sampler, "reference"));
+    auto pointAt = [&](size_t k) { return sampler.at(points[k].point, points[k].source); };
     std::vector<Result<OneSidedDistance>> results(approximations.size(), OneSidedDistance{});
     for (size_t i = 0; i < approximations.size(); ++i) {
         const Status checked = checkSurface(*approximations[i], "approximation");
@@ -809,7 +862,7 @@ Result<std::vector<Result<OneSidedDistance>>> measureReferenceSides(const Mesh& 
             results[i] = index.status();
             continue;
         }
-        results[i] = measurePoints(points, *index);
+        results[i] = measurePointsAt(points.size(), pointAt, *index);
     }
     return results;
 }

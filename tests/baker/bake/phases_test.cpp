@@ -14,8 +14,8 @@ using lodbake::bake_detail::concurrentPhases;
 using lodbake::bake_detail::PhaseEstimates;
 using lodbake::bake_detail::PhaseTask;
 
-// "p0" PFRep encoder e on LOD0, "e1" other encoder 1 on LOD0, "L3" level 3, "M" measurement, "R2" the
-// reference sides of levels 2 and on; phases separated by '|'.
+// "p0" PFRep encoder e on LOD0, "e1" other encoder 1 on LOD0, "L3" level 3, "M" measurement, "R1" the
+// reference sides of levels 1 and on; phases separated by '|'.
 std::string describe(const std::vector<std::vector<PhaseTask>>& phases) {
     std::string s;
     for (size_t p = 0; p < phases.size(); ++p) {
@@ -56,9 +56,9 @@ TEST(BakePhasesTest, SmallAssetRunsEveryTaskAtOnce) {
 }
 
 TEST(BakePhasesTest, LargeAssetRunsItsBigTasksAlone) {
-    // dragon_poisson: PFRep beside the reference sides of levels 2 to 5, the measurement alone, then
+    // dragon_poisson: PFRep beside the reference sides of every level, the measurement alone, then
     // the coding of every level side by side.
-    EXPECT_EQ(describe(concurrentPhases(kBuiltin, desktopLevels(1067852))), "p0 R2 | M | e1 L1 L2 L3 L4 L5");
+    EXPECT_EQ(describe(concurrentPhases(kBuiltin, desktopLevels(1067852))), "p0 R1 | M | e1 L1 L2 L3 L4 L5");
     // A mid-size asset: the PFRep build beside the measurement and LOD0's coding, then the other levels.
     EXPECT_EQ(describe(concurrentPhases(kBuiltin, desktopLevels(500000))), "p0 M e1 | L1 L2 L3 L4 L5");
 }
@@ -68,8 +68,8 @@ TEST(BakePhasesTest, ReferenceSidesOnlyBesideAnEarlierTaskAndBeforeTheMeasuremen
     EXPECT_EQ(describe(concurrentPhases({false}, desktopLevels(1067852))), "M | p0 L1 L2 L3 L4 L5");
     // In the measurement's phase the measurement measures both sides itself.
     EXPECT_EQ(describe(concurrentPhases(kBuiltin, desktopLevels(300000))), "p0 M e1 L1 L2 L3 L4 L5");
-    // With fewer than three levels there is no level 2.
-    EXPECT_EQ(describe(concurrentPhases(kBuiltin, {1067852, 500000})), "p0 | M | e1 L1");
+    // Only LOD0: nothing to measure.
+    EXPECT_EQ(describe(concurrentPhases(kBuiltin, {1067852})), "p0 | M | e1");
     // Where the PFRep build and the reference sides together exceed the budget, the PFRep build runs
     // alone and the measurement measures both sides.
     PhaseEstimates smaller;
@@ -84,7 +84,7 @@ TEST(BakePhasesTest, OrderAndTasksDoNotDependOnTheCut) {
         std::string all;
         for (const auto& phase : concurrentPhases(kBuiltin, desktopLevels(lod0)))
             for (const PhaseTask& task : phase) all += describe({{task}}) + " ";
-        EXPECT_EQ(all, lod0 == 1067852ul ? "p0 R2 M e1 L1 L2 L3 L4 L5 " : "p0 M e1 L1 L2 L3 L4 L5 ") << lod0;
+        EXPECT_EQ(all, lod0 == 1067852ul ? "p0 R1 M e1 L1 L2 L3 L4 L5 " : "p0 M e1 L1 L2 L3 L4 L5 ") << lod0;
     }
     PhaseEstimates tiny;
     tiny.budget_bytes = 1;

@@ -183,8 +183,9 @@ Result<std::vector<Result<DistanceResult>>> prepareAndMeasureSurfaceDistances(
 /// The reference side alone: for every approximation, the distances from the reference's points to it,
 /// bit-identical to the side that prepareAndMeasureSurfaceDistances measures with the same reference and
 /// options. It needs neither the reference's index nor the approximations' points, only the reference's
-/// points and one approximation's index at a time (about 24 bytes per reference point plus the largest
-/// index), so it can run earlier, where memory is short (the bake runs it beside the PFRep build).
+/// points (kept as their sources, 8 bytes each; every query recomputes its point, bit for bit) and one
+/// approximation's index at a time, so it can run earlier, where memory is short (the bake runs it
+/// beside the PFRep build).
 /// Fails as prepareAndMeasureSurfaceDistances does for a bad reference or options; results[i] fails
 /// for a bad approximation (the two-sided measurement then fails the same way). Pointers must not be null.
 Result<std::vector<Result<OneSidedDistance>>> measureReferenceSides(const Mesh& reference,
