@@ -254,7 +254,9 @@ Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vect
     };
     std::vector<bool> encoder_is_pfrep;
     for (size_t e = 0; e < encoders.size(); ++e) encoder_is_pfrep.push_back(stageOf(e) == BakeStage::Pfrep);
-    const std::vector<std::vector<PhaseTask>> phases = concurrentPhases(encoder_is_pfrep, level_triangles);
+    bake_detail::PhaseEstimates estimates;
+    estimates.measure_reference_ahead = maxParallelism() > 1;
+    const std::vector<std::vector<PhaseTask>> phases = concurrentPhases(encoder_is_pfrep, level_triangles, estimates);
     // The levels that share the measurement's phase (the measurement precedes every level task).
     for (const std::vector<PhaseTask>& phase : phases) {
         bool has_measure = false;

@@ -33,7 +33,7 @@ std::vector<std::vector<PhaseTask>> concurrentPhases(const std::vector<bool>& en
     const size_t reference_at = tasks.size();
     // Every level (1 and on): one index at a time, the first the largest.
     constexpr size_t kFirstReferenceLevel = 1;
-    if (level_triangles.size() > kFirstReferenceLevel)
+    if (estimates.measure_reference_ahead && level_triangles.size() > kFirstReferenceLevel)
         tasks.push_back(
             {PhaseTask::Kind::MeasureReference, kFirstReferenceLevel,
              estimates.reference_points_bytes_per_triangle * lod0 +

@@ -20,6 +20,9 @@ struct PhaseEstimates {
     /// LOD0 triangle), then one level's index at a time (per triangle of the largest of its levels).
     double reference_points_bytes_per_triangle = 6;
     double reference_index_bytes_per_triangle = 70;
+    /// Whether the reference sides may run ahead (MeasureReference); with one thread nothing idles
+    /// beside the PFRep build, and the split only costs (LOD0's points recomputed per query).
+    bool measure_reference_ahead = true;
     /// Tasks share a phase only while their estimates add up to at most this; a task above it runs
     /// alone. Small assets (up to about 400,000 triangles) run every task at once.
     double budget_bytes = 240.0 * 1024 * 1024;

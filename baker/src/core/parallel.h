@@ -53,6 +53,11 @@ template <class Fn> Status parallelForChunks(size_t count, size_t chunk_size, Fn
     });
 }
 
+/// How many threads parallel loops may use now (ScopedThreadLimit's limit, else the machine's).
+inline size_t maxParallelism() {
+    return tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism);
+}
+
 /// Limits the worker threads TBB may use while it is alive (CLI --threads, determinism tests).
 class ScopedThreadLimit {
 public:

@@ -72,6 +72,10 @@ TEST(BakePhasesTest, ReferenceSidesOnlyBesideAnEarlierTaskAndBeforeTheMeasuremen
     EXPECT_EQ(describe(concurrentPhases(kBuiltin, {1067852})), "p0 | M | e1");
     // Where the PFRep build and the reference sides together exceed the budget, the PFRep build runs
     // alone and the measurement measures both sides.
+    // With one thread (measure_reference_ahead off) nothing would idle beside the PFRep build.
+    PhaseEstimates one_thread;
+    one_thread.measure_reference_ahead = false;
+    EXPECT_EQ(describe(concurrentPhases(kBuiltin, desktopLevels(1067852), one_thread)), "p0 | M | e1 L1 L2 L3 L4 L5");
     PhaseEstimates smaller;
     smaller.budget_bytes = 224.0 * 1024 * 1024;
     EXPECT_EQ(describe(concurrentPhases(kBuiltin, desktopLevels(1067852), smaller)), "p0 | M | e1 L1 L2 L3 L4 L5");
