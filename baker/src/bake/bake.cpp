@@ -140,9 +140,10 @@ void measureChain(const Mesh& mesh, LodChain& chain, const LodChainOptions& opti
 // byte): the error measurement (then the metrics and texture levels that follow from it), and the
 // stream encoders' prepare steps. They run in phases (concurrentPhases): with 2 threads a small
 // asset's PFRep build (a replay of the chain's logged collapses, then the blob) runs beside the measurement and the
-// valence coding of the levels; a large asset's PFRep build and measurement (parallel inside) run one
-// after the other, each alone, then the coding of every level side by side. The commits (cheap; the valence commit renumbers its level) then
-// run in encoder and level order on this thread.
+// valence coding of the levels; a large asset's PFRep build runs beside the measurement's reference sides
+// (MeasureReference), then the rest of the measurement (parallel inside), then the coding of every level
+// side by side. The commits (cheap; the valence commit renumbers its level) then run in encoder and level
+// order on this thread.
 Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vector<PackStreamEncoder>& encoders,
                  AssetSlot& slot, size_t index, const BakeHooks& hooks) {
     Mesh& mesh = input.mesh;
