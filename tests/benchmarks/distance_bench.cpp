@@ -1,6 +1,9 @@
 // distance_bench: cost of the surface-distance measurement the bake runs for every level
 // (docs/surface_distance.md), on one thread, in thread CPU time.
 //   - our figure: DistanceReference::prepare + measureSurfaceDistances over the chain's 5 levels;
+//   - the bake's split (docs/bake.md, "Concurrency"): prepareAndMeasureSurfaceDistances in one call
+//     against measureReferenceSides for every level plus prepareAndMeasureSurfaceDistances with those
+//     sides given (the part the bake runs beside the PFRep build, and the rest), results compared bit for bit;
 //   - anchor, same run: the core TriangleBvh (lodbake/core/bvh.h) built over the same meshes and queried
 //     from every vertex of both sides, cold (no warm start), per query.
 // Prints every result with 17 significant digits so two builds can be compared exactly.
@@ -95,6 +98,32 @@ int main(int argc, char** argv) {
                     r.hausdorff, r.mean, r.rms);
         points += 2 * options.distance.sample_count + mesh.vertexCount() + levels[l]->vertexCount();
     }
+    // The split the bake runs on a large asset, against the one call, alternating.
+    double best_whole = 1e300, best_sides = 1e300, best_rest = 1e300;
+    bool same = true;
+    for (int r = 0; r < runs; ++r) {
+        const double c0 = threadCpuSeconds();
+        auto whole = lodbake::prepareAndMeasureSurfaceDistances(mesh, levels, options.distance);
+        const double c1 = threadCpuSeconds();
+        auto sides = lodbake::measureReferenceSides(mesh, levels, options.distance);
+        const double c2 = threadCpuSeconds();
+        if (!whole.ok() || !sides.ok()) return 1;
+        std::vector<const lodbake::OneSidedDistance*> known(levels.size(), nullptr);
+        for (size_t i = 0; i < levels.size(); ++i)
+            if ((*sides)[i].ok()) known[i] = &*(*sides)[i];
+        auto rest = lodbake::prepareAndMeasureSurfaceDistances(mesh, levels, options.distance, known);
+        const double c3 = threadCpuSeconds();
+        if (!rest.ok()) return 1;
+        best_whole = std::min(best_whole, c1 - c0);
+        best_sides = std::min(best_sides, c2 - c1);
+        best_rest = std::min(best_rest, c3 - c2);
+        for (size_t l = 0; l < levels.size(); ++l)
+            same &= (*whole)[l].ok() == (*rest)[l].ok() &&
+                    (!(*whole)[l].ok() || ((*whole)[l]->hausdorff == (*rest)[l]->hausdorff &&
+                                           (*whole)[l]->mean == (*rest)[l]->mean && (*whole)[l]->rms == (*rest)[l]->rms));
+    }
+    std::printf("one call %.3f s; split: reference sides %.3f s + the rest %.3f s = %.3f s; results %s\n",
+                best_whole, best_sides, best_rest, best_sides + best_rest, same ? "bit-identical" : "DIFFER");
     double anchor = 0, checksum = 0;
     size_t queries = 0;
     for (const lodbake::Mesh* level : levels) {

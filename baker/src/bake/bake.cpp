@@ -15,6 +15,7 @@
 #include "lodbake/core/json_writer.h"
 #include "lodbake/gltf/gltf_io.h"
 #include "lodbake/simplify/lod_chain.h"
+#include "lodbake/simplify/mesh_distance.h"
 
 namespace lodbake {
 
@@ -106,14 +107,43 @@ Result<TextureLevels> textureLevels(const Mesh& lod0, size_t level_count, const 
     return out;
 }
 
+// measureLodChain (lod_chain.h), with the reference sides of some levels measured beforehand
+// (`reference_sides[i]` for chain level i, when present and ok): the same results, bit for bit, and the
+// same warnings.
+void measureChain(const Mesh& mesh, LodChain& chain, const LodChainOptions& options,
+                  const std::vector<Result<OneSidedDistance>>& reference_sides, Diagnostics& diagnostics) {
+    std::vector<const Mesh*> meshes;
+    std::vector<const OneSidedDistance*> known;
+    for (size_t i = 0; i < chain.levels.size(); ++i) {
+        meshes.push_back(&chain.levels[i].mesh);
+        known.push_back(i < reference_sides.size() && reference_sides[i].ok() ? &*reference_sides[i] : nullptr);
+    }
+    Result<std::vector<Result<DistanceResult>>> measured =
+        prepareAndMeasureSurfaceDistances(mesh, meshes, options.distance, known);
+    if (!measured.ok()) diagnostics.warn("lod chain: errors not measured: " + measured.status().message());
+    for (size_t i = 0; measured.ok() && i < measured->size(); ++i) {
+        LodLevel& level = chain.levels[i];
+        const Result<DistanceResult>& d = (*measured)[i];
+        if (!d.ok()) {
+            diagnostics.warn("lod chain: level ratio " + std::to_string(level.target_ratio) +
+                             ": error not measured: " + d.status().message());
+            continue;
+        }
+        level.has_distance = true;
+        level.distance = *d;
+    }
+    updateSwitchDistances(chain, options.screen);
+}
+
 // After the chain, the remaining work of an asset is a fixed set of tasks that only read the
 // meshes (STYLE.md §7: each writes its own slot; which thread runs which, and when, changes no
 // byte): the error measurement (then the metrics and texture levels that follow from it), and the
 // stream encoders' prepare steps. They run in phases (concurrentPhases): with 2 threads a small
 // asset's PFRep build (a replay of the chain's logged collapses, then the blob) runs beside the measurement and the
-// valence coding of the levels; a large asset's PFRep build and measurement (parallel inside) run one
-// after the other, each alone, then the coding of every level side by side. The commits (cheap; the valence commit renumbers its level) then
-// run in encoder and level order on this thread.
+// valence coding of the levels; a large asset's PFRep build runs beside the measurement's reference sides
+// (MeasureReference), then the rest of the measurement (parallel inside), then the coding of every level
+// side by side. The commits (cheap; the valence commit renumbers its level) then run in encoder and level
+// order on this thread.
 Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vector<PackStreamEncoder>& encoders,
                  AssetSlot& slot, size_t index, const BakeHooks& hooks) {
     Mesh& mesh = input.mesh;
@@ -162,14 +192,20 @@ Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vect
     auto stageOf = [&](size_t e) {
         return encoders[e].extension_name == "LODBAKE_progressive_fans" ? BakeStage::Pfrep : BakeStage::Encode;
     };
+    // Chain level i's reference side (LOD0's points against the level), when a MeasureReference task
+    // measured it in an earlier phase (beside the PFRep build); the measurement then skips it.
+    std::vector<Result<OneSidedDistance>> reference_sides;
     std::vector<bool> level_with_measure(level_count, false);
     std::vector<size_t> nested_levels;
-    auto runTask = [&](const PhaseTask& task, bool alone) {
+    // LOD0 as the running phase's tasks may read it: LOD0 itself, or its positions and indices lent to a
+    // geometry-only mesh (below).
+    const Mesh* lod0_view = &mesh;
+    auto runTask = [&](const PhaseTask& task) {
         switch (task.kind) {
         case PhaseTask::Kind::Measure: {
             {
                 StageTimer timer(hooks, index, BakeStage::Measure);
-                measureLodChain(mesh, chain, chain_options, measure_diagnostics);
+                measureChain(mesh, chain, chain_options, reference_sides, measure_diagnostics);
                 metrics = lodMetrics(mesh, chain, screen, settings.hysteresis);
             }
             // Encoders that read the measured errors (adaptive stream precision) code the levels of this
@@ -186,22 +222,25 @@ Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vect
             textures = textureLevels(mesh, level_count, metrics, settings, input.name, measure_diagnostics);
             return;
         }
+        case PhaseTask::Kind::MeasureReference: {
+            // Levels task.index and on. A failure here (a bad reference or level) leaves the side to the
+            // measurement, which then reports it.
+            StageTimer timer(hooks, index, BakeStage::Measure);
+            std::vector<const Mesh*> meshes;
+            for (size_t l = task.index; l < level_count; ++l) meshes.push_back(&levelMesh(l));
+            Result<std::vector<Result<OneSidedDistance>>> sides =
+                measureReferenceSides(*lod0_view, meshes, chain_options.distance);
+            if (!sides.ok()) return;
+            reference_sides.assign(task.index - 1, internalError("not measured beforehand"));
+            for (Result<OneSidedDistance>& side : *sides) reference_sides.push_back(std::move(side));
+            return;
+        }
         case PhaseTask::Kind::Lod0Encoder: {
             const size_t e = task.index;
             StageTimer timer(hooks, index, stageOf(e));
-            if (alone && stageOf(e) == BakeStage::Pfrep) {
-                // The PFRep build reads positions and indices only (it would copy them out of a mesh
-                // with attributes). Running alone, nothing else reads LOD0 meanwhile, so they are lent
-                // to a geometry-only mesh instead of copied: the same input, one copy less at the peak.
-                Mesh geometry;
-                geometry.positions = std::move(mesh.positions);
-                geometry.indices = std::move(mesh.indices);
-                commits[e * level_count] = encoders[e].prepare(chain, 0, geometry);
-                mesh.positions = std::move(geometry.positions);
-                mesh.indices = std::move(geometry.indices);
-            } else {
-                commits[e * level_count] = encoders[e].prepare(chain, 0, mesh);
-            }
+            // A PFRep build reads LOD0's positions and indices only (lod0_view); the other encoders all of it.
+            commits[e * level_count] =
+                encoders[e].prepare(chain, 0, stageOf(e) == BakeStage::Pfrep ? *lod0_view : mesh);
             return;
         }
         case PhaseTask::Kind::Level:
@@ -216,7 +255,9 @@ Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vect
     };
     std::vector<bool> encoder_is_pfrep;
     for (size_t e = 0; e < encoders.size(); ++e) encoder_is_pfrep.push_back(stageOf(e) == BakeStage::Pfrep);
-    const std::vector<std::vector<PhaseTask>> phases = concurrentPhases(encoder_is_pfrep, level_triangles);
+    bake_detail::PhaseEstimates estimates;
+    estimates.measure_reference_ahead = maxParallelism() > 1;
+    const std::vector<std::vector<PhaseTask>> phases = concurrentPhases(encoder_is_pfrep, level_triangles, estimates);
     // The levels that share the measurement's phase (the measurement precedes every level task).
     for (const std::vector<PhaseTask>& phase : phases) {
         bool has_measure = false;
@@ -229,10 +270,27 @@ Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vect
         }
     }
     for (const std::vector<PhaseTask>& phase : phases) {
+        // The PFRep build and the reference sides read positions and indices only (the PFRep build would
+        // copy them out of a mesh with attributes). When nothing else in the phase reads LOD0, they are
+        // lent to a geometry-only mesh instead of copied: the same input, one copy less at the peak.
+        bool geometry_only = true;
+        for (const PhaseTask& task : phase)
+            geometry_only &= task.kind == PhaseTask::Kind::MeasureReference ||
+                             (task.kind == PhaseTask::Kind::Lod0Encoder && stageOf(task.index) == BakeStage::Pfrep);
+        Mesh geometry;
+        if (geometry_only) {
+            geometry.positions = std::move(mesh.positions);
+            geometry.indices = std::move(mesh.indices);
+            lod0_view = &geometry;
+        }
         std::atomic<size_t> next{0};
-        const bool alone = phase.size() == 1;
-        LODBAKE_RETURN_IF_ERROR(
-            parallelFor(phase.size(), 1, [&](size_t) { runTask(phase[next.fetch_add(1)], alone); }));
+        const Status run = parallelFor(phase.size(), 1, [&](size_t) { runTask(phase[next.fetch_add(1)]); });
+        if (geometry_only) {
+            mesh.positions = std::move(geometry.positions);
+            mesh.indices = std::move(geometry.indices);
+            lod0_view = &mesh;
+        }
+        LODBAKE_RETURN_IF_ERROR(run);
     }
     LODBAKE_RETURN_IF_ERROR(deferred);
     for (const Diagnostic& d : measure_diagnostics.items()) {

@@ -13,20 +13,27 @@ namespace bake_detail {
 /// dragon_poisson (1.07M triangles, glibc allocator as the CLI sets it up: resident size above what
 /// the bake holds).
 struct PhaseEstimates {
-    double pfrep_bytes_per_triangle = 250;   // the PFRep build's own simplifier (geometry only)
+    double pfrep_bytes_per_triangle = 190;   // the PFRep build's own simplifier (geometry only)
     double encode_bytes_per_triangle = 110;  // the valence coder's tables, then its check's decoder
     double measure_bytes_per_triangle = 160; // LOD0's BVH and points, then two levels' (per LOD0 triangle)
+    /// The reference sides measured beforehand (MeasureReference): LOD0's points as their sources (per
+    /// LOD0 triangle), then one level's index at a time (per triangle of the largest of its levels).
+    double reference_points_bytes_per_triangle = 6;
+    double reference_index_bytes_per_triangle = 70;
+    /// Whether the reference sides may run ahead (MeasureReference); with one thread nothing idles
+    /// beside the PFRep build, and the split only costs (LOD0's points recomputed per query).
+    bool measure_reference_ahead = true;
     /// Tasks share a phase only while their estimates add up to at most this; a task above it runs
-    /// alone. Small assets (up to about 370,000 triangles) run every task at once.
-    double budget_bytes = 224.0 * 1024 * 1024;
+    /// alone. Small assets (up to about 400,000 triangles) run every task at once.
+    double budget_bytes = 240.0 * 1024 * 1024;
 };
 
-/// One task: the measurement (then the metrics and texture levels), one encoder's prepare on LOD0,
-/// or every encoder's prepare on one other level.
+/// One task: the measurement (then the metrics and texture levels), the reference sides of some levels'
+/// measurement ahead of it, one encoder's prepare on LOD0, or every encoder's prepare on one other level.
 struct PhaseTask {
-    enum class Kind { Measure, Lod0Encoder, Level };
+    enum class Kind { Measure, MeasureReference, Lod0Encoder, Level };
     Kind kind = Kind::Measure;
-    size_t index = 0; // encoder (Lod0Encoder) or level (Level)
+    size_t index = 0; // encoder (Lod0Encoder), level (Level), first level (MeasureReference: it and the rest)
     double bytes = 0; // working-memory estimate
 };
 
@@ -37,6 +44,11 @@ struct PhaseTask {
 /// allocator keeps) adds to every later task's peak. LOD0's coding comes after the measurement so
 /// that on a large asset it shares the last phase with the other levels' coding (single-threaded
 /// tasks side by side) rather than running alone, and the measurement's peak holds none of its output.
+/// A MeasureReference task (LOD0's points against every level, the part of the
+/// measurement that needs neither LOD0's index nor the levels' points) comes between the PFRep build
+/// and the measurement when it shares a phase with the PFRep build and not with the measurement:
+/// the PFRep build is single-threaded and runs alone on a large asset, so with two threads this part of
+/// the measurement takes a core that would idle. Anywhere else it would gain nothing: it is left out.
 /// `encoder_is_pfrep[e]` tells which encoders build PFRep; `level_triangles[0]` is LOD0's count.
 std::vector<std::vector<PhaseTask>> concurrentPhases(const std::vector<bool>& encoder_is_pfrep,
                                                      const std::vector<size_t>& level_triangles,

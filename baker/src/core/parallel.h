@@ -85,6 +85,11 @@ private:
     tbb::task_group group_;
 };
 
+/// How many threads parallel loops may use now (ScopedThreadLimit's limit, else the machine's).
+inline size_t maxParallelism() {
+    return tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism);
+}
+
 /// Limits the worker threads TBB may use while it is alive (CLI --threads, determinism tests).
 class ScopedThreadLimit {
 public:

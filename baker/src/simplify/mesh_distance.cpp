@@ -11,7 +11,8 @@
 // all triangles whatever the tree, so it equals what any exact search returns.
 // measureSurfaceDistances draws the reference side's points once for all levels and measures the
 // levels one after the other (each level's chunks in parallel), so one level's BVH and points exist
-// at a time.
+// at a time. measureReferenceSides measures the reference side alone, ahead of the rest (the bake runs
+// it beside the PFRep build), with the reference's points kept as their sources and recomputed per query.
 //
 // Determinism: sample k of a side is drawn from a counter-based generator (splitmix64 of seed, side
 // and k), so it does not depend on which thread draws it. Points are processed in chunks of a fixed
@@ -234,17 +235,50 @@ private:
     double slack_;
 };
 
-struct SideStats {
-    double max = 0.0;
-    double sum = 0.0;
-    double sum_sq = 0.0;
-    uint64_t count = 0;
+using SideStats = OneSidedDistance;
+
+// How one side's points are drawn: area-uniform stratified samples, then the referenced vertices.
+// Point i is recomputed from (i, its source: the sample's triangle or the vertex) with the same
+// arithmetic wherever it is evaluated, so a stored point and a recomputed one are the same bits.
+class SideSampler {
+public:
+    SideSampler(const Mesh& from, const DistanceOptions& options, uint64_t stream)
+        : from_(from), sample_count_(options.sample_count), key_(splitmix64(options.seed ^ stream)) {}
+
+    size_t sampleCount() const { return sample_count_; }
+    uint64_t key() const { return key_; }
+    // Point `point` (samples first, then vertices) from its source.
+    Vec3d at(uint32_t point, uint32_t source) const {
+        return point < sample_count_ ? sampleOn(point, source) : toDouble(from_.positions[source]);
+    }
+    // Sample i's point on triangle `tri`.
+    Vec3d sampleOn(size_t i, size_t tri) const {
+        const uint64_t base = key_ + uint64_t(i) * 3;
+        const double u1 = toUnit(splitmix64(base + 1)), u2 = toUnit(splitmix64(base + 2));
+        const Vec3d a = toDouble(from_.positions[from_.indices[tri * 3]]);
+        const Vec3d b = toDouble(from_.positions[from_.indices[tri * 3 + 1]]);
+        const Vec3d c = toDouble(from_.positions[from_.indices[tri * 3 + 2]]);
+        const double r1 = std::sqrt(u1);
+        return a * (1.0 - r1) + b * (r1 * (1.0 - u2)) + c * (r1 * u2);
+    }
+
+private:
+    const Mesh& from_;
+    size_t sample_count_;
+    uint64_t key_;
 };
 
-// The points measured from one side: area-uniform stratified samples, then the referenced
-// vertices, stored in Morton order of their position (ties by point index).
-Result<PointArray> samplePoints(const Mesh& from, const DistanceOptions& options, uint64_t stream,
-                                        const char* role) {
+// A point in Morton order: its code, its index (samples first, then vertices) and its source.
+struct PointKey {
+    uint64_t code;
+    uint32_t point;
+    uint32_t source; // the sample's triangle, or the vertex
+    bool operator<(const PointKey& o) const { return code < o.code || (code == o.code && point < o.point); }
+};
+
+// One side's points as keys sorted in Morton order of their position (ties by point index).
+Result<LargeArray<PointKey>> sortedPointKeys(const Mesh& from, const DistanceOptions& options,
+                                             const SideSampler& sampler, const char* role) {
     const size_t tri_count = from.faceCount();
     LargeArray<double> cdf(tri_count);
     double total = 0.0;
@@ -270,20 +304,10 @@ Result<PointArray> samplePoints(const Mesh& from, const DistanceOptions& options
         }
     }
 
-    const size_t sample_count = options.sample_count;
+    const size_t sample_count = sampler.sampleCount();
     const size_t point_count = sample_count + vertices.size();
-    const uint64_t key = splitmix64(options.seed ^ stream);
+    const uint64_t key = sampler.key();
 
-    // Sample i's point on triangle `tri`; the same arithmetic whenever it is evaluated.
-    auto sampleOn = [&](size_t i, size_t tri) -> Vec3d {
-        const uint64_t base = key + uint64_t(i) * 3;
-        const double u1 = toUnit(splitmix64(base + 1)), u2 = toUnit(splitmix64(base + 2));
-        const Vec3d a = toDouble(from.positions[from.indices[tri * 3]]);
-        const Vec3d b = toDouble(from.positions[from.indices[tri * 3 + 1]]);
-        const Vec3d c = toDouble(from.positions[from.indices[tri * 3 + 2]]);
-        const double r1 = std::sqrt(u1);
-        return a * (1.0 - r1) + b * (r1 * (1.0 - u2)) + c * (r1 * u2);
-    };
     // Sample i's triangle. Stratified over the area CDF: sample i falls in the i-th of sample_count
     // equal slices of the total area. Each sample is still area-uniform and the estimate has less variance.
     auto triangleOf = [&](size_t i, size_t& t) -> size_t {
@@ -296,17 +320,11 @@ Result<PointArray> samplePoints(const Mesh& from, const DistanceOptions& options
         return t < tri_count ? t : last_positive;
     };
 
-    // First every point's Morton code (and its triangle, or its vertex), in chunks; then the codes
-    // sorted (ties by point index); then the points computed again, in that order, from the stored
-    // triangle: independent loads in parallel chunks instead of a serial permutation, and no array of
+    // Every point's Morton code (and its triangle, or its vertex), in chunks; then the codes sorted
+    // (ties by point index). The points themselves are computed again from the stored source when they
+    // are needed: independent loads in parallel chunks instead of a serial permutation, and no array of
     // points beside the codes until the codes are sorted.
-    struct Key {
-        uint64_t code;
-        uint32_t point;  // point index: samples first, then vertices
-        uint32_t source; // the sample's triangle, or the vertex
-        bool operator<(const Key& o) const { return code < o.code || (code == o.code && point < o.point); }
-    };
-    LargeArray<Key> order(point_count);
+    LargeArray<PointKey> order(point_count);
     const Aabb box = computeBounds(from);
     const Vec3d box_min = toDouble(box.min);
     const Vec3d extent = toDouble(box.max) - box_min;
@@ -323,7 +341,7 @@ Result<PointArray> samplePoints(const Mesh& from, const DistanceOptions& options
             Vec3d point;
             if (i < sample_count) {
                 source = uint32_t(triangleOf(i, t));
-                point = sampleOn(i, source);
+                point = sampler.sampleOn(i, source);
             } else {
                 source = vertices[i - sample_count];
                 point = toDouble(from.positions[source]);
@@ -333,19 +351,39 @@ Result<PointArray> samplePoints(const Mesh& from, const DistanceOptions& options
     }));
     LargeArray<double>().swap(cdf);
     std::sort(order.begin(), order.end());
+    return order;
+}
+
+// The points measured from one side, stored in Morton order of their position (ties by point index).
+Result<PointArray> samplePoints(const Mesh& from, const DistanceOptions& options, uint64_t stream, const char* role) {
+    const SideSampler sampler(from, options, stream);
+    LODBAKE_ASSIGN_OR_RETURN(LargeArray<PointKey> order, sortedPointKeys(from, options, sampler, role));
+    const size_t point_count = order.size();
     PointArray points(point_count);
     LODBAKE_RETURN_IF_ERROR(parallelForChunks(point_count, kChunkSize, [&](size_t, size_t first, size_t end) {
-        for (size_t k = first; k < end; ++k) {
-            const Key& o = order[k];
-            points[k] = o.point < sample_count ? sampleOn(o.point, o.source) : toDouble(from.positions[o.source]);
-        }
+        for (size_t k = first; k < end; ++k) points[k] = sampler.at(order[k].point, order[k].source);
     }));
     return points;
 }
 
-// Distances from `points` to the surface indexed by `to`.
-Result<SideStats> measurePoints(const PointArray& points, const DistanceIndex& to) {
-    const size_t point_count = points.size();
+// One side's points in the same order as samplePoints gives them, kept as (point, source) pairs, a third of
+// the memory (8 bytes a point instead of 24), each point recomputed by the query that needs it.
+struct PointSources {
+    uint32_t point;
+    uint32_t source;
+};
+
+Result<LargeArray<PointSources>> samplePointSources(const Mesh& from, const DistanceOptions& options,
+                                                    const SideSampler& sampler, const char* role) {
+    LODBAKE_ASSIGN_OR_RETURN(LargeArray<PointKey> order, sortedPointKeys(from, options, sampler, role));
+    LargeArray<PointSources> sources(order.size());
+    for (size_t k = 0; k < order.size(); ++k) sources[k] = {order[k].point, order[k].source};
+    return sources;
+}
+
+// Distances from the points pointAt(0 .. point_count - 1) to the surface indexed by `to`.
+template <class PointAt>
+Result<SideStats> measurePointsAt(size_t point_count, const PointAt& pointAt, const DistanceIndex& to) {
     std::vector<SideStats> chunks(chunkCount(point_count, kChunkSize));
     LODBAKE_RETURN_IF_ERROR(parallelForChunks(point_count, kChunkSize, [&](size_t chunk, size_t first, size_t end) {
         SideStats s;
@@ -353,7 +391,7 @@ Result<SideStats> measurePoints(const PointArray& points, const DistanceIndex& t
         // a tight first bound that prunes most of the tree. The minimum found is the same either way.
         DistanceIndex::Cursor cursor;
         for (size_t k = first; k < end; ++k) {
-            const double d = std::sqrt(to.closestDistanceSq(points[k], cursor));
+            const double d = std::sqrt(to.closestDistanceSq(pointAt(k), cursor));
             s.max = std::max(s.max, d);
             s.sum += d;
             s.sum_sq += d * d;
@@ -372,6 +410,12 @@ Result<SideStats> measurePoints(const PointArray& points, const DistanceIndex& t
     return total_stats;
 }
 
+// Distances from `points` to the surface indexed by `to`.
+Result<SideStats> measurePoints(const PointArray& points, const DistanceIndex& to) {
+    return measurePointsAt(
+        points.size(), [&](size_t k) -> const Vec3d& { return points[k]; }, to);
+}
+
 Status checkOptions(const DistanceOptions& options) {
     if (options.sample_count == 0 && !options.include_vertices) {
         return invalidInput("distance options: expected sample_count > 0 or include_vertices, got neither");
@@ -380,23 +424,26 @@ Status checkOptions(const DistanceOptions& options) {
 }
 
 // What an approximation needs before it is measured: its index and its side's points (each built
-// only from the approximation, so it can be prepared while the previous one is measured).
+// only from the approximation, so it can be prepared while the previous one is measured). No index
+// when the reference side was measured beforehand (measureReferenceSides): nothing else queries it.
 struct ApproxSide {
     Status status = Status::okStatus();
     DistanceIndex index;
     PointArray points;
 };
 
-ApproxSide prepareApprox(const Mesh& approx, const DistanceOptions& options) {
+ApproxSide prepareApprox(const Mesh& approx, const DistanceOptions& options, bool with_index) {
     ApproxSide side;
     side.status = checkSurface(approx, "approximation");
     if (!side.status.ok()) return side;
-    Result<DistanceIndex> index = DistanceIndex::build(approx.positions, approx.indices);
-    if (!index.ok()) {
-        side.status = index.status();
-        return side;
+    if (with_index) {
+        Result<DistanceIndex> index = DistanceIndex::build(approx.positions, approx.indices);
+        if (!index.ok()) {
+            side.status = index.status();
+            return side;
+        }
+        side.index = std::move(index).value();
     }
-    side.index = std::move(index).value();
     Result<PointArray> points = samplePoints(approx, options, kApproxStream, "approximation");
     if (!points.ok()) {
         side.status = points.status();
@@ -407,11 +454,17 @@ ApproxSide prepareApprox(const Mesh& approx, const DistanceOptions& options) {
     return side;
 }
 
-// One prepared approximation against a reference whose side's points are already drawn.
+// One prepared approximation against a reference whose side's points are already drawn, or whose
+// side was measured beforehand (`known`, not null).
 Result<DistanceResult> measurePrepared(const DistanceReference& reference, const PointArray& reference_points,
-                                       const ApproxSide& approx) {
+                                       const ApproxSide& approx, const OneSidedDistance* known) {
     LODBAKE_RETURN_IF_ERROR(approx.status);
-    LODBAKE_ASSIGN_OR_RETURN(SideStats ref_to_approx, measurePoints(reference_points, approx.index));
+    SideStats ref_to_approx;
+    if (known) {
+        ref_to_approx = *known;
+    } else {
+        LODBAKE_ASSIGN_OR_RETURN(ref_to_approx, measurePoints(reference_points, approx.index));
+    }
     LODBAKE_ASSIGN_OR_RETURN(SideStats approx_to_ref, measurePoints(approx.points, reference.index()));
 
     DistanceResult r;
@@ -429,10 +482,13 @@ Result<DistanceResult> measurePrepared(const DistanceReference& reference, const
 // measured: two tasks side by side, the next approximation's serial index build and sampling beside the
 // current one's parallel queries, so idle threads join the queries. At most two approximations' indexes
 // and points exist at once. `first` is approximations[0] already prepared (empty when there are none).
+// `known[i]`, when there and not null, is approximation i's reference side, measured beforehand.
 std::vector<Result<DistanceResult>> measurePipelined(const DistanceReference& reference,
                                                      const PointArray& reference_points,
                                                      const std::vector<const Mesh*>& approximations,
-                                                     const DistanceOptions& options, ApproxSide first) {
+                                                     const DistanceOptions& options, ApproxSide first,
+                                                     const std::vector<const OneSidedDistance*>& known) {
+    auto knownAt = [&](size_t i) { return i < known.size() ? known[i] : nullptr; };
     std::vector<Result<DistanceResult>> results(approximations.size(), Result<DistanceResult>(DistanceResult{}));
     ApproxSide current = std::move(first);
     for (size_t i = 0; i < approximations.size(); ++i) {
@@ -440,9 +496,9 @@ std::vector<Result<DistanceResult>> measurePipelined(const DistanceReference& re
         const bool has_next = i + 1 < approximations.size();
         const Status run = parallelFor(has_next ? 2 : 1, 1, [&](size_t task) {
             if (task == 0)
-                results[i] = measurePrepared(reference, reference_points, current);
+                results[i] = measurePrepared(reference, reference_points, current, knownAt(i));
             else
-                next = prepareApprox(*approximations[i + 1], options);
+                next = prepareApprox(*approximations[i + 1], options, knownAt(i + 1) == nullptr);
         });
         if (!run.ok()) {
             results[i] = run;
@@ -753,7 +809,7 @@ Result<DistanceResult> measureSurfaceDistance(const DistanceReference& reference
     LODBAKE_RETURN_IF_ERROR(checkSurface(approx, "approximation"));
     LODBAKE_ASSIGN_OR_RETURN(PointArray reference_points,
                              samplePoints(reference.mesh(), options, kReferenceStream, "reference"));
-    return measurePrepared(reference, reference_points, prepareApprox(approx, options));
+    return measurePrepared(reference, reference_points, prepareApprox(approx, options, true), nullptr);
 }
 
 std::vector<Result<DistanceResult>> measureSurfaceDistances(const DistanceReference& reference,
@@ -772,20 +828,59 @@ std::vector<Result<DistanceResult>> measureSurfaceDistances(const DistanceRefere
         if (task == 0)
             reference_points = samplePoints(reference.mesh(), options, kReferenceStream, "reference");
         else
-            first = prepareApprox(*approximations[0], options);
+            first = prepareApprox(*approximations[0], options, true);
     });
     if (!run.ok()) reference_points = run;
     if (!reference_points.ok()) {
         for (auto& r : results) r = reference_points.status();
         return results;
     }
-    return measurePipelined(reference, *reference_points, approximations, options, std::move(first));
+    return measurePipelined(reference, *reference_points, approximations, options, std::move(first), {});
+}
+
+Result<std::vector<Result<OneSidedDistance>>> measureReferenceSides(const Mesh& reference,
+                                                                   const std::vector<const Mesh*>& approximations,
+                                                                   const DistanceOptions& options) {
+    LODBAKE_RETURN_IF_ERROR(checkOptions(options));
+    LODBAKE_RETURN_IF_ERROR(checkSurface(reference, "reference"));
+    // The points as their sources (8 bytes each instead of 24) and one approximation's index at a time:
+    // this side is meant to run where memory is short (beside another big task); recomputing a point
+    // costs little next to its query, and the index builds little next to the queries.
+    const SideSampler sampler(reference, options, kReferenceStream);
+    LODBAKE_ASSIGN_OR_RETURN(LargeArray<PointSources> points,
+                             samplePointSources(reference, options, sampler, "reference"));
+    auto pointAt = [&](size_t k) { return sampler.at(points[k].point, points[k].source); };
+    std::vector<Result<OneSidedDistance>> results(approximations.size(), OneSidedDistance{});
+    for (size_t i = 0; i < approximations.size(); ++i) {
+        const Status checked = checkSurface(*approximations[i], "approximation");
+        if (!checked.ok()) {
+            results[i] = checked;
+            continue;
+        }
+        Result<DistanceIndex> index = DistanceIndex::build(approximations[i]->positions, approximations[i]->indices);
+        if (!index.ok()) {
+            results[i] = index.status();
+            continue;
+        }
+        results[i] = measurePointsAt(points.size(), pointAt, *index);
+    }
+    return results;
 }
 
 Result<std::vector<Result<DistanceResult>>> prepareAndMeasureSurfaceDistances(
     const Mesh& reference, const std::vector<const Mesh*>& approximations, const DistanceOptions& options) {
+    return prepareAndMeasureSurfaceDistances(reference, approximations, options, {});
+}
+
+Result<std::vector<Result<DistanceResult>>> prepareAndMeasureSurfaceDistances(
+    const Mesh& reference, const std::vector<const Mesh*>& approximations, const DistanceOptions& options,
+    const std::vector<const OneSidedDistance*>& reference_sides) {
     LODBAKE_RETURN_IF_ERROR(checkOptions(options));
     LODBAKE_RETURN_IF_ERROR(checkSurface(reference, "reference"));
+    auto knownAt = [&](size_t i) { return i < reference_sides.size() ? reference_sides[i] : nullptr; };
+    // The reference's points are needed only for the sides not measured beforehand.
+    bool need_points = false;
+    for (size_t i = 0; i < approximations.size(); ++i) need_points |= knownAt(i) == nullptr;
     // Three independent setup tasks side by side: the reference's index (serial), its points and the
     // first approximation's index and points.
     Result<DistanceReference> prepared = internalError("distance reference: not prepared");
@@ -794,14 +889,15 @@ Result<std::vector<Result<DistanceResult>>> prepareAndMeasureSurfaceDistances(
     LODBAKE_RETURN_IF_ERROR(parallelFor(approximations.empty() ? 2 : 3, 1, [&](size_t task) {
         if (task == 0)
             prepared = DistanceReference::prepareChecked(reference);
-        else if (task == 1)
+        else if (task == 1 && need_points)
             reference_points = samplePoints(reference, options, kReferenceStream, "reference");
-        else
-            first = prepareApprox(*approximations[0], options);
+        else if (task == 2)
+            first = prepareApprox(*approximations[0], options, knownAt(0) == nullptr);
     }));
     LODBAKE_RETURN_IF_ERROR(prepared.status());
     LODBAKE_RETURN_IF_ERROR(reference_points.status());
-    return measurePipelined(*prepared, *reference_points, approximations, options, std::move(first));
+    return measurePipelined(*prepared, *reference_points, approximations, options, std::move(first),
+                            reference_sides);
 }
 
 Result<DistanceResult> measureSurfaceDistance(const Mesh& reference, const Mesh& approx,

@@ -14,8 +14,8 @@ using lodbake::bake_detail::concurrentPhases;
 using lodbake::bake_detail::PhaseEstimates;
 using lodbake::bake_detail::PhaseTask;
 
-// "p0" PFRep encoder e on LOD0, "e1" other encoder 1 on LOD0, "L3" level 3, "M" measurement; phases
-// separated by '|'.
+// "p0" PFRep encoder e on LOD0, "e1" other encoder 1 on LOD0, "L3" level 3, "M" measurement, "R1" the
+// reference sides of levels 1 and on; phases separated by '|'.
 std::string describe(const std::vector<std::vector<PhaseTask>>& phases) {
     std::string s;
     for (size_t p = 0; p < phases.size(); ++p) {
@@ -26,6 +26,9 @@ std::string describe(const std::vector<std::vector<PhaseTask>>& phases) {
             switch (task.kind) {
             case PhaseTask::Kind::Measure:
                 s += "M";
+                break;
+            case PhaseTask::Kind::MeasureReference:
+                s += "R" + std::to_string(task.index);
                 break;
             case PhaseTask::Kind::Lod0Encoder:
                 s += (task.index == 0 ? "p" : "e") + std::to_string(task.index);
@@ -53,18 +56,39 @@ TEST(BakePhasesTest, SmallAssetRunsEveryTaskAtOnce) {
 }
 
 TEST(BakePhasesTest, LargeAssetRunsItsBigTasksAlone) {
-    // dragon_poisson: PFRep and the measurement alone, then the coding of every level side by side.
-    EXPECT_EQ(describe(concurrentPhases(kBuiltin, desktopLevels(1067852))), "p0 | M | e1 L1 L2 L3 L4 L5");
-    // A mid-size asset: the PFRep build beside the measurement, then the coding.
-    EXPECT_EQ(describe(concurrentPhases(kBuiltin, desktopLevels(500000))), "p0 M | e1 L1 L2 L3 L4 L5");
+    // dragon_poisson: PFRep beside the reference sides of every level, the measurement alone, then
+    // the coding of every level side by side.
+    EXPECT_EQ(describe(concurrentPhases(kBuiltin, desktopLevels(1067852))), "p0 R1 | M | e1 L1 L2 L3 L4 L5");
+    // A mid-size asset: the PFRep build beside the measurement and LOD0's coding, then the other levels.
+    EXPECT_EQ(describe(concurrentPhases(kBuiltin, desktopLevels(500000))), "p0 M e1 | L1 L2 L3 L4 L5");
+}
+
+TEST(BakePhasesTest, ReferenceSidesOnlyBesideAnEarlierTaskAndBeforeTheMeasurement) {
+    // Without a PFRep encoder it would run first in its phase, where it gains nothing.
+    EXPECT_EQ(describe(concurrentPhases({false}, desktopLevels(1067852))), "M | p0 L1 L2 L3 L4 L5");
+    // In the measurement's phase the measurement measures both sides itself.
+    EXPECT_EQ(describe(concurrentPhases(kBuiltin, desktopLevels(300000))), "p0 M e1 L1 L2 L3 L4 L5");
+    // Only LOD0: nothing to measure.
+    EXPECT_EQ(describe(concurrentPhases(kBuiltin, {1067852})), "p0 | M | e1");
+    // Where the PFRep build and the reference sides together exceed the budget, the PFRep build runs
+    // alone and the measurement measures both sides.
+    // With one thread (measure_reference_ahead off) nothing would idle beside the PFRep build.
+    PhaseEstimates one_thread;
+    one_thread.measure_reference_ahead = false;
+    EXPECT_EQ(describe(concurrentPhases(kBuiltin, desktopLevels(1067852), one_thread)), "p0 | M | e1 L1 L2 L3 L4 L5");
+    PhaseEstimates smaller;
+    smaller.budget_bytes = 224.0 * 1024 * 1024;
+    EXPECT_EQ(describe(concurrentPhases(kBuiltin, desktopLevels(1067852), smaller)), "p0 | M | e1 L1 L2 L3 L4 L5");
 }
 
 TEST(BakePhasesTest, OrderAndTasksDoNotDependOnTheCut) {
-    for (size_t lod0 : {0ul, 1000ul, 250000ul, 600000ul, 5000000ul}) {
+    // Every task once, in the start order; the reference sides only where they are worth it.
+    // (5,000,000 triangles: the PFRep build alone is above the budget, so nothing joins it.)
+    for (size_t lod0 : {0ul, 1000ul, 250000ul, 600000ul, 1067852ul, 5000000ul}) {
         std::string all;
         for (const auto& phase : concurrentPhases(kBuiltin, desktopLevels(lod0)))
             for (const PhaseTask& task : phase) all += describe({{task}}) + " ";
-        EXPECT_EQ(all, "p0 M e1 L1 L2 L3 L4 L5 ") << lod0;
+        EXPECT_EQ(all, lod0 == 1067852ul ? "p0 R1 M e1 L1 L2 L3 L4 L5 " : "p0 M e1 L1 L2 L3 L4 L5 ") << lod0;
     }
     PhaseEstimates tiny;
     tiny.budget_bytes = 1;

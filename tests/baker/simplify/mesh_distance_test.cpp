@@ -276,6 +276,69 @@ TEST(MeshDistanceTest, PrepareAndMeasureEqualsOneByOneForAnyThreadCount) {
     EXPECT_FALSE(lodbake::prepareAndMeasureSurfaceDistances(reference, pointers, none).ok());
 }
 
+// measureReferenceSides measures the reference side of every level on its own (the bake runs it beside
+// the PFRep build); prepareAndMeasureSurfaceDistances then takes the sides it is given instead of
+// measuring them: the same bits as measuring both sides there, for any subset given and thread count.
+TEST(MeshDistanceTest, ReferenceSidesMeasuredBeforehandGiveTheSameBits) {
+    Mesh reference = perturbed(icosphere(4), 0.01f, 41);
+    std::vector<Mesh> levels = {perturbed(icosphere(3), 0.01f, 42), perturbed(icosphere(2), 0.02f, 43),
+                                lodbake_test::makeMesh({{0, 0, 0}}, {}), perturbed(icosphere(1), 0.02f, 44)};
+    std::vector<const Mesh*> pointers;
+    for (const Mesh& m : levels) pointers.push_back(&m);
+    lodbake::DistanceOptions options;
+    options.sample_count = 20000;
+    auto prepared = lodbake::DistanceReference::prepare(reference);
+    ASSERT_TRUE(prepared.ok());
+    for (int threads : {1, 2}) {
+        lodbake::ScopedThreadLimit limit(threads);
+        const auto sides = lodbake::measureReferenceSides(reference, pointers, options);
+        ASSERT_TRUE(sides.ok()) << sides.status().message();
+        ASSERT_EQ(sides->size(), levels.size());
+        EXPECT_FALSE((*sides)[2].ok()); // degenerate level
+        // Every side, none, and the sides of levels 1 and on (the bake's use).
+        for (size_t first : {size_t(0), size_t(1), levels.size()}) {
+            std::vector<const lodbake::OneSidedDistance*> known(levels.size(), nullptr);
+            for (size_t i = first; i < levels.size(); ++i)
+                if ((*sides)[i].ok()) known[i] = &*(*sides)[i];
+            const auto batch = lodbake::prepareAndMeasureSurfaceDistances(reference, pointers, options, known);
+            ASSERT_TRUE(batch.ok()) << batch.status().message();
+            ASSERT_EQ(batch->size(), levels.size());
+            for (size_t i = 0; i < levels.size(); ++i) {
+                const auto single = lodbake::measureSurfaceDistance(prepared.value(), levels[i], options);
+                ASSERT_EQ((*batch)[i].ok(), single.ok()) << i;
+                if (!single.ok()) {
+                    EXPECT_EQ((*batch)[i].status().message(), single.status().message());
+                    continue;
+                }
+                EXPECT_EQ((*sides)[i]->max, single->max_ref_to_approx) << i;
+                EXPECT_EQ((*batch)[i]->hausdorff, single->hausdorff) << first << " " << i;
+                EXPECT_EQ((*batch)[i]->mean, single->mean) << first << " " << i;
+                EXPECT_EQ((*batch)[i]->rms, single->rms) << first << " " << i;
+                EXPECT_EQ((*batch)[i]->max_ref_to_approx, single->max_ref_to_approx) << first << " " << i;
+                EXPECT_EQ((*batch)[i]->max_approx_to_ref, single->max_approx_to_ref) << first << " " << i;
+                EXPECT_EQ((*batch)[i]->diagonal, single->diagonal) << first << " " << i;
+            }
+        }
+    }
+    // A given side is taken as it is, not measured again.
+    lodbake::OneSidedDistance forged;
+    forged.max = 123.0;
+    forged.sum = 1.0;
+    forged.sum_sq = 1.0;
+    forged.count = 1;
+    const auto taken =
+        lodbake::prepareAndMeasureSurfaceDistances(reference, pointers, options, {nullptr, &forged, nullptr, nullptr});
+    ASSERT_TRUE(taken.ok());
+    EXPECT_EQ((*taken)[1]->max_ref_to_approx, 123.0);
+    EXPECT_EQ((*taken)[1]->hausdorff, 123.0);
+    EXPECT_FALSE(lodbake::measureReferenceSides(levels[2], pointers, options).ok());
+    lodbake::DistanceOptions none;
+    none.sample_count = 0;
+    none.include_vertices = false;
+    EXPECT_FALSE(lodbake::measureReferenceSides(reference, pointers, none).ok());
+    EXPECT_TRUE(lodbake::measureReferenceSides(reference, {}, options)->empty());
+}
+
 // Brute force: the exact distance the index computes, over every triangle.
 double bruteForceDistanceSq(const Mesh& m, const lodbake::Vec3d& p) {
     double best = HUGE_VAL;

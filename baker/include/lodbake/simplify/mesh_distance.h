@@ -60,6 +60,15 @@ struct DistanceResult {
     double rmsRel() const { return diagonal > 0 ? rms / diagonal : 0.0; }
 };
 
+/// One side of a two-sided distance: the distances from one surface's points to the other surface,
+/// combined in chunk order (what DistanceResult is computed from, two sides at a time).
+struct OneSidedDistance {
+    double max = 0.0;
+    double sum = 0.0;
+    double sum_sq = 0.0;
+    uint64_t count = 0;
+};
+
 /// Measures the two-sided distance. Fails (InvalidInput) if either mesh has no triangle of
 /// non-zero area, has an index out of range or a referenced vertex with a NaN/Inf coordinate, or if
 /// options ask for no points at all (sample_count 0 and include_vertices false).
@@ -142,7 +151,8 @@ public:
 
 private:
     friend Result<std::vector<Result<DistanceResult>>> prepareAndMeasureSurfaceDistances(
-        const Mesh& reference, const std::vector<const Mesh*>& approximations, const DistanceOptions& options);
+        const Mesh& reference, const std::vector<const Mesh*>& approximations, const DistanceOptions& options,
+        const std::vector<const OneSidedDistance*>& reference_sides);
     static Result<DistanceReference> prepareChecked(const Mesh& reference); // prepare after checkSurface
 
     const Mesh* mesh_ = nullptr;
@@ -169,5 +179,26 @@ std::vector<Result<DistanceResult>> measureSurfaceDistances(const DistanceRefere
 /// side. Fails as prepare does for a bad reference, and for options asking for no points.
 Result<std::vector<Result<DistanceResult>>> prepareAndMeasureSurfaceDistances(
     const Mesh& reference, const std::vector<const Mesh*>& approximations, const DistanceOptions& options = {});
+
+/// The reference side alone: for every approximation, the distances from the reference's points to it,
+/// bit-identical to the side that prepareAndMeasureSurfaceDistances measures with the same reference and
+/// options. It needs neither the reference's index nor the approximations' points, only the reference's
+/// points (kept as their sources, 8 bytes each; every query recomputes its point, bit for bit) and one
+/// approximation's index at a time, so it can run earlier, where memory is short (the bake runs it
+/// beside the PFRep build).
+/// Fails as prepareAndMeasureSurfaceDistances does for a bad reference or options; results[i] fails
+/// for a bad approximation (the two-sided measurement then fails the same way). Pointers must not be null.
+Result<std::vector<Result<OneSidedDistance>>> measureReferenceSides(const Mesh& reference,
+                                                                   const std::vector<const Mesh*>& approximations,
+                                                                   const DistanceOptions& options = {});
+
+/// prepareAndMeasureSurfaceDistances with the reference sides of some approximations measured beforehand
+/// by measureReferenceSides (same reference, same options): `reference_sides[i]`, when present and not
+/// null, is taken as approximation i's reference side instead of being measured, and approximation i's
+/// index is never built. When every side is given, the reference's points are not drawn. The results
+/// are bit-identical to measuring both sides here.
+Result<std::vector<Result<DistanceResult>>> prepareAndMeasureSurfaceDistances(
+    const Mesh& reference, const std::vector<const Mesh*>& approximations, const DistanceOptions& options,
+    const std::vector<const OneSidedDistance*>& reference_sides);
 
 } // namespace lodbake
