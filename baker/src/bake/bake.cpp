@@ -107,32 +107,14 @@ Result<TextureLevels> textureLevels(const Mesh& lod0, size_t level_count, const 
     return out;
 }
 
-// measureLodChain (lod_chain.h), with the reference sides of some levels measured beforehand
-// (`reference_sides[i]` for chain level i, when present and ok): the same results, bit for bit, and the
-// same warnings.
+// measureLodChain (lod_chain.h) with the reference sides that a MeasureReference task measured
+// (`reference_sides[i]` for chain level i, when present and ok).
 void measureChain(const Mesh& mesh, LodChain& chain, const LodChainOptions& options,
                   const std::vector<Result<OneSidedDistance>>& reference_sides, Diagnostics& diagnostics) {
-    std::vector<const Mesh*> meshes;
     std::vector<const OneSidedDistance*> known;
-    for (size_t i = 0; i < chain.levels.size(); ++i) {
-        meshes.push_back(&chain.levels[i].mesh);
+    for (size_t i = 0; i < chain.levels.size(); ++i)
         known.push_back(i < reference_sides.size() && reference_sides[i].ok() ? &*reference_sides[i] : nullptr);
-    }
-    Result<std::vector<Result<DistanceResult>>> measured =
-        prepareAndMeasureSurfaceDistances(mesh, meshes, options.distance, known);
-    if (!measured.ok()) diagnostics.warn("lod chain: errors not measured: " + measured.status().message());
-    for (size_t i = 0; measured.ok() && i < measured->size(); ++i) {
-        LodLevel& level = chain.levels[i];
-        const Result<DistanceResult>& d = (*measured)[i];
-        if (!d.ok()) {
-            diagnostics.warn("lod chain: level ratio " + std::to_string(level.target_ratio) +
-                             ": error not measured: " + d.status().message());
-            continue;
-        }
-        level.has_distance = true;
-        level.distance = *d;
-    }
-    updateSwitchDistances(chain, options.screen);
+    measureLodChain(mesh, chain, options, known, diagnostics);
 }
 
 // After the chain, the remaining work of an asset is a fixed set of tasks that only read the

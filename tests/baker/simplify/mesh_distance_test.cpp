@@ -208,30 +208,51 @@ TEST(MeshDistanceTest, PreparedReferenceGivesTheSameResult) {
     EXPECT_FALSE(lodbake::DistanceReference::prepare(lodbake_test::makeMesh({{0, 0, 0}}, {})).ok());
 }
 
-TEST(MeshDistanceTest, BatchOfLevelsEqualsOneByOneForAnyThreadCount) {
-    Mesh reference = perturbed(icosphere(4), 0.01f, 21);
-    std::vector<Mesh> levels = {perturbed(icosphere(3), 0.01f, 22), perturbed(icosphere(2), 0.02f, 23),
-                                lodbake_test::makeMesh({{0, 0, 0}}, {}), perturbed(icosphere(1), 0.02f, 24)};
+// A batch result equals the one-level result bit for bit (or fails with the same message).
+void expectSameBits(const lodbake::Result<lodbake::DistanceResult>& got,
+                    const lodbake::Result<lodbake::DistanceResult>& want, const std::string& label) {
+    ASSERT_EQ(got.ok(), want.ok()) << label;
+    if (!want.ok()) {
+        EXPECT_EQ(got.status().message(), want.status().message()) << label;
+        return;
+    }
+    EXPECT_EQ(got->hausdorff, want->hausdorff) << label;
+    EXPECT_EQ(got->mean, want->mean) << label;
+    EXPECT_EQ(got->rms, want->rms) << label;
+    EXPECT_EQ(got->max_ref_to_approx, want->max_ref_to_approx) << label;
+    EXPECT_EQ(got->max_approx_to_ref, want->max_approx_to_ref) << label;
+    EXPECT_EQ(got->diagonal, want->diagonal) << label;
+}
+
+// Four levels of an icosphere reference for the batch tests (seeds from `seed`): three perturbed
+// spheres and a degenerate one (third), which fails to measure.
+std::vector<Mesh> batchLevels(uint64_t seed) {
+    return {perturbed(icosphere(3), 0.01f, seed + 1), perturbed(icosphere(2), 0.02f, seed + 2),
+            lodbake_test::makeMesh({{0, 0, 0}}, {}), perturbed(icosphere(1), 0.02f, seed + 3)};
+}
+
+struct LevelBatch {
+    Mesh reference;
+    std::vector<Mesh> levels;
     std::vector<const Mesh*> pointers;
-    for (const Mesh& m : levels) pointers.push_back(&m);
     lodbake::DistanceOptions options;
-    options.sample_count = 20000;
-    auto prepared = lodbake::DistanceReference::prepare(reference);
+    explicit LevelBatch(uint64_t seed) : reference(perturbed(icosphere(4), 0.01f, seed)), levels(batchLevels(seed)) {
+        for (const Mesh& m : levels) pointers.push_back(&m);
+        options.sample_count = 20000;
+    }
+};
+
+TEST(MeshDistanceTest, BatchOfLevelsEqualsOneByOneForAnyThreadCount) {
+    const LevelBatch in(21);
+    auto prepared = lodbake::DistanceReference::prepare(in.reference);
     ASSERT_TRUE(prepared.ok());
     for (int threads : {1, 2}) {
         lodbake::ScopedThreadLimit limit(threads);
-        const auto batch = lodbake::measureSurfaceDistances(prepared.value(), pointers, options);
-        ASSERT_EQ(batch.size(), levels.size());
-        for (size_t i = 0; i < levels.size(); ++i) {
-            const auto single = lodbake::measureSurfaceDistance(prepared.value(), levels[i], options);
-            ASSERT_EQ(batch[i].ok(), single.ok()) << i;
-            if (!single.ok()) {
-                EXPECT_EQ(batch[i].status().message(), single.status().message());
-                continue;
-            }
-            EXPECT_EQ(batch[i]->hausdorff, single->hausdorff) << i;
-            EXPECT_EQ(batch[i]->mean, single->mean) << i;
-            EXPECT_EQ(batch[i]->rms, single->rms) << i;
+        const auto batch = lodbake::measureSurfaceDistances(prepared.value(), in.pointers, in.options);
+        ASSERT_EQ(batch.size(), in.levels.size());
+        for (size_t i = 0; i < in.levels.size(); ++i) {
+            expectSameBits(batch[i], lodbake::measureSurfaceDistance(prepared.value(), in.levels[i], in.options),
+                           std::to_string(i));
         }
     }
 }
@@ -255,16 +276,8 @@ TEST(MeshDistanceTest, PrepareAndMeasureEqualsOneByOneForAnyThreadCount) {
         ASSERT_TRUE(batch.ok()) << batch.status().message();
         ASSERT_EQ(batch->size(), levels.size());
         for (size_t i = 0; i < levels.size(); ++i) {
-            const auto single = lodbake::measureSurfaceDistance(prepared.value(), levels[i], options);
-            ASSERT_EQ((*batch)[i].ok(), single.ok()) << i;
-            if (!single.ok()) {
-                EXPECT_EQ((*batch)[i].status().message(), single.status().message());
-                continue;
-            }
-            EXPECT_EQ((*batch)[i]->hausdorff, single->hausdorff) << i;
-            EXPECT_EQ((*batch)[i]->mean, single->mean) << i;
-            EXPECT_EQ((*batch)[i]->rms, single->rms) << i;
-            EXPECT_EQ((*batch)[i]->diagonal, single->diagonal) << i;
+            expectSameBits((*batch)[i], lodbake::measureSurfaceDistance(prepared.value(), levels[i], options),
+                           std::to_string(i));
         }
         EXPECT_FALSE((*batch)[1].ok());
         EXPECT_TRUE(lodbake::prepareAndMeasureSurfaceDistances(reference, {}, options)->empty());
@@ -280,43 +293,29 @@ TEST(MeshDistanceTest, PrepareAndMeasureEqualsOneByOneForAnyThreadCount) {
 // the PFRep build); prepareAndMeasureSurfaceDistances then takes the sides it is given instead of
 // measuring them: the same bits as measuring both sides there, for any subset given and thread count.
 TEST(MeshDistanceTest, ReferenceSidesMeasuredBeforehandGiveTheSameBits) {
-    Mesh reference = perturbed(icosphere(4), 0.01f, 41);
-    std::vector<Mesh> levels = {perturbed(icosphere(3), 0.01f, 42), perturbed(icosphere(2), 0.02f, 43),
-                                lodbake_test::makeMesh({{0, 0, 0}}, {}), perturbed(icosphere(1), 0.02f, 44)};
-    std::vector<const Mesh*> pointers;
-    for (const Mesh& m : levels) pointers.push_back(&m);
-    lodbake::DistanceOptions options;
-    options.sample_count = 20000;
-    auto prepared = lodbake::DistanceReference::prepare(reference);
+    const LevelBatch in(41);
+    auto prepared = lodbake::DistanceReference::prepare(in.reference);
     ASSERT_TRUE(prepared.ok());
     for (int threads : {1, 2}) {
         lodbake::ScopedThreadLimit limit(threads);
-        const auto sides = lodbake::measureReferenceSides(reference, pointers, options);
+        const auto sides = lodbake::measureReferenceSides(in.reference, in.pointers, in.options);
         ASSERT_TRUE(sides.ok()) << sides.status().message();
-        ASSERT_EQ(sides->size(), levels.size());
+        ASSERT_EQ(sides->size(), in.levels.size());
         EXPECT_FALSE((*sides)[2].ok()); // degenerate level
-        // Every side, none, and the sides of levels 1 and on (the bake's use).
-        for (size_t first : {size_t(0), size_t(1), levels.size()}) {
-            std::vector<const lodbake::OneSidedDistance*> known(levels.size(), nullptr);
-            for (size_t i = first; i < levels.size(); ++i)
+        // Every side, none, and the sides of in.levels 1 and on (the bake's use).
+        for (size_t first : {size_t(0), size_t(1), in.levels.size()}) {
+            std::vector<const lodbake::OneSidedDistance*> known(in.levels.size(), nullptr);
+            for (size_t i = first; i < in.levels.size(); ++i)
                 if ((*sides)[i].ok()) known[i] = &*(*sides)[i];
-            const auto batch = lodbake::prepareAndMeasureSurfaceDistances(reference, pointers, options, known);
+            const auto batch = lodbake::prepareAndMeasureSurfaceDistances(in.reference, in.pointers, in.options, known);
             ASSERT_TRUE(batch.ok()) << batch.status().message();
-            ASSERT_EQ(batch->size(), levels.size());
-            for (size_t i = 0; i < levels.size(); ++i) {
-                const auto single = lodbake::measureSurfaceDistance(prepared.value(), levels[i], options);
-                ASSERT_EQ((*batch)[i].ok(), single.ok()) << i;
-                if (!single.ok()) {
-                    EXPECT_EQ((*batch)[i].status().message(), single.status().message());
-                    continue;
+            ASSERT_EQ(batch->size(), in.levels.size());
+            for (size_t i = 0; i < in.levels.size(); ++i) {
+                const auto single = lodbake::measureSurfaceDistance(prepared.value(), in.levels[i], in.options);
+                expectSameBits((*batch)[i], single, std::to_string(first) + " " + std::to_string(i));
+                if (single.ok()) {
+                    EXPECT_EQ((*sides)[i]->max, single->max_ref_to_approx) << i;
                 }
-                EXPECT_EQ((*sides)[i]->max, single->max_ref_to_approx) << i;
-                EXPECT_EQ((*batch)[i]->hausdorff, single->hausdorff) << first << " " << i;
-                EXPECT_EQ((*batch)[i]->mean, single->mean) << first << " " << i;
-                EXPECT_EQ((*batch)[i]->rms, single->rms) << first << " " << i;
-                EXPECT_EQ((*batch)[i]->max_ref_to_approx, single->max_ref_to_approx) << first << " " << i;
-                EXPECT_EQ((*batch)[i]->max_approx_to_ref, single->max_approx_to_ref) << first << " " << i;
-                EXPECT_EQ((*batch)[i]->diagonal, single->diagonal) << first << " " << i;
             }
         }
     }
@@ -327,16 +326,16 @@ TEST(MeshDistanceTest, ReferenceSidesMeasuredBeforehandGiveTheSameBits) {
     forged.sum_sq = 1.0;
     forged.count = 1;
     const auto taken =
-        lodbake::prepareAndMeasureSurfaceDistances(reference, pointers, options, {nullptr, &forged, nullptr, nullptr});
+        lodbake::prepareAndMeasureSurfaceDistances(in.reference, in.pointers, in.options, {nullptr, &forged, nullptr, nullptr});
     ASSERT_TRUE(taken.ok());
     EXPECT_EQ((*taken)[1]->max_ref_to_approx, 123.0);
     EXPECT_EQ((*taken)[1]->hausdorff, 123.0);
-    EXPECT_FALSE(lodbake::measureReferenceSides(levels[2], pointers, options).ok());
+    EXPECT_FALSE(lodbake::measureReferenceSides(in.levels[2], in.pointers, in.options).ok());
     lodbake::DistanceOptions none;
     none.sample_count = 0;
     none.include_vertices = false;
-    EXPECT_FALSE(lodbake::measureReferenceSides(reference, pointers, none).ok());
-    EXPECT_TRUE(lodbake::measureReferenceSides(reference, {}, options)->empty());
+    EXPECT_FALSE(lodbake::measureReferenceSides(in.reference, in.pointers, none).ok());
+    EXPECT_TRUE(lodbake::measureReferenceSides(in.reference, {}, in.options)->empty());
 }
 
 // Brute force: the exact distance the index computes, over every triangle.
