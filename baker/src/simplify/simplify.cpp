@@ -2,6 +2,7 @@
 #include "lodbake/simplify/simplify.h"
 
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <string>
 
@@ -27,6 +28,10 @@ Result<SimplifyOutput> simplify(const Mesh& mesh, const SimplifyOptions& options
     if (!(options.max_error >= 0.0)) return invalidInput("simplify options: max_error: expected a non-negative number");
     detail::EdgeCollapser engine;
     LODBAKE_RETURN_IF_ERROR(engine.init(mesh, options, diagnostics));
+    // One target, the serial collapse order: no partitioned rounds (docs/simplify.md). They are for the
+    // bake's chain, which runs alone on its stage; on a geometry-only dragon_poisson they moved this
+    // call's Hausdorff error by -12 % to +45 % (0.5, 0.25, 0.2, 0.1), its mean by under 0.1 %.
+    engine.setRoundMinFaces(SIZE_MAX);
     const size_t faces = engine.initialFaceCount();
     size_t target = 0;
     if (options.target_triangles > 0)

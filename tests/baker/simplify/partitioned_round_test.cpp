@@ -4,6 +4,7 @@
 #include "simplify/edge_collapse.h"
 
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <map>
 #include <utility>
@@ -119,6 +120,34 @@ TEST(PartitionedRoundTest, SmallMeshesKeepTheSerialLoop) {
     ASSERT_GT(rounds.rounds, 0u);
     EXPECT_NE(serial.meshes[0].indices, rounds.meshes[0].indices);
     EXPECT_EQ(serial.meshes[0].faceCount(), rounds.meshes[0].faceCount());
+}
+
+// simplify() (one target) keeps the serial order above kRoundMinFaces too: the same mesh as the
+// engine run with rounds off, not the one with rounds.
+TEST(PartitionedRoundTest, SimplifyKeepsTheSerialLoop) {
+    const Mesh mesh = lodbake_test::icosphere(7); // 327,680 faces, above kRoundMinFaces
+    ASSERT_GE(mesh.faceCount(), EdgeCollapser::kRoundMinFaces);
+    lodbake::SimplifyOptions options;
+    options.target_ratio = 0.4f;
+    Diagnostics d;
+    const auto simplified = lodbake::simplify(mesh, options, d);
+    ASSERT_TRUE(simplified.ok()) << simplified.status().message();
+    auto engineMesh = [&](size_t round_min_faces, size_t& rounds) {
+        EdgeCollapser engine;
+        EXPECT_TRUE(engine.init(mesh, options, d).ok());
+        engine.setRoundMinFaces(round_min_faces);
+        engine.run(size_t(std::ceil(0.4 * double(engine.initialFaceCount()))), HUGE_VAL, nullptr);
+        rounds = engine.roundCount();
+        return engine.extract();
+    };
+    size_t serial_rounds = 0, round_rounds = 0;
+    const Mesh serial = engineMesh(SIZE_MAX, serial_rounds);
+    const Mesh with_rounds = engineMesh(EdgeCollapser::kRoundMinFaces, round_rounds);
+    EXPECT_EQ(serial_rounds, 0u);
+    EXPECT_GE(round_rounds, 1u);
+    EXPECT_EQ(simplified->mesh.indices, serial.indices);
+    EXPECT_EQ(simplified->mesh.positions, serial.positions);
+    EXPECT_NE(simplified->mesh.indices, with_rounds.indices);
 }
 
 TEST(PartitionedRoundTest, TargetAtOrAboveTheFaceCountCollapsesNothing) {
