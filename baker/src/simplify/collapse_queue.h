@@ -66,6 +66,53 @@ inline void siftDown(Entry* at, Slot* slot, uint32_t n, uint32_t i) {
     at[i] = e;
     slot[e.id].pos = i;
 }
+
+// The smallest child of the root of a heap of n entries (the top after a pop if nothing else
+// changes), or kAbsent.
+inline uint32_t secondId(const Entry* at, uint32_t n) {
+    if (n < 2) return kAbsent;
+    const uint32_t last = std::min(kArity + 1, n);
+    uint32_t child = 1;
+    for (uint32_t k = 2; k < last; ++k)
+        if (less(at[k], at[child])) child = k;
+    return at[child].id;
+}
+
+// Gives the entry at i a new cost and restores the order.
+inline void update(Entry* at, Slot* slot, uint32_t n, uint32_t i, float cost) {
+    const Entry old = at[i];
+    at[i].cost = cost;
+    if (less(at[i], old))
+        siftUp(at, slot, i);
+    else
+        siftDown(at, slot, n, i);
+}
+
+// Removes `id` if present from a heap of n entries (its last entry fills the gap); returns the new
+// count.
+inline uint32_t remove(Entry* at, Slot* slot, uint32_t n, uint32_t id) {
+    const uint32_t i = slot[id].pos;
+    slot[id].pos = kAbsent;
+    if (i == kAbsent) return n;
+    const uint32_t last = n - 1;
+    if (i == last) return last;
+    at[i] = at[last];
+    slot[at[i].id].pos = i;
+    if (i > 0 && less(at[i], at[(i - 1) / kArity]))
+        siftUp(at, slot, i);
+    else
+        siftDown(at, slot, last, i);
+    return last;
+}
+
+// True when the heap order and the position index agree (for tests).
+inline bool isConsistent(const Entry* at, const Slot* slot, uint32_t n) {
+    for (uint32_t i = 0; i < n; ++i) {
+        if (slot[at[i].id].pos != i) return false;
+        if (i > 0 && less(at[i], at[(i - 1) / kArity])) return false;
+    }
+    return true;
+}
 } // namespace collapse_heap
 
 class PartHeap;
@@ -84,15 +131,7 @@ public:
     bool contains(uint32_t id) const { return pos(id) != kAbsent; }
     uint32_t topId() const { return at(0).id; }
     /// The smallest child of the root (the top after a pop if nothing else changes), or kAbsent.
-    uint32_t secondId() const {
-        const uint32_t n = uint32_t(size());
-        if (n < 2) return kAbsent;
-        const uint32_t last = std::min(kArity + 1, n);
-        uint32_t child = 1;
-        for (uint32_t k = 2; k < last; ++k)
-            if (less(at(k), at(child))) child = k;
-        return at(child).id;
-    }
+    uint32_t secondId() const { return collapse_heap::secondId(base(), uint32_t(size())); }
     float topCost() const { return at(0).cost; }
     float cost(uint32_t id) const { return at(pos(id)).cost; }
 
@@ -131,12 +170,7 @@ public:
             siftUp(i);
             return;
         }
-        const Entry old = at(i);
-        at(i).cost = cost;
-        if (less(at(i), old))
-            siftUp(i);
-        else
-            siftDown(i);
+        collapse_heap::update(base(), slot_.data(), uint32_t(size()), i, cost);
     }
 
     /// Bulk construction: append ids that are not yet present with pushUnordered, then call
@@ -152,24 +186,8 @@ public:
 
     /// Removes `id` if present.
     void remove(uint32_t id) {
-        const uint32_t i = pos(id);
-        slot_[id].pos = kAbsent;
-        if (i == kAbsent) return;
-        const uint32_t last = uint32_t(size() - 1);
-        if (i == last) {
-            heap_.pop_back();
-            return;
-        }
-        const Entry moved = at(last);
-        heap_.pop_back();
-        at(i) = moved;
-        setPos(moved.id, i);
-        if (i > 0 && less(moved, at((i - 1) / kArity)))
-            siftUp(i);
-        else
-            siftDown(i);
+        heap_.resize(size_t(collapse_heap::remove(base(), slot_.data(), uint32_t(size()), id)) + kPad);
     }
-
     uint32_t pop() {
         const uint32_t id = at(0).id;
         remove(id);
@@ -177,13 +195,7 @@ public:
     }
 
     /// True when the heap order and the position index agree (for tests).
-    bool isConsistent() const {
-        for (size_t i = 0; i < size(); ++i) {
-            if (pos(at(i).id) != i) return false;
-            if (i > 0 && less(at(i), at((i - 1) / kArity))) return false;
-        }
-        return true;
-    }
+    bool isConsistent() const { return collapse_heap::isConsistent(base(), slot_.data(), uint32_t(size())); }
 
     /// Partitioned rounds (EdgeCollapser::run): moves every queued id x with p = part_of(x) <
     /// part_count into part heap p, laid out in this queue's storage after the ids that stay
@@ -208,13 +220,16 @@ private:
     static constexpr uint32_t kSplitSlack = 64;
     static bool less(const Entry& a, const Entry& b) { return collapse_heap::less(a, b); }
 
+    // Node 0 (one past the padding: valid as a pointer also when the heap is empty).
+    Entry* base() { return heap_.data() + kPad; }
+    const Entry* base() const { return heap_.data() + kPad; }
     Entry& at(uint32_t i) { return heap_[i + kPad]; }
     const Entry& at(uint32_t i) const { return heap_[i + kPad]; }
     uint32_t pos(uint32_t id) const { return slot_[id].pos; }
     void setPos(uint32_t id, uint32_t i) { slot_[id].pos = i; }
 
-    void siftUp(uint32_t i) { collapse_heap::siftUp(&at(0), slot_.data(), i); }
-    void siftDown(uint32_t i) { collapse_heap::siftDown(&at(0), slot_.data(), uint32_t(size()), i); }
+    void siftUp(uint32_t i) { collapse_heap::siftUp(base(), slot_.data(), i); }
+    void siftDown(uint32_t i) { collapse_heap::siftDown(base(), slot_.data(), uint32_t(size()), i); }
 
     LargeArray<Entry> heap_;
     LargeArray<Slot> slot_;
@@ -235,14 +250,7 @@ public:
     template <class Fn> void forEachCost(Fn&& fn) const {
         for (uint32_t i = 0; i < size_; ++i) fn(at_[i].cost);
     }
-    uint32_t secondId() const {
-        if (size_ < 2) return kAbsent;
-        const uint32_t last = std::min(collapse_heap::kArity + 1, size_);
-        uint32_t child = 1;
-        for (uint32_t k = 2; k < last; ++k)
-            if (collapse_heap::less(at_[k], at_[child])) child = k;
-        return at_[child].id;
-    }
+    uint32_t secondId() const { return collapse_heap::secondId(at_, size_); }
     float payload(uint32_t id) const { return slot_[id].payload; }
     void setPayload(uint32_t id, float value) { slot_[id].payload = value; }
     void prefetchEntry(uint32_t id) const {
@@ -263,36 +271,13 @@ public:
             collapse_heap::siftUp(at_, slot_, i);
             return;
         }
-        const collapse_heap::Entry old = at_[i];
-        at_[i].cost = cost;
-        if (collapse_heap::less(at_[i], old))
-            collapse_heap::siftUp(at_, slot_, i);
-        else
-            collapse_heap::siftDown(at_, slot_, size_, i);
+        collapse_heap::update(at_, slot_, size_, i, cost);
     }
 
-    void remove(uint32_t id) {
-        const uint32_t i = slot_[id].pos;
-        slot_[id].pos = kAbsent;
-        if (i == kAbsent) return;
-        const uint32_t last = --size_;
-        if (i == last) return;
-        at_[i] = at_[last];
-        slot_[at_[i].id].pos = i;
-        if (i > 0 && collapse_heap::less(at_[i], at_[(i - 1) / collapse_heap::kArity]))
-            collapse_heap::siftUp(at_, slot_, i);
-        else
-            collapse_heap::siftDown(at_, slot_, size_, i);
-    }
+    void remove(uint32_t id) { size_ = collapse_heap::remove(at_, slot_, size_, id); }
 
     /// True when the heap order and the position index agree (for tests).
-    bool isConsistent() const {
-        for (uint32_t i = 0; i < size_; ++i) {
-            if (slot_[at_[i].id].pos != i) return false;
-            if (i > 0 && collapse_heap::less(at_[i], at_[(i - 1) / collapse_heap::kArity])) return false;
-        }
-        return true;
-    }
+    bool isConsistent() const { return collapse_heap::isConsistent(at_, slot_, size_); }
 
 private:
     friend class CollapseQueue;
