@@ -432,17 +432,29 @@ struct ApproxSide {
     PointArray points;
 };
 
+// An approximation's index, after the surface check every measurement of it makes first.
+Result<DistanceIndex> checkedIndex(const Mesh& approx) {
+    LODBAKE_RETURN_IF_ERROR(checkSurface(approx, "approximation"));
+    return DistanceIndex::build(approx.positions, approx.indices);
+}
+
+// Side i's distances when they were measured beforehand (known[i], when there and not null).
+const OneSidedDistance* knownSide(const std::vector<const OneSidedDistance*>& known, size_t i) {
+    return i < known.size() ? known[i] : nullptr;
+}
+
 ApproxSide prepareApprox(const Mesh& approx, const DistanceOptions& options, bool with_index) {
     ApproxSide side;
-    side.status = checkSurface(approx, "approximation");
-    if (!side.status.ok()) return side;
     if (with_index) {
-        Result<DistanceIndex> index = DistanceIndex::build(approx.positions, approx.indices);
+        Result<DistanceIndex> index = checkedIndex(approx);
         if (!index.ok()) {
             side.status = index.status();
             return side;
         }
         side.index = std::move(index).value();
+    } else {
+        side.status = checkSurface(approx, "approximation");
+        if (!side.status.ok()) return side;
     }
     Result<PointArray> points = samplePoints(approx, options, kApproxStream, "approximation");
     if (!points.ok()) {
@@ -488,7 +500,6 @@ std::vector<Result<DistanceResult>> measurePipelined(const DistanceReference& re
                                                      const std::vector<const Mesh*>& approximations,
                                                      const DistanceOptions& options, ApproxSide first,
                                                      const std::vector<const OneSidedDistance*>& known) {
-    auto knownAt = [&](size_t i) { return i < known.size() ? known[i] : nullptr; };
     std::vector<Result<DistanceResult>> results(approximations.size(), Result<DistanceResult>(DistanceResult{}));
     ApproxSide current = std::move(first);
     for (size_t i = 0; i < approximations.size(); ++i) {
@@ -496,9 +507,9 @@ std::vector<Result<DistanceResult>> measurePipelined(const DistanceReference& re
         const bool has_next = i + 1 < approximations.size();
         const Status run = parallelFor(has_next ? 2 : 1, 1, [&](size_t task) {
             if (task == 0)
-                results[i] = measurePrepared(reference, reference_points, current, knownAt(i));
+                results[i] = measurePrepared(reference, reference_points, current, knownSide(known, i));
             else
-                next = prepareApprox(*approximations[i + 1], options, knownAt(i + 1) == nullptr);
+                next = prepareApprox(*approximations[i + 1], options, knownSide(known, i + 1) == nullptr);
         });
         if (!run.ok()) {
             results[i] = run;
@@ -852,12 +863,7 @@ Result<std::vector<Result<OneSidedDistance>>> measureReferenceSides(const Mesh& 
     auto pointAt = [&](size_t k) { return sampler.at(points[k].point, points[k].source); };
     std::vector<Result<OneSidedDistance>> results(approximations.size(), OneSidedDistance{});
     for (size_t i = 0; i < approximations.size(); ++i) {
-        const Status checked = checkSurface(*approximations[i], "approximation");
-        if (!checked.ok()) {
-            results[i] = checked;
-            continue;
-        }
-        Result<DistanceIndex> index = DistanceIndex::build(approximations[i]->positions, approximations[i]->indices);
+        Result<DistanceIndex> index = checkedIndex(*approximations[i]);
         if (!index.ok()) {
             results[i] = index.status();
             continue;
@@ -877,10 +883,9 @@ Result<std::vector<Result<DistanceResult>>> prepareAndMeasureSurfaceDistances(
     const std::vector<const OneSidedDistance*>& reference_sides) {
     LODBAKE_RETURN_IF_ERROR(checkOptions(options));
     LODBAKE_RETURN_IF_ERROR(checkSurface(reference, "reference"));
-    auto knownAt = [&](size_t i) { return i < reference_sides.size() ? reference_sides[i] : nullptr; };
     // The reference's points are needed only for the sides not measured beforehand.
     bool need_points = false;
-    for (size_t i = 0; i < approximations.size(); ++i) need_points |= knownAt(i) == nullptr;
+    for (size_t i = 0; i < approximations.size(); ++i) need_points |= knownSide(reference_sides, i) == nullptr;
     // Three independent setup tasks side by side: the reference's index (serial), its points and the
     // first approximation's index and points.
     Result<DistanceReference> prepared = internalError("distance reference: not prepared");
@@ -892,7 +897,7 @@ Result<std::vector<Result<DistanceResult>>> prepareAndMeasureSurfaceDistances(
         else if (task == 1 && need_points)
             reference_points = samplePoints(reference, options, kReferenceStream, "reference");
         else if (task == 2)
-            first = prepareApprox(*approximations[0], options, knownAt(0) == nullptr);
+            first = prepareApprox(*approximations[0], options, knownSide(reference_sides, 0) == nullptr);
     }));
     LODBAKE_RETURN_IF_ERROR(prepared.status());
     LODBAKE_RETURN_IF_ERROR(reference_points.status());
