@@ -188,6 +188,7 @@ public:
     void remove(uint32_t id) {
         heap_.resize(size_t(collapse_heap::remove(base(), slot_.data(), uint32_t(size()), id)) + kPad);
     }
+
     uint32_t pop() {
         const uint32_t id = at(0).id;
         remove(id);
@@ -218,7 +219,6 @@ private:
     // split() starts each part's region on a multiple of 8 entries, with its own kPad: at most 14
     // entries per part beyond the ids themselves (512 bytes for up to 4 parts).
     static constexpr uint32_t kSplitSlack = 64;
-    static bool less(const Entry& a, const Entry& b) { return collapse_heap::less(a, b); }
 
     // Node 0 (one past the padding: valid as a pointer also when the heap is empty).
     Entry* base() { return heap_.data() + kPad; }
