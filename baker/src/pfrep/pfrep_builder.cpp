@@ -10,6 +10,7 @@
 #include <string>
 #include <unordered_map>
 
+#include "core/large_array.h"
 #include "core/parallel.h"
 #include "lodbake/simplify/quadric.h"
 #include "lodrt/format.h"
@@ -206,16 +207,19 @@ Result<PfrepBuild> buildBlob(const CollapseSequence& sequence, const std::vector
     namespace fmt = lodrt::format;
     const uint32_t point_count = uint32_t(sequence.point_positions.size());
     if (point_triangles.size() % 3 != 0) return invalidInput("pfrep: point triangle list is not a multiple of 3");
-    std::vector<Triangle> tris;
+    // The working arrays (tens of MB on a scan) are on core/large_array.h storage: from 2 MB on, huge
+    // pages where the OS offers them. On std::vector, first-touch 4 KB page faults were about 40 % of
+    // the blob build on dragon_poisson (docs/bake.md, "Session 13").
+    detail::LargeArray<Triangle> tris;
     const size_t input_count = point_triangles.size() / 3;
     for (size_t c = 0; c < point_triangles.size(); ++c)
         if (point_triangles[c] >= point_count)
             return invalidInput("pfrep: triangle " + std::to_string(c / 3) + ": point out of range");
-    std::vector<uint32_t> rank_of(point_count, kNone);
+    detail::LargeArray<uint32_t> rank_of(point_count, kNone);
     std::vector<uint32_t> rank_point;
     rank_point.reserve(point_count);
-    std::vector<double> removal_error(point_count, 0.0);
-    std::vector<uint8_t> referenced(point_count, 0);
+    detail::LargeArray<double> removal_error(point_count, 0.0);
+    detail::LargeArray<uint8_t> referenced(point_count, 0);
     // Record r, before it is ranked: both points valid and not yet removed, the kept point unmoved.
     auto checkRecord = [&](size_t r) -> Status {
         const CollapseRecord& rec = sequence.records[r];
@@ -283,7 +287,7 @@ Result<PfrepBuild> buildBlob(const CollapseSequence& sequence, const std::vector
         struct Range {
             uint32_t offset = 0, size = 0, capacity = 0;
         };
-        std::vector<Range> incident(point_count);
+        detail::LargeArray<Range> incident(point_count);
         for (uint32_t p : point_triangles) ++incident[p].capacity;
         size_t pool_size = 0;
         for (uint32_t p = 0; p < point_count; ++p) {
@@ -293,7 +297,7 @@ Result<PfrepBuild> buildBlob(const CollapseSequence& sequence, const std::vector
             pool_size += incident[p].capacity;
         }
         if (pool_size > 0xffffffffu / 2) return resourceLimit("pfrep: too many triangles");
-        std::vector<uint32_t> pool(pool_size);
+        detail::LargeArray<uint32_t> pool(pool_size);
         pool.reserve(pool_size + pool_size / 2);
         auto link = [&](uint32_t p, uint32_t t) {
             Range& r = incident[p];
@@ -320,7 +324,7 @@ Result<PfrepBuild> buildBlob(const CollapseSequence& sequence, const std::vector
         // Replay: ranks in removal order, then the survivors that have faces, by point id. The
         // triangles record r re-creates are tris[created_end[r - 1], created_end[r]).
         std::vector<uint32_t> ring;
-        std::vector<uint32_t> created_end(sequence.records.size());
+        detail::LargeArray<uint32_t> created_end(sequence.records.size());
         for (size_t r = 0; r < sequence.records.size(); ++r) {
             const CollapseRecord& rec = sequence.records[r];
             const uint32_t u = rec.removed_point, v = rec.kept_point;
@@ -346,8 +350,8 @@ Result<PfrepBuild> buildBlob(const CollapseSequence& sequence, const std::vector
             }
             created_end[r] = uint32_t(tris.size());
         }
-        std::vector<uint32_t>().swap(pool);
-        std::vector<Range>().swap(incident);
+        detail::LargeArray<uint32_t>().swap(pool);
+        detail::LargeArray<Range>().swap(incident);
         // Each removed point's error (its distance to the nearest triangle its removal creates, 0 when
         // it creates none), after the replay: independent per record, fixed chunks in parallel.
         LODBAKE_RETURN_IF_ERROR(parallelFor(sequence.records.size(), kChunk, [&](size_t r) {
@@ -386,23 +390,23 @@ Result<PfrepBuild> buildBlob(const CollapseSequence& sequence, const std::vector
             t = {{r[m], r[(m + 1) % 3], r[(m + 2) % 3]}, t.dependency == kNone ? kNone : rank_of[t.dependency]};
         }
     }));
-    std::vector<uint32_t> fan_first(vertex_count + 1, 0);
+    detail::LargeArray<uint32_t> fan_first(vertex_count + 1, 0);
     for (const Triangle& t : tris) ++fan_first[t.p[0] + 1];
     for (uint32_t i = 0; i < vertex_count; ++i) fan_first[i + 1] += fan_first[i];
     struct Slot {
         uint32_t a, b, dep; // ranks; dep kNone for input triangles
     };
-    std::vector<Slot> slots(tris.size());
+    detail::LargeArray<Slot> slots(tris.size());
     {
-        std::vector<uint32_t> fill(fan_first.begin(), fan_first.end() - 1);
+        detail::LargeArray<uint32_t> fill(fan_first.begin(), fan_first.end() - 1);
         for (const Triangle& t : tris) slots[fill[t.p[0]]++] = {t.p[1], t.p[2], t.dependency};
     }
     const size_t stored_triangles = tris.size();
-    std::vector<Triangle>().swap(tris); // the slots hold everything from here on
+    detail::LargeArray<Triangle>().swap(tris); // the slots hold everything from here on
 
     // Triangles per level: the slot at entry c with dependency d lives in levels (d, c] (from 0 for
     // input triangles), capped at the last level.
-    std::vector<int64_t> level_delta(size_t(removed) + 2, 0);
+    detail::LargeArray<int64_t> level_delta(size_t(removed) + 2, 0);
     for (uint32_t c = 0; c < vertex_count; ++c)
         for (uint32_t s = fan_first[c]; s < fan_first[c + 1]; ++s) {
             const uint32_t from = slots[s].dep == kNone ? 0 : slots[s].dep + 1;
@@ -419,8 +423,8 @@ Result<PfrepBuild> buildBlob(const CollapseSequence& sequence, const std::vector
     // ranks are lower, so already final): error and sphere grow monotonically up the hierarchy.
     // Each vertex's own fan is measured in parallel (fixed chunks); then one pass in rank order adds
     // what the dependencies bring. Every value is a maximum, so splitting the two changes no bit.
-    std::vector<double> err(vertex_count, 0.0), radius(vertex_count, 0.0), cone_angle(vertex_count, 0.0);
-    std::vector<Vec3d> axis(vertex_count);
+    detail::LargeArray<double> err(vertex_count, 0.0), radius(vertex_count, 0.0), cone_angle(vertex_count, 0.0);
+    detail::LargeArray<Vec3d> axis(vertex_count);
     auto pos = [&](uint32_t rank) { return toD(sequence.point_positions[rank_point[rank]]); };
     LODBAKE_RETURN_IF_ERROR(parallelFor(vertex_count, kChunk, [&](size_t vi) {
         const uint32_t i = uint32_t(vi);
@@ -479,7 +483,7 @@ Result<PfrepBuild> buildBlob(const CollapseSequence& sequence, const std::vector
         size_t dependency_groups = 0, neighbour_slots = 0;
     };
     std::vector<EntryChunk> chunks(chunkCount(vertex_count, kChunk));
-    std::vector<uint32_t> entry_offset(vertex_count);
+    detail::LargeArray<uint32_t> entry_offset(vertex_count);
     PfrepBuild build;
     LODBAKE_RETURN_IF_ERROR(parallelForChunks(vertex_count, kChunk, [&](size_t chunk, size_t lo, size_t hi) {
         EntryChunk& out = chunks[chunk];
