@@ -205,6 +205,11 @@ public:
     /// itself may not be used; the part heaps share its per-id slots (their ids must be disjoint).
     template <class PartOf>
     bool split(PartOf part_of, const uint32_t* capacity, PartHeap* parts, uint32_t part_count);
+    /// The same; the part heaps are built (their entries' positions set, then heap order) by
+    /// for_parts(part_count, build), which calls build(p) once for every part p, in any order or at once
+    /// (the parts own disjoint regions and ids).
+    template <class PartOf, class ForParts>
+    bool split(PartOf part_of, const uint32_t* capacity, PartHeap* parts, uint32_t part_count, ForParts for_parts);
     /// Ends a split: the part heaps' ids and the ones that stayed form one queue again.
     void merge(const PartHeap* parts, uint32_t part_count);
 
@@ -288,6 +293,14 @@ private:
 
 template <class PartOf>
 bool CollapseQueue::split(PartOf part_of, const uint32_t* capacity, PartHeap* parts, uint32_t part_count) {
+    return split(part_of, capacity, parts, part_count, [](uint32_t count, const auto& build) {
+        for (uint32_t p = 0; p < count; ++p) build(p);
+    });
+}
+
+template <class PartOf, class ForParts>
+bool CollapseQueue::split(PartOf part_of, const uint32_t* capacity, PartHeap* parts, uint32_t part_count,
+                          ForParts for_parts) {
     // Region of part p: heap_[start_p, start_p + kPad + capacity[p]), start_p a multiple of 8, so that
     // its node i sits at start_p + kPad + i with the same cache-line alignment as the whole queue's.
     const uint32_t n = uint32_t(size());
@@ -328,11 +341,14 @@ bool CollapseQueue::split(PartOf part_of, const uint32_t* capacity, PartHeap* pa
         part.slot_ = slot_.data();
         part.size_ = counts[p];
         part.capacity_ = capacity[p];
-        for (uint32_t i = 0; i < counts[p]; ++i) slot_[dst[i].id].pos = i;
+    }
+    for_parts(part_count, [&](uint32_t p) {
+        PartHeap& part = parts[p];
+        for (uint32_t i = 0; i < part.size_; ++i) slot_[part.at_[i].id].pos = i;
         if (part.size_ >= 2)
             for (uint32_t i = (part.size_ - 2) / kArity + 1; i-- > 0;)
-                collapse_heap::siftDown(dst, slot_.data(), part.size_, i);
-    }
+                collapse_heap::siftDown(part.at_, slot_.data(), part.size_, i);
+    });
     rest_size_ = rest;
     return true;
 }

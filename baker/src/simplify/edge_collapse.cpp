@@ -28,8 +28,10 @@
 
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <limits>
 #include <new>
 #include <string>
@@ -940,19 +942,41 @@ bool EdgeCollapser::roundApplies(size_t target_faces, const CollapseSequence* se
 void EdgeCollapser::runRound(size_t target_faces, double max_error) {
     const uint32_t point_count = uint32_t(position_.size());
     const uint32_t he_count = uint32_t(he_.size());
+    // The set-up loops below run over fixed chunks in parallel; each chunk's result is a count, a
+    // minimum, a maximum or bits OR-ed into shared words, so nothing depends on the thread count or
+    // on which chunk finishes first.
+    constexpr size_t kSetupChunk = 65536;
     // The cut: a plane across the longest extent of the alive points' box other than the previous
     // round's axis (so that the last round's seam lies inside a part now), at the median of their
     // coordinate (a histogram's bin edge: deterministic and without a copy of the coordinates).
-    float lo[3] = {HUGE_VALF, HUGE_VALF, HUGE_VALF}, hi[3] = {-HUGE_VALF, -HUGE_VALF, -HUGE_VALF};
-    uint32_t alive_points = 0;
-    for (uint32_t p = 0; p < point_count; ++p) {
-        if (point_he_[p] == kNone) continue;
-        ++alive_points;
+    struct Box {
+        float lo[3] = {HUGE_VALF, HUGE_VALF, HUGE_VALF}, hi[3] = {-HUGE_VALF, -HUGE_VALF, -HUGE_VALF};
+        uint32_t alive = 0;
+    };
+    std::vector<Box> boxes(chunkCount(point_count, kSetupChunk));
+    if (!parallelForChunks(point_count, kSetupChunk, [&](size_t chunk, size_t first, size_t last) {
+             Box& b = boxes[chunk];
+             for (size_t p = first; p < last; ++p) {
+                 if (point_he_[p] == kNone) continue;
+                 ++b.alive;
+                 for (int k = 0; k < 3; ++k) {
+                     b.lo[k] = std::min(b.lo[k], position_[p][k]);
+                     b.hi[k] = std::max(b.hi[k], position_[p][k]);
+                 }
+             }
+         }).ok())
+        throw std::bad_alloc(); // as the serial loop's allocations would (only bad_alloc gets here)
+    Box box;
+    for (const Box& b : boxes) {
+        box.alive += b.alive;
         for (int k = 0; k < 3; ++k) {
-            lo[k] = std::min(lo[k], position_[p][k]);
-            hi[k] = std::max(hi[k], position_[p][k]);
+            box.lo[k] = std::min(box.lo[k], b.lo[k]);
+            box.hi[k] = std::max(box.hi[k], b.hi[k]);
         }
     }
+    const float* lo = box.lo;
+    const float* hi = box.hi;
+    const uint32_t alive_points = box.alive;
     int axis = -1;
     for (int k = 0; k < 3; ++k)
         if (k != round_axis_ && (axis < 0 || hi[k] - lo[k] > hi[axis] - lo[axis])) axis = k;
@@ -963,9 +987,17 @@ void EdgeCollapser::runRound(size_t target_faces, double max_error) {
     auto binOf = [&](uint32_t p) {
         return std::min(kBins - 1, uint32_t((double(position_[p][axis]) - axis_lo) * bin_scale));
     };
+    std::vector<std::vector<uint32_t>> chunk_histograms(boxes.size());
+    if (!parallelForChunks(point_count, kSetupChunk, [&](size_t chunk, size_t first, size_t last) {
+             std::vector<uint32_t>& h = chunk_histograms[chunk];
+             h.assign(kBins, 0);
+             for (size_t p = first; p < last; ++p)
+                 if (point_he_[p] != kNone) ++h[binOf(uint32_t(p))];
+         }).ok())
+        throw std::bad_alloc();
     std::vector<uint32_t> histogram(kBins, 0);
-    for (uint32_t p = 0; p < point_count; ++p)
-        if (point_he_[p] != kNone) ++histogram[binOf(p)];
+    for (const std::vector<uint32_t>& h : chunk_histograms)
+        for (uint32_t b = 0; b < kBins; ++b) histogram[b] += h[b];
     uint32_t cut_bin = 0;
     for (uint32_t sum = 0; cut_bin < kBins - 1; ++cut_bin) {
         sum += histogram[cut_bin];
@@ -979,49 +1011,73 @@ void EdgeCollapser::runRound(size_t target_faces, double max_error) {
     // (the kept point's new neighbours were the removed one's), so the sets hold for the round.
     const size_t words = (size_t(point_count) + 63) / 64;
     std::vector<uint64_t> has[2] = {std::vector<uint64_t>(words, 0), std::vector<uint64_t>(words, 0)};
-    auto setBit = [](std::vector<uint64_t>& bits, uint32_t p) { bits[p >> 6] |= uint64_t(1) << (p & 63); };
+    // Faces of different chunks share words: the bits are OR-ed in atomically.
+    auto setBit = [](std::vector<uint64_t>& bits, uint32_t p) {
+        __atomic_fetch_or(&bits[p >> 6], uint64_t(1) << (p & 63), __ATOMIC_RELAXED);
+    };
     auto bit = [](const std::vector<uint64_t>& bits, uint32_t p) { return (bits[p >> 6] >> (p & 63)) & 1; };
     auto faceSide = [&](uint32_t f) { return binOf(he_[f * 3].point) > cut_bin ? 1u : 0u; };
-    for (uint32_t f = 0; f < he_count / 3; ++f) {
-        if (he_[f * 3].point == kNone) continue;
-        const uint32_t side = faceSide(f);
-        for (uint32_t k = 0; k < 3; ++k) setBit(has[side], he_[f * 3 + k].point);
-    }
+    const uint32_t face_count = he_count / 3;
+    if (!parallelForChunks(face_count, kSetupChunk, [&](size_t, size_t first, size_t last) {
+             for (uint32_t f = uint32_t(first); f < uint32_t(last); ++f) {
+                 if (he_[f * 3].point == kNone) continue;
+                 const uint32_t side = faceSide(f);
+                 for (uint32_t k = 0; k < 3; ++k) setBit(has[side], he_[f * 3 + k].point);
+             }
+         }).ok())
+        throw std::bad_alloc();
     for (uint32_t part = 0; part < kRoundParts; ++part) {
         part_points_[part].resize(words);
         for (size_t i = 0; i < words; ++i) part_points_[part][i] = has[part][i] & ~has[1 - part][i];
     }
     std::vector<uint64_t>& outside = has[0]; // points next to a point not in their faces' part
     std::fill(outside.begin(), outside.end(), 0);
-    for (uint32_t f = 0; f < he_count / 3; ++f) {
-        if (he_[f * 3].point == kNone) continue;
-        const std::vector<uint64_t>& pure = part_points_[faceSide(f)];
-        const uint32_t a = he_[f * 3].point, b = he_[f * 3 + 1].point, c = he_[f * 3 + 2].point;
-        if (!bit(pure, a) || !bit(pure, b) || !bit(pure, c)) {
-            setBit(outside, a);
-            setBit(outside, b);
-            setBit(outside, c);
-        }
-    }
+    if (!parallelForChunks(face_count, kSetupChunk, [&](size_t, size_t first, size_t last) {
+             for (uint32_t f = uint32_t(first); f < uint32_t(last); ++f) {
+                 if (he_[f * 3].point == kNone) continue;
+                 const std::vector<uint64_t>& pure = part_points_[faceSide(f)];
+                 const uint32_t a = he_[f * 3].point, b = he_[f * 3 + 1].point, c = he_[f * 3 + 2].point;
+                 if (!bit(pure, a) || !bit(pure, b) || !bit(pure, c)) {
+                     setBit(outside, a);
+                     setBit(outside, b);
+                     setBit(outside, c);
+                 }
+             }
+         }).ok())
+        throw std::bad_alloc();
     for (uint32_t part = 0; part < kRoundParts; ++part)
         for (size_t i = 0; i < words; ++i) part_points_[part][i] &= ~outside[i];
     std::vector<uint64_t>().swap(has[0]);
     std::vector<uint64_t>().swap(has[1]);
 
-    // A part's heap holds at most its edges alive now (its collapses only remove or merge them).
+    // Each half-edge's part (kRoundParts: none), read in half-edge order here instead of at random
+    // by the split's passes over the queue. A part's heap holds at most its edges alive now (its
+    // collapses only remove or merge them).
+    LargeArray<uint8_t> part_of_edge(he_count);
+    std::vector<std::array<uint32_t, kRoundParts>> chunk_capacity(chunkCount(he_count, kSetupChunk));
+    if (!parallelForChunks(he_count, kSetupChunk, [&](size_t chunk, size_t first, size_t last) {
+             std::array<uint32_t, kRoundParts> count{};
+             for (uint32_t h = uint32_t(first); h < uint32_t(last); ++h) {
+                 uint32_t part = 0;
+                 while (part < kRoundParts && !inPart(part, h)) ++part;
+                 part_of_edge[h] = uint8_t(part);
+                 if (part < kRoundParts && canonical(h) == h) ++count[part];
+             }
+             chunk_capacity[chunk] = count;
+         }).ok())
+        throw std::bad_alloc();
     uint32_t capacity[kRoundParts] = {0, 0};
-    for (uint32_t h = 0; h < he_count; ++h) {
-        if (he_[h].point == kNone || canonical(h) != h) continue;
-        for (uint32_t part = 0; part < kRoundParts; ++part) capacity[part] += inPart(part, h);
-    }
+    for (const std::array<uint32_t, kRoundParts>& count : chunk_capacity)
+        for (uint32_t part = 0; part < kRoundParts; ++part) capacity[part] += count[part];
     PartHeap heaps[kRoundParts];
-    auto part_of = [&](uint32_t id) {
-        for (uint32_t part = 0; part < kRoundParts; ++part)
-            if (inPart(part, id)) return part;
-        return kRoundParts;
-    };
+    auto part_of = [&](uint32_t id) { return uint32_t(part_of_edge[id]); };
     const size_t goal = size_t(double(alive_faces_ - target_faces) * kRoundShare);
-    if (queue_.split(part_of, capacity, heaps, kRoundParts)) {
+    auto for_parts = [](uint32_t count, const std::function<void(uint32_t)>& fn) {
+        if (!parallelFor(count, 1, [&](size_t part) { fn(uint32_t(part)); }).ok()) throw std::bad_alloc();
+    };
+    const bool split = queue_.split(part_of, capacity, heaps, kRoundParts, for_parts);
+    LargeArray<uint8_t>().swap(part_of_edge);
+    if (split) {
         for (uint32_t part = 0; part < kRoundParts; ++part) {
             Worker& w = parts_[part];
             w.heap = &heaps[part];

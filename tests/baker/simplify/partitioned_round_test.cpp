@@ -196,6 +196,43 @@ TEST(PartitionedRoundTest, QueueSplitAndMergeKeepEveryId) {
     EXPECT_EQ(q.size(), expected - 200 + 2);
 }
 
+TEST(PartitionedRoundTest, SplitBuildsThePartsAlikeInAnyOrder) {
+    // runRound builds the part heaps side by side (split's for_parts): built last part first, the
+    // parts must pop the same ids in the same order as when built one after the other.
+    constexpr uint32_t kIds = 3000;
+    auto fill = [](CollapseQueue& q) {
+        q.reserve(kIds + 64);
+        for (uint32_t id = 0; id < kIds; ++id) q.set(id, float((id * 2654435761u) % 97));
+    };
+    const uint32_t capacity[2] = {kIds / 3 + 1, kIds / 3 + 1};
+    auto part_of = [](uint32_t id) { return id % 3; };
+    CollapseQueue serial(kIds), reversed(kIds);
+    fill(serial);
+    fill(reversed);
+    PartHeap a[2], b[2];
+    ASSERT_TRUE(serial.split(part_of, capacity, a, 2));
+    std::vector<uint32_t> order;
+    ASSERT_TRUE(reversed.split(part_of, capacity, b, 2, [&](uint32_t count, const auto& build) {
+        for (uint32_t p = count; p-- > 0;) {
+            order.push_back(p);
+            build(p);
+        }
+    }));
+    EXPECT_EQ(order, (std::vector<uint32_t>{1, 0}));
+    for (uint32_t p = 0; p < 2; ++p) {
+        EXPECT_TRUE(b[p].isConsistent());
+        ASSERT_EQ(a[p].size(), b[p].size());
+        while (!a[p].empty()) {
+            ASSERT_FALSE(b[p].empty());
+            EXPECT_EQ(a[p].topId(), b[p].topId());
+            EXPECT_EQ(a[p].topCost(), b[p].topCost());
+            a[p].remove(a[p].topId());
+            b[p].remove(b[p].topId());
+        }
+        EXPECT_TRUE(b[p].empty());
+    }
+}
+
 TEST(PartitionedRoundTest, SplitRefusesPartsThatDoNotFit) {
     CollapseQueue q(100);
     for (uint32_t id = 0; id < 100; ++id) q.set(id, float(id));
