@@ -222,6 +222,19 @@ std::string jobReport(const BakeJob& job, const BakeJobResult& r) {
     for (size_t s = 0; s < size_t(BakeStage::Count); ++s)
         j.field(bakeStageName(BakeStage(s)), r.stage_times[s].thread_cpu_seconds);
     j.endObject();
+    // Every run of a stage as it began (docs/pipeline.md, "Reading the timings").
+    j.key("timeline").beginArray();
+    for (const BakeJobResult::StageRun& run : r.timeline) {
+        j.beginObject();
+        j.field("stage", std::string(bakeStageName(run.stage)));
+        if (run.input != kWholePack) j.field("input", uint64_t(run.input));
+        if (run.level != StageTime::kNoLevel) j.field("level", uint64_t(run.level));
+        j.field("start", run.start_seconds);
+        j.field("seconds", run.wall_seconds);
+        j.field("threadCpuSeconds", run.thread_cpu_seconds);
+        j.endObject();
+    }
+    j.endArray();
     j.endObject();
     std::string head = j.str();
     const size_t close = head.find_last_of('}');

@@ -196,7 +196,7 @@ Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vect
                 const size_t l = nested_levels[i];
                 for (size_t e = 0; e < encoders.size(); ++e) {
                     if (!encoders[e].needs_measurement) continue;
-                    StageTimer timer(hooks, index, BakeStage::Encode);
+                    StageTimer timer(hooks, index, BakeStage::Encode, l);
                     commits[e * level_count + l] = encoders[e].prepare(chain, l, levelMesh(l));
                 }
             });
@@ -219,7 +219,7 @@ Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vect
         }
         case PhaseTask::Kind::Lod0Encoder: {
             const size_t e = task.index;
-            StageTimer timer(hooks, index, stageOf(e));
+            StageTimer timer(hooks, index, stageOf(e), 0);
             // A PFRep build reads LOD0's positions and indices only (lod0_view); the other encoders all of it.
             commits[e * level_count] =
                 encoders[e].prepare(chain, 0, stageOf(e) == BakeStage::Pfrep ? *lod0_view : mesh);
@@ -229,8 +229,10 @@ Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vect
             for (size_t e = 0; e < encoders.size(); ++e) {
                 // In the measurement's phase, the measurement task codes these after it (above).
                 if (encoders[e].needs_measurement && level_with_measure[task.index]) continue;
-                StageTimer timer(hooks, index, stageOf(e));
-                commits[e * level_count + task.index] = encoders[e].prepare(chain, task.index, levelMesh(task.index));
+                StageTimer timer(hooks, index, stageOf(e), task.index);
+                Result<PackStreamCommit>& commit = commits[e * level_count + task.index];
+                commit = encoders[e].prepare(chain, task.index, levelMesh(task.index));
+                if (commit.ok() && !*commit) timer.cancel(); // nothing to code here (PFRep codes LOD0 only)
             }
             return;
         }

@@ -63,6 +63,14 @@ void runJob(const BakeJob& job, size_t index, const BatchOptions& options, const
             sum.wall_seconds += time.wall_seconds;
             sum.cpu_seconds += time.cpu_seconds;
             sum.thread_cpu_seconds += time.thread_cpu_seconds;
+            BakeJobResult::StageRun run;
+            run.stage = stage;
+            run.input = input;
+            run.level = time.level;
+            run.start_seconds = std::max(0.0, std::chrono::duration<double>(time.start - start).count());
+            run.wall_seconds = time.wall_seconds;
+            run.thread_cpu_seconds = time.thread_cpu_seconds;
+            result.timeline.push_back(run);
         }
         if (hooks.stage_done) hooks.stage_done(index, input, stage, time);
     };
@@ -72,6 +80,7 @@ void runJob(const BakeJob& job, size_t index, const BatchOptions& options, const
         time.wall_seconds = secondsSince(wall);
         time.cpu_seconds = processCpuSeconds() - cpu;
         time.thread_cpu_seconds = threadCpuSeconds() - thread_cpu;
+        time.start = wall;
         stageDone(input, stage, time);
     };
     std::vector<std::string> names;
@@ -191,6 +200,15 @@ std::vector<BakeJobResult> runBakeJobs(const std::vector<BakeJob>& jobs, const B
     const Status status = parallelFor(jobs.size(), 1, [&](size_t) {
         const size_t j = order[next.fetch_add(1)];
         runJob(jobs[j], j, options, hooks, results[j]);
+        // The stages reported as they finished; the timeline lists them as they began (ties: input,
+        // then stage, then level, so equal start times print in a fixed order).
+        std::vector<BakeJobResult::StageRun>& timeline = results[j].timeline;
+        std::sort(timeline.begin(), timeline.end(), [](const BakeJobResult::StageRun& a, const BakeJobResult::StageRun& b) {
+            if (a.start_seconds != b.start_seconds) return a.start_seconds < b.start_seconds;
+            if (a.input != b.input) return a.input < b.input;
+            if (a.stage != b.stage) return a.stage < b.stage;
+            return a.level < b.level;
+        });
         if (hooks.job_done) hooks.job_done(j, results[j]);
     });
     if (!status.ok())

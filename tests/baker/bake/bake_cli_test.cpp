@@ -6,6 +6,9 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <set>
+#include <string>
 
 #include "../gltf/gltf_test_util.h"
 #include "lodbake/core/file_io.h"
@@ -126,6 +129,38 @@ TEST(BakeCliTest, RockSampleBakesIntoAValidDeterministicPackThatLoddumpReads) {
         ASSERT_EQ(report["assets"].size(), 1u);
         EXPECT_EQ(report["assets"][0]["levels"].size(), 6u);
         EXPECT_EQ(report["packBytes"].get<size_t>(), bytesOf(rock1).size());
+    }
+    {
+        SCOPED_TRACE("ReportTimelineListsEveryStageRunAsItBegan");
+        std::ifstream report_stream(report_path);
+        const nlohmann::json report = nlohmann::json::parse(report_stream);
+        const nlohmann::json& timeline = report["timeline"];
+        ASSERT_TRUE(timeline.is_array());
+        const double total = report["timings"]["total"].get<double>();
+        std::map<std::string, int> runs;
+        std::set<uint64_t> coded_levels;
+        double previous_start = 0.0, stage_sum = 0.0;
+        for (const nlohmann::json& run : timeline) {
+            const std::string stage = run["stage"].get<std::string>();
+            ++runs[stage];
+            const double start = run["start"].get<double>(), seconds = run["seconds"].get<double>();
+            EXPECT_GE(start, previous_start) << stage; // as the runs began
+            EXPECT_GE(seconds, 0.0) << stage;
+            EXPECT_LE(start + seconds, total + 1e-3) << stage;
+            previous_start = start;
+            if (stage == "encode") coded_levels.insert(run["level"].get<uint64_t>());
+            if (stage == "pack" || stage == "write") {
+                EXPECT_FALSE(run.contains("input")) << stage;
+            }
+            if (stage == "lod_chain") stage_sum += seconds;
+        }
+        for (const char* stage : {"load", "repair", "lod_chain", "pfrep", "pack", "write"})
+            EXPECT_EQ(runs[stage], 1) << stage; // PFRep codes LOD0 only: no empty runs for the other levels
+        EXPECT_GE(runs["measure"], 1);
+        // The valence coding of every level, each its own run.
+        EXPECT_EQ(coded_levels, (std::set<uint64_t>{0, 1, 2, 3, 4, 5}));
+        // The stage sums are the timeline's runs added up.
+        EXPECT_DOUBLE_EQ(stage_sum, report["timings"]["lod_chain"].get<double>());
     }
 }
 

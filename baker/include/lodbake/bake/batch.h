@@ -43,6 +43,17 @@ struct BakeJobResult {
     std::string summary;                 // bakeSummaryText of the pack
     uint64_t pack_bytes = 0;
     StageTime stage_times[size_t(BakeStage::Count)] = {}; // summed over the job's inputs
+    /// Every run of a stage in the order they began (an input's stages, each level's coding, the
+    /// measurement's parts...): the job's timeline, for seeing what ran side by side and what idled.
+    struct StageRun {
+        BakeStage stage = BakeStage::Load;
+        size_t input = kWholePack;        // input index, or kWholePack
+        size_t level = StageTime::kNoLevel; // the level worked on, when one
+        double start_seconds = 0;         // since the job began
+        double wall_seconds = 0;
+        double thread_cpu_seconds = 0;
+    };
+    std::vector<StageRun> timeline;
     double wall_seconds = 0;
     /// The pack, written to its temporary but not yet renamed into place (null on failure): the
     /// caller commits it (after staging its own report and depfile), or drops it to discard the pack.

@@ -42,6 +42,11 @@ struct StageTime {
     double wall_seconds = 0;
     double cpu_seconds = 0;
     double thread_cpu_seconds = 0;
+    /// When this run of the stage began, and the LOD level it worked on (kNoLevel: several or none).
+    /// Not summed: sums of StageTime (BakeJobResult::stage_times) leave them at their defaults.
+    std::chrono::steady_clock::time_point start{};
+    size_t level = kNoLevel;
+    static constexpr size_t kNoLevel = size_t(-1);
 };
 
 /// Observers of bake(). Called from worker threads, concurrently: the callee synchronises.
@@ -58,10 +63,12 @@ struct BakeHooks {
 /// Reports a stage's wall and CPU time to the hooks when it goes out of scope (or at finish()).
 class StageTimer {
 public:
-    StageTimer(const BakeHooks& hooks, size_t input, BakeStage stage)
-        : hooks_(hooks), input_(input), stage_(stage), start_(std::chrono::steady_clock::now()),
+    StageTimer(const BakeHooks& hooks, size_t input, BakeStage stage, size_t level = StageTime::kNoLevel)
+        : hooks_(hooks), input_(input), stage_(stage), level_(level), start_(std::chrono::steady_clock::now()),
           cpu_start_(processCpuSeconds()), thread_cpu_start_(threadCpuSeconds()) {}
     ~StageTimer() { finish(); }
+    /// Reports nothing (a run that did no work, e.g. an encoder that codes LOD0 only, asked for another level).
+    void cancel() { done_ = true; }
     void finish() {
         if (done_ || !hooks_.stage_done) return;
         done_ = true;
@@ -69,6 +76,8 @@ public:
         time.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
         time.cpu_seconds = processCpuSeconds() - cpu_start_;
         time.thread_cpu_seconds = threadCpuSeconds() - thread_cpu_start_;
+        time.start = start_;
+        time.level = level_;
         hooks_.stage_done(input_, stage_, time);
     }
 
@@ -76,6 +85,7 @@ private:
     const BakeHooks& hooks_;
     size_t input_;
     BakeStage stage_;
+    size_t level_;
     std::chrono::steady_clock::time_point start_;
     double cpu_start_;
     double thread_cpu_start_;
