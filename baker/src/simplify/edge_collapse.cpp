@@ -946,6 +946,10 @@ void EdgeCollapser::runRound(size_t target_faces, double max_error) {
     // minimum, a maximum or bits OR-ed into shared words, so nothing depends on the thread count or
     // on which chunk finishes first.
     constexpr size_t kSetupChunk = 65536;
+    // A failed parallel loop (only bad_alloc gets there) throws as the serial loops' allocations would.
+    auto inChunks = [](size_t count, auto&& fn) {
+        if (!parallelForChunks(count, kSetupChunk, fn).ok()) throw std::bad_alloc();
+    };
     // The cut: a plane across the longest extent of the alive points' box other than the previous
     // round's axis (so that the last round's seam lies inside a part now), at the median of their
     // coordinate (a histogram's bin edge: deterministic and without a copy of the coordinates).
@@ -954,18 +958,17 @@ void EdgeCollapser::runRound(size_t target_faces, double max_error) {
         uint32_t alive = 0;
     };
     std::vector<Box> boxes(chunkCount(point_count, kSetupChunk));
-    if (!parallelForChunks(point_count, kSetupChunk, [&](size_t chunk, size_t first, size_t last) {
-             Box& b = boxes[chunk];
-             for (size_t p = first; p < last; ++p) {
-                 if (point_he_[p] == kNone) continue;
-                 ++b.alive;
-                 for (int k = 0; k < 3; ++k) {
-                     b.lo[k] = std::min(b.lo[k], position_[p][k]);
-                     b.hi[k] = std::max(b.hi[k], position_[p][k]);
-                 }
-             }
-         }).ok())
-        throw std::bad_alloc(); // as the serial loop's allocations would (only bad_alloc gets here)
+    inChunks(point_count, [&](size_t chunk, size_t first, size_t last) {
+        Box& b = boxes[chunk];
+        for (size_t p = first; p < last; ++p) {
+            if (point_he_[p] == kNone) continue;
+            ++b.alive;
+            for (int k = 0; k < 3; ++k) {
+                b.lo[k] = std::min(b.lo[k], position_[p][k]);
+                b.hi[k] = std::max(b.hi[k], position_[p][k]);
+            }
+        }
+    });
     Box box;
     for (const Box& b : boxes) {
         box.alive += b.alive;
@@ -988,13 +991,12 @@ void EdgeCollapser::runRound(size_t target_faces, double max_error) {
         return std::min(kBins - 1, uint32_t((double(position_[p][axis]) - axis_lo) * bin_scale));
     };
     std::vector<std::vector<uint32_t>> chunk_histograms(boxes.size());
-    if (!parallelForChunks(point_count, kSetupChunk, [&](size_t chunk, size_t first, size_t last) {
-             std::vector<uint32_t>& h = chunk_histograms[chunk];
-             h.assign(kBins, 0);
-             for (size_t p = first; p < last; ++p)
-                 if (point_he_[p] != kNone) ++h[binOf(uint32_t(p))];
-         }).ok())
-        throw std::bad_alloc();
+    inChunks(point_count, [&](size_t chunk, size_t first, size_t last) {
+        std::vector<uint32_t>& h = chunk_histograms[chunk];
+        h.assign(kBins, 0);
+        for (size_t p = first; p < last; ++p)
+            if (point_he_[p] != kNone) ++h[binOf(uint32_t(p))];
+    });
     std::vector<uint32_t> histogram(kBins, 0);
     for (const std::vector<uint32_t>& h : chunk_histograms)
         for (uint32_t b = 0; b < kBins; ++b) histogram[b] += h[b];
@@ -1018,33 +1020,31 @@ void EdgeCollapser::runRound(size_t target_faces, double max_error) {
     auto bit = [](const std::vector<uint64_t>& bits, uint32_t p) { return (bits[p >> 6] >> (p & 63)) & 1; };
     auto faceSide = [&](uint32_t f) { return binOf(he_[f * 3].point) > cut_bin ? 1u : 0u; };
     const uint32_t face_count = he_count / 3;
-    if (!parallelForChunks(face_count, kSetupChunk, [&](size_t, size_t first, size_t last) {
-             for (uint32_t f = uint32_t(first); f < uint32_t(last); ++f) {
-                 if (he_[f * 3].point == kNone) continue;
-                 const uint32_t side = faceSide(f);
-                 for (uint32_t k = 0; k < 3; ++k) setBit(has[side], he_[f * 3 + k].point);
-             }
-         }).ok())
-        throw std::bad_alloc();
+    inChunks(face_count, [&](size_t, size_t first, size_t last) {
+        for (uint32_t f = uint32_t(first); f < uint32_t(last); ++f) {
+            if (he_[f * 3].point == kNone) continue;
+            const uint32_t side = faceSide(f);
+            for (uint32_t k = 0; k < 3; ++k) setBit(has[side], he_[f * 3 + k].point);
+        }
+    });
     for (uint32_t part = 0; part < kRoundParts; ++part) {
         part_points_[part].resize(words);
         for (size_t i = 0; i < words; ++i) part_points_[part][i] = has[part][i] & ~has[1 - part][i];
     }
     std::vector<uint64_t>& outside = has[0]; // points next to a point not in their faces' part
     std::fill(outside.begin(), outside.end(), 0);
-    if (!parallelForChunks(face_count, kSetupChunk, [&](size_t, size_t first, size_t last) {
-             for (uint32_t f = uint32_t(first); f < uint32_t(last); ++f) {
-                 if (he_[f * 3].point == kNone) continue;
-                 const std::vector<uint64_t>& pure = part_points_[faceSide(f)];
-                 const uint32_t a = he_[f * 3].point, b = he_[f * 3 + 1].point, c = he_[f * 3 + 2].point;
-                 if (!bit(pure, a) || !bit(pure, b) || !bit(pure, c)) {
-                     setBit(outside, a);
-                     setBit(outside, b);
-                     setBit(outside, c);
-                 }
-             }
-         }).ok())
-        throw std::bad_alloc();
+    inChunks(face_count, [&](size_t, size_t first, size_t last) {
+        for (uint32_t f = uint32_t(first); f < uint32_t(last); ++f) {
+            if (he_[f * 3].point == kNone) continue;
+            const std::vector<uint64_t>& pure = part_points_[faceSide(f)];
+            const uint32_t a = he_[f * 3].point, b = he_[f * 3 + 1].point, c = he_[f * 3 + 2].point;
+            if (!bit(pure, a) || !bit(pure, b) || !bit(pure, c)) {
+                setBit(outside, a);
+                setBit(outside, b);
+                setBit(outside, c);
+            }
+        }
+    });
     for (uint32_t part = 0; part < kRoundParts; ++part)
         for (size_t i = 0; i < words; ++i) part_points_[part][i] &= ~outside[i];
     std::vector<uint64_t>().swap(has[0]);
@@ -1055,17 +1055,16 @@ void EdgeCollapser::runRound(size_t target_faces, double max_error) {
     // collapses only remove or merge them).
     LargeArray<uint8_t> part_of_edge(he_count);
     std::vector<std::array<uint32_t, kRoundParts>> chunk_capacity(chunkCount(he_count, kSetupChunk));
-    if (!parallelForChunks(he_count, kSetupChunk, [&](size_t chunk, size_t first, size_t last) {
-             std::array<uint32_t, kRoundParts> count{};
-             for (uint32_t h = uint32_t(first); h < uint32_t(last); ++h) {
-                 uint32_t part = 0;
-                 while (part < kRoundParts && !inPart(part, h)) ++part;
-                 part_of_edge[h] = uint8_t(part);
-                 if (part < kRoundParts && canonical(h) == h) ++count[part];
-             }
-             chunk_capacity[chunk] = count;
-         }).ok())
-        throw std::bad_alloc();
+    inChunks(he_count, [&](size_t chunk, size_t first, size_t last) {
+        std::array<uint32_t, kRoundParts> count{};
+        for (uint32_t h = uint32_t(first); h < uint32_t(last); ++h) {
+            uint32_t part = 0;
+            while (part < kRoundParts && !inPart(part, h)) ++part;
+            part_of_edge[h] = uint8_t(part);
+            if (part < kRoundParts && canonical(h) == h) ++count[part];
+        }
+        chunk_capacity[chunk] = count;
+    });
     uint32_t capacity[kRoundParts] = {0, 0};
     for (const std::array<uint32_t, kRoundParts>& count : chunk_capacity)
         for (uint32_t part = 0; part < kRoundParts; ++part) capacity[part] += count[part];
