@@ -15,6 +15,7 @@
 
 #include "core/parallel.h"
 #include "lodbake/core/bvh.h"
+#include "lodbake/simplify/mesh_distance.h"
 
 namespace lodbake::detail {
 
@@ -94,11 +95,6 @@ void refineLevelPositions(const Mesh& input, Mesh& level, float max_normal_chang
     std::vector<ClosestHit> hits(std::min(sample_count, kRefineBlock));
     std::vector<Vec3d> delta(groups);
     std::vector<double> weight(groups);
-    // Each sample's distance from the previous step: no vertex moved further than `moved`, so the
-    // new nearest face is within distance + moved, which bounds (and speeds up) the next search
-    // without changing its result.
-    std::vector<double> previous(sample_count, 0.0);
-    double moved = 0.0;
     // The snapshot's face normals (unnormalised): the rotation bound, and on textured levels the
     // area bound, are relative to them, so three steps cannot add up to more than one step may do.
     std::vector<Vec3d> snapshot_normal(level.faceCount());
@@ -108,41 +104,35 @@ void refineLevelPositions(const Mesh& input, Mesh& level, float max_normal_chang
                                    Vec3d(level.positions[c[2]]) - Vec3d(level.positions[c[0]]));
     }
     for (int it = 0; it < kLevelRefineIterations; ++it) {
-        Result<TriangleBvh> bvh = TriangleBvh::build(level.positions, level.indices);
-        if (!bvh.ok()) return; // out of resources: the level stays as the engine left it
+        // The nearest-face index of the error measurement (mesh_distance.h): exact minimum distances,
+        // each query starting from the previous one's path (the samples are in input order, so
+        // neighbouring points follow each other).
+        Result<DistanceIndex> index = DistanceIndex::build(level.positions, level.indices);
+        if (!index.ok()) return; // out of resources: the level stays as the engine left it
         std::fill(delta.begin(), delta.end(), Vec3d());
         std::fill(weight.begin(), weight.end(), 0.0);
         // The nearest level face of every sample, in parallel over fixed chunks of samples (each
-        // chunk starts its "previous face" hint afresh: a bound only speeds a search up, the face
-        // found is the same); the pulls are then added in sample order, as a serial loop adds them.
+        // chunk starts its cursor afresh: where a search starts changes only its speed, and which of
+        // several equally near faces it returns, never the distance); the pulls are then added in
+        // sample order, as a serial loop adds them.
         // A block of samples at a time, so the hits buffer stays small.
         for (size_t block = 0; block < sample_count; block += kRefineBlock) {
             const size_t block_end = std::min(block + kRefineBlock, sample_count);
             const Status searched =
                 parallelForChunks(block_end - block, kRefineChunk, [&](size_t, size_t chunk_first, size_t chunk_last) {
                     const size_t first = block + chunk_first, last = block + chunk_last;
-                    uint32_t last_face = 0; // the previous sample's face: scans list neighbouring points together
+                    DistanceIndex::Cursor cursor;
                     for (size_t slot = first; slot < last; ++slot) {
                         const Vec3d x(input.positions[sample_vertex[slot]]);
-                        // Any face's distance bounds the search; searches that are bounded find the same face
-                        // as an unbounded one (they only skip nodes further than the nearest face).
-                        double bound2 = HUGE_VAL;
-                        if (last_face < level.faceCount()) {
-                            const Vec3d la(level.positions[level.indices[last_face * 3]]);
-                            const Vec3d lb(level.positions[level.indices[last_face * 3 + 1]]);
-                            const Vec3d lc(level.positions[level.indices[last_face * 3 + 2]]);
-                            const Vec3d d = x - closestPointOnTriangle(x, la, lb, lc);
-                            bound2 = dot(d, d);
-                        }
-                        if (it > 0) {
-                            const double bound = previous[slot] + moved;
-                            bound2 = std::min(bound2, bound * bound);
-                        }
                         ClosestHit hit;
-                        if (std::isfinite(bound2)) hit = bvh->closest(x, bound2 * (1.0 + 1e-6) + 1e-300);
-                        if (!hit.isFound()) hit = bvh->closest(x);
-                        if (hit.isFound()) last_face = hit.face.value;
-                        previous[slot] = std::sqrt(hit.distance_sq);
+                        hit.distance_sq = index->closestDistanceSq(x, cursor);
+                        if (cursor.hint != DistanceIndex::kNoHint) {
+                            const uint32_t f = index->faceOfSlot(cursor.hint);
+                            hit.face = FaceId(f);
+                            hit.point = closestPointOnTriangle(x, Vec3d(level.positions[level.indices[f * 3]]),
+                                                               Vec3d(level.positions[level.indices[f * 3 + 1]]),
+                                                               Vec3d(level.positions[level.indices[f * 3 + 2]]));
+                        }
                         hits[slot - block] = hit;
                     }
                 });
@@ -205,12 +195,7 @@ void refineLevelPositions(const Mesh& input, Mesh& level, float max_normal_chang
                 for (size_t v = 0; v < n; ++v)
                     if (stays[group[v]]) next[v] = level.positions[v];
         }
-        moved = 0.0;
-        for (size_t v = 0; v < n; ++v) {
-            const Vec3d step = Vec3d(next[v]) - Vec3d(level.positions[v]);
-            moved = std::max(moved, std::sqrt(dot(step, step)));
-            level.positions[v] = next[v];
-        }
+        level.positions = std::move(next);
     }
 }
 
