@@ -209,7 +209,8 @@ Result<PfrepBuild> buildBlob(const CollapseSequence& sequence, const std::vector
     if (point_triangles.size() % 3 != 0) return invalidInput("pfrep: point triangle list is not a multiple of 3");
     // The working arrays (tens of MB on a scan) are on core/large_array.h storage: from 2 MB on, huge
     // pages where the OS offers them. On std::vector, first-touch 4 KB page faults were about 40 % of
-    // the blob build on dragon_poisson (docs/bake.md, "Session 13").
+    // a standalone blob build of dragon_poisson; inside a bake those arrays mostly reuse heap pages
+    // the chain freed, so there it made no measurable difference (docs/bake.md, "Sessions 12 and 13").
     detail::LargeArray<Triangle> tris;
     const size_t input_count = point_triangles.size() / 3;
     for (size_t c = 0; c < point_triangles.size(); ++c)

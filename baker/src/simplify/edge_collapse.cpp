@@ -31,7 +31,6 @@
 #include <array>
 #include <cmath>
 #include <cstring>
-#include <functional>
 #include <limits>
 #include <new>
 #include <string>
@@ -1071,7 +1070,7 @@ void EdgeCollapser::runRound(size_t target_faces, double max_error) {
     PartHeap heaps[kRoundParts];
     auto part_of = [&](uint32_t id) { return uint32_t(part_of_edge[id]); };
     const size_t goal = size_t(double(alive_faces_ - target_faces) * kRoundShare);
-    auto for_parts = [](uint32_t count, const std::function<void(uint32_t)>& fn) {
+    auto for_parts = [](uint32_t count, const auto& fn) {
         if (!parallelFor(count, 1, [&](size_t part) { fn(uint32_t(part)); }).ok()) throw std::bad_alloc();
     };
     const bool split = queue_.split(part_of, capacity, heaps, kRoundParts, for_parts);
