@@ -107,14 +107,18 @@ Result<TextureLevels> textureLevels(const Mesh& lod0, size_t level_count, const 
     return out;
 }
 
-// measureLodChain (lod_chain.h) with the reference sides that a MeasureReference task measured
-// (`reference_sides[i]` for chain level i, when present and ok).
+// measureLodChain (lod_chain.h) with the sides that a MeasureReference task measured (`reference_sides[i]`
+// and `level_sides[i]` for chain level i, when present and ok).
 void measureChain(const Mesh& mesh, LodChain& chain, const LodChainOptions& options,
-                  const std::vector<Result<OneSidedDistance>>& reference_sides, Diagnostics& diagnostics) {
-    std::vector<const OneSidedDistance*> known;
-    for (size_t i = 0; i < chain.levels.size(); ++i)
-        known.push_back(i < reference_sides.size() && reference_sides[i].ok() ? &*reference_sides[i] : nullptr);
-    measureLodChain(mesh, chain, options, known, diagnostics);
+                  const std::vector<Result<OneSidedDistance>>& reference_sides,
+                  const std::vector<Result<OneSidedDistance>>& level_sides, Diagnostics& diagnostics) {
+    auto known = [&](const std::vector<Result<OneSidedDistance>>& sides) {
+        std::vector<const OneSidedDistance*> out;
+        for (size_t i = 0; i < chain.levels.size(); ++i)
+            out.push_back(i < sides.size() && sides[i].ok() ? &*sides[i] : nullptr);
+        return out;
+    };
+    measureLodChain(mesh, chain, options, known(reference_sides), known(level_sides), diagnostics);
 }
 
 // After the chain, the remaining work of an asset is a fixed set of tasks that only read the
@@ -176,7 +180,7 @@ Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vect
     };
     // Chain level i's reference side (LOD0's points against the level), when a MeasureReference task
     // measured it in an earlier phase (beside the PFRep build); the measurement then skips it.
-    std::vector<Result<OneSidedDistance>> reference_sides;
+    std::vector<Result<OneSidedDistance>> reference_sides, level_sides;
     std::vector<bool> level_with_measure(level_count, false);
     std::vector<size_t> nested_levels;
     // LOD0 as the running phase's tasks may read it: LOD0 itself, or its positions and indices lent to a
@@ -187,7 +191,7 @@ Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vect
         case PhaseTask::Kind::Measure: {
             {
                 StageTimer timer(hooks, index, BakeStage::Measure);
-                measureChain(mesh, chain, chain_options, reference_sides, measure_diagnostics);
+                measureChain(mesh, chain, chain_options, reference_sides, level_sides, measure_diagnostics);
                 metrics = lodMetrics(mesh, chain, screen, settings.hysteresis);
             }
             // Encoders that read the measured errors (adaptive stream precision) code the levels of this
@@ -215,6 +219,13 @@ Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vect
             if (!sides.ok()) return;
             reference_sides.assign(task.index - 1, internalError("not measured beforehand"));
             for (Result<OneSidedDistance>& side : *sides) reference_sides.push_back(std::move(side));
+            // Then the levels' sides, against LOD0 indexed in slabs one at a time (the whole index does not
+            // fit beside the PFRep build).
+            Result<std::vector<Result<OneSidedDistance>>> level_sides_ahead =
+                measureApproximationSides(*lod0_view, meshes, chain_options.distance, task.slabs);
+            if (!level_sides_ahead.ok()) return;
+            level_sides.assign(task.index - 1, internalError("not measured beforehand"));
+            for (Result<OneSidedDistance>& side : *level_sides_ahead) level_sides.push_back(std::move(side));
             return;
         }
         case PhaseTask::Kind::Lod0Encoder: {
