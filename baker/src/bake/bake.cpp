@@ -126,9 +126,9 @@ void measureChain(const Mesh& mesh, LodChain& chain, const LodChainOptions& opti
 // byte): the error measurement (then the metrics and texture levels that follow from it), and the
 // stream encoders' prepare steps. They run in phases (concurrentPhases): with 2 threads a small
 // asset's PFRep build (a replay of the chain's logged collapses, then the blob) runs beside the measurement and the
-// valence coding of the levels; a large asset's PFRep build runs beside the measurement's reference sides
-// (MeasureReference), then the rest of the measurement (parallel inside), then the coding of every level
-// side by side. The commits (cheap; the valence commit renumbers its level) then run in encoder and level
+// valence coding of the levels; a large asset's PFRep build runs beside both sides of the measurement
+// (MeasureReference: the reference sides, then the levels' sides against LOD0 in slabs), then the
+// measurement (which only combines them) and the coding of every level side by side. The commits (cheap; the valence commit renumbers its level) then run in encoder and level
 // order on this thread.
 Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vector<PackStreamEncoder>& encoders,
                  AssetSlot& slot, size_t index, const BakeHooks& hooks) {
@@ -178,8 +178,9 @@ Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vect
     auto stageOf = [&](size_t e) {
         return encoders[e].extension_name == "LODBAKE_progressive_fans" ? BakeStage::Pfrep : BakeStage::Encode;
     };
-    // Chain level i's reference side (LOD0's points against the level), when a MeasureReference task
-    // measured it in an earlier phase (beside the PFRep build); the measurement then skips it.
+    // Chain level i's reference side (LOD0's points against the level) and level side (its points against
+    // LOD0), when a MeasureReference task measured them in an earlier phase (beside the PFRep build); the
+    // measurement then skips them.
     std::vector<Result<OneSidedDistance>> reference_sides, level_sides;
     std::vector<bool> level_with_measure(level_count, false);
     std::vector<size_t> nested_levels;

@@ -12,7 +12,10 @@
 // measureSurfaceDistances draws the reference side's points once for all levels and measures the
 // levels one after the other (each level's chunks in parallel), so one level's BVH and points exist
 // at a time. measureReferenceSides measures the reference side alone, ahead of the rest (the bake runs
-// it beside the PFRep build), with the reference's points kept as their sources and recomputed per query.
+// it beside the PFRep build), with the reference's points kept as their sources and recomputed per query;
+// measureApproximationSides the other sides, against the reference indexed in slabs one at a time
+// (SlabCut), each point against its own slab first and then, with that distance as the bound, against
+// the slabs still within reach.
 //
 // Determinism: sample k of a side is drawn from a counter-based generator (splitmix64 of seed, side
 // and k), so it does not depend on which thread draws it. Points are processed in chunks of a fixed

@@ -210,12 +210,13 @@ Result<std::vector<Result<DistanceResult>>> prepareAndMeasureSurfaceDistances(
 /// The approximation sides alone: for every approximation, the distances from its points to the
 /// reference, bit-identical to the side that prepareAndMeasureSurfaceDistances measures with the same
 /// reference and options. The reference is indexed in slabs, one at a time (`slab_count` of them, at
-/// most 64, cut across its longest extent at quantiles of its triangles): each point is measured against
-/// its own slab, then against the others with that distance as a bound (a second index of each slab),
-/// and the minimum over the slabs is the minimum over the reference. So only one slab's index exists at
-/// a time -- about 1 / slab_count of the reference's -- beside the approximations' points (as their
-/// sources, 8 bytes each) and one squared distance per point: it can run earlier, where memory is
-/// short (the bake runs it beside the PFRep build, after measureReferenceSides).
+/// most 8, cut across its longest extent at quantiles of its triangles): each point is measured against
+/// its own slab, then, with that distance as the bound, against the other slabs still within reach
+/// (each rebuilt as the band of its triangles within the reach of the points that need it), and the
+/// minimum over the slabs is the minimum over the reference. So only one slab's index exists at a time
+/// -- about 1 / slab_count of the reference's -- beside the approximations' points (as their sources, 8
+/// bytes each, with 10 bytes of state): it can run earlier, where memory is short (the bake runs it
+/// beside the PFRep build, after measureReferenceSides). 0 slabs means 1.
 /// Fails as prepareAndMeasureSurfaceDistances does for a bad reference or options, or when an index
 /// cannot be built; results[i] fails for a bad approximation. Pointers must not be null.
 Result<std::vector<Result<OneSidedDistance>>> measureApproximationSides(const Mesh& reference,
