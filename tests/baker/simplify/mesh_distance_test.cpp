@@ -382,6 +382,19 @@ TEST(MeshDistanceTest, LevelSidesMeasuredInSlabsGiveTheSameBits) {
     EXPECT_TRUE(lodbake::measureApproximationSides(in.reference, {}, in.options, 3)->empty());
 }
 
+// Deterministic numbers in [-1, 1) (a 64-bit LCG), for query points.
+class SignedUnits {
+public:
+    explicit SignedUnits(uint64_t seed) : state_(seed) {}
+    double operator()() {
+        state_ = state_ * 6364136223846793005ull + 1442695040888963407ull;
+        return double(state_ >> 11) * (1.0 / 9007199254740992.0) * 2.0 - 1.0;
+    }
+
+private:
+    uint64_t state_;
+};
+
 // Brute force: the exact distance the index computes, over every triangle.
 double bruteForceDistanceSq(const Mesh& m, const lodbake::Vec3d& p) {
     double best = HUGE_VAL;
@@ -445,11 +458,7 @@ TEST(MeshDistanceTest, CursorWalkEqualsBruteForceExactly) {
         for (Vec3f& p : m.positions) p = p * scale;
         auto index = lodbake::DistanceIndex::build(m.positions, m.indices);
         ASSERT_TRUE(index.ok());
-        uint64_t state = 5;
-        auto next = [&state]() {
-            state = state * 6364136223846793005ull + 1442695040888963407ull;
-            return double(state >> 11) * (1.0 / 9007199254740992.0) * 2.0 - 1.0;
-        };
+        SignedUnits next(5);
         lodbake::DistanceIndex::Cursor cursor;
         lodbake::Vec3d dir(1, 0, 0);
         uint32_t deep = 0;
@@ -476,11 +485,7 @@ TEST(MeshDistanceTest, BoundedQueryIsTheMinimumOfTheBoundAndTheExactDistance) {
     Mesh m = perturbed(icosphere(3), 0.03f, 9);
     auto index = lodbake::DistanceIndex::build(m.positions, m.indices);
     ASSERT_TRUE(index.ok());
-    uint64_t state = 11;
-    auto next = [&state]() {
-        state = state * 6364136223846793005ull + 1442695040888963407ull;
-        return double(state >> 11) * (1.0 / 9007199254740992.0) * 2.0 - 1.0;
-    };
+    SignedUnits next(11);
     lodbake::DistanceIndex::Cursor cursor;
     for (int i = 0; i < 2000; ++i) {
         const lodbake::Vec3d dir(next(), next(), next());
