@@ -7,7 +7,7 @@
 //   - anchor, same run: the core TriangleBvh (lodbake/core/bvh.h) built over the same meshes and queried
 //     from every vertex of both sides, cold (no warm start), per query.
 // Prints every result with 17 significant digits so two builds can be compared exactly.
-// usage: distance_bench [MESH (default dragon_poisson.ply)] [--runs N] [--no-anchor] [--slabs N]
+// usage: distance_bench [MESH (default dragon_poisson.ply)] [--runs N] [--no-anchor]
 #include <algorithm>
 #include <cstdio>
 #include <cstring>
@@ -46,14 +46,11 @@ int main(int argc, char** argv) {
     std::string name = "dragon_poisson.ply";
     int runs = 3;
     bool anchor_run = true;
-    uint32_t slabs = 3; // measureApproximationSides: LOD0's slabs
     for (int a = 1; a < argc; ++a) {
         if (std::strcmp(argv[a], "--runs") == 0 && a + 1 < argc)
             runs = std::max(1, std::atoi(argv[++a]));
         else if (std::strcmp(argv[a], "--no-anchor") == 0)
             anchor_run = false;
-        else if (std::strcmp(argv[a], "--slabs") == 0 && a + 1 < argc)
-            slabs = uint32_t(std::max(1, std::atoi(argv[++a])));
         else
             name = argv[a];
     }
@@ -102,8 +99,8 @@ int main(int argc, char** argv) {
         points += 2 * options.distance.sample_count + mesh.vertexCount() + levels[l]->vertexCount();
     }
     // The split the bake runs on a large asset, against the one call, alternating.
-    double best_whole = 1e300, best_sides = 1e300, best_rest = 1e300, best_level_sides = 1e300, best_combine = 1e300;
-    bool same = true, same_ahead = true;
+    double best_whole = 1e300, best_sides = 1e300, best_rest = 1e300;
+    bool same = true;
     for (int r = 0; r < runs; ++r) {
         const double c0 = threadCpuSeconds();
         auto whole = lodbake::prepareAndMeasureSurfaceDistances(mesh, levels, options.distance);
@@ -117,25 +114,9 @@ int main(int argc, char** argv) {
         auto rest = lodbake::prepareAndMeasureSurfaceDistances(mesh, levels, options.distance, known);
         const double c3 = threadCpuSeconds();
         if (!rest.ok()) return 1;
-        auto level_sides = lodbake::measureApproximationSides(mesh, levels, options.distance, slabs);
-        const double c4 = threadCpuSeconds();
-        if (!level_sides.ok()) return 1;
-        std::vector<const lodbake::OneSidedDistance*> known_levels(levels.size(), nullptr);
-        for (size_t i = 0; i < levels.size(); ++i)
-            if ((*level_sides)[i].ok()) known_levels[i] = &*(*level_sides)[i];
-        auto combined = lodbake::prepareAndMeasureSurfaceDistances(mesh, levels, options.distance, known, known_levels);
-        const double c5 = threadCpuSeconds();
-        if (!combined.ok()) return 1;
         best_whole = std::min(best_whole, c1 - c0);
         best_sides = std::min(best_sides, c2 - c1);
         best_rest = std::min(best_rest, c3 - c2);
-        best_level_sides = std::min(best_level_sides, c4 - c3);
-        best_combine = std::min(best_combine, c5 - c4);
-        for (size_t l = 0; l < levels.size(); ++l)
-            same_ahead &= (*whole)[l].ok() == (*combined)[l].ok() &&
-                          (!(*whole)[l].ok() || ((*whole)[l]->hausdorff == (*combined)[l]->hausdorff &&
-                                                 (*whole)[l]->mean == (*combined)[l]->mean &&
-                                                 (*whole)[l]->rms == (*combined)[l]->rms));
         for (size_t l = 0; l < levels.size(); ++l)
             same &= (*whole)[l].ok() == (*rest)[l].ok() &&
                     (!(*whole)[l].ok() || ((*whole)[l]->hausdorff == (*rest)[l]->hausdorff &&
@@ -143,10 +124,6 @@ int main(int argc, char** argv) {
     }
     std::printf("one call %.3f s; split: reference sides %.3f s + the rest %.3f s = %.3f s; results %s\n",
                 best_whole, best_sides, best_rest, best_sides + best_rest, same ? "bit-identical" : "DIFFER");
-    std::printf("all ahead: reference sides %.3f s + level sides (%u slabs) %.3f s + combining %.3f s = %.3f s; "
-                "results %s\n",
-                best_sides, slabs, best_level_sides, best_combine, best_sides + best_level_sides + best_combine,
-                same_ahead ? "bit-identical" : "DIFFER");
     double anchor = 0, checksum = 0;
     size_t queries = 0;
     for (const lodbake::Mesh* level : levels) {

@@ -107,18 +107,14 @@ Result<TextureLevels> textureLevels(const Mesh& lod0, size_t level_count, const 
     return out;
 }
 
-// measureLodChain (lod_chain.h) with the sides that a MeasureReference task measured (`reference_sides[i]`
-// and `level_sides[i]` for chain level i, when present and ok).
+// measureLodChain (lod_chain.h) with the reference sides that a MeasureReference task measured
+// (`reference_sides[i]` for chain level i, when present and ok).
 void measureChain(const Mesh& mesh, LodChain& chain, const LodChainOptions& options,
-                  const std::vector<Result<OneSidedDistance>>& reference_sides,
-                  const std::vector<Result<OneSidedDistance>>& level_sides, Diagnostics& diagnostics) {
-    auto known = [&](const std::vector<Result<OneSidedDistance>>& sides) {
-        std::vector<const OneSidedDistance*> out;
-        for (size_t i = 0; i < chain.levels.size(); ++i)
-            out.push_back(i < sides.size() && sides[i].ok() ? &*sides[i] : nullptr);
-        return out;
-    };
-    measureLodChain(mesh, chain, options, known(reference_sides), known(level_sides), diagnostics);
+                  const std::vector<Result<OneSidedDistance>>& reference_sides, Diagnostics& diagnostics) {
+    std::vector<const OneSidedDistance*> known;
+    for (size_t i = 0; i < chain.levels.size(); ++i)
+        known.push_back(i < reference_sides.size() && reference_sides[i].ok() ? &*reference_sides[i] : nullptr);
+    measureLodChain(mesh, chain, options, known, diagnostics);
 }
 
 // After the chain, the remaining work of an asset is a fixed set of tasks that only read the
@@ -126,9 +122,9 @@ void measureChain(const Mesh& mesh, LodChain& chain, const LodChainOptions& opti
 // byte): the error measurement (then the metrics and texture levels that follow from it), and the
 // stream encoders' prepare steps. They run in phases (concurrentPhases): with 2 threads a small
 // asset's PFRep build (a replay of the chain's logged collapses, then the blob) runs beside the measurement and the
-// valence coding of the levels; a large asset's PFRep build runs beside both sides of the measurement
-// (MeasureReference: the reference sides, then the levels' sides against LOD0 in slabs), then the
-// measurement (which only combines them) and the coding of every level side by side. The commits (cheap; the valence commit renumbers its level) then run in encoder and level
+// valence coding of the levels; a large asset's PFRep build runs beside the measurement's reference sides
+// (MeasureReference), then the rest of the measurement (parallel inside), then the coding of every level
+// side by side. The commits (cheap; the valence commit renumbers its level) then run in encoder and level
 // order on this thread.
 Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vector<PackStreamEncoder>& encoders,
                  AssetSlot& slot, size_t index, const BakeHooks& hooks) {
@@ -178,10 +174,9 @@ Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vect
     auto stageOf = [&](size_t e) {
         return encoders[e].extension_name == "LODBAKE_progressive_fans" ? BakeStage::Pfrep : BakeStage::Encode;
     };
-    // Chain level i's reference side (LOD0's points against the level) and level side (its points against
-    // LOD0), when a MeasureReference task measured them in an earlier phase (beside the PFRep build); the
-    // measurement then skips them.
-    std::vector<Result<OneSidedDistance>> reference_sides, level_sides;
+    // Chain level i's reference side (LOD0's points against the level), when a MeasureReference task
+    // measured it in an earlier phase (beside the PFRep build); the measurement then skips it.
+    std::vector<Result<OneSidedDistance>> reference_sides;
     std::vector<bool> level_with_measure(level_count, false);
     std::vector<size_t> nested_levels;
     // LOD0 as the running phase's tasks may read it: LOD0 itself, or its positions and indices lent to a
@@ -192,7 +187,7 @@ Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vect
         case PhaseTask::Kind::Measure: {
             {
                 StageTimer timer(hooks, index, BakeStage::Measure);
-                measureChain(mesh, chain, chain_options, reference_sides, level_sides, measure_diagnostics);
+                measureChain(mesh, chain, chain_options, reference_sides, measure_diagnostics);
                 metrics = lodMetrics(mesh, chain, screen, settings.hysteresis);
             }
             // Encoders that read the measured errors (adaptive stream precision) code the levels of this
@@ -220,13 +215,6 @@ Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vect
             if (!sides.ok()) return;
             reference_sides.assign(task.index - 1, internalError("not measured beforehand"));
             for (Result<OneSidedDistance>& side : *sides) reference_sides.push_back(std::move(side));
-            // Then the levels' sides, against LOD0 indexed in slabs one at a time (the whole index does not
-            // fit beside the PFRep build).
-            Result<std::vector<Result<OneSidedDistance>>> level_sides_ahead =
-                measureApproximationSides(*lod0_view, meshes, chain_options.distance, task.slabs);
-            if (!level_sides_ahead.ok()) return;
-            level_sides.assign(task.index - 1, internalError("not measured beforehand"));
-            for (Result<OneSidedDistance>& side : *level_sides_ahead) level_sides.push_back(std::move(side));
             return;
         }
         case PhaseTask::Kind::Lod0Encoder: {

@@ -4,7 +4,6 @@
 // Internal to the bake; the cut never changes a byte of the output, only the peak memory.
 
 #include <cstddef>
-#include <cstdint>
 #include <vector>
 
 namespace lodbake {
@@ -21,15 +20,6 @@ struct PhaseEstimates {
     /// LOD0 triangle), then one level's index at a time (per triangle of the largest of its levels).
     double reference_points_bytes_per_triangle = 6;
     double reference_index_bytes_per_triangle = 70;
-    /// Then the levels' sides (measureApproximationSides): every level's points as their sources, slab
-    /// and squared distance (per point: the samples of every level, plus about one vertex per two
-    /// triangles), and one slab of LOD0's index at a time, with its build (per triangle of a slab).
-    double level_point_bytes = 18;
-    double sample_points = 200000; // area-uniform samples per level side (BakeSettings::error_samples)
-    double slab_index_bytes_per_triangle = 70;
-    double slab_triangles = 300000; // LOD0 triangles per slab, at most
-    /// The measurement when both sides of every level were measured beforehand: the metrics only.
-    double measured_ahead_bytes = 0;
     /// Whether the reference sides may run ahead (MeasureReference); with one thread nothing idles
     /// beside the PFRep build, and the split only costs (LOD0's points recomputed per query).
     bool measure_reference_ahead = true;
@@ -44,7 +34,6 @@ struct PhaseTask {
     enum class Kind { Measure, MeasureReference, Lod0Encoder, Level };
     Kind kind = Kind::Measure;
     size_t index = 0; // encoder (Lod0Encoder), level (Level), first level (MeasureReference: it and the rest)
-    uint32_t slabs = 0; // MeasureReference: LOD0's slabs for the levels' sides (measureApproximationSides)
     double bytes = 0; // working-memory estimate
 };
 
@@ -55,12 +44,11 @@ struct PhaseTask {
 /// allocator keeps) adds to every later task's peak. LOD0's coding comes after the measurement so
 /// that on a large asset it shares the last phase with the other levels' coding (single-threaded
 /// tasks side by side) rather than running alone, and the measurement's peak holds none of its output.
-/// A MeasureReference task (LOD0's points against every level, then every level's points against LOD0
-/// indexed in slabs: the measurement's work, without the memory of LOD0's whole index) comes between the
-/// PFRep build and the measurement when it shares a phase with the PFRep build and not with the
-/// measurement: the PFRep build is single-threaded and runs alone on a large asset, so with two threads
-/// the measurement takes a core that would idle. The measurement then only combines the sides, so it
-/// starts the next phase with the coding. Anywhere else it would gain nothing: it is left out.
+/// A MeasureReference task (LOD0's points against every level, the part of the
+/// measurement that needs neither LOD0's index nor the levels' points) comes between the PFRep build
+/// and the measurement when it shares a phase with the PFRep build and not with the measurement:
+/// the PFRep build is single-threaded and runs alone on a large asset, so with two threads this part of
+/// the measurement takes a core that would idle. Anywhere else it would gain nothing: it is left out.
 /// `encoder_is_pfrep[e]` tells which encoders build PFRep; `level_triangles[0]` is LOD0's count.
 std::vector<std::vector<PhaseTask>> concurrentPhases(const std::vector<bool>& encoder_is_pfrep,
                                                      const std::vector<size_t>& level_triangles,

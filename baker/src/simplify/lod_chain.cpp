@@ -116,19 +116,18 @@ Result<LodChain> buildLodChain(const Mesh& mesh, const LodChainOptions& options,
 }
 
 void measureLodChain(const Mesh& mesh, LodChain& chain, const LodChainOptions& options, Diagnostics& diagnostics) {
-    measureLodChain(mesh, chain, options, {}, {}, diagnostics);
+    measureLodChain(mesh, chain, options, {}, diagnostics);
 }
 
 void measureLodChain(const Mesh& mesh, LodChain& chain, const LodChainOptions& options,
-                     const std::vector<const OneSidedDistance*>& reference_sides,
-                     const std::vector<const OneSidedDistance*>& level_sides, Diagnostics& diagnostics) {
+                     const std::vector<const OneSidedDistance*>& reference_sides, Diagnostics& diagnostics) {
     // The input's index, its points and the first level's are built side by side; then each level is
     // measured (in parallel inside) while the next one's index and points are built, so at most two
     // levels' indexes and points exist at once (mesh_distance.h).
     std::vector<const Mesh*> meshes;
     for (const LodLevel& level : chain.levels) meshes.push_back(&level.mesh);
     Result<std::vector<Result<DistanceResult>>> measured =
-        prepareAndMeasureSurfaceDistances(mesh, meshes, options.distance, reference_sides, level_sides);
+        prepareAndMeasureSurfaceDistances(mesh, meshes, options.distance, reference_sides);
     if (!measured.ok()) diagnostics.warn("lod chain: errors not measured: " + measured.status().message());
     for (size_t i = 0; measured.ok() && i < measured->size(); ++i) {
         LodLevel& level = chain.levels[i];

@@ -12,10 +12,7 @@
 // measureSurfaceDistances draws the reference side's points once for all levels and measures the
 // levels one after the other (each level's chunks in parallel), so one level's BVH and points exist
 // at a time. measureReferenceSides measures the reference side alone, ahead of the rest (the bake runs
-// it beside the PFRep build), with the reference's points kept as their sources and recomputed per query;
-// measureApproximationSides the other sides, against the reference indexed in slabs one at a time
-// (SlabCut), each point against its own slab first and then, with that distance as the bound, against
-// the slabs still within reach.
+// it beside the PFRep build), with the reference's points kept as their sources and recomputed per query.
 //
 // Determinism: sample k of a side is drawn from a counter-based generator (splitmix64 of seed, side
 // and k), so it does not depend on which thread draws it. Points are processed in chunks of a fixed
@@ -27,7 +24,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
@@ -385,26 +381,6 @@ Result<LargeArray<PointSources>> samplePointSources(const Mesh& from, const Dist
     return sources;
 }
 
-// One point's distance added to its chunk's statistics.
-inline void addDistance(SideStats& s, double d) {
-    s.max = std::max(s.max, d);
-    s.sum += d;
-    s.sum_sq += d * d;
-    s.count++;
-}
-
-// The chunks' statistics combined in chunk order.
-SideStats combineChunks(const std::vector<SideStats>& chunks) {
-    SideStats total_stats;
-    for (const SideStats& s : chunks) {
-        total_stats.max = std::max(total_stats.max, s.max);
-        total_stats.sum += s.sum;
-        total_stats.sum_sq += s.sum_sq;
-        total_stats.count += s.count;
-    }
-    return total_stats;
-}
-
 // Distances from the points pointAt(0 .. point_count - 1) to the surface indexed by `to`.
 template <class PointAt>
 Result<SideStats> measurePointsAt(size_t point_count, const PointAt& pointAt, const DistanceIndex& to) {
@@ -414,22 +390,24 @@ Result<SideStats> measurePointsAt(size_t point_count, const PointAt& pointAt, co
         // Consecutive points (Morton order) are near each other: the previous answer's triangle gives
         // a tight first bound that prunes most of the tree. The minimum found is the same either way.
         DistanceIndex::Cursor cursor;
-        for (size_t k = first; k < end; ++k) addDistance(s, std::sqrt(to.closestDistanceSq(pointAt(k), cursor)));
+        for (size_t k = first; k < end; ++k) {
+            const double d = std::sqrt(to.closestDistanceSq(pointAt(k), cursor));
+            s.max = std::max(s.max, d);
+            s.sum += d;
+            s.sum_sq += d * d;
+            s.count++;
+        }
         chunks[chunk] = s;
     }));
-    return combineChunks(chunks);
-}
 
-// The statistics of points whose squared distances are known (in the points' order), in the same chunks
-// and order as measurePointsAt: the same bits as measuring them there.
-Result<SideStats> statsOfSquaredDistances(const LargeArray<double>& squared) {
-    std::vector<SideStats> chunks(chunkCount(squared.size(), kChunkSize));
-    LODBAKE_RETURN_IF_ERROR(parallelForChunks(squared.size(), kChunkSize, [&](size_t chunk, size_t first, size_t end) {
-        SideStats s;
-        for (size_t k = first; k < end; ++k) addDistance(s, std::sqrt(squared[k]));
-        chunks[chunk] = s;
-    }));
-    return combineChunks(chunks);
+    SideStats total_stats;
+    for (const SideStats& s : chunks) {
+        total_stats.max = std::max(total_stats.max, s.max);
+        total_stats.sum += s.sum;
+        total_stats.sum_sq += s.sum_sq;
+        total_stats.count += s.count;
+    }
+    return total_stats;
 }
 
 // Distances from `points` to the surface indexed by `to`.
@@ -465,7 +443,7 @@ const OneSidedDistance* knownSide(const std::vector<const OneSidedDistance*>& kn
     return i < known.size() ? known[i] : nullptr;
 }
 
-ApproxSide prepareApprox(const Mesh& approx, const DistanceOptions& options, bool with_index, bool with_points) {
+ApproxSide prepareApprox(const Mesh& approx, const DistanceOptions& options, bool with_index) {
     ApproxSide side;
     if (with_index) {
         Result<DistanceIndex> index = checkedIndex(approx);
@@ -478,7 +456,6 @@ ApproxSide prepareApprox(const Mesh& approx, const DistanceOptions& options, boo
         side.status = checkSurface(approx, "approximation");
         if (!side.status.ok()) return side;
     }
-    if (!with_points) return side;
     Result<PointArray> points = samplePoints(approx, options, kApproxStream, "approximation");
     if (!points.ok()) {
         side.status = points.status();
@@ -490,10 +467,9 @@ ApproxSide prepareApprox(const Mesh& approx, const DistanceOptions& options, boo
 }
 
 // One prepared approximation against a reference whose side's points are already drawn, or whose
-// side was measured beforehand (`known`, not null); likewise the approximation's side (`known_approx`).
+// side was measured beforehand (`known`, not null).
 Result<DistanceResult> measurePrepared(const DistanceReference& reference, const PointArray& reference_points,
-                                       const ApproxSide& approx, const OneSidedDistance* known,
-                                       const OneSidedDistance* known_approx) {
+                                       const ApproxSide& approx, const OneSidedDistance* known) {
     LODBAKE_RETURN_IF_ERROR(approx.status);
     SideStats ref_to_approx;
     if (known) {
@@ -501,12 +477,7 @@ Result<DistanceResult> measurePrepared(const DistanceReference& reference, const
     } else {
         LODBAKE_ASSIGN_OR_RETURN(ref_to_approx, measurePoints(reference_points, approx.index));
     }
-    SideStats approx_to_ref;
-    if (known_approx) {
-        approx_to_ref = *known_approx;
-    } else {
-        LODBAKE_ASSIGN_OR_RETURN(approx_to_ref, measurePoints(approx.points, reference.index()));
-    }
+    LODBAKE_ASSIGN_OR_RETURN(SideStats approx_to_ref, measurePoints(approx.points, reference.index()));
 
     DistanceResult r;
     r.max_ref_to_approx = ref_to_approx.max;
@@ -528,8 +499,7 @@ std::vector<Result<DistanceResult>> measurePipelined(const DistanceReference& re
                                                      const PointArray& reference_points,
                                                      const std::vector<const Mesh*>& approximations,
                                                      const DistanceOptions& options, ApproxSide first,
-                                                     const std::vector<const OneSidedDistance*>& known,
-                                                     const std::vector<const OneSidedDistance*>& known_approx) {
+                                                     const std::vector<const OneSidedDistance*>& known) {
     std::vector<Result<DistanceResult>> results(approximations.size(), Result<DistanceResult>(DistanceResult{}));
     ApproxSide current = std::move(first);
     for (size_t i = 0; i < approximations.size(); ++i) {
@@ -537,11 +507,9 @@ std::vector<Result<DistanceResult>> measurePipelined(const DistanceReference& re
         const bool has_next = i + 1 < approximations.size();
         const Status run = parallelFor(has_next ? 2 : 1, 1, [&](size_t task) {
             if (task == 0)
-                results[i] = measurePrepared(reference, reference_points, current, knownSide(known, i),
-                                             knownSide(known_approx, i));
+                results[i] = measurePrepared(reference, reference_points, current, knownSide(known, i));
             else
-                next = prepareApprox(*approximations[i + 1], options, knownSide(known, i + 1) == nullptr,
-                                     knownSide(known_approx, i + 1) == nullptr);
+                next = prepareApprox(*approximations[i + 1], options, knownSide(known, i + 1) == nullptr);
         });
         if (!run.ok()) {
             results[i] = run;
@@ -551,103 +519,6 @@ std::vector<Result<DistanceResult>> measurePipelined(const DistanceReference& re
     }
     return results;
 }
-
-// A surface cut into slabs across the longest extent of its box, at quantiles of its triangles'
-// centroids (a histogram's bin edges: deterministic and without a sort), for measuring against it one
-// slab's index at a time. Every triangle is in exactly one slab; a point is placed by the same rule.
-class SlabCut {
-public:
-    SlabCut(const Mesh& mesh, uint32_t wanted) : mesh_(mesh) {
-        const size_t face_count = mesh.faceCount();
-        const Aabb box = computeBounds(mesh);
-        for (int k = 0; k < 3; ++k)
-            if (axis_ < 0 || box.max[k] - box.min[k] > box.max[axis_] - box.min[axis_]) axis_ = k;
-        lo_ = box.min[axis_];
-        const double extent = double(box.max[axis_]) - lo_;
-        if (wanted > 1 && extent > 0.0 && face_count > 0) {
-            scale_ = double(kBins) / extent;
-            std::vector<size_t> histogram(kBins, 0);
-            for (size_t f = 0; f < face_count; ++f) ++histogram[bin(centroid(f))];
-            size_t sum = 0;
-            uint32_t b = 0;
-            for (uint32_t k = 1; k < wanted; ++k) {
-                const size_t below = face_count * k / wanted;
-                for (; b < kBins && sum + histogram[b] <= below; ++b) sum += histogram[b];
-                if (b == kBins) break;
-                if (cut_bins_.empty() || cut_bins_.back() < b) cut_bins_.push_back(b); // slab k starts at bin b
-            }
-        }
-        face_counts_.assign(cut_bins_.size() + 1, 0);
-        extent_lo_.assign(cut_bins_.size() + 1, HUGE_VAL);
-        extent_hi_.assign(cut_bins_.size() + 1, -HUGE_VAL);
-        face_slab_.resize(face_count);
-        for (size_t f = 0; f < face_count; ++f) {
-            const uint8_t slab = uint8_t(cut_bins_.empty() ? 0u : slabOfBin(bin(centroid(f))));
-            face_slab_[f] = slab;
-            ++face_counts_[slab];
-            for (int k = 0; k < 3; ++k) {
-                const double x = mesh.positions[mesh.indices[f * 3 + k]][axis_];
-                extent_lo_[slab] = std::min(extent_lo_[slab], x);
-                extent_hi_[slab] = std::max(extent_hi_[slab], x);
-            }
-        }
-    }
-
-    uint32_t slabCount() const { return uint32_t(face_counts_.size()); }
-    size_t faceCount(uint32_t slab) const { return face_counts_[slab]; }
-    uint32_t slabOf(const Vec3d& p) const { return slabOfBin(bin(p[axis_])); }
-    // Whether a triangle of `slab` may lie within sqrt(distance_sq) of p: its extent along the axis (a
-    // lower bound of the distance to each of its triangles) is not farther, with a wide margin for the
-    // rounding of this test.
-    bool mayReach(uint32_t slab, const Vec3d& p, double distance_sq) const {
-        const double x = p[axis_];
-        const double gap = std::max(extent_lo_[slab] - x, x - extent_hi_[slab]);
-        return !(gap > 0.0 && gap * gap > distance_sq * (1.0 + 1e-6));
-    }
-    // The corner indices of the slab's triangles, in face order; only those whose extent along the axis
-    // meets [lo, hi] when that is given.
-    std::vector<uint32_t> indices(uint32_t slab, double lo = -HUGE_VAL, double hi = HUGE_VAL) const {
-        const bool all = !(lo > -HUGE_VAL) && !(hi < HUGE_VAL);
-        std::vector<uint32_t> out;
-        if (all) out.reserve(face_counts_[slab] * 3);
-        for (size_t f = 0; f < face_slab_.size(); ++f) {
-            if (face_slab_[f] != slab) continue;
-            const uint32_t* c = &mesh_.indices[f * 3];
-            if (!all) {
-                const double x0 = mesh_.positions[c[0]][axis_], x1 = mesh_.positions[c[1]][axis_],
-                             x2 = mesh_.positions[c[2]][axis_];
-                if (std::max({x0, x1, x2}) < lo || std::min({x0, x1, x2}) > hi) continue;
-            }
-            out.insert(out.end(), c, c + 3);
-        }
-        return out;
-    }
-    int axis() const { return axis_; }
-
-private:
-    static constexpr uint32_t kBins = 4096;
-    double centroid(size_t f) const {
-        const uint32_t* c = &mesh_.indices[f * 3];
-        return (double(mesh_.positions[c[0]][axis_]) + double(mesh_.positions[c[1]][axis_]) +
-                double(mesh_.positions[c[2]][axis_])) /
-               3.0;
-    }
-    uint32_t bin(double x) const {
-        const double b = (x - lo_) * scale_;
-        return b > 0.0 ? uint32_t(std::min(b, double(kBins - 1))) : 0u;
-    }
-    uint32_t slabOfBin(uint32_t b) const {
-        return uint32_t(std::upper_bound(cut_bins_.begin(), cut_bins_.end(), b) - cut_bins_.begin());
-    }
-
-    const Mesh& mesh_;
-    int axis_ = -1;
-    double lo_ = 0.0, scale_ = 0.0;
-    std::vector<uint32_t> cut_bins_; // first bin of slabs 1, 2, ...
-    std::vector<size_t> face_counts_;
-    std::vector<double> extent_lo_, extent_hi_; // per slab: its triangles' extent along the axis
-    LargeArray<uint8_t> face_slab_;
-};
 
 } // namespace
 
@@ -745,11 +616,7 @@ double DistanceIndex::closestDistanceSq(const Vec3d& p, uint32_t& hint) const {
 }
 
 double DistanceIndex::closestDistanceSq(const Vec3d& p, Cursor& cursor) const {
-    return closestDistanceSq(p, cursor, std::numeric_limits<double>::infinity());
-}
-
-double DistanceIndex::closestDistanceSq(const Vec3d& p, Cursor& cursor, double bound_sq) const {
-    double best = bound_sq;
+    double best = std::numeric_limits<double>::infinity();
     if (root_ == kEmptyChild) return best;
     uint32_t& hint = cursor.hint;
     auto measureSlot = [&](uint32_t s) __attribute__((always_inline)) {
@@ -757,7 +624,7 @@ double DistanceIndex::closestDistanceSq(const Vec3d& p, Cursor& cursor, double b
         return exactDistanceSq(p, toDouble(c[0]), toDouble(c[1]), toDouble(c[2]));
     };
     const uint32_t start = hint;
-    if (hint != kNoHint) best = std::min(best, measureSlot(hint));
+    if (hint != kNoHint) best = measureSlot(hint);
     // A box is skipped only when its (widened, rounded) distance exceeds the best exact distance by the
     // relative slack plus an absolute term far below float resolution: no triangle whose exact
     // distance could be the minimum is ever skipped.
@@ -953,7 +820,7 @@ Result<DistanceResult> measureSurfaceDistance(const DistanceReference& reference
     LODBAKE_RETURN_IF_ERROR(checkSurface(approx, "approximation"));
     LODBAKE_ASSIGN_OR_RETURN(PointArray reference_points,
                              samplePoints(reference.mesh(), options, kReferenceStream, "reference"));
-    return measurePrepared(reference, reference_points, prepareApprox(approx, options, true, true), nullptr, nullptr);
+    return measurePrepared(reference, reference_points, prepareApprox(approx, options, true), nullptr);
 }
 
 std::vector<Result<DistanceResult>> measureSurfaceDistances(const DistanceReference& reference,
@@ -972,14 +839,14 @@ std::vector<Result<DistanceResult>> measureSurfaceDistances(const DistanceRefere
         if (task == 0)
             reference_points = samplePoints(reference.mesh(), options, kReferenceStream, "reference");
         else
-            first = prepareApprox(*approximations[0], options, true, true);
+            first = prepareApprox(*approximations[0], options, true);
     });
     if (!run.ok()) reference_points = run;
     if (!reference_points.ok()) {
         for (auto& r : results) r = reference_points.status();
         return results;
     }
-    return measurePipelined(reference, *reference_points, approximations, options, std::move(first), {}, {});
+    return measurePipelined(reference, *reference_points, approximations, options, std::move(first), {});
 }
 
 Result<std::vector<Result<OneSidedDistance>>> measureReferenceSides(const Mesh& reference,
@@ -1006,113 +873,6 @@ Result<std::vector<Result<OneSidedDistance>>> measureReferenceSides(const Mesh& 
     return results;
 }
 
-Result<std::vector<Result<OneSidedDistance>>> measureApproximationSides(const Mesh& reference,
-                                                                       const std::vector<const Mesh*>& approximations,
-                                                                       const DistanceOptions& options,
-                                                                       uint32_t slab_count) {
-    LODBAKE_RETURN_IF_ERROR(checkOptions(options));
-    LODBAKE_RETURN_IF_ERROR(checkSurface(reference, "reference"));
-    constexpr uint32_t kMaxSlabs = 8; // a point's slabs to visit fit in a byte
-    const SlabCut cut(reference, std::min(std::max(slab_count, 1u), kMaxSlabs));
-    const uint32_t slabs = cut.slabCount();
-    // Every approximation's points as their sources (recomputed per query, bit for bit), the slab each
-    // lies in, the other slabs it must still be measured against (a bit per slab), and its squared
-    // distance to the nearest triangle of the slabs measured so far.
-    struct Side {
-        Status status = Status::okStatus();
-        std::unique_ptr<SideSampler> sampler;
-        LargeArray<PointSources> points;
-        LargeArray<uint8_t> slab, visit;
-        LargeArray<double> best;
-    };
-    std::vector<Side> sides(approximations.size());
-    for (size_t i = 0; i < approximations.size(); ++i) {
-        Side& side = sides[i];
-        side.status = checkSurface(*approximations[i], "approximation");
-        if (!side.status.ok()) continue;
-        side.sampler = std::make_unique<SideSampler>(*approximations[i], options, kApproxStream);
-        Result<LargeArray<PointSources>> points =
-            samplePointSources(*approximations[i], options, *side.sampler, "approximation");
-        if (!points.ok()) {
-            side.status = points.status();
-            continue;
-        }
-        side.points = std::move(points).value();
-        side.best.assign(side.points.size(), std::numeric_limits<double>::infinity());
-        side.visit.assign(side.points.size(), uint8_t((1u << slabs) - 1)); // every slab, until its own is measured
-        side.slab.resize(side.points.size());
-        LODBAKE_RETURN_IF_ERROR(parallelForChunks(side.points.size(), kChunkSize, [&](size_t, size_t first, size_t end) {
-            for (size_t k = first; k < end; ++k)
-                side.slab[k] = uint8_t(cut.slabOf(side.sampler->at(side.points[k].point, side.points[k].source)));
-        }));
-    }
-    // Every point first against its own slab, where its nearest triangle usually is; that distance then
-    // rules out the slabs that lie farther along the axis, and the point is measured against the rest
-    // with it as the bound. The minimum over the slabs is the minimum over the whole surface: the same
-    // bits as one index of all of it. One slab's index at a time: the own slabs in order, then the other
-    // slabs that some point still needs, in reverse order (the first of them is often the last index built).
-    DistanceIndex index;
-    uint32_t indexed = slabs; // the slab `index` holds whole, if any
-    auto measureSlab = [&](uint32_t slab, bool own) -> Status {
-        if (indexed != slab) {
-            // A slab measured again holds only the triangles that may lie within reach of the points that
-            // need it: those whose extent along the axis meets the points' reach (a thin band next to the
-            // slabs they lie in), so its index is small.
-            double lo = -HUGE_VAL, hi = HUGE_VAL;
-            if (!own) {
-                lo = HUGE_VAL;
-                hi = -HUGE_VAL;
-                const uint8_t bit = uint8_t(1u << slab);
-                for (const Side& side : sides)
-                    for (size_t k = 0; k < side.visit.size(); ++k) {
-                        if (!(side.visit[k] & bit)) continue;
-                        const double x = side.sampler->at(side.points[k].point, side.points[k].source)[cut.axis()];
-                        const double reach = std::sqrt(side.best[k]) * (1.0 + 1e-6);
-                        lo = std::min(lo, x - reach);
-                        hi = std::max(hi, x + reach);
-                    }
-            }
-            index = DistanceIndex();
-            LODBAKE_ASSIGN_OR_RETURN(index, DistanceIndex::build(reference.positions, cut.indices(slab, lo, hi)));
-            indexed = own ? slab : slabs;
-        }
-        const uint8_t bit = uint8_t(1u << slab);
-        for (Side& side : sides) {
-            if (!side.status.ok()) continue;
-            LODBAKE_RETURN_IF_ERROR(
-                parallelForChunks(side.points.size(), kChunkSize, [&](size_t, size_t first, size_t end) {
-                    DistanceIndex::Cursor cursor;
-                    for (size_t k = first; k < end; ++k) {
-                        if (own ? side.slab[k] != slab : !(side.visit[k] & bit)) continue;
-                        const Vec3d p = side.sampler->at(side.points[k].point, side.points[k].source);
-                        const double d = index.closestDistanceSq(p, cursor, side.best[k]);
-                        side.best[k] = d;
-                        if (!own) continue;
-                        uint8_t visit = 0;
-                        for (uint32_t other = 0; other < slabs; ++other)
-                            if (other != slab && cut.faceCount(other) > 0 && cut.mayReach(other, p, d))
-                                visit |= uint8_t(1u << other);
-                        side.visit[k] = visit;
-                    }
-                }));
-        }
-        return Status::okStatus();
-    };
-    for (uint32_t slab = 0; slab < slabs; ++slab)
-        if (cut.faceCount(slab) > 0) LODBAKE_RETURN_IF_ERROR(measureSlab(slab, true));
-    for (uint32_t slab = slabs; slab-- > 0;) {
-        if (cut.faceCount(slab) == 0) continue;
-        bool needed = false;
-        for (const Side& side : sides)
-            for (size_t k = 0; k < side.visit.size() && !needed; ++k) needed = side.visit[k] & (1u << slab);
-        if (needed) LODBAKE_RETURN_IF_ERROR(measureSlab(slab, false));
-    }
-    std::vector<Result<OneSidedDistance>> results(approximations.size(), OneSidedDistance{});
-    for (size_t i = 0; i < sides.size(); ++i)
-        results[i] = sides[i].status.ok() ? statsOfSquaredDistances(sides[i].best) : Result<OneSidedDistance>(sides[i].status);
-    return results;
-}
-
 Result<std::vector<Result<DistanceResult>>> prepareAndMeasureSurfaceDistances(
     const Mesh& reference, const std::vector<const Mesh*>& approximations, const DistanceOptions& options) {
     return prepareAndMeasureSurfaceDistances(reference, approximations, options, {});
@@ -1121,46 +881,28 @@ Result<std::vector<Result<DistanceResult>>> prepareAndMeasureSurfaceDistances(
 Result<std::vector<Result<DistanceResult>>> prepareAndMeasureSurfaceDistances(
     const Mesh& reference, const std::vector<const Mesh*>& approximations, const DistanceOptions& options,
     const std::vector<const OneSidedDistance*>& reference_sides) {
-    return prepareAndMeasureSurfaceDistances(reference, approximations, options, reference_sides, {});
-}
-
-Result<std::vector<Result<DistanceResult>>> prepareAndMeasureSurfaceDistances(
-    const Mesh& reference, const std::vector<const Mesh*>& approximations, const DistanceOptions& options,
-    const std::vector<const OneSidedDistance*>& reference_sides,
-    const std::vector<const OneSidedDistance*>& approximation_sides) {
     LODBAKE_RETURN_IF_ERROR(checkOptions(options));
     LODBAKE_RETURN_IF_ERROR(checkSurface(reference, "reference"));
-    // The reference's points are needed only for the reference sides not measured beforehand, its index
-    // only for the approximation sides not measured beforehand.
-    bool need_points = false, need_index = false;
-    for (size_t i = 0; i < approximations.size(); ++i) {
-        need_points |= knownSide(reference_sides, i) == nullptr;
-        need_index |= knownSide(approximation_sides, i) == nullptr;
-    }
+    // The reference's points are needed only for the sides not measured beforehand.
+    bool need_points = false;
+    for (size_t i = 0; i < approximations.size(); ++i) need_points |= knownSide(reference_sides, i) == nullptr;
     // Three independent setup tasks side by side: the reference's index (serial), its points and the
     // first approximation's index and points.
     Result<DistanceReference> prepared = internalError("distance reference: not prepared");
     Result<PointArray> reference_points = Result<PointArray>(PointArray());
     ApproxSide first;
     LODBAKE_RETURN_IF_ERROR(parallelFor(approximations.empty() ? 2 : 3, 1, [&](size_t task) {
-        if (task == 0 && need_index) {
+        if (task == 0)
             prepared = DistanceReference::prepareChecked(reference);
-        } else if (task == 0) {
-            DistanceReference unindexed; // every approximation side is known: only the diagonal is read
-            unindexed.mesh_ = &reference;
-            unindexed.diagonal_ = computeBounds(reference).diagonal();
-            prepared = std::move(unindexed);
-        } else if (task == 1 && need_points) {
+        else if (task == 1 && need_points)
             reference_points = samplePoints(reference, options, kReferenceStream, "reference");
-        } else if (task == 2) {
-            first = prepareApprox(*approximations[0], options, knownSide(reference_sides, 0) == nullptr,
-                                  knownSide(approximation_sides, 0) == nullptr);
-        }
+        else if (task == 2)
+            first = prepareApprox(*approximations[0], options, knownSide(reference_sides, 0) == nullptr);
     }));
     LODBAKE_RETURN_IF_ERROR(prepared.status());
     LODBAKE_RETURN_IF_ERROR(reference_points.status());
     return measurePipelined(*prepared, *reference_points, approximations, options, std::move(first),
-                            reference_sides, approximation_sides);
+                            reference_sides);
 }
 
 Result<DistanceResult> measureSurfaceDistance(const Mesh& reference, const Mesh& approx,

@@ -14,8 +14,8 @@ using lodbake::bake_detail::concurrentPhases;
 using lodbake::bake_detail::PhaseEstimates;
 using lodbake::bake_detail::PhaseTask;
 
-// "p0" PFRep encoder e on LOD0, "e1" other encoder 1 on LOD0, "L3" level 3, "M" measurement, "R1" both
-// sides of the measurement of levels 1 and on, measured ahead; phases separated by '|'.
+// "p0" PFRep encoder e on LOD0, "e1" other encoder 1 on LOD0, "L3" level 3, "M" measurement, "R1" the
+// reference sides of levels 1 and on; phases separated by '|'.
 std::string describe(const std::vector<std::vector<PhaseTask>>& phases) {
     std::string s;
     for (size_t p = 0; p < phases.size(); ++p) {
@@ -56,13 +56,9 @@ TEST(BakePhasesTest, SmallAssetRunsEveryTaskAtOnce) {
 }
 
 TEST(BakePhasesTest, LargeAssetRunsItsBigTasksAlone) {
-    // dragon_poisson: PFRep beside both sides of every level's measurement, then the measurement (which
-    // only combines them) and the coding of every level side by side.
-    EXPECT_EQ(describe(concurrentPhases(kBuiltin, desktopLevels(1067852))), "p0 R1 | M e1 L1 L2 L3 L4 L5");
-    EXPECT_EQ(describe(concurrentPhases(kBuiltin, desktopLevels(600000))), "p0 R1 | M e1 L1 L2 L3 L4 L5");
-    // The levels' sides are measured against LOD0 in slabs of at most 300,000 triangles.
-    EXPECT_EQ(concurrentPhases(kBuiltin, desktopLevels(1067852))[0][1].slabs, 4u);
-    EXPECT_EQ(concurrentPhases(kBuiltin, desktopLevels(600000))[0][1].slabs, 2u);
+    // dragon_poisson: PFRep beside the reference sides of every level, the measurement alone, then
+    // the coding of every level side by side.
+    EXPECT_EQ(describe(concurrentPhases(kBuiltin, desktopLevels(1067852))), "p0 R1 | M | e1 L1 L2 L3 L4 L5");
     // A mid-size asset: the PFRep build beside the measurement and LOD0's coding, then the other levels.
     EXPECT_EQ(describe(concurrentPhases(kBuiltin, desktopLevels(500000))), "p0 M e1 | L1 L2 L3 L4 L5");
 }
@@ -92,8 +88,7 @@ TEST(BakePhasesTest, OrderAndTasksDoNotDependOnTheCut) {
         std::string all;
         for (const auto& phase : concurrentPhases(kBuiltin, desktopLevels(lod0)))
             for (const PhaseTask& task : phase) all += describe({{task}}) + " ";
-        EXPECT_EQ(all, lod0 == 600000ul || lod0 == 1067852ul ? "p0 R1 M e1 L1 L2 L3 L4 L5 " : "p0 M e1 L1 L2 L3 L4 L5 ")
-            << lod0;
+        EXPECT_EQ(all, lod0 == 1067852ul ? "p0 R1 M e1 L1 L2 L3 L4 L5 " : "p0 M e1 L1 L2 L3 L4 L5 ") << lod0;
     }
     PhaseEstimates tiny;
     tiny.budget_bytes = 1;

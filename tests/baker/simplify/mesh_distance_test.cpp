@@ -338,63 +338,6 @@ TEST(MeshDistanceTest, ReferenceSidesMeasuredBeforehandGiveTheSameBits) {
     EXPECT_TRUE(lodbake::measureReferenceSides(in.reference, {}, in.options)->empty());
 }
 
-// measureApproximationSides measures every level's side against the reference indexed in slabs, one at a
-// time: the same bits as one index of the whole reference, for any slab count (more slabs than the cut
-// can make, too) and thread count, with both sides given to prepareAndMeasureSurfaceDistances (which
-// then builds no index at all).
-TEST(MeshDistanceTest, LevelSidesMeasuredInSlabsGiveTheSameBits) {
-    const LevelBatch in(43);
-    auto prepared = lodbake::DistanceReference::prepare(in.reference);
-    ASSERT_TRUE(prepared.ok());
-    const auto reference_sides = lodbake::measureReferenceSides(in.reference, in.pointers, in.options);
-    ASSERT_TRUE(reference_sides.ok());
-    std::vector<const lodbake::OneSidedDistance*> known_reference(in.levels.size(), nullptr);
-    for (size_t i = 0; i < in.levels.size(); ++i)
-        if ((*reference_sides)[i].ok()) known_reference[i] = &*(*reference_sides)[i];
-    for (int threads : {1, 2}) {
-        lodbake::ScopedThreadLimit limit(threads);
-        for (uint32_t slabs : {0u, 1u, 2u, 3u, 5u, 8u, 200u}) {
-            const std::string where = std::to_string(threads) + " threads, " + std::to_string(slabs) + " slabs";
-            const auto sides = lodbake::measureApproximationSides(in.reference, in.pointers, in.options, slabs);
-            ASSERT_TRUE(sides.ok()) << sides.status().message();
-            ASSERT_EQ(sides->size(), in.levels.size());
-            EXPECT_FALSE((*sides)[2].ok()) << where; // degenerate level
-            std::vector<const lodbake::OneSidedDistance*> known(in.levels.size(), nullptr);
-            for (size_t i = 0; i < in.levels.size(); ++i)
-                if ((*sides)[i].ok()) known[i] = &*(*sides)[i];
-            const auto batch =
-                lodbake::prepareAndMeasureSurfaceDistances(in.reference, in.pointers, in.options, known_reference, known);
-            ASSERT_TRUE(batch.ok()) << batch.status().message();
-            for (size_t i = 0; i < in.levels.size(); ++i) {
-                const auto single = lodbake::measureSurfaceDistance(prepared.value(), in.levels[i], in.options);
-                expectSameBits((*batch)[i], single, where + ", level " + std::to_string(i));
-                if (single.ok()) {
-                    EXPECT_EQ((*sides)[i]->max, single->max_approx_to_ref) << where << ", level " << i;
-                }
-            }
-        }
-    }
-    EXPECT_FALSE(lodbake::measureApproximationSides(in.levels[2], in.pointers, in.options, 3).ok());
-    lodbake::DistanceOptions none;
-    none.sample_count = 0;
-    none.include_vertices = false;
-    EXPECT_FALSE(lodbake::measureApproximationSides(in.reference, in.pointers, none, 3).ok());
-    EXPECT_TRUE(lodbake::measureApproximationSides(in.reference, {}, in.options, 3)->empty());
-}
-
-// Deterministic numbers in [-1, 1) (a 64-bit LCG), for query points.
-class SignedUnits {
-public:
-    explicit SignedUnits(uint64_t seed) : state_(seed) {}
-    double operator()() {
-        state_ = state_ * 6364136223846793005ull + 1442695040888963407ull;
-        return double(state_ >> 11) * (1.0 / 9007199254740992.0) * 2.0 - 1.0;
-    }
-
-private:
-    uint64_t state_;
-};
-
 // Brute force: the exact distance the index computes, over every triangle.
 double bruteForceDistanceSq(const Mesh& m, const lodbake::Vec3d& p) {
     double best = HUGE_VAL;
@@ -458,7 +401,11 @@ TEST(MeshDistanceTest, CursorWalkEqualsBruteForceExactly) {
         for (Vec3f& p : m.positions) p = p * scale;
         auto index = lodbake::DistanceIndex::build(m.positions, m.indices);
         ASSERT_TRUE(index.ok());
-        SignedUnits next(5);
+        uint64_t state = 5;
+        auto next = [&state]() {
+            state = state * 6364136223846793005ull + 1442695040888963407ull;
+            return double(state >> 11) * (1.0 / 9007199254740992.0) * 2.0 - 1.0;
+        };
         lodbake::DistanceIndex::Cursor cursor;
         lodbake::Vec3d dir(1, 0, 0);
         uint32_t deep = 0;
@@ -476,26 +423,6 @@ TEST(MeshDistanceTest, CursorWalkEqualsBruteForceExactly) {
             if (cursor.depth > 3) ++deep;
         }
         EXPECT_GT(deep, 1000u) << "the walk should keep a path below the root";
-    }
-}
-
-// With a bound, a query returns min(bound, the exact nearest distance): a bound above the nearest
-// distance changes nothing, one below it comes back as it is, and the hint is kept for the next query.
-TEST(MeshDistanceTest, BoundedQueryIsTheMinimumOfTheBoundAndTheExactDistance) {
-    Mesh m = perturbed(icosphere(3), 0.03f, 9);
-    auto index = lodbake::DistanceIndex::build(m.positions, m.indices);
-    ASSERT_TRUE(index.ok());
-    SignedUnits next(11);
-    lodbake::DistanceIndex::Cursor cursor;
-    for (int i = 0; i < 2000; ++i) {
-        const lodbake::Vec3d dir(next(), next(), next());
-        if (lodbake::length(dir) == 0) continue;
-        const lodbake::Vec3d p = lodbake::normalize(dir) * (1.0 + 0.5 * next());
-        const double want = bruteForceDistanceSq(m, p);
-        const double factor = i % 3 == 0 ? 0.5 : (i % 3 == 1 ? 1.0 : 4.0);
-        const double bound = want * factor;
-        ASSERT_EQ(index->closestDistanceSq(p, cursor, bound), std::min(bound, want)) << i;
-        ASSERT_EQ(index->closestDistanceSq(p, cursor, HUGE_VAL), want) << i;
     }
 }
 

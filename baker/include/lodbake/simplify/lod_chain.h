@@ -228,13 +228,11 @@ Result<LodChain> buildLodChain(const Mesh& mesh, const LodChainOptions& options,
 /// that cannot be measured keeps its quadric estimate, with a warning.
 void measureLodChain(const Mesh& mesh, LodChain& chain, const LodChainOptions& options, Diagnostics& diagnostics);
 
-/// measureLodChain with the reference sides and the level sides of some levels measured beforehand by
-/// measureReferenceSides and measureApproximationSides (mesh_distance.h; same mesh, options.distance):
-/// `reference_sides[i]` and `level_sides[i]`, when present and not null, are level i's. The same
-/// results, bit for bit, and the same warnings.
+/// measureLodChain with the reference sides of some levels measured beforehand by measureReferenceSides
+/// (mesh_distance.h; same mesh, options.distance): `reference_sides[i]`, when present and not null, is
+/// level i's. The same results, bit for bit, and the same warnings.
 void measureLodChain(const Mesh& mesh, LodChain& chain, const LodChainOptions& options,
-                     const std::vector<const OneSidedDistance*>& reference_sides,
-                     const std::vector<const OneSidedDistance*>& level_sides, Diagnostics& diagnostics);
+                     const std::vector<const OneSidedDistance*>& reference_sides, Diagnostics& diagnostics);
 
 /// Switch distance and screen coverage of every level: from its measured Hausdorff error when there
 /// is one, else its quadric estimate, made non-decreasing down the chain so selection by distance is

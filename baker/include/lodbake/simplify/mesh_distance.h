@@ -112,11 +112,6 @@ public:
     double closestDistanceSq(const Vec3d& p, uint32_t& hint) const;
     /// The same distance; the search starts from `cursor` (see Cursor) and updates it.
     double closestDistanceSq(const Vec3d& p, Cursor& cursor) const;
-    /// min(bound_sq, the squared distance from `p` to the nearest triangle), exact as above: the search
-    /// skips whatever is farther than `bound_sq` (a squared distance known beforehand, e.g. to another
-    /// part of the same surface), so a query far from every triangle ends at the root. The cursor's hint
-    /// moves only to a triangle nearer than that.
-    double closestDistanceSq(const Vec3d& p, Cursor& cursor, double bound_sq) const;
     /// The input triangle of a slot.
     uint32_t faceOfSlot(uint32_t slot) const { return face_of_slot_[slot]; }
 
@@ -157,8 +152,7 @@ public:
 private:
     friend Result<std::vector<Result<DistanceResult>>> prepareAndMeasureSurfaceDistances(
         const Mesh& reference, const std::vector<const Mesh*>& approximations, const DistanceOptions& options,
-        const std::vector<const OneSidedDistance*>& reference_sides,
-        const std::vector<const OneSidedDistance*>& approximation_sides);
+        const std::vector<const OneSidedDistance*>& reference_sides);
     static Result<DistanceReference> prepareChecked(const Mesh& reference); // prepare after checkSurface
 
     const Mesh* mesh_ = nullptr;
@@ -206,32 +200,5 @@ Result<std::vector<Result<OneSidedDistance>>> measureReferenceSides(const Mesh& 
 Result<std::vector<Result<DistanceResult>>> prepareAndMeasureSurfaceDistances(
     const Mesh& reference, const std::vector<const Mesh*>& approximations, const DistanceOptions& options,
     const std::vector<const OneSidedDistance*>& reference_sides);
-
-/// The approximation sides alone: for every approximation, the distances from its points to the
-/// reference, bit-identical to the side that prepareAndMeasureSurfaceDistances measures with the same
-/// reference and options. The reference is indexed in slabs, one at a time (`slab_count` of them, at
-/// most 8, cut across its longest extent at quantiles of its triangles): each point is measured against
-/// its own slab, then, with that distance as the bound, against the other slabs still within reach
-/// (each rebuilt as the band of its triangles within the reach of the points that need it), and the
-/// minimum over the slabs is the minimum over the reference. So only one slab's index exists at a time
-/// -- about 1 / slab_count of the reference's -- beside the approximations' points (as their sources, 8
-/// bytes each, with 10 bytes of state): it can run earlier, where memory is short (the bake runs it
-/// beside the PFRep build, after measureReferenceSides). 0 slabs means 1.
-/// Fails as prepareAndMeasureSurfaceDistances does for a bad reference or options, or when an index
-/// cannot be built; results[i] fails for a bad approximation. Pointers must not be null.
-Result<std::vector<Result<OneSidedDistance>>> measureApproximationSides(const Mesh& reference,
-                                                                       const std::vector<const Mesh*>& approximations,
-                                                                       const DistanceOptions& options,
-                                                                       uint32_t slab_count);
-
-/// prepareAndMeasureSurfaceDistances with the reference sides and the approximation sides of some
-/// approximations measured beforehand (measureReferenceSides, measureApproximationSides; same reference,
-/// same options): a side given (present and not null) is taken instead of measured. The reference's
-/// index is built only when some approximation side is not given, its points only when some reference
-/// side is not given. The results are bit-identical to measuring both sides here.
-Result<std::vector<Result<DistanceResult>>> prepareAndMeasureSurfaceDistances(
-    const Mesh& reference, const std::vector<const Mesh*>& approximations, const DistanceOptions& options,
-    const std::vector<const OneSidedDistance*>& reference_sides,
-    const std::vector<const OneSidedDistance*>& approximation_sides);
 
 } // namespace lodbake
