@@ -522,7 +522,7 @@ void EdgeCollapser::collapse(Worker& w, const Candidate& c, const WedgePair* pai
     if (sequence) sequence->records.push_back(record);
     if (removal_log_) {
         const Vec3d pv = toD(position_[v]) - c.position, pu = toD(position_[u]) - c.position;
-        removal_log_->add(u, v, p.x == position_[v].x && p.y == position_[v].y && p.z == position_[v].z,
+        (w.heap && w.part > 0 ? w.removals : *removal_log_).add(u, v, p.x == position_[v].x && p.y == position_[v].y && p.z == position_[v].z,
                           dot(pu, pu) < dot(pv, pv));
     }
     if (has_penalty_) {
@@ -932,9 +932,10 @@ void EdgeCollapser::queueRemove(Worker& w, uint32_t edge) {
 
 bool EdgeCollapser::roundApplies(size_t target_faces, const CollapseSequence* sequence) const {
     // Not below late_faces_ (the late stage prices distances by the whole mesh's mean area), nor with
-    // what the parts would share: UV chart counts, component removal, a removal log, a sequence.
+    // what the parts would share: UV chart counts, component removal, a sequence. (A removal log is
+    // kept per part and appended in part order at the merge.)
     return alive_faces_ >= round_min_faces_ && target_faces >= late_faces_ && alive_faces_ > target_faces &&
-           alive_faces_ - target_faces >= alive_faces_ / kRoundMinRemovedDivisor && !sequence && !removal_log_ &&
+           alive_faces_ - target_faces >= alive_faces_ / kRoundMinRemovedDivisor && !sequence &&
            uv_channel_ == kNone && !remove_components_;
 }
 
@@ -1150,6 +1151,8 @@ void EdgeCollapser::runRound(size_t target_faces, double max_error) {
                     queue_.remove(e);
             }
             std::vector<uint32_t>().swap(w.deferred);
+            if (removal_log_) removal_log_->append(w.removals);
+            w.removals.clear();
             w.heap = nullptr;
         }
         round_axis_ = axis;

@@ -262,3 +262,71 @@ TEST(PfrepChainFallbackTest, CoveredComponentRemovalLeavesNoLogAndTheExtensionSi
 }
 
 } // namespace
+
+// Above EdgeCollapser::kRoundMinFaces the chain collapses in partitioned rounds (two parts side by
+// side). With a removal log it still does: each part logs its own collapses and the logs are appended
+// in part order at the merge, which is a valid order because the parts never touch the same data. So
+// the levels are the ones the chain makes without the log, and the log, replayed as vertex removals,
+// gives exactly each level's faces.
+TEST(PfrepChainRoundsTest, LogOfAPartitionedChainReplaysItsLevels) {
+    const lodbake::Mesh mesh = lodbake_test::bumpyIcosphere(7); // 327,680 faces
+    ASSERT_GE(mesh.faceCount(), size_t(200000));
+    lodbake::LodChainOptions options;
+    options.ratios = {0.5, 0.25, 0.05};
+    options.measure_error = false;
+    options.record_collapses = false; // a recorded sequence would keep the serial order
+    lodbake::Diagnostics d;
+    auto plain = lodbake::buildLodChain(mesh, options, d);
+    ASSERT_TRUE(plain.ok()) << plain.status().message();
+    options.record_removals = true;
+    auto logged = lodbake::buildLodChain(mesh, options, d);
+    ASSERT_TRUE(logged.ok()) << logged.status().message();
+    ASSERT_TRUE(logged->removals_complete);
+    ASSERT_EQ(plain->levels.size(), logged->levels.size());
+    for (size_t l = 0; l < plain->levels.size(); ++l) {
+        EXPECT_EQ(plain->levels[l].collapse_count, logged->levels[l].collapse_count) << "level " << l;
+        EXPECT_EQ(plain->levels[l].mesh.indices, logged->levels[l].mesh.indices) << "level " << l;
+    }
+    EXPECT_GT(logged->removals.size(), logged->levels.back().collapse_count);
+
+    // Replay: the engine's faces keep their input order and corner order, a collapse renames the removed
+    // point in place and drops the faces that then repeat a point; the level's vertices are the points
+    // in order of first use by those faces (no attributes: one wedge per point).
+    std::vector<lodbake::Vec3f> positions;
+    std::vector<uint32_t> triangles;
+    ASSERT_TRUE(lodbake::chainPoints(mesh, positions, triangles).ok());
+    std::vector<uint32_t> parent(positions.size());
+    std::iota(parent.begin(), parent.end(), 0u);
+    auto find = [&](uint32_t x) {
+        while (parent[x] != x) x = parent[x] = parent[parent[x]];
+        return x;
+    };
+    lodbake::CollapsePairLog::Reader reader(logged->removals);
+    size_t applied = 0;
+    for (const lodbake::LodLevel& level : logged->levels) {
+        for (; applied < level.collapse_count; ++applied) {
+            uint32_t u = 0, v = 0;
+            ASSERT_TRUE(reader.next(u, v));
+            ASSERT_LT(u, parent.size());
+            ASSERT_LT(v, parent.size());
+            ASSERT_EQ(find(u), u) << "collapse " << applied << " removes a point that is gone";
+            ASSERT_EQ(find(v), v) << "collapse " << applied << " keeps a point that is gone";
+            parent[u] = v;
+        }
+        std::vector<uint32_t> vertex_of(positions.size(), UINT32_MAX), expected;
+        uint32_t next = 0;
+        for (size_t t = 0; t < triangles.size(); t += 3) {
+            const uint32_t a = find(triangles[t]), b = find(triangles[t + 1]), c = find(triangles[t + 2]);
+            if (a == b || b == c || a == c) continue;
+            for (uint32_t p : {a, b, c}) {
+                if (vertex_of[p] == UINT32_MAX) vertex_of[p] = next++;
+                expected.push_back(vertex_of[p]);
+            }
+        }
+        EXPECT_EQ(level.mesh.indices, expected) << "level of " << level.mesh.faceCount() << " faces";
+    }
+    // The blob read from the log has each chain level at its collapse count (the extension checks it).
+    auto object = lodbake::buildPfrepExtension(mesh, *logged, {}, d);
+    ASSERT_TRUE(object.ok()) << object.status().message();
+    ASSERT_EQ(object->levels.size(), logged->levels.size() + 1);
+}

@@ -64,6 +64,17 @@ template <class Height> lodbake::Mesh grid(int n, Height height) {
     return m;
 }
 
+/// icosphere(levels) with a smooth radial bump: regular connectivity, but collapse costs that differ
+/// from place to place.
+inline lodbake::Mesh bumpyIcosphere(int levels) {
+    lodbake::Mesh m = icosphere(levels);
+    for (lodbake::Vec3f& p : m.positions) {
+        const float r = 1.0f + 0.05f * std::sin(7.0f * p.x) * std::sin(5.0f * p.y + 1.0f) * std::sin(3.0f * p.z + 2.0f);
+        p = p * r;
+    }
+    return m;
+}
+
 inline lodbake::Mesh flatGrid(int n) {
     return grid(n, [](float, float) { return 0.0f; });
 }

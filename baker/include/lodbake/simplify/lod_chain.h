@@ -103,6 +103,11 @@ public:
                   uint64_t(kept_stays));
         ++count_;
     }
+    /// Appends `other`'s entries after this log's (entries are self-contained, so the bytes concatenate).
+    void append(const CollapsePairLog& other) {
+        bytes_.insert(bytes_.end(), other.bytes_.begin(), other.bytes_.end());
+        count_ += other.count_;
+    }
     size_t size() const { return count_; }
     bool empty() const { return count_ == 0; }
     size_t byteSize() const { return bytes_.size(); }
