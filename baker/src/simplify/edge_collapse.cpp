@@ -522,8 +522,9 @@ void EdgeCollapser::collapse(Worker& w, const Candidate& c, const WedgePair* pai
     if (sequence) sequence->records.push_back(record);
     if (removal_log_) {
         const Vec3d pv = toD(position_[v]) - c.position, pu = toD(position_[u]) - c.position;
-        (w.heap && w.part > 0 ? w.removals : *removal_log_).add(u, v, p.x == position_[v].x && p.y == position_[v].y && p.z == position_[v].z,
-                          dot(pu, pu) < dot(pv, pv));
+        CollapsePairLog& log = w.heap && w.part > 0 ? w.removals : *removal_log_; // part 0 logs in place
+        log.add(u, v, p.x == position_[v].x && p.y == position_[v].y && p.z == position_[v].z,
+                dot(pu, pu) < dot(pv, pv));
     }
     if (has_penalty_) {
         // v now stands for the input points of both; it keeps the one further from its new fan.
