@@ -522,7 +522,7 @@ void EdgeCollapser::collapse(Worker& w, const Candidate& c, const WedgePair* pai
     if (sequence) sequence->records.push_back(record);
     if (removal_log_) {
         const Vec3d pv = toD(position_[v]) - c.position, pu = toD(position_[u]) - c.position;
-        CollapsePairLog& log = w.heap && w.part > 0 ? w.removals : *removal_log_; // part 0 logs in place
+        CollapsePairLog& log = w.heap ? w.removals : *removal_log_; // a part: its own, appended at the merge
         log.add(u, v, p.x == position_[v].x && p.y == position_[v].y && p.z == position_[v].z,
                 dot(pu, pu) < dot(pv, pv));
     }

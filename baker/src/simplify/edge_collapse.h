@@ -106,9 +106,8 @@ private:
         PartHeap* heap = nullptr;       // a part's heap; null: queue_ and the engine's counters
         uint32_t part = 0;              // with heap: which part (part_points_)
         std::vector<uint32_t> deferred; // with heap: edges outside the part whose key changed (runRound)
-        // With heap and a removal log, parts after the first: the part's collapses, appended at the merge
-        // (part 0 writes straight into the log: a round's collapses are logged part after part, a valid
-        // order because the parts never touch the same data).
+        // With heap and a removal log: the part's collapses, appended to the log in part order at the
+        // merge (a valid order: the parts never touch the same data).
         CollapsePairLog removals;
         size_t faces_removed = 0, collapses = 0; // with heap: the part's counters
         double max_error = 0;
