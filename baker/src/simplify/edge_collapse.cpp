@@ -1085,6 +1085,9 @@ void EdgeCollapser::runRound(size_t target_faces, double max_error) {
             w.faces_removed = 0;
             w.collapses = 0;
             w.max_error = 0;
+            // A part removes at most `goal` faces, so it logs at most `goal` collapses: reserved
+            // once (mapped, resident as written) instead of grown by doubling in a worker's heap.
+            if (removal_log_) w.removals.reserve(goal);
         }
         late_ = false;
         // The parts run in phases up to a common key limit, so that neither collapses much further

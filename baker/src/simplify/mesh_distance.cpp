@@ -38,14 +38,6 @@
 
 namespace lodbake {
 
-void* detail::allocateDistanceArray(size_t bytes) {
-    return LargeArrayAllocator<unsigned char>().allocate(bytes);
-}
-
-void detail::freeDistanceArray(void* p, size_t bytes) {
-    LargeArrayAllocator<unsigned char>().deallocate(static_cast<unsigned char*>(p), bytes);
-}
-
 namespace {
 
 using detail::LargeArray;

@@ -32,6 +32,7 @@
 #include <vector>
 
 #include "lodbake/core/diagnostics.h"
+#include "lodbake/core/mapped_array.h"
 #include "lodbake/core/mesh.h"
 #include "lodbake/core/status.h"
 #include "lodbake/simplify/mesh_distance.h"
@@ -111,11 +112,12 @@ public:
     size_t size() const { return count_; }
     bool empty() const { return count_ == 0; }
     size_t byteSize() const { return bytes_.size(); }
-    /// Room for `entries` entries of the largest size (11 bytes), so the stream never grows by copying
-    /// (pages not yet written are not resident).
+    /// Room for `entries` entries of the largest size (11 bytes), so the stream never grows by copying.
+    /// A large stream is mapped on its own with ordinary pages (core/mapped_array.h): the pages not yet
+    /// written are not resident, and the reservation takes no room in malloc's heap.
     void reserve(size_t entries) { bytes_.reserve(entries * 11); }
     void clear() {
-        std::vector<uint8_t>().swap(bytes_);
+        Bytes().swap(bytes_);
         count_ = 0;
     }
     /// Sequential reader: next() gives the entries in order; false once past the last (or on a
@@ -163,7 +165,8 @@ private:
         }
         bytes_.push_back(uint8_t(v));
     }
-    std::vector<uint8_t> bytes_;
+    using Bytes = detail::MappedArray<uint8_t, detail::MappedPages::Small>;
+    Bytes bytes_;
     size_t count_ = 0;
 };
 

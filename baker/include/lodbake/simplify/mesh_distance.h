@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "lodbake/core/bvh.h"
+#include "lodbake/core/mapped_array.h"
 #include "lodbake/core/mesh.h"
 #include "lodbake/core/status.h"
 
@@ -16,29 +17,10 @@ namespace lodbake {
 
 namespace detail {
 /// Storage of DistanceIndex's arrays: allocations of 2 MB and more are mapped on their own with
-/// transparent huge pages (core/large_array.h), which saves the page faults of filling them and the
-/// TLB misses of the queries' scattered reads. Out of line, so this header needs nothing from src/.
-void* allocateDistanceArray(size_t bytes);
-void freeDistanceArray(void* p, size_t bytes);
+/// transparent huge pages, which saves the page faults of filling them and the TLB misses of the
+/// queries' scattered reads.
 template <class T>
-struct DistanceArrayAllocator {
-    using value_type = T;
-    DistanceArrayAllocator() = default;
-    template <class U>
-    DistanceArrayAllocator(const DistanceArrayAllocator<U>&) {}
-    T* allocate(size_t n) { return static_cast<T*>(allocateDistanceArray(n * sizeof(T))); }
-    void deallocate(T* p, size_t n) { freeDistanceArray(p, n * sizeof(T)); }
-    template <class U>
-    bool operator==(const DistanceArrayAllocator<U>&) const {
-        return true;
-    }
-    template <class U>
-    bool operator!=(const DistanceArrayAllocator<U>&) const {
-        return false;
-    }
-};
-template <class T>
-using DistanceArray = std::vector<T, DistanceArrayAllocator<T>>;
+using DistanceArray = MappedArray<T, MappedPages::Huge>;
 } // namespace detail
 
 struct DistanceOptions {
