@@ -63,7 +63,9 @@ options:
   --no-progressive-fans do not embed LOD0's PFRep blob (preset key progressive_fans)
   --pfrep-from-chain    build that blob from the LOD chain's own collapses: one simplification
                         instead of two (about 1 s less on a 1 M-triangle scan), coarser PFRep
-                        levels (preset key pfrep_from_chain; off in every shipped preset)
+                        levels (preset key pfrep_from_chain; on in desktop, mobile, vr)
+  --no-pfrep-from-chain  build it from a half-edge simplification of its own: more accurate PFRep
+                        levels (archive's default)
   --adaptive-precision  levels after LOD0 coded with position/normal bits from their own measured
                         error (preset key stream_precision.adaptive; on in desktop, mobile, vr)
   --no-adaptive-precision  every level coded with LOD0's bits (archive's default)
@@ -89,6 +91,7 @@ struct CliOverrides {
     bool compact = false;
     bool no_progressive_fans = false;
     bool pfrep_from_chain = false;
+    bool no_pfrep_from_chain = false;
     bool adaptive_precision = false;
     bool no_adaptive_precision = false;
     bool remove_covered_components = false;
@@ -101,6 +104,7 @@ void applyOverrides(const CliOverrides& o, BakeSettings& s) {
     if (o.compact) s.compact = true;
     if (o.no_progressive_fans) s.progressive_fans = false;
     if (o.pfrep_from_chain) s.pfrep_from_chain = true;
+    if (o.no_pfrep_from_chain) s.pfrep_from_chain = false;
     if (o.adaptive_precision) s.stream_precision.adaptive = true;
     if (o.no_adaptive_precision) s.stream_precision.adaptive = false;
     if (o.remove_covered_components) s.remove_covered_components = true;
@@ -288,6 +292,7 @@ int runBake(int argc, char** argv) {
                     {"--compact", nullptr, false},
                     {"--no-progressive-fans", nullptr, false},
                     {"--pfrep-from-chain", nullptr, false},
+                    {"--no-pfrep-from-chain", nullptr, false},
                     {"--adaptive-precision", nullptr, false},
                     {"--no-adaptive-precision", nullptr, false},
                     {"--remove-covered-components", nullptr, false},
@@ -341,11 +346,14 @@ int runBake(int argc, char** argv) {
     overrides.compact = args.flags.count("--compact") > 0;
     overrides.no_progressive_fans = args.flags.count("--no-progressive-fans") > 0;
     overrides.pfrep_from_chain = args.flags.count("--pfrep-from-chain") > 0;
+    overrides.no_pfrep_from_chain = args.flags.count("--no-pfrep-from-chain") > 0;
     overrides.adaptive_precision = args.flags.count("--adaptive-precision") > 0;
     overrides.no_adaptive_precision = args.flags.count("--no-adaptive-precision") > 0;
     overrides.remove_covered_components = args.flags.count("--remove-covered-components") > 0;
     if (overrides.adaptive_precision && overrides.no_adaptive_precision)
         return usageError("--adaptive-precision and --no-adaptive-precision exclude each other");
+    if (overrides.pfrep_from_chain && overrides.no_pfrep_from_chain)
+        return usageError("--pfrep-from-chain and --no-pfrep-from-chain exclude each other");
     applyOverrides(overrides, base);
 
     // The jobs.

@@ -246,10 +246,17 @@ TEST(BakeCliUsageTest, PresetErrorsAndOverrides) {
     r = bake("--print-config --preset " + shellQuote(src("configs/desktop.json")) + " --remove-covered-components");
     ASSERT_EQ(r.exit_code, 0) << r.output;
     EXPECT_TRUE(nlohmann::json::parse(r.output)["remove_covered_components"].get<bool>());
-    EXPECT_FALSE(printed["pfrep_from_chain"].get<bool>()); // off in mobile.json as in every shipped preset
-    r = bake("--print-config --preset " + shellQuote(src("configs/desktop.json")) + " --pfrep-from-chain");
+    EXPECT_TRUE(printed["pfrep_from_chain"].get<bool>()); // on in mobile.json, desktop.json and vr.json
+    r = bake("--print-config --preset " + shellQuote(src("configs/desktop.json")) + " --no-pfrep-from-chain");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_FALSE(nlohmann::json::parse(r.output)["pfrep_from_chain"].get<bool>());
+    r = bake("--print-config --preset " + shellQuote(src("configs/archive.json")));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_FALSE(nlohmann::json::parse(r.output)["pfrep_from_chain"].get<bool>()); // archive: the separate pass
+    r = bake("--print-config --preset " + shellQuote(src("configs/archive.json")) + " --pfrep-from-chain");
     ASSERT_EQ(r.exit_code, 0) << r.output;
     EXPECT_TRUE(nlohmann::json::parse(r.output)["pfrep_from_chain"].get<bool>());
+    EXPECT_EQ(bake("--print-config --pfrep-from-chain --no-pfrep-from-chain").exit_code, 2);
     EXPECT_EQ(bake("x.ply -o out.gltf").exit_code, 2);
     EXPECT_EQ(bake("-o out.glb").exit_code, 2);
 }
