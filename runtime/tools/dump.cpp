@@ -37,7 +37,8 @@ void printUsage(std::FILE* out) {
                       "pack. --level N shows only level N of each group (and only those meshes).\n"
                       "Checks: MSFT_lod ids in range and without cycles, screen coverage not increasing and\n"
                       "errors not decreasing from one level to the next, every compressed stream decodes and\n"
-                      "matches the plain accessors, PFRep full detail agrees with the chain's level 0.\n"
+                      "matches the plain accessors, each PFRep level the extension lists is what the blob\n"
+                      "extracts and no finer than the chain level it stands for.\n"
                       "--render OUT.png draws every level of every group side by side (flat shaded; with\n"
                       "--wireframe the triangle edges too) and writes the picture with OpenImageIO.\n"
                       "Exit status: 0 ok, 1 bad pack or failed check, 2 usage.\n");
@@ -234,7 +235,8 @@ bool readPositions(const lodrt::Pack& pack, uint32_t index, std::vector<float>* 
 
 uint32_t findAttribute(const lodrt::Pack& pack, const lodrt::PrimitiveInfo& prim, std::string_view name) {
     for (uint32_t a = 0; a < prim.attribute_count; ++a)
-        if (pack.attribute(prim.first_attribute + a).name == name) return pack.attribute(prim.first_attribute + a).accessor;
+        if (pack.attribute(prim.first_attribute + a).name == name)
+            return pack.attribute(prim.first_attribute + a).accessor;
     return lodrt::kNoIndex;
 }
 
@@ -330,8 +332,8 @@ bool decodeValencePrimitive(const lodrt::Pack& pack, uint32_t prim_index, Decode
     }
     if (info.triangle_count != prim.triangle_count || info.vertex_count != prim.vertex_count) {
         *error = "stream has " + std::to_string(info.vertex_count) + " vertices and " +
-                 std::to_string(info.triangle_count) + " triangles, the primitive " + std::to_string(prim.vertex_count) +
-                 " and " + std::to_string(prim.triangle_count);
+                 std::to_string(info.triangle_count) + " triangles, the primitive " +
+                 std::to_string(prim.vertex_count) + " and " + std::to_string(prim.triangle_count);
         return false;
     }
     out->positions.assign(size_t(info.vertex_count) * 3, 0.0f);
@@ -355,7 +357,8 @@ bool decodeValencePrimitive(const lodrt::Pack& pack, uint32_t prim_index, Decode
     // Where the plain accessors have data, they must hold the same triangles (each possibly rotated)
     // in the same order, and the same positions up to the quantization step.
     std::vector<uint32_t> plain;
-    if (prim.indices != lodrt::kNoIndex && readIndices(pack, prim.indices, &plain) && plain.size() == out->indices.size()) {
+    if (prim.indices != lodrt::kNoIndex && readIndices(pack, prim.indices, &plain) &&
+        plain.size() == out->indices.size()) {
         for (size_t t = 0; t < plain.size(); t += 3) {
             const uint32_t* d = &out->indices[t];
             bool same = false;
@@ -377,8 +380,8 @@ bool decodeValencePrimitive(const lodrt::Pack& pack, uint32_t prim_index, Decode
             const double diff = std::fabs(double(plain_positions[i]) - double(out->positions[i]));
             if (!(diff <= step + 1e-6 * double(info.cube_size))) {
                 char buf[160];
-                std::snprintf(buf, sizeof(buf), "decoded vertex %zu is %.3g from the plain position (step %.3g)",
-                              i / 3, diff, step);
+                std::snprintf(buf, sizeof(buf), "decoded vertex %zu is %.3g from the plain position (step %.3g)", i / 3,
+                              diff, step);
                 *error = buf;
                 return false;
             }
@@ -401,7 +404,8 @@ void checkStreams(const lodrt::Pack& pack, std::vector<Problem>& problems) {
             std::string error;
             if (!decodeValencePrimitive(pack, mesh.first_primitive + p, &decoded, &seen, &error))
                 problems.push_back(
-                    {mesh_pointer + "/primitives/" + std::to_string(p) + "/extensions/" + std::string(kValence), error});
+                    {mesh_pointer + "/primitives/" + std::to_string(p) + "/extensions/" + std::string(kValence),
+                     error});
         }
         const lodrt::JsonValue pfrep = mesh.json.find("extensions").find(kPfrep);
         if (!pfrep.isObject()) continue;
@@ -428,6 +432,83 @@ void checkStreams(const lodrt::Pack& pack, std::vector<Problem>& problems) {
 
 std::string nodePointer(uint32_t node) {
     return "/nodes/" + std::to_string(node);
+}
+
+// The PFRep blob on a group's full-detail mesh against the group's chain: the extension's header
+// fields are the blob's, its `levels` has one entry per chain level, each entry's removal count is
+// in order and within the blob, its `triangles` is what the blob extracts at that count, and that
+// count is not above the chain level's own triangle count (equal when the blob comes from the
+// chain's collapses; the blob's own half-edge sequence stops at the first level within the level's
+// budget, which the chain level reaches too, a step of one or two triangles away: 1 % and 2
+// triangles are allowed).
+void checkPfrepLevels(const lodrt::Pack& pack, const LodGroup& group, std::vector<Problem>& problems) {
+    if (group.levels.empty() || group.levels[0].mesh == lodrt::kNoIndex) return;
+    const uint32_t mesh_index = group.levels[0].mesh;
+    const lodrt::JsonValue pfrep = pack.mesh(mesh_index).json.find("extensions").find(kPfrep);
+    if (!pfrep.isObject()) return;
+    const std::string where = "/meshes/" + std::to_string(mesh_index) + "/extensions/" + std::string(kPfrep);
+    const uint32_t view = extensionView(pack, pfrep, "bufferView");
+    uint64_t size = 0;
+    const uint8_t* data = view == lodrt::kNoIndex ? nullptr : viewBytes(pack, view, &size);
+    lodrt::PfrepModel model;
+    // An unreadable blob is reported by checkStreams.
+    if (!data || lodrt::openPfrep(data, size_t(size), &model) != lodrt::Result::Ok) return;
+    auto field = [&](const char* name, uint64_t want) {
+        uint64_t got = 0;
+        if (!pfrep.find(name).asUint64(&got) || got != want)
+            problems.push_back(
+                {where + "/" + name, std::string(name) + ": expected the blob's " + std::to_string(want)});
+    };
+    field("vertexCount", model.vertex_count);
+    field("removedCount", model.removed_count);
+    field("triangleCount", model.level0_triangles);
+    const lodrt::JsonValue levels = pfrep.find("levels");
+    if (levels.size() != group.levels.size()) {
+        problems.push_back({where + "/levels", "expected " + std::to_string(group.levels.size()) +
+                                                   " levels (one per level of the LOD group), got " +
+                                                   std::to_string(levels.size())});
+        return;
+    }
+    std::vector<uint32_t> indices(size_t(model.level0_triangles) * 3);
+    uint64_t previous_removals = 0, previous_triangles = model.level0_triangles;
+    for (uint32_t l = 0; l < levels.size(); ++l) {
+        const std::string at = where + "/levels/" + std::to_string(l);
+        uint64_t removals = 0, triangles = 0;
+        if (!levels.at(l).find("removals").asUint64(&removals) ||
+            !levels.at(l).find("triangles").asUint64(&triangles)) {
+            problems.push_back({at, "expected integer removals and triangles"});
+            continue;
+        }
+        if (removals > model.removed_count || removals < previous_removals || (l == 0 && removals != 0)) {
+            problems.push_back({at + "/removals", "PFRep level " + std::to_string(removals) +
+                                                      (l == 0 ? ": the first level must be 0"
+                                                              : ": expected at least the previous level's and at most "
+                                                                "removedCount (" +
+                                                                    std::to_string(model.removed_count) + ")")});
+            continue;
+        }
+        size_t extracted = 0;
+        if (lodrt::pfrepExtractLevel(model, uint32_t(removals), indices.data(), model.level0_triangles, &extracted) !=
+                lodrt::Result::Ok ||
+            extracted != triangles) {
+            problems.push_back({at + "/triangles", "PFRep level " + std::to_string(removals) + " has " +
+                                                       std::to_string(extracted) + " triangles, the extension says " +
+                                                       std::to_string(triangles)});
+            continue;
+        }
+        if (triangles > previous_triangles)
+            problems.push_back({at + "/triangles", "PFRep levels gain triangles from one chain level to the next"});
+        // Finer than the chain level it stands for: it would not fit that level's triangle budget.
+        // (Coarser is allowed: a chain that cannot reach a level's budget, held by UV seams or locked
+        // points, keeps more triangles than it, while the blob's sequence reaches it.)
+        const uint64_t chain = group.levels[l].triangles;
+        if (triangles > chain && double(triangles - chain) > 0.01 * double(chain) + 2.0)
+            problems.push_back({at, "PFRep level " + std::to_string(removals) + " (" + std::to_string(triangles) +
+                                        " triangles) disagrees with chain level " + std::to_string(l) + " (" +
+                                        std::to_string(chain) + " triangles): finer than the level it stands for"});
+        previous_removals = removals;
+        previous_triangles = triangles;
+    }
 }
 
 LodReport analyseLods(const lodrt::Pack& pack) {
@@ -539,6 +620,7 @@ LodReport analyseLods(const lodrt::Pack& pack) {
                     {nodePointer(n) + "/extensions/LODBAKE_lod_metrics/levels/" + std::to_string(l),
                      lvl + ": switch distance decreases"});
         }
+        checkPfrepLevels(pack, group, report.problems);
         report.groups.push_back(std::move(group));
     }
     checkStreams(pack, report.problems);

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -199,6 +200,60 @@ TEST(LoddumpLodCheckTest, FlagsCyclesRisingCoverageAndFallingErrors) {
         const CommandResult d = loddump(shellQuote(path));
         EXPECT_EQ(d.exit_code, 1) << c.name << ": " << d.output;
         EXPECT_NE(d.output.find(c.expected), std::string::npos) << c.name << ": " << d.output;
+    }
+}
+
+// loddump checks the PFRep blob against the chain: the extension's header fields, one level entry per
+// chain level, removal counts in order and within the blob, each entry's triangles what the blob
+// extracts, and no PFRep level finer than the chain level it stands for. A baked pack passes; each edit
+// of its extension is reported (exit status 1).
+TEST(LoddumpLodCheckTest, FlagsPfrepLevelsThatDisagreeWithTheChain) {
+    const std::string out = outDir() + "/pfrep_check.glb";
+    const CommandResult r = bake(shellQuote(src("assets/samples/rock_scan/rock_000.ply")) + " -o " + shellQuote(out));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    const std::vector<uint8_t> glb = bytesOf(out);
+    const nlohmann::json doc = lodbake_test::glbJson(glb);
+    uint32_t json_length = 0, bin_length = 0;
+    std::memcpy(&json_length, glb.data() + 12, 4);
+    std::memcpy(&bin_length, glb.data() + 20 + json_length, 4);
+    const std::vector<uint8_t> bin(glb.begin() + 28 + json_length, glb.begin() + 28 + json_length + bin_length);
+    const nlohmann::json& fans = doc["meshes"][0]["extensions"]["LODBAKE_progressive_fans"];
+    ASSERT_GE(fans["levels"].size(), 3u) << fans;
+    struct Case {
+        const char* name;
+        void (*edit)(nlohmann::json& fans);
+        const char* expected;
+    };
+    const Case cases[] = {
+        {"same", [](nlohmann::json&) {}, nullptr},
+        {"count", [](nlohmann::json& f) { f["levels"].erase(f["levels"].size() - 1); }, "levels (one per level of"},
+        {"header", [](nlohmann::json& f) { f["vertexCount"] = f["vertexCount"].get<uint64_t>() + 1; },
+         "vertexCount: expected the blob's"},
+        {"extract",
+         [](nlohmann::json& f) { f["levels"][1]["triangles"] = f["levels"][1]["triangles"].get<uint64_t>() + 2; },
+         "triangles, the extension says"},
+        {"range", [](nlohmann::json& f) { f["levels"][1]["removals"] = f["removedCount"].get<uint64_t>() + 1; },
+         "at most removedCount"},
+        {"order",
+         [](nlohmann::json& f) { f["levels"][2]["removals"] = f["levels"][1]["removals"].get<uint64_t>() - 1; },
+         "at least the previous level's"},
+        {"finer", [](nlohmann::json& f) { f["levels"][1] = f["levels"][0]; }, "finer than the level it stands for"},
+    };
+    for (const Case& c : cases) {
+        nlohmann::json edited = doc;
+        c.edit(edited["meshes"][0]["extensions"]["LODBAKE_progressive_fans"]);
+        const std::string path = outDir() + "/pfrep_check_" + c.name + ".glb";
+        const std::vector<uint8_t> bytes = lodbake_test::makeGlb(edited, bin);
+        std::ofstream(path, std::ios::binary)
+            .write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
+        const CommandResult d = loddump(shellQuote(path));
+        if (!c.expected) {
+            EXPECT_EQ(d.exit_code, 0) << c.name << ": " << d.output;
+            continue;
+        }
+        EXPECT_EQ(d.exit_code, 1) << c.name << ": " << d.output;
+        EXPECT_NE(d.output.find(c.expected), std::string::npos) << c.name << ": " << d.output;
+        EXPECT_NE(d.output.find("/meshes/0/extensions/LODBAKE_progressive_fans"), std::string::npos) << d.output;
     }
 }
 
