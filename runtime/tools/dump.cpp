@@ -390,9 +390,74 @@ bool decodeValencePrimitive(const lodrt::Pack& pack, uint32_t prim_index, Decode
     return true;
 }
 
+// An opened PFRep blob on a group's full-detail mesh against the group's chain: the extension's
+// header fields are the blob's, its `levels` has one entry per chain level, each entry's removal
+// count is in order and within the blob, its `triangles` is what the blob extracts at that count, and that
+// count is not above the chain level's own triangle count (equal when the blob comes from the
+// chain's collapses; the blob's own half-edge sequence stops at the first level within the level's
+// budget, which the chain level reaches too, a step of one or two triangles away: 1 % and 2
+// triangles are allowed).
+void checkPfrepLevels(const lodrt::JsonValue& pfrep, const lodrt::PfrepModel& model, const std::string& where,
+                      const LodGroup& group, std::vector<Problem>& problems) {
+    auto field = [&](const char* name, uint64_t want) {
+        uint64_t got = 0;
+        if (!pfrep.find(name).asUint64(&got) || got != want)
+            problems.push_back(
+                {where + "/" + name, std::string(name) + ": expected the blob's " + std::to_string(want)});
+    };
+    field("vertexCount", model.vertex_count);
+    field("removedCount", model.removed_count);
+    field("triangleCount", model.level0_triangles);
+    const lodrt::JsonValue levels = pfrep.find("levels");
+    if (levels.size() != group.levels.size()) {
+        problems.push_back({where + "/levels", "expected " + std::to_string(group.levels.size()) +
+                                                   " levels (one per level of the LOD group), got " +
+                                                   std::to_string(levels.size())});
+        return;
+    }
+    std::vector<uint32_t> indices(size_t(model.level0_triangles) * 3);
+    uint64_t previous_removals = 0;
+    for (uint32_t l = 0; l < levels.size(); ++l) {
+        const std::string at = where + "/levels/" + std::to_string(l);
+        uint64_t removals = 0, triangles = 0;
+        if (!levels.at(l).find("removals").asUint64(&removals) ||
+            !levels.at(l).find("triangles").asUint64(&triangles)) {
+            problems.push_back({at, "expected integer removals and triangles"});
+            continue;
+        }
+        if (removals > model.removed_count || removals < previous_removals || (l == 0 && removals != 0)) {
+            problems.push_back({at + "/removals", "PFRep level " + std::to_string(removals) +
+                                                      (l == 0 ? ": the first level must be 0"
+                                                              : ": expected at least the previous level's and at most "
+                                                                "removedCount (" +
+                                                                    std::to_string(model.removed_count) + ")")});
+            continue;
+        }
+        size_t extracted = 0;
+        if (lodrt::pfrepExtractLevel(model, uint32_t(removals), indices.data(), model.level0_triangles, &extracted) !=
+                lodrt::Result::Ok ||
+            extracted != triangles) {
+            problems.push_back({at + "/triangles", "PFRep level " + std::to_string(removals) + " has " +
+                                                       std::to_string(extracted) + " triangles, the extension says " +
+                                                       std::to_string(triangles)});
+            continue;
+        }
+        // Finer than the chain level it stands for: it would not fit that level's triangle budget.
+        // (Coarser is allowed: a chain that cannot reach a level's budget, held by UV seams or locked
+        // points, keeps more triangles than it, while the blob's sequence reaches it.)
+        const uint64_t chain = group.levels[l].triangles;
+        if (triangles > chain && double(triangles - chain) > 0.01 * double(chain) + 2.0)
+            problems.push_back({at, "PFRep level " + std::to_string(removals) + " (" + std::to_string(triangles) +
+                                        " triangles) disagrees with chain level " + std::to_string(l) + " (" +
+                                        std::to_string(chain) + " triangles): finer than the level it stands for"});
+        previous_removals = removals;
+    }
+}
+
 // Checks every compressed stream of the pack: valence streams decode and agree with the primitive;
-// PFRep blobs open and code the same full-detail triangle count as the mesh they sit on.
-void checkStreams(const lodrt::Pack& pack, std::vector<Problem>& problems) {
+// PFRep blobs open and code the same full-detail triangle count as the mesh they sit on, and on a
+// group's full-detail mesh agree with the group's levels (checkPfrepLevels).
+void checkStreams(const lodrt::Pack& pack, const std::vector<LodGroup>& groups, std::vector<Problem>& problems) {
     for (uint32_t m = 0; m < pack.meshCount(); ++m) {
         const lodrt::MeshInfo& mesh = pack.mesh(m);
         const std::string mesh_pointer = "/meshes/" + std::to_string(m);
@@ -427,88 +492,14 @@ void checkStreams(const lodrt::Pack& pack, std::vector<Problem>& problems) {
         if (model.level0_triangles != mesh_triangles)
             problems.push_back({where, "PFRep full detail has " + std::to_string(model.level0_triangles) +
                                            " triangles, the mesh (chain level 0) " + std::to_string(mesh_triangles)});
+        for (const LodGroup& group : groups)
+            if (!group.levels.empty() && group.levels[0].mesh == m)
+                checkPfrepLevels(pfrep, model, where, group, problems);
     }
 }
 
 std::string nodePointer(uint32_t node) {
     return "/nodes/" + std::to_string(node);
-}
-
-// The PFRep blob on a group's full-detail mesh against the group's chain: the extension's header
-// fields are the blob's, its `levels` has one entry per chain level, each entry's removal count is
-// in order and within the blob, its `triangles` is what the blob extracts at that count, and that
-// count is not above the chain level's own triangle count (equal when the blob comes from the
-// chain's collapses; the blob's own half-edge sequence stops at the first level within the level's
-// budget, which the chain level reaches too, a step of one or two triangles away: 1 % and 2
-// triangles are allowed).
-void checkPfrepLevels(const lodrt::Pack& pack, const LodGroup& group, std::vector<Problem>& problems) {
-    if (group.levels.empty() || group.levels[0].mesh == lodrt::kNoIndex) return;
-    const uint32_t mesh_index = group.levels[0].mesh;
-    const lodrt::JsonValue pfrep = pack.mesh(mesh_index).json.find("extensions").find(kPfrep);
-    if (!pfrep.isObject()) return;
-    const std::string where = "/meshes/" + std::to_string(mesh_index) + "/extensions/" + std::string(kPfrep);
-    const uint32_t view = extensionView(pack, pfrep, "bufferView");
-    uint64_t size = 0;
-    const uint8_t* data = view == lodrt::kNoIndex ? nullptr : viewBytes(pack, view, &size);
-    lodrt::PfrepModel model;
-    // An unreadable blob is reported by checkStreams.
-    if (!data || lodrt::openPfrep(data, size_t(size), &model) != lodrt::Result::Ok) return;
-    auto field = [&](const char* name, uint64_t want) {
-        uint64_t got = 0;
-        if (!pfrep.find(name).asUint64(&got) || got != want)
-            problems.push_back(
-                {where + "/" + name, std::string(name) + ": expected the blob's " + std::to_string(want)});
-    };
-    field("vertexCount", model.vertex_count);
-    field("removedCount", model.removed_count);
-    field("triangleCount", model.level0_triangles);
-    const lodrt::JsonValue levels = pfrep.find("levels");
-    if (levels.size() != group.levels.size()) {
-        problems.push_back({where + "/levels", "expected " + std::to_string(group.levels.size()) +
-                                                   " levels (one per level of the LOD group), got " +
-                                                   std::to_string(levels.size())});
-        return;
-    }
-    std::vector<uint32_t> indices(size_t(model.level0_triangles) * 3);
-    uint64_t previous_removals = 0, previous_triangles = model.level0_triangles;
-    for (uint32_t l = 0; l < levels.size(); ++l) {
-        const std::string at = where + "/levels/" + std::to_string(l);
-        uint64_t removals = 0, triangles = 0;
-        if (!levels.at(l).find("removals").asUint64(&removals) ||
-            !levels.at(l).find("triangles").asUint64(&triangles)) {
-            problems.push_back({at, "expected integer removals and triangles"});
-            continue;
-        }
-        if (removals > model.removed_count || removals < previous_removals || (l == 0 && removals != 0)) {
-            problems.push_back({at + "/removals", "PFRep level " + std::to_string(removals) +
-                                                      (l == 0 ? ": the first level must be 0"
-                                                              : ": expected at least the previous level's and at most "
-                                                                "removedCount (" +
-                                                                    std::to_string(model.removed_count) + ")")});
-            continue;
-        }
-        size_t extracted = 0;
-        if (lodrt::pfrepExtractLevel(model, uint32_t(removals), indices.data(), model.level0_triangles, &extracted) !=
-                lodrt::Result::Ok ||
-            extracted != triangles) {
-            problems.push_back({at + "/triangles", "PFRep level " + std::to_string(removals) + " has " +
-                                                       std::to_string(extracted) + " triangles, the extension says " +
-                                                       std::to_string(triangles)});
-            continue;
-        }
-        if (triangles > previous_triangles)
-            problems.push_back({at + "/triangles", "PFRep levels gain triangles from one chain level to the next"});
-        // Finer than the chain level it stands for: it would not fit that level's triangle budget.
-        // (Coarser is allowed: a chain that cannot reach a level's budget, held by UV seams or locked
-        // points, keeps more triangles than it, while the blob's sequence reaches it.)
-        const uint64_t chain = group.levels[l].triangles;
-        if (triangles > chain && double(triangles - chain) > 0.01 * double(chain) + 2.0)
-            problems.push_back({at, "PFRep level " + std::to_string(removals) + " (" + std::to_string(triangles) +
-                                        " triangles) disagrees with chain level " + std::to_string(l) + " (" +
-                                        std::to_string(chain) + " triangles): finer than the level it stands for"});
-        previous_removals = removals;
-        previous_triangles = triangles;
-    }
 }
 
 LodReport analyseLods(const lodrt::Pack& pack) {
@@ -620,10 +611,9 @@ LodReport analyseLods(const lodrt::Pack& pack) {
                     {nodePointer(n) + "/extensions/LODBAKE_lod_metrics/levels/" + std::to_string(l),
                      lvl + ": switch distance decreases"});
         }
-        checkPfrepLevels(pack, group, report.problems);
         report.groups.push_back(std::move(group));
     }
-    checkStreams(pack, report.problems);
+    checkStreams(pack, report.groups, report.problems);
     return report;
 }
 

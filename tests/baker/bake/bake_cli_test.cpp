@@ -4,7 +4,6 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -213,10 +212,7 @@ TEST(LoddumpLodCheckTest, FlagsPfrepLevelsThatDisagreeWithTheChain) {
     ASSERT_EQ(r.exit_code, 0) << r.output;
     const std::vector<uint8_t> glb = bytesOf(out);
     const nlohmann::json doc = lodbake_test::glbJson(glb);
-    uint32_t json_length = 0, bin_length = 0;
-    std::memcpy(&json_length, glb.data() + 12, 4);
-    std::memcpy(&bin_length, glb.data() + 20 + json_length, 4);
-    const std::vector<uint8_t> bin(glb.begin() + 28 + json_length, glb.begin() + 28 + json_length + bin_length);
+    const std::vector<uint8_t> bin = lodbake_test::glbBin(glb);
     const nlohmann::json& fans = doc["meshes"][0]["extensions"]["LODBAKE_progressive_fans"];
     ASSERT_GE(fans["levels"].size(), 3u) << fans;
     struct Case {

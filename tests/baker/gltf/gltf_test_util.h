@@ -82,6 +82,16 @@ inline nlohmann::json glbJson(const std::vector<uint8_t>& glb) {
     return nlohmann::json::parse(glb.begin() + 20, glb.begin() + 20 + length);
 }
 
+/// The BIN chunk of a GLB (empty without one), as makeGlb takes it.
+inline std::vector<uint8_t> glbBin(const std::vector<uint8_t>& glb) {
+    uint32_t json_length = 0, bin_length = 0;
+    std::memcpy(&json_length, glb.data() + 12, 4);
+    const size_t bin = 20 + size_t(json_length);
+    if (bin + 8 > glb.size()) return {};
+    std::memcpy(&bin_length, glb.data() + bin, 4);
+    return std::vector<uint8_t>(glb.begin() + long(bin + 8), glb.begin() + long(bin + 8 + bin_length));
+}
+
 /// Two sub-meshes (two quads) with normals, tangents, two UV sets, colours, two materials and a PNG
 /// texture: every stream and material feature the exporter writes.
 inline lodbake::Mesh richMesh() {

@@ -31,7 +31,22 @@ Tri canonical(uint32_t a, uint32_t b, uint32_t c) {
     return {a, b, c};
 }
 
-bool sameBits(const lodbake::Vec3f& a, const lodbake::Vec3f& b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+bool sameBits(const lodbake::Vec3f& a, const lodbake::Vec3f& b) {
+    return std::memcmp(&a, &b, sizeof a) == 0;
+}
+
+// The chain's points merged by its collapses so far: find() names each point by the point its cluster
+// has merged into (a union by the collapses' removed -> kept pairs, with path halving).
+struct MergedPoints {
+    explicit MergedPoints(size_t count) : parent(count) { std::iota(parent.begin(), parent.end(), 0u); }
+    uint32_t find(uint32_t x) {
+        while (parent[x] != x) x = parent[x] = parent[parent[x]];
+        return x;
+    }
+    void merge(uint32_t removed, uint32_t kept) { parent[removed] = kept; }
+    size_t size() const { return parent.size(); }
+    std::vector<uint32_t> parent;
+};
 
 // The log's flags against a replay of the full records: kept_stays says the merged position is the
 // kept point's position before the collapse, removed_nearer that the removed point was nearer to it.
@@ -113,9 +128,9 @@ TEST(CollapsePairLogTest, RoundTripsPairsInBothDirectionsAndRefusesACutStream) {
 TEST(PfrepChainPointsTest, NumbersPointsLikeTheSimplifier) {
     // Duplicated positions (welded), a face degenerate by position (dropped) and vertices listed far
     // from the order of the faces that use them.
-    lodbake::Mesh mesh = lodbake_test::makeMesh({{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {1, 0, 0}, {2, 0, 0},
-                                                 {2, 1, 0}, {0, 0, 0}, {3, 3, 3}},
-                                                {2, 3, 7, 4, 5, 6, 4, 6, 2, 0, 1, 4, 1, 2, 4, 8, 8, 8});
+    lodbake::Mesh mesh = lodbake_test::makeMesh(
+        {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {1, 0, 0}, {2, 0, 0}, {2, 1, 0}, {0, 0, 0}, {3, 3, 3}},
+        {2, 3, 7, 4, 5, 6, 4, 6, 2, 0, 1, 4, 1, 2, 4, 8, 8, 8});
     lodbake::Diagnostics d;
     lodbake::LodChainOptions options;
     options.ratios = {1.0};
@@ -180,18 +195,14 @@ TEST_F(PfrepChainTest, BlobLevelsAreTheChainsFacesForEveryRule) {
         EXPECT_EQ(m.removed_count, chain_->removals.size());
         // Independent replay in the engine's names: the chain's faces after k collapses, each point
         // named by the engine point its cluster has merged into (union by the records).
-        std::vector<uint32_t> parent(positions.size());
-        std::iota(parent.begin(), parent.end(), 0u);
-        auto find = [&](uint32_t x) {
-            while (parent[x] != x) x = parent[x] = parent[parent[x]];
-            return x;
-        };
+        MergedPoints points(positions.size());
+        auto find = [&](uint32_t x) { return points.find(x); };
         const auto& records = chain_->sequence.records;
         std::vector<uint32_t> idx(lodrt::pfrepMaxTriangles(m) * 3);
         size_t applied = 0;
         for (const lodbake::LodLevel& level : chain_->levels) {
             for (; applied < level.collapse_count; ++applied)
-                parent[records[applied].removed_point] = records[applied].kept_point;
+                points.merge(records[applied].removed_point, records[applied].kept_point);
             std::multiset<Tri> expected;
             for (size_t t = 0; t < triangles.size(); t += 3) {
                 const uint32_t a = find(triangles[t]), b = find(triangles[t + 1]), c = find(triangles[t + 2]);
@@ -261,8 +272,6 @@ TEST(PfrepChainFallbackTest, CoveredComponentRemovalLeavesNoLogAndTheExtensionSi
     EXPECT_LE(double(object->levels[2].triangles), 0.25 * double(mesh.faceCount()));
 }
 
-} // namespace
-
 // Above EdgeCollapser::kRoundMinFaces the chain collapses in partitioned rounds (two parts side by
 // side). With a removal log it still does: each part logs its own collapses and the logs are appended
 // in part order at the merge, which is a valid order because the parts never touch the same data. So
@@ -295,23 +304,19 @@ TEST(PfrepChainRoundsTest, LogOfAPartitionedChainReplaysItsLevels) {
     std::vector<lodbake::Vec3f> positions;
     std::vector<uint32_t> triangles;
     ASSERT_TRUE(lodbake::chainPoints(mesh, positions, triangles).ok());
-    std::vector<uint32_t> parent(positions.size());
-    std::iota(parent.begin(), parent.end(), 0u);
-    auto find = [&](uint32_t x) {
-        while (parent[x] != x) x = parent[x] = parent[parent[x]];
-        return x;
-    };
+    MergedPoints points(positions.size());
+    auto find = [&](uint32_t x) { return points.find(x); };
     lodbake::CollapsePairLog::Reader reader(logged->removals);
     size_t applied = 0;
     for (const lodbake::LodLevel& level : logged->levels) {
         for (; applied < level.collapse_count; ++applied) {
             uint32_t u = 0, v = 0;
             ASSERT_TRUE(reader.next(u, v));
-            ASSERT_LT(u, parent.size());
-            ASSERT_LT(v, parent.size());
+            ASSERT_LT(u, points.size());
+            ASSERT_LT(v, points.size());
             ASSERT_EQ(find(u), u) << "collapse " << applied << " removes a point that is gone";
             ASSERT_EQ(find(v), v) << "collapse " << applied << " keeps a point that is gone";
-            parent[u] = v;
+            points.merge(u, v);
         }
         std::vector<uint32_t> vertex_of(positions.size(), UINT32_MAX), expected;
         uint32_t next = 0;
@@ -330,3 +335,5 @@ TEST(PfrepChainRoundsTest, LogOfAPartitionedChainReplaysItsLevels) {
     ASSERT_TRUE(object.ok()) << object.status().message();
     ASSERT_EQ(object->levels.size(), logged->levels.size() + 1);
 }
+
+} // namespace
