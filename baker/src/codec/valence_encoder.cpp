@@ -33,11 +33,9 @@ using lodrt::detail::VertexSymbol;
 // The largest are backed by transparent huge pages where the OS offers them (core/large_array.h): one
 // page fault per 2 MB instead of one per 4 KB, which was a third of dragon_poisson's encode time.
 // Smaller ones stay with malloc, which hands a repeated encode memory already resident.
-// From 2 MB, the smallest size with a whole huge page (session 9: on this VM a 4 KB page fault costs
-// about 13 us of CPU, a 2 MB one about 0.2 ms; the bake codes each level once, into fresh memory, and
-// from 8 MB on only its LOD0 had huge pages: the bake's minor faults went from 238,000 to 209,000.
-// Session 8 had measured igea's 3 MB arrays 25 % slower with 2 MB in codec_bench's repeated runs; in
-// session 9 igea and lucy100k encode as fast or faster with 2 MB there too).
+// From 2 MB, the smallest size with a whole huge page: the bake codes each level once, into fresh
+// memory, and a fault on a 2 MB page replaces 512 faults on 4 KB pages, so every level's large arrays
+// gain, not only LOD0's.
 constexpr size_t kMapBytes = size_t(2) << 20;
 template <class T> struct CodecAllocator {
     using value_type = T;

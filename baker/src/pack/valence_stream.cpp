@@ -50,9 +50,8 @@ template <typename T> std::vector<T> gather(const std::vector<T>& in, const std:
 }
 
 // The check decoder's indices, on core/large_array.h's storage: from 2 MB on, huge pages where the OS
-// offers them. In a std::vector they cost a 4 KB page fault per 1,024 indices (about 13 us of CPU each
-// on the session-9 VM: 40 ms for dragon_poisson's LOD0); the commit copies them into the level's own
-// index array, which is already resident and has the same size.
+// offers them. In a std::vector they cost a 4 KB page fault per 1,024 indices; the commit copies them
+// into the level's own index array, which is already resident and has the same size.
 using DecodedIndices = detail::LargeArray<uint32_t>;
 
 // True when decoded triangle t is input triangle old_face_of[t], renumbered, possibly rotated
