@@ -109,17 +109,22 @@ if command -v draco_encoder >/dev/null && command -v draco_decoder >/dev/null; t
     draco_glb "$tmp/rock.ply" "$out/gltf/rock_draco.glb"
 fi
 
-# Scan sets: the rock in two placements (the .conf's scans are read relative to its folder, so the
-# conf fuzz target finds its own scan.ply; these seeds give it the line shapes).
+# Scan sets naming the two scans the conf target writes next to its input (scan.ply, scan.off),
+# with every kind of line it reads.
 printf 'camera 0 0 0 0 0 0 1\nmesh calib.ply 0 0 0 0 0 0 1\nbmesh scan.ply 0 0 0 0 0 0 1\nbmesh scan.ply 0.5 -1 2 0 0 0.7071068 0.7071068\n' \
     >"$out/conf/two_scans.conf"
 printf 'bmesh scan.off 1e-3 2 3 0.1 0.2 0.3 0.9\n' >"$out/conf/one_off_scan.conf"
-# Manifests: the documented example shape, with presets and per-asset settings.
+# Manifests: the documented example shape, with presets and per-asset settings (the fuzz target
+# finds no preset file, so one seed has none and reaches the assets).
 cat >"$out/manifest/good.json" <<'JSON'
 {"version": 1, "preset": "presets/light.json", "output_dir": "packs", "assets": [
   {"input": "meshes/rock.ply"},
   {"inputs": ["a.obj", "b.obj"], "output": "ab.glb", "settings": {"lod_ratios": [0.3], "textures": {"enabled": false}}},
   {"input": "c.glb", "output": "sub/c.glb", "settings": {"pixel_threshold": 3}}]}
+JSON
+cat >"$out/manifest/no_preset.json" <<'JSON'
+{"version": 1, "output_dir": "packs", "assets": [{"input": "rock.ply"},
+  {"inputs": ["a.obj", "b.glb"], "output": "x/ab.glb", "settings": {"lod_ratios": [0.5, 0.1], "pixel_threshold": 2}}]}
 JSON
 # Cache files: the entry and side-file list a real bake stores (the quad's MTL and textures make a
 # list with side files).
