@@ -141,7 +141,10 @@ TEST(PackCorpusTest, EveryPackIsRefusedWithItsOwnMessage) {
     std::map<std::string, std::string> by_message;
     for (const Case& c : cases) {
         SCOPED_TRACE(c.name);
-        ASSERT_FALSE(c.verdict.stage.empty()) << "accepted by lodrt and by loddump";
+        if (c.verdict.stage.empty()) {
+            ADD_FAILURE() << "accepted by lodrt and by loddump";
+            continue;
+        }
         ++per_stage[c.verdict.stage];
         EXPECT_NE(c.verdict.message.find(c.expected), std::string::npos)
             << c.verdict.stage << " said '" << c.verdict.message << "', expected '" << c.expected << "'";
