@@ -11,7 +11,7 @@ root=$(cd "$(dirname "$0")/.." && pwd)
 mkdir -p "$out"
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
-for t in gltf obj off ply preset lod pack pfrep valence; do mkdir -p "$out/$t"; done
+for t in gltf obj off ply preset conf manifest cache lod pack pfrep valence; do mkdir -p "$out/$t"; done
 
 cp "$root"/tests/malformed/ply/*.ply "$out/ply/"
 cp "$root"/tests/malformed/off/*.off "$out/off/"
@@ -22,12 +22,22 @@ for m in "$root"/tests/malformed/obj/*.mtl; do
 done
 cp "$root"/tests/malformed/gltf/*.gltf "$root"/tests/malformed/gltf/*.glb "$out/gltf/"
 cp "$root"/configs/*.json "$out/preset/"
-[ -d "$root/tests/malformed/preset" ] && cp "$root"/tests/malformed/preset/*.json "$out/preset/" 2>/dev/null || true
-[ -d "$root/tests/malformed/lbm" ] && cp "$root"/tests/malformed/lbm/*.lbm "$out/valence/" 2>/dev/null || true
-[ -d "$root/tests/malformed/lbp" ] && cp "$root"/tests/malformed/lbp/*.lbp "$out/pfrep/" 2>/dev/null || true
-[ -d "$root/tests/malformed/pack" ] && cp "$root"/tests/malformed/pack/*.glb "$out/pack/" 2>/dev/null || true
-[ -d "$root/tests/fuzz/regressions" ] && for t in "$root"/tests/fuzz/regressions/*/; do
-    t=$(basename "$t"); [ -d "$out/$t" ] && cp "$root/tests/fuzz/regressions/$t"/* "$out/$t/" 2>/dev/null || true
+# Every corpus folder named here must exist and hold files (a missing one fails the script, so a
+# renamed folder cannot shrink the seeds silently).
+cp "$root"/tests/malformed/preset/*.json "$out/preset/"
+cp "$root"/tests/malformed/lbm/*.lbm "$out/valence/"
+cp "$root"/tests/malformed/lbp/*.lbp "$out/pfrep/"
+cp "$root"/tests/malformed/pack/*.glb "$out/pack/"
+cp "$root"/tests/malformed/conf/*.conf "$out/conf/"
+cp "$root"/tests/malformed/manifest/*.json "$out/manifest/"
+cp "$root"/tests/fuzz/seeds/cache/* "$out/cache/"
+for dir in "$root"/tests/fuzz/regressions/*/; do
+    t=$(basename "$dir")
+    if [ ! -d "$out/$t" ]; then
+        echo "fuzz-seeds.sh: tests/fuzz/regressions/$t is not a fuzz target" >&2
+        exit 1
+    fi
+    cp "$dir"* "$out/$t/"
 done
 
 # Tiny generated meshes: a tetrahedron with colours, and a textured quad with a material.
@@ -98,6 +108,28 @@ if command -v draco_encoder >/dev/null && command -v draco_decoder >/dev/null; t
     draco_glb "$tmp/tet.ply" "$out/gltf/tet_draco.glb"
     draco_glb "$tmp/rock.ply" "$out/gltf/rock_draco.glb"
 fi
+
+# Scan sets naming the two scans the conf target writes next to its input (scan.ply, scan.off),
+# with every kind of line it reads.
+printf 'camera 0 0 0 0 0 0 1\nmesh calib.ply 0 0 0 0 0 0 1\nbmesh scan.ply 0 0 0 0 0 0 1\nbmesh scan.ply 0.5 -1 2 0 0 0.7071068 0.7071068\n' \
+    >"$out/conf/two_scans.conf"
+printf 'bmesh scan.off 1e-3 2 3 0.1 0.2 0.3 0.9\n' >"$out/conf/one_off_scan.conf"
+# Manifests: the documented example shape, with presets and per-asset settings (the fuzz target
+# finds no preset file, so one seed has none and reaches the assets).
+cat >"$out/manifest/good.json" <<'JSON'
+{"version": 1, "preset": "presets/light.json", "output_dir": "packs", "assets": [
+  {"input": "meshes/rock.ply"},
+  {"inputs": ["a.obj", "b.obj"], "output": "ab.glb", "settings": {"lod_ratios": [0.3], "textures": {"enabled": false}}},
+  {"input": "c.glb", "output": "sub/c.glb", "settings": {"pixel_threshold": 3}}]}
+JSON
+cat >"$out/manifest/no_preset.json" <<'JSON'
+{"version": 1, "output_dir": "packs", "assets": [{"input": "rock.ply"},
+  {"inputs": ["a.obj", "b.glb"], "output": "x/ab.glb", "settings": {"lod_ratios": [0.5, 0.1], "pixel_threshold": 2}}]}
+JSON
+# Cache files: the entry and side-file list a real bake stores (the quad's MTL and textures make a
+# list with side files).
+"$lodbake" bake "$tmp/quad.obj" -o "$tmp/quad_cached.glb" --levels 0.5 --cache-dir "$tmp/cache" --quiet
+cp "$tmp"/cache/v2/packs/*.bin "$tmp"/cache/v2/deps/*.txt "$out/cache/"
 
 # Runtime inputs: a baked pack, PFRep blobs, .lbm streams.
 "$lodbake" bake "$tmp/tet.off" -o "$out/pack/tet_pack.glb" --levels 1 >/dev/null 2>&1 || true

@@ -333,65 +333,92 @@ struct ModelBuilder {
         return Result::Ok;
     }
 
+    // extras.MSFT_screencoverage: at least one number per level after the first, each in [0, 1] and
+    // none above the one before. Checked whether or not measured metrics are present (a pack must
+    // not hold two contradicting descriptions of its switches); used only without them.
+    Result checkCoverage(uint32_t root, const ModelInfo& model, JsonValue coverage) {
+        if (!coverage.isArray() || coverage.size() < model.level_count - 1)
+            return fail(Result::BadGltf, "/nodes/%u/extras/MSFT_screencoverage: expected at least %u numbers", root,
+                        model.level_count - 1);
+        double prev = 1;
+        for (uint32_t k = 0; k < coverage.size(); ++k) {
+            const JsonValue v = coverage.at(k);
+            const double c = v.number();
+            if (!v.isNumber() || !(c >= 0 && c <= prev))
+                return fail(Result::BadGltf,
+                            "/nodes/%u/extras/MSFT_screencoverage/%u: expected a number in [0, 1] that does not "
+                            "increase",
+                            root, k);
+            prev = c;
+        }
+        return Result::Ok;
+    }
+
+    Result fillMeasured(const char* path, JsonValue metrics, const ModelInfo& model, LevelInfo* levels) {
+        JsonValue array = metrics.find("levels");
+        if (!array.isArray() || array.size() != model.level_count)
+            return fail(Result::BadGltf, "%s/levels: expected %u entries (MSFT_lod ids + 1)", path, model.level_count);
+        static const char* const kKeys[3] = {"hausdorffError", "meanError", "switchDistance"};
+        double prev[3] = {0, 0, 0};
+        for (uint32_t l = 0; l < model.level_count; ++l) {
+            JsonValue entry = array.at(l);
+            double v[3] = {0, 0, 0};
+            for (int k = 0; k < 3; ++k) {
+                Result r = readMetric(entry, path, l, kKeys[k], &v[k]);
+                if (r != Result::Ok) return r;
+            }
+            JsonValue band = entry.find("hysteresisBand");
+            if (band.size() != 2 || !band.at(0).isNumber() || !band.at(1).isNumber() ||
+                !finiteFloat(band.at(0).number()) || !finiteFloat(band.at(1).number()))
+                return fail(Result::BadGltf, "%s/levels/%u/hysteresisBand: expected two finite numbers", path, l);
+            const double near_d = band.at(0).number(), far_d = band.at(1).number();
+            // The entry must describe this level's mesh, not another one (a writer that shifted
+            // its entries against the levels would pass every ordering rule).
+            uint64_t triangles = 0;
+            if (!entry.find("triangles").asUint64(&triangles))
+                return fail(Result::BadGltf, "%s/levels/%u/triangles: expected an integer", path, l);
+            if (triangles != levels[l].triangle_count)
+                return fail(Result::BadGltf, "%s/levels/%u/triangles: %llu; the level's mesh has %llu", path, l,
+                            static_cast<unsigned long long>(triangles),
+                            static_cast<unsigned long long>(levels[l].triangle_count));
+            if (l == 0 && (v[0] != 0 || v[1] != 0 || v[2] != 0))
+                return fail(Result::BadGltf, "%s/levels/0: level 0 must have zero errors and switchDistance 0", path);
+            for (int k = 0; k < 3; ++k)
+                if (v[k] < prev[k])
+                    return fail(Result::BadGltf, "%s/levels/%u/%s: level %u: decreases from level %u (%g after %g)",
+                                path, l, kKeys[k], l, l - 1, v[k], prev[k]);
+            if (!(near_d <= v[2] && v[2] <= far_d))
+                return fail(Result::BadGltf, "%s/levels/%u/hysteresisBand: level %u: expected near <= %g <= far",
+                            path, l, l, v[2]);
+            for (int k = 0; k < 3; ++k) prev[k] = v[k];
+            levels[l].hausdorff_error = float(v[0]);
+            levels[l].mean_error = float(v[1]);
+            levels[l].switch_distance = float(v[2]);
+            levels[l].band_near = float(near_d);
+            levels[l].band_far = float(far_d);
+        }
+        return Result::Ok;
+    }
+
     Result fillMetrics(uint32_t root, ModelInfo* model, LevelInfo* levels) {
         const NodeInfo& node = pack->node(root);
         char path[96];
         std::snprintf(path, sizeof(path), "/nodes/%u/extensions/LODBAKE_lod_metrics", root);
         JsonValue metrics = node.json.find("extensions").find("LODBAKE_lod_metrics");
+        JsonValue coverage = node.json.find("extras").find("MSFT_screencoverage");
+        if (coverage.isValid() && model->level_count > 1) {
+            Result r = checkCoverage(root, *model, coverage);
+            if (r != Result::Ok) return r;
+        }
         if (metrics.isValid()) {
-            JsonValue array = metrics.find("levels");
-            if (!array.isArray() || array.size() != model->level_count)
-                return fail(Result::BadGltf, "%s/levels: expected %u entries (MSFT_lod ids + 1)", path,
-                            model->level_count);
-            double prev_h = 0, prev_m = 0, prev_s = 0;
-            for (uint32_t l = 0; l < model->level_count; ++l) {
-                JsonValue entry = array.at(l);
-                double h = 0, m = 0, s = 0;
-                Result r = readMetric(entry, path, l, "hausdorffError", &h);
-                if (r == Result::Ok) r = readMetric(entry, path, l, "meanError", &m);
-                if (r == Result::Ok) r = readMetric(entry, path, l, "switchDistance", &s);
-                if (r != Result::Ok) return r;
-                JsonValue band = entry.find("hysteresisBand");
-                if (band.size() != 2 || !band.at(0).isNumber() || !band.at(1).isNumber() ||
-                    !finiteFloat(band.at(0).number()) || !finiteFloat(band.at(1).number()))
-                    return fail(Result::BadGltf, "%s/levels/%u/hysteresisBand: expected two finite numbers", path, l);
-                const double near_d = band.at(0).number(), far_d = band.at(1).number();
-                if (l == 0 && (h != 0 || m != 0 || s != 0))
-                    return fail(Result::BadGltf, "%s/levels/0: level 0 must have zero errors and switchDistance 0",
-                                path);
-                if (h < prev_h || m < prev_m || s < prev_s)
-                    return fail(Result::BadGltf, "%s/levels/%u: level %u: errors and switchDistance must not decrease",
-                                path, l, l);
-                if (!(near_d <= s && s <= far_d))
-                    return fail(Result::BadGltf, "%s/levels/%u/hysteresisBand: level %u: expected near <= %g <= far",
-                                path, l, l, s);
-                prev_h = h;
-                prev_m = m;
-                prev_s = s;
-                levels[l].hausdorff_error = float(h);
-                levels[l].mean_error = float(m);
-                levels[l].switch_distance = float(s);
-                levels[l].band_near = float(near_d);
-                levels[l].band_far = float(far_d);
-            }
+            Result r = fillMeasured(path, metrics, *model, levels);
+            if (r != Result::Ok) return r;
             model->error_source = ErrorSource::Measured;
             return Result::Ok;
         }
-        JsonValue coverage = node.json.find("extras").find("MSFT_screencoverage");
         if (coverage.isValid() && model->level_count > 1) {
-            if (!coverage.isArray() || coverage.size() < model->level_count - 1)
-                return fail(Result::BadGltf, "/nodes/%u/extras/MSFT_screencoverage: expected at least %u numbers", root,
-                            model->level_count - 1);
-            double prev = 1;
             for (uint32_t l = 1; l < model->level_count; ++l) {
-                const JsonValue v = coverage.at(l - 1);
-                const double c = v.number();
-                if (!v.isNumber() || !(c >= 0 && c <= prev))
-                    return fail(Result::BadGltf,
-                                "/nodes/%u/extras/MSFT_screencoverage/%u: expected a number in [0, 1] that does not "
-                                "increase",
-                                root, l - 1);
-                prev = c;
+                const double c = coverage.at(l - 1).number();
                 // Level l takes over where the previous level's coverage ends.
                 const double d = c > 0 ? double(model->sphere_radius) / (c * kReferenceTanHalfFov) : double(kInf);
                 const double e = d * 2.0 * kReferenceTanHalfFov / kReferenceViewportPx;

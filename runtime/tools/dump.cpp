@@ -330,6 +330,26 @@ bool decodeValencePrimitive(const lodrt::Pack& pack, uint32_t prim_index, Decode
         *error = std::string("stream fails to decode: header: ") + lodrt::resultName(r);
         return false;
     }
+    // The extension object repeats the header's bit depths and says whether the stream has normals
+    // (schemas/LODBAKE_valence_compression/README.md): a reader may trust either, so they must agree.
+    uint64_t bits = 0;
+    if (!ext.find("positionBits").asUint64(&bits) || bits != info.position_bits) {
+        *error = "positionBits: " + (ext.find("positionBits").isNumber() ? std::to_string(bits) : std::string("missing")) +
+                 "; the stream header says " + std::to_string(info.position_bits);
+        return false;
+    }
+    const bool names_normal = ext.find("attributes").find("NORMAL").isValid();
+    if (names_normal != info.has_normals) {
+        *error = info.has_normals ? "attributes: the stream has normals but NORMAL is not named"
+                                  : "attributes: NORMAL is named but the stream has no normals";
+        return false;
+    }
+    bits = 0;
+    if (info.has_normals && (!ext.find("normalBits").asUint64(&bits) || bits != info.normal_bits)) {
+        *error = "normalBits: " + (ext.find("normalBits").isNumber() ? std::to_string(bits) : std::string("missing")) +
+                 "; the stream header says " + std::to_string(info.normal_bits);
+        return false;
+    }
     if (info.triangle_count != prim.triangle_count || info.vertex_count != prim.vertex_count) {
         *error = "stream has " + std::to_string(info.vertex_count) + " vertices and " +
                  std::to_string(info.triangle_count) + " triangles, the primitive " +
@@ -588,6 +608,13 @@ LodReport analyseLods(const lodrt::Pack& pack) {
                 row.switch_distance = m.find("switchDistance").number();
                 row.metric_coverage = m.find("screenCoverage").number();
             }
+            uint64_t listed = 0;
+            if (m.isObject() && row.mesh != lodrt::kNoIndex &&
+                (!m.find("triangles").asUint64(&listed) || listed != row.triangles))
+                report.problems.push_back({nodePointer(n) + "/extensions/LODBAKE_lod_metrics/levels/" +
+                                               std::to_string(l) + "/triangles",
+                                           "level " + std::to_string(l) + ": " + std::to_string(listed) +
+                                               " triangles, the level's mesh has " + std::to_string(row.triangles)});
             if (coverage.at(l).isNumber()) {
                 row.has_coverage = true;
                 row.coverage = coverage.at(l).number();

@@ -65,11 +65,19 @@ Result<TextureLevels> textureLevels(const Mesh& lod0, size_t level_count, const 
     const std::vector<bool> srgb = srgbTextures(lod0);
     std::vector<ImageSize> source_sizes(sources.size());
     std::vector<bool> resizable(sources.size(), false);
+    // Messages name the texture as its source names it (the MTL map or the glTF image uri).
+    std::vector<std::string> labels(sources.size());
     for (size_t t = 0; t < sources.size(); ++t) {
-        Result<ImageSize> size = probeImageSize(sources[t].bytes, name + ": texture " + std::to_string(t));
+        const std::string& file = sources[t].uri.empty() ? sources[t].name : sources[t].uri;
+        labels[t] = name + ": texture " + std::to_string(t) + (file.empty() ? "" : " '" + file + "'");
+        Result<ImageSize> size = probeImageSize(sources[t].bytes, labels[t]);
         if (size.ok()) {
             source_sizes[t] = *size;
             resizable[t] = settings.textures.enabled;
+        } else if (looksLikePngOrJpeg(sources[t].bytes)) {
+            // A PNG or JPEG whose header does not decode is damaged: shipping its bytes would put a
+            // broken image in every level, so the bake fails like for a damaged mesh.
+            return size.status();
         } else if (!sources[t].bytes.empty()) {
             diagnostics.warn(size.status().message() + "; kept as is in every level");
         }
@@ -97,7 +105,7 @@ Result<TextureLevels> textureLevels(const Mesh& lod0, size_t level_count, const 
         TextureResizeOptions options;
         options.is_srgb = srgb[t];
         job_results[t] =
-            resizeEncodedImageLevels(sources[t].bytes, name + ": texture " + std::to_string(t), wanted[t], options);
+            resizeEncodedImageLevels(sources[t].bytes, labels[t], wanted[t], options);
     }));
     for (size_t t = 0; t < sources.size(); ++t) {
         if (!job_results[t].ok()) return job_results[t].status();

@@ -1,6 +1,7 @@
 // The bake cache (lodbake/bake/cache.h). Layout under the cache folder:
-//   v1/deps/<primary key>.txt   side-file list: "lodbake-deps 1", then per input "input <i> <n>" and n paths
-//   v1/packs/<result key>.bin   "lodbake-cache 1\n<summary bytes> <report bytes> <glb bytes>\n" + the three
+//   v2/deps/<primary key>.txt   side-file list: "lodbake-deps 1", then per input "input <i> <n>" and n paths
+//   v2/packs/<result key>.bin   "lodbake-cache 2\n<summary bytes> <report bytes> <glb bytes> <payload hash>\n" + the
+//                               three (the hash, 16 hex digits of Hasher over them, catches a garbled payload)
 #include "lodbake/bake/cache.h"
 
 #include <cstdio>
@@ -18,9 +19,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr const char* kLayout = "v1";
+constexpr const char* kLayout = "v2"; // v1: entries without a payload hash
 constexpr const char* kDepsMagic = "lodbake-deps 1";
-constexpr const char* kEntryMagic = "lodbake-cache 1";
+constexpr const char* kEntryMagic = "lodbake-cache 2";
 
 // Two hashers seeded differently give a 128-bit key.
 struct KeyHasher {
@@ -82,45 +83,14 @@ Result<CacheKey> resultKey(const CacheKey& primary, const std::vector<std::vecto
 
 bool readDeps(const std::string& path, size_t input_count, std::vector<std::vector<std::string>>& out) {
     Result<std::vector<uint8_t>> bytes = readFileBytes(path, uint64_t(1) << 24);
-    if (!bytes.ok()) return false;
-    std::istringstream in(std::string(bytes->begin(), bytes->end()));
-    std::string line;
-    if (!std::getline(in, line) || line != kDepsMagic) return false;
-    out.assign(input_count, {});
-    for (size_t i = 0; i < input_count; ++i) {
-        if (!std::getline(in, line)) return false;
-        size_t index = 0, count = 0;
-        char tail = 0;
-        if (std::sscanf(line.c_str(), "input %zu %zu%c", &index, &count, &tail) != 2 || index != i) return false;
-        for (size_t k = 0; k < count; ++k) {
-            if (!std::getline(in, line) || line.empty()) return false;
-            out[i].push_back(line);
-        }
-    }
-    return true;
+    return bytes.ok() && parseCacheDeps(std::string(bytes->begin(), bytes->end()), input_count, out);
 }
 
-bool parseEntry(const std::vector<uint8_t>& bytes, CacheEntry& entry) {
-    const std::string magic = std::string(kEntryMagic) + "\n";
-    if (bytes.size() < magic.size() || std::string(bytes.begin(), bytes.begin() + long(magic.size())) != magic)
-        return false;
-    size_t pos = magic.size();
-    size_t eol = pos;
-    while (eol < bytes.size() && bytes[eol] != '\n' && eol - pos < 64) ++eol;
-    if (eol >= bytes.size() || bytes[eol] != '\n') return false;
-    const std::string sizes(bytes.begin() + long(pos), bytes.begin() + long(eol));
-    unsigned long long s = 0, r = 0, g = 0;
-    char tail = 0;
-    if (std::sscanf(sizes.c_str(), "%llu %llu %llu%c", &s, &r, &g, &tail) != 3) return false;
-    pos = eol + 1;
-    const uint64_t rest = bytes.size() - pos;
-    if (s > rest || r > rest - s || g != rest - s - r) return false;
-    entry.summary.assign(bytes.begin() + long(pos), bytes.begin() + long(pos + s));
-    pos += s;
-    entry.report_json.assign(bytes.begin() + long(pos), bytes.begin() + long(pos + r));
-    pos += r;
-    entry.glb.assign(bytes.begin() + long(pos), bytes.end());
-    return true;
+uint64_t payloadHash(const uint8_t* data, size_t size) {
+    Hasher h;
+    h.addString(kEntryMagic);
+    h.addBytes(data, size);
+    return h.digest();
 }
 
 Status makeDirs(const std::string& dir) {
@@ -131,6 +101,64 @@ Status makeDirs(const std::string& dir) {
 }
 
 } // namespace
+
+bool parseCacheDeps(const std::string& text, size_t input_count, std::vector<std::vector<std::string>>& out) {
+    std::istringstream in(text);
+    std::string line;
+    if (!std::getline(in, line) || line != kDepsMagic) return false;
+    out.assign(input_count, {});
+    for (size_t i = 0; i < input_count; ++i) {
+        if (!std::getline(in, line)) return false;
+        size_t index = 0, count = 0;
+        char tail = 0;
+        if (std::sscanf(line.c_str(), "input %zu %zu%c", &index, &count, &tail) != 2 || index != i) return false;
+        for (size_t k = 0; k < count; ++k) {
+            if (!std::getline(in, line) || line.empty() || line.find('\0') != std::string::npos) return false;
+            out[i].push_back(line);
+        }
+    }
+    return true;
+}
+
+bool parseCacheEntry(const std::vector<uint8_t>& bytes, CacheEntry& entry) {
+    const std::string magic = std::string(kEntryMagic) + "\n";
+    if (bytes.size() < magic.size() || std::string(bytes.begin(), bytes.begin() + long(magic.size())) != magic)
+        return false;
+    size_t pos = magic.size();
+    size_t eol = pos;
+    while (eol < bytes.size() && bytes[eol] != '\n' && eol - pos < 96) ++eol;
+    if (eol >= bytes.size() || bytes[eol] != '\n') return false;
+    const std::string sizes(bytes.begin() + long(pos), bytes.begin() + long(eol));
+    unsigned long long s = 0, r = 0, g = 0;
+    char hash[17] = {0};
+    char tail = 0;
+    // %16[0-9a-f] and the length check below: exactly 16 lowercase hex digits, nothing after them.
+    if (std::sscanf(sizes.c_str(), "%llu %llu %llu %16[0-9a-f]%c", &s, &r, &g, hash, &tail) != 4 ||
+        std::string(hash).size() != 16)
+        return false;
+    pos = eol + 1;
+    const uint64_t rest = bytes.size() - pos;
+    if (s > rest || r > rest - s || g != rest - s - r) return false;
+    if (hashToHex(payloadHash(bytes.data() + pos, size_t(rest))) != hash) return false;
+    entry.summary.assign(bytes.begin() + long(pos), bytes.begin() + long(pos + s));
+    pos += s;
+    entry.report_json.assign(bytes.begin() + long(pos), bytes.begin() + long(pos + r));
+    pos += r;
+    entry.glb.assign(bytes.begin() + long(pos), bytes.end());
+    return true;
+}
+
+std::vector<uint8_t> serializeCacheEntry(const CacheEntry& entry) {
+    std::vector<uint8_t> payload(entry.summary.begin(), entry.summary.end());
+    payload.insert(payload.end(), entry.report_json.begin(), entry.report_json.end());
+    payload.insert(payload.end(), entry.glb.begin(), entry.glb.end());
+    const std::string head = std::string(kEntryMagic) + "\n" + std::to_string(entry.summary.size()) + " " +
+                             std::to_string(entry.report_json.size()) + " " + std::to_string(entry.glb.size()) + " " +
+                             hashToHex(payloadHash(payload.data(), payload.size())) + "\n";
+    std::vector<uint8_t> blob(head.begin(), head.end());
+    blob.insert(blob.end(), payload.begin(), payload.end());
+    return blob;
+}
 
 std::string CacheKey::hex() const {
     return hashToHex(hi) + hashToHex(lo);
@@ -158,7 +186,7 @@ Result<CacheLookup> cacheLookup(const std::string& cache_dir, const std::vector<
     Result<CacheKey> key = resultKey(lookup.primary, side, inputs);
     if (!key.ok()) return lookup; // a side file went away: the bake will say what is missing
     Result<std::vector<uint8_t>> bytes = readFileBytes(packPath(cache_dir, *key));
-    if (!bytes.ok() || !parseEntry(*bytes, lookup.entry)) return lookup;
+    if (!bytes.ok() || !parseCacheEntry(*bytes, lookup.entry)) return lookup;
     lookup.hit = true;
     lookup.files_read.resize(inputs.size());
     for (size_t i = 0; i < inputs.size(); ++i) {
@@ -184,12 +212,7 @@ Status cacheStore(const std::string& cache_dir, const CacheKey& primary, const s
         for (const std::string& rel : side[i]) deps += rel + "\n";
     }
     LODBAKE_ASSIGN_OR_RETURN(CacheKey key, resultKey(primary, side, inputs));
-    std::string head = std::string(kEntryMagic) + "\n" + std::to_string(entry.summary.size()) + " " +
-                       std::to_string(entry.report_json.size()) + " " + std::to_string(entry.glb.size()) + "\n";
-    std::vector<uint8_t> blob(head.begin(), head.end());
-    blob.insert(blob.end(), entry.summary.begin(), entry.summary.end());
-    blob.insert(blob.end(), entry.report_json.begin(), entry.report_json.end());
-    blob.insert(blob.end(), entry.glb.begin(), entry.glb.end());
+    const std::vector<uint8_t> blob = serializeCacheEntry(entry);
     const std::string pack = packPath(cache_dir, key);
     const std::string deps_file = depsPath(cache_dir, primary);
     LODBAKE_RETURN_IF_ERROR(makeDirs(parentDirectory(pack)));

@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "lodbake/core/file_io.h"
+#include "lodbake/core/json_limits.h"
 
 namespace lodbake {
 
@@ -36,7 +37,10 @@ Status checkKeys(const Json& object, const std::string& where, const std::set<st
         if (known.count(it.key())) continue;
         std::string list;
         for (const std::string& k : known) list += (list.empty() ? "" : ", ") + k;
-        return invalidInput(where + "/" + it.key() + ": unknown key (known keys: " + list + ")");
+        // Quoted the JSON way (control characters escaped) so that the message stays one line.
+        const std::string quoted = Json(it.key()).dump();
+        return invalidInput(where + "/" + quoted.substr(1, quoted.size() - 2) + ": unknown key (known keys: " + list +
+                            ")");
     }
     return Status::okStatus();
 }
@@ -123,7 +127,7 @@ Result<BakeManifest> parseImpl(const Json& root, const std::string& path, const 
             asset.output = joinPath(output_dir, stemOf(asset.inputs.front()) + ".glb");
         }
         if (lowerExtension(asset.output) != ".glb")
-            return invalidInput(where + "/output: expected a .glb path, got \"" + asset.output + "\"");
+            return invalidInput(where + "/output: expected a .glb path, got " + Json(asset.output).dump());
         if (a.contains("preset")) {
             LODBAKE_ASSIGN_OR_RETURN(std::string preset, readPath(a["preset"], where + "/preset"));
             preset = resolve(dir, preset);
@@ -143,7 +147,7 @@ Result<BakeManifest> parseImpl(const Json& root, const std::string& path, const 
         const std::string key = fs::path(asset.output).lexically_normal().string();
         const auto [it, inserted] = outputs.emplace(key, i);
         if (!inserted)
-            return invalidInput(where + "/output: \"" + asset.output + "\" is also the output of /assets/" +
+            return invalidInput(where + "/output: " + Json(asset.output).dump() + " is also the output of /assets/" +
                                 std::to_string(it->second));
         manifest.assets.push_back(std::move(asset));
     }
@@ -154,6 +158,14 @@ Result<BakeManifest> parseImpl(const Json& root, const std::string& path, const 
 
 Result<BakeManifest> parseBakeManifest(const std::string& json_text, const std::string& path, const BakeSettings& base,
                                        const std::string& output_dir_override) {
+    // A manifest nests four levels (assets, an asset, its settings, a setting's object); refuse deep
+    // documents before nlohmann-json's recursion sees them.
+    constexpr uint32_t kMaxManifestDepth = 16;
+    const JsonDepthScan depth =
+        scanJsonDepth(reinterpret_cast<const uint8_t*>(json_text.data()), json_text.size(), kMaxManifestDepth);
+    if (depth.is_too_deep)
+        return invalidInput(path + ": byte " + std::to_string(depth.offset) + ": expected at most " +
+                            std::to_string(kMaxManifestDepth) + " levels of nested arrays and objects");
     try {
         const Json root = Json::parse(json_text);
         return parseImpl(root, path, base, output_dir_override);

@@ -44,7 +44,11 @@ bool openInput(const char* codec, OIIO::Filesystem::IOMemReader* reader, std::un
     void* proxy = reader;
     config.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &proxy);
     *input = OIIO::ImageInput::open(codec, &config);
-    if (!*input) return fail(error, "cannot read the image header: " + OIIO::geterror());
+    if (!*input) {
+        std::string why = OIIO::geterror();
+        std::replace(why.begin(), why.end(), '\n', ' '); // messages are one line
+        return fail(error, "cannot read the image header: " + why);
+    }
     return true;
 }
 
@@ -98,8 +102,15 @@ bool resizeLevelsImpl(const uint8_t* data, size_t size, const uint32_t* sizes, s
     const OIIO::TypeDesc source_format = float_spec.format;
     float_spec.set_format(OIIO::TypeDesc::FLOAT);
     OIIO::ImageBuf src(float_spec, OIIO::InitializePixels::No);
-    if (!input->read_image(0, 0, 0, float_spec.nchannels, OIIO::TypeDesc::FLOAT, src.localpixels()))
-        return fail(error, "cannot decode the image: " + input->geterror());
+    // libjpeg (and libpng for some damage) reports a truncated or corrupt stream as a warning and
+    // fills the missing pixels with grey; OpenImageIO records the warning but read_image succeeds.
+    // A damaged texture must fail the bake, not become a partly grey level, so any error counts.
+    const bool is_read = input->read_image(0, 0, 0, float_spec.nchannels, OIIO::TypeDesc::FLOAT, src.localpixels());
+    if (!is_read || input->has_error()) {
+        std::string why = input->geterror();
+        std::replace(why.begin(), why.end(), '\n', ' ');
+        return fail(error, "cannot decode the image: " + (why.empty() ? std::string("read failed") : why));
+    }
     input->close();
     input.reset();
     const int channels = src.spec().nchannels;

@@ -73,6 +73,10 @@ const Loaded& loadModule() {
 
 } // namespace
 
+bool looksLikePngOrJpeg(const std::vector<uint8_t>& encoded) {
+    return isPngOrJpeg(encoded);
+}
+
 Result<ImageSize> probeImageSize(const std::vector<uint8_t>& encoded, const std::string& name) {
     if (!isPngOrJpeg(encoded)) return invalidInput(name + ": not a PNG or JPEG image");
     const Loaded& module = loadModule();

@@ -95,6 +95,12 @@ Result<LoadedMesh> readConf(const std::string& path, const ReadOptions& options,
         if (!scan.ok()) return scan.status().withPrefix(where);
         Mesh& mesh = scan->mesh;
         applyConfTransform(mesh, Vec3d(v[0], v[1], v[2]), v + 3);
+        // Every reader refuses non-finite positions; a finite scan must not become one through a
+        // translation near the double range (it would overflow the float positions).
+        for (const Vec3f& p : mesh.positions)
+            if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+                return invalidInput(where + ": the transform moves scan '" + w[1].substr(0, 80) +
+                                    "' outside the float range");
         if (out.mesh.vertexCount() + mesh.vertexCount() > options.max_vertex_count)
             return resourceLimit(where + ": the scans add up to more than " + std::to_string(options.max_vertex_count) +
                                  " vertices");

@@ -110,6 +110,43 @@ TEST(BakeManifestTest, ErrorsNameTheManifestAndThePointer) {
     EXPECT_NE(lodbake_test::runCommand(schemaCheck(file)).exit_code, 0);
 }
 
+// Damaged manifests: every truncation of a good one, single bytes garbled into control characters,
+// quotes and brackets, and hostile shapes (deep nesting, keys and paths holding line breaks) are
+// refused with one line naming the manifest, or (a truncation that is still a whole document)
+// read as what they say.
+TEST(BakeManifestTest, TruncatedAndGarbledManifestsFailOnOneLine) {
+    const std::string d = dir();
+    const std::string path = d + "/m.json";
+    const std::string good = kGood;
+    auto check = [&](const std::string& text, const std::string& what) {
+        auto m = parseBakeManifest(text, path, BakeSettings{}, "");
+        if (m.ok()) return true;
+        const std::string& message = m.status().message();
+        EXPECT_EQ(message.rfind(path + ": ", 0), 0u) << what << ": " << message;
+        EXPECT_EQ(message.find('\n'), std::string::npos) << what << ": " << message;
+        return false;
+    };
+    size_t accepted = 0;
+    for (size_t n = 0; n < good.size(); ++n) accepted += check(good.substr(0, n), "cut to " + std::to_string(n));
+    EXPECT_EQ(accepted, 0u) << "a strict prefix of the manifest is never a whole JSON document";
+    for (size_t i = 0; i < good.size(); ++i)
+        for (char c : {'\0', '\n', '"', '{', ']', '\x7f'}) {
+            std::string garbled = good;
+            garbled[i] = c;
+            check(garbled, "byte " + std::to_string(i) + " set to " + std::to_string(int(c)));
+        }
+    const std::string deep = std::string(100000, '[') + std::string(100000, ']');
+    EXPECT_FALSE(check(R"({"version": 1, "assets": )" + deep + "}", "deep nesting"));
+    auto m = parseBakeManifest(R"({"version": 1, "assets": )" + deep + "}", path, BakeSettings{}, "");
+    EXPECT_NE(m.status().message().find("levels of nested arrays and objects"), std::string::npos)
+        << m.status().message();
+    EXPECT_FALSE(check(R"({"version": 1, "assets": [{"input": "a.ply", "a\nb": 1}]})", "key with a line break"));
+    EXPECT_FALSE(check(R"({"version": 1, "assets": [{"input": "a.ply", "output": "x\ny.gltf"}]})",
+                       "output with a line break"));
+    EXPECT_FALSE(check(R"({"version": 1, "assets": [{"input": "a\n.ply"}, {"input": "a\n.obj"}]})",
+                       "two outputs with a line break"));
+}
+
 TEST(BakeManifestTest, SchemaSettingsRepeatThePresetSchema) {
     auto load = [](const std::string& name) {
         std::ifstream in(lodbake_test::sourceDir() + "/schemas/config/" + name);

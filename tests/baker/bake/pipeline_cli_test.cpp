@@ -8,6 +8,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -17,6 +18,7 @@
 #include <nlohmann/json.hpp>
 
 #include "../gltf/gltf_test_util.h"
+#include "lodbake/bake/cache.h"
 #include "lodbake/core/file_io.h"
 #include "test_paths.h"
 
@@ -195,13 +197,100 @@ TEST(PipelineCliTest, CacheHitReusesThePackAndAnyChangedInputMisses) {
     ASSERT_EQ(runCommand(parallel).exit_code, 0);
     for (int i = 1; i < 4; ++i) EXPECT_EQ(bytesOf(d + "/rock" + std::to_string(i) + ".glb"), bytesOf(d + "/rock0.glb"));
     EXPECT_FALSE(bytesOf(d + "/rock0.glb").empty());
-    EXPECT_EQ(listDir(d + "/cache/v1/packs").size(), 1u);
+    EXPECT_EQ(listDir(d + "/cache/v2/packs").size(), 1u);
     EXPECT_NE(
         bakeIn(d, "assets/rock.ply -o rock4.glb --preset assets/light.json --cache-dir cache").err.find("cache hit"),
         std::string::npos);
     // No temporaries left in the cache.
-    for (const char* sub : {"cache/v1/packs", "cache/v1/deps"})
+    for (const char* sub : {"cache/v2/packs", "cache/v2/deps"})
         for (const std::string& name : listDir(d + "/" + sub)) EXPECT_NE(name[0], '.') << name;
+}
+
+// A damaged cache (an entry cut short, a garbled byte in its pack, a garbled side-file list) is a
+// miss: the bake runs again, writes the right bytes and repairs the entry; it never copies a broken pack.
+TEST(PipelineCliTest, DamagedCacheEntriesMissAndAreRebaked) {
+    const std::string d = sampleDir("damaged_cache");
+    const std::string common = "assets/crate.obj -o out.glb --preset assets/light.json --cache-dir cache --quiet";
+    ASSERT_EQ(bakeIn(d, common).exit_code, 0);
+    const std::vector<uint8_t> good = bytesOf(d + "/out.glb");
+    ASSERT_FALSE(good.empty());
+    const std::vector<std::string> packs = listDir(d + "/cache/v2/packs"), deps = listDir(d + "/cache/v2/deps");
+    ASSERT_EQ(packs.size(), 1u);
+    ASSERT_EQ(deps.size(), 1u);
+    const std::string entry = d + "/cache/v2/packs/" + packs[0], list = d + "/cache/v2/deps/" + deps[0];
+    const std::vector<uint8_t> entry_bytes = bytesOf(entry);
+    const std::vector<uint8_t> list_bytes = bytesOf(list);
+    auto damage = [&](const std::string& path, std::vector<uint8_t> bytes, const char* what) {
+        SCOPED_TRACE(what);
+        ASSERT_TRUE(lodbake::writeFileAtomic(path, bytes.data(), bytes.size()).ok());
+        fs::remove(d + "/out.glb");
+        const BakeRun run = bakeIn(d, common + " --report r.json");
+        ASSERT_EQ(run.exit_code, 0) << run.err;
+        EXPECT_EQ(nlohmann::json::parse(textOf(d + "/r.json"))["cache"], "miss");
+        EXPECT_EQ(bytesOf(d + "/out.glb"), good);
+        lodbake::CacheEntry stored;
+        EXPECT_TRUE(lodbake::parseCacheEntry(bytesOf(entry), stored)) << "the bake must store the entry again";
+        EXPECT_EQ(stored.glb, good);
+        EXPECT_EQ(bytesOf(list), list_bytes);
+    };
+    std::vector<uint8_t> cut(entry_bytes.begin(), entry_bytes.begin() + long(entry_bytes.size() / 2));
+    damage(entry, cut, "entry cut in half");
+    std::vector<uint8_t> head_only(entry_bytes.begin(), entry_bytes.begin() + 10);
+    damage(entry, head_only, "entry cut inside its header");
+    std::vector<uint8_t> garbled = entry_bytes;
+    garbled[garbled.size() - 100] ^= 0x01; // one bit inside the GLB: same sizes, different bytes
+    damage(entry, garbled, "one flipped bit in the pack");
+    std::vector<uint8_t> sizes = entry_bytes;
+    const size_t eol = size_t(std::find(sizes.begin() + 16, sizes.end(), uint8_t('\n')) - sizes.begin());
+    // The last digit of the GLB's size (before " <16 hex digits>"): one more or nine fewer bytes.
+    sizes[eol - 18] = uint8_t(sizes[eol - 18] == '9' ? '0' : sizes[eol - 18] + 1);
+    damage(entry, sizes, "a section size lies");
+    damage(entry, {}, "empty entry");
+    std::vector<uint8_t> bad_list = list_bytes; // the first side file's name, first letter case-flipped
+    const auto first_line_end = std::find(bad_list.begin(), bad_list.end(), uint8_t('\n'));
+    const auto second_line_end = std::find(first_line_end + 1, bad_list.end(), uint8_t('\n'));
+    ASSERT_LT(second_line_end + 1, bad_list.end()) << "the crate reads side files (MTL, texture)";
+    second_line_end[1] ^= 0x20;
+    damage(list, bad_list, "garbled side-file list");
+    std::vector<uint8_t> short_list(list_bytes.begin(), list_bytes.begin() + long(list_bytes.size() / 3));
+    damage(list, short_list, "side-file list cut short");
+    // Undamaged, it hits again.
+    fs::remove(d + "/out.glb");
+    EXPECT_NE(bakeIn(d, "assets/crate.obj -o out.glb --preset assets/light.json --cache-dir cache").err.find(
+                  "cache hit"),
+              std::string::npos);
+    EXPECT_EQ(bytesOf(d + "/out.glb"), good);
+}
+
+// The entry format itself: every truncation and every single flipped bit is refused.
+TEST(PipelineCliTest, CacheEntryParserRefusesEveryTruncationAndFlippedBit) {
+    lodbake::CacheEntry entry;
+    entry.summary = "crate: 3 levels\n";
+    entry.report_json = "{\"cache\":\"miss\"}";
+    entry.glb = {'g', 'l', 'T', 'F', 2, 0, 0, 0, 1, 2, 3, 4};
+    const std::vector<uint8_t> bytes = lodbake::serializeCacheEntry(entry);
+    lodbake::CacheEntry back;
+    ASSERT_TRUE(lodbake::parseCacheEntry(bytes, back));
+    EXPECT_EQ(back.summary, entry.summary);
+    EXPECT_EQ(back.report_json, entry.report_json);
+    EXPECT_EQ(back.glb, entry.glb);
+    for (size_t n = 0; n < bytes.size(); ++n) {
+        const std::vector<uint8_t> cut(bytes.begin(), bytes.begin() + long(n));
+        EXPECT_FALSE(lodbake::parseCacheEntry(cut, back)) << "cut to " << n << " bytes";
+    }
+    for (size_t i = 0; i < bytes.size(); ++i)
+        for (int bit = 0; bit < 8; ++bit) {
+            std::vector<uint8_t> flipped = bytes;
+            flipped[i] ^= uint8_t(1u << bit);
+            EXPECT_FALSE(lodbake::parseCacheEntry(flipped, back)) << "byte " << i << " bit " << bit;
+        }
+    std::vector<std::vector<std::string>> side;
+    EXPECT_TRUE(lodbake::parseCacheDeps("lodbake-deps 1\ninput 0 1\ncrate.mtl\n", 1, side));
+    EXPECT_EQ(side, (std::vector<std::vector<std::string>>{{"crate.mtl"}}));
+    for (const char* bad : {"", "lodbake-deps 1\n", "lodbake-deps 1\ninput 0 2\ncrate.mtl\n",
+                            "lodbake-deps 1\ninput 1 0\n", "lodbake-deps 1\ninput 0 1x\n", "lodbake-deps 2\ninput 0 0\n",
+                            "lodbake-deps 1\ninput 0 1\n\n"})
+        EXPECT_FALSE(lodbake::parseCacheDeps(bad, 1, side)) << bad;
 }
 
 TEST(PipelineCliTest, BytesDoNotDependOnTheCurrentDirectoryOrTheInputPath) {

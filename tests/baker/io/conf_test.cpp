@@ -83,3 +83,53 @@ TEST(ConfTest, MissingScanNamesLineAndFile) {
     EXPECT_NE(r.status().message().find("bun.conf: line"), std::string::npos) << r.status().message();
     EXPECT_NE(r.status().message().find(".ply"), std::string::npos) << r.status().message();
 }
+
+// Damaged scan sets: every truncation of a good .conf and every byte garbled into a control
+// character, a digit, a letter or a line break either reads (the prefix or edit is still a valid
+// set) or fails with one line naming the .conf; a transform that would push a finite scan outside
+// the float range is refused instead of producing infinite positions.
+TEST(ConfTest, TruncatedAndGarbledConfsFailOnOneLineNamingTheConf) {
+    const std::string dir = lodbake_test::scratchDir() + "/conf_damaged";
+    std::filesystem::create_directories(dir);
+    writeText(dir + "/a.ply", kTrianglePly);
+    const std::string conf = dir + "/set.conf";
+    const std::string good = "camera 0 0 0 0 0 0 1\nmesh calib.ply 0 0 0 0 0 0 1\n"
+                             "bmesh a.ply 0.5 0 -1 0 0 0.7071068 0.7071068\nbmesh a.ply 1e-3 2 3 0.1 0.2 0.3 0.9\n";
+    auto read = [&](const std::string& text, const std::string& what) {
+        writeText(conf, text);
+        Diagnostics d;
+        auto r = readConf(conf, ReadOptions(), d);
+        if (r.ok()) {
+            EXPECT_TRUE(checkMeshConsistency(r->mesh, what).ok()) << what;
+            for (const Vec3f& p : r->mesh.positions)
+                EXPECT_TRUE(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z)) << what;
+            return true;
+        }
+        const std::string& m = r.status().message();
+        EXPECT_EQ(m.rfind(conf + ": ", 0), 0u) << what << ": " << m;
+        EXPECT_EQ(m.find('\n'), std::string::npos) << what << ": " << m;
+        return false;
+    };
+    ASSERT_TRUE(read(good, "good"));
+    size_t refused = 0;
+    for (size_t n = 0; n < good.size(); ++n) refused += !read(good.substr(0, n), "cut to " + std::to_string(n));
+    EXPECT_GT(refused, good.size() / 2) << "most cuts lose the bmesh lines or cut a field";
+    for (size_t i = 0; i < good.size(); i += 3)
+        for (char c : {'\0', '\n', '9', 'x', '#', '\t'}) {
+            std::string garbled = good;
+            garbled[i] = c;
+            read(garbled, "byte " + std::to_string(i) + " set to " + std::to_string(int(c)));
+        }
+    EXPECT_FALSE(read("bmesh a.ply 1e300 0 0 0 0 0 1\n", "translation beyond float"));
+    writeText(conf, "bmesh a.ply 1e300 0 0 0 0 0 1\n");
+    Diagnostics d;
+    auto far = readConf(conf, ReadOptions(), d);
+    ASSERT_FALSE(far.ok());
+    EXPECT_NE(far.status().message().find("line 1: the transform moves scan 'a.ply' outside the float range"),
+              std::string::npos)
+        << far.status().message();
+    EXPECT_FALSE(read("bmesh a.ply 0 0 0 0 0 0 1e-300\n", "zero quaternion"));
+    EXPECT_FALSE(read("bmesh a.ply 0 0 0 0 0 0 1 extra\n", "ten fields"));
+    EXPECT_FALSE(read("bmesh a.ply 0 0 0 0 0 0 nan\n", "nan field"));
+    EXPECT_FALSE(read(std::string("bmesh a.ply 0 0 0 0 0 0 1\0\n", 27), "a NUL byte"));
+}

@@ -56,4 +56,12 @@ Result<CacheLookup> cacheLookup(const std::string& cache_dir, const std::vector<
 Status cacheStore(const std::string& cache_dir, const CacheKey& primary, const std::vector<std::string>& inputs,
                   const std::vector<std::vector<std::string>>& files_read, const CacheEntry& entry);
 
+/// The cache's file formats, exposed for tests and the fuzz target (tests/fuzz/fuzz_cache.cpp).
+/// A damaged file is a miss, never an error: these return false for anything but a well-formed file.
+/// Entries carry a hash of their payload, so a garbled (not only a truncated) entry is a miss too.
+bool parseCacheEntry(const std::vector<uint8_t>& bytes, CacheEntry& entry);
+std::vector<uint8_t> serializeCacheEntry(const CacheEntry& entry);
+/// The side-file list under a primary key, for `input_count` inputs.
+bool parseCacheDeps(const std::string& text, size_t input_count, std::vector<std::vector<std::string>>& out);
+
 } // namespace lodbake

@@ -15,6 +15,9 @@ struct ImageSize {
     uint32_t height = 0;
 };
 
+/// True when the bytes start with the PNG signature or a JPEG SOI marker (what the module decodes).
+bool looksLikePngOrJpeg(const std::vector<uint8_t>& encoded);
+
 /// Reads the dimensions from the header of an encoded PNG or JPEG. `name` prefixes messages.
 Result<ImageSize> probeImageSize(const std::vector<uint8_t>& encoded, const std::string& name);
 
