@@ -8,6 +8,7 @@
 # Set LODBAKE_SKIP_SANITIZERS=1 to stop after step 2. Timings of each step are printed at the end.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+export LODBAKE_REQUIRE_SHARED_MESHES=1 # tests needing ../shared fail instead of skipping when it is missing
 
 t0=$(date +%s)
 timings=()

@@ -49,25 +49,97 @@ std::string quadWith(const std::string& from, const std::string& to) {
     return json;
 }
 
-// Touches everything a loaded pack exposes, so ASan sees any dangling span.
-uint64_t walk(const Pack& pack) {
-    uint64_t sum = 0;
+// What loadPack promises about a pack it accepts, checked independently of its code: every index
+// in range, every byte range inside the bytes that exist, counts that agree. Returns the first broken
+// promise, or "" when all hold. It reads every name, accessor range and index value, so ASan also
+// sees any dangling span.
+std::string packViolation(const Pack& pack) {
+    const auto where = [](const char* kind, uint32_t i) { return std::string(kind) + " " + std::to_string(i) + ": "; };
+    for (uint32_t b = 0; b < pack.bufferCount(); ++b)
+        if (pack.buffer(b).is_glb_bin && pack.buffer(b).byte_length > pack.container().bin_size)
+            return where("buffer", b) + "longer than the BIN chunk";
+    for (uint32_t v = 0; v < pack.bufferViewCount(); ++v) {
+        const lodrt::BufferViewInfo& view = pack.bufferView(v);
+        if (view.buffer >= pack.bufferCount()) return where("bufferView", v) + "buffer out of range";
+        if (view.byte_length == 0 || view.byte_offset + view.byte_length > pack.buffer(view.buffer).byte_length)
+            return where("bufferView", v) + "bytes outside its buffer";
+        if (view.byte_stride != 0 && (view.byte_stride < 4 || view.byte_stride > 252 || view.byte_stride % 4 != 0))
+            return where("bufferView", v) + "bad byteStride";
+    }
+    for (uint32_t a = 0; a < pack.accessorCount(); ++a) {
+        const lodrt::AccessorInfo& accessor = pack.accessor(a);
+        if (accessor.byte_length != accessor.count * accessor.element_size)
+            return where("accessor", a) + "byte_length is not count x element size";
+        if (accessor.buffer_view == kNoIndex || accessor.count == 0) continue;
+        if (accessor.buffer_view >= pack.bufferViewCount()) return where("accessor", a) + "bufferView out of range";
+        const lodrt::BufferViewInfo& view = pack.bufferView(accessor.buffer_view);
+        const uint64_t stride = view.byte_stride ? view.byte_stride : accessor.element_size;
+        if (accessor.byte_offset + stride * (accessor.count - 1) + accessor.element_size > view.byte_length)
+            return where("accessor", a) + "elements outside its bufferView";
+    }
     for (uint32_t m = 0; m < pack.meshCount(); ++m) {
         const lodrt::MeshInfo& mesh = pack.mesh(m);
-        sum += mesh.name.size();
-        for (uint32_t p = 0; p < mesh.primitive_count; ++p) {
-            const lodrt::PrimitiveInfo& prim = pack.primitive(mesh.first_primitive + p);
-            sum += prim.vertex_count + prim.triangle_count;
-            for (uint32_t a = 0; a < prim.attribute_count; ++a) {
-                const lodrt::AttributeInfo& attr = pack.attribute(prim.first_attribute + a);
-                sum += attr.name.size() + pack.accessor(attr.accessor).byte_length;
+        const std::string name(mesh.name);
+        if (uint64_t(mesh.first_primitive) + mesh.primitive_count > pack.primitiveCount())
+            return where("mesh", m) + "primitives out of range";
+    }
+    for (uint32_t p = 0; p < pack.primitiveCount(); ++p) {
+        const lodrt::PrimitiveInfo& prim = pack.primitive(p);
+        if (prim.attribute_count == 0 || uint64_t(prim.first_attribute) + prim.attribute_count > pack.attributeCount())
+            return where("primitive", p) + "attributes out of range";
+        for (uint32_t k = 0; k < prim.attribute_count; ++k) {
+            const lodrt::AttributeInfo& attribute = pack.attribute(prim.first_attribute + k);
+            const std::string name(attribute.name);
+            if (attribute.accessor >= pack.accessorCount()) return where("primitive", p) + name + " out of range";
+            if (pack.accessor(attribute.accessor).count != prim.vertex_count)
+                return where("primitive", p) + name + " count differs from vertex_count";
+        }
+        if (prim.material != kNoIndex && prim.material >= pack.materialCount())
+            return where("primitive", p) + "material out of range";
+        if (prim.mode > 6) return where("primitive", p) + "mode above 6";
+        uint64_t index_count = prim.vertex_count;
+        if (prim.indices != kNoIndex) {
+            if (prim.indices >= pack.accessorCount()) return where("primitive", p) + "indices out of range";
+            const lodrt::AccessorInfo& indices = pack.accessor(prim.indices);
+            index_count = indices.count;
+            const uint32_t size = lodrt::componentSize(indices.component_type);
+            if (indices.type != AccessorType::Scalar || (size != 1 && size != 2 && size != 4) ||
+                indices.component_type == ComponentType::Float || indices.normalized)
+                return where("primitive", p) + "indices not SCALAR u8/u16/u32";
+            const bool in_bin = indices.buffer_view != kNoIndex && !indices.is_sparse &&
+                                pack.buffer(pack.bufferView(indices.buffer_view).buffer).is_glb_bin;
+            if (in_bin) {
+                const lodrt::BufferViewInfo& view = pack.bufferView(indices.buffer_view);
+                const uint64_t stride = view.byte_stride ? view.byte_stride : size;
+                const uint8_t* base = pack.container().bin + view.byte_offset + indices.byte_offset;
+                for (uint64_t i = 0; i < indices.count; ++i) {
+                    uint32_t value = 0;
+                    std::memcpy(&value, base + i * stride, size); // little-endian host
+                    if (value >= prim.vertex_count)
+                        return where("primitive", p) + "index " + std::to_string(value) + " out of range";
+                }
             }
         }
+        if (prim.index_count != index_count) return where("primitive", p) + "index_count";
+        const uint64_t triangles = prim.mode == 4                     ? index_count / 3
+                                   : prim.mode == 5 || prim.mode == 6 ? (index_count >= 3 ? index_count - 2 : 0)
+                                                                      : 0;
+        if ((prim.mode == 4 && index_count % 3 != 0) || prim.triangle_count != triangles)
+            return where("primitive", p) + "triangle_count does not follow from the mode and index count";
     }
-    for (uint32_t n = 0; n < pack.nodeCount(); ++n) sum += pack.node(n).name.size();
+    for (uint32_t n = 0; n < pack.nodeCount(); ++n) {
+        const lodrt::NodeInfo& node = pack.node(n);
+        const std::string name(node.name);
+        if ((node.mesh != kNoIndex && node.mesh >= pack.meshCount()) ||
+            (node.parent != kNoIndex && node.parent >= pack.nodeCount()))
+            return where("node", n) + "mesh or parent out of range";
+    }
+    if (pack.warningCount() > lodrt::kMaxPackWarnings) return "more warnings than kMaxPackWarnings";
     for (uint32_t w = 0; w < pack.warningCount(); ++w)
-        sum += std::strlen(pack.warning(w).pointer) + std::strlen(pack.warning(w).message);
-    return sum;
+        if (!pack.warning(w).pointer || !pack.warning(w).message || !*pack.warning(w).message ||
+            std::strlen(pack.warning(w).pointer) > 4096)
+            return where("warning", w) + "without a pointer or message";
+    return std::string();
 }
 
 struct CountingHeap {
@@ -250,7 +322,13 @@ TEST(PackTest, RejectsIndexValuesOutOfRange) {
     EXPECT_EQ(loaded.message, "/meshes/0/primitives/0/indices: index 4 at position 4 out of range (4 vertices)");
     lodrt::LoadOptions options;
     options.skip_index_check = true;
-    EXPECT_EQ(load(makeGlb(quadJson(), bin), &pack, &options).result, Result::Ok);
+    const std::vector<uint8_t> bad = makeGlb(quadJson(), bin); // the pack points into these bytes
+    EXPECT_EQ(load(bad, &pack, &options).result, Result::Ok);
+    // The mutation tests' oracle sees what the skipped check would have: it is able to fail.
+    EXPECT_EQ(packViolation(pack), "primitive 0: index 4 out of range");
+    const std::vector<uint8_t> good = quadGlb();
+    ASSERT_EQ(lodrt::loadPack(good.data(), good.size(), nullptr, &pack), Result::Ok);
+    EXPECT_EQ(packViolation(pack), "");
 }
 
 TEST(PackTest, RejectsNodeCycles) {
@@ -354,7 +432,7 @@ TEST(PackTest, RandomCorruptionNeverCrashes) {
         const Result result = lodrt::loadPack(bytes.data(), bytes.size(), nullptr, &pack, message, sizeof(message));
         if (result == Result::Ok) {
             ++ok;
-            EXPECT_GE(walk(pack), 0u);
+            EXPECT_EQ(packViolation(pack), "") << iteration;
         } else {
             ++failed;
             EXPECT_GT(std::strlen(message), 0u) << iteration;
@@ -387,10 +465,11 @@ TEST(PackTest, StructuredJsonMutationsNeverCrash) {
             }
         }
         Pack pack;
-        const Loaded loaded = load(makeGlb(json, bin), &pack);
+        const std::vector<uint8_t> glb = makeGlb(json, bin); // the pack points into these bytes
+        const Loaded loaded = load(glb, &pack);
         ++counts[int(loaded.result) & 15];
         if (loaded.result == Result::Ok) {
-            EXPECT_GE(walk(pack), 0u);
+            EXPECT_EQ(packViolation(pack), "") << iteration;
         } else {
             EXPECT_FALSE(loaded.message.empty());
         }

@@ -1,5 +1,7 @@
 #include "test_paths.h"
 
+#include <cstdlib>
+#include <cstring>
 #include <filesystem>
 
 namespace lodbake_test {
@@ -11,5 +13,17 @@ std::string scratchDir() {
 }
 
 bool haveSharedMeshes() { return std::filesystem::is_directory(sharedMeshesDir()); }
+
+bool sharedDataRequired() {
+    const char* value = std::getenv("LODBAKE_REQUIRE_SHARED_MESHES");
+    return value && *value && std::strcmp(value, "0") != 0;
+}
+
+std::string missingSharedDir(const std::string& dir) {
+    if (std::filesystem::is_directory(dir)) return std::string();
+    return dir + " not found (the shared data next to the repository)" +
+           (sharedDataRequired() ? "; LODBAKE_REQUIRE_SHARED_MESHES is set, so this test fails"
+                                 : "; set LODBAKE_REQUIRE_SHARED_MESHES=1 to fail instead of skipping");
+}
 
 } // namespace lodbake_test

@@ -17,14 +17,30 @@ std::string scratchDir();
 inline std::string lodbakeCli() { return LODBAKE_TEST_CLI; }
 /// The Python interpreter that has the Debian packages the tests need (jsonschema, numpy, open3d).
 inline std::string python() { return LODBAKE_TEST_PYTHON; }
+/// `../shared/eval` next to the repository: the reference evaluation scripts (meshdist.py).
+inline std::string sharedEvalDir() { return LODBAKE_TEST_SHARED_EVAL_DIR; }
 /// True if the shared scans are present (a clone without `../shared` skips the tests that need them).
 bool haveSharedMeshes();
+/// True when the environment sets LODBAKE_REQUIRE_SHARED_MESHES (to anything but empty or 0), as
+/// scripts/setup-and-test.sh does: then a missing shared folder fails the tests that need it.
+bool sharedDataRequired();
+/// Empty when `dir` is a directory; otherwise the message naming it, for the skip or the failure.
+std::string missingSharedDir(const std::string& dir);
 
 } // namespace lodbake_test
 
-/// Skips the current test, with a message, when the shared scans are missing.
-#define LODBAKE_REQUIRE_SHARED_MESHES()                                                                        \
+/// Skips the current test when shared folder `dir` is missing, or fails it, naming the folder, when
+/// LODBAKE_REQUIRE_SHARED_MESHES is set.
+#define LODBAKE_REQUIRE_SHARED_DIR(dir)                                                                        \
     do {                                                                                                       \
-        if (!lodbake_test::haveSharedMeshes())                                                                 \
-            GTEST_SKIP() << "../shared/meshes not found next to the repository";                               \
+        const std::string lodbake_missing_shared_ = lodbake_test::missingSharedDir(dir);                       \
+        if (!lodbake_missing_shared_.empty()) {                                                                \
+            if (lodbake_test::sharedDataRequired()) FAIL() << lodbake_missing_shared_;                         \
+            GTEST_SKIP() << lodbake_missing_shared_;                                                           \
+        }                                                                                                      \
     } while (0)
+
+/// The shared scans (../shared/meshes).
+#define LODBAKE_REQUIRE_SHARED_MESHES() LODBAKE_REQUIRE_SHARED_DIR(lodbake_test::sharedMeshesDir())
+/// The shared evaluation scripts (../shared/eval).
+#define LODBAKE_REQUIRE_SHARED_EVAL() LODBAKE_REQUIRE_SHARED_DIR(lodbake_test::sharedEvalDir())

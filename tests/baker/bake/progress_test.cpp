@@ -55,8 +55,9 @@ TEST(BatchProgressTest, BarShowsPercentJobsStageAndEtaWithinTheWidth) {
 }
 
 TEST(BatchProgressTest, CliDrawsTheBarOnlyOnATerminal) {
-    // util-linux `script` gives the bake a pseudo-terminal.
-    if (lodbake_test::runCommand("command -v script").exit_code != 0) GTEST_SKIP() << "no `script` command";
+    // util-linux `script` gives the bake a pseudo-terminal (Debian's bsdutils, an essential package).
+    ASSERT_EQ(lodbake_test::runCommand("command -v script").exit_code, 0)
+        << "no `script` command: install util-linux's script (Debian: bsdutils)";
     const std::string d = lodbake_test::scratchDir() + "/progress_tty_" + std::to_string(::getpid());
     std::filesystem::create_directories(d);
     const std::string assets = lodbake_test::sourceDir() + "/assets/samples/rock_scan/rock.conf";

@@ -481,7 +481,7 @@ double jsonNumber(const std::string& json, const std::string& key) {
 }
 
 struct PythonResult {
-    double hausdorff = NAN, mean = NAN;
+    double hausdorff = NAN, mean = NAN, rms = NAN;
 };
 
 // Debian's interpreter, where scripts/install-deps.sh installs python3-open3d.
@@ -491,7 +491,8 @@ PythonResult runMeshdistPy(const std::string& ref_path, const std::string& appro
     const std::string python = pythonWithOpen3d();
     EXPECT_FALSE(python.empty()) << "no python3 with numpy and open3d (Debian python3-open3d) found";
     const std::string out = ref_path + ".meshdist.json";
-    const std::string cmd = python + " '" + lodbake_test::sourceDir() + "/../shared/eval/meshdist.py' '" + ref_path +
+    std::remove(out.c_str()); // a failed run must not leave the previous run's numbers to read
+    const std::string cmd = python + " '" + lodbake_test::sharedEvalDir() + "/meshdist.py' '" + ref_path +
                             "' '" + approx_path + "' --json > '" + out + "'";
     int rc = std::system(cmd.c_str());
     EXPECT_EQ(rc, 0) << cmd;
@@ -501,6 +502,7 @@ PythonResult runMeshdistPy(const std::string& ref_path, const std::string& appro
     PythonResult r;
     r.hausdorff = jsonNumber(ss.str(), "hausdorff");
     r.mean = jsonNumber(ss.str(), "mean");
+    r.rms = jsonNumber(ss.str(), "rms");
     return r;
 }
 
@@ -514,14 +516,17 @@ void expectAgreesWithPython(const Mesh& reference, const Mesh& approx, const std
     lodbake::DistanceResult ours = measure(reference, approx);
     ASSERT_GT(py.hausdorff, 0.0) << name;
     ASSERT_GT(py.mean, 0.0) << name;
+    ASSERT_GT(py.rms, 0.0) << name;
     EXPECT_NEAR(ours.hausdorffRel(), py.hausdorff, 0.1 * py.hausdorff) << name;
     EXPECT_NEAR(ours.meanRel(), py.mean, 0.1 * py.mean) << name;
-    std::printf("[ meshdist ] %s: hausdorff ours %.4e python %.4e, mean ours %.4e python %.4e\n", name.c_str(),
-                ours.hausdorffRel(), py.hausdorff, ours.meanRel(), py.mean);
+    EXPECT_NEAR(ours.rmsRel(), py.rms, 0.1 * py.rms) << name;
+    std::printf("[ meshdist ] %s: hausdorff ours %.4e python %.4e, mean ours %.4e python %.4e, rms ours %.4e "
+                "python %.4e\n",
+                name.c_str(), ours.hausdorffRel(), py.hausdorff, ours.meanRel(), py.mean, ours.rmsRel(), py.rms);
 }
 
 TEST(MeshDistanceTest, AgreesWithOpen3dScriptOnSyntheticMeshes) {
-    LODBAKE_REQUIRE_SHARED_MESHES();
+    LODBAKE_REQUIRE_SHARED_EVAL(); // only the script: the meshes are built here
     Mesh sphere = icosphere(5);
     expectAgreesWithPython(sphere, icosahedron(), "sphere_ico");
     expectAgreesWithPython(sphere, perturbed(icosphere(3), 0.01f, 3), "sphere_noisy");
@@ -529,6 +534,7 @@ TEST(MeshDistanceTest, AgreesWithOpen3dScriptOnSyntheticMeshes) {
 
 TEST(MeshDistanceTest, AgreesWithOpen3dScriptOnBunny) {
     LODBAKE_REQUIRE_SHARED_MESHES();
+    LODBAKE_REQUIRE_SHARED_EVAL();
     lodbake::Diagnostics diagnostics;
     auto loaded = lodbake::readMesh(lodbake_test::sharedMesh("bunny_zipper.ply"), lodbake::ReadOptions(), diagnostics);
     ASSERT_TRUE(loaded.ok()) << loaded.status().message();

@@ -127,6 +127,7 @@ UvStats uvStats(const Mesh& m) {
 }
 
 void checkChain(const std::string& name) {
+    LODBAKE_REQUIRE_SHARED_MESHES();
     lodbake::Diagnostics d;
     auto loaded = lodbake::readMesh(lodbake_test::sharedMesh(name), lodbake::ReadOptions(), d);
     ASSERT_TRUE(loaded.ok()) << loaded.status().message();
