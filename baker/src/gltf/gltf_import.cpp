@@ -1005,10 +1005,11 @@ Status importMaterials(const tinygltf::Model& model, const std::string& name, co
     return Status::okStatus();
 }
 
-Result<LoadedMesh> readGltfImpl(const uint8_t* data, size_t size, const std::string& name,
-                                const SideFileLoader& load_side_file, const ReadOptions& options,
-                                Diagnostics& diagnostics) {
-    const bool is_glb = size >= 4 && readU32(data) == kGlbMagic;
+// Checks the container and the JSON (depth, references) and parses the document with tinygltf.
+// `prepass` receives what the JSON scan found (the Draco indices accessors among it).
+Status parseGltfDocument(const uint8_t* data, size_t size, const std::string& name,
+                         const SideFileLoader& load_side_file, const ReadOptions& options, Diagnostics& diagnostics,
+                         bool is_glb, JsonPrepass& prepass, tinygltf::Model& model) {
     if (!is_glb && lowerExtension(name) == ".glb") {
         if (size < 12)
             return invalidInput(name + ": GLB header: expected 12 bytes, the file has " + std::to_string(size));
@@ -1022,7 +1023,6 @@ Result<LoadedMesh> readGltfImpl(const uint8_t* data, size_t size, const std::str
     if (depth.is_too_deep)
         return resourceLimit(name + ": JSON: byte " + std::to_string(depth.offset) + ": expected at most " +
                              std::to_string(options.max_json_depth) + " levels of nested arrays and objects");
-    JsonPrepass prepass;
     LODBAKE_RETURN_IF_ERROR(checkJsonReferences(json, json_size, name, prepass));
     if (size > std::numeric_limits<unsigned int>::max()) return resourceLimit(name + ": file larger than 4 GiB");
     std::vector<uint8_t> rewritten;
@@ -1035,46 +1035,34 @@ Result<LoadedMesh> readGltfImpl(const uint8_t* data, size_t size, const std::str
         size = rewritten.size();
     }
 
-    tinygltf::Model model;
-    {
-        tinygltf::TinyGLTF loader;
-        LoaderContext context{&load_side_file, parentDirectory(name)};
-        loader.SetFsCallbacks({&fileExists, &expandFilePath, &readWholeFile, &writeWholeFile, &context});
-        loader.SetImageLoader(&keepEncodedImage, nullptr);
-        std::string err, warn;
-        const std::string base_dir = parentDirectory(name);
-        const bool ok =
-            is_glb ? loader.LoadBinaryFromMemory(&model, &err, &warn, data, static_cast<unsigned int>(size), base_dir)
-                   : loader.LoadASCIIFromString(&model, &err, &warn, reinterpret_cast<const char*>(data),
-                                                static_cast<unsigned int>(size), base_dir);
-        if (!ok) return invalidInput(name + ": " + firstLine(err));
-        if (!warn.empty()) diagnostics.note(name + ": " + firstLine(warn));
-    }
+    tinygltf::TinyGLTF loader;
+    LoaderContext context{&load_side_file, parentDirectory(name)};
+    loader.SetFsCallbacks({&fileExists, &expandFilePath, &readWholeFile, &writeWholeFile, &context});
+    loader.SetImageLoader(&keepEncodedImage, nullptr);
+    std::string err, warn;
+    const std::string base_dir = parentDirectory(name);
+    const bool ok =
+        is_glb ? loader.LoadBinaryFromMemory(&model, &err, &warn, data, static_cast<unsigned int>(size), base_dir)
+               : loader.LoadASCIIFromString(&model, &err, &warn, reinterpret_cast<const char*>(data),
+                                            static_cast<unsigned int>(size), base_dir);
+    if (!ok) return invalidInput(name + ": " + firstLine(err));
+    if (!warn.empty()) diagnostics.note(name + ": " + firstLine(warn));
+    return Status::okStatus();
+}
 
-    bool quantized = false;
-    for (const std::string& e : model.extensionsUsed)
-        if (e == "KHR_mesh_quantization") quantized = true;
-    for (const std::string& e : model.extensionsRequired)
-        if (e != "KHR_mesh_quantization" && e != kDracoExtension)
-            return unsupported(name + ": extensionsRequired: extension \"" + e + "\" is not supported");
-
-    LoadedMesh loaded;
-    loaded.source.encoding = is_glb ? "glb" : "gltf";
-    loaded.source.face_kind = "triangles";
-    Mesh& mesh = loaded.mesh;
-    LODBAKE_RETURN_IF_ERROR(importMaterials(model, name, options, mesh, diagnostics));
-
-    std::vector<Instance> instances;
-    LODBAKE_RETURN_IF_ERROR(collectInstances(model, name, instances));
-
+// Reads the triangle primitives of every mesh instance, in world space. Primitives of one mesh that
+// use the same attribute accessors share their vertices. Counts the file's vertices and faces into
+// `source`, each accessor and (mesh, primitive) once.
+Status readInstanceParts(const tinygltf::Model& model, const std::vector<Instance>& instances,
+                         const JsonPrepass& prepass, const std::string& name, bool quantized,
+                         const ReadOptions& options, Diagnostics& diagnostics, std::vector<PrimitiveData>& parts,
+                         SourceInfo& source) {
     bool used_draco = false;
-    std::vector<PrimitiveData> parts;
     uint64_t total_vertices = 0, total_faces = 0;
     std::set<int> counted_positions;                     // POSITION accessors counted in file_vertex_count
     std::set<std::pair<int, size_t>> counted_primitives; // (mesh, primitive) counted in file_face_count
     for (const Instance& instance : instances) {
         const tinygltf::Mesh& gmesh = model.meshes[size_t(instance.mesh)];
-        // Primitives of one mesh that use the same attribute accessors share their vertices.
         std::map<std::map<std::string, int>, size_t> shared;
         for (size_t p = 0; p < gmesh.primitives.size(); ++p) {
             const std::string where = name + ": mesh \"" +
@@ -1114,12 +1102,15 @@ Result<LoadedMesh> readGltfImpl(const uint8_t* data, size_t size, const std::str
             parts.push_back(std::move(part));
         }
     }
-    if (used_draco) loaded.source.encoding += "+draco";
-    loaded.source.file_vertex_count = total_vertices;
-    loaded.source.file_face_count = total_faces;
-    if (parts.empty()) return invalidInput(name + ": meshes: the scene holds no triangle primitives");
+    if (used_draco) source.encoding += "+draco";
+    source.file_vertex_count = total_vertices;
+    source.file_face_count = total_faces;
+    return Status::okStatus();
+}
 
-    // Merge: a stream present in any primitive is present in all (neutral fill values).
+// Merges the parts into one mesh with one submesh per part: a stream present in any part is present
+// in all (neutral fill values).
+void mergeParts(const std::vector<PrimitiveData>& parts, Mesh& mesh) {
     bool has_normals = false, has_tangents = false, has_colors = false;
     uint32_t uv_sets = 0;
     for (const PrimitiveData& part : parts) {
@@ -1170,7 +1161,10 @@ Result<LoadedMesh> readGltfImpl(const uint8_t* data, size_t size, const std::str
         for (uint32_t i : part.indices) mesh.indices.push_back(base + i);
         mesh.submeshes.push_back(std::move(sub));
     }
-    // Texture slots must sample a UV set the mesh has.
+}
+
+// Texture slots must sample a UV set the mesh has; the others are dropped with a warning.
+void dropUnsampledTextures(const std::string& name, Diagnostics& diagnostics, Mesh& mesh) {
     for (size_t m = 0; m < mesh.materials.size(); ++m) {
         Material& material = mesh.materials[m];
         for (TextureSlot* slot : {&material.base_color_texture, &material.metallic_roughness_texture,
@@ -1183,6 +1177,38 @@ Result<LoadedMesh> readGltfImpl(const uint8_t* data, size_t size, const std::str
             }
         }
     }
+}
+
+Result<LoadedMesh> readGltfImpl(const uint8_t* data, size_t size, const std::string& name,
+                                const SideFileLoader& load_side_file, const ReadOptions& options,
+                                Diagnostics& diagnostics) {
+    const bool is_glb = size >= 4 && readU32(data) == kGlbMagic;
+    JsonPrepass prepass;
+    tinygltf::Model model;
+    LODBAKE_RETURN_IF_ERROR(
+        parseGltfDocument(data, size, name, load_side_file, options, diagnostics, is_glb, prepass, model));
+
+    bool quantized = false;
+    for (const std::string& e : model.extensionsUsed)
+        if (e == "KHR_mesh_quantization") quantized = true;
+    for (const std::string& e : model.extensionsRequired)
+        if (e != "KHR_mesh_quantization" && e != kDracoExtension)
+            return unsupported(name + ": extensionsRequired: extension \"" + e + "\" is not supported");
+
+    LoadedMesh loaded;
+    loaded.source.encoding = is_glb ? "glb" : "gltf";
+    loaded.source.face_kind = "triangles";
+    Mesh& mesh = loaded.mesh;
+    LODBAKE_RETURN_IF_ERROR(importMaterials(model, name, options, mesh, diagnostics));
+
+    std::vector<Instance> instances;
+    LODBAKE_RETURN_IF_ERROR(collectInstances(model, name, instances));
+    std::vector<PrimitiveData> parts;
+    LODBAKE_RETURN_IF_ERROR(
+        readInstanceParts(model, instances, prepass, name, quantized, options, diagnostics, parts, loaded.source));
+    if (parts.empty()) return invalidInput(name + ": meshes: the scene holds no triangle primitives");
+    mergeParts(parts, mesh);
+    dropUnsampledTextures(name, diagnostics, mesh);
     LODBAKE_RETURN_IF_ERROR(checkMeshConsistency(mesh, name));
     return loaded;
 }
