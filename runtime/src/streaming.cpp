@@ -602,13 +602,11 @@ bool Streamer::shrinkPfrep(uint32_t stream) {
     return true;
 }
 
-void Streamer::update(const ModelDemand* demand) {
-    if (!slots_) return;
-    collect();
+// Usefulness: coarsest levels are pinned (infinite); a level at or coarser than the wanted one
+// gets the model's priority divided by its distance in levels from the wanted one; finer levels
+// than wanted are worth nothing.
+void Streamer::scoreLevels(const ModelDemand* demand) {
     const ModelSet& models = source_->models();
-    // Usefulness: coarsest levels are pinned (infinite); a level at or coarser than the wanted one
-    // gets the model's priority divided by its distance in levels from the wanted one; finer levels
-    // than wanted are worth nothing.
     for (uint32_t i = 0; i < slot_count_; ++i) {
         Slot& s = slots_[i];
         s.usefulness = s.is_coarsest ? INFINITY : 0.0f;
@@ -619,9 +617,12 @@ void Streamer::update(const ModelDemand* demand) {
         if (d.wanted_level == kNoLevel || l < d.wanted_level || !(d.priority > 0)) continue;
         s.usefulness = d.priority / float(1 + l - d.wanted_level);
     }
-    // PFRep prefixes: the directory is pinned; every step up to the one the wanted chain level needs
-    // is worth the model's priority (each is a prerequisite of the next, so they are not discounted
-    // by distance like levels); steps beyond it are worth nothing and are shrunk first.
+}
+
+// PFRep prefixes: the directory is pinned; every step up to the one the wanted chain level needs
+// is worth the model's priority (each is a prerequisite of the next, so they are not discounted
+// by distance like levels); steps beyond it are worth nothing and are shrunk first.
+void Streamer::scorePfrepStreams(const ModelDemand* demand) {
     for (uint32_t m = 0; m < pfrep_count_; ++m) {
         PfrepStream& ps = pfrep_[m];
         ps.usefulness = 0;
@@ -649,135 +650,171 @@ void Streamer::update(const ModelDemand* demand) {
         else if (uint32_t(ps.step) < target)
             ps.usefulness = priority;
     }
-    const uint32_t stream_base = slot_count_;
-    auto usefulness = [this](uint32_t id) {
-        return id < slot_count_ ? slots_[id].usefulness : pfrep_[id - slot_count_].usefulness;
-    };
+}
+
+// Request ids: levels are slots [0, slot_count_), PFRep streams follow.
+float Streamer::usefulness(uint32_t id) const {
+    return id < slot_count_ ? slots_[id].usefulness : pfrep_[id - slot_count_].usefulness;
+}
+
+// Fills candidates_ with the absent levels and the streams worth loading; returns their count.
+uint32_t Streamer::rankCandidates() {
     uint32_t candidate_count = 0;
     for (uint32_t i = 0; i < slot_count_; ++i)
         if (slots_[i].state == LevelState::Absent && slots_[i].usefulness > 0 && slots_[i].size > 0)
             candidates_[candidate_count++] = i;
     for (uint32_t m = 0; m < pfrep_count_; ++m)
-        if (pfrep_[m].usefulness > 0) candidates_[candidate_count++] = stream_base + m;
+        if (pfrep_[m].usefulness > 0) candidates_[candidate_count++] = slot_count_ + m;
     // Most useful first; ties by id (levels before prefixes) so the order does not depend on the sort.
-    std::sort(candidates_, candidates_ + candidate_count, [&usefulness](uint32_t a, uint32_t b) {
+    std::sort(candidates_, candidates_ + candidate_count, [this](uint32_t a, uint32_t b) {
         const float ua = usefulness(a), ub = usefulness(b);
         if (ua != ub) return ua > ub;
         return a < b;
     });
+    return candidate_count;
+}
+
+// Bytes held while the request runs: a level's buffer, or a prefix step's whole new buffer.
+// Coarsest levels and the PFRep directory are pinned (loaded whatever the budget).
+uint64_t Streamer::requestBytes(uint32_t id, bool* is_pinned) const {
+    *is_pinned = false;
+    if (id < slot_count_) {
+        *is_pinned = slots_[id].is_coarsest != 0;
+        return slots_[id].size;
+    }
+    const PfrepStream& ps = pfrep_[id - slot_count_];
+    if (ps.step < 0) {
+        *is_pinned = true;
+        return ps.directory_bytes; // 0 for the header, which lives in the stream itself
+    }
+    return ps.step_bytes[ps.step + 1];
+}
+
+// The resident level (or shrinkable PFRep stream) least useful and worth less than `useful`;
+// UINT32_MAX when there is none.
+uint32_t Streamer::leastUsefulVictim(float useful) const {
+    uint32_t victim = UINT32_MAX;
+    float victim_usefulness = 0;
+    for (uint32_t i = 0; i < slot_count_; ++i) {
+        const Slot& v = slots_[i];
+        if (v.state != LevelState::Resident || v.is_coarsest || !(v.usefulness < useful)) continue;
+        if (victim == UINT32_MAX || v.usefulness < victim_usefulness) {
+            victim = i;
+            victim_usefulness = v.usefulness;
+        }
+    }
+    for (uint32_t m = 0; m < pfrep_count_; ++m) {
+        const PfrepStream& v = pfrep_[m];
+        if (v.step <= 0 || v.state == PfrepStreamState::Loading || !(v.held_usefulness < useful)) continue;
+        if (victim == UINT32_MAX || v.held_usefulness < victim_usefulness) {
+            victim = slot_count_ + m;
+            victim_usefulness = v.held_usefulness;
+        }
+    }
+    return victim;
+}
+
+// Evicts the least useful resident levels (or shrinks prefixes) that are worth less than `useful`
+// until `size` more bytes fit the budget, but only when that makes enough room: evicting and then
+// skipping would reload the victims next frame. Returns whether the request fits.
+bool Streamer::makeRoom(uint64_t size, float useful) {
+    const uint64_t budget = options_.budget_bytes;
+    uint64_t reclaimable = 0;
+    for (uint32_t i = 0; i < slot_count_; ++i) {
+        const Slot& v = slots_[i];
+        if (v.state == LevelState::Resident && !v.is_coarsest && v.usefulness < useful) reclaimable += v.size;
+    }
+    for (uint32_t m = 0; m < pfrep_count_; ++m) {
+        const PfrepStream& v = pfrep_[m];
+        if (v.step > 0 && v.state != PfrepStreamState::Loading && v.held_usefulness < useful)
+            reclaimable += v.step_bytes[v.step] - v.step_bytes[0];
+    }
+    const uint64_t used = stats_.resident_bytes + stats_.in_flight_bytes;
+    if (used + size > budget + reclaimable) return false;
+    while (stats_.resident_bytes + stats_.in_flight_bytes + size > budget) {
+        const uint32_t victim = leastUsefulVictim(useful);
+        if (victim == UINT32_MAX) break;
+        if (victim < slot_count_) {
+            evict(victim);
+        } else if (!shrinkPfrep(victim - slot_count_)) {
+            break;
+        }
+    }
+    return stats_.resident_bytes + stats_.in_flight_bytes + size <= budget;
+}
+
+// Sets task `task_index` up to read request `id` (`size` bytes) and marks the level or stream
+// Loading; false (the level or stream marked Failed) when its buffer cannot be allocated.
+bool Streamer::prepareTask(uint32_t task_index, uint32_t id, uint64_t size) {
+    Task& t = tasks_[task_index];
+    t.source = source_;
+    t.result = Result::Ok;
+    if (id < slot_count_) {
+        Slot& s = slots_[id];
+        uint8_t* data = static_cast<uint8_t*>(detail::allocateBytes(options_.allocator, size_t(s.size)));
+        if (!data) {
+            s.state = LevelState::Failed;
+            ++stats_.failures;
+            return false;
+        }
+        s.data = data;
+        s.state = LevelState::Loading;
+        s.task = task_index;
+        t.kind = Task::Kind::Level;
+        t.model = slot_model_[id];
+        t.level = id - source_->models().model(t.model).first_level;
+        t.dst = data;
+        t.size = size_t(s.size);
+        t.slot = id;
+        stats_.in_flight_bytes += size;
+        return true;
+    }
+    PfrepStream* ps = &pfrep_[id - slot_count_];
+    t.slot = id - slot_count_;
+    t.view = ps->view;
+    if (ps->step < 0 && ps->directory_bytes == 0) {
+        t.kind = Task::Kind::PfrepHeader;
+        t.dst = ps->header;
+        t.size = sizeof(ps->header);
+    } else {
+        uint8_t* data = static_cast<uint8_t*>(detail::allocateBytes(options_.allocator, size_t(size)));
+        if (!data) {
+            ps->state = PfrepStreamState::Failed;
+            ps->is_failed = 1;
+            ++stats_.failures;
+            return false;
+        }
+        t.kind = Task::Kind::PfrepStep;
+        t.dst = data;
+        t.size = size_t(size);
+        t.has_prefix = ps->step >= 0;
+        t.old_data = t.has_prefix ? ps->data : nullptr;
+        t.old_size = t.has_prefix ? size_t(ps->step_bytes[ps->step]) : 0;
+        if (t.has_prefix) t.pfrep = ps->steps[ps->step];
+        stats_.in_flight_bytes += size;
+    }
+    ps->state = PfrepStreamState::Loading;
+    return true;
+}
+
+void Streamer::update(const ModelDemand* demand) {
+    if (!slots_) return;
+    collect();
+    scoreLevels(demand);
+    scorePfrepStreams(demand);
+    const uint32_t candidate_count = rankCandidates();
     uint32_t next_task = 0;
     for (uint32_t c = 0; c < candidate_count; ++c) {
         while (next_task < task_count_ && tasks_[next_task].is_busy) ++next_task;
         if (next_task == task_count_) break;
         const uint32_t id = candidates_[c];
-        const bool is_level = id < stream_base;
-        const float useful = usefulness(id);
-        PfrepStream* ps = is_level ? nullptr : &pfrep_[id - stream_base];
-        if (ps && ps->state == PfrepStreamState::Loading) continue; // collected inline and resubmitted
-        // Bytes held while the request runs: a level's buffer, or a prefix step's whole new buffer.
-        uint64_t size = 0;
+        if (id >= slot_count_ && pfrep_[id - slot_count_].state == PfrepStreamState::Loading)
+            continue; // collected inline and resubmitted
         bool is_pinned = false;
-        if (is_level) {
-            size = slots_[id].size;
-            is_pinned = slots_[id].is_coarsest != 0;
-        } else if (ps->step < 0) {
-            size = ps->directory_bytes; // 0 for the header, which lives in the stream itself
-            is_pinned = true;
-        } else {
-            size = ps->step_bytes[ps->step + 1];
-        }
-        const uint64_t budget = options_.budget_bytes;
-        if (budget > 0 && !is_pinned) {
-            // Evict the least useful resident levels (or shrink prefixes) that are worth less than
-            // this one, but only when that makes enough room: evicting and then skipping would reload
-            // the victims next frame.
-            uint64_t reclaimable = 0;
-            for (uint32_t i = 0; i < slot_count_; ++i) {
-                const Slot& v = slots_[i];
-                if (v.state == LevelState::Resident && !v.is_coarsest && v.usefulness < useful) reclaimable += v.size;
-            }
-            for (uint32_t m = 0; m < pfrep_count_; ++m) {
-                const PfrepStream& v = pfrep_[m];
-                if (v.step > 0 && v.state != PfrepStreamState::Loading && v.held_usefulness < useful)
-                    reclaimable += v.step_bytes[v.step] - v.step_bytes[0];
-            }
-            const uint64_t used = stats_.resident_bytes + stats_.in_flight_bytes;
-            if (used + size > budget + reclaimable) continue;
-            while (stats_.resident_bytes + stats_.in_flight_bytes + size > budget) {
-                uint32_t victim = UINT32_MAX;
-                float victim_usefulness = 0;
-                for (uint32_t i = 0; i < slot_count_; ++i) {
-                    const Slot& v = slots_[i];
-                    if (v.state != LevelState::Resident || v.is_coarsest || !(v.usefulness < useful)) continue;
-                    if (victim == UINT32_MAX || v.usefulness < victim_usefulness) {
-                        victim = i;
-                        victim_usefulness = v.usefulness;
-                    }
-                }
-                for (uint32_t m = 0; m < pfrep_count_; ++m) {
-                    const PfrepStream& v = pfrep_[m];
-                    if (v.step <= 0 || v.state == PfrepStreamState::Loading || !(v.held_usefulness < useful)) continue;
-                    if (victim == UINT32_MAX || v.held_usefulness < victim_usefulness) {
-                        victim = stream_base + m;
-                        victim_usefulness = v.held_usefulness;
-                    }
-                }
-                if (victim == UINT32_MAX) break;
-                if (victim < stream_base) {
-                    evict(victim);
-                } else if (!shrinkPfrep(victim - stream_base)) {
-                    break;
-                }
-            }
-            if (stats_.resident_bytes + stats_.in_flight_bytes + size > budget) continue;
-        }
+        const uint64_t size = requestBytes(id, &is_pinned);
+        if (options_.budget_bytes > 0 && !is_pinned && !makeRoom(size, usefulness(id))) continue;
+        if (!prepareTask(next_task, id, size)) continue;
         Task& t = tasks_[next_task];
-        t.source = source_;
-        t.result = Result::Ok;
-        if (is_level) {
-            Slot& s = slots_[id];
-            uint8_t* data = static_cast<uint8_t*>(detail::allocateBytes(options_.allocator, size_t(s.size)));
-            if (!data) {
-                s.state = LevelState::Failed;
-                ++stats_.failures;
-                continue;
-            }
-            s.data = data;
-            s.state = LevelState::Loading;
-            s.task = next_task;
-            t.kind = Task::Kind::Level;
-            t.model = slot_model_[id];
-            t.level = id - models.model(t.model).first_level;
-            t.dst = data;
-            t.size = size_t(s.size);
-            t.slot = id;
-        } else {
-            t.slot = id - stream_base;
-            t.view = ps->view;
-            if (ps->step < 0 && ps->directory_bytes == 0) {
-                t.kind = Task::Kind::PfrepHeader;
-                t.dst = ps->header;
-                t.size = sizeof(ps->header);
-            } else {
-                uint8_t* data = static_cast<uint8_t*>(detail::allocateBytes(options_.allocator, size_t(size)));
-                if (!data) {
-                    ps->state = PfrepStreamState::Failed;
-                    ps->is_failed = 1;
-                    ++stats_.failures;
-                    continue;
-                }
-                t.kind = Task::Kind::PfrepStep;
-                t.dst = data;
-                t.size = size_t(size);
-                t.has_prefix = ps->step >= 0;
-                t.old_data = t.has_prefix ? ps->data : nullptr;
-                t.old_size = t.has_prefix ? size_t(ps->step_bytes[ps->step]) : 0;
-                if (t.has_prefix) t.pfrep = ps->steps[ps->step];
-                stats_.in_flight_bytes += size;
-            }
-            ps->state = PfrepStreamState::Loading;
-        }
-        if (is_level) stats_.in_flight_bytes += size;
         ++stats_.requests;
         t.done.store(0, std::memory_order_relaxed);
         t.is_busy = true;

@@ -116,10 +116,8 @@ std::vector<Vec4f> exportTangents(const Mesh& mesh, const std::vector<Vec3f>& no
     return tangents;
 }
 
-} // namespace
-
-Result<int> addMeshToModel(tinygltf::Model& model, BufferBuilder& buffer, const Mesh& mesh, ModelDedupe* dedupe,
-                           const std::vector<std::pair<uint32_t, uint32_t>>* vertex_ranges) {
+// Refuses positions and texture coordinates a viewer cannot use.
+Status checkExportable(const Mesh& mesh) {
     if (mesh.faceCount() == 0) return invalidInput("glTF export: the mesh has no triangles");
     for (size_t i = 0; i < mesh.positions.size(); ++i)
         if (!finite3(mesh.positions[i]))
@@ -128,79 +126,95 @@ Result<int> addMeshToModel(tinygltf::Model& model, BufferBuilder& buffer, const 
         for (size_t i = 0; i < set.size(); ++i)
             if (!std::isfinite(set[i].x) || !std::isfinite(set[i].y))
                 return invalidInput("glTF export: vertex " + std::to_string(i) + ": texture coordinate is not finite");
+    return Status::okStatus();
+}
 
+// The vertex streams as written: unit normals and tangents, colours clamped to [0, 1].
+struct ExportStreams {
     std::vector<Vec3f> normals;
     std::vector<Vec4f> tangents, colors;
+};
+
+ExportStreams exportStreams(const Mesh& mesh) {
+    ExportStreams out;
     if (mesh.hasNormals()) {
-        normals = exportNormals(mesh);
-        if (mesh.hasTangents()) tangents = exportTangents(mesh, normals);
+        out.normals = exportNormals(mesh);
+        if (mesh.hasTangents()) out.tangents = exportTangents(mesh, out.normals);
     }
     if (mesh.hasColors()) {
-        colors = mesh.colors;
-        for (Vec4f& c : colors)
+        out.colors = mesh.colors;
+        for (Vec4f& c : out.colors)
             for (float* f : {&c.x, &c.y, &c.z, &c.w})
                 *f = std::isfinite(*f) ? std::min(std::max(*f, 0.0f), 1.0f) : 0.0f;
     }
-    // The attribute accessors of vertices [first, first + count).
-    auto addAttributes = [&](size_t first, size_t count) {
-        const bool whole = first == 0 && count == mesh.vertexCount();
-        auto add = [&](const auto& values, int components, int type, bool with_bounds) {
-            if (whole) return addFloatAccessor(model, buffer, values, components, type, with_bounds);
-            const std::vector<typename std::decay_t<decltype(values)>::value_type> part(
-                values.begin() + std::ptrdiff_t(first), values.begin() + std::ptrdiff_t(first + count));
-            return addFloatAccessor(model, buffer, part, components, type, with_bounds);
-        };
-        tinygltf::Primitive primitive;
-        primitive.mode = TINYGLTF_MODE_TRIANGLES;
-        primitive.attributes["POSITION"] = add(mesh.positions, 3, TINYGLTF_TYPE_VEC3, true);
-        if (!normals.empty()) {
-            primitive.attributes["NORMAL"] = add(normals, 3, TINYGLTF_TYPE_VEC3, false);
-            if (!tangents.empty()) primitive.attributes["TANGENT"] = add(tangents, 4, TINYGLTF_TYPE_VEC4, false);
-        }
-        for (size_t s = 0; s < mesh.uvs.size(); ++s)
-            primitive.attributes["TEXCOORD_" + std::to_string(s)] = add(mesh.uvs[s], 2, TINYGLTF_TYPE_VEC2, false);
-        if (!colors.empty()) primitive.attributes["COLOR_0"] = add(colors, 4, TINYGLTF_TYPE_VEC4, false);
-        return primitive;
-    };
-    std::vector<SubMesh> submeshes = mesh.submeshes;
-    if (submeshes.empty()) {
-        SubMesh all;
-        all.index_count = uint32_t(mesh.indices.size());
-        submeshes.push_back(all);
-    }
-    // Per non-empty sub-mesh: the first vertex its indices are relative to, and its primitive's attributes.
-    std::vector<uint32_t> sub_first(submeshes.size(), 0);
-    std::vector<tinygltf::Primitive> bases;
-    if (vertex_ranges) {
-        size_t p = 0;
-        for (size_t s = 0; s < submeshes.size(); ++s) {
-            if (submeshes[s].index_count == 0) continue;
-            if (p >= vertex_ranges->size()) return internalError("glTF export: fewer vertex ranges than primitives");
-            const auto [first, count] = (*vertex_ranges)[p++];
-            if (size_t(first) + count > mesh.vertexCount())
-                return internalError("glTF export: a primitive's vertex range exceeds the vertices");
-            for (uint32_t i = submeshes[s].first_index; i < submeshes[s].first_index + submeshes[s].index_count; ++i)
-                if (i >= mesh.indices.size() || mesh.indices[i] < first || mesh.indices[i] - first >= count)
-                    return internalError("glTF export: a primitive's index lies outside its vertex range");
-            sub_first[s] = first;
-            bases.push_back(addAttributes(first, count));
-        }
-        if (p != vertex_ranges->size()) return internalError("glTF export: more vertex ranges than primitives");
-    } else {
-        bases.push_back(addAttributes(0, mesh.vertexCount()));
-    }
+    return out;
+}
 
-    // Indices: one view, one accessor per sub-mesh.
-    const bool short_indices = mesh.vertexCount() < 65536;
+// A primitive holding the attribute accessors of vertices [first, first + count).
+tinygltf::Primitive addAttributes(tinygltf::Model& model, BufferBuilder& buffer, const Mesh& mesh,
+                                  const ExportStreams& streams, size_t first, size_t count) {
+    const bool whole = first == 0 && count == mesh.vertexCount();
+    auto add = [&](const auto& values, int components, int type, bool with_bounds) {
+        if (whole) return addFloatAccessor(model, buffer, values, components, type, with_bounds);
+        const std::vector<typename std::decay_t<decltype(values)>::value_type> part(
+            values.begin() + std::ptrdiff_t(first), values.begin() + std::ptrdiff_t(first + count));
+        return addFloatAccessor(model, buffer, part, components, type, with_bounds);
+    };
+    tinygltf::Primitive primitive;
+    primitive.mode = TINYGLTF_MODE_TRIANGLES;
+    primitive.attributes["POSITION"] = add(mesh.positions, 3, TINYGLTF_TYPE_VEC3, true);
+    if (!streams.normals.empty()) {
+        primitive.attributes["NORMAL"] = add(streams.normals, 3, TINYGLTF_TYPE_VEC3, false);
+        if (!streams.tangents.empty())
+            primitive.attributes["TANGENT"] = add(streams.tangents, 4, TINYGLTF_TYPE_VEC4, false);
+    }
+    for (size_t s = 0; s < mesh.uvs.size(); ++s)
+        primitive.attributes["TEXCOORD_" + std::to_string(s)] = add(mesh.uvs[s], 2, TINYGLTF_TYPE_VEC2, false);
+    if (!streams.colors.empty()) primitive.attributes["COLOR_0"] = add(streams.colors, 4, TINYGLTF_TYPE_VEC4, false);
+    return primitive;
+}
+
+// Per non-empty sub-mesh with vertex ranges (else one for the whole mesh): its primitive's attributes
+// in `bases`, and in `sub_first` the first vertex its indices are relative to.
+Status addPrimitiveAttributes(tinygltf::Model& model, BufferBuilder& buffer, const Mesh& mesh,
+                              const ExportStreams& streams, const std::vector<SubMesh>& submeshes,
+                              const std::vector<std::pair<uint32_t, uint32_t>>* vertex_ranges,
+                              std::vector<uint32_t>& sub_first, std::vector<tinygltf::Primitive>& bases) {
+    sub_first.assign(submeshes.size(), 0);
+    if (!vertex_ranges) {
+        bases.push_back(addAttributes(model, buffer, mesh, streams, 0, mesh.vertexCount()));
+        return Status::okStatus();
+    }
+    size_t p = 0;
+    for (size_t s = 0; s < submeshes.size(); ++s) {
+        if (submeshes[s].index_count == 0) continue;
+        if (p >= vertex_ranges->size()) return internalError("glTF export: fewer vertex ranges than primitives");
+        const auto [first, count] = (*vertex_ranges)[p++];
+        if (size_t(first) + count > mesh.vertexCount())
+            return internalError("glTF export: a primitive's vertex range exceeds the vertices");
+        for (uint32_t i = submeshes[s].first_index; i < submeshes[s].first_index + submeshes[s].index_count; ++i)
+            if (i >= mesh.indices.size() || mesh.indices[i] < first || mesh.indices[i] - first >= count)
+                return internalError("glTF export: a primitive's index lies outside its vertex range");
+        sub_first[s] = first;
+        bases.push_back(addAttributes(model, buffer, mesh, streams, first, count));
+    }
+    if (p != vertex_ranges->size()) return internalError("glTF export: more vertex ranges than primitives");
+    return Status::okStatus();
+}
+
+// Indices: one view for all sub-meshes (16-bit when the vertex count allows), each index relative to
+// its sub-mesh's first vertex when there are vertex ranges. Returns the view.
+int addIndexView(BufferBuilder& buffer, const Mesh& mesh, const std::vector<SubMesh>& submeshes,
+                 const std::vector<uint32_t>& sub_first, bool with_ranges, bool short_indices) {
     const int index_size = short_indices ? 2 : 4;
     std::vector<uint8_t> index_bytes(mesh.indices.size() * size_t(index_size));
-    std::vector<uint32_t> index_base(vertex_ranges ? mesh.indices.size() : 0, 0); // only with vertex ranges
-    for (size_t s = 0; s < submeshes.size() && vertex_ranges; ++s)
+    std::vector<uint32_t> index_base(with_ranges ? mesh.indices.size() : 0, 0); // only with vertex ranges
+    for (size_t s = 0; s < submeshes.size() && with_ranges; ++s)
         for (size_t i = submeshes[s].first_index;
              i < size_t(submeshes[s].first_index) + submeshes[s].index_count && i < mesh.indices.size(); ++i)
             index_base[i] = sub_first[s];
     for (size_t i = 0; i < mesh.indices.size(); ++i) {
-        const uint32_t index = mesh.indices[i] - (vertex_ranges ? index_base[i] : 0);
+        const uint32_t index = mesh.indices[i] - (with_ranges ? index_base[i] : 0);
         if (short_indices) {
             const auto v = uint16_t(index);
             std::memcpy(&index_bytes[i * 2], &v, 2);
@@ -208,9 +222,12 @@ Result<int> addMeshToModel(tinygltf::Model& model, BufferBuilder& buffer, const 
             std::memcpy(&index_bytes[i * 4], &index, 4);
         }
     }
-    const int index_view = buffer.addView(index_bytes.data(), index_bytes.size(), TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER);
+    return buffer.addView(index_bytes.data(), index_bytes.size(), TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER);
+}
 
-    // Textures with bytes a viewer can decode; others are dropped (and the slots using them).
+// Textures with bytes a viewer can decode; others are dropped (and the slots using them). Returns the
+// model texture of each mesh texture (-1: dropped); with `dedupe`, equal bytes share one texture.
+std::vector<int> addTextures(tinygltf::Model& model, BufferBuilder& buffer, const Mesh& mesh, ModelDedupe* dedupe) {
     std::vector<int> texture_map(mesh.textures.size(), -1);
     for (size_t t = 0; t < mesh.textures.size(); ++t) {
         const Texture& texture = mesh.textures[t];
@@ -234,44 +251,58 @@ Result<int> addMeshToModel(tinygltf::Model& model, BufferBuilder& buffer, const 
         texture_map[t] = int(model.textures.size() - 1);
         if (dedupe) dedupe->textures.emplace(texture.bytes, texture_map[t]);
     }
+    return texture_map;
+}
+
+// A material as glTF has it, factors clamped to their valid ranges, slots on dropped textures or
+// missing UV sets left unset.
+tinygltf::Material exportMaterial(const Material& in, const Mesh& mesh, const std::vector<int>& texture_map) {
     auto slot = [&](const TextureSlot& s, int& index, int& texcoord) {
         if (!s.isSet() || size_t(s.texture) >= texture_map.size() || texture_map[size_t(s.texture)] < 0) return;
         if (s.texcoord >= mesh.uvs.size()) return;
         index = texture_map[size_t(s.texture)];
         texcoord = int(s.texcoord);
     };
+    tinygltf::Material out;
+    out.name = in.name;
+    auto& pbr = out.pbrMetallicRoughness;
+    pbr.baseColorFactor = {in.base_color_factor.x, in.base_color_factor.y, in.base_color_factor.z,
+                           in.base_color_factor.w};
+    for (double& f : pbr.baseColorFactor) f = std::isfinite(f) ? std::min(std::max(f, 0.0), 1.0) : 1.0;
+    pbr.metallicFactor = std::min(std::max(double(in.metallic_factor), 0.0), 1.0);
+    pbr.roughnessFactor = std::min(std::max(double(in.roughness_factor), 0.0), 1.0);
+    slot(in.base_color_texture, pbr.baseColorTexture.index, pbr.baseColorTexture.texCoord);
+    slot(in.metallic_roughness_texture, pbr.metallicRoughnessTexture.index, pbr.metallicRoughnessTexture.texCoord);
+    slot(in.normal_texture, out.normalTexture.index, out.normalTexture.texCoord);
+    out.normalTexture.scale = in.normal_scale;
+    slot(in.occlusion_texture, out.occlusionTexture.index, out.occlusionTexture.texCoord);
+    out.occlusionTexture.strength = std::min(std::max(double(in.occlusion_strength), 0.0), 1.0);
+    slot(in.emissive_texture, out.emissiveTexture.index, out.emissiveTexture.texCoord);
+    out.emissiveFactor = {in.emissive_factor.x, in.emissive_factor.y, in.emissive_factor.z};
+    for (double& f : out.emissiveFactor) f = std::isfinite(f) ? std::min(std::max(f, 0.0), 1.0) : 0.0;
+    switch (in.alpha_mode) {
+    case AlphaMode::Opaque:
+        out.alphaMode = "OPAQUE";
+        break;
+    case AlphaMode::Mask:
+        out.alphaMode = "MASK";
+        out.alphaCutoff = std::max(double(in.alpha_cutoff), 0.0);
+        break;
+    case AlphaMode::Blend:
+        out.alphaMode = "BLEND";
+        break;
+    }
+    out.doubleSided = in.is_double_sided;
+    return out;
+}
+
+// Adds the mesh's materials; with `dedupe`, one equal to a material added since dedupe->first_material
+// is reused. Returns the model material of each mesh material.
+std::vector<int> addMaterials(tinygltf::Model& model, const Mesh& mesh, const std::vector<int>& texture_map,
+                              const ModelDedupe* dedupe) {
     std::vector<int> material_map;
     for (const Material& in : mesh.materials) {
-        tinygltf::Material out;
-        out.name = in.name;
-        auto& pbr = out.pbrMetallicRoughness;
-        pbr.baseColorFactor = {in.base_color_factor.x, in.base_color_factor.y, in.base_color_factor.z,
-                               in.base_color_factor.w};
-        for (double& f : pbr.baseColorFactor) f = std::isfinite(f) ? std::min(std::max(f, 0.0), 1.0) : 1.0;
-        pbr.metallicFactor = std::min(std::max(double(in.metallic_factor), 0.0), 1.0);
-        pbr.roughnessFactor = std::min(std::max(double(in.roughness_factor), 0.0), 1.0);
-        slot(in.base_color_texture, pbr.baseColorTexture.index, pbr.baseColorTexture.texCoord);
-        slot(in.metallic_roughness_texture, pbr.metallicRoughnessTexture.index, pbr.metallicRoughnessTexture.texCoord);
-        slot(in.normal_texture, out.normalTexture.index, out.normalTexture.texCoord);
-        out.normalTexture.scale = in.normal_scale;
-        slot(in.occlusion_texture, out.occlusionTexture.index, out.occlusionTexture.texCoord);
-        out.occlusionTexture.strength = std::min(std::max(double(in.occlusion_strength), 0.0), 1.0);
-        slot(in.emissive_texture, out.emissiveTexture.index, out.emissiveTexture.texCoord);
-        out.emissiveFactor = {in.emissive_factor.x, in.emissive_factor.y, in.emissive_factor.z};
-        for (double& f : out.emissiveFactor) f = std::isfinite(f) ? std::min(std::max(f, 0.0), 1.0) : 0.0;
-        switch (in.alpha_mode) {
-        case AlphaMode::Opaque:
-            out.alphaMode = "OPAQUE";
-            break;
-        case AlphaMode::Mask:
-            out.alphaMode = "MASK";
-            out.alphaCutoff = std::max(double(in.alpha_cutoff), 0.0);
-            break;
-        case AlphaMode::Blend:
-            out.alphaMode = "BLEND";
-            break;
-        }
-        out.doubleSided = in.is_double_sided;
+        tinygltf::Material out = exportMaterial(in, mesh, texture_map);
         int index = -1;
         if (dedupe)
             for (size_t m = dedupe->first_material; m < model.materials.size() && index < 0; ++m)
@@ -282,14 +313,39 @@ Result<int> addMeshToModel(tinygltf::Model& model, BufferBuilder& buffer, const 
         }
         material_map.push_back(index);
     }
+    return material_map;
+}
 
+} // namespace
+
+Result<int> addMeshToModel(tinygltf::Model& model, BufferBuilder& buffer, const Mesh& mesh, ModelDedupe* dedupe,
+                           const std::vector<std::pair<uint32_t, uint32_t>>* vertex_ranges) {
+    LODBAKE_RETURN_IF_ERROR(checkExportable(mesh));
+    const ExportStreams streams = exportStreams(mesh);
+    std::vector<SubMesh> submeshes = mesh.submeshes;
+    if (submeshes.empty()) {
+        SubMesh all;
+        all.index_count = uint32_t(mesh.indices.size());
+        submeshes.push_back(all);
+    }
+    std::vector<uint32_t> sub_first;
+    std::vector<tinygltf::Primitive> bases;
+    LODBAKE_RETURN_IF_ERROR(
+        addPrimitiveAttributes(model, buffer, mesh, streams, submeshes, vertex_ranges, sub_first, bases));
+    const bool short_indices = mesh.vertexCount() < 65536;
+    const int index_view = addIndexView(buffer, mesh, submeshes, sub_first, vertex_ranges != nullptr, short_indices);
+    const std::vector<int> texture_map = addTextures(model, buffer, mesh, dedupe);
+    const std::vector<int> material_map = addMaterials(model, mesh, texture_map, dedupe);
+
+    // One primitive per non-empty sub-mesh, each with its own index accessor into the shared view.
+    const size_t index_size = short_indices ? 2 : 4;
     tinygltf::Mesh gmesh;
     size_t primitive_index = 0;
     for (const SubMesh& sub : submeshes) {
         if (sub.index_count == 0) continue;
         tinygltf::Accessor accessor;
         accessor.bufferView = index_view;
-        accessor.byteOffset = size_t(sub.first_index) * size_t(index_size);
+        accessor.byteOffset = size_t(sub.first_index) * index_size;
         accessor.componentType =
             short_indices ? TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT : TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT;
         accessor.count = sub.index_count;

@@ -642,105 +642,86 @@ bool wantedSemantic(const std::string& s) {
     return s == "POSITION" || s == "NORMAL" || s == "TANGENT" || s == "COLOR_0" || s.rfind("TEXCOORD_", 0) == 0;
 }
 
-Result<PrimitiveData> readPrimitive(const tinygltf::Model& model, const tinygltf::Primitive& primitive,
-                                    const std::string& where, bool quantized, const ReadOptions& options,
-                                    int draco_indices_accessor, bool* used_draco) {
-    PrimitiveData out;
-    out.material = primitive.material;
-    if (primitive.material >= 0 && size_t(primitive.material) >= model.materials.size())
-        return invalidInput(where + ": material " + std::to_string(primitive.material) + " does not exist");
-    auto pos_it = primitive.attributes.find("POSITION");
-    if (pos_it == primitive.attributes.end()) return invalidInput(where + ": attributes: POSITION is missing");
-
-    std::vector<AttributeSource> sources;
-    std::vector<uint32_t> draco_indices;
-    bool has_draco_indices = false;
-    auto draco_it = primitive.extensions.find(kDracoExtension);
-    std::map<std::string, int> draco_ids;
-    if (draco_it != primitive.extensions.end()) {
-        *used_draco = true;
-        const std::string dw = where + ": " + kDracoExtension;
-        const tinygltf::Value& ext = draco_it->second;
-        if (!ext.IsObject() || !ext.Has("bufferView") || !ext.Get("bufferView").IsNumber() || !ext.Has("attributes") ||
-            !ext.Get("attributes").IsObject())
-            return invalidInput(dw + ": expected an object with bufferView and attributes");
-        const int view = ext.Get("bufferView").GetNumberAsInt();
-        const tinygltf::Value& attrs = ext.Get("attributes");
-        std::vector<int> ids;
-        std::vector<std::string> semantics;
-        for (const std::string& key : attrs.Keys()) {
-            const tinygltf::Value& id = attrs.Get(key);
-            if (!id.IsNumber() || id.GetNumberAsInt() < 0)
-                return invalidInput(dw + ": attributes." + key + ": expected an id");
-            if (!wantedSemantic(key)) continue;
-            if (primitive.attributes.count(key) == 0)
-                return invalidInput(dw + ": attributes." + key + ": the primitive has no such attribute accessor");
-            ids.push_back(id.GetNumberAsInt());
-            semantics.push_back(key);
-        }
-        LODBAKE_ASSIGN_OR_RETURN(auto bytes, viewBytes(model, view, dw));
-        // The declared counts must match what Draco decodes; refusing absurd ones before decoding
-        // bounds what a small bitstream can make us allocate (decompression bombs).
-        for (const std::string& semantic : semantics) {
-            const int a = primitive.attributes.at(semantic);
-            if (a < 0 || size_t(a) >= model.accessors.size()) continue; // reported after decoding
-            const uint64_t count = model.accessors[size_t(a)].count;
-            const uint64_t plausible = kMaxDracoPointsPerByte * uint64_t(bytes.second) + 64;
-            if (count > options.max_vertex_count || count > plausible)
-                return resourceLimit(dw + ": accessor " + std::to_string(a) + " (" + semantic + "): count " +
-                                     std::to_string(count) + ", expected at most " +
-                                     std::to_string(std::min<uint64_t>(options.max_vertex_count, plausible)) +
-                                     " for " + std::to_string(bytes.second) + " bytes of Draco data");
-        }
-        LODBAKE_ASSIGN_OR_RETURN(gltf_detail::DracoMeshData decoded,
-                                 gltf_detail::decodeDracoMesh(bytes.first, bytes.second, ids, dw));
-        for (size_t i = 0; i < semantics.size(); ++i) {
-            const int accessor_index = primitive.attributes.at(semantics[i]);
-            const std::string aw = where + ": accessor " + std::to_string(accessor_index) + " (" + semantics[i] + ")";
-            if (accessor_index < 0 || size_t(accessor_index) >= model.accessors.size())
-                return invalidInput(aw + ": accessor does not exist");
-            const tinygltf::Accessor& accessor = model.accessors[size_t(accessor_index)];
-            if (accessor.count != decoded.point_count)
-                return invalidInput(aw + ": count " + std::to_string(accessor.count) + " but the Draco data has " +
-                                    std::to_string(decoded.point_count) + " points");
-            AttributeSource src;
-            src.semantic = semantics[i];
-            src.accessor = accessor_index;
-            src.data.components = componentCount(accessor.type);
-            if (src.data.components != decoded.attributes[i].component_count)
-                return invalidInput(aw + ": type " + typeName(src.data.components) + " but the Draco attribute has " +
-                                    std::to_string(decoded.attributes[i].component_count) + " components");
-            src.data.component_type = TINYGLTF_COMPONENT_TYPE_FLOAT; // Draco dequantises to float
-            src.data.count = decoded.point_count;
-            src.data.values.assign(decoded.attributes[i].values.begin(), decoded.attributes[i].values.end());
-            draco_ids[semantics[i]] = accessor_index;
-            sources.push_back(std::move(src));
-        }
-        if (draco_indices_accessor >= 0) {
-            if (size_t(draco_indices_accessor) >= model.accessors.size())
-                return invalidInput(where + ": indices accessor " + std::to_string(draco_indices_accessor) +
-                                    " does not exist");
-            const size_t declared = model.accessors[size_t(draco_indices_accessor)].count;
-            if (declared != decoded.indices.size())
-                return invalidInput(where + ": accessor " + std::to_string(draco_indices_accessor) +
-                                    " (indices): count " + std::to_string(declared) + " but the Draco data has " +
-                                    std::to_string(decoded.indices.size()) + " indices");
-        }
-        draco_indices = std::move(decoded.indices);
-        has_draco_indices = true;
+// Decodes the primitive's KHR_draco_mesh_compression data: one float AttributeSource per wanted
+// semantic (recorded in `draco_ids`) and the decoded indices, after checking the declared counts.
+Status readDracoAttributes(const tinygltf::Model& model, const tinygltf::Primitive& primitive,
+                           const tinygltf::Value& ext, const std::string& where, const ReadOptions& options,
+                           int draco_indices_accessor, std::vector<AttributeSource>& sources,
+                           std::map<std::string, int>& draco_ids, std::vector<uint32_t>& draco_indices) {
+    const std::string dw = where + ": " + kDracoExtension;
+    if (!ext.IsObject() || !ext.Has("bufferView") || !ext.Get("bufferView").IsNumber() || !ext.Has("attributes") ||
+        !ext.Get("attributes").IsObject())
+        return invalidInput(dw + ": expected an object with bufferView and attributes");
+    const int view = ext.Get("bufferView").GetNumberAsInt();
+    const tinygltf::Value& attrs = ext.Get("attributes");
+    std::vector<int> ids;
+    std::vector<std::string> semantics;
+    for (const std::string& key : attrs.Keys()) {
+        const tinygltf::Value& id = attrs.Get(key);
+        if (!id.IsNumber() || id.GetNumberAsInt() < 0) return invalidInput(dw + ": attributes." + key + ": expected an id");
+        if (!wantedSemantic(key)) continue;
+        if (primitive.attributes.count(key) == 0)
+            return invalidInput(dw + ": attributes." + key + ": the primitive has no such attribute accessor");
+        ids.push_back(id.GetNumberAsInt());
+        semantics.push_back(key);
     }
-
-    for (const auto& attribute : primitive.attributes) {
-        if (!wantedSemantic(attribute.first) || draco_ids.count(attribute.first)) continue;
+    LODBAKE_ASSIGN_OR_RETURN(auto bytes, viewBytes(model, view, dw));
+    // The declared counts must match what Draco decodes; refusing absurd ones before decoding
+    // bounds what a small bitstream can make us allocate (decompression bombs).
+    for (const std::string& semantic : semantics) {
+        const int a = primitive.attributes.at(semantic);
+        if (a < 0 || size_t(a) >= model.accessors.size()) continue; // reported after decoding
+        const uint64_t count = model.accessors[size_t(a)].count;
+        const uint64_t plausible = kMaxDracoPointsPerByte * uint64_t(bytes.second) + 64;
+        if (count > options.max_vertex_count || count > plausible)
+            return resourceLimit(dw + ": accessor " + std::to_string(a) + " (" + semantic + "): count " +
+                                 std::to_string(count) + ", expected at most " +
+                                 std::to_string(std::min<uint64_t>(options.max_vertex_count, plausible)) + " for " +
+                                 std::to_string(bytes.second) + " bytes of Draco data");
+    }
+    LODBAKE_ASSIGN_OR_RETURN(gltf_detail::DracoMeshData decoded,
+                             gltf_detail::decodeDracoMesh(bytes.first, bytes.second, ids, dw));
+    for (size_t i = 0; i < semantics.size(); ++i) {
+        const int accessor_index = primitive.attributes.at(semantics[i]);
+        const std::string aw = where + ": accessor " + std::to_string(accessor_index) + " (" + semantics[i] + ")";
+        if (accessor_index < 0 || size_t(accessor_index) >= model.accessors.size())
+            return invalidInput(aw + ": accessor does not exist");
+        const tinygltf::Accessor& accessor = model.accessors[size_t(accessor_index)];
+        if (accessor.count != decoded.point_count)
+            return invalidInput(aw + ": count " + std::to_string(accessor.count) + " but the Draco data has " +
+                                std::to_string(decoded.point_count) + " points");
         AttributeSource src;
-        src.semantic = attribute.first;
-        src.accessor = attribute.second;
-        const std::string aw = where + ": accessor " + std::to_string(attribute.second) + " (" + attribute.first + ")";
-        LODBAKE_ASSIGN_OR_RETURN(src.data, readAccessor(model, attribute.second, aw, options));
+        src.semantic = semantics[i];
+        src.accessor = accessor_index;
+        src.data.components = componentCount(accessor.type);
+        if (src.data.components != decoded.attributes[i].component_count)
+            return invalidInput(aw + ": type " + typeName(src.data.components) + " but the Draco attribute has " +
+                                std::to_string(decoded.attributes[i].component_count) + " components");
+        src.data.component_type = TINYGLTF_COMPONENT_TYPE_FLOAT; // Draco dequantises to float
+        src.data.count = decoded.point_count;
+        src.data.values.assign(decoded.attributes[i].values.begin(), decoded.attributes[i].values.end());
+        draco_ids[semantics[i]] = accessor_index;
         sources.push_back(std::move(src));
     }
+    if (draco_indices_accessor >= 0) {
+        if (size_t(draco_indices_accessor) >= model.accessors.size())
+            return invalidInput(where + ": indices accessor " + std::to_string(draco_indices_accessor) +
+                                " does not exist");
+        const size_t declared = model.accessors[size_t(draco_indices_accessor)].count;
+        if (declared != decoded.indices.size())
+            return invalidInput(where + ": accessor " + std::to_string(draco_indices_accessor) +
+                                " (indices): count " + std::to_string(declared) + " but the Draco data has " +
+                                std::to_string(decoded.indices.size()) + " indices");
+    }
+    draco_indices = std::move(decoded.indices);
+    return Status::okStatus();
+}
 
-    // POSITION first, so that its problems are the ones reported.
+// Checks each attribute's format and count and stores its values in `out`; returns the vertex count.
+// POSITION is checked first, so that its problems are the ones reported.
+Result<size_t> storeAttributes(std::vector<AttributeSource>& sources, const std::map<std::string, int>& draco_ids,
+                               const std::string& where, bool quantized, const ReadOptions& options,
+                               PrimitiveData& out) {
     std::stable_partition(sources.begin(), sources.end(),
                           [](const AttributeSource& a) { return a.semantic == "POSITION"; });
     const AttributeSource* position = nullptr;
@@ -795,12 +776,15 @@ Result<PrimitiveData> readPrimitive(const tinygltf::Model& model, const tinygltf
     for (const auto& n : out.normals)
         if (!std::isfinite(n.x) || !std::isfinite(n.y) || !std::isfinite(n.z))
             return invalidInput(where + ": NORMAL: a normal is not finite");
+    return vertex_count;
+}
 
-    // Indices.
+// The primitive's index list as stored: from its accessor, or 0..vertex_count-1 without one.
+Result<std::vector<uint32_t>> readIndexList(const tinygltf::Model& model, const tinygltf::Primitive& primitive,
+                                            const std::string& where, const ReadOptions& options,
+                                            size_t vertex_count) {
     std::vector<uint32_t> raw;
-    if (has_draco_indices) {
-        raw = std::move(draco_indices);
-    } else if (primitive.indices >= 0) {
+    if (primitive.indices >= 0) {
         const std::string iw = where + ": accessor " + std::to_string(primitive.indices) + " (indices)";
         LODBAKE_ASSIGN_OR_RETURN(AccessorData idx, readAccessor(model, primitive.indices, iw, options));
         if (idx.components != 1) return invalidInput(iw + ": expected SCALAR, got " + typeName(idx.components));
@@ -815,33 +799,81 @@ Result<PrimitiveData> readPrimitive(const tinygltf::Model& model, const tinygltf
         raw.resize(vertex_count);
         for (size_t i = 0; i < vertex_count; ++i) raw[i] = uint32_t(i);
     }
-    for (size_t i = 0; i < raw.size(); ++i)
-        if (raw[i] >= vertex_count)
-            return invalidInput(where + ": index " + std::to_string(i) + " is " + std::to_string(raw[i]) +
-                                ", out of range (" + std::to_string(vertex_count) + " vertices)");
+    return raw;
+}
 
-    switch (primitive.mode) {
+// Triangles from the index list in the primitive's mode (triangles, strip or fan).
+Status assembleTriangles(int mode, std::vector<uint32_t>& raw, const std::string& where,
+                         std::vector<uint32_t>& indices) {
+    switch (mode) {
     case TINYGLTF_MODE_TRIANGLES:
         if (raw.size() % 3 != 0)
             return invalidInput(where + ": " + std::to_string(raw.size()) + " indices, expected a multiple of 3");
-        out.indices = std::move(raw);
+        indices = std::move(raw);
         break;
     case TINYGLTF_MODE_TRIANGLE_STRIP:
         for (size_t i = 0; i + 2 < raw.size(); ++i) {
             const uint32_t a = raw[i], b = raw[i + 1], c = raw[i + 2];
             if (a == b || b == c || a == c) continue; // strip restarts
             if (i % 2 == 0)
-                out.indices.insert(out.indices.end(), {a, b, c});
+                indices.insert(indices.end(), {a, b, c});
             else
-                out.indices.insert(out.indices.end(), {a, c, b}); // spec order for odd triangles
+                indices.insert(indices.end(), {a, c, b}); // spec order for odd triangles
         }
         break;
     case TINYGLTF_MODE_TRIANGLE_FAN:
-        for (size_t i = 1; i + 1 < raw.size(); ++i) out.indices.insert(out.indices.end(), {raw[i], raw[i + 1], raw[0]});
+        for (size_t i = 1; i + 1 < raw.size(); ++i) indices.insert(indices.end(), {raw[i], raw[i + 1], raw[0]});
         break;
     default:
-        return invalidInput(where + ": mode " + std::to_string(primitive.mode) + " is not valid");
+        return invalidInput(where + ": mode " + std::to_string(mode) + " is not valid");
     }
+    return Status::okStatus();
+}
+
+Result<PrimitiveData> readPrimitive(const tinygltf::Model& model, const tinygltf::Primitive& primitive,
+                                    const std::string& where, bool quantized, const ReadOptions& options,
+                                    int draco_indices_accessor, bool* used_draco) {
+    PrimitiveData out;
+    out.material = primitive.material;
+    if (primitive.material >= 0 && size_t(primitive.material) >= model.materials.size())
+        return invalidInput(where + ": material " + std::to_string(primitive.material) + " does not exist");
+    auto pos_it = primitive.attributes.find("POSITION");
+    if (pos_it == primitive.attributes.end()) return invalidInput(where + ": attributes: POSITION is missing");
+
+    std::vector<AttributeSource> sources;
+    std::vector<uint32_t> draco_indices;
+    bool has_draco_indices = false;
+    auto draco_it = primitive.extensions.find(kDracoExtension);
+    std::map<std::string, int> draco_ids;
+    if (draco_it != primitive.extensions.end()) {
+        *used_draco = true;
+        LODBAKE_RETURN_IF_ERROR(readDracoAttributes(model, primitive, draco_it->second, where, options,
+                                                    draco_indices_accessor, sources, draco_ids, draco_indices));
+        has_draco_indices = true;
+    }
+    for (const auto& attribute : primitive.attributes) {
+        if (!wantedSemantic(attribute.first) || draco_ids.count(attribute.first)) continue;
+        AttributeSource src;
+        src.semantic = attribute.first;
+        src.accessor = attribute.second;
+        const std::string aw = where + ": accessor " + std::to_string(attribute.second) + " (" + attribute.first + ")";
+        LODBAKE_ASSIGN_OR_RETURN(src.data, readAccessor(model, attribute.second, aw, options));
+        sources.push_back(std::move(src));
+    }
+    LODBAKE_ASSIGN_OR_RETURN(const size_t vertex_count,
+                             storeAttributes(sources, draco_ids, where, quantized, options, out));
+
+    std::vector<uint32_t> raw;
+    if (has_draco_indices) {
+        raw = std::move(draco_indices);
+    } else {
+        LODBAKE_ASSIGN_OR_RETURN(raw, readIndexList(model, primitive, where, options, vertex_count));
+    }
+    for (size_t i = 0; i < raw.size(); ++i)
+        if (raw[i] >= vertex_count)
+            return invalidInput(where + ": index " + std::to_string(i) + " is " + std::to_string(raw[i]) +
+                                ", out of range (" + std::to_string(vertex_count) + " vertices)");
+    LODBAKE_RETURN_IF_ERROR(assembleTriangles(primitive.mode, raw, where, out.indices));
     return out;
 }
 
@@ -973,10 +1005,11 @@ Status importMaterials(const tinygltf::Model& model, const std::string& name, co
     return Status::okStatus();
 }
 
-Result<LoadedMesh> readGltfImpl(const uint8_t* data, size_t size, const std::string& name,
-                                const SideFileLoader& load_side_file, const ReadOptions& options,
-                                Diagnostics& diagnostics) {
-    const bool is_glb = size >= 4 && readU32(data) == kGlbMagic;
+// Checks the container and the JSON (depth, references) and parses the document with tinygltf.
+// `prepass` receives what the JSON scan found (the Draco indices accessors among it).
+Status parseGltfDocument(const uint8_t* data, size_t size, const std::string& name,
+                         const SideFileLoader& load_side_file, const ReadOptions& options, Diagnostics& diagnostics,
+                         bool is_glb, JsonPrepass& prepass, tinygltf::Model& model) {
     if (!is_glb && lowerExtension(name) == ".glb") {
         if (size < 12)
             return invalidInput(name + ": GLB header: expected 12 bytes, the file has " + std::to_string(size));
@@ -990,7 +1023,6 @@ Result<LoadedMesh> readGltfImpl(const uint8_t* data, size_t size, const std::str
     if (depth.is_too_deep)
         return resourceLimit(name + ": JSON: byte " + std::to_string(depth.offset) + ": expected at most " +
                              std::to_string(options.max_json_depth) + " levels of nested arrays and objects");
-    JsonPrepass prepass;
     LODBAKE_RETURN_IF_ERROR(checkJsonReferences(json, json_size, name, prepass));
     if (size > std::numeric_limits<unsigned int>::max()) return resourceLimit(name + ": file larger than 4 GiB");
     std::vector<uint8_t> rewritten;
@@ -1003,46 +1035,34 @@ Result<LoadedMesh> readGltfImpl(const uint8_t* data, size_t size, const std::str
         size = rewritten.size();
     }
 
-    tinygltf::Model model;
-    {
-        tinygltf::TinyGLTF loader;
-        LoaderContext context{&load_side_file, parentDirectory(name)};
-        loader.SetFsCallbacks({&fileExists, &expandFilePath, &readWholeFile, &writeWholeFile, &context});
-        loader.SetImageLoader(&keepEncodedImage, nullptr);
-        std::string err, warn;
-        const std::string base_dir = parentDirectory(name);
-        const bool ok =
-            is_glb ? loader.LoadBinaryFromMemory(&model, &err, &warn, data, static_cast<unsigned int>(size), base_dir)
-                   : loader.LoadASCIIFromString(&model, &err, &warn, reinterpret_cast<const char*>(data),
-                                                static_cast<unsigned int>(size), base_dir);
-        if (!ok) return invalidInput(name + ": " + firstLine(err));
-        if (!warn.empty()) diagnostics.note(name + ": " + firstLine(warn));
-    }
+    tinygltf::TinyGLTF loader;
+    LoaderContext context{&load_side_file, parentDirectory(name)};
+    loader.SetFsCallbacks({&fileExists, &expandFilePath, &readWholeFile, &writeWholeFile, &context});
+    loader.SetImageLoader(&keepEncodedImage, nullptr);
+    std::string err, warn;
+    const std::string base_dir = parentDirectory(name);
+    const bool ok =
+        is_glb ? loader.LoadBinaryFromMemory(&model, &err, &warn, data, static_cast<unsigned int>(size), base_dir)
+               : loader.LoadASCIIFromString(&model, &err, &warn, reinterpret_cast<const char*>(data),
+                                            static_cast<unsigned int>(size), base_dir);
+    if (!ok) return invalidInput(name + ": " + firstLine(err));
+    if (!warn.empty()) diagnostics.note(name + ": " + firstLine(warn));
+    return Status::okStatus();
+}
 
-    bool quantized = false;
-    for (const std::string& e : model.extensionsUsed)
-        if (e == "KHR_mesh_quantization") quantized = true;
-    for (const std::string& e : model.extensionsRequired)
-        if (e != "KHR_mesh_quantization" && e != kDracoExtension)
-            return unsupported(name + ": extensionsRequired: extension \"" + e + "\" is not supported");
-
-    LoadedMesh loaded;
-    loaded.source.encoding = is_glb ? "glb" : "gltf";
-    loaded.source.face_kind = "triangles";
-    Mesh& mesh = loaded.mesh;
-    LODBAKE_RETURN_IF_ERROR(importMaterials(model, name, options, mesh, diagnostics));
-
-    std::vector<Instance> instances;
-    LODBAKE_RETURN_IF_ERROR(collectInstances(model, name, instances));
-
+// Reads the triangle primitives of every mesh instance, in world space. Primitives of one mesh that
+// use the same attribute accessors share their vertices. Counts the file's vertices and faces into
+// `source`, each accessor and (mesh, primitive) once.
+Status readInstanceParts(const tinygltf::Model& model, const std::vector<Instance>& instances,
+                         const JsonPrepass& prepass, const std::string& name, bool quantized,
+                         const ReadOptions& options, Diagnostics& diagnostics, std::vector<PrimitiveData>& parts,
+                         SourceInfo& source) {
     bool used_draco = false;
-    std::vector<PrimitiveData> parts;
     uint64_t total_vertices = 0, total_faces = 0;
     std::set<int> counted_positions;                     // POSITION accessors counted in file_vertex_count
     std::set<std::pair<int, size_t>> counted_primitives; // (mesh, primitive) counted in file_face_count
     for (const Instance& instance : instances) {
         const tinygltf::Mesh& gmesh = model.meshes[size_t(instance.mesh)];
-        // Primitives of one mesh that use the same attribute accessors share their vertices.
         std::map<std::map<std::string, int>, size_t> shared;
         for (size_t p = 0; p < gmesh.primitives.size(); ++p) {
             const std::string where = name + ": mesh \"" +
@@ -1082,12 +1102,15 @@ Result<LoadedMesh> readGltfImpl(const uint8_t* data, size_t size, const std::str
             parts.push_back(std::move(part));
         }
     }
-    if (used_draco) loaded.source.encoding += "+draco";
-    loaded.source.file_vertex_count = total_vertices;
-    loaded.source.file_face_count = total_faces;
-    if (parts.empty()) return invalidInput(name + ": meshes: the scene holds no triangle primitives");
+    if (used_draco) source.encoding += "+draco";
+    source.file_vertex_count = total_vertices;
+    source.file_face_count = total_faces;
+    return Status::okStatus();
+}
 
-    // Merge: a stream present in any primitive is present in all (neutral fill values).
+// Merges the parts into one mesh with one submesh per part: a stream present in any part is present
+// in all (neutral fill values).
+void mergeParts(const std::vector<PrimitiveData>& parts, Mesh& mesh) {
     bool has_normals = false, has_tangents = false, has_colors = false;
     uint32_t uv_sets = 0;
     for (const PrimitiveData& part : parts) {
@@ -1138,7 +1161,10 @@ Result<LoadedMesh> readGltfImpl(const uint8_t* data, size_t size, const std::str
         for (uint32_t i : part.indices) mesh.indices.push_back(base + i);
         mesh.submeshes.push_back(std::move(sub));
     }
-    // Texture slots must sample a UV set the mesh has.
+}
+
+// Texture slots must sample a UV set the mesh has; the others are dropped with a warning.
+void dropUnsampledTextures(const std::string& name, Diagnostics& diagnostics, Mesh& mesh) {
     for (size_t m = 0; m < mesh.materials.size(); ++m) {
         Material& material = mesh.materials[m];
         for (TextureSlot* slot : {&material.base_color_texture, &material.metallic_roughness_texture,
@@ -1151,6 +1177,38 @@ Result<LoadedMesh> readGltfImpl(const uint8_t* data, size_t size, const std::str
             }
         }
     }
+}
+
+Result<LoadedMesh> readGltfImpl(const uint8_t* data, size_t size, const std::string& name,
+                                const SideFileLoader& load_side_file, const ReadOptions& options,
+                                Diagnostics& diagnostics) {
+    const bool is_glb = size >= 4 && readU32(data) == kGlbMagic;
+    JsonPrepass prepass;
+    tinygltf::Model model;
+    LODBAKE_RETURN_IF_ERROR(
+        parseGltfDocument(data, size, name, load_side_file, options, diagnostics, is_glb, prepass, model));
+
+    bool quantized = false;
+    for (const std::string& e : model.extensionsUsed)
+        if (e == "KHR_mesh_quantization") quantized = true;
+    for (const std::string& e : model.extensionsRequired)
+        if (e != "KHR_mesh_quantization" && e != kDracoExtension)
+            return unsupported(name + ": extensionsRequired: extension \"" + e + "\" is not supported");
+
+    LoadedMesh loaded;
+    loaded.source.encoding = is_glb ? "glb" : "gltf";
+    loaded.source.face_kind = "triangles";
+    Mesh& mesh = loaded.mesh;
+    LODBAKE_RETURN_IF_ERROR(importMaterials(model, name, options, mesh, diagnostics));
+
+    std::vector<Instance> instances;
+    LODBAKE_RETURN_IF_ERROR(collectInstances(model, name, instances));
+    std::vector<PrimitiveData> parts;
+    LODBAKE_RETURN_IF_ERROR(
+        readInstanceParts(model, instances, prepass, name, quantized, options, diagnostics, parts, loaded.source));
+    if (parts.empty()) return invalidInput(name + ": meshes: the scene holds no triangle primitives");
+    mergeParts(parts, mesh);
+    dropUnsampledTextures(name, diagnostics, mesh);
     LODBAKE_RETURN_IF_ERROR(checkMeshConsistency(mesh, name));
     return loaded;
 }

@@ -658,7 +658,19 @@ private:
         loaded.source.file_face_count = face_count_;
         loaded.source.face_kind = all_triangles_ ? "triangles" : "polygons";
 
-        // Materials that usemtl names, checked now so mtllib may come anywhere in the file.
+        LODBAKE_ASSIGN_OR_RETURN(const std::vector<MaterialId> slot_material, resolveUsemtlSlots());
+        LODBAKE_RETURN_IF_ERROR(loadMaterials(mesh));
+        addUnreferencedPositions();
+        orderVertices();
+        fillVertexAttributes(mesh);
+        fillVertexColors(mesh);
+        groupTrianglesByMaterial(slot_material, mesh);
+        noteSkippedStatements();
+        return loaded;
+    }
+
+    // Materials that usemtl names, checked now so mtllib may come anywhere in the file.
+    Result<std::vector<MaterialId>> resolveUsemtlSlots() {
         std::vector<MaterialId> slot_material(usemtl_.size(), MaterialId::invalid());
         for (size_t s = 1; s < usemtl_.size(); ++s) {
             const auto it = material_by_name_.find(usemtl_[s].name);
@@ -669,6 +681,11 @@ private:
             }
             slot_material[s] = MaterialId(it->second);
         }
+        return slot_material;
+    }
+
+    // Moves the MTL materials into the mesh, loading the textures they name (each file once).
+    Status loadMaterials(Mesh& mesh) {
         std::map<std::string, int32_t> texture_by_path;
         for (MtlMaterial& m : materials_) {
             Material& mat = m.material;
@@ -688,8 +705,11 @@ private:
                                   ": material name is not valid UTF-8; invalid bytes replaced by '?': " + mat.name);
             mesh.materials.push_back(std::move(mat));
         }
+        return Status();
+    }
 
-        // Positions no face uses still become vertices (a point cloud keeps all of them).
+    // Positions no face uses still become vertices (a point cloud keeps all of them).
+    void addUnreferencedPositions() {
         uint64_t unreferenced = 0;
         if (chain_head_.size() < positions_.size()) chain_head_.resize(positions_.size(), kNone);
         for (uint32_t v = 0; v < positions_.size(); ++v) {
@@ -701,22 +721,28 @@ private:
         }
         if (unreferenced > 0 && face_count_ > 0)
             diagnostics_.note(name_ + ": " + std::to_string(unreferenced) + " vertices are used by no face (kept)");
+    }
 
-        // Number vertices by position index, then by first use: a file without vt/vn keeps its
-        // vertex order, and unreferenced positions stay where the file has them.
+    // Number vertices by position index, then by first use: a file without vt/vn keeps its
+    // vertex order, and unreferenced positions stay where the file has them.
+    void orderVertices() {
         const size_t vertex_count = unified_.size();
-        {
-            std::vector<uint32_t> new_id(vertex_count);
-            std::vector<UnifiedVertex> ordered;
-            ordered.reserve(vertex_count);
-            for (uint32_t head : chain_head_)
-                for (uint32_t u = head; u != kNone; u = unified_[u].next) {
-                    new_id[u] = uint32_t(ordered.size());
-                    ordered.push_back(unified_[u]);
-                }
-            for (uint32_t& i : indices_) i = new_id[i];
-            unified_ = std::move(ordered);
-        }
+        std::vector<uint32_t> new_id(vertex_count);
+        std::vector<UnifiedVertex> ordered;
+        ordered.reserve(vertex_count);
+        for (uint32_t head : chain_head_)
+            for (uint32_t u = head; u != kNone; u = unified_[u].next) {
+                new_id[u] = uint32_t(ordered.size());
+                ordered.push_back(unified_[u]);
+            }
+        for (uint32_t& i : indices_) i = new_id[i];
+        unified_ = std::move(ordered);
+    }
+
+    // Positions, texture coordinates (missing ones set to (0, 0)) and normals (dropped for the whole
+    // mesh when a used corner has none) of the unified vertices.
+    void fillVertexAttributes(Mesh& mesh) {
+        const size_t vertex_count = unified_.size();
         std::vector<uint8_t> used(vertex_count, 0);
         for (uint32_t i : indices_) used[i] = 1;
         bool any_vt = false, any_vn = false;
@@ -752,59 +778,66 @@ private:
                               " face corners have no normal; normals dropped for the whole mesh");
             mesh.normals.clear();
         }
-        if (!colors_.empty()) {
-            float max_component = 0.0f;
-            for (size_t i = 0; i < colors_.size(); ++i)
-                if (color_given_[i])
-                    max_component = std::max({max_component, colors_[i].x, colors_[i].y, colors_[i].z});
-            // Some exporters write 0..255 although the de-facto convention is 0..1.
-            const float scale = max_component > 1.0f ? 1.0f / 255.0f : 1.0f;
-            if (scale != 1.0f) diagnostics_.note(name_ + ": vertex colours exceed 1; read as 0..255 values");
-            if (colored_count_ < positions_.size())
-                diagnostics_.warn(name_ + ": " + std::to_string(positions_.size() - colored_count_) + " of " +
-                                  std::to_string(positions_.size()) + " vertices have no colour; set to white");
-            mesh.colors.resize(vertex_count);
-            for (size_t i = 0; i < vertex_count; ++i) {
-                const uint32_t v = unified_[i].corner.v;
-                if (!color_given_[v]) {
-                    mesh.colors[i] = {1.0f, 1.0f, 1.0f, 1.0f};
-                    continue;
-                }
-                const Vec4f& c = colors_[v];
-                mesh.colors[i] = {detail::srgbToLinear(c.x * scale), detail::srgbToLinear(c.y * scale),
-                                  detail::srgbToLinear(c.z * scale), std::clamp(c.w, 0.0f, 1.0f)};
-            }
-        }
+    }
 
-        // Group triangles by usemtl slot, slots in order of first use, triangles in file order.
+    // Vertex colours (the `v x y z r g b` extension), linearised; vertices without one are white.
+    void fillVertexColors(Mesh& mesh) {
+        if (colors_.empty()) return;
+        const size_t vertex_count = unified_.size();
+        float max_component = 0.0f;
+        for (size_t i = 0; i < colors_.size(); ++i)
+            if (color_given_[i]) max_component = std::max({max_component, colors_[i].x, colors_[i].y, colors_[i].z});
+        // Some exporters write 0..255 although the de-facto convention is 0..1.
+        const float scale = max_component > 1.0f ? 1.0f / 255.0f : 1.0f;
+        if (scale != 1.0f) diagnostics_.note(name_ + ": vertex colours exceed 1; read as 0..255 values");
+        if (colored_count_ < positions_.size())
+            diagnostics_.warn(name_ + ": " + std::to_string(positions_.size() - colored_count_) + " of " +
+                              std::to_string(positions_.size()) + " vertices have no colour; set to white");
+        mesh.colors.resize(vertex_count);
+        for (size_t i = 0; i < vertex_count; ++i) {
+            const uint32_t v = unified_[i].corner.v;
+            if (!color_given_[v]) {
+                mesh.colors[i] = {1.0f, 1.0f, 1.0f, 1.0f};
+                continue;
+            }
+            const Vec4f& c = colors_[v];
+            mesh.colors[i] = {detail::srgbToLinear(c.x * scale), detail::srgbToLinear(c.y * scale),
+                              detail::srgbToLinear(c.z * scale), std::clamp(c.w, 0.0f, 1.0f)};
+        }
+    }
+
+    // Group triangles by usemtl slot, slots in order of first use, triangles in file order.
+    void groupTrianglesByMaterial(const std::vector<MaterialId>& slot_material, Mesh& mesh) {
         const size_t tri_count = tri_slot_.size();
         std::vector<uint32_t> slot_order;
         std::vector<uint32_t> slot_tris(usemtl_.size(), 0);
         for (uint32_t s : tri_slot_)
             if (slot_tris[s]++ == 0) slot_order.push_back(s);
         const bool any_material = slot_order.size() > 1 || (slot_order.size() == 1 && slot_order[0] != 0);
-        if (any_material) {
-            std::vector<uint32_t> slot_start(usemtl_.size(), 0);
-            uint32_t start = 0;
-            for (uint32_t s : slot_order) {
-                slot_start[s] = start;
-                SubMesh sub;
-                sub.material = slot_material[s];
-                sub.name = sub.material.isValid() ? mesh.materials[sub.material.value].name : std::string();
-                sub.first_index = start * 3;
-                sub.index_count = slot_tris[s] * 3;
-                mesh.submeshes.push_back(sub);
-                start += slot_tris[s];
-            }
-            mesh.indices.resize(indices_.size());
-            for (size_t t = 0; t < tri_count; ++t) {
-                const uint32_t dst = slot_start[tri_slot_[t]]++;
-                std::copy_n(&indices_[t * 3], 3, &mesh.indices[size_t(dst) * 3]);
-            }
-        } else {
+        if (!any_material) {
             mesh.indices = std::move(indices_);
+            return;
         }
+        std::vector<uint32_t> slot_start(usemtl_.size(), 0);
+        uint32_t start = 0;
+        for (uint32_t s : slot_order) {
+            slot_start[s] = start;
+            SubMesh sub;
+            sub.material = slot_material[s];
+            sub.name = sub.material.isValid() ? mesh.materials[sub.material.value].name : std::string();
+            sub.first_index = start * 3;
+            sub.index_count = slot_tris[s] * 3;
+            mesh.submeshes.push_back(sub);
+            start += slot_tris[s];
+        }
+        mesh.indices.resize(indices_.size());
+        for (size_t t = 0; t < tri_count; ++t) {
+            const uint32_t dst = slot_start[tri_slot_[t]]++;
+            std::copy_n(&indices_[t * 3], 3, &mesh.indices[size_t(dst) * 3]);
+        }
+    }
 
+    void noteSkippedStatements() {
         if (line_statements_ + point_statements_ > 0)
             diagnostics_.note(name_ + ": skipped " + std::to_string(line_statements_) + " line (l) and " +
                               std::to_string(point_statements_) + " point (p) statements");
@@ -816,7 +849,6 @@ private:
         if (fallback_triangulations_ > 0)
             diagnostics_.warn(name_ + ": " + std::to_string(fallback_triangulations_) +
                               " polygons are degenerate or self-intersecting; triangulated as fans");
-        return loaded;
     }
 };
 

@@ -568,13 +568,8 @@ void triangulateRangeGrid(const Mesh& mesh, const std::vector<int32_t>& grid, si
         }
 }
 
-} // namespace
-
-Result<LoadedMesh> readPlyFromMemory(const uint8_t* data, size_t size, const std::string& name,
-                                     const ReadOptions& options, Diagnostics& diagnostics) {
-    LODBAKE_ASSIGN_OR_RETURN(Header header, parseHeader(data, size, name, diagnostics));
-
-    // Roles of the elements we understand; everything else is skipped.
+// Index of the first 'vertex' element, after checking it has scalar x, y, z and a count within limits.
+Result<size_t> findVertexElement(const Header& header, const std::string& name, const ReadOptions& options) {
     int vertex_element = -1;
     for (size_t i = 0; i < header.elements.size(); ++i)
         if (header.elements[i].name == "vertex" && vertex_element < 0) vertex_element = int(i);
@@ -591,248 +586,289 @@ Result<LoadedMesh> readPlyFromMemory(const uint8_t* data, size_t size, const std
     if (vertex_count > options.max_vertex_count)
         return resourceLimit(name + ": header: element vertex count " + std::to_string(vertex_count) +
                              " exceeds the limit of " + std::to_string(options.max_vertex_count));
+    return size_t(vertex_element);
+}
 
-    // Refuse counts the remaining bytes cannot hold, before allocating anything.
-    {
-        const uint64_t body = size - header.body_offset;
-        uint64_t needed = 0;
-        for (const Element& el : header.elements) {
-            const uint64_t per = minRecordBytes(el, header.encoding);
-            const uint64_t ascii_slack = header.encoding == Encoding::Ascii ? 1 : 0; // last value needs no separator
-            if (per > 0 && el.count > (body + ascii_slack) / per)
-                return invalidInput(name + ": header: element " + el.name + " count " + std::to_string(el.count) +
-                                    " needs at least " + std::to_string(el.count) + " x " + std::to_string(per) +
-                                    " bytes but the body has " + std::to_string(body));
-            needed += el.count * per;
-            if (needed > body + ascii_slack)
-                return invalidInput(name + ": header: elements up to " + el.name + " need at least " +
-                                    std::to_string(needed) + " bytes but the body has " + std::to_string(body));
+// Refuses counts the remaining bytes cannot hold, before anything is allocated.
+Status checkBodyHoldsCounts(const Header& header, size_t size, const std::string& name) {
+    const uint64_t body = size - header.body_offset;
+    uint64_t needed = 0;
+    for (const Element& el : header.elements) {
+        const uint64_t per = minRecordBytes(el, header.encoding);
+        const uint64_t ascii_slack = header.encoding == Encoding::Ascii ? 1 : 0; // last value needs no separator
+        if (per > 0 && el.count > (body + ascii_slack) / per)
+            return invalidInput(name + ": header: element " + el.name + " count " + std::to_string(el.count) +
+                                " needs at least " + std::to_string(el.count) + " x " + std::to_string(per) +
+                                " bytes but the body has " + std::to_string(body));
+        needed += el.count * per;
+        if (needed > body + ascii_slack)
+            return invalidInput(name + ": header: elements up to " + el.name + " need at least " +
+                                std::to_string(needed) + " bytes but the body has " + std::to_string(body));
+    }
+    return Status::okStatus();
+}
+
+// Which slot each vertex property fills (kIgnore for none), and which attributes are complete.
+struct VertexLayout {
+    std::vector<int> slots;
+    std::array<bool, kSlotCount> present{};
+    std::array<ScalarType, kSlotCount> slot_type{};
+    bool has_normals = false, has_colors = false, has_uvs = false;
+};
+
+VertexLayout mapVertexProperties(const Element& el, const std::string& name, Diagnostics& diagnostics) {
+    VertexLayout layout;
+    layout.slots.assign(el.properties.size(), kIgnore);
+    std::array<bool, kSlotCount>& present = layout.present;
+    for (size_t pi = 0; pi < el.properties.size(); ++pi) {
+        const Property& p = el.properties[pi];
+        if (p.is_list) continue;
+        const Slot s = vertexSlot(p.name);
+        if (s == kIgnore || present[s]) continue;
+        layout.slots[pi] = s;
+        present[s] = true;
+        layout.slot_type[s] = p.value_type;
+    }
+    layout.has_normals = present[kNx] && present[kNy] && present[kNz];
+    layout.has_colors = present[kRed] && present[kGreen] && present[kBlue];
+    layout.has_uvs = present[kU] && present[kV];
+    if ((present[kNx] || present[kNy] || present[kNz]) && !layout.has_normals)
+        diagnostics.warn(name + ": vertex: incomplete normal (needs nx, ny, nz); normals ignored");
+    if ((present[kRed] || present[kGreen] || present[kBlue]) && !layout.has_colors)
+        diagnostics.warn(name + ": vertex: incomplete colour (needs red, green, blue); colours ignored");
+    if ((present[kU] || present[kV]) && !layout.has_uvs)
+        diagnostics.warn(name + ": vertex: incomplete texture coordinate; texture coordinates ignored");
+    return layout;
+}
+
+// Reads the vertex element's records into the mesh's positions and complete attributes.
+Status readVertexElement(const Element& el, size_t n, BodyCursor& cursor, const std::string& name,
+                         Diagnostics& diagnostics, Mesh& mesh) {
+    const VertexLayout layout = mapVertexProperties(el, name, diagnostics);
+    const std::array<bool, kSlotCount>& present = layout.present;
+    const std::array<ScalarType, kSlotCount>& slot_type = layout.slot_type;
+    const bool has_normals = layout.has_normals, has_colors = layout.has_colors, has_uvs = layout.has_uvs;
+    mesh.positions.resize(n);
+    if (has_normals) mesh.normals.resize(n);
+    if (has_colors) mesh.colors.resize(n);
+    if (has_uvs) mesh.uvs.assign(1, std::vector<Vec2f>(n));
+    std::array<double, kSlotCount + 1> value{};
+    const std::array<float, 256>& srgb = srgbByteTable();
+    auto colorChannel = [&](int s) -> float {
+        const double v = value[size_t(s)];
+        if (slot_type[size_t(s)] == ScalarType::Uint8) return srgb[size_t(v)];
+        if (isIntegerType(slot_type[size_t(s)])) return srgbToLinear(v / integerTypeMax(slot_type[size_t(s)]));
+        return srgbToLinear(v);
+    };
+    auto alphaChannel = [&]() -> float {
+        if (!present[kAlpha]) return 1.0f;
+        const double v = value[kAlpha];
+        if (isIntegerType(slot_type[kAlpha])) return float(std::clamp(v / integerTypeMax(slot_type[kAlpha]), 0.0, 1.0));
+        return float(std::clamp(v, 0.0, 1.0));
+    };
+    for (size_t vi = 0; vi < n; ++vi) {
+        for (size_t pi = 0; pi < el.properties.size(); ++pi) {
+            const Property& p = el.properties[pi];
+            ReadError e;
+            if (p.is_list) {
+                double count = 0;
+                e = cursor.read(p.count_type, count);
+                if (e == ReadError::None && count < 0)
+                    return invalidInput(name + ": vertex " + std::to_string(vi) + " property '" + p.name +
+                                        "': negative list count");
+                if (e == ReadError::None) e = cursor.skip(p.value_type, uint64_t(count));
+            } else if (layout.slots[pi] == kIgnore) {
+                e = cursor.skip(p.value_type, 1);
+            } else {
+                e = cursor.read(p.value_type, value[size_t(layout.slots[pi])]);
+            }
+            if (e != ReadError::None)
+                return invalidInput(name + ": vertex " + std::to_string(vi) + " property '" + p.name +
+                                    "': " + describeError(e, cursor, p.value_type));
+        }
+        const Vec3f pos{float(value[kX]), float(value[kY]), float(value[kZ])};
+        if (!isFinite(pos))
+            return invalidInput(name + ": vertex " + std::to_string(vi) + ": coordinate is not finite (" +
+                                std::to_string(pos.x) + ", " + std::to_string(pos.y) + ", " +
+                                std::to_string(pos.z) + ")");
+        mesh.positions[vi] = pos;
+        if (has_normals) {
+            const Vec3f nrm{float(value[kNx]), float(value[kNy]), float(value[kNz])};
+            if (!isFinite(nrm)) return invalidInput(name + ": vertex " + std::to_string(vi) + ": normal is not finite");
+            mesh.normals[vi] = normalize(nrm);
+        }
+        if (has_colors) {
+            for (int s : {kRed, kGreen, kBlue, kAlpha})
+                if (present[size_t(s)] && !std::isfinite(value[size_t(s)]))
+                    return invalidInput(name + ": vertex " + std::to_string(vi) + " property '" + kSlotNames[s] +
+                                        "': colour is not finite");
+            mesh.colors[vi] = {colorChannel(kRed), colorChannel(kGreen), colorChannel(kBlue), alphaChannel()};
+        }
+        if (has_uvs) {
+            if (!std::isfinite(value[kU]) || !std::isfinite(value[kV]))
+                return invalidInput(name + ": vertex " + std::to_string(vi) + ": texture coordinate is not finite");
+            mesh.uvs[0][vi] = {float(value[kU]), float(1.0 - double(float(value[kV])))};
         }
     }
+    return Status::okStatus();
+}
 
-    LoadedMesh loaded;
+// A face-like element (face, tristrips or range_grid) about to be read: which list holds its vertex
+// indices (-1: none, the element is skipped) and whether the vertex positions are already known.
+struct FaceElement {
+    const Element& el;
+    bool is_face, is_strip, is_grid;
+    int index_prop = -1;
+    bool after_vertices = false;
+};
+
+// Finds the element's vertex index list and prepares `body` and `mesh` for its records.
+Status prepareFaceElement(FaceElement& fe, const Header& header, const std::string& name,
+                          const ReadOptions& options, Diagnostics& diagnostics, BodyData& body, LoadedMesh& loaded) {
+    const Element& el = fe.el;
+    if (fe.is_face || fe.is_strip || fe.is_grid) {
+        fe.index_prop = el.findProperty("vertex_indices");
+        if (fe.index_prop < 0) fe.index_prop = el.findProperty("vertex_index");
+        if (fe.index_prop < 0 || !el.properties[size_t(fe.index_prop)].is_list) {
+            diagnostics.warn(name + ": element " + el.name + ": no 'vertex_indices' list; element skipped");
+            fe.index_prop = -1;
+        } else if (!isIntegerType(el.properties[size_t(fe.index_prop)].value_type)) {
+            return invalidInput(name + ": header: element " + el.name + " property '" +
+                                el.properties[size_t(fe.index_prop)].name + "': vertex indices must be integers");
+        }
+    }
+    if (fe.index_prop < 0) return Status::okStatus();
+    if (body.has_faces || body.has_strips || body.has_grid)
+        diagnostics.warn(name + ": element " + el.name + ": a second face-like element; its faces are kept too");
+    if (fe.is_face) {
+        if (el.count > options.max_face_count)
+            return resourceLimit(name + ": header: element face count " + std::to_string(el.count) +
+                                 " exceeds the limit of " + std::to_string(options.max_face_count));
+        body.has_faces = true;
+        body.face_element_count += el.count;
+        if (fe.after_vertices) {
+            loaded.mesh.indices.reserve(loaded.mesh.indices.size() + size_t(el.count) * 3);
+        } else {
+            body.polygons.offsets.reserve(body.polygons.offsets.size() + size_t(el.count));
+            body.polygons.indices.reserve(body.polygons.indices.size() + size_t(el.count) * 3);
+        }
+    }
+    if (fe.is_grid) {
+        if (header.num_cols < 0 || header.num_rows < 0)
+            return invalidInput(name + ": header: element range_grid needs 'obj_info num_cols' and 'obj_info num_rows'");
+        const size_t rows = size_t(header.num_rows), cols = size_t(header.num_cols);
+        if (uint64_t(rows) * uint64_t(cols) != el.count)
+            return invalidInput(name + ": header: element range_grid count " + std::to_string(el.count) +
+                                " is not num_rows x num_cols = " + std::to_string(rows) + " x " +
+                                std::to_string(cols));
+        body.has_grid = true;
+        body.grid.assign(size_t(el.count), -1);
+    }
+    if (fe.is_strip) body.has_strips = true;
+    loaded.source.file_face_count += el.count;
+    return Status::okStatus();
+}
+
+// Reads the records of a non-vertex element: lists other than the vertex indices and scalars are
+// skipped; indices go to the strips, the grid, the mesh (triangulated, when positions are known) or
+// the raw polygons.
+Status readFaceElementRecords(const FaceElement& fe, uint64_t vertex_count, const Header& header,
+                              const std::string& name, const ReadOptions& options, BodyCursor& cursor,
+                              BodyData& body, Mesh& mesh) {
+    const Element& el = fe.el;
+    const bool is_face = fe.is_face, is_strip = fe.is_strip, is_grid = fe.is_grid;
+    std::vector<uint32_t> poly;
+    for (uint64_t ri = 0; ri < el.count; ++ri) {
+        for (size_t pi = 0; pi < el.properties.size(); ++pi) {
+            const Property& p = el.properties[pi];
+            auto where = [&]() { return name + ": " + el.name + " " + std::to_string(ri) + " property '" + p.name + "': "; };
+            if (!p.is_list) {
+                const ReadError e = cursor.skip(p.value_type, 1);
+                if (e != ReadError::None) return invalidInput(where() + describeError(e, cursor, p.value_type));
+                continue;
+            }
+            double count_d = 0;
+            ReadError e = cursor.read(p.count_type, count_d);
+            if (e != ReadError::None) return invalidInput(where() + describeError(e, cursor, p.count_type));
+            if (count_d < 0) return invalidInput(where() + "negative list count " + std::to_string(int64_t(count_d)));
+            const uint64_t count = uint64_t(count_d);
+            if (int(pi) == fe.index_prop && is_face && count > options.max_polygon_vertices)
+                return resourceLimit(where() + "polygon has " + std::to_string(count) +
+                                     " vertices, more than the limit of " +
+                                     std::to_string(options.max_polygon_vertices));
+            const uint64_t value_bytes = header.encoding == Encoding::Ascii ? 2 : scalarSize(p.value_type);
+            const uint64_t slack = header.encoding == Encoding::Ascii ? 1 : 0; // last ascii value needs no separator
+            if (count > cursor.remaining() / value_bytes + slack)
+                return invalidInput(where() + "list of " + std::to_string(count) +
+                                    " values runs past the end of the file");
+            if (int(pi) != fe.index_prop) {
+                e = cursor.skip(p.value_type, count);
+                if (e != ReadError::None) return invalidInput(where() + describeError(e, cursor, p.value_type));
+                continue;
+            }
+            if (is_grid && count > 1)
+                return invalidInput(where() + "expected 0 or 1 vertex indices per grid cell, got " +
+                                    std::to_string(count));
+            poly.clear();
+            for (uint64_t k = 0; k < count; ++k) {
+                double v = 0;
+                e = cursor.read(p.value_type, v);
+                if (e != ReadError::None) return invalidInput(where() + describeError(e, cursor, p.value_type));
+                if (is_strip && v == -1.0) {
+                    body.strips.push_back(-1);
+                    continue;
+                }
+                if (v < 0 || v >= double(vertex_count))
+                    return invalidInput(name + ": " + el.name + " " + std::to_string(ri) + ": vertex index " +
+                                        std::to_string(int64_t(v)) + " out of range (" +
+                                        std::to_string(vertex_count) + " vertices)");
+                if (is_strip) body.strips.push_back(int64_t(v));
+                else poly.push_back(uint32_t(v));
+            }
+            if (is_strip) {
+                body.strips.push_back(-1);
+            } else if (is_grid) {
+                if (count == 1) body.grid[size_t(ri)] = int32_t(poly[0]);
+            } else if (fe.after_vertices) {
+                // Positions are known: triangulate now instead of keeping the raw lists.
+                if (poly.size() < 3) ++body.short_faces;
+                else triangulatePolygon(mesh, poly.data(), poly.size(), mesh.indices);
+            } else {
+                body.polygons.indices.insert(body.polygons.indices.end(), poly.begin(), poly.end());
+                if (body.polygons.indices.size() > std::numeric_limits<uint32_t>::max())
+                    return resourceLimit(where() + "too many face indices");
+                body.polygons.offsets.push_back(uint32_t(body.polygons.indices.size()));
+            }
+        }
+    }
+    return Status::okStatus();
+}
+
+// Strips: triangle k of a strip is (s[k], s[k+1], s[k+2]) for even k and (s[k+1], s[k], s[k+2]) for
+// odd k, which keeps every triangle's winding the same. Strips use repeated indices on purpose to
+// turn corners, so the degenerate triangles they make are dropped silently.
+void triangulateStrips(const std::vector<int64_t>& strips, std::vector<uint32_t>& out) {
+    size_t begin = 0;
+    for (size_t i = 0; i <= strips.size(); ++i) {
+        if (i < strips.size() && strips[i] >= 0) continue;
+        for (size_t k = begin; k + 2 < i; ++k) {
+            uint32_t a = uint32_t(strips[k]), b = uint32_t(strips[k + 1]);
+            const uint32_t c = uint32_t(strips[k + 2]);
+            if ((k - begin) % 2 == 1) std::swap(a, b);
+            if (isDegenerate(a, b, c)) continue;
+            out.push_back(a);
+            out.push_back(b);
+            out.push_back(c);
+        }
+        begin = i + 1;
+    }
+}
+
+// Turns what the body held into triangles: raw polygons, strips and the range grid, in that order.
+void triangulateBody(BodyData& body, const Header& header, const std::string& name, const ReadOptions& options,
+                     Diagnostics& diagnostics, LoadedMesh& loaded) {
     Mesh& mesh = loaded.mesh;
     SourceInfo& source = loaded.source;
-    source.format = MeshFormat::Ply;
-    source.encoding = encodingName(header.encoding);
-    source.file_vertex_count = vertex_count;
-    source.face_kind = "none";
-
-    BodyData body;
-    BodyCursor cursor(data, size, header.body_offset, header.encoding);
-
-    for (size_t ei = 0; ei < header.elements.size(); ++ei) {
-        const Element& el = header.elements[ei];
-        if (el.properties.empty()) continue;
-        if (int(ei) == vertex_element) {
-            std::vector<int> slots(el.properties.size(), kIgnore);
-            std::array<bool, kSlotCount> present{};
-            std::array<ScalarType, kSlotCount> slot_type{};
-            for (size_t pi = 0; pi < el.properties.size(); ++pi) {
-                const Property& p = el.properties[pi];
-                if (p.is_list) continue;
-                const Slot s = vertexSlot(p.name);
-                if (s == kIgnore || present[s]) continue;
-                slots[pi] = s;
-                present[s] = true;
-                slot_type[s] = p.value_type;
-            }
-            const bool has_normals = present[kNx] && present[kNy] && present[kNz];
-            const bool has_colors = present[kRed] && present[kGreen] && present[kBlue];
-            const bool has_uvs = present[kU] && present[kV];
-            if ((present[kNx] || present[kNy] || present[kNz]) && !has_normals)
-                diagnostics.warn(name + ": vertex: incomplete normal (needs nx, ny, nz); normals ignored");
-            if ((present[kRed] || present[kGreen] || present[kBlue]) && !has_colors)
-                diagnostics.warn(name + ": vertex: incomplete colour (needs red, green, blue); colours ignored");
-            if ((present[kU] || present[kV]) && !has_uvs)
-                diagnostics.warn(name + ": vertex: incomplete texture coordinate; texture coordinates ignored");
-            const size_t n = size_t(vertex_count);
-            mesh.positions.resize(n);
-            if (has_normals) mesh.normals.resize(n);
-            if (has_colors) mesh.colors.resize(n);
-            if (has_uvs) mesh.uvs.assign(1, std::vector<Vec2f>(n));
-            std::array<double, kSlotCount + 1> value{};
-            const std::array<float, 256>& srgb = srgbByteTable();
-            auto colorChannel = [&](int s) -> float {
-                const double v = value[size_t(s)];
-                if (slot_type[size_t(s)] == ScalarType::Uint8) return srgb[size_t(v)];
-                if (isIntegerType(slot_type[size_t(s)])) return srgbToLinear(v / integerTypeMax(slot_type[size_t(s)]));
-                return srgbToLinear(v);
-            };
-            auto alphaChannel = [&]() -> float {
-                if (!present[kAlpha]) return 1.0f;
-                const double v = value[kAlpha];
-                if (isIntegerType(slot_type[kAlpha])) return float(std::clamp(v / integerTypeMax(slot_type[kAlpha]), 0.0, 1.0));
-                return float(std::clamp(v, 0.0, 1.0));
-            };
-            for (size_t vi = 0; vi < n; ++vi) {
-                for (size_t pi = 0; pi < el.properties.size(); ++pi) {
-                    const Property& p = el.properties[pi];
-                    ReadError e;
-                    if (p.is_list) {
-                        double count = 0;
-                        e = cursor.read(p.count_type, count);
-                        if (e == ReadError::None && count < 0)
-                            return invalidInput(name + ": vertex " + std::to_string(vi) + " property '" + p.name +
-                                                "': negative list count");
-                        if (e == ReadError::None) e = cursor.skip(p.value_type, uint64_t(count));
-                    } else if (slots[pi] == kIgnore) {
-                        e = cursor.skip(p.value_type, 1);
-                    } else {
-                        e = cursor.read(p.value_type, value[size_t(slots[pi])]);
-                    }
-                    if (e != ReadError::None)
-                        return invalidInput(name + ": vertex " + std::to_string(vi) + " property '" + p.name +
-                                            "': " + describeError(e, cursor, p.value_type));
-                }
-                const Vec3f pos{float(value[kX]), float(value[kY]), float(value[kZ])};
-                if (!isFinite(pos))
-                    return invalidInput(name + ": vertex " + std::to_string(vi) + ": coordinate is not finite (" +
-                                        std::to_string(pos.x) + ", " + std::to_string(pos.y) + ", " +
-                                        std::to_string(pos.z) + ")");
-                mesh.positions[vi] = pos;
-                if (has_normals) {
-                    const Vec3f nrm{float(value[kNx]), float(value[kNy]), float(value[kNz])};
-                    if (!isFinite(nrm))
-                        return invalidInput(name + ": vertex " + std::to_string(vi) + ": normal is not finite");
-                    mesh.normals[vi] = normalize(nrm);
-                }
-                if (has_colors) {
-                    for (int s : {kRed, kGreen, kBlue, kAlpha})
-                        if (present[size_t(s)] && !std::isfinite(value[size_t(s)]))
-                            return invalidInput(name + ": vertex " + std::to_string(vi) + " property '" +
-                                                kSlotNames[s] + "': colour is not finite");
-                    mesh.colors[vi] = {colorChannel(kRed), colorChannel(kGreen), colorChannel(kBlue), alphaChannel()};
-                }
-                if (has_uvs) {
-                    if (!std::isfinite(value[kU]) || !std::isfinite(value[kV]))
-                        return invalidInput(name + ": vertex " + std::to_string(vi) +
-                                            ": texture coordinate is not finite");
-                    mesh.uvs[0][vi] = {float(value[kU]), float(1.0 - double(float(value[kV])))};
-                }
-            }
-            continue;
-        }
-
-        const bool is_face = el.name == "face";
-        const bool is_strip = el.name == "tristrips";
-        const bool is_grid = el.name == "range_grid";
-        int index_prop = -1;
-        if (is_face || is_strip || is_grid) {
-            index_prop = el.findProperty("vertex_indices");
-            if (index_prop < 0) index_prop = el.findProperty("vertex_index");
-            if (index_prop < 0 || !el.properties[size_t(index_prop)].is_list) {
-                diagnostics.warn(name + ": element " + el.name + ": no 'vertex_indices' list; element skipped");
-                index_prop = -1;
-            } else if (!isIntegerType(el.properties[size_t(index_prop)].value_type)) {
-                return invalidInput(name + ": header: element " + el.name + " property '" +
-                                    el.properties[size_t(index_prop)].name + "': vertex indices must be integers");
-            }
-        }
-        if (index_prop >= 0 && (body.has_faces || body.has_strips || body.has_grid)) {
-            diagnostics.warn(name + ": element " + el.name + ": a second face-like element; its faces are kept too");
-        }
-        if (index_prop >= 0 && is_face) {
-            if (el.count > options.max_face_count)
-                return resourceLimit(name + ": header: element face count " + std::to_string(el.count) +
-                                     " exceeds the limit of " + std::to_string(options.max_face_count));
-            body.has_faces = true;
-            body.face_element_count += el.count;
-            if (int(ei) > vertex_element) {
-                mesh.indices.reserve(mesh.indices.size() + size_t(el.count) * 3);
-            } else {
-                body.polygons.offsets.reserve(body.polygons.offsets.size() + size_t(el.count));
-                body.polygons.indices.reserve(body.polygons.indices.size() + size_t(el.count) * 3);
-            }
-        }
-        size_t rows = 0, cols = 0;
-        if (index_prop >= 0 && is_grid) {
-            if (header.num_cols < 0 || header.num_rows < 0)
-                return invalidInput(name + ": header: element range_grid needs 'obj_info num_cols' and 'obj_info num_rows'");
-            rows = size_t(header.num_rows);
-            cols = size_t(header.num_cols);
-            if (uint64_t(rows) * uint64_t(cols) != el.count)
-                return invalidInput(name + ": header: element range_grid count " + std::to_string(el.count) +
-                                    " is not num_rows x num_cols = " + std::to_string(rows) + " x " +
-                                    std::to_string(cols));
-            body.has_grid = true;
-            body.grid.assign(size_t(el.count), -1);
-        }
-        if (index_prop >= 0 && is_strip) body.has_strips = true;
-        if (index_prop >= 0) source.file_face_count += el.count;
-
-        std::vector<uint32_t> poly;
-        for (uint64_t ri = 0; ri < el.count; ++ri) {
-            for (size_t pi = 0; pi < el.properties.size(); ++pi) {
-                const Property& p = el.properties[pi];
-                auto where = [&]() {
-                    return name + ": " + el.name + " " + std::to_string(ri) + " property '" + p.name + "': ";
-                };
-                if (!p.is_list) {
-                    const ReadError e = cursor.skip(p.value_type, 1);
-                    if (e != ReadError::None) return invalidInput(where() + describeError(e, cursor, p.value_type));
-                    continue;
-                }
-                double count_d = 0;
-                ReadError e = cursor.read(p.count_type, count_d);
-                if (e != ReadError::None) return invalidInput(where() + describeError(e, cursor, p.count_type));
-                if (count_d < 0)
-                    return invalidInput(where() + "negative list count " + std::to_string(int64_t(count_d)));
-                const uint64_t count = uint64_t(count_d);
-                if (int(pi) == index_prop && is_face && count > options.max_polygon_vertices)
-                    return resourceLimit(where() + "polygon has " + std::to_string(count) +
-                                         " vertices, more than the limit of " +
-                                         std::to_string(options.max_polygon_vertices));
-                const uint64_t value_bytes = header.encoding == Encoding::Ascii ? 2 : scalarSize(p.value_type);
-                const uint64_t slack = header.encoding == Encoding::Ascii ? 1 : 0; // last ascii value needs no separator
-                if (count > cursor.remaining() / value_bytes + slack)
-                    return invalidInput(where() + "list of " + std::to_string(count) +
-                                        " values runs past the end of the file");
-                if (int(pi) != index_prop) {
-                    e = cursor.skip(p.value_type, count);
-                    if (e != ReadError::None) return invalidInput(where() + describeError(e, cursor, p.value_type));
-                    continue;
-                }
-                if (is_grid && count > 1)
-                    return invalidInput(where() + "expected 0 or 1 vertex indices per grid cell, got " +
-                                        std::to_string(count));
-                poly.clear();
-                for (uint64_t k = 0; k < count; ++k) {
-                    double v = 0;
-                    e = cursor.read(p.value_type, v);
-                    if (e != ReadError::None) return invalidInput(where() + describeError(e, cursor, p.value_type));
-                    if (is_strip && v == -1.0) {
-                        body.strips.push_back(-1);
-                        continue;
-                    }
-                    if (v < 0 || v >= double(vertex_count))
-                        return invalidInput(name + ": " + el.name + " " + std::to_string(ri) + ": vertex index " +
-                                            std::to_string(int64_t(v)) + " out of range (" +
-                                            std::to_string(vertex_count) + " vertices)");
-                    if (is_strip) body.strips.push_back(int64_t(v));
-                    else poly.push_back(uint32_t(v));
-                }
-                if (is_strip) {
-                    body.strips.push_back(-1);
-                } else if (is_grid) {
-                    if (count == 1) body.grid[size_t(ri)] = int32_t(poly[0]);
-                } else if (int(ei) > vertex_element) {
-                    // Positions are known: triangulate now instead of keeping the raw lists.
-                    if (poly.size() < 3) ++body.short_faces;
-                    else triangulatePolygon(mesh, poly.data(), poly.size(), mesh.indices);
-                } else {
-                    body.polygons.indices.insert(body.polygons.indices.end(), poly.begin(), poly.end());
-                    if (body.polygons.indices.size() > std::numeric_limits<uint32_t>::max())
-                        return resourceLimit(where() + "too many face indices");
-                    body.polygons.offsets.push_back(uint32_t(body.polygons.indices.size()));
-                }
-            }
-        }
-    }
-    if (const size_t extra = cursor.trailingBytes(); extra > 0)
-        diagnostics.warn(name + ": body: " + std::to_string(extra) + " bytes after the last element ignored");
-
-    // Triangulate.
     if (body.has_faces) {
         // Faces of an element that came before the vertex element (rare) were kept raw until now.
         source.face_kind = "polygons";
@@ -852,33 +888,52 @@ Result<LoadedMesh> readPlyFromMemory(const uint8_t* data, size_t size, const std
     }
     if (body.has_strips) {
         if (!body.has_faces) source.face_kind = "tristrips";
-        size_t degenerate = 0;
-        size_t begin = 0;
-        for (size_t i = 0; i <= body.strips.size(); ++i) {
-            if (i < body.strips.size() && body.strips[i] >= 0) continue;
-            // Strip [begin, i): triangle k is (s[k], s[k+1], s[k+2]) for even k and (s[k+1], s[k], s[k+2])
-            // for odd k, which keeps every triangle's winding the same.
-            for (size_t k = begin; k + 2 < i; ++k) {
-                uint32_t a = uint32_t(body.strips[k]), b = uint32_t(body.strips[k + 1]);
-                const uint32_t c = uint32_t(body.strips[k + 2]);
-                if ((k - begin) % 2 == 1) std::swap(a, b);
-                if (isDegenerate(a, b, c)) {
-                    ++degenerate;
-                    continue;
-                }
-                mesh.indices.push_back(a);
-                mesh.indices.push_back(b);
-                mesh.indices.push_back(c);
-            }
-            begin = i + 1;
-        }
-        (void)degenerate; // strips use repeated indices on purpose to turn corners; dropping them is normal
+        triangulateStrips(body.strips, mesh.indices);
     }
     if (body.has_grid) {
         if (!body.has_faces && !body.has_strips) source.face_kind = "range_grid";
         triangulateRangeGrid(mesh, body.grid, size_t(header.num_rows), size_t(header.num_cols),
                              options.range_grid_max_edge_factor, mesh.indices);
     }
+}
+
+} // namespace
+
+Result<LoadedMesh> readPlyFromMemory(const uint8_t* data, size_t size, const std::string& name,
+                                     const ReadOptions& options, Diagnostics& diagnostics) {
+    LODBAKE_ASSIGN_OR_RETURN(Header header, parseHeader(data, size, name, diagnostics));
+    // Roles of the elements we understand; everything else is skipped.
+    LODBAKE_ASSIGN_OR_RETURN(const size_t vertex_element, findVertexElement(header, name, options));
+    const uint64_t vertex_count = header.elements[vertex_element].count;
+    LODBAKE_RETURN_IF_ERROR(checkBodyHoldsCounts(header, size, name));
+
+    LoadedMesh loaded;
+    Mesh& mesh = loaded.mesh;
+    SourceInfo& source = loaded.source;
+    source.format = MeshFormat::Ply;
+    source.encoding = encodingName(header.encoding);
+    source.file_vertex_count = vertex_count;
+    source.face_kind = "none";
+
+    BodyData body;
+    BodyCursor cursor(data, size, header.body_offset, header.encoding);
+    for (size_t ei = 0; ei < header.elements.size(); ++ei) {
+        const Element& el = header.elements[ei];
+        if (el.properties.empty()) continue;
+        if (ei == vertex_element) {
+            LODBAKE_RETURN_IF_ERROR(readVertexElement(el, size_t(vertex_count), cursor, name, diagnostics, mesh));
+            continue;
+        }
+        FaceElement fe{el, el.name == "face", el.name == "tristrips", el.name == "range_grid"};
+        fe.after_vertices = ei > vertex_element;
+        LODBAKE_RETURN_IF_ERROR(prepareFaceElement(fe, header, name, options, diagnostics, body, loaded));
+        LODBAKE_RETURN_IF_ERROR(
+            readFaceElementRecords(fe, vertex_count, header, name, options, cursor, body, mesh));
+    }
+    if (const size_t extra = cursor.trailingBytes(); extra > 0)
+        diagnostics.warn(name + ": body: " + std::to_string(extra) + " bytes after the last element ignored");
+
+    triangulateBody(body, header, name, options, diagnostics, loaded);
     if (mesh.faceCount() > options.max_face_count)
         return resourceLimit(name + ": face: " + std::to_string(mesh.faceCount()) +
                              " triangles after triangulation exceed the limit of " +

@@ -512,6 +512,115 @@ std::vector<Result<DistanceResult>> measurePipelined(const DistanceReference& re
     return results;
 }
 
+// closestDistanceSq's steps. They run for every node the search visits, so they are forced inline:
+// the search compiles to the same loop as when they were written in place.
+
+// One entry of the search stack: a child reference and the float distance to its box (a lower bound).
+struct SearchEntry {
+    uint32_t ref;
+    float dist;
+};
+
+// Squared float distances from (px, py, pz) to the four child boxes of `node`. `dist` is 16-byte aligned.
+__attribute__((always_inline)) inline void childBoxDistancesSq(const DistanceIndex::Node& node, float px, float py,
+                                                               float pz, float* dist) {
+#if defined(__SSE2__)
+    const __m128 vx = _mm_set1_ps(px), vy = _mm_set1_ps(py), vz = _mm_set1_ps(pz);
+    const __m128 zero = _mm_setzero_ps();
+    const __m128 dx =
+        _mm_max_ps(_mm_max_ps(_mm_sub_ps(_mm_loadu_ps(node.lo[0]), vx), _mm_sub_ps(vx, _mm_loadu_ps(node.hi[0]))), zero);
+    const __m128 dy =
+        _mm_max_ps(_mm_max_ps(_mm_sub_ps(_mm_loadu_ps(node.lo[1]), vy), _mm_sub_ps(vy, _mm_loadu_ps(node.hi[1]))), zero);
+    const __m128 dz =
+        _mm_max_ps(_mm_max_ps(_mm_sub_ps(_mm_loadu_ps(node.lo[2]), vz), _mm_sub_ps(vz, _mm_loadu_ps(node.hi[2]))), zero);
+    _mm_store_ps(dist, _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz)));
+#else
+    for (int i = 0; i < 4; ++i) {
+        const float dx = std::max(std::max(node.lo[0][i] - px, px - node.hi[0][i]), 0.0f);
+        const float dy = std::max(std::max(node.lo[1][i] - py, py - node.hi[1][i]), 0.0f);
+        const float dz = std::max(std::max(node.lo[2][i] - pz, pz - node.hi[2][i]), 0.0f);
+        dist[i] = dx * dx + dy * dy + dz * dz;
+    }
+#endif
+}
+
+// Bit i set for each child i whose distance is within `limit_f`. `dist` is 16-byte aligned.
+__attribute__((always_inline)) inline unsigned childrenWithin(const float* dist, float limit_f) {
+#if defined(__SSE2__)
+    return unsigned(_mm_movemask_ps(_mm_cmple_ps(_mm_load_ps(dist), _mm_set1_ps(limit_f))));
+#else
+    unsigned mask = 0;
+    for (int i = 0; i < 4; ++i) mask |= unsigned(dist[i] <= limit_f) << i;
+    return mask;
+#endif
+}
+
+// Where to start (see Cursor): the deepest node of the last query's path whose clearance, less the
+// distance from the last point, still exceeds the limit. Every triangle outside it is then farther
+// than the limit from p (triangle inequality), so the search would skip it anyway. The entries kept
+// are lower bounds for p as well once that distance is taken off; entry 0 is the root (nothing
+// outside it). Only with the float box test, whose distances the clearances come from. Returns the
+// number of path entries the search starts below (the start node is cursor.node[depth - 1]).
+inline uint32_t resumeDepth(DistanceIndex::Cursor& cursor, const Vec3d& p, double limit, float mag, uint32_t root,
+                            bool use_float) {
+    uint32_t depth = 1;
+    if (use_float && cursor.depth > 0) {
+        const Vec3d step = p - cursor.point;
+        // Margins far above the rounding of these few double operations.
+        const double moved = std::sqrt(dot(step, step)) * (1.0 + 0x1p-40) + double(mag) * 0x1p-50;
+        depth = cursor.depth;
+        for (; depth > 1; --depth) {
+            const double c = cursor.clearance[depth - 1] - moved;
+            if (c > 0.0 && c * c * (1.0 - 0x1p-40) > limit) break;
+        }
+        for (uint32_t i = 1; i < depth; ++i) cursor.clearance[i] -= moved;
+    } else {
+        cursor.node[0] = root;
+        cursor.clearance[0] = std::numeric_limits<double>::infinity();
+    }
+    cursor.depth = use_float ? depth : 0;
+    cursor.point = p;
+    return depth;
+}
+
+// The search descends alone into child `only` (reference `ref`) of a node on the cursor's path: the
+// child joins the path with its clearance. Returns false (the path ends) when the cursor is full.
+__attribute__((always_inline)) inline bool extendCursorPath(DistanceIndex::Cursor& cursor, uint32_t ref,
+                                                            const float* dist, int only, float mag) {
+    if (cursor.depth >= DistanceIndex::kCursorDepth) return false;
+    // The other children's boxes are beyond the limit; their float distance bounds the distance from
+    // p to their triangles: up to a relative 2^-20 for the float arithmetic and |p - float(p)| < M 2^-22
+    // (|p| <= 2M).
+    float nearest_other = HUGE_VALF;
+    for (int i = 0; i < 4; ++i)
+        if (i != only) nearest_other = std::min(nearest_other, dist[i]);
+    const double bound = std::sqrt(double(nearest_other) * (1.0 - 0x1p-19)) - double(mag) * 0x1p-22;
+    cursor.node[cursor.depth] = ref;
+    cursor.clearance[cursor.depth] = std::min(cursor.clearance[cursor.depth - 1], bound);
+    ++cursor.depth;
+    return true;
+}
+
+// Of the children in `mask` (two or more), the nearest is returned to be visited next and the others
+// are pushed farthest first.
+__attribute__((always_inline)) inline uint32_t pushAllButNearest(const DistanceIndex::Node& node, unsigned mask,
+                                                                 const float* dist, SearchEntry* stack, size_t& top) {
+    SearchEntry keep[4];
+    int n = 0;
+    for (; mask != 0; mask &= mask - 1) {
+        const int i = __builtin_ctz(mask);
+        const SearchEntry x{node.child[i], dist[i]};
+        int j = n++;
+        while (j > 0 && keep[j - 1].dist < x.dist) {
+            keep[j] = keep[j - 1];
+            --j;
+        }
+        keep[j] = x;
+    }
+    for (int i = 0; i + 1 < n; ++i) stack[top++] = keep[i];
+    return keep[n - 1].ref;
+}
+
 } // namespace
 
 Result<DistanceIndex> DistanceIndex::build(const std::vector<Vec3f>& positions, const std::vector<uint32_t>& indices) {
@@ -634,7 +743,6 @@ double DistanceIndex::closestDistanceSq(const Vec3d& p, Cursor& cursor) const {
     };
     setLimit();
 #if defined(__SSE2__)
-    const __m128 vx = _mm_set1_ps(px), vy = _mm_set1_ps(py), vz = _mm_set1_ps(pz);
     const __m128 vp = _mm_setr_ps(px, py, pz, 0.0f);
     const __m128 slack4 = _mm_set1_ps(float(slack_)); // exact: the magnitude (a float) times 2^-21
     const __m128 zero = _mm_setzero_ps();
@@ -658,35 +766,9 @@ double DistanceIndex::closestDistanceSq(const Vec3d& p, Cursor& cursor) const {
         return triangleBoxDistanceSq(s, p) > limit;
     };
 
-    struct Entry {
-        uint32_t ref;
-        float dist;
-    };
-    Entry stack[kStackSize];
+    SearchEntry stack[kStackSize];
     size_t top = 0;
-    // Where to start (see Cursor): the deepest node of the last query's path whose clearance, less the
-    // distance from the last point, still exceeds the limit. Every triangle outside it is then farther
-    // than the limit from p (triangle inequality), so the search would skip it anyway. The entries kept
-    // are lower bounds for p as well once that distance is taken off; entry 0 is the root (nothing
-    // outside it). Only with the float box test, whose distances the clearances come from.
-    uint32_t depth = 1;
-    if (use_float && cursor.depth > 0) {
-        const Vec3d step = p - cursor.point;
-        // Margins far above the rounding of these few double operations.
-        const double moved = std::sqrt(dot(step, step)) * (1.0 + 0x1p-40) + double(mag) * 0x1p-50;
-        depth = cursor.depth;
-        for (; depth > 1; --depth) {
-            const double c = cursor.clearance[depth - 1] - moved;
-            if (c > 0.0 && c * c * (1.0 - 0x1p-40) > limit) break;
-        }
-        for (uint32_t i = 1; i < depth; ++i) cursor.clearance[i] -= moved;
-    } else {
-        cursor.node[0] = root_;
-        cursor.clearance[0] = std::numeric_limits<double>::infinity();
-    }
-    cursor.depth = use_float ? depth : 0;
-    cursor.point = p;
-    uint32_t ref = cursor.node[depth - 1];
+    uint32_t ref = cursor.node[resumeDepth(cursor, p, limit, mag, root_, use_float) - 1];
     // Whether the search is still on a single path from its start (no branch, no pop yet): each node
     // then joins the cursor's path.
     bool on_path = use_float;
@@ -707,22 +789,7 @@ double DistanceIndex::closestDistanceSq(const Vec3d& p, Cursor& cursor) const {
             const Node& node = nodes_[ref];
             alignas(16) float dist[4];
             if (use_float) {
-#if defined(__SSE2__)
-                const __m128 dx = _mm_max_ps(_mm_max_ps(_mm_sub_ps(_mm_loadu_ps(node.lo[0]), vx),
-                                                        _mm_sub_ps(vx, _mm_loadu_ps(node.hi[0]))), zero);
-                const __m128 dy = _mm_max_ps(_mm_max_ps(_mm_sub_ps(_mm_loadu_ps(node.lo[1]), vy),
-                                                        _mm_sub_ps(vy, _mm_loadu_ps(node.hi[1]))), zero);
-                const __m128 dz = _mm_max_ps(_mm_max_ps(_mm_sub_ps(_mm_loadu_ps(node.lo[2]), vz),
-                                                        _mm_sub_ps(vz, _mm_loadu_ps(node.hi[2]))), zero);
-                _mm_store_ps(dist, _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz)));
-#else
-                for (int i = 0; i < 4; ++i) {
-                    const float dx = std::max(std::max(node.lo[0][i] - px, px - node.hi[0][i]), 0.0f);
-                    const float dy = std::max(std::max(node.lo[1][i] - py, py - node.hi[1][i]), 0.0f);
-                    const float dz = std::max(std::max(node.lo[2][i] - pz, pz - node.hi[2][i]), 0.0f);
-                    dist[i] = dx * dx + dy * dy + dz * dz;
-                }
-#endif
+                childBoxDistancesSq(node, px, py, pz, dist);
             } else {
                 // Rounded down to float so the float comparison below stays conservative.
                 for (int i = 0; i < 4; ++i) {
@@ -732,51 +799,16 @@ double DistanceIndex::closestDistanceSq(const Vec3d& p, Cursor& cursor) const {
                     dist[i] = double(f) > limit ? HUGE_VALF : f;
                 }
             }
-            unsigned mask = 0;
-#if defined(__SSE2__)
-            mask = unsigned(_mm_movemask_ps(_mm_cmple_ps(_mm_load_ps(dist), _mm_set1_ps(limit_f))));
-#else
-            for (int i = 0; i < 4; ++i) mask |= unsigned(dist[i] <= limit_f) << i;
-#endif
+            const unsigned mask = childrenWithin(dist, limit_f);
             if (mask != 0) {
                 if ((mask & (mask - 1)) == 0) { // one child: descend without the stack
                     const int only = __builtin_ctz(mask);
                     ref = node.child[only];
-                    if (on_path) {
-                        if (cursor.depth < kCursorDepth) {
-                            // The other children's boxes are beyond the limit; their float distance
-                            // bounds the distance from p to their triangles: up to a relative 2^-20 for
-                            // the float arithmetic and |p - float(p)| < M 2^-22 (|p| <= 2M).
-                            float nearest_other = HUGE_VALF;
-                            for (int i = 0; i < 4; ++i)
-                                if (i != only) nearest_other = std::min(nearest_other, dist[i]);
-                            const double bound =
-                                std::sqrt(double(nearest_other) * (1.0 - 0x1p-19)) - double(mag) * 0x1p-22;
-                            cursor.node[cursor.depth] = ref;
-                            cursor.clearance[cursor.depth] = std::min(cursor.clearance[cursor.depth - 1], bound);
-                            ++cursor.depth;
-                        } else {
-                            on_path = false;
-                        }
-                    }
+                    if (on_path) on_path = extendCursorPath(cursor, ref, dist, only, mag);
                     continue;
                 }
                 on_path = false;
-                // Nearest child visited next, the others pushed farthest first.
-                Entry keep[4];
-                int n = 0;
-                for (; mask != 0; mask &= mask - 1) {
-                    const int i = __builtin_ctz(mask);
-                    const Entry x{node.child[i], dist[i]};
-                    int j = n++;
-                    while (j > 0 && keep[j - 1].dist < x.dist) {
-                        keep[j] = keep[j - 1];
-                        --j;
-                    }
-                    keep[j] = x;
-                }
-                for (int i = 0; i + 1 < n; ++i) stack[top++] = keep[i];
-                ref = keep[n - 1].ref;
+                ref = pushAllButNearest(node, mask, dist, stack, top);
                 continue;
             }
         }
@@ -784,7 +816,7 @@ double DistanceIndex::closestDistanceSq(const Vec3d& p, Cursor& cursor) const {
         on_path = false;
         for (;;) {
             if (top == 0) return best;
-            const Entry e = stack[--top];
+            const SearchEntry e = stack[--top];
             if (e.dist <= limit_f) {
                 ref = e.ref;
                 break;

@@ -217,6 +217,15 @@ private:
     bool shrinkPfrep(uint32_t stream);
     void initPfrepStream(uint32_t model);
     void rebuildResidentTable();
+    // update() in steps: score what is wanted, rank the requests, make room, start one.
+    void scoreLevels(const ModelDemand* demand);
+    void scorePfrepStreams(const ModelDemand* demand);
+    float usefulness(uint32_t id) const;
+    uint32_t rankCandidates();
+    uint64_t requestBytes(uint32_t id, bool* is_pinned) const;
+    uint32_t leastUsefulVictim(float useful) const;
+    bool makeRoom(uint64_t size, float useful);
+    bool prepareTask(uint32_t task_index, uint32_t id, uint64_t size);
     void release();
     const PackSource* source_ = nullptr;
     JobSystem jobs_;
