@@ -276,6 +276,216 @@ void setAllocatorPolicy() {
 #endif
 }
 
+// A step of runBake that may end the run: kContinue, or the exit code to return.
+constexpr int kContinue = -1;
+
+// The jobs of a run and the settings files each read (presets and the manifest: read, so listed in
+// the depfile).
+struct JobList {
+    std::vector<BakeJob> jobs;
+    std::vector<std::string> settings_files;
+    std::vector<std::vector<std::string>> job_settings_files; // per job, the asset presets of a manifest
+};
+
+// The command-line flags that override the preset and the manifest.
+int parseOverrides(Args& args, CliOverrides& overrides) {
+    if (args.values.count("--threads")) {
+        double n = 0;
+        if (!parseNumber(args.values["--threads"], n) || n < 0 || n > 1024 || n != std::floor(n))
+            return usageError("--threads expects an integer in [0, 1024], got '" + args.values["--threads"] + "'");
+        overrides.has_threads = true;
+        overrides.threads = uint32_t(n);
+    }
+    if (args.values.count("--levels")) {
+        std::vector<double> ratios;
+        if (!parseList(args.values["--levels"], ratios) || ratios.empty())
+            return usageError("--levels expects comma-separated numbers, got '" + args.values["--levels"] + "'");
+        for (double r : ratios)
+            if (!(r > 0.0 && r <= 1.0))
+                return usageError("--levels: every ratio must lie in (0, 1], got '" + args.values["--levels"] + "'");
+        overrides.has_levels = true;
+        overrides.levels = ratios;
+    }
+    if (args.values.count("--pixels")) {
+        double p = 0;
+        if (!parseNumber(args.values["--pixels"], p) || !(p > 0))
+            return usageError("--pixels expects a positive number, got '" + args.values["--pixels"] + "'");
+        overrides.has_pixels = true;
+        overrides.pixels = p;
+    }
+    overrides.compact = args.flags.count("--compact") > 0;
+    overrides.no_progressive_fans = args.flags.count("--no-progressive-fans") > 0;
+    overrides.pfrep_from_chain = args.flags.count("--pfrep-from-chain") > 0;
+    overrides.no_pfrep_from_chain = args.flags.count("--no-pfrep-from-chain") > 0;
+    overrides.adaptive_precision = args.flags.count("--adaptive-precision") > 0;
+    overrides.no_adaptive_precision = args.flags.count("--no-adaptive-precision") > 0;
+    overrides.remove_covered_components = args.flags.count("--remove-covered-components") > 0;
+    if (overrides.adaptive_precision && overrides.no_adaptive_precision)
+        return usageError("--adaptive-precision and --no-adaptive-precision exclude each other");
+    if (overrides.pfrep_from_chain && overrides.no_pfrep_from_chain)
+        return usageError("--pfrep-from-chain and --no-pfrep-from-chain exclude each other");
+    return kContinue;
+}
+
+// The jobs: from the manifest, one per input (-o DIR/), or one for every input (-o OUT.glb).
+int collectJobs(Args& args, const BakeSettings& base, const CliOverrides& overrides, const std::string& out,
+                JobList& list) {
+    std::vector<BakeJob>& jobs = list.jobs;
+    if (args.values.count("--manifest")) {
+        if (!args.positional.empty()) return usageError("--manifest takes no input files on the command line");
+        if (!out.empty() && !isFolderTarget(out))
+            return usageError("with --manifest, -o names a folder (end it with '/'), got '" + out + "'");
+        const std::string manifest_path = args.values["--manifest"];
+        Result<BakeManifest> manifest = readBakeManifest(manifest_path, base, out);
+        if (!manifest.ok()) return reportError(manifest.status());
+        list.settings_files.push_back(manifest_path);
+        for (ManifestAsset& a : manifest->assets) {
+            BakeJob job;
+            job.inputs = a.inputs;
+            job.output = a.output;
+            job.settings = a.settings;
+            applyOverrides(overrides, job.settings); // command-line flags win over the manifest
+            list.job_settings_files.push_back(a.settings_files);
+            jobs.push_back(std::move(job));
+        }
+    } else if (args.flags.count("--print-config")) {
+        std::fputs(settingsToJson(base).c_str(), stdout);
+        return kExitOk;
+    } else {
+        if (args.positional.empty()) return usageError("bake needs at least one input file (or --manifest)");
+        if (out.empty()) return usageError("bake needs -o OUT.glb or -o DIR/");
+        if (isFolderTarget(out)) {
+            std::map<std::string, std::string> stems;
+            for (const std::string& in : args.positional) {
+                BakeJob job;
+                job.inputs = {in};
+                job.output = joinPath(out, inputGroupName(in) + ".glb");
+                job.settings = base;
+                const auto [it, inserted] = stems.emplace(job.output, in);
+                if (!inserted)
+                    return usageError("'" + in + "' and '" + it->second + "' would both be baked into '" + job.output +
+                                      "'; use --manifest to name the outputs");
+                jobs.push_back(std::move(job));
+            }
+        } else {
+            if (lowerExtension(out) != ".glb") return usageError("bake writes a .glb pack, got '" + out + "'");
+            BakeJob job;
+            job.inputs = args.positional;
+            job.output = out;
+            job.settings = base;
+            jobs.push_back(std::move(job));
+        }
+    }
+    return kContinue;
+}
+
+// --print-config with a manifest: one resolved settings document per pack, keyed by output path.
+void printJobConfigs(const std::vector<BakeJob>& jobs) {
+    std::string text = "{";
+    for (size_t i = 0; i < jobs.size(); ++i) {
+        std::string settings = settingsToJson(jobs[i].settings);
+        while (!settings.empty() && settings.back() == '\n') settings.pop_back();
+        text += std::string(i ? "," : "") + "\n" + JsonWriter::escape(jobs[i].output) + ": " + settings;
+    }
+    std::fputs((text + "\n}\n").c_str(), stdout);
+}
+
+// No output may be an input; batch and manifest outputs go into folders the run creates (as a
+// build system's output tree).
+int checkOutputs(Args& args, const std::vector<BakeJob>& jobs, const std::string& out) {
+    for (const BakeJob& job : jobs)
+        for (const std::string& in : job.inputs)
+            if (isSameFile(in, job.output)) return usageError("output '" + job.output + "' is also an input");
+    if (args.values.count("--manifest") || (!out.empty() && isFolderTarget(out))) {
+        std::set<std::string> folders;
+        for (const BakeJob& job : jobs) folders.insert(parentDirectory(job.output));
+        for (const std::string& folder : folders) {
+            std::error_code ec;
+            if (!folder.empty()) fs::create_directories(folder, ec);
+            if (ec) return reportError(ioError(folder + ": cannot create the output folder: " + ec.message()));
+        }
+    }
+    return kContinue;
+}
+
+// Every job's diagnostics and errors, in job order whatever order the jobs finished in. Returns the
+// run's exit code so far.
+int printJobDiagnostics(const std::vector<BakeJob>& jobs, const std::vector<BakeJobResult>& results, bool quiet) {
+    int exit_code = kExitOk;
+    for (size_t i = 0; i < jobs.size(); ++i) {
+        const BakeJobResult& r = results[i];
+        if (quiet) {
+            Diagnostics warnings; // --quiet keeps warnings and errors only
+            for (const Diagnostic& diagnostic : r.diagnostics.items())
+                if (diagnostic.severity == Severity::Warning) warnings.warn(diagnostic.message);
+            printDiagnostics(warnings);
+        } else {
+            printDiagnostics(r.diagnostics);
+        }
+        if (!r.cache_warning.empty()) std::fprintf(stderr, "warning: cache: %s\n", r.cache_warning.c_str());
+        if (!r.status.ok()) {
+            exit_code = reportError(r.status);
+            continue;
+        }
+        if (r.cache_hit && !quiet) std::fprintf(stderr, "note: %s: cache hit\n", jobs[i].output.c_str());
+    }
+    return exit_code;
+}
+
+// The packs, then the report and depfile that describe them, committed together.
+Status writeOutputs(Args& args, const JobList& list, const std::vector<BakeJobResult>& results, const std::string& out,
+                    int exit_code, double total_seconds, double total_cpu_seconds) {
+    const std::vector<BakeJob>& jobs = list.jobs;
+    // A failed pack fails the run, but the packs that were baked are still written (the report and
+    // depfile only when every pack succeeded: a build system must re-run the failed ones).
+    AtomicFileWriter writer;
+    Status status = Status::okStatus();
+    std::string report, depfile;
+    if (exit_code == kExitOk && args.values.count("--report")) {
+        if (jobs.size() == 1 && !args.values.count("--manifest") && !isFolderTarget(out)) {
+            report = jobReport(jobs[0], results[0]);
+        } else {
+            std::string packs;
+            for (size_t i = 0; i < jobs.size(); ++i) packs += (i ? ",\n" : "") + jobReport(jobs[i], results[i]);
+            report = "{\n\"totalSeconds\": " + JsonWriter::formatNumber(total_seconds) +
+                     ",\n\"totalCpuSeconds\": " + JsonWriter::formatNumber(total_cpu_seconds) + ",\n\"packs\": [\n" +
+                     packs + "\n]\n}\n";
+        }
+        status = writer.add(args.values["--report"], report);
+    }
+    if (exit_code == kExitOk && status.ok() && args.values.count("--depfile")) {
+        std::vector<DepfileRule> rules;
+        for (size_t i = 0; i < jobs.size(); ++i) {
+            DepfileRule rule;
+            rule.target = jobs[i].output;
+            rule.prerequisites = list.settings_files;
+            if (i < list.job_settings_files.size())
+                rule.prerequisites.insert(rule.prerequisites.end(), list.job_settings_files[i].begin(),
+                                          list.job_settings_files[i].end());
+            rule.prerequisites.insert(rule.prerequisites.end(), results[i].files_read.begin(),
+                                      results[i].files_read.end());
+            rules.push_back(std::move(rule));
+        }
+        depfile = formatDepfile(rules);
+        status = writer.add(args.values["--depfile"], depfile);
+    }
+    // Packs first, then the report and depfile that describe them.
+    for (size_t i = 0; i < results.size() && status.ok(); ++i)
+        if (results[i].staged) status = results[i].staged->commit();
+    if (status.ok()) status = writer.commit();
+    return status;
+}
+
+void printSummaries(const std::vector<BakeJob>& jobs, const std::vector<BakeJobResult>& results, bool quiet) {
+    for (size_t i = 0; i < jobs.size() && !quiet; ++i) {
+        const BakeJobResult& r = results[i];
+        if (!r.status.ok()) continue;
+        std::fputs(r.summary.c_str(), stdout);
+        std::printf("wrote %s (%llu bytes%s)\n", jobs[i].output.c_str(), static_cast<unsigned long long>(r.pack_bytes),
+                    r.cache_hit ? ", cache hit" : "");
+    }
+}
+
 } // namespace
 
 int runBake(int argc, char** argv) {
@@ -312,122 +522,26 @@ int runBake(int argc, char** argv) {
     const bool quiet = args.flags.count("--quiet") > 0;
     BakeSettings base;
     std::vector<std::string> settings_files; // presets and the manifest: read, so listed in the depfile
-    std::vector<std::vector<std::string>> job_settings_files; // per job, the asset presets of a manifest
     if (args.values.count("--preset")) {
         const Status status = applyPresetFile(args.values["--preset"], base);
         if (!status.ok()) return reportError(status);
         settings_files.push_back(args.values["--preset"]);
     }
     CliOverrides overrides;
-    if (args.values.count("--threads")) {
-        double n = 0;
-        if (!parseNumber(args.values["--threads"], n) || n < 0 || n > 1024 || n != std::floor(n))
-            return usageError("--threads expects an integer in [0, 1024], got '" + args.values["--threads"] + "'");
-        overrides.has_threads = true;
-        overrides.threads = uint32_t(n);
-    }
-    if (args.values.count("--levels")) {
-        std::vector<double> ratios;
-        if (!parseList(args.values["--levels"], ratios) || ratios.empty())
-            return usageError("--levels expects comma-separated numbers, got '" + args.values["--levels"] + "'");
-        for (double r : ratios)
-            if (!(r > 0.0 && r <= 1.0))
-                return usageError("--levels: every ratio must lie in (0, 1], got '" + args.values["--levels"] + "'");
-        overrides.has_levels = true;
-        overrides.levels = ratios;
-    }
-    if (args.values.count("--pixels")) {
-        double p = 0;
-        if (!parseNumber(args.values["--pixels"], p) || !(p > 0))
-            return usageError("--pixels expects a positive number, got '" + args.values["--pixels"] + "'");
-        overrides.has_pixels = true;
-        overrides.pixels = p;
-    }
-    overrides.compact = args.flags.count("--compact") > 0;
-    overrides.no_progressive_fans = args.flags.count("--no-progressive-fans") > 0;
-    overrides.pfrep_from_chain = args.flags.count("--pfrep-from-chain") > 0;
-    overrides.no_pfrep_from_chain = args.flags.count("--no-pfrep-from-chain") > 0;
-    overrides.adaptive_precision = args.flags.count("--adaptive-precision") > 0;
-    overrides.no_adaptive_precision = args.flags.count("--no-adaptive-precision") > 0;
-    overrides.remove_covered_components = args.flags.count("--remove-covered-components") > 0;
-    if (overrides.adaptive_precision && overrides.no_adaptive_precision)
-        return usageError("--adaptive-precision and --no-adaptive-precision exclude each other");
-    if (overrides.pfrep_from_chain && overrides.no_pfrep_from_chain)
-        return usageError("--pfrep-from-chain and --no-pfrep-from-chain exclude each other");
+    if (const int c = parseOverrides(args, overrides); c != kContinue) return c;
     applyOverrides(overrides, base);
 
     // The jobs.
-    std::vector<BakeJob> jobs;
+    JobList list;
+    list.settings_files = std::move(settings_files);
     const std::string out = args.values.count("--output") ? args.values["--output"] : std::string();
-    if (args.values.count("--manifest")) {
-        if (!args.positional.empty()) return usageError("--manifest takes no input files on the command line");
-        if (!out.empty() && !isFolderTarget(out))
-            return usageError("with --manifest, -o names a folder (end it with '/'), got '" + out + "'");
-        const std::string manifest_path = args.values["--manifest"];
-        Result<BakeManifest> manifest = readBakeManifest(manifest_path, base, out);
-        if (!manifest.ok()) return reportError(manifest.status());
-        settings_files.push_back(manifest_path);
-        for (ManifestAsset& a : manifest->assets) {
-            BakeJob job;
-            job.inputs = a.inputs;
-            job.output = a.output;
-            job.settings = a.settings;
-            applyOverrides(overrides, job.settings); // command-line flags win over the manifest
-            job_settings_files.push_back(a.settings_files);
-            jobs.push_back(std::move(job));
-        }
-    } else if (args.flags.count("--print-config")) {
-        std::fputs(settingsToJson(base).c_str(), stdout);
-        return kExitOk;
-    } else {
-        if (args.positional.empty()) return usageError("bake needs at least one input file (or --manifest)");
-        if (out.empty()) return usageError("bake needs -o OUT.glb or -o DIR/");
-        if (isFolderTarget(out)) {
-            std::map<std::string, std::string> stems;
-            for (const std::string& in : args.positional) {
-                BakeJob job;
-                job.inputs = {in};
-                job.output = joinPath(out, inputGroupName(in) + ".glb");
-                job.settings = base;
-                const auto [it, inserted] = stems.emplace(job.output, in);
-                if (!inserted)
-                    return usageError("'" + in + "' and '" + it->second + "' would both be baked into '" + job.output +
-                                      "'; use --manifest to name the outputs");
-                jobs.push_back(std::move(job));
-            }
-        } else {
-            if (lowerExtension(out) != ".glb") return usageError("bake writes a .glb pack, got '" + out + "'");
-            BakeJob job;
-            job.inputs = args.positional;
-            job.output = out;
-            job.settings = base;
-            jobs.push_back(std::move(job));
-        }
-    }
+    if (const int c = collectJobs(args, base, overrides, out, list); c != kContinue) return c;
+    const std::vector<BakeJob>& jobs = list.jobs;
     if (args.flags.count("--print-config")) {
-        // Manifest: one resolved settings document per pack, keyed by output path.
-        std::string text = "{";
-        for (size_t i = 0; i < jobs.size(); ++i) {
-            std::string settings = settingsToJson(jobs[i].settings);
-            while (!settings.empty() && settings.back() == '\n') settings.pop_back();
-            text += std::string(i ? "," : "") + "\n" + JsonWriter::escape(jobs[i].output) + ": " + settings;
-        }
-        std::fputs((text + "\n}\n").c_str(), stdout);
+        printJobConfigs(jobs);
         return kExitOk;
     }
-    for (const BakeJob& job : jobs)
-        for (const std::string& in : job.inputs)
-            if (isSameFile(in, job.output)) return usageError("output '" + job.output + "' is also an input");
-    // Batch and manifest outputs go into folders the run creates (as a build system's output tree).
-    if (args.values.count("--manifest") || (!out.empty() && isFolderTarget(out))) {
-        std::set<std::string> folders;
-        for (const BakeJob& job : jobs) folders.insert(parentDirectory(job.output));
-        for (const std::string& folder : folders) {
-            std::error_code ec;
-            if (!folder.empty()) fs::create_directories(folder, ec);
-            if (ec) return reportError(ioError(folder + ": cannot create the output folder: " + ec.message()));
-        }
-    }
+    if (const int c = checkOutputs(args, jobs, out); c != kContinue) return c;
 
     // From here on an interrupted bake removes its temporaries before dying by the signal.
     installTempFileSignalCleanup();
@@ -450,70 +564,10 @@ int runBake(int argc, char** argv) {
     const double total_cpu_seconds = processCpuSeconds() - cpu_start;
     printer.finish();
 
-    // Everything printed in job order, whatever order the jobs finished in.
-    int exit_code = kExitOk;
-    for (size_t i = 0; i < jobs.size(); ++i) {
-        const BakeJobResult& r = results[i];
-        if (quiet) {
-            Diagnostics warnings; // --quiet keeps warnings and errors only
-            for (const Diagnostic& diagnostic : r.diagnostics.items())
-                if (diagnostic.severity == Severity::Warning) warnings.warn(diagnostic.message);
-            printDiagnostics(warnings);
-        } else {
-            printDiagnostics(r.diagnostics);
-        }
-        if (!r.cache_warning.empty()) std::fprintf(stderr, "warning: cache: %s\n", r.cache_warning.c_str());
-        if (!r.status.ok()) {
-            exit_code = reportError(r.status);
-            continue;
-        }
-        if (r.cache_hit && !quiet) std::fprintf(stderr, "note: %s: cache hit\n", jobs[i].output.c_str());
-    }
-    // A failed pack fails the run, but the packs that were baked are still written (the report and
-    // depfile only when every pack succeeded: a build system must re-run the failed ones).
-    AtomicFileWriter writer;
-    Status status = Status::okStatus();
-    std::string report, depfile;
-    if (exit_code == kExitOk && args.values.count("--report")) {
-        if (jobs.size() == 1 && !args.values.count("--manifest") && !isFolderTarget(out)) {
-            report = jobReport(jobs[0], results[0]);
-        } else {
-            std::string packs;
-            for (size_t i = 0; i < jobs.size(); ++i) packs += (i ? ",\n" : "") + jobReport(jobs[i], results[i]);
-            report = "{\n\"totalSeconds\": " + JsonWriter::formatNumber(total_seconds) +
-                     ",\n\"totalCpuSeconds\": " + JsonWriter::formatNumber(total_cpu_seconds) + ",\n\"packs\": [\n" +
-                     packs + "\n]\n}\n";
-        }
-        status = writer.add(args.values["--report"], report);
-    }
-    if (exit_code == kExitOk && status.ok() && args.values.count("--depfile")) {
-        std::vector<DepfileRule> rules;
-        for (size_t i = 0; i < jobs.size(); ++i) {
-            DepfileRule rule;
-            rule.target = jobs[i].output;
-            rule.prerequisites = settings_files;
-            if (i < job_settings_files.size())
-                rule.prerequisites.insert(rule.prerequisites.end(), job_settings_files[i].begin(),
-                                          job_settings_files[i].end());
-            rule.prerequisites.insert(rule.prerequisites.end(), results[i].files_read.begin(),
-                                      results[i].files_read.end());
-            rules.push_back(std::move(rule));
-        }
-        depfile = formatDepfile(rules);
-        status = writer.add(args.values["--depfile"], depfile);
-    }
-    // Packs first, then the report and depfile that describe them.
-    for (size_t i = 0; i < results.size() && status.ok(); ++i)
-        if (results[i].staged) status = results[i].staged->commit();
-    if (status.ok()) status = writer.commit();
+    int exit_code = printJobDiagnostics(jobs, results, quiet);
+    const Status status = writeOutputs(args, list, results, out, exit_code, total_seconds, total_cpu_seconds);
     if (!status.ok()) return reportError(status);
-    for (size_t i = 0; i < jobs.size() && !quiet; ++i) {
-        const BakeJobResult& r = results[i];
-        if (!r.status.ok()) continue;
-        std::fputs(r.summary.c_str(), stdout);
-        std::printf("wrote %s (%llu bytes%s)\n", jobs[i].output.c_str(), static_cast<unsigned long long>(r.pack_bytes),
-                    r.cache_hit ? ", cache hit" : "");
-    }
+    printSummaries(jobs, results, quiet);
     return exit_code;
 }
 

@@ -12,6 +12,7 @@
 #include <limits>
 #include <new>
 
+#include "lodrt/format.h"
 #include "memory.h"
 
 namespace lodrt {
@@ -102,10 +103,10 @@ struct ModelBuilder {
     }
 
     static JsonValue lodIds(const NodeInfo& node) {
-        return node.json.find("extensions").find("MSFT_lod").find("ids");
+        return node.json.find("extensions").find(format::kExtMsftLod).find("ids");
     }
     static bool hasLod(const NodeInfo& node) {
-        return node.json.find("extensions").find("MSFT_lod").isValid();
+        return node.json.find("extensions").find(format::kExtMsftLod).isValid();
     }
 
     // Local transform of a node (glTF 2.0 §5.25: matrix, or T * R * S), column-major.
@@ -200,7 +201,7 @@ struct ModelBuilder {
     // Validates the chain rooted at `root` and marks its nodes as owned.
     Result claimChain(uint32_t root) {
         const uint32_t node_count = pack->nodeCount();
-        JsonValue lod = pack->node(root).json.find("extensions").find("MSFT_lod");
+        JsonValue lod = pack->node(root).json.find("extensions").find(format::kExtMsftLod);
         if (!lod.isObject()) return fail(Result::BadGltf, "/nodes/%u/extensions/MSFT_lod: expected an object", root);
         JsonValue ids = lod.find("ids");
         if (!ids.isArray()) return fail(Result::BadGltf, "/nodes/%u/extensions/MSFT_lod/ids: expected an array", root);
@@ -404,8 +405,8 @@ struct ModelBuilder {
         const NodeInfo& node = pack->node(root);
         char path[96];
         std::snprintf(path, sizeof(path), "/nodes/%u/extensions/LODBAKE_lod_metrics", root);
-        JsonValue metrics = node.json.find("extensions").find("LODBAKE_lod_metrics");
-        JsonValue coverage = node.json.find("extras").find("MSFT_screencoverage");
+        JsonValue metrics = node.json.find("extensions").find(format::kExtLodMetrics);
+        JsonValue coverage = node.json.find("extras").find(format::kMsftScreenCoverage);
         if (coverage.isValid() && model->level_count > 1) {
             Result r = checkCoverage(root, *model, coverage);
             if (r != Result::Ok) return r;

@@ -10,6 +10,7 @@
 #include <cstring>
 #include <new>
 
+#include "lodrt/format.h"
 #include "memory.h"
 
 namespace lodrt {
@@ -293,8 +294,9 @@ struct PackLoader {
             if (!name.isString())
                 return fail(Result::BadGltf, "/extensionsRequired/%u: expected an extension name string", i);
             // Streams lodrt has decoders for (lodrt/valence.h, lodrt/pfrep.h) are not worth a warning.
-            if (name.string() == "LODBAKE_valence_compression" || name.string() == "LODBAKE_progressive_fans")
-                continue;
+            bool decoded = false;
+            for (const char* stream : format::kDecodedStreamExtensions) decoded |= name.string() == stream;
+            if (decoded) continue;
             char pointer[64], shown[96];
             std::snprintf(pointer, sizeof(pointer), "/extensionsRequired/%u", i);
             escapePointerToken(name.string(), shown, sizeof(shown));

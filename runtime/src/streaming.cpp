@@ -420,7 +420,7 @@ void Streamer::initPfrepStream(uint32_t m) {
     const ModelInfo& info = models.model(m);
     const LevelInfo& level0 = models.level(info.first_level);
     if (level0.mesh == kNoIndex || level0.mesh >= pack.meshCount()) return;
-    const JsonValue ext = pack.mesh(level0.mesh).json.find("extensions").find("LODBAKE_progressive_fans");
+    const JsonValue ext = pack.mesh(level0.mesh).json.find("extensions").find(format::kExtProgressiveFans);
     if (!ext.isObject()) return;
     ps.state = PfrepStreamState::Absent;
     ps.step_count = info.level_count + 1;

@@ -18,6 +18,7 @@
 
 #include "contact_sheet.h"
 #include "huge_page_heap.h"
+#include "lodrt/format.h"
 #include "lodrt/lodrt.h"
 #include "lodrt/pfrep.h"
 #include "lodrt/valence.h"
@@ -30,18 +31,20 @@ constexpr int kExitUsage = 2;
 
 void printUsage(std::FILE* out) {
     std::fprintf(out, "usage: loddump PACK [--json] [--level N] [--render OUT.png [--wireframe]]\n"
-                      "Prints the LOD groups (MSFT_lod + LODBAKE_lod_metrics: per level triangles, vertices,\n"
+                      "Prints the LOD groups (%s + %s: per level triangles, vertices,\n"
                       "errors, screen coverage, switch distance, bytes per stream: plain accessors,\n"
-                      "LODBAKE_valence_compression, LODBAKE_progressive_fans, each with its ratio to the same\n"
+                      "%s, %s, each with its ratio to the same\n"
                       "data as float32/uint32), then meshes, primitives, accessors and problems of a .glb/.gltf\n"
                       "pack. --level N shows only level N of each group (and only those meshes).\n"
-                      "Checks: MSFT_lod ids in range and without cycles, screen coverage not increasing and\n"
+                      "Checks: %s ids in range and without cycles, screen coverage not increasing and\n"
                       "errors not decreasing from one level to the next, every compressed stream decodes and\n"
                       "matches the plain accessors, each PFRep level the extension lists is what the blob\n"
                       "extracts and no finer than the chain level it stands for.\n"
                       "--render OUT.png draws every level of every group side by side (flat shaded; with\n"
                       "--wireframe the triangle edges too) and writes the picture with OpenImageIO.\n"
-                      "Exit status: 0 ok, 1 bad pack or failed check, 2 usage.\n");
+                      "Exit status: 0 ok, 1 bad pack or failed check, 2 usage.\n",
+                 lodrt::format::kExtMsftLod, lodrt::format::kExtLodMetrics, lodrt::format::kExtValenceCompression,
+                 lodrt::format::kExtProgressiveFans, lodrt::format::kExtMsftLod);
 }
 
 bool readFile(const char* path, std::vector<uint8_t>* bytes, std::string* error) {
@@ -157,8 +160,8 @@ struct LodReport {
     std::vector<Problem> problems;
 };
 
-constexpr std::string_view kValence = "LODBAKE_valence_compression";
-constexpr std::string_view kPfrep = "LODBAKE_progressive_fans";
+constexpr std::string_view kValence = lodrt::format::kExtValenceCompression;
+constexpr std::string_view kPfrep = lodrt::format::kExtProgressiveFans;
 
 // The accessor's data as float32 components / uint32 indices.
 uint64_t rawBytes(const lodrt::AccessorInfo& acc) {
@@ -528,7 +531,7 @@ LodReport analyseLods(const lodrt::Pack& pack) {
     // Nodes referenced as a lower level are not group roots.
     std::vector<bool> is_lower(node_count, false);
     for (uint32_t n = 0; n < node_count; ++n) {
-        const lodrt::JsonValue ids = pack.node(n).json.find("extensions").find("MSFT_lod").find("ids");
+        const lodrt::JsonValue ids = pack.node(n).json.find("extensions").find(lodrt::format::kExtMsftLod).find("ids");
         for (uint32_t i = 0; i < ids.size(); ++i) {
             uint64_t id = 0;
             if (ids.at(i).asUint64(&id) && id < node_count && id != n) is_lower[size_t(id)] = true;
@@ -543,7 +546,7 @@ LodReport analyseLods(const lodrt::Pack& pack) {
         state[start] = 1;
         while (!stack.empty()) {
             const uint32_t n = stack.back().first;
-            const lodrt::JsonValue ids = pack.node(n).json.find("extensions").find("MSFT_lod").find("ids");
+            const lodrt::JsonValue ids = pack.node(n).json.find("extensions").find(lodrt::format::kExtMsftLod).find("ids");
             if (stack.back().second >= ids.size()) {
                 state[n] = 2;
                 stack.pop_back();
@@ -555,7 +558,7 @@ LodReport analyseLods(const lodrt::Pack& pack) {
             if (state[size_t(id)] == 1) {
                 report.problems.push_back(
                     {nodePointer(n) + "/extensions/MSFT_lod/ids/" + std::to_string(i),
-                     "MSFT_lod cycle: node " + std::to_string(id) + " leads back to node " + std::to_string(n)});
+                     std::string(lodrt::format::kExtMsftLod) + " cycle: node " + std::to_string(id) + " leads back to node " + std::to_string(n)});
             } else if (state[size_t(id)] == 0) {
                 state[size_t(id)] = 1;
                 stack.push_back({uint32_t(id), 0});
@@ -563,7 +566,7 @@ LodReport analyseLods(const lodrt::Pack& pack) {
         }
     }
     for (uint32_t n = 0; n < node_count; ++n) {
-        const lodrt::JsonValue lod = pack.node(n).json.find("extensions").find("MSFT_lod");
+        const lodrt::JsonValue lod = pack.node(n).json.find("extensions").find(lodrt::format::kExtMsftLod);
         if (!lod.isValid() || is_lower[n]) continue;
         LodGroup group;
         group.root = n;
@@ -581,14 +584,14 @@ LodReport analyseLods(const lodrt::Pack& pack) {
             for (uint32_t c : chain)
                 if (c == id) {
                     report.problems.push_back(
-                        {where, "MSFT_lod cycle: node " + std::to_string(id) + " is already a level of this group"});
+                        {where, std::string(lodrt::format::kExtMsftLod) + " cycle: node " + std::to_string(id) + " is already a level of this group"});
                     ok = false;
                 }
             if (ok) chain.push_back(uint32_t(id));
         }
         const lodrt::JsonValue metrics =
-            pack.node(n).json.find("extensions").find("LODBAKE_lod_metrics").find("levels");
-        const lodrt::JsonValue coverage = pack.node(n).json.find("extras").find("MSFT_screencoverage");
+            pack.node(n).json.find("extensions").find(lodrt::format::kExtLodMetrics).find("levels");
+        const lodrt::JsonValue coverage = pack.node(n).json.find("extras").find(lodrt::format::kMsftScreenCoverage);
         if (metrics.isValid() && metrics.size() != chain.size())
             report.problems.push_back({nodePointer(n) + "/extensions/LODBAKE_lod_metrics/levels",
                                        "expected " + std::to_string(chain.size()) + " levels (MSFT_lod ids + 1), got " +

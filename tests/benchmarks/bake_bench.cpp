@@ -36,6 +36,7 @@
 #include "lodbake/pack/pack.h"
 #include "lodbake/pfrep/pfrep_extension.h"
 #include "lodbake/simplify/mesh_distance.h"
+#include "lodbake/stream/stream.h"
 
 namespace {
 

@@ -31,6 +31,7 @@
 #include "lodbake/gltf/gltf_io.h"
 #include "lodbake/io/mesh_io.h"
 #include "lodbake/pack/pack.h"
+#include "lodbake/stream/stream.h"
 #include "lodrt/pack.h"
 #include "lodrt/valence.h"
 

@@ -16,6 +16,7 @@
 #include "lodbake/gltf/gltf_io.h"
 #include "lodbake/simplify/lod_chain.h"
 #include "lodbake/simplify/mesh_distance.h"
+#include "lodbake/stream/stream.h"
 
 namespace lodbake {
 
@@ -125,181 +126,218 @@ void measureChain(const Mesh& mesh, LodChain& chain, const LodChainOptions& opti
     measureLodChain(mesh, chain, options, known, diagnostics);
 }
 
+Status repairInput(BakeInput& input, const BakeSettings& settings, AssetSlot& slot, size_t index,
+                   const BakeHooks& hooks) {
+    slot.report.name = input.name;
+    slot.report.input_triangles = input.mesh.faceCount();
+    slot.report.input_vertices = input.mesh.vertexCount();
+    if (!settings.repair) return Status::okStatus();
+    StageTimer timer(hooks, index, BakeStage::Repair);
+    RepairOptions repair_options;
+    repair_options.report_welded = false; // only `unresolved` goes into the bake's report
+    repair_options.report_before = false; // likewise: the input is validated only if a skip test needs it
+    LODBAKE_ASSIGN_OR_RETURN(RepairReport repair, repairMesh(input.mesh, repair_options, input.name, slot.diagnostics));
+    slot.report.repair_unresolved = repair.unresolved;
+    return Status::okStatus();
+}
+
+LodChainOptions chainOptions(const BakeSettings& settings, const std::vector<PackStreamEncoder>& encoders) {
+    LodChainOptions options;
+    options.ratios = settings.lod_ratios;
+    options.screen = screenParams(settings);
+    options.distance.sample_count = settings.error_samples;
+    options.simplify.remove_covered_components = settings.remove_covered_components;
+    options.measure_error = false; // measured beside the stream encoders (AssetTasks)
+    options.record_collapses = false;
+    // A stream that reads the collapse record gets the chain's collapses as vertex removals.
+    for (const PackStreamEncoder& encoder : encoders) options.record_removals |= encoder.needs.collapse_record;
+    return options;
+}
+
 // After the chain, the remaining work of an asset is a fixed set of tasks that only read the
 // meshes (STYLE.md §7: each writes its own slot; which thread runs which, and when, changes no
 // byte): the error measurement (then the metrics and texture levels that follow from it), and the
-// stream encoders' prepare steps. They run in phases (concurrentPhases): with 2 threads a small
-// asset's PFRep build (a replay of the chain's logged collapses, then the blob) runs beside the measurement and the
-// valence coding of the levels; a large asset's PFRep build runs beside the measurement's reference sides
-// (MeasureReference), then the rest of the measurement (parallel inside), then the coding of every level
-// side by side. The commits (cheap; the valence commit renumbers its level) then run in encoder and level
-// order on this thread.
-Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vector<PackStreamEncoder>& encoders,
-                 AssetSlot& slot, size_t index, const BakeHooks& hooks) {
-    Mesh& mesh = input.mesh;
-    slot.report.name = input.name;
-    slot.report.input_triangles = mesh.faceCount();
-    slot.report.input_vertices = mesh.vertexCount();
-    if (settings.repair) {
-        StageTimer timer(hooks, index, BakeStage::Repair);
-        RepairOptions repair_options;
-        repair_options.report_welded = false; // only `unresolved` goes into the bake's report
-        repair_options.report_before = false; // likewise: the input is validated only if a skip test needs it
-        LODBAKE_ASSIGN_OR_RETURN(RepairReport repair, repairMesh(mesh, repair_options, input.name, slot.diagnostics));
-        slot.report.repair_unresolved = repair.unresolved;
-    }
-    const ScreenParams screen = screenParams(settings);
-    LodChainOptions chain_options;
-    chain_options.ratios = settings.lod_ratios;
-    chain_options.screen = screen;
-    chain_options.distance.sample_count = settings.error_samples;
-    chain_options.simplify.remove_covered_components = settings.remove_covered_components;
-    chain_options.measure_error = false; // measured below, beside the stream encoders
-    chain_options.record_collapses = false;
-    for (const PackStreamEncoder& encoder : encoders) {
-        chain_options.record_collapses |= encoder.needs_collapses;
-        // pfrep_from_chain: the PFRep blob is built from the chain's own pass, read as vertex removals
-        // (docs/bake.md); otherwise it runs a half-edge simplification of its own.
-        chain_options.record_removals |=
-            settings.pfrep_from_chain && encoder.extension_name == "LODBAKE_progressive_fans";
-    }
-    StageTimer chain_timer(hooks, index, BakeStage::LodChain);
-    Result<LodChain> chain_result = buildLodChain(mesh, chain_options, slot.diagnostics);
-    if (!chain_result.ok())
-        return Status(chain_result.status().code(), input.name + ": " + chain_result.status().message());
-    LodChain chain = std::move(chain_result).value();
-    chain_timer.finish();
+// stream encoders' prepare steps. They run in phases (concurrentPhases) cut by the streams' own cost
+// estimates: with 2 threads a small asset's LOD0-only streams (the PFRep build: a replay of the
+// chain's logged collapses, then the blob) run beside the measurement and the coding of the levels;
+// a large asset's run beside the measurement's reference sides (MeasureReference), then the rest of
+// the measurement (parallel inside), then the coding of every level side by side. The commits
+// (cheap; the valence commit renumbers its level) then run in encoder and level order on this thread.
+//
+// AssetTasks holds those tasks and what they produce; each task writes its own members.
+class AssetTasks {
+public:
+    AssetTasks(Mesh& mesh, LodChain& chain, const LodChainOptions& chain_options, const BakeSettings& settings,
+               const std::vector<PackStreamEncoder>& encoders, const std::string& name, size_t index,
+               const BakeHooks& hooks)
+        : mesh_(mesh), chain_(chain), chain_options_(chain_options), settings_(settings), encoders_(encoders),
+          name_(name), index_(index), hooks_(hooks), level_count_(chain.levels.size() + 1),
+          commits(encoders.size() * level_count_, PackStreamCommit()), level_with_measure_(level_count_, false) {}
 
-    const size_t level_count = chain.levels.size() + 1;
-    auto levelMesh = [&](size_t l) -> const Mesh& { return l == 0 ? mesh : chain.levels[l - 1].mesh; };
-    std::vector<size_t> level_triangles(level_count);
-    for (size_t l = 0; l < level_count; ++l) level_triangles[l] = levelMesh(l).faceCount();
-    std::vector<Result<PackStreamCommit>> commits(encoders.size() * level_count, PackStreamCommit());
-    Diagnostics measure_diagnostics;
-    LodMetrics metrics;
-    Result<TextureLevels> textures = TextureLevels{};
-    Status deferred = Status::okStatus();
-    auto stageOf = [&](size_t e) {
-        return encoders[e].extension_name == "LODBAKE_progressive_fans" ? BakeStage::Pfrep : BakeStage::Encode;
-    };
-    // Chain level i's reference side (LOD0's points against the level), when a MeasureReference task
-    // measured it in an earlier phase (beside the PFRep build); the measurement then skips it.
-    std::vector<Result<OneSidedDistance>> reference_sides;
-    std::vector<bool> level_with_measure(level_count, false);
-    std::vector<size_t> nested_levels;
-    // LOD0 as the running phase's tasks may read it: LOD0 itself, or its positions and indices lent to a
-    // geometry-only mesh (below).
-    const Mesh* lod0_view = &mesh;
-    auto runTask = [&](const PhaseTask& task) {
-        switch (task.kind) {
-        case PhaseTask::Kind::Measure: {
-            {
-                StageTimer timer(hooks, index, BakeStage::Measure);
-                measureChain(mesh, chain, chain_options, reference_sides, measure_diagnostics);
-                metrics = lodMetrics(mesh, chain, screen, settings.hysteresis);
-            }
-            // Encoders that read the measured errors (adaptive stream precision) code the levels of this
-            // phase now, in a nested loop that idle threads join; later phases' Level tasks do it themselves.
-            deferred = parallelFor(nested_levels.size(), 1, [&](size_t i) {
-                const size_t l = nested_levels[i];
-                for (size_t e = 0; e < encoders.size(); ++e) {
-                    if (!encoders[e].needs_measurement) continue;
-                    StageTimer timer(hooks, index, BakeStage::Encode, l);
-                    commits[e * level_count + l] = encoders[e].prepare(chain, l, levelMesh(l));
-                }
-            });
-            StageTimer timer(hooks, index, BakeStage::Textures);
-            textures = textureLevels(mesh, level_count, metrics, settings, input.name, measure_diagnostics);
-            return;
-        }
-        case PhaseTask::Kind::MeasureReference: {
-            // Levels task.index and on. A failure here (a bad reference or level) leaves the side to the
-            // measurement, which then reports it.
-            StageTimer timer(hooks, index, BakeStage::Measure);
-            std::vector<const Mesh*> meshes;
-            for (size_t l = task.index; l < level_count; ++l) meshes.push_back(&levelMesh(l));
-            Result<std::vector<Result<OneSidedDistance>>> sides =
-                measureReferenceSides(*lod0_view, meshes, chain_options.distance);
-            if (!sides.ok()) return;
-            reference_sides.assign(task.index - 1, internalError("not measured beforehand"));
-            for (Result<OneSidedDistance>& side : *sides) reference_sides.push_back(std::move(side));
-            return;
-        }
-        case PhaseTask::Kind::Lod0Encoder: {
-            const size_t e = task.index;
-            StageTimer timer(hooks, index, stageOf(e), 0);
-            // A PFRep build reads LOD0's positions and indices only (lod0_view); the other encoders all of it.
-            commits[e * level_count] =
-                encoders[e].prepare(chain, 0, stageOf(e) == BakeStage::Pfrep ? *lod0_view : mesh);
-            return;
-        }
-        case PhaseTask::Kind::Level:
-            for (size_t e = 0; e < encoders.size(); ++e) {
-                // In the measurement's phase, the measurement task codes these after it (above).
-                if (encoders[e].needs_measurement && level_with_measure[task.index]) continue;
-                StageTimer timer(hooks, index, stageOf(e), task.index);
-                Result<PackStreamCommit>& commit = commits[e * level_count + task.index];
-                commit = encoders[e].prepare(chain, task.index, levelMesh(task.index));
-                if (commit.ok() && !*commit) timer.cancel(); // nothing to code here (PFRep codes LOD0 only)
-            }
-            return;
-        }
-    };
-    std::vector<bool> encoder_is_pfrep;
-    for (size_t e = 0; e < encoders.size(); ++e) encoder_is_pfrep.push_back(stageOf(e) == BakeStage::Pfrep);
-    bake_detail::PhaseEstimates estimates;
-    estimates.measure_reference_ahead = maxParallelism() > 1;
-    const std::vector<std::vector<PhaseTask>> phases = concurrentPhases(encoder_is_pfrep, level_triangles, estimates);
+    size_t levelCount() const { return level_count_; }
+    const Mesh& levelMesh(size_t l) const { return l == 0 ? mesh_ : chain_.levels[l - 1].mesh; }
+
+    Status run() {
+        std::vector<size_t> level_triangles(level_count_);
+        for (size_t l = 0; l < level_count_; ++l) level_triangles[l] = levelMesh(l).faceCount();
+        std::vector<bake_detail::EncoderCost> costs;
+        for (const PackStreamEncoder& encoder : encoders_)
+            costs.push_back({encoder.needs.lod0_only, encoder.cost.bytes_per_triangle});
+        bake_detail::PhaseEstimates estimates;
+        estimates.measure_reference_ahead = maxParallelism() > 1;
+        const std::vector<std::vector<PhaseTask>> phases = concurrentPhases(costs, level_triangles, estimates);
+        findNestedLevels(phases);
+        for (const std::vector<PhaseTask>& phase : phases) LODBAKE_RETURN_IF_ERROR(runPhase(phase));
+        return deferred_;
+    }
+
+private:
+    BakeStage stageOf(size_t e) const { return encoders_[e].needs.lod0_only ? BakeStage::Pfrep : BakeStage::Encode; }
+
     // The levels that share the measurement's phase (the measurement precedes every level task).
-    for (const std::vector<PhaseTask>& phase : phases) {
-        bool has_measure = false;
-        for (const PhaseTask& task : phase) {
-            has_measure |= task.kind == PhaseTask::Kind::Measure;
-            if (has_measure && task.kind == PhaseTask::Kind::Level) {
-                level_with_measure[task.index] = true;
-                nested_levels.push_back(task.index);
+    void findNestedLevels(const std::vector<std::vector<PhaseTask>>& phases) {
+        for (const std::vector<PhaseTask>& phase : phases) {
+            bool has_measure = false;
+            for (const PhaseTask& task : phase) {
+                has_measure |= task.kind == PhaseTask::Kind::Measure;
+                if (has_measure && task.kind == PhaseTask::Kind::Level) {
+                    level_with_measure_[task.index] = true;
+                    nested_levels_.push_back(task.index);
+                }
             }
         }
     }
-    for (const std::vector<PhaseTask>& phase : phases) {
-        // The PFRep build and the reference sides read positions and indices only (the PFRep build would
-        // copy them out of a mesh with attributes). When nothing else in the phase reads LOD0, they are
-        // lent to a geometry-only mesh instead of copied: the same input, one copy less at the peak.
+
+    Status runPhase(const std::vector<PhaseTask>& phase) {
+        // The reference sides and the geometry-only streams read positions and indices only (a PFRep
+        // build would copy them out of a mesh with attributes). When nothing else in the phase reads
+        // LOD0, they are lent to a geometry-only mesh instead of copied: the same input, one copy less
+        // at the peak.
         bool geometry_only = true;
         for (const PhaseTask& task : phase)
             geometry_only &= task.kind == PhaseTask::Kind::MeasureReference ||
-                             (task.kind == PhaseTask::Kind::Lod0Encoder && stageOf(task.index) == BakeStage::Pfrep);
+                             (task.kind == PhaseTask::Kind::Lod0Encoder && encoders_[task.index].needs.geometry_only);
         Mesh geometry;
         if (geometry_only) {
-            geometry.positions = std::move(mesh.positions);
-            geometry.indices = std::move(mesh.indices);
-            lod0_view = &geometry;
+            geometry.positions = std::move(mesh_.positions);
+            geometry.indices = std::move(mesh_.indices);
+            lod0_view_ = &geometry;
         }
         std::atomic<size_t> next{0};
         const Status run = parallelFor(phase.size(), 1, [&](size_t) { runTask(phase[next.fetch_add(1)]); });
         if (geometry_only) {
-            mesh.positions = std::move(geometry.positions);
-            mesh.indices = std::move(geometry.indices);
-            lod0_view = &mesh;
+            mesh_.positions = std::move(geometry.positions);
+            mesh_.indices = std::move(geometry.indices);
+            lod0_view_ = &mesh_;
         }
-        LODBAKE_RETURN_IF_ERROR(run);
+        return run;
     }
-    LODBAKE_RETURN_IF_ERROR(deferred);
-    for (const Diagnostic& d : measure_diagnostics.items()) {
-        if (d.severity == Severity::Warning)
-            slot.diagnostics.warn(d.message);
-        else
-            slot.diagnostics.note(d.message);
-    }
-    if (!textures.ok()) return textures.status();
-    for (const Result<PackStreamCommit>& commit : commits) LODBAKE_RETURN_IF_ERROR(commit.status());
 
-    slot.report.metrics = metrics;
-    slot.report.texture_sizes = textures->sizes;
+    void runTask(const PhaseTask& task) {
+        switch (task.kind) {
+        case PhaseTask::Kind::Measure:
+            return measure();
+        case PhaseTask::Kind::MeasureReference:
+            return measureReference(task.index);
+        case PhaseTask::Kind::Lod0Encoder:
+            return prepareLod0(task.index);
+        case PhaseTask::Kind::Level:
+            return prepareLevel(task.index);
+        }
+    }
+
+    void measure() {
+        {
+            StageTimer timer(hooks_, index_, BakeStage::Measure);
+            measureChain(mesh_, chain_, chain_options_, reference_sides_, measure_diagnostics);
+            metrics = lodMetrics(mesh_, chain_, chain_options_.screen, settings_.hysteresis);
+        }
+        // Encoders that read the measured errors code the levels of this phase now, in a nested loop
+        // that idle threads join; later phases' Level tasks do it themselves.
+        deferred_ = parallelFor(nested_levels_.size(), 1, [&](size_t i) {
+            const size_t l = nested_levels_[i];
+            for (size_t e = 0; e < encoders_.size(); ++e) {
+                if (!encoders_[e].needs.measured_errors || encoders_[e].needs.lod0_only) continue;
+                StageTimer timer(hooks_, index_, BakeStage::Encode, l);
+                commits[e * level_count_ + l] = encoders_[e].prepare(chain_, l, levelMesh(l));
+            }
+        });
+        StageTimer timer(hooks_, index_, BakeStage::Textures);
+        textures = textureLevels(mesh_, level_count_, metrics, settings_, name_, measure_diagnostics);
+    }
+
+    // Levels `first` and on. A failure here (a bad reference or level) leaves the side to the
+    // measurement, which then reports it.
+    void measureReference(size_t first) {
+        StageTimer timer(hooks_, index_, BakeStage::Measure);
+        std::vector<const Mesh*> meshes;
+        for (size_t l = first; l < level_count_; ++l) meshes.push_back(&levelMesh(l));
+        Result<std::vector<Result<OneSidedDistance>>> sides =
+            measureReferenceSides(*lod0_view_, meshes, chain_options_.distance);
+        if (!sides.ok()) return;
+        reference_sides_.assign(first - 1, internalError("not measured beforehand"));
+        for (Result<OneSidedDistance>& side : *sides) reference_sides_.push_back(std::move(side));
+    }
+
+    void prepareLod0(size_t e) {
+        StageTimer timer(hooks_, index_, stageOf(e), 0);
+        // A geometry-only stream may get LOD0's positions and indices alone (lod0_view_).
+        commits[e * level_count_] = encoders_[e].prepare(chain_, 0, encoders_[e].needs.geometry_only ? *lod0_view_ : mesh_);
+    }
+
+    void prepareLevel(size_t l) {
+        for (size_t e = 0; e < encoders_.size(); ++e) {
+            if (encoders_[e].needs.lod0_only) continue;
+            // In the measurement's phase, the measurement task codes these after it (measure()).
+            if (encoders_[e].needs.measured_errors && level_with_measure_[l]) continue;
+            StageTimer timer(hooks_, index_, stageOf(e), l);
+            Result<PackStreamCommit>& commit = commits[e * level_count_ + l];
+            commit = encoders_[e].prepare(chain_, l, levelMesh(l));
+            if (commit.ok() && !*commit) timer.cancel(); // nothing to code on this level
+        }
+    }
+
+    Mesh& mesh_;
+    LodChain& chain_;
+    const LodChainOptions& chain_options_;
+    const BakeSettings& settings_;
+    const std::vector<PackStreamEncoder>& encoders_;
+    const std::string& name_;
+    size_t index_;
+    const BakeHooks& hooks_;
+    size_t level_count_;
+
+public:
+    // Products, read once run() has returned.
+    std::vector<Result<PackStreamCommit>> commits; // encoder e, level l at e * levelCount() + l
+    Diagnostics measure_diagnostics;
+    LodMetrics metrics;
+    Result<TextureLevels> textures = TextureLevels{};
+
+private:
+    // Chain level i's reference side (LOD0's points against the level), when a MeasureReference task
+    // measured it in an earlier phase; the measurement then skips it.
+    std::vector<Result<OneSidedDistance>> reference_sides_;
+    std::vector<bool> level_with_measure_;
+    std::vector<size_t> nested_levels_;
+    // LOD0 as the running phase's tasks may read it: LOD0 itself, or its positions and indices lent to
+    // a geometry-only mesh (runPhase).
+    const Mesh* lod0_view_ = &mesh_;
+    Status deferred_ = Status::okStatus();
+};
+
+// The asset's pack entry: the levels' meshes (moved out of `mesh` and the chain), their textures,
+// then every stream's commit in encoder and level order.
+Status assemblePackAsset(const std::string& name, Mesh& mesh, LodChain& chain, AssetTasks& tasks,
+                         const std::vector<PackStreamEncoder>& encoders, AssetSlot& slot) {
+    const size_t level_count = tasks.levelCount();
+    const TextureLevels& textures = *tasks.textures;
+    slot.report.metrics = tasks.metrics;
+    slot.report.texture_sizes = textures.sizes;
     PackAsset& asset = slot.asset;
-    asset.name = input.name;
-    asset.screen_coverage = msftScreenCoverage(metrics);
-    asset.node_extensions.push_back(lodMetricsExtension(metrics));
+    asset.name = name;
+    asset.screen_coverage = msftScreenCoverage(tasks.metrics);
+    asset.node_extensions.push_back(lodMetricsExtension(tasks.metrics));
     asset.levels.resize(level_count);
     asset.levels[0].mesh = std::move(mesh);
     for (size_t l = 1; l < level_count; ++l) asset.levels[l].mesh = std::move(chain.levels[l - 1].mesh);
@@ -307,9 +345,9 @@ Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vect
     for (size_t l = 1; l < level_count; ++l) {
         std::vector<Texture>& level_textures = asset.levels[l].mesh.textures;
         for (size_t t = 0; t < level_textures.size() && t < sources.size(); ++t) {
-            const ImageSize& size = textures->sizes[l][t];
-            const auto found = textures->resized.find({t, {size.width, size.height}});
-            if (found == textures->resized.end()) continue;
+            const ImageSize& size = textures.sizes[l][t];
+            const auto found = textures.resized.find({t, {size.width, size.height}});
+            if (found == textures.resized.end()) continue;
             level_textures[t].bytes = found->second;
             level_textures[t].name =
                 sources[t].name + "_" + std::to_string(size.width) + "x" + std::to_string(size.height);
@@ -317,10 +355,34 @@ Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vect
     }
     for (size_t e = 0; e < encoders.size(); ++e)
         for (size_t l = 0; l < level_count; ++l) {
-            const PackStreamCommit& commit = *commits[e * level_count + l];
+            const PackStreamCommit& commit = *tasks.commits[e * level_count + l];
             if (commit) LODBAKE_RETURN_IF_ERROR(commit(asset.levels[l]));
         }
     return Status::okStatus();
+}
+
+Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vector<PackStreamEncoder>& encoders,
+                 AssetSlot& slot, size_t index, const BakeHooks& hooks) {
+    LODBAKE_RETURN_IF_ERROR(repairInput(input, settings, slot, index, hooks));
+    const LodChainOptions chain_options = chainOptions(settings, encoders);
+    StageTimer chain_timer(hooks, index, BakeStage::LodChain);
+    Result<LodChain> chain_result = buildLodChain(input.mesh, chain_options, slot.diagnostics);
+    if (!chain_result.ok())
+        return Status(chain_result.status().code(), input.name + ": " + chain_result.status().message());
+    LodChain chain = std::move(chain_result).value();
+    chain_timer.finish();
+
+    AssetTasks tasks(input.mesh, chain, chain_options, settings, encoders, input.name, index, hooks);
+    LODBAKE_RETURN_IF_ERROR(tasks.run());
+    for (const Diagnostic& d : tasks.measure_diagnostics.items()) {
+        if (d.severity == Severity::Warning)
+            slot.diagnostics.warn(d.message);
+        else
+            slot.diagnostics.note(d.message);
+    }
+    if (!tasks.textures.ok()) return tasks.textures.status();
+    for (const Result<PackStreamCommit>& commit : tasks.commits) LODBAKE_RETURN_IF_ERROR(commit.status());
+    return assemblePackAsset(input.name, input.mesh, chain, tasks, encoders, slot);
 }
 
 } // namespace
@@ -342,16 +404,15 @@ Result<BakeOutput> bake(std::vector<BakeInput> inputs, const BakeSettings& setti
         const int n = seen[input.name]++;
         if (n > 0) input.name += "_" + std::to_string(n);
     }
-    std::vector<PackStreamEncoder> encoders;
-    ValenceStreamOptions valence;
-    valence.position_bits = settings.stream_precision.position_bits;
-    valence.normal_bits = settings.stream_precision.normal_bits;
-    valence.adaptive = settings.stream_precision.adaptive;
-    valence.error_fraction = settings.stream_precision.error_fraction;
-    valence.release_memory = hooks.release_memory;
-    for (PackStreamEncoder& encoder : builtinStreamEncoders(valence))
-        if (settings.progressive_fans || encoder.extension_name != "LODBAKE_progressive_fans")
-            encoders.push_back(std::move(encoder));
+    StreamSettings streams;
+    streams.valence.position_bits = settings.stream_precision.position_bits;
+    streams.valence.normal_bits = settings.stream_precision.normal_bits;
+    streams.valence.adaptive = settings.stream_precision.adaptive;
+    streams.valence.error_fraction = settings.stream_precision.error_fraction;
+    streams.valence.release_memory = hooks.release_memory;
+    streams.progressive_fans = settings.progressive_fans;
+    streams.pfrep_from_chain = settings.pfrep_from_chain;
+    const std::vector<PackStreamEncoder> encoders = builtinStreamEncoders(streams);
     PackDescription description;
     description.compact = settings.compact;
     // Fail before the expensive stages when no stream encoder exists at all.

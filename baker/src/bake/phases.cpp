@@ -22,14 +22,17 @@ std::vector<std::vector<PhaseTask>> cut(const std::vector<PhaseTask>& tasks, dou
 
 } // namespace
 
-std::vector<std::vector<PhaseTask>> concurrentPhases(const std::vector<bool>& encoder_is_pfrep,
+std::vector<std::vector<PhaseTask>> concurrentPhases(const std::vector<EncoderCost>& encoders,
                                                      const std::vector<size_t>& level_triangles,
                                                      const PhaseEstimates& estimates) {
     const double lod0 = level_triangles.empty() ? 0.0 : double(level_triangles[0]);
     std::vector<PhaseTask> tasks;
-    for (size_t e = 0; e < encoder_is_pfrep.size(); ++e)
-        if (encoder_is_pfrep[e])
-            tasks.push_back({PhaseTask::Kind::Lod0Encoder, e, estimates.pfrep_bytes_per_triangle * lod0});
+    double level_bytes_per_triangle = 0; // every encoder that codes every level, on one level
+    for (const EncoderCost& encoder : encoders)
+        if (!encoder.lod0_only) level_bytes_per_triangle += encoder.bytes_per_triangle;
+    for (size_t e = 0; e < encoders.size(); ++e)
+        if (encoders[e].lod0_only)
+            tasks.push_back({PhaseTask::Kind::Lod0Encoder, e, encoders[e].bytes_per_triangle * lod0});
     const size_t reference_at = tasks.size();
     // Every level (1 and on): one index at a time, the first the largest.
     constexpr size_t kFirstReferenceLevel = 1;
@@ -39,11 +42,11 @@ std::vector<std::vector<PhaseTask>> concurrentPhases(const std::vector<bool>& en
              estimates.reference_points_bytes_per_triangle * lod0 +
                  estimates.reference_index_bytes_per_triangle * double(level_triangles[kFirstReferenceLevel])});
     tasks.push_back({PhaseTask::Kind::Measure, 0, estimates.measure_bytes_per_triangle * lod0});
-    for (size_t e = 0; e < encoder_is_pfrep.size(); ++e)
-        if (!encoder_is_pfrep[e])
-            tasks.push_back({PhaseTask::Kind::Lod0Encoder, e, estimates.encode_bytes_per_triangle * lod0});
+    for (size_t e = 0; e < encoders.size(); ++e)
+        if (!encoders[e].lod0_only)
+            tasks.push_back({PhaseTask::Kind::Lod0Encoder, e, encoders[e].bytes_per_triangle * lod0});
     for (size_t l = 1; l < level_triangles.size(); ++l)
-        tasks.push_back({PhaseTask::Kind::Level, l, estimates.encode_bytes_per_triangle * double(level_triangles[l])});
+        tasks.push_back({PhaseTask::Kind::Level, l, level_bytes_per_triangle * double(level_triangles[l])});
     std::vector<std::vector<PhaseTask>> phases = cut(tasks, estimates.budget_bytes);
     if (reference_at < tasks.size() && tasks[reference_at].kind == PhaseTask::Kind::MeasureReference) {
         // Kept only beside an earlier task of its phase and before the measurement's phase.

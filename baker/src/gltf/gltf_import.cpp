@@ -19,6 +19,8 @@
 #include "gltf/draco_decode.h"
 #include "lodbake/core/file_io.h"
 #include "lodbake/core/json_limits.h"
+#include "lodrt/format.h"
+
 
 namespace lodbake {
 
@@ -27,7 +29,7 @@ namespace {
 constexpr uint32_t kGlbMagic = 0x46546C67;  // "glTF"
 constexpr uint32_t kChunkJson = 0x4E4F534A; // "JSON"
 constexpr uint32_t kChunkBin = 0x004E4942;  // "BIN\0"
-constexpr const char* kDracoExtension = "KHR_draco_mesh_compression";
+constexpr const char* kDracoExtension = lodrt::format::kExtKhrDracoMeshCompression;
 constexpr uint64_t kMaxViewlessCount = uint64_t(1) << 20; // elements of an accessor without a bufferView
 constexpr uint64_t kMaxDracoPointsPerByte = 32; // real meshes need well over 2 bits of Draco data per point
 
@@ -1190,9 +1192,9 @@ Result<LoadedMesh> readGltfImpl(const uint8_t* data, size_t size, const std::str
 
     bool quantized = false;
     for (const std::string& e : model.extensionsUsed)
-        if (e == "KHR_mesh_quantization") quantized = true;
+        if (e == lodrt::format::kExtKhrMeshQuantization) quantized = true;
     for (const std::string& e : model.extensionsRequired)
-        if (e != "KHR_mesh_quantization" && e != kDracoExtension)
+        if (e != lodrt::format::kExtKhrMeshQuantization && e != kDracoExtension)
             return unsupported(name + ": extensionsRequired: extension \"" + e + "\" is not supported");
 
     LoadedMesh loaded;

@@ -2,18 +2,22 @@
 // node (https://github.com/KhronosGroup/glTF/tree/main/extensions/2.0/Vendor/MSFT_lod) with the
 // MSFT_screencoverage array in the node's extras, as that extension specifies.
 #include <algorithm>
+#include <cerrno>
+#include <cstdlib>
 #include <exception>
 #include <ostream>
 #include <set>
 #include <streambuf>
 
-#include <nlohmann/json.hpp>
 #include <tiny_gltf.h>
 
 #include "gltf/gltf_model.h"
+#include "lodbake/core/json_writer.h"
 #include "lodbake/gltf/gltf_io.h"
 #include "lodbake/pack/pack.h"
 #include "lodbake/version.h"
+#include "lodrt/format.h"
+
 
 namespace lodbake {
 
@@ -23,21 +27,50 @@ namespace {
 // front, moving the bytes within the vector; a bigger JSON only costs one more copy of the buffer).
 constexpr size_t kGlbHeadRoom = size_t(1) << 20;
 
-tinygltf::Value toValue(const nlohmann::json& j) {
-    if (j.is_object()) {
+// A number as tinygltf would hold it had the JsonWriter's text of it been parsed: integer text (no
+// fraction, no exponent) that fits 64 bits becomes an int (narrowed as nlohmann's get<int> does),
+// everything else a double, non-finite values null. So the pack's JSON is what a text round trip
+// would give, byte for byte.
+tinygltf::Value numberValue(double d) {
+    const std::string text = JsonWriter::formatNumber(d);
+    if (text == "null") return tinygltf::Value();
+    if (text.find_first_of(".eE") != std::string::npos) return tinygltf::Value(d);
+    errno = 0;
+    if (text[0] == '-') {
+        const long long i = std::strtoll(text.c_str(), nullptr, 10);
+        if (errno != ERANGE) return tinygltf::Value(static_cast<int>(i));
+    } else {
+        const unsigned long long u = std::strtoull(text.c_str(), nullptr, 10);
+        if (errno != ERANGE) return tinygltf::Value(static_cast<int>(u));
+    }
+    return tinygltf::Value(d);
+}
+
+tinygltf::Value toValue(const JsonNode& j) {
+    switch (j.kind()) {
+    case JsonNode::Kind::Object: {
         tinygltf::Value::Object o;
-        for (auto it = j.begin(); it != j.end(); ++it) o[it.key()] = toValue(it.value());
+        for (const auto& member : j.members()) o[member.first] = toValue(member.second);
         return tinygltf::Value(std::move(o));
     }
-    if (j.is_array()) {
+    case JsonNode::Kind::Array: {
         tinygltf::Value::Array a;
-        for (const auto& e : j) a.push_back(toValue(e));
+        for (const JsonNode& item : j.items()) a.push_back(toValue(item));
         return tinygltf::Value(std::move(a));
     }
-    if (j.is_boolean()) return tinygltf::Value(j.get<bool>());
-    if (j.is_number_integer() || j.is_number_unsigned()) return tinygltf::Value(j.get<int>());
-    if (j.is_number()) return tinygltf::Value(j.get<double>());
-    if (j.is_string()) return tinygltf::Value(j.get<std::string>());
+    case JsonNode::Kind::Bool:
+        return tinygltf::Value(j.asBool());
+    case JsonNode::Kind::Int:
+        return tinygltf::Value(static_cast<int>(j.asInt()));
+    case JsonNode::Kind::UInt:
+        return tinygltf::Value(static_cast<int>(j.asUInt()));
+    case JsonNode::Kind::Double:
+        return numberValue(j.asDouble());
+    case JsonNode::Kind::String:
+        return tinygltf::Value(j.asString());
+    case JsonNode::Kind::Null:
+        break;
+    }
     return tinygltf::Value();
 }
 
@@ -54,12 +87,12 @@ struct ViewPatch {
 Status addExtension(const PackExtension& e, BufferBuilder& buffer, tinygltf::ExtensionMap& target,
                     std::set<std::string>& used, std::set<std::string>& streams, const ViewPatch& where,
                     std::vector<ViewPatch>& patches) {
-    nlohmann::json object = nlohmann::json::parse(e.json);
-    if (!object.is_object()) return invalidInput("pack: extension " + e.name + ": expected a JSON object");
+    JsonNode object = e.json;
+    if (!object.isObject()) return invalidInput("pack: extension " + e.name + ": expected a JSON object");
     if (e.blobs.size() != e.blob_view_members.size())
         return internalError("pack: extension " + e.name + ": blob and member counts differ");
     for (size_t b = 0; b < e.blobs.size(); ++b) {
-        object[e.blob_view_members[b]] = buffer.addView(e.blobs[b].data(), e.blobs[b].size(), 0);
+        object.set(e.blob_view_members[b], buffer.addView(e.blobs[b].data(), e.blobs[b].size(), 0));
         ViewPatch patch = where;
         patch.extension = e.name;
         patch.member = e.blob_view_members[b];
@@ -299,13 +332,13 @@ Result<std::vector<uint8_t>> writeImpl(const PackDescription& description, PackD
             for (size_t l = 1; l < nodes.size(); ++l) ids.push_back(tinygltf::Value(nodes[l]));
             tinygltf::Value::Object lod;
             lod["ids"] = tinygltf::Value(std::move(ids));
-            root.extensions["MSFT_lod"] = tinygltf::Value(std::move(lod));
-            used.insert("MSFT_lod");
+            root.extensions[lodrt::format::kExtMsftLod] = tinygltf::Value(std::move(lod));
+            used.insert(lodrt::format::kExtMsftLod);
             if (asset.screen_coverage.size() == nodes.size()) {
                 tinygltf::Value::Array coverage;
                 for (double c : asset.screen_coverage) coverage.push_back(tinygltf::Value(c));
                 tinygltf::Value::Object extras;
-                extras["MSFT_screencoverage"] = tinygltf::Value(std::move(coverage));
+                extras[lodrt::format::kMsftScreenCoverage] = tinygltf::Value(std::move(coverage));
                 root.extras = tinygltf::Value(std::move(extras));
             }
         }
@@ -344,8 +377,6 @@ Result<std::vector<uint8_t>> writeImpl(const PackDescription& description, PackD
 Result<std::vector<uint8_t>> writePackGlb(const PackDescription& description) {
     try {
         return writeImpl(description, nullptr);
-    } catch (const nlohmann::json::exception& e) {
-        return invalidInput(std::string("pack: malformed extension JSON: ") + e.what());
     } catch (const std::exception& e) {
         return internalError(std::string("pack: glTF writing failed: ") + e.what());
     }
@@ -354,8 +385,6 @@ Result<std::vector<uint8_t>> writePackGlb(const PackDescription& description) {
 Result<std::vector<uint8_t>> writePackGlb(PackDescription&& description) {
     try {
         return writeImpl(description, &description);
-    } catch (const nlohmann::json::exception& e) {
-        return invalidInput(std::string("pack: malformed extension JSON: ") + e.what());
     } catch (const std::exception& e) {
         return internalError(std::string("pack: glTF writing failed: ") + e.what());
     }

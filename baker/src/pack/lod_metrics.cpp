@@ -1,4 +1,4 @@
-// LOD metrics for the pack: the chain's measured errors and switch distances as the
+// LOD metrics in the pack: the levels' measured errors and switch distances as the
 // LODBAKE_lod_metrics node extension and the MSFT_screencoverage array (MSFT_lod).
 #include "lodbake/pack/pack.h"
 
@@ -8,45 +8,9 @@
 #include <cstdlib>
 #include <cstring>
 
-#include "lodbake/core/json_writer.h"
+#include "lodrt/format.h"
 
 namespace lodbake {
-
-LodMetrics lodMetrics(const Mesh& full, const LodChain& chain, const ScreenParams& screen, double hysteresis) {
-    LodMetrics m;
-    m.bounding_radius = chain.bounding_radius;
-    m.pixel_threshold = screen.pixel_threshold;
-    m.viewport_height_px = screen.viewport_height_px;
-    m.vertical_fov_rad = screen.vertical_fov_rad;
-    LodMetricsLevel lod0;
-    lod0.triangles = full.faceCount();
-    lod0.vertices = full.vertexCount();
-    lod0.screen_coverage = 1.0;
-    m.levels.push_back(lod0);
-    for (const LodLevel& level : chain.levels) {
-        LodMetricsLevel l;
-        l.triangles = level.mesh.faceCount();
-        l.vertices = level.mesh.vertexCount();
-        if (level.has_distance) {
-            l.hausdorff_error = level.distance.hausdorff;
-            l.mean_error = level.distance.mean;
-            l.hausdorff_error_rel = level.distance.hausdorffRel();
-            l.mean_error_rel = level.distance.meanRel();
-        }
-        // Errors are measured independently per level; a coarser level never claims to be better.
-        const LodMetricsLevel& prev = m.levels.back();
-        l.hausdorff_error = std::max(l.hausdorff_error, prev.hausdorff_error);
-        l.mean_error = std::max(l.mean_error, prev.mean_error);
-        l.hausdorff_error_rel = std::max(l.hausdorff_error_rel, prev.hausdorff_error_rel);
-        l.mean_error_rel = std::max(l.mean_error_rel, prev.mean_error_rel);
-        l.switch_distance = std::max(switchDistance(l.hausdorff_error, screen), prev.switch_distance);
-        l.screen_coverage = screenCoverage(chain.bounding_radius, l.switch_distance, screen);
-        l.hysteresis_near = l.switch_distance * (1.0 - hysteresis);
-        l.hysteresis_far = l.switch_distance * (1.0 + hysteresis);
-        m.levels.push_back(l);
-    }
-    return m;
-}
 
 namespace {
 
@@ -78,31 +42,28 @@ double down(double x) {
 } // namespace
 
 PackExtension lodMetricsExtension(const LodMetrics& m) {
-    JsonWriter j(0);
-    j.beginObject();
-    j.field("boundingRadius", up(m.bounding_radius));
-    j.key("levels").beginArray();
+    JsonNode levels = JsonNode::array();
     for (const LodMetricsLevel& l : m.levels) {
-        j.beginObject();
-        j.field("hausdorffError", up(l.hausdorff_error));
-        j.field("hausdorffErrorRelative", up(l.hausdorff_error_rel));
-        j.key("hysteresisBand").beginArray().value(down(l.hysteresis_near)).value(up(l.hysteresis_far)).endArray();
-        j.field("meanError", up(l.mean_error));
-        j.field("meanErrorRelative", up(l.mean_error_rel));
-        j.field("screenCoverage", down(l.screen_coverage));
-        j.field("switchDistance", up(l.switch_distance));
-        j.field("triangles", l.triangles);
-        j.field("vertices", l.vertices);
-        j.endObject();
+        JsonNode level = JsonNode::object();
+        level.set("hausdorffError", up(l.hausdorff_error));
+        level.set("hausdorffErrorRelative", up(l.hausdorff_error_rel));
+        level.set("hysteresisBand", JsonNode::array().push(down(l.hysteresis_near)).push(up(l.hysteresis_far)));
+        level.set("meanError", up(l.mean_error));
+        level.set("meanErrorRelative", up(l.mean_error_rel));
+        level.set("screenCoverage", down(l.screen_coverage));
+        level.set("switchDistance", up(l.switch_distance));
+        level.set("triangles", l.triangles);
+        level.set("vertices", l.vertices);
+        levels.push(std::move(level));
     }
-    j.endArray();
-    j.field("pixelThreshold", m.pixel_threshold);
-    j.field("verticalFov", m.vertical_fov_rad);
-    j.field("viewportHeight", m.viewport_height_px);
-    j.endObject();
     PackExtension e;
-    e.name = "LODBAKE_lod_metrics";
-    e.json = j.str();
+    e.name = lodrt::format::kExtLodMetrics;
+    e.json = JsonNode::object();
+    e.json.set("boundingRadius", up(m.bounding_radius));
+    e.json.set("levels", std::move(levels));
+    e.json.set("pixelThreshold", m.pixel_threshold);
+    e.json.set("verticalFov", m.vertical_fov_rad);
+    e.json.set("viewportHeight", m.viewport_height_px);
     return e;
 }
 

@@ -6,28 +6,22 @@
 #include <algorithm>
 #include <cmath>
 
-#include "lodbake/core/json_writer.h"
+#include "lodrt/format.h"
+
 
 namespace lodbake {
 
 namespace {
 
 PfrepExtensionObject finishObject(PfrepBuild build, PfrepExtensionObject out) {
-    JsonWriter j(0);
-    j.beginObject();
-    j.key("levels").beginArray();
-    for (const PfrepExtensionLevel& level : out.levels) {
-        j.beginObject();
-        j.field("removals", uint64_t(level.removals));
-        j.field("triangles", level.triangles);
-        j.endObject();
-    }
-    j.endArray();
-    j.field("removedCount", uint64_t(out.removed_count));
-    j.field("triangleCount", out.triangle_count);
-    j.field("vertexCount", uint64_t(out.vertex_count));
-    j.endObject();
-    out.json = j.str();
+    JsonNode levels = JsonNode::array();
+    for (const PfrepExtensionLevel& level : out.levels)
+        levels.push(JsonNode::object().set("removals", uint64_t(level.removals)).set("triangles", level.triangles));
+    out.json = JsonNode::object();
+    out.json.set("levels", std::move(levels));
+    out.json.set("removedCount", uint64_t(out.removed_count));
+    out.json.set("triangleCount", out.triangle_count);
+    out.json.set("vertexCount", uint64_t(out.vertex_count));
     out.blob = std::move(build.blob);
     return out;
 }
@@ -46,9 +40,9 @@ Result<PfrepExtensionObject> buildPfrepExtension(const Mesh& lod0, const std::ve
                                                  const PfrepOptions& options, Diagnostics& diagnostics) {
     for (size_t l = 0; l < level_ratios.size(); ++l)
         if (!(level_ratios[l] > 0.0 && level_ratios[l] <= 1.0))
-            return invalidInput("LODBAKE_progressive_fans: level " + std::to_string(l) +
+            return invalidInput(std::string(lodrt::format::kExtProgressiveFans) + ": level " + std::to_string(l) +
                                 ": ratio: expected a value in (0, 1]");
-    if (lod0.faceCount() == 0) return invalidInput("LODBAKE_progressive_fans: the mesh has no triangle");
+    if (lod0.faceCount() == 0) return invalidInput(std::string(lodrt::format::kExtProgressiveFans) + ": the mesh has no triangle");
     // The blob stores positions only, so its collapse order is chosen on the geometry alone: the
     // attributes' quadrics and seams would cost time and memory (per-wedge quadrics of the whole
     // full-detail mesh) and only steer the order towards data the blob does not keep. Materials go
@@ -82,7 +76,7 @@ Result<PfrepExtensionObject> buildPfrepExtension(const Mesh& lod0, const LodChai
         for (const LodLevel& level : chain.levels) ratios.push_back(level.target_ratio);
         return buildPfrepExtension(lod0, ratios, options, diagnostics);
     }
-    if (lod0.faceCount() == 0) return invalidInput("LODBAKE_progressive_fans: the mesh has no triangle");
+    if (lod0.faceCount() == 0) return invalidInput(std::string(lodrt::format::kExtProgressiveFans) + ": the mesh has no triangle");
     LODBAKE_ASSIGN_OR_RETURN(PfrepBuild build, buildPfrepFromChain(lod0, chain.removals, diagnostics));
     // Level k of the blob has the chain's faces after k collapses: each chain level is the blob level
     // at its collapse count, with exactly its triangles.
@@ -91,7 +85,7 @@ Result<PfrepExtensionObject> buildPfrepExtension(const Mesh& lod0, const LodChai
     for (const LodLevel& level : chain.levels) {
         const size_t k = level.collapse_count;
         if (k >= build.level_triangles.size() || build.level_triangles[k] != level.mesh.faceCount())
-            return internalError("LODBAKE_progressive_fans: PFRep level " + std::to_string(k) +
+            return internalError(std::string(lodrt::format::kExtProgressiveFans) + ": PFRep level " + std::to_string(k) +
                                  " does not have the chain level's " + std::to_string(level.mesh.faceCount()) +
                                  " triangles");
         out.levels.push_back({uint32_t(k), build.level_triangles[k]});

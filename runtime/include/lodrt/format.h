@@ -15,6 +15,19 @@ constexpr uint32_t kGlbChunkBin = 0x004E4942u;  // "BIN\0"
 constexpr uint32_t kGlbHeaderSize = 12;
 constexpr uint32_t kGlbChunkHeaderSize = 8;
 
+// glTF extension names. The LODBAKE_ ones are specified in schemas/<name>/; MSFT_lod is
+// https://github.com/KhronosGroup/glTF/tree/main/extensions/2.0/Vendor/MSFT_lod, whose screen
+// coverage array sits in the LOD0 node's extras under kMsftScreenCoverage.
+constexpr const char kExtLodMetrics[] = "LODBAKE_lod_metrics";
+constexpr const char kExtValenceCompression[] = "LODBAKE_valence_compression";
+constexpr const char kExtProgressiveFans[] = "LODBAKE_progressive_fans";
+constexpr const char kExtMsftLod[] = "MSFT_lod";
+constexpr const char kMsftScreenCoverage[] = "MSFT_screencoverage";
+constexpr const char kExtKhrDracoMeshCompression[] = "KHR_draco_mesh_compression";
+constexpr const char kExtKhrMeshQuantization[] = "KHR_mesh_quantization";
+// The stream extensions lodrt decodes (lodrt/valence.h, lodrt/pfrep.h): a pack may require them.
+constexpr const char* const kDecodedStreamExtensions[] = {kExtValenceCompression, kExtProgressiveFans};
+
 // PFRep progressive fans (docs/format/pfrep.md). Little-endian; all offsets are byte offsets from the
 // start of the blob. Vertex ids are removal ranks: vertex i is the i-th vertex removed by the
 // half-edge-collapse sequence, ids >= removed_count are never removed.

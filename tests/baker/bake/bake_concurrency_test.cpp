@@ -12,6 +12,7 @@
 #include "lodbake/bake/stages.h"
 #include "lodbake/core/diagnostics.h"
 #include "lodbake/pack/pack.h"
+#include "lodbake/stream/stream.h"
 
 namespace {
 

@@ -11,10 +11,11 @@
 namespace {
 
 using lodbake::bake_detail::concurrentPhases;
+using lodbake::bake_detail::EncoderCost;
 using lodbake::bake_detail::PhaseEstimates;
 using lodbake::bake_detail::PhaseTask;
 
-// "p0" PFRep encoder e on LOD0, "e1" other encoder 1 on LOD0, "L3" level 3, "M" measurement, "R1" the
+// "p0" LOD0-only encoder 0, "e1" other encoder 1 on LOD0, "L3" level 3, "M" measurement, "R1" the
 // reference sides of levels 1 and on; phases separated by '|'.
 std::string describe(const std::vector<std::vector<PhaseTask>>& phases) {
     std::string s;
@@ -48,7 +49,8 @@ std::vector<size_t> desktopLevels(size_t lod0) {
     return t;
 }
 
-const std::vector<bool> kBuiltin{true, false}; // PFRep, then valence (builtinStreamEncoders order)
+// PFRep (LOD0 only), then valence (builtinStreamEncoders order, their StreamCost).
+const std::vector<EncoderCost> kBuiltin{{true, 190}, {false, 110}};
 
 TEST(BakePhasesTest, SmallAssetRunsEveryTaskAtOnce) {
     EXPECT_EQ(describe(concurrentPhases(kBuiltin, desktopLevels(70000))), "p0 M e1 L1 L2 L3 L4 L5");
@@ -65,7 +67,7 @@ TEST(BakePhasesTest, LargeAssetRunsItsBigTasksAlone) {
 
 TEST(BakePhasesTest, ReferenceSidesOnlyBesideAnEarlierTaskAndBeforeTheMeasurement) {
     // Without a PFRep encoder it would run first in its phase, where it gains nothing.
-    EXPECT_EQ(describe(concurrentPhases({false}, desktopLevels(1067852))), "M | p0 L1 L2 L3 L4 L5");
+    EXPECT_EQ(describe(concurrentPhases(std::vector<EncoderCost>{{false, 110}}, desktopLevels(1067852))), "M | p0 L1 L2 L3 L4 L5");
     // In the measurement's phase the measurement measures both sides itself.
     EXPECT_EQ(describe(concurrentPhases(kBuiltin, desktopLevels(300000))), "p0 M e1 L1 L2 L3 L4 L5");
     // Only LOD0: nothing to measure.

@@ -1,10 +1,15 @@
 #include <gtest/gtest.h>
 
+#include <cstring>
+#include <limits>
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
+#include "lodbake/gltf/gltf_io.h"
 #include "lodbake/pack/pack.h"
+#include "mesh_builders.h"
 
 namespace {
 
@@ -37,7 +42,7 @@ TEST(LodMetricsTest, ExtensionJsonHasEveryLevel) {
     const PackExtension e = lodMetricsExtension(sample());
     EXPECT_EQ(e.name, "LODBAKE_lod_metrics");
     EXPECT_FALSE(e.is_stream);
-    const nlohmann::json j = nlohmann::json::parse(e.json);
+    const nlohmann::json j = nlohmann::json::parse(e.json.text());
     ASSERT_EQ(j["levels"].size(), 4u);
     EXPECT_EQ(j["levels"][3]["hausdorffError"].get<double>(), 0.05);
     EXPECT_EQ(j["levels"][0]["hysteresisBand"].size(), 2u);
@@ -61,7 +66,7 @@ TEST(LodMetricsTest, WrittenNumbersAreShortAndNeverClaimMore) {
         l.screen_coverage = e > 0.0 ? 0.0010787 / e : 1.0;
         m.levels.push_back(l);
     }
-    const nlohmann::json j = nlohmann::json::parse(lodMetricsExtension(m).json);
+    const nlohmann::json j = nlohmann::json::parse(lodMetricsExtension(m).json.text());
     auto digits = [](double v) {
         const std::string text = nlohmann::json(v).dump();
         size_t n = 0;
@@ -114,6 +119,44 @@ TEST(LodMetricsTest, CompactWithoutStreamsNamesTheMissingExtensions) {
     asset.levels[0].primitive_extensions = {{stream}};
     d.assets.push_back(asset);
     EXPECT_TRUE(checkCompact(d).ok());
+}
+
+} // namespace
+
+namespace {
+
+using namespace lodbake;
+
+std::string glbJsonText(const std::vector<uint8_t>& glb) {
+    uint32_t length = 0;
+    std::memcpy(&length, glb.data() + 12, 4);
+    return std::string(glb.begin() + 20, glb.begin() + 20 + length);
+}
+
+// Extension objects are structured data written without a text round trip, yet every number is
+// written as the JsonWriter's text of it would read back: integral values as integers, the rest as
+// doubles; a non-finite one is a null, which the glTF writer leaves out; members sorted by key.
+TEST(PackWriterTest, ExtensionNumbersAreWrittenAsTheirJsonText) {
+    PackDescription description;
+    PackAsset asset;
+    asset.name = "a";
+    asset.levels.resize(1);
+    asset.levels[0].mesh = lodbake_test::singleTriangle();
+    PackExtension e;
+    e.name = "EXT_test";
+    e.json = JsonNode::object();
+    e.json.set("z", 3.0).set("y", 0.1).set("x", 2.5).set("w", int64_t(-5)).set("v", uint64_t(7));
+    e.json.set("u", 1e20).set("t", std::numeric_limits<double>::quiet_NaN()).set("s", "text").set("r", true);
+    e.json.set("q", JsonNode::array().push(-0.0).push(JsonNode::object().set("p", 4.0)));
+    asset.node_extensions.push_back(e);
+    description.assets.push_back(std::move(asset));
+    Result<std::vector<uint8_t>> glb = writePackGlb(description);
+    ASSERT_TRUE(glb.ok()) << glb.status().message();
+    const std::string text = glbJsonText(*glb);
+    EXPECT_NE(text.find("\"EXT_test\":{\"q\":[0,{\"p\":4}],\"r\":true,\"s\":\"text\",\"u\":1e+20,"
+                        "\"v\":7,\"w\":-5,\"x\":2.5,\"y\":0.1,\"z\":3}"),
+              std::string::npos)
+        << text;
 }
 
 } // namespace

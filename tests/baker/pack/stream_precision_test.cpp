@@ -14,6 +14,7 @@
 #include "lodbake/core/diagnostics.h"
 #include "lodbake/io/mesh_io.h"
 #include "lodbake/pack/pack.h"
+#include "lodbake/stream/stream.h"
 #include "lodrt/pack.h"
 #include "lodrt/valence.h"
 #include "test_paths.h"
@@ -96,9 +97,9 @@ TEST(StreamPrecisionTest, LodZeroUnmeasuredLevelsAndTheOffSwitchKeepTheOptionsBi
     p = valencePrecision(options, chain, 1, mesh);
     EXPECT_EQ(p.position_bits, 13u);
     EXPECT_EQ(p.normal_bits, 7u);
-    EXPECT_FALSE(valenceStreamEncoder(options).needs_measurement);
+    EXPECT_FALSE(valenceStreamEncoder(options).needs.measured_errors);
     options.adaptive = true;
-    EXPECT_TRUE(valenceStreamEncoder(options).needs_measurement);
+    EXPECT_TRUE(valenceStreamEncoder(options).needs.measured_errors);
 }
 
 TEST(StreamPrecisionTest, NormalBitsFollowTheLeanOfTheLevel) {

@@ -20,6 +20,7 @@
 #include "lodbake/gltf/gltf_io.h"
 #include "lodbake/io/mesh_io.h"
 #include "lodbake/pack/pack.h"
+#include "lodbake/stream/stream.h"
 #include "lodrt/pack.h"
 #include "lodrt/valence.h"
 #include "data_uri.h"
@@ -110,7 +111,7 @@ TEST(ValenceStreamTest, LevelIsRenumberedIntoTheDecodedOrder) {
     EXPECT_TRUE(e.is_stream);
     ASSERT_EQ(e.blobs.size(), 1u);
     ASSERT_EQ(e.blob_view_members, std::vector<std::string>{"bufferView"});
-    const nlohmann::json j = nlohmann::json::parse(e.json);
+    const nlohmann::json j = nlohmann::json::parse(e.json.text());
     EXPECT_EQ(j["attributes"]["POSITION"], 0);
     EXPECT_EQ(j["attributes"]["NORMAL"], 1);
     EXPECT_EQ(j["positionBits"], 14);

@@ -241,7 +241,7 @@ TEST(PfrepPackTest, ExtensionObjectRejectsBadRatiosAndEmptyMeshes) {
     EXPECT_FALSE(lodbake::buildPfrepExtension(quad, {1.5}, {}, diagnostics).ok());
     auto object = lodbake::buildPfrepExtension(quad, {1.0, 0.5}, {}, diagnostics);
     ASSERT_TRUE(object.ok()) << object.status().message();
-    json j = json::parse(object->json);
+    json j = json::parse(object->json.text());
     EXPECT_FALSE(j.contains("bufferView")); // the pack writer adds it
     j["bufferView"] = 0;
     EXPECT_EQ(validate(j, "quad.json"), "");

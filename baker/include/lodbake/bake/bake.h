@@ -13,6 +13,7 @@
 #include "lodbake/core/status.h"
 #include "lodbake/image/texture_resize.h"
 #include "lodbake/pack/pack.h"
+#include "lodbake/simplify/lod_chain.h"
 
 namespace lodbake {
 
@@ -34,6 +35,10 @@ struct BakeOutput {
     std::vector<uint8_t> glb;
     std::vector<BakeAssetReport> assets;
 };
+
+/// Metrics of `chain` with LOD0 = `full` (error 0, switch distance 0) prepended. `hysteresis` is the
+/// band half-width as a fraction of each switch distance.
+LodMetrics lodMetrics(const Mesh& full, const LodChain& chain, const ScreenParams& screen, double hysteresis);
 
 /// Bakes `inputs` (consumed) with `settings` into one GLB. Inputs are processed in parallel (at
 /// most settings.threads workers, 0 = all); the bytes do not depend on the thread count. Warnings

@@ -13,10 +13,10 @@ enum class BakeStage {
     Repair,   // repairMesh
     LodChain, // simplification of every level
     Measure,  // error measurement of every level against LOD0 (switch distances)
-    Pfrep,    // the LODBAKE_progressive_fans blob of LOD0 (its own half-edge simplification, or a replay
-              // of the chain's collapses with pfrep_from_chain)
+    Pfrep,    // the streams built from LOD0 alone (StreamNeeds::lod0_only: the LODBAKE_progressive_fans
+              // blob, its own half-edge simplification or a replay of the chain's collapses)
     Textures, // texture levels
-    Encode,   // compressed level streams (LODBAKE_valence_compression)
+    Encode,   // the streams of every level (LODBAKE_valence_compression)
     Pack,     // GLB serialisation of the whole pack
     Write,    // atomic write of the outputs (batch runner)
     Count

@@ -7,25 +7,23 @@
 // LODBAKE_lod_metrics extension. Every level is an ordinary glTF mesh, so viewers without our
 // extensions show LOD0.
 //
-// Extension hook: a compressed stream (LODBAKE_valence_compression on a primitive,
-// LODBAKE_progressive_fans on a mesh) is a PackExtension added to a PackLevel by a
-// PackStreamEncoder: its JSON object plus binary blobs that the writer stores as buffer views,
-// writing each view's index into the named member of the object.
+// Extensions are structured data (PackExtension: a JsonNode object plus binary blobs that the writer
+// stores as buffer views, writing each view's index into the named member of the object), added by
+// the bake and by the streams (lodbake/stream/stream.h). This module depends on core only.
 
 #include <cstdint>
-#include <functional>
 #include <string>
 #include <vector>
 
+#include "lodbake/core/json_value.h"
 #include "lodbake/core/mesh.h"
 #include "lodbake/core/status.h"
-#include "lodbake/simplify/lod_chain.h"
 
 namespace lodbake {
 
 struct PackExtension {
-    std::string name;                           // e.g. "LODBAKE_lod_metrics"
-    std::string json;                           // the extension object as JSON text
+    std::string name;                           // e.g. lodrt::format::kExtLodMetrics
+    JsonNode json;                              // the extension object
     std::vector<std::vector<uint8_t>> blobs;    // payloads, each stored in its own buffer view
     std::vector<std::string> blob_view_members; // blob i's buffer-view index goes into this member
     bool is_stream = false;                     // a compressed stream: listed in extensionsRequired when compact
@@ -79,94 +77,12 @@ struct LodMetrics {
     std::vector<LodMetricsLevel> levels;
 };
 
-/// Metrics of `chain` with LOD0 = `full` (error 0, switch distance 0) prepended. `hysteresis` is the
-/// band half-width as a fraction of each switch distance.
-LodMetrics lodMetrics(const Mesh& full, const LodChain& chain, const ScreenParams& screen, double hysteresis);
-
 /// The LODBAKE_lod_metrics extension object (sorted keys, shortest round-trip numbers).
 PackExtension lodMetricsExtension(const LodMetrics& metrics);
 
 /// MSFT_screencoverage values: level i is shown while the coverage is at least value i, i.e. until
 /// level i+1's switch distance; the last level's value is 0 (never culled). Non-increasing.
 std::vector<double> msftScreenCoverage(const LodMetrics& metrics);
-
-/// Writes a prepared stream into its level (attaches the extension; may renumber the level's mesh).
-/// Empty when the encoder has nothing to add to that level.
-using PackStreamCommit = std::function<Status(PackLevel& level)>;
-
-/// A compressed-stream encoder: adds its extension to level `level_index` of an asset.
-///
-/// Two steps, so that the costly one can run while other stages still read the meshes: `prepare`
-/// only reads `mesh` (the level as baked, before any encoder's commit; it must stay unchanged until
-/// prepare returns) and does all the coding; the commit it returns is cheap and runs later, one
-/// level and one encoder at a time, in encoder order. `encode` is prepare followed by its commit.
-struct PackStreamEncoder {
-    std::string extension_name;
-    bool needs_collapses = false; // reads chain.sequence (the chain then records its collapses)
-    /// Reads the measured errors of chain.levels: the prepare steps of the levels after LOD0 run after
-    /// the measurement (LOD0's prepare still runs beside it).
-    bool needs_measurement = false;
-    std::function<Result<PackStreamCommit>(const LodChain& chain, size_t level_index, const Mesh& mesh)> prepare;
-    std::function<Status(const LodChain& chain, size_t level_index, PackLevel& level)> encode;
-};
-
-/// An encoder whose `encode` is `prepare` followed by the commit it returns.
-PackStreamEncoder makeStreamEncoder(
-    std::string extension_name,
-    std::function<Result<PackStreamCommit>(const LodChain& chain, size_t level_index, const Mesh& mesh)> prepare);
-
-/// Quantization of the LODBAKE_valence_compression streams. The defaults match gltfpack's default
-/// quantization (14-bit positions, 8-bit normals), so pack sizes compare like for like.
-///
-/// Adaptive precision (`adaptive`): LOD0 keeps these bits; every other level whose error was measured
-/// (chain.levels[l - 1].has_distance) gets the fewest position bits whose quantization moves no vertex
-/// by more than `error_fraction` of the level's own measured mean distance e to LOD0, and the fewest
-/// normal bits whose octahedral quantization turns no normal by more than `error_fraction` of
-/// atan(e / L), L the level's median edge length (how far its faces already lean against LOD0's).
-/// Never more than the bits above, never fewer than the format's minimum.
-struct ValenceStreamOptions {
-    uint32_t position_bits = 14; // 8..16, per coordinate in the bounding cube
-    uint32_t normal_bits = 8;    // octahedral bits per component, 4..16
-    bool adaptive = false;
-    double error_fraction = 0.25; // (0, 1]: largest quantization displacement / the level's mean error
-    /// Called between coding a primitive and decoding it for the check, when the coder's working set
-    /// has been freed (BakeHooks::release_memory); optional, changes no byte.
-    std::function<void()> release_memory;
-};
-
-/// The precision one level is coded with, and why.
-struct ValencePrecision {
-    uint32_t position_bits = 14;
-    uint32_t normal_bits = 8;
-    double max_displacement = 0; // largest distance quantization can move a vertex: sqrt(3)/2 * step
-    double max_normal_angle = 0; // largest angle (radians) the normal quantization can turn a unit normal
-};
-
-/// Largest angle (radians) between a unit normal and its octahedral quantization with `bits` bits per
-/// component, as the codec quantizes (round to nearest), measured once on a dense set of directions
-/// and cached per bit depth.
-double octahedralMaxAngle(uint32_t bits);
-
-/// The precision `options` give level `level_index` of a chain whose mesh is `mesh` (its measured
-/// errors in chain.levels[level_index - 1]). Without adaptive precision, for LOD0, or for a level
-/// without a measured error: options' bits.
-ValencePrecision valencePrecision(const ValenceStreamOptions& options, const LodChain& chain, size_t level_index,
-                                  const Mesh& mesh);
-
-/// The LODBAKE_valence_compression encoder (schemas/LODBAKE_valence_compression): codes each primitive
-/// (non-empty sub-mesh) of a level with codec::encodeValence into its own buffer view, at the
-/// precision valencePrecision gives the level, and reorders the level into the decoded order, so the
-/// plain accessors and the decoded streams hold the same triangles with the same indices (uncoded
-/// attributes such as UVs stay plain and line up with the decoded vertices). A level with one
-/// primitive keeps all its vertices; a level with several is laid out primitive by primitive, each
-/// primitive's vertices a range of its own (PackLevel::primitive_vertex_ranges; vertices two
-/// primitives shared are copied, unreferenced ones dropped). Fails when the codec rejects the mesh or
-/// when the decoded triangles are not the input's (an internal error).
-PackStreamEncoder valenceStreamEncoder(const ValenceStreamOptions& options = {});
-
-/// The stream encoders built into this baker, in the order they run (valence last: it renumbers the
-/// level's vertices).
-std::vector<PackStreamEncoder> builtinStreamEncoders(const ValenceStreamOptions& valence = {});
 
 /// Compact packs need compressed streams: fails (Unsupported) naming the stream extensions that are
 /// missing when `description.compact` is set and no stream extension is present.

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "lodbake/core/diagnostics.h"
+#include "lodbake/core/json_value.h"
 #include "lodbake/core/mesh.h"
 #include "lodbake/core/status.h"
 #include "lodbake/pfrep/pfrep_builder.h"
@@ -29,7 +30,7 @@ struct PfrepExtensionObject {
     uint32_t removed_count = 0;
     uint64_t triangle_count = 0;             // triangles of PFRep level 0
     std::vector<PfrepExtensionLevel> levels; // one per chain level, highest detail first
-    std::string json; // the extension object without its bufferView member (the pack writer adds it)
+    JsonNode json; // the extension object without its bufferView member (the pack writer adds it)
 };
 
 /// Builds the PFRep of `lod0` (half-edge sequence, `options`) and, for each ratio of

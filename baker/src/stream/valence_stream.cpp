@@ -7,7 +7,7 @@
 // and attributes the codec does not code (UVs, colours, tangents) stay valid as plain accessors.
 // A level with several primitives (materials, scan sets) is laid out primitive by primitive, each
 // primitive's vertices a range of its own in its stream's decoded order.
-#include "lodbake/pack/pack.h"
+#include "lodbake/stream/stream.h"
 
 #include <algorithm>
 #include <array>
@@ -15,12 +15,13 @@
 #include <functional>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <utility>
 
 #include "core/large_array.h"
 #include "lodbake/codec/valence_encoder.h"
-#include "lodbake/core/json_writer.h"
+#include "lodrt/format.h"
 #include "lodrt/result.h"
 #include "lodrt/valence.h"
 
@@ -167,18 +168,15 @@ Result<CodedStream> codeStream(const Mesh& mesh, const ValencePrecision& precisi
 }
 
 PackExtension streamExtension(CodedStream& stream, const ValencePrecision& precision) {
-    JsonWriter j(0);
-    j.beginObject();
-    j.key("attributes").beginObject();
-    if (stream.has_normals) j.field("NORMAL", uint64_t(1));
-    j.field("POSITION", uint64_t(0));
-    j.endObject();
-    if (stream.has_normals) j.field("normalBits", uint64_t(precision.normal_bits));
-    j.field("positionBits", uint64_t(precision.position_bits));
-    j.endObject();
+    JsonNode attributes = JsonNode::object();
+    if (stream.has_normals) attributes.set("NORMAL", uint64_t(1));
+    attributes.set("POSITION", uint64_t(0));
     PackExtension e;
-    e.name = "LODBAKE_valence_compression";
-    e.json = j.str();
+    e.name = lodrt::format::kExtValenceCompression;
+    e.json = JsonNode::object();
+    e.json.set("attributes", std::move(attributes));
+    if (stream.has_normals) e.json.set("normalBits", uint64_t(precision.normal_bits));
+    e.json.set("positionBits", uint64_t(precision.position_bits));
     e.blobs.push_back(std::move(stream.bytes));
     e.blob_view_members.push_back("bufferView");
     e.is_stream = true;
@@ -415,12 +413,18 @@ ValencePrecision valencePrecision(const ValenceStreamOptions& options, const Lod
 }
 
 PackStreamEncoder valenceStreamEncoder(const ValenceStreamOptions& options) {
-    PackStreamEncoder encoder = makeStreamEncoder(
-        "LODBAKE_valence_compression", [options](const LodChain& chain, size_t level_index, const Mesh& mesh) {
-            return prepareLevel(options, chain, level_index, mesh);
-        });
-    encoder.needs_measurement = options.adaptive;
-    return encoder;
+    StreamNeeds needs;
+    needs.measured_errors = options.adaptive; // adaptive precision follows each level's measured error
+    StreamCost cost;
+    cost.bytes_per_triangle = 110; // the coder's tables, then its check's decoder
+    return makeStreamEncoder(lodrt::format::kExtValenceCompression, needs, cost,
+                             [options](const LodChain& chain, size_t level_index, const Mesh& mesh) {
+                                 return prepareLevel(options, chain, level_index, mesh);
+                             });
+}
+
+std::optional<PackStreamEncoder> valenceStream(const StreamSettings& settings) {
+    return valenceStreamEncoder(settings.valence);
 }
 
 } // namespace lodbake
