@@ -76,7 +76,7 @@ if [ $quick = 1 ]; then
     add read_bench "$quick_dir"
     add repair_bench "$meshes" bunny_zipper.ply lucy100k.ply
     add runtime_bench --frames 50
-    add simplify_bench --samples 50000 bunny_zipper.ply lucy100k.ply
+    add simplify_bench bunny_zipper.ply lucy100k.ply
     add simplify_bench --speed-only --runs 1 dragon_poisson.ply
 else
     add bake_bench --runs 3 --bar-only

@@ -264,7 +264,7 @@ int main(int argc, char** argv) {
                 worst_encode.take(enc_ms, denc_ms, where);
                 worst_error.take(our_err, draco_err, where);
                 std::printf("%-20s %4u %2s %7.0f | %9zu %9zu %5.3f | %6.2f %6.2f %6.2f | %8.2f %8.2f %5.2f | %8.1f "
-                            "%8.1f %5.2f | %9.3g %9.3g  (err enc %.3g)\n",
+                            "%8.1f %5.2f | %9.6g %9.6g  (err enc %.6g)\n",
                             name.c_str(), bits, normals ? "+n" : "", vn, ours.bytes.size(), dbuf.size(),
                             double(ours.bytes.size()) / double(dbuf.size()), ours.connectivity_bytes * 8.0 / vn,
                             ours.position_bytes * 8.0 / vn, ours.normal_bytes * 8.0 / vn, dec_ms, ddec_ms,

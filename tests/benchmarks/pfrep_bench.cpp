@@ -406,8 +406,8 @@ int main(int argc, char** argv) {
                             k, f * 100, count, s * 1e3, rate, count / cpu / 1e6, count / sc / 1e6, sc / s, values,
                             count ? double(values) / count : 0.0, count / sf / 1e6);
             }
-            std::printf("  worst %.1f M triangles/s wall, %.1f M triangles/s thread CPU time: bar %s\n", worst, worst_cpu,
-                        worst >= 50 ? "met" : (worst_cpu >= 50 ? "met in CPU time only" : "NOT met"));
+            std::printf("  worst %.1f M triangles/s wall, %.1f M triangles/s thread CPU time (the bar's figure): bar %s\n",
+                        worst, worst_cpu, worst_cpu >= 50 ? "met" : "NOT met");
             bars.absolute(std::string("extraction M triangles/s, worst k, thread CPU (") + extraction_name +
                               "; anchor: memcpy of the list)",
                           worst_cpu, 50, Limit::AtLeast, copy_at_worst_cpu);
@@ -601,9 +601,10 @@ int main(int argc, char** argv) {
                               sorted[sorted.size() / 2], 2.0, Limit::AtMost, scan_ms);
             }
             std::printf("  %d frames: mean %.3f ms/frame, worst %.3f ms, %.1f mask bits changed by refine/frame; state %zu bytes "
-                        "per instance for %u vertices (|V| bits); %zu triangles in the last frame: bar %s\n",
+                        "per instance for %u vertices (|V| bits); %zu triangles in the last frame (wall time; the bar "
+                        "is judged on the median frame's thread CPU time)\n",
                         kFrames, total / kFrames * 1e3, worst * 1e3, double(total_changes) / kFrames, mask_bytes,
-                        m.vertex_count, last_tris, total / kFrames * 1e3 < 2.0 ? "met" : "NOT met");
+                        m.vertex_count, last_tris);
             size_t ops_rest = 0, flips_rest = 0, toggles = 0, max_ops_rest = 0;
             for (int f = 1; f < kFrames; ++f) {
                 ops_rest += frame_ops[size_t(f)];
