@@ -2,7 +2,8 @@
 // Bars of the benchmark programs, judged and printed the same way by every one of them.
 //
 // A bar compares our figure with a limit. A ratio bar compares ours / anchor (the anchor measured in
-// the same run: meshoptimizer, gltfpack, Draco, or our own previous path) with the limit; an absolute
+// the same run: meshoptimizer, gltfpack, Draco, or our own previous path; for a speedup, ours is the
+// 1-thread figure and the anchor the 2-thread one) with the limit; an absolute
 // bar compares our figure itself with a limit the product requirement states as a number (the
 // anchor, when the bench measures one, is printed beside it for scale). Every bar is printed as one
 // machine-readable line,
