@@ -465,8 +465,13 @@ void judge(const std::vector<MeshResult>& results, bool speed_only, lodbake_benc
                 else
                     bars.ratio(name, w->ours, w->anchor, 1.0, Limit::AtMost);
             }
-            bars.absolute(m.name + ": chain peak RSS per input triangle (B; anchor: native meshopt)", m.ours_bytes, 300,
-                          Limit::AtMost, m.native_bytes);
+            // 0: the child process that measures the peak failed.
+            if (m.ours_bytes > 0)
+                bars.absolute(m.name + ": chain peak RSS per input triangle (B; anchor: native meshopt)", m.ours_bytes,
+                              300, Limit::AtMost, m.native_bytes);
+            else
+                bars.unmeasured(m.name + ": chain peak RSS per input triangle (the measuring process failed)", 300,
+                                Limit::AtMost, false);
         }
         if (m.triangles >= 500000)
             bars.ratio(m.name + ": 5-level chain time / native meshopt_simplify, 1 thread (s)", m.ours_s, m.native_s,
