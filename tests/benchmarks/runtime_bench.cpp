@@ -235,7 +235,11 @@ void benchSamplePath(const lodrt::PackSource& source, const char* name) {
     lodrt_sample::SceneConfig config;
     config.print_frames = false;
     lodrt_sample::Scene scene(source, config);
-    if (scene.init(nullptr) != lodrt::Result::Ok) return;
+    if (scene.init(nullptr) != lodrt::Result::Ok) {
+        g_bars.unmeasured(std::string("sample path (") + name + "): the scene does not start", 0.25, Limit::AtMost,
+                          true);
+        return;
+    }
     lodrt_sample::SceneSummary summary;
     for (int f = 0; f < config.frames; ++f) scene.frame(f, &summary, nullptr);
     const double ratio = double(summary.triangles_lod0) / double(std::max<uint64_t>(1, summary.triangles_lod));
