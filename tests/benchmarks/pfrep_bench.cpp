@@ -410,8 +410,9 @@ int main(int argc, char** argv) {
                             k, f * 100, count, s * 1e3, rate, count / cpu / 1e6, count / sc / 1e6, sc / s, values,
                             count ? double(values) / count : 0.0, count / sf / 1e6);
             }
-            std::printf("  worst %.1f M triangles/s wall, %.1f M triangles/s thread CPU time (the bar's figure): bar %s\n",
-                        worst, worst_cpu, worst_cpu >= 50 ? "met" : "NOT met");
+            std::printf(
+                "  worst %.1f M triangles/s wall, %.1f M triangles/s thread CPU time (the bar's figure): bar %s\n",
+                worst, worst_cpu, worst_cpu >= 50 ? "met" : "NOT met");
             bars.absolute(std::string("extraction M triangles/s, worst k, thread CPU (") + extraction_name +
                               "; anchor: memcpy of the list)",
                           worst_cpu, 50, Limit::AtLeast, copy_at_worst_cpu);
@@ -604,9 +605,9 @@ int main(int argc, char** argv) {
                 bars.absolute("refine 1000 lucy100k instances, ms/frame, median thread CPU (anchor: reading the masks)",
                               sorted[sorted.size() / 2], 2.0, Limit::AtMost, scan_ms);
             }
-            std::printf("  %d frames: mean %.3f ms/frame, worst %.3f ms, %.1f mask bits changed by refine/frame; state %zu bytes "
-                        "per instance for %u vertices (|V| bits); %zu triangles in the last frame (wall time; the bar "
-                        "is judged on the median frame's thread CPU time)\n",
+            std::printf("  %d frames: mean %.3f ms/frame, worst %.3f ms, %.1f mask bits changed by refine/frame; "
+                        "state %zu bytes per instance for %u vertices (|V| bits); %zu triangles in the last frame "
+                        "(wall time; the bar is judged on the median frame's thread CPU time)\n",
                         kFrames, total / kFrames * 1e3, worst * 1e3, double(total_changes) / kFrames, mask_bytes,
                         m.vertex_count, last_tris);
             size_t ops_rest = 0, flips_rest = 0, toggles = 0, max_ops_rest = 0;

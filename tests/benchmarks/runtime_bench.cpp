@@ -246,7 +246,8 @@ void benchSamplePath(const lodrt::PackSource& source, const char* name) {
     std::printf("2. sample path (%s, 5x5 grid, %d frames): triangles with LOD %llu, always LOD0 %llu: %.2fx  bar >= "
                 "4x: %s\n",
                 name, config.frames, static_cast<unsigned long long>(summary.triangles_lod),
-                static_cast<unsigned long long>(summary.triangles_lod0), ratio, 4 * summary.triangles_lod <= summary.triangles_lod0 ? "PASS" : "FAIL");
+                static_cast<unsigned long long>(summary.triangles_lod0), ratio,
+                4 * summary.triangles_lod <= summary.triangles_lod0 ? "PASS" : "FAIL");
     std::printf("   max screen-space error of the selected levels %.4f px (threshold %.1f): %s; level changes per "
                 "instance <= %u, reversals %u\n",
                 summary.max_sse_selected_px, config.pixel_threshold,
