@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_bar.h"
 #include "bench_mesh.h"
 #include "bench_timing.h"
 #include "core/parallel.h"
@@ -54,6 +55,11 @@ struct Best {
 } // namespace
 
 int main(int argc, char** argv) {
+    // --check is accepted so that scripts/bench.sh can pass it to every bench; there is no bar.
+    (void)lodbake_bench::takeCheckFlag(argc, argv);
+    lodbake_bench::Bars::printNone(
+        "bake_stages_bench",
+        "a diagnostic of the chain and PFRep stages (times and output hashes); no bar in the docs or issues");
     size_t threads = 2;
     int runs = 1;
     bool chain = true, pfrep = true;

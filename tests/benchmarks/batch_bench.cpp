@@ -10,9 +10,14 @@
 //     triangle: bar <= 300 B/triangle; anchor: the peak of `lodbake info` reading the same file.
 // Every bake is a separate `lodbake` process, as a build system runs it.
 //
+// Bars (docs/pipeline.md, docs/bake.md): speedup >= 1.7 on wall time; packs of both thread counts and
+// of the warm re-bake byte-identical; warm/cold <= 5 %; peak <= 300 B per input triangle.
+//
 // usage: batch_bench [--runs N] [--preset FILE] [--only MESH,...] [--skip-threads] [--skip-cache] [--skip-memory]
+//                    [--check]
 // Defaults: 1 run (the 1-thread batch takes minutes), configs/desktop.json, every shared mesh.
-// Not a ctest: these machines are noisy, so the best of N runs of each side is compared.
+// Not a ctest: these machines are noisy, so with N runs the run of median wall time is compared.
+// --check: exit 1 when a bar is not met.
 
 #include <sys/resource.h>
 #include <sys/wait.h>
@@ -29,6 +34,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_bar.h"
 #include "shared_mesh_list.h"
 
 namespace {
@@ -119,14 +125,15 @@ double longestPackPath(const std::string& report, std::string& which) {
 }
 
 struct BatchRun {
-    double best_seconds = 1e300;
-    double cpu_seconds = 0; // of the best run
-    std::string report;     // --report of the best run
+    double best_seconds = 1e300; // wall time of the run of median wall time
+    double cpu_seconds = 0;      // of that run
+    std::string report;          // --report of that run
 };
 
-// Best of `runs` batch bakes (each with --report); every run must succeed.
+// The run of median wall time of `runs` batch bakes (each with --report); every run must succeed.
 bool bestBatch(const std::vector<std::string>& base, const std::string& out_dir, int runs, const std::string& log,
                BatchRun& best) {
+    std::vector<BatchRun> all;
     for (int i = 0; i < runs; ++i) {
         fs::remove_all(out_dir);
         std::vector<std::string> argv = base;
@@ -139,12 +146,11 @@ bool bestBatch(const std::vector<std::string>& base, const std::string& out_dir,
             std::fprintf(stderr, "batch_bench: bake failed (%d), see %s\n", r.exit_code, log.c_str());
             return false;
         }
-        if (r.seconds < best.best_seconds) {
-            best.best_seconds = r.seconds;
-            best.cpu_seconds = r.cpu_seconds;
-            best.report = readAll(out_dir + ".report.json");
-        }
+        all.push_back(BatchRun{r.seconds, r.cpu_seconds, readAll(out_dir + ".report.json")});
     }
+    std::sort(all.begin(), all.end(),
+              [](const BatchRun& a, const BatchRun& b) { return a.best_seconds < b.best_seconds; });
+    best = std::move(all[all.size() / 2]);
     return true;
 }
 
@@ -159,6 +165,9 @@ bool bestBatch(const std::vector<std::string>& base, const std::string& out_dir,
 } // namespace
 
 int main(int argc, char** argv) {
+    const bool check = lodbake_bench::takeCheckFlag(argc, argv);
+    lodbake_bench::Bars bars("batch_bench");
+    using lodbake_bench::Limit;
     int runs = 1;
     std::string preset = std::string(LODBAKE_BENCH_SOURCE_DIR) + "/configs/desktop.json";
     std::vector<std::string> meshes = lodbake_test::allSharedMeshNames();
@@ -179,7 +188,7 @@ int main(int argc, char** argv) {
             do_memory = false;
         else {
             std::fprintf(stderr, "usage: batch_bench [--runs N] [--preset FILE] [--only MESH,...] [--skip-threads] "
-                                 "[--skip-cache] [--skip-memory]\n");
+                                 "[--skip-cache] [--skip-memory] [--check]\n");
             return 2;
         }
     }
@@ -189,9 +198,8 @@ int main(int argc, char** argv) {
     std::vector<std::string> base = {cli, "bake"};
     for (const std::string& m : meshes) base.push_back(std::string(LODBAKE_BENCH_MESHES_DIR) + "/" + m);
     base.insert(base.end(), {"--preset", preset, "--quiet"});
-    std::printf("batch_bench: %zu meshes, preset %s, best of %d; load average at start %.1f on %ld cores\n",
+    std::printf("batch_bench: %zu meshes, preset %s, median of %d; load average at start %.1f on %ld cores\n",
                 meshes.size(), preset.c_str(), runs, loadAverage(), ::sysconf(_SC_NPROCESSORS_ONLN));
-    int failures = 0;
 
     if (do_threads) {
         BatchRun t1, t2;
@@ -228,7 +236,9 @@ int main(int argc, char** argv) {
                     t1.cpu_seconds, 100.0 * t1.cpu_seconds / t1.best_seconds, t2.cpu_seconds,
                     50.0 * t2.cpu_seconds / t2.best_seconds, longest_pack.c_str(), path, bound, t1.cpu_seconds / bound,
                     t1.cpu_seconds / bound >= 1.7 ? "met" : "NOT met", load_before, loadAverage());
-        if (differing) ++failures;
+        bars.ratio("batch speedup, 1-thread s / 2-thread s (" + std::to_string(meshes.size()) + " meshes, wall)",
+                   t1.best_seconds, t2.best_seconds, 1.7, Limit::AtLeast);
+        bars.absolute("packs differing between 1 and 2 threads", double(differing), 0, Limit::AtMost);
     }
 
     if (do_cache) {
@@ -245,7 +255,8 @@ int main(int argc, char** argv) {
         const double ratio = warm / cold;
         std::printf("cache: cold %.2f s, warm %.3f s, warm/cold %.2f %% (bar <= 5 %%: %s); warm packs identical: %s\n",
                     cold, warm, 100.0 * ratio, ratio <= 0.05 ? "met" : "NOT met", differing == 0 ? "yes" : "NO");
-        if (differing) ++failures;
+        bars.ratio("warm --cache-dir re-bake / cold bake (s)", warm, cold, 0.05, Limit::AtMost);
+        bars.absolute("packs differing between the cold and the warm bake", double(differing), 0, Limit::AtMost);
     }
 
     if (do_memory) {
@@ -269,7 +280,11 @@ int main(int argc, char** argv) {
                     kLargest, triangles, bake.maxrss_kb / 1024.0, per_tri, per_tri <= 300 ? "met" : "NOT met",
                     info.maxrss_kb / 1024.0, triangles > 0 ? info.maxrss_kb * 1024.0 / triangles : 0,
                     info.maxrss_kb > 0 ? double(bake.maxrss_kb) / double(info.maxrss_kb) : 0);
+        bars.absolute(std::string("bake peak RSS per input triangle, ") + kLargest +
+                          ", 2 threads (B; anchor: lodbake info)",
+                      triangles > 0 ? per_tri : NAN, 300, Limit::AtMost,
+                      triangles > 0 ? info.maxrss_kb * 1024.0 / triangles : NAN);
     }
     std::printf("load average at end %.1f\n", loadAverage());
-    return failures ? 1 : 0;
+    return bars.finish(check);
 }

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <vector>
 
 namespace lodbake_bench {
 
@@ -27,6 +28,22 @@ template <class F> double bestMs(int runs, F&& f) {
         best = std::min(best, std::chrono::duration<double, std::milli>(t1 - t0).count());
     }
     return best;
+}
+
+/// Median wall time of `runs` calls of f, in milliseconds (what the bars are judged on: a single
+/// lucky or preempted run moves it less than the best or the mean).
+template <class F> double medianMs(int runs, F&& f) {
+    std::vector<double> times;
+    for (int i = 0; i < runs; ++i) {
+        const auto t0 = std::chrono::steady_clock::now();
+        f();
+        const auto t1 = std::chrono::steady_clock::now();
+        times.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
+    }
+    if (times.empty()) return 0.0;
+    std::sort(times.begin(), times.end());
+    const size_t h = times.size() / 2;
+    return times.size() % 2 ? times[h] : 0.5 * (times[h - 1] + times[h]);
 }
 
 } // namespace lodbake_bench

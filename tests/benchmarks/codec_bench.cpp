@@ -1,14 +1,21 @@
 // codec_bench: the .lbm codec (lodbake::codec::encodeValence + lodrt::valenceDecode) against Draco
 // (draco::Encoder, speed 0 = draco_encoder -cl 10, edgebreaker, same quantization bits) in the same run.
 // Both get the same input: the scan with unreferenced vertices removed; "+n" rows add area/angle
-// weighted vertex normals coded at 10 bits by both. Times are the best of kRuns in thread CPU time
-// (the machine is shared: CPU time leaves out the time slices other processes take), single thread.
+// weighted vertex normals coded at 10 bits by both. Times are the median of --runs (default 9)
+// alternating runs in thread CPU time (the machine is shared: CPU time leaves out the time slices
+// other processes take), single thread. The position error of both sides is measured the same way:
+// each stream is decoded (ours by lodrt::valenceDecode, Draco's by draco::Decoder) and every decoded
+// point's largest per-coordinate distance to its nearest input vertex is taken.
+// Bars (docs/format/valence.md), over every cell, each judged on the worst cell: total size <= 0.9x
+// Draco's, decode time <= 0.5x, encode time <= 1.0x, maximum position error <= Draco's.
 //
-// usage: codec_bench [DIR] [FILE...]   (DIR defaults to the shared meshes folder)
+// usage: codec_bench [--runs N] [--check] [DIR] [FILE...]   (DIR defaults to the shared meshes folder)
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
+#include <cstring>
 #include <cstdio>
 #include <ctime>
 #include <map>
@@ -20,6 +27,7 @@
 #include <draco/compression/encode.h>
 #include <draco/mesh/mesh.h>
 
+#include "bench_bar.h"
 #include "bench_timing.h"
 #include "lodbake/cleanup/normals.h"
 #include "lodbake/codec/valence_encoder.h"
@@ -28,29 +36,54 @@
 
 namespace {
 
-constexpr int kRuns = 9;
 constexpr uint32_t kNormalBits = 10;
 
 double threadCpuMs() {
     return 1e3 * lodbake_bench::threadCpuSeconds();
 }
 
-// Runs a and b alternately, kRuns times each, and returns each one's best time. Alternating gives
+// Runs a and b alternately, `runs` times each, and returns each one's median time. Alternating gives
 // both the same history of heap and caches: timed one after the other, whichever ran first on a mesh
 // paid for growing the heap on every run (our encode of the first cell of bunny_zipper and igea took
 // 1.6x as long as the same encode in the next cell, whichever bit count came first).
-template <class A, class B> std::pair<double, double> bestMsAlternating(A&& a, B&& b) {
-    double best_a = 1e300, best_b = 1e300;
-    for (int i = 0; i < kRuns; ++i) {
+template <class A, class B> std::pair<double, double> medianMsAlternating(int runs, A&& a, B&& b) {
+    std::vector<double> times_a, times_b;
+    for (int i = 0; i < runs; ++i) {
         double t0 = threadCpuMs();
         a();
-        best_a = std::min(best_a, threadCpuMs() - t0);
+        times_a.push_back(threadCpuMs() - t0);
         t0 = threadCpuMs();
         b();
-        best_b = std::min(best_b, threadCpuMs() - t0);
+        times_b.push_back(threadCpuMs() - t0);
     }
-    return {best_a, best_b};
+    return {lodbake_bench::median(times_a), lodbake_bench::median(times_b)};
 }
+
+// The worst cell of one bar: the largest ours / anchor seen, with the cell it came from.
+struct Worst {
+    double ours = 0, anchor = 0, ratio = -1;
+    std::string cell;
+    bool measured = true;
+    void take(double o, double a, const std::string& where) {
+        if (!(a > 0) || !(o >= 0)) {
+            measured = false;
+            cell = where;
+            return;
+        }
+        if (o / a > ratio) {
+            ratio = o / a;
+            ours = o;
+            anchor = a;
+            cell = where;
+        }
+    }
+    void judge(lodbake_bench::Bars& bars, const std::string& name, double limit) const {
+        if (!measured || ratio < 0)
+            bars.unmeasured(name + " (not measured: " + cell + ")", limit, lodbake_bench::Limit::AtMost, true);
+        else
+            bars.ratio(name + " (worst: " + cell + ")", ours, anchor, limit, lodbake_bench::Limit::AtMost);
+    }
+};
 
 // Keeps only the vertices some triangle references, in their original order.
 lodbake::Mesh compact(const lodbake::Mesh& in) {
@@ -126,14 +159,30 @@ double maxErrorToNearest(const lodbake::Mesh& in, const std::vector<float>& deco
 
 int main(int argc, char** argv) {
     using namespace lodbake;
-    const std::string dir = argc > 1 ? argv[1] : LODBAKE_BENCH_MESHES_DIR;
+    const bool check = lodbake_bench::takeCheckFlag(argc, argv);
+    int runs = 9;
+    std::vector<std::string> positional;
+    for (int i = 1; i < argc; ++i) {
+        if (std::strcmp(argv[i], "--runs") == 0 && i + 1 < argc) {
+            runs = std::max(1, std::atoi(argv[++i]));
+        } else if (argv[i][0] == '-') {
+            std::fprintf(stderr, "usage: codec_bench [--runs N] [--check] [DIR] [FILE...]\n");
+            return 2;
+        } else {
+            positional.push_back(argv[i]);
+        }
+    }
+    const std::string dir = !positional.empty() ? positional[0] : LODBAKE_BENCH_MESHES_DIR;
     std::vector<std::string> names;
-    for (int i = 2; i < argc; ++i) names.push_back(argv[i]);
+    for (size_t i = 1; i < positional.size(); ++i) names.push_back(positional[i]);
+    Worst worst_size, worst_decode, worst_encode, worst_error;
     if (names.empty()) names = {"bunny_zipper.ply", "igea.ply", "lucy100k.ply", "nefertiti.obj", "dragon_poisson.ply"};
 
     std::printf("%-20s %4s %2s %7s | %9s %9s %5s | %6s %6s %6s | %8s %8s %5s | %8s %8s %5s | %9s %9s\n", "mesh", "bits",
                 "n", "V", "ours B", "draco B", "ratio", "conn", "pos", "nrm", "dec ms", "draco", "ratio", "enc ms",
                 "draco", "ratio", "err ours", "err draco");
+    std::printf("(err: largest per-coordinate distance of a decoded point to its nearest input vertex, both "
+                "sides decoded and measured the same way; err enc: what our encoder reports)\n");
     for (const std::string& name : names) {
         Diagnostics diag;
         auto loaded = readMesh(dir + "/" + name, {}, diag);
@@ -160,8 +209,8 @@ int main(int argc, char** argv) {
                 encoder.SetAttributeQuantization(draco::GeometryAttribute::NORMAL, int(kNormalBits));
                 encoder.SetEncodingMethod(draco::MESH_EDGEBREAKER_ENCODING);
                 draco::EncoderBuffer dbuf;
-                const auto [enc_ms, denc_ms] = bestMsAlternating(
-                    [&] { ours = std::move(*codec::encodeValence(m, o)); },
+                const auto [enc_ms, denc_ms] = medianMsAlternating(
+                    runs, [&] { ours = std::move(*codec::encodeValence(m, o)); },
                     [&] {
                         dbuf.Clear();
                         if (!encoder.EncodeMeshToBuffer(*dm, &dbuf).ok()) std::fprintf(stderr, "draco encode failed\n");
@@ -183,8 +232,8 @@ int main(int argc, char** argv) {
                 out.scratch_size = scratch.size() * 8;
                 lodrt::Result r = lodrt::Result::Ok;
                 std::unique_ptr<draco::Mesh> decoded;
-                const auto [dec_ms, ddec_ms] = bestMsAlternating(
-                    [&] { r = lodrt::valenceDecode(ours.bytes.data(), ours.bytes.size(), out); },
+                const auto [dec_ms, ddec_ms] = medianMsAlternating(
+                    runs, [&] { r = lodrt::valenceDecode(ours.bytes.data(), ours.bytes.size(), out); },
                     [&] {
                         draco::DecoderBuffer in;
                         in.Init(dbuf.data(), dbuf.size());
@@ -192,27 +241,45 @@ int main(int argc, char** argv) {
                         auto res = decoder.DecodeMeshFromBuffer(&in);
                         if (res.ok()) decoded = std::move(res).value();
                     });
-                if (r != lodrt::Result::Ok) std::fprintf(stderr, "decode failed: %s\n", lodrt::resultName(r));
+                // The lookup grid of both measurements: one quantization step of our cube at these
+                // bits (exactness needs only that each decoded point lies within one cell of its source).
+                const double cell = info.cube_size / double((1u << bits) - 1);
+                double our_err = -1.0;
+                if (r != lodrt::Result::Ok)
+                    std::fprintf(stderr, "decode failed: %s\n", lodrt::resultName(r));
+                else
+                    our_err = maxErrorToNearest(m, positions, cell);
                 double draco_err = -1.0;
                 if (decoded) {
                     const draco::PointAttribute* pa = decoded->GetNamedAttribute(draco::GeometryAttribute::POSITION);
                     std::vector<float> dp(3 * size_t(decoded->num_points()));
                     for (uint32_t i = 0; i < decoded->num_points(); ++i)
                         pa->GetMappedValue(draco::PointIndex(i), &dp[3 * size_t(i)]);
-                    draco_err = maxErrorToNearest(m, dp, info.cube_size / double((1u << bits) - 1));
+                    draco_err = maxErrorToNearest(m, dp, cell);
                 }
+                char where[96];
+                std::snprintf(where, sizeof(where), "%s %u bits%s", name.c_str(), bits, normals ? " +n" : "");
+                worst_size.take(double(ours.bytes.size()), double(dbuf.size()), where);
+                worst_decode.take(dec_ms, ddec_ms, where);
+                worst_encode.take(enc_ms, denc_ms, where);
+                worst_error.take(our_err, draco_err, where);
                 std::printf("%-20s %4u %2s %7.0f | %9zu %9zu %5.3f | %6.2f %6.2f %6.2f | %8.2f %8.2f %5.2f | %8.1f "
-                            "%8.1f %5.2f | %9.3g %9.3g\n",
+                            "%8.1f %5.2f | %9.6g %9.6g  (err enc %.6g)\n",
                             name.c_str(), bits, normals ? "+n" : "", vn, ours.bytes.size(), dbuf.size(),
                             double(ours.bytes.size()) / double(dbuf.size()), ours.connectivity_bytes * 8.0 / vn,
                             ours.position_bytes * 8.0 / vn, ours.normal_bytes * 8.0 / vn, dec_ms, ddec_ms,
-                            dec_ms / ddec_ms, enc_ms, denc_ms, enc_ms / denc_ms, ours.max_position_error, draco_err);
+                            dec_ms / ddec_ms, enc_ms, denc_ms, enc_ms / denc_ms, our_err, draco_err,
+                            ours.max_position_error);
                 std::fflush(stdout);
             }
         }
     }
-    std::printf("conn/pos/nrm: our bits per vertex; ratios are ours / draco (bars: size <= 0.9, decode <= 0.5, "
-                "encode <= 1.0); times: best of %d, thread CPU ms\n",
-                kRuns);
-    return 0;
+    std::printf("conn/pos/nrm: our bits per vertex; ratios are ours / draco; times: median of %d, thread CPU ms\n",
+                runs);
+    lodbake_bench::Bars bars("codec_bench");
+    worst_size.judge(bars, "size / Draco -cl 10 (bytes)", 0.9);
+    worst_decode.judge(bars, "decode time / Draco (thread CPU ms)", 0.5);
+    worst_encode.judge(bars, "encode time / Draco (thread CPU ms)", 1.0);
+    worst_error.judge(bars, "max position error / Draco's (decoded, same measure)", 1.0);
+    return bars.finish(check);
 }

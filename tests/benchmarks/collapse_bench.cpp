@@ -22,6 +22,7 @@
 
 #include <meshoptimizer.h>
 
+#include "bench_bar.h"
 #include "bench_mesh.h"
 #include "bench_timing.h"
 #include "core/parallel.h"
@@ -48,6 +49,10 @@ struct Step {
 } // namespace
 
 int main(int argc, char** argv) {
+    // --check is accepted so that scripts/bench.sh can pass it to every bench; there is no bar.
+    (void)lodbake_bench::takeCheckFlag(argc, argv);
+    lodbake_bench::Bars::printNone("collapse_bench", "a diagnostic of the collapse engine (cost per collapse next to "
+                                                     "native meshopt, output hashes); no bar in the docs or issues");
     size_t threads = 1;
     int runs = 3;
     std::string path;

@@ -7,13 +7,16 @@
 //   - anchor, same run: the core TriangleBvh (lodbake/core/bvh.h) built over the same meshes and queried
 //     from every vertex of both sides, cold (no warm start), per query.
 // Prints every result with 17 significant digits so two builds can be compared exactly.
-// usage: distance_bench [MESH (default dragon_poisson.ply)] [--runs N] [--no-anchor]
+// Bar: the split gives the one call's results bit for bit on every level (the bake's results must not
+// depend on how the measurement is divided; docs/bake.md, "Concurrency"). The times have no bar.
+// usage: distance_bench [MESH (default dragon_poisson.ply)] [--runs N] [--no-anchor] [--check]
 #include <algorithm>
 #include <cstdio>
 #include <cstring>
 #include <string>
 #include <vector>
 
+#include "bench_bar.h"
 #include "bench_timing.h"
 #include "core/parallel.h"
 #include "lodbake/core/bvh.h"
@@ -43,6 +46,7 @@ double anchorSeconds(const lodbake::Mesh& from, const lodbake::Mesh& to, size_t&
 } // namespace
 
 int main(int argc, char** argv) {
+    const bool check = lodbake_bench::takeCheckFlag(argc, argv);
     std::string name = "dragon_poisson.ply";
     int runs = 3;
     bool anchor_run = true;
@@ -100,7 +104,7 @@ int main(int argc, char** argv) {
     }
     // The split the bake runs on a large asset, against the one call, alternating.
     double best_whole = 1e300, best_sides = 1e300, best_rest = 1e300;
-    bool same = true;
+    size_t differing = 0; // levels whose split result differs from the one call's, over all runs
     for (int r = 0; r < runs; ++r) {
         const double c0 = threadCpuSeconds();
         auto whole = lodbake::prepareAndMeasureSurfaceDistances(mesh, levels, options.distance);
@@ -118,12 +122,16 @@ int main(int argc, char** argv) {
         best_sides = std::min(best_sides, c2 - c1);
         best_rest = std::min(best_rest, c3 - c2);
         for (size_t l = 0; l < levels.size(); ++l)
-            same &= (*whole)[l].ok() == (*rest)[l].ok() &&
-                    (!(*whole)[l].ok() || ((*whole)[l]->hausdorff == (*rest)[l]->hausdorff &&
-                                           (*whole)[l]->mean == (*rest)[l]->mean && (*whole)[l]->rms == (*rest)[l]->rms));
+            differing += !(
+                (*whole)[l].ok() == (*rest)[l].ok() &&
+                (!(*whole)[l].ok() || ((*whole)[l]->hausdorff == (*rest)[l]->hausdorff &&
+                                       (*whole)[l]->mean == (*rest)[l]->mean && (*whole)[l]->rms == (*rest)[l]->rms)));
     }
-    std::printf("one call %.3f s; split: reference sides %.3f s + the rest %.3f s = %.3f s; results %s\n",
-                best_whole, best_sides, best_rest, best_sides + best_rest, same ? "bit-identical" : "DIFFER");
+    std::printf("one call %.3f s; split: reference sides %.3f s + the rest %.3f s = %.3f s; results %s\n", best_whole,
+                best_sides, best_rest, best_sides + best_rest, differing == 0 ? "bit-identical" : "DIFFER");
+    lodbake_bench::Bars bars("distance_bench");
+    bars.absolute("levels whose split measurement differs from the one call (" + name + ")", double(differing), 0,
+                  lodbake_bench::Limit::AtMost);
     double anchor = 0, checksum = 0;
     size_t queries = 0;
     for (const lodbake::Mesh* level : levels) {
@@ -134,10 +142,10 @@ int main(int argc, char** argv) {
     const double ours = best_prepare + best_measure;
     std::printf("ours: prepare %.3f s + measure %.3f s = %.3f s for about %zu points (%.3f us/point)\n", best_prepare,
                 best_measure, ours, points, ours / double(points) * 1e6);
-    if (!anchor_run) return 0;
+    if (!anchor_run) return bars.finish(check);
     std::printf("anchor (core TriangleBvh, cold vertex queries incl. builds): %.3f s for %zu queries (%.3f us/query) "
                 "[%g]\n",
                 anchor, queries, anchor / double(queries) * 1e6, checksum);
-    std::printf("per point, ours / anchor: %.2f\n", (ours / double(points)) / (anchor / double(queries)));
-    return 0;
+    std::printf("per point, ours / anchor: %.2f (no bar)\n", (ours / double(points)) / (anchor / double(queries)));
+    return bars.finish(check);
 }

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_bar.h"
 #include "bench_timing.h"
 
 #include "lodbake/io/mesh_io.h"
@@ -30,6 +31,10 @@ std::string stem(const std::string& name) {
 } // namespace
 
 int main(int argc, char** argv) {
+    // --check is accepted so that scripts/bench.sh can pass it to every bench; there is no bar.
+    (void)lodbake_bench::takeCheckFlag(argc, argv);
+    lodbake_bench::Bars::printNone(
+        "multilevel_bench", "the multilevel method against QEM (docs/simplify.md); no bar in the docs or issues");
     using namespace lodbake;
     std::string out_dir = LODBAKE_BENCH_OUT_DIR;
     std::vector<double> ratios = {0.5, 0.1, 0.02};

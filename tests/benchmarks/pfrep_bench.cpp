@@ -4,7 +4,13 @@
 //   3. selective refinement of 1,000 lucy100k instances from a moving camera (bar: < 2 ms per frame),
 //      instance state exactly |V| bits;
 //   4. writes PFRep levels and full-edge discrete levels at equal triangle counts for meshdist.py.
-// usage: pfrep_bench [--quick | --refine | --quality | --shared MESH] (quick: skips the largest scans in part 1; refine: part 3 only)
+// The three bars are absolute product requirements (docs/format/pfrep.md, issue 30: "as today"); each
+// is printed with an anchor measured in the same run for scale (2: a memcpy of the same triangle list,
+// 3: reading every instance's mask once per frame). 1 is judged on the worst scan, 2 on the worst k in
+// thread CPU time, 3 on the median frame in thread CPU time (the machine is shared).
+// usage: pfrep_bench [--quick | --refine | --quality | --shared MESH] [--check]
+//   quick: skips the largest scans in part 1 (part 2 then runs on igea) and part 4; refine: part 3 only;
+//   --check: exit 1 when a bar is not met.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -13,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_bar.h"
 #include "bench_timing.h"
 #include "lodbake/io/mesh_io.h"
 #include "lodbake/pfrep/pfrep_builder.h"
@@ -286,6 +293,9 @@ int sharedChain(const char* name, const char* rule_name) {
 } // namespace
 
 int main(int argc, char** argv) {
+    const bool check = lodbake_bench::takeCheckFlag(argc, argv);
+    lodbake_bench::Bars bars("pfrep_bench");
+    using lodbake_bench::Limit;
     if (argc > 2 && std::strcmp(argv[1], "--shared") == 0) return sharedChain(argv[2], argc > 3 ? argv[3] : nullptr);
     const bool quick = argc > 1 && std::strcmp(argv[1], "--quick") == 0;
     const bool refine_only = argc > 1 && std::strcmp(argv[1], "--refine") == 0;
@@ -309,8 +319,11 @@ int main(int argc, char** argv) {
         scans.push_back("dragon_stand_merged.ply");
         scans.push_back("dragon_poisson.ply");
     }
-    lodbake::PfrepBuild dragon, lucy;
+    lodbake::PfrepBuild dragon, lucy, igea;
     bool all_met = true;
+    double worst_per_vertex = -1;
+    std::string worst_scan;
+    size_t measured_scans = 0;
     for (const std::string& name : scans) {
         lodbake::Mesh mesh;
         if (!load(name, mesh)) continue;
@@ -320,6 +333,11 @@ int main(int argc, char** argv) {
         const double per_vertex = double(build.blob.size()) / double(build.rank_point.size());
         const double per_input = double(build.blob.size()) / double(mesh.vertexCount());
         all_met &= per_vertex <= 40.0;
+        ++measured_scans;
+        if (per_vertex > worst_per_vertex) {
+            worst_per_vertex = per_vertex;
+            worst_scan = name;
+        }
         std::printf("  %-28s V %8zu  removed %8zu  stored tris %8zu  deps/vertex %.2f  A/vertex %.2f  "
                     "%9zu bytes  %.2f B/vertex (%.2f per input vertex)  build %.1f s  %s\n",
                     name.c_str(), build.rank_point.size(), build.removed, build.stored_triangles,
@@ -328,16 +346,30 @@ int main(int argc, char** argv) {
                     per_input, seconds, per_vertex <= 40.0 ? "met" : "NOT MET");
         if (name == "dragon_poisson.ply") dragon = std::move(build);
         if (name == "lucy100k.ply") lucy = std::move(build);
+        if (name == "igea.ply") igea = std::move(build);
     }
-    if (!refine_only) std::printf("  bar %s\n", all_met ? "met on every scan measured" : "NOT met");
+    if (!refine_only) {
+        std::printf("  bar %s\n", all_met ? "met on every scan measured" : "NOT met");
+        if (measured_scans < scans.size())
+            bars.unmeasured("blob bytes per stored vertex (" + std::to_string(scans.size() - measured_scans) + " of " +
+                                std::to_string(scans.size()) + " scans not built)",
+                            40, Limit::AtMost, false);
+        else
+            bars.absolute("blob bytes per stored vertex (worst: " + worst_scan + ", " + std::to_string(scans.size()) +
+                              " scans)",
+                          worst_per_vertex, 40, Limit::AtMost);
+    }
 
-    if (!dragon.blob.empty()) {
-        std::printf("== 2. progressive extraction, dragon_poisson (bar: >= 50 M triangles/s, one core)\n");
+    // Part 2 runs on dragon_poisson; --quick leaves it out of part 1, so igea stands in.
+    const lodbake::PfrepBuild& extraction = !dragon.blob.empty() ? dragon : igea;
+    const char* extraction_name = !dragon.blob.empty() ? "dragon_poisson" : "igea";
+    if (!extraction.blob.empty()) {
+        std::printf("== 2. progressive extraction, %s (bar: >= 50 M triangles/s, one core)\n", extraction_name);
         lodrt::PfrepModel m;
-        if (lodrt::openPfrep(dragon.blob.data(), dragon.blob.size(), &m) == lodrt::Result::Ok) {
+        if (lodrt::openPfrep(extraction.blob.data(), extraction.blob.size(), &m) == lodrt::Result::Ok) {
             std::vector<uint32_t> idx(lodrt::pfrepMaxTriangles(m) * 3);
             std::vector<uint32_t> fans(lodrt::pfrepMaxFanValues(m));
-            double worst = HUGE_VAL, worst_cpu = HUGE_VAL;
+            double worst = HUGE_VAL, worst_cpu = HUGE_VAL, copy_at_worst_cpu = 0;
             for (double f : {0.0, 0.1, 0.25, 0.5, 0.75, 0.9, 0.97, 0.99, 0.999, 1.0}) {
                 const uint32_t k = uint32_t(f * m.removed_count);
                 size_t count = 0;
@@ -350,7 +382,9 @@ int main(int argc, char** argv) {
                 } while (secondsSince(t) < 0.3);
                 const double s = secondsSince(t) / reps;
                 const double cpu = (threadCpuSeconds() - c0) / reps;
-                worst_cpu = std::min(worst_cpu, count / cpu / 1e6);
+                const double rate_cpu = count / cpu / 1e6;
+                const bool new_worst_cpu = rate_cpu < worst_cpu;
+                worst_cpu = std::min(worst_cpu, rate_cpu);
                 size_t values = 0;
                 const auto tf = Clock::now();
                 int fan_reps = 0;
@@ -370,14 +404,21 @@ int main(int argc, char** argv) {
                 const double sc = secondsSince(tc) / copy_reps;
                 const double rate = count / s / 1e6;
                 worst = std::min(worst, rate);
+                if (new_worst_cpu) copy_at_worst_cpu = count / sc / 1e6;
                 std::printf("  k %8u (%5.1f%%): %8zu triangles in %8.3f ms = %6.1f M tri/s (thread CPU time: %6.1f M tri/s) (memcpy of the list: %6.1f M "
                             "tri/s, ratio %.2f); fans: %zu values (%.2f per triangle) %6.1f M tri/s\n",
                             k, f * 100, count, s * 1e3, rate, count / cpu / 1e6, count / sc / 1e6, sc / s, values,
                             count ? double(values) / count : 0.0, count / sf / 1e6);
             }
-            std::printf("  worst %.1f M triangles/s wall, %.1f M triangles/s thread CPU time: bar %s\n", worst, worst_cpu,
-                        worst >= 50 ? "met" : (worst_cpu >= 50 ? "met in CPU time only" : "NOT met"));
+            std::printf(
+                "  worst %.1f M triangles/s wall, %.1f M triangles/s thread CPU time (the bar's figure): bar %s\n",
+                worst, worst_cpu, worst_cpu >= 50 ? "met" : "NOT met");
+            bars.absolute(std::string("extraction M triangles/s, worst k, thread CPU (") + extraction_name +
+                              "; anchor: memcpy of the list)",
+                          worst_cpu, 50, Limit::AtLeast, copy_at_worst_cpu);
         }
+    } else if (!refine_only) {
+        bars.unmeasured("extraction M triangles/s (no blob built)", 50, Limit::AtLeast, false);
     }
 
     // --blob-cache PATH: lucy100k's blob is read from PATH when it holds one this reader opens,
@@ -528,6 +569,7 @@ int main(int argc, char** argv) {
                     }
                 }
             }
+            double scan_ms = 0;
             {
                 // Anchor, same run: only reading every instance's mask once per frame (an AND over
                 // its words, the least any step must do to know its state), thread CPU time.
@@ -544,7 +586,7 @@ int main(int argc, char** argv) {
                         }
                         sink += acc;
                     }
-                const double scan_ms = (threadCpuSeconds() - a0) / kFrames * 1e3;
+                scan_ms = (threadCpuSeconds() - a0) / kFrames * 1e3;
                 std::printf("  anchor: reading all %d masks (%zu bytes each) takes %.3f ms/frame thread CPU time "
                             "(refine / anchor = %.2f) [%llu]\n",
                             kInstances, mask_bytes, scan_ms, total_cpu / kFrames * 1e3 / scan_ms,
@@ -560,11 +602,14 @@ int main(int argc, char** argv) {
                 const size_t over = size_t(std::count_if(sorted.begin(), sorted.end(), [](double x) { return x >= 2.0; }));
                 std::printf("  thread CPU time per frame: median %.3f ms, 99th percentile %.3f ms, %zu of %zu frames >= 2 ms\n",
                             sorted[sorted.size() / 2], sorted[sorted.size() * 99 / 100], over, sorted.size());
+                bars.absolute("refine 1000 lucy100k instances, ms/frame, median thread CPU (anchor: reading the masks)",
+                              sorted[sorted.size() / 2], 2.0, Limit::AtMost, scan_ms);
             }
-            std::printf("  %d frames: mean %.3f ms/frame, worst %.3f ms, %.1f mask bits changed by refine/frame; state %zu bytes "
-                        "per instance for %u vertices (|V| bits); %zu triangles in the last frame: bar %s\n",
+            std::printf("  %d frames: mean %.3f ms/frame, worst %.3f ms, %.1f mask bits changed by refine/frame; "
+                        "state %zu bytes per instance for %u vertices (|V| bits); %zu triangles in the last frame "
+                        "(wall time; the bar is judged on the median frame's thread CPU time)\n",
                         kFrames, total / kFrames * 1e3, worst * 1e3, double(total_changes) / kFrames, mask_bytes,
-                        m.vertex_count, last_tris, total / kFrames * 1e3 < 2.0 ? "met" : "NOT met");
+                        m.vertex_count, last_tris);
             size_t ops_rest = 0, flips_rest = 0, toggles = 0, max_ops_rest = 0;
             for (int f = 1; f < kFrames; ++f) {
                 ops_rest += frame_ops[size_t(f)];
@@ -581,8 +626,10 @@ int main(int argc, char** argv) {
         }
     }
 
+    if (lucy.blob.empty())
+        bars.unmeasured("refine 1000 lucy100k instances, ms/frame (no blob)", 2.0, Limit::AtMost, false);
     // 4. Levels for meshdist.py: PFRep (half-edge, positions quantized) against the full-edge chain.
-    if (refine_only) return 0;
+    if (refine_only || quick) return bars.finish(check);
     const std::string out = LODBAKE_BENCH_OUT_DIR;
     for (const char* name : {"lucy100k.ply", "rocker_arm.obj"}) {
         lodbake::Mesh mesh;
@@ -610,5 +657,5 @@ int main(int argc, char** argv) {
                         levelTriangles(m, k, idx));
         }
     }
-    return 0;
+    return bars.finish(check);
 }

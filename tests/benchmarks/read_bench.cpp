@@ -12,6 +12,7 @@
 #include <system_error>
 #include <vector>
 
+#include "bench_bar.h"
 #include "bench_timing.h"
 
 #include "lodbake/core/file_io.h"
@@ -28,6 +29,10 @@ template <class F> double bestMs(F&& f) { return lodbake_bench::bestMs(kRuns, f)
 } // namespace
 
 int main(int argc, char** argv) {
+    // --check is accepted so that scripts/bench.sh can pass it to every bench; there is no bar.
+    (void)lodbake_bench::takeCheckFlag(argc, argv);
+    lodbake_bench::Bars::printNone("read_bench",
+                                   "reader throughput next to reading the bytes; no bar in the docs or issues");
     const std::string dir = argc > 1 ? argv[1] : LODBAKE_BENCH_SHARED_MESHES_DIR;
     std::vector<std::string> files;
     std::error_code ec;

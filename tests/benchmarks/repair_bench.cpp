@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_bar.h"
 #include "bench_timing.h"
 
 #include "core/parallel.h"
@@ -88,6 +89,10 @@ void printBakeTimes(const std::string& name, const lodbake::Mesh& input) {
 } // namespace
 
 int main(int argc, char** argv) {
+    // --check is accepted so that scripts/bench.sh can pass it to every bench; there is no bar.
+    (void)lodbake_bench::takeCheckFlag(argc, argv);
+    lodbake_bench::Bars::printNone("repair_bench",
+                                   "repair time next to computeTopologyStats; no bar in the docs or issues");
     using namespace lodbake;
     bool pass_times = false, bake_times = false;
     std::vector<std::string> args;

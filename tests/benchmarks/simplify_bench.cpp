@@ -17,9 +17,16 @@
 //            gives; topology kept, late levels refined) and with remove_covered_components (the
 //            setting a preset for merged scans uses, `--remove-covered-components`).
 //
+// Bars (docs/simplify.md), per mesh: mean and Hausdorff distance <= meshoptimizer 1.3's in every
+// cell (a cell is met by the defaults or by remove_covered_components, the merged-scan presets'
+// setting; judged on the worst cell); chain time <= native meshopt_simplify on the meshes of 500k
+// triangles and more (the bar is set on the 1 M-triangle meshes; median of the runs); peak RSS of the
+// chain <= 300 B per input triangle (native meshopt's printed beside it).
+//
 // usage: simplify_bench [--meshes DIR] [--out DIR] [--node-bench DIR] [--samples N] [--skip-node]
-//                       [--speed-only] [--runs N] [MESH...]
-// The run ends with one summary table (markdown) of every mesh: quality, speed ratio, memory.
+//                       [--speed-only] [--runs N] [--check] [MESH...]
+// The run ends with one summary table (markdown) of every mesh: quality, speed ratio, memory, then the
+// bars; --check exits 1 when one is not met.
 // Not a ctest: run it through scripts/bench-simplify.sh.
 
 #include <unistd.h>
@@ -40,6 +47,7 @@
 
 #include <meshoptimizer.h>
 
+#include "bench_bar.h"
 #include "core/parallel.h"
 #include "lodbake/core/diagnostics.h"
 #include "lodbake/io/mesh_io.h"
@@ -249,9 +257,10 @@ MeshResult benchMesh(const Args& args, const std::string& name) {
     result.triangles = mesh.faceCount();
     std::printf("  %zu vertices, %zu triangles\n", mesh.vertexCount(), mesh.faceCount());
 
-    // Speed: best of a few alternating runs, our chain on one thread (and once on all threads).
+    // Speed: the median of a few alternating runs, our chain on one thread (and once on all threads).
     const int runs = args.runs > 0 ? args.runs : (mesh.faceCount() > 400000 ? 2 : 3);
-    double ours_1t = 1e30, ours_nt = 1e30, native_t = 1e30;
+    double ours_nt = 1e30;
+    std::vector<double> ours_runs, native_runs;
     std::vector<size_t> ours_chain_tris, native_chain_tris;
     for (int r = 0; r < runs; ++r) {
         {
@@ -263,7 +272,7 @@ MeshResult benchMesh(const Args& args, const std::string& name) {
                 std::printf("  our chain failed: %s\n", chain.status().message().c_str());
                 return result;
             }
-            ours_1t = std::min(ours_1t, seconds(t0, t1));
+            ours_runs.push_back(seconds(t0, t1));
             ours_chain_tris.clear();
             for (const auto& level : chain->levels) ours_chain_tris.push_back(level.mesh.faceCount());
         }
@@ -276,11 +285,12 @@ MeshResult benchMesh(const Args& args, const std::string& name) {
         auto t0 = std::chrono::steady_clock::now();
         native_chain_tris = nativeChain(mesh);
         auto t1 = std::chrono::steady_clock::now();
-        native_t = std::min(native_t, seconds(t0, t1));
+        native_runs.push_back(seconds(t0, t1));
     }
+    const double ours_1t = lodbake_bench::median(ours_runs), native_t = lodbake_bench::median(native_runs);
     result.ours_s = ours_1t;
     result.native_s = native_t;
-    std::printf("  5-level chain (0.5 0.25 0.1 0.03 0.01), best of %d: ours %.3f s (1 thread), %.3f s (all threads); "
+    std::printf("  5-level chain (0.5 0.25 0.1 0.03 0.01), median of %d: ours %.3f s (1 thread), %.3f s (all threads); "
                 "native meshopt_simplify %.3f s; ours/native %.2f (1 thread)\n",
                 runs, ours_1t, ours_nt, native_t, ours_1t / native_t);
     std::printf("  chain triangles ours:");
@@ -417,9 +427,62 @@ void printSummary(const std::vector<MeshResult>& results, bool speed_only) {
     }
 }
 
+// The bars of every mesh measured (see the header).
+void judge(const std::vector<MeshResult>& results, bool speed_only, lodbake_bench::Bars& bars) {
+    using lodbake_bench::Limit;
+    for (const MeshResult& m : results) {
+        if (m.triangles == 0) {
+            bars.unmeasured(m.name + ": not loaded", 1.0, Limit::AtMost, true);
+            continue;
+        }
+        // Per cell the better setting; over cells the worst ratio.
+        struct Worst {
+            double ours = 0, anchor = 0, ratio = -1;
+            double cell = 0;
+            bool measured = true;
+        } mean, haus;
+        for (const QualityRow& q : m.quality) {
+            auto take = [&](Worst& w, double ours, double covered, double anchor) {
+                // A distance of 0 is a failed measurement (a simplified level is never exact).
+                if (!(anchor > 0) || !(ours > 0) || !(covered > 0)) {
+                    w.measured = false;
+                    return;
+                }
+                const double best = std::min(ours, covered);
+                if (best / anchor > w.ratio) w = Worst{best, anchor, best / anchor, q.ratio, w.measured};
+            };
+            take(mean, q.ours_mean, q.covered_mean, q.anchor_mean);
+            take(haus, q.ours_haus, q.covered_haus, q.anchor_haus);
+        }
+        if (!speed_only) {
+            for (const auto& [what, w] : {std::make_pair("mean", &mean), std::make_pair("Hausdorff", &haus)}) {
+                char name[160];
+                std::snprintf(name, sizeof(name), "%s: %s distance / meshoptimizer 1.3 (worst cell: ratio %g)",
+                              m.name.c_str(), what, w->cell);
+                if (!w->measured || w->ratio < 0)
+                    bars.unmeasured(m.name + ": " + what + " distance / meshoptimizer 1.3 (anchor missing)", 1.0,
+                                    Limit::AtMost, true);
+                else
+                    bars.ratio(name, w->ours, w->anchor, 1.0, Limit::AtMost);
+            }
+            // 0: the child process that measures the peak failed.
+            if (m.ours_bytes > 0)
+                bars.absolute(m.name + ": chain peak RSS per input triangle (B; anchor: native meshopt)", m.ours_bytes,
+                              300, Limit::AtMost, m.native_bytes);
+            else
+                bars.unmeasured(m.name + ": chain peak RSS per input triangle (the measuring process failed)", 300,
+                                Limit::AtMost, false);
+        }
+        if (m.triangles >= 500000)
+            bars.ratio(m.name + ": 5-level chain time / native meshopt_simplify, 1 thread (s)", m.ours_s, m.native_s,
+                       1.0, Limit::AtMost);
+    }
+}
+
 } // namespace
 
 int main(int argc, char** argv) {
+    const bool check = lodbake_bench::takeCheckFlag(argc, argv);
     if (argc == 4 && std::string(argv[1]) == "--rss-child") return rssChildWork(argv[2], argv[3]) ? 0 : 1;
     Args args;
     for (int i = 1; i < argc; ++i) {
@@ -467,5 +530,7 @@ int main(int argc, char** argv) {
         return 1;
     }
     printSummary(results, args.speed_only);
-    return 0;
+    lodbake_bench::Bars bars("simplify_bench");
+    judge(results, args.speed_only, bars);
+    return bars.finish(check);
 }
