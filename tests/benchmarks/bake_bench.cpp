@@ -31,7 +31,7 @@
 #include "lodbake/config/bake_config.h"
 #include "lodbake/simplify/lod_chain.h"
 #include "lodbake/core/diagnostics.h"
-#include "lodbake/gltf/gltf_io.h"
+#include "lodbake/pack/pack_glb.h"
 #include "lodbake/io/mesh_io.h"
 #include "lodbake/pack/pack.h"
 #include "lodbake/pfrep/pfrep_extension.h"

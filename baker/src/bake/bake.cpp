@@ -13,7 +13,7 @@
 #include "core/parallel.h"
 #include "lodbake/cleanup/repair.h"
 #include "lodbake/core/json_writer.h"
-#include "lodbake/gltf/gltf_io.h"
+#include "lodbake/pack/pack_glb.h"
 #include "lodbake/simplify/lod_chain.h"
 #include "lodbake/simplify/mesh_distance.h"
 

@@ -17,7 +17,7 @@
 #include "../gltf/gltf_test_util.h"
 #include "lodbake/bake/bake.h"
 #include "lodbake/core/diagnostics.h"
-#include "lodbake/gltf/gltf_io.h"
+#include "lodbake/pack/pack_glb.h"
 #include "lodbake/io/mesh_io.h"
 #include "lodbake/pack/pack.h"
 #include "lodrt/pack.h"

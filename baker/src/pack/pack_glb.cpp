@@ -10,8 +10,9 @@
 #include <nlohmann/json.hpp>
 #include <tiny_gltf.h>
 
-#include "gltf/gltf_model.h"
-#include "lodbake/gltf/gltf_io.h"
+#include "lodbake/pack/pack_glb.h"
+
+#include "io/gltf_model.h"
 #include "lodbake/pack/pack.h"
 #include "lodbake/version.h"
 
