@@ -13,6 +13,7 @@
 #include "core/parallel.h"
 #include "lodbake/cleanup/repair.h"
 #include "lodbake/core/json_writer.h"
+#include "lodbake/core/math.h"
 #include "lodbake/pack/pack_glb.h"
 #include "lodbake/simplify/lod_chain.h"
 #include "lodbake/simplify/mesh_distance.h"
@@ -23,8 +24,6 @@ namespace {
 
 using bake_detail::concurrentPhases;
 using bake_detail::PhaseTask;
-
-constexpr double kPi = 3.14159265358979323846;
 
 ScreenParams screenParams(const BakeSettings& s) {
     ScreenParams screen;
@@ -149,7 +148,6 @@ Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vect
     chain_options.measure_error = false; // measured below, beside the stream encoders
     chain_options.record_collapses = false;
     for (const PackStreamEncoder& encoder : encoders) {
-        chain_options.record_collapses |= encoder.needs_collapses;
         // pfrep_from_chain: the PFRep blob is built from the chain's own pass, read as vertex removals
         // (docs/bake.md); otherwise it runs a half-edge simplification of its own.
         chain_options.record_removals |=

@@ -50,11 +50,6 @@ PackStreamEncoder makeStreamEncoder(
     PackStreamEncoder encoder;
     encoder.extension_name = std::move(extension_name);
     encoder.prepare = std::move(prepare);
-    encoder.encode = [prepare = encoder.prepare](const LodChain& chain, size_t level_index,
-                                                 PackLevel& level) -> Status {
-        LODBAKE_ASSIGN_OR_RETURN(PackStreamCommit commit, prepare(chain, level_index, level.mesh));
-        return commit ? commit(level) : Status::okStatus();
-    };
     return encoder;
 }
 

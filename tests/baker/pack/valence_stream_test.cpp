@@ -24,6 +24,7 @@
 #include "lodrt/valence.h"
 #include "data_uri.h"
 #include "mesh_builders.h"
+#include "stream_level.h"
 #include "test_paths.h"
 
 namespace {
@@ -102,7 +103,7 @@ TEST(ValenceStreamTest, LevelIsRenumberedIntoTheDecodedOrder) {
     level.mesh = grid(24);
     const Mesh original = level.mesh;
     const PackStreamEncoder encoder = valenceStreamEncoder();
-    ASSERT_TRUE(encoder.encode(LodChain{}, 0, level).ok());
+    ASSERT_TRUE(lodbake_test::encodeStreamLevel(encoder, LodChain{}, 0, level).ok());
     ASSERT_EQ(level.primitive_extensions.size(), 1u);
     ASSERT_EQ(level.primitive_extensions[0].size(), 1u);
     const PackExtension& e = level.primitive_extensions[0][0];
@@ -143,7 +144,7 @@ TEST(ValenceStreamTest, LevelIsRenumberedIntoTheDecodedOrder) {
     // Re-using the encoder gives identical bytes.
     PackLevel again;
     again.mesh = original;
-    ASSERT_TRUE(encoder.encode(LodChain{}, 0, again).ok());
+    ASSERT_TRUE(lodbake_test::encodeStreamLevel(encoder, LodChain{}, 0, again).ok());
     EXPECT_EQ(again.primitive_extensions[0][0].blobs[0], e.blobs[0]);
 }
 
@@ -185,7 +186,7 @@ TEST(ValenceStreamTest, MultiPrimitiveLevelGetsOneStreamPerPrimitive) {
     PackLevel level;
     level.mesh = twoPrimitiveGrid(8);
     const Mesh original = level.mesh;
-    ASSERT_TRUE(valenceStreamEncoder().encode(LodChain{}, 0, level).ok());
+    ASSERT_TRUE(lodbake_test::encodeStreamLevel(valenceStreamEncoder(), LodChain{}, 0, level).ok());
     const Mesh& m = level.mesh;
     // Sub-meshes keep their order, names, materials and triangle counts; the empty one stays empty.
     ASSERT_EQ(m.submeshes.size(), 3u);
@@ -237,7 +238,8 @@ PackDescription onePack(bool compact) {
     asset.levels[1].mesh = grid(4);
     asset.screen_coverage = {0.5, 0.0};
     const PackStreamEncoder encoder = valenceStreamEncoder();
-    for (size_t l = 0; l < 2; ++l) EXPECT_TRUE(encoder.encode(LodChain{}, l, asset.levels[l]).ok());
+    for (size_t l = 0; l < 2; ++l)
+        EXPECT_TRUE(lodbake_test::encodeStreamLevel(encoder, LodChain{}, l, asset.levels[l]).ok());
     description.assets.push_back(std::move(asset));
     return description;
 }
@@ -368,7 +370,8 @@ PackDescription twoPrimitivePack(bool compact) {
     asset.levels[1].mesh = twoPrimitiveGrid(6);
     asset.screen_coverage = {0.5, 0.0};
     const PackStreamEncoder encoder = valenceStreamEncoder();
-    for (size_t l = 0; l < 2; ++l) EXPECT_TRUE(encoder.encode(LodChain{}, l, asset.levels[l]).ok());
+    for (size_t l = 0; l < 2; ++l)
+        EXPECT_TRUE(lodbake_test::encodeStreamLevel(encoder, LodChain{}, l, asset.levels[l]).ok());
     description.assets.push_back(std::move(asset));
     return description;
 }

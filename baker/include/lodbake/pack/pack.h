@@ -99,18 +99,16 @@ using PackStreamCommit = std::function<Status(PackLevel& level)>;
 /// Two steps, so that the costly one can run while other stages still read the meshes: `prepare`
 /// only reads `mesh` (the level as baked, before any encoder's commit; it must stay unchanged until
 /// prepare returns) and does all the coding; the commit it returns is cheap and runs later, one
-/// level and one encoder at a time, in encoder order. `encode` is prepare followed by its commit.
+/// level and one encoder at a time, in encoder order.
 struct PackStreamEncoder {
     std::string extension_name;
-    bool needs_collapses = false; // reads chain.sequence (the chain then records its collapses)
     /// Reads the measured errors of chain.levels: the prepare steps of the levels after LOD0 run after
     /// the measurement (LOD0's prepare still runs beside it).
     bool needs_measurement = false;
     std::function<Result<PackStreamCommit>(const LodChain& chain, size_t level_index, const Mesh& mesh)> prepare;
-    std::function<Status(const LodChain& chain, size_t level_index, PackLevel& level)> encode;
 };
 
-/// An encoder whose `encode` is `prepare` followed by the commit it returns.
+/// An encoder named `extension_name` that codes with `prepare`.
 PackStreamEncoder makeStreamEncoder(
     std::string extension_name,
     std::function<Result<PackStreamCommit>(const LodChain& chain, size_t level_index, const Mesh& mesh)> prepare);
