@@ -3,7 +3,9 @@
 // meshopt_simplify (Debian libmeshoptimizer, options 0, no error limit) building the same 5 levels
 // from the original on 2 threads, in the same run. Prints both times and the ratio; the bar is ≤ 3.
 //
-// usage: bake_bench [--runs N] [--stages] [MESH]   (default dragon_poisson.ply from ../shared/meshes)
+// usage: bake_bench [--runs N] [--stages] [--ratio-only] [MESH]
+// (default MESH: dragon_poisson.ply from ../shared/meshes)
+// --ratio-only: only the CLI run against native meshopt, without the in-process timing of the stages.
 // --stages: instead, every stage of a bake run on its own in process, at 1 and 2 threads, with its
 // wall time, process and thread CPU time and peak resident size (what each stage costs alone).
 // Not a ctest: these machines are noisy, so the best of N runs of each side is compared.
@@ -181,17 +183,19 @@ void stageBreakdown(const lodbake::Mesh& input, const lodbake::BakeSettings& set
 int main(int argc, char** argv) {
     std::string mesh_path = std::string(LODBAKE_BENCH_MESHES_DIR) + "/dragon_poisson.ply";
     int runs = 3;
-    bool stages_only = false;
+    bool stages_only = false, ratio_only = false;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
         if (a == "--runs" && i + 1 < argc) {
             runs = std::max(1, std::atoi(argv[++i]));
         } else if (a == "--stages") {
             stages_only = true;
+        } else if (a == "--ratio-only") {
+            ratio_only = true;
         } else if (!a.empty() && a[0] != '-') {
             mesh_path = a;
         } else {
-            std::fprintf(stderr, "usage: bake_bench [--runs N] [--stages] [MESH]\n");
+            std::fprintf(stderr, "usage: bake_bench [--runs N] [--stages] [--ratio-only] [MESH]\n");
             return 2;
         }
     }
@@ -233,7 +237,7 @@ int main(int argc, char** argv) {
         native = std::min(native, nativeSeconds(mesh, settings.lod_ratios, triangles));
     }
     // Where the time goes, in process (2 threads): repair, then the chain with and without measuring.
-    {
+    if (!ratio_only) {
         lodbake::ScopedThreadLimit limit(2);
         lodbake::Mesh repaired = mesh;
         lodbake::Diagnostics d;
