@@ -14,11 +14,11 @@
 #include <system_error>
 
 #include "lodbake/core/file_io.h"
+#include "lodbake/core/math.h"
 
 namespace lodbake::scansim {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 // The scanner reports coordinates in its own frame, centred near the object rather than on the
 // turntable axis, so the .conf translations are not zero and a reader that ignores them is caught.
 constexpr Vec3d kScannerOffset{0.0015, -0.045, 0.001};

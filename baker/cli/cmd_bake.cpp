@@ -250,13 +250,13 @@ std::string jobReport(const BakeJob& job, const BakeJobResult& r) {
     return head + "," + body.substr(open + 1);
 }
 
-// Allocator policy is the program's business, not the library's. A bake allocates and frees arrays
-// of hundreds of megabytes stage after stage (with several threads, from several glibc arenas);
-// glibc keeps most freed pages resident (its heap is not returned while fragmented, and freeing a
-// large block raises its mmap threshold, so the next stage's arrays come from the heap too), so the
-// resident size of one stage adds to the next one's. Giving the free pages back whenever a stage
-// ends, and where a stage frees one working set before building the next (BakeHooks::
-// release_memory), keeps the peak near that of the largest working set (docs/bake.md, "Memory").
+// Allocator policy is the program's business, not the library's (docs/cli.md, "Environment"). A bake
+// allocates and frees arrays of hundreds of megabytes stage after stage (with several threads, from
+// several glibc arenas); glibc keeps most freed pages resident (its heap is not returned while
+// fragmented, and freeing a large block raises its mmap threshold, so the next stage's arrays come
+// from the heap too), so the resident size of one stage would add to the next one's. Giving the free
+// pages back whenever a stage ends, and where a stage frees one working set before building the next
+// (BakeHooks::release_memory), keeps the peak near that of the largest working set.
 void releaseFreeMemory() {
 #if defined(__GLIBC__)
     malloc_trim(0);
@@ -266,13 +266,12 @@ void releaseFreeMemory() {
 // Inside a stage no hook helps: a working set freed while the next one grows stays resident below
 // it. So blocks of 16 MiB and more are mapped and unmapped on their own, and free memory at the top
 // of the heap goes back at once (a fixed mmap threshold, which also stops glibc from raising its
-// trim threshold to 64 MiB). On dragon_poisson this lowers the PFRep build's peak by 22 MiB and the
-// pack writer's by 70 MiB at the cost of 16 % more page faults and no measurable CPU time; a 1 to 8
-// MiB threshold saves a few MiB more but costs 10-15 % CPU (docs/bake.md, "Memory").
+// trim threshold). A smaller mmap threshold saves little more memory and costs CPU time in page
+// faults. glibc's own environment settings for either threshold take precedence.
 void setAllocatorPolicy() {
 #if defined(__GLIBC__)
-    mallopt(M_MMAP_THRESHOLD, 16 << 20);
-    mallopt(M_TRIM_THRESHOLD, 128 << 10);
+    if (std::getenv("MALLOC_MMAP_THRESHOLD_") == nullptr) mallopt(M_MMAP_THRESHOLD, 16 << 20);
+    if (std::getenv("MALLOC_TRIM_THRESHOLD_") == nullptr) mallopt(M_TRIM_THRESHOLD, 128 << 10);
 #endif
 }
 

@@ -18,6 +18,7 @@
 #include "lodbake/core/diagnostics.h"
 #include "lodbake/core/file_io.h"
 #include "lodbake/core/json_writer.h"
+#include "lodbake/core/math.h"
 #include "lodbake/io/mesh_io.h"
 #include "lodbake/pfrep/pfrep_builder.h"
 #include "lodbake/simplify/lod_chain.h"
@@ -343,7 +344,7 @@ int runLods(int argc, char** argv) {
             return usageError(std::string(n.name) + " expects a positive number, got '" + args.values[n.name] + "'");
     }
     if (!(fov_deg < 180.0)) return usageError("--fov must be below 180 degrees");
-    options.screen.vertical_fov_rad = fov_deg * 3.14159265358979323846 / 180.0;
+    options.screen.vertical_fov_rad = fov_deg * lodbake::kPi / 180.0;
     options.simplify.remove_covered_components = args.flags.count("--remove-covered-components") > 0;
 
     Diagnostics diagnostics;

@@ -5,7 +5,6 @@
 #include <string>
 
 #include "cli_common.h"
-#include "huge_page_heap.h"
 #include "lodbake/version.h"
 
 namespace {
@@ -52,7 +51,6 @@ int main(int argc, char** argv) {
         std::printf("lodbake %s\n", lodbake::kVersionString);
         return kExitOk;
     }
-    lodtools::restartWithHugePageHeap(argv); // huge_page_heap.h: malloc on huge pages
     if (cmd == "info") return runInfo(argc, argv);
     if (cmd == "convert") return runConvert(argc, argv);
     if (cmd == "simplify") return runSimplify(argc, argv);

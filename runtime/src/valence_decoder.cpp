@@ -475,52 +475,47 @@ LODRT_VALENCE_NOINLINE void predictVertex(const int32_t* qpos, const uint32_t* t
     detail::predictFromPlanOf<Spread>(qpos, t, n, neighbour, fallback, out, scale, spread);
 }
 
-} // namespace
+// The scratch memory as the layout places it.
+struct Scratch {
+    uint8_t* base;
+    uint32_t* u32(size_t offset) const { return reinterpret_cast<uint32_t*>(base + offset); }
+};
 
-Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& output) {
-    ValenceInfo info;
-    Result r = valenceReadInfo(data, size, &info);
-    if (r != Result::Ok) return r;
-    const size_t vn = info.vertex_count, tn = info.triangle_count;
+// 1a. The conquest over the connectivity stream, on the layout's arrays.
+Result runConquest(const uint8_t* stream, const ValenceInfo& info, const ScratchLayout& l, Scratch s,
+                   detail::Conquest<ConnectivityReader>& conquest, ConnectivityReader& reader) {
     const uint32_t vc = info.closed_vertex_count, tc = info.closed_triangle_count;
-    if ((tn > 0 && !output.indices) || (vn > 0 && !output.positions)) return Result::InvalidArgument;
-    if (reinterpret_cast<uintptr_t>(output.scratch) % 8 != 0) return Result::InvalidArgument;
-    const ScratchLayout l = layout(info);
-    if (l.total > 0 && !output.scratch) return Result::InvalidArgument;
-    if (output.index_capacity < 3 * tn || output.position_capacity < 3 * vn || output.scratch_size < l.total ||
-        (output.normals && info.has_normals && output.normal_capacity < 3 * vn))
-        return Result::BufferTooSmall;
-    uint8_t* base = static_cast<uint8_t*>(output.scratch);
-    auto u32 = [&](size_t offset) { return reinterpret_cast<uint32_t*>(base + offset); };
-
-    // 1. Connectivity: the conquest, then the duplicate list.
-    detail::Conquest<ConnectivityReader> conquest;
     detail::ConquestArrays& a = conquest.a;
-    a.corner_vertex = u32(l.corner_vertex);
-    a.corner_opposite = u32(l.corner_opposite);
-    a.vertex_flags = u32(l.vertex_flags);
-    a.vertex_corner = u32(l.vertex_corner);
-    a.vertex_valence = u32(l.vertex_valence);
-    a.node_vertex = u32(l.node_vertex);
-    a.node_prev = u32(l.node_prev);
-    a.node_next = u32(l.node_next);
-    a.node_free = u32(l.node_free);
-    a.node_corner = u32(l.node_corner);
-    a.completion = u32(l.completion);
-    a.stack_head = u32(l.stack_head);
-    a.stack_size = u32(l.stack_size);
+    a.corner_vertex = s.u32(l.corner_vertex);
+    a.corner_opposite = s.u32(l.corner_opposite);
+    a.vertex_flags = s.u32(l.vertex_flags);
+    a.vertex_corner = s.u32(l.vertex_corner);
+    a.vertex_valence = s.u32(l.vertex_valence);
+    a.node_vertex = s.u32(l.node_vertex);
+    a.node_prev = s.u32(l.node_prev);
+    a.node_next = s.u32(l.node_next);
+    a.node_free = s.u32(l.node_free);
+    a.node_corner = s.u32(l.node_corner);
+    a.completion = s.u32(l.completion);
+    a.stack_head = s.u32(l.stack_head);
+    a.stack_size = s.u32(l.stack_size);
     a.max_vertices = vc;
     a.max_triangles = tc;
-    ConnectivityReader reader;
     reader.init();
-    const uint8_t* stream = data + kValenceHeaderSize;
     if (!reader.rd.init(stream, info.connectivity_bytes)) return Result::CorruptStream;
-    r = conquest.run(reader);
+    const Result r = conquest.run(reader);
     if (r != Result::Ok) return r;
     if (conquest.vertex_count != vc || conquest.triangle_count != tc || conquest.completion_count != vc)
         return Result::CorruptStream;
+    return Result::Ok;
+}
 
-    uint32_t* final_of = u32(l.final_of);
+// 1b. The duplicate list (the rest of the connectivity stream): the final vertex of every closed
+// vertex (kNone for dummies); `final_count`: the vertices some triangle uses.
+Result readFinalOrder(const ValenceInfo& info, const detail::ConquestArrays& a, ConnectivityReader& reader,
+                      uint32_t* final_of, uint32_t* final_count) {
+    const uint32_t vc = info.closed_vertex_count;
+    const size_t vn = info.vertex_count;
     uint32_t dup_count = 0;
     if (!reader.readU32(reader.dup, &dup_count) || dup_count > vc) return Result::CorruptStream;
     uint32_t dups_read = 0, dup_rank = kNone, dup_original = 0;
@@ -542,7 +537,7 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
         return true;
     };
     if (!nextDup()) return Result::CorruptStream;
-    uint32_t final_count = 0, rank = 0;
+    uint32_t count = 0, rank = 0;
     for (uint32_t v = 0; v < vc; ++v) {
         if (a.vertex_flags[v] & detail::kFlagDummy) {
             final_of[v] = kNone;
@@ -553,46 +548,45 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
             if (!nextDup()) return Result::CorruptStream;
             continue;
         }
-        if (final_count >= vn) return Result::CorruptStream;
-        final_of[v] = final_count++;
+        if (count >= vn) return Result::CorruptStream;
+        final_of[v] = count++;
     }
     if (dup_rank != kNone || !reader.rd.finishedExactly()) return Result::CorruptStream;
+    *final_count = count;
+    return Result::Ok;
+}
 
+// 1c. The output triangles: the closed ones without a dummy vertex, in final vertex ids.
+Result writeTriangles(const ValenceInfo& info, const detail::ConquestArrays& a, const uint32_t* final_of,
+                      uint32_t* indices) {
+    const size_t tn = info.triangle_count;
     size_t out_t = 0;
-    for (uint32_t t = 0; t < tc; ++t) {
+    for (uint32_t t = 0; t < info.closed_triangle_count; ++t) {
         const uint32_t* cv = &a.corner_vertex[3 * size_t(t)];
         if ((a.vertex_flags[cv[0]] | a.vertex_flags[cv[1]] | a.vertex_flags[cv[2]]) & detail::kFlagDummy) continue;
         if (out_t >= tn) return Result::CorruptStream;
-        for (int i = 0; i < 3; ++i) output.indices[3 * out_t + size_t(i)] = final_of[cv[i]];
+        for (int i = 0; i < 3; ++i) indices[3 * out_t + size_t(i)] = final_of[cv[i]];
         ++out_t;
     }
-    if (out_t != tn) return Result::CorruptStream;
+    return out_t == tn ? Result::Ok : Result::CorruptStream;
+}
 
-    // 2. Positions, in the order positionOrder gives, then the vertices no triangle uses.
-    stream += info.connectivity_bytes;
+// The position streams and their models.
+struct PositionReader {
     RangeDecoder pos;
-    if (!pos.init(stream, info.position_bytes)) return Result::CorruptStream;
-    stream += info.position_bytes;
     BitReader pos_raw;
-    pos_raw.init(stream, info.position_raw_bytes);
-    stream += info.position_raw_bytes;
-    ResidualModel<3, detail::kPositionContexts> pos_model;
-    pos_model.init();
-    int32_t* qpos = reinterpret_cast<int32_t*>(base + l.qpos);
-    int32_t* qpos_final = reinterpret_cast<int32_t*>(base + l.qpos_final);
-    uint8_t* decoded = base + l.decoded;
-    const int32_t qmax = int32_t((1u << info.position_bits) - 1);
-    int32_t last[3] = {(qmax + 1) / 2, (qmax + 1) / 2, (qmax + 1) / 2};
-    uint32_t prev_sign[3] = {0, 0, 0};
+    ResidualModel<3, detail::kPositionContexts> model;
     uint32_t snap_models[3][kValenceSnapContexts];
-    detail::initRangeProbs(&snap_models[0][0], sizeof(snap_models) / 4);
-    const uint32_t snap_flags = uint32_t(read16(data + 6) / kValenceFlagSnapX) & 7u; // header checked above
-    const uint32_t spread_flags = uint32_t(read16(data + 6) / kValenceFlagSpreadX) & 7u;
+    uint32_t snap_flags = 0, spread_flags = 0;
+    int32_t qmax = 0;
+    const int32_t* qpos = nullptr; // engine-order positions decoded so far (snap candidates)
+    uint32_t prev_sign[3] = {0, 0, 0};
+
     // One vertex: x, then y and z in the context of the earlier residual lengths and signs, each
     // residual added to `pred`; a snapped component first reads whether it is its candidate. `t`, `n`,
     // `nb`: the plan entry (none: 0, kNone). False on a corrupt stream or a coordinate outside [0, qmax].
-    auto decodeVertex = [&](uint32_t ctx, const uint32_t* spread, const int32_t* pred, int32_t* out,
-                            const uint32_t* t, uint32_t n, uint32_t nb) {
+    bool vertex(uint32_t ctx, const uint32_t* spread, const int32_t* pred, int32_t* out, const uint32_t* t,
+                uint32_t n, uint32_t nb) {
         uint32_t earlier = kNone, x_sign = 0;
         int32_t candidate[3] = {0, 0, 0};
         uint32_t snap_ctx[3] = {0, 0, 0};
@@ -606,10 +600,10 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
             if ((snap >> j) & 1u && pos.bit(snap_models[j][snap_ctx[j]])) {
                 res = candidate[j] - pred[j];
                 length = detail::bitLength(uint32_t(res < 0 ? -res : res));
-            } else if (!pos_model.decode(pos, pos_raw, j,
-                                         (spread_flags >> j) & 1u ? detail::spreadContext(ctx, earlier, spread[j])
-                                                                  : detail::positionContext(ctx, earlier),
-                                         &res, &length, prev_sign[j] * 3 + x_sign)) {
+            } else if (!model.decode(pos, pos_raw, j,
+                                     (spread_flags >> j) & 1u ? detail::spreadContext(ctx, earlier, spread[j])
+                                                              : detail::positionContext(ctx, earlier),
+                                     &res, &length, prev_sign[j] * 3 + x_sign)) {
                 return false;
             }
             prev_sign[j] = detail::signClass(res);
@@ -620,20 +614,42 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
             out[j] = value;
         }
         return true;
-    };
-    // The plan (order and prediction triples) from the connectivity alone, then one sequential pass
-    // of residuals. The node arrays are free again: they hold the order's degree counts and stacks.
-    uint8_t* final_done = base + l.final_done;
+    }
+};
+
+// 2. Positions, in the order the plan gives, then the vertices no triangle uses. The plan (order and
+// prediction triples) comes from the connectivity alone, then one sequential pass of residuals. The
+// node arrays are free again: they hold the order's degree counts and stacks. Fills qpos_final and
+// the output positions.
+Result decodePositions(const uint8_t* data, const uint8_t* stream, const ValenceInfo& info, const ScratchLayout& l,
+                       Scratch s, const detail::ConquestArrays& a, uint32_t final_count, const ValenceOutput& output) {
+    const size_t vn = info.vertex_count;
+    const uint32_t* final_of = s.u32(l.final_of);
+    PositionReader reader;
+    if (!reader.pos.init(stream, info.position_bytes)) return Result::CorruptStream;
+    reader.pos_raw.init(stream + info.position_bytes, info.position_raw_bytes);
+    reader.model.init();
+    int32_t* qpos = reinterpret_cast<int32_t*>(s.base + l.qpos);
+    int32_t* qpos_final = reinterpret_cast<int32_t*>(s.base + l.qpos_final);
+    reader.qpos = qpos;
+    reader.qmax = int32_t((1u << info.position_bits) - 1);
+    const int32_t qmax = reader.qmax;
+    int32_t last[3] = {(qmax + 1) / 2, (qmax + 1) / 2, (qmax + 1) / 2};
+    detail::initRangeProbs(&reader.snap_models[0][0], sizeof(reader.snap_models) / 4);
+    reader.snap_flags = uint32_t(read16(data + 6) / kValenceFlagSnapX) & 7u; // header checked above
+    reader.spread_flags = uint32_t(read16(data + 6) / kValenceFlagSpreadX) & 7u;
+    uint8_t* final_done = s.base + l.final_done;
     // An empty mesh has no scratch (null base): memset's pointer must not be null even for 0 bytes.
     if (vn > 0) std::memset(final_done, 0, vn);
     detail::PositionPlan plan;
     plan.order = a.completion;
     plan.count = a.node_corner;
-    plan.neighbour = u32(l.plan_neighbour);
-    plan.triples = u32(l.plan_triples);
-    plan.max_triples = 3 * tc;
+    plan.neighbour = s.u32(l.plan_neighbour);
+    plan.triples = s.u32(l.plan_triples);
+    plan.max_triples = 3 * info.closed_triangle_count;
     if (!detail::planPositions(a.corner_vertex, a.corner_opposite, a.vertex_corner, a.vertex_flags, a.vertex_valence,
-                               vc, decoded, a.node_vertex, a.node_prev, a.node_next, &plan))
+                               info.closed_vertex_count, s.base + l.decoded, a.node_vertex, a.node_prev, a.node_next,
+                               &plan))
         return Result::CorruptStream;
     const uint32_t* triple = plan.triples;
     for (uint32_t i = 0; i < plan.ordered; ++i) {
@@ -648,11 +664,11 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
         } else {
             int32_t pred[3];
             uint32_t scale, spread[3] = {0, 0, 0};
-            if (spread_flags != 0)
+            if (reader.spread_flags != 0)
                 predictVertex<true>(qpos, triple, n, plan.neighbour[i], last, pred, &scale, spread);
             else
                 predictVertex<false>(qpos, triple, n, plan.neighbour[i], last, pred, &scale, spread);
-            if (!decodeVertex(detail::scaleContext(scale, n), spread, pred, q, triple, n, plan.neighbour[i]))
+            if (!reader.vertex(detail::scaleContext(scale, n), spread, pred, q, triple, n, plan.neighbour[i]))
                 return Result::CorruptStream;
             qf[0] = q[0];
             qf[1] = q[1];
@@ -663,79 +679,96 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
         last[0] = q[0];
         last[1] = q[1];
         last[2] = q[2];
-        if (pos.overrun() || pos_raw.overrun()) return Result::CorruptStream;
+        if (reader.pos.overrun() || reader.pos_raw.overrun()) return Result::CorruptStream;
     }
     for (size_t fid = final_count; fid < vn; ++fid) {
         int32_t* qf = &qpos_final[3 * fid];
         const uint32_t no_spread[3] = {0, 0, 0};
-        if (!decodeVertex(detail::scaleContext(0, 0), no_spread, last, qf, nullptr, 0, kNone))
+        if (!reader.vertex(detail::scaleContext(0, 0), no_spread, last, qf, nullptr, 0, kNone))
             return Result::CorruptStream;
         last[0] = qf[0];
         last[1] = qf[1];
         last[2] = qf[2];
     }
-    if (!pos.finishedExactly() || !pos_raw.finishedExactly()) return Result::CorruptStream;
+    if (!reader.pos.finishedExactly() || !reader.pos_raw.finishedExactly()) return Result::CorruptStream;
     const float step = qmax > 0 ? info.cube_size / float(qmax) : 0.0f;
     for (size_t i = 0; i < 3 * vn; ++i) output.positions[i] = info.bounds_min[i % 3] + float(qpos_final[i]) * step;
+    return Result::Ok;
+}
 
-    // 3. Normals, in final order, predicted by the exact sum of the face normals on the quantized
-    // positions.
-    if (info.has_normals) {
-        RangeDecoder nrm;
-        if (!nrm.init(stream, info.normal_bytes)) return Result::CorruptStream;
-        BitReader nrm_raw;
-        nrm_raw.init(stream + info.normal_bytes, info.normal_raw_bytes);
-        int64_t* sum = reinterpret_cast<int64_t*>(base + l.normal_sum);
-        uint32_t* qnorm = u32(l.qnorm);
-        for (size_t i = 0; i < 3 * vn; ++i) sum[i] = 0;
-        for (size_t t = 0; t < tn; ++t) {
-            const uint32_t* f = &output.indices[3 * t];
-            const int32_t* p0 = &qpos_final[3 * size_t(f[0])];
-            const int32_t* p1 = &qpos_final[3 * size_t(f[1])];
-            const int32_t* p2 = &qpos_final[3 * size_t(f[2])];
-            const int64_t e1[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
-            const int64_t e2[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
-            const int64_t n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
-                                  e1[0] * e2[1] - e1[1] * e2[0]};
-            for (int c = 0; c < 3; ++c)
-                for (int j = 0; j < 3; ++j) sum[3 * size_t(f[c]) + size_t(j)] += n[j];
+// 3. Normals, in final order, predicted by the exact sum of the face normals on the quantized
+// positions.
+Result decodeNormals(const uint8_t* stream, const ValenceInfo& info, const ScratchLayout& l, Scratch s,
+                     const ValenceOutput& output) {
+    const size_t vn = info.vertex_count, tn = info.triangle_count;
+    RangeDecoder nrm;
+    if (!nrm.init(stream, info.normal_bytes)) return Result::CorruptStream;
+    BitReader nrm_raw;
+    nrm_raw.init(stream + info.normal_bytes, info.normal_raw_bytes);
+    const int32_t* qpos_final = reinterpret_cast<const int32_t*>(s.base + l.qpos_final);
+    int64_t* sum = reinterpret_cast<int64_t*>(s.base + l.normal_sum);
+    uint32_t* qnorm = s.u32(l.qnorm);
+    for (size_t i = 0; i < 3 * vn; ++i) sum[i] = 0;
+    for (size_t t = 0; t < tn; ++t) detail::addFaceNormal(qpos_final, &output.indices[3 * t], sum);
+    ResidualModel<2, kValenceNormalContexts> nrm_model;
+    nrm_model.init();
+    const uint32_t nb = info.normal_bits;
+    const uint32_t mask = (1u << nb) - 1;
+    const int32_t half = int32_t(1) << (nb - 1);
+    uint32_t nrm_length[2] = {0, 0};
+    for (size_t x = 0; x < vn; ++x) {
+        uint32_t p[2];
+        detail::predictNormal(&sum[3 * x], qnorm, x, nb, p);
+        for (int j = 0; j < 2; ++j) {
+            int32_t res;
+            uint32_t length;
+            const uint32_t ctx = nrm_length[j] < kValenceNormalContexts ? nrm_length[j] : kValenceNormalContexts - 1;
+            if (!nrm_model.decode(nrm, nrm_raw, j, ctx, &res, &length)) return Result::CorruptStream;
+            if (res < -half || res >= half) return Result::CorruptStream;
+            nrm_length[j] = length;
+            qnorm[2 * x + size_t(j)] = (p[j] + uint32_t(res)) & mask;
         }
-        ResidualModel<2, kValenceNormalContexts> nrm_model;
-        nrm_model.init();
-        const uint32_t nb = info.normal_bits;
-        const uint32_t mask = (1u << nb) - 1;
-        const int32_t half = int32_t(1) << (nb - 1);
-        uint32_t nrm_length[2] = {0, 0};
-        for (size_t x = 0; x < vn; ++x) {
-            const int64_t* s3 = &sum[3 * x];
-            uint32_t p[2];
-            if (s3[0] != 0 || s3[1] != 0 || s3[2] != 0) {
-                const float fs[3] = {float(s3[0]), float(s3[1]), float(s3[2])};
-                octahedralEncode(fs, nb, p);
-            } else if (x > 0) {
-                p[0] = qnorm[2 * (x - 1)];
-                p[1] = qnorm[2 * (x - 1) + 1];
-            } else {
-                p[0] = p[1] = uint32_t(half);
-            }
-            for (int j = 0; j < 2; ++j) {
-                int32_t res;
-                uint32_t length;
-                const uint32_t ctx =
-                    nrm_length[j] < kValenceNormalContexts ? nrm_length[j] : kValenceNormalContexts - 1;
-                if (!nrm_model.decode(nrm, nrm_raw, j, ctx, &res, &length)) return Result::CorruptStream;
-                if (res < -half || res >= half) return Result::CorruptStream;
-                nrm_length[j] = length;
-                qnorm[2 * x + size_t(j)] = (p[j] + uint32_t(res)) & mask;
-            }
-            if (nrm.overrun() || nrm_raw.overrun()) return Result::CorruptStream;
-        }
-        if (!nrm.finishedExactly() || !nrm_raw.finishedExactly()) return Result::CorruptStream;
-        if (output.normals) {
-            for (size_t i = 0; i < vn; ++i) octahedralDecode(&qnorm[2 * i], info.normal_bits, &output.normals[3 * i]);
-        }
+        if (nrm.overrun() || nrm_raw.overrun()) return Result::CorruptStream;
+    }
+    if (!nrm.finishedExactly() || !nrm_raw.finishedExactly()) return Result::CorruptStream;
+    if (output.normals) {
+        for (size_t i = 0; i < vn; ++i) octahedralDecode(&qnorm[2 * i], info.normal_bits, &output.normals[3 * i]);
     }
     return Result::Ok;
+}
+
+} // namespace
+
+Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& output) {
+    ValenceInfo info;
+    Result r = valenceReadInfo(data, size, &info);
+    if (r != Result::Ok) return r;
+    const size_t vn = info.vertex_count, tn = info.triangle_count;
+    if ((tn > 0 && !output.indices) || (vn > 0 && !output.positions)) return Result::InvalidArgument;
+    if (reinterpret_cast<uintptr_t>(output.scratch) % 8 != 0) return Result::InvalidArgument;
+    const ScratchLayout l = layout(info);
+    if (l.total > 0 && !output.scratch) return Result::InvalidArgument;
+    if (output.index_capacity < 3 * tn || output.position_capacity < 3 * vn || output.scratch_size < l.total ||
+        (output.normals && info.has_normals && output.normal_capacity < 3 * vn))
+        return Result::BufferTooSmall;
+    const Scratch s{static_cast<uint8_t*>(output.scratch)};
+
+    // 1. Connectivity: the conquest, then the duplicate list.
+    const uint8_t* stream = data + kValenceHeaderSize;
+    detail::Conquest<ConnectivityReader> conquest;
+    ConnectivityReader reader;
+    r = runConquest(stream, info, l, s, conquest, reader);
+    if (r != Result::Ok) return r;
+    uint32_t final_count = 0;
+    r = readFinalOrder(info, conquest.a, reader, s.u32(l.final_of), &final_count);
+    if (r != Result::Ok) return r;
+    r = writeTriangles(info, conquest.a, s.u32(l.final_of), output.indices);
+    if (r != Result::Ok) return r;
+    stream += info.connectivity_bytes;
+    r = decodePositions(data, stream, info, l, s, conquest.a, final_count, output);
+    if (r != Result::Ok) return r;
+    stream += info.position_bytes + size_t(info.position_raw_bytes);
+    return info.has_normals ? decodeNormals(stream, info, l, s, output) : Result::Ok;
 }
 
 } // namespace lodrt

@@ -17,7 +17,6 @@
 #include <vector>
 
 #include "contact_sheet.h"
-#include "huge_page_heap.h"
 #include "lodrt/format.h"
 #include "lodrt/lodrt.h"
 #include "lodrt/pfrep.h"
@@ -977,7 +976,6 @@ int renderSheet(const lodrt::Pack& pack, const LodReport& report, int level_filt
 } // namespace
 
 int main(int argc, char** argv) {
-    lodtools::restartWithHugePageHeap(argv); // huge_page_heap.h: malloc on huge pages
     const char* path = nullptr;
     bool as_json = false;
     bool wireframe = false;

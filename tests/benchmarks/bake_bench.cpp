@@ -35,7 +35,7 @@
 #include "lodbake/config/bake_config.h"
 #include "lodbake/simplify/lod_chain.h"
 #include "lodbake/core/diagnostics.h"
-#include "lodbake/gltf/gltf_io.h"
+#include "lodbake/pack/pack_glb.h"
 #include "lodbake/io/mesh_io.h"
 #include "lodbake/pack/pack.h"
 #include "lodbake/pfrep/pfrep_extension.h"
@@ -152,6 +152,11 @@ void stageBreakdown(const lodbake::Mesh& input, const lodbake::BakeSettings& set
     valence_options.adaptive = settings.stream_precision.adaptive;
     valence_options.error_fraction = settings.stream_precision.error_fraction;
     const PackStreamEncoder valence = valenceStreamEncoder(valence_options);
+    // As the bake codes a level: prepare, then the commit it returns.
+    auto encode = [&](size_t l, PackLevel& level) {
+        Result<PackStreamCommit> commit = valence.prepare(*chain, l, level.mesh);
+        if (commit.ok() && *commit) (void)(*commit)(level);
+    };
     std::vector<PackLevel> packed(chain->levels.size() + 1);
     packed[0].mesh = mesh;
     for (size_t l = 0; l < chain->levels.size(); ++l) packed[l + 1].mesh = chain->levels[l].mesh;
@@ -159,12 +164,12 @@ void stageBreakdown(const lodbake::Mesh& input, const lodbake::BakeSettings& set
         // The bake's last phase on a large asset: every level's coding side by side, largest first.
         std::vector<PackLevel> copies = packed;
         step("valence, all levels side by side", [&] {
-            (void)parallelFor(copies.size(), 1, [&](size_t l) { (void)valence.encode(*chain, l, copies[l]); });
+            (void)parallelFor(copies.size(), 1, [&](size_t l) { encode(l, copies[l]); });
         });
     }
     for (size_t l = 0; l < packed.size(); ++l) {
         const std::string name = "valence level " + std::to_string(l);
-        step(name.c_str(), [&] { (void)valence.encode(*chain, l, packed[l]); });
+        step(name.c_str(), [&] { encode(l, packed[l]); });
     }
     PackDescription description;
     PackAsset asset;

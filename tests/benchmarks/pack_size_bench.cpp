@@ -31,7 +31,7 @@
 #include "lodbake/config/bake_config.h"
 #include "lodbake/core/diagnostics.h"
 #include "lodbake/core/file_io.h"
-#include "lodbake/gltf/gltf_io.h"
+#include "lodbake/io/gltf.h"
 #include "lodbake/io/mesh_io.h"
 #include "lodbake/pack/pack.h"
 #include "lodbake/stream/stream.h"

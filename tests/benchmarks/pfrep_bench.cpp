@@ -158,38 +158,27 @@ int qualityVariants() {
         for (const auto& level : chain->levels)
             lodbake::writeMesh(level.mesh, stem + "_" + std::to_string(level.mesh.faceCount()) + "_chain.ply", {}, d);
         std::vector<lodbake::Vec3d> point_normals = pointNormals(mesh);
-        // The PFRep read from the chain's own pass (the bake's), one blob per ChainEndRule: level k of
-        // the blob is the chain's level topology at its collapse count, at the original positions.
+        // The PFRep read from the chain's own pass (the bake's): level k of the blob is the chain's
+        // level topology at its collapse count, at the original positions.
         {
             lodbake::LodChainOptions shared_options = options;
             shared_options.record_removals = true;
             auto shared = lodbake::buildLodChain(mesh, shared_options, d);
             if (!shared.ok()) continue;
-            std::vector<lodbake::Vec3f> merged;
-            for (const auto& r : shared->sequence.records) merged.push_back(r.position);
-            using Rule = lodbake::ChainEndRule;
-            const std::pair<Rule, const char*> rules[] = {
-                {Rule::LowerQuadric, "sharedquadric"}, {Rule::EngineKept, "sharedengine"},
-                {Rule::NearerMerged, "sharednear"}, {Rule::EngineNearer, "sharedenear"}};
-            for (const auto& [rule, rule_name] : rules) {
-                auto b = lodbake::buildPfrepFromChain(mesh, shared->removals, d, rule, &merged);
-                lodrt::PfrepModel m;
-                if (!b.ok() || lodrt::openPfrep(b->blob.data(), b->blob.size(), &m) != lodrt::Result::Ok) {
-                    std::printf("  %s %s: %s\n", name, rule_name, b.ok() ? "blob refused" : b.status().message().c_str());
-                    continue;
-                }
-                std::vector<uint32_t> idx(lodrt::pfrepMaxTriangles(m) * 3);
+            auto b = lodbake::buildPfrepFromChain(mesh, shared->removals, d);
+            lodrt::PfrepModel m;
+            if (!b.ok() || lodrt::openPfrep(b->blob.data(), b->blob.size(), &m) != lodrt::Result::Ok) {
+                std::printf("  %s shared: %s\n", name, b.ok() ? "blob refused" : b.status().message().c_str());
+            } else {
                 for (size_t l = 0; l < shared->levels.size(); ++l) {
                     const auto& level = shared->levels[l];
                     const uint32_t k = uint32_t(level.collapse_count);
                     const lodbake::Mesh pm = levelMesh(m, k);
-                    lodbake::writeMesh(pm, stem + "_" + std::to_string(level.mesh.faceCount()) + "_" +
-                                               rule_name + ".ply", {}, d);
-                    std::printf("  %s %s level %zu: k %u, %zu triangles (chain %zu), %zu flipped\n", name,
-                                rule_name, l, k, pm.faceCount(), level.mesh.faceCount(),
-                                flippedFaces(pm, b->rank_point, point_normals));
+                    lodbake::writeMesh(pm, stem + "_" + std::to_string(level.mesh.faceCount()) + "_shared.ply", {}, d);
+                    std::printf("  %s shared level %zu: k %u, %zu triangles (chain %zu), %zu flipped\n", name, l, k,
+                                pm.faceCount(), level.mesh.faceCount(), flippedFaces(pm, b->rank_point, point_normals));
                 }
-                std::printf("  %s %s: %.1f bytes/vertex, %u removed of %u\n", name, rule_name,
+                std::printf("  %s shared: %.1f bytes/vertex, %u removed of %u\n", name,
                             double(b->blob.size()) / double(m.vertex_count), m.removed_count, m.vertex_count);
             }
         }
@@ -214,22 +203,15 @@ int qualityVariants() {
     return 0;
 }
 
-// --shared NAME [quadric|engine|near]: the bake's chain (default ratios, no repair) with its vertex-removal log, the blob
+// --shared NAME: the bake's chain (default ratios, no repair) with its vertex-removal log, the blob
 // read from it and the blob of the separate half-edge pass: log size, times (thread CPU), blob sizes,
 // and both blobs' levels at the chain's 50 % and 10 % levels written for meshdist.py.
-int sharedChain(const char* name, const char* rule_name) {
-    using Rule = lodbake::ChainEndRule;
-    const std::string rn = rule_name ? rule_name : "quadric";
-    const Rule rule = rn == "engine"  ? Rule::EngineKept
-                      : rn == "near"  ? Rule::NearerMerged
-                      : rn == "enear" ? Rule::EngineNearer
-                                      : Rule::LowerQuadric;
+int sharedChain(const char* name) {
     lodbake::Mesh mesh;
     if (!load(name, mesh)) return 1;
     lodbake::Diagnostics d;
     lodbake::LodChainOptions options;
     options.measure_error = false;
-    options.record_collapses = rule == Rule::NearerMerged; // the merged positions
     options.record_removals = true;
     double t0 = threadCpuSeconds();
     auto chain = lodbake::buildLodChain(mesh, options, d);
@@ -240,9 +222,7 @@ int sharedChain(const char* name, const char* rule_name) {
                 name, chain_s, chain->removals.size(), chain->levels.back().collapse_count,
                 chain->removals.byteSize(), double(chain->removals.byteSize()) / double(chain->removals.size()));
     t0 = threadCpuSeconds();
-    std::vector<lodbake::Vec3f> merged;
-    for (const auto& r : chain->sequence.records) merged.push_back(r.position);
-    auto shared = lodbake::buildPfrepFromChain(mesh, chain->removals, d, rule, &merged);
+    auto shared = lodbake::buildPfrepFromChain(mesh, chain->removals, d);
     const double shared_s = threadCpuSeconds() - t0;
     t0 = threadCpuSeconds();
     auto own = lodbake::buildPfrep(mesh, {}, d);
@@ -296,7 +276,7 @@ int main(int argc, char** argv) {
     const bool check = lodbake_bench::takeCheckFlag(argc, argv);
     lodbake_bench::Bars bars("pfrep_bench");
     using lodbake_bench::Limit;
-    if (argc > 2 && std::strcmp(argv[1], "--shared") == 0) return sharedChain(argv[2], argc > 3 ? argv[3] : nullptr);
+    if (argc > 2 && std::strcmp(argv[1], "--shared") == 0) return sharedChain(argv[2]);
     const bool quick = argc > 1 && std::strcmp(argv[1], "--quick") == 0;
     const bool refine_only = argc > 1 && std::strcmp(argv[1], "--refine") == 0;
     if (argc > 1 && std::strcmp(argv[1], "--quality") == 0) return qualityVariants();

@@ -1,4 +1,4 @@
-// libFuzzer target for the glTF 2.0 / GLB importer (lodbake/gltf/gltf_io.h) with Draco, straight
+// libFuzzer target for the glTF 2.0 / GLB importer (lodbake/io/gltf.h) with Draco, straight
 // from memory. Inputs starting with "glTF" take the GLB path, others the JSON path. Every external
 // buffer or image URI is served the input itself, which covers self-referencing buffers. Run with
 // scripts/fuzz.sh gltf SECONDS.
@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "fuzz_support.h"
-#include "lodbake/gltf/gltf_io.h"
+#include "lodbake/io/gltf.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     const std::vector<uint8_t> input(data, data + size);

@@ -13,7 +13,8 @@
 #include "core/parallel.h"
 #include "lodbake/cleanup/repair.h"
 #include "lodbake/core/json_writer.h"
-#include "lodbake/gltf/gltf_io.h"
+#include "lodbake/core/math.h"
+#include "lodbake/pack/pack_glb.h"
 #include "lodbake/simplify/lod_chain.h"
 #include "lodbake/simplify/mesh_distance.h"
 #include "lodbake/stream/stream.h"
@@ -24,8 +25,6 @@ namespace {
 
 using bake_detail::concurrentPhases;
 using bake_detail::PhaseTask;
-
-constexpr double kPi = 3.14159265358979323846;
 
 ScreenParams screenParams(const BakeSettings& s) {
     ScreenParams screen;

@@ -15,6 +15,7 @@
 #include <string>
 
 #include "codec/range_encoder.h"
+#include "core/byte_order.h"
 #include "core/large_array.h"
 #include "lodrt/detail/valence_model.h"
 #include "lodrt/format.h"
@@ -282,22 +283,22 @@ struct PriorPairing {
     std::vector<uint8_t> exploded;
 };
 
-// Builds the closed manifold. `exploded[f]` faces get private copies of their three vertices. With
-// `several_fans` set, input vertices whose corners fall into several fans (copies included) are listed
-// there, and when there are any the build stops after numbering the fans (the caller cuts them loose and
-// builds again). With `prior` (a build stopped so, with a subset of `exploded`), its pairing is updated
-// instead of computed again: only edges of newly exploded faces change.
-ClosedMesh buildClosed(const Mesh& mesh, const std::vector<uint8_t>& exploded, std::vector<uint32_t>* several_fans,
-                       PriorPairing* prior) {
-    const size_t fn = mesh.faceCount(), cn = 3 * fn, inputs = mesh.vertexCount();
-    ClosedMesh m;
-    m.real_triangles = fn;
-    // Working vertex per corner: the input vertex, or for exploded/degenerate faces a private copy
-    // numbered from `inputs` on (private_source: its input vertex). Only which corners share a working
-    // vertex matters below, not the numbering.
-    UninitArray work(cn);
-    U8Array own(fn);
-    U32Array private_source;
+// Working vertex per corner: the input vertex, or for exploded/degenerate faces a private copy
+// numbered from the input vertex count on. Only which corners share a working vertex matters, not the
+// numbering.
+struct WorkingVertices {
+    UninitArray work;        // working vertex per corner
+    U8Array own;             // per face: its corners have private copies
+    U32Array private_source; // private copy - input vertex count -> its input vertex
+};
+
+void assignWorkingVertices(const Mesh& mesh, const std::vector<uint8_t>& exploded, WorkingVertices& wv) {
+    const size_t fn = mesh.faceCount(), inputs = mesh.vertexCount();
+    UninitArray& work = wv.work;
+    U8Array& own = wv.own;
+    U32Array& private_source = wv.private_source;
+    work.allocate(3 * fn);
+    own.assign(fn, 0);
     for (size_t f = 0; f < fn; ++f) {
         const uint32_t* t = &mesh.indices[3 * f];
         own[f] = exploded[f] || t[0] == t[1] || t[1] == t[2] || t[0] == t[2];
@@ -310,146 +311,159 @@ ClosedMesh buildClosed(const Mesh& mesh, const std::vector<uint8_t>& exploded, s
             }
         }
     }
-    auto sourceOf = [&](uint32_t w) { return w < inputs ? w : private_source[w - inputs]; };
-    // Pair half-edges: an undirected edge with exactly one half-edge each way is interior; every
-    // other half-edge becomes a boundary. Corner c is opposite the half-edge next(c) -> prev(c).
-    // Half-edges are bucketed by their smaller vertex (counting sort, 4 bytes per corner instead of a
-    // sorted 16-byte key per corner), each bucket grouped by the larger vertex. The half-edges of
-    // faces with private vertices are alone in their group: they are left out.
-    if (prior) {
-        // A group (the half-edges of one undirected edge between input vertices) changes only by losing
-        // the half-edges of newly exploded faces, whose vertices all get marked here: the groups with
-        // both vertices marked are formed again from their remaining half-edges, every other pair stays.
-        m.opposite.swap(prior->opposite);
-        U8Array marked(inputs, 0);
-        bool any = false;
-        for (size_t f = 0; f < fn; ++f) {
-            if (!own[f] || prior->exploded[f]) continue;
-            const uint32_t* t = &mesh.indices[3 * f];
-            if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue; // had private vertices already
-            any = true;
-            for (int i = 0; i < 3; ++i) {
-                marked[t[i]] = 1;
-                const uint32_t c = uint32_t(3 * f + size_t(i));
-                if (m.opposite[c] != kNone) m.opposite[m.opposite[c]] = kNone;
-                m.opposite[c] = kNone;
-            }
+}
+
+// The pairing of a build stopped by several fans (`prior`) updated for the faces exploded since.
+void updatePairing(const Mesh& mesh, const WorkingVertices& wv, PriorPairing& prior, U32Array& opposite) {
+    const size_t fn = mesh.faceCount(), inputs = mesh.vertexCount();
+    const UninitArray& work = wv.work;
+    const U8Array& own = wv.own;
+    opposite.swap(prior.opposite);
+    // A group (the half-edges of one undirected edge between input vertices) changes only by losing
+    // the half-edges of newly exploded faces, whose vertices all get marked here: the groups with
+    // both vertices marked are formed again from their remaining half-edges, every other pair stays.
+    U8Array marked(inputs, 0);
+    bool any = false;
+    for (size_t f = 0; f < fn; ++f) {
+        if (!own[f] || prior.exploded[f]) continue;
+        const uint32_t* t = &mesh.indices[3 * f];
+        if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue; // had private vertices already
+        any = true;
+        for (int i = 0; i < 3; ++i) {
+            marked[t[i]] = 1;
+            const uint32_t c = uint32_t(3 * f + size_t(i));
+            if (opposite[c] != kNone) opposite[opposite[c]] = kNone;
+            opposite[c] = kNone;
         }
-        if (any) {
-            struct HalfEdge {
-                uint32_t lower, upper, corner;
-            };
-            std::vector<HalfEdge> regroup;
-            for (size_t f = 0; f < fn; ++f) {
-                if (own[f]) continue;
-                const uint32_t* w = &work[3 * f];
-                for (int i = 0; i < 3; ++i) {
-                    const uint32_t u = w[(i + 1) % 3], v = w[(i + 2) % 3];
-                    if (!marked[u] || !marked[v]) continue;
-                    const uint32_t c = uint32_t(3 * f + size_t(i));
-                    regroup.push_back({std::min(u, v), std::max(u, v), c});
-                    m.opposite[c] = kNone;
-                }
-            }
-            std::sort(regroup.begin(), regroup.end(), [](const HalfEdge& x, const HalfEdge& y) {
-                return x.lower != y.lower   ? x.lower < y.lower
-                       : x.upper != y.upper ? x.upper < y.upper
-                                            : x.corner < y.corner;
-            });
-            for (size_t i = 0; i < regroup.size();) {
-                size_t j = i;
-                while (j < regroup.size() && regroup[j].lower == regroup[i].lower &&
-                       regroup[j].upper == regroup[i].upper)
-                    ++j;
-                if (j - i == 2) {
-                    const uint32_t c = regroup[i].corner, d = regroup[i + 1].corner;
-                    if (work[nextCorner(c)] == work[prevCorner(d)]) {
-                        m.opposite[c] = d;
-                        m.opposite[d] = c;
-                    }
-                }
-                i = j;
-            }
-        }
-    } else {
-        m.opposite.assign(cn, kNone);
-        U32Array start(inputs + 1, 0);
-        UninitArray bucket(cn);
+    }
+    if (any) {
+        struct HalfEdge {
+            uint32_t lower, upper, corner;
+        };
+        std::vector<HalfEdge> regroup;
         for (size_t f = 0; f < fn; ++f) {
             if (own[f]) continue;
             const uint32_t* w = &work[3 * f];
-            ++start[std::min(w[1], w[2]) + 1];
-            ++start[std::min(w[2], w[0]) + 1];
-            ++start[std::min(w[0], w[1]) + 1];
-        }
-        for (size_t v = 0; v < inputs; ++v) start[v + 1] += start[v];
-        {
-            U32Array fill(start.begin(), start.end() - 1);
-            for (size_t f = 0; f < fn; ++f) {
-                if (own[f]) continue;
-                const uint32_t* w = &work[3 * f];
-                const uint32_t c = uint32_t(3 * f);
-                bucket[fill[std::min(w[1], w[2])]++] = c;
-                bucket[fill[std::min(w[2], w[0])]++] = c + 1;
-                bucket[fill[std::min(w[0], w[1])]++] = c + 2;
+            for (int i = 0; i < 3; ++i) {
+                const uint32_t u = w[(i + 1) % 3], v = w[(i + 2) % 3];
+                if (!marked[u] || !marked[v]) continue;
+                const uint32_t c = uint32_t(3 * f + size_t(i));
+                regroup.push_back({std::min(u, v), std::max(u, v), c});
+                opposite[c] = kNone;
             }
         }
-        // Each bucket's upper vertices are loaded once (the corners of a bucket are scattered over the
-        // mesh, so every load is a cache miss) into a small array sorted along with the corners.
-        constexpr size_t kLocal = 64;
-        uint32_t local_up[kLocal];
-        std::vector<uint32_t> large_up;
-        for (size_t v = 0; v < inputs; ++v) {
-            uint32_t* b = bucket.get() + start[v];
-            const size_t n = start[v + 1] - start[v];
-            if (n < 2) continue; // a lone half-edge pairs with nothing
-            uint32_t* up = local_up;
-            if (n > kLocal) {
-                large_up.resize(n);
-                up = large_up.data();
-            }
-            for (size_t i = 0; i < n; ++i) up[i] = std::max(work[nextCorner(b[i])], work[prevCorner(b[i])]);
-            // Buckets are small (about a valence): insertion sort by the upper vertex.
-            for (size_t i = 1; i < n; ++i) {
-                const uint32_t x = b[i], ux = up[i];
-                size_t j = i;
-                for (; j > 0 && up[j - 1] > ux; --j) {
-                    b[j] = b[j - 1];
-                    up[j] = up[j - 1];
+        std::sort(regroup.begin(), regroup.end(), [](const HalfEdge& x, const HalfEdge& y) {
+            return x.lower != y.lower   ? x.lower < y.lower
+                   : x.upper != y.upper ? x.upper < y.upper
+                                        : x.corner < y.corner;
+        });
+        for (size_t i = 0; i < regroup.size();) {
+            size_t j = i;
+            while (j < regroup.size() && regroup[j].lower == regroup[i].lower &&
+                   regroup[j].upper == regroup[i].upper)
+                ++j;
+            if (j - i == 2) {
+                const uint32_t c = regroup[i].corner, d = regroup[i + 1].corner;
+                if (work[nextCorner(c)] == work[prevCorner(d)]) {
+                    opposite[c] = d;
+                    opposite[d] = c;
                 }
-                b[j] = x;
-                up[j] = ux;
             }
-            for (size_t i = 0; i < n;) {
-                size_t j = i;
-                while (j < n && up[j] == up[i]) ++j;
-                if (j - i == 2) {
-                    const uint32_t c = b[i], d = b[i + 1];
-                    if (work[nextCorner(c)] == work[prevCorner(d)]) {
-                        m.opposite[c] = d;
-                        m.opposite[d] = c;
-                    }
-                }
-                i = j;
-            }
+            i = j;
         }
     }
-    U8Array().swap(own);
+}
+
+// Pairs the half-edges of faces without private vertices from scratch. Half-edges are bucketed by
+// their smaller vertex (counting sort, 4 bytes per corner instead of a sorted 16-byte key per corner),
+// each bucket grouped by the larger vertex. The half-edges of faces with private vertices are alone in
+// their group: they are left out.
+void pairHalfEdges(const WorkingVertices& wv, size_t fn, size_t inputs, U32Array& opposite) {
+    const size_t cn = 3 * fn;
+    const UninitArray& work = wv.work;
+    const U8Array& own = wv.own;
+    opposite.assign(cn, kNone);
+    U32Array start(inputs + 1, 0);
+    UninitArray bucket(cn);
+    for (size_t f = 0; f < fn; ++f) {
+        if (own[f]) continue;
+        const uint32_t* w = &work[3 * f];
+        ++start[std::min(w[1], w[2]) + 1];
+        ++start[std::min(w[2], w[0]) + 1];
+        ++start[std::min(w[0], w[1]) + 1];
+    }
+    for (size_t v = 0; v < inputs; ++v) start[v + 1] += start[v];
+    {
+        U32Array fill(start.begin(), start.end() - 1);
+        for (size_t f = 0; f < fn; ++f) {
+            if (own[f]) continue;
+            const uint32_t* w = &work[3 * f];
+            const uint32_t c = uint32_t(3 * f);
+            bucket[fill[std::min(w[1], w[2])]++] = c;
+            bucket[fill[std::min(w[2], w[0])]++] = c + 1;
+            bucket[fill[std::min(w[0], w[1])]++] = c + 2;
+        }
+    }
+    // Each bucket's upper vertices are loaded once (the corners of a bucket are scattered over the
+    // mesh, so every load is a cache miss) into a small array sorted along with the corners.
+    constexpr size_t kLocal = 64;
+    uint32_t local_up[kLocal];
+    std::vector<uint32_t> large_up;
+    for (size_t v = 0; v < inputs; ++v) {
+        uint32_t* b = bucket.get() + start[v];
+        const size_t n = start[v + 1] - start[v];
+        if (n < 2) continue; // a lone half-edge pairs with nothing
+        uint32_t* up = local_up;
+        if (n > kLocal) {
+            large_up.resize(n);
+            up = large_up.data();
+        }
+        for (size_t i = 0; i < n; ++i) up[i] = std::max(work[nextCorner(b[i])], work[prevCorner(b[i])]);
+        // Buckets are small (about a valence): insertion sort by the upper vertex.
+        for (size_t i = 1; i < n; ++i) {
+            const uint32_t x = b[i], ux = up[i];
+            size_t j = i;
+            for (; j > 0 && up[j - 1] > ux; --j) {
+                b[j] = b[j - 1];
+                up[j] = up[j - 1];
+            }
+            b[j] = x;
+            up[j] = ux;
+        }
+        for (size_t i = 0; i < n;) {
+            size_t j = i;
+            while (j < n && up[j] == up[i]) ++j;
+            if (j - i == 2) {
+                const uint32_t c = b[i], d = b[i + 1];
+                if (work[nextCorner(c)] == work[prevCorner(d)]) {
+                    opposite[c] = d;
+                    opposite[d] = c;
+                }
+            }
+            i = j;
+        }
+    }
+}
+
+// Splits the working vertices into fans, one closed vertex each (m.corner_vertex, m.source); returns the
+// number of boundary half-edges.
+size_t numberFans(const WorkingVertices& wv, size_t cn, size_t inputs, ClosedMesh& m) {
+    auto sourceOf = [&](uint32_t w) { return w < inputs ? w : wv.private_source[w - inputs]; };
     // Split vertices into fans: the corners around one working vertex joined across paired edges, i.e.
     // the orbits of s(c) = next(opposite[next(c)]) (the same vertex's corner across the edge prev(c) -> c;
     // its inverse is prev(opposite[prev(c)])), each a chain or a cycle. One closed vertex per fan,
     // numbered in the order of the fans' first corners: in increasing corner order the first corner not
     // yet numbered is the first of its fan, which is then walked both ways.
-    // The dummy triangles are appended below: room for them is reserved up front.
+    // The dummy triangles are appended by capBoundaries: room for them is reserved up front.
     size_t boundary = 0;
     for (uint32_t c = 0; c < cn; ++c) boundary += m.opposite[c] == kNone;
     m.corner_vertex.reserve(cn + 3 * boundary);
     m.corner_vertex.assign(cn, kNone);
-    m.source.reserve(inputs + private_source.size() + boundary / 3 + 1);
+    m.source.reserve(inputs + wv.private_source.size() + boundary / 3 + 1);
     for (uint32_t c = 0; c < cn; ++c) {
         if (m.corner_vertex[c] != kNone) continue;
         const uint32_t id = uint32_t(m.source.size());
-        m.source.push_back(sourceOf(work[c]));
+        m.source.push_back(sourceOf(wv.work[c]));
         m.corner_vertex[c] = id;
         bool cycle = false;
         for (uint32_t x = c;;) {
@@ -470,16 +484,11 @@ ClosedMesh buildClosed(const Mesh& mesh, const std::vector<uint8_t>& exploded, s
             m.corner_vertex[x] = id;
         }
     }
-    work.reset();
-    U32Array().swap(private_source);
-    if (several_fans) {
-        std::vector<uint8_t> fans(mesh.vertexCount(), 0);
-        for (uint32_t src : m.source) {
-            if (fans[src] == 1) several_fans->push_back(src);
-            if (fans[src] < 2) ++fans[src];
-        }
-        if (!several_fans->empty()) return m;
-    }
+    return boundary;
+}
+
+// Caps every boundary loop with a dummy vertex and its fan of dummy triangles.
+void capBoundaries(size_t cn, size_t boundary, ClosedMesh& m) {
     m.opposite.reserve(cn + 3 * boundary);
     // Boundary loops: each vertex now has at most one outgoing boundary half-edge.
     const size_t vn = m.source.size();
@@ -512,6 +521,39 @@ ClosedMesh buildClosed(const Mesh& mesh, const std::vector<uint8_t>& exploded, s
         m.opposite[3 * previous_tri + 1] = 3 * first_tri;
         m.opposite[3 * first_tri] = 3 * previous_tri + 1;
     }
+}
+
+// Builds the closed manifold. `exploded[f]` faces get private copies of their three vertices. With
+// `several_fans` set, input vertices whose corners fall into several fans (copies included) are listed
+// there, and when there are any the build stops after numbering the fans (the caller cuts them loose and
+// builds again). With `prior` (a build stopped so, with a subset of `exploded`), its pairing is updated
+// instead of computed again: only edges of newly exploded faces change.
+ClosedMesh buildClosed(const Mesh& mesh, const std::vector<uint8_t>& exploded, std::vector<uint32_t>* several_fans,
+                       PriorPairing* prior) {
+    const size_t fn = mesh.faceCount(), cn = 3 * fn, inputs = mesh.vertexCount();
+    ClosedMesh m;
+    m.real_triangles = fn;
+    WorkingVertices wv;
+    assignWorkingVertices(mesh, exploded, wv);
+    // Pair half-edges: an undirected edge with exactly one half-edge each way is interior; every
+    // other half-edge becomes a boundary. Corner c is opposite the half-edge next(c) -> prev(c).
+    if (prior)
+        updatePairing(mesh, wv, *prior, m.opposite);
+    else
+        pairHalfEdges(wv, fn, inputs, m.opposite);
+    U8Array().swap(wv.own);
+    const size_t boundary = numberFans(wv, cn, inputs, m);
+    wv.work.reset();
+    U32Array().swap(wv.private_source);
+    if (several_fans) {
+        std::vector<uint8_t> fans(mesh.vertexCount(), 0);
+        for (uint32_t src : m.source) {
+            if (fans[src] == 1) several_fans->push_back(src);
+            if (fans[src] < 2) ++fans[src];
+        }
+        if (!several_fans->empty()) return m;
+    }
+    capBoundaries(cn, boundary, m);
     m.valence.assign(m.source.size(), 0);
     for (uint32_t v : m.corner_vertex) ++m.valence[v];
     return m;
@@ -675,14 +717,6 @@ struct EncoderIo {
     }
 };
 
-void put32(std::vector<uint8_t>& out, size_t at, uint32_t v) {
-    for (int i = 0; i < 4; ++i) out[at + i] = uint8_t(v >> (8 * i));
-}
-void putFloat(std::vector<uint8_t>& out, size_t at, float f) {
-    uint32_t u;
-    std::memcpy(&u, &f, 4);
-    put32(out, at, u);
-}
 
 // One attempt: conquest of the closed mesh built with `exploded`. Fills `io` (and its engine) or
 // reports the failure.
@@ -812,14 +846,12 @@ std::string describe(lodrt::Result r, const std::vector<uint8_t>& bytes) {
     return what + " (" + lodrt::resultName(r) + ")";
 }
 
-} // namespace
-
-Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeOptions& options) {
+// The options' bit counts, the format's count limits and finite positions.
+Status checkEncodable(const Mesh& mesh, const ValenceEncodeOptions& options, bool normals) {
     LODBAKE_RETURN_IF_ERROR(checkMeshConsistency(mesh, "valence encoder"));
     if (options.position_bits < kValenceMinPositionBits || options.position_bits > kValenceMaxPositionBits)
         return invalidInput("valence encoder: position bits " + std::to_string(options.position_bits) +
                             " outside [8, 16]");
-    const bool normals = options.encode_normals && mesh.hasNormals();
     if (normals && (options.normal_bits < kValenceMinNormalBits || options.normal_bits > kValenceMaxNormalBits))
         return invalidInput("valence encoder: normal bits " + std::to_string(options.normal_bits) + " outside [4, 16]");
     const size_t vn = mesh.vertexCount(), fn = mesh.faceCount();
@@ -832,9 +864,22 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
         if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
             return invalidInput("valence encoder: vertex " + std::to_string(i) + ": position is not finite");
     }
+    return Status::okStatus();
+}
 
-    // Quantization cube: all vertices (unreferenced ones are coded too).
-    float lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
+// The quantization cube over all vertices (unreferenced ones are coded too) and every input vertex's
+// quantized position.
+struct Quantization {
+    float lo[3] = {0, 0, 0};
+    float cube = 0;
+    uint32_t qmax = 0;
+    I32Array qpos; // three per input vertex
+};
+
+Status quantizePositions(const Mesh& mesh, uint32_t bits, Quantization& out, double& max_error) {
+    const size_t vn = mesh.vertexCount();
+    float* lo = out.lo;
+    float hi[3] = {0, 0, 0};
     for (size_t i = 0; i < vn; ++i) {
         const float c[3] = {mesh.positions[i].x, mesh.positions[i].y, mesh.positions[i].z};
         for (int j = 0; j < 3; ++j) {
@@ -844,23 +889,28 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
     }
     const float cube = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2], 0.0f});
     if (!std::isfinite(cube)) return invalidInput("valence encoder: bounding box extent overflows a float");
-    const uint32_t qmax = (1u << options.position_bits) - 1;
+    const uint32_t qmax = (1u << bits) - 1;
     const float step = cube / float(qmax);
-    ValenceEncodeResult result;
-    I32Array qpos_in(3 * vn);
+    out.cube = cube;
+    out.qmax = qmax;
+    out.qpos.resize(3 * vn);
     for (size_t i = 0; i < vn; ++i) {
         const float c[3] = {mesh.positions[i].x, mesh.positions[i].y, mesh.positions[i].z};
         for (int j = 0; j < 3; ++j) {
             const double t = cube > 0.0f ? double(c[j] - lo[j]) / double(cube) * qmax : 0.0;
             // t >= 0 (c[j] >= lo[j]), so the truncation is floor(t + 0.5), without two library calls.
             const long q = std::clamp<long>(long(t + 0.5), 0, long(qmax));
-            qpos_in[3 * i + size_t(j)] = int32_t(q);
+            out.qpos[3 * i + size_t(j)] = int32_t(q);
             const double decoded = double(lo[j] + float(q) * step);
-            result.max_position_error = std::max(result.max_position_error, std::fabs(decoded - double(c[j])));
+            max_error = std::max(max_error, std::fabs(decoded - double(c[j])));
         }
     }
+    return Status::okStatus();
+}
 
-    // Conquest, cutting more of the mesh loose while a decoder assumption fails.
+// Conquest, cutting more of the mesh loose while a decoder assumption fails.
+Result<std::unique_ptr<Attempt>> conquer(const Mesh& mesh) {
+    const size_t vn = mesh.vertexCount(), fn = mesh.faceCount();
     std::vector<uint8_t> exploded(fn, 0);
     auto attempt = std::make_unique<Attempt>();
     for (int round = 0;; ++round) {
@@ -884,288 +934,342 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
         }
         if (!changed) std::fill(exploded.begin(), exploded.end(), uint8_t(1));
     }
-    const auto& a = attempt->engine.a;
-    EncoderIo& io = attempt->io;
-    RangeEncoder& conn = attempt->conn;
-    const uint32_t vc = uint32_t(attempt->closed.source.size()),
-                   tc = uint32_t(attempt->closed.corner_vertex.size() / 3);
+    return attempt;
+}
 
-    // Final vertex order: conquest order without dummies and copies, then unreferenced vertices.
-    U32Array source_of_engine(vc); // input vertex per engine vertex, kNone for dummies
-    for (uint32_t v = 0; v < vc; ++v) source_of_engine[io.engine_id[v]] = attempt->closed.source[v];
-    attempt->releaseConquestState();
-    U32Array final_of(vc, kNone);
-    std::vector<uint32_t> new_of(vn, kNone);
+// The final vertex order: conquest order without dummies and copies, then unreferenced vertices.
+struct FinalOrder {
+    U32Array source_of_engine;    // input vertex per engine vertex, kNone for dummies
+    U32Array final_of;            // final vertex per engine vertex, kNone for dummies
+    std::vector<uint32_t> new_of; // final vertex per input vertex
     std::vector<std::pair<uint32_t, uint32_t>> dups; // (rank among non-dummies, final id of the original)
-    uint32_t final_count = 0, rank = 0;
+    uint32_t referenced = 0;      // final vertices some triangle uses (the first ones)
+    uint32_t rank = 0;            // engine vertices that are not dummies
+};
+
+// Orders the vertices, frees the conquest's working state, and codes the copies (cut vertices) into
+// the connectivity stream.
+FinalOrder orderVertices(Attempt& attempt, size_t vn) {
+    FinalOrder o;
+    EncoderIo& io = attempt.io;
+    const uint32_t vc = uint32_t(attempt.closed.source.size());
+    o.source_of_engine.resize(vc);
+    for (uint32_t v = 0; v < vc; ++v) o.source_of_engine[io.engine_id[v]] = attempt.closed.source[v];
+    attempt.releaseConquestState();
+    o.final_of.assign(vc, kNone);
+    o.new_of.assign(vn, kNone);
+    uint32_t final_count = 0;
     for (uint32_t ev = 0; ev < vc; ++ev) {
-        const uint32_t src = source_of_engine[ev];
+        const uint32_t src = o.source_of_engine[ev];
         if (src == kNone) continue;
-        if (new_of[src] != kNone) {
-            dups.push_back({rank, new_of[src]});
-            final_of[ev] = new_of[src];
+        if (o.new_of[src] != kNone) {
+            o.dups.push_back({o.rank, o.new_of[src]});
+            o.final_of[ev] = o.new_of[src];
         } else {
-            new_of[src] = final_of[ev] = final_count++;
+            o.new_of[src] = o.final_of[ev] = final_count++;
         }
-        ++rank;
+        ++o.rank;
     }
-    conn.uint(io.dup.klass, io.dup.top, dups.size());
-    for (size_t i = 0; i < dups.size(); ++i) {
-        const uint32_t gap = i == 0 ? dups[i].first : dups[i].first - dups[i - 1].first - 1;
-        const uint32_t back = (dups[i].first - uint32_t(i)) - 1 - dups[i].second;
+    RangeEncoder& conn = attempt.conn;
+    conn.uint(io.dup.klass, io.dup.top, o.dups.size());
+    for (size_t i = 0; i < o.dups.size(); ++i) {
+        const uint32_t gap = i == 0 ? o.dups[i].first : o.dups[i].first - o.dups[i - 1].first - 1;
+        const uint32_t back = (o.dups[i].first - uint32_t(i)) - 1 - o.dups[i].second;
         conn.uint(io.dup.klass, io.dup.top, gap);
         conn.uint(io.dup.klass, io.dup.top, back);
     }
-    const uint32_t referenced = final_count;
+    o.referenced = final_count;
     for (size_t v = 0; v < vn; ++v)
-        if (new_of[v] == kNone) new_of[v] = final_count++;
+        if (o.new_of[v] == kNone) o.new_of[v] = final_count++;
+    return o;
+}
 
-    // Output triangles: the closed ones without a dummy vertex.
-    auto isOutput = [&](const uint32_t* cv) {
-        return !((a.vertex_flags[cv[0]] | a.vertex_flags[cv[1]] | a.vertex_flags[cv[2]]) & lodrt::detail::kFlagDummy);
-    };
-    result.old_face_of.reserve(fn);
-    for (uint32_t t = 0; t < tc; ++t)
-        if (isOutput(&a.corner_vertex[3 * size_t(t)])) result.old_face_of.push_back(io.real_of[3 * size_t(t)] / 3);
-    U32Array().swap(io.real_of);
-    if (result.old_face_of.size() != fn) return internalError("valence encoder: triangle count mismatch");
+// A closed triangle (its engine corners' vertices) is output unless it has a dummy vertex.
+bool isOutputTriangle(const lodrt::detail::ConquestArrays& a, const uint32_t* cv) {
+    return !((a.vertex_flags[cv[0]] | a.vertex_flags[cv[1]] | a.vertex_flags[cv[2]]) & lodrt::detail::kFlagDummy);
+}
 
-    // Positions in the plan's order, predicted exactly as the decoder will.
-    I32Array qpos(3 * size_t(vc), 0), qpos_final(3 * vn);
-    U8Array ordered(vc);
-    U32Array order(vc), count(vc), neighbour(vc), stack0(vc), stack1(vc), stack2(vc);
-    // Sized for the worst case and filled only as far as the plan goes: left uninitialised, so the
-    // untouched tail costs no resident memory.
-    UninitArray triples(9 * size_t(tc));
-    lodrt::detail::PositionPlan plan;
-    plan.order = order.data();
-    plan.count = count.data();
-    plan.neighbour = neighbour.data();
-    plan.triples = triples.get();
-    plan.max_triples = 3 * tc;
-    if (!lodrt::detail::planPositions(a.corner_vertex, a.corner_opposite, a.vertex_corner, a.vertex_flags,
-                                      a.vertex_valence, vc, ordered.data(), stack0.data(), stack1.data(), stack2.data(),
-                                      &plan))
-        return internalError("valence encoder: broken corner cycle");
-    U32Array().swap(stack0);
-    U32Array().swap(stack1);
-    U32Array().swap(stack2);
-    U8Array().swap(ordered);
-    std::vector<uint32_t> isolated(vn - referenced);
-    for (size_t v = 0; v < vn; ++v)
-        if (new_of[v] >= referenced) isolated[new_of[v] - referenced] = uint32_t(v);
-    U8Array final_done(vn, 0);
+// The position pass's plan (order and prediction triples, from the connectivity alone) and the
+// coordinates it visits, predicted exactly as the decoder will.
+class PositionWalk {
+public:
+    PositionWalk(const lodrt::detail::ConquestArrays& a, const FinalOrder& order, const Quantization& quantized,
+                 size_t vn, uint32_t vc, uint32_t tc)
+        : order_(order), quantized_(quantized), qpos_(3 * size_t(vc), 0), qpos_final_(3 * vn), plan_order_(vc),
+          count_(vc), neighbour_(vc), triples_(9 * size_t(tc)) {
+        plan_.order = plan_order_.data();
+        plan_.count = count_.data();
+        plan_.neighbour = neighbour_.data();
+        plan_.triples = triples_.get();
+        plan_.max_triples = 3 * tc;
+        {
+            U8Array ordered(vc);
+            U32Array stack0(vc), stack1(vc), stack2(vc);
+            planned_ = lodrt::detail::planPositions(a.corner_vertex, a.corner_opposite, a.vertex_corner,
+                                                    a.vertex_flags, a.vertex_valence, vc, ordered.data(),
+                                                    stack0.data(), stack1.data(), stack2.data(), &plan_);
+        }
+        isolated_.resize(vn - order.referenced);
+        final_done_.assign(vn, 0);
+        for (size_t v = 0; v < vn; ++v)
+            if (order.new_of[v] >= order.referenced) isolated_[order.new_of[v] - order.referenced] = uint32_t(v);
+    }
+
+    bool planned() const { return planned_; }
+    uint32_t planEntries() const { return plan_.ordered; }
+    // Quantized positions in final order, complete after a walk of the whole plan.
+    const I32Array& finalPositions() const { return qpos_final_; }
+    // The prediction triples are only read by walks.
+    void releasePlan() { triples_.reset(); }
+
     // Visits every coded coordinate in stream order with everything its coding needs. The contexts do
     // not depend on how a coordinate is coded (a snapped one counts with the length and sign of
     // candidate - prediction), so each component's values can be coded into a stream of its own.
     // `mask`: the components whose snap candidates are needed (bit j); `limit`: plan entries to visit
     // (all of them, then the vertices no triangle uses, unless fewer).
-    auto walkPositions = [&](uint32_t mask, uint32_t limit, auto&& code) {
-        std::fill(final_done.begin(), final_done.end(), uint8_t(0));
+    template <class Code> void walk(uint32_t mask, uint32_t limit, Code&& code) {
+        std::fill(final_done_.begin(), final_done_.end(), uint8_t(0));
+        const uint32_t qmax = quantized_.qmax;
         int32_t last[3] = {int32_t(qmax + 1) / 2, int32_t(qmax + 1) / 2, int32_t(qmax + 1) / 2};
         uint32_t prev_sign[3] = {0, 0, 0};
-        // One vertex: `q` its coordinates, `t`/`n`/`nb` its plan entry (n = 0, nb = kNone: none).
-        auto vertex = [&](const int32_t* q, const int32_t* pred, uint32_t ctx, const uint32_t* spread,
-                          const uint32_t* t, uint32_t n, uint32_t nb) {
-            uint32_t earlier = kNone, x_sign = 0;
-            int32_t candidate[3] = {0, 0, 0};
-            uint32_t snap_ctx[3] = {0, 0, 0};
-            const bool has_candidate =
-                lodrt::detail::snapCandidates(qpos.data(), t, n, nb, pred, mask, candidate, snap_ctx);
-            for (int j = 0; j < 3; ++j) {
-                const int32_t r = q[j] - pred[j];
-                PositionValue value;
-                value.j = j;
-                value.r = r;
-                value.ctx = lodrt::detail::positionContext(ctx, earlier);
-                value.spread_ctx = lodrt::detail::spreadContext(ctx, earlier, spread[j]);
-                value.sign_ctx = prev_sign[j] * 3 + x_sign;
-                value.has_candidate = has_candidate && ((mask >> j) & 1u);
-                value.candidate = candidate[j];
-                value.snap_ctx = snap_ctx[j];
-                value.hit = value.has_candidate && value.candidate == q[j];
-                code(value);
-                prev_sign[j] = lodrt::detail::signClass(r);
-                if (j == 0) x_sign = prev_sign[0];
-                const uint32_t k = lodrt::detail::bitLength(uint32_t(r < 0 ? -r : r));
-                earlier = earlier == kNone ? k : std::max(earlier, k);
-            }
-        };
-        const uint32_t* triple = plan.triples;
-        const uint32_t entries = std::min(limit, plan.ordered);
+        const uint32_t* triple = plan_.triples;
+        const uint32_t entries = std::min(limit, plan_.ordered);
         for (uint32_t i = 0; i < entries; ++i) {
-            const uint32_t ev = order[i], n = count[i];
+            const uint32_t ev = plan_order_[i], n = count_[i];
             const uint32_t* t = triple;
             triple += 3 * size_t(n);
-            const uint32_t fid = final_of[ev];
+            const uint32_t fid = order_.final_of[ev];
             if (fid == kNone) continue;
-            const uint32_t src = source_of_engine[ev];
-            int32_t* q = &qpos[3 * size_t(ev)];
-            for (int j = 0; j < 3; ++j) q[j] = qpos_in[3 * size_t(src) + size_t(j)];
-            if (!final_done[fid]) {
+            const uint32_t src = order_.source_of_engine[ev];
+            int32_t* q = &qpos_[3 * size_t(ev)];
+            for (int j = 0; j < 3; ++j) q[j] = quantized_.qpos[3 * size_t(src) + size_t(j)];
+            if (!final_done_[fid]) {
                 int32_t pred[3];
                 uint32_t scale = 0, spread[3];
-                lodrt::detail::predictFromPlan(qpos.data(), t, n, neighbour[i], last, pred, &scale, spread);
-                vertex(q, pred, lodrt::detail::scaleContext(scale, n), spread, t, n, neighbour[i]);
-                for (int j = 0; j < 3; ++j) qpos_final[3 * size_t(fid) + size_t(j)] = q[j];
-                final_done[fid] = 1;
+                lodrt::detail::predictFromPlan(qpos_.data(), t, n, neighbour_[i], last, pred, &scale, spread);
+                vertex(mask, prev_sign, q, pred, lodrt::detail::scaleContext(scale, n), spread, t, n, neighbour_[i],
+                       code);
+                for (int j = 0; j < 3; ++j) qpos_final_[3 * size_t(fid) + size_t(j)] = q[j];
+                final_done_[fid] = 1;
             }
             for (int j = 0; j < 3; ++j) last[j] = q[j];
         }
-        if (entries < plan.ordered) return;
-        for (uint32_t v : isolated) {
-            const int32_t* q = &qpos_in[3 * size_t(v)];
+        if (entries < plan_.ordered) return;
+        for (uint32_t v : isolated_) {
+            const int32_t* q = &quantized_.qpos[3 * size_t(v)];
             const int32_t pred[3] = {last[0], last[1], last[2]};
             const uint32_t spread[3] = {0, 0, 0};
-            vertex(q, pred, lodrt::detail::scaleContext(0, 0), spread, nullptr, 0, kNone);
+            vertex(mask, prev_sign, q, pred, lodrt::detail::scaleContext(0, 0), spread, nullptr, 0, kNone, code);
             for (int j = 0; j < 3; ++j) {
                 last[j] = q[j];
-                qpos_final[3 * size_t(new_of[v]) + size_t(j)] = q[j];
+                qpos_final_[3 * size_t(order_.new_of[v]) + size_t(j)] = q[j];
             }
-        }
-    };
-    // Which components to snap and which to code with spread contexts: every component sized all four
-    // ways (two without a sizeable share of snap hits) as streams of its own (exact sizes, since a
-    // component's values and contexts do not depend on the other components' choices; WayPairSizer),
-    // ways far behind after the first eighth dropped; the smallest of the rest wins (ties: fewer flags).
-    uint16_t flags_pos = 0;
-    // The estimate's walk keeps every value it visits (8 bytes each) so that the stream below is coded
-    // from them instead of walking the plan again (the walk is half of a position pass).
-    CodecArray<CodedValue> walked;
-    {
-        // Without a sizeable share of hits the snap flag cannot pay: no snap estimate. The share is
-        // counted on the first eighth of the plan (at least 4096 vertices).
-        size_t candidates = 0, hits = 0;
-        walkPositions(7u, std::max(plan.ordered / 8, 4096u), [&](const PositionValue& v) {
-            candidates += v.has_candidate;
-            hits += v.hit;
-        });
-        const bool try_snap = hits * 16 >= candidates && hits > 0;
-        const int ways = try_snap ? 4 : 2; // way w: snap (w & 2), spread contexts (w & 1)
-        walked.reserve(3 * vn);
-        walkPositions(try_snap ? 7u : 0u, kNone, [&](const PositionValue& v) { walked.push_back(CodedValue::of(v)); });
-        // One sizer per component and snap choice (sizer[j][w >> 1] sizes ways w and w | 1); 6 x 17 KB:
-        // not on the stack of a pool thread.
-        std::vector<std::unique_ptr<WayPairSizer>> sizers;
-        for (int j = 0; j < 3; ++j)
-            for (int pair = 0; pair < ways / 2; ++pair) sizers.push_back(std::make_unique<WayPairSizer>(pair == 1));
-        auto sizer = [&](int j, int w) -> WayPairSizer& { return *sizers[size_t(j * (ways / 2) + (w >> 1))]; };
-        // Values [begin, end) (component order x, y, z per vertex) into every way still alive.
-        auto estimate = [&](size_t begin, size_t end) {
-            for (int j = 0; j < 3; ++j)
-                for (int pair = 0; pair < ways / 2; ++pair) sizer(j, 2 * pair).code(walked.data(), begin, end, j);
-        };
-        // The first eighth in every way; a way already 2 % (and 256 bytes) larger than the best there
-        // is dropped (on snapped Poisson meshes the unsnapped ways are 15-20 % larger), the others run
-        // to the end and the smallest is exact.
-        const size_t prefix = 3 * (walked.size() / 24);
-        estimate(0, prefix);
-        for (int j = 0; j < 3; ++j) {
-            size_t so_far[4] = {0, 0, 0, 0}, best = ~size_t(0);
-            for (int w = 0; w < ways; ++w) {
-                so_far[w] = sizer(j, w).bytesSoFar(w & 1);
-                best = std::min(best, so_far[w]);
-            }
-            for (int w = 0; w < ways; ++w)
-                if (so_far[w] > best + std::max<size_t>(256, best / 50)) sizer(j, w).drop(w & 1);
-        }
-        estimate(prefix, walked.size());
-        for (int j = 0; j < 3; ++j) {
-            int best = -1;
-            size_t best_size = 0;
-            for (int w = 0; w < ways; ++w) {
-                if (!sizer(j, w).alive(w & 1)) continue;
-                const size_t size = sizer(j, w).finishedBytes(w & 1);
-                if (best < 0 || size < best_size) {
-                    best = w;
-                    best_size = size;
-                }
-            }
-            if (best & 2) flags_pos = uint16_t(flags_pos | (kValenceFlagSnapX << j));
-            if (best & 1) flags_pos = uint16_t(flags_pos | (kValenceFlagSpreadX << j));
         }
     }
+
+private:
+    // One vertex: `q` its coordinates, `t`/`n`/`nb` its plan entry (n = 0, nb = kNone: none).
+    template <class Code>
+    void vertex(uint32_t mask, uint32_t* prev_sign, const int32_t* q, const int32_t* pred, uint32_t ctx,
+                const uint32_t* spread, const uint32_t* t, uint32_t n, uint32_t nb, Code& code) {
+        uint32_t earlier = kNone, x_sign = 0;
+        int32_t candidate[3] = {0, 0, 0};
+        uint32_t snap_ctx[3] = {0, 0, 0};
+        const bool has_candidate =
+            lodrt::detail::snapCandidates(qpos_.data(), t, n, nb, pred, mask, candidate, snap_ctx);
+        for (int j = 0; j < 3; ++j) {
+            const int32_t r = q[j] - pred[j];
+            PositionValue value;
+            value.j = j;
+            value.r = r;
+            value.ctx = lodrt::detail::positionContext(ctx, earlier);
+            value.spread_ctx = lodrt::detail::spreadContext(ctx, earlier, spread[j]);
+            value.sign_ctx = prev_sign[j] * 3 + x_sign;
+            value.has_candidate = has_candidate && ((mask >> j) & 1u);
+            value.candidate = candidate[j];
+            value.snap_ctx = snap_ctx[j];
+            value.hit = value.has_candidate && value.candidate == q[j];
+            code(value);
+            prev_sign[j] = lodrt::detail::signClass(r);
+            if (j == 0) x_sign = prev_sign[0];
+            const uint32_t k = lodrt::detail::bitLength(uint32_t(r < 0 ? -r : r));
+            earlier = earlier == kNone ? k : std::max(earlier, k);
+        }
+    }
+
+    const FinalOrder& order_;
+    const Quantization& quantized_;
+    I32Array qpos_, qpos_final_;
+    U32Array plan_order_, count_, neighbour_;
+    // Sized for the worst case and filled only as far as the plan goes: left uninitialised, so the
+    // untouched tail costs no resident memory.
+    UninitArray triples_;
+    lodrt::detail::PositionPlan plan_;
+    bool planned_ = false;
+    std::vector<uint32_t> isolated_;
+    U8Array final_done_;
+};
+
+// Which components to snap and which to code with spread contexts: every component sized all four
+// ways (two without a sizeable share of snap hits) as streams of its own (exact sizes, since a
+// component's values and contexts do not depend on the other components' choices; WayPairSizer),
+// ways far behind after the first eighth dropped; the smallest of the rest wins (ties: fewer flags).
+// Returns the position flags. The estimate's walk keeps every value it visits (8 bytes each) in
+// `walked`, so that the stream is coded from them instead of walking the plan again (the walk is half
+// of a position pass).
+uint16_t choosePositionFlags(PositionWalk& walk, size_t vn, CodecArray<CodedValue>& walked) {
+    uint16_t flags_pos = 0;
+    // Without a sizeable share of hits the snap flag cannot pay: no snap estimate. The share is
+    // counted on the first eighth of the plan (at least 4096 vertices).
+    size_t candidates = 0, hits = 0;
+    walk.walk(7u, std::max(walk.planEntries() / 8, 4096u), [&](const PositionValue& v) {
+        candidates += v.has_candidate;
+        hits += v.hit;
+    });
+    const bool try_snap = hits * 16 >= candidates && hits > 0;
+    const int ways = try_snap ? 4 : 2; // way w: snap (w & 2), spread contexts (w & 1)
+    walked.reserve(3 * vn);
+    walk.walk(try_snap ? 7u : 0u, kNone, [&](const PositionValue& v) { walked.push_back(CodedValue::of(v)); });
+    // One sizer per component and snap choice (sizer[j][w >> 1] sizes ways w and w | 1); 6 x 17 KB:
+    // not on the stack of a pool thread.
+    std::vector<std::unique_ptr<WayPairSizer>> sizers;
+    for (int j = 0; j < 3; ++j)
+        for (int pair = 0; pair < ways / 2; ++pair) sizers.push_back(std::make_unique<WayPairSizer>(pair == 1));
+    auto sizer = [&](int j, int w) -> WayPairSizer& { return *sizers[size_t(j * (ways / 2) + (w >> 1))]; };
+    // Values [begin, end) (component order x, y, z per vertex) into every way still alive.
+    auto estimate = [&](size_t begin, size_t end) {
+        for (int j = 0; j < 3; ++j)
+            for (int pair = 0; pair < ways / 2; ++pair) sizer(j, 2 * pair).code(walked.data(), begin, end, j);
+    };
+    // The first eighth in every way; a way already 2 % (and 256 bytes) larger than the best there
+    // is dropped, the others run to the end and the smallest is exact.
+    const size_t prefix = 3 * (walked.size() / 24);
+    estimate(0, prefix);
+    for (int j = 0; j < 3; ++j) {
+        size_t so_far[4] = {0, 0, 0, 0}, best = ~size_t(0);
+        for (int w = 0; w < ways; ++w) {
+            so_far[w] = sizer(j, w).bytesSoFar(w & 1);
+            best = std::min(best, so_far[w]);
+        }
+        for (int w = 0; w < ways; ++w)
+            if (so_far[w] > best + std::max<size_t>(256, best / 50)) sizer(j, w).drop(w & 1);
+    }
+    estimate(prefix, walked.size());
+    for (int j = 0; j < 3; ++j) {
+        int best = -1;
+        size_t best_size = 0;
+        for (int w = 0; w < ways; ++w) {
+            if (!sizer(j, w).alive(w & 1)) continue;
+            const size_t size = sizer(j, w).finishedBytes(w & 1);
+            if (best < 0 || size < best_size) {
+                best = w;
+                best_size = size;
+            }
+        }
+        if (best & 2) flags_pos = uint16_t(flags_pos | (kValenceFlagSnapX << j));
+        if (best & 1) flags_pos = uint16_t(flags_pos | (kValenceFlagSpreadX << j));
+    }
+    return flags_pos;
+}
+
+// Codes the walked values with the chosen flags. Values come in component order x, y, z per vertex; a
+// component that is not snapped codes without its candidate, exactly as a walk with its mask would
+// give it.
+void codePositions(const CodecArray<CodedValue>& walked, uint16_t flags_pos, RangeEncoder& pos, BitWriter& pos_raw) {
+    PositionModel model;
+    model.init();
+    const uint32_t snap_mask = uint32_t(flags_pos / kValenceFlagSnapX) & 7u;
+    const uint32_t spread_mask = uint32_t(flags_pos / kValenceFlagSpreadX) & 7u;
+    for (size_t i = 0; i < walked.size(); ++i) {
+        const PositionValue v = walked[i].value(int(i % 3));
+        if (v.has_candidate && ((snap_mask >> v.j) & 1u)) {
+            pos.bit(model.snap[v.j][v.snap_ctx], v.hit ? 1u : 0u);
+            if (v.hit) continue;
+        }
+        pos.residual(model.residuals, pos_raw, v.j, ((spread_mask >> v.j) & 1u) ? v.spread_ctx : v.ctx, v.r,
+                     v.sign_ctx);
+    }
+}
+
+// Normals after all positions, in final order, each predicted from the exact sum of its faces' normals
+// on the quantized positions (the decoder's step 3).
+void codeNormals(const Mesh& mesh, uint32_t nb, const FinalOrder& order, const lodrt::detail::ConquestArrays& a,
+                 uint32_t tc, const I32Array& qpos_final, RangeEncoder& nrm, BitWriter& nrm_raw) {
+    const size_t vn = mesh.vertexCount();
+    U32Array qnorm(2 * vn);
+    for (size_t i = 0; i < vn; ++i) {
+        const float n[3] = {mesh.normals[i].x, mesh.normals[i].y, mesh.normals[i].z};
+        uint32_t q[2];
+        lodrt::octahedralEncode(n, nb, q);
+        qnorm[2 * size_t(order.new_of[i])] = q[0];
+        qnorm[2 * size_t(order.new_of[i]) + 1] = q[1];
+    }
+    // Over the output triangles as the engine's corner table holds them.
+    CodecArray<int64_t> sum(3 * vn, 0);
+    for (uint32_t t = 0; t < tc; ++t) {
+        const uint32_t* cv = &a.corner_vertex[3 * size_t(t)];
+        if (!isOutputTriangle(a, cv)) continue;
+        const uint32_t f[3] = {order.final_of[cv[0]], order.final_of[cv[1]], order.final_of[cv[2]]};
+        lodrt::detail::addFaceNormal(qpos_final.data(), f, sum.data());
+    }
+    ResidualModel<2, kValenceNormalContexts> nrm_model;
+    nrm_model.init();
+    const uint32_t mask = (1u << nb) - 1;
+    const int32_t half = int32_t(1) << (nb - 1);
+    uint32_t nrm_length[2] = {0, 0};
+    for (size_t x = 0; x < vn; ++x) {
+        uint32_t p[2];
+        lodrt::detail::predictNormal(&sum[3 * x], qnorm.data(), x, nb, p);
+        for (int j = 0; j < 2; ++j) {
+            int32_t r = int32_t((qnorm[2 * x + size_t(j)] - p[j]) & mask);
+            if (r >= half) r -= int32_t(mask) + 1;
+            const uint32_t ctx = std::min(nrm_length[j], kValenceNormalContexts - 1);
+            nrm_length[j] = nrm.residual(nrm_model, nrm_raw, j, ctx, r);
+        }
+    }
+}
+
+} // namespace
+
+Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeOptions& options) {
+    const bool normals = options.encode_normals && mesh.hasNormals();
+    LODBAKE_RETURN_IF_ERROR(checkEncodable(mesh, options, normals));
+    const size_t vn = mesh.vertexCount(), fn = mesh.faceCount();
+    ValenceEncodeResult result;
+    Quantization quantized;
+    LODBAKE_RETURN_IF_ERROR(quantizePositions(mesh, options.position_bits, quantized, result.max_position_error));
+    LODBAKE_ASSIGN_OR_RETURN(std::unique_ptr<Attempt> attempt, conquer(mesh));
+    const auto& a = attempt->engine.a;
+    const uint32_t vc = uint32_t(attempt->closed.source.size()),
+                   tc = uint32_t(attempt->closed.corner_vertex.size() / 3);
+    FinalOrder order = orderVertices(*attempt, vn);
+
+    // Output triangles: the closed ones without a dummy vertex.
+    EncoderIo& io = attempt->io;
+    result.old_face_of.reserve(fn);
+    for (uint32_t t = 0; t < tc; ++t)
+        if (isOutputTriangle(a, &a.corner_vertex[3 * size_t(t)]))
+            result.old_face_of.push_back(io.real_of[3 * size_t(t)] / 3);
+    U32Array().swap(io.real_of);
+    if (result.old_face_of.size() != fn) return internalError("valence encoder: triangle count mismatch");
+
+    PositionWalk walk(a, order, quantized, vn, vc, tc);
+    if (!walk.planned()) return internalError("valence encoder: broken corner cycle");
+    uint16_t flags_pos = 0;
     RangeEncoder pos;
     BitWriter pos_raw;
     {
-        PositionModel model;
-        model.init();
-        const uint32_t snap_mask = uint32_t(flags_pos / kValenceFlagSnapX) & 7u;
-        const uint32_t spread_mask = uint32_t(flags_pos / kValenceFlagSpreadX) & 7u;
-        // Values come in component order x, y, z per vertex; a component that is not snapped codes
-        // without its candidate, exactly as a walk with its mask would give it.
-        for (size_t i = 0; i < walked.size(); ++i) {
-            const PositionValue v = walked[i].value(int(i % 3));
-            if (v.has_candidate && ((snap_mask >> v.j) & 1u)) {
-                pos.bit(model.snap[v.j][v.snap_ctx], v.hit ? 1u : 0u);
-                if (v.hit) continue;
-            }
-            pos.residual(model.residuals, pos_raw, v.j, ((spread_mask >> v.j) & 1u) ? v.spread_ctx : v.ctx, v.r,
-                         v.sign_ctx);
-        }
-        CodecArray<CodedValue>().swap(walked);
+        CodecArray<CodedValue> walked;
+        flags_pos = choosePositionFlags(walk, vn, walked);
+        codePositions(walked, flags_pos, pos, pos_raw);
     }
-    triples.reset();
-
-    // Normals after all positions, in final order, each predicted from the exact sum of its faces'
-    // normals on the quantized positions (the decoder's step 3).
+    walk.releasePlan();
     RangeEncoder nrm;
     BitWriter nrm_raw;
-    if (normals) {
-        U32Array qnorm(2 * vn);
-        for (size_t i = 0; i < vn; ++i) {
-            const float n[3] = {mesh.normals[i].x, mesh.normals[i].y, mesh.normals[i].z};
-            uint32_t q[2];
-            lodrt::octahedralEncode(n, options.normal_bits, q);
-            qnorm[2 * size_t(new_of[i])] = q[0];
-            qnorm[2 * size_t(new_of[i]) + 1] = q[1];
-        }
-        // Over the output triangles as the engine's corner table holds them (in integers the order of
-        // the sums does not matter).
-        CodecArray<int64_t> sum(3 * vn, 0);
-        for (uint32_t t = 0; t < tc; ++t) {
-            const uint32_t* cv = &a.corner_vertex[3 * size_t(t)];
-            if (!isOutput(cv)) continue;
-            const uint32_t f[3] = {final_of[cv[0]], final_of[cv[1]], final_of[cv[2]]};
-            const int32_t* p0 = &qpos_final[3 * size_t(f[0])];
-            const int32_t* p1 = &qpos_final[3 * size_t(f[1])];
-            const int32_t* p2 = &qpos_final[3 * size_t(f[2])];
-            const int64_t e1[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
-            const int64_t e2[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
-            const int64_t n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
-                                  e1[0] * e2[1] - e1[1] * e2[0]};
-            for (int c = 0; c < 3; ++c)
-                for (int j = 0; j < 3; ++j) sum[3 * size_t(f[c]) + size_t(j)] += n[j];
-        }
-        ResidualModel<2, kValenceNormalContexts> nrm_model;
-        nrm_model.init();
-        const uint32_t nb = options.normal_bits;
-        const uint32_t mask = (1u << nb) - 1;
-        const int32_t half = int32_t(1) << (nb - 1);
-        uint32_t nrm_length[2] = {0, 0};
-        for (size_t x = 0; x < vn; ++x) {
-            const int64_t* s3 = &sum[3 * x];
-            uint32_t p[2];
-            if (s3[0] != 0 || s3[1] != 0 || s3[2] != 0) {
-                const float fs[3] = {float(s3[0]), float(s3[1]), float(s3[2])};
-                lodrt::octahedralEncode(fs, nb, p);
-            } else if (x > 0) {
-                p[0] = qnorm[2 * (x - 1)];
-                p[1] = qnorm[2 * (x - 1) + 1];
-            } else {
-                p[0] = p[1] = uint32_t(half);
-            }
-            for (int j = 0; j < 2; ++j) {
-                int32_t r = int32_t((qnorm[2 * x + size_t(j)] - p[j]) & mask);
-                if (r >= half) r -= int32_t(mask) + 1;
-                const uint32_t ctx = std::min(nrm_length[j], kValenceNormalContexts - 1);
-                nrm_length[j] = nrm.residual(nrm_model, nrm_raw, j, ctx, r);
-            }
-        }
-    }
+    if (normals) codeNormals(mesh, options.normal_bits, order, a, tc, walk.finalPositions(), nrm, nrm_raw);
 
-    std::vector<uint8_t> conn_bytes = conn.finish(), pos_bytes = pos.finish(), pos_raw_bytes = pos_raw.finish(),
-                         nrm_bytes, nrm_raw_bytes;
+    std::vector<uint8_t> conn_bytes = attempt->conn.finish(), pos_bytes = pos.finish(),
+                         pos_raw_bytes = pos_raw.finish(), nrm_bytes, nrm_raw_bytes;
     if (normals) {
         nrm_bytes = nrm.finish();
         nrm_raw_bytes = nrm_raw.finish();
@@ -1184,8 +1288,8 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
     put32(out, 20, tc);
     out[24] = uint8_t(options.position_bits);
     out[25] = normals ? uint8_t(options.normal_bits) : 0;
-    for (int j = 0; j < 3; ++j) putFloat(out, 28 + 4 * size_t(j), lo[j]);
-    putFloat(out, 40, cube);
+    for (int j = 0; j < 3; ++j) putF32(out, 28 + 4 * size_t(j), quantized.lo[j]);
+    putF32(out, 40, quantized.cube);
     put32(out, 44, uint32_t(conn_bytes.size()));
     put32(out, 48, uint32_t(pos_bytes.size()));
     put32(out, 52, uint32_t(nrm_bytes.size()));
@@ -1197,9 +1301,9 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
     result.connectivity_bytes = conn_bytes.size();
     result.position_bytes = pos_bytes.size() + pos_raw_bytes.size();
     result.normal_bytes = nrm_bytes.size() + nrm_raw_bytes.size();
-    result.cut_vertex_copies = dups.size();
-    result.dummy_vertices = vc - rank;
-    result.new_vertex_of = std::move(new_of);
+    result.cut_vertex_copies = order.dups.size();
+    result.dummy_vertices = vc - order.rank;
+    result.new_vertex_of = std::move(order.new_of);
     return result;
 }
 

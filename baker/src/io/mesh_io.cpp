@@ -1,7 +1,7 @@
 #include "lodbake/io/mesh_io.h"
 
 #include "lodbake/core/file_io.h"
-#include "lodbake/gltf/gltf_io.h"
+#include "lodbake/io/gltf.h"
 #include "lodbake/io/conf.h"
 #include "lodbake/io/obj.h"
 #include "lodbake/io/off.h"

@@ -10,6 +10,7 @@
 #include <string>
 #include <unordered_map>
 
+#include "core/byte_order.h"
 #include "core/large_array.h"
 #include "core/parallel.h"
 #include "lodbake/simplify/quadric.h"
@@ -82,13 +83,6 @@ void writeCount(BitWriter& w, uint32_t count, uint32_t bits) {
         w.write(escape, bits);
         w.write(count - escape, lodrt::format::kPfrepCountEscapeBits);
     }
-}
-
-void put32(std::vector<uint8_t>& b, size_t at, uint32_t v) {
-    std::memcpy(b.data() + at, &v, 4);
-}
-void putF32(std::vector<uint8_t>& b, size_t at, float v) {
-    std::memcpy(b.data() + at, &v, 4);
 }
 
 Vec3d toD(const Vec3f& v) {
@@ -751,10 +745,7 @@ Status chainPoints(const Mesh& mesh, std::vector<Vec3f>& positions, std::vector<
     return Status::okStatus();
 }
 
-Result<PfrepBuild> buildPfrepFromChain(const Mesh& mesh, const CollapsePairLog& removals, Diagnostics& diagnostics,
-                                       ChainEndRule rule, const std::vector<Vec3f>* merged_positions) {
-    if (rule == ChainEndRule::NearerMerged && (!merged_positions || merged_positions->size() != removals.size()))
-        return invalidInput("pfrep: one merged position per collapse expected");
+Result<PfrepBuild> buildPfrepFromChain(const Mesh& mesh, const CollapsePairLog& removals, Diagnostics& diagnostics) {
     CollapseSequence sequence;
     std::vector<uint32_t> triangles;
     LODBAKE_RETURN_IF_ERROR(chainPoints(mesh, sequence.point_positions, triangles));
@@ -763,19 +754,15 @@ Result<PfrepBuild> buildPfrepFromChain(const Mesh& mesh, const CollapsePairLog& 
     // for it: rep[engine point] is that point.
     std::vector<uint32_t> rep(point_count);
     for (uint32_t p = 0; p < point_count; ++p) rep[p] = p;
-    // LowerQuadric: the end whose original position has the lower error for the merged point's quadric
-    // (face planes, area-weighted, summed over the points merged into it), as the half-edge simplifier
-    // chooses its direction.
-    std::vector<Quadric> quadric;
-    const bool by_quadric = rule == ChainEndRule::LowerQuadric;
-    if (by_quadric) {
-        quadric.resize(point_count);
-        for (size_t t = 0; t < triangles.size(); t += 3) {
-            const Quadric q = Quadric::fromTriangle(toD(sequence.point_positions[triangles[t]]),
-                                                    toD(sequence.point_positions[triangles[t + 1]]),
-                                                    toD(sequence.point_positions[triangles[t + 2]]));
-            for (int k = 0; k < 3; ++k) quadric[triangles[t + k]] += q;
-        }
+    // The end whose original position has the lower error for the merged point's quadric (face
+    // planes, area-weighted, summed over the points merged into it) stays, as the half-edge
+    // simplifier chooses its direction.
+    std::vector<Quadric> quadric(point_count);
+    for (size_t t = 0; t < triangles.size(); t += 3) {
+        const Quadric q = Quadric::fromTriangle(toD(sequence.point_positions[triangles[t]]),
+                                                toD(sequence.point_positions[triangles[t + 1]]),
+                                                toD(sequence.point_positions[triangles[t + 2]]));
+        for (int k = 0; k < 3; ++k) quadric[triangles[t + k]] += q;
     }
     sequence.records.reserve(removals.size());
     CollapsePairLog::Reader reader(removals);
@@ -785,23 +772,14 @@ Result<PfrepBuild> buildPfrepFromChain(const Mesh& mesh, const CollapsePairLog& 
         if (!reader.next(u, v, kept_stays, removed_nearer) || u >= point_count || v >= point_count || u == v)
             return invalidInput("pfrep: collapse " + std::to_string(r) + ": bad points in the chain's log");
         uint32_t removed = rep[u], kept = rep[v];
-        if (rule == ChainEndRule::NearerMerged) {
-            const Vec3d p = toD((*merged_positions)[r]);
-            const Vec3d dk = toD(sequence.point_positions[kept]) - p, dr = toD(sequence.point_positions[removed]) - p;
-            if (dot(dk, dk) > dot(dr, dr))
-                std::swap(removed, kept);
-        }
-        if (rule == ChainEndRule::EngineNearer && !kept_stays && removed_nearer) std::swap(removed, kept);
-        if (by_quadric) {
-            // When the chain did not move its kept point (a corner, or a border or seam point whose
-            // edge leaves its line: the quadric has no constraint planes here), that end stays.
-            Quadric q = quadric[removed];
-            q += quadric[kept];
-            if (!kept_stays &&
-                q.evaluate(toD(sequence.point_positions[removed])) < q.evaluate(toD(sequence.point_positions[kept])))
-                std::swap(removed, kept);
-            quadric[kept] = q;
-        }
+        // When the chain did not move its kept point (a corner, or a border or seam point whose edge
+        // leaves its line: the quadric has no constraint planes here), that end stays.
+        Quadric q = quadric[removed];
+        q += quadric[kept];
+        if (!kept_stays &&
+            q.evaluate(toD(sequence.point_positions[removed])) < q.evaluate(toD(sequence.point_positions[kept])))
+            std::swap(removed, kept);
+        quadric[kept] = q;
         rep[v] = kept;
         CollapseRecord record;
         record.removed_point = removed;

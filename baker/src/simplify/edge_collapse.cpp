@@ -37,12 +37,12 @@
 #include <utility>
 
 #include "core/parallel.h"
+#include "lodbake/core/math.h"
 
 namespace lodbake::detail {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 // Below this quality (4√3·area / Σ edge²) a face's normal is too unstable to bound its rotation.
 constexpr double kReliableQuality = 0.05;
 // A popped collapse whose point-distance penalty grows its key by more than this many times its

@@ -15,6 +15,7 @@
 
 #include "core/parallel.h"
 #include "lodbake/core/bvh.h"
+#include "lodbake/core/math.h"
 #include "lodbake/simplify/mesh_distance.h"
 
 namespace lodbake::detail {
@@ -190,7 +191,7 @@ void keepWithinBounds(const Mesh& level, const std::vector<uint32_t>& group, uin
 
 void refineLevelPositions(const Mesh& input, Mesh& level, float max_normal_change_deg) {
     const size_t n = level.positions.size();
-    const double cos_bound = std::cos(double(max_normal_change_deg) * (3.14159265358979323846 / 180.0));
+    const double cos_bound = std::cos(double(max_normal_change_deg) * (kPi / 180.0));
     const double cos2 = cos_bound * cos_bound;
     const bool textured = !level.uvs.empty();
     if (n == 0 || level.faceCount() == 0) return;

@@ -34,11 +34,6 @@ PackStreamEncoder makeStreamEncoder(
     encoder.needs = needs;
     encoder.cost = cost;
     encoder.prepare = std::move(prepare);
-    encoder.encode = [prepare = encoder.prepare](const LodChain& chain, size_t level_index,
-                                                 PackLevel& level) -> Status {
-        LODBAKE_ASSIGN_OR_RETURN(PackStreamCommit commit, prepare(chain, level_index, level.mesh));
-        return commit ? commit(level) : Status::okStatus();
-    };
     return encoder;
 }
 

@@ -10,7 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "gltf_test_util.h"
-#include "lodbake/gltf/gltf_io.h"
+#include "lodbake/io/gltf.h"
 
 namespace {
 

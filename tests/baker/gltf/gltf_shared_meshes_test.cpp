@@ -6,7 +6,7 @@
 #include <gtest/gtest.h>
 
 #include "gltf_test_util.h"
-#include "lodbake/gltf/gltf_io.h"
+#include "lodbake/io/gltf.h"
 #include "lodbake/io/mesh_io.h"
 #include "test_paths.h"
 

@@ -8,7 +8,7 @@
 
 #include "gltf_test_util.h"
 #include "lodbake/core/file_io.h"
-#include "lodbake/gltf/gltf_io.h"
+#include "lodbake/io/gltf.h"
 #include "lodbake/io/mesh_io.h"
 #include "test_paths.h"
 

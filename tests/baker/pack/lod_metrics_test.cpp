@@ -7,7 +7,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "lodbake/gltf/gltf_io.h"
+#include "lodbake/pack/pack_glb.h"
 #include "lodbake/pack/pack.h"
 #include "mesh_builders.h"
 

@@ -17,7 +17,7 @@
 #include "../gltf/gltf_test_util.h"
 #include "lodbake/bake/bake.h"
 #include "lodbake/core/diagnostics.h"
-#include "lodbake/gltf/gltf_io.h"
+#include "lodbake/pack/pack_glb.h"
 #include "lodbake/io/mesh_io.h"
 #include "lodbake/pack/pack.h"
 #include "lodbake/stream/stream.h"
@@ -25,6 +25,7 @@
 #include "lodrt/valence.h"
 #include "data_uri.h"
 #include "mesh_builders.h"
+#include "stream_level.h"
 #include "test_paths.h"
 
 namespace {
@@ -103,7 +104,7 @@ TEST(ValenceStreamTest, LevelIsRenumberedIntoTheDecodedOrder) {
     level.mesh = grid(24);
     const Mesh original = level.mesh;
     const PackStreamEncoder encoder = valenceStreamEncoder();
-    ASSERT_TRUE(encoder.encode(LodChain{}, 0, level).ok());
+    ASSERT_TRUE(lodbake_test::encodeStreamLevel(encoder, LodChain{}, 0, level).ok());
     ASSERT_EQ(level.primitive_extensions.size(), 1u);
     ASSERT_EQ(level.primitive_extensions[0].size(), 1u);
     const PackExtension& e = level.primitive_extensions[0][0];
@@ -144,7 +145,7 @@ TEST(ValenceStreamTest, LevelIsRenumberedIntoTheDecodedOrder) {
     // Re-using the encoder gives identical bytes.
     PackLevel again;
     again.mesh = original;
-    ASSERT_TRUE(encoder.encode(LodChain{}, 0, again).ok());
+    ASSERT_TRUE(lodbake_test::encodeStreamLevel(encoder, LodChain{}, 0, again).ok());
     EXPECT_EQ(again.primitive_extensions[0][0].blobs[0], e.blobs[0]);
 }
 
@@ -186,7 +187,7 @@ TEST(ValenceStreamTest, MultiPrimitiveLevelGetsOneStreamPerPrimitive) {
     PackLevel level;
     level.mesh = twoPrimitiveGrid(8);
     const Mesh original = level.mesh;
-    ASSERT_TRUE(valenceStreamEncoder().encode(LodChain{}, 0, level).ok());
+    ASSERT_TRUE(lodbake_test::encodeStreamLevel(valenceStreamEncoder(), LodChain{}, 0, level).ok());
     const Mesh& m = level.mesh;
     // Sub-meshes keep their order, names, materials and triangle counts; the empty one stays empty.
     ASSERT_EQ(m.submeshes.size(), 3u);
@@ -238,7 +239,8 @@ PackDescription onePack(bool compact) {
     asset.levels[1].mesh = grid(4);
     asset.screen_coverage = {0.5, 0.0};
     const PackStreamEncoder encoder = valenceStreamEncoder();
-    for (size_t l = 0; l < 2; ++l) EXPECT_TRUE(encoder.encode(LodChain{}, l, asset.levels[l]).ok());
+    for (size_t l = 0; l < 2; ++l)
+        EXPECT_TRUE(lodbake_test::encodeStreamLevel(encoder, LodChain{}, l, asset.levels[l]).ok());
     description.assets.push_back(std::move(asset));
     return description;
 }
@@ -369,7 +371,8 @@ PackDescription twoPrimitivePack(bool compact) {
     asset.levels[1].mesh = twoPrimitiveGrid(6);
     asset.screen_coverage = {0.5, 0.0};
     const PackStreamEncoder encoder = valenceStreamEncoder();
-    for (size_t l = 0; l < 2; ++l) EXPECT_TRUE(encoder.encode(LodChain{}, l, asset.levels[l]).ok());
+    for (size_t l = 0; l < 2; ++l)
+        EXPECT_TRUE(lodbake_test::encodeStreamLevel(encoder, LodChain{}, l, asset.levels[l]).ok());
     description.assets.push_back(std::move(asset));
     return description;
 }

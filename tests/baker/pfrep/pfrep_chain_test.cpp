@@ -178,17 +178,14 @@ TEST_F(PfrepChainTest, LogHoldsEveryCollapseAndRunsToTheEnd) {
     EXPECT_LT(chain_->removals.byteSize(), chain_->removals.size() * 6);
 }
 
-TEST_F(PfrepChainTest, BlobLevelsAreTheChainsFacesForEveryRule) {
+TEST_F(PfrepChainTest, BlobLevelsAreTheChainsFaces) {
     LODBAKE_REQUIRE_SHARED_MESHES();
-    std::vector<lodbake::Vec3f> merged;
-    for (const auto& r : chain_->sequence.records) merged.push_back(r.position);
     std::vector<lodbake::Vec3f> positions;
     std::vector<uint32_t> triangles;
     ASSERT_TRUE(lodbake::chainPoints(*mesh_, positions, triangles).ok());
-    using Rule = lodbake::ChainEndRule;
-    for (Rule rule : {Rule::LowerQuadric, Rule::EngineKept, Rule::NearerMerged, Rule::EngineNearer}) {
+    {
         lodbake::Diagnostics d;
-        auto build = lodbake::buildPfrepFromChain(*mesh_, chain_->removals, d, rule, &merged);
+        auto build = lodbake::buildPfrepFromChain(*mesh_, chain_->removals, d);
         ASSERT_TRUE(build.ok()) << build.status().message();
         lodrt::PfrepModel m;
         ASSERT_EQ(lodrt::openPfrep(build->blob.data(), build->blob.size(), &m), lodrt::Result::Ok);
@@ -216,7 +213,7 @@ TEST_F(PfrepChainTest, BlobLevelsAreTheChainsFacesForEveryRule) {
             for (size_t t = 0; t < count; ++t)
                 got.insert(canonical(find(build->rank_point[idx[t * 3]]), find(build->rank_point[idx[t * 3 + 1]]),
                                      find(build->rank_point[idx[t * 3 + 2]])));
-            EXPECT_TRUE(got == expected) << "rule " << int(rule) << ", level of " << level.mesh.faceCount();
+            EXPECT_TRUE(got == expected) << "level of " << level.mesh.faceCount();
         }
     }
 }

@@ -1,9 +1,10 @@
 #pragma once
 // Storage for the large arrays that public types hold (a DistanceIndex's tree, an LOD chain's removal
 // log): big blocks are mapped on their own, so they go back to the OS when freed and never sit in
-// malloc's arenas (where a freed block stays resident below the next one, and where the bake's
-// huge-page heap makes every touched 2 MB resident). Out of line (src/core/mapped_array.cpp), so this
-// header needs nothing from src/. Contents and results do not depend on it.
+// malloc's arenas (where a freed block stays resident below the next one, and where glibc's huge-page
+// heap, if the user asks for it, makes every touched 2 MB resident). Out of line
+// (src/core/mapped_array.cpp), so this header needs nothing from src/. Contents and results do not
+// depend on it.
 
 #include <cstddef>
 #include <vector>

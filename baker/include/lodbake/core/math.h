@@ -6,6 +6,8 @@
 
 namespace lodbake {
 
+constexpr double kPi = 3.14159265358979323846;
+
 template <class T> struct Vec2 {
     T x = 0, y = 0;
     constexpr Vec2() = default;

@@ -1,6 +1,7 @@
 #pragma once
 // Reading and writing meshes in every supported file format, chosen by file extension (readers also
-// check the magic bytes). Per-format entry points are in ply.h, obj.h, off.h and gltf/gltf_io.h.
+// check the magic bytes). Per-format entry points are in ply.h, obj.h, off.h, conf.h and gltf.h; they
+// share the plain types declared here.
 
 #include <cstdint>
 #include <functional>
@@ -44,6 +45,11 @@ struct LoadedMesh {
     Mesh mesh;
     SourceInfo source;
 };
+
+/// How a reader opens its side files (OBJ: MTL and textures; glTF: buffers and images): given a path
+/// relative to the main file's folder resolved against it, returns the bytes or an error. readMesh()
+/// passes a loader that reads files.
+using SideFileLoader = std::function<Result<std::vector<uint8_t>>(const std::string& path)>;
 
 /// Loads a file as one flattened mesh (glTF: all triangle primitives, node transforms applied).
 /// Errors are one line naming the file, the element and what was expected.

@@ -3,17 +3,12 @@
 // polygons (triangulated), per-vertex colours ("v x y z r g b").
 
 #include <cstdint>
-#include <functional>
 #include <string>
 #include <vector>
 
 #include "lodbake/io/mesh_io.h"
 
 namespace lodbake {
-
-/// How an OBJ reader opens its side files (MTL, textures): given a path relative to the OBJ's folder
-/// resolved against it, returns the bytes or an error. readMesh() passes a loader that reads files.
-using SideFileLoader = std::function<Result<std::vector<uint8_t>>(const std::string& path)>;
 
 /// Parses an OBJ held in memory. `name` is the OBJ's path: it prefixes every message, and side files
 /// named by mtllib (relative to the OBJ's folder) and by map_* (relative to the MTL's folder) are

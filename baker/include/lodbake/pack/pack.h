@@ -1,6 +1,6 @@
 #pragma once
-// The pack description: what goes into a baked glTF pack, independent of any glTF library. The gltf
-// module serialises it (writePackGlb in gltf/gltf_io.h).
+// The pack description: what goes into a baked glTF pack, independent of any glTF library.
+// writePackGlb (pack_glb.h) serialises it.
 //
 // Layout: one LOD group per baked asset. The group's LOD0 node is in the scene and carries MSFT_lod
 // (ids of the lower-detail nodes, highest detail first), extras.MSFT_screencoverage and the

@@ -53,24 +53,14 @@ Result<PfrepBuild> buildPfrepFromSequence(const CollapseSequence& sequence, cons
 /// numbered in order of first use by the faces not degenerate by position) and those faces' points.
 Status chainPoints(const Mesh& mesh, std::vector<Vec3f>& positions, std::vector<uint32_t>& triangles);
 
-/// Which end of a chain's full-edge collapse the blob keeps (at its original position).
-enum class ChainEndRule {
-    LowerQuadric, // the end with the lower error for the merged point's face-plane quadric (default)
-    EngineKept,   // the end the simplifier names as kept
-    NearerMerged, // the end nearer the chain's merged position (needs those positions)
-    EngineNearer, // the end whose engine point was nearer the merged position (the log's bit)
-};
-
 /// Builds the blob from a discrete chain's own simplification pass (LodChain::removals, recorded with
 /// LodChainOptions::record_removals) over `mesh`, the chain's input: each full-edge collapse is read
 /// as the half-edge collapse that removes one end and keeps the other at its ORIGINAL position, so
 /// level k of the blob has exactly the chain's faces after k collapses (positions differ: the chain
-/// moved its points). Which end stays: `rule` (docs/format/pfrep.md measures all three);
-/// NearerMerged needs `merged_positions`, the chain's new position per collapse (CollapseRecord::
-/// position of a chain recorded with record_collapses too).
-Result<PfrepBuild> buildPfrepFromChain(const Mesh& mesh, const CollapsePairLog& removals, Diagnostics& diagnostics,
-                                       ChainEndRule rule = ChainEndRule::LowerQuadric,
-                                       const std::vector<Vec3f>* merged_positions = nullptr);
+/// moved its points). The end that stays is the one with the lower error for the merged point's
+/// face-plane quadric, as the half-edge simplifier chooses its direction, or the chain's kept end
+/// when the chain did not move it.
+Result<PfrepBuild> buildPfrepFromChain(const Mesh& mesh, const CollapsePairLog& removals, Diagnostics& diagnostics);
 
 /// Runs the half-edge simplifier on `mesh` and builds the blob.
 Result<PfrepBuild> buildPfrep(const Mesh& mesh, const PfrepOptions& options, Diagnostics& diagnostics);

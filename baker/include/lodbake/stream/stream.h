@@ -44,22 +44,21 @@ struct StreamCost {
 };
 
 /// A stream: an extension that an encoder adds to levels of an asset, registered once in
-/// builtinStreamEncoders (stream_encoders.cpp). The bake reads only this description: it needs no
+/// builtinStreamEncoders (stream_registry.cpp). The bake reads only this description: it needs no
 /// list of names.
 ///
 /// Two steps, so that the costly one can run while other stages still read the meshes: `prepare`
 /// only reads `mesh` (the level as baked, before any encoder's commit; it must stay unchanged until
 /// prepare returns) and does all the coding; the commit it returns is cheap and runs later, one
-/// level and one encoder at a time, in encoder order. `encode` is prepare followed by its commit.
+/// level and one encoder at a time, in encoder order.
 struct PackStreamEncoder {
     std::string extension_name;
     StreamNeeds needs;
     StreamCost cost;
     std::function<Result<PackStreamCommit>(const LodChain& chain, size_t level_index, const Mesh& mesh)> prepare;
-    std::function<Status(const LodChain& chain, size_t level_index, PackLevel& level)> encode;
 };
 
-/// An encoder whose `encode` is `prepare` followed by the commit it returns.
+/// An encoder of `extension_name` with its needs, cost and prepare step.
 PackStreamEncoder makeStreamEncoder(
     std::string extension_name, StreamNeeds needs, StreamCost cost,
     std::function<Result<PackStreamCommit>(const LodChain& chain, size_t level_index, const Mesh& mesh)> prepare);

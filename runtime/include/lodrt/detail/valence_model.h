@@ -30,6 +30,7 @@
 
 #include "lodrt/format.h"
 #include "lodrt/result.h"
+#include "lodrt/valence.h"
 
 namespace lodrt {
 namespace detail {
@@ -443,6 +444,35 @@ private:
         return best;
     }
 };
+
+/// Adds the normal of triangle `f` (the cross product of its edges on the quantized positions
+/// `qpos`, exact in integers) to the sums of its three vertices: the normal predictor's input
+/// (docs/format/valence.md, "Normals"). Summation order does not matter in integers.
+inline void addFaceNormal(const int32_t* qpos, const uint32_t f[3], int64_t* sum) {
+    const int32_t* p0 = &qpos[3 * size_t(f[0])];
+    const int32_t* p1 = &qpos[3 * size_t(f[1])];
+    const int32_t* p2 = &qpos[3 * size_t(f[2])];
+    const int64_t e1[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
+    const int64_t e2[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
+    const int64_t n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+    for (int c = 0; c < 3; ++c)
+        for (int j = 0; j < 3; ++j) sum[3 * size_t(f[c]) + size_t(j)] += n[j];
+}
+
+/// Prediction `p` of vertex x's octahedral normal (`bits` per component): the sum of its faces'
+/// normals `s3`, encoded; for a vertex without one, the previous vertex's coded normal (`qnorm`, two
+/// components per vertex), and the centre of the octahedron for the first.
+inline void predictNormal(const int64_t* s3, const uint32_t* qnorm, size_t x, uint32_t bits, uint32_t p[2]) {
+    if (s3[0] != 0 || s3[1] != 0 || s3[2] != 0) {
+        const float fs[3] = {float(s3[0]), float(s3[1]), float(s3[2])};
+        octahedralEncode(fs, bits, p);
+    } else if (x > 0) {
+        p[0] = qnorm[2 * (x - 1)];
+        p[1] = qnorm[2 * (x - 1) + 1];
+    } else {
+        p[0] = p[1] = uint32_t(1) << (bits - 1);
+    }
+}
 
 /// Integer division rounded half away from zero.
 inline int64_t divRound(int64_t sum, int64_t count) {

@@ -11,13 +11,13 @@
 
 #include <tiny_gltf.h>
 
-#include "gltf/gltf_model.h"
+#include "lodbake/pack/pack_glb.h"
+
+#include "io/gltf_model.h"
 #include "lodbake/core/json_writer.h"
-#include "lodbake/gltf/gltf_io.h"
 #include "lodbake/pack/pack.h"
 #include "lodbake/version.h"
 #include "lodrt/format.h"
-
 
 namespace lodbake {
 

@@ -7,7 +7,6 @@
 #include <vector>
 
 #include "lodbake/io/mesh_io.h"
-#include "lodbake/io/obj.h"
 
 namespace lodbake {
 
@@ -50,18 +49,3 @@ Result<GltfFiles> writeGltfToMemory(const Mesh& mesh, const GltfWriteOptions& op
 
 } // namespace lodbake
 
-namespace lodbake {
-
-struct PackDescription;
-
-/// Serialises a pack description (pack/pack.h) as one GLB: per asset, one glTF mesh per level, a
-/// LOD0 node in the scene with MSFT_lod (the other levels' nodes, highest detail first),
-/// extras.MSFT_screencoverage and the asset's node extensions; mesh and primitive extensions with
-/// their blobs stored as buffer views. Extensions are listed in extensionsUsed; stream extensions also
-/// in extensionsRequired when the description is compact. Deterministic bytes; passes the Khronos
-/// validator. Errors: a level without triangles or non-finite data, malformed extension JSON.
-Result<std::vector<uint8_t>> writePackGlb(const PackDescription& description);
-/// The same bytes; frees each level's mesh and blobs once the pack holds them (lower peak memory).
-Result<std::vector<uint8_t>> writePackGlb(PackDescription&& description);
-
-} // namespace lodbake

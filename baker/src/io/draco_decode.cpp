@@ -1,6 +1,6 @@
 // KHR_draco_mesh_compression: decodes the Draco bitstream with Draco's own decoder and converts the
 // requested attributes to float, point by point. Draco is used only here.
-#include "gltf/draco_decode.h"
+#include "io/draco_decode.h"
 
 #include <exception>
 #include <memory>

@@ -2,7 +2,7 @@
 // own tightly packed buffer view, images embedded in the buffer. The output is made to pass the
 // Khronos glTF-Validator without errors or warnings (exact min/max, unit normals and tangents,
 // aligned views, no dangling texture coordinates).
-#include "lodbake/gltf/gltf_io.h"
+#include "lodbake/io/gltf.h"
 
 #include <cctype>
 #include <cmath>
@@ -16,7 +16,7 @@
 #include <tiny_gltf.h>
 
 #include "lodbake/version.h"
-#include "gltf/gltf_model.h"
+#include "io/gltf_model.h"
 
 namespace lodbake {
 

@@ -1,7 +1,7 @@
 // glTF 2.0 / GLB import: container and reference checks, tinygltf parsing (images kept encoded),
 // accessor decoding with full bounds checks, KHR_mesh_quantization, KHR_draco_mesh_compression,
 // and scene flattening with node transforms applied.
-#include "lodbake/gltf/gltf_io.h"
+#include "lodbake/io/gltf.h"
 
 #include <algorithm>
 #include <array>
@@ -16,7 +16,7 @@
 #include <nlohmann/json.hpp>
 #include <tiny_gltf.h>
 
-#include "gltf/draco_decode.h"
+#include "io/draco_decode.h"
 #include "lodbake/core/file_io.h"
 #include "lodbake/core/json_limits.h"
 #include "lodrt/format.h"
