@@ -44,6 +44,9 @@ if [ "${LODBAKE_SKIP_SANITIZERS:-0}" != 1 ]; then
         -DLODBAKE_BUILD_FUZZERS=ON -DLODBAKE_BUILD_BENCHMARKS=OFF
     cmake --build "$asan_dir" --parallel "$jobs"
     step "sanitizer build"
+    # Packs must not depend on the compiler: shared scans baked by both trees, sha256 compared.
+    scripts/compare-compilers.sh "$build_dir" "$asan_dir"
+    step "compiler comparison"
     # Asserts stay on in this build (no NDEBUG). Leaks are reported too.
     ASAN_OPTIONS=abort_on_error=1:detect_leaks=1:strict_string_checks=1:detect_stack_use_after_return=1 \
         UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \

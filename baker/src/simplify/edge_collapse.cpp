@@ -270,7 +270,7 @@ bool EdgeCollapser::evaluate(uint32_t edge, Candidate& c) const {
             c.position = minimizeOnSegment(q, pr, pk);
     }
     // Positions are stored in float: evaluate what will actually be stored.
-    c.position = toD(Vec3f(float(c.position.x), float(c.position.y), float(c.position.z)));
+    c.position = roundToFloat(c.position);
     c.cost = q.evaluate(c.position);
     // Attribute quadrics add no weight, so q.weight is the geometric one; without attributes the
     // geometric error is the cost itself.
@@ -361,8 +361,8 @@ bool EdgeCollapser::checkUvFaces(const std::vector<uint32_t>& fan, const Vec3d& 
                 // The same bits collapse() will store (kept += removed, then the optimal value).
                 const double* kept = wedgeBlock(pairs[i].kept);
                 const double* removed = wedgeBlock(pairs[i].removed);
-                nu = double(float(attributeBlockOptimalValue(kept, removed, ch, p)));
-                nv = double(float(attributeBlockOptimalValue(kept, removed, ch + 1, p)));
+                nu = roundToFloat(attributeBlockOptimalValue(kept, removed, ch, p));
+                nv = roundToFloat(attributeBlockOptimalValue(kept, removed, ch + 1, p));
                 break;
             }
             const double old_area = (xu - value(w, 0)) * (yv - value(w, 1)) - (yu - value(w, 0)) * (xv - value(w, 1));

@@ -64,6 +64,15 @@ template <class T> inline Vec3<T> normalize(const Vec3<T>& a) {
     return len > T(0) ? a / len : Vec3<T>();
 }
 inline Vec3d toDouble(const Vec3f& v) { return Vec3d(v); }
+/// double(float(x)): x rounded to the nearest float, for code that evaluates what a float will store.
+/// The float goes through a volatile so that no optimiser can drop the rounding: GCC 12 folds a pair
+/// of such round trips to x once its SLP vectorizer has turned them into vector conversions, and
+/// GCC and Clang builds then disagree.
+inline double roundToFloat(double x) {
+    volatile float f = float(x);
+    return double(f);
+}
+inline Vec3d roundToFloat(const Vec3d& v) { return {roundToFloat(v.x), roundToFloat(v.y), roundToFloat(v.z)}; }
 inline bool isFinite(const Vec3f& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
 } // namespace lodbake
