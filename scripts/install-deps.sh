@@ -3,7 +3,7 @@
 # Clang with libclang-rt-14-dev, its sanitizer and libFuzzer runtimes, which --no-install-recommends
 # would leave out, for the sanitizer job and the fuzzers), the libraries (tinygltf, Draco,
 # OpenImageIO, oneTBB, GoogleTest, nlohmann-json), the tools the tests and benchmarks run (Draco
-# CLI, meshoptimizer, Open3D for ../shared/eval) and the Khronos glTF-Validator from npm. Safe to run again: it installs only what is missing.
+# CLI, meshoptimizer, Open3D for ../shared/eval, Universal Ctags for the function-length check) and the Khronos glTF-Validator from npm. Safe to run again: it installs only what is missing.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -17,6 +17,7 @@ packages=(
     libgtest-dev googletest
     libmeshoptimizer-dev
     python3 python3-numpy python3-open3d python3-jsonschema
+    universal-ctags
 )
 # Node.js: machines of this kind ship it (with npm bundled); Debian's own npm package conflicts with
 # such a build, so only ask apt for node and npm when the commands are missing.
