@@ -174,6 +174,23 @@ private:
     void updateEdgesAround(Worker& w, uint32_t point);
     void updateEdgesInFan(Worker& w); // the edges of the fan in w.fan_tmp
     void requeueAll();
+    // init's steps, in order.
+    struct InputMap;
+    // Welds the input's vertices into points (by position) and wedges (by position and attributes).
+    void weldPoints(InputMap& map);
+    // Renumbers the points in order of first use by the faces.
+    void renumberPointsByFirstUse(InputMap& map);
+    // The corner table's points and wedges, the sub-mesh of every face; returns the face count.
+    uint32_t buildFaces(const InputMap& map, Diagnostics& diagnostics);
+    // Twins and point_he_ from each point's outgoing half-edges (`start`: their ranges by point).
+    Status linkTwins(const LargeArray<uint32_t>& start);
+    // Each point's kind (locked when its faces form more than one fan).
+    Status classifyPoints(const LargeArray<uint32_t>& start, Diagnostics& diagnostics);
+    Status accumulateQuadrics(const std::vector<uint8_t>& covered_border);
+    Status accumulateAttributeBlocks();
+    void buildUvCharts(const Mesh& mesh);
+    // Every valid collapse's key, in the queue.
+    Status queueInitialKeys();
     // remove_covered_components (covered_components.cpp): removes every connected component whose
     // points, far points and face centroids all lie within `tolerance` of the other components'
     // faces, smallest first; appends each removal to `sequence` when not null.
