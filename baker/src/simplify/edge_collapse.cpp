@@ -940,17 +940,33 @@ bool EdgeCollapser::roundApplies(size_t target_faces, const CollapseSequence* se
            uv_channel_ == kNone && !remove_components_;
 }
 
-void EdgeCollapser::runRound(size_t target_faces, double max_error) {
+namespace {
+
+// The set-up loops below run over fixed chunks in parallel; each chunk's result is a count, a
+// minimum, a maximum or bits OR-ed into shared words, so nothing depends on the thread count or
+// on which chunk finishes first.
+constexpr size_t kSetupChunk = 65536;
+// A failed parallel loop (only bad_alloc gets there) throws as the serial loops' allocations would.
+template <class Fn> void inChunks(size_t count, Fn&& fn) {
+    if (!parallelForChunks(count, kSetupChunk, fn).ok()) throw std::bad_alloc();
+}
+
+} // namespace
+
+// A partitioned round's cut (findRoundCut): a face belongs to part 1 when its first corner's
+// bin along `axis` is above `bin`.
+struct EdgeCollapser::RoundCut {
+    static constexpr uint32_t kBins = 4096;
+    int axis = -1;
+    double axis_lo = 0, bin_scale = 0;
+    uint32_t bin = 0;
+    uint32_t binOf(const Vec3f& position) const {
+        return std::min(kBins - 1, uint32_t((double(position[axis]) - axis_lo) * bin_scale));
+    }
+};
+
+bool EdgeCollapser::findRoundCut(RoundCut& cut) const {
     const uint32_t point_count = uint32_t(position_.size());
-    const uint32_t he_count = uint32_t(he_.size());
-    // The set-up loops below run over fixed chunks in parallel; each chunk's result is a count, a
-    // minimum, a maximum or bits OR-ed into shared words, so nothing depends on the thread count or
-    // on which chunk finishes first.
-    constexpr size_t kSetupChunk = 65536;
-    // A failed parallel loop (only bad_alloc gets there) throws as the serial loops' allocations would.
-    auto inChunks = [](size_t count, auto&& fn) {
-        if (!parallelForChunks(count, kSetupChunk, fn).ok()) throw std::bad_alloc();
-    };
     // The cut: a plane across the longest extent of the alive points' box other than the previous
     // round's axis (so that the last round's seam lies inside a part now), at the median of their
     // coordinate (a histogram's bin edge: deterministic and without a copy of the coordinates).
@@ -984,13 +1000,12 @@ void EdgeCollapser::runRound(size_t target_faces, double max_error) {
     int axis = -1;
     for (int k = 0; k < 3; ++k)
         if (k != round_axis_ && (axis < 0 || hi[k] - lo[k] > hi[axis] - lo[axis])) axis = k;
-    if (!(hi[axis] > lo[axis])) return;
-    constexpr uint32_t kBins = 4096;
-    const double bin_scale = double(kBins) / (double(hi[axis]) - double(lo[axis]));
-    const double axis_lo = lo[axis];
-    auto binOf = [&](uint32_t p) {
-        return std::min(kBins - 1, uint32_t((double(position_[p][axis]) - axis_lo) * bin_scale));
-    };
+    if (!(hi[axis] > lo[axis])) return false;
+    constexpr uint32_t kBins = RoundCut::kBins;
+    cut.axis = axis;
+    cut.bin_scale = double(kBins) / (double(hi[axis]) - double(lo[axis]));
+    cut.axis_lo = lo[axis];
+    auto binOf = [&](uint32_t p) { return cut.binOf(position_[p]); };
     std::vector<std::vector<uint32_t>> chunk_histograms(boxes.size());
     inChunks(point_count, [&](size_t chunk, size_t first, size_t last) {
         std::vector<uint32_t>& h = chunk_histograms[chunk];
@@ -1006,6 +1021,13 @@ void EdgeCollapser::runRound(size_t target_faces, double max_error) {
         sum += histogram[cut_bin];
         if (2 * size_t(sum) >= alive_points) break;
     }
+    cut.bin = cut_bin;
+    return true;
+}
+
+void EdgeCollapser::markRoundParts(const RoundCut& cut) {
+    const uint32_t point_count = uint32_t(position_.size());
+    const uint32_t he_count = uint32_t(he_.size());
     // A face belongs to the side of its first corner. A point is in part p when every face around it
     // and around each of its neighbours belongs to p; an edge is in p when both ends are. A collapse of
     // such an edge reads and writes only faces of p, points whose faces are all of p (it, its
@@ -1019,7 +1041,7 @@ void EdgeCollapser::runRound(size_t target_faces, double max_error) {
         __atomic_fetch_or(&bits[p >> 6], uint64_t(1) << (p & 63), __ATOMIC_RELAXED);
     };
     auto bit = [](const std::vector<uint64_t>& bits, uint32_t p) { return (bits[p >> 6] >> (p & 63)) & 1; };
-    auto faceSide = [&](uint32_t f) { return binOf(he_[f * 3].point) > cut_bin ? 1u : 0u; };
+    auto faceSide = [&](uint32_t f) { return cut.binOf(position_[he_[f * 3].point]) > cut.bin ? 1u : 0u; };
     const uint32_t face_count = he_count / 3;
     inChunks(face_count, [&](size_t, size_t first, size_t last) {
         for (uint32_t f = uint32_t(first); f < uint32_t(last); ++f) {
@@ -1050,7 +1072,10 @@ void EdgeCollapser::runRound(size_t target_faces, double max_error) {
         for (size_t i = 0; i < words; ++i) part_points_[part][i] &= ~outside[i];
     std::vector<uint64_t>().swap(has[0]);
     std::vector<uint64_t>().swap(has[1]);
+}
 
+bool EdgeCollapser::splitQueue(PartHeap* heaps) {
+    const uint32_t he_count = uint32_t(he_.size());
     // Each half-edge's part (kRoundParts: none), read in half-edge order here instead of at random
     // by the split's passes over the queue. A part's heap holds at most its edges alive now (its
     // collapses only remove or merge them).
@@ -1069,97 +1094,108 @@ void EdgeCollapser::runRound(size_t target_faces, double max_error) {
     uint32_t capacity[kRoundParts] = {0, 0};
     for (const std::array<uint32_t, kRoundParts>& count : chunk_capacity)
         for (uint32_t part = 0; part < kRoundParts; ++part) capacity[part] += count[part];
-    PartHeap heaps[kRoundParts];
     auto part_of = [&](uint32_t id) { return uint32_t(part_of_edge[id]); };
-    const size_t goal = size_t(double(alive_faces_ - target_faces) * kRoundShare);
     auto for_parts = [](uint32_t count, const auto& fn) {
         if (!parallelFor(count, 1, [&](size_t part) { fn(uint32_t(part)); }).ok()) throw std::bad_alloc();
     };
     const bool split = queue_.split(part_of, capacity, heaps, kRoundParts, for_parts);
     LargeArray<uint8_t>().swap(part_of_edge);
-    if (split) {
+    return split;
+}
+
+void EdgeCollapser::collapseRoundParts(PartHeap* heaps, size_t goal, double max_error) {
+    for (uint32_t part = 0; part < kRoundParts; ++part) {
+        Worker& w = parts_[part];
+        w.heap = &heaps[part];
+        w.part = part;
+        w.faces_removed = 0;
+        w.collapses = 0;
+        w.max_error = 0;
+        // A part removes at most `goal` faces, so it logs at most `goal` collapses: reserved
+        // once (mapped, resident as written) instead of grown by doubling in a worker's heap.
+        if (removal_log_) w.removals.reserve(goal);
+    }
+    late_ = false;
+    // The parts run in phases up to a common key limit, so that neither collapses much further
+    // up the cost order than the other (with a fixed share of the faces each, the part with the
+    // costlier surface went further than the serial order would: Hausdorff error +34 % on
+    // dragon_stand_merged). A phase's limit is the key below which the two heaps together hold as
+    // many entries as faces are left to remove, from a histogram of the keys' float bits (6
+    // mantissa bits: steps of 1.6 %); a collapse removes two faces but re-keys its neighbours
+    // above the limit, so a phase removes about two thirds of what is left. Each part may remove
+    // at most its part (by entries under the limit) of the faces left, so the round never passes
+    // the goal. Phases end once less than 1/32 of the goal is left: two per round on
+    // dragon_poisson (a limit at half as many entries took six or seven, each a wait for the
+    // slower part). The seam's edges and the rest go on in run()'s serial loop.
+    constexpr uint32_t kCostBins = 1u << 14;
+    auto costBin = [](float cost) {
+        uint32_t bits;
+        std::memcpy(&bits, &cost, sizeof bits);
+        return cost > 0.0f ? std::min(kCostBins - 1, bits >> 17) : 0u; // +inf: the last bin
+    };
+    std::vector<uint32_t> key_histogram[kRoundParts];
+    for (std::vector<uint32_t>& h : key_histogram) h.assign(kCostBins, 0);
+    size_t removed = 0;
+    Status status = Status::okStatus();
+    for (uint32_t phase = 0; phase < kRoundMaxPhases && removed + goal / 32 < goal && status.ok(); ++phase) {
+        const size_t left = goal - removed;
         for (uint32_t part = 0; part < kRoundParts; ++part) {
-            Worker& w = parts_[part];
-            w.heap = &heaps[part];
-            w.part = part;
-            w.faces_removed = 0;
-            w.collapses = 0;
-            w.max_error = 0;
-            // A part removes at most `goal` faces, so it logs at most `goal` collapses: reserved
-            // once (mapped, resident as written) instead of grown by doubling in a worker's heap.
-            if (removal_log_) w.removals.reserve(goal);
+            std::fill(key_histogram[part].begin(), key_histogram[part].end(), 0u);
+            heaps[part].forEachCost([&](float cost) { ++key_histogram[part][costBin(cost)]; });
         }
-        late_ = false;
-        // The parts run in phases up to a common key limit, so that neither collapses much further
-        // up the cost order than the other (with a fixed share of the faces each, the part with the
-        // costlier surface went further than the serial order would: Hausdorff error +34 % on
-        // dragon_stand_merged). A phase's limit is the key below which the two heaps together hold as
-        // many entries as faces are left to remove, from a histogram of the keys' float bits (6
-        // mantissa bits: steps of 1.6 %); a collapse removes two faces but re-keys its neighbours
-        // above the limit, so a phase removes about two thirds of what is left. Each part may remove
-        // at most its part (by entries under the limit) of the faces left, so the round never passes
-        // the goal. Phases end once less than 1/32 of the goal is left: two per round on
-        // dragon_poisson (a limit at half as many entries took six or seven, each a wait for the
-        // slower part). The seam's edges and the rest go on in run()'s serial loop.
-        constexpr uint32_t kCostBins = 1u << 14;
-        auto costBin = [](float cost) {
-            uint32_t bits;
-            std::memcpy(&bits, &cost, sizeof bits);
-            return cost > 0.0f ? std::min(kCostBins - 1, bits >> 17) : 0u; // +inf: the last bin
-        };
-        std::vector<uint32_t> key_histogram[kRoundParts];
-        for (std::vector<uint32_t>& h : key_histogram) h.assign(kCostBins, 0);
-        size_t removed = 0;
-        Status status = Status::okStatus();
-        for (uint32_t phase = 0; phase < kRoundMaxPhases && removed + goal / 32 < goal && status.ok(); ++phase) {
-            const size_t left = goal - removed;
+        uint32_t limit = 0;
+        size_t under[kRoundParts] = {}, under_total = 0;
+        for (; limit < kCostBins; ++limit) {
             for (uint32_t part = 0; part < kRoundParts; ++part) {
-                std::fill(key_histogram[part].begin(), key_histogram[part].end(), 0u);
-                heaps[part].forEachCost([&](float cost) { ++key_histogram[part][costBin(cost)]; });
+                under[part] += key_histogram[part][limit];
+                under_total += key_histogram[part][limit];
             }
-            uint32_t limit = 0;
-            size_t under[kRoundParts] = {}, under_total = 0;
-            for (; limit < kCostBins; ++limit) {
-                for (uint32_t part = 0; part < kRoundParts; ++part) {
-                    under[part] += key_histogram[part][limit];
-                    under_total += key_histogram[part][limit];
-                }
-                if (under_total >= left) break;
-            }
-            if (under_total == 0) break;
-            size_t cap[kRoundParts];
-            for (uint32_t part = 0; part < kRoundParts; ++part)
-                cap[part] = parts_[part].faces_removed + size_t(double(left) * double(under[part]) / double(under_total));
-            status = parallelFor(kRoundParts, 1, [&](size_t part) {
-                Worker& w = parts_[part];
-                while (w.faces_removed < cap[part] && !w.heap->empty() && costBin(w.heap->topCost()) <= limit)
-                    step(w, max_error, nullptr);
-            });
-            size_t now = 0;
-            for (const Worker& w : parts_) now += w.faces_removed;
-            if (now == removed) break;
-            removed = now;
+            if (under_total >= left) break;
         }
-        queue_.merge(heaps, kRoundParts);
-        if (!status.ok()) throw std::bad_alloc(); // as a serial push_back would (only bad_alloc gets here)
-        // Counters in part order; the edges the parts left to the merge get their keys now.
-        Candidate c;
-        for (Worker& w : parts_) {
-            alive_faces_ -= w.faces_removed;
-            collapses_ += w.collapses;
-            max_error_done_ = std::max(max_error_done_, w.max_error);
-            for (uint32_t e : w.deferred) {
-                if (he_[e].point != kNone && canonical(e) == e && evaluate(e, c))
-                    queue_.set(e, float(c.cost));
-                else
-                    queue_.remove(e);
-            }
-            std::vector<uint32_t>().swap(w.deferred);
-            if (removal_log_) removal_log_->append(w.removals);
-            w.removals.clear();
-            w.heap = nullptr;
+        if (under_total == 0) break;
+        size_t cap[kRoundParts];
+        for (uint32_t part = 0; part < kRoundParts; ++part)
+            cap[part] = parts_[part].faces_removed + size_t(double(left) * double(under[part]) / double(under_total));
+        status = parallelFor(kRoundParts, 1, [&](size_t part) {
+            Worker& w = parts_[part];
+            while (w.faces_removed < cap[part] && !w.heap->empty() && costBin(w.heap->topCost()) <= limit)
+                step(w, max_error, nullptr);
+        });
+        size_t now = 0;
+        for (const Worker& w : parts_) now += w.faces_removed;
+        if (now == removed) break;
+        removed = now;
+    }
+    queue_.merge(heaps, kRoundParts);
+    if (!status.ok()) throw std::bad_alloc(); // as a serial push_back would (only bad_alloc gets here)
+    // Counters in part order; the edges the parts left to the merge get their keys now.
+    Candidate c;
+    for (Worker& w : parts_) {
+        alive_faces_ -= w.faces_removed;
+        collapses_ += w.collapses;
+        max_error_done_ = std::max(max_error_done_, w.max_error);
+        for (uint32_t e : w.deferred) {
+            if (he_[e].point != kNone && canonical(e) == e && evaluate(e, c))
+                queue_.set(e, float(c.cost));
+            else
+                queue_.remove(e);
         }
-        round_axis_ = axis;
+        std::vector<uint32_t>().swap(w.deferred);
+        if (removal_log_) removal_log_->append(w.removals);
+        w.removals.clear();
+        w.heap = nullptr;
+    }
+}
+
+void EdgeCollapser::runRound(size_t target_faces, double max_error) {
+    RoundCut cut;
+    if (!findRoundCut(cut)) return;
+    markRoundParts(cut);
+    PartHeap heaps[kRoundParts];
+    const size_t goal = size_t(double(alive_faces_ - target_faces) * kRoundShare);
+    if (splitQueue(heaps)) {
+        collapseRoundParts(heaps, goal, max_error);
+        round_axis_ = cut.axis;
         ++rounds_;
     }
     for (std::vector<uint64_t>& bits : part_points_) std::vector<uint64_t>().swap(bits);

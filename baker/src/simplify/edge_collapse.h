@@ -134,6 +134,16 @@ private:
     // Collapses kRoundShare of the way to target_faces in kRoundParts parts side by side, then merges
     // their queues and counters (nothing when the mesh cannot be cut or the parts do not fit).
     void runRound(size_t target_faces, double max_error);
+    // runRound's steps, in order.
+    struct RoundCut;
+    // The plane that cuts the alive points in two; false when they have no extent to cut.
+    bool findRoundCut(RoundCut& cut) const;
+    // part_points_: the points whose collapses touch only their part's data.
+    void markRoundParts(const RoundCut& cut);
+    // Moves the parts' edges from queue_ to their heaps; false when the parts do not fit.
+    bool splitQueue(PartHeap* heaps);
+    // Collapses in the parts side by side up to `goal` faces, then merges their queues and counters.
+    void collapseRoundParts(PartHeap* heaps, size_t goal, double max_error);
     // The top of w's queue: collapsed, re-queued with its distance penalty, or dropped.
     void step(Worker& w, double max_error, CollapseSequence* sequence);
     // Removes an edge from w's queue (a part: from its heap, or defers an edge outside it).
