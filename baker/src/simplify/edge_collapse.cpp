@@ -451,15 +451,7 @@ bool EdgeCollapser::isValid(Worker& w, const Candidate& c, int& pair_count, Wedg
     return true;
 }
 
-void EdgeCollapser::collapse(Worker& w, const Candidate& c, const WedgePair* pairs, int pair_count,
-                             CollapseSequence* sequence) {
-    const uint32_t u = c.removed, v = c.kept, h = c.edge;
-    const uint32_t t = he_[h].twin;
-    const uint32_t f0 = h / 3;
-    const uint32_t f1 = t == kNone ? kNone : t / 3;
-    const uint32_t w0 = he_[prevHe(h)].point;
-    const uint32_t w1 = t == kNone ? kNone : he_[prevHe(t)].point;
-
+inline void EdgeCollapser::prefetchNeighbourhood(const Worker& w, const CollapseSequence* sequence) const {
     // Every neighbour's edge to v is re-evaluated at the end (updateEdgesInFan), which reads the
     // neighbour's quadric: a random access each. Requesting them all now lets those misses overlap
     // with each other and with the work below instead of waiting one by one.
@@ -478,21 +470,10 @@ void EdgeCollapser::collapse(Worker& w, const Candidate& c, const WedgePair* pai
     // A half-edge sequence reads the triangle ids of u's faces (below).
     if (sequence && !face_triangle_.empty())
         for (uint32_t he : w.fan_u) prefetch(&face_triangle_[he / 3]);
-    for (uint32_t k = 0; k < 3; ++k) {
-        queueRemove(w, canonical(f0 * 3 + k));
-        if (f1 != kNone) queueRemove(w, canonical(f1 * 3 + k));
-    }
+}
 
-    quadric_[v] += quadric_[u];
-    const Vec3f p(float(c.position.x), float(c.position.y), float(c.position.z));
-    CollapseRecord record;
-    if (sequence) {
-        record.removed_point = u;
-        record.kept_point = v;
-        record.position = p;
-        record.first_wedge_update = uint32_t(sequence->wedge_updates.size());
-        record.wedge_update_count = uint32_t(pair_count);
-    }
+inline void EdgeCollapser::mergeWedges(const Candidate& c, const WedgePair* pairs, int pair_count,
+                                       CollapseSequence* sequence) {
     const bool has_normals = source_->hasNormals();
     const uint32_t color_first = source_->hasColors() ? channel_count_ - 4 : channel_count_;
     for (int i = 0; i < pair_count; ++i) {
@@ -519,6 +500,58 @@ void EdgeCollapser::collapse(Worker& w, const Candidate& c, const WedgePair* pai
                                               wedge_value_.begin() + kept_base + channel_count_);
         }
     }
+}
+
+inline void EdgeCollapser::removeCollapsedFaces(Worker& w, uint32_t h, uint32_t t) {
+    // Remove f0 (and f1): glue the twins of their two other edges together.
+    for (int side = 0; side < 2; ++side) {
+        const uint32_t hf = side == 0 ? h : t;
+        if (hf == kNone) continue;
+        const uint32_t e1 = nextHe(hf), e2 = prevHe(hf);
+        const uint32_t t1 = he_[e1].twin, t2 = he_[e2].twin;
+        const uint32_t opposite = he_[e2].point;
+        if (t1 != kNone) he_[t1].twin = t2;
+        if (t2 != kNone) he_[t2].twin = t1;
+        point_he_[opposite] = t1 != kNone ? t1 : (t2 != kNone ? nextHe(t2) : kNone);
+        const uint32_t f = hf / 3;
+        if (uv_channel_ != kNone) --chart_alive_[face_chart_[f]];
+        for (uint32_t k = 0; k < 3; ++k) {
+            he_[f * 3 + k].twin = kNone;
+            he_[f * 3 + k].point = kNone;
+        }
+        if (w.heap)
+            ++w.faces_removed;
+        else
+            --alive_faces_;
+    }
+}
+
+void EdgeCollapser::collapse(Worker& w, const Candidate& c, const WedgePair* pairs, int pair_count,
+                             CollapseSequence* sequence) {
+    const uint32_t u = c.removed, v = c.kept, h = c.edge;
+    const uint32_t t = he_[h].twin;
+    const uint32_t f0 = h / 3;
+    const uint32_t f1 = t == kNone ? kNone : t / 3;
+    const uint32_t w0 = he_[prevHe(h)].point;
+    const uint32_t w1 = t == kNone ? kNone : he_[prevHe(t)].point;
+
+    prefetchNeighbourhood(w, sequence);
+    for (uint32_t k = 0; k < 3; ++k) {
+        queueRemove(w, canonical(f0 * 3 + k));
+        if (f1 != kNone) queueRemove(w, canonical(f1 * 3 + k));
+    }
+
+    quadric_[v] += quadric_[u];
+    const Vec3f p(float(c.position.x), float(c.position.y), float(c.position.z));
+    CollapseRecord record;
+    if (sequence) {
+        record.removed_point = u;
+        record.kept_point = v;
+        record.position = p;
+        record.first_wedge_update = uint32_t(sequence->wedge_updates.size());
+        record.wedge_update_count = uint32_t(pair_count);
+    }
+    mergeWedges(c, pairs, pair_count, sequence);
     if (sequence) sequence->records.push_back(record);
     if (removal_log_) {
         const Vec3d pv = toD(position_[v]) - c.position, pu = toD(position_[u]) - c.position;
@@ -551,27 +584,7 @@ void EdgeCollapser::collapse(Worker& w, const Candidate& c, const WedgePair* pai
         }
     }
 
-    // Remove f0 (and f1): glue the twins of their two other edges together.
-    for (int side = 0; side < 2; ++side) {
-        const uint32_t hf = side == 0 ? h : t;
-        if (hf == kNone) continue;
-        const uint32_t e1 = nextHe(hf), e2 = prevHe(hf);
-        const uint32_t t1 = he_[e1].twin, t2 = he_[e2].twin;
-        const uint32_t opposite = he_[e2].point;
-        if (t1 != kNone) he_[t1].twin = t2;
-        if (t2 != kNone) he_[t2].twin = t1;
-        point_he_[opposite] = t1 != kNone ? t1 : (t2 != kNone ? nextHe(t2) : kNone);
-        const uint32_t f = hf / 3;
-        if (uv_channel_ != kNone) --chart_alive_[face_chart_[f]];
-        for (uint32_t k = 0; k < 3; ++k) {
-            he_[f * 3 + k].twin = kNone;
-            he_[f * 3 + k].point = kNone;
-        }
-        if (w.heap)
-            ++w.faces_removed;
-        else
-            --alive_faces_;
-    }
+    removeCollapsedFaces(w, h, t);
 
     if (log_triangles) {
         for (const auto& [id, f] : w.created_tmp) {

@@ -181,6 +181,13 @@ private:
                       const WedgePair* pairs, int pair_count) const;
     Vec3d fanNormal(const std::vector<uint32_t>& fan) const;
     void collapse(Worker& w, const Candidate& c, const WedgePair* pairs, int pair_count, CollapseSequence* sequence);
+    // collapse's steps.
+    // Requests the data the collapse and the re-evaluations after it read at random.
+    void prefetchNeighbourhood(const Worker& w, const CollapseSequence* sequence) const;
+    // Merges each removed wedge's attribute quadrics into the kept one and places its attributes.
+    void mergeWedges(const Candidate& c, const WedgePair* pairs, int pair_count, CollapseSequence* sequence);
+    // Removes the edge's faces (h's, and t's unless kNone), gluing their other edges' twins.
+    void removeCollapsedFaces(Worker& w, uint32_t h, uint32_t t);
     void updateEdgesAround(Worker& w, uint32_t point);
     void updateEdgesInFan(Worker& w); // the edges of the fan in w.fan_tmp
     void requeueAll();
