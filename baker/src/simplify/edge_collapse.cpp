@@ -73,6 +73,15 @@ inline void prefetch(const void* p) {
 #endif
 }
 
+// The named steps of init, runRound and collapse are inlined into them: the compiler then sees the
+// one function each was, and makes the same inlining decisions for the hot collapse loop around
+// them (left to itself it traded inlines there for the new functions, and the loop got slower).
+#if defined(__GNUC__)
+#define LODBAKE_STEP inline __attribute__((always_inline))
+#else
+#define LODBAKE_STEP inline
+#endif
+
 // Items per task of init's parallel loops: fixed, so no result depends on the thread count.
 constexpr uint32_t kInitChunk = 4096;
 
@@ -451,7 +460,7 @@ bool EdgeCollapser::isValid(Worker& w, const Candidate& c, int& pair_count, Wedg
     return true;
 }
 
-inline void EdgeCollapser::prefetchNeighbourhood(const Worker& w, const CollapseSequence* sequence) const {
+LODBAKE_STEP void EdgeCollapser::prefetchNeighbourhood(const Worker& w, const CollapseSequence* sequence) const {
     // Every neighbour's edge to v is re-evaluated at the end (updateEdgesInFan), which reads the
     // neighbour's quadric: a random access each. Requesting them all now lets those misses overlap
     // with each other and with the work below instead of waiting one by one.
@@ -472,7 +481,7 @@ inline void EdgeCollapser::prefetchNeighbourhood(const Worker& w, const Collapse
         for (uint32_t he : w.fan_u) prefetch(&face_triangle_[he / 3]);
 }
 
-inline void EdgeCollapser::mergeWedges(const Candidate& c, const WedgePair* pairs, int pair_count,
+LODBAKE_STEP void EdgeCollapser::mergeWedges(const Candidate& c, const WedgePair* pairs, int pair_count,
                                        CollapseSequence* sequence) {
     const bool has_normals = source_->hasNormals();
     const uint32_t color_first = source_->hasColors() ? channel_count_ - 4 : channel_count_;
@@ -502,7 +511,7 @@ inline void EdgeCollapser::mergeWedges(const Candidate& c, const WedgePair* pair
     }
 }
 
-inline void EdgeCollapser::removeCollapsedFaces(Worker& w, uint32_t h, uint32_t t) {
+LODBAKE_STEP void EdgeCollapser::removeCollapsedFaces(Worker& w, uint32_t h, uint32_t t) {
     // Remove f0 (and f1): glue the twins of their two other edges together.
     for (int side = 0; side < 2; ++side) {
         const uint32_t hf = side == 0 ? h : t;
@@ -978,7 +987,7 @@ struct EdgeCollapser::RoundCut {
     }
 };
 
-bool EdgeCollapser::findRoundCut(RoundCut& cut) const {
+LODBAKE_STEP bool EdgeCollapser::findRoundCut(RoundCut& cut) const {
     const uint32_t point_count = uint32_t(position_.size());
     // The cut: a plane across the longest extent of the alive points' box other than the previous
     // round's axis (so that the last round's seam lies inside a part now), at the median of their
@@ -1038,7 +1047,7 @@ bool EdgeCollapser::findRoundCut(RoundCut& cut) const {
     return true;
 }
 
-void EdgeCollapser::markRoundParts(const RoundCut& cut) {
+LODBAKE_STEP void EdgeCollapser::markRoundParts(const RoundCut& cut) {
     const uint32_t point_count = uint32_t(position_.size());
     const uint32_t he_count = uint32_t(he_.size());
     // A face belongs to the side of its first corner. A point is in part p when every face around it
@@ -1087,7 +1096,7 @@ void EdgeCollapser::markRoundParts(const RoundCut& cut) {
     std::vector<uint64_t>().swap(has[1]);
 }
 
-bool EdgeCollapser::splitQueue(PartHeap* heaps) {
+LODBAKE_STEP bool EdgeCollapser::splitQueue(PartHeap* heaps) {
     const uint32_t he_count = uint32_t(he_.size());
     // Each half-edge's part (kRoundParts: none), read in half-edge order here instead of at random
     // by the split's passes over the queue. A part's heap holds at most its edges alive now (its
@@ -1116,7 +1125,7 @@ bool EdgeCollapser::splitQueue(PartHeap* heaps) {
     return split;
 }
 
-void EdgeCollapser::collapseRoundParts(PartHeap* heaps, size_t goal, double max_error) {
+LODBAKE_STEP void EdgeCollapser::collapseRoundParts(PartHeap* heaps, size_t goal, double max_error) {
     for (uint32_t part = 0; part < kRoundParts; ++part) {
         Worker& w = parts_[part];
         w.heap = &heaps[part];
@@ -1250,7 +1259,7 @@ struct EdgeCollapser::InputMap {
     LargeArray<uint32_t> vertex_point, vertex_wedge;
 };
 
-void EdgeCollapser::weldPoints(InputMap& map) {
+LODBAKE_STEP void EdgeCollapser::weldPoints(InputMap& map) {
     const Mesh& mesh = map.mesh;
     const bool has_wedges = map.has_wedges;
     const uint32_t vertex_count = uint32_t(mesh.vertexCount());
@@ -1369,7 +1378,7 @@ void EdgeCollapser::weldPoints(InputMap& map) {
     LargeArray<uint32_t>().swap(order);
 }
 
-void EdgeCollapser::renumberPointsByFirstUse(InputMap& map) {
+LODBAKE_STEP void EdgeCollapser::renumberPointsByFirstUse(InputMap& map) {
     const Mesh& mesh = map.mesh;
     const bool has_wedges = map.has_wedges;
     LargeArray<uint32_t>& vertex_point = map.vertex_point;
@@ -1412,7 +1421,7 @@ void EdgeCollapser::renumberPointsByFirstUse(InputMap& map) {
     }
 }
 
-uint32_t EdgeCollapser::buildFaces(const InputMap& map, Diagnostics& diagnostics) {
+LODBAKE_STEP uint32_t EdgeCollapser::buildFaces(const InputMap& map, Diagnostics& diagnostics) {
     const Mesh& mesh = map.mesh;
     const bool has_wedges = map.has_wedges;
     const LargeArray<uint32_t>& vertex_point = map.vertex_point;
@@ -1455,7 +1464,7 @@ uint32_t EdgeCollapser::buildFaces(const InputMap& map, Diagnostics& diagnostics
     return kept_faces;
 }
 
-Status EdgeCollapser::linkTwins(const LargeArray<uint32_t>& start) {
+LODBAKE_STEP Status EdgeCollapser::linkTwins(const LargeArray<uint32_t>& start) {
     const uint32_t point_count = uint32_t(position_.size());
     const uint32_t he_count = uint32_t(he_.size());
     // Each point's outgoing half-edges in half-edge order, with their end points: the twin
@@ -1501,7 +1510,7 @@ Status EdgeCollapser::linkTwins(const LargeArray<uint32_t>& start) {
     return Status::okStatus();
 }
 
-Status EdgeCollapser::classifyPoints(const LargeArray<uint32_t>& start, Diagnostics& diagnostics) {
+LODBAKE_STEP Status EdgeCollapser::classifyPoints(const LargeArray<uint32_t>& start, Diagnostics& diagnostics) {
     const uint32_t point_count = uint32_t(position_.size());
     // A point whose faces form more than one fan (a bow-tie) is non-manifold: lock it. Any
     // other point gets its kind from the same fan (classifyFan reads only the corner table, the
@@ -1529,7 +1538,7 @@ Status EdgeCollapser::classifyPoints(const LargeArray<uint32_t>& start, Diagnost
     return Status::okStatus();
 }
 
-Status EdgeCollapser::accumulateQuadrics(const std::vector<uint8_t>& covered_border) {
+LODBAKE_STEP Status EdgeCollapser::accumulateQuadrics(const std::vector<uint8_t>& covered_border) {
     const uint32_t face_count = uint32_t(he_.size() / 3);
     constexpr uint32_t kBatch = 2 * kInitChunk;
     struct FaceQuadrics {
@@ -1581,7 +1590,7 @@ Status EdgeCollapser::accumulateQuadrics(const std::vector<uint8_t>& covered_bor
     return Status::okStatus();
 }
 
-Status EdgeCollapser::accumulateAttributeBlocks() {
+LODBAKE_STEP Status EdgeCollapser::accumulateAttributeBlocks() {
     const uint32_t face_count = uint32_t(he_.size() / 3);
     // Each face's attribute block is computed in parallel (fixed chunks of a batch of faces, into
     // a small buffer) and added to its wedges in face order: the same sums as a serial loop.
@@ -1616,7 +1625,7 @@ Status EdgeCollapser::accumulateAttributeBlocks() {
     return Status::okStatus();
 }
 
-void EdgeCollapser::buildUvCharts(const Mesh& mesh) {
+LODBAKE_STEP void EdgeCollapser::buildUvCharts(const Mesh& mesh) {
     const uint32_t face_count = uint32_t(he_.size() / 3);
     const uint32_t he_count = uint32_t(he_.size());
     // UV charts: faces joined across edges whose two corners share wedges (union-find).
@@ -1645,7 +1654,7 @@ void EdgeCollapser::buildUvCharts(const Mesh& mesh) {
     }
 }
 
-Status EdgeCollapser::queueInitialKeys() {
+LODBAKE_STEP Status EdgeCollapser::queueInitialKeys() {
     const uint32_t he_count = uint32_t(he_.size());
     // Room for every canonical half-edge (half the interior ones plus the open ones): the queue never
     // holds more, and growing it by doubling would copy it and keep up to twice the memory.
