@@ -193,187 +193,225 @@ Result<std::vector<uint32_t>> pointTriangles(const Mesh& mesh, const CollapseSeq
 
 namespace {
 
-// buildPfrepFromSequence; when `releasable` is not null (buildPfrep's own sequence and triangles),
-// the triangle lists are released as soon as the blob's own list of triangles holds them.
-Result<PfrepBuild> buildBlob(const CollapseSequence& sequence, const std::vector<uint32_t>& point_triangles,
-                             Diagnostics& diagnostics, CollapseSequence* releasable,
-                             std::vector<uint32_t>* releasable_triangles) {
-    namespace fmt = lodrt::format;
-    const uint32_t point_count = uint32_t(sequence.point_positions.size());
-    if (point_triangles.size() % 3 != 0) return invalidInput("pfrep: point triangle list is not a multiple of 3");
-    // The working arrays (tens of MB on a scan) are on core/large_array.h storage: from 2 MB on, huge
-    // pages where the OS offers them. On std::vector, first-touch 4 KB page faults were about 40 % of
-    // a standalone blob build of dragon_poisson; inside a bake those arrays mostly reuse heap pages
-    // the chain freed, so there it made no measurable difference (docs/bake.md, "Sessions 12 and 13").
-    detail::LargeArray<Triangle> tris;
+struct Slot {
+    uint32_t a, b, dep; // ranks; dep kNone for input triangles
+};
+
+// Entries. Each starts on a byte boundary and depends only on its own fan, so fixed chunks of
+// vertices are written in parallel, each into its own stream, and concatenated in order: the
+// same bytes as one stream written entry after entry.
+struct EntryChunk {
+    BitWriter stream;
+    Status status = Status::okStatus();
+    size_t dependency_groups = 0, neighbour_slots = 0;
+};
+
+// buildBlob's working arrays, from step to step.
+struct BlobState {
+    BlobState(const CollapseSequence& seq, uint32_t points)
+        : sequence(seq), point_count(points), rank_of(points, kNone), removal_error(points, 0.0),
+          referenced(points, 0) {
+        rank_point.reserve(points);
+    }
+    const CollapseSequence& sequence;
+    uint32_t point_count;
+    detail::LargeArray<Triangle> tris;        // every stored triangle (buildFans: as ranks)
+    detail::LargeArray<uint32_t> rank_of;     // per point
+    std::vector<uint32_t> rank_point;         // per rank: the removed points in order, then the survivors
+    detail::LargeArray<double> removal_error; // per point
+    detail::LargeArray<uint8_t> referenced;   // per point: on an input triangle
+    uint32_t removed = 0, vertex_count = 0;
+    size_t level0 = 0, stored_triangles = 0;
+    detail::LargeArray<uint32_t> fan_first; // per rank, its fan's first slot; then the end
+    detail::LargeArray<Slot> slots;
+    detail::LargeArray<double> err, radius, cone_angle; // per rank: the view-dependent bounds
+    detail::LargeArray<Vec3d> axis;
+    detail::LargeArray<uint32_t> entry_offset; // per rank: its entry's offset in `stream`
+    BitWriter stream;                          // the entries
+};
+
+// Record r, before it is ranked: both points valid and not yet removed, the kept point unmoved.
+Status checkRecord(const BlobState& state, size_t r) {
+    const CollapseSequence& sequence = state.sequence;
+    const uint32_t point_count = state.point_count;
+    const detail::LargeArray<uint32_t>& rank_of = state.rank_of;
+    const CollapseRecord& rec = sequence.records[r];
+    const uint32_t u = rec.removed_point, v = rec.kept_point;
+    if (u >= point_count || v >= point_count || u == v || rank_of[u] != kNone || rank_of[v] != kNone)
+        return invalidInput("pfrep: collapse " + std::to_string(r) + ": bad points");
+    if (rec.position != sequence.point_positions[v])
+        return invalidInput("pfrep: collapse " + std::to_string(r) +
+                            ": the kept point moves (full-edge collapse); PFRep needs placement KeepEndpoint");
+    return Status::okStatus();
+}
+
+// The simplifier logs the triangles each record re-creates (CollapseSequence::created_triangles):
+// then the list of every triangle is the input's followed by the log, and no replay is needed.
+Status listLoggedTriangles(BlobState& state, const std::vector<uint32_t>& point_triangles,
+                           CollapseSequence* releasable, std::vector<uint32_t>* releasable_triangles) {
+    const CollapseSequence& sequence = state.sequence;
+    const uint32_t point_count = state.point_count;
     const size_t input_count = point_triangles.size() / 3;
-    for (size_t c = 0; c < point_triangles.size(); ++c)
-        if (point_triangles[c] >= point_count)
-            return invalidInput("pfrep: triangle " + std::to_string(c / 3) + ": point out of range");
-    detail::LargeArray<uint32_t> rank_of(point_count, kNone);
-    std::vector<uint32_t> rank_point;
-    rank_point.reserve(point_count);
-    detail::LargeArray<double> removal_error(point_count, 0.0);
-    detail::LargeArray<uint8_t> referenced(point_count, 0);
-    // Record r, before it is ranked: both points valid and not yet removed, the kept point unmoved.
-    auto checkRecord = [&](size_t r) -> Status {
+    detail::LargeArray<Triangle>& tris = state.tris;
+    detail::LargeArray<uint32_t>& rank_of = state.rank_of;
+    std::vector<uint32_t>& rank_point = state.rank_point;
+    detail::LargeArray<double>& removal_error = state.removal_error;
+    detail::LargeArray<uint8_t>& referenced = state.referenced;
+    const size_t created_count = sequence.created_end.back();
+    if (sequence.created_triangles.size() != created_count * 3)
+        return invalidInput("pfrep: the re-created triangle log does not match its ranges");
+    for (uint32_t p : point_triangles) referenced[p] = 1;
+    tris.reserve(input_count + created_count);
+    for (size_t t = 0; t < input_count; ++t)
+        tris.push_back({{point_triangles[t * 3], point_triangles[t * 3 + 1], point_triangles[t * 3 + 2]}, kNone});
+    size_t first = 0;
+    for (size_t r = 0; r < sequence.records.size(); ++r) {
+        LODBAKE_RETURN_IF_ERROR(checkRecord(state, r));
+        const uint32_t u = sequence.records[r].removed_point;
+        const size_t last = sequence.created_end[r];
+        if (last < first || last > created_count)
+            return invalidInput("pfrep: collapse " + std::to_string(r) + ": bad re-created triangle range");
+        rank_of[u] = uint32_t(rank_point.size());
+        rank_point.push_back(u);
+        for (size_t t = first; t < last; ++t) {
+            const uint32_t* c = &sequence.created_triangles[t * 3];
+            if (c[0] >= point_count || c[1] >= point_count || c[2] >= point_count)
+                return invalidInput("pfrep: collapse " + std::to_string(r) +
+                                    ": re-created triangle point out of range");
+            tris.push_back({{c[0], c[1], c[2]}, u});
+        }
+        first = last;
+    }
+    // Each removed point's error: its distance to the nearest triangle its removal creates (0
+    // when it creates none). Independent per record: fixed chunks in parallel.
+    LODBAKE_RETURN_IF_ERROR(parallelFor(sequence.records.size(), kChunk, [&](size_t r) {
+        const uint32_t u = sequence.records[r].removed_point;
+        const size_t lo = r == 0 ? 0 : sequence.created_end[r - 1], hi = sequence.created_end[r];
+        double err = HUGE_VAL;
+        const Vec3d pu = toD(sequence.point_positions[u]);
+        for (size_t t = lo; t < hi; ++t) {
+            const uint32_t* c = &sequence.created_triangles[t * 3];
+            err = std::min(err, pointTriangleDistance(pu, toD(sequence.point_positions[c[0]]),
+                                                      toD(sequence.point_positions[c[1]]),
+                                                      toD(sequence.point_positions[c[2]])));
+        }
+        removal_error[u] = hi > lo ? err : 0.0;
+    }));
+    if (releasable) {
+        std::vector<uint32_t>().swap(releasable->created_triangles);
+        std::vector<uint32_t>().swap(*releasable_triangles);
+    }
+    return Status::okStatus();
+}
+
+// Replays the sequence to list the triangles each record re-creates.
+Status replayCollapses(BlobState& state, const std::vector<uint32_t>& point_triangles) {
+    const CollapseSequence& sequence = state.sequence;
+    const uint32_t point_count = state.point_count;
+    const size_t input_count = point_triangles.size() / 3;
+    detail::LargeArray<Triangle>& tris = state.tris;
+    detail::LargeArray<uint32_t>& rank_of = state.rank_of;
+    std::vector<uint32_t>& rank_point = state.rank_point;
+    detail::LargeArray<double>& removal_error = state.removal_error;
+    detail::LargeArray<uint8_t>& referenced = state.referenced;
+    tris.reserve(point_triangles.size() / 3 * 3);
+    // Alive incident triangles of every point, in insertion order, as ranges of one pool: laid out
+    // point after point for the input, a range moves to the pool's end when it outgrows its capacity.
+    // A triangle leaves its corners' ranges when it dies, so a removed point's range is its ring.
+    struct Range {
+        uint32_t offset = 0, size = 0, capacity = 0;
+    };
+    detail::LargeArray<Range> incident(point_count);
+    for (uint32_t p : point_triangles) ++incident[p].capacity;
+    size_t pool_size = 0;
+    for (uint32_t p = 0; p < point_count; ++p) {
+        referenced[p] = incident[p].capacity > 0;
+        incident[p].offset = uint32_t(pool_size);
+        incident[p].capacity += 4; // room for the triangles a neighbour's removal brings
+        pool_size += incident[p].capacity;
+    }
+    if (pool_size > 0xffffffffu / 2) return resourceLimit("pfrep: too many triangles");
+    detail::LargeArray<uint32_t> pool(pool_size);
+    pool.reserve(pool_size + pool_size / 2);
+    auto link = [&](uint32_t p, uint32_t t) {
+        Range& r = incident[p];
+        if (r.size == r.capacity) {
+            const uint32_t offset = uint32_t(pool.size());
+            pool.resize(pool.size() + size_t(r.capacity) * 2);
+            std::copy(pool.begin() + r.offset, pool.begin() + r.offset + r.size, pool.begin() + offset);
+            r.offset = offset;
+            r.capacity *= 2;
+        }
+        pool[r.offset + r.size++] = t;
+    };
+    auto unlink = [&](uint32_t p, uint32_t t) {
+        Range& r = incident[p];
+        uint32_t* first = pool.data() + r.offset;
+        r.size = uint32_t(std::remove(first, first + r.size, t) - first);
+    };
+    for (size_t t = 0; t < input_count; ++t) {
+        Triangle tri{{point_triangles[t * 3], point_triangles[t * 3 + 1], point_triangles[t * 3 + 2]}, kNone};
+        for (uint32_t p : tri.p) link(p, uint32_t(tris.size()));
+        tris.push_back(tri);
+    }
+
+    // Replay: ranks in removal order, then the survivors that have faces, by point id. The
+    // triangles record r re-creates are tris[created_end[r - 1], created_end[r]).
+    std::vector<uint32_t> ring;
+    detail::LargeArray<uint32_t> created_end(sequence.records.size());
+    for (size_t r = 0; r < sequence.records.size(); ++r) {
         const CollapseRecord& rec = sequence.records[r];
         const uint32_t u = rec.removed_point, v = rec.kept_point;
-        if (u >= point_count || v >= point_count || u == v || rank_of[u] != kNone || rank_of[v] != kNone)
-            return invalidInput("pfrep: collapse " + std::to_string(r) + ": bad points");
-        if (rec.position != sequence.point_positions[v])
-            return invalidInput("pfrep: collapse " + std::to_string(r) +
-                                ": the kept point moves (full-edge collapse); PFRep needs placement KeepEndpoint");
-        return Status::okStatus();
-    };
-    // The simplifier logs the triangles each record re-creates (CollapseSequence::created_triangles):
-    // then the list of every triangle is the input's followed by the log, and no replay is needed.
-    const bool logged = !sequence.records.empty() && sequence.created_end.size() == sequence.records.size();
-    if (logged) {
-        const size_t created_count = sequence.created_end.back();
-        if (sequence.created_triangles.size() != created_count * 3)
-            return invalidInput("pfrep: the re-created triangle log does not match its ranges");
-        for (uint32_t p : point_triangles) referenced[p] = 1;
-        tris.reserve(input_count + created_count);
-        for (size_t t = 0; t < input_count; ++t)
-            tris.push_back({{point_triangles[t * 3], point_triangles[t * 3 + 1], point_triangles[t * 3 + 2]}, kNone});
-        size_t first = 0;
-        for (size_t r = 0; r < sequence.records.size(); ++r) {
-            LODBAKE_RETURN_IF_ERROR(checkRecord(r));
-            const uint32_t u = sequence.records[r].removed_point;
-            const size_t last = sequence.created_end[r];
-            if (last < first || last > created_count)
-                return invalidInput("pfrep: collapse " + std::to_string(r) + ": bad re-created triangle range");
-            rank_of[u] = uint32_t(rank_point.size());
-            rank_point.push_back(u);
-            for (size_t t = first; t < last; ++t) {
-                const uint32_t* c = &sequence.created_triangles[t * 3];
-                if (c[0] >= point_count || c[1] >= point_count || c[2] >= point_count)
-                    return invalidInput("pfrep: collapse " + std::to_string(r) +
-                                        ": re-created triangle point out of range");
-                tris.push_back({{c[0], c[1], c[2]}, u});
-            }
-            first = last;
+        LODBAKE_RETURN_IF_ERROR(checkRecord(state, r));
+        rank_of[u] = uint32_t(rank_point.size());
+        rank_point.push_back(u);
+        ring.assign(pool.begin() + incident[u].offset, pool.begin() + incident[u].offset + incident[u].size);
+        if (ring.empty())
+            return invalidInput("pfrep: collapse " + std::to_string(r) + ": removed point has no faces");
+        incident[u].size = 0;
+        for (uint32_t t : ring) {
+            for (uint32_t p : tris[t].p)
+                if (p != u) unlink(p, t);
+            const Triangle& old = tris[t];
+            if (old.p[0] == v || old.p[1] == v || old.p[2] == v) continue;
+            Triangle fresh = old;
+            for (uint32_t& p : fresh.p)
+                if (p == u) p = v;
+            fresh.dependency = u;
+            const uint32_t id = uint32_t(tris.size());
+            tris.push_back(fresh);
+            for (uint32_t p : fresh.p) link(p, id);
         }
-        // Each removed point's error: its distance to the nearest triangle its removal creates (0
-        // when it creates none). Independent per record: fixed chunks in parallel.
-        LODBAKE_RETURN_IF_ERROR(parallelFor(sequence.records.size(), kChunk, [&](size_t r) {
-            const uint32_t u = sequence.records[r].removed_point;
-            const size_t lo = r == 0 ? 0 : sequence.created_end[r - 1], hi = sequence.created_end[r];
-            double err = HUGE_VAL;
-            const Vec3d pu = toD(sequence.point_positions[u]);
-            for (size_t t = lo; t < hi; ++t) {
-                const uint32_t* c = &sequence.created_triangles[t * 3];
-                err = std::min(err, pointTriangleDistance(pu, toD(sequence.point_positions[c[0]]),
-                                                          toD(sequence.point_positions[c[1]]),
-                                                          toD(sequence.point_positions[c[2]])));
-            }
-            removal_error[u] = hi > lo ? err : 0.0;
-        }));
-        if (releasable) {
-            std::vector<uint32_t>().swap(releasable->created_triangles);
-            std::vector<uint32_t>().swap(*releasable_triangles);
-        }
-    } else {
-        tris.reserve(point_triangles.size() / 3 * 3);
-        // Alive incident triangles of every point, in insertion order, as ranges of one pool: laid out
-        // point after point for the input, a range moves to the pool's end when it outgrows its capacity.
-        // A triangle leaves its corners' ranges when it dies, so a removed point's range is its ring.
-        struct Range {
-            uint32_t offset = 0, size = 0, capacity = 0;
-        };
-        detail::LargeArray<Range> incident(point_count);
-        for (uint32_t p : point_triangles) ++incident[p].capacity;
-        size_t pool_size = 0;
-        for (uint32_t p = 0; p < point_count; ++p) {
-            referenced[p] = incident[p].capacity > 0;
-            incident[p].offset = uint32_t(pool_size);
-            incident[p].capacity += 4; // room for the triangles a neighbour's removal brings
-            pool_size += incident[p].capacity;
-        }
-        if (pool_size > 0xffffffffu / 2) return resourceLimit("pfrep: too many triangles");
-        detail::LargeArray<uint32_t> pool(pool_size);
-        pool.reserve(pool_size + pool_size / 2);
-        auto link = [&](uint32_t p, uint32_t t) {
-            Range& r = incident[p];
-            if (r.size == r.capacity) {
-                const uint32_t offset = uint32_t(pool.size());
-                pool.resize(pool.size() + size_t(r.capacity) * 2);
-                std::copy(pool.begin() + r.offset, pool.begin() + r.offset + r.size, pool.begin() + offset);
-                r.offset = offset;
-                r.capacity *= 2;
-            }
-            pool[r.offset + r.size++] = t;
-        };
-        auto unlink = [&](uint32_t p, uint32_t t) {
-            Range& r = incident[p];
-            uint32_t* first = pool.data() + r.offset;
-            r.size = uint32_t(std::remove(first, first + r.size, t) - first);
-        };
-        for (size_t t = 0; t < input_count; ++t) {
-            Triangle tri{{point_triangles[t * 3], point_triangles[t * 3 + 1], point_triangles[t * 3 + 2]}, kNone};
-            for (uint32_t p : tri.p) link(p, uint32_t(tris.size()));
-            tris.push_back(tri);
-        }
-
-        // Replay: ranks in removal order, then the survivors that have faces, by point id. The
-        // triangles record r re-creates are tris[created_end[r - 1], created_end[r]).
-        std::vector<uint32_t> ring;
-        detail::LargeArray<uint32_t> created_end(sequence.records.size());
-        for (size_t r = 0; r < sequence.records.size(); ++r) {
-            const CollapseRecord& rec = sequence.records[r];
-            const uint32_t u = rec.removed_point, v = rec.kept_point;
-            LODBAKE_RETURN_IF_ERROR(checkRecord(r));
-            rank_of[u] = uint32_t(rank_point.size());
-            rank_point.push_back(u);
-            ring.assign(pool.begin() + incident[u].offset, pool.begin() + incident[u].offset + incident[u].size);
-            if (ring.empty())
-                return invalidInput("pfrep: collapse " + std::to_string(r) + ": removed point has no faces");
-            incident[u].size = 0;
-            for (uint32_t t : ring) {
-                for (uint32_t p : tris[t].p)
-                    if (p != u) unlink(p, t);
-                const Triangle& old = tris[t];
-                if (old.p[0] == v || old.p[1] == v || old.p[2] == v) continue;
-                Triangle fresh = old;
-                for (uint32_t& p : fresh.p)
-                    if (p == u) p = v;
-                fresh.dependency = u;
-                const uint32_t id = uint32_t(tris.size());
-                tris.push_back(fresh);
-                for (uint32_t p : fresh.p) link(p, id);
-            }
-            created_end[r] = uint32_t(tris.size());
-        }
-        detail::LargeArray<uint32_t>().swap(pool);
-        detail::LargeArray<Range>().swap(incident);
-        // Each removed point's error (its distance to the nearest triangle its removal creates, 0 when
-        // it creates none), after the replay: independent per record, fixed chunks in parallel.
-        LODBAKE_RETURN_IF_ERROR(parallelFor(sequence.records.size(), kChunk, [&](size_t r) {
-            const uint32_t u = sequence.records[r].removed_point;
-            const size_t lo = r == 0 ? input_count : created_end[r - 1], hi = created_end[r];
-            double err = HUGE_VAL;
-            const Vec3d pu = toD(sequence.point_positions[u]);
-            for (size_t t = lo; t < hi; ++t)
-                err = std::min(err, pointTriangleDistance(pu, toD(sequence.point_positions[tris[t].p[0]]),
-                                                          toD(sequence.point_positions[tris[t].p[1]]),
-                                                          toD(sequence.point_positions[tris[t].p[2]])));
-            removal_error[u] = hi > lo ? err : 0.0;
-        }));
+        created_end[r] = uint32_t(tris.size());
     }
-    const uint32_t removed = uint32_t(rank_point.size());
-    for (uint32_t p = 0; p < point_count; ++p) {
-        if (rank_of[p] != kNone || !referenced[p]) continue;
-        rank_of[p] = uint32_t(rank_point.size());
-        rank_point.push_back(p);
-    }
-    const uint32_t vertex_count = uint32_t(rank_point.size());
-    if (vertex_count >= fmt::kPfrepMaxVertices) return resourceLimit("pfrep: too many vertices");
+    detail::LargeArray<uint32_t>().swap(pool);
+    detail::LargeArray<Range>().swap(incident);
+    // Each removed point's error (its distance to the nearest triangle its removal creates, 0 when
+    // it creates none), after the replay: independent per record, fixed chunks in parallel.
+    LODBAKE_RETURN_IF_ERROR(parallelFor(sequence.records.size(), kChunk, [&](size_t r) {
+        const uint32_t u = sequence.records[r].removed_point;
+        const size_t lo = r == 0 ? input_count : created_end[r - 1], hi = created_end[r];
+        double err = HUGE_VAL;
+        const Vec3d pu = toD(sequence.point_positions[u]);
+        for (size_t t = lo; t < hi; ++t)
+            err = std::min(err, pointTriangleDistance(pu, toD(sequence.point_positions[tris[t].p[0]]),
+                                                      toD(sequence.point_positions[tris[t].p[1]]),
+                                                      toD(sequence.point_positions[tris[t].p[2]])));
+        removal_error[u] = hi > lo ? err : 0.0;
+    }));
+    return Status::okStatus();
+}
 
-    // Every triangle goes to the fan of its lowest-ranked corner, rotated to start there. The rank
-    // look-ups (random accesses) are done in parallel, in place: each triangle becomes its corners'
-    // ranks rotated to start at the lowest, and its dependency's rank.
-    size_t level0 = 0;
+// Every triangle goes to the fan of its lowest-ranked corner, rotated to start there. The rank
+// look-ups (random accesses) are done in parallel, in place: each triangle becomes its corners'
+// ranks rotated to start at the lowest, and its dependency's rank.
+Status buildFans(BlobState& state) {
+    const uint32_t vertex_count = state.vertex_count;
+    detail::LargeArray<Triangle>& tris = state.tris;
+    const detail::LargeArray<uint32_t>& rank_of = state.rank_of;
+    size_t& level0 = state.level0;
+    detail::LargeArray<uint32_t>& fan_first = state.fan_first;
+    detail::LargeArray<Slot>& slots = state.slots;
     for (const Triangle& t : tris) level0 += t.dependency == kNone;
     LODBAKE_RETURN_IF_ERROR(parallelForChunks(tris.size(), kChunk, [&](size_t, size_t first, size_t last) {
         for (size_t i = first; i < last; ++i) {
@@ -385,22 +423,25 @@ Result<PfrepBuild> buildBlob(const CollapseSequence& sequence, const std::vector
             t = {{r[m], r[(m + 1) % 3], r[(m + 2) % 3]}, t.dependency == kNone ? kNone : rank_of[t.dependency]};
         }
     }));
-    detail::LargeArray<uint32_t> fan_first(vertex_count + 1, 0);
+    fan_first.assign(vertex_count + 1, 0);
     for (const Triangle& t : tris) ++fan_first[t.p[0] + 1];
     for (uint32_t i = 0; i < vertex_count; ++i) fan_first[i + 1] += fan_first[i];
-    struct Slot {
-        uint32_t a, b, dep; // ranks; dep kNone for input triangles
-    };
-    detail::LargeArray<Slot> slots(tris.size());
+    slots.resize(tris.size());
     {
         detail::LargeArray<uint32_t> fill(fan_first.begin(), fan_first.end() - 1);
         for (const Triangle& t : tris) slots[fill[t.p[0]]++] = {t.p[1], t.p[2], t.dependency};
     }
-    const size_t stored_triangles = tris.size();
+    state.stored_triangles = tris.size();
     detail::LargeArray<Triangle>().swap(tris); // the slots hold everything from here on
+    return Status::okStatus();
+}
 
-    // Triangles per level: the slot at entry c with dependency d lives in levels (d, c] (from 0 for
-    // input triangles), capped at the last level.
+// Triangles per level: the slot at entry c with dependency d lives in levels (d, c] (from 0 for
+// input triangles), capped at the last level.
+std::vector<uint32_t> countLevelTriangles(const BlobState& state) {
+    const uint32_t removed = state.removed, vertex_count = state.vertex_count;
+    const detail::LargeArray<uint32_t>& fan_first = state.fan_first;
+    const detail::LargeArray<Slot>& slots = state.slots;
     detail::LargeArray<int64_t> level_delta(size_t(removed) + 2, 0);
     for (uint32_t c = 0; c < vertex_count; ++c)
         for (uint32_t s = fan_first[c]; s < fan_first[c + 1]; ++s) {
@@ -413,13 +454,28 @@ Result<PfrepBuild> buildBlob(const CollapseSequence& sequence, const std::vector
     std::vector<uint32_t> level_triangles(size_t(removed) + 1);
     int64_t running = 0;
     for (uint32_t k = 0; k <= removed; ++k) level_triangles[k] = uint32_t(running += level_delta[k]);
+    return level_triangles;
+}
 
-    // Per-vertex bounds for the view-dependent criterion, accumulated over dependencies (whose
-    // ranks are lower, so already final): error and sphere grow monotonically up the hierarchy.
-    // Each vertex's own fan is measured in parallel (fixed chunks); then one pass in rank order adds
-    // what the dependencies bring. Every value is a maximum, so splitting the two changes no bit.
-    detail::LargeArray<double> err(vertex_count, 0.0), radius(vertex_count, 0.0), cone_angle(vertex_count, 0.0);
-    detail::LargeArray<Vec3d> axis(vertex_count);
+// Per-vertex bounds for the view-dependent criterion, accumulated over dependencies (whose
+// ranks are lower, so already final): error and sphere grow monotonically up the hierarchy.
+// Each vertex's own fan is measured in parallel (fixed chunks); then one pass in rank order adds
+// what the dependencies bring. Every value is a maximum, so splitting the two changes no bit.
+Status computeVertexBounds(BlobState& state) {
+    const CollapseSequence& sequence = state.sequence;
+    const std::vector<uint32_t>& rank_point = state.rank_point;
+    const uint32_t removed = state.removed, vertex_count = state.vertex_count;
+    const detail::LargeArray<uint32_t>& fan_first = state.fan_first;
+    const detail::LargeArray<Slot>& slots = state.slots;
+    const detail::LargeArray<double>& removal_error = state.removal_error;
+    state.err.assign(vertex_count, 0.0);
+    state.radius.assign(vertex_count, 0.0);
+    state.cone_angle.assign(vertex_count, 0.0);
+    state.axis.resize(vertex_count);
+    detail::LargeArray<double>& err = state.err;
+    detail::LargeArray<double>& radius = state.radius;
+    detail::LargeArray<double>& cone_angle = state.cone_angle;
+    detail::LargeArray<Vec3d>& axis = state.axis;
     auto pos = [&](uint32_t rank) { return toD(sequence.point_positions[rank_point[rank]]); };
     LODBAKE_RETURN_IF_ERROR(parallelFor(vertex_count, kChunk, [&](size_t vi) {
         const uint32_t i = uint32_t(vi);
@@ -469,17 +525,18 @@ Result<PfrepBuild> buildBlob(const CollapseSequence& sequence, const std::vector
         radius[i] = rad;
         cone_angle[i] = std::min(angle, M_PI);
     }
-    // Entries. Each starts on a byte boundary and depends only on its own fan, so fixed chunks of
-    // vertices are written in parallel, each into its own stream, and concatenated in order: the
-    // same bytes as one stream written entry after entry.
-    struct EntryChunk {
-        BitWriter stream;
-        Status status = Status::okStatus();
-        size_t dependency_groups = 0, neighbour_slots = 0;
-    };
+    return Status::okStatus();
+}
+
+// Writes every entry into state.stream, its offset into state.entry_offset.
+Status writeEntries(BlobState& state, PfrepBuild& build) {
+    namespace fmt = lodrt::format;
+    const uint32_t vertex_count = state.vertex_count;
+    const detail::LargeArray<uint32_t>& fan_first = state.fan_first;
+    const detail::LargeArray<Slot>& slots = state.slots;
     std::vector<EntryChunk> chunks(chunkCount(vertex_count, kChunk));
-    detail::LargeArray<uint32_t> entry_offset(vertex_count);
-    PfrepBuild build;
+    state.entry_offset.resize(vertex_count);
+    detail::LargeArray<uint32_t>& entry_offset = state.entry_offset;
     LODBAKE_RETURN_IF_ERROR(parallelForChunks(vertex_count, kChunk, [&](size_t chunk, size_t lo, size_t hi) {
         EntryChunk& out = chunks[chunk];
         std::vector<uint8_t> used, bits;
@@ -577,7 +634,7 @@ Result<PfrepBuild> buildBlob(const CollapseSequence& sequence, const std::vector
         }
         out.stream.alignByte();
     }));
-    BitWriter stream;
+    BitWriter& stream = state.stream;
     std::vector<uint8_t>& stream_bytes = stream.bytes();
     {
         size_t total_bytes = 0;
@@ -599,6 +656,22 @@ Result<PfrepBuild> buildBlob(const CollapseSequence& sequence, const std::vector
         }
         std::vector<EntryChunk>().swap(chunks);
     }
+    return Status::okStatus();
+}
+
+// The blob: header, block directory and blocks (docs/format/pfrep.md), into build.blob.
+Status writeBlob(BlobState& state, PfrepBuild& build) {
+    namespace fmt = lodrt::format;
+    const CollapseSequence& sequence = state.sequence;
+    const std::vector<uint32_t>& rank_point = state.rank_point;
+    const uint32_t removed = state.removed, vertex_count = state.vertex_count;
+    const size_t level0 = state.level0;
+    const detail::LargeArray<double>& err = state.err;
+    const detail::LargeArray<double>& radius = state.radius;
+    const detail::LargeArray<double>& cone_angle = state.cone_angle;
+    const detail::LargeArray<Vec3d>& axis = state.axis;
+    const detail::LargeArray<uint32_t>& entry_offset = state.entry_offset;
+    const std::vector<uint8_t>& stream_bytes = state.stream.bytes();
     const size_t entries_size = stream_bytes.size();
 
     // Blocks: the largest that keeps every in-block offset within 16 bits.
@@ -677,11 +750,55 @@ Result<PfrepBuild> buildBlob(const CollapseSequence& sequence, const std::vector
         std::memcpy(records + size_t(count) * (fmt::kPfrepVertexRecordSize + 2),
                     stream_bytes.data() + entry_offset[first], entryEnd(last - 1) - entry_offset[first]);
     }));
+    return Status::okStatus();
+}
+
+// buildPfrepFromSequence; when `releasable` is not null (buildPfrep's own sequence and triangles),
+// the triangle lists are released as soon as the blob's own list of triangles holds them.
+Result<PfrepBuild> buildBlob(const CollapseSequence& sequence, const std::vector<uint32_t>& point_triangles,
+                             Diagnostics& diagnostics, CollapseSequence* releasable,
+                             std::vector<uint32_t>* releasable_triangles) {
+    namespace fmt = lodrt::format;
+    const uint32_t point_count = uint32_t(sequence.point_positions.size());
+    if (point_triangles.size() % 3 != 0) return invalidInput("pfrep: point triangle list is not a multiple of 3");
+    // The working arrays (tens of MB on a scan) are on core/large_array.h storage: from 2 MB on, huge
+    // pages where the OS offers them. On std::vector, first-touch 4 KB page faults were about 40 % of
+    // a standalone blob build of dragon_poisson; inside a bake those arrays mostly reuse heap pages
+    // the chain freed, so there it made no measurable difference (docs/bake.md, "Sessions 12 and 13").
+    for (size_t c = 0; c < point_triangles.size(); ++c)
+        if (point_triangles[c] >= point_count)
+            return invalidInput("pfrep: triangle " + std::to_string(c / 3) + ": point out of range");
+    BlobState state(sequence, point_count);
+    const bool logged = !sequence.records.empty() && sequence.created_end.size() == sequence.records.size();
+    if (logged)
+        LODBAKE_RETURN_IF_ERROR(listLoggedTriangles(state, point_triangles, releasable, releasable_triangles));
+    else
+        LODBAKE_RETURN_IF_ERROR(replayCollapses(state, point_triangles));
+    std::vector<uint32_t>& rank_point = state.rank_point;
+    detail::LargeArray<uint32_t>& rank_of = state.rank_of;
+    const detail::LargeArray<uint8_t>& referenced = state.referenced;
+    const uint32_t removed = uint32_t(rank_point.size());
+    for (uint32_t p = 0; p < point_count; ++p) {
+        if (rank_of[p] != kNone || !referenced[p]) continue;
+        rank_of[p] = uint32_t(rank_point.size());
+        rank_point.push_back(p);
+    }
+    const uint32_t vertex_count = uint32_t(rank_point.size());
+    if (vertex_count >= fmt::kPfrepMaxVertices) return resourceLimit("pfrep: too many vertices");
+    state.removed = removed;
+    state.vertex_count = vertex_count;
+
+    LODBAKE_RETURN_IF_ERROR(buildFans(state));
+    std::vector<uint32_t> level_triangles = countLevelTriangles(state);
+    LODBAKE_RETURN_IF_ERROR(computeVertexBounds(state));
+    PfrepBuild build;
+    LODBAKE_RETURN_IF_ERROR(writeEntries(state, build));
+    LODBAKE_RETURN_IF_ERROR(writeBlob(state, build));
 
     build.rank_point = std::move(rank_point);
     build.removed = removed;
-    build.level0_triangles = level0;
-    build.stored_triangles = stored_triangles;
+    build.level0_triangles = state.level0;
+    build.stored_triangles = state.stored_triangles;
     build.level_triangles = std::move(level_triangles);
     if (removed == 0) diagnostics.note("pfrep: no vertex could be removed; the blob holds the input only");
     return build;

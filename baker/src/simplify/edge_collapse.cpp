@@ -73,6 +73,15 @@ inline void prefetch(const void* p) {
 #endif
 }
 
+// The named steps of init, runRound and collapse are inlined into them: the compiler then sees the
+// one function each was, and makes the same inlining decisions for the hot collapse loop around
+// them (left to itself it traded inlines there for the new functions, and the loop got slower).
+#if defined(__GNUC__)
+#define LODBAKE_STEP inline __attribute__((always_inline))
+#else
+#define LODBAKE_STEP inline
+#endif
+
 // Items per task of init's parallel loops: fixed, so no result depends on the thread count.
 constexpr uint32_t kInitChunk = 4096;
 
@@ -451,15 +460,7 @@ bool EdgeCollapser::isValid(Worker& w, const Candidate& c, int& pair_count, Wedg
     return true;
 }
 
-void EdgeCollapser::collapse(Worker& w, const Candidate& c, const WedgePair* pairs, int pair_count,
-                             CollapseSequence* sequence) {
-    const uint32_t u = c.removed, v = c.kept, h = c.edge;
-    const uint32_t t = he_[h].twin;
-    const uint32_t f0 = h / 3;
-    const uint32_t f1 = t == kNone ? kNone : t / 3;
-    const uint32_t w0 = he_[prevHe(h)].point;
-    const uint32_t w1 = t == kNone ? kNone : he_[prevHe(t)].point;
-
+LODBAKE_STEP void EdgeCollapser::prefetchNeighbourhood(const Worker& w, const CollapseSequence* sequence) const {
     // Every neighbour's edge to v is re-evaluated at the end (updateEdgesInFan), which reads the
     // neighbour's quadric: a random access each. Requesting them all now lets those misses overlap
     // with each other and with the work below instead of waiting one by one.
@@ -478,21 +479,10 @@ void EdgeCollapser::collapse(Worker& w, const Candidate& c, const WedgePair* pai
     // A half-edge sequence reads the triangle ids of u's faces (below).
     if (sequence && !face_triangle_.empty())
         for (uint32_t he : w.fan_u) prefetch(&face_triangle_[he / 3]);
-    for (uint32_t k = 0; k < 3; ++k) {
-        queueRemove(w, canonical(f0 * 3 + k));
-        if (f1 != kNone) queueRemove(w, canonical(f1 * 3 + k));
-    }
+}
 
-    quadric_[v] += quadric_[u];
-    const Vec3f p(float(c.position.x), float(c.position.y), float(c.position.z));
-    CollapseRecord record;
-    if (sequence) {
-        record.removed_point = u;
-        record.kept_point = v;
-        record.position = p;
-        record.first_wedge_update = uint32_t(sequence->wedge_updates.size());
-        record.wedge_update_count = uint32_t(pair_count);
-    }
+LODBAKE_STEP void EdgeCollapser::mergeWedges(const Candidate& c, const WedgePair* pairs, int pair_count,
+                                       CollapseSequence* sequence) {
     const bool has_normals = source_->hasNormals();
     const uint32_t color_first = source_->hasColors() ? channel_count_ - 4 : channel_count_;
     for (int i = 0; i < pair_count; ++i) {
@@ -519,6 +509,58 @@ void EdgeCollapser::collapse(Worker& w, const Candidate& c, const WedgePair* pai
                                               wedge_value_.begin() + kept_base + channel_count_);
         }
     }
+}
+
+LODBAKE_STEP void EdgeCollapser::removeCollapsedFaces(Worker& w, uint32_t h, uint32_t t) {
+    // Remove f0 (and f1): glue the twins of their two other edges together.
+    for (int side = 0; side < 2; ++side) {
+        const uint32_t hf = side == 0 ? h : t;
+        if (hf == kNone) continue;
+        const uint32_t e1 = nextHe(hf), e2 = prevHe(hf);
+        const uint32_t t1 = he_[e1].twin, t2 = he_[e2].twin;
+        const uint32_t opposite = he_[e2].point;
+        if (t1 != kNone) he_[t1].twin = t2;
+        if (t2 != kNone) he_[t2].twin = t1;
+        point_he_[opposite] = t1 != kNone ? t1 : (t2 != kNone ? nextHe(t2) : kNone);
+        const uint32_t f = hf / 3;
+        if (uv_channel_ != kNone) --chart_alive_[face_chart_[f]];
+        for (uint32_t k = 0; k < 3; ++k) {
+            he_[f * 3 + k].twin = kNone;
+            he_[f * 3 + k].point = kNone;
+        }
+        if (w.heap)
+            ++w.faces_removed;
+        else
+            --alive_faces_;
+    }
+}
+
+void EdgeCollapser::collapse(Worker& w, const Candidate& c, const WedgePair* pairs, int pair_count,
+                             CollapseSequence* sequence) {
+    const uint32_t u = c.removed, v = c.kept, h = c.edge;
+    const uint32_t t = he_[h].twin;
+    const uint32_t f0 = h / 3;
+    const uint32_t f1 = t == kNone ? kNone : t / 3;
+    const uint32_t w0 = he_[prevHe(h)].point;
+    const uint32_t w1 = t == kNone ? kNone : he_[prevHe(t)].point;
+
+    prefetchNeighbourhood(w, sequence);
+    for (uint32_t k = 0; k < 3; ++k) {
+        queueRemove(w, canonical(f0 * 3 + k));
+        if (f1 != kNone) queueRemove(w, canonical(f1 * 3 + k));
+    }
+
+    quadric_[v] += quadric_[u];
+    const Vec3f p(float(c.position.x), float(c.position.y), float(c.position.z));
+    CollapseRecord record;
+    if (sequence) {
+        record.removed_point = u;
+        record.kept_point = v;
+        record.position = p;
+        record.first_wedge_update = uint32_t(sequence->wedge_updates.size());
+        record.wedge_update_count = uint32_t(pair_count);
+    }
+    mergeWedges(c, pairs, pair_count, sequence);
     if (sequence) sequence->records.push_back(record);
     if (removal_log_) {
         const Vec3d pv = toD(position_[v]) - c.position, pu = toD(position_[u]) - c.position;
@@ -551,27 +593,7 @@ void EdgeCollapser::collapse(Worker& w, const Candidate& c, const WedgePair* pai
         }
     }
 
-    // Remove f0 (and f1): glue the twins of their two other edges together.
-    for (int side = 0; side < 2; ++side) {
-        const uint32_t hf = side == 0 ? h : t;
-        if (hf == kNone) continue;
-        const uint32_t e1 = nextHe(hf), e2 = prevHe(hf);
-        const uint32_t t1 = he_[e1].twin, t2 = he_[e2].twin;
-        const uint32_t opposite = he_[e2].point;
-        if (t1 != kNone) he_[t1].twin = t2;
-        if (t2 != kNone) he_[t2].twin = t1;
-        point_he_[opposite] = t1 != kNone ? t1 : (t2 != kNone ? nextHe(t2) : kNone);
-        const uint32_t f = hf / 3;
-        if (uv_channel_ != kNone) --chart_alive_[face_chart_[f]];
-        for (uint32_t k = 0; k < 3; ++k) {
-            he_[f * 3 + k].twin = kNone;
-            he_[f * 3 + k].point = kNone;
-        }
-        if (w.heap)
-            ++w.faces_removed;
-        else
-            --alive_faces_;
-    }
+    removeCollapsedFaces(w, h, t);
 
     if (log_triangles) {
         for (const auto& [id, f] : w.created_tmp) {
@@ -940,17 +962,33 @@ bool EdgeCollapser::roundApplies(size_t target_faces, const CollapseSequence* se
            uv_channel_ == kNone && !remove_components_;
 }
 
-void EdgeCollapser::runRound(size_t target_faces, double max_error) {
+namespace {
+
+// The set-up loops below run over fixed chunks in parallel; each chunk's result is a count, a
+// minimum, a maximum or bits OR-ed into shared words, so nothing depends on the thread count or
+// on which chunk finishes first.
+constexpr size_t kSetupChunk = 65536;
+// A failed parallel loop (only bad_alloc gets there) throws as the serial loops' allocations would.
+template <class Fn> void inChunks(size_t count, Fn&& fn) {
+    if (!parallelForChunks(count, kSetupChunk, fn).ok()) throw std::bad_alloc();
+}
+
+} // namespace
+
+// A partitioned round's cut (findRoundCut): a face belongs to part 1 when its first corner's
+// bin along `axis` is above `bin`.
+struct EdgeCollapser::RoundCut {
+    static constexpr uint32_t kBins = 4096;
+    int axis = -1;
+    double axis_lo = 0, bin_scale = 0;
+    uint32_t bin = 0;
+    uint32_t binOf(const Vec3f& position) const {
+        return std::min(kBins - 1, uint32_t((double(position[axis]) - axis_lo) * bin_scale));
+    }
+};
+
+LODBAKE_STEP bool EdgeCollapser::findRoundCut(RoundCut& cut) const {
     const uint32_t point_count = uint32_t(position_.size());
-    const uint32_t he_count = uint32_t(he_.size());
-    // The set-up loops below run over fixed chunks in parallel; each chunk's result is a count, a
-    // minimum, a maximum or bits OR-ed into shared words, so nothing depends on the thread count or
-    // on which chunk finishes first.
-    constexpr size_t kSetupChunk = 65536;
-    // A failed parallel loop (only bad_alloc gets there) throws as the serial loops' allocations would.
-    auto inChunks = [](size_t count, auto&& fn) {
-        if (!parallelForChunks(count, kSetupChunk, fn).ok()) throw std::bad_alloc();
-    };
     // The cut: a plane across the longest extent of the alive points' box other than the previous
     // round's axis (so that the last round's seam lies inside a part now), at the median of their
     // coordinate (a histogram's bin edge: deterministic and without a copy of the coordinates).
@@ -984,13 +1022,12 @@ void EdgeCollapser::runRound(size_t target_faces, double max_error) {
     int axis = -1;
     for (int k = 0; k < 3; ++k)
         if (k != round_axis_ && (axis < 0 || hi[k] - lo[k] > hi[axis] - lo[axis])) axis = k;
-    if (!(hi[axis] > lo[axis])) return;
-    constexpr uint32_t kBins = 4096;
-    const double bin_scale = double(kBins) / (double(hi[axis]) - double(lo[axis]));
-    const double axis_lo = lo[axis];
-    auto binOf = [&](uint32_t p) {
-        return std::min(kBins - 1, uint32_t((double(position_[p][axis]) - axis_lo) * bin_scale));
-    };
+    if (!(hi[axis] > lo[axis])) return false;
+    constexpr uint32_t kBins = RoundCut::kBins;
+    cut.axis = axis;
+    cut.bin_scale = double(kBins) / (double(hi[axis]) - double(lo[axis]));
+    cut.axis_lo = lo[axis];
+    auto binOf = [&](uint32_t p) { return cut.binOf(position_[p]); };
     std::vector<std::vector<uint32_t>> chunk_histograms(boxes.size());
     inChunks(point_count, [&](size_t chunk, size_t first, size_t last) {
         std::vector<uint32_t>& h = chunk_histograms[chunk];
@@ -1006,6 +1043,13 @@ void EdgeCollapser::runRound(size_t target_faces, double max_error) {
         sum += histogram[cut_bin];
         if (2 * size_t(sum) >= alive_points) break;
     }
+    cut.bin = cut_bin;
+    return true;
+}
+
+LODBAKE_STEP void EdgeCollapser::markRoundParts(const RoundCut& cut) {
+    const uint32_t point_count = uint32_t(position_.size());
+    const uint32_t he_count = uint32_t(he_.size());
     // A face belongs to the side of its first corner. A point is in part p when every face around it
     // and around each of its neighbours belongs to p; an edge is in p when both ends are. A collapse of
     // such an edge reads and writes only faces of p, points whose faces are all of p (it, its
@@ -1019,7 +1063,7 @@ void EdgeCollapser::runRound(size_t target_faces, double max_error) {
         __atomic_fetch_or(&bits[p >> 6], uint64_t(1) << (p & 63), __ATOMIC_RELAXED);
     };
     auto bit = [](const std::vector<uint64_t>& bits, uint32_t p) { return (bits[p >> 6] >> (p & 63)) & 1; };
-    auto faceSide = [&](uint32_t f) { return binOf(he_[f * 3].point) > cut_bin ? 1u : 0u; };
+    auto faceSide = [&](uint32_t f) { return cut.binOf(position_[he_[f * 3].point]) > cut.bin ? 1u : 0u; };
     const uint32_t face_count = he_count / 3;
     inChunks(face_count, [&](size_t, size_t first, size_t last) {
         for (uint32_t f = uint32_t(first); f < uint32_t(last); ++f) {
@@ -1050,7 +1094,10 @@ void EdgeCollapser::runRound(size_t target_faces, double max_error) {
         for (size_t i = 0; i < words; ++i) part_points_[part][i] &= ~outside[i];
     std::vector<uint64_t>().swap(has[0]);
     std::vector<uint64_t>().swap(has[1]);
+}
 
+LODBAKE_STEP bool EdgeCollapser::splitQueue(PartHeap* heaps) {
+    const uint32_t he_count = uint32_t(he_.size());
     // Each half-edge's part (kRoundParts: none), read in half-edge order here instead of at random
     // by the split's passes over the queue. A part's heap holds at most its edges alive now (its
     // collapses only remove or merge them).
@@ -1069,103 +1116,127 @@ void EdgeCollapser::runRound(size_t target_faces, double max_error) {
     uint32_t capacity[kRoundParts] = {0, 0};
     for (const std::array<uint32_t, kRoundParts>& count : chunk_capacity)
         for (uint32_t part = 0; part < kRoundParts; ++part) capacity[part] += count[part];
-    PartHeap heaps[kRoundParts];
     auto part_of = [&](uint32_t id) { return uint32_t(part_of_edge[id]); };
-    const size_t goal = size_t(double(alive_faces_ - target_faces) * kRoundShare);
     auto for_parts = [](uint32_t count, const auto& fn) {
         if (!parallelFor(count, 1, [&](size_t part) { fn(uint32_t(part)); }).ok()) throw std::bad_alloc();
     };
     const bool split = queue_.split(part_of, capacity, heaps, kRoundParts, for_parts);
     LargeArray<uint8_t>().swap(part_of_edge);
-    if (split) {
+    return split;
+}
+
+LODBAKE_STEP void EdgeCollapser::collapseRoundParts(PartHeap* heaps, size_t goal, double max_error) {
+    for (uint32_t part = 0; part < kRoundParts; ++part) {
+        Worker& w = parts_[part];
+        w.heap = &heaps[part];
+        w.part = part;
+        w.faces_removed = 0;
+        w.collapses = 0;
+        w.max_error = 0;
+        // A part removes at most `goal` faces, so it logs at most `goal` collapses: reserved
+        // once (mapped, resident as written) instead of grown by doubling in a worker's heap.
+        if (removal_log_) w.removals.reserve(goal);
+    }
+    late_ = false;
+    // The parts run in phases up to a common key limit, so that neither collapses much further
+    // up the cost order than the other (with a fixed share of the faces each, the part with the
+    // costlier surface went further than the serial order would: Hausdorff error +34 % on
+    // dragon_stand_merged). A phase's limit is the key below which the two heaps together hold as
+    // many entries as faces are left to remove, from a histogram of the keys' float bits (6
+    // mantissa bits: steps of 1.6 %); a collapse removes two faces but re-keys its neighbours
+    // above the limit, so a phase removes about two thirds of what is left. Each part may remove
+    // at most its part (by entries under the limit) of the faces left, so the round never passes
+    // the goal. Phases end once less than 1/32 of the goal is left: two per round on
+    // dragon_poisson (a limit at half as many entries took six or seven, each a wait for the
+    // slower part). The seam's edges and the rest go on in run()'s serial loop.
+    constexpr uint32_t kCostBins = 1u << 14;
+    auto costBin = [](float cost) {
+        uint32_t bits;
+        std::memcpy(&bits, &cost, sizeof bits);
+        return cost > 0.0f ? std::min(kCostBins - 1, bits >> 17) : 0u; // +inf: the last bin
+    };
+    std::vector<uint32_t> key_histogram[kRoundParts];
+    for (std::vector<uint32_t>& h : key_histogram) h.assign(kCostBins, 0);
+    size_t removed = 0;
+    Status status = Status::okStatus();
+    for (uint32_t phase = 0; phase < kRoundMaxPhases && removed + goal / 32 < goal && status.ok(); ++phase) {
+        const size_t left = goal - removed;
         for (uint32_t part = 0; part < kRoundParts; ++part) {
-            Worker& w = parts_[part];
-            w.heap = &heaps[part];
-            w.part = part;
-            w.faces_removed = 0;
-            w.collapses = 0;
-            w.max_error = 0;
-            // A part removes at most `goal` faces, so it logs at most `goal` collapses: reserved
-            // once (mapped, resident as written) instead of grown by doubling in a worker's heap.
-            if (removal_log_) w.removals.reserve(goal);
+            std::fill(key_histogram[part].begin(), key_histogram[part].end(), 0u);
+            heaps[part].forEachCost([&](float cost) { ++key_histogram[part][costBin(cost)]; });
         }
-        late_ = false;
-        // The parts run in phases up to a common key limit, so that neither collapses much further
-        // up the cost order than the other (with a fixed share of the faces each, the part with the
-        // costlier surface went further than the serial order would: Hausdorff error +34 % on
-        // dragon_stand_merged). A phase's limit is the key below which the two heaps together hold as
-        // many entries as faces are left to remove, from a histogram of the keys' float bits (6
-        // mantissa bits: steps of 1.6 %); a collapse removes two faces but re-keys its neighbours
-        // above the limit, so a phase removes about two thirds of what is left. Each part may remove
-        // at most its part (by entries under the limit) of the faces left, so the round never passes
-        // the goal. Phases end once less than 1/32 of the goal is left: two per round on
-        // dragon_poisson (a limit at half as many entries took six or seven, each a wait for the
-        // slower part). The seam's edges and the rest go on in run()'s serial loop.
-        constexpr uint32_t kCostBins = 1u << 14;
-        auto costBin = [](float cost) {
-            uint32_t bits;
-            std::memcpy(&bits, &cost, sizeof bits);
-            return cost > 0.0f ? std::min(kCostBins - 1, bits >> 17) : 0u; // +inf: the last bin
-        };
-        std::vector<uint32_t> key_histogram[kRoundParts];
-        for (std::vector<uint32_t>& h : key_histogram) h.assign(kCostBins, 0);
-        size_t removed = 0;
-        Status status = Status::okStatus();
-        for (uint32_t phase = 0; phase < kRoundMaxPhases && removed + goal / 32 < goal && status.ok(); ++phase) {
-            const size_t left = goal - removed;
+        uint32_t limit = 0;
+        size_t under[kRoundParts] = {}, under_total = 0;
+        for (; limit < kCostBins; ++limit) {
             for (uint32_t part = 0; part < kRoundParts; ++part) {
-                std::fill(key_histogram[part].begin(), key_histogram[part].end(), 0u);
-                heaps[part].forEachCost([&](float cost) { ++key_histogram[part][costBin(cost)]; });
+                under[part] += key_histogram[part][limit];
+                under_total += key_histogram[part][limit];
             }
-            uint32_t limit = 0;
-            size_t under[kRoundParts] = {}, under_total = 0;
-            for (; limit < kCostBins; ++limit) {
-                for (uint32_t part = 0; part < kRoundParts; ++part) {
-                    under[part] += key_histogram[part][limit];
-                    under_total += key_histogram[part][limit];
-                }
-                if (under_total >= left) break;
-            }
-            if (under_total == 0) break;
-            size_t cap[kRoundParts];
-            for (uint32_t part = 0; part < kRoundParts; ++part)
-                cap[part] = parts_[part].faces_removed + size_t(double(left) * double(under[part]) / double(under_total));
-            status = parallelFor(kRoundParts, 1, [&](size_t part) {
-                Worker& w = parts_[part];
-                while (w.faces_removed < cap[part] && !w.heap->empty() && costBin(w.heap->topCost()) <= limit)
-                    step(w, max_error, nullptr);
-            });
-            size_t now = 0;
-            for (const Worker& w : parts_) now += w.faces_removed;
-            if (now == removed) break;
-            removed = now;
+            if (under_total >= left) break;
         }
-        queue_.merge(heaps, kRoundParts);
-        if (!status.ok()) throw std::bad_alloc(); // as a serial push_back would (only bad_alloc gets here)
-        // Counters in part order; the edges the parts left to the merge get their keys now.
-        Candidate c;
-        for (Worker& w : parts_) {
-            alive_faces_ -= w.faces_removed;
-            collapses_ += w.collapses;
-            max_error_done_ = std::max(max_error_done_, w.max_error);
-            for (uint32_t e : w.deferred) {
-                if (he_[e].point != kNone && canonical(e) == e && evaluate(e, c))
-                    queue_.set(e, float(c.cost));
-                else
-                    queue_.remove(e);
-            }
-            std::vector<uint32_t>().swap(w.deferred);
-            if (removal_log_) removal_log_->append(w.removals);
-            w.removals.clear();
-            w.heap = nullptr;
+        if (under_total == 0) break;
+        size_t cap[kRoundParts];
+        for (uint32_t part = 0; part < kRoundParts; ++part)
+            cap[part] = parts_[part].faces_removed + size_t(double(left) * double(under[part]) / double(under_total));
+        status = parallelFor(kRoundParts, 1, [&](size_t part) {
+            Worker& w = parts_[part];
+            while (w.faces_removed < cap[part] && !w.heap->empty() && costBin(w.heap->topCost()) <= limit)
+                step(w, max_error, nullptr);
+        });
+        size_t now = 0;
+        for (const Worker& w : parts_) now += w.faces_removed;
+        if (now == removed) break;
+        removed = now;
+    }
+    queue_.merge(heaps, kRoundParts);
+    if (!status.ok()) throw std::bad_alloc(); // as a serial push_back would (only bad_alloc gets here)
+    // Counters in part order; the edges the parts left to the merge get their keys now.
+    Candidate c;
+    for (Worker& w : parts_) {
+        alive_faces_ -= w.faces_removed;
+        collapses_ += w.collapses;
+        max_error_done_ = std::max(max_error_done_, w.max_error);
+        for (uint32_t e : w.deferred) {
+            if (he_[e].point != kNone && canonical(e) == e && evaluate(e, c))
+                queue_.set(e, float(c.cost));
+            else
+                queue_.remove(e);
         }
-        round_axis_ = axis;
+        std::vector<uint32_t>().swap(w.deferred);
+        if (removal_log_) removal_log_->append(w.removals);
+        w.removals.clear();
+        w.heap = nullptr;
+    }
+}
+
+void EdgeCollapser::runRound(size_t target_faces, double max_error) {
+    RoundCut cut;
+    if (!findRoundCut(cut)) return;
+    markRoundParts(cut);
+    PartHeap heaps[kRoundParts];
+    const size_t goal = size_t(double(alive_faces_ - target_faces) * kRoundShare);
+    if (splitQueue(heaps)) {
+        collapseRoundParts(heaps, goal, max_error);
+        round_axis_ = cut.axis;
         ++rounds_;
     }
     for (std::vector<uint64_t>& bits : part_points_) std::vector<uint64_t>().swap(bits);
 }
 
-Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Diagnostics& diagnostics) {
+namespace {
+
+// Attribute channel ch of input vertex v: normal xyz, each UV set, colour rgba.
+float channelValue(const Mesh& mesh, uint32_t v, uint32_t ch) {
+    if (mesh.hasNormals()) {
+        if (ch < 3) return mesh.normals[v][int(ch)];
+        ch -= 3;
+    }
+    if (ch < 2 * mesh.uvs.size()) return mesh.uvs[ch / 2][v][int(ch % 2)];
+    ch -= uint32_t(2 * mesh.uvs.size());
+    return mesh.colors[v][int(ch)];
+}
+
+Status checkSimplifyInput(const Mesh& mesh, const SimplifyOptions& options) {
     LODBAKE_RETURN_IF_ERROR(checkMeshConsistency(mesh, "simplify input"));
     for (size_t v = 0; v < mesh.vertexCount(); ++v)
         if (!isFinite(mesh.positions[v]))
@@ -1176,10 +1247,21 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
         !(options.tip_distance_weight >= 0.0f))
         return invalidInput("simplify options: expected min_triangle_quality >= 0, max_normal_change_deg > 0, "
                             "border_weight >= 0, cost_area_exponent in [0, 1], tip_distance_weight >= 0");
-    source_ = &mesh;
-    options_ = options;
-    cos_max_normal_change_ = std::cos(std::min(double(options.max_normal_change_deg), 180.0) * kPi / 180.0);
+    return Status::okStatus();
+}
 
+} // namespace
+
+// init's map of the input: each vertex's point and wedge (kNone when unreferenced).
+struct EdgeCollapser::InputMap {
+    const Mesh& mesh;
+    bool has_wedges;
+    LargeArray<uint32_t> vertex_point, vertex_wedge;
+};
+
+LODBAKE_STEP void EdgeCollapser::weldPoints(InputMap& map) {
+    const Mesh& mesh = map.mesh;
+    const bool has_wedges = map.has_wedges;
     const uint32_t vertex_count = uint32_t(mesh.vertexCount());
     LargeArray<uint8_t> referenced(vertex_count, 0);
     for (uint32_t i : mesh.indices) referenced[i] = 1;
@@ -1188,42 +1270,20 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
     for (uint32_t v = 0; v < vertex_count; ++v)
         if (referenced[v]) order.push_back(v);
 
-    // Attribute channels: normal xyz, each UV set, colour rgba.
-    channel_count_ = (mesh.hasNormals() ? 3 : 0) + 2 * uint32_t(mesh.uvs.size()) + (mesh.hasColors() ? 4 : 0);
-    const Aabb box = computeBounds(mesh);
-    const double diagonal = box.isEmpty() ? 1.0 : std::max(box.diagonal(), 1e-30);
-    channel_weight_.clear();
-    const AttributeWeights& aw = options.attribute_weights;
-    if (mesh.hasNormals())
-        for (int k = 0; k < 3; ++k) channel_weight_.push_back(float(aw.normal * aw.normal * diagonal * diagonal));
-    for (size_t s = 0; s < mesh.uvs.size(); ++s)
-        for (int k = 0; k < 2; ++k) channel_weight_.push_back(float(aw.uv * aw.uv * diagonal * diagonal));
-    if (mesh.hasColors())
-        for (int k = 0; k < 4; ++k) channel_weight_.push_back(float(aw.color * aw.color * diagonal * diagonal));
-    auto channelValue = [&](uint32_t v, uint32_t ch) -> float {
-        if (mesh.hasNormals()) {
-            if (ch < 3) return mesh.normals[v][int(ch)];
-            ch -= 3;
-        }
-        if (ch < 2 * mesh.uvs.size()) return mesh.uvs[ch / 2][v][int(ch % 2)];
-        ch -= uint32_t(2 * mesh.uvs.size());
-        return mesh.colors[v][int(ch)];
-    };
-    const bool has_wedges = channel_count_ > 0 || mesh.hasTangents();
-
     // Weld by bit-identical position (points), and by position + attributes (wedges), with open
     // addressing hash tables filled in vertex order: every point and wedge is numbered by its
     // first (smallest) input vertex, independent of the table layout.
     auto attrEqual = [&](uint32_t a, uint32_t b) {
         for (uint32_t ch = 0; ch < channel_count_; ++ch)
-            if (floatBits(channelValue(a, ch)) != floatBits(channelValue(b, ch))) return false;
+            if (floatBits(channelValue(mesh, a, ch)) != floatBits(channelValue(mesh, b, ch))) return false;
         if (mesh.hasTangents())
             for (int k = 0; k < 4; ++k)
                 if (floatBits(mesh.tangents[a][k]) != floatBits(mesh.tangents[b][k])) return false;
         return true;
     };
     auto attrHash = [&](uint32_t v, uint64_t h) {
-        for (uint32_t ch = 0; ch < channel_count_; ++ch) h = (h ^ floatBits(channelValue(v, ch))) * 0x100000001b3ull;
+        for (uint32_t ch = 0; ch < channel_count_; ++ch)
+            h = (h ^ floatBits(channelValue(mesh, v, ch))) * 0x100000001b3ull;
         if (mesh.hasTangents())
             for (int k = 0; k < 4; ++k) h = (h ^ floatBits(mesh.tangents[v][k])) * 0x100000001b3ull;
         return h;
@@ -1237,7 +1297,10 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
     size_t table_size = 16;
     while (table_size < size_t(order.size()) * 2) table_size *= 2;
     const size_t mask = table_size - 1;
-    LargeArray<uint32_t> vertex_point(vertex_count, kNone), vertex_wedge(vertex_count, kNone);
+    map.vertex_point.assign(vertex_count, kNone);
+    map.vertex_wedge.assign(vertex_count, kNone);
+    LargeArray<uint32_t>& vertex_point = map.vertex_point;
+    LargeArray<uint32_t>& vertex_wedge = map.vertex_wedge;
     position_.clear();
     wedge_vertex_.clear();
     wedge_point_.clear();
@@ -1313,6 +1376,13 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
         }
     }
     LargeArray<uint32_t>().swap(order);
+}
+
+LODBAKE_STEP void EdgeCollapser::renumberPointsByFirstUse(InputMap& map) {
+    const Mesh& mesh = map.mesh;
+    const bool has_wedges = map.has_wedges;
+    LargeArray<uint32_t>& vertex_point = map.vertex_point;
+    LargeArray<uint32_t>& vertex_wedge = map.vertex_wedge;
     // Points renumbered in order of first use by the faces: a collapse touches a few dozen points
     // and faces that are neighbours on the surface, and scans often list their vertices far from
     // the order of their faces (lucy100k's faces span 9,500 vertex ids at the 90th percentile).
@@ -1321,53 +1391,41 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
     // points of different sheets.) Only storage moves: no decision depends on point ids, so the
     // simplified meshes are the same bits (wedges keep their numbering by first vertex; without
     // attributes a wedge is its point and moves with it).
-    {
-        const uint32_t n = uint32_t(position_.size());
-        LargeArray<uint32_t> first_use(n, kNone);
-        uint32_t next = 0;
-        for (size_t f = 0; f < mesh.faceCount(); ++f) {
-            const uint32_t p0 = vertex_point[mesh.indices[f * 3]], p1 = vertex_point[mesh.indices[f * 3 + 1]],
-                           p2 = vertex_point[mesh.indices[f * 3 + 2]];
-            if (p0 == p1 || p1 == p2 || p0 == p2) continue; // dropped below
-            for (uint32_t p : {p0, p1, p2})
-                if (first_use[p] == kNone) first_use[p] = next++;
-        }
-        for (uint32_t p = 0; p < n; ++p) // points only on dropped faces, after the others
+    const uint32_t n = uint32_t(position_.size());
+    LargeArray<uint32_t> first_use(n, kNone);
+    uint32_t next = 0;
+    for (size_t f = 0; f < mesh.faceCount(); ++f) {
+        const uint32_t p0 = vertex_point[mesh.indices[f * 3]], p1 = vertex_point[mesh.indices[f * 3 + 1]],
+                       p2 = vertex_point[mesh.indices[f * 3 + 2]];
+        if (p0 == p1 || p1 == p2 || p0 == p2) continue; // dropped below
+        for (uint32_t p : {p0, p1, p2})
             if (first_use[p] == kNone) first_use[p] = next++;
-        const LargeArray<uint32_t>& new_id = first_use;
-        LargeArray<Vec3f> moved(n);
-        for (uint32_t p = 0; p < n; ++p) moved[new_id[p]] = position_[p];
-        position_.swap(moved);
-        LargeArray<Vec3f>().swap(moved);
-        for (uint32_t& p : vertex_point)
-            if (p != kNone) p = new_id[p];
-        if (has_wedges) {
-            for (uint32_t& p : wedge_point_) p = new_id[p];
-        } else {
-            LargeArray<uint32_t> wedge_vertex(n);
-            for (uint32_t w = 0; w < n; ++w) wedge_vertex[new_id[w]] = wedge_vertex_[w];
-            wedge_vertex_.swap(wedge_vertex);
-            for (uint32_t w = 0; w < n; ++w) wedge_point_[w] = w;
-            vertex_wedge = vertex_point;
-        }
     }
-    const uint32_t point_count = uint32_t(position_.size());
-    const uint32_t wedge_count = uint32_t(wedge_vertex_.size());
-    // The attribute values and blocks, the point quadrics, far_ and the queue's slots are large
-    // arrays (dragon_poisson: 6, 98, 47, 6 and 26 MB) that mostly land on fresh pages, whose first
-    // touch costs far more than the filling. Background tasks allocate and fill them while this
-    // thread builds the faces, twins and point kinds. The quadrics and the queue start once the
-    // twins' corner lists are freed: the memory in use then stays below that at the end of init.
-    BackgroundTasks fill_attributes, fill_quadrics, fill_queue;
-    block_size_ = channel_count_ > 0 ? attributeBlockSize(channel_count_) : 0;
-    fill_attributes.run([&, wedge_count] {
-        wedge_value_.assign(size_t(wedge_count) * channel_count_, 0.0f);
-        for (uint32_t w = 0; w < wedge_count; ++w)
-            for (uint32_t ch = 0; ch < channel_count_; ++ch)
-                wedge_value_[size_t(w) * channel_count_ + ch] = channelValue(wedge_vertex_[w], ch);
-        wedge_block_.assign(size_t(wedge_count) * block_size_, 0.0);
-    });
+    for (uint32_t p = 0; p < n; ++p) // points only on dropped faces, after the others
+        if (first_use[p] == kNone) first_use[p] = next++;
+    const LargeArray<uint32_t>& new_id = first_use;
+    LargeArray<Vec3f> moved(n);
+    for (uint32_t p = 0; p < n; ++p) moved[new_id[p]] = position_[p];
+    position_.swap(moved);
+    LargeArray<Vec3f>().swap(moved);
+    for (uint32_t& p : vertex_point)
+        if (p != kNone) p = new_id[p];
+    if (has_wedges) {
+        for (uint32_t& p : wedge_point_) p = new_id[p];
+    } else {
+        LargeArray<uint32_t> wedge_vertex(n);
+        for (uint32_t w = 0; w < n; ++w) wedge_vertex[new_id[w]] = wedge_vertex_[w];
+        wedge_vertex_.swap(wedge_vertex);
+        for (uint32_t w = 0; w < n; ++w) wedge_point_[w] = w;
+        vertex_wedge = vertex_point;
+    }
+}
 
+LODBAKE_STEP uint32_t EdgeCollapser::buildFaces(const InputMap& map, Diagnostics& diagnostics) {
+    const Mesh& mesh = map.mesh;
+    const bool has_wedges = map.has_wedges;
+    const LargeArray<uint32_t>& vertex_point = map.vertex_point;
+    const LargeArray<uint32_t>& vertex_wedge = map.vertex_wedge;
     // Faces, in input order, without those degenerate by position.
     const size_t input_faces = mesh.faceCount();
     std::vector<SubMesh> groups = mesh.submeshes;
@@ -1403,197 +1461,173 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
     if (dropped > 0)
         diagnostics.note("simplify input: " + std::to_string(dropped) +
                          " faces with repeated positions dropped (zero area)");
-    const uint32_t face_count = kept_faces;
-    const uint32_t he_count = face_count * 3;
-    initial_faces_ = face_count;
-    alive_faces_ = face_count;
-    collapses_ = 0;
-    max_error_done_ = 0;
+    return kept_faces;
+}
 
-    // Twins: pair a->b with b->a when each occurs exactly once; otherwise lock both points.
-    kind_.assign(point_count, kFree);
+LODBAKE_STEP Status EdgeCollapser::linkTwins(const LargeArray<uint32_t>& start) {
+    const uint32_t point_count = uint32_t(position_.size());
+    const uint32_t he_count = uint32_t(he_.size());
+    // Each point's outgoing half-edges in half-edge order, with their end points: the twin
+    // search below then reads two short runs of this array instead of one corner of he_ per
+    // candidate (a random access each).
+    struct Outgoing {
+        uint32_t he;
+        uint32_t to;
+    };
+    LargeArray<Outgoing> list(he_count);
     {
-        LargeArray<uint32_t> start(size_t(point_count) + 1, 0);
-        for (uint32_t h = 0; h < he_count; ++h) ++start[he_[h].point + 1];
-        for (uint32_t p = 0; p < point_count; ++p) start[p + 1] += start[p];
-        // Each point's outgoing half-edges in half-edge order, with their end points: the twin
-        // search below then reads two short runs of this array instead of one corner of he_ per
-        // candidate (a random access each).
-        struct Outgoing {
-            uint32_t he;
-            uint32_t to;
-        };
-        LargeArray<Outgoing> list(he_count);
-        {
-            LargeArray<uint32_t> fill(start.begin(), start.end() - 1);
-            for (uint32_t h = 0; h < he_count; ++h) list[fill[he_[h].point]++] = {h, he_[nextHe(h)].point};
-        }
-        // Each half-edge finds its own twin (the pairing is symmetric: a->b once and b->a once), in
-        // parallel over fixed chunks; the points to lock are collected per chunk.
-        std::vector<std::vector<uint32_t>> lock_points(chunkCount(he_count, kInitChunk));
-        LODBAKE_RETURN_IF_ERROR(forChunks(he_count, [&](size_t chunk, uint32_t first, uint32_t last) {
-            for (uint32_t h = first; h < last; ++h) {
-                const uint32_t a = he_[h].point, b = he_[nextHe(h)].point;
-                uint32_t same = 0, reverse = 0, match = kNone;
-                for (uint32_t i = start[a]; i < start[a + 1]; ++i) same += list[i].to == b;
-                for (uint32_t i = start[b]; i < start[b + 1]; ++i)
-                    if (list[i].to == a) {
-                        ++reverse;
-                        match = list[i].he;
-                    }
-                if (same == 1 && reverse == 1) {
-                    he_[h].twin = match;
-                } else if (same + reverse > 1) {
-                    lock_points[chunk].push_back(a);
-                    lock_points[chunk].push_back(b);
-                }
-            }
-        }));
-        for (const std::vector<uint32_t>& points : lock_points)
-            for (uint32_t point : points) kind_[point] = kLocked;
-        std::vector<std::vector<uint32_t>>().swap(lock_points);
-        point_he_.assign(point_count, kNone);
-        for (uint32_t p = 0; p < point_count; ++p)
-            if (start[p] < start[p + 1]) point_he_[p] = list[start[p]].he;
-        LargeArray<Outgoing>().swap(list);
-        fill_quadrics.run([this, point_count, penalty = options.tip_distance_weight > 0] {
-            quadric_.assign(point_count, Quadric());
-            // Late stage (see run()): the penalty also measures each point's far input point, so far_
-            // is kept from the start.
-            if (penalty)
-                far_ = position_;
-            else
-                LargeArray<Vec3f>().swap(far_);
-        });
-        fill_queue.run([this, he_count] { queue_ = CollapseQueue(he_count); });
-        // A point whose faces form more than one fan (a bow-tie) is non-manifold: lock it. Any
-        // other point gets its kind from the same fan (classifyFan reads only the corner table, the
-        // wedges, the groups and the options, all final here).
-        std::vector<size_t> locked_in_chunk(chunkCount(point_count, kInitChunk), 0);
-        LODBAKE_RETURN_IF_ERROR(forChunks(point_count, [&](size_t chunk, uint32_t first, uint32_t last) {
-            std::vector<uint32_t> fan;
-            for (uint32_t p = first; p < last; ++p) {
-                if (point_he_[p] == kNone) {
-                    kind_[p] = kDead;
-                    continue;
-                }
-                if (kind_[p] != kLocked) {
-                    const bool closed = gatherFan(p, fan);
-                    kind_[p] = fan.size() != start[p + 1] - start[p] ? kLocked : classifyFan(fan, closed);
-                }
-                if (kind_[p] == kLocked) ++locked_in_chunk[chunk];
-            }
-        }));
-        size_t locked = 0;
-        for (size_t n : locked_in_chunk) locked += n;
-        if (locked > 0)
-            diagnostics.note("simplify input: " + std::to_string(locked) +
-                             " points on non-manifold or inconsistently oriented edges/fans are kept unchanged");
+        LargeArray<uint32_t> fill(start.begin(), start.end() - 1);
+        for (uint32_t h = 0; h < he_count; ++h) list[fill[he_[h].point]++] = {h, he_[nextHe(h)].point};
     }
-
-    // remove_covered_components: a scan's open border lying on another component (merged
-    // overlapping scans) is not a border of the object; its constraint planes weigh less.
-    remove_components_ = options.remove_covered_components && options.placement == CollapsePlacement::Optimal;
-    std::vector<uint8_t> covered_border;
-    if (remove_components_) markCoveredBorders(covered_border);
-    // Quadrics: area-weighted face planes plus constraint planes along feature edges.
-    // Each face's quadric and its feature edges' constraint quadrics are computed in parallel (fixed
-    // chunks of a batch of faces, into a small buffer) and added to the points in face order: the
-    // same sums as a serial loop.
-    LODBAKE_RETURN_IF_ERROR(fill_quadrics.wait());
-    {
-        constexpr uint32_t kBatch = 2 * kInitChunk;
-        struct FaceQuadrics {
-            Quadric face;
-            Quadric constraint[3];
-            uint8_t has_constraint[3];
-        };
-        std::vector<FaceQuadrics> batch(kBatch);
-        for (uint32_t base = 0; base < face_count; base += kBatch) {
-            const uint32_t count = std::min(kBatch, face_count - base);
-            LODBAKE_RETURN_IF_ERROR(forChunks(count, [&](size_t, uint32_t first, uint32_t last) {
-                for (uint32_t i = first; i < last; ++i) {
-                    const uint32_t f = base + i;
-                    FaceQuadrics& out = batch[i];
-                    const Vec3d p0 = toD(position_[he_[f * 3].point]);
-                    const Vec3d p1 = toD(position_[he_[f * 3 + 1].point]);
-                    const Vec3d p2 = toD(position_[he_[f * 3 + 2].point]);
-                    out.face = Quadric::fromTriangle(p0, p1, p2);
-                    const Vec3d n = normalize(cross(p1 - p0, p2 - p0));
-                    for (uint32_t k = 0; k < 3; ++k) {
-                        out.has_constraint[k] = 0;
-                        const uint32_t h = f * 3 + k;
-                        if (!isFeature(h) || (he_[h].twin != kNone && he_[h].twin < h)) continue;
-                        const Vec3d a = toD(position_[he_[h].point]);
-                        const Vec3d b = toD(position_[he_[nextHe(h)].point]);
-                        const Vec3d e = b - a;
-                        const Vec3d m = normalize(cross(e, n));
-                        if (!(length2(m) > 0.0)) continue;
-                        double weight = double(options.border_weight) * length2(e);
-                        if (!covered_border.empty() && covered_border[h]) weight *= kCoveredBorderFactor;
-                        out.constraint[k] = Quadric::fromPlane(m, -dot(m, a), weight);
-                        out.constraint[k].weight = 0; // constraints steer placement; they are not surface area
-                        out.has_constraint[k] = 1;
-                    }
+    // Each half-edge finds its own twin (the pairing is symmetric: a->b once and b->a once), in
+    // parallel over fixed chunks; the points to lock are collected per chunk.
+    std::vector<std::vector<uint32_t>> lock_points(chunkCount(he_count, kInitChunk));
+    LODBAKE_RETURN_IF_ERROR(forChunks(he_count, [&](size_t chunk, uint32_t first, uint32_t last) {
+        for (uint32_t h = first; h < last; ++h) {
+            const uint32_t a = he_[h].point, b = he_[nextHe(h)].point;
+            uint32_t same = 0, reverse = 0, match = kNone;
+            for (uint32_t i = start[a]; i < start[a + 1]; ++i) same += list[i].to == b;
+            for (uint32_t i = start[b]; i < start[b + 1]; ++i)
+                if (list[i].to == a) {
+                    ++reverse;
+                    match = list[i].he;
                 }
-            }));
-            for (uint32_t i = 0; i < count; ++i) {
+            if (same == 1 && reverse == 1) {
+                he_[h].twin = match;
+            } else if (same + reverse > 1) {
+                lock_points[chunk].push_back(a);
+                lock_points[chunk].push_back(b);
+            }
+        }
+    }));
+    for (const std::vector<uint32_t>& points : lock_points)
+        for (uint32_t point : points) kind_[point] = kLocked;
+    std::vector<std::vector<uint32_t>>().swap(lock_points);
+    point_he_.assign(point_count, kNone);
+    for (uint32_t p = 0; p < point_count; ++p)
+        if (start[p] < start[p + 1]) point_he_[p] = list[start[p]].he;
+    LargeArray<Outgoing>().swap(list);
+    return Status::okStatus();
+}
+
+LODBAKE_STEP Status EdgeCollapser::classifyPoints(const LargeArray<uint32_t>& start, Diagnostics& diagnostics) {
+    const uint32_t point_count = uint32_t(position_.size());
+    // A point whose faces form more than one fan (a bow-tie) is non-manifold: lock it. Any
+    // other point gets its kind from the same fan (classifyFan reads only the corner table, the
+    // wedges, the groups and the options, all final here).
+    std::vector<size_t> locked_in_chunk(chunkCount(point_count, kInitChunk), 0);
+    LODBAKE_RETURN_IF_ERROR(forChunks(point_count, [&](size_t chunk, uint32_t first, uint32_t last) {
+        std::vector<uint32_t> fan;
+        for (uint32_t p = first; p < last; ++p) {
+            if (point_he_[p] == kNone) {
+                kind_[p] = kDead;
+                continue;
+            }
+            if (kind_[p] != kLocked) {
+                const bool closed = gatherFan(p, fan);
+                kind_[p] = fan.size() != start[p + 1] - start[p] ? kLocked : classifyFan(fan, closed);
+            }
+            if (kind_[p] == kLocked) ++locked_in_chunk[chunk];
+        }
+    }));
+    size_t locked = 0;
+    for (size_t n : locked_in_chunk) locked += n;
+    if (locked > 0)
+        diagnostics.note("simplify input: " + std::to_string(locked) +
+                         " points on non-manifold or inconsistently oriented edges/fans are kept unchanged");
+    return Status::okStatus();
+}
+
+LODBAKE_STEP Status EdgeCollapser::accumulateQuadrics(const std::vector<uint8_t>& covered_border) {
+    const uint32_t face_count = uint32_t(he_.size() / 3);
+    constexpr uint32_t kBatch = 2 * kInitChunk;
+    struct FaceQuadrics {
+        Quadric face;
+        Quadric constraint[3];
+        uint8_t has_constraint[3];
+    };
+    std::vector<FaceQuadrics> batch(kBatch);
+    for (uint32_t base = 0; base < face_count; base += kBatch) {
+        const uint32_t count = std::min(kBatch, face_count - base);
+        LODBAKE_RETURN_IF_ERROR(forChunks(count, [&](size_t, uint32_t first, uint32_t last) {
+            for (uint32_t i = first; i < last; ++i) {
                 const uint32_t f = base + i;
-                const FaceQuadrics& in = batch[i];
-                for (uint32_t k = 0; k < 3; ++k) quadric_[he_[f * 3 + k].point] += in.face;
+                FaceQuadrics& out = batch[i];
+                const Vec3d p0 = toD(position_[he_[f * 3].point]);
+                const Vec3d p1 = toD(position_[he_[f * 3 + 1].point]);
+                const Vec3d p2 = toD(position_[he_[f * 3 + 2].point]);
+                out.face = Quadric::fromTriangle(p0, p1, p2);
+                const Vec3d n = normalize(cross(p1 - p0, p2 - p0));
                 for (uint32_t k = 0; k < 3; ++k) {
-                    if (!in.has_constraint[k]) continue;
+                    out.has_constraint[k] = 0;
                     const uint32_t h = f * 3 + k;
-                    quadric_[he_[h].point] += in.constraint[k];
-                    quadric_[he_[nextHe(h)].point] += in.constraint[k];
+                    if (!isFeature(h) || (he_[h].twin != kNone && he_[h].twin < h)) continue;
+                    const Vec3d a = toD(position_[he_[h].point]);
+                    const Vec3d b = toD(position_[he_[nextHe(h)].point]);
+                    const Vec3d e = b - a;
+                    const Vec3d m = normalize(cross(e, n));
+                    if (!(length2(m) > 0.0)) continue;
+                    double weight = double(options_.border_weight) * length2(e);
+                    if (!covered_border.empty() && covered_border[h]) weight *= kCoveredBorderFactor;
+                    out.constraint[k] = Quadric::fromPlane(m, -dot(m, a), weight);
+                    out.constraint[k].weight = 0; // constraints steer placement; they are not surface area
+                    out.has_constraint[k] = 1;
                 }
+            }
+        }));
+        for (uint32_t i = 0; i < count; ++i) {
+            const uint32_t f = base + i;
+            const FaceQuadrics& in = batch[i];
+            for (uint32_t k = 0; k < 3; ++k) quadric_[he_[f * 3 + k].point] += in.face;
+            for (uint32_t k = 0; k < 3; ++k) {
+                if (!in.has_constraint[k]) continue;
+                const uint32_t h = f * 3 + k;
+                quadric_[he_[h].point] += in.constraint[k];
+                quadric_[he_[nextHe(h)].point] += in.constraint[k];
             }
         }
     }
-    LODBAKE_RETURN_IF_ERROR(fill_attributes.wait());
-    if (channel_count_ > 0) {
-        // Each face's attribute block is computed in parallel (fixed chunks of a batch of faces, into
-        // a small buffer) and added to its wedges in face order: the same sums as a serial loop.
-        constexpr uint32_t kBatch = 2 * kInitChunk;
-        std::vector<double> face_blocks(size_t(kBatch) * block_size_);
-        for (uint32_t base = 0; base < face_count; base += kBatch) {
-            const uint32_t count = std::min(kBatch, face_count - base);
-            LODBAKE_RETURN_IF_ERROR(forChunks(count, [&](size_t, uint32_t first, uint32_t last) {
-                for (uint32_t i = first; i < last; ++i) {
-                    const uint32_t f = base + i;
-                    const Vec3d p0 = toD(position_[he_[f * 3].point]);
-                    const Vec3d p1 = toD(position_[he_[f * 3 + 1].point]);
-                    const Vec3d p2 = toD(position_[he_[f * 3 + 2].point]);
-                    const size_t w0 = size_t(corner_wedge_[f * 3]) * channel_count_;
-                    const size_t w1 = size_t(corner_wedge_[f * 3 + 1]) * channel_count_;
-                    const size_t w2 = size_t(corner_wedge_[f * 3 + 2]) * channel_count_;
-                    double* face_block = &face_blocks[size_t(i) * block_size_];
-                    std::fill(face_block, face_block + block_size_, 0.0);
-                    addTriangleToAttributeBlock(face_block, channel_count_, p0, p1, p2, &wedge_value_[w0],
-                                                &wedge_value_[w1], &wedge_value_[w2], channel_weight_.data());
-                }
-            }));
-            for (uint32_t i = 0; i < count; ++i) {
+    return Status::okStatus();
+}
+
+LODBAKE_STEP Status EdgeCollapser::accumulateAttributeBlocks() {
+    const uint32_t face_count = uint32_t(he_.size() / 3);
+    // Each face's attribute block is computed in parallel (fixed chunks of a batch of faces, into
+    // a small buffer) and added to its wedges in face order: the same sums as a serial loop.
+    constexpr uint32_t kBatch = 2 * kInitChunk;
+    std::vector<double> face_blocks(size_t(kBatch) * block_size_);
+    for (uint32_t base = 0; base < face_count; base += kBatch) {
+        const uint32_t count = std::min(kBatch, face_count - base);
+        LODBAKE_RETURN_IF_ERROR(forChunks(count, [&](size_t, uint32_t first, uint32_t last) {
+            for (uint32_t i = first; i < last; ++i) {
                 const uint32_t f = base + i;
-                const double* face_block = &face_blocks[size_t(i) * block_size_];
-                for (uint32_t k = 0; k < 3; ++k) {
-                    double* block = &wedge_block_[size_t(corner_wedge_[f * 3 + k]) * block_size_];
-                    for (size_t j = 0; j < block_size_; ++j) block[j] += face_block[j];
-                }
+                const Vec3d p0 = toD(position_[he_[f * 3].point]);
+                const Vec3d p1 = toD(position_[he_[f * 3 + 1].point]);
+                const Vec3d p2 = toD(position_[he_[f * 3 + 2].point]);
+                const size_t w0 = size_t(corner_wedge_[f * 3]) * channel_count_;
+                const size_t w1 = size_t(corner_wedge_[f * 3 + 1]) * channel_count_;
+                const size_t w2 = size_t(corner_wedge_[f * 3 + 2]) * channel_count_;
+                double* face_block = &face_blocks[size_t(i) * block_size_];
+                std::fill(face_block, face_block + block_size_, 0.0);
+                addTriangleToAttributeBlock(face_block, channel_count_, p0, p1, p2, &wedge_value_[w0],
+                                            &wedge_value_[w1], &wedge_value_[w2], channel_weight_.data());
+            }
+        }));
+        for (uint32_t i = 0; i < count; ++i) {
+            const uint32_t f = base + i;
+            const double* face_block = &face_blocks[size_t(i) * block_size_];
+            for (uint32_t k = 0; k < 3; ++k) {
+                double* block = &wedge_block_[size_t(corner_wedge_[f * 3 + k]) * block_size_];
+                for (size_t j = 0; j < block_size_; ++j) block[j] += face_block[j];
             }
         }
     }
-    has_penalty_ = options.tip_distance_weight > 0;
-    // A PFRep record is a vertex removal (KeepEndpoint): no component removals there (above).
-    next_component_check_ = size_t(double(face_count) * kComponentCheckStep);
-    removals_ = 0;
-    removed_faces_ = 0;
-    // Late stage (see run()); far_ is filled above. The quadric weights sum to three times the
-    // surface area whatever collapses.
-    late_ = false;
-    late_faces_ = size_t(kLateFraction * double(initial_faces_));
-    total_weight_ = 0;
-    for (const Quadric& q : quadric_) total_weight_ += q.weight;
+    return Status::okStatus();
+}
+
+LODBAKE_STEP void EdgeCollapser::buildUvCharts(const Mesh& mesh) {
+    const uint32_t face_count = uint32_t(he_.size() / 3);
+    const uint32_t he_count = uint32_t(he_.size());
     // UV charts: faces joined across edges whose two corners share wedges (union-find).
     uv_set_count_ = uint32_t(mesh.uvs.size());
     uv_channel_ = uv_set_count_ > 0 ? (mesh.hasNormals() ? 3u : 0u) : kNone;
@@ -1618,7 +1652,10 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
             ++chart_alive_[face_chart_[f]];
         }
     }
-    LODBAKE_RETURN_IF_ERROR(fill_queue.wait());
+}
+
+LODBAKE_STEP Status EdgeCollapser::queueInitialKeys() {
+    const uint32_t he_count = uint32_t(he_.size());
     // Room for every canonical half-edge (half the interior ones plus the open ones): the queue never
     // holds more, and growing it by doubling would copy it and keep up to twice the memory.
     {
@@ -1648,6 +1685,102 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
     }
     queue_.heapify();
     return Status::okStatus();
+}
+
+Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Diagnostics& diagnostics) {
+    LODBAKE_RETURN_IF_ERROR(checkSimplifyInput(mesh, options));
+    source_ = &mesh;
+    options_ = options;
+    cos_max_normal_change_ = std::cos(std::min(double(options.max_normal_change_deg), 180.0) * kPi / 180.0);
+
+    // Attribute channels: normal xyz, each UV set, colour rgba.
+    channel_count_ = (mesh.hasNormals() ? 3 : 0) + 2 * uint32_t(mesh.uvs.size()) + (mesh.hasColors() ? 4 : 0);
+    const Aabb box = computeBounds(mesh);
+    const double diagonal = box.isEmpty() ? 1.0 : std::max(box.diagonal(), 1e-30);
+    channel_weight_.clear();
+    const AttributeWeights& aw = options.attribute_weights;
+    if (mesh.hasNormals())
+        for (int k = 0; k < 3; ++k) channel_weight_.push_back(float(aw.normal * aw.normal * diagonal * diagonal));
+    for (size_t s = 0; s < mesh.uvs.size(); ++s)
+        for (int k = 0; k < 2; ++k) channel_weight_.push_back(float(aw.uv * aw.uv * diagonal * diagonal));
+    if (mesh.hasColors())
+        for (int k = 0; k < 4; ++k) channel_weight_.push_back(float(aw.color * aw.color * diagonal * diagonal));
+    const bool has_wedges = channel_count_ > 0 || mesh.hasTangents();
+
+    InputMap map{mesh, has_wedges, {}, {}};
+    weldPoints(map);
+    renumberPointsByFirstUse(map);
+    const uint32_t point_count = uint32_t(position_.size());
+    const uint32_t wedge_count = uint32_t(wedge_vertex_.size());
+    // The attribute values and blocks, the point quadrics, far_ and the queue's slots are large
+    // arrays (dragon_poisson: 6, 98, 47, 6 and 26 MB) that mostly land on fresh pages, whose first
+    // touch costs far more than the filling. Background tasks allocate and fill them while this
+    // thread builds the faces, twins and point kinds. The quadrics and the queue start once the
+    // twins' corner lists are freed: the memory in use then stays below that at the end of init.
+    BackgroundTasks fill_attributes, fill_quadrics, fill_queue;
+    block_size_ = channel_count_ > 0 ? attributeBlockSize(channel_count_) : 0;
+    fill_attributes.run([&, wedge_count] {
+        wedge_value_.assign(size_t(wedge_count) * channel_count_, 0.0f);
+        for (uint32_t w = 0; w < wedge_count; ++w)
+            for (uint32_t ch = 0; ch < channel_count_; ++ch)
+                wedge_value_[size_t(w) * channel_count_ + ch] = channelValue(mesh, wedge_vertex_[w], ch);
+        wedge_block_.assign(size_t(wedge_count) * block_size_, 0.0);
+    });
+
+    const uint32_t face_count = buildFaces(map, diagnostics);
+    const uint32_t he_count = face_count * 3;
+    initial_faces_ = face_count;
+    alive_faces_ = face_count;
+    collapses_ = 0;
+    max_error_done_ = 0;
+
+    // Twins: pair a->b with b->a when each occurs exactly once; otherwise lock both points.
+    kind_.assign(point_count, kFree);
+    {
+        LargeArray<uint32_t> start(size_t(point_count) + 1, 0);
+        for (uint32_t h = 0; h < he_count; ++h) ++start[he_[h].point + 1];
+        for (uint32_t p = 0; p < point_count; ++p) start[p + 1] += start[p];
+        LODBAKE_RETURN_IF_ERROR(linkTwins(start));
+        fill_quadrics.run([this, point_count, penalty = options.tip_distance_weight > 0] {
+            quadric_.assign(point_count, Quadric());
+            // Late stage (see run()): the penalty also measures each point's far input point, so far_
+            // is kept from the start.
+            if (penalty)
+                far_ = position_;
+            else
+                LargeArray<Vec3f>().swap(far_);
+        });
+        fill_queue.run([this, he_count] { queue_ = CollapseQueue(he_count); });
+        LODBAKE_RETURN_IF_ERROR(classifyPoints(start, diagnostics));
+    }
+
+    // remove_covered_components: a scan's open border lying on another component (merged
+    // overlapping scans) is not a border of the object; its constraint planes weigh less.
+    remove_components_ = options.remove_covered_components && options.placement == CollapsePlacement::Optimal;
+    std::vector<uint8_t> covered_border;
+    if (remove_components_) markCoveredBorders(covered_border);
+    // Quadrics: area-weighted face planes plus constraint planes along feature edges.
+    // Each face's quadric and its feature edges' constraint quadrics are computed in parallel (fixed
+    // chunks of a batch of faces, into a small buffer) and added to the points in face order: the
+    // same sums as a serial loop.
+    LODBAKE_RETURN_IF_ERROR(fill_quadrics.wait());
+    LODBAKE_RETURN_IF_ERROR(accumulateQuadrics(covered_border));
+    LODBAKE_RETURN_IF_ERROR(fill_attributes.wait());
+    if (channel_count_ > 0) LODBAKE_RETURN_IF_ERROR(accumulateAttributeBlocks());
+    has_penalty_ = options.tip_distance_weight > 0;
+    // A PFRep record is a vertex removal (KeepEndpoint): no component removals there (above).
+    next_component_check_ = size_t(double(face_count) * kComponentCheckStep);
+    removals_ = 0;
+    removed_faces_ = 0;
+    // Late stage (see run()); far_ is filled above. The quadric weights sum to three times the
+    // surface area whatever collapses.
+    late_ = false;
+    late_faces_ = size_t(kLateFraction * double(initial_faces_));
+    total_weight_ = 0;
+    for (const Quadric& q : quadric_) total_weight_ += q.weight;
+    buildUvCharts(mesh);
+    LODBAKE_RETURN_IF_ERROR(fill_queue.wait());
+    return queueInitialKeys();
 }
 
 void EdgeCollapser::describe(CollapseSequence& sequence) {

@@ -134,6 +134,16 @@ private:
     // Collapses kRoundShare of the way to target_faces in kRoundParts parts side by side, then merges
     // their queues and counters (nothing when the mesh cannot be cut or the parts do not fit).
     void runRound(size_t target_faces, double max_error);
+    // runRound's steps, in order.
+    struct RoundCut;
+    // The plane that cuts the alive points in two; false when they have no extent to cut.
+    bool findRoundCut(RoundCut& cut) const;
+    // part_points_: the points whose collapses touch only their part's data.
+    void markRoundParts(const RoundCut& cut);
+    // Moves the parts' edges from queue_ to their heaps; false when the parts do not fit.
+    bool splitQueue(PartHeap* heaps);
+    // Collapses in the parts side by side up to `goal` faces, then merges their queues and counters.
+    void collapseRoundParts(PartHeap* heaps, size_t goal, double max_error);
     // The top of w's queue: collapsed, re-queued with its distance penalty, or dropped.
     void step(Worker& w, double max_error, CollapseSequence* sequence);
     // Removes an edge from w's queue (a part: from its heap, or defers an edge outside it).
@@ -171,9 +181,33 @@ private:
                       const WedgePair* pairs, int pair_count) const;
     Vec3d fanNormal(const std::vector<uint32_t>& fan) const;
     void collapse(Worker& w, const Candidate& c, const WedgePair* pairs, int pair_count, CollapseSequence* sequence);
+    // collapse's steps.
+    // Requests the data the collapse and the re-evaluations after it read at random.
+    void prefetchNeighbourhood(const Worker& w, const CollapseSequence* sequence) const;
+    // Merges each removed wedge's attribute quadrics into the kept one and places its attributes.
+    void mergeWedges(const Candidate& c, const WedgePair* pairs, int pair_count, CollapseSequence* sequence);
+    // Removes the edge's faces (h's, and t's unless kNone), gluing their other edges' twins.
+    void removeCollapsedFaces(Worker& w, uint32_t h, uint32_t t);
     void updateEdgesAround(Worker& w, uint32_t point);
     void updateEdgesInFan(Worker& w); // the edges of the fan in w.fan_tmp
     void requeueAll();
+    // init's steps, in order.
+    struct InputMap;
+    // Welds the input's vertices into points (by position) and wedges (by position and attributes).
+    void weldPoints(InputMap& map);
+    // Renumbers the points in order of first use by the faces.
+    void renumberPointsByFirstUse(InputMap& map);
+    // The corner table's points and wedges, the sub-mesh of every face; returns the face count.
+    uint32_t buildFaces(const InputMap& map, Diagnostics& diagnostics);
+    // Twins and point_he_ from each point's outgoing half-edges (`start`: their ranges by point).
+    Status linkTwins(const LargeArray<uint32_t>& start);
+    // Each point's kind (locked when its faces form more than one fan).
+    Status classifyPoints(const LargeArray<uint32_t>& start, Diagnostics& diagnostics);
+    Status accumulateQuadrics(const std::vector<uint8_t>& covered_border);
+    Status accumulateAttributeBlocks();
+    void buildUvCharts(const Mesh& mesh);
+    // Every valid collapse's key, in the queue.
+    Status queueInitialKeys();
     // remove_covered_components (covered_components.cpp): removes every connected component whose
     // points, far points and face centroids all lie within `tolerance` of the other components'
     // faces, smallest first; appends each removal to `sequence` when not null.
