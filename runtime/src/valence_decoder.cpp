@@ -461,8 +461,9 @@ void octahedralDecode(const uint32_t in[2], uint32_t bits, float n[3]) {
 
 namespace {
 
-// The prediction out of line, one function per spread setting: inlined into valenceDecode it made the
-// whole decode of an unflagged stream 4-5 % slower (measured on nefertiti, same instruction count).
+// The prediction out of line, one function per spread setting: inlined into valenceDecode it slows the
+// whole decode of an unflagged stream, at the same instruction count (decode speed: codec_bench,
+// docs/benchmarks.md, "Valence codec against Draco").
 #if defined(__GNUC__) || defined(__clang__)
 #define LODRT_VALENCE_NOINLINE __attribute__((noinline))
 #else

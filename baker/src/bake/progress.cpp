@@ -1,5 +1,6 @@
-// Batch progress. Each stage is a fixed share of a job, measured on the shared scans (the LOD chain
-// with its error measurement dominates); a job's share is its weight over the total.
+// Batch progress. Each stage is a fixed share of a job, set from the stages' times on the shared
+// scans (docs/benchmarks.md, "Bake timeline": the LOD chain with its error measurement dominates);
+// a job's share is its weight over the total.
 #include "lodbake/bake/progress.h"
 
 #include <algorithm>

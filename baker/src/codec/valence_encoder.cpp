@@ -32,7 +32,8 @@ using lodrt::detail::VertexSymbol;
 
 // The encoder's large arrays (a corner or two per input corner, several per vertex) are filled fresh.
 // The largest are backed by transparent huge pages where the OS offers them (core/large_array.h): one
-// page fault per 2 MB instead of one per 4 KB, which was a third of dragon_poisson's encode time.
+// page fault per 2 MB instead of one per 4 KB, where first-touch faults otherwise take a large share
+// of a scan's encode time.
 // Smaller ones stay with malloc, which hands a repeated encode memory already resident.
 // From 2 MB, the smallest size with a whole huge page: the bake codes each level once, into fresh
 // memory, and a fault on a 2 MB page replaces 512 faults on 4 KB pages, so every level's large arrays
@@ -745,9 +746,8 @@ struct Attempt {
                         &node_prev, &node_next, &node_free, &node_corner, &completion, &stack_head, &stack_size})
             v->reset();
         // Vertices with several fans (non-manifold vertices and edges) pinch the front where their
-        // copies meet, and the conquest fails there, often near its end (the dragon at 1,071,828 of
-        // 1,071,852 triangles). Cutting their triangles loose before the first conquest costs a few
-        // copies and saves the restart.
+        // copies meet, and the conquest fails there, often near its end. Cutting their triangles
+        // loose before the first conquest costs a few copies and saves the restart.
         closed = buildClosed(mesh, exploded, precut ? &failure.culprit_sources : nullptr, use_prior ? &prior : nullptr);
         prior = PriorPairing();
         if (!failure.culprit_sources.empty()) {

@@ -8,7 +8,8 @@
 // filling fresh arrays costs one page fault per 4 KB. On Linux, an allocation of at least
 // kHugePageBytes is aligned to 2 MB and marked MADV_HUGEPAGE: the kernel then backs it with 2 MB
 // pages when it can (with THP set to "madvise" or "always"), which removes most TLB misses and
-// page faults (dragon_poisson's chain: docs/simplify.md, "Measured"). Only whole 2 MB pages
+// page faults (bake time: docs/benchmarks.md, "Bake time and peak memory against native
+// meshoptimizer"). Only whole 2 MB pages
 // inside the requested size are advised, so no memory beyond the request becomes resident, and
 // such blocks are mapped and unmapped directly, so they never sit in malloc's free lists.
 // Elsewhere, for small arrays, and in AddressSanitizer builds it is plain operator new. Contents

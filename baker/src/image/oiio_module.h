@@ -1,7 +1,7 @@
 #pragma once
 // Internal to the image module: the interface of liblodbake_oiio, the shared module that holds every
-// OpenImageIO call. Debian's libOpenImageIO pulls in some 250 libraries (OpenCV, GDAL, OpenVDB,
-// FFmpeg...) whose start-up costs about 3 s per process; loading it with dlopen only when a texture
+// OpenImageIO call. Debian's libOpenImageIO pulls in hundreds of libraries (OpenCV, GDAL, OpenVDB,
+// FFmpeg...) whose loading slows every process start; loading it with dlopen only when a texture
 // is actually resized keeps that cost away from every bake without textures and from every test
 // process. Module and library are built by the same toolchain, so C++ types cross the boundary.
 

@@ -761,10 +761,10 @@ Result<PfrepBuild> buildBlob(const CollapseSequence& sequence, const std::vector
     namespace fmt = lodrt::format;
     const uint32_t point_count = uint32_t(sequence.point_positions.size());
     if (point_triangles.size() % 3 != 0) return invalidInput("pfrep: point triangle list is not a multiple of 3");
-    // The working arrays (tens of MB on a scan) are on core/large_array.h storage: from 2 MB on, huge
-    // pages where the OS offers them. On std::vector, first-touch 4 KB page faults were about 40 % of
-    // a standalone blob build of dragon_poisson; inside a bake those arrays mostly reuse heap pages
-    // the chain freed, so there it made no measurable difference (docs/bake.md, "Sessions 12 and 13").
+    // The working arrays (sized by the mesh) are on core/large_array.h storage: from 2 MB on, huge
+    // pages where the OS offers them, so filling them fresh takes one page fault per 2 MB instead of
+    // one per 4 KB. A standalone blob build gains most; inside a bake those arrays mostly reuse heap
+    // pages the chain freed.
     for (size_t c = 0; c < point_triangles.size(); ++c)
         if (point_triangles[c] >= point_count)
             return invalidInput("pfrep: triangle " + std::to_string(c / 3) + ": point out of range");

@@ -59,7 +59,7 @@ constexpr double kPlaneMargin = 1.0 + 1e-9;
 // time the face count has fallen to kComponentCheckStep of the count at the previous check, with a
 // tolerance of kCoveredComponentFactor × the largest collapse error (quadric RMS estimate) so far.
 // Open border edges lying on another component get kCoveredBorderFactor × the border weight. Both
-// factors were chosen on dragon_stand_merged (factors 0.5–4 and 0–1 measured).
+// factors are tuned on merged range scans, whose overlapping sheets are what the option removes.
 constexpr double kComponentCheckStep = 0.8;
 constexpr double kCoveredComponentFactor = 1.0;
 constexpr double kCoveredBorderFactor = 0.5;
@@ -73,9 +73,9 @@ inline void prefetch(const void* p) {
 #endif
 }
 
-// The named steps of init, runRound and collapse are inlined into them: the compiler then sees the
-// one function each was, and makes the same inlining decisions for the hot collapse loop around
-// them (left to itself it traded inlines there for the new functions, and the loop got slower).
+// The named steps of init, runRound and collapse are inlined into them: the compiler then sees
+// each as one function and keeps its inlining decisions for the hot collapse loop around them
+// (left to itself it trades inlines there for the step functions, which slows the loop).
 #if defined(__GNUC__)
 #define LODBAKE_STEP inline __attribute__((always_inline))
 #else
@@ -773,8 +773,8 @@ void EdgeCollapser::updateEdgesAround(Worker& w, uint32_t point) {
 
 void EdgeCollapser::updateEdgesInFan(Worker& w) {
     // Eager update: every edge around the kept point gets its fresh key now. (Marking them stale
-    // and re-keying on pop saved about 5 % of the instructions but let keys that dropped wait,
-    // which cost up to 10 % Hausdorff error on Nefertiti and Lucy.)
+    // and re-keying on pop saves a few instructions but lets keys that dropped wait, so collapses
+    // leave the cost order and the Hausdorff error grows.)
     Candidate c;
     auto update = [&](uint32_t he) {
         const uint32_t e = canonical(he);
@@ -822,8 +822,9 @@ void EdgeCollapser::requeueAll() {
 
 bool EdgeCollapser::run(size_t target_faces, double max_error, CollapseSequence* sequence) {
     // A round removes at most half of the faces alive: its seam band (points next to the other part)
-    // keeps its density meanwhile, and the serial loop must catch up on it afterwards (one round from
-    // 268 k to 107 k faces, dragon_poisson's 10 % level: Hausdorff error +11 % against the serial order).
+    // keeps its density meanwhile, and the serial loop must catch up on it afterwards (one round
+    // straight to a distant target leaves it too much, and the Hausdorff error rises above the serial
+    // order's).
     // A run that goes further takes more rounds, each cut across the last one's seam (not after a
     // round to the run's own target: the serial loop's share is what catches up on the seam band).
     for (;;) {
@@ -1140,15 +1141,15 @@ LODBAKE_STEP void EdgeCollapser::collapseRoundParts(PartHeap* heaps, size_t goal
     late_ = false;
     // The parts run in phases up to a common key limit, so that neither collapses much further
     // up the cost order than the other (with a fixed share of the faces each, the part with the
-    // costlier surface went further than the serial order would: Hausdorff error +34 % on
-    // dragon_stand_merged). A phase's limit is the key below which the two heaps together hold as
+    // costlier surface goes further than the serial order would, which raises the Hausdorff
+    // error). A phase's limit is the key below which the two heaps together hold as
     // many entries as faces are left to remove, from a histogram of the keys' float bits (6
     // mantissa bits: steps of 1.6 %); a collapse removes two faces but re-keys its neighbours
     // above the limit, so a phase removes about two thirds of what is left. Each part may remove
     // at most its part (by entries under the limit) of the faces left, so the round never passes
-    // the goal. Phases end once less than 1/32 of the goal is left: two per round on
-    // dragon_poisson (a limit at half as many entries took six or seven, each a wait for the
-    // slower part). The seam's edges and the rest go on in run()'s serial loop.
+    // the goal. Phases end once less than 1/32 of the goal is left. A limit at as many entries as
+    // faces are left keeps the phases few (a lower limit needs more of them, and each ends in a wait
+    // for the slower part). The seam's edges and the rest go on in run()'s serial loop.
     constexpr uint32_t kCostBins = 1u << 14;
     auto costBin = [](float cost) {
         uint32_t bits;
@@ -1385,10 +1386,9 @@ LODBAKE_STEP void EdgeCollapser::renumberPointsByFirstUse(InputMap& map) {
     LargeArray<uint32_t>& vertex_wedge = map.vertex_wedge;
     // Points renumbered in order of first use by the faces: a collapse touches a few dozen points
     // and faces that are neighbours on the surface, and scans often list their vertices far from
-    // the order of their faces (lucy100k's faces span 9,500 vertex ids at the 90th percentile).
-    // Face order is kept, so points and faces then advance together. (A Morton curve of the
-    // positions was 30 % slower on dragon_stand_merged: its 15 overlapping sheets interleave
-    // points of different sheets.) Only storage moves: no decision depends on point ids, so the
+    // the order of their faces. Face order is kept, so points and faces then advance together.
+    // (A Morton curve of the positions does worse on merged range scans: their overlapping sheets
+    // interleave points of different sheets.) Only storage moves: no decision depends on point ids, so the
     // simplified meshes are the same bits (wedges keep their numbering by first vertex; without
     // attributes a wedge is its point and moves with it).
     const uint32_t n = uint32_t(position_.size());
@@ -1713,7 +1713,7 @@ Status EdgeCollapser::init(const Mesh& mesh, const SimplifyOptions& options, Dia
     const uint32_t point_count = uint32_t(position_.size());
     const uint32_t wedge_count = uint32_t(wedge_vertex_.size());
     // The attribute values and blocks, the point quadrics, far_ and the queue's slots are large
-    // arrays (dragon_poisson: 6, 98, 47, 6 and 26 MB) that mostly land on fresh pages, whose first
+    // arrays (sized by the mesh) that mostly land on fresh pages, whose first
     // touch costs far more than the filling. Background tasks allocate and fill them while this
     // thread builds the faces, twins and point kinds. The quadrics and the queue start once the
     // twins' corner lists are freed: the memory in use then stays below that at the end of init.

@@ -50,8 +50,8 @@ public:
 
     size_t faceCount() const { return alive_faces_; }
     // refine_late_levels applies to a snapshot taken now: at most 2.5 % of the input's faces (the 2 %
-    // and 0.5 % levels it was measured on; a 3 % level is not refined, which halves its cost in the
-    // default 5-level chain).
+    // and 0.5 % levels it is tuned for; a 3 % level is not refined, which saves most of the
+    // refinement's cost in the default 5-level chain).
     bool refinesSnapshot() const {
         return options_.refine_late_levels && options_.placement == CollapsePlacement::Optimal &&
                double(alive_faces_) <= 0.025 * double(initial_faces_);
@@ -116,8 +116,8 @@ private:
     // runs the parts one after the other).
     static constexpr uint32_t kRoundParts = 2;
     // A round removes this fraction of the faces to its target; the serial loop removes the rest,
-    // the seam band's first (0.95 left a Hausdorff error 11 % above the serial order's on
-    // dragon_poisson's 10 % level; 0.9 none).
+    // the seam band's first (a larger share leaves it too little to catch up on the seam band, and
+    // the Hausdorff error rises above the serial order's).
     static constexpr double kRoundShare = 0.9;
     static constexpr uint32_t kRoundMaxPhases = 16; // key limits per round (runRound)
     // No round that would remove fewer than alive / this faces (its set-up is a few passes over the mesh).

@@ -22,7 +22,9 @@ namespace lodbake::detail {
 
 namespace {
 
-// Steps; measured on the 2 % and 0.5 % cells of bunny, igea, Lucy and Nefertiti.
+// Relaxation steps and the share of each step's pull that is applied, tuned on the late (2 % and
+// 0.5 %) levels of the shared scans: damping keeps a point from overshooting while its neighbours
+// move too (simplification results: docs/benchmarks.md, "Simplification against meshoptimizer").
 constexpr int kLevelRefineIterations = 3;
 constexpr double kDamping = 0.5;
 // Input points used per step: every k-th referenced vertex so that at most this many are used
@@ -30,8 +32,8 @@ constexpr double kDamping = 0.5;
 constexpr size_t kMaxRefinePoints = 65536;
 // On a level with UVs refinement may not change a face's area by more than a factor 1.25 either way
 // from the snapshot's (squared: the cross products' squared lengths are compared): squeezing or
-// stretching a face in 3D distorts its texture (Lee Perry-Smith's 1 % level: stretch 91.6 unrefined, 826 with unbounded
-// area, 77.8 with this bound).
+// stretching a face in 3D distorts its texture. Unbounded, refinement can multiply a textured level's
+// texture stretch; within this bound it does not add to it.
 constexpr double kMinAreaRatio2 = 0.64;
 constexpr double kMaxAreaRatio2 = 1.5625;
 // Samples per task of the parallel nearest-face searches (fixed: nothing depends on the thread count).

@@ -57,8 +57,8 @@ Result<LodChain> buildLodChain(const Mesh& mesh, const LodChainOptions& options,
             const size_t collapses = faces > last_target ? faces - last_target : 0;
             sequence->records.reserve(collapses);
             if (!sequence->point_triangles.empty()) {
-                // About three re-created triangles per half-edge collapse on scans (2.7 M stored
-                // triangles for 1.07 M input ones on dragon_poisson).
+                // A half-edge collapse on a scan re-creates about three triangles; room for four per
+                // collapse saves growing the list by doubling.
                 sequence->created_end.reserve(collapses);
                 sequence->created_triangles.reserve(collapses * 4 * 3);
             }

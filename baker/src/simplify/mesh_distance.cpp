@@ -513,7 +513,7 @@ std::vector<Result<DistanceResult>> measurePipelined(const DistanceReference& re
 }
 
 // closestDistanceSq's steps. They run for every node the search visits, so they are forced inline:
-// the search compiles to the same loop as when they were written in place.
+// the search compiles to the same loop as if they were written in place.
 
 // One entry of the search stack: a child reference and the float distance to its box (a lower bound).
 struct SearchEntry {

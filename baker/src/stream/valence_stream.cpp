@@ -97,8 +97,8 @@ struct CodedStream {
 // An uninitialised array on core/large_array.h's storage: from 2 MB on it is mapped on its own and
 // backed by transparent huge pages where the OS offers them. The check's decoder fills fresh blocks
 // of up to about 150 bytes per triangle (its scratch and the positions it has to write); with 4 KB
-// pages every first touch is a page fault, which on dragon_poisson's LOD0 cost more than the decode
-// itself (0.65 instead of 0.27 s of CPU).
+// pages every first touch is a page fault, which on a large level costs more than the decode
+// itself.
 template <typename T> class ScratchArray {
 public:
     explicit ScratchArray(size_t n) : n_(std::max<size_t>(n, 1)), p_(detail::LargeArrayAllocator<T>().allocate(n_)) {}
@@ -153,8 +153,9 @@ Result<CodedStream> codeStream(const Mesh& mesh, const ValencePrecision& precisi
     Result<codec::ValenceEncodeResult> encoded = codec::encodeValence(mesh, encode_options);
     if (!encoded.ok()) return Status(encoded.status().code(), where + ": " + encoded.status().message());
     // The decoder's scratch is one large block that the allocator maps fresh, while the coder's freed
-    // tables may still be resident: without this the check's peak sits on top of the coder's (on
-    // dragon_poisson's LOD0 with glibc: 319 instead of 231 MiB). Small meshes are not worth the call.
+    // tables may still be resident: without this the check's peak sits on top of the coder's (peak
+    // memory: docs/benchmarks.md, "Bake time and peak memory against native meshoptimizer"). Small
+    // meshes are not worth the call.
     if (release_memory && mesh.faceCount() >= kReleaseMemoryTriangles) release_memory();
     LODBAKE_ASSIGN_OR_RETURN(DecodedIndices decoded, decodeIndices(encoded->bytes, mesh.vertexCount(), where));
     if (encoded->new_vertex_of.size() != mesh.vertexCount() || !sameTriangles(mesh, *encoded, decoded))

@@ -166,7 +166,8 @@ inline size_t pfrepCriterionTableFloats(const PfrepModel& model) {
 }
 /// Fills table[0, capacity) with the dequantized refinement criterion of every loaded vertex and
 /// attaches it to *model, so pfrepRefine reads each vertex's criterion from 32 contiguous bytes
-/// instead of decoding its record (same values, same decisions; measured in pfrep_bench). Costs
+/// instead of decoding its record (same values, same decisions, faster: pfrep_bench's refinement,
+/// docs/benchmarks.md, "PFRep blobs"). Costs
 /// 32.25 bytes per vertex per model, not per instance. InvalidArgument / BufferTooSmall.
 LODRT_API Result pfrepAttachCriterionTable(PfrepModel* model, float* table, size_t capacity);
 

@@ -1,13 +1,13 @@
 #pragma once
 // Stanford range-scan alignment files (.conf): a list of range scans and the rigid transform that
 // places each in world coordinates. Reading one loads every scan, transforms it and concatenates
-// them, so a whole turntable session bakes as one input (overlapping sheets, no welding between
+// them, so a whole turntable of scans bakes as one input (overlapping sheets, no welding between
 // scans).
 //
 // Lines: "bmesh FILE tx ty tz qx qy qz qw" (a scan, FILE relative to the .conf's folder),
 // "camera ..." and "mesh ..." (ignored; "mesh" names a scanner calibration object, noted in the
 // diagnostics). A point p of FILE goes to R(q)^T · p + t, the Stanford convention (the conjugate
-// quaternion), which puts the shared bunny and dragon scans onto their reconstructions.
+// quaternion), which puts the shared Stanford range scans onto their reconstructions.
 
 #include <string>
 

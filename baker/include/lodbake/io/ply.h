@@ -25,8 +25,8 @@
 //   one with 3 samples gives 1 triangle. The grid spacing is the larger of the median distances
 //   between neighbouring samples along rows and along columns; triangles with an edge longer than
 //   ReadOptions::range_grid_max_edge_factor × spacing (bridges across depth jumps) are dropped.
-//   Triangles face the scanner. This reproduces the derived files in the shared scan set
-//   (bunny_scan_bun000_tri.ply: same 78,505 triangles with the same winding).
+//   Triangles face the scanner. This reproduces the derived files in the shared scan set (the
+//   same triangles with the same winding).
 //
 // SourceInfo: encoding "ascii" / "binary_little_endian" / "binary_big_endian"; file_vertex_count
 // is the vertex element's count; file_face_count counts faces, strips or grid cells as the file has

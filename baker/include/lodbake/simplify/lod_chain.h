@@ -187,7 +187,7 @@ struct LodChainOptions {
     ScreenParams screen;
     bool record_collapses = true; // fill LodChain::sequence
     // Fill LodChain::removals, and run the collapses on past the last level to the end of valid ones
-    // (the tail is short: the last level is usually 1 % of the input). Ignored (removals left empty)
+    // (the tail is short: the default chain's last level is 1 % of the input). Ignored (removals left empty)
     // with simplify.remove_covered_components, whose component removals are not vertex removals.
     // With record_collapses the sequence then also holds the tail's records.
     bool record_removals = false;

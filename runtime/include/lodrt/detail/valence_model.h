@@ -190,14 +190,16 @@ struct ConquestArrays {
 constexpr uint32_t kFlagDummy = 1u;
 constexpr uint32_t kFlagOpenOne = 2u;
 /// Nodes within this many steps on each side of a closed focus are candidates for the next focus
-/// (measured: 1 -> 3 -> 8 steps give nefertiti 2.55 -> 2.38 -> 2.36 bits/vertex, 200 no better).
+/// (a wider window finds a better next focus, so symbols cost fewer bits; beyond 8 steps the gain
+/// ends while the search still grows).
 constexpr uint32_t kFocusWindow = 8;
 constexpr uint32_t kValenceContexts = 33; // 32 focus contexts + 1 for the seed triangle
 constexpr uint32_t kSeedContext = 32;
 
 /// Context of the symbol coded at focus F: the valences of the front edge's two vertices (their sum,
-/// 8 buckets) and the focus's free edges (1, 2, 3, 4+). Measured better than the focus valence alone
-/// or the previous valence (nefertiti 2.40 -> 2.36 bits/vertex).
+/// 8 buckets) and the focus's free edges (1, 2, 3, 4+). It predicts the symbol better than the focus
+/// valence alone or the previous valence, so the stream is smaller (docs/benchmarks.md, "Valence codec
+/// against Draco").
 inline uint32_t valenceContext(uint32_t focus_valence, uint32_t focus_free, uint32_t next_valence) {
     uint32_t sum = focus_valence + next_valence;
     sum = sum < 8 ? 0 : (sum > 15 ? 7 : sum - 8);
