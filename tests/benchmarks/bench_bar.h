@@ -18,6 +18,8 @@
 #include <string>
 #include <vector>
 
+#include "bench_timing.h"
+
 namespace lodbake_bench {
 
 enum class Limit { AtMost, AtLeast };
@@ -32,14 +34,6 @@ struct Bar {
     bool on_ratio = false; // the limit applies to the ratio, else to ours
     bool met = false;
 };
-
-/// Median of `values` (the mean of the two middle values for an even count); 0 for none.
-inline double median(std::vector<double> values) {
-    if (values.empty()) return 0;
-    std::sort(values.begin(), values.end());
-    const size_t h = values.size() / 2;
-    return values.size() % 2 ? values[h] : 0.5 * (values[h - 1] + values[h]);
-}
 
 /// Removes `--check` from argv (so the bench's own parsing never sees it) and says whether it was there.
 inline bool takeCheckFlag(int& argc, char** argv) {

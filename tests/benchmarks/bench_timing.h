@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <utility>
 #include <vector>
 
 namespace lodbake_bench {
@@ -30,6 +31,14 @@ template <class F> double bestMs(int runs, F&& f) {
     return best;
 }
 
+/// Median of `values` (the mean of the two middle values for an even count); 0 for none.
+inline double median(std::vector<double> values) {
+    if (values.empty()) return 0;
+    std::sort(values.begin(), values.end());
+    const size_t h = values.size() / 2;
+    return values.size() % 2 ? values[h] : 0.5 * (values[h - 1] + values[h]);
+}
+
 /// Median wall time of `runs` calls of f, in milliseconds (what the bars are judged on: a single
 /// lucky or preempted run moves it less than the best or the mean).
 template <class F> double medianMs(int runs, F&& f) {
@@ -40,10 +49,7 @@ template <class F> double medianMs(int runs, F&& f) {
         const auto t1 = std::chrono::steady_clock::now();
         times.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
     }
-    if (times.empty()) return 0.0;
-    std::sort(times.begin(), times.end());
-    const size_t h = times.size() / 2;
-    return times.size() % 2 ? times[h] : 0.5 * (times[h - 1] + times[h]);
+    return median(std::move(times));
 }
 
 } // namespace lodbake_bench
