@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <deque>
@@ -390,10 +391,15 @@ TEST(PfrepStreamingTest, WorkerThreadsReachTheSameResult) {
     ASSERT_EQ(source.openBytes(bytes.data(), bytes.size(), nullptr), Result::Ok);
     const Blob blob = blobOf(source, 1);
     // Each job on its own thread: steps complete while the frame keeps calling update().
+    // The threads are joined however the test leaves this scope, so a failed assertion reports
+    // instead of terminating on a joinable std::thread.
     struct Threads {
         std::vector<std::thread> running;
         static void submit(void* user, void (*run)(void*), void* task) {
             static_cast<Threads*>(user)->running.emplace_back(run, task);
+        }
+        ~Threads() {
+            for (std::thread& t : running) t.join();
         }
     } threads;
     const lodrt::JobSystem system{&Threads::submit, &threads};
@@ -402,14 +408,16 @@ TEST(PfrepStreamingTest, WorkerThreadsReachTheSameResult) {
         ASSERT_EQ(streamer.init(&source, &system, nullptr), Result::Ok);
         std::vector<ModelDemand> demand(2);
         demand[1] = {0, 3.0f};
-        for (int frame = 0; frame < 20000 && streamer.pfrepLevel(1) != 0; ++frame) {
+        // Bounded by time, not by a frame count: on a loaded machine the job threads may get
+        // little of the CPU while this loop spins.
+        const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
+        while (streamer.pfrepLevel(1) != 0 && std::chrono::steady_clock::now() < deadline) {
             streamer.update(demand.data());
-            std::this_thread::yield();
+            std::this_thread::sleep_for(std::chrono::microseconds(100));
         }
         ASSERT_EQ(streamer.pfrepLevel(1), 0);
         EXPECT_EQ(streamer.pfrepModel(1)->size, blob.bytes.size());
         expectCoveredLevelsMatch(streamer, 1, blob);
         EXPECT_EQ(streamer.pfrepLevel(0), kNoLevel);
     } // the destructor waits for jobs still running
-    for (std::thread& t : threads.running) t.join();
 }
