@@ -1,0 +1,69 @@
+#pragma once
+// lodview's OpenGL 3.3 core side: one GPU copy per resident pack level (vertex buffer of its
+// POSITION accessors as the pack stores them, uint32 index buffer from PackSource::copyLevelIndices),
+// a flat-shading program, an offscreen framebuffer of the requested size (so a headless run reads
+// back the same pixels an interactive run shows), and GL_TIME_ELAPSED queries for GPU frame time.
+// Needs a current context (GLFW creates it); functions come from libepoxy.
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "lodrt/lodrt.h"
+
+namespace lodview {
+
+/// GPU copy of one level of one model: one draw range per TRIANGLES primitive.
+struct GpuLevel {
+    struct Range {
+        uint32_t vao = 0;
+        uint32_t first_index = 0; // into the level's index buffer
+        uint32_t index_count = 0;
+    };
+    std::vector<uint32_t> buffers; // vertex buffers (one per primitive) and the index buffer
+    std::vector<Range> ranges;
+    uint64_t triangles = 0;
+    bool valid = false;
+};
+
+class Renderer {
+public:
+    Renderer() = default;
+    ~Renderer();
+    Renderer(const Renderer&) = delete;
+    Renderer& operator=(const Renderer&) = delete;
+
+    /// Compiles the program and creates the framebuffer. False with *error set on failure.
+    bool init(uint32_t width, uint32_t height, std::string* error);
+
+    /// Uploads a level from the bytes PackSource::readLevel wrote. `indices` is caller scratch of
+    /// at least source.levelIndexCount(model, level) values. False with *error set when the level
+    /// has no drawable POSITION data.
+    bool upload(const lodrt::PackSource& source, uint32_t model, uint32_t level, const uint8_t* bytes,
+                uint32_t* indices, size_t index_capacity, GpuLevel* out, std::string* error);
+    void release(GpuLevel* level);
+
+    /// Frame: binds the framebuffer, clears, starts the GPU timer.
+    void beginFrame(const float view_proj[16]);
+    /// One draw call per range; returns the draw calls made.
+    uint32_t draw(const GpuLevel& level, const float model[16], const float colour[3]);
+    /// Ends the GPU timer; copies the framebuffer to the window's when `to_window`.
+    void endFrame(bool to_window, uint32_t window_width, uint32_t window_height);
+    /// GPU time of the last frame in milliseconds (waits for the query), or -1 when timer queries
+    /// are unsupported.
+    double gpuMilliseconds();
+    /// Reads the framebuffer as 8-bit RGB, rows top to bottom.
+    void readPixels(std::vector<uint8_t>* rgb);
+
+    uint32_t width() const { return width_; }
+    uint32_t height() const { return height_; }
+
+private:
+    uint32_t program_ = 0, fbo_ = 0, colour_rb_ = 0, depth_rb_ = 0, query_ = 0;
+    int u_view_proj_ = -1, u_model_ = -1, u_colour_ = -1;
+    uint32_t width_ = 0, height_ = 0;
+    bool query_pending_ = false;
+};
+
+} // namespace lodview

@@ -1,0 +1,438 @@
+#include "view_scene.h"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+
+namespace lodview {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double msSince(Clock::time_point t0) {
+    return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+// Clay tones per asset, and one colour per level for --colour-by-level (level 0 red ... coarsest
+// blue), so a screenshot shows where the selection switched.
+constexpr float kAssetColours[][3] = {{0.80f, 0.74f, 0.64f}, {0.70f, 0.76f, 0.80f}, {0.78f, 0.70f, 0.74f},
+                                      {0.72f, 0.78f, 0.68f}, {0.82f, 0.78f, 0.58f}, {0.66f, 0.70f, 0.78f}};
+constexpr float kLevelColours[lodrt::kMaxLevels][3] = {
+    {0.90f, 0.20f, 0.15f}, {0.95f, 0.55f, 0.10f}, {0.95f, 0.85f, 0.15f}, {0.35f, 0.80f, 0.25f},
+    {0.15f, 0.75f, 0.80f}, {0.20f, 0.40f, 0.95f}, {0.55f, 0.30f, 0.85f}, {0.85f, 0.35f, 0.75f}};
+
+} // namespace
+
+struct View::Pack {
+    std::string path;
+    int fd = -1;
+    uint64_t size = 0;
+    lodrt::PackSource source;
+    lodrt::LodTable table;
+    lodrt::Streamer streamer; // after source: destroyed first
+    std::vector<lodrt::ModelDemand> demand;
+    std::vector<GpuLevel> gpu; // model * kMaxLevels + level
+    size_t first = 0, count = 0; // its instances
+    uint64_t streamed_before = 0;
+    uint32_t requests_before = 0;
+
+    ~Pack() {
+        if (fd >= 0) close(fd);
+    }
+    // pread: no shared file position, so the job thread and the frame thread may read at once.
+    static lodrt::Result read(void* user, uint64_t offset, void* dst, size_t size) {
+        const Pack* self = static_cast<const Pack*>(user);
+        uint8_t* out = static_cast<uint8_t*>(dst);
+        while (size > 0) {
+            const ssize_t n = pread(self->fd, out, size, off_t(offset));
+            if (n < 0 && errno == EINTR) continue;
+            if (n <= 0) return lodrt::Result::Truncated;
+            out += n;
+            offset += uint64_t(n);
+            size -= size_t(n);
+        }
+        return lodrt::Result::Ok;
+    }
+};
+
+JobThread::JobThread() : thread_([this] { loop(); }) {}
+
+JobThread::~JobThread() {
+    {
+        std::lock_guard<std::mutex> lock(mutex_);
+        stop_ = true;
+    }
+    cv_.notify_all();
+    thread_.join();
+}
+
+void JobThread::submit(void* user, void (*run)(void*), void* task) {
+    JobThread* self = static_cast<JobThread*>(user);
+    {
+        std::lock_guard<std::mutex> lock(self->mutex_);
+        self->queue_.push_back({run, task});
+    }
+    self->cv_.notify_one();
+}
+
+void JobThread::loop() {
+    for (;;) {
+        std::pair<void (*)(void*), void*> job;
+        {
+            std::unique_lock<std::mutex> lock(mutex_);
+            cv_.wait(lock, [this] { return stop_ || !queue_.empty(); });
+            if (queue_.empty()) return;
+            job = queue_.front();
+            queue_.pop_front();
+        }
+        job.first(job.second);
+    }
+}
+
+View::View() = default;
+
+View::~View() {
+    drain();
+    packs_.clear();
+}
+
+bool View::open(const std::vector<std::string>& paths, std::string* error) {
+    // Every lodrt allocation goes through this hook, so a frame's allocations can be counted.
+    allocator_.user = &allocations_;
+    allocator_.allocate = [](void* user, size_t size) -> void* {
+        static_cast<std::atomic<uint64_t>*>(user)->fetch_add(1, std::memory_order_relaxed);
+        return std::malloc(size);
+    };
+    allocator_.deallocate = [](void*, void* ptr) { std::free(ptr); };
+    jobs_ = lodrt::JobSystem{&JobThread::submit, &jobs_thread_};
+    for (const std::string& path : paths) {
+        std::unique_ptr<Pack> pack(new Pack);
+        pack->path = path;
+        pack->fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+        struct stat st;
+        if (pack->fd < 0 || fstat(pack->fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+            *error = path + ": file: expected a readable pack file";
+            return false;
+        }
+        pack->size = uint64_t(st.st_size);
+        lodrt::LoadOptions options;
+        options.allocator = allocator_;
+        char message[256] = {};
+        const lodrt::Result r = pack->source.openReader(lodrt::RangeReader{&Pack::read, pack.get()}, pack->size,
+                                                        &options, message, sizeof(message));
+        if (r != lodrt::Result::Ok) {
+            *error = path + ": " + message + " (" + lodrt::resultName(r) + ")";
+            return false;
+        }
+        if (pack->source.models().modelCount() == 0) {
+            *error = path + ": /nodes: expected at least one node with a mesh";
+            return false;
+        }
+        packs_.push_back(std::move(pack));
+    }
+    return true;
+}
+
+bool View::placeInstances(std::string* error) {
+    struct Asset {
+        uint32_t pack, model;
+    };
+    std::vector<Asset> assets;
+    for (uint32_t p = 0; p < packs_.size(); ++p)
+        for (uint32_t m = 0; m < packs_[p]->source.models().modelCount(); ++m) assets.push_back({p, m});
+    const int n = config_.grid;
+    const size_t count = size_t(n) * size_t(n);
+    for (uint32_t p = 0; p < packs_.size(); ++p) {
+        Pack& pack = *packs_[p];
+        pack.first = x_.size();
+        for (size_t cell = 0; cell < count; ++cell) {
+            const Asset& asset = assets[cell % assets.size()];
+            if (asset.pack != p) continue;
+            const lodrt::ModelInfo& info = pack.source.models().model(asset.model);
+            const float s = info.world_sphere_radius > 0 ? 1.0f / info.world_sphere_radius : 1.0f;
+            const float gx = float(int(cell) % n) - 0.5f * float(n - 1);
+            const float gz = float(int(cell) / n) - 0.5f * float(n - 1);
+            // Bounding sphere of radius 1 resting on the ground at the cell's centre.
+            const float centre[3] = {gx * config_.spacing, 1.0f, gz * config_.spacing};
+            float m[16] = {s, 0, 0, 0, 0, s, 0, 0, 0, 0, s, 0, 0, 0, 0, 1};
+            for (int a = 0; a < 3; ++a) m[12 + a] = centre[a] - s * info.world_sphere_center[a];
+            placement_.insert(placement_.end(), m, m + 16);
+            x_.push_back(centre[0]);
+            y_.push_back(centre[1]);
+            z_.push_back(centre[2]);
+            r_.push_back(s * info.world_sphere_radius);
+            scale_.push_back(s * info.max_axis_scale);
+            model_.push_back(asset.model);
+            asset_.push_back(uint32_t(cell % assets.size()));
+        }
+        pack.count = x_.size() - pack.first;
+    }
+    instance_count_ = x_.size();
+    level_.assign(instance_count_, lodrt::kNoLevel);
+    draw_.assign(instance_count_, lodrt::kNoLevel);
+    visibility_.assign(instance_count_, lodrt::Containment::Outside);
+    const lodrt::Result r =
+        bvh_.build(x_.data(), y_.data(), z_.data(), r_.data(), instance_count_, &allocator_);
+    if (r != lodrt::Result::Ok) {
+        *error = std::string("instances: cannot build the bounding volume hierarchy (") + lodrt::resultName(r) + ")";
+        return false;
+    }
+    return true;
+}
+
+bool View::init(const ViewConfig& config, std::string* error) {
+    config_ = config;
+    if (!placeInstances(error)) return false;
+    params_.pixel_threshold = config_.pixel_threshold;
+    params_.viewport_height = float(config_.height);
+    params_.vertical_fov = config_.vertical_fov;
+    params_.hysteresis = config_.hysteresis;
+    k_ = lodrt::pixelsPerUnitAtDistanceOne(params_);
+    size_t max_indices = 0;
+    for (auto& pack : packs_) {
+        const lodrt::ModelSet& models = pack->source.models();
+        lodrt::Result r = pack->table.prepare(models, params_, &allocator_);
+        if (r == lodrt::Result::Ok) {
+            lodrt::StreamerOptions options;
+            options.allocator = allocator_;
+            options.budget_bytes = config_.budget_bytes;
+            r = pack->streamer.init(&pack->source, &jobs_, &options);
+        }
+        if (r != lodrt::Result::Ok) {
+            *error = pack->path + ": cannot prepare selection and streaming (" + lodrt::resultName(r) + ")";
+            return false;
+        }
+        pack->demand.assign(models.modelCount(), lodrt::ModelDemand());
+        pack->gpu.resize(size_t(models.modelCount()) * lodrt::kMaxLevels);
+        for (uint32_t m = 0; m < models.modelCount(); ++m)
+            for (uint32_t l = 0; l < models.model(m).level_count; ++l)
+                max_indices = std::max(max_indices, size_t(pack->source.levelIndexCount(m, l)));
+    }
+    index_scratch_.resize(std::max<size_t>(max_indices, 1));
+    return true;
+}
+
+void View::camera(float t, float eye[3], float target[3]) const {
+    const float half = 0.5f * float(config_.grid - 1) * config_.spacing;
+    const float start = half + 3.0f * config_.spacing, end = -half - 1.5f * config_.spacing;
+    eye[0] = 0.5f * config_.spacing; // the aisle between the two middle columns
+    eye[1] = 1.6f;
+    eye[2] = start + (end - start) * t;
+    const float yaw = 0.45f * std::sin(6.2831853f * 1.5f * t);
+    target[0] = eye[0] - 4.0f * std::sin(yaw);
+    target[1] = 1.1f;
+    target[2] = eye[2] - 4.0f * std::cos(yaw);
+}
+
+void View::selectPack(Pack& pack, const float eye[3]) {
+    const size_t f = pack.first;
+    const lodrt::InstanceArrays in{x_.data() + f, y_.data() + f, z_.data() + f, r_.data() + f, scale_.data() + f,
+                                   model_.data() + f, pack.count};
+    const lodrt::SelectionOutput out{level_.data() + f, draw_.data() + f, nullptr};
+    lodrt::selectLevels(pack.table, eye, in, visibility_.data() + f, pack.streamer.residentTable(), out);
+    if (config_.mode == LodMode::ForceLod0)
+        for (size_t i = f; i < f + pack.count; ++i)
+            if (visibility_[i] != lodrt::Containment::Outside) level_[i] = 0;
+    lodrt::accumulateDemand(pack.table, params_, eye, in, visibility_.data() + f, level_.data() + f,
+                            pack.demand.data());
+}
+
+// Benchmark runs draw exactly the selected levels: keep updating the streamers until every
+// visible instance's selected level is resident, or until nothing more can be fetched (a budget
+// too small for it). Returns false when some instance still draws coarser.
+bool View::waitForSelected(const float eye[3]) {
+    (void)eye;
+    for (;;) {
+        bool satisfied = true, busy = false;
+        for (auto& pack : packs_) {
+            const uint8_t* resident = pack->streamer.residentTable();
+            for (size_t i = pack->first; i < pack->first + pack->count; ++i)
+                if (visibility_[i] != lodrt::Containment::Outside &&
+                    resident[model_[i] * lodrt::kMaxLevels + level_[i]] != level_[i])
+                    satisfied = false;
+        }
+        if (satisfied) return true;
+        std::this_thread::sleep_for(std::chrono::microseconds(200));
+        for (auto& pack : packs_) {
+            pack->streamer.update(pack->demand.data());
+            busy = busy || !pack->streamer.idle();
+        }
+        if (!busy) {
+            bool again = true; // one more pass after the last job landed
+            for (auto& pack : packs_) {
+                const uint8_t* resident = pack->streamer.residentTable();
+                for (size_t i = pack->first; i < pack->first + pack->count; ++i)
+                    if (visibility_[i] != lodrt::Containment::Outside &&
+                        resident[model_[i] * lodrt::kMaxLevels + level_[i]] != level_[i])
+                        again = false;
+            }
+            return again;
+        }
+    }
+}
+
+bool View::mirrorResident(Renderer* renderer, std::string* error) {
+    for (auto& pack : packs_) {
+        const lodrt::ModelSet& models = pack->source.models();
+        for (uint32_t m = 0; m < models.modelCount(); ++m)
+            for (uint32_t l = 0; l < models.model(m).level_count; ++l) {
+                GpuLevel& gpu = pack->gpu[m * lodrt::kMaxLevels + l];
+                const bool resident = pack->streamer.state(m, l) == lodrt::LevelState::Resident;
+                if (resident && !gpu.valid) {
+                    size_t size = 0;
+                    const uint8_t* bytes = pack->streamer.levelData(m, l, &size);
+                    std::string why;
+                    if (!renderer->upload(pack->source, m, l, bytes, index_scratch_.data(), index_scratch_.size(),
+                                          &gpu, &why)) {
+                        renderer->release(&gpu);
+                        *error = pack->path + ": level " + std::to_string(l) + ": " + why;
+                        return false;
+                    }
+                } else if (!resident && gpu.valid) {
+                    renderer->release(&gpu); // evicted by the streamer
+                }
+            }
+    }
+    return true;
+}
+
+bool View::update(const float eye[3], const float view_proj[16], Renderer* renderer, FrameStats* stats,
+                  std::string* error) {
+    const uint64_t allocations_before = allocations_.load();
+    for (auto& pack : packs_) {
+        pack->streamed_before = pack->streamer.stats().streamed_bytes;
+        pack->requests_before = pack->streamer.stats().requests;
+    }
+    Clock::time_point t0 = Clock::now();
+    lodrt::Frustum frustum;
+    if (!lodrt::extractFrustum(view_proj, lodrt::ClipDepth::NegativeOneToOne, &frustum)) {
+        *error = "camera: the view-projection matrix has a degenerate frustum";
+        return false;
+    }
+    const size_t visible = bvh_.cull(frustum, visibility_.data());
+    stats->cull_ms = msSince(t0);
+    stats->visible = uint32_t(visible);
+    stats->culled = uint32_t(instance_count_ - visible);
+
+    t0 = Clock::now();
+    for (auto& pack : packs_) selectPack(*pack, eye);
+    stats->select_ms = msSince(t0);
+
+    t0 = Clock::now();
+    for (auto& pack : packs_) pack->streamer.update(pack->demand.data());
+    stats->stream_ms = msSince(t0);
+
+    if (config_.sync_streaming) {
+        t0 = Clock::now();
+        waitForSelected(eye);
+        stats->wait_ms = msSince(t0);
+    }
+    // Draw levels against what is resident after this frame's update.
+    for (auto& pack : packs_) {
+        const uint8_t* resident = pack->streamer.residentTable();
+        for (size_t i = pack->first; i < pack->first + pack->count; ++i)
+            draw_[i] = visibility_[i] == lodrt::Containment::Outside
+                           ? lodrt::kNoLevel
+                           : resident[model_[i] * lodrt::kMaxLevels + level_[i]];
+    }
+    stats->lodrt_allocations = allocations_.load() - allocations_before;
+
+    t0 = Clock::now();
+    const bool ok = mirrorResident(renderer, error);
+    stats->upload_ms = msSince(t0);
+    for (auto& pack : packs_) {
+        const lodrt::StreamStats s = pack->streamer.stats();
+        if (s.failures > 0 && ok) {
+            *error = pack->path + ": " + std::to_string(s.failures) + " level reads failed";
+            return false;
+        }
+        stats->levels_resident += s.resident_levels;
+        stats->resident_bytes += s.resident_bytes;
+        stats->bytes_streamed += s.streamed_bytes - pack->streamed_before;
+        stats->stream_requests += s.requests - pack->requests_before;
+    }
+    measure(eye, stats);
+    return ok;
+}
+
+void View::measure(const float eye[3], FrameStats* stats) const {
+    for (const auto& pack : packs_) {
+        const lodrt::ModelSet& models = pack->source.models();
+        for (size_t i = pack->first; i < pack->first + pack->count; ++i) {
+            if (visibility_[i] == lodrt::Containment::Outside) continue;
+            if (draw_[i] == lodrt::kNoLevel) {
+                ++stats->not_drawable;
+                continue;
+            }
+            if (draw_[i] != level_[i]) ++stats->coarser_than_selected;
+            // Projected error as the selection defines it: distance to the bounding sphere in
+            // model units.
+            const float dx = x_[i] - eye[0], dy = y_[i] - eye[1], dz = z_[i] - eye[2];
+            const float d = std::fmax((std::sqrt(dx * dx + dy * dy + dz * dz) - r_[i]) / scale_[i], 1e-6f);
+            const float error = models.modelLevel(model_[i], draw_[i]).hausdorff_error;
+            if (error > 0) stats->max_sse_px = std::fmax(stats->max_sse_px, error * k_ / d);
+        }
+    }
+}
+
+void View::draw(Renderer* renderer, FrameStats* stats) const {
+    for (const auto& pack : packs_) {
+        const lodrt::ModelSet& models = pack->source.models();
+        for (size_t i = pack->first; i < pack->first + pack->count; ++i) {
+            const uint8_t l = draw_[i];
+            if (l == lodrt::kNoLevel) continue;
+            const GpuLevel& gpu = pack->gpu[model_[i] * lodrt::kMaxLevels + l];
+            if (!gpu.valid) continue;
+            float model[16];
+            lodrt::multiplyTransforms(&placement_[i * 16], models.modelLevel(model_[i], l).world_transform, model);
+            const float* colour = config_.colour_by_level ? kLevelColours[l] : kAssetColours[asset_[i] % 6];
+            stats->draw_calls += renderer->draw(gpu, model, colour);
+            stats->triangles += gpu.triangles;
+            ++stats->instances_drawn;
+            ++stats->histogram[l];
+        }
+    }
+}
+
+void View::drain() {
+    for (;;) {
+        bool idle = true;
+        for (auto& pack : packs_) {
+            if (pack->streamer.idle()) continue;
+            pack->streamer.update(nullptr);
+            idle = idle && pack->streamer.idle();
+        }
+        if (idle) return;
+        std::this_thread::yield();
+    }
+}
+
+void View::releaseGpu(Renderer* renderer) {
+    for (auto& pack : packs_)
+        for (GpuLevel& gpu : pack->gpu)
+            if (gpu.valid || !gpu.buffers.empty()) renderer->release(&gpu);
+}
+
+uint64_t View::totalStreamedBytes() const {
+    uint64_t total = 0;
+    for (const auto& pack : packs_) total += pack->streamer.stats().streamed_bytes;
+    return total;
+}
+
+uint64_t View::level0Triangles() const {
+    uint64_t total = 0;
+    for (const auto& pack : packs_)
+        for (size_t i = pack->first; i < pack->first + pack->count; ++i)
+            total += pack->source.models().modelLevel(model_[i], 0).triangle_count;
+    return total;
+}
+
+} // namespace lodview
