@@ -9,6 +9,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export LODBAKE_REQUIRE_SHARED_MESHES=1 # tests needing ../shared fail instead of skipping when it is missing
+export LODBAKE_REQUIRE_LODVIEW=1 # the lodview test fails instead of skipping when lodview or xvfb-run is missing
 
 t0=$(date +%s)
 timings=()

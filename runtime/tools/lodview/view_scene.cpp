@@ -222,7 +222,7 @@ bool View::init(const ViewConfig& config, std::string* error) {
 
 void View::camera(float t, float eye[3], float target[3]) const {
     const float half = 0.5f * float(config_.grid - 1) * config_.spacing;
-    const float start = half + 3.0f * config_.spacing, end = -half - 1.5f * config_.spacing;
+    const float start = half + 3.0f * config_.spacing, end = -half;
     eye[0] = 0.5f * config_.spacing; // the aisle between the two middle columns
     eye[1] = 1.6f;
     eye[2] = start + (end - start) * t;

@@ -1,0 +1,194 @@
+#!/usr/bin/env python3
+"""Runs lodview --headless under xvfb-run on a small pack and checks what it wrote.
+
+  lodview_check.py --lodview EXE --xvfb-run XVFB --out DIR PACK...
+  lodview_check.py --missing REASON
+
+Three runs of the same walk on a 3x3 grid (LOD, forced LOD0, colour by level), each a few frames
+at 320x180. Checks: exit code 0; each PNG decodes (zlib, no imaging library), has the requested
+size and is not blank (enough pixels differ from the clear colour, and the shading gives many
+distinct colours); the JSON report has every field per frame and consistent counts (visible +
+culled = instances, the level histogram sums to the instances drawn, draw calls and triangles
+positive when something is drawn, LOD0 frames draw only level 0 and at least the LOD run's
+triangles, drawn levels within 1 px, no lodrt allocation beyond the level reads). The blank and
+size checks first reject images built to fail them, so they are known to be able to fail.
+
+--missing: lodview or xvfb-run was not found at configure time. The test is skipped (exit 77)
+unless LODBAKE_REQUIRE_LODVIEW is set (scripts/setup-and-test.sh sets it), when it fails.
+"""
+import argparse
+import json
+import os
+import struct
+import subprocess
+import sys
+import zlib
+
+CLEAR = (158, 178, 199)  # glClearColor(0.62, 0.70, 0.78) in 8 bits
+FRAME_FIELDS = {
+    "frame": int, "eye": list, "frame_ms": float, "cpu_ms": float, "gpu_ms": float, "cull_ms": float,
+    "select_ms": float, "stream_ms": float, "upload_ms": float, "stream_wait_ms": float, "visible": int,
+    "culled": int, "instances_drawn": int, "draw_calls": int, "triangles": int, "levels_resident": int,
+    "resident_bytes": int, "bytes_streamed": int, "stream_requests": int, "lodrt_allocations": int,
+    "not_drawable": int, "coarser_than_selected": int, "max_sse_px": float, "level_histogram": list,
+}
+SUMMARY_FIELDS = ["frames", "mean_frame_ms", "mean_cpu_ms", "mean_gpu_ms", "mean_triangles", "mean_draw_calls",
+                  "max_sse_px", "bytes_streamed", "lodrt_allocations_beyond_requests", "frames_drawn_coarser"]
+FRAMES, WIDTH, HEIGHT, GRID = 6, 320, 180, 3
+
+
+def read_png_rgb(path):
+    """(width, height, rows of RGB tuples) of an 8-bit RGB or RGBA, non-interlaced PNG."""
+    data = open(path, "rb").read()
+    if data[:8] != b"\x89PNG\r\n\x1a\n":
+        raise ValueError(f"{path}: not a PNG")
+    pos, idat, header = 8, b"", None
+    while pos < len(data):
+        length, kind = struct.unpack(">I4s", data[pos:pos + 8])
+        body = data[pos + 8:pos + 8 + length]
+        if kind == b"IHDR":
+            header = struct.unpack(">IIBBBBB", body)
+        elif kind == b"IDAT":
+            idat += body
+        pos += 12 + length
+    width, height, depth, colour, _, _, interlace = header
+    if depth != 8 or colour not in (2, 6) or interlace:
+        raise ValueError(f"{path}: expected 8-bit RGB(A), non-interlaced")
+    channels = 3 if colour == 2 else 4
+    raw, stride = zlib.decompress(idat), width * channels
+    rows, prev, at = [], bytearray(stride), 0
+    for _ in range(height):
+        kind, line = raw[at], bytearray(raw[at + 1:at + 1 + stride])
+        at += 1 + stride
+        for i in range(stride):
+            a = line[i - channels] if i >= channels else 0
+            b, c = prev[i], prev[i - channels] if i >= channels else 0
+            if kind == 1:
+                line[i] = (line[i] + a) & 255
+            elif kind == 2:
+                line[i] = (line[i] + b) & 255
+            elif kind == 3:
+                line[i] = (line[i] + (a + b) // 2) & 255
+            elif kind == 4:
+                p = a + b - c
+                pa, pb, pc = abs(p - a), abs(p - b), abs(p - c)
+                line[i] = (line[i] + (a if pa <= pb and pa <= pc else b if pb <= pc else c)) & 255
+        rows.append([tuple(line[x * channels:x * channels + 3]) for x in range(width)])
+        prev = line
+    return width, height, rows
+
+
+def image_problem(width, height, rows, want_width, want_height):
+    """None when the image has the wanted size and shows a scene; else what is wrong."""
+    if (width, height) != (want_width, want_height):
+        return f"size {width}x{height}, expected {want_width}x{want_height}"
+    pixels = [p for row in rows for p in row]
+    covered = sum(1 for p in pixels if max(abs(p[k] - CLEAR[k]) for k in range(3)) > 8)
+    distinct = len(set(pixels))
+    if covered < 0.005 * len(pixels) or distinct < 16:
+        return f"blank: {covered} of {len(pixels)} pixels differ from the clear colour, {distinct} colours"
+    return None
+
+
+def self_test():
+    """The image checks must reject a blank image and a wrong size."""
+    blank = [[CLEAR] * WIDTH for _ in range(HEIGHT)]
+    assert image_problem(WIDTH, HEIGHT, blank, WIDTH, HEIGHT), "a blank image passed the check"
+    flat = [[CLEAR] * WIDTH for _ in range(HEIGHT - 20)] + [[(200, 10, 10)] * WIDTH for _ in range(20)]
+    assert image_problem(WIDTH, HEIGHT, flat, WIDTH, HEIGHT), "a two-colour image passed the check"
+    shaded = [[(x % 256, y % 256, 40) for x in range(WIDTH)] for y in range(HEIGHT)]
+    assert image_problem(WIDTH, HEIGHT, shaded, WIDTH, HEIGHT) is None, "a shaded image failed the check"
+    assert image_problem(WIDTH, HEIGHT + 1, shaded, WIDTH, HEIGHT), "a wrong size passed the check"
+
+
+def run(args, name, extra):
+    prefix = os.path.join(args.out, name)
+    report = prefix + ".json"
+    cmd = [args.xvfb_run, "-a", "-s", "-screen 0 640x480x24", args.lodview, *args.packs, "--headless",
+           "--frames", str(FRAMES), "--size", f"{WIDTH}x{HEIGHT}", "--grid", str(GRID), "--report", report,
+           "--screenshot", prefix, "--shots", f"0,{FRAMES // 2}", *extra]
+    print("+", " ".join(cmd), flush=True)
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
+    sys.stdout.write(proc.stdout)
+    sys.stderr.write(proc.stderr)
+    if proc.returncode != 0:
+        raise AssertionError(f"{name}: lodview exited {proc.returncode}")
+    for frame in (0, FRAMES // 2):
+        png = f"{prefix}_{frame:04d}.png"
+        problem = image_problem(*read_png_rgb(png), WIDTH, HEIGHT)
+        if problem:
+            raise AssertionError(f"{png}: {problem}")
+    return json.load(open(report))
+
+
+def check_report(name, report):
+    def fail(what):
+        raise AssertionError(f"{name}: report: {what}")
+    instances = GRID * GRID
+    if report.get("instances") != instances or report.get("width") != WIDTH or report.get("height") != HEIGHT:
+        fail("expected instances 9, width 320, height 180")
+    frames = report.get("frames")
+    if not isinstance(frames, list) or len(frames) != FRAMES:
+        fail(f"expected {FRAMES} frames")
+    for f in frames:
+        for key, kind in FRAME_FIELDS.items():
+            if not isinstance(f.get(key), kind) and not (kind is float and isinstance(f.get(key), int)):
+                fail(f"frame {f.get('frame')}: /{key}: expected {kind.__name__}")
+        if f["visible"] + f["culled"] != instances:
+            fail(f"frame {f['frame']}: visible + culled != {instances}")
+        if sum(f["level_histogram"]) != f["instances_drawn"] or f["instances_drawn"] > f["visible"]:
+            fail(f"frame {f['frame']}: level histogram does not sum to the instances drawn")
+        if f["instances_drawn"] and (f["draw_calls"] < f["instances_drawn"] or f["triangles"] <= 0):
+            fail(f"frame {f['frame']}: instances drawn without draw calls or triangles")
+        if f["levels_resident"] < 1 or f["frame_ms"] <= 0:
+            fail(f"frame {f['frame']}: no level resident or no frame time")
+        if f["max_sse_px"] > 1.0001:
+            fail(f"frame {f['frame']}: drawn level projects to {f['max_sse_px']} px")
+    if not any(f["instances_drawn"] for f in frames):
+        fail("nothing was drawn")
+    summary = report.get("summary", {})
+    for key in SUMMARY_FIELDS:
+        if key not in summary:
+            fail(f"/summary/{key}: missing")
+    if summary["frames"] != FRAMES or summary["lodrt_allocations_beyond_requests"] != 0:
+        fail("summary: expected 6 frames and no lodrt allocation beyond the level reads")
+    if summary["frames_drawn_coarser"] != 0:
+        fail("summary: a headless run must draw the selected levels")
+
+
+def main():
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--lodview")
+    parser.add_argument("--xvfb-run")
+    parser.add_argument("--out")
+    parser.add_argument("--missing")
+    parser.add_argument("packs", nargs="*")
+    args = parser.parse_args()
+    if args.missing:
+        required = os.environ.get("LODBAKE_REQUIRE_LODVIEW", "") not in ("", "0")
+        print(f"lodview test: {args.missing}", file=sys.stderr)
+        return 1 if required else 77
+    self_test()
+    os.makedirs(args.out, exist_ok=True)
+    lod = run(args, "lod", ["--mode", "lod"])
+    lod0 = run(args, "lod0", ["--mode", "lod0"])
+    levels = run(args, "levels", ["--mode", "lod", "--colour-by-level"])
+    for name, report in (("lod", lod), ("lod0", lod0), ("levels", levels)):
+        check_report(name, report)
+    for a, b in zip(lod["frames"], lod0["frames"]):
+        if any(b["level_histogram"][1:]):
+            raise AssertionError(f"lod0: frame {b['frame']} drew a level other than 0")
+        if b["visible"] != a["visible"] or b["triangles"] < a["triangles"]:
+            raise AssertionError(f"lod0: frame {b['frame']}: fewer triangles than with LOD on the same path")
+    if read_png_rgb(os.path.join(args.out, "levels_0000.png")) == read_png_rgb(os.path.join(args.out, "lod_0000.png")):
+        raise AssertionError("colour by level drew the same image as the plain run")
+    print(f"lodview check: 3 runs of {FRAMES} frames passed")
+    return 0
+
+
+if __name__ == "__main__":
+    try:
+        sys.exit(main())
+    except (AssertionError, ValueError, OSError, subprocess.TimeoutExpired) as e:
+        print(f"error: {e}", file=sys.stderr)
+        sys.exit(1)
