@@ -10,7 +10,8 @@ size and is not blank (enough pixels differ from the clear colour, and the shadi
 distinct colours); the JSON report has every field per frame and consistent counts (visible +
 culled = instances, the level histogram sums to the instances drawn, draw calls and triangles
 positive when something is drawn, LOD0 frames draw only level 0 and at least the LOD run's
-triangles, drawn levels within 1 px, no lodrt allocation beyond the level reads). The blank and
+triangles, drawn levels within 1 px, no lodrt allocation beyond the level reads and none of them
+from the heap). The blank and
 size checks first reject images built to fail them, so they are known to be able to fail.
 
 --missing: lodview or xvfb-run was not found at configure time. The test is skipped (exit 77)
@@ -29,11 +30,12 @@ FRAME_FIELDS = {
     "frame": int, "eye": list, "frame_ms": float, "cpu_ms": float, "gpu_ms": float, "cull_ms": float,
     "select_ms": float, "stream_ms": float, "upload_ms": float, "stream_wait_ms": float, "visible": int,
     "culled": int, "instances_drawn": int, "draw_calls": int, "triangles": int, "levels_resident": int,
-    "resident_bytes": int, "bytes_streamed": int, "stream_requests": int, "lodrt_allocations": int,
+    "resident_bytes": int, "bytes_streamed": int, "stream_requests": int, "lodrt_allocations": int, "lodrt_heap_allocations": int,
     "not_drawable": int, "coarser_than_selected": int, "max_sse_px": float, "level_histogram": list,
 }
 SUMMARY_FIELDS = ["frames", "mean_frame_ms", "mean_cpu_ms", "mean_gpu_ms", "mean_triangles", "mean_draw_calls",
-                  "max_sse_px", "bytes_streamed", "lodrt_allocations_beyond_requests", "frames_drawn_coarser"]
+                  "max_sse_px", "bytes_streamed", "lodrt_allocations_beyond_requests", "lodrt_heap_allocations",
+                  "frames_drawn_coarser"]
 FRAMES, WIDTH, HEIGHT, GRID = 6, 320, 180, 3
 
 
@@ -152,6 +154,10 @@ def check_report(name, report):
             fail(f"/summary/{key}: missing")
     if summary["frames"] != FRAMES or summary["lodrt_allocations_beyond_requests"] != 0:
         fail("summary: expected 6 frames and no lodrt allocation beyond the level reads")
+    if summary["lodrt_heap_allocations"] != 0 or sum(f["lodrt_heap_allocations"] for f in frames) != 0:
+        fail("summary: lodrt made heap allocations during frames")
+    if sum(f["stream_requests"] for f in frames) and not sum(f["lodrt_allocations"] for f in frames):
+        fail("levels were streamed but no lodrt allocation was counted (the counter does not count)")
     if summary["frames_drawn_coarser"] != 0:
         fail("summary: a headless run must draw the selected levels")
 

@@ -53,12 +53,18 @@ bool compile(GLenum kind, const char* text, GLuint* out, std::string* error) {
 
 GLenum glComponentType(lodrt::ComponentType type) {
     switch (type) {
-    case lodrt::ComponentType::Byte: return GL_BYTE;
-    case lodrt::ComponentType::UnsignedByte: return GL_UNSIGNED_BYTE;
-    case lodrt::ComponentType::Short: return GL_SHORT;
-    case lodrt::ComponentType::UnsignedShort: return GL_UNSIGNED_SHORT;
-    case lodrt::ComponentType::UnsignedInt: return GL_UNSIGNED_INT;
-    case lodrt::ComponentType::Float: return GL_FLOAT;
+    case lodrt::ComponentType::Byte:
+        return GL_BYTE;
+    case lodrt::ComponentType::UnsignedByte:
+        return GL_UNSIGNED_BYTE;
+    case lodrt::ComponentType::Short:
+        return GL_SHORT;
+    case lodrt::ComponentType::UnsignedShort:
+        return GL_UNSIGNED_SHORT;
+    case lodrt::ComponentType::UnsignedInt:
+        return GL_UNSIGNED_INT;
+    case lodrt::ComponentType::Float:
+        return GL_FLOAT;
     }
     return GL_FLOAT;
 }

@@ -20,8 +20,19 @@
 #include <vector>
 
 #include "gl_renderer.h"
-#include "sample_scene.h"
+#include "../../examples/sample_scene.h"
 #include "view_scene.h"
+
+#if defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define LODVIEW_LEAK_CHECK 1
+#endif
+#elif defined(__SANITIZE_ADDRESS__)
+#define LODVIEW_LEAK_CHECK 1
+#endif
+#ifdef LODVIEW_LEAK_CHECK
+#include <sanitizer/lsan_interface.h>
+#endif
 
 namespace {
 
@@ -208,14 +219,16 @@ void writeFrameJson(std::FILE* out, const FrameRecord& r, bool last) {
                  "\"upload_ms\": %.4f, \"stream_wait_ms\": %.4f, \"visible\": %u, \"culled\": %u, "
                  "\"instances_drawn\": %u, \"draw_calls\": %u, \"triangles\": %llu, \"levels_resident\": %u, "
                  "\"resident_bytes\": %llu, \"bytes_streamed\": %llu, \"stream_requests\": %u, "
-                 "\"lodrt_allocations\": %llu, \"not_drawable\": %u, \"coarser_than_selected\": %u, "
+                 "\"lodrt_allocations\": %llu, \"lodrt_heap_allocations\": %llu, \"not_drawable\": %u, "
+                 "\"coarser_than_selected\": %u, "
                  "\"max_sse_px\": %.4f, \"level_histogram\": [",
                  r.frame, r.eye[0], r.eye[1], r.eye[2], r.frame_ms, r.cpu_ms, r.gpu_ms, s.cull_ms, s.select_ms,
                  s.stream_ms, s.upload_ms, s.wait_ms, s.visible, s.culled, s.instances_drawn, s.draw_calls,
                  static_cast<unsigned long long>(s.triangles), s.levels_resident,
                  static_cast<unsigned long long>(s.resident_bytes), static_cast<unsigned long long>(s.bytes_streamed),
-                 s.stream_requests, static_cast<unsigned long long>(s.lodrt_allocations), s.not_drawable,
-                 s.coarser_than_selected, double(s.max_sse_px));
+                 s.stream_requests, static_cast<unsigned long long>(s.lodrt_allocations),
+                 static_cast<unsigned long long>(s.lodrt_heap_allocations), s.not_drawable, s.coarser_than_selected,
+                 double(s.max_sse_px));
     for (uint32_t l = 0; l < lodrt::kMaxLevels; ++l) std::fprintf(out, "%s%u", l ? ", " : "", s.histogram[l]);
     std::fprintf(out, "]}%s\n", last ? "" : ",");
 }
@@ -223,7 +236,7 @@ void writeFrameJson(std::FILE* out, const FrameRecord& r, bool last) {
 struct Summary {
     double mean_frame_ms = 0, mean_cpu_ms = 0, mean_gpu_ms = 0, mean_triangles = 0, mean_draw_calls = 0;
     float max_sse_px = 0;
-    uint64_t bytes_streamed = 0, allocations_beyond_requests = 0;
+    uint64_t bytes_streamed = 0, allocations_beyond_requests = 0, heap_allocations = 0;
     uint32_t coarser_frames = 0;
 };
 
@@ -239,6 +252,7 @@ Summary summarize(const std::vector<FrameRecord>& records) {
         s.bytes_streamed += r.stats.bytes_streamed;
         if (r.stats.lodrt_allocations > r.stats.stream_requests)
             s.allocations_beyond_requests += r.stats.lodrt_allocations - r.stats.stream_requests;
+        s.heap_allocations += r.stats.lodrt_heap_allocations;
         if (r.stats.coarser_than_selected || r.stats.not_drawable) ++s.coarser_frames;
     }
     const double n = records.empty() ? 1.0 : double(records.size());
@@ -250,29 +264,32 @@ Summary summarize(const std::vector<FrameRecord>& records) {
     return s;
 }
 
-bool writeReport(const Args& args, const lodview::View& view, const std::vector<FrameRecord>& records,
-                 const Summary& s, const char* renderer_name) {
+bool writeReport(const Args& args, const lodview::View& view, const std::vector<FrameRecord>& records, const Summary& s,
+                 const char* renderer_name) {
     std::FILE* out = std::fopen(args.report.c_str(), "w");
     if (!out) {
         std::fprintf(stderr, "error: %s: cannot write the report\n", args.report.c_str());
         return false;
     }
-    std::fprintf(out, "{\n  \"renderer\": \"%s\",\n  \"width\": %u, \"height\": %u, \"mode\": \"%s\", "
-                      "\"colour_by_level\": %s, \"instances\": %zu, \"packs\": %zu, \"pixel_threshold\": %g, "
-                      "\"budget_bytes\": %llu, \"sync_streaming\": %s,\n  \"frames\": [\n",
+    std::fprintf(out,
+                 "{\n  \"renderer\": \"%s\",\n  \"width\": %u, \"height\": %u, \"mode\": \"%s\", "
+                 "\"colour_by_level\": %s, \"instances\": %zu, \"packs\": %zu, \"pixel_threshold\": %g, "
+                 "\"budget_bytes\": %llu, \"sync_streaming\": %s,\n  \"frames\": [\n",
                  renderer_name, args.view.width, args.view.height,
                  args.view.mode == lodview::LodMode::Lod ? "lod" : "lod0", args.view.colour_by_level ? "true" : "false",
                  view.instanceCount(), view.packCount(), double(args.view.pixel_threshold),
                  static_cast<unsigned long long>(args.view.budget_bytes), args.view.sync_streaming ? "true" : "false");
     for (size_t i = 0; i < records.size(); ++i) writeFrameJson(out, records[i], i + 1 == records.size());
-    std::fprintf(out,
-                 "  ],\n  \"summary\": {\"frames\": %zu, \"mean_frame_ms\": %.4f, \"mean_cpu_ms\": %.4f, "
-                 "\"mean_gpu_ms\": %.4f, \"mean_triangles\": %.1f, \"mean_draw_calls\": %.2f, \"max_sse_px\": %.4f, "
-                 "\"bytes_streamed\": %llu, \"lodrt_allocations_beyond_requests\": %llu, "
-                 "\"frames_drawn_coarser\": %u}\n}\n",
-                 records.size(), s.mean_frame_ms, s.mean_cpu_ms, s.mean_gpu_ms, s.mean_triangles, s.mean_draw_calls,
-                 double(s.max_sse_px), static_cast<unsigned long long>(s.bytes_streamed),
-                 static_cast<unsigned long long>(s.allocations_beyond_requests), s.coarser_frames);
+    std::fprintf(
+        out,
+        "  ],\n  \"summary\": {\"frames\": %zu, \"mean_frame_ms\": %.4f, \"mean_cpu_ms\": %.4f, "
+        "\"mean_gpu_ms\": %.4f, \"mean_triangles\": %.1f, \"mean_draw_calls\": %.2f, \"max_sse_px\": %.4f, "
+        "\"bytes_streamed\": %llu, \"lodrt_allocations_beyond_requests\": %llu, \"lodrt_heap_allocations\": %llu, "
+        "\"frames_drawn_coarser\": %u}\n}\n",
+        records.size(), s.mean_frame_ms, s.mean_cpu_ms, s.mean_gpu_ms, s.mean_triangles, s.mean_draw_calls,
+        double(s.max_sse_px), static_cast<unsigned long long>(s.bytes_streamed),
+        static_cast<unsigned long long>(s.allocations_beyond_requests),
+        static_cast<unsigned long long>(s.heap_allocations), s.coarser_frames);
     const bool ok = std::fclose(out) == 0;
     if (!ok) std::fprintf(stderr, "error: %s: cannot write the report\n", args.report.c_str());
     return ok;
@@ -357,11 +374,12 @@ int runHeadless(App& app) {
     if (!args.report.empty() && !writeReport(args, app.view, records, s, gl_renderer ? gl_renderer : "?")) return 1;
     std::printf("lodview: %s, %ux%u, %zu instances of %zu packs, mode %s: %d frames, mean frame %.3f ms (cpu %.3f, "
                 "gpu %.3f), mean %.0f triangles and %.1f draw calls per frame, max drawn screen-space error %.3f px, "
-                "streamed %llu bytes\n",
+                "streamed %llu bytes, %llu heap allocations in lodrt\n",
                 gl_renderer ? gl_renderer : "?", args.view.width, args.view.height, app.view.instanceCount(),
                 app.view.packCount(), args.view.mode == lodview::LodMode::Lod ? "lod" : "lod0", args.frames,
                 s.mean_frame_ms, s.mean_cpu_ms, s.mean_gpu_ms, s.mean_triangles, s.mean_draw_calls,
-                double(s.max_sse_px), static_cast<unsigned long long>(s.bytes_streamed));
+                double(s.max_sse_px), static_cast<unsigned long long>(s.bytes_streamed),
+                static_cast<unsigned long long>(s.heap_allocations));
     int failed = 0;
     if (args.max_sse > 0 && s.max_sse_px > args.max_sse * 1.0001f) {
         std::fprintf(stderr, "error: a drawn level projects to %.3f px, above --max-sse %.3g px\n",
@@ -461,6 +479,12 @@ int main(int argc, char** argv) {
         app.window = window;
         code = runApp(app);
     }
+#ifdef LODVIEW_LEAK_CHECK
+    // Everything of lodview and lodrt is freed now. Check here, while the GL driver is still
+    // loaded: at exit Mesa has unloaded it, and what it keeps for the process lifetime could no
+    // longer be told apart from a leak of ours (tests/runtime/lodview_lsan.supp names it).
+    __lsan_do_leak_check();
+#endif
     glfwDestroyWindow(window);
     glfwTerminate();
     return code;

@@ -39,7 +39,7 @@ struct View::Pack {
     lodrt::LodTable table;
     lodrt::Streamer streamer; // after source: destroyed first
     std::vector<lodrt::ModelDemand> demand;
-    std::vector<GpuLevel> gpu; // model * kMaxLevels + level
+    std::vector<GpuLevel> gpu;   // model * kMaxLevels + level
     size_t first = 0, count = 0; // its instances
     uint64_t streamed_before = 0;
     uint32_t requests_before = 0;
@@ -113,6 +113,7 @@ bool View::open(const std::vector<std::string>& paths, std::string* error) {
     };
     allocator_.deallocate = [](void*, void* ptr) { std::free(ptr); };
     jobs_ = lodrt::JobSystem{&JobThread::submit, &jobs_thread_};
+    uint64_t total_bytes = 0;
     for (const std::string& path : paths) {
         std::unique_ptr<Pack> pack(new Pack);
         pack->path = path;
@@ -123,6 +124,7 @@ bool View::open(const std::vector<std::string>& paths, std::string* error) {
             return false;
         }
         pack->size = uint64_t(st.st_size);
+        total_bytes += pack->size;
         lodrt::LoadOptions options;
         options.allocator = allocator_;
         char message[256] = {};
@@ -137,6 +139,13 @@ bool View::open(const std::vector<std::string>& paths, std::string* error) {
             return false;
         }
         packs_.push_back(std::move(pack));
+    }
+    // Every level and PFRep prefix is a byte range of its file; a growing prefix briefly holds its
+    // old and new buffer. Twice the files' bytes holds all of it at once (untouched pages of the
+    // arena cost nothing).
+    if (!pool_.init(size_t(2 * total_bytes + (1u << 20)))) {
+        *error = "memory: cannot reserve the level pool";
+        return false;
     }
     return true;
 }
@@ -179,8 +188,7 @@ bool View::placeInstances(std::string* error) {
     level_.assign(instance_count_, lodrt::kNoLevel);
     draw_.assign(instance_count_, lodrt::kNoLevel);
     visibility_.assign(instance_count_, lodrt::Containment::Outside);
-    const lodrt::Result r =
-        bvh_.build(x_.data(), y_.data(), z_.data(), r_.data(), instance_count_, &allocator_);
+    const lodrt::Result r = bvh_.build(x_.data(), y_.data(), z_.data(), r_.data(), instance_count_, &allocator_);
     if (r != lodrt::Result::Ok) {
         *error = std::string("instances: cannot build the bounding volume hierarchy (") + lodrt::resultName(r) + ")";
         return false;
@@ -202,7 +210,7 @@ bool View::init(const ViewConfig& config, std::string* error) {
         lodrt::Result r = pack->table.prepare(models, params_, &allocator_);
         if (r == lodrt::Result::Ok) {
             lodrt::StreamerOptions options;
-            options.allocator = allocator_;
+            options.allocator = pool_.allocator();
             options.budget_bytes = config_.budget_bytes;
             r = pack->streamer.init(&pack->source, &jobs_, &options);
         }
@@ -234,8 +242,8 @@ void View::camera(float t, float eye[3], float target[3]) const {
 
 void View::selectPack(Pack& pack, const float eye[3]) {
     const size_t f = pack.first;
-    const lodrt::InstanceArrays in{x_.data() + f, y_.data() + f, z_.data() + f, r_.data() + f, scale_.data() + f,
-                                   model_.data() + f, pack.count};
+    const lodrt::InstanceArrays in{x_.data() + f,     y_.data() + f,     z_.data() + f, r_.data() + f,
+                                   scale_.data() + f, model_.data() + f, pack.count};
     const lodrt::SelectionOutput out{level_.data() + f, draw_.data() + f, nullptr};
     lodrt::selectLevels(pack.table, eye, in, visibility_.data() + f, pack.streamer.residentTable(), out);
     if (config_.mode == LodMode::ForceLod0)
@@ -290,8 +298,8 @@ bool View::mirrorResident(Renderer* renderer, std::string* error) {
                     size_t size = 0;
                     const uint8_t* bytes = pack->streamer.levelData(m, l, &size);
                     std::string why;
-                    if (!renderer->upload(pack->source, m, l, bytes, index_scratch_.data(), index_scratch_.size(),
-                                          &gpu, &why)) {
+                    if (!renderer->upload(pack->source, m, l, bytes, index_scratch_.data(), index_scratch_.size(), &gpu,
+                                          &why)) {
                         renderer->release(&gpu);
                         *error = pack->path + ": level " + std::to_string(l) + ": " + why;
                         return false;
@@ -306,7 +314,7 @@ bool View::mirrorResident(Renderer* renderer, std::string* error) {
 
 bool View::update(const float eye[3], const float view_proj[16], Renderer* renderer, FrameStats* stats,
                   std::string* error) {
-    const uint64_t allocations_before = allocations_.load();
+    const uint64_t setup_before = allocations_.load(), pool_before = pool_.calls(), heap_before = pool_.heapCalls();
     for (auto& pack : packs_) {
         pack->streamed_before = pack->streamer.stats().streamed_bytes;
         pack->requests_before = pack->streamer.stats().requests;
@@ -343,7 +351,9 @@ bool View::update(const float eye[3], const float view_proj[16], Renderer* rende
                            ? lodrt::kNoLevel
                            : resident[model_[i] * lodrt::kMaxLevels + level_[i]];
     }
-    stats->lodrt_allocations = allocations_.load() - allocations_before;
+    const uint64_t setup_calls = allocations_.load() - setup_before;
+    stats->lodrt_allocations = setup_calls + pool_.calls() - pool_before;
+    stats->lodrt_heap_allocations = setup_calls + pool_.heapCalls() - heap_before;
 
     t0 = Clock::now();
     const bool ok = mirrorResident(renderer, error);

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "gl_renderer.h"
+#include "level_pool.h"
 #include "lodrt/lodrt.h"
 
 namespace lodview {
@@ -27,8 +28,8 @@ struct ViewConfig {
     float vertical_fov = 1.0471976f; // 60 degrees
     float pixel_threshold = 1;       // screen-space error bound of the selection
     float hysteresis = 0.1f;
-    int grid = 5;            // grid x grid instances
-    float spacing = 4;       // between grid cells; every instance has a bounding radius of 1
+    int grid = 5;              // grid x grid instances
+    float spacing = 4;         // between grid cells; every instance has a bounding radius of 1
     uint64_t budget_bytes = 0; // per pack streamer budget; 0 = unlimited
     LodMode mode = LodMode::Lod;
     bool colour_by_level = false;
@@ -47,6 +48,7 @@ struct FrameStats {
     uint32_t coarser_than_selected = 0;         // drawn coarser than selected (streaming lag)
     float max_sse_px = 0;                       // worst projected error of the drawn levels
     uint64_t lodrt_allocations = 0;             // allocator calls made by lodrt during the frame
+    uint64_t lodrt_heap_allocations = 0;        // of those, served by malloc instead of the level pool
     uint32_t stream_requests = 0;               // level / PFRep reads the streamers started
 };
 
@@ -114,8 +116,9 @@ private:
     ViewConfig config_;
     JobThread jobs_thread_;
     lodrt::JobSystem jobs_;
-    lodrt::Allocator allocator_;
+    lodrt::Allocator allocator_; // setup allocations (packs, tables, hierarchy), counted, malloc
     std::atomic<uint64_t> allocations_{0};
+    LevelPool pool_; // the streamers' allocations
     // Instances, ordered by pack (each pack's are contiguous), structure of arrays.
     size_t instance_count_ = 0;
     std::vector<float> x_, y_, z_, r_, scale_;
