@@ -4,14 +4,14 @@
   lodview_check.py --lodview EXE --xvfb-run XVFB --out DIR PACK...
   lodview_check.py --missing REASON
 
-Three runs of the same walk on a 3x3 grid (LOD, forced LOD0, colour by level), each a few frames
-at 320x180. Checks: exit code 0; each PNG decodes (zlib, no imaging library), has the requested
+Four runs of the same walk on a 3x3 grid (LOD, forced LOD0, colour by level, PFRep refinement),
+each a few frames at 320x180. Checks: exit code 0; each PNG decodes (zlib, no imaging library), has the requested
 size and is not blank (enough pixels differ from the clear colour, and the shading gives many
 distinct colours); the JSON report has every field per frame and consistent counts (visible +
-culled = instances, the level histogram sums to the instances drawn, draw calls and triangles
-positive when something is drawn, LOD0 frames draw only level 0 and at least the LOD run's
-triangles, drawn levels within 1 px, no lodrt allocation beyond the level reads and none of them
-from the heap). The blank and
+culled = instances, the level histogram plus the PFRep instances sums to the instances drawn, draw
+calls and triangles positive when something is drawn, LOD0 frames draw only level 0 and at least
+the LOD run's triangles, the PFRep run refines and draws instances from the streamed prefix, drawn
+levels within 1 px, no lodrt allocation beyond the level reads and none from the heap). The blank and
 size checks first reject images built to fail them, so they are known to be able to fail.
 
 --missing: lodview or xvfb-run was not found at configure time. The test is skipped (exit 77)
@@ -31,7 +31,8 @@ FRAME_FIELDS = {
     "select_ms": float, "stream_ms": float, "upload_ms": float, "stream_wait_ms": float, "visible": int,
     "culled": int, "instances_drawn": int, "draw_calls": int, "triangles": int, "levels_resident": int,
     "resident_bytes": int, "bytes_streamed": int, "stream_requests": int, "lodrt_allocations": int, "lodrt_heap_allocations": int,
-    "not_drawable": int, "coarser_than_selected": int, "max_sse_px": float, "level_histogram": list,
+    "not_drawable": int, "coarser_than_selected": int, "max_sse_px": float, "pfrep_ms": float,
+    "pfrep_instances": int, "pfrep_triangles": int, "pfrep_changes": int, "level_histogram": list,
 }
 SUMMARY_FIELDS = ["frames", "mean_frame_ms", "mean_cpu_ms", "mean_gpu_ms", "mean_triangles", "mean_draw_calls",
                   "max_sse_px", "bytes_streamed", "lodrt_allocations_beyond_requests", "lodrt_heap_allocations",
@@ -138,7 +139,7 @@ def check_report(name, report):
                 fail(f"frame {f.get('frame')}: /{key}: expected {kind.__name__}")
         if f["visible"] + f["culled"] != instances:
             fail(f"frame {f['frame']}: visible + culled != {instances}")
-        if sum(f["level_histogram"]) != f["instances_drawn"] or f["instances_drawn"] > f["visible"]:
+        if sum(f["level_histogram"]) + f["pfrep_instances"] != f["instances_drawn"] or f["instances_drawn"] > f["visible"]:
             fail(f"frame {f['frame']}: level histogram does not sum to the instances drawn")
         if f["instances_drawn"] and (f["draw_calls"] < f["instances_drawn"] or f["triangles"] <= 0):
             fail(f"frame {f['frame']}: instances drawn without draw calls or triangles")
@@ -179,8 +180,13 @@ def main():
     lod = run(args, "lod", ["--mode", "lod"])
     lod0 = run(args, "lod0", ["--mode", "lod0"])
     levels = run(args, "levels", ["--mode", "lod", "--colour-by-level"])
-    for name, report in (("lod", lod), ("lod0", lod0), ("levels", levels)):
+    pfrep = run(args, "pfrep", ["--mode", "pfrep"])
+    for name, report in (("lod", lod), ("lod0", lod0), ("levels", levels), ("pfrep", pfrep)):
         check_report(name, report)
+    if any(f["pfrep_instances"] for f in lod["frames"]):
+        raise AssertionError("lod: instances were drawn from PFRep outside --mode pfrep")
+    if not any(f["pfrep_instances"] and f["pfrep_triangles"] and f["pfrep_changes"] for f in pfrep["frames"]):
+        raise AssertionError("pfrep: no instance was refined and drawn from its PFRep prefix")
     for a, b in zip(lod["frames"], lod0["frames"]):
         if any(b["level_histogram"][1:]):
             raise AssertionError(f"lod0: frame {b['frame']} drew a level other than 0")
@@ -188,7 +194,7 @@ def main():
             raise AssertionError(f"lod0: frame {b['frame']}: fewer triangles than with LOD on the same path")
     if read_png_rgb(os.path.join(args.out, "levels_0000.png")) == read_png_rgb(os.path.join(args.out, "lod_0000.png")):
         raise AssertionError("colour by level drew the same image as the plain run")
-    print(f"lodview check: 3 runs of {FRAMES} frames passed")
+    print(f"lodview check: 4 runs of {FRAMES} frames passed")
     return 0
 
 

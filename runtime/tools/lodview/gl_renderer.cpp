@@ -194,6 +194,51 @@ void Renderer::release(GpuLevel* level) {
     *level = GpuLevel();
 }
 
+void Renderer::uploadPositions(const float* xyz, size_t vertex_count, uint32_t* vbo) {
+    if (!*vbo) glGenBuffers(1, vbo);
+    glBindBuffer(GL_ARRAY_BUFFER, *vbo);
+    glBufferData(GL_ARRAY_BUFFER, GLsizeiptr(vertex_count * 3 * sizeof(float)), xyz, GL_STATIC_DRAW);
+    glBindBuffer(GL_ARRAY_BUFFER, 0);
+}
+
+void Renderer::createDynamicMesh(uint32_t vbo, uint32_t* vao, uint32_t* ibo) {
+    glGenVertexArrays(1, vao);
+    glBindVertexArray(*vao);
+    glBindBuffer(GL_ARRAY_BUFFER, vbo);
+    glEnableVertexAttribArray(0);
+    glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 0, nullptr);
+    glGenBuffers(1, ibo);
+    glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, *ibo);
+    glBindVertexArray(0);
+    glBindBuffer(GL_ARRAY_BUFFER, 0);
+}
+
+void Renderer::uploadIndices(uint32_t ibo, const uint32_t* indices, size_t count) {
+    glBindVertexArray(0);
+    glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, ibo);
+    glBufferData(GL_ELEMENT_ARRAY_BUFFER, GLsizeiptr(count * sizeof(uint32_t)), indices, GL_DYNAMIC_DRAW);
+    glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, 0);
+}
+
+uint32_t Renderer::drawDynamic(uint32_t vao, size_t index_count, const float model[16], const float colour[3]) {
+    glUniformMatrix4fv(u_model_, 1, GL_FALSE, model);
+    glUniform3fv(u_colour_, 1, colour);
+    glBindVertexArray(vao);
+    glDrawElements(GL_TRIANGLES, GLsizei(index_count), GL_UNSIGNED_INT, nullptr);
+    return 1;
+}
+
+void Renderer::releaseDynamic(uint32_t* vao, uint32_t* ibo) {
+    if (*vao) glDeleteVertexArrays(1, vao);
+    if (*ibo) glDeleteBuffers(1, ibo);
+    *vao = *ibo = 0;
+}
+
+void Renderer::releaseBuffer(uint32_t* vbo) {
+    if (*vbo) glDeleteBuffers(1, vbo);
+    *vbo = 0;
+}
+
 void Renderer::beginFrame(const float view_proj[16]) {
     glBindFramebuffer(GL_FRAMEBUFFER, fbo_);
     glViewport(0, 0, GLsizei(width_), GLsizei(height_));

@@ -44,6 +44,16 @@ public:
                 uint32_t* indices, size_t index_capacity, GpuLevel* out, std::string* error);
     void release(GpuLevel* level);
 
+    /// PFRep instances: one float3 position buffer per model (re-specified in place when more
+    /// of the prefix arrives, so vertex arrays that use it stay valid) and per instance a vertex
+    /// array with its own index buffer, rewritten when the instance's mask changes.
+    void uploadPositions(const float* xyz, size_t vertex_count, uint32_t* vbo);
+    void createDynamicMesh(uint32_t vbo, uint32_t* vao, uint32_t* ibo);
+    void uploadIndices(uint32_t ibo, const uint32_t* indices, size_t count);
+    uint32_t drawDynamic(uint32_t vao, size_t index_count, const float model[16], const float colour[3]);
+    void releaseDynamic(uint32_t* vao, uint32_t* ibo);
+    void releaseBuffer(uint32_t* vbo);
+
     /// Frame: binds the framebuffer, clears, starts the GPU timer.
     void beginFrame(const float view_proj[16]);
     /// One draw call per range; returns the draw calls made.

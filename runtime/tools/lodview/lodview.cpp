@@ -1,6 +1,6 @@
 // lodview: draws a grid of instances of baked packs through lodrt with OpenGL 3.3 core (GLFW
 // window, libepoxy for the GL entry points). Interactive: the walk plays in a loop (L toggles LOD /
-// forced LOD0, C colour by level, Space pauses, Left/Right step, Esc quits). --headless (under
+// forced LOD0, P PFRep refinement, C colour by level, Space pauses, Left/Right step, Esc quits). --headless (under
 // xvfb-run with Mesa's llvmpipe on a machine without a GPU): the walk in N frames, a JSON report per
 // frame and PNG screenshots. See docs/lodview.md.
 
@@ -39,8 +39,8 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 constexpr const char* kUsage =
-    "usage: lodview PACK.glb... [--headless] [--frames N] [--warmup N] [--size WxH] [--mode lod|lod0]\n"
-    "               [--colour-by-level] [--budget BYTES] [--threshold PX] [--grid N] [--no-sync]\n"
+    "usage: lodview PACK.glb... [--headless] [--frames N] [--warmup N] [--size WxH] [--mode lod|lod0|pfrep]\n"
+    "               [--colour-by-level] [--budget BYTES] [--threshold PX] [--grid N] [--no-sync] [--pfrep-steps N]\n"
     "               [--report OUT.json] [--screenshot PREFIX] [--shots LIST] [--max-sse PX]\n";
 
 struct Args {
@@ -94,6 +94,9 @@ bool parseValue(const char* name, const char* value, Args* args) {
     } else if (!std::strcmp(name, "--warmup")) {
         ok = parseInt(value, 0, 1000, &v);
         args->warmup = int(v);
+    } else if (!std::strcmp(name, "--pfrep-steps")) {
+        ok = parseInt(value, 1, 1000, &v);
+        args->view.pfrep_steps = uint32_t(v);
     } else if (!std::strcmp(name, "--grid")) {
         ok = parseInt(value, 1, 100, &v);
         args->view.grid = int(v);
@@ -104,8 +107,10 @@ bool parseValue(const char* name, const char* value, Args* args) {
         args->view.width = w;
         args->view.height = h;
     } else if (!std::strcmp(name, "--mode")) {
-        ok = !std::strcmp(value, "lod") || !std::strcmp(value, "lod0");
-        args->view.mode = !std::strcmp(value, "lod0") ? lodview::LodMode::ForceLod0 : lodview::LodMode::Lod;
+        ok = !std::strcmp(value, "lod") || !std::strcmp(value, "lod0") || !std::strcmp(value, "pfrep");
+        args->view.mode = !std::strcmp(value, "lod0")    ? lodview::LodMode::ForceLod0
+                          : !std::strcmp(value, "pfrep") ? lodview::LodMode::Pfrep
+                                                         : lodview::LodMode::Lod;
     } else if (!std::strcmp(name, "--budget")) {
         char* end = nullptr;
         args->view.budget_bytes = std::strtoull(value, &end, 10);
@@ -204,6 +209,10 @@ void perspectiveGl(float fov, float aspect, float n, float f, float out[16]) {
     out[14] = 2 * f * n / (n - f);
 }
 
+const char* modeName(lodview::LodMode mode) {
+    return mode == lodview::LodMode::Lod ? "lod" : mode == lodview::LodMode::ForceLod0 ? "lod0" : "pfrep";
+}
+
 struct FrameRecord {
     int frame = 0;
     float eye[3] = {};
@@ -221,14 +230,16 @@ void writeFrameJson(std::FILE* out, const FrameRecord& r, bool last) {
                  "\"resident_bytes\": %llu, \"bytes_streamed\": %llu, \"stream_requests\": %u, "
                  "\"lodrt_allocations\": %llu, \"lodrt_heap_allocations\": %llu, \"not_drawable\": %u, "
                  "\"coarser_than_selected\": %u, "
-                 "\"max_sse_px\": %.4f, \"level_histogram\": [",
+                 "\"max_sse_px\": %.4f, \"pfrep_ms\": %.4f, \"pfrep_instances\": %u, \"pfrep_triangles\": %llu, "
+                 "\"pfrep_changes\": %llu, \"level_histogram\": [",
                  r.frame, r.eye[0], r.eye[1], r.eye[2], r.frame_ms, r.cpu_ms, r.gpu_ms, s.cull_ms, s.select_ms,
                  s.stream_ms, s.upload_ms, s.wait_ms, s.visible, s.culled, s.instances_drawn, s.draw_calls,
                  static_cast<unsigned long long>(s.triangles), s.levels_resident,
                  static_cast<unsigned long long>(s.resident_bytes), static_cast<unsigned long long>(s.bytes_streamed),
                  s.stream_requests, static_cast<unsigned long long>(s.lodrt_allocations),
                  static_cast<unsigned long long>(s.lodrt_heap_allocations), s.not_drawable, s.coarser_than_selected,
-                 double(s.max_sse_px));
+                 double(s.max_sse_px), s.pfrep_ms, s.pfrep_instances,
+                 static_cast<unsigned long long>(s.pfrep_triangles), static_cast<unsigned long long>(s.pfrep_changes));
     for (uint32_t l = 0; l < lodrt::kMaxLevels; ++l) std::fprintf(out, "%s%u", l ? ", " : "", s.histogram[l]);
     std::fprintf(out, "]}%s\n", last ? "" : ",");
 }
@@ -275,10 +286,10 @@ bool writeReport(const Args& args, const lodview::View& view, const std::vector<
                  "{\n  \"renderer\": \"%s\",\n  \"width\": %u, \"height\": %u, \"mode\": \"%s\", "
                  "\"colour_by_level\": %s, \"instances\": %zu, \"packs\": %zu, \"pixel_threshold\": %g, "
                  "\"budget_bytes\": %llu, \"sync_streaming\": %s,\n  \"frames\": [\n",
-                 renderer_name, args.view.width, args.view.height,
-                 args.view.mode == lodview::LodMode::Lod ? "lod" : "lod0", args.view.colour_by_level ? "true" : "false",
-                 view.instanceCount(), view.packCount(), double(args.view.pixel_threshold),
-                 static_cast<unsigned long long>(args.view.budget_bytes), args.view.sync_streaming ? "true" : "false");
+                 renderer_name, args.view.width, args.view.height, modeName(args.view.mode),
+                 args.view.colour_by_level ? "true" : "false", view.instanceCount(), view.packCount(),
+                 double(args.view.pixel_threshold), static_cast<unsigned long long>(args.view.budget_bytes),
+                 args.view.sync_streaming ? "true" : "false");
     for (size_t i = 0; i < records.size(); ++i) writeFrameJson(out, records[i], i + 1 == records.size());
     std::fprintf(
         out,
@@ -376,10 +387,9 @@ int runHeadless(App& app) {
                 "gpu %.3f), mean %.0f triangles and %.1f draw calls per frame, max drawn screen-space error %.3f px, "
                 "streamed %llu bytes, %llu heap allocations in lodrt\n",
                 gl_renderer ? gl_renderer : "?", args.view.width, args.view.height, app.view.instanceCount(),
-                app.view.packCount(), args.view.mode == lodview::LodMode::Lod ? "lod" : "lod0", args.frames,
-                s.mean_frame_ms, s.mean_cpu_ms, s.mean_gpu_ms, s.mean_triangles, s.mean_draw_calls,
-                double(s.max_sse_px), static_cast<unsigned long long>(s.bytes_streamed),
-                static_cast<unsigned long long>(s.heap_allocations));
+                app.view.packCount(), modeName(args.view.mode), args.frames, s.mean_frame_ms, s.mean_cpu_ms,
+                s.mean_gpu_ms, s.mean_triangles, s.mean_draw_calls, double(s.max_sse_px),
+                static_cast<unsigned long long>(s.bytes_streamed), static_cast<unsigned long long>(s.heap_allocations));
     int failed = 0;
     if (args.max_sse > 0 && s.max_sse_px > args.max_sse * 1.0001f) {
         std::fprintf(stderr, "error: a drawn level projects to %.3f px, above --max-sse %.3g px\n",
@@ -396,6 +406,8 @@ void onKey(GLFWwindow* window, int key, int, int action, int) {
     if (key == GLFW_KEY_ESCAPE) glfwSetWindowShouldClose(window, 1);
     if (key == GLFW_KEY_L)
         app.view.setMode(c.mode == lodview::LodMode::Lod ? lodview::LodMode::ForceLod0 : lodview::LodMode::Lod);
+    if (key == GLFW_KEY_P)
+        app.view.setMode(c.mode == lodview::LodMode::Pfrep ? lodview::LodMode::Lod : lodview::LodMode::Pfrep);
     if (key == GLFW_KEY_C) app.view.setColourByLevel(!c.colour_by_level);
     if (key == GLFW_KEY_SPACE) app.paused = !app.paused;
     if (key == GLFW_KEY_RIGHT) app.step += 1;
@@ -416,9 +428,8 @@ int runInteractive(App& app) {
         if (!runFrame(app, float(frame) / float(n - 1), &record)) return 1;
         char title[256];
         std::snprintf(title, sizeof(title), "lodview  %s%s  frame %.2f ms  %llu tris  %u draws  max SSE %.2f px",
-                      app.view.config().mode == lodview::LodMode::Lod ? "LOD" : "LOD0",
-                      app.view.config().colour_by_level ? " (by level)" : "", record.frame_ms,
-                      static_cast<unsigned long long>(record.stats.triangles), record.stats.draw_calls,
+                      modeName(app.view.config().mode), app.view.config().colour_by_level ? " (by level)" : "",
+                      record.frame_ms, static_cast<unsigned long long>(record.stats.triangles), record.stats.draw_calls,
                       double(record.stats.max_sse_px));
         glfwSetWindowTitle(app.window, title);
         glfwSwapBuffers(app.window);

@@ -28,6 +28,7 @@ constexpr float kAssetColours[][3] = {{0.80f, 0.74f, 0.64f}, {0.70f, 0.76f, 0.80
 constexpr float kLevelColours[lodrt::kMaxLevels][3] = {
     {0.90f, 0.20f, 0.15f}, {0.95f, 0.55f, 0.10f}, {0.95f, 0.85f, 0.15f}, {0.35f, 0.80f, 0.25f},
     {0.15f, 0.75f, 0.80f}, {0.20f, 0.40f, 0.95f}, {0.55f, 0.30f, 0.85f}, {0.85f, 0.35f, 0.75f}};
+constexpr float kPfrepColour[3] = {0.85f, 0.85f, 0.85f}; // refined per vertex: no single level
 
 } // namespace
 
@@ -41,6 +42,24 @@ struct View::Pack {
     std::vector<lodrt::ModelDemand> demand;
     std::vector<GpuLevel> gpu;   // model * kMaxLevels + level
     size_t first = 0, count = 0; // its instances
+    // Pfrep mode: per model, the decoded positions of the resident prefix on the GPU; per
+    // instance (index - first), its mask and index buffer.
+    struct PfrepModelGpu {
+        uint32_t vbo = 0;
+        uint32_t decoded_from = UINT32_MAX; // loaded_from of the prefix the positions came from
+        std::vector<float> positions;
+        std::vector<uint32_t> scratch;
+    };
+    struct PfrepInstance {
+        std::vector<uint8_t> mask;
+        std::vector<uint32_t> indices;
+        uint32_t vao = 0, ibo = 0;
+        size_t triangles = 0;
+        uint32_t loaded_from = UINT32_MAX;
+        bool drawable = false;
+    };
+    std::vector<PfrepModelGpu> pfrep_models;
+    std::vector<PfrepInstance> pfrep_instances;
     uint64_t streamed_before = 0;
     uint32_t requests_before = 0;
 
@@ -219,6 +238,8 @@ bool View::init(const ViewConfig& config, std::string* error) {
             return false;
         }
         pack->demand.assign(models.modelCount(), lodrt::ModelDemand());
+        pack->pfrep_models.resize(models.modelCount());
+        pack->pfrep_instances.resize(pack->count);
         pack->gpu.resize(size_t(models.modelCount()) * lodrt::kMaxLevels);
         for (uint32_t m = 0; m < models.modelCount(); ++m)
             for (uint32_t l = 0; l < models.model(m).level_count; ++l)
@@ -356,8 +377,13 @@ bool View::update(const float eye[3], const float view_proj[16], Renderer* rende
     stats->lodrt_heap_allocations = setup_calls + pool_.heapCalls() - heap_before;
 
     t0 = Clock::now();
-    const bool ok = mirrorResident(renderer, error);
+    bool ok = mirrorResident(renderer, error);
     stats->upload_ms = msSince(t0);
+    if (ok && config_.mode == LodMode::Pfrep) {
+        t0 = Clock::now();
+        ok = refinePfrep(frustum, eye, renderer, stats, error);
+        stats->pfrep_ms = msSince(t0);
+    }
     for (auto& pack : packs_) {
         const lodrt::StreamStats s = pack->streamer.stats();
         if (s.failures > 0 && ok) {
@@ -373,11 +399,76 @@ bool View::update(const float eye[3], const float view_proj[16], Renderer* rende
     return ok;
 }
 
+// Refines every visible instance of a model whose PFRep prefix holds vertices towards the
+// instance's model-space view at the selection's pixel threshold; the index buffer is rewritten
+// only when the mask changed. The model and its bytes are valid until the next update.
+bool View::refinePfrep(const lodrt::Frustum& frustum, const float eye[3], Renderer* renderer, FrameStats* stats,
+                       std::string* error) {
+    for (auto& pack : packs_) {
+        const lodrt::ModelSet& models = pack->source.models();
+        for (size_t i = pack->first; i < pack->first + pack->count; ++i) {
+            Pack::PfrepInstance& inst = pack->pfrep_instances[i - pack->first];
+            inst.drawable = false;
+            const lodrt::PfrepModel* pm = pack->streamer.pfrepModel(model_[i]);
+            if (visibility_[i] == lodrt::Containment::Outside || !pm || pm->loaded_from >= pm->vertex_count) continue;
+            Pack::PfrepModelGpu& g = pack->pfrep_models[model_[i]];
+            if (g.decoded_from != pm->loaded_from) { // more of the prefix (or less) is resident
+                g.positions.resize(size_t(pm->vertex_count) * 3);
+                g.scratch.resize(lodrt::pfrepScratchValues(*pm));
+                if (lodrt::pfrepDecodePositions(*pm, g.positions.data(), g.positions.size()) != lodrt::Result::Ok) {
+                    *error = pack->path + ": PFRep positions cannot be decoded";
+                    return false;
+                }
+                renderer->uploadPositions(g.positions.data(), pm->vertex_count, &g.vbo);
+                g.decoded_from = pm->loaded_from;
+            }
+            if (inst.mask.empty()) {
+                inst.mask.resize(lodrt::pfrepMaskBytes(*pm));
+                inst.indices.resize(lodrt::pfrepMaxTriangles(*pm) * 3);
+                renderer->createDynamicMesh(g.vbo, &inst.vao, &inst.ibo);
+            }
+            // A prefix shrunk for the budget: the mask restarts from the coarsest mesh.
+            if (inst.loaded_from == UINT32_MAX || pm->loaded_from > inst.loaded_from)
+                lodrt::pfrepMaskCoarsest(*pm, inst.mask.data());
+            inst.loaded_from = pm->loaded_from;
+            float to_world[16];
+            lodrt::multiplyTransforms(&placement_[i * 16], models.modelLevel(model_[i], 0).world_transform, to_world);
+            lodrt::PfrepView view;
+            size_t triangles = 0, changes = 0;
+            lodrt::Result r =
+                lodrt::pfrepInstanceViewTransform(frustum, eye, to_world, k_, config_.pixel_threshold, 0.5f, &view);
+            // config_.pfrep_steps adaptation steps per frame (1 as an engine would run it); fewer
+            // changes than a step allows mean the mask is a fixed point of the view.
+            for (uint32_t step = 0; r == lodrt::Result::Ok && step < config_.pfrep_steps; ++step) {
+                size_t changed = 0;
+                r = lodrt::pfrepRefine(*pm, view, inst.mask.data(), g.scratch.data(), g.scratch.size(), &changed);
+                changes += changed;
+                if (changed == 0) break;
+            }
+            if (r == lodrt::Result::Ok)
+                r = lodrt::pfrepExtractSelective(*pm, inst.mask.data(), inst.indices.data(), inst.indices.size() / 3,
+                                                 &triangles);
+            if (r != lodrt::Result::Ok) {
+                *error = pack->path + ": PFRep refinement: " + lodrt::resultName(r);
+                return false;
+            }
+            if (changes > 0 || triangles != inst.triangles)
+                renderer->uploadIndices(inst.ibo, inst.indices.data(), triangles * 3);
+            inst.triangles = triangles;
+            inst.drawable = triangles > 0;
+            stats->pfrep_changes += changes;
+        }
+    }
+    return true;
+}
+
 void View::measure(const float eye[3], FrameStats* stats) const {
     for (const auto& pack : packs_) {
         const lodrt::ModelSet& models = pack->source.models();
         for (size_t i = pack->first; i < pack->first + pack->count; ++i) {
             if (visibility_[i] == lodrt::Containment::Outside) continue;
+            // A refined PFRep instance: its per-vertex criterion holds the threshold.
+            if (config_.mode == LodMode::Pfrep && pack->pfrep_instances[i - pack->first].drawable) continue;
             if (draw_[i] == lodrt::kNoLevel) {
                 ++stats->not_drawable;
                 continue;
@@ -399,6 +490,18 @@ void View::draw(Renderer* renderer, FrameStats* stats) const {
         for (size_t i = pack->first; i < pack->first + pack->count; ++i) {
             const uint8_t l = draw_[i];
             if (l == lodrt::kNoLevel) continue;
+            const Pack::PfrepInstance& inst = pack->pfrep_instances[i - pack->first];
+            if (config_.mode == LodMode::Pfrep && inst.drawable) {
+                float model[16];
+                lodrt::multiplyTransforms(&placement_[i * 16], models.modelLevel(model_[i], 0).world_transform, model);
+                const float* colour = config_.colour_by_level ? kPfrepColour : kAssetColours[asset_[i] % 6];
+                stats->draw_calls += renderer->drawDynamic(inst.vao, inst.triangles * 3, model, colour);
+                stats->triangles += inst.triangles;
+                stats->pfrep_triangles += inst.triangles;
+                ++stats->pfrep_instances;
+                ++stats->instances_drawn;
+                continue;
+            }
             const GpuLevel& gpu = pack->gpu[model_[i] * lodrt::kMaxLevels + l];
             if (!gpu.valid) continue;
             float model[16];
@@ -426,9 +529,12 @@ void View::drain() {
 }
 
 void View::releaseGpu(Renderer* renderer) {
-    for (auto& pack : packs_)
+    for (auto& pack : packs_) {
         for (GpuLevel& gpu : pack->gpu)
             if (gpu.valid || !gpu.buffers.empty()) renderer->release(&gpu);
+        for (Pack::PfrepInstance& inst : pack->pfrep_instances) renderer->releaseDynamic(&inst.vao, &inst.ibo);
+        for (Pack::PfrepModelGpu& g : pack->pfrep_models) renderer->releaseBuffer(&g.vbo);
+    }
 }
 
 uint64_t View::totalStreamedBytes() const {

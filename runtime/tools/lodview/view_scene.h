@@ -21,7 +21,10 @@
 
 namespace lodview {
 
-enum class LodMode : uint8_t { Lod, ForceLod0 };
+/// Lod: discrete levels by screen-space error. ForceLod0: level 0 for every visible instance.
+/// Pfrep: instances of models with a PFRep blob are refined per vertex (pfrepUpdateInstance) from
+/// the streamed prefix, the others drawn as in Lod.
+enum class LodMode : uint8_t { Lod, ForceLod0, Pfrep };
 
 struct ViewConfig {
     uint32_t width = 1280, height = 720;
@@ -34,11 +37,12 @@ struct ViewConfig {
     LodMode mode = LodMode::Lod;
     bool colour_by_level = false;
     bool sync_streaming = false; // before drawing, wait until every selected level is resident
+    uint32_t pfrep_steps = 1;    // Pfrep mode: refinement steps per instance per frame
 };
 
 /// What one frame did (times in milliseconds).
 struct FrameStats {
-    double cull_ms = 0, select_ms = 0, stream_ms = 0, upload_ms = 0, wait_ms = 0;
+    double cull_ms = 0, select_ms = 0, stream_ms = 0, upload_ms = 0, wait_ms = 0, pfrep_ms = 0;
     uint32_t visible = 0, culled = 0, draw_calls = 0, instances_drawn = 0;
     uint64_t triangles = 0;
     uint32_t levels_resident = 0;
@@ -50,6 +54,9 @@ struct FrameStats {
     uint64_t lodrt_allocations = 0;             // allocator calls made by lodrt during the frame
     uint64_t lodrt_heap_allocations = 0;        // of those, served by malloc instead of the level pool
     uint32_t stream_requests = 0;               // level / PFRep reads the streamers started
+    uint32_t pfrep_instances = 0;               // instances drawn from their PFRep (Pfrep mode)
+    uint64_t pfrep_triangles = 0;               // their triangles (part of `triangles`)
+    uint64_t pfrep_changes = 0;                 // mask bits the refinement changed
 };
 
 /// The engine side of job scheduling: one worker thread with a queue (lodrt calls submit from
@@ -112,6 +119,8 @@ private:
     bool waitForSelected(const float eye[3]);
     bool mirrorResident(Renderer* renderer, std::string* error);
     void measure(const float eye[3], FrameStats* stats) const;
+    bool refinePfrep(const lodrt::Frustum& frustum, const float eye[3], Renderer* renderer, FrameStats* stats,
+                     std::string* error);
     std::vector<std::unique_ptr<Pack>> packs_;
     ViewConfig config_;
     JobThread jobs_thread_;
