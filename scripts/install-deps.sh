@@ -18,8 +18,8 @@ packages=(
     libmeshoptimizer-dev
     python3 python3-numpy python3-open3d python3-jsonschema
     universal-ctags
-    # lodview and its headless test: GLFW, libepoxy, Mesa's GL with the llvmpipe driver, Xvfb.
-    libglfw3-dev libepoxy-dev libgl-dev libgl1-mesa-dri xvfb xauth
+    # lodview and its headless test: GLFW, libepoxy, Mesa's GL with the llvmpipe driver, Xvfb, stb_image.
+    libglfw3-dev libepoxy-dev libgl-dev libgl1-mesa-dri xvfb xauth libstb-dev
 )
 # Node.js: machines of this kind ship it (with npm bundled); Debian's own npm package conflicts with
 # such a build, so only ask apt for node and npm when the commands are missing.

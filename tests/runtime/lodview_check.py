@@ -2,6 +2,7 @@
 """Runs lodview --headless under xvfb-run on a small pack and checks what it wrote.
 
   lodview_check.py --lodview EXE --xvfb-run XVFB --out DIR PACK...
+  lodview_check.py --lodview EXE --xvfb-run XVFB --out DIR --textured-source SRC --lodbake EXE --preset P
   lodview_check.py --missing REASON
 
 Four runs of the same walk on a 3x3 grid (LOD, forced LOD0, colour by level, PFRep refinement),
@@ -13,6 +14,10 @@ calls and triangles positive when something is drawn, LOD0 frames draw only leve
 the LOD run's triangles, the PFRep run refines and draws instances from the streamed prefix, drawn
 levels within 1 px, no lodrt allocation beyond the level reads and none from the heap). The blank and
 size checks first reject images built to fail them, so they are known to be able to fail.
+
+--textured-source SRC --lodbake EXE --preset P: bakes SRC (a textured shared scan) and checks
+that every draw call of a plain run uses the base colour texture and none of a colour-by-level run
+does; skipped (77) when SRC is missing unless LODBAKE_REQUIRE_SHARED_MESHES is set.
 
 --missing: lodview or xvfb-run was not found at configure time. The test is skipped (exit 77)
 unless LODBAKE_REQUIRE_LODVIEW is set (scripts/setup-and-test.sh sets it), when it fails.
@@ -29,7 +34,7 @@ CLEAR = (158, 178, 199)  # glClearColor(0.62, 0.70, 0.78) in 8 bits
 FRAME_FIELDS = {
     "frame": int, "eye": list, "frame_ms": float, "cpu_ms": float, "gpu_ms": float, "cull_ms": float,
     "select_ms": float, "stream_ms": float, "upload_ms": float, "stream_wait_ms": float, "visible": int,
-    "culled": int, "instances_drawn": int, "draw_calls": int, "triangles": int, "levels_resident": int,
+    "culled": int, "instances_drawn": int, "draw_calls": int, "textured_draw_calls": int, "triangles": int, "levels_resident": int,
     "resident_bytes": int, "bytes_streamed": int, "stream_requests": int, "lodrt_allocations": int, "lodrt_heap_allocations": int,
     "not_drawable": int, "coarser_than_selected": int, "max_sse_px": float, "pfrep_ms": float,
     "pfrep_instances": int, "pfrep_triangles": int, "pfrep_changes": int, "level_histogram": list,
@@ -163,8 +168,40 @@ def check_report(name, report):
         fail("summary: a headless run must draw the selected levels")
 
 
+def check_textured(args):
+    """Bakes a textured shared scan and checks that lodview draws it with its base colour texture."""
+    if not os.path.isfile(args.textured_source):
+        required = os.environ.get("LODBAKE_REQUIRE_SHARED_MESHES", "") not in ("", "0")
+        print(f"lodview textured test: {args.textured_source}: missing", file=sys.stderr)
+        return 1 if required else 77
+    os.makedirs(args.out, exist_ok=True)
+    pack = os.path.join(args.out, "textured.glb")
+    bake = subprocess.run([args.lodbake, "bake", args.textured_source, "-o", pack, "--preset", args.preset, "--quiet"],
+                          capture_output=True, text=True, timeout=600)
+    if bake.returncode != 0:
+        raise AssertionError(f"bake of {args.textured_source} failed: {bake.stderr.strip()}")
+    args.packs = [pack]
+    textured = run(args, "textured", ["--mode", "lod"])
+    by_level = run(args, "textured_levels", ["--mode", "lod", "--colour-by-level"])
+    check_report("textured", textured)
+    check_report("textured_levels", by_level)
+    for f in textured["frames"]:
+        if f["textured_draw_calls"] != f["draw_calls"]:
+            raise AssertionError(f"textured: frame {f['frame']}: {f['textured_draw_calls']} of {f['draw_calls']} "
+                                 "draw calls used the base colour texture")
+    if any(f["textured_draw_calls"] for f in by_level["frames"]):
+        raise AssertionError("textured_levels: colour by level still drew textures")
+    if not any(f["textured_draw_calls"] for f in textured["frames"]):
+        raise AssertionError("textured: nothing was drawn")
+    print(f"lodview textured check: 2 runs of {FRAMES} frames passed")
+    return 0
+
+
 def main():
     parser = argparse.ArgumentParser()
+    parser.add_argument("--textured-source")
+    parser.add_argument("--lodbake")
+    parser.add_argument("--preset")
     parser.add_argument("--lodview")
     parser.add_argument("--xvfb-run")
     parser.add_argument("--out")
@@ -176,6 +213,8 @@ def main():
         print(f"lodview test: {args.missing}", file=sys.stderr)
         return 1 if required else 77
     self_test()
+    if args.textured_source:
+        return check_textured(args)
     os.makedirs(args.out, exist_ok=True)
     lod = run(args, "lod", ["--mode", "lod"])
     lod0 = run(args, "lod0", ["--mode", "lod0"])

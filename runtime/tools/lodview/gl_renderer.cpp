@@ -4,6 +4,10 @@
 
 #include <cstring>
 
+#ifdef LODVIEW_HAS_STB
+#include <stb_image.h>
+#endif
+
 namespace lodview {
 
 namespace {
@@ -12,25 +16,32 @@ namespace {
 // (a coarse level's faceting is what the viewer is meant to show) and both sides are lit alike.
 constexpr const char* kVertexShader = R"(#version 330 core
 layout(location = 0) in vec3 a_position;
+layout(location = 1) in vec2 a_uv;
 uniform mat4 u_view_proj;
 uniform mat4 u_model;
 out vec3 v_world;
+out vec2 v_uv;
 void main() {
     vec4 world = u_model * vec4(a_position, 1.0);
     v_world = world.xyz;
+    v_uv = a_uv;
     gl_Position = u_view_proj * world;
 }
 )";
 
 constexpr const char* kFragmentShader = R"(#version 330 core
 in vec3 v_world;
+in vec2 v_uv;
 uniform vec3 u_colour;
+uniform int u_textured;
+uniform sampler2D u_texture;
 out vec4 o_colour;
 void main() {
     vec3 n = normalize(cross(dFdx(v_world), dFdy(v_world)));
     vec3 light = normalize(vec3(0.4, 0.8, 0.45));
     float lit = 0.25 + 0.75 * abs(dot(n, light));
-    o_colour = vec4(u_colour * lit, 1.0);
+    vec3 base = u_textured != 0 ? texture(u_texture, v_uv).rgb : u_colour;
+    o_colour = vec4(base * lit, 1.0);
 }
 )";
 
@@ -69,13 +80,85 @@ GLenum glComponentType(lodrt::ComponentType type) {
     return GL_FLOAT;
 }
 
-// The POSITION accessor of primitive p, or kNoIndex.
-uint32_t positionAccessor(const lodrt::Pack& pack, const lodrt::PrimitiveInfo& prim) {
+// The accessor of attribute `name` of primitive p, or kNoIndex.
+uint32_t attributeAccessor(const lodrt::Pack& pack, const lodrt::PrimitiveInfo& prim, std::string_view name) {
     for (uint32_t a = 0; a < prim.attribute_count; ++a) {
         const lodrt::AttributeInfo& attribute = pack.attribute(prim.first_attribute + a);
-        if (attribute.name == "POSITION") return attribute.accessor;
+        if (attribute.name == name) return attribute.accessor;
     }
     return lodrt::kNoIndex;
+}
+
+uint32_t jsonIndex(const lodrt::JsonValue& value) {
+    uint64_t v = 0;
+    return value.asUint64(&v) && v < lodrt::kNoIndex ? uint32_t(v) : lodrt::kNoIndex;
+}
+
+// The buffer view of the image behind `material`'s base colour texture and the TEXCOORD set it
+// uses, or kNoIndex (the pack is hostile: every step is checked).
+uint32_t baseColourImageView(const lodrt::Pack& pack, uint32_t material, uint32_t* tex_coord) {
+    const lodrt::JsonValue root = pack.document().root();
+    const lodrt::JsonValue info =
+        root.find("materials").at(material).find("pbrMetallicRoughness").find("baseColorTexture");
+    const uint32_t texture = jsonIndex(info.find("index"));
+    const uint32_t set = info.find("texCoord").isValid() ? jsonIndex(info.find("texCoord")) : 0;
+    if (texture == lodrt::kNoIndex || set > 7) return lodrt::kNoIndex;
+    const uint32_t image = jsonIndex(root.find("textures").at(texture).find("source"));
+    if (image == lodrt::kNoIndex) return lodrt::kNoIndex;
+    const uint32_t view = jsonIndex(root.find("images").at(image).find("bufferView"));
+    if (view == lodrt::kNoIndex || view >= pack.bufferViewCount()) return lodrt::kNoIndex;
+    *tex_coord = set;
+    return view;
+}
+
+// Reads and decodes an image buffer view into a mipmapped RGBA8 texture; 0 when it cannot.
+uint32_t loadTexture(const lodrt::PackSource& source, uint32_t view) {
+#ifdef LODVIEW_HAS_STB
+    const uint64_t size = source.pack().bufferView(view).byte_length;
+    if (size == 0 || size > (uint64_t(1) << 30)) return 0;
+    std::vector<uint8_t> bytes(size);
+    if (source.readBufferView(view, 0, bytes.data(), bytes.size()) != lodrt::Result::Ok) return 0;
+    int w = 0, h = 0, n = 0;
+    uint8_t* rgba = stbi_load_from_memory(bytes.data(), int(bytes.size()), &w, &h, &n, 4);
+    if (!rgba) return 0;
+    GLuint texture = 0;
+    glGenTextures(1, &texture);
+    glBindTexture(GL_TEXTURE_2D, texture);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    // glTF texture coordinates start at the image's first row, which is what GL samples at t = 0.
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, w, h, 0, GL_RGBA, GL_UNSIGNED_BYTE, rgba);
+    glGenerateMipmap(GL_TEXTURE_2D);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glBindTexture(GL_TEXTURE_2D, 0);
+    stbi_image_free(rgba);
+    return texture;
+#else
+    (void)source;
+    (void)view;
+    return 0;
+#endif
+}
+
+// Uploads accessor `accessor` of the level's bytes as vertex attribute `location` of the bound
+// vertex array. False when its data is not inside the level's bytes.
+bool uploadAttribute(const lodrt::PackSource& source, uint32_t model, uint32_t level, const uint8_t* bytes,
+                     uint32_t accessor, GLuint location, GLint components, GpuLevel* out) {
+    const lodrt::Pack& pack = source.pack();
+    const lodrt::AccessorInfo& acc = pack.accessor(accessor);
+    const uint8_t* data = source.accessorData(model, level, bytes, accessor);
+    if (!data || acc.count == 0 || lodrt::componentCount(acc.type) != uint32_t(components)) return false;
+    const uint32_t stride = pack.bufferView(acc.buffer_view).byte_stride;
+    const uint64_t step = stride ? stride : acc.element_size;
+    GLuint vbo = 0;
+    glGenBuffers(1, &vbo);
+    out->buffers.push_back(vbo);
+    glBindBuffer(GL_ARRAY_BUFFER, vbo);
+    glBufferData(GL_ARRAY_BUFFER, GLsizeiptr((acc.count - 1) * step + acc.element_size), data, GL_STATIC_DRAW);
+    glEnableVertexAttribArray(location);
+    glVertexAttribPointer(location, components, glComponentType(acc.component_type),
+                          acc.normalized ? GL_TRUE : GL_FALSE, GLsizei(stride), nullptr);
+    return true;
 }
 
 } // namespace
@@ -114,6 +197,11 @@ bool Renderer::init(uint32_t width, uint32_t height, std::string* error) {
     u_view_proj_ = glGetUniformLocation(program_, "u_view_proj");
     u_model_ = glGetUniformLocation(program_, "u_model");
     u_colour_ = glGetUniformLocation(program_, "u_colour");
+    u_textured_ = glGetUniformLocation(program_, "u_textured");
+    u_texture_ = glGetUniformLocation(program_, "u_texture");
+    glUseProgram(program_);
+    glUniform1i(u_texture_, 0);
+    glUseProgram(0);
 
     glGenRenderbuffers(1, &colour_rb_);
     glBindRenderbuffer(GL_RENDERBUFFER, colour_rb_);
@@ -151,28 +239,29 @@ bool Renderer::upload(const lodrt::PackSource& source, uint32_t model, uint32_t 
         const lodrt::PrimitiveInfo& prim = pack.primitive(mesh.first_primitive + p);
         if (prim.mode != 4) continue;
         const uint32_t count = uint32_t(prim.index_count);
-        const uint32_t accessor = positionAccessor(pack, prim);
-        const lodrt::AccessorInfo* acc = accessor == lodrt::kNoIndex ? nullptr : &pack.accessor(accessor);
-        const uint8_t* data = acc ? source.accessorData(model, level, bytes, accessor) : nullptr;
-        if (!acc || !data || acc->type != lodrt::AccessorType::Vec3 || acc->count == 0) {
+        GLuint vao = 0;
+        glGenVertexArrays(1, &vao);
+        glBindVertexArray(vao);
+        out->ranges.push_back({vao, first, count, 0});
+        const uint32_t position = attributeAccessor(pack, prim, "POSITION");
+        if (position == lodrt::kNoIndex || !uploadAttribute(source, model, level, bytes, position, 0, 3, out)) {
+            glBindVertexArray(0);
             *error = "a primitive has no POSITION data inside the level's bytes";
             return false;
         }
-        const uint32_t stride = pack.bufferView(acc->buffer_view).byte_stride;
-        const uint64_t step = stride ? stride : acc->element_size;
-        GLuint vao = 0, vbo = 0;
-        glGenVertexArrays(1, &vao);
-        glBindVertexArray(vao);
-        glGenBuffers(1, &vbo);
-        out->buffers.push_back(vbo);
-        glBindBuffer(GL_ARRAY_BUFFER, vbo);
-        glBufferData(GL_ARRAY_BUFFER, GLsizeiptr((acc->count - 1) * step + acc->element_size), data, GL_STATIC_DRAW);
-        glEnableVertexAttribArray(0);
-        glVertexAttribPointer(0, 3, glComponentType(acc->component_type), acc->normalized ? GL_TRUE : GL_FALSE,
-                              GLsizei(stride), nullptr);
+        uint32_t set = 0;
+        const uint32_t image_view =
+            prim.material == lodrt::kNoIndex ? lodrt::kNoIndex : baseColourImageView(pack, prim.material, &set);
+        const char names[8][11] = {"TEXCOORD_0", "TEXCOORD_1", "TEXCOORD_2", "TEXCOORD_3",
+                                   "TEXCOORD_4", "TEXCOORD_5", "TEXCOORD_6", "TEXCOORD_7"};
+        const uint32_t uv = image_view == lodrt::kNoIndex ? lodrt::kNoIndex : attributeAccessor(pack, prim, names[set]);
+        if (uv != lodrt::kNoIndex && uploadAttribute(source, model, level, bytes, uv, 1, 2, out)) {
+            out->ranges.back().texture = loadTexture(source, image_view);
+            if (out->ranges.back().texture) out->textures.push_back(out->ranges.back().texture);
+        }
         glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, ibo);
         glBindVertexArray(0);
-        out->ranges.push_back({vao, first, count});
+        out->ranges.back().first_index = first;
         out->triangles += count / 3;
         first += count;
     }
@@ -190,6 +279,7 @@ bool Renderer::upload(const lodrt::PackSource& source, uint32_t model, uint32_t 
 
 void Renderer::release(GpuLevel* level) {
     for (const GpuLevel::Range& r : level->ranges) glDeleteVertexArrays(1, &r.vao);
+    if (!level->textures.empty()) glDeleteTextures(GLsizei(level->textures.size()), level->textures.data());
     if (!level->buffers.empty()) glDeleteBuffers(GLsizei(level->buffers.size()), level->buffers.data());
     *level = GpuLevel();
 }
@@ -221,6 +311,7 @@ void Renderer::uploadIndices(uint32_t ibo, const uint32_t* indices, size_t count
 }
 
 uint32_t Renderer::drawDynamic(uint32_t vao, size_t index_count, const float model[16], const float colour[3]) {
+    glUniform1i(u_textured_, 0);
     glUniformMatrix4fv(u_model_, 1, GL_FALSE, model);
     glUniform3fv(u_colour_, 1, colour);
     glBindVertexArray(vao);
@@ -253,10 +344,18 @@ void Renderer::beginFrame(const float view_proj[16]) {
     glUniformMatrix4fv(u_view_proj_, 1, GL_FALSE, view_proj);
 }
 
-uint32_t Renderer::draw(const GpuLevel& level, const float model[16], const float colour[3]) {
+uint32_t Renderer::draw(const GpuLevel& level, const float model[16], const float colour[3], bool textured,
+                        uint32_t* textured_calls) {
     glUniformMatrix4fv(u_model_, 1, GL_FALSE, model);
     glUniform3fv(u_colour_, 1, colour);
     for (const GpuLevel::Range& r : level.ranges) {
+        const bool use = textured && r.texture != 0;
+        glUniform1i(u_textured_, use ? 1 : 0);
+        if (use) {
+            glActiveTexture(GL_TEXTURE0);
+            glBindTexture(GL_TEXTURE_2D, r.texture);
+            ++*textured_calls;
+        }
         glBindVertexArray(r.vao);
         glDrawElements(GL_TRIANGLES, GLsizei(r.index_count), GL_UNSIGNED_INT,
                        reinterpret_cast<const void*>(uintptr_t(r.first_index) * sizeof(uint32_t)));

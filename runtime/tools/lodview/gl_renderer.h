@@ -20,8 +20,10 @@ struct GpuLevel {
         uint32_t vao = 0;
         uint32_t first_index = 0; // into the level's index buffer
         uint32_t index_count = 0;
+        uint32_t texture = 0; // base colour texture, 0 when the material has none (or no decoder)
     };
-    std::vector<uint32_t> buffers; // vertex buffers (one per primitive) and the index buffer
+    std::vector<uint32_t> buffers;  // vertex buffers (per primitive: positions, texture coordinates) and indices
+    std::vector<uint32_t> textures; // base colour textures of its materials
     std::vector<Range> ranges;
     uint64_t triangles = 0;
     bool valid = false;
@@ -37,7 +39,9 @@ public:
     /// Compiles the program and creates the framebuffer. False with *error set on failure.
     bool init(uint32_t width, uint32_t height, std::string* error);
 
-    /// Uploads a level from the bytes PackSource::readLevel wrote. `indices` is caller scratch of
+    /// Uploads a level from the bytes PackSource::readLevel wrote. A primitive whose material has
+    /// a base colour texture (an image in a buffer view, read with PackSource::readBufferView and
+    /// decoded with stb_image) and the texture coordinates it names gets that texture. `indices` is caller scratch of
     /// at least source.levelIndexCount(model, level) values. False with *error set when the level
     /// has no drawable POSITION data.
     bool upload(const lodrt::PackSource& source, uint32_t model, uint32_t level, const uint8_t* bytes,
@@ -56,8 +60,10 @@ public:
 
     /// Frame: binds the framebuffer, clears, starts the GPU timer.
     void beginFrame(const float view_proj[16]);
-    /// One draw call per range; returns the draw calls made.
-    uint32_t draw(const GpuLevel& level, const float model[16], const float colour[3]);
+    /// One draw call per range, textured where the range has a texture and `textured`; returns the
+    /// draw calls made and adds the textured ones to *textured_calls.
+    uint32_t draw(const GpuLevel& level, const float model[16], const float colour[3], bool textured,
+                  uint32_t* textured_calls);
     /// Ends the GPU timer; copies the framebuffer to the window's when `to_window`.
     void endFrame(bool to_window, uint32_t window_width, uint32_t window_height);
     /// GPU time of the last frame in milliseconds (waits for the query), or -1 when timer queries
@@ -71,7 +77,7 @@ public:
 
 private:
     uint32_t program_ = 0, fbo_ = 0, colour_rb_ = 0, depth_rb_ = 0, query_ = 0;
-    int u_view_proj_ = -1, u_model_ = -1, u_colour_ = -1;
+    int u_view_proj_ = -1, u_model_ = -1, u_colour_ = -1, u_textured_ = -1, u_texture_ = -1;
     uint32_t width_ = 0, height_ = 0;
     bool query_pending_ = false;
 };

@@ -226,7 +226,8 @@ void writeFrameJson(std::FILE* out, const FrameRecord& r, bool last) {
                  "    {\"frame\": %d, \"eye\": [%.4f, %.4f, %.4f], \"frame_ms\": %.4f, \"cpu_ms\": %.4f, "
                  "\"gpu_ms\": %.4f, \"cull_ms\": %.5f, \"select_ms\": %.5f, \"stream_ms\": %.5f, "
                  "\"upload_ms\": %.4f, \"stream_wait_ms\": %.4f, \"visible\": %u, \"culled\": %u, "
-                 "\"instances_drawn\": %u, \"draw_calls\": %u, \"triangles\": %llu, \"levels_resident\": %u, "
+                 "\"instances_drawn\": %u, \"draw_calls\": %u, \"textured_draw_calls\": %u, \"triangles\": %llu, "
+                 "\"levels_resident\": %u, "
                  "\"resident_bytes\": %llu, \"bytes_streamed\": %llu, \"stream_requests\": %u, "
                  "\"lodrt_allocations\": %llu, \"lodrt_heap_allocations\": %llu, \"not_drawable\": %u, "
                  "\"coarser_than_selected\": %u, "
@@ -234,7 +235,7 @@ void writeFrameJson(std::FILE* out, const FrameRecord& r, bool last) {
                  "\"pfrep_changes\": %llu, \"level_histogram\": [",
                  r.frame, r.eye[0], r.eye[1], r.eye[2], r.frame_ms, r.cpu_ms, r.gpu_ms, s.cull_ms, s.select_ms,
                  s.stream_ms, s.upload_ms, s.wait_ms, s.visible, s.culled, s.instances_drawn, s.draw_calls,
-                 static_cast<unsigned long long>(s.triangles), s.levels_resident,
+                 s.textured_draw_calls, static_cast<unsigned long long>(s.triangles), s.levels_resident,
                  static_cast<unsigned long long>(s.resident_bytes), static_cast<unsigned long long>(s.bytes_streamed),
                  s.stream_requests, static_cast<unsigned long long>(s.lodrt_allocations),
                  static_cast<unsigned long long>(s.lodrt_heap_allocations), s.not_drawable, s.coarser_than_selected,

@@ -507,7 +507,8 @@ void View::draw(Renderer* renderer, FrameStats* stats) const {
             float model[16];
             lodrt::multiplyTransforms(&placement_[i * 16], models.modelLevel(model_[i], l).world_transform, model);
             const float* colour = config_.colour_by_level ? kLevelColours[l] : kAssetColours[asset_[i] % 6];
-            stats->draw_calls += renderer->draw(gpu, model, colour);
+            stats->draw_calls +=
+                renderer->draw(gpu, model, colour, !config_.colour_by_level, &stats->textured_draw_calls);
             stats->triangles += gpu.triangles;
             ++stats->instances_drawn;
             ++stats->histogram[l];

@@ -44,6 +44,7 @@ struct ViewConfig {
 struct FrameStats {
     double cull_ms = 0, select_ms = 0, stream_ms = 0, upload_ms = 0, wait_ms = 0, pfrep_ms = 0;
     uint32_t visible = 0, culled = 0, draw_calls = 0, instances_drawn = 0;
+    uint32_t textured_draw_calls = 0; // draw calls with the material's base colour texture
     uint64_t triangles = 0;
     uint32_t levels_resident = 0;
     uint64_t resident_bytes = 0, bytes_streamed = 0;
