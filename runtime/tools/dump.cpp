@@ -36,7 +36,9 @@ void printUsage(std::FILE* out) {
                       "data as float32/uint32), then meshes, primitives, accessors and problems of a .glb/.gltf\n"
                       "pack. --level N shows only level N of each group (and only those meshes).\n"
                       "Checks: %s ids in range and without cycles, screen coverage not increasing and\n"
-                      "errors not decreasing from one level to the next, every compressed stream decodes and\n"
+                      "errors not decreasing from one level to the next, no two neighbouring levels with the\n"
+                      "same triangle count, no Hausdorff error more than 4 times the finer level's, every\n"
+                      "compressed stream decodes and\n"
                       "matches the plain accessors, each PFRep level the extension lists is what the blob\n"
                       "extracts and no finer than the chain level it stands for.\n"
                       "--render OUT.png draws every level of every group side by side (flat shaded; with\n"
@@ -524,6 +526,33 @@ std::string nodePointer(uint32_t node) {
     return "/nodes/" + std::to_string(node);
 }
 
+// A chain whose simplifier stopped early can repeat a level or leap from a good level to a ruined
+// one: two neighbours with the same triangle count, or a Hausdorff error more than kMaxErrorStep
+// times the finer level's. Checked after everything else, so a pack with a broken stream or id
+// still reports that first.
+constexpr double kMaxErrorStep = 4.0;
+
+void checkLevelSteps(LodReport& report) {
+    for (const LodGroup& group : report.groups) {
+        for (uint32_t l = 1; l < group.levels.size(); ++l) {
+            const LodLevelRow& a = group.levels[l - 1];
+            const LodLevelRow& b = group.levels[l];
+            const std::string where = nodePointer(b.node);
+            const std::string lvl = "level " + std::to_string(l);
+            if (a.mesh != lodrt::kNoIndex && b.mesh != lodrt::kNoIndex && a.triangles == b.triangles)
+                report.problems.push_back({where, lvl + ": the same " + std::to_string(b.triangles) +
+                                                      " triangles as level " + std::to_string(l - 1) +
+                                                      " (a repeated level)"});
+            if (a.has_metrics && b.has_metrics && a.hausdorff > 0.0 && b.hausdorff > kMaxErrorStep * a.hausdorff) {
+                char step[32];
+                std::snprintf(step, sizeof step, "%.3g", b.hausdorff / a.hausdorff);
+                report.problems.push_back({where, lvl + ": Hausdorff error " + step + " times level " +
+                                                      std::to_string(l - 1) + "'s (more than 4 times)"});
+            }
+        }
+    }
+}
+
 LodReport analyseLods(const lodrt::Pack& pack) {
     LodReport report;
     const uint32_t node_count = pack.nodeCount();
@@ -643,6 +672,7 @@ LodReport analyseLods(const lodrt::Pack& pack) {
         report.groups.push_back(std::move(group));
     }
     checkStreams(pack, report.groups, report.problems);
+    checkLevelSteps(report);
     return report;
 }
 
