@@ -37,8 +37,8 @@ void printUsage(std::FILE* out) {
                       "pack. --level N shows only level N of each group (and only those meshes).\n"
                       "Checks: %s ids in range and without cycles, screen coverage not increasing and\n"
                       "errors not decreasing from one level to the next, no two neighbouring levels with the\n"
-                      "same triangle count, no Hausdorff error more than 4 times the finer level's, every\n"
-                      "compressed stream decodes and\n"
+                      "same triangle count (a Hausdorff error more than 4 times the finer level's is a\n"
+                      "warning), every compressed stream decodes and\n"
                       "matches the plain accessors, each PFRep level the extension lists is what the blob\n"
                       "extracts and no finer than the chain level it stands for.\n"
                       "--render OUT.png draws every level of every group side by side (flat shaded; with\n"
@@ -159,6 +159,7 @@ struct Problem {
 struct LodReport {
     std::vector<LodGroup> groups;
     std::vector<Problem> problems;
+    std::vector<Problem> warnings; // listed with the problems; they do not fail the check
 };
 
 constexpr std::string_view kValence = lodrt::format::kExtValenceCompression;
@@ -527,9 +528,10 @@ std::string nodePointer(uint32_t node) {
 }
 
 // A chain whose simplifier stopped early can repeat a level or leap from a good level to a ruined
-// one: two neighbours with the same triangle count, or a Hausdorff error more than kMaxErrorStep
-// times the finer level's. Checked after everything else, so a pack with a broken stream or id
-// still reports that first.
+// one: two neighbours with the same triangle count (an error: a level that adds nothing), or a
+// Hausdorff error more than kMaxErrorStep times the finer level's (a warning: a coarse level of a
+// hard input, or one after a much better finer level, can step that far legitimately). Checked after
+// everything else, so a pack with a broken stream or id still reports that first.
 constexpr double kMaxErrorStep = 4.0;
 
 void checkLevelSteps(LodReport& report) {
@@ -546,7 +548,7 @@ void checkLevelSteps(LodReport& report) {
             if (a.has_metrics && b.has_metrics && a.hausdorff > 0.0 && b.hausdorff > kMaxErrorStep * a.hausdorff) {
                 char step[32];
                 std::snprintf(step, sizeof step, "%.3g", b.hausdorff / a.hausdorff);
-                report.problems.push_back({where, lvl + ": Hausdorff error " + step + " times level " +
+                report.warnings.push_back({where, lvl + ": Hausdorff error " + step + " times level " +
                                                       std::to_string(l - 1) + "'s (more than 4 times)"});
             }
         }
@@ -812,10 +814,11 @@ void printText(const char* path, const lodrt::Pack& pack, const LodReport& lods,
                 pack.meshCount(), ull(t.primitives), ull(t.vertices), ull(t.triangles), ull(t.bytes),
                 pack.materialCount(), pack.nodeCount());
     std::printf("problems:");
-    if (pack.warningCount() == 0 && lods.problems.empty()) std::printf(" none");
+    if (pack.warningCount() == 0 && lods.problems.empty() && lods.warnings.empty()) std::printf(" none");
     std::printf("\n");
     for (uint32_t w = 0; w < pack.warningCount(); ++w)
         std::printf("  warning %s: %s\n", pack.warning(w).pointer, pack.warning(w).message);
+    for (const Problem& p : lods.warnings) std::printf("  warning %s: %s\n", p.pointer.c_str(), p.message.c_str());
     for (const Problem& p : lods.problems) std::printf("  error %s: %s\n", p.pointer.c_str(), p.message.c_str());
 }
 
@@ -890,6 +893,7 @@ void printJson(const char* path, const lodrt::Pack* pack, const char* error, con
     if (pack) {
         for (uint32_t w = 0; w < pack->warningCount(); ++w)
             addProblem("warning", pack->warning(w).pointer, pack->warning(w).message);
+        for (const Problem& p : lods->warnings) addProblem("warning", p.pointer.c_str(), p.message.c_str());
         for (const Problem& p : lods->problems) addProblem("error", p.pointer.c_str(), p.message.c_str());
     }
     out += problem_count ? "\n  ]\n}\n" : "]\n}\n";
