@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <string>
 
+#include "lodbake/core/file_io.h"
 #include "scansim.h"
 
 namespace {
@@ -34,6 +35,9 @@ options:
   --no-shadows         keep samples the projector cannot see
   --confidence         add `property float confidence` (cosine of the view angle)
   --ascii              ascii PLY instead of binary little endian
+  --atlas K            also write <name>_atlas.obj: the rock as a textured mesh whose UVs form an
+                       atlas of 6*K*K charts (K in [1, 64]; 6 gives 216 charts)
+  --atlas-quads M      quads per chart edge of that mesh (default 5)
   -h, --help           this help
 )";
 
@@ -61,6 +65,8 @@ bool parseUnsigned(const std::string& s, uint64_t& out) {
 
 int main(int argc, char** argv) {
     ScanOptions options;
+    AtlasOptions atlas;
+    bool write_atlas = false;
     std::string out_dir;
     // A preset is applied first wherever it appears, so that the other flags override it.
     for (int i = 1; i + 1 < argc; ++i) {
@@ -108,6 +114,10 @@ int main(int argc, char** argv) {
             options.write_confidence = true;
         } else if (a == "--ascii") {
             options.binary = false;
+        } else if (a == "--atlas" || a == "--atlas-quads") {
+            if (!value(v) || !parseUnsigned(v, u) || u < 1 || u > 64) return usage(a + " needs an integer in [1, 64]");
+            (a == "--atlas" ? atlas.charts_per_edge : atlas.quads_per_chart) = uint32_t(u);
+            if (a == "--atlas") write_atlas = true;
         } else {
             return usage("unknown argument '" + a + "'");
         }
@@ -134,5 +144,16 @@ int main(int argc, char** argv) {
                     (unsigned long long)s.dropped_grazing, (unsigned long long)s.dropped_speckle);
     }
     std::printf("%s: %zu views\n", confFileName(options).c_str(), scans->views.size());
+    if (write_atlas) {
+        Result<std::string> obj = atlasObjText(options, atlas);
+        const std::string path = out_dir + "/" + options.name + "_atlas.obj";
+        const Status atlas_written =
+            obj.ok() ? writeFileAtomic(path, obj->data(), obj->size()) : obj.status();
+        if (!atlas_written.ok()) {
+            std::fprintf(stderr, "error: %s\n", atlas_written.message().c_str());
+            return 1;
+        }
+        std::printf("%s: %u charts\n", path.c_str(), 6 * atlas.charts_per_edge * atlas.charts_per_edge);
+    }
     return 0;
 }

@@ -130,6 +130,19 @@ Status writeScanSet(const ScanSet& scans, const ScanOptions& options, const std:
 /// Named option sets for the bundled samples ("rock"); an error for an unknown name.
 Result<ScanOptions> presetOptions(const std::string& name);
 
+/// The atlased reconstruction (atlas.cpp): the rock (without its plinth) as a closed cube-sphere
+/// mesh of 6 × charts_per_edge² × quads_per_chart² quads, each cube face cut into
+/// charts_per_edge² square charts. Every chart has its own UVs in its own cell of a square atlas
+/// grid, so chart borders are UV seams (positions shared bit for bit, UVs not): the layout of an
+/// automatic photogrammetry atlas, for simplification across seams.
+struct AtlasOptions {
+    uint32_t charts_per_edge = 6; // 216 charts
+    uint32_t quads_per_chart = 5; // 10,800 triangles with the default charts
+};
+
+/// The atlased mesh as Wavefront OBJ text (v, vt, f v/vt). Deterministic for the given options.
+Result<std::string> atlasObjText(const ScanOptions& options, const AtlasOptions& atlas);
+
 /// p_world = R(q)^T * p + t, the Stanford .conf convention.
 Vec3d scannerToWorld(const Vec3d& p, const double quaternion[4], const double translation[3]);
 

@@ -36,7 +36,9 @@ void printUsage(std::FILE* out) {
                       "data as float32/uint32), then meshes, primitives, accessors and problems of a .glb/.gltf\n"
                       "pack. --level N shows only level N of each group (and only those meshes).\n"
                       "Checks: %s ids in range and without cycles, screen coverage not increasing and\n"
-                      "errors not decreasing from one level to the next, every compressed stream decodes and\n"
+                      "errors not decreasing from one level to the next, no two neighbouring levels with the\n"
+                      "same triangle count (a Hausdorff error more than 4 times the finer level's is a\n"
+                      "warning), every compressed stream decodes and\n"
                       "matches the plain accessors, each PFRep level the extension lists is what the blob\n"
                       "extracts and no finer than the chain level it stands for.\n"
                       "--render OUT.png draws every level of every group side by side (flat shaded; with\n"
@@ -157,6 +159,7 @@ struct Problem {
 struct LodReport {
     std::vector<LodGroup> groups;
     std::vector<Problem> problems;
+    std::vector<Problem> warnings; // listed with the problems; they do not fail the check
 };
 
 constexpr std::string_view kValence = lodrt::format::kExtValenceCompression;
@@ -524,6 +527,34 @@ std::string nodePointer(uint32_t node) {
     return "/nodes/" + std::to_string(node);
 }
 
+// A chain whose simplifier stopped early can repeat a level or leap from a good level to a ruined
+// one: two neighbours with the same triangle count (an error: a level that adds nothing), or a
+// Hausdorff error more than kMaxErrorStep times the finer level's (a warning: a coarse level of a
+// hard input, or one after a much better finer level, can step that far legitimately). Checked after
+// everything else, so a pack with a broken stream or id still reports that first.
+constexpr double kMaxErrorStep = 4.0;
+
+void checkLevelSteps(LodReport& report) {
+    for (const LodGroup& group : report.groups) {
+        for (uint32_t l = 1; l < group.levels.size(); ++l) {
+            const LodLevelRow& a = group.levels[l - 1];
+            const LodLevelRow& b = group.levels[l];
+            const std::string where = nodePointer(b.node);
+            const std::string lvl = "level " + std::to_string(l);
+            if (a.mesh != lodrt::kNoIndex && b.mesh != lodrt::kNoIndex && a.triangles == b.triangles)
+                report.problems.push_back({where, lvl + ": the same " + std::to_string(b.triangles) +
+                                                      " triangles as level " + std::to_string(l - 1) +
+                                                      " (a repeated level)"});
+            if (a.has_metrics && b.has_metrics && a.hausdorff > 0.0 && b.hausdorff > kMaxErrorStep * a.hausdorff) {
+                char step[32];
+                std::snprintf(step, sizeof step, "%.3g", b.hausdorff / a.hausdorff);
+                report.warnings.push_back({where, lvl + ": Hausdorff error " + step + " times level " +
+                                                      std::to_string(l - 1) + "'s (more than 4 times)"});
+            }
+        }
+    }
+}
+
 LodReport analyseLods(const lodrt::Pack& pack) {
     LodReport report;
     const uint32_t node_count = pack.nodeCount();
@@ -643,6 +674,7 @@ LodReport analyseLods(const lodrt::Pack& pack) {
         report.groups.push_back(std::move(group));
     }
     checkStreams(pack, report.groups, report.problems);
+    checkLevelSteps(report);
     return report;
 }
 
@@ -782,10 +814,11 @@ void printText(const char* path, const lodrt::Pack& pack, const LodReport& lods,
                 pack.meshCount(), ull(t.primitives), ull(t.vertices), ull(t.triangles), ull(t.bytes),
                 pack.materialCount(), pack.nodeCount());
     std::printf("problems:");
-    if (pack.warningCount() == 0 && lods.problems.empty()) std::printf(" none");
+    if (pack.warningCount() == 0 && lods.problems.empty() && lods.warnings.empty()) std::printf(" none");
     std::printf("\n");
     for (uint32_t w = 0; w < pack.warningCount(); ++w)
         std::printf("  warning %s: %s\n", pack.warning(w).pointer, pack.warning(w).message);
+    for (const Problem& p : lods.warnings) std::printf("  warning %s: %s\n", p.pointer.c_str(), p.message.c_str());
     for (const Problem& p : lods.problems) std::printf("  error %s: %s\n", p.pointer.c_str(), p.message.c_str());
 }
 
@@ -860,6 +893,7 @@ void printJson(const char* path, const lodrt::Pack* pack, const char* error, con
     if (pack) {
         for (uint32_t w = 0; w < pack->warningCount(); ++w)
             addProblem("warning", pack->warning(w).pointer, pack->warning(w).message);
+        for (const Problem& p : lods->warnings) addProblem("warning", p.pointer.c_str(), p.message.c_str());
         for (const Problem& p : lods->problems) addProblem("error", p.pointer.c_str(), p.message.c_str());
     }
     out += problem_count ? "\n  ]\n}\n" : "]\n}\n";

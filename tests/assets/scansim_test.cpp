@@ -1,17 +1,21 @@
 // lodbake_scansim: determinism, the committed samples are exactly what the simulator makes now, the
-// .conf convention brings every view onto the object, and noise and holes follow the options.
+// .conf convention brings every view onto the object, noise and holes follow the options, and the
+// atlased mesh has its charts and seams.
 
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <map>
 #include <set>
 #include <sstream>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include <gtest/gtest.h>
 
 #include "lodbake/core/file_io.h"
+#include "lodbake/io/mesh_io.h"
 #include "scansim.h"
 #include "test_paths.h"
 
@@ -282,4 +286,54 @@ TEST(ScanSimTest, RejectsBadOptions) {
     o.range_noise_sigma = -1.0;
     EXPECT_FALSE(validateOptions(o).ok());
     EXPECT_FALSE(presetOptions("no_such_preset").ok());
+}
+
+namespace {
+
+// The atlas mesh through the OBJ reader: 6·K² charts, closed once welded by position.
+lodbake::Mesh readAtlas(const AtlasOptions& atlas, const std::string& file) {
+    lodbake::Result<std::string> obj = atlasObjText(smallOptions(), atlas);
+    EXPECT_TRUE(obj.ok()) << obj.status().message();
+    if (!obj.ok()) return {};
+    const std::string path = (fs::temp_directory_path() / file).string();
+    EXPECT_TRUE(lodbake::writeFileAtomic(path, obj->data(), obj->size()).ok());
+    lodbake::Diagnostics d;
+    auto loaded = lodbake::readMesh(path, lodbake::ReadOptions(), d);
+    fs::remove(path);
+    EXPECT_TRUE(loaded.ok()) << loaded.status().message();
+    return loaded.ok() ? std::move(loaded->mesh) : lodbake::Mesh();
+}
+
+} // namespace
+
+TEST(ScanSimTest, AtlasHasItsChartsAndIsClosed) {
+    AtlasOptions atlas;
+    atlas.charts_per_edge = 6;
+    atlas.quads_per_chart = 2;
+    lodbake::Result<std::string> a = atlasObjText(smallOptions(), atlas);
+    lodbake::Result<std::string> b = atlasObjText(smallOptions(), atlas);
+    ASSERT_TRUE(a.ok() && b.ok());
+    EXPECT_EQ(*a, *b);
+    const lodbake::Mesh m = readAtlas(atlas, "lodbake_scansim_atlas_test.obj");
+    ASSERT_EQ(m.faceCount(), size_t(6 * 36 * 4 * 2));
+    ASSERT_EQ(m.uvs.size(), 1u);
+    // One wedge per chart corner: (quads + 1)² UVs per chart; positions shared across charts.
+    EXPECT_EQ(m.vertexCount(), size_t(216 * 9));
+    // Welded by position every edge has two faces (closed); by position and UV, every chart border
+    // edge is open: 216 charts of 2×2 quads have 216·8 border edges.
+    std::map<std::pair<std::tuple<float, float, float>, std::tuple<float, float, float>>, int> by_position;
+    std::map<std::pair<uint32_t, uint32_t>, int> by_vertex;
+    auto key = [&](uint32_t v) { return std::make_tuple(m.positions[v].x, m.positions[v].y, m.positions[v].z); };
+    for (size_t f = 0; f < m.faceCount(); ++f)
+        for (int k = 0; k < 3; ++k) {
+            const uint32_t a0 = m.indices[f * 3 + k], b0 = m.indices[f * 3 + (k + 1) % 3];
+            ++by_position[{std::min(key(a0), key(b0)), std::max(key(a0), key(b0))}];
+            ++by_vertex[{std::min(a0, b0), std::max(a0, b0)}];
+        }
+    for (const auto& [edge, count] : by_position) EXPECT_EQ(count, 2);
+    size_t open = 0;
+    for (const auto& [edge, count] : by_vertex) open += count == 1;
+    EXPECT_EQ(open, size_t(216 * 8));
+    EXPECT_FALSE(atlasObjText(smallOptions(), AtlasOptions{0, 5}).ok());
+    EXPECT_FALSE(atlasObjText(smallOptions(), AtlasOptions{6, 65}).ok());
 }

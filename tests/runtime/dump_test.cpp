@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 
 #include "glb_builder.h"
+#include "lod_pack_builder.h"
 #include "lodrt/json.h"
 
 namespace {
@@ -124,6 +125,27 @@ TEST(DumpTest, BadPackIsOneErrorLineAndExit1) {
     ASSERT_EQ(lodrt::parseJson(cut.out.data(), cut.out.size(), nullptr, nullptr, &doc), lodrt::Result::Ok) << cut.out;
     EXPECT_FALSE(doc.root().find("ok").boolean());
     EXPECT_EQ(doc.root().find("problems").at(0).find("severity").string(), "error");
+}
+
+TEST(DumpTest, FlagsRepeatedLevelsAndErrorLeaps) {
+    // Every level of the built pack is one triangle, and level 2's error is 5 times level 1's.
+    lodrt_test::LodPackSpec spec;
+    spec.errors = {0, 0.001, 0.005};
+    const std::string path = scratchPath("leap.glb");
+    writeBytes(path, lodrt_test::lodPackGlb(spec));
+    const DumpRun run = runDump("\"" + path + "\"");
+    EXPECT_EQ(run.exit_code, 1);
+    EXPECT_EQ(lineCount(run.err), 1u) << run.err;
+    EXPECT_NE(run.err.find("level 1: the same 1 triangles as level 0 (a repeated level)"), std::string::npos)
+        << run.err;
+    EXPECT_NE(run.out.find("level 2: the same 1 triangles as level 1"), std::string::npos) << run.out;
+    EXPECT_NE(run.out.find("  warning /nodes/2: level 2: Hausdorff error 5 times level 1's (more than 4 times)"),
+              std::string::npos)
+        << run.out;
+    // A step of exactly 4 times is not flagged; a larger one alone is a warning, not a failed check.
+    spec.errors = {0, 0.001, 0.004};
+    writeBytes(path, lodrt_test::lodPackGlb(spec));
+    EXPECT_EQ(runDump("\"" + path + "\"").out.find("Hausdorff error"), std::string::npos);
 }
 
 TEST(DumpTest, MissingFileIsExit1NamingTheFile) {

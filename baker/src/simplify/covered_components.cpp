@@ -196,7 +196,7 @@ void EdgeCollapser::removeCoveredComponents(double tolerance, CollapseSequence* 
             for (uint32_t k = 0; k < 3; ++k) queue_.remove(canonical(component_faces[i] * 3 + k));
         for (uint32_t i = begin; i < end; ++i) {
             const uint32_t f = component_faces[i];
-            if (uv_channel_ != kNone) --chart_alive_[face_chart_[f]];
+            if (uv_channel_ != kNone && --chart_alive_[face_chart_[f]] == 0) ++dropped_charts_;
             for (uint32_t k = 0; k < 3; ++k) {
                 he_[f * 3 + k].point = kNone;
                 he_[f * 3 + k].twin = kNone;

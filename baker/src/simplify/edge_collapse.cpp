@@ -443,8 +443,9 @@ bool EdgeCollapser::isValid(Worker& w, const Candidate& c, int& pair_count, Wedg
         }
     }
     if (uv_channel_ != kNone) {
-        // A UV chart never loses its last face, and no face flips or degenerates in texture space.
-        if (chart_alive_[face_chart_[f0]] == 1 || (f1 != kNone && chart_alive_[face_chart_[f1]] == 1)) return false;
+        // No face flips or degenerates in texture space. A chart may lose its last face: an atlas of
+        // hundreds of charts could not reach a coarse level otherwise, and the collapse that drops
+        // it pays for it in the queue like any other (its wedge's attribute quadric enters the cost).
         if (!checkUvFaces(w.fan_u, c.position, f0, f1, pairs, pair_count) ||
             !checkUvFaces(w.fan_v, c.position, f0, f1, pairs, pair_count))
             return false;
@@ -523,7 +524,7 @@ LODBAKE_STEP void EdgeCollapser::removeCollapsedFaces(Worker& w, uint32_t h, uin
         if (t2 != kNone) he_[t2].twin = t1;
         point_he_[opposite] = t1 != kNone ? t1 : (t2 != kNone ? nextHe(t2) : kNone);
         const uint32_t f = hf / 3;
-        if (uv_channel_ != kNone) --chart_alive_[face_chart_[f]];
+        if (uv_channel_ != kNone && --chart_alive_[face_chart_[f]] == 0) ++dropped_charts_;
         for (uint32_t k = 0; k < 3; ++k) {
             he_[f * 3 + k].twin = kNone;
             he_[f * 3 + k].point = kNone;
@@ -1633,6 +1634,8 @@ LODBAKE_STEP void EdgeCollapser::buildUvCharts(const Mesh& mesh) {
     uv_channel_ = uv_set_count_ > 0 ? (mesh.hasNormals() ? 3u : 0u) : kNone;
     face_chart_.clear();
     chart_alive_.clear();
+    chart_count_ = 0;
+    dropped_charts_ = 0;
     if (uv_channel_ != kNone) {
         face_chart_.resize(face_count);
         for (uint32_t f = 0; f < face_count; ++f) face_chart_[f] = f;
@@ -1649,7 +1652,7 @@ LODBAKE_STEP void EdgeCollapser::buildUvCharts(const Mesh& mesh) {
         chart_alive_.assign(face_count, 0);
         for (uint32_t f = 0; f < face_count; ++f) {
             face_chart_[f] = root(f);
-            ++chart_alive_[face_chart_[f]];
+            chart_count_ += chart_alive_[face_chart_[f]]++ == 0;
         }
     }
 }

@@ -61,6 +61,8 @@ public:
     size_t removalCount() const { return removals_; }       // components removed (remove_covered_components)
     size_t removedFaceCount() const { return removed_faces_; } // faces they had
     double maxCollapseError() const { return max_error_done_; }
+    size_t chartCount() const { return chart_count_; }          // UV charts of the input (first UV set)
+    size_t droppedChartCount() const { return dropped_charts_; } // charts whose last face was collapsed
 
 private:
     enum Kind : uint8_t { kFree = 0, kLine = 1, kCorner = 2, kLocked = 3, kDead = 4 };
@@ -256,6 +258,7 @@ private:
     uint32_t uv_set_count_ = 0;
     LargeArray<uint32_t> face_chart_;  // UV chart (representative face) per face
     LargeArray<uint32_t> chart_alive_; // alive faces per chart representative
+    size_t chart_count_ = 0, dropped_charts_ = 0;
     // Below late_faces_ faces (kLateFraction of the input) the point-distance penalty also
     // measures far_ points and face centroids, and prices distances by the mean area (run()).
     size_t late_faces_ = 0;

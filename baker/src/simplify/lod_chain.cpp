@@ -12,6 +12,20 @@
 
 namespace lodbake {
 
+namespace {
+
+std::string ratioText(double ratio) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%g", ratio);
+    return buf;
+}
+
+// Why the engine stops above a target: every edge left is refused by a validity rule
+// (docs/simplify.md, "Validity of a collapse"); the chain has no error budget of its own.
+constexpr const char* kStallReason = "no valid collapse left";
+
+} // namespace
+
 double switchDistance(double error, const ScreenParams& screen) {
     if (!(error > 0.0)) return 0.0;
     const double t = std::tan(screen.vertical_fov_rad * 0.5);
@@ -75,15 +89,28 @@ Result<LodChain> buildLodChain(const Mesh& mesh, const LodChainOptions& options,
         }
         bool stuck = false;
         for (double ratio : ratios) {
+            const size_t target = size_t(std::ceil(ratio * double(faces)));
+            const std::string name = "lod chain: level ratio " + ratioText(ratio);
+            if (stuck) {
+                // Its mesh would be the previous level's again: a chain never holds two equal levels.
+                diagnostics.note(name + " omitted (target " + std::to_string(target) + "): the chain stopped at " +
+                                 std::to_string(engine.faceCount()) + " triangles");
+                continue;
+            }
             LodLevel level;
             level.target_ratio = ratio;
-            const size_t target = size_t(std::ceil(ratio * double(faces)));
-            level.reached_target = !stuck && engine.run(target, HUGE_VAL, sequence);
+            level.reached_target = engine.run(target, HUGE_VAL, sequence);
+            if (!chain.levels.empty() && engine.faceCount() == chain.levels.back().mesh.faceCount()) {
+                stuck = !level.reached_target;
+                diagnostics.note(name + " omitted (target " + std::to_string(target) + "): " +
+                                 (stuck ? std::string(kStallReason) + " at " : "the same as the previous level, ") +
+                                 std::to_string(engine.faceCount()) + " triangles");
+                continue;
+            }
             if (!level.reached_target) {
                 stuck = true;
-                diagnostics.note("lod chain: level ratio " + std::to_string(ratio) + " stopped at " +
-                                 std::to_string(engine.faceCount()) + " triangles (target " + std::to_string(target) +
-                                 "): no valid collapse left");
+                diagnostics.note(name + " stopped at " + std::to_string(engine.faceCount()) + " triangles (target " +
+                                 std::to_string(target) + "): " + std::string(kStallReason));
             }
             level.collapse_count = engine.collapseCount();
             level.removal_count = engine.removalCount();
@@ -92,6 +119,9 @@ Result<LodChain> buildLodChain(const Mesh& mesh, const LodChainOptions& options,
             level.is_refined = engine.refinesSnapshot(); // refined below, once the engine is gone
             chain.levels.push_back(std::move(level));
         }
+        if (engine.droppedChartCount() > 0)
+            diagnostics.note("lod chain: " + std::to_string(engine.droppedChartCount()) + " of " +
+                             std::to_string(engine.chartCount()) + " UV charts collapsed away by the last level");
         if (record_removals) {
             // The vertex-removal reading goes on to the end of valid collapses (PFRep wants every level
             // there is); nothing is snapshotted any more.

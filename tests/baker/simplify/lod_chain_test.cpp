@@ -223,16 +223,58 @@ TEST(LodChainTest, RejectsBadRatiosAndNotesUnreachableLevels) {
     EXPECT_FALSE(lodbake::buildLodChain(lodbake_test::icosphere(1), o, d).ok());
     o.ratios = {1.5};
     EXPECT_FALSE(lodbake::buildLodChain(lodbake_test::icosphere(1), o, d).ok());
-    // A tetrahedron cannot lose a face: every level repeats it and says so.
+    // An icosahedron cannot go below a tetrahedron: the last level stops there and says so.
     const Mesh tetra = lodbake_test::icosphere(0); // icosahedron: 20 faces, reaches 4 at best
     o.ratios = {0.5, 0.01};
     o.measure_error = false;
     auto chain = lodbake::buildLodChain(tetra, o, d);
     ASSERT_TRUE(chain.ok());
+    ASSERT_EQ(chain->levels.size(), 2u);
     EXPECT_TRUE(chain->levels[0].reached_target);
     EXPECT_FALSE(chain->levels[1].reached_target);
     EXPECT_GE(chain->levels[1].mesh.faceCount(), 4u);
     EXPECT_FALSE(d.empty());
+}
+
+bool noteContains(const Diagnostics& d, const std::string& text) {
+    for (const lodbake::Diagnostic& m : d.items())
+        if (m.message.find(text) != std::string::npos) return true;
+    return false;
+}
+
+TEST(LodChainTest, AStoppedChainNeverRepeatsALevel) {
+    // The icosahedron stops above 0.1 of its faces: that level is kept (not reached, with its
+    // reason) and the ones after it, which could only repeat it, are left out with a note.
+    Diagnostics d;
+    LodChainOptions o;
+    o.ratios = {0.5, 0.1, 0.05, 0.01};
+    o.measure_error = false;
+    auto chain = lodbake::buildLodChain(lodbake_test::icosphere(0), o, d);
+    ASSERT_TRUE(chain.ok());
+    ASSERT_EQ(chain->levels.size(), 2u);
+    EXPECT_TRUE(chain->levels[0].reached_target);
+    EXPECT_FALSE(chain->levels[1].reached_target);
+    EXPECT_LT(chain->levels[1].mesh.faceCount(), chain->levels[0].mesh.faceCount());
+    EXPECT_TRUE(noteContains(d, "level ratio 0.1 stopped at")) << d.items().size();
+    EXPECT_TRUE(noteContains(d, "no valid collapse left"));
+    EXPECT_TRUE(noteContains(d, "level ratio 0.05 omitted"));
+    EXPECT_TRUE(noteContains(d, "level ratio 0.01 omitted"));
+}
+
+TEST(LodChainTest, RatiosWithTheSameTargetGiveOneLevel) {
+    // 20 faces: 0.5 and 0.48 both ask for 10 triangles; the second level would repeat the first.
+    Diagnostics d;
+    LodChainOptions o;
+    o.ratios = {0.5, 0.48, 0.3};
+    o.measure_error = false;
+    auto chain = lodbake::buildLodChain(lodbake_test::icosphere(0), o, d);
+    ASSERT_TRUE(chain.ok());
+    ASSERT_EQ(chain->levels.size(), 2u);
+    EXPECT_EQ(chain->levels[0].target_ratio, 0.5);
+    EXPECT_EQ(chain->levels[1].target_ratio, 0.3);
+    EXPECT_TRUE(noteContains(d, "level ratio 0.48 omitted"));
+    for (size_t i = 1; i < chain->levels.size(); ++i)
+        EXPECT_LT(chain->levels[i].mesh.faceCount(), chain->levels[i - 1].mesh.faceCount());
 }
 
 TEST(LodChainTest, Lucy100kChainMeasuresEveryLevel) {

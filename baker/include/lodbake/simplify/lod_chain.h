@@ -226,8 +226,10 @@ double switchDistance(double error, const ScreenParams& screen);
 double screenCoverage(double radius, double distance, const ScreenParams& screen);
 
 /// Builds the chain. Ratios must lie in (0, 1]; duplicates are dropped, the rest sorted in
-/// decreasing order. A level that cannot be reached repeats the smallest valid mesh, with
-/// reached_target = false and a note. Fails on invalid input or options.
+/// decreasing order. A level that cannot be reached is the smallest valid mesh, with
+/// reached_target = false and a note giving the reason; the levels after it (and any level whose
+/// mesh would equal the previous one's) are omitted with a note, so no two levels are equal and
+/// `levels` may be shorter than the ratios. Fails on invalid input or options.
 Result<LodChain> buildLodChain(const Mesh& mesh, const LodChainOptions& options, Diagnostics& diagnostics);
 
 /// Measures every level of `chain` against `mesh` (what buildLodChain does when options.measure_error

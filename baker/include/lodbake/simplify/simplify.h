@@ -26,9 +26,13 @@ namespace lodbake {
 
 /// Relative importance of attribute error against geometric error. An attribute difference of 1
 /// (normal components, UV units, colour channels in [0,1]) weighs as much as a geometric error of
-/// `weight` × bounding-box diagonal.
+/// `weight` × bounding-box diagonal. Normals weigh nothing by default: the bake derives them from the
+/// geometry (repair), so their error repeats the geometric one, and near creases, where smooth
+/// normals swing, it outweighs it and leads the simplifier away from the surface
+/// (docs/benchmarks.md, "Textured assets against gltfpack"). They are still optimised at every
+/// collapse, and normal seams are still seams.
 struct AttributeWeights {
-    float normal = 0.05f;
+    float normal = 0.0f;
     float uv = 0.5f;
     float color = 0.25f;
 };
