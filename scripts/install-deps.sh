@@ -18,6 +18,8 @@ packages=(
     libmeshoptimizer-dev
     python3 python3-numpy python3-open3d python3-jsonschema
     universal-ctags
+    # The range-scan merge's screened Poisson reconstruction (baker/src/reconstruct/, liblodbake_open3d).
+    libopen3d-dev
 )
 # Node.js: machines of this kind ship it (with npm bundled); Debian's own npm package conflicts with
 # such a build, so only ask apt for node and npm when the commands are missing.

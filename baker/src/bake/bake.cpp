@@ -15,6 +15,7 @@
 #include "lodbake/core/json_writer.h"
 #include "lodbake/core/math.h"
 #include "lodbake/pack/pack_glb.h"
+#include "lodbake/reconstruct/merge.h"
 #include "lodbake/simplify/lod_chain.h"
 #include "lodbake/simplify/mesh_distance.h"
 #include "lodbake/stream/stream.h"
@@ -125,18 +126,44 @@ void measureChain(const Mesh& mesh, LodChain& chain, const LodChainOptions& opti
     measureLodChain(mesh, chain, options, known, diagnostics);
 }
 
+// The repair pipeline, then (settings.merge) the range-view merge: `auto` merges only when the
+// repaired mesh's components overlap as sheets, so single surfaces and separate pieces pass through
+// untouched. A merged surface is repaired again; the first repair's warnings (overlapping sheets
+// left as components) no longer describe it and are dropped.
 Status repairInput(BakeInput& input, const BakeSettings& settings, AssetSlot& slot, size_t index,
                    const BakeHooks& hooks) {
     slot.report.name = input.name;
     slot.report.input_triangles = input.mesh.faceCount();
     slot.report.input_vertices = input.mesh.vertexCount();
-    if (!settings.repair) return Status::okStatus();
+    if (!settings.repair && settings.merge == MergeMode::Off) return Status::okStatus();
     StageTimer timer(hooks, index, BakeStage::Repair);
     RepairOptions repair_options;
     repair_options.report_welded = false; // only `unresolved` goes into the bake's report
     repair_options.report_before = false; // likewise: the input is validated only if a skip test needs it
-    LODBAKE_ASSIGN_OR_RETURN(RepairReport repair, repairMesh(input.mesh, repair_options, input.name, slot.diagnostics));
-    slot.report.repair_unresolved = repair.unresolved;
+    Diagnostics first;
+    if (settings.repair) {
+        LODBAKE_ASSIGN_OR_RETURN(RepairReport repair, repairMesh(input.mesh, repair_options, input.name, first));
+        slot.report.repair_unresolved = repair.unresolved;
+    }
+    const bool merge = settings.merge == MergeMode::Poisson ||
+                       (settings.merge == MergeMode::Auto &&
+                        overlappingSheetFraction(input.mesh) >= kOverlappingSheetFraction);
+    if (!merge) {
+        if (!settings.repair) timer.cancel(); // nothing ran
+        for (const Diagnostic& d : first.items())
+            (d.severity == Severity::Warning ? slot.diagnostics.warn(d.message) : slot.diagnostics.note(d.message));
+        return Status::okStatus();
+    }
+    MergeOptions merge_options;
+    merge_options.distance_samples = 200000; // the report's distances: a fixed subset of the samples
+    LODBAKE_ASSIGN_OR_RETURN(MergeReport merged, mergeRangeViews(input.mesh, merge_options, input.name));
+    slot.report.merge = mergeReportLines(merged);
+    for (const std::string& line : slot.report.merge) slot.diagnostics.note(input.name + ": merge: " + line);
+    if (settings.repair) {
+        LODBAKE_ASSIGN_OR_RETURN(RepairReport repair,
+                                 repairMesh(input.mesh, repair_options, input.name, slot.diagnostics));
+        slot.report.repair_unresolved = repair.unresolved;
+    }
     return Status::okStatus();
 }
 
@@ -452,6 +479,11 @@ std::string bakeReportJson(const BakeOutput& output, const BakeSettings& setting
         j.key("repairUnresolved").beginArray();
         for (const std::string& u : a.repair_unresolved) j.value(u);
         j.endArray();
+        if (!a.merge.empty()) {
+            j.key("merge").beginArray();
+            for (const std::string& m : a.merge) j.value(m);
+            j.endArray();
+        }
         j.field("boundingRadius", a.metrics.bounding_radius);
         j.key("levels").beginArray();
         for (size_t l = 0; l < a.metrics.levels.size(); ++l) {
