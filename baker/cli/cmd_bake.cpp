@@ -73,7 +73,7 @@ options:
                         error of the rest, e.g. merged overlapping scans (preset key
                         remove_covered_components; off in every shipped preset; docs/simplify.md)
   --merge auto|poisson|off  merge aligned range views into one surface before the chain: auto
-                        (default) when the repaired input's components overlap as sheets, poisson
+                        (default) when the input's components overlap as sheets, poisson
                         always, off never (preset key merge; docs/bake.md "Merging range scans")
   --report R.json       write per-level metrics, texture sizes, cache use and stage timings as JSON
   --depfile OUT.d       write a Makefile-syntax depfile listing every file read

@@ -126,10 +126,10 @@ void measureChain(const Mesh& mesh, LodChain& chain, const LodChainOptions& opti
     measureLodChain(mesh, chain, options, known, diagnostics);
 }
 
-// The repair pipeline, then (settings.merge) the range-view merge: `auto` merges only when the
-// repaired mesh's components overlap as sheets, so single surfaces and separate pieces pass through
-// untouched. A merged surface is repaired again; the first repair's warnings (overlapping sheets
-// left as components) no longer describe it and are dropped.
+// The range-view merge (settings.merge), then the repair pipeline. `auto` merges only when the
+// input's components overlap as sheets, so single surfaces and separate pieces pass through
+// untouched. The merge reads the sheets as scanned: the repair's hole filling would add invented
+// samples, and dropping speckle is the merge's density trim's job; the merged surface is repaired.
 Status repairInput(BakeInput& input, const BakeSettings& settings, AssetSlot& slot, size_t index,
                    const BakeHooks& hooks) {
     slot.report.name = input.name;
@@ -137,33 +137,25 @@ Status repairInput(BakeInput& input, const BakeSettings& settings, AssetSlot& sl
     slot.report.input_vertices = input.mesh.vertexCount();
     if (!settings.repair && settings.merge == MergeMode::Off) return Status::okStatus();
     StageTimer timer(hooks, index, BakeStage::Repair);
-    RepairOptions repair_options;
-    repair_options.report_welded = false; // only `unresolved` goes into the bake's report
-    repair_options.report_before = false; // likewise: the input is validated only if a skip test needs it
-    Diagnostics first;
-    if (settings.repair) {
-        LODBAKE_ASSIGN_OR_RETURN(RepairReport repair, repairMesh(input.mesh, repair_options, input.name, first));
-        slot.report.repair_unresolved = repair.unresolved;
-    }
     const bool merge = settings.merge == MergeMode::Poisson ||
                        (settings.merge == MergeMode::Auto &&
                         overlappingSheetFraction(input.mesh) >= kOverlappingSheetFraction);
-    if (!merge) {
-        if (!settings.repair) timer.cancel(); // nothing ran
-        for (const Diagnostic& d : first.items())
-            (d.severity == Severity::Warning ? slot.diagnostics.warn(d.message) : slot.diagnostics.note(d.message));
+    if (merge) {
+        MergeOptions merge_options;
+        merge_options.distance_samples = 200000; // the report's distances: a fixed subset of the samples
+        LODBAKE_ASSIGN_OR_RETURN(MergeReport merged, mergeRangeViews(input.mesh, merge_options, input.name));
+        slot.report.merge = mergeReportLines(merged);
+        for (const std::string& line : slot.report.merge) slot.diagnostics.note(input.name + ": merge: " + line);
+    }
+    if (!settings.repair) {
+        if (!merge) timer.cancel(); // nothing ran
         return Status::okStatus();
     }
-    MergeOptions merge_options;
-    merge_options.distance_samples = 200000; // the report's distances: a fixed subset of the samples
-    LODBAKE_ASSIGN_OR_RETURN(MergeReport merged, mergeRangeViews(input.mesh, merge_options, input.name));
-    slot.report.merge = mergeReportLines(merged);
-    for (const std::string& line : slot.report.merge) slot.diagnostics.note(input.name + ": merge: " + line);
-    if (settings.repair) {
-        LODBAKE_ASSIGN_OR_RETURN(RepairReport repair,
-                                 repairMesh(input.mesh, repair_options, input.name, slot.diagnostics));
-        slot.report.repair_unresolved = repair.unresolved;
-    }
+    RepairOptions repair_options;
+    repair_options.report_welded = false; // only `unresolved` goes into the bake's report
+    repair_options.report_before = false; // likewise: the input is validated only if a skip test needs it
+    LODBAKE_ASSIGN_OR_RETURN(RepairReport repair, repairMesh(input.mesh, repair_options, input.name, slot.diagnostics));
+    slot.report.repair_unresolved = repair.unresolved;
     return Status::okStatus();
 }
 

@@ -90,12 +90,17 @@ void unite(std::vector<uint32_t>& parent, uint32_t x, uint32_t y) {
 }
 
 // Component of every vertex (the smallest vertex id in it; unreferenced vertices are their own).
-// Vertices at one position are joined: attribute seams (UV charts) split vertices, not surfaces.
-std::vector<uint32_t> vertexComponents(const Mesh& mesh) {
+// With `join_positions`, vertices at one position are joined: attribute seams (UV charts) split
+// vertices, not surfaces.
+std::vector<uint32_t> vertexComponents(const Mesh& mesh, bool join_positions = true) {
     std::vector<uint32_t> parent(mesh.vertexCount());
     std::iota(parent.begin(), parent.end(), 0u);
     for (size_t i = 0; i + 2 < mesh.indices.size(); i += 3)
         for (size_t k = 1; k < 3; ++k) unite(parent, mesh.indices[i], mesh.indices[i + k]);
+    if (!join_positions) {
+        for (uint32_t v = 0; v < parent.size(); ++v) parent[v] = findRoot(parent, v);
+        return parent;
+    }
     std::vector<uint32_t> order(mesh.vertexCount());
     std::iota(order.begin(), order.end(), 0u);
     auto key = [&](uint32_t v) {
@@ -308,8 +313,18 @@ std::vector<std::string> mergeReportLines(const MergeReport& r) {
 }
 
 double overlappingSheetFraction(const Mesh& mesh) {
-    const std::vector<uint32_t> comp = vertexComponents(mesh);
+    if (mesh.indices.size() % 3 != 0) return 0.0;
+    for (uint32_t i : mesh.indices)
+        if (i >= mesh.vertexCount()) return 0.0; // inconsistent: the repair that follows reports it
     const std::vector<uint8_t> used = referencedVertices(mesh);
+    auto countRoots = [&](const std::vector<uint32_t>& c) {
+        size_t n = 0;
+        for (uint32_t v = 0; v < c.size(); ++v) n += used[v] && c[v] == v;
+        return n;
+    };
+    // Most inputs are one connected surface: that needs no sort of the positions.
+    if (countRoots(vertexComponents(mesh, false)) < 2) return 0.0;
+    const std::vector<uint32_t> comp = vertexComponents(mesh);
     size_t roots = 0, referenced = 0;
     for (uint32_t v = 0; v < comp.size(); ++v) {
         roots += used[v] && comp[v] == v;

@@ -49,7 +49,7 @@ std::vector<std::string> mergeReportLines(const MergeReport& report);
 
 /// How much of a mesh's surface lies on top of another of its components: the fraction of its
 /// referenced vertices whose grid cell (cell size a few sample spacings) also holds a vertex of
-/// another component. 0 for a single component. Deterministic.
+/// another component. 0 for a single component (and for an inconsistent mesh). Deterministic.
 double overlappingSheetFraction(const Mesh& mesh);
 
 /// A mesh counts as overlapping sheets when overlappingSheetFraction() reaches this.
