@@ -294,3 +294,19 @@ TEST(MergeCliTest, RockReportsWhatWasMerged) {
     ASSERT_TRUE(merged.ok());
     EXPECT_EQ(componentCount(merged->mesh), 1u);
 }
+
+// The overlap test on real scans: the 15 registered dragon scans are sheets; one raw view with its
+// speckle, and the bunny's single range image, are not.
+TEST(MergeTest, RegisteredScansAreSheetsAndASingleViewIsNot) {
+    LODBAKE_REQUIRE_SHARED_MESHES();
+    auto fraction = [](const char* name) {
+        Diagnostics d;
+        Result<LoadedMesh> loaded = readMesh(lodbake_test::sharedMesh(name), ReadOptions(), d);
+        EXPECT_TRUE(loaded.ok()) << name;
+        return loaded.ok() ? overlappingSheetFraction(loaded->mesh) : -1.0;
+    };
+    EXPECT_GE(fraction("dragon_stand_merged.ply"), kOverlappingSheetFraction);
+    EXPECT_LT(fraction("dragon_scan_stand0_tri.ply"), kOverlappingSheetFraction);
+    EXPECT_LT(fraction("bunny_scan_bun000_tri.ply"), kOverlappingSheetFraction);
+    EXPECT_EQ(fraction("fandisk.obj"), 0.0);
+}

@@ -23,7 +23,7 @@ struct MergeOptions {
     double cell_per_spacing = 1.0;   // picked depth: the finest whose cell is at least this × the sample spacing
     float scale = 1.1f;              // octree cube / the samples' bounding cube
     double trim_log2 = 1.5;          // trim vertices whose density is this many octaves below the median
-    size_t max_points = size_t(1) << 24; // input limit (memory: the octree grows with the samples)
+    size_t max_points = size_t(1) << 22; // input limit: the octree and its solver grow with the samples
     size_t min_points = 64;              // fewer samples than this cannot define a surface
     uint32_t distance_samples = 0;   // samples measured for the report's distances; 0: every sample
 };
