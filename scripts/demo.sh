@@ -82,16 +82,18 @@ stage_convert() {
     current=$out
 }
 stage_bake() {
-    # The whole scan set (every view aligned by rock.conf), not just one view: repair joins what it can,
-    # then the LOD chain, texture levels and the pack (docs/bake.md).
+    # The whole scan set (every view aligned by rock.conf), not just one view: repair, then the six
+    # overlapping views merged into one surface (--merge auto: screened Poisson, docs/bake.md), then
+    # the LOD chain, texture levels and the pack.
     local out=$demo_dir/rock.glb
-    say "baking the whole scan set into one LOD pack: $out (desktop preset)"
-    run "$lodbake" bake "$sample_dir/rock.conf" --preset configs/desktop.json -o "$out" --report "$demo_dir/rock_report.json"
+    say "baking the whole scan set into one LOD pack: $out (desktop preset, views merged)"
+    run "$lodbake" bake "$sample_dir/rock.conf" --preset configs/desktop.json --merge auto -o "$out" \
+        --report "$demo_dir/rock_report.json"
     current=$out
 }
 stage_dump() {
-    say "the pack as the runtime sees it (loddump: LOD table, checks, meshes)"
-    run "$loddump" "$current"
+    say "the pack as the runtime sees it (loddump: LOD table, checks, meshes; every level drawn in $demo_dir/rock_levels.png)"
+    run "$loddump" "$current" --render "$demo_dir/rock_levels.png"
 }
 stages=(inspect convert bake dump)
 

@@ -20,6 +20,8 @@ packages=(
     universal-ctags
     # lodview and its headless test: GLFW, libepoxy, Mesa's GL with the llvmpipe driver, Xvfb, stb_image.
     libglfw3-dev libepoxy-dev libgl-dev libgl1-mesa-dri xvfb xauth libstb-dev
+    # The range-scan merge's screened Poisson reconstruction (baker/src/reconstruct/, liblodbake_open3d).
+    libopen3d-dev
 )
 # Node.js: machines of this kind ship it (with npm bundled); Debian's own npm package conflicts with
 # such a build, so only ask apt for node and npm when the commands are missing.

@@ -61,5 +61,6 @@ int runPfrep(int argc, char** argv);
 int runEncode(int argc, char** argv);
 int runDecode(int argc, char** argv);
 int runBake(int argc, char** argv);
+int runMerge(int argc, char** argv);
 
 } // namespace lodbake::cli

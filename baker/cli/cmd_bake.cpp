@@ -72,6 +72,9 @@ options:
   --remove-covered-components  levels may drop a whole component that lies within their accepted
                         error of the rest, e.g. merged overlapping scans (preset key
                         remove_covered_components; off in every shipped preset; docs/simplify.md)
+  --merge auto|poisson|off  merge aligned range views into one surface before the chain: auto
+                        (default) when the input's components overlap as sheets, poisson
+                        always, off never (preset key merge; docs/bake.md "Merging range scans")
   --report R.json       write per-level metrics, texture sizes, cache use and stage timings as JSON
   --depfile OUT.d       write a Makefile-syntax depfile listing every file read
   --cache-dir DIR       reuse packs whose inputs, settings and baker version are unchanged
@@ -95,6 +98,8 @@ struct CliOverrides {
     bool adaptive_precision = false;
     bool no_adaptive_precision = false;
     bool remove_covered_components = false;
+    bool has_merge = false;
+    MergeMode merge = MergeMode::Auto;
 };
 
 void applyOverrides(const CliOverrides& o, BakeSettings& s) {
@@ -108,6 +113,7 @@ void applyOverrides(const CliOverrides& o, BakeSettings& s) {
     if (o.adaptive_precision) s.stream_precision.adaptive = true;
     if (o.no_adaptive_precision) s.stream_precision.adaptive = false;
     if (o.remove_covered_components) s.remove_covered_components = true;
+    if (o.has_merge) s.merge = o.merge;
 }
 
 bool isFolderTarget(const std::string& out) {
@@ -319,6 +325,11 @@ int parseOverrides(Args& args, CliOverrides& overrides) {
     overrides.adaptive_precision = args.flags.count("--adaptive-precision") > 0;
     overrides.no_adaptive_precision = args.flags.count("--no-adaptive-precision") > 0;
     overrides.remove_covered_components = args.flags.count("--remove-covered-components") > 0;
+    if (args.values.count("--merge")) {
+        if (!parseMergeMode(args.values["--merge"], overrides.merge))
+            return usageError("--merge expects auto, poisson or off, got '" + args.values["--merge"] + "'");
+        overrides.has_merge = true;
+    }
     if (overrides.adaptive_precision && overrides.no_adaptive_precision)
         return usageError("--adaptive-precision and --no-adaptive-precision exclude each other");
     if (overrides.pfrep_from_chain && overrides.no_pfrep_from_chain)
@@ -504,7 +515,7 @@ int runBake(int argc, char** argv) {
                     {"--no-pfrep-from-chain", nullptr, false},
                     {"--adaptive-precision", nullptr, false},
                     {"--no-adaptive-precision", nullptr, false},
-                    {"--remove-covered-components", nullptr, false},
+                    {"--remove-covered-components", nullptr, false}, {"--merge", nullptr, true},
                     {"--report", nullptr, true},
                     {"--depfile", nullptr, true},
                     {"--cache-dir", nullptr, true},

@@ -19,6 +19,7 @@ commands:
   info IN            print format, counts, attributes, bounds and topology of a mesh file
   convert IN -o OUT  convert between .ply .obj .off .gltf .glb (.conf scan sets as input)
   repair IN -o OUT   weld, remove degenerate faces, make manifold, orient, drop speckle, fill holes, normals
+  merge IN -o OUT    merge aligned range views (.conf set or overlapping sheets) into one surface (Poisson)
   simplify IN -o OUT simplify to a triangle ratio, count or error (quadric edge collapse)
   lods IN -o PREFIX  build a discrete LOD chain with measured errors and switch distances
   pfrep IN -o OUT.lbp  build a progressive-fans (PFRep) blob; pfrep --extract K IN.lbp -o OUT extracts level K
@@ -58,6 +59,7 @@ int main(int argc, char** argv) {
     if (cmd == "pfrep") return runPfrep(argc, argv);
     if (cmd == "repair") return runRepair(argc, argv);
     if (cmd == "bake") return runBake(argc, argv);
+    if (cmd == "merge") return runMerge(argc, argv);
     if (cmd == "encode") return runEncode(argc, argv);
     if (cmd == "decode") return runDecode(argc, argv);
     return usageError("unknown command '" + cmd + "'");

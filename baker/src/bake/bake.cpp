@@ -15,6 +15,7 @@
 #include "lodbake/core/json_writer.h"
 #include "lodbake/core/math.h"
 #include "lodbake/pack/pack_glb.h"
+#include "lodbake/reconstruct/merge.h"
 #include "lodbake/simplify/lod_chain.h"
 #include "lodbake/simplify/mesh_distance.h"
 #include "lodbake/stream/stream.h"
@@ -125,13 +126,31 @@ void measureChain(const Mesh& mesh, LodChain& chain, const LodChainOptions& opti
     measureLodChain(mesh, chain, options, known, diagnostics);
 }
 
+// The range-view merge (settings.merge), then the repair pipeline. `auto` merges only when the
+// input's components overlap as sheets, so single surfaces and separate pieces pass through
+// untouched. The merge reads the sheets as scanned: the repair's hole filling would add invented
+// samples, and dropping speckle is the merge's density trim's job; the merged surface is repaired.
 Status repairInput(BakeInput& input, const BakeSettings& settings, AssetSlot& slot, size_t index,
                    const BakeHooks& hooks) {
     slot.report.name = input.name;
     slot.report.input_triangles = input.mesh.faceCount();
     slot.report.input_vertices = input.mesh.vertexCount();
-    if (!settings.repair) return Status::okStatus();
+    if (!settings.repair && settings.merge == MergeMode::Off) return Status::okStatus();
     StageTimer timer(hooks, index, BakeStage::Repair);
+    const bool merge = settings.merge == MergeMode::Poisson ||
+                       (settings.merge == MergeMode::Auto &&
+                        overlappingSheetFraction(input.mesh) >= kOverlappingSheetFraction);
+    if (merge) {
+        MergeOptions merge_options;
+        merge_options.distance_samples = 200000; // the report's distances: a fixed subset of the samples
+        LODBAKE_ASSIGN_OR_RETURN(MergeReport merged, mergeRangeViews(input.mesh, merge_options, input.name));
+        slot.report.merge = mergeReportLines(merged);
+        for (const std::string& line : slot.report.merge) slot.diagnostics.note(input.name + ": merge: " + line);
+    }
+    if (!settings.repair) {
+        if (!merge) timer.cancel(); // nothing ran
+        return Status::okStatus();
+    }
     RepairOptions repair_options;
     repair_options.report_welded = false; // only `unresolved` goes into the bake's report
     repair_options.report_before = false; // likewise: the input is validated only if a skip test needs it
@@ -452,6 +471,11 @@ std::string bakeReportJson(const BakeOutput& output, const BakeSettings& setting
         j.key("repairUnresolved").beginArray();
         for (const std::string& u : a.repair_unresolved) j.value(u);
         j.endArray();
+        if (!a.merge.empty()) {
+            j.key("merge").beginArray();
+            for (const std::string& m : a.merge) j.value(m);
+            j.endArray();
+        }
         j.field("boundingRadius", a.metrics.bounding_radius);
         j.key("levels").beginArray();
         for (size_t l = 0; l < a.metrics.levels.size(); ++l) {

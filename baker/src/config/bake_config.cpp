@@ -145,6 +145,12 @@ Status applyImpl(const Json& root, const std::string& name, BakeSettings& s) {
         {"pfrep_from_chain", [&](const Json& v, const std::string& w) { return readBool(v, w, s.pfrep_from_chain); }},
         {"remove_covered_components",
          [&](const Json& v, const std::string& w) { return readBool(v, w, s.remove_covered_components); }},
+        {"merge",
+         [&](const Json& v, const std::string& w) -> Status {
+             if (!v.is_string() || !parseMergeMode(v.get<std::string>(), s.merge))
+                 return expected(w, "one of \"auto\", \"poisson\", \"off\"", v);
+             return Status::okStatus();
+         }},
         {"stream_precision",
          [&](const Json& v, const std::string&) {
              return applyObject(v, name, "/stream_precision", precision_handlers);
@@ -189,6 +195,24 @@ Status validateSettings(const BakeSettings& settings, const std::string& name) {
     return Status::okStatus();
 }
 
+const char* mergeModeName(MergeMode mode) {
+    switch (mode) {
+    case MergeMode::Off: return "off";
+    case MergeMode::Auto: return "auto";
+    case MergeMode::Poisson: return "poisson";
+    }
+    return "off";
+}
+
+bool parseMergeMode(const std::string& text, MergeMode& mode) {
+    for (MergeMode m : {MergeMode::Off, MergeMode::Auto, MergeMode::Poisson})
+        if (text == mergeModeName(m)) {
+            mode = m;
+            return true;
+        }
+    return false;
+}
+
 std::string settingsToJson(const BakeSettings& s) {
     try {
         // nlohmann::json objects are std::map based: keys come out sorted.
@@ -210,6 +234,7 @@ std::string settingsToJson(const BakeSettings& s) {
         j["progressive_fans"] = s.progressive_fans;
         j["pfrep_from_chain"] = s.pfrep_from_chain;
         j["remove_covered_components"] = s.remove_covered_components;
+        j["merge"] = mergeModeName(s.merge);
         j["stream_precision"] = {{"adaptive", s.stream_precision.adaptive},
                                  {"error_fraction", s.stream_precision.error_fraction},
                                  {"normal_bits", s.stream_precision.normal_bits},

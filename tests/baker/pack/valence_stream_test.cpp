@@ -429,6 +429,7 @@ TEST(ValenceStreamTest, ScanSetLevelsGetAStreamPerScan) {
         settings.textures.enabled = false;
         settings.stream_precision.adaptive = true;
         settings.compact = compact;
+        settings.merge = MergeMode::Off; // keep the six scans as six sheets (one primitive each)
         std::vector<BakeInput> inputs(1);
         inputs[0].name = "rock";
         inputs[0].mesh = std::move(loaded->mesh);

@@ -27,6 +27,7 @@ struct BakeAssetReport {
     uint64_t input_triangles = 0;
     uint64_t input_vertices = 0;
     std::vector<std::string> repair_unresolved;        // what repair could not fix
+    std::vector<std::string> merge;                    // what the range-view merge did (empty: no merge)
     LodMetrics metrics;                                // LOD0 first
     std::vector<std::vector<ImageSize>> texture_sizes; // per level, per texture of that level's mesh
 };

@@ -29,6 +29,18 @@ struct StreamPrecisionSettings {
     double error_fraction = 0.25; // adaptive: largest quantization displacement / the level's mean error
 };
 
+/// Merging of range views before the chain (reconstruct module, docs/bake.md "Merging range scans").
+enum class MergeMode {
+    Off,     // never
+    Auto,    // when the (repaired) input's components overlap as sheets
+    Poisson, // always
+};
+
+/// "off", "auto", "poisson".
+const char* mergeModeName(MergeMode mode);
+/// Parses a mergeModeName(); false for anything else.
+bool parseMergeMode(const std::string& text, MergeMode& mode);
+
 struct BakeSettings {
     int version = kBakePresetVersion;
     std::vector<double> lod_ratios{0.5, 0.25, 0.1, 0.03,
@@ -48,6 +60,7 @@ struct BakeSettings {
     bool remove_covered_components = false; // levels may drop whole components lying within their accepted
                                             // error of the rest (SimplifyOptions::remove_covered_components)
     StreamPrecisionSettings stream_precision;
+    MergeMode merge = MergeMode::Auto; // merge overlapping range views into one surface before the chain
 };
 
 /// Applies the preset text `json_text` (from file `name`, used in messages) over `settings`. Keys are
