@@ -72,6 +72,9 @@ options:
   --remove-covered-components  levels may drop a whole component that lies within their accepted
                         error of the rest, e.g. merged overlapping scans (preset key
                         remove_covered_components; off in every shipped preset; docs/simplify.md)
+  --keep-unreadable-images  ship an image that is not a decodable PNG/JPEG byte for byte in every
+                        level (with a warning) instead of failing (preset key
+                        textures.keep_unreadable_images)
   --report R.json       write per-level metrics, texture sizes, cache use and stage timings as JSON
   --depfile OUT.d       write a Makefile-syntax depfile listing every file read
   --cache-dir DIR       reuse packs whose inputs, settings and baker version are unchanged
@@ -95,6 +98,7 @@ struct CliOverrides {
     bool adaptive_precision = false;
     bool no_adaptive_precision = false;
     bool remove_covered_components = false;
+    bool keep_unreadable_images = false;
 };
 
 void applyOverrides(const CliOverrides& o, BakeSettings& s) {
@@ -108,6 +112,7 @@ void applyOverrides(const CliOverrides& o, BakeSettings& s) {
     if (o.adaptive_precision) s.stream_precision.adaptive = true;
     if (o.no_adaptive_precision) s.stream_precision.adaptive = false;
     if (o.remove_covered_components) s.remove_covered_components = true;
+    if (o.keep_unreadable_images) s.textures.keep_unreadable_images = true;
 }
 
 bool isFolderTarget(const std::string& out) {
@@ -319,6 +324,7 @@ int parseOverrides(Args& args, CliOverrides& overrides) {
     overrides.adaptive_precision = args.flags.count("--adaptive-precision") > 0;
     overrides.no_adaptive_precision = args.flags.count("--no-adaptive-precision") > 0;
     overrides.remove_covered_components = args.flags.count("--remove-covered-components") > 0;
+    overrides.keep_unreadable_images = args.flags.count("--keep-unreadable-images") > 0;
     if (overrides.adaptive_precision && overrides.no_adaptive_precision)
         return usageError("--adaptive-precision and --no-adaptive-precision exclude each other");
     if (overrides.pfrep_from_chain && overrides.no_pfrep_from_chain)
@@ -505,6 +511,7 @@ int runBake(int argc, char** argv) {
                     {"--adaptive-precision", nullptr, false},
                     {"--no-adaptive-precision", nullptr, false},
                     {"--remove-covered-components", nullptr, false},
+                    {"--keep-unreadable-images", nullptr, false},
                     {"--report", nullptr, true},
                     {"--depfile", nullptr, true},
                     {"--cache-dir", nullptr, true},
