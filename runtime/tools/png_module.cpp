@@ -80,6 +80,7 @@ extern "C" __attribute__((visibility("default"))) int loddump_read_rgba8(const u
         OIIO::ImageSpec config;
         void* proxy = &reader;
         config.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &proxy);
+        config.attribute("oiio:UnassociatedAlpha", 1); // as stored: no premultiplication by alpha
         std::unique_ptr<OIIO::ImageInput> in = OIIO::ImageInput::open(is_png ? "texture.png" : "texture.jpg", &config);
         if (!in) {
             setError(error, error_size, "cannot read the image header: " + OIIO::geterror());

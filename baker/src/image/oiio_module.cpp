@@ -51,6 +51,8 @@ bool openInput(const char* codec, OIIO::Filesystem::IOMemReader* reader, std::un
     OIIO::ImageSpec config;
     void* proxy = reader;
     config.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &proxy);
+    // Samples as stored: OpenImageIO would otherwise premultiply colour by alpha on reading.
+    config.attribute("oiio:UnassociatedAlpha", 1);
     *input = OIIO::ImageInput::open(codec, &config);
     if (!*input) return fail(error, "cannot read the image header: " + oneLine(OIIO::geterror()));
     return true;
@@ -101,6 +103,7 @@ bool encodeImpl(const Pixels& pixels, Codec codec, int jpeg_quality, std::vector
     // Only the pixel layout is written: no timestamps or software tags (STYLE.md §7).
     OIIO::ImageSpec spec(int(pixels.width), int(pixels.height), int(pixels.channels), type);
     if (is_jpeg) spec.attribute("Compression", "jpeg:" + std::to_string(std::min(std::max(jpeg_quality, 1), 100)));
+    spec.attribute("oiio:UnassociatedAlpha", 1); // the samples are stored as they are, not divided by alpha
     std::vector<unsigned char> bytes;
     OIIO::Filesystem::IOVecOutput writer(bytes);
     auto output = OIIO::ImageOutput::create(name);
