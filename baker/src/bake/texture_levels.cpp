@@ -85,7 +85,7 @@ Result<TextureLevels> textureLevels(const Mesh& lod0, size_t level_count, const 
     const size_t count = sources.size();
     const std::vector<bool> srgb = srgbTextures(lod0);
     std::vector<ImageSize> source_sizes(count);
-    std::vector<bool> resizable(count, false);
+    std::vector<bool> readable(count, false), resizable(count, false);
     out.is_verbatim.assign(count, false);
     // Messages name the texture as its source names it (the MTL map or the glTF image uri).
     std::vector<std::string> labels(count);
@@ -95,6 +95,7 @@ Result<TextureLevels> textureLevels(const Mesh& lod0, size_t level_count, const 
         bool is_readable = false, is_verbatim = false;
         LODBAKE_RETURN_IF_ERROR(readSource(sources[t], labels[t], settings, diagnostics, &source_sizes[t],
                                            &is_readable, &is_verbatim));
+        readable[t] = is_readable;
         resizable[t] = is_readable && settings.textures.enabled;
         out.is_verbatim[t] = is_verbatim;
     }
@@ -117,10 +118,12 @@ Result<TextureLevels> textureLevels(const Mesh& lod0, size_t level_count, const 
                 wanted[t].push_back(size);
         }
     // One job per texture: decode once, then the pyramid and every size it needs (parallel inside).
+    // A texture no level resizes is decoded all the same: a PNG or JPEG whose header reads but whose
+    // pixels do not is as unreadable as one whose header does not, and must not ship unnoticed.
     std::vector<Result<std::vector<std::vector<uint8_t>>>> job_results(
         count, Result<std::vector<std::vector<uint8_t>>>(std::vector<std::vector<uint8_t>>()));
     LODBAKE_RETURN_IF_ERROR(parallelFor(count, 1, [&](size_t t) {
-        if (wanted[t].empty()) return;
+        if (!readable[t]) return;
         TextureResizeOptions options;
         options.is_srgb = srgb[t];
         job_results[t] = resizeEncodedImageLevels(sources[t].bytes, labels[t], wanted[t], options);

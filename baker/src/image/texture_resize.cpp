@@ -91,6 +91,24 @@ Result<ImageSize> probeImageSize(const std::vector<uint8_t>& encoded, const std:
     return size;
 }
 
+Result<DecodedImage> decodeImage(const std::vector<uint8_t>& encoded, const std::string& name, uint64_t max_pixels) {
+    LODBAKE_ASSIGN_OR_RETURN(const ImageSize size, probeImageSize(encoded, name));
+    if (uint64_t(size.width) * size.height > max_pixels)
+        return resourceLimit(name + ": image header: " + std::to_string(size.width) + " x " +
+                             std::to_string(size.height) + " pixels, expected at most " + std::to_string(max_pixels));
+    const Loaded& module = loadModule();
+    oiio_module::Pixels pixels;
+    std::string error;
+    if (!module.api->decode(encoded.data(), encoded.size(), &pixels, &error)) return invalidInput(name + ": " + error);
+    DecodedImage out;
+    out.width = pixels.width;
+    out.height = pixels.height;
+    out.channels = pixels.channels;
+    out.bits = pixels.bits;
+    out.samples = std::move(pixels.data);
+    return out;
+}
+
 ImageSize levelTextureSize(ImageSize source, double target_px, uint32_t min_px, uint32_t max_px) {
     const uint32_t largest = std::max(source.width, source.height);
     if (largest == 0) return source;

@@ -22,6 +22,20 @@ bool looksLikePngOrJpeg(const std::vector<uint8_t>& encoded);
 /// Reads the dimensions from the header of an encoded PNG or JPEG. `name` prefixes messages.
 Result<ImageSize> probeImageSize(const std::vector<uint8_t>& encoded, const std::string& name);
 
+/// Decoded samples of an encoded PNG or JPEG, as stored: rows top to bottom, channels interleaved.
+struct DecodedImage {
+    uint32_t width = 0;
+    uint32_t height = 0;
+    uint32_t channels = 0;        // 1 grey, 2 grey + alpha, 3 RGB, 4 RGBA
+    uint32_t bits = 8;            // 8 or 16 per sample
+    std::vector<uint8_t> samples; // 16-bit samples as native uint16_t
+};
+
+/// Decodes a whole PNG or JPEG (a decoder warning is an error). `name` prefixes messages. A header
+/// claiming more than max_pixels pixels is refused before decoding (ResourceLimit).
+Result<DecodedImage> decodeImage(const std::vector<uint8_t>& encoded, const std::string& name,
+                                 uint64_t max_pixels = uint64_t(1) << 28);
+
 /// The size of a level texture whose larger side should be about `target_px` texels: the target is
 /// rounded up to a power of two and clamped to [min_px, max_px]; both sides scale by the same
 /// power-of-two factor (so power-of-two sources stay power-of-two, aspect ratios are kept). Never
