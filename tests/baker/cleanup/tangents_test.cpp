@@ -3,10 +3,13 @@
 // glTF's rule: bitangent = cross(normal, tangent.xyz) * tangent.w points up the image (towards -v).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
 
 #include "lodbake/cleanup/tangents.h"
+#include "lodbake/io/mesh_io.h"
+#include "test_paths.h"
 
 namespace {
 
@@ -148,6 +151,43 @@ TEST(TangentsTest, NeedsNormalsAndTheUvSetAndIsChosenByTheNormalMap) {
     const auto r = generateTangents(no_normals, 0, "quad");
     ASSERT_FALSE(r.ok());
     EXPECT_NE(r.status().message().find("quad: tangents: expected vertex normals"), std::string::npos);
+}
+
+// The shared textured Nefertiti ships the TANGENT its exporter computed with MikkTSpace: ours, from
+// its positions, normals and UVs alone, must agree corner by corner.
+TEST(TangentsTest, AgreeWithTheTangentsAnExporterShipped) {
+    LODBAKE_REQUIRE_SHARED_MESHES();
+    Diagnostics diagnostics;
+    auto read = readMesh(lodbake_test::sharedMesh("nefertiti_fraunhofer_textured.glb"), ReadOptions{}, diagnostics);
+    ASSERT_TRUE(read.ok()) << read.status().message();
+    Mesh m = std::move(read->mesh);
+    const std::vector<Vec4f> shipped = m.tangents;
+    ASSERT_EQ(shipped.size(), m.vertexCount());
+    const size_t original_vertices = m.vertexCount();
+    m.tangents.clear();
+    const auto r = generateTangents(m, 0, "nefertiti");
+    ASSERT_TRUE(r.ok()) << r.status().message();
+    // Split copies keep their original's data: compare each corner with its original vertex.
+    std::vector<uint32_t> original(m.vertexCount());
+    for (uint32_t v = 0; v < original_vertices; ++v) original[v] = v;
+    for (uint32_t v = uint32_t(original_vertices); v < m.vertexCount(); ++v)
+        for (uint32_t o = 0; o < original_vertices; ++o)
+            if (m.positions[o] == m.positions[v] && m.normals[o] == m.normals[v] && m.uvs[0][o] == m.uvs[0][v]) {
+                original[v] = o;
+                break;
+            }
+    std::vector<double> angles;
+    size_t same_handedness = 0;
+    for (uint32_t v : m.indices) {
+        const Vec4f& ours = m.tangents[v];
+        const Vec4f& theirs = shipped[original[v]];
+        same_handedness += (ours.w > 0) == (theirs.w > 0);
+        angles.push_back(angleDeg(v3(ours), v3(theirs)));
+    }
+    std::sort(angles.begin(), angles.end());
+    EXPECT_EQ(same_handedness, angles.size());
+    EXPECT_LT(angles[angles.size() / 2], 0.25) << "median angle, degrees";
+    EXPECT_LT(angles[angles.size() * 95 / 100], 1.5) << "95th percentile angle, degrees";
 }
 
 } // namespace
