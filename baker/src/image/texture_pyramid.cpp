@@ -35,6 +35,7 @@ struct DecodeTables {
     // The linear value halfway between two consecutive 8-bit sRGB codes: a linear value rounds to the
     // number of thresholds at or below it, which is round(255 * linearToSrgb(value)).
     std::array<float, 255> srgb8_thresholds{};
+    std::array<uint8_t, 4096> srgb8_guess{}; // code of linear value i / 4095
 };
 
 const DecodeTables& tables() {
@@ -45,6 +46,10 @@ const DecodeTables& tables() {
             d.linear8[size_t(i)] = float(i / 255.0);
         }
         for (int i = 0; i < 255; ++i) d.srgb8_thresholds[size_t(i)] = float(srgbToLinear((i + 0.5) / 255.0));
+        for (int i = 0; i < 4096; ++i)
+            d.srgb8_guess[size_t(i)] = uint8_t(std::upper_bound(d.srgb8_thresholds.begin(), d.srgb8_thresholds.end(),
+                                                                float(i) / 4095.0f) -
+                                               d.srgb8_thresholds.begin());
         d.srgb16.resize(65536);
         d.linear16.resize(65536);
         for (int i = 0; i < 65536; ++i) {
@@ -54,6 +59,15 @@ const DecodeTables& tables() {
         return d;
     }();
     return t;
+}
+
+// round(255 * linearToSrgb(v)) for v in [0, 1]: the number of thresholds at or below v, found from a
+// first guess (the code of v's bucket in a 4096-entry table) and a step or two along the thresholds.
+uint8_t srgbCode(const DecodeTables& t, float v) {
+    uint32_t code = t.srgb8_guess[size_t(v * 4095.0f)];
+    while (code < 255 && t.srgb8_thresholds[code] <= v) ++code;
+    while (code > 0 && t.srgb8_thresholds[code - 1] > v) --code;
+    return uint8_t(code);
 }
 
 // The colour channels an sRGB transfer applies to: all but alpha (the last of 2 or 4 channels).
@@ -76,7 +90,16 @@ struct Taps {
     uint32_t per_output = 0;
     std::vector<uint32_t> index;
     std::vector<float> weight;
+    std::vector<uint8_t> is_contiguous; // per output: index[k] == index[0] + k for every tap
 };
+
+void markContiguous(Taps& taps) {
+    const size_t outputs = taps.per_output ? taps.index.size() / taps.per_output : 0;
+    taps.is_contiguous.assign(outputs, 1);
+    for (size_t i = 0; i < outputs; ++i)
+        for (uint32_t k = 1; k < taps.per_output; ++k)
+            if (taps.index[i * taps.per_output + k] != taps.index[i * taps.per_output] + k) taps.is_contiguous[i] = 0;
+}
 
 Taps lanczosTaps(uint32_t source, uint32_t target) {
     Taps taps;
@@ -84,6 +107,7 @@ Taps lanczosTaps(uint32_t source, uint32_t target) {
         taps.per_output = 1;
         for (uint32_t i = 0; i < target; ++i) taps.index.push_back(i);
         taps.weight.assign(target, 1.0f);
+        markContiguous(taps);
         return taps;
     }
     const double scale = double(source) / double(target);
@@ -115,6 +139,7 @@ Taps lanczosTaps(uint32_t source, uint32_t target) {
         for (uint32_t k = 0; k < taps.per_output; ++k)
             taps.weight[size_t(i) * taps.per_output + k] = float(sum != 0 ? w[k] / sum : (k == 0 ? 1.0 : 0.0));
     }
+    markContiguous(taps);
     return taps;
 }
 
@@ -137,11 +162,17 @@ Result<LinearImage> resampleRows(uint32_t width, uint32_t height, uint32_t chann
             for (uint32_t x = 0; x < out_width; ++x) {
                 const uint32_t* index = &across.index[size_t(x) * across.per_output];
                 const float* weight = &across.weight[size_t(x) * across.per_output];
-                for (size_t ch = 0; ch < c; ++ch) {
-                    float sum = 0.0f;
-                    for (uint32_t k = 0; k < across.per_output; ++k) sum += weight[k] * in[size_t(index[k]) * c + ch];
-                    out[size_t(x) * c + ch] = sum;
+                float sum[4] = {0.0f, 0.0f, 0.0f, 0.0f};
+                if (across.is_contiguous[x]) {
+                    // Away from the edges the taps are consecutive texels: no index lookups.
+                    const float* texel = in + size_t(index[0]) * c;
+                    for (uint32_t k = 0; k < across.per_output; ++k, texel += c)
+                        for (size_t ch = 0; ch < c; ++ch) sum[ch] += weight[k] * texel[ch];
+                } else {
+                    for (uint32_t k = 0; k < across.per_output; ++k)
+                        for (size_t ch = 0; ch < c; ++ch) sum[ch] += weight[k] * in[size_t(index[k]) * c + ch];
                 }
+                for (size_t ch = 0; ch < c; ++ch) out[size_t(x) * c + ch] = sum[ch];
             }
         }
     }));
@@ -215,10 +246,7 @@ Result<Pixels> quantise(const LinearImage& image, bool is_srgb, uint32_t bits) {
                 const bool colour = is_srgb && isColourChannel(uint32_t(i % c), c);
                 const size_t at = y * row_samples + i;
                 if (out.bits == 8) {
-                    out.data[at] = colour ? uint8_t(std::upper_bound(t.srgb8_thresholds.begin(),
-                                                                     t.srgb8_thresholds.end(), v) -
-                                                    t.srgb8_thresholds.begin())
-                                          : uint8_t(std::lround(double(v) * 255.0));
+                    out.data[at] = colour ? srgbCode(t, v) : uint8_t(std::lround(double(v) * 255.0));
                 } else {
                     const double encoded = colour ? linearToSrgb(double(v)) : double(v);
                     const uint16_t code = uint16_t(std::lround(std::clamp(encoded, 0.0, 1.0) * 65535.0));

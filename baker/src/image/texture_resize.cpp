@@ -199,16 +199,17 @@ Result<std::vector<std::vector<uint8_t>>> resizeEncodedImageLevels(const std::ve
         if (is_step && k == 0) {
             pixels = decoded;
         } else {
-            Result<image_detail::LinearImage> level =
-                is_step ? Result<image_detail::LinearImage>(steps[k])
-                : k == 0 ? image_detail::resampleDecoded(decoded, options.is_srgb, sizes[i].width, sizes[i].height)
-                         : image_detail::resampleLinear(steps[k], sizes[i].width, sizes[i].height);
-            if (!level.ok()) {
-                statuses[i] = level.status();
+            // A size between two steps is filtered from the larger one; a step is rounded as it is.
+            Result<image_detail::LinearImage> between = image_detail::LinearImage{};
+            if (!is_step)
+                between = k == 0 ? image_detail::resampleDecoded(decoded, options.is_srgb, sizes[i].width, sizes[i].height)
+                                 : image_detail::resampleLinear(steps[k], sizes[i].width, sizes[i].height);
+            if (!between.ok()) {
+                statuses[i] = between.status();
                 return;
             }
             const uint32_t bits = codec == oiio_module::Codec::Jpeg ? 8 : decoded.bits;
-            pixels = image_detail::quantise(*level, options.is_srgb, bits);
+            pixels = image_detail::quantise(is_step ? steps[k] : *between, options.is_srgb, bits);
         }
         std::string encode_error;
         if (!pixels.ok())
