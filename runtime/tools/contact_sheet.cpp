@@ -135,8 +135,8 @@ void sampleTexture(const SheetTexture& t, float u, float v, bool is_srgb, float 
     }();
     for (int k = 0; k < 4; ++k) out[k] = 0;
     if (t.width == 0 || t.height == 0 || t.rgba.size() < size_t(t.width) * t.height * 4) return;
-    if (!std::isfinite(u) || !std::isfinite(v)) u = v = 0;
-    const float x = u * float(t.width) - 0.5f, y = v * float(t.height) - 0.5f;
+    float x = u * float(t.width) - 0.5f, y = v * float(t.height) - 0.5f;
+    if (!std::isfinite(x) || !std::isfinite(y)) x = y = 0;
     const float fx = std::floor(x), fy = std::floor(y);
     const float ax = x - fx, ay = y - fy;
     auto wrap = [](double i, uint32_t n) { return size_t(int64_t(std::fmod(std::fmod(i, double(n)) + n, double(n)))); };
@@ -175,7 +175,12 @@ public:
             sampleTexture(*material_->base_colour_texture, uv[0], uv[1], true, albedo);
         }
         float n[3];
-        if (mesh_.normals.size() < mesh_.positions.size() || !(interpolate(&mesh_.normals, 3, w, n), normalise3(n)))
+        bool has_normal = false;
+        if (mesh_.normals.size() == mesh_.positions.size()) {
+            interpolate(&mesh_.normals, 3, w, n);
+            has_normal = normalise3(n); // a zero normal (a primitive without NORMAL) takes the face's
+        }
+        if (!has_normal)
             for (int k = 0; k < 3; ++k) n[k] = face_normal_[k];
         if (material_->normal_texture) perturb(w, n);
         const float shade_term = 0.25f + 0.75f * std::fabs(dot3(n, view_.forward));
