@@ -75,6 +75,9 @@ options:
   --merge auto|poisson|off  merge aligned range views into one surface before the chain: auto
                         (default) when the input's components overlap as sheets, poisson
                         always, off never (preset key merge; docs/bake.md "Merging range scans")
+  --keep-unreadable-images  ship an image that is not a decodable PNG/JPEG byte for byte in every
+                        level (with a warning) instead of failing (preset key
+                        textures.keep_unreadable_images)
   --report R.json       write per-level metrics, texture sizes, cache use and stage timings as JSON
   --depfile OUT.d       write a Makefile-syntax depfile listing every file read
   --cache-dir DIR       reuse packs whose inputs, settings and baker version are unchanged
@@ -100,6 +103,7 @@ struct CliOverrides {
     bool remove_covered_components = false;
     bool has_merge = false;
     MergeMode merge = MergeMode::Auto;
+    bool keep_unreadable_images = false;
 };
 
 void applyOverrides(const CliOverrides& o, BakeSettings& s) {
@@ -114,6 +118,7 @@ void applyOverrides(const CliOverrides& o, BakeSettings& s) {
     if (o.no_adaptive_precision) s.stream_precision.adaptive = false;
     if (o.remove_covered_components) s.remove_covered_components = true;
     if (o.has_merge) s.merge = o.merge;
+    if (o.keep_unreadable_images) s.textures.keep_unreadable_images = true;
 }
 
 bool isFolderTarget(const std::string& out) {
@@ -330,6 +335,7 @@ int parseOverrides(Args& args, CliOverrides& overrides) {
             return usageError("--merge expects auto, poisson or off, got '" + args.values["--merge"] + "'");
         overrides.has_merge = true;
     }
+    overrides.keep_unreadable_images = args.flags.count("--keep-unreadable-images") > 0;
     if (overrides.adaptive_precision && overrides.no_adaptive_precision)
         return usageError("--adaptive-precision and --no-adaptive-precision exclude each other");
     if (overrides.pfrep_from_chain && overrides.no_pfrep_from_chain)
@@ -516,6 +522,7 @@ int runBake(int argc, char** argv) {
                     {"--adaptive-precision", nullptr, false},
                     {"--no-adaptive-precision", nullptr, false},
                     {"--remove-covered-components", nullptr, false}, {"--merge", nullptr, true},
+                    {"--keep-unreadable-images", nullptr, false},
                     {"--report", nullptr, true},
                     {"--depfile", nullptr, true},
                     {"--cache-dir", nullptr, true},

@@ -1,7 +1,8 @@
-// Contact sheet rasteriser for loddump --render: orthographic projection, a depth buffer, one flat
-// colour per triangle (Lambert term of its normal against the view direction), edge-distance
-// wireframe (the pixel's distance to the nearest edge from its barycentric coordinates, as in
-// Bærentzen et al., "Single-pass wireframe rendering", SIGGRAPH 2006 sketches).
+// Contact sheet rasteriser for loddump --render: orthographic projection, a depth buffer, a headlight
+// Lambert term (one flat colour per triangle for untextured levels; per pixel from the interpolated
+// normal, perturbed by the normal map, for levels with materials, whose base colour comes from the
+// texture), edge-distance wireframe (the pixel's distance to the nearest edge from its barycentric
+// coordinates, as in Bærentzen et al., "Single-pass wireframe rendering", SIGGRAPH 2006 sketches).
 #include "contact_sheet.h"
 
 #include <algorithm>
@@ -101,6 +102,170 @@ View frame(const SheetMesh& mesh, uint32_t cell_px) {
     return v;
 }
 
+void cross3(const float* a, const float* b, float* out) {
+    out[0] = a[1] * b[2] - a[2] * b[1];
+    out[1] = a[2] * b[0] - a[0] * b[2];
+    out[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+// Normalises v in place; false (v unchanged) when it has no length.
+bool normalise3(float* v) {
+    const float length = std::sqrt(dot3(v, v));
+    if (!(length > 1e-20f) || !std::isfinite(length)) return false;
+    for (int k = 0; k < 3; ++k) v[k] /= length;
+    return true;
+}
+
+float srgbToLinear(float c) {
+    return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f);
+}
+
+float linearToSrgb(float l) {
+    l = std::clamp(l, 0.0f, 1.0f);
+    return l <= 0.0031308f ? l * 12.92f : 1.055f * std::pow(l, 1.0f / 2.4f) - 0.055f;
+}
+
+// Bilinear sample with repeat wrapping (glTF's default sampler), texel centres at half-integers;
+// sRGB texels are converted to linear light before they are blended.
+void sampleTexture(const SheetTexture& t, float u, float v, bool is_srgb, float out[4]) {
+    static const std::vector<float> srgb_table = [] {
+        std::vector<float> table(256);
+        for (int i = 0; i < 256; ++i) table[size_t(i)] = srgbToLinear(float(i) / 255.0f);
+        return table;
+    }();
+    for (int k = 0; k < 4; ++k) out[k] = 0;
+    if (t.width == 0 || t.height == 0 || t.rgba.size() < size_t(t.width) * t.height * 4) return;
+    float x = u * float(t.width) - 0.5f, y = v * float(t.height) - 0.5f;
+    if (!std::isfinite(x) || !std::isfinite(y)) x = y = 0;
+    const float fx = std::floor(x), fy = std::floor(y);
+    const float ax = x - fx, ay = y - fy;
+    auto wrap = [](double i, uint32_t n) { return size_t(int64_t(std::fmod(std::fmod(i, double(n)) + n, double(n)))); };
+    for (int dy = 0; dy < 2; ++dy)
+        for (int dx = 0; dx < 2; ++dx) {
+            const float weight = (dx ? ax : 1 - ax) * (dy ? ay : 1 - ay);
+            const uint8_t* texel = &t.rgba[(wrap(fy + dy, t.height) * t.width + wrap(fx + dx, t.width)) * 4];
+            for (int k = 0; k < 4; ++k) {
+                const float value = is_srgb && k < 3 ? srgb_table[texel[k]] : float(texel[k]) / 255.0f;
+                out[k] += weight * value;
+            }
+        }
+}
+
+// Per-pixel shading of one triangle of a level with materials: base colour from the factor and the
+// texture, normal from the interpolated vertex normals (or the face's) perturbed by the normal map in
+// the tangent frame (interpolated TANGENT, or the face's UV gradient), then the headlight term.
+class TexturedShader {
+public:
+    TexturedShader(const SheetMesh& mesh, const View& view) : mesh_(mesh), view_(view) {}
+
+    void prepare(size_t triangle, const uint32_t* v, const float* face_normal) {
+        for (int k = 0; k < 3; ++k) v_[k] = v[k];
+        const uint32_t m = triangle < mesh_.triangle_material.size() ? mesh_.triangle_material[triangle] : 0;
+        material_ = m < mesh_.materials.size() ? &mesh_.materials[m] : &kDefault;
+        for (int k = 0; k < 3; ++k) face_normal_[k] = face_normal[k];
+        faceTangent();
+    }
+
+    // Display-space RGB in [0, 1] at barycentric weights w.
+    void shade(const float w[3], float out[3]) const {
+        float albedo[4] = {1, 1, 1, 1};
+        if (material_->base_colour_texture) {
+            float uv[2];
+            interpolate(uvSet(material_->base_colour_uv), 2, w, uv);
+            sampleTexture(*material_->base_colour_texture, uv[0], uv[1], true, albedo);
+        }
+        float n[3];
+        bool has_normal = false;
+        if (mesh_.normals.size() == mesh_.positions.size()) {
+            interpolate(&mesh_.normals, 3, w, n);
+            has_normal = normalise3(n); // a zero normal (a primitive without NORMAL) takes the face's
+        }
+        if (!has_normal)
+            for (int k = 0; k < 3; ++k) n[k] = face_normal_[k];
+        if (material_->normal_texture) perturb(w, n);
+        const float shade_term = 0.25f + 0.75f * std::fabs(dot3(n, view_.forward));
+        for (int k = 0; k < 3; ++k) out[k] = linearToSrgb(albedo[k] * material_->base_colour[k] * shade_term);
+    }
+
+private:
+    const std::vector<float>* uvSet(uint32_t set) const {
+        return set < mesh_.uvs.size() && mesh_.uvs[set].size() / 2 == mesh_.positions.size() / 3 ? &mesh_.uvs[set]
+                                                                                                  : nullptr;
+    }
+
+    void interpolate(const std::vector<float>* stream, int width, const float w[3], float* out) const {
+        for (int k = 0; k < width; ++k) {
+            out[k] = 0;
+            if (!stream) continue;
+            for (int c = 0; c < 3; ++c) out[k] += w[c] * (*stream)[size_t(v_[c]) * size_t(width) + size_t(k)];
+        }
+    }
+
+    // The face's tangent frame from the normal map's UVs: T along +u, handedness so that
+    // cross(N, T) * w points up the image (towards -v).
+    void faceTangent() {
+        face_tangent_[0] = 1, face_tangent_[1] = face_tangent_[2] = 0, face_tangent_[3] = 1;
+        const std::vector<float>* uv = material_->normal_texture ? uvSet(material_->normal_uv) : nullptr;
+        if (!uv) return;
+        const float* p[3];
+        const float* t[3];
+        for (int k = 0; k < 3; ++k) {
+            p[k] = &mesh_.positions[size_t(v_[k]) * 3];
+            t[k] = &(*uv)[size_t(v_[k]) * 2];
+        }
+        const float e1[3] = {p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]};
+        const float e2[3] = {p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]};
+        const float du1 = t[1][0] - t[0][0], dv1 = t[1][1] - t[0][1], du2 = t[2][0] - t[0][0], dv2 = t[2][1] - t[0][1];
+        const float r = du1 * dv2 - du2 * dv1;
+        if (!(std::fabs(r) > 1e-20f)) return;
+        float dpdu[3], dpdv[3], side[3];
+        for (int k = 0; k < 3; ++k) {
+            dpdu[k] = (e1[k] * dv2 - e2[k] * dv1) / r;
+            dpdv[k] = (e2[k] * du1 - e1[k] * du2) / r;
+        }
+        if (!normalise3(dpdu)) return;
+        cross3(face_normal_, dpdu, side);
+        for (int k = 0; k < 3; ++k) face_tangent_[k] = dpdu[k];
+        face_tangent_[3] = dot3(side, dpdv) <= 0 ? 1.0f : -1.0f;
+    }
+
+    void perturb(const float w[3], float* n) const {
+        float tangent[4];
+        for (int k = 0; k < 4; ++k) tangent[k] = face_tangent_[k];
+        if (mesh_.tangents.size() / 4 == mesh_.positions.size() / 3) {
+            interpolate(&mesh_.tangents, 4, w, tangent);
+            tangent[3] = mesh_.tangents[size_t(v_[0]) * 4 + 3] < 0 ? -1.0f : 1.0f;
+            if (!normalise3(tangent))
+                for (int k = 0; k < 4; ++k) tangent[k] = face_tangent_[k];
+        }
+        // Gram-Schmidt against the shading normal, then the bitangent glTF defines.
+        const float along = dot3(n, tangent);
+        for (int k = 0; k < 3; ++k) tangent[k] -= along * n[k];
+        if (!normalise3(tangent)) return;
+        float bitangent[3];
+        cross3(n, tangent, bitangent);
+        float uv[2], texel[4];
+        interpolate(uvSet(material_->normal_uv), 2, w, uv);
+        sampleTexture(*material_->normal_texture, uv[0], uv[1], false, texel);
+        const float tx = (2 * texel[0] - 1) * material_->normal_scale, ty = (2 * texel[1] - 1) * material_->normal_scale,
+                    tz = 2 * texel[2] - 1;
+        float perturbed[3];
+        for (int k = 0; k < 3; ++k) perturbed[k] = tangent[k] * tx + bitangent[k] * tangent[3] * ty + n[k] * tz;
+        if (normalise3(perturbed))
+            for (int k = 0; k < 3; ++k) n[k] = perturbed[k];
+    }
+
+    static const SheetMaterial kDefault;
+    const SheetMesh& mesh_;
+    const View& view_;
+    const SheetMaterial* material_ = &kDefault;
+    uint32_t v_[3] = {0, 0, 0};
+    float face_normal_[3] = {0, 0, 1};
+    float face_tangent_[4] = {1, 0, 0, 1};
+};
+
+const SheetMaterial TexturedShader::kDefault{};
+
 void drawMesh(SheetImage& image, std::vector<float>& depth, uint32_t cell_x, uint32_t cell_y, uint32_t cell_px,
               const SheetMesh& mesh, const View& view, bool wireframe) {
     const size_t vertex_count = mesh.positions.size() / 3;
@@ -112,6 +277,8 @@ void drawMesh(SheetImage& image, std::vector<float>& depth, uint32_t cell_x, uin
         sy[v] = float(cell_y) + 0.5f * float(cell_px) - dot3(p, view.up) * view.scale;
         sz[v] = dot3(p, view.forward);
     }
+    const bool is_textured = !mesh.triangle_material.empty();
+    TexturedShader textured(mesh, view);
     const float x_end = float(cell_x + cell_px), y_end = float(cell_y + cell_px);
     for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
         const uint32_t a = mesh.indices[t], b = mesh.indices[t + 1], c = mesh.indices[t + 2];
@@ -127,6 +294,11 @@ void drawMesh(SheetImage& image, std::vector<float>& depth, uint32_t cell_x, uin
         if (!(n_len > 0)) continue;
         const float lambert = std::fabs(dot3(n, view.forward)) / n_len;
         const float shade = 0.25f + 0.75f * lambert;
+        if (is_textured) {
+            const uint32_t corners[3] = {a, b, c};
+            const float unit[3] = {n[0] / n_len, n[1] / n_len, n[2] / n_len};
+            textured.prepare(t / 3, corners, unit);
+        }
 
         const float x0 = sx[a], y0 = sy[a], x1 = sx[b], y1 = sy[b], x2 = sx[c], y2 = sy[c];
         const float area = (x1 - x0) * (y2 - y0) - (x2 - x0) * (y1 - y0);
@@ -151,7 +323,12 @@ void drawMesh(SheetImage& image, std::vector<float>& depth, uint32_t cell_x, uin
                 if (!(z < depth[pixel])) continue;
                 depth[pixel] = z;
                 float colour[3];
-                for (int k = 0; k < 3; ++k) colour[k] = kBaseColour[k] * shade;
+                if (is_textured) {
+                    const float w[3] = {w0, w1, w2};
+                    textured.shade(w, colour);
+                } else {
+                    for (int k = 0; k < 3; ++k) colour[k] = kBaseColour[k] * shade;
+                }
                 if (wireframe) {
                     const float d = std::min({w0 * std::fabs(area) / std::max(len0, 1e-6f),
                                               w1 * std::fabs(area) / std::max(len1, 1e-6f),

@@ -1,6 +1,7 @@
 // loddump: prints a summary of a pack (GLB or .gltf) using only the runtime. The only lodrt program
 // that opens files; everything it shows comes from lodrt::loadPack and the lodrt stream decoders.
-// --render draws a contact sheet (contact_sheet.h) and writes it through a PNG module loaded with
+// --render draws a contact sheet (contact_sheet.h), shaded with the pack's textures
+// (sheet_materials.h), decoding them and writing the picture through an image module loaded with
 // dlopen (png_module.cpp), so OpenImageIO costs nothing unless a picture is asked for.
 #include <dlfcn.h>
 #include <unistd.h>
@@ -17,6 +18,7 @@
 #include <vector>
 
 #include "contact_sheet.h"
+#include "sheet_materials.h"
 #include "lodrt/format.h"
 #include "lodrt/lodrt.h"
 #include "lodrt/pfrep.h"
@@ -41,7 +43,8 @@ void printUsage(std::FILE* out) {
                       "warning), every compressed stream decodes and\n"
                       "matches the plain accessors, each PFRep level the extension lists is what the blob\n"
                       "extracts and no finer than the chain level it stands for.\n"
-                      "--render OUT.png draws every level of every group side by side (flat shaded; with\n"
+                      "--render OUT.png draws every level of every group side by side (shaded with each\n"
+                      "level's base colour texture and normal map, or flat without materials; with\n"
                       "--wireframe the triangle edges too) and writes the picture with OpenImageIO.\n"
                       "Exit status: 0 ok, 1 bad pack or failed check, 2 usage.\n",
                  lodrt::format::kExtMsftLod, lodrt::format::kExtLodMetrics, lodrt::format::kExtValenceCompression,
@@ -902,7 +905,8 @@ void printJson(const char* path, const lodrt::Pack* pack, const char* error, con
 
 // The level's triangles for the picture: every primitive's plain data, or its decoded valence stream
 // when the plain accessors carry none (compact packs).
-loddump::SheetMesh levelTriangles(const lodrt::Pack& pack, const LodLevelRow& row, uint32_t level) {
+loddump::SheetMesh levelTriangles(const lodrt::Pack& pack, const LodLevelRow& row, uint32_t level,
+                                  loddump::SheetTextures& textures) {
     loddump::SheetMesh out;
     out.label = "L" + std::to_string(level) + " " + std::to_string(row.triangles) + " tris";
     if (row.mesh == lodrt::kNoIndex) return out;
@@ -930,15 +934,25 @@ loddump::SheetMesh levelTriangles(const lodrt::Pack& pack, const LodLevelRow& ro
         const uint32_t base = uint32_t(out.positions.size() / 3);
         out.positions.insert(out.positions.end(), d.positions.begin(), d.positions.end());
         for (uint32_t i : d.indices) out.indices.push_back(base + i);
+        loddump::appendShading(pack, prim, d.positions.size() / 3, d.indices.size() / 3, textures, &out);
     }
     return out;
 }
 
 using WriteRgb8 = int (*)(const char*, const uint8_t*, uint32_t, uint32_t, char*, size_t);
+using ReadRgba8 = int (*)(const uint8_t*, size_t, uint8_t**, uint32_t*, uint32_t*, char*, size_t);
+using FreeFn = void (*)(void*);
 
-// Loads the PNG module: $LODDUMP_OIIO_MODULE, then beside the executable (installed:
+// The image module's entry points (png_module.cpp).
+struct ImageModule {
+    WriteRgb8 write = nullptr;
+    ReadRgba8 read = nullptr;
+    FreeFn release = nullptr;
+};
+
+// Loads the image module: $LODDUMP_OIIO_MODULE, then beside the executable (installed:
 // ../lib/lodbake/), then the build tree.
-WriteRgb8 loadImageWriter(std::string* error) {
+bool loadImageModule(ImageModule* module, std::string* error) {
 #ifdef LODDUMP_OIIO_MODULE_NAME
     std::vector<std::string> candidates;
     if (const char* env = std::getenv("LODDUMP_OIIO_MODULE")) candidates.push_back(env);
@@ -960,24 +974,46 @@ WriteRgb8 loadImageWriter(std::string* error) {
             tried += "\n  " + path + ": " + (why ? why : "?");
             continue;
         }
-        void* entry = dlsym(handle, "loddump_write_rgb8");
-        if (entry) return reinterpret_cast<WriteRgb8>(entry);
-        tried += "\n  " + path + ": no loddump_write_rgb8";
+        module->write = reinterpret_cast<WriteRgb8>(dlsym(handle, "loddump_write_rgb8"));
+        module->read = reinterpret_cast<ReadRgba8>(dlsym(handle, "loddump_read_rgba8"));
+        module->release = reinterpret_cast<FreeFn>(dlsym(handle, "loddump_free"));
+        if (module->write && module->read && module->release) return true;
+        tried += "\n  " + path + ": not loddump's image module (loddump_write_rgb8, loddump_read_rgba8, loddump_free)";
     }
-    *error = "cannot load the PNG module (OpenImageIO):" + tried;
+    *error = "cannot load the image module (OpenImageIO):" + tried;
 #else
+    (void)module;
     *error = "this loddump was built without OpenImageIO, so --render is not available";
 #endif
-    return nullptr;
+    return false;
 }
 
 int renderSheet(const lodrt::Pack& pack, const LodReport& report, int level_filter, const char* out_path,
                 bool wireframe) {
+    ImageModule module;
+    std::string error;
+    if (!loadImageModule(&module, &error)) {
+        std::fprintf(stderr, "error: %s: %s\n", out_path, error.c_str());
+        return kExitBadPack;
+    }
+    // The levels are shaded with their textures, decoded once each through the image module.
+    loddump::SheetTextures textures(pack, [&](const uint8_t* data, size_t size, loddump::SheetTexture* out,
+                                              std::string* why) {
+        uint8_t* pixels = nullptr;
+        char message[512] = "";
+        if (module.read(data, size, &pixels, &out->width, &out->height, message, sizeof(message)) != 0) {
+            *why = message;
+            return false;
+        }
+        out->rgba.assign(pixels, pixels + size_t(out->width) * out->height * 4);
+        module.release(pixels);
+        return true;
+    });
     std::vector<std::vector<loddump::SheetMesh>> rows;
     for (const LodGroup& g : report.groups) {
         rows.emplace_back();
         for (uint32_t l = 0; l < g.levels.size(); ++l)
-            if (levelSelected(level_filter, l)) rows.back().push_back(levelTriangles(pack, g.levels[l], l));
+            if (levelSelected(level_filter, l)) rows.back().push_back(levelTriangles(pack, g.levels[l], l, textures));
     }
     if (report.groups.empty()) {
         // No LOD group: one row of every mesh instanced by a node.
@@ -987,20 +1023,17 @@ int renderSheet(const lodrt::Pack& pack, const LodReport& report, int level_filt
             row.mesh = pack.node(n).mesh;
             if (row.mesh == lodrt::kNoIndex) continue;
             measureMesh(pack, row.mesh, row);
-            rows.back().push_back(levelTriangles(pack, row, uint32_t(rows.back().size())));
+            rows.back().push_back(levelTriangles(pack, row, uint32_t(rows.back().size()), textures));
         }
     }
     loddump::SheetOptions options;
     options.wireframe = wireframe;
     const loddump::SheetImage image = loddump::renderContactSheet(rows, options);
-    std::string error;
-    const WriteRgb8 write = loadImageWriter(&error);
+    // A texture that does not decode is drawn with its material's factor alone, and said.
+    for (const std::string& problem : textures.problems())
+        std::fprintf(stderr, "warning: %s: %s: drawn without this texture\n", out_path, problem.c_str());
     char message[512] = "";
-    if (!write) {
-        std::fprintf(stderr, "error: %s: %s\n", out_path, error.c_str());
-        return kExitBadPack;
-    }
-    if (write(out_path, image.rgb.data(), image.width, image.height, message, sizeof(message)) != 0) {
+    if (module.write(out_path, image.rgb.data(), image.width, image.height, message, sizeof(message)) != 0) {
         std::fprintf(stderr, "error: %s: %s\n", out_path, message);
         return kExitBadPack;
     }

@@ -10,6 +10,7 @@
 #include <set>
 
 #include "bake/phases.h"
+#include "bake/texture_levels.h"
 #include "core/parallel.h"
 #include "lodbake/cleanup/repair.h"
 #include "lodbake/core/json_writer.h"
@@ -24,8 +25,12 @@ namespace lodbake {
 
 namespace {
 
+using bake_detail::addNormalMapTangents;
+using bake_detail::applyTextureLevels;
 using bake_detail::concurrentPhases;
 using bake_detail::PhaseTask;
+using bake_detail::TextureLevels;
+using bake_detail::textureLevels;
 
 ScreenParams screenParams(const BakeSettings& s) {
     ScreenParams screen;
@@ -35,86 +40,12 @@ ScreenParams screenParams(const BakeSettings& s) {
     return screen;
 }
 
-// Textures sampled as colour (base colour, emissive) are sRGB; the rest hold linear data.
-std::vector<bool> srgbTextures(const Mesh& mesh) {
-    std::vector<bool> srgb(mesh.textures.size(), false);
-    for (const Material& m : mesh.materials)
-        for (const TextureSlot* slot : {&m.base_color_texture, &m.emissive_texture})
-            if (slot->isSet() && size_t(slot->texture) < srgb.size()) srgb[size_t(slot->texture)] = true;
-    return srgb;
-}
-
 struct AssetSlot {
     Status status = Status::okStatus();
     Diagnostics diagnostics;
     PackAsset asset;
     BakeAssetReport report;
 };
-
-// Texture levels: LOD0 keeps the sources; level l's textures are sized for the object's projected
-// size at its switch distance. Equal sizes share one resized image (and so one glTF image).
-struct TextureLevels {
-    std::vector<std::vector<ImageSize>> sizes; // per level, per texture
-    std::map<std::pair<size_t, std::pair<uint32_t, uint32_t>>, std::vector<uint8_t>>
-        resized; // (texture, size) -> bytes
-};
-
-Result<TextureLevels> textureLevels(const Mesh& lod0, size_t level_count, const LodMetrics& metrics,
-                                    const BakeSettings& settings, const std::string& name, Diagnostics& diagnostics) {
-    TextureLevels out;
-    const std::vector<Texture>& sources = lod0.textures;
-    const std::vector<bool> srgb = srgbTextures(lod0);
-    std::vector<ImageSize> source_sizes(sources.size());
-    std::vector<bool> resizable(sources.size(), false);
-    // Messages name the texture as its source names it (the MTL map or the glTF image uri).
-    std::vector<std::string> labels(sources.size());
-    for (size_t t = 0; t < sources.size(); ++t) {
-        const std::string& file = sources[t].uri.empty() ? sources[t].name : sources[t].uri;
-        labels[t] = name + ": texture " + std::to_string(t) + (file.empty() ? "" : " '" + file + "'");
-        Result<ImageSize> size = probeImageSize(sources[t].bytes, labels[t]);
-        if (size.ok()) {
-            source_sizes[t] = *size;
-            resizable[t] = settings.textures.enabled;
-        } else if (looksLikePngOrJpeg(sources[t].bytes)) {
-            // A PNG or JPEG whose header does not decode is damaged: shipping its bytes would put a
-            // broken image in every level, so the bake fails like for a damaged mesh.
-            return size.status();
-        } else if (!sources[t].bytes.empty()) {
-            diagnostics.warn(size.status().message() + "; kept as is in every level");
-        }
-    }
-    out.sizes.assign(level_count, std::vector<ImageSize>(sources.size()));
-    for (size_t l = 0; l < level_count; ++l)
-        for (size_t t = 0; t < sources.size(); ++t) {
-            out.sizes[l][t] = source_sizes[t];
-            if (l == 0 || !resizable[t]) continue;
-            const double target =
-                metrics.levels[l].screen_coverage * settings.viewport_height_px * settings.textures.texels_per_pixel;
-            out.sizes[l][t] =
-                levelTextureSize(source_sizes[t], target, settings.textures.min_size_px, settings.textures.max_size_px);
-            if (out.sizes[l][t].width != source_sizes[t].width || out.sizes[l][t].height != source_sizes[t].height)
-                out.resized[{t, {out.sizes[l][t].width, out.sizes[l][t].height}}];
-        }
-    // One job per texture: decode and linearise once, then every size it needs (a halving chain).
-    std::vector<std::vector<ImageSize>> wanted(sources.size());
-    for (const auto& entry : out.resized)
-        wanted[entry.first.first].push_back({entry.first.second.first, entry.first.second.second});
-    std::vector<Result<std::vector<std::vector<uint8_t>>>> job_results(
-        sources.size(), Result<std::vector<std::vector<uint8_t>>>(std::vector<std::vector<uint8_t>>()));
-    LODBAKE_RETURN_IF_ERROR(parallelFor(sources.size(), 1, [&](size_t t) {
-        if (wanted[t].empty()) return;
-        TextureResizeOptions options;
-        options.is_srgb = srgb[t];
-        job_results[t] =
-            resizeEncodedImageLevels(sources[t].bytes, labels[t], wanted[t], options);
-    }));
-    for (size_t t = 0; t < sources.size(); ++t) {
-        if (!job_results[t].ok()) return job_results[t].status();
-        for (size_t k = 0; k < wanted[t].size(); ++k)
-            out.resized[{t, {wanted[t][k].width, wanted[t][k].height}}] = std::move(job_results[t].value()[k]);
-    }
-    return out;
-}
 
 // measureLodChain (lod_chain.h) with the reference sides that a MeasureReference task measured
 // (`reference_sides[i]` for chain level i, when present and ok).
@@ -359,18 +290,7 @@ Status assemblePackAsset(const std::string& name, Mesh& mesh, LodChain& chain, A
     asset.levels.resize(level_count);
     asset.levels[0].mesh = std::move(mesh);
     for (size_t l = 1; l < level_count; ++l) asset.levels[l].mesh = std::move(chain.levels[l - 1].mesh);
-    const std::vector<Texture>& sources = asset.levels[0].mesh.textures;
-    for (size_t l = 1; l < level_count; ++l) {
-        std::vector<Texture>& level_textures = asset.levels[l].mesh.textures;
-        for (size_t t = 0; t < level_textures.size() && t < sources.size(); ++t) {
-            const ImageSize& size = textures.sizes[l][t];
-            const auto found = textures.resized.find({t, {size.width, size.height}});
-            if (found == textures.resized.end()) continue;
-            level_textures[t].bytes = found->second;
-            level_textures[t].name =
-                sources[t].name + "_" + std::to_string(size.width) + "x" + std::to_string(size.height);
-        }
-    }
+    applyTextureLevels(textures, asset.levels);
     for (size_t e = 0; e < encoders.size(); ++e)
         for (size_t l = 0; l < level_count; ++l) {
             const PackStreamCommit& commit = *tasks.commits[e * level_count + l];
@@ -382,6 +302,7 @@ Status assemblePackAsset(const std::string& name, Mesh& mesh, LodChain& chain, A
 Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vector<PackStreamEncoder>& encoders,
                  AssetSlot& slot, size_t index, const BakeHooks& hooks) {
     LODBAKE_RETURN_IF_ERROR(repairInput(input, settings, slot, index, hooks));
+    LODBAKE_RETURN_IF_ERROR(addNormalMapTangents(input.mesh, input.name, slot.diagnostics));
     const LodChainOptions chain_options = chainOptions(settings, encoders);
     StageTimer chain_timer(hooks, index, BakeStage::LodChain);
     Result<LodChain> chain_result = buildLodChain(input.mesh, chain_options, slot.diagnostics);

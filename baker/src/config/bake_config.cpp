@@ -105,6 +105,8 @@ Status applyImpl(const Json& root, const std::string& name, BakeSettings& s) {
         {"min_size_px", [&](const Json& v, const std::string& w) { return readUint(v, w, 1, 65536, t.min_size_px); }},
         {"texels_per_pixel",
          [&](const Json& v, const std::string& w) { return readNumber(v, w, 0.0, 64.0, true, t.texels_per_pixel); }},
+        {"keep_unreadable_images",
+         [&](const Json& v, const std::string& w) { return readBool(v, w, t.keep_unreadable_images); }},
     };
     StreamPrecisionSettings& q = s.stream_precision;
     const std::map<std::string, Handler> precision_handlers{
@@ -228,7 +230,8 @@ std::string settingsToJson(const BakeSettings& s) {
         j["textures"] = {{"enabled", s.textures.enabled},
                          {"max_size_px", s.textures.max_size_px},
                          {"min_size_px", s.textures.min_size_px},
-                         {"texels_per_pixel", s.textures.texels_per_pixel}};
+                         {"texels_per_pixel", s.textures.texels_per_pixel},
+                         {"keep_unreadable_images", s.textures.keep_unreadable_images}};
         j["threads"] = s.threads;
         j["compact"] = s.compact;
         j["progressive_fans"] = s.progressive_fans;

@@ -1,5 +1,6 @@
-// Texture levels: the size rule here; decoding, filtering and encoding in liblodbake_oiio, which is
-// loaded with dlopen on first use (oiio_module.h says why). Module search order: $LODBAKE_OIIO_MODULE,
+// Texture levels: the size rule and the pyramid's plan here, the filtering in texture_pyramid.cpp,
+// decoding and encoding in liblodbake_oiio, which is loaded with dlopen on first use (oiio_module.h
+// says why). Module search order: $LODBAKE_OIIO_MODULE,
 // <executable dir>/../lib/lodbake/, <executable dir>/, then the build tree it was built in.
 #include "lodbake/image/texture_resize.h"
 
@@ -12,7 +13,9 @@
 #include <cstdlib>
 #include <mutex>
 
+#include "core/parallel.h"
 #include "image/oiio_module.h"
+#include "image/texture_pyramid.h"
 
 namespace lodbake {
 
@@ -88,6 +91,24 @@ Result<ImageSize> probeImageSize(const std::vector<uint8_t>& encoded, const std:
     return size;
 }
 
+Result<DecodedImage> decodeImage(const std::vector<uint8_t>& encoded, const std::string& name, uint64_t max_pixels) {
+    LODBAKE_ASSIGN_OR_RETURN(const ImageSize size, probeImageSize(encoded, name));
+    if (uint64_t(size.width) * size.height > max_pixels)
+        return resourceLimit(name + ": image header: " + std::to_string(size.width) + " x " +
+                             std::to_string(size.height) + " pixels, expected at most " + std::to_string(max_pixels));
+    const Loaded& module = loadModule();
+    oiio_module::Pixels pixels;
+    std::string error;
+    if (!module.api->decode(encoded.data(), encoded.size(), &pixels, &error)) return invalidInput(name + ": " + error);
+    DecodedImage out;
+    out.width = pixels.width;
+    out.height = pixels.height;
+    out.channels = pixels.channels;
+    out.bits = pixels.bits;
+    out.samples = std::move(pixels.data);
+    return out;
+}
+
 ImageSize levelTextureSize(ImageSize source, double target_px, uint32_t min_px, uint32_t max_px) {
     const uint32_t largest = std::max(source.width, source.height);
     if (largest == 0) return source;
@@ -104,6 +125,37 @@ ImageSize levelTextureSize(ImageSize source, double target_px, uint32_t min_px, 
     return out;
 }
 
+namespace {
+
+// The halving steps a set of sizes needs: step 0 is the source, step k + 1 halves step k (rounding
+// up), and size i comes from from_step[i], the smallest step at least as large on both axes.
+struct StepPlan {
+    std::vector<ImageSize> steps;
+    std::vector<size_t> from_step;
+    std::vector<bool> is_kept; // a step some size is taken from
+};
+
+StepPlan planSteps(ImageSize source, const std::vector<ImageSize>& sizes) {
+    StepPlan plan;
+    plan.steps.push_back(source);
+    plan.from_step.assign(sizes.size(), 0);
+    for (size_t i = 0; i < sizes.size(); ++i) {
+        for (;;) {
+            const ImageSize at = plan.steps[plan.from_step[i]];
+            const ImageSize next{std::max<uint32_t>(1, (at.width + 1) / 2), std::max<uint32_t>(1, (at.height + 1) / 2)};
+            const bool is_last = at.width == 1 && at.height == 1;
+            if (is_last || sizes[i].width > next.width || sizes[i].height > next.height) break;
+            if (plan.from_step[i] + 1 == plan.steps.size()) plan.steps.push_back(next);
+            ++plan.from_step[i];
+        }
+    }
+    plan.is_kept.assign(plan.steps.size(), false);
+    for (size_t step : plan.from_step) plan.is_kept[step] = true;
+    return plan;
+}
+
+} // namespace
+
 Result<std::vector<std::vector<uint8_t>>> resizeEncodedImageLevels(const std::vector<uint8_t>& encoded,
                                                                    const std::string& name,
                                                                    const std::vector<ImageSize>& sizes,
@@ -117,16 +169,56 @@ Result<std::vector<std::vector<uint8_t>>> resizeEncodedImageLevels(const std::ve
         return resourceLimit(name + ": image header: " + std::to_string(source.width) + " x " +
                              std::to_string(source.height) + " pixels, expected at most " +
                              std::to_string(options.max_source_pixels));
-    std::vector<uint32_t> flat;
-    for (const ImageSize& s : sizes) {
-        flat.push_back(s.width);
-        flat.push_back(s.height);
-    }
-    std::vector<std::vector<uint8_t>> out;
+    oiio_module::Pixels decoded;
     std::string error;
-    if (!module.api->resizeLevels(encoded.data(), encoded.size(), flat.data(), sizes.size(), options.is_srgb,
-                                  options.jpeg_quality, options.filter.c_str(), &out, &error))
-        return invalidInput(name + ": " + error);
+    if (!module.api->decode(encoded.data(), encoded.size(), &decoded, &error)) return invalidInput(name + ": " + error);
+    for (const ImageSize& s : sizes)
+        if (s.width == 0 || s.height == 0 || s.width > decoded.width || s.height > decoded.height)
+            return invalidInput(name + ": cannot make a " + std::to_string(s.width) + "x" + std::to_string(s.height) +
+                                " level of a " + std::to_string(decoded.width) + "x" + std::to_string(decoded.height) +
+                                " image");
+    const StepPlan plan = planSteps({decoded.width, decoded.height}, sizes);
+    // The pyramid: each step from the one before (the first from the decoded samples), parallel inside.
+    std::vector<image_detail::LinearImage> steps(plan.steps.size());
+    for (size_t k = 1; k < plan.steps.size(); ++k) {
+        Result<image_detail::LinearImage> step =
+            k == 1 ? image_detail::resampleDecoded(decoded, options.is_srgb, plan.steps[k].width, plan.steps[k].height)
+                   : image_detail::resampleLinear(steps[k - 1], plan.steps[k].width, plan.steps[k].height);
+        if (!step.ok()) return Status(step.status().code(), name + ": " + step.status().message());
+        steps[k] = std::move(step).value();
+        if (k >= 2 && !plan.is_kept[k - 1]) steps[k - 1] = {}; // no size needs it any more
+    }
+    // Every size from its step, filtered (when between steps), rounded and encoded side by side.
+    const oiio_module::Codec codec = encoded[0] == 0x89 ? oiio_module::Codec::Png : oiio_module::Codec::Jpeg;
+    std::vector<std::vector<uint8_t>> out(sizes.size());
+    std::vector<Status> statuses(sizes.size(), Status::okStatus());
+    LODBAKE_RETURN_IF_ERROR(parallelFor(sizes.size(), 1, [&](size_t i) {
+        const size_t k = plan.from_step[i];
+        const bool is_step = sizes[i].width == plan.steps[k].width && sizes[i].height == plan.steps[k].height;
+        Result<oiio_module::Pixels> pixels = oiio_module::Pixels{};
+        if (is_step && k == 0) {
+            pixels = decoded;
+        } else {
+            // A size between two steps is filtered from the larger one; a step is rounded as it is.
+            Result<image_detail::LinearImage> between = image_detail::LinearImage{};
+            if (!is_step)
+                between = k == 0 ? image_detail::resampleDecoded(decoded, options.is_srgb, sizes[i].width, sizes[i].height)
+                                 : image_detail::resampleLinear(steps[k], sizes[i].width, sizes[i].height);
+            if (!between.ok()) {
+                statuses[i] = between.status();
+                return;
+            }
+            const uint32_t bits = codec == oiio_module::Codec::Jpeg ? 8 : decoded.bits;
+            pixels = image_detail::quantise(is_step ? steps[k] : *between, options.is_srgb, bits);
+        }
+        std::string encode_error;
+        if (!pixels.ok())
+            statuses[i] = pixels.status();
+        else if (!module.api->encode(*pixels, codec, options.jpeg_quality, &out[i], &encode_error))
+            statuses[i] = invalidInput(encode_error);
+    }));
+    for (const Status& s : statuses)
+        if (!s.ok()) return Status(s.code(), name + ": " + s.message());
     return out;
 }
 

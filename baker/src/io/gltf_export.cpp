@@ -225,13 +225,16 @@ int addIndexView(BufferBuilder& buffer, const Mesh& mesh, const std::vector<SubM
     return buffer.addView(index_bytes.data(), index_bytes.size(), TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER);
 }
 
-// Textures with bytes a viewer can decode; others are dropped (and the slots using them). Returns the
-// model texture of each mesh texture (-1: dropped); with `dedupe`, equal bytes share one texture.
+// Textures with bytes a viewer can decode, and those kept verbatim on request; others are dropped (and
+// the slots using them). Returns the model texture of each mesh texture (-1: dropped); with `dedupe`,
+// equal bytes share one texture.
 std::vector<int> addTextures(tinygltf::Model& model, BufferBuilder& buffer, const Mesh& mesh, ModelDedupe* dedupe) {
     std::vector<int> texture_map(mesh.textures.size(), -1);
     for (size_t t = 0; t < mesh.textures.size(); ++t) {
         const Texture& texture = mesh.textures[t];
-        const std::string mime = sniffMime(texture.bytes);
+        std::string mime = sniffMime(texture.bytes);
+        if (mime.empty() && texture.is_verbatim && !texture.bytes.empty())
+            mime = texture.mime_type.empty() ? "application/octet-stream" : texture.mime_type;
         if (mime.empty()) continue;
         if (dedupe) {
             const auto found = dedupe->textures.find(texture.bytes);

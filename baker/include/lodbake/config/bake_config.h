@@ -16,9 +16,11 @@ constexpr int kBakePresetVersion = 1;
 
 struct TextureLodSettings {
     bool enabled = true;           // downscale each level's textures to its expected on-screen size
-    uint32_t max_size_px = 4096;   // no level texture is larger than this (the source size is also a cap)
+    uint32_t max_size_px = 4096;   // no texture of any level, LOD0 included, is larger (nor larger than its source)
     uint32_t min_size_px = 16;     // no level texture is made smaller than this
     double texels_per_pixel = 1.0; // texels per screen pixel of the object's projected size at the switch distance
+    bool keep_unreadable_images = false; // ship an image that is not a decodable PNG/JPEG byte for byte in every
+                                         // level (with a warning) instead of failing the bake
 };
 
 /// Quantization of the LODBAKE_valence_compression streams (ValenceStreamOptions, docs/bake.md).

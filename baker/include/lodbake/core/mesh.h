@@ -23,6 +23,8 @@ struct Texture {
     std::string uri;             // as written in the source (OBJ map_Kd, glTF image uri); may be empty
     std::string mime_type;       // "image/png", "image/jpeg", ... (empty if unknown)
     std::vector<uint8_t> bytes;  // encoded image file contents
+    bool is_verbatim = false;    // written as these bytes even when they are no PNG or JPEG (the bake's
+                                 // keep_unreadable_images); otherwise writers drop undecodable images
 };
 
 /// A material slot's texture reference.
