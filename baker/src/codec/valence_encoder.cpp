@@ -830,8 +830,8 @@ std::string describe(lodrt::Result r, const std::vector<uint8_t>& bytes) {
         break;
     case lodrt::Result::UnsupportedVersion:
         what = "format version " + std::to_string(bytes.size() >= 6 ? bytes[4] | (bytes[5] << 8) : 0) +
-               " is not supported (this decoder reads version " + std::to_string(kValenceVersion) +
-               "; re-encode the mesh)";
+               " is not supported (this decoder reads versions " + std::to_string(kValenceVersionWithoutAttributes) +
+               " and " + std::to_string(kValenceVersion) + "; re-encode the mesh)";
         break;
     case lodrt::Result::TrailingBytes:
         what = "bytes after the streams the header announces";
@@ -854,6 +854,20 @@ Status checkEncodable(const Mesh& mesh, const ValenceEncodeOptions& options, boo
                             " outside [8, 16]");
     if (normals && (options.normal_bits < kValenceMinNormalBits || options.normal_bits > kValenceMaxNormalBits))
         return invalidInput("valence encoder: normal bits " + std::to_string(options.normal_bits) + " outside [4, 16]");
+    if (options.encode_attributes) {
+        const size_t count = mesh.uvs.size() + (mesh.hasColors() ? 1 : 0) + (mesh.hasTangents() ? 1 : 0);
+        if (count > kValenceMaxAttributes)
+            return invalidInput("valence encoder: " + std::to_string(count) + " attributes exceed the format limit of " +
+                                std::to_string(kValenceMaxAttributes));
+        const std::pair<const char*, uint32_t> bits[] = {
+            {"UV", mesh.uvs.empty() ? kValenceMinAttributeBits : options.uv_bits},
+            {"colour", mesh.hasColors() ? options.color_bits : kValenceMinAttributeBits},
+            {"tangent", mesh.hasTangents() ? options.tangent_bits : kValenceMinAttributeBits}};
+        for (const auto& [name, b] : bits)
+            if (b < kValenceMinAttributeBits || b > kValenceMaxAttributeBits)
+                return invalidInput(std::string("valence encoder: ") + name + " bits " + std::to_string(b) +
+                                    " outside [4, 16]");
+    }
     const size_t vn = mesh.vertexCount(), fn = mesh.faceCount();
     // Cutting can copy each corner's vertex and cap each boundary edge: keep the closed counts in range.
     if (vn > kValenceMaxCount / 4 || fn > kValenceMaxCount / 4)
@@ -1021,6 +1035,16 @@ public:
     const I32Array& finalPositions() const { return qpos_final_; }
     // The prediction triples are only read by walks.
     void releasePlan() { triples_.reset(); }
+    // Quantized positions per engine vertex, complete after a walk of the whole plan.
+    const int32_t* closedPositions() const { return qpos_.data(); }
+    // Calls f(engine vertex, its triples, their count, its neighbour) for every plan entry in order.
+    template <class F> void forEachPlanned(F&& f) const {
+        const uint32_t* triple = plan_.triples;
+        for (uint32_t i = 0; i < plan_.ordered; ++i) {
+            f(plan_order_[i], triple, count_[i], neighbour_[i]);
+            triple += 3 * size_t(count_[i]);
+        }
+    }
 
     // Visits every coded coordinate in stream order with everything its coding needs. The contexts do
     // not depend on how a coordinate is coded (a snapped one counts with the length and sign of
@@ -1229,6 +1253,278 @@ void codeNormals(const Mesh& mesh, uint32_t nb, const FinalOrder& order, const l
     }
 }
 
+// ---- Attributes (format version 7): UV sets, colours, tangents (docs/format/valence.md "Attributes").
+
+using AttributeModel = ResidualModel<4, kValenceAttributeContexts>;
+
+// One attribute as the header's table records it, with its coded parts.
+struct CodedAttribute {
+    uint8_t kind = 0, components = 0, bits = 0, predictor = 0;
+    uint16_t set = 0;
+    float min[4] = {0, 0, 0, 0}, size[4] = {0, 0, 0, 0};
+    std::vector<uint8_t> range, raw;
+    double max_error = 0.0;
+};
+
+// Quantized UV or colour values, 4 per input vertex, in the attribute's own range: per component for
+// colours, one square range for a UV set (so that the geometric prediction's right angles stay right
+// angles in quantized units).
+Status quantizeAttribute(const Mesh& mesh, CodedAttribute& at, I32Array& q) {
+    const size_t vn = mesh.vertexCount();
+    const uint32_t c = at.components;
+    auto value = [&](size_t i, uint32_t j) -> float {
+        if (at.kind == kValenceAttributeUv) return j == 0 ? mesh.uvs[at.set][i].x : mesh.uvs[at.set][i].y;
+        const Vec4f& col = mesh.colors[i];
+        return j == 0 ? col.x : (j == 1 ? col.y : (j == 2 ? col.z : col.w));
+    };
+    float lo[4] = {0, 0, 0, 0}, hi[4] = {0, 0, 0, 0};
+    for (size_t i = 0; i < vn; ++i)
+        for (uint32_t j = 0; j < c; ++j) {
+            const float x = value(i, j);
+            if (!std::isfinite(x))
+                return invalidInput("valence encoder: vertex " + std::to_string(i) +
+                                    (at.kind == kValenceAttributeUv ? ": UV set " + std::to_string(at.set) : ": colour") +
+                                    " is not finite");
+            lo[j] = i == 0 || x < lo[j] ? x : lo[j];
+            hi[j] = i == 0 || x > hi[j] ? x : hi[j];
+        }
+    float size[4] = {0, 0, 0, 0};
+    for (uint32_t j = 0; j < c; ++j) size[j] = hi[j] - lo[j];
+    if (at.kind == kValenceAttributeUv) size[0] = size[1] = std::max(size[0], size[1]);
+    const uint32_t qmax = (1u << at.bits) - 1;
+    for (uint32_t j = 0; j < c; ++j) {
+        if (!std::isfinite(size[j])) return invalidInput("valence encoder: attribute range overflows a float");
+        at.min[j] = lo[j];
+        at.size[j] = size[j];
+    }
+    q.assign(4 * vn, 0);
+    for (size_t i = 0; i < vn; ++i)
+        for (uint32_t j = 0; j < c; ++j) {
+            const float x = value(i, j);
+            const double t = size[j] > 0.0f ? double(x - lo[j]) / double(size[j]) * qmax : 0.0;
+            const long v = std::clamp<long>(long(t + 0.5), 0, long(qmax));
+            q[4 * i + j] = int32_t(v);
+            const double decoded = double(lo[j] + float(v) * (qmax > 0 ? size[j] / float(qmax) : 0.0f));
+            at.max_error = std::max(at.max_error, std::fabs(decoded - double(x)));
+        }
+    return Status::okStatus();
+}
+
+// Codes one vertex's UV or colour residuals (wrapped to [-2^(bits-1), 2^(bits-1))); the decoder's
+// readAttributeValue.
+void codeAttributeValue(RangeEncoder& rc, BitWriter& raw, AttributeModel& model, const CodedAttribute& at,
+                        uint32_t n, const int32_t* value, const int32_t* pred, uint32_t& prev_length,
+                        uint32_t* prev_sign) {
+    const uint32_t mask = (1u << at.bits) - 1;
+    const int32_t half = int32_t(1) << (at.bits - 1);
+    uint32_t earlier = 0, first_sign = 0;
+    for (uint32_t j = 0; j < at.components; ++j) {
+        int32_t r = int32_t(uint32_t(value[j] - pred[j]) & mask);
+        if (r >= half) r -= int32_t(mask) + 1;
+        const uint32_t ctx = lodrt::detail::attributeContext(j, n, j == 0 ? prev_length : earlier);
+        const uint32_t k = rc.residual(model, raw, int(j), ctx, r, prev_sign[j] * 3 + first_sign);
+        prev_sign[j] = lodrt::detail::signClass(r);
+        if (j == 0) {
+            first_sign = prev_sign[0];
+            prev_length = k;
+        }
+        earlier = std::max(earlier, k);
+    }
+}
+
+// A UV or colour set over the position plan (the decoder's decodeAttribute), from its quantized input
+// values `q`; `final_values` receives them in final order (components per vertex).
+void codeAttribute(const PositionWalk& walk, const FinalOrder& order, const I32Array& q, size_t vn, uint32_t vc,
+                   CodedAttribute& at, I32Array& final_values) {
+    const uint32_t c = at.components;
+    const int32_t qmax = int32_t((1u << at.bits) - 1);
+    RangeEncoder rc;
+    BitWriter raw;
+    auto model = std::make_unique<AttributeModel>();
+    model->init();
+    I32Array qa(4 * size_t(vc), 0);
+    final_values.assign(size_t(c) * vn, 0);
+    U8Array done(vn, 0);
+    int32_t last[4] = {(qmax + 1) / 2, (qmax + 1) / 2, (qmax + 1) / 2, (qmax + 1) / 2};
+    uint32_t prev_length = 0, prev_sign[4] = {0, 0, 0, 0};
+    const int32_t* qpos = walk.closedPositions();
+    walk.forEachPlanned([&](uint32_t ev, const uint32_t* t, uint32_t n, uint32_t neighbour) {
+        const uint32_t fid = order.final_of[ev];
+        if (fid == kNone) return;
+        const int32_t* value = &q[4 * size_t(order.source_of_engine[ev])];
+        for (uint32_t j = 0; j < c; ++j) qa[4 * size_t(ev) + j] = value[j];
+        if (!done[fid]) {
+            int32_t pred[4];
+            lodrt::detail::predictAttribute(qa.data(), c, qpos, ev, t, n, neighbour, last, at.predictor, qmax, pred);
+            codeAttributeValue(rc, raw, *model, at, n, value, pred, prev_length, prev_sign);
+            for (uint32_t j = 0; j < c; ++j) final_values[size_t(c) * fid + j] = value[j];
+            done[fid] = 1;
+        }
+        for (uint32_t j = 0; j < c; ++j) last[j] = value[j];
+    });
+    for (size_t v = 0; v < vn; ++v) {
+        const uint32_t fid = order.new_of[v];
+        if (fid < order.referenced) continue;
+        for (uint32_t j = 0; j < c; ++j) final_values[size_t(c) * fid + j] = q[4 * v + j];
+    }
+    for (size_t fid = order.referenced; fid < vn; ++fid) {
+        const int32_t* value = &final_values[size_t(c) * fid];
+        codeAttributeValue(rc, raw, *model, at, 0, value, last, prev_length, prev_sign);
+        for (uint32_t j = 0; j < c; ++j) last[j] = value[j];
+    }
+    at.range = rc.finish();
+    at.raw = raw.finish();
+}
+
+// Tangents in final order (the decoder's decodeTangent); `uv` the final-order quantized values of the
+// UV attribute named by at.predictor (null for none).
+void codeTangents(const Mesh& mesh, const FinalOrder& order, const lodrt::detail::ConquestArrays& a, uint32_t tc,
+                  const I32Array& qpos_final, const int32_t* uv, CodedAttribute& at) {
+    const size_t vn = mesh.vertexCount();
+    const uint32_t nb = at.bits, mask = (1u << nb) - 1;
+    U32Array qt(2 * vn);
+    std::vector<uint8_t> negative(vn);
+    for (size_t i = 0; i < vn; ++i) {
+        const Vec4f& t = mesh.tangents[i];
+        const float n[3] = {t.x, t.y, t.z};
+        const size_t f = order.new_of[i];
+        lodrt::octahedralEncode(n, nb, &qt[2 * f]);
+        negative[f] = t.w < 0.0f ? 1 : 0;
+        float d[3];
+        lodrt::octahedralDecode(&qt[2 * f], nb, d);
+        const double len = std::sqrt(double(t.x) * t.x + double(t.y) * t.y + double(t.z) * t.z);
+        if (len > 0.0 && std::isfinite(len))
+            for (int j = 0; j < 3; ++j) at.max_error = std::max(at.max_error, std::fabs(double(d[j]) - n[j] / len));
+    }
+    CodecArray<int64_t> sum(4 * vn, 0);
+    if (uv)
+        for (uint32_t t = 0; t < tc; ++t) {
+            const uint32_t* cv = &a.corner_vertex[3 * size_t(t)];
+            if (!isOutputTriangle(a, cv)) continue;
+            const uint32_t f[3] = {order.final_of[cv[0]], order.final_of[cv[1]], order.final_of[cv[2]]};
+            lodrt::detail::addFaceTangent(qpos_final.data(), uv, f, sum.data());
+        }
+    RangeEncoder rc;
+    BitWriter raw;
+    ResidualModel<2, kValenceNormalContexts> model;
+    model.init();
+    uint32_t sign_models[kValenceTangentSignContexts];
+    initRangeProbs(sign_models, kValenceTangentSignContexts);
+    const int32_t half = int32_t(1) << (nb - 1);
+    uint32_t length[2] = {0, 0};
+    for (size_t x = 0; x < vn; ++x) {
+        uint32_t p[2];
+        lodrt::detail::predictNormal(&sum[4 * x], qt.data(), x, nb, p);
+        for (int j = 0; j < 2; ++j) {
+            int32_t r = int32_t((qt[2 * x + size_t(j)] - p[j]) & mask);
+            if (r >= half) r -= int32_t(mask) + 1;
+            length[j] = rc.residual(model, raw, j, std::min(length[j], kValenceNormalContexts - 1), r);
+        }
+        rc.bit(sign_models[lodrt::detail::tangentSignContext(sum[4 * x + 3])], negative[x]);
+    }
+    at.range = rc.finish();
+    at.raw = raw.finish();
+}
+
+// Every attribute the options and the mesh have, coded: UV sets (each with the smaller of its two
+// predictors), then the colours, then the tangents (predicted on UV set 0 when there is one).
+Result<std::vector<CodedAttribute>> codeAttributes(const Mesh& mesh, const ValenceEncodeOptions& options,
+                                                   const PositionWalk& walk, const FinalOrder& order,
+                                                   const lodrt::detail::ConquestArrays& a, uint32_t vc, uint32_t tc) {
+    std::vector<CodedAttribute> out;
+    const size_t vn = mesh.vertexCount();
+    I32Array q, uv0_final;
+    for (size_t s = 0; s < mesh.uvs.size(); ++s) {
+        CodedAttribute base;
+        base.kind = kValenceAttributeUv;
+        base.components = 2;
+        base.bits = uint8_t(options.uv_bits);
+        base.set = uint16_t(s);
+        LODBAKE_RETURN_IF_ERROR(quantizeAttribute(mesh, base, q));
+        CodedAttribute best;
+        I32Array best_final;
+        bool have = false;
+        for (uint8_t predictor : {kValencePredictUvGeometric, kValencePredictParallelogram}) {
+            CodedAttribute at = base;
+            at.predictor = predictor;
+            I32Array final_values;
+            codeAttribute(walk, order, q, vn, vc, at, final_values);
+            if (!have || at.range.size() + at.raw.size() < best.range.size() + best.raw.size()) {
+                best = std::move(at);
+                best_final = std::move(final_values);
+                have = true;
+            }
+        }
+        if (s == 0) uv0_final = std::move(best_final);
+        out.push_back(std::move(best));
+    }
+    if (mesh.hasColors()) {
+        CodedAttribute at;
+        at.kind = kValenceAttributeColor;
+        const bool opaque = std::all_of(mesh.colors.begin(), mesh.colors.end(), [](const Vec4f& c) { return c.w == 1.0f; });
+        at.components = opaque ? 3 : 4;
+        at.bits = uint8_t(options.color_bits);
+        LODBAKE_RETURN_IF_ERROR(quantizeAttribute(mesh, at, q));
+        I32Array final_values;
+        codeAttribute(walk, order, q, vn, vc, at, final_values);
+        out.push_back(std::move(at));
+    }
+    if (mesh.hasTangents()) {
+        CodedAttribute at;
+        at.kind = kValenceAttributeTangent;
+        at.components = 4;
+        at.bits = uint8_t(options.tangent_bits);
+        at.predictor = mesh.uvs.empty() ? kValenceNoReference : 0;
+        codeTangents(mesh, order, a, tc, walk.finalPositions(), mesh.uvs.empty() ? nullptr : uv0_final.data(), at);
+        out.push_back(std::move(at));
+    }
+    return out;
+}
+
+// The attribute table (format.h, kValenceFlagAttributes) for `attributes`.
+std::vector<uint8_t> attributeTable(const std::vector<CodedAttribute>& attributes) {
+    std::vector<uint8_t> t(4 + attributes.size() * kValenceAttributeRecordSize, 0);
+    put32(t, 0, uint32_t(attributes.size()));
+    for (size_t i = 0; i < attributes.size(); ++i) {
+        const CodedAttribute& at = attributes[i];
+        const size_t o = 4 + i * kValenceAttributeRecordSize;
+        t[o] = at.kind;
+        t[o + 1] = at.components;
+        t[o + 2] = at.bits;
+        t[o + 3] = at.predictor;
+        t[o + 4] = uint8_t(at.set);
+        t[o + 5] = uint8_t(at.set >> 8);
+        for (size_t j = 0; j < 4; ++j) {
+            putF32(t, o + 8 + 4 * j, at.min[j]);
+            putF32(t, o + 24 + 4 * j, at.size[j]);
+        }
+        put32(t, o + 40, uint32_t(at.range.size()));
+        put32(t, o + 44, uint32_t(at.raw.size()));
+    }
+    return t;
+}
+
+// The decoded attributes into the mesh's UV sets, colours (alpha 1 for RGB) and tangents.
+void copyAttributes(const lodrt::ValenceInfo& info, const std::vector<std::vector<float>>& decoded, Mesh& mesh) {
+    const size_t vn = info.vertex_count;
+    for (uint32_t i = 0; i < info.attribute_count; ++i) {
+        const lodrt::ValenceAttribute& at = info.attributes[i];
+        const std::vector<float>& d = decoded[i];
+        if (at.kind == kValenceAttributeUv) {
+            if (mesh.uvs.size() <= at.set) mesh.uvs.resize(size_t(at.set) + 1, std::vector<Vec2f>(vn, Vec2f{0, 0}));
+            for (size_t v = 0; v < vn; ++v) mesh.uvs[at.set][v] = Vec2f{d[2 * v], d[2 * v + 1]};
+        } else if (at.kind == kValenceAttributeColor) {
+            mesh.colors.resize(vn);
+            const size_t c = at.components;
+            for (size_t v = 0; v < vn; ++v)
+                mesh.colors[v] = Vec4f{d[c * v], d[c * v + 1], d[c * v + 2], c == 4 ? d[c * v + 3] : 1.0f};
+        } else {
+            mesh.tangents.resize(vn);
+            for (size_t v = 0; v < vn; ++v) mesh.tangents[v] = Vec4f{d[4 * v], d[4 * v + 1], d[4 * v + 2], d[4 * v + 3]};
+        }
+    }
+}
+
 } // namespace
 
 Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeOptions& options) {
@@ -1263,6 +1559,10 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
         flags_pos = choosePositionFlags(walk, vn, walked);
         codePositions(walked, flags_pos, pos, pos_raw);
     }
+    std::vector<CodedAttribute> attributes;
+    if (options.encode_attributes) {
+        LODBAKE_ASSIGN_OR_RETURN(attributes, codeAttributes(mesh, options, walk, order, a, vc, tc));
+    }
     walk.releasePlan();
     RangeEncoder nrm;
     BitWriter nrm_raw;
@@ -1277,9 +1577,12 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
     std::vector<uint8_t>& out = result.bytes;
     out.assign(kValenceHeaderSize, 0);
     put32(out, 0, kValenceMagic);
-    out[4] = uint8_t(kValenceVersion);
-    out[5] = uint8_t(kValenceVersion >> 8);
-    const uint16_t flags = uint16_t((normals ? kValenceFlagNormals : 0) | flags_pos);
+    // Without attributes the stream is a version 6 one, byte for byte (format.h).
+    const uint16_t version = attributes.empty() ? kValenceVersionWithoutAttributes : kValenceVersion;
+    out[4] = uint8_t(version);
+    out[5] = uint8_t(version >> 8);
+    const uint16_t flags =
+        uint16_t((normals ? kValenceFlagNormals : 0) | flags_pos | (attributes.empty() ? 0 : kValenceFlagAttributes));
     out[6] = uint8_t(flags);
     out[7] = uint8_t(flags >> 8);
     put32(out, 8, uint32_t(vn));
@@ -1295,9 +1598,24 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
     put32(out, 52, uint32_t(nrm_bytes.size()));
     put32(out, 56, uint32_t(pos_raw_bytes.size()));
     put32(out, 60, uint32_t(nrm_raw_bytes.size()));
+    if (!attributes.empty()) {
+        const std::vector<uint8_t> table = attributeTable(attributes);
+        out.insert(out.end(), table.begin(), table.end());
+    }
+    result.header_bytes = out.size();
     for (const std::vector<uint8_t>* part : {&conn_bytes, &pos_bytes, &pos_raw_bytes, &nrm_bytes, &nrm_raw_bytes})
         out.insert(out.end(), part->begin(), part->end());
-    result.header_bytes = kValenceHeaderSize;
+    for (const CodedAttribute& at : attributes) {
+        out.insert(out.end(), at.range.begin(), at.range.end());
+        out.insert(out.end(), at.raw.begin(), at.raw.end());
+        ValenceAttributeReport report;
+        report.kind = at.kind;
+        report.set = at.set;
+        report.bits = at.bits;
+        report.bytes = at.range.size() + at.raw.size();
+        report.max_error = at.max_error;
+        result.attributes.push_back(report);
+    }
     result.connectivity_bytes = conn_bytes.size();
     result.position_bytes = pos_bytes.size() + pos_raw_bytes.size();
     result.normal_bytes = nrm_bytes.size() + nrm_raw_bytes.size();
@@ -1328,6 +1646,12 @@ Result<Mesh> decodeValence(const std::vector<uint8_t>& bytes, const std::string&
     output.normal_capacity = normals.size();
     output.scratch = scratch.get();
     output.scratch_size = scratch_words * 8;
+    std::vector<std::vector<float>> attributes(info.attribute_count);
+    for (uint32_t i = 0; i < info.attribute_count; ++i) {
+        attributes[i].resize(size_t(info.attributes[i].components) * info.vertex_count);
+        output.attributes[i] = attributes[i].data();
+        output.attribute_capacity[i] = attributes[i].size();
+    }
     r = lodrt::valenceDecode(bytes.data(), bytes.size(), output);
     scratch.reset(); // before the copies below: they need no scratch
     if (r != lodrt::Result::Ok) return invalidInput(name + ": streams: " + describe(r, bytes));
@@ -1340,6 +1664,7 @@ Result<Mesh> decodeValence(const std::vector<uint8_t>& bytes, const std::string&
         for (size_t i = 0; i < info.vertex_count; ++i)
             mesh.normals[i] = Vec3f{normals[3 * i], normals[3 * i + 1], normals[3 * i + 2]};
     }
+    copyAttributes(info, attributes, mesh);
     return mesh;
 }
 
