@@ -348,15 +348,22 @@ bool readAttributeRecord(const uint8_t* p, uint32_t index, const ValenceInfo& v,
 
 // The attribute table after the header (version 7); adds its own and its attributes' bytes to *total.
 Result readAttributeTable(const uint8_t* data, size_t size, ValenceInfo* v, uint64_t* total) {
-    if (size < uint64_t(kValenceHeaderSize) + 4) return Result::Truncated;
-    const uint32_t count = read32(data + kValenceHeaderSize);
+    if (size < uint64_t(kValenceHeaderSize) + kValenceAttributeTablePrefix) return Result::Truncated;
+    const uint8_t* prefix = data + kValenceHeaderSize;
+    const uint32_t count = read32(prefix);
     if (count == 0 || count > kValenceMaxAttributes) return Result::CorruptStream;
-    const uint64_t table = 4 + uint64_t(count) * kValenceAttributeRecordSize;
+    v->twin_bytes = read32(prefix + 4);
+    v->twin_shift = prefix[8];
+    if (v->twin_shift > kValenceMaxTwinShift || prefix[9] != 0 || prefix[10] != 0 || prefix[11] != 0 ||
+        (v->twin_bytes == 0 && v->twin_shift != 0))
+        return Result::CorruptStream;
+    const uint64_t table = kValenceAttributeTablePrefix + uint64_t(count) * kValenceAttributeRecordSize;
     if (size < kValenceHeaderSize + table) return Result::Truncated;
-    *total += table;
+    *total += table + v->twin_bytes;
     for (uint32_t i = 0; i < count; ++i) {
         ValenceAttribute& a = v->attributes[i];
-        if (!readAttributeRecord(data + kValenceHeaderSize + 4 + size_t(i) * kValenceAttributeRecordSize, i, *v, &a))
+        if (!readAttributeRecord(prefix + kValenceAttributeTablePrefix + size_t(i) * kValenceAttributeRecordSize, i,
+                                 *v, &a))
             return Result::CorruptStream;
         *total += uint64_t(a.bytes) + a.raw_bytes;
     }
@@ -436,8 +443,16 @@ struct ScratchLayout {
     size_t corner_vertex, corner_opposite, vertex_flags, vertex_corner, vertex_valence, node_vertex, node_prev,
         node_next, node_free, node_corner, completion, stack_head, stack_size, final_of, final_done, qpos, qpos_final,
         decoded, plan_neighbour, plan_triples, normal_sum, qnorm, attr_closed, attr_final[kValenceMaxAttributes],
-        tangent_sum, total;
+        tangent_sum, plan_boundary, twin_head, twin_next, twin_of, total;
+    size_t twin_slots;
 };
+
+// Hash slots of the twin grid: a power of two at least twice the closed vertices (and 16).
+size_t twinSlots(size_t closed_vertices) {
+    size_t n = 16;
+    while (n < 2 * closed_vertices) n *= 2;
+    return n;
+}
 
 ScratchLayout layout(const ValenceInfo& info) {
     ScratchLayout l;
@@ -483,6 +498,12 @@ ScratchLayout layout(const ValenceInfo& info) {
         l.attr_final[i] = take(used ? (a.kind == kValenceAttributeTangent ? 2 : a.components) * vn * 4 : 0);
     }
     l.tangent_sum = take(tangents ? 4 * vn * 8 : 0);
+    const bool twins = info.twin_bytes > 0;
+    l.twin_slots = twins ? twinSlots(vc) : 0;
+    l.plan_boundary = take(twins ? vc : 0);
+    l.twin_head = take(l.twin_slots * 4);
+    l.twin_next = take(twins ? vc * 4 : 0);
+    l.twin_of = take(twins ? vn * 4 : 0);
     l.total = at;
     return l;
 }
@@ -698,6 +719,46 @@ struct PositionReader {
 // prediction triples) comes from the connectivity alone, then one sequential pass of residuals. The
 // node arrays are free again: they hold the order's degree counts and stacks. Fills qpos_final and
 // the output positions.
+// Position twins (docs/format/valence.md "Twins"): the boundary vertices coded so far in a grid, and
+// the twin decisions' own range-coded part. Inactive (no grid) in a stream without twins.
+struct TwinReader {
+    RangeDecoder rd;
+    detail::TwinGrid grid;
+    uint32_t models[detail::kTwinContexts];
+    uint32_t* twin_of = nullptr; // per final vertex: its twin partner, kNone
+    const uint8_t* boundary = nullptr;
+    bool active = false;
+
+    bool init(const uint8_t* part, const ValenceInfo& info, const ScratchLayout& l, Scratch s) {
+        active = info.twin_bytes > 0;
+        if (!active) return true;
+        if (!rd.init(part, info.twin_bytes)) return false;
+        detail::initRangeProbs(models, detail::kTwinContexts);
+        grid.head = s.u32(l.twin_head);
+        grid.next = s.u32(l.twin_next);
+        grid.mask = uint32_t(l.twin_slots - 1);
+        grid.shift = info.twin_shift;
+        grid.qmax = int32_t((1u << info.position_bits) - 1);
+        for (size_t i = 0; i < l.twin_slots; ++i) grid.head[i] = kNone;
+        twin_of = s.u32(l.twin_of);
+        for (size_t i = 0; i < info.vertex_count; ++i) twin_of[i] = kNone;
+        boundary = s.base + l.plan_boundary;
+        return true;
+    }
+    // The twin of plan entry i predicted at `pred`, kNone when it has none or the stream says no.
+    uint32_t twin(uint32_t i, const int32_t* qpos, const int32_t pred[3]) {
+        if (!active || !boundary[i]) return kNone;
+        uint32_t ctx = 0;
+        const uint32_t candidate = detail::twinCandidate(grid, qpos, pred, &ctx);
+        if (candidate == kNone || !rd.bit(models[ctx])) return kNone;
+        return candidate;
+    }
+    void pair(uint32_t a, uint32_t b) {
+        if (twin_of[a] == kNone) twin_of[a] = b;
+        if (twin_of[b] == kNone) twin_of[b] = a;
+    }
+};
+
 Result decodePositions(const uint8_t* data, const uint8_t* stream, const ValenceInfo& info, const ScratchLayout& l,
                        Scratch s, const detail::ConquestArrays& a, uint32_t final_count, const ValenceOutput& output,
                        detail::PositionPlan& plan) {
@@ -724,6 +785,10 @@ Result decodePositions(const uint8_t* data, const uint8_t* stream, const Valence
     plan.neighbour = s.u32(l.plan_neighbour);
     plan.triples = s.u32(l.plan_triples);
     plan.max_triples = 3 * info.closed_triangle_count;
+    TwinReader twins;
+    if (!twins.init(stream + info.position_bytes + size_t(info.position_raw_bytes), info, l, s))
+        return Result::CorruptStream;
+    plan.boundary = twins.active ? s.base + l.plan_boundary : nullptr;
     if (!detail::planPositions(a.corner_vertex, a.corner_opposite, a.vertex_corner, a.vertex_flags, a.vertex_valence,
                                info.closed_vertex_count, s.base + l.decoded, a.node_vertex, a.node_prev, a.node_next,
                                &plan))
@@ -745,19 +810,27 @@ Result decodePositions(const uint8_t* data, const uint8_t* stream, const Valence
                 predictVertex<true>(qpos, triple, n, plan.neighbour[i], last, pred, &scale, spread);
             else
                 predictVertex<false>(qpos, triple, n, plan.neighbour[i], last, pred, &scale, spread);
-            if (!reader.vertex(detail::scaleContext(scale, n), spread, pred, q, triple, n, plan.neighbour[i]))
+            const uint32_t twin = twins.twin(i, qpos, pred);
+            if (twin != kNone) {
+                for (int j = 0; j < 3; ++j) q[j] = qpos[3 * size_t(twin) + size_t(j)];
+                twins.pair(fid, final_of[twin]);
+            } else if (!reader.vertex(detail::scaleContext(scale, n), spread, pred, q, triple, n, plan.neighbour[i])) {
                 return Result::CorruptStream;
+            }
             qf[0] = q[0];
             qf[1] = q[1];
             qf[2] = q[2];
             final_done[fid] = 1;
         }
+        if (twins.active && twins.boundary[i]) detail::twinInsert(twins.grid, qpos, v);
         triple += 3 * size_t(n);
         last[0] = q[0];
         last[1] = q[1];
         last[2] = q[2];
-        if (reader.pos.overrun() || reader.pos_raw.overrun()) return Result::CorruptStream;
+        if (reader.pos.overrun() || reader.pos_raw.overrun() || (twins.active && twins.rd.overrun()))
+            return Result::CorruptStream;
     }
+    if (twins.active && !twins.rd.finishedExactly()) return Result::CorruptStream;
     for (size_t fid = final_count; fid < vn; ++fid) {
         int32_t* qf = &qpos_final[3 * fid];
         const uint32_t no_spread[3] = {0, 0, 0};
@@ -785,6 +858,7 @@ Result decodeNormals(const uint8_t* stream, const ValenceInfo& info, const Scrat
     const int32_t* qpos_final = reinterpret_cast<const int32_t*>(s.base + l.qpos_final);
     int64_t* sum = reinterpret_cast<int64_t*>(s.base + l.normal_sum);
     uint32_t* qnorm = s.u32(l.qnorm);
+    const uint32_t* twin_of = info.twin_bytes > 0 ? s.u32(l.twin_of) : nullptr;
     for (size_t i = 0; i < 3 * vn; ++i) sum[i] = 0;
     for (size_t t = 0; t < tn; ++t) detail::addFaceNormal(qpos_final, &output.indices[3 * t], sum);
     ResidualModel<2, kValenceNormalContexts> nrm_model;
@@ -795,7 +869,7 @@ Result decodeNormals(const uint8_t* stream, const ValenceInfo& info, const Scrat
     uint32_t nrm_length[2] = {0, 0};
     for (size_t x = 0; x < vn; ++x) {
         uint32_t p[2];
-        detail::predictNormal(&sum[3 * x], qnorm, x, nb, p);
+        detail::predictNormalTwin(&sum[3 * x], qnorm, x, twin_of ? twin_of[x] : kNone, nb, p);
         for (int j = 0; j < 2; ++j) {
             int32_t res;
             uint32_t length;
@@ -987,7 +1061,8 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
 
     // 1. Connectivity: the conquest, then the duplicate list.
     const uint8_t* stream = data + kValenceHeaderSize;
-    if (info.attribute_count > 0) stream += 4 + size_t(info.attribute_count) * kValenceAttributeRecordSize;
+    if (info.attribute_count > 0)
+        stream += kValenceAttributeTablePrefix + size_t(info.attribute_count) * kValenceAttributeRecordSize;
     detail::Conquest<ConnectivityReader> conquest;
     ConnectivityReader reader;
     r = runConquest(stream, info, l, s, conquest, reader);
@@ -1001,7 +1076,7 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
     detail::PositionPlan plan;
     r = decodePositions(data, stream, info, l, s, conquest.a, final_count, output, plan);
     if (r != Result::Ok) return r;
-    stream += info.position_bytes + size_t(info.position_raw_bytes);
+    stream += info.position_bytes + size_t(info.position_raw_bytes) + info.twin_bytes;
     if (info.has_normals) {
         r = decodeNormals(stream, info, l, s, output);
         if (r != Result::Ok) return r;

@@ -1010,8 +1010,9 @@ public:
     PositionWalk(const lodrt::detail::ConquestArrays& a, const FinalOrder& order, const Quantization& quantized,
                  size_t vn, uint32_t vc, uint32_t tc)
         : order_(order), quantized_(quantized), qpos_(3 * size_t(vc), 0), qpos_final_(3 * vn), plan_order_(vc),
-          count_(vc), neighbour_(vc), triples_(9 * size_t(tc)) {
+          count_(vc), neighbour_(vc), triples_(9 * size_t(tc)), boundary_(vc, 0) {
         plan_.order = plan_order_.data();
+        plan_.boundary = boundary_.data();
         plan_.count = count_.data();
         plan_.neighbour = neighbour_.data();
         plan_.triples = triples_.get();
@@ -1023,6 +1024,7 @@ public:
                                                     a.vertex_flags, a.vertex_valence, vc, ordered.data(),
                                                     stack0.data(), stack1.data(), stack2.data(), &plan_);
         }
+        twin_.assign(plan_.ordered, kNone);
         isolated_.resize(vn - order.referenced);
         final_done_.assign(vn, 0);
         for (size_t v = 0; v < vn; ++v)
@@ -1068,11 +1070,13 @@ public:
             int32_t* q = &qpos_[3 * size_t(ev)];
             for (int j = 0; j < 3; ++j) q[j] = quantized_.qpos[3 * size_t(src) + size_t(j)];
             if (!final_done_[fid]) {
-                int32_t pred[3];
-                uint32_t scale = 0, spread[3];
-                lodrt::detail::predictFromPlan(qpos_.data(), t, n, neighbour_[i], last, pred, &scale, spread);
-                vertex(mask, prev_sign, q, pred, lodrt::detail::scaleContext(scale, n), spread, t, n, neighbour_[i],
-                       code);
+                if (twin_[i] == kNone) { // a twin takes its partner's position: nothing coded here
+                    int32_t pred[3];
+                    uint32_t scale = 0, spread[3];
+                    lodrt::detail::predictFromPlan(qpos_.data(), t, n, neighbour_[i], last, pred, &scale, spread);
+                    vertex(mask, prev_sign, q, pred, lodrt::detail::scaleContext(scale, n), spread, t, n,
+                           neighbour_[i], code);
+                }
                 for (int j = 0; j < 3; ++j) qpos_final_[3 * size_t(fid) + size_t(j)] = q[j];
                 final_done_[fid] = 1;
             }
@@ -1091,7 +1095,94 @@ public:
         }
     }
 
+    // Position twins (docs/format/valence.md "Twins"): with cells of 2^shift units, every boundary
+    // vertex's candidate and whether it is the vertex's twin, in stream order (the decisions the twin
+    // part codes); the hits are skipped by later walks and paired in twin_of (final vertices).
+    struct TwinDecision {
+        uint32_t ctx;
+        bool hit;
+    };
+    std::vector<TwinDecision> decideTwins(uint32_t shift, std::vector<uint32_t>& twin_of) {
+        std::fill(final_done_.begin(), final_done_.end(), uint8_t(0));
+        std::fill(twin_.begin(), twin_.end(), kNone);
+        const uint32_t vc = uint32_t(qpos_.size() / 3);
+        size_t slots = 16;
+        while (slots < 2 * size_t(vc)) slots *= 2;
+        U32Array head(slots, kNone), next(vc, kNone);
+        lodrt::detail::TwinGrid grid;
+        grid.head = head.data();
+        grid.next = next.data();
+        grid.mask = uint32_t(slots - 1);
+        grid.shift = shift;
+        grid.qmax = int32_t(quantized_.qmax);
+        std::vector<TwinDecision> out;
+        forEachEntry([&](uint32_t i, uint32_t ev, uint32_t fid, const int32_t* pred) {
+            if (pred && boundary_[i]) {
+                uint32_t ctx = 0;
+                const uint32_t c = lodrt::detail::twinCandidate(grid, qpos_.data(), pred, &ctx);
+                if (c != kNone) {
+                    const bool hit = std::equal(&qpos_[3 * size_t(c)], &qpos_[3 * size_t(c)] + 3, &qpos_[3 * size_t(ev)]);
+                    out.push_back({ctx, hit});
+                    if (hit) {
+                        twin_[i] = c;
+                        const uint32_t other = order_.final_of[c];
+                        if (twin_of[fid] == kNone) twin_of[fid] = other;
+                        if (twin_of[other] == kNone) twin_of[other] = fid;
+                    }
+                }
+            }
+            if (boundary_[i]) lodrt::detail::twinInsert(grid, qpos_.data(), ev);
+        });
+        return out;
+    }
+    // Bit length of the median prediction error (largest coordinate) of the boundary vertices: the
+    // twin grid's cell shift, so that a typical twin lies within the cells searched.
+    uint32_t twinShift() {
+        std::fill(final_done_.begin(), final_done_.end(), uint8_t(0));
+        std::vector<uint32_t> errors;
+        forEachEntry([&](uint32_t i, uint32_t ev, uint32_t, const int32_t* pred) {
+            if (!pred || !boundary_[i]) return;
+            uint32_t m = 0;
+            for (int j = 0; j < 3; ++j) m = std::max(m, uint32_t(std::abs(qpos_[3 * size_t(ev) + size_t(j)] - pred[j])));
+            errors.push_back(m);
+        });
+        if (errors.empty()) return 0;
+        std::nth_element(errors.begin(), errors.begin() + std::ptrdiff_t(errors.size() / 2), errors.end());
+        return std::min(lodrt::detail::bitLength(errors[errors.size() / 2]), kValenceMaxTwinShift);
+    }
+    bool anyTwin() const {
+        return std::any_of(twin_.begin(), twin_.end(), [](uint32_t t) { return t != kNone; });
+    }
+    void clearTwins() { std::fill(twin_.begin(), twin_.end(), kNone); }
+
 private:
+    // Plan entries in order with their engine vertex, final vertex and prediction (null for a copy of
+    // a vertex already coded); qpos_ holds every position up to the entry's own, final_done_ is kept.
+    template <class F> void forEachEntry(F&& f) {
+        const uint32_t qmax = quantized_.qmax;
+        int32_t last[3] = {int32_t(qmax + 1) / 2, int32_t(qmax + 1) / 2, int32_t(qmax + 1) / 2};
+        const uint32_t* triple = plan_.triples;
+        for (uint32_t i = 0; i < plan_.ordered; ++i) {
+            const uint32_t ev = plan_order_[i], n = count_[i];
+            const uint32_t* t = triple;
+            triple += 3 * size_t(n);
+            const uint32_t fid = order_.final_of[ev];
+            if (fid == kNone) continue;
+            int32_t* q = &qpos_[3 * size_t(ev)];
+            for (int j = 0; j < 3; ++j) q[j] = quantized_.qpos[3 * size_t(order_.source_of_engine[ev]) + size_t(j)];
+            if (!final_done_[fid]) {
+                int32_t pred[3];
+                uint32_t scale = 0, spread[3];
+                lodrt::detail::predictFromPlan(qpos_.data(), t, n, neighbour_[i], last, pred, &scale, spread);
+                f(i, ev, fid, pred);
+                final_done_[fid] = 1;
+            } else {
+                f(i, ev, fid, static_cast<const int32_t*>(nullptr));
+            }
+            for (int j = 0; j < 3; ++j) last[j] = q[j];
+        }
+    }
+
     // One vertex: `q` its coordinates, `t`/`n`/`nb` its plan entry (n = 0, nb = kNone: none).
     template <class Code>
     void vertex(uint32_t mask, uint32_t* prev_sign, const int32_t* q, const int32_t* pred, uint32_t ctx,
@@ -1132,6 +1223,8 @@ private:
     bool planned_ = false;
     std::vector<uint32_t> isolated_;
     U8Array final_done_;
+    U8Array boundary_;           // per plan entry: a dummy neighbour (plan_.boundary)
+    std::vector<uint32_t> twin_; // per plan entry: the twin whose position it takes, kNone
 };
 
 // Which components to snap and which to code with spread contexts: every component sized all four
@@ -1215,10 +1308,33 @@ void codePositions(const CodecArray<CodedValue>& walked, uint16_t flags_pos, Ran
     }
 }
 
+// Position twins: decided once on the grid whose cells fit the boundary vertices' median prediction
+// error, and coded only when at least an eighth of the decisions are hits (each decision costs a
+// bit at worst, a hit saves a whole position). Leaves twin_of empty and shift 0 without twins.
+void codeTwins(PositionWalk& walk, size_t vn, std::vector<uint32_t>& twin_of, uint32_t& shift,
+               std::vector<uint8_t>& bytes) {
+    shift = walk.twinShift();
+    twin_of.assign(vn, kNone);
+    const auto decisions = walk.decideTwins(shift, twin_of);
+    const size_t hits = size_t(std::count_if(decisions.begin(), decisions.end(), [](const auto& d) { return d.hit; }));
+    if (hits == 0 || hits * 8 < decisions.size()) {
+        walk.clearTwins();
+        twin_of.clear();
+        shift = 0;
+        return;
+    }
+    RangeEncoder rc;
+    uint32_t models[lodrt::detail::kTwinContexts];
+    initRangeProbs(models, lodrt::detail::kTwinContexts);
+    for (const auto& d : decisions) rc.bit(models[d.ctx], d.hit ? 1u : 0u);
+    bytes = rc.finish();
+}
+
 // Normals after all positions, in final order, each predicted from the exact sum of its faces' normals
 // on the quantized positions (the decoder's step 3).
 void codeNormals(const Mesh& mesh, uint32_t nb, const FinalOrder& order, const lodrt::detail::ConquestArrays& a,
-                 uint32_t tc, const I32Array& qpos_final, RangeEncoder& nrm, BitWriter& nrm_raw) {
+                 uint32_t tc, const I32Array& qpos_final, const uint32_t* twin_of, RangeEncoder& nrm,
+                 BitWriter& nrm_raw) {
     const size_t vn = mesh.vertexCount();
     U32Array qnorm(2 * vn);
     for (size_t i = 0; i < vn; ++i) {
@@ -1243,7 +1359,7 @@ void codeNormals(const Mesh& mesh, uint32_t nb, const FinalOrder& order, const l
     uint32_t nrm_length[2] = {0, 0};
     for (size_t x = 0; x < vn; ++x) {
         uint32_t p[2];
-        lodrt::detail::predictNormal(&sum[3 * x], qnorm.data(), x, nb, p);
+        lodrt::detail::predictNormalTwin(&sum[3 * x], qnorm.data(), x, twin_of ? twin_of[x] : kNone, nb, p);
         for (int j = 0; j < 2; ++j) {
             int32_t r = int32_t((qnorm[2 * x + size_t(j)] - p[j]) & mask);
             if (r >= half) r -= int32_t(mask) + 1;
@@ -1482,12 +1598,15 @@ Result<std::vector<CodedAttribute>> codeAttributes(const Mesh& mesh, const Valen
 }
 
 // The attribute table (format.h, kValenceFlagAttributes) for `attributes`.
-std::vector<uint8_t> attributeTable(const std::vector<CodedAttribute>& attributes) {
-    std::vector<uint8_t> t(4 + attributes.size() * kValenceAttributeRecordSize, 0);
+std::vector<uint8_t> attributeTable(const std::vector<CodedAttribute>& attributes, size_t twin_bytes,
+                                    uint32_t twin_shift) {
+    std::vector<uint8_t> t(kValenceAttributeTablePrefix + attributes.size() * kValenceAttributeRecordSize, 0);
     put32(t, 0, uint32_t(attributes.size()));
+    put32(t, 4, uint32_t(twin_bytes));
+    t[8] = uint8_t(twin_shift);
     for (size_t i = 0; i < attributes.size(); ++i) {
         const CodedAttribute& at = attributes[i];
-        const size_t o = 4 + i * kValenceAttributeRecordSize;
+        const size_t o = kValenceAttributeTablePrefix + i * kValenceAttributeRecordSize;
         t[o] = at.kind;
         t[o + 1] = at.components;
         t[o + 2] = at.bits;
@@ -1551,6 +1670,13 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
 
     PositionWalk walk(a, order, quantized, vn, vc, tc);
     if (!walk.planned()) return internalError("valence encoder: broken corner cycle");
+    // Twins only in a stream with attributes (version 7): without them the bytes stay version 6's.
+    const bool has_attributes =
+        options.encode_attributes && (!mesh.uvs.empty() || mesh.hasColors() || mesh.hasTangents());
+    std::vector<uint32_t> twin_of;
+    uint32_t twin_shift = 0;
+    std::vector<uint8_t> twin_bytes;
+    if (has_attributes) codeTwins(walk, vn, twin_of, twin_shift, twin_bytes);
     uint16_t flags_pos = 0;
     RangeEncoder pos;
     BitWriter pos_raw;
@@ -1566,7 +1692,9 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
     walk.releasePlan();
     RangeEncoder nrm;
     BitWriter nrm_raw;
-    if (normals) codeNormals(mesh, options.normal_bits, order, a, tc, walk.finalPositions(), nrm, nrm_raw);
+    if (normals)
+        codeNormals(mesh, options.normal_bits, order, a, tc, walk.finalPositions(), twin_of.empty() ? nullptr : twin_of.data(),
+                    nrm, nrm_raw);
 
     std::vector<uint8_t> conn_bytes = attempt->conn.finish(), pos_bytes = pos.finish(),
                          pos_raw_bytes = pos_raw.finish(), nrm_bytes, nrm_raw_bytes;
@@ -1599,11 +1727,12 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
     put32(out, 56, uint32_t(pos_raw_bytes.size()));
     put32(out, 60, uint32_t(nrm_raw_bytes.size()));
     if (!attributes.empty()) {
-        const std::vector<uint8_t> table = attributeTable(attributes);
+        const std::vector<uint8_t> table = attributeTable(attributes, twin_bytes.size(), twin_shift);
         out.insert(out.end(), table.begin(), table.end());
     }
     result.header_bytes = out.size();
-    for (const std::vector<uint8_t>* part : {&conn_bytes, &pos_bytes, &pos_raw_bytes, &nrm_bytes, &nrm_raw_bytes})
+    for (const std::vector<uint8_t>* part :
+         {&conn_bytes, &pos_bytes, &pos_raw_bytes, &twin_bytes, &nrm_bytes, &nrm_raw_bytes})
         out.insert(out.end(), part->begin(), part->end());
     for (const CodedAttribute& at : attributes) {
         out.insert(out.end(), at.range.begin(), at.range.end());
@@ -1617,7 +1746,7 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
         result.attributes.push_back(report);
     }
     result.connectivity_bytes = conn_bytes.size();
-    result.position_bytes = pos_bytes.size() + pos_raw_bytes.size();
+    result.position_bytes = pos_bytes.size() + pos_raw_bytes.size() + twin_bytes.size();
     result.normal_bytes = nrm_bytes.size() + nrm_raw_bytes.size();
     result.cut_vertex_copies = order.dups.size();
     result.dummy_vertices = vc - order.rank;

@@ -80,7 +80,8 @@ constexpr uint16_t kValenceFlagSnapX = 2u; // component j: kValenceFlagSnapX << 
 // on the component (docs/format/valence.md "Positions"). Set where it makes the component smaller.
 constexpr uint16_t kValenceFlagSpreadX = 16u; // component j: kValenceFlagSpreadX << j
 // Flag bit 7 (version 7 only, and required there): an attribute table follows the header: u32 count
-// A (1..kValenceMaxAttributes), then A records of kValenceAttributeRecordSize bytes:
+// A (1..kValenceMaxAttributes), u32 twin part bytes (0: no twins), u8 twin cell shift (0..16), three
+// zero bytes (kValenceAttributeTablePrefix in all), then A records of kValenceAttributeRecordSize bytes:
 //   0 u8 kind (kValenceAttribute*), 1 u8 components, 2 u8 bits, 3 u8 predictor (UV) or the index of
 //   the UV attribute a tangent is predicted from (kValenceNoReference: none), 4 u16 set (TEXCOORD_n /
 //   COLOR_n), 6 u16 zero, 8 f32[4] min, 24 f32[4] size (unused components 0), 40 u32 range-coded
@@ -89,6 +90,10 @@ constexpr uint16_t kValenceFlagAttributes = 128u;
 constexpr uint16_t kValenceKnownFlags = 255u;
 constexpr uint32_t kValenceMaxAttributes = 16;
 constexpr uint32_t kValenceAttributeRecordSize = 48;
+constexpr uint32_t kValenceAttributeTablePrefix = 12;
+// Position twins (docs/format/valence.md "Twins"): a range-coded part between the position raw bits
+// and the normals, one decision per boundary vertex that has a candidate.
+constexpr uint32_t kValenceMaxTwinShift = 16;
 constexpr uint8_t kValenceAttributeUv = 1;      // 2 components, quantized in their own range
 constexpr uint8_t kValenceAttributeColor = 2;   // 3 (RGB) or 4 (RGBA) components
 constexpr uint8_t kValenceAttributeTangent = 3; // octahedral xyz (2 components) + handedness sign

@@ -43,6 +43,8 @@ struct ValenceInfo {
     uint32_t normal_raw_bytes = 0;
     uint32_t version = 0;
     uint32_t attribute_count = 0; // entries of `attributes` in use (0 for a version 6 stream)
+    uint32_t twin_bytes = 0;      // position twin part (0: the stream codes no twins)
+    uint32_t twin_shift = 0;      // twin grid cell: 2^twin_shift quantized units
     ValenceAttribute attributes[format::kValenceMaxAttributes];
 };
 

@@ -642,6 +642,23 @@ TEST(ValenceCodecTest, AttributesOnlyChangeStreamsThatHaveThem) {
     EXPECT_NE(streamFlags(with) & lodrt::format::kValenceFlagAttributes, 0u);
 }
 
+// The seam copies of the textured torus take their positions from their twins: fewer position bytes
+// than the same mesh coded without twins (its attributes switched off codes no twins), and the same
+// decoded positions (expectRoundTrip checks them against the input).
+TEST(ValenceCodecTest, SeamTwinsCostLessThanCodedPositions) {
+    const Mesh in = texturedTorus(48, 24);
+    ValenceEncodeResult with;
+    expectRoundTrip(in, {}, &with);
+    lodrt::ValenceInfo info;
+    ASSERT_EQ(lodrt::valenceReadInfo(with.bytes.data(), with.bytes.size(), &info), lodrt::Result::Ok);
+    EXPECT_GT(info.twin_bytes, 0u);
+    ValenceEncodeOptions off;
+    off.encode_attributes = false;
+    auto without = encodeValence(in, off);
+    ASSERT_TRUE(without.ok());
+    EXPECT_LT(with.position_bytes + with.normal_bytes, without->position_bytes + without->normal_bytes);
+}
+
 TEST(ValenceCodecTest, RejectsBadAttributeOptions) {
     const Mesh in = texturedTorus(6, 4);
     for (uint32_t bad : {3u, 17u}) {
@@ -667,7 +684,7 @@ TEST(ValenceDecoderSafetyTest, AttributeTableIsChecked) {
     const std::vector<uint8_t> bytes = attributeStream();
     ASSERT_EQ(decodeChecked(bytes), lodrt::Result::Ok);
     const size_t table = lodrt::format::kValenceHeaderSize;
-    const size_t rec = table + 4; // first record: UV set 0
+    const size_t rec = table + lodrt::format::kValenceAttributeTablePrefix; // first record: UV set 0
     const size_t tangent = rec + 3 * lodrt::format::kValenceAttributeRecordSize;
     ASSERT_EQ(bytes[tangent], lodrt::format::kValenceAttributeTangent);
     struct Patch {
@@ -676,6 +693,8 @@ TEST(ValenceDecoderSafetyTest, AttributeTableIsChecked) {
         const char* what;
     } patches[] = {{table, 0, "no attributes"},
                    {table, 17, "too many attributes"},
+                   {table + 8, 17, "twin cell shift 17"},
+                   {table + 9, 1, "table prefix padding"},
                    {rec, 9, "unknown kind"},
                    {rec + 1, 3, "UV with 3 components"},
                    {rec + 2, 3, "3 bits"},
@@ -712,12 +731,22 @@ TEST(ValenceDecoderSafetyTest, AttributePartsCutShortAreCorrupt) {
     lodrt::ValenceInfo info;
     ASSERT_EQ(lodrt::valenceReadInfo(bytes.data(), bytes.size(), &info), lodrt::Result::Ok);
     ASSERT_EQ(info.attribute_count, 4u);
-    size_t at = lodrt::format::kValenceHeaderSize + 4 + info.attribute_count * lodrt::format::kValenceAttributeRecordSize +
-                info.connectivity_bytes + info.position_bytes + info.position_raw_bytes + info.normal_bytes +
-                info.normal_raw_bytes;
+    const size_t table = lodrt::format::kValenceHeaderSize + lodrt::format::kValenceAttributeTablePrefix;
+    // The twin part (the torus's seams have twins): cut short, its decisions run out.
+    ASSERT_GT(info.twin_bytes, 0u);
+    const size_t twin_end = table + info.attribute_count * lodrt::format::kValenceAttributeRecordSize +
+                            info.connectivity_bytes + info.position_bytes + info.position_raw_bytes + info.twin_bytes;
+    for (uint32_t cut = 1; cut <= 6 && cut < info.twin_bytes; ++cut) {
+        std::vector<uint8_t> bad(bytes.begin(), bytes.begin() + long(twin_end - cut));
+        bad.insert(bad.end(), bytes.begin() + long(twin_end), bytes.end());
+        const uint32_t length = info.twin_bytes - cut;
+        for (int k = 0; k < 4; ++k) bad[lodrt::format::kValenceHeaderSize + 4 + size_t(k)] = uint8_t(length >> (8 * k));
+        EXPECT_EQ(decodeChecked(bad), lodrt::Result::CorruptStream) << "twin part, " << cut << " cut";
+    }
+    size_t at = twin_end + info.normal_bytes + info.normal_raw_bytes;
     for (uint32_t i = 0; i < info.attribute_count; ++i) {
         const lodrt::ValenceAttribute& a = info.attributes[i];
-        const size_t field = lodrt::format::kValenceHeaderSize + 4 + i * lodrt::format::kValenceAttributeRecordSize + 40;
+        const size_t field = table + i * lodrt::format::kValenceAttributeRecordSize + 40;
         const size_t end = at + a.bytes;
         for (uint32_t cut = 1; cut <= 6 && cut < a.bytes; ++cut) {
             std::vector<uint8_t> bad(bytes.begin(), bytes.begin() + long(end - cut));

@@ -491,6 +491,7 @@ struct PositionPlan {
     uint32_t* count = nullptr;     // per entry of order: its parallelograms (triples)
     uint32_t* neighbour = nullptr; // per entry: the first known neighbour a met in the walk, kNone if none
     uint32_t* triples = nullptr;   // (a, b, w) of every parallelogram a + b - w, entry after entry
+    uint8_t* boundary = nullptr;   // optional, per entry: 1 when the vertex has a dummy neighbour
     uint32_t max_triples = 0;
     uint32_t ordered = 0;      // entries of order filled
     uint32_t triple_count = 0; // triples filled
@@ -533,7 +534,7 @@ inline bool planPositions(const uint32_t* cv, const uint32_t* opp, const uint32_
         }
         state[v] |= kOrdered;
         plan->order[count] = v;
-        uint32_t n = 0, neighbour = kNone;
+        uint32_t n = 0, neighbour = kNone, boundary = 0;
         // Each triangle (v, a, b) with exactly one of a, b ordered now has both others of the
         // unordered one ordered.
         const uint32_t c0 = vertex_corner[v];
@@ -546,6 +547,7 @@ inline bool planPositions(const uint32_t* cv, const uint32_t* opp, const uint32_
             const uint32_t cn = i3 == 2 ? t3 : c + 1, cp = i3 == 0 ? t3 + 2 : c - 1;
             const uint32_t va = cv[cn], vb = cv[cp];
             const uint32_t sa = state[va], sb = state[vb];
+            boundary |= (sa | sb) & kDummy;
             const uint32_t oa = sa & kOrdered, ob = sb & kOrdered;
             if (oa != ob) {
                 const uint32_t u = oa ? vb : va;
@@ -579,6 +581,7 @@ inline bool planPositions(const uint32_t* cv, const uint32_t* opp, const uint32_
         }
         plan->count[count] = n;
         plan->neighbour[count] = neighbour;
+        if (plan->boundary) plan->boundary[count] = boundary ? 1 : 0;
         ++count;
     }
     plan->ordered = count;
@@ -905,6 +908,88 @@ inline void addFaceTangent(const int32_t* qpos, const int32_t* quv, const uint32
 /// 2 none.
 inline uint32_t tangentSignContext(int64_t orientation) {
     return orientation > 0 ? 0u : (orientation < 0 ? 1u : 2u);
+}
+
+
+/// Position twins (format version 7, docs/format/valence.md "Twins"): a vertex on a boundary of the
+/// coded connectivity (a UV seam's side) usually has the position of a vertex on the seam's other
+/// side. A grid of cells 2^shift quantized units wide holds the boundary vertices coded so far
+/// (`head`: one chain per hash slot, `mask + 1` slots; `next`: per closed vertex); the candidate of a
+/// vertex is the one nearest its prediction among the chains of the 27 cells around it.
+constexpr uint32_t kTwinChainLimit = 16; // vertices looked at per cell (bounds a hostile stream's time)
+constexpr uint32_t kTwinContexts = 18;   // bit length of the candidate's distance from the prediction
+struct TwinGrid {
+    uint32_t* head = nullptr;
+    uint32_t* next = nullptr;
+    uint32_t mask = 0;
+    uint32_t shift = 0;
+    int32_t qmax = 0;
+};
+inline uint32_t twinSlot(const TwinGrid& g, const int32_t c[3]) {
+    return (uint32_t(c[0]) * 73856093u ^ uint32_t(c[1]) * 19349663u ^ uint32_t(c[2]) * 83492791u) & g.mask;
+}
+inline void twinCell(const TwinGrid& g, const int32_t* p, int32_t c[3]) {
+    for (int j = 0; j < 3; ++j) {
+        const int32_t x = p[j] < 0 ? 0 : (p[j] > g.qmax ? g.qmax : p[j]);
+        c[j] = x >> g.shift;
+    }
+}
+inline void twinInsert(TwinGrid& g, const int32_t* qpos, uint32_t v) {
+    int32_t c[3];
+    twinCell(g, &qpos[3 * size_t(v)], c);
+    const uint32_t slot = twinSlot(g, c);
+    g.next[v] = g.head[slot];
+    g.head[slot] = v;
+}
+/// The candidate nearest `pred` (squared distance; the first met wins ties; cells in z, y, x order
+/// from -1 to +1, each chain newest first, at most kTwinChainLimit vertices of it), kNone without
+/// one; *ctx its context.
+inline uint32_t twinCandidate(const TwinGrid& g, const int32_t* qpos, const int32_t pred[3], uint32_t* ctx) {
+    int32_t c[3];
+    twinCell(g, pred, c);
+    uint32_t best = kNone;
+    uint64_t best_d = ~uint64_t(0);
+    for (int32_t dz = -1; dz <= 1; ++dz)
+        for (int32_t dy = -1; dy <= 1; ++dy)
+            for (int32_t dx = -1; dx <= 1; ++dx) {
+                const int32_t cell[3] = {c[0] + dx, c[1] + dy, c[2] + dz};
+                uint32_t v = g.head[twinSlot(g, cell)];
+                for (uint32_t k = 0; v != kNone && k < kTwinChainLimit; ++k, v = g.next[v]) {
+                    const int32_t* p = &qpos[3 * size_t(v)];
+                    uint64_t d = 0;
+                    for (int j = 0; j < 3; ++j) {
+                        const int64_t e = int64_t(p[j]) - pred[j];
+                        d += uint64_t(e * e);
+                    }
+                    if (d < best_d) {
+                        best_d = d;
+                        best = v;
+                    }
+                }
+            }
+    if (best != kNone) {
+        uint32_t m = 0;
+        for (int j = 0; j < 3; ++j) {
+            const int64_t e = int64_t(qpos[3 * size_t(best) + size_t(j)]) - pred[j];
+            const uint64_t a = uint64_t(e < 0 ? -e : e);
+            m = a > m ? uint32_t(a > 0xFFFFFFFFu ? 0xFFFFFFFFu : a) : m;
+        }
+        const uint32_t b = bitLength(m);
+        *ctx = b < kTwinContexts ? b : kTwinContexts - 1;
+    }
+    return best;
+}
+
+/// Normal prediction with twins: a vertex whose twin partner comes earlier in final order takes the
+/// partner's coded normal (a UV seam rarely splits the normal); else predictNormal.
+inline void predictNormalTwin(const int64_t* s3, const uint32_t* qnorm, size_t x, uint32_t partner, uint32_t bits,
+                              uint32_t p[2]) {
+    if (partner != kNone && partner < x) {
+        p[0] = qnorm[2 * size_t(partner)];
+        p[1] = qnorm[2 * size_t(partner) + 1];
+    } else {
+        predictNormal(s3, qnorm, x, bits, p);
+    }
 }
 
 } // namespace detail
