@@ -331,7 +331,9 @@ bool readAttributeRecord(const uint8_t* p, uint32_t index, const ValenceInfo& v,
         if (a->components != 2 || a->predictor > kValencePredictUvGeometric) return false;
         quantized = 2;
     } else if (a->kind == kValenceAttributeColor) {
-        if ((a->components != 3 && a->components != 4) || a->predictor != kValencePredictParallelogram) return false;
+        if ((a->components != 3 && a->components != 4) ||
+            (a->predictor != kValencePredictParallelogram && a->predictor != kValencePredictColorDecorrelated))
+            return false;
         quantized = a->components;
     } else if (a->kind == kValenceAttributeTangent) {
         if (a->components != 4 || a->set != 0) return false;
@@ -893,11 +895,11 @@ using AttributeModel = ResidualModel<4, kValenceAttributeContexts>;
 
 // Reads one vertex's UV or colour value given its prediction; false on a corrupt stream.
 inline bool readAttributeValue(RangeDecoder& rd, BitReader& raw, AttributeModel& model, uint32_t components,
-                               uint32_t bits, uint32_t n, const int32_t* pred, uint32_t* prev_length,
-                               uint32_t* prev_sign, int32_t* out) {
+                               uint32_t bits, bool decorrelated, uint32_t n, const int32_t* pred,
+                               uint32_t* prev_length, uint32_t* prev_sign, int32_t* out) {
     const uint32_t mask = (1u << bits) - 1;
     const int32_t half = int32_t(1) << (bits - 1);
-    uint32_t earlier = 0, first_sign = 0;
+    uint32_t earlier = 0, first_sign = 0, first = 0;
     for (uint32_t j = 0; j < components; ++j) {
         int32_t res;
         uint32_t length;
@@ -910,7 +912,10 @@ inline bool readAttributeValue(RangeDecoder& rd, BitReader& raw, AttributeModel&
             *prev_length = length;
         }
         earlier = length > earlier ? length : earlier;
-        out[j] = int32_t((uint32_t(pred[j]) + uint32_t(res)) & mask);
+        // Decorrelated channels 1..: the coded value is the residual minus channel 0's (mod 2^bits).
+        const uint32_t r = uint32_t(res) + (decorrelated && j > 0 ? first : 0u);
+        if (j == 0) first = uint32_t(res);
+        out[j] = int32_t((uint32_t(pred[j]) + r) & mask);
     }
     return true;
 }
@@ -923,6 +928,7 @@ LODRT_VALENCE_NOINLINE Result decodeAttribute(const uint8_t* stream, const Valen
     const ValenceAttribute& at = info.attributes[index];
     const size_t vn = info.vertex_count;
     const uint32_t c = at.components;
+    const bool decorrelated = at.predictor == kValencePredictColorDecorrelated;
     RangeDecoder rd;
     if (!rd.init(stream, at.bytes)) return Result::CorruptStream;
     BitReader raw;
@@ -949,7 +955,7 @@ LODRT_VALENCE_NOINLINE Result decodeAttribute(const uint8_t* stream, const Valen
         } else {
             int32_t pred[4];
             detail::predictAttribute(qa, c, qpos, v, triple, n, plan.neighbour[i], last, at.predictor, qmax, pred);
-            if (!readAttributeValue(rd, raw, model, c, at.bits, n, pred, &prev_length, prev_sign, q))
+            if (!readAttributeValue(rd, raw, model, c, at.bits, decorrelated, n, pred, &prev_length, prev_sign, q))
                 return Result::CorruptStream;
             for (uint32_t j = 0; j < c; ++j) f[j] = q[j];
             final_done[fid] = 1;
@@ -960,7 +966,7 @@ LODRT_VALENCE_NOINLINE Result decodeAttribute(const uint8_t* stream, const Valen
     }
     for (size_t fid = final_count; fid < vn; ++fid) {
         int32_t* f = &qf[c * fid];
-        if (!readAttributeValue(rd, raw, model, c, at.bits, 0, last, &prev_length, prev_sign, f))
+        if (!readAttributeValue(rd, raw, model, c, at.bits, decorrelated, 0, last, &prev_length, prev_sign, f))
             return Result::CorruptStream;
         for (uint32_t j = 0; j < c; ++j) last[j] = f[j];
         if (rd.overrun() || raw.overrun()) return Result::CorruptStream;

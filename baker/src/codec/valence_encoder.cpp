@@ -1433,9 +1433,12 @@ void codeAttributeValue(RangeEncoder& rc, BitWriter& raw, AttributeModel& model,
                         uint32_t* prev_sign) {
     const uint32_t mask = (1u << at.bits) - 1;
     const int32_t half = int32_t(1) << (at.bits - 1);
-    uint32_t earlier = 0, first_sign = 0;
+    const bool decorrelated = at.predictor == kValencePredictColorDecorrelated;
+    uint32_t earlier = 0, first_sign = 0, first = 0;
     for (uint32_t j = 0; j < at.components; ++j) {
-        int32_t r = int32_t(uint32_t(value[j] - pred[j]) & mask);
+        const uint32_t full = uint32_t(value[j] - pred[j]);
+        if (j == 0) first = full;
+        int32_t r = int32_t((full - (decorrelated && j > 0 ? first : 0u)) & mask);
         if (r >= half) r -= int32_t(mask) + 1;
         const uint32_t ctx = lodrt::detail::attributeContext(j, n, j == 0 ? prev_length : earlier);
         const uint32_t k = rc.residual(model, raw, int(j), ctx, r, prev_sign[j] * 3 + first_sign);
@@ -1575,15 +1578,25 @@ Result<std::vector<CodedAttribute>> codeAttributes(const Mesh& mesh, const Valen
         out.push_back(std::move(best));
     }
     if (mesh.hasColors()) {
-        CodedAttribute at;
-        at.kind = kValenceAttributeColor;
+        // Channels coded on their own or relative to channel 0's residual (a scan's colour errors are
+        // mostly in brightness, shared by the channels), whichever is smaller.
+        CodedAttribute base;
+        base.kind = kValenceAttributeColor;
         const bool opaque = std::all_of(mesh.colors.begin(), mesh.colors.end(), [](const Vec4f& c) { return c.w == 1.0f; });
-        at.components = opaque ? 3 : 4;
-        at.bits = uint8_t(options.color_bits);
-        LODBAKE_RETURN_IF_ERROR(quantizeAttribute(mesh, at, q));
-        I32Array final_values;
-        codeAttribute(walk, order, q, vn, vc, at, final_values);
-        out.push_back(std::move(at));
+        base.components = opaque ? 3 : 4;
+        base.bits = uint8_t(options.color_bits);
+        LODBAKE_RETURN_IF_ERROR(quantizeAttribute(mesh, base, q));
+        CodedAttribute best;
+        for (uint8_t predictor : {kValencePredictParallelogram, kValencePredictColorDecorrelated}) {
+            CodedAttribute at = base;
+            at.predictor = predictor;
+            I32Array final_values;
+            codeAttribute(walk, order, q, vn, vc, at, final_values);
+            if (predictor == kValencePredictParallelogram ||
+                at.range.size() + at.raw.size() < best.range.size() + best.raw.size())
+                best = std::move(at);
+        }
+        out.push_back(std::move(best));
     }
     if (mesh.hasTangents()) {
         CodedAttribute at;

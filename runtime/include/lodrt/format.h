@@ -99,6 +99,8 @@ constexpr uint8_t kValenceAttributeColor = 2;   // 3 (RGB) or 4 (RGBA) component
 constexpr uint8_t kValenceAttributeTangent = 3; // octahedral xyz (2 components) + handedness sign
 constexpr uint8_t kValencePredictParallelogram = 0; // UV and colour: mean of the parallelograms
 constexpr uint8_t kValencePredictUvGeometric = 1;   // UV: from the positions (docs/format/valence.md)
+constexpr uint8_t kValencePredictColorDecorrelated = 2; // colour: parallelogram, channels 1.. coded
+                                                        // relative to channel 0's residual
 constexpr uint8_t kValenceNoReference = 255;
 constexpr uint32_t kValenceMinAttributeBits = 4;
 constexpr uint32_t kValenceMaxAttributeBits = 16;

@@ -703,6 +703,7 @@ TEST(ValenceDecoderSafetyTest, AttributeTableIsChecked) {
                    {rec + 6, 1, "reserved field"},
                    {rec + 24 + 3, 0xBF, "negative size"},
                    {rec + 24 + 8 + 3, 0x3F, "range of an unused component"},
+                   {rec + 2 * lodrt::format::kValenceAttributeRecordSize + 3, 1, "colours with the UV predictor"},
                    {tangent + 3, 3, "tangent predicted from itself"},
                    {tangent + 3, 2, "tangent predicted from the colours"},
                    {4, lodrt::format::kValenceVersionWithoutAttributes, "table in a version 6 stream"}};
