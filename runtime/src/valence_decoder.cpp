@@ -331,8 +331,8 @@ bool readAttributeRecord(const uint8_t* p, uint32_t index, const ValenceInfo& v,
         if (a->components != 2 || a->predictor > kValencePredictUvGeometric) return false;
         quantized = 2;
     } else if (a->kind == kValenceAttributeColor) {
-        if ((a->components != 3 && a->components != 4) ||
-            (a->predictor != kValencePredictParallelogram && a->predictor != kValencePredictColorDecorrelated))
+        if ((a->components != 3 && a->components != 4) || a->predictor == kValencePredictUvGeometric ||
+            a->predictor > kValencePredictNeighbourMeanDecorrelated)
             return false;
         quantized = a->components;
     } else if (a->kind == kValenceAttributeTangent) {
@@ -928,7 +928,7 @@ LODRT_VALENCE_NOINLINE Result decodeAttribute(const uint8_t* stream, const Valen
     const ValenceAttribute& at = info.attributes[index];
     const size_t vn = info.vertex_count;
     const uint32_t c = at.components;
-    const bool decorrelated = at.predictor == kValencePredictColorDecorrelated;
+    const bool decorrelated = detail::decorrelatedChannels(at.predictor);
     RangeDecoder rd;
     if (!rd.init(stream, at.bytes)) return Result::CorruptStream;
     BitReader raw;

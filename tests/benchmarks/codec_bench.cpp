@@ -448,8 +448,9 @@ bool attributeRow(const std::string& label, const lodbake::Mesh& m, int runs, At
                 draco_uv ? double(our_uv) / double(draco_uv) : 0.0, our_col, draco_col, our_tan, draco_tan, dec_ms,
                 ddec_ms, dec_ms / ddec_ms, err[0][0], err[0][1], err[1][0], err[1][1], err[2][0], err[2][1],
                 same ? "same" : "DIFFER");
-    std::printf("%-28s        | bits/vertex: conn %.2f pos %.2f nrm %.2f uv %.2f col %.2f tan %.2f\n", "",
-                enc->connectivity_bytes * 8.0 / info.vertex_count, enc->position_bytes * 8.0 / info.vertex_count,
+    std::printf("%-28s        | twins %zu of %zu decisions | bits/vertex: conn %.2f pos %.2f nrm %.2f uv %.2f col %.2f "
+                "tan %.2f\n",
+                "", enc->twin_vertices, enc->twin_decisions, enc->connectivity_bytes * 8.0 / info.vertex_count, enc->position_bytes * 8.0 / info.vertex_count,
                 enc->normal_bytes * 8.0 / info.vertex_count, our_uv * 8.0 / info.vertex_count,
                 our_col * 8.0 / info.vertex_count, our_tan * 8.0 / info.vertex_count);
     std::fflush(stdout);

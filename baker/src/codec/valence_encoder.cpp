@@ -1312,7 +1312,7 @@ void codePositions(const CodecArray<CodedValue>& walked, uint16_t flags_pos, Ran
 // error, and coded only when at least an eighth of the decisions are hits (each decision costs a
 // bit at worst, a hit saves a whole position). Leaves twin_of empty and shift 0 without twins.
 void codeTwins(PositionWalk& walk, size_t vn, std::vector<uint32_t>& twin_of, uint32_t& shift,
-               std::vector<uint8_t>& bytes) {
+               std::vector<uint8_t>& bytes, ValenceEncodeResult& result) {
     shift = walk.twinShift();
     twin_of.assign(vn, kNone);
     const auto decisions = walk.decideTwins(shift, twin_of);
@@ -1323,6 +1323,8 @@ void codeTwins(PositionWalk& walk, size_t vn, std::vector<uint32_t>& twin_of, ui
         shift = 0;
         return;
     }
+    result.twin_decisions = decisions.size();
+    result.twin_vertices = hits;
     RangeEncoder rc;
     uint32_t models[lodrt::detail::kTwinContexts];
     initRangeProbs(models, lodrt::detail::kTwinContexts);
@@ -1433,7 +1435,7 @@ void codeAttributeValue(RangeEncoder& rc, BitWriter& raw, AttributeModel& model,
                         uint32_t* prev_sign) {
     const uint32_t mask = (1u << at.bits) - 1;
     const int32_t half = int32_t(1) << (at.bits - 1);
-    const bool decorrelated = at.predictor == kValencePredictColorDecorrelated;
+    const bool decorrelated = lodrt::detail::decorrelatedChannels(at.predictor);
     uint32_t earlier = 0, first_sign = 0, first = 0;
     for (uint32_t j = 0; j < at.components; ++j) {
         const uint32_t full = uint32_t(value[j] - pred[j]);
@@ -1578,8 +1580,9 @@ Result<std::vector<CodedAttribute>> codeAttributes(const Mesh& mesh, const Valen
         out.push_back(std::move(best));
     }
     if (mesh.hasColors()) {
-        // Channels coded on their own or relative to channel 0's residual (a scan's colour errors are
-        // mostly in brightness, shared by the channels), whichever is smaller.
+        // Parallelogram or neighbour mean, channels coded on their own or relative to channel 0's
+        // residual (a scan's colour errors are mostly in brightness, shared by the channels):
+        // whichever of the four is smallest.
         CodedAttribute base;
         base.kind = kValenceAttributeColor;
         const bool opaque = std::all_of(mesh.colors.begin(), mesh.colors.end(), [](const Vec4f& c) { return c.w == 1.0f; });
@@ -1587,7 +1590,8 @@ Result<std::vector<CodedAttribute>> codeAttributes(const Mesh& mesh, const Valen
         base.bits = uint8_t(options.color_bits);
         LODBAKE_RETURN_IF_ERROR(quantizeAttribute(mesh, base, q));
         CodedAttribute best;
-        for (uint8_t predictor : {kValencePredictParallelogram, kValencePredictColorDecorrelated}) {
+        for (uint8_t predictor : {kValencePredictParallelogram, kValencePredictColorDecorrelated,
+                                  kValencePredictNeighbourMean, kValencePredictNeighbourMeanDecorrelated}) {
             CodedAttribute at = base;
             at.predictor = predictor;
             I32Array final_values;
@@ -1689,7 +1693,7 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
     std::vector<uint32_t> twin_of;
     uint32_t twin_shift = 0;
     std::vector<uint8_t> twin_bytes;
-    if (has_attributes) codeTwins(walk, vn, twin_of, twin_shift, twin_bytes);
+    if (has_attributes) codeTwins(walk, vn, twin_of, twin_shift, twin_bytes, result);
     uint16_t flags_pos = 0;
     RangeEncoder pos;
     BitWriter pos_raw;

@@ -101,6 +101,8 @@ constexpr uint8_t kValencePredictParallelogram = 0; // UV and colour: mean of th
 constexpr uint8_t kValencePredictUvGeometric = 1;   // UV: from the positions (docs/format/valence.md)
 constexpr uint8_t kValencePredictColorDecorrelated = 2; // colour: parallelogram, channels 1.. coded
                                                         // relative to channel 0's residual
+constexpr uint8_t kValencePredictNeighbourMean = 3;     // colour: mean of the triples' a and b
+constexpr uint8_t kValencePredictNeighbourMeanDecorrelated = 4; // colour: that, channels as in 2
 constexpr uint8_t kValenceNoReference = 255;
 constexpr uint32_t kValenceMinAttributeBits = 4;
 constexpr uint32_t kValenceMaxAttributeBits = 16;

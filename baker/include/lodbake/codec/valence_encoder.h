@@ -58,6 +58,8 @@ struct ValenceEncodeResult {
     std::vector<ValenceAttributeReport> attributes; // in stream order
     size_t cut_vertex_copies = 0; // vertex copies the manifold cut made (merged back by the decoder)
     size_t dummy_vertices = 0;    // one per boundary loop of the cut mesh
+    size_t twin_decisions = 0;    // boundary vertices with a twin candidate (0 without twins)
+    size_t twin_vertices = 0;     // vertices that take their twin's position instead of coding one
     /// Largest |decoded - input| over all position coordinates (the quantization error).
     double max_position_error = 0.0;
 };

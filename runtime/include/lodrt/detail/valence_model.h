@@ -858,15 +858,25 @@ inline void predictAttribute(const int32_t* qa, uint32_t components, const int32
         }
         return;
     }
+    // Neighbour mean: the average of the 2n values at a and b (noisy colours: a parallelogram adds
+    // the noise of three vertices, a mean of many averages it out).
+    const bool mean = predictor == format::kValencePredictNeighbourMean ||
+                      predictor == format::kValencePredictNeighbourMeanDecorrelated;
     for (uint32_t j = 0; j < components; ++j) {
         int64_t sum = 0;
         for (uint32_t i = 0; i < n; ++i) {
             const uint32_t* e = t + 3 * size_t(i);
-            sum += int64_t(qa[4 * size_t(e[0]) + j]) + qa[4 * size_t(e[1]) + j] - qa[4 * size_t(e[2]) + j];
+            sum += int64_t(qa[4 * size_t(e[0]) + j]) + qa[4 * size_t(e[1]) + j] - (mean ? 0 : qa[4 * size_t(e[2]) + j]);
         }
-        const int64_t m = divRound(sum, int64_t(n));
+        const int64_t m = divRound(sum, int64_t(mean ? 2 * n : n));
         out[j] = m < 0 ? 0 : (m > qmax ? qmax : int32_t(m));
     }
+}
+
+/// Whether a colour predictor codes channels 1.. relative to channel 0's residual.
+inline bool decorrelatedChannels(uint32_t predictor) {
+    return predictor == format::kValencePredictColorDecorrelated ||
+           predictor == format::kValencePredictNeighbourMeanDecorrelated;
 }
 
 /// Length context of component j of a UV or colour value: `count` the vertex's parallelogram count,
