@@ -539,7 +539,13 @@ TEST(ValenceStreamSchemaTest, SchemaRejectsBrokenObjects) {
         {"bits", R"({"bufferView": 0, "attributes": {"POSITION": 0}, "positionBits": 20})"},
         {"normal_bits_missing", R"({"bufferView": 0, "attributes": {"POSITION": 0, "NORMAL": 1}, "positionBits": 14})"},
         {"unknown_attribute",
+         R"({"bufferView": 0, "attributes": {"POSITION": 0, "JOINTS_0": 2}, "positionBits": 14})"},
+        {"uv_bits_missing",
          R"({"bufferView": 0, "attributes": {"POSITION": 0, "TEXCOORD_0": 2}, "positionBits": 14})"},
+        {"tangent_bits_without_tangents",
+         R"({"bufferView": 0, "attributes": {"POSITION": 0}, "positionBits": 14, "tangentBits": 10})"},
+        {"color_bits_missing",
+         R"({"bufferView": 0, "attributes": {"POSITION": 0, "COLOR_0": 2}, "positionBits": 14})"},
     };
     for (const auto& [name, text] : bad) {
         const std::string file = outDir() + "/bad_" + name + ".json";
@@ -551,6 +557,12 @@ TEST(ValenceStreamSchemaTest, SchemaRejectsBrokenObjects) {
                                "normalBits": 8})";
     const CommandResult v = validateObjects({good});
     EXPECT_EQ(v.exit_code, 0) << v.output;
+    const std::string textured = outDir() + "/good_textured.json";
+    std::ofstream(textured) << R"({"bufferView": 3, "attributes": {"POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2,
+                                   "COLOR_0": 3, "TANGENT": 4}, "positionBits": 14, "normalBits": 8,
+                                   "uvBits": 12, "colorBits": 8, "tangentBits": 10})";
+    const CommandResult vt = validateObjects({textured});
+    EXPECT_EQ(vt.exit_code, 0) << vt.output;
 }
 
 // A compact pack draws what the plain pack draws: for the textured shared assets, every primitive's
