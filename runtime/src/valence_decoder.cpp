@@ -748,10 +748,11 @@ struct TwinReader {
         return true;
     }
     // The twin of plan entry i predicted at `pred`, kNone when it has none or the stream says no.
-    uint32_t twin(uint32_t i, const int32_t* qpos, const int32_t pred[3]) {
+    uint32_t twin(uint32_t i, const int32_t* qpos, const int32_t pred[3], const uint32_t* t, uint32_t n,
+                  uint32_t neighbour) {
         if (!active || !boundary[i]) return kNone;
         uint32_t ctx = 0;
-        const uint32_t candidate = detail::twinCandidate(grid, qpos, pred, &ctx);
+        const uint32_t candidate = detail::twinCandidate(grid, qpos, pred, t, n, neighbour, &ctx);
         if (candidate == kNone || !rd.bit(models[ctx])) return kNone;
         return candidate;
     }
@@ -812,7 +813,7 @@ Result decodePositions(const uint8_t* data, const uint8_t* stream, const Valence
                 predictVertex<true>(qpos, triple, n, plan.neighbour[i], last, pred, &scale, spread);
             else
                 predictVertex<false>(qpos, triple, n, plan.neighbour[i], last, pred, &scale, spread);
-            const uint32_t twin = twins.twin(i, qpos, pred);
+            const uint32_t twin = twins.twin(i, qpos, pred, triple, n, plan.neighbour[i]);
             if (twin != kNone) {
                 for (int j = 0; j < 3; ++j) q[j] = qpos[3 * size_t(twin) + size_t(j)];
                 twins.pair(fid, final_of[twin]);

@@ -1116,10 +1116,10 @@ public:
         grid.shift = shift;
         grid.qmax = int32_t(quantized_.qmax);
         std::vector<TwinDecision> out;
-        forEachEntry([&](uint32_t i, uint32_t ev, uint32_t fid, const int32_t* pred) {
+        forEachEntry([&](uint32_t i, uint32_t ev, uint32_t fid, const int32_t* pred, const uint32_t* t, uint32_t n) {
             if (pred && boundary_[i]) {
                 uint32_t ctx = 0;
-                const uint32_t c = lodrt::detail::twinCandidate(grid, qpos_.data(), pred, &ctx);
+                const uint32_t c = lodrt::detail::twinCandidate(grid, qpos_.data(), pred, t, n, neighbour_[i], &ctx);
                 if (c != kNone) {
                     const bool hit = std::equal(&qpos_[3 * size_t(c)], &qpos_[3 * size_t(c)] + 3, &qpos_[3 * size_t(ev)]);
                     out.push_back({ctx, hit});
@@ -1140,7 +1140,7 @@ public:
     uint32_t twinShift() {
         std::fill(final_done_.begin(), final_done_.end(), uint8_t(0));
         std::vector<uint32_t> errors;
-        forEachEntry([&](uint32_t i, uint32_t ev, uint32_t, const int32_t* pred) {
+        forEachEntry([&](uint32_t i, uint32_t ev, uint32_t, const int32_t* pred, const uint32_t*, uint32_t) {
             if (!pred || !boundary_[i]) return;
             uint32_t m = 0;
             for (int j = 0; j < 3; ++j) m = std::max(m, uint32_t(std::abs(qpos_[3 * size_t(ev) + size_t(j)] - pred[j])));
@@ -1174,10 +1174,10 @@ private:
                 int32_t pred[3];
                 uint32_t scale = 0, spread[3];
                 lodrt::detail::predictFromPlan(qpos_.data(), t, n, neighbour_[i], last, pred, &scale, spread);
-                f(i, ev, fid, pred);
+                f(i, ev, fid, pred, t, n);
                 final_done_[fid] = 1;
             } else {
-                f(i, ev, fid, static_cast<const int32_t*>(nullptr));
+                f(i, ev, fid, static_cast<const int32_t*>(nullptr), t, n);
             }
             for (int j = 0; j < 3; ++j) last[j] = q[j];
         }

@@ -951,10 +951,20 @@ inline void twinInsert(TwinGrid& g, const int32_t* qpos, uint32_t v) {
     g.next[v] = g.head[slot];
     g.head[slot] = v;
 }
+/// Whether u is one of the vertex's known neighbours: the a or b of one of its `n` triples `t`, or
+/// `neighbour` (its twin, on the seam's other side, never is).
+inline bool knownNeighbour(uint32_t u, const uint32_t* t, uint32_t n, uint32_t neighbour) {
+    if (u == neighbour) return true;
+    for (uint32_t i = 0; i < n; ++i)
+        if (t[3 * size_t(i)] == u || t[3 * size_t(i) + 1] == u) return true;
+    return false;
+}
+
 /// The candidate nearest `pred` (squared distance; the first met wins ties; cells in z, y, x order
-/// from -1 to +1, each chain newest first, at most kTwinChainLimit vertices of it), kNone without
-/// one; *ctx its context.
-inline uint32_t twinCandidate(const TwinGrid& g, const int32_t* qpos, const int32_t pred[3], uint32_t* ctx) {
+/// from -1 to +1, each chain newest first, at most kTwinChainLimit vertices of it, the vertex's known
+/// neighbours skipped), kNone without one; *ctx its context.
+inline uint32_t twinCandidate(const TwinGrid& g, const int32_t* qpos, const int32_t pred[3], const uint32_t* t,
+                              uint32_t n, uint32_t neighbour, uint32_t* ctx) {
     int32_t c[3];
     twinCell(g, pred, c);
     uint32_t best = kNone;
@@ -971,7 +981,7 @@ inline uint32_t twinCandidate(const TwinGrid& g, const int32_t* qpos, const int3
                         const int64_t e = int64_t(p[j]) - pred[j];
                         d += uint64_t(e * e);
                     }
-                    if (d < best_d) {
+                    if (d < best_d && !knownNeighbour(v, t, n, neighbour)) {
                         best_d = d;
                         best = v;
                     }
