@@ -54,8 +54,9 @@ LODRT_API Result valenceReadInfo(const uint8_t* data, size_t size, ValenceInfo* 
 
 /// Bytes of scratch valenceDecode needs (the conquest's corner table, active lists, the position plan
 /// and quantized attributes; about 57 bytes per closed vertex plus 88 per closed triangle, plus 13 per
-/// vertex and 32 more with normals; with an attribute table 16 more per closed vertex, 8 per vertex
-/// and attribute component, 32 per vertex with tangents), a multiple of 8.
+/// vertex and 32 more with normals; with an attribute table 16 more per closed vertex, 4 per vertex
+/// and coded attribute component, 32 per vertex with tangents; with twins 13 to 21 more per closed
+/// vertex and 4 per vertex), a multiple of 8.
 LODRT_API size_t valenceScratchSize(const ValenceInfo& info);
 
 /// Caller-owned buffers. Capacities are in elements of the pointed-to type.
