@@ -451,7 +451,7 @@ struct ScratchLayout {
 
 // Hash slots of the twin grid: a power of two at least twice the closed vertices (and 16).
 size_t twinSlots(size_t closed_vertices) {
-    size_t n = 16;
+    size_t n = kValenceTwinMinSlots;
     while (n < 2 * closed_vertices) n *= 2;
     return n;
 }

@@ -1106,7 +1106,7 @@ public:
         std::fill(final_done_.begin(), final_done_.end(), uint8_t(0));
         std::fill(twin_.begin(), twin_.end(), kNone);
         const uint32_t vc = uint32_t(qpos_.size() / 3);
-        size_t slots = 16;
+        size_t slots = kValenceTwinMinSlots;
         while (slots < 2 * size_t(vc)) slots *= 2;
         U32Array head(slots, kNone), next(vc, kNone);
         lodrt::detail::TwinGrid grid;

@@ -94,6 +94,10 @@ constexpr uint32_t kValenceAttributeTablePrefix = 12;
 // Position twins (docs/format/valence.md "Twins"): a range-coded part between the position raw bits
 // and the normals, one decision per boundary vertex that has a candidate.
 constexpr uint32_t kValenceMaxTwinShift = 16;
+constexpr uint32_t kValenceTwinChainLimit = 16; // grid vertices looked at per cell (bounds a hostile stream's time)
+constexpr uint32_t kValenceTwinContexts = 18;   // bit length of the candidate's distance from the prediction
+constexpr uint32_t kValenceTwinHash[3] = {73856093u, 19349663u, 83492791u}; // cell -> slot multipliers
+constexpr uint32_t kValenceTwinMinSlots = 16; // slots: a power of two, at least this and twice Vc
 constexpr uint8_t kValenceAttributeUv = 1;      // 2 components, quantized in their own range
 constexpr uint8_t kValenceAttributeColor = 2;   // 3 (RGB) or 4 (RGBA) components
 constexpr uint8_t kValenceAttributeTangent = 3; // octahedral xyz (2 components) + handedness sign

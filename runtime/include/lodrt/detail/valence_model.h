@@ -926,8 +926,8 @@ inline uint32_t tangentSignContext(int64_t orientation) {
 /// side. A grid of cells 2^shift quantized units wide holds the boundary vertices coded so far
 /// (`head`: one chain per hash slot, `mask + 1` slots; `next`: per closed vertex); the candidate of a
 /// vertex is the one nearest its prediction among the chains of the 27 cells around it.
-constexpr uint32_t kTwinChainLimit = 16; // vertices looked at per cell (bounds a hostile stream's time)
-constexpr uint32_t kTwinContexts = 18;   // bit length of the candidate's distance from the prediction
+constexpr uint32_t kTwinChainLimit = format::kValenceTwinChainLimit;
+constexpr uint32_t kTwinContexts = format::kValenceTwinContexts;
 struct TwinGrid {
     uint32_t* head = nullptr;
     uint32_t* next = nullptr;
@@ -936,7 +936,9 @@ struct TwinGrid {
     int32_t qmax = 0;
 };
 inline uint32_t twinSlot(const TwinGrid& g, const int32_t c[3]) {
-    return (uint32_t(c[0]) * 73856093u ^ uint32_t(c[1]) * 19349663u ^ uint32_t(c[2]) * 83492791u) & g.mask;
+    return (uint32_t(c[0]) * format::kValenceTwinHash[0] ^ uint32_t(c[1]) * format::kValenceTwinHash[1] ^
+            uint32_t(c[2]) * format::kValenceTwinHash[2]) &
+           g.mask;
 }
 inline void twinCell(const TwinGrid& g, const int32_t* p, int32_t c[3]) {
     for (int j = 0; j < 3; ++j) {
