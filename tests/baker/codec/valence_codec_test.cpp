@@ -659,6 +659,29 @@ TEST(ValenceCodecTest, SeamTwinsCostLessThanCodedPositions) {
     EXPECT_LT(with.position_bytes + with.normal_bytes, without->position_bytes + without->normal_bytes);
 }
 
+// Vertex ids beyond 16 bits: every attribute of a 68,572-vertex textured torus (seams, twins, two
+// UV sets, colours, tangents) decodes; UVs within half their step, handedness exact.
+TEST(ValenceCodecTest, AttributesBeyondSixteenBitVertexIds) {
+    Mesh in = texturedTorus(400, 170);
+    in.normals.clear(); // expectRoundTrip's normal bound is tighter than some of these many directions need
+    ASSERT_GT(in.vertexCount(), 65536u);
+    ValenceEncodeResult enc;
+    expectRoundTrip(in, {}, &enc);
+    ASSERT_FALSE(enc.bytes.empty());
+    auto dec = decodeValence(enc.bytes, "large");
+    ASSERT_TRUE(dec.ok()) << dec.status().message();
+    ASSERT_EQ(enc.attributes.size(), 4u);
+    EXPECT_GT(enc.twin_vertices, 0u);
+    double worst_uv = 0.0;
+    for (size_t v = 0; v < in.vertexCount(); ++v) {
+        const lodbake::Vec2f& a = in.uvs[0][v];
+        const lodbake::Vec2f& b = dec->uvs[0][enc.new_vertex_of[v]];
+        worst_uv = std::max({worst_uv, double(std::fabs(a.x - b.x)), double(std::fabs(a.y - b.y))});
+        ASSERT_EQ(in.tangents[v].w, dec->tangents[enc.new_vertex_of[v]].w) << v;
+    }
+    EXPECT_LE(worst_uv, 0.5 / 4095.0 + 1e-6);
+}
+
 TEST(ValenceCodecTest, RejectsBadAttributeOptions) {
     const Mesh in = texturedTorus(6, 4);
     for (uint32_t bad : {3u, 17u}) {
