@@ -2,7 +2,9 @@
 // conquest engine shared with the encoder (lodrt/detail/valence_model.h); this file supplies the
 // stream reading side of it, then decodes positions (multi-parallelogram prediction over the decoded
 // corner table: the order and parallelograms planned from the connectivity first, then the residuals
-// in one sequential pass) and normals. Everything lives in caller memory; every value read is checked.
+// in one sequential pass, seam copies taking their twin's position) and normals, then the attribute
+// table's UV sets and colours (over the same plan) and tangents. Everything lives in caller memory;
+// every value read is checked.
 
 #include <cmath>
 #include <cstring>
