@@ -682,6 +682,29 @@ TEST(ValenceCodecTest, AttributesBeyondSixteenBitVertexIds) {
     EXPECT_LE(worst_uv, 0.5 / 4095.0 + 1e-6);
 }
 
+// encode's attribute options and report: a textured, coloured glb with tangents, every attribute in
+// the JSON report with its bytes; decode writes them back; bits out of range are usage errors.
+TEST(ValenceCodecTest, CliEncodesAttributes) {
+    const std::string dir = lodbake_test::scratchDir();
+    const std::string in = dir + "/valence_textured.glb", lbm = dir + "/valence_textured.lbm",
+                      out = dir + "/valence_textured_back.glb";
+    lodbake::Diagnostics diag;
+    ASSERT_TRUE(lodbake::writeMesh(texturedTorus(12, 8), in, {}, diag).ok());
+    CliRun enc = runCli("encode '" + in + "' -o '" + lbm + "' --uv-bits 10 --color-bits 6 --tangent-bits 9 --json");
+    ASSERT_EQ(enc.exit_code, 0) << enc.err;
+    for (const char* key : {"\"attributes\"", "\"kind\": \"uv\"", "\"kind\": \"color\"", "\"kind\": \"tangent\"",
+                            "\"bits\": 10", "\"bits\": 6", "\"bits\": 9", "\"max_error\""})
+        EXPECT_NE(enc.out.find(key), std::string::npos) << key << "\n" << enc.out;
+    CliRun dec = runCli("decode '" + lbm + "' -o '" + out + "'");
+    ASSERT_EQ(dec.exit_code, 0) << dec.err;
+    auto back = lodbake::readMesh(out, {}, diag);
+    ASSERT_TRUE(back.ok());
+    EXPECT_FALSE(back->mesh.uvs.empty());
+    EXPECT_TRUE(back->mesh.hasTangents());
+    for (const char* flag : {"--uv-bits 3", "--color-bits 17", "--tangent-bits 2"})
+        EXPECT_EQ(runCli("encode '" + in + "' -o '" + lbm + "' " + flag).exit_code, 2) << flag;
+}
+
 TEST(ValenceCodecTest, RejectsBadAttributeOptions) {
     const Mesh in = texturedTorus(6, 4);
     for (uint32_t bad : {3u, 17u}) {
