@@ -1313,7 +1313,25 @@ void codePositions(const CodecArray<CodedValue>& walked, uint16_t flags_pos, Ran
 // bit at worst, a hit saves a whole position). Leaves twin_of empty and shift 0 without twins.
 void codeTwins(PositionWalk& walk, size_t vn, std::vector<uint32_t>& twin_of, uint32_t& shift,
                std::vector<uint8_t>& bytes, ValenceEncodeResult& result) {
-    shift = walk.twinShift();
+    // Cells from one step finer than the median error to three steps coarser (a seam copy's
+    // prediction is worse than a typical boundary vertex's): the most hits wins (ties: the fewest
+    // decisions, then the finer cell).
+    const uint32_t median = walk.twinShift();
+    size_t best_hits = 0, best_decisions = 0;
+    shift = median;
+    bool first = true;
+    for (uint32_t step = 0; step <= 4; ++step) {
+        const uint32_t s = std::min(median + step - std::min(median, 1u), kValenceMaxTwinShift);
+        std::vector<uint32_t> scratch(vn, kNone);
+        const auto d = walk.decideTwins(s, scratch);
+        const size_t h = size_t(std::count_if(d.begin(), d.end(), [](const auto& x) { return x.hit; }));
+        if (first || h > best_hits || (h == best_hits && d.size() < best_decisions)) {
+            best_hits = h;
+            best_decisions = d.size();
+            shift = s;
+            first = false;
+        }
+    }
     twin_of.assign(vn, kNone);
     const auto decisions = walk.decideTwins(shift, twin_of);
     const size_t hits = size_t(std::count_if(decisions.begin(), decisions.end(), [](const auto& d) { return d.hit; }));
