@@ -138,6 +138,9 @@ cp "$tmp"/cache/v2/packs/*.bin "$tmp"/cache/v2/deps/*.txt "$out/cache/"
 "$lodbake" pfrep "$tmp/rock.ply" -o "$out/pfrep/rock.lbp" >/dev/null
 "$lodbake" encode "$tmp/tet.off" -o "$out/valence/tet.lbm" --bits 10 >/dev/null
 "$lodbake" encode "$tmp/rock.ply" -o "$out/valence/rock.lbm" --bits 8 >/dev/null
+# Attribute paths of the .lbm decoder: the tetrahedron's colours (above), the quad's UVs and tangents.
+"$lodbake" encode "$tmp/quad.obj" -o "$out/valence/quad_uv.lbm" --uv-bits 10 >/dev/null
+"$lodbake" encode "$out/gltf/quad.glb" -o "$out/valence/quad_glb.lbm" >/dev/null
 cp "$out"/gltf/*.glb "$out/pack/" 2>/dev/null || true
 # The LOD runtime (models, streaming) reads the same packs.
 cp "$out"/pack/* "$out/lod/"

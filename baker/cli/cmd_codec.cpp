@@ -23,6 +23,7 @@
 #include "lodbake/simplify/mesh_distance.h"
 #include "lodbake/simplify/simplify.h"
 #include "lodbake/version.h"
+#include "lodrt/format.h"
 #include "lodrt/pfrep.h"
 
 #include "cli_common.h"
@@ -31,24 +32,37 @@ namespace lodbake::cli {
 
 namespace {
 
-const char* kEncodeHelp = R"(usage: lodbake encode IN -o OUT.lbm [--bits 14] [--normal-bits 10] [--no-normals] [--json]
+const char* kEncodeHelp = R"(usage: lodbake encode IN -o OUT.lbm [--bits 14] [--normal-bits 10] [--uv-bits 12]
+                      [--color-bits 8] [--tangent-bits 10] [--no-normals] [--no-attributes] [--json]
 
-Compresses IN's triangles, positions (quantized in the bounding cube) and normals (octahedral)
-into the .lbm format (docs/format/valence.md). Triangles come back exactly, as index triples over
-the decoded vertex order (vertices and triangles may be reordered, triangles rotated). UV sets,
-colours, tangents and materials are not coded (a warning says so).
+Compresses IN's triangles, positions (quantized in the bounding cube), normals (octahedral), UV
+sets, vertex colours and tangents into the .lbm format (docs/format/valence.md). Triangles come back
+exactly, as index triples over the decoded vertex order (vertices and triangles may be reordered,
+triangles rotated). Materials are not coded (a warning says so).
 
 options:
   --bits N          position quantization bits, 8..16 (default 14)
   --normal-bits N   octahedral normal bits per component, 4..16 (default 10)
+  --uv-bits N       UV quantization bits per component, 4..16 (default 12)
+  --color-bits N    colour quantization bits per channel, 4..16 (default 8)
+  --tangent-bits N  octahedral tangent bits per component, 4..16 (default 10)
   --no-normals      do not code normals even if IN has them
-  --json            print bytes and bits per vertex of each stream as JSON
+  --no-attributes   do not code UV sets, colours and tangents
+  --json            print bytes and bits per vertex of each stream and attribute as JSON
 )";
 
 const char* kDecodeHelp = R"(usage: lodbake decode IN.lbm -o OUT
 
-Decodes an .lbm file and writes it as .ply .obj .off .gltf or .glb.
+Decodes an .lbm file (positions, normals, UV sets, colours, tangents) and writes it as .ply .obj .off
+.gltf or .glb (each format keeps the attributes it can hold).
 )";
+
+// The --json name of an attribute kind (lodrt/format.h).
+const char* attributeName(uint32_t kind) {
+    if (kind == lodrt::format::kValenceAttributeUv) return "uv";
+    if (kind == lodrt::format::kValenceAttributeColor) return "color";
+    return "tangent";
+}
 
 } // namespace
 
@@ -57,7 +71,9 @@ int runEncode(int argc, char** argv) {
     int code = 0;
     if (!parseArgs(argc, argv, 2,
                    {{"--output", "-o", true}, {"--bits", nullptr, true}, {"--normal-bits", nullptr, true},
-                    {"--no-normals", nullptr, false}, {"--json", nullptr, false}, {"--help", "-h", false}},
+                    {"--uv-bits", nullptr, true}, {"--color-bits", nullptr, true}, {"--tangent-bits", nullptr, true},
+                    {"--no-normals", nullptr, false}, {"--no-attributes", nullptr, false}, {"--json", nullptr, false},
+                    {"--help", "-h", false}},
                    args, code))
         return code;
     if (args.flags.count("--help")) {
@@ -73,7 +89,10 @@ int runEncode(int argc, char** argv) {
     if (isSameFile(in, out)) return usageError("output '" + out + "' is the input file; the input is never modified");
     codec::ValenceEncodeOptions options;
     for (auto [flag, field, lo, hi] : {std::make_tuple("--bits", &options.position_bits, 8u, 16u),
-                                       std::make_tuple("--normal-bits", &options.normal_bits, 4u, 16u)}) {
+                                       std::make_tuple("--normal-bits", &options.normal_bits, 4u, 16u),
+                                       std::make_tuple("--uv-bits", &options.uv_bits, 4u, 16u),
+                                       std::make_tuple("--color-bits", &options.color_bits, 4u, 16u),
+                                       std::make_tuple("--tangent-bits", &options.tangent_bits, 4u, 16u)}) {
         if (!args.values.count(flag)) continue;
         double v = 0.0;
         if (!parseNumber(args.values[flag], v) || v != std::floor(v) || v < lo || v > hi)
@@ -82,15 +101,15 @@ int runEncode(int argc, char** argv) {
         *field = uint32_t(v);
     }
     options.encode_normals = !args.flags.count("--no-normals");
+    options.encode_attributes = !args.flags.count("--no-attributes");
 
     Diagnostics diagnostics;
     Result<LoadedMesh> loaded = readMesh(in, args.read, diagnostics);
     printDiagnostics(diagnostics);
     if (!loaded.ok()) return reportError(loaded.status());
     const Mesh& mesh = loaded->mesh;
-    if (!mesh.uvs.empty() || mesh.hasColors() || mesh.hasTangents() || !mesh.materials.empty())
-        std::fprintf(stderr, "warning: %s: UV sets, colours, tangents and materials are not coded in .lbm\n",
-                     in.c_str());
+    if (!mesh.materials.empty())
+        std::fprintf(stderr, "warning: %s: materials are not coded in .lbm\n", in.c_str());
     Result<codec::ValenceEncodeResult> encoded = codec::encodeValence(mesh, options);
     if (!encoded.ok()) return reportError(encoded.status().withPrefix(in));
     const Status written = writeFileAtomic(out, encoded->bytes.data(), encoded->bytes.size());
@@ -115,15 +134,30 @@ int runEncode(int argc, char** argv) {
             j.endObject();
         }
         j.field("max_position_error", encoded->max_position_error);
+        j.key("attributes").beginArray();
+        for (const codec::ValenceAttributeReport& a : encoded->attributes) {
+            j.beginObject();
+            j.field("kind", attributeName(a.kind));
+            j.field("set", uint64_t(a.set));
+            j.field("bits", uint64_t(a.bits));
+            j.field("bytes", uint64_t(a.bytes));
+            j.field("bits_per_vertex", double(a.bytes) * 8.0 / vn);
+            j.field("max_error", a.max_error);
+            j.endObject();
+        }
+        j.endArray();
         j.endObject();
         std::fputs(j.str().c_str(), stdout);
         std::fputs("\n", stdout);
         return kExitOk;
     }
-    std::printf("wrote %s: %zu bytes (%.2f bits/vertex: connectivity %.2f, positions %.2f, normals %.2f)\n",
+    std::printf("wrote %s: %zu bytes (%.2f bits/vertex: connectivity %.2f, positions %.2f, normals %.2f",
                 out.c_str(), encoded->bytes.size(), double(encoded->bytes.size()) * 8.0 / vn,
                 double(encoded->connectivity_bytes) * 8.0 / vn, double(encoded->position_bytes) * 8.0 / vn,
                 double(encoded->normal_bytes) * 8.0 / vn);
+    for (const codec::ValenceAttributeReport& a : encoded->attributes)
+        std::printf(", %s %u: %.2f", attributeName(a.kind), a.set, double(a.bytes) * 8.0 / vn);
+    std::printf(")\n");
     return kExitOk;
 }
 

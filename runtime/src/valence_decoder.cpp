@@ -2,7 +2,9 @@
 // conquest engine shared with the encoder (lodrt/detail/valence_model.h); this file supplies the
 // stream reading side of it, then decodes positions (multi-parallelogram prediction over the decoded
 // corner table: the order and parallelograms planned from the connectivity first, then the residuals
-// in one sequential pass) and normals. Everything lives in caller memory; every value read is checked.
+// in one sequential pass, seam copies taking their twin's position) and normals, then the attribute
+// table's UV sets and colours (over the same plan) and tangents. Everything lives in caller memory;
+// every value read is checked.
 
 #include <cmath>
 #include <cstring>
@@ -309,6 +311,70 @@ struct ConnectivityReader {
     Result onTriangle(uint32_t, uint32_t) { return Result::Ok; }
 };
 
+// One attribute record (format.h, kValenceFlagAttributes), checked against the ones before it.
+bool readAttributeRecord(const uint8_t* p, uint32_t index, const ValenceInfo& v, ValenceAttribute* a) {
+    a->kind = p[0];
+    a->components = p[1];
+    a->bits = p[2];
+    a->predictor = p[3];
+    a->set = read16(p + 4);
+    if (read16(p + 6) != 0) return false;
+    for (int j = 0; j < 4; ++j) {
+        a->min[j] = readFloat(p + 8 + 4 * j);
+        a->size[j] = readFloat(p + 24 + 4 * j);
+        if (!std::isfinite(a->min[j]) || !std::isfinite(a->size[j]) || a->size[j] < 0.0f) return false;
+    }
+    a->bytes = read32(p + 40);
+    a->raw_bytes = read32(p + 44);
+    if (a->bits < kValenceMinAttributeBits || a->bits > kValenceMaxAttributeBits) return false;
+    if (v.vertex_count > uint64_t(kValenceAttributesPerByte) * (uint64_t(a->bytes) + 1)) return false;
+    uint32_t quantized = 0; // components with a range
+    if (a->kind == kValenceAttributeUv) {
+        if (a->components != 2 || a->predictor > kValencePredictUvGeometric) return false;
+        quantized = 2;
+    } else if (a->kind == kValenceAttributeColor) {
+        if ((a->components != 3 && a->components != 4) || a->predictor == kValencePredictUvGeometric ||
+            a->predictor > kValencePredictNeighbourMeanDecorrelated)
+            return false;
+        quantized = a->components;
+    } else if (a->kind == kValenceAttributeTangent) {
+        if (a->components != 4 || a->set != 0) return false;
+        if (a->predictor != kValenceNoReference &&
+            (a->predictor >= index || v.attributes[a->predictor].kind != kValenceAttributeUv))
+            return false;
+    } else {
+        return false;
+    }
+    for (uint32_t j = quantized; j < 4; ++j)
+        if (a->min[j] != 0.0f || a->size[j] != 0.0f) return false;
+    return true;
+}
+
+// The attribute table after the header (version 7); adds its own and its attributes' bytes to *total.
+Result readAttributeTable(const uint8_t* data, size_t size, ValenceInfo* v, uint64_t* total) {
+    if (size < uint64_t(kValenceHeaderSize) + kValenceAttributeTablePrefix) return Result::Truncated;
+    const uint8_t* prefix = data + kValenceHeaderSize;
+    const uint32_t count = read32(prefix);
+    if (count == 0 || count > kValenceMaxAttributes) return Result::CorruptStream;
+    v->twin_bytes = read32(prefix + 4);
+    v->twin_shift = prefix[8];
+    if (v->twin_shift > kValenceMaxTwinShift || prefix[9] != 0 || prefix[10] != 0 || prefix[11] != 0 ||
+        (v->twin_bytes == 0 && v->twin_shift != 0))
+        return Result::CorruptStream;
+    const uint64_t table = kValenceAttributeTablePrefix + uint64_t(count) * kValenceAttributeRecordSize;
+    if (size < kValenceHeaderSize + table) return Result::Truncated;
+    *total += table + v->twin_bytes;
+    for (uint32_t i = 0; i < count; ++i) {
+        ValenceAttribute& a = v->attributes[i];
+        if (!readAttributeRecord(prefix + kValenceAttributeTablePrefix + size_t(i) * kValenceAttributeRecordSize, i,
+                                 *v, &a))
+            return Result::CorruptStream;
+        *total += uint64_t(a.bytes) + a.raw_bytes;
+    }
+    v->attribute_count = count;
+    return Result::Ok;
+}
+
 } // namespace
 
 Result valenceReadInfo(const uint8_t* data, size_t size, ValenceInfo* info) {
@@ -317,11 +383,15 @@ Result valenceReadInfo(const uint8_t* data, size_t size, ValenceInfo* info) {
     if (size < 4) return Result::Truncated;
     if (read32(data) != kValenceMagic) return Result::BadMagic;
     if (size < 6) return Result::Truncated;
-    if (read16(data + 4) != kValenceVersion) return Result::UnsupportedVersion;
+    const uint16_t version = read16(data + 4);
+    if (version != kValenceVersion && version != kValenceVersionWithoutAttributes) return Result::UnsupportedVersion;
     if (size < kValenceHeaderSize) return Result::Truncated;
     const uint16_t flags = read16(data + 6);
     if (flags & ~kValenceKnownFlags) return Result::CorruptStream;
+    // Version 7 is the attribute table's: it must be there, and only there.
+    if (((flags & kValenceFlagAttributes) != 0) != (version == kValenceVersion)) return Result::CorruptStream;
     ValenceInfo v;
+    v.version = version;
     v.vertex_count = read32(data + 8);
     v.triangle_count = read32(data + 12);
     v.closed_vertex_count = read32(data + 16);
@@ -358,8 +428,12 @@ Result valenceReadInfo(const uint8_t* data, size_t size, ValenceInfo* info) {
         v.vertex_count > uint64_t(kValencePositionsPerByte) * (uint64_t(v.position_bytes) + 1) ||
         (v.has_normals && v.vertex_count > uint64_t(kValenceNormalsPerByte) * (uint64_t(v.normal_bytes) + 1)))
         return Result::CorruptStream;
-    const uint64_t total = uint64_t(kValenceHeaderSize) + v.connectivity_bytes + v.position_bytes +
-                           uint64_t(v.position_raw_bytes) + v.normal_bytes + uint64_t(v.normal_raw_bytes);
+    uint64_t total = uint64_t(kValenceHeaderSize) + v.connectivity_bytes + v.position_bytes +
+                     uint64_t(v.position_raw_bytes) + v.normal_bytes + uint64_t(v.normal_raw_bytes);
+    if (flags & kValenceFlagAttributes) {
+        const Result r = readAttributeTable(data, size, &v, &total);
+        if (r != Result::Ok) return r;
+    }
     if (size < total) return Result::Truncated;
     if (size > total) return Result::TrailingBytes;
     *info = v;
@@ -372,8 +446,17 @@ namespace {
 struct ScratchLayout {
     size_t corner_vertex, corner_opposite, vertex_flags, vertex_corner, vertex_valence, node_vertex, node_prev,
         node_next, node_free, node_corner, completion, stack_head, stack_size, final_of, final_done, qpos, qpos_final,
-        decoded, plan_neighbour, plan_triples, normal_sum, qnorm, total;
+        decoded, plan_neighbour, plan_triples, normal_sum, qnorm, attr_closed, attr_final[kValenceMaxAttributes],
+        tangent_sum, plan_boundary, twin_head, twin_next, twin_of, total;
+    size_t twin_slots;
 };
+
+// Hash slots of the twin grid: a power of two at least twice the closed vertices (and 16).
+size_t twinSlots(size_t closed_vertices) {
+    size_t n = kValenceTwinMinSlots;
+    while (n < 2 * closed_vertices) n *= 2;
+    return n;
+}
 
 ScratchLayout layout(const ValenceInfo& info) {
     ScratchLayout l;
@@ -407,6 +490,24 @@ ScratchLayout layout(const ValenceInfo& info) {
     l.plan_triples = take(9 * tc * 4);
     l.normal_sum = take(info.has_normals ? 3 * vn * 8 : 0);
     l.qnorm = take(info.has_normals ? 2 * vn * 4 : 0);
+    // Attributes: one closed-vertex array reused by each UV or colour set in turn (4 per vertex), each
+    // attribute's quantized values in final order (a tangent keeps its octahedral pair), and the
+    // tangents' face sums.
+    bool tangents = false;
+    l.attr_closed = take(info.attribute_count > 0 ? 4 * vc * 4 : 0);
+    for (uint32_t i = 0; i < kValenceMaxAttributes; ++i) {
+        const ValenceAttribute& a = info.attributes[i];
+        const bool used = i < info.attribute_count;
+        tangents = tangents || (used && a.kind == kValenceAttributeTangent);
+        l.attr_final[i] = take(used ? (a.kind == kValenceAttributeTangent ? 2 : a.components) * vn * 4 : 0);
+    }
+    l.tangent_sum = take(tangents ? 4 * vn * 8 : 0);
+    const bool twins = info.twin_bytes > 0;
+    l.twin_slots = twins ? twinSlots(vc) : 0;
+    l.plan_boundary = take(twins ? vc : 0);
+    l.twin_head = take(l.twin_slots * 4);
+    l.twin_next = take(twins ? vc * 4 : 0);
+    l.twin_of = take(twins ? vn * 4 : 0);
     l.total = at;
     return l;
 }
@@ -622,8 +723,50 @@ struct PositionReader {
 // prediction triples) comes from the connectivity alone, then one sequential pass of residuals. The
 // node arrays are free again: they hold the order's degree counts and stacks. Fills qpos_final and
 // the output positions.
+// Position twins (docs/format/valence.md "Twins"): the boundary vertices coded so far in a grid, and
+// the twin decisions' own range-coded part. Inactive (no grid) in a stream without twins.
+struct TwinReader {
+    RangeDecoder rd;
+    detail::TwinGrid grid;
+    uint32_t models[detail::kTwinContexts];
+    uint32_t* twin_of = nullptr; // per final vertex: its twin partner, kNone
+    const uint8_t* boundary = nullptr;
+    bool active = false;
+
+    bool init(const uint8_t* part, const ValenceInfo& info, const ScratchLayout& l, Scratch s) {
+        active = info.twin_bytes > 0;
+        if (!active) return true;
+        if (!rd.init(part, info.twin_bytes)) return false;
+        detail::initRangeProbs(models, detail::kTwinContexts);
+        grid.head = s.u32(l.twin_head);
+        grid.next = s.u32(l.twin_next);
+        grid.mask = uint32_t(l.twin_slots - 1);
+        grid.shift = info.twin_shift;
+        grid.qmax = int32_t((1u << info.position_bits) - 1);
+        for (size_t i = 0; i < l.twin_slots; ++i) grid.head[i] = kNone;
+        twin_of = s.u32(l.twin_of);
+        for (size_t i = 0; i < info.vertex_count; ++i) twin_of[i] = kNone;
+        boundary = s.base + l.plan_boundary;
+        return true;
+    }
+    // The twin of plan entry i predicted at `pred`, kNone when it has none or the stream says no.
+    uint32_t twin(uint32_t i, const int32_t* qpos, const int32_t pred[3], const uint32_t* t, uint32_t n,
+                  uint32_t neighbour) {
+        if (!active || !boundary[i]) return kNone;
+        uint32_t ctx = 0;
+        const uint32_t candidate = detail::twinCandidate(grid, qpos, pred, t, n, neighbour, &ctx);
+        if (candidate == kNone || !rd.bit(models[ctx])) return kNone;
+        return candidate;
+    }
+    void pair(uint32_t a, uint32_t b) {
+        if (twin_of[a] == kNone) twin_of[a] = b;
+        if (twin_of[b] == kNone) twin_of[b] = a;
+    }
+};
+
 Result decodePositions(const uint8_t* data, const uint8_t* stream, const ValenceInfo& info, const ScratchLayout& l,
-                       Scratch s, const detail::ConquestArrays& a, uint32_t final_count, const ValenceOutput& output) {
+                       Scratch s, const detail::ConquestArrays& a, uint32_t final_count, const ValenceOutput& output,
+                       detail::PositionPlan& plan) {
     const size_t vn = info.vertex_count;
     const uint32_t* final_of = s.u32(l.final_of);
     PositionReader reader;
@@ -642,12 +785,15 @@ Result decodePositions(const uint8_t* data, const uint8_t* stream, const Valence
     uint8_t* final_done = s.base + l.final_done;
     // An empty mesh has no scratch (null base): memset's pointer must not be null even for 0 bytes.
     if (vn > 0) std::memset(final_done, 0, vn);
-    detail::PositionPlan plan;
     plan.order = a.completion;
     plan.count = a.node_corner;
     plan.neighbour = s.u32(l.plan_neighbour);
     plan.triples = s.u32(l.plan_triples);
     plan.max_triples = 3 * info.closed_triangle_count;
+    TwinReader twins;
+    if (!twins.init(stream + info.position_bytes + size_t(info.position_raw_bytes), info, l, s))
+        return Result::CorruptStream;
+    plan.boundary = twins.active ? s.base + l.plan_boundary : nullptr;
     if (!detail::planPositions(a.corner_vertex, a.corner_opposite, a.vertex_corner, a.vertex_flags, a.vertex_valence,
                                info.closed_vertex_count, s.base + l.decoded, a.node_vertex, a.node_prev, a.node_next,
                                &plan))
@@ -669,19 +815,27 @@ Result decodePositions(const uint8_t* data, const uint8_t* stream, const Valence
                 predictVertex<true>(qpos, triple, n, plan.neighbour[i], last, pred, &scale, spread);
             else
                 predictVertex<false>(qpos, triple, n, plan.neighbour[i], last, pred, &scale, spread);
-            if (!reader.vertex(detail::scaleContext(scale, n), spread, pred, q, triple, n, plan.neighbour[i]))
+            const uint32_t twin = twins.twin(i, qpos, pred, triple, n, plan.neighbour[i]);
+            if (twin != kNone) {
+                for (int j = 0; j < 3; ++j) q[j] = qpos[3 * size_t(twin) + size_t(j)];
+                twins.pair(fid, final_of[twin]);
+            } else if (!reader.vertex(detail::scaleContext(scale, n), spread, pred, q, triple, n, plan.neighbour[i])) {
                 return Result::CorruptStream;
+            }
             qf[0] = q[0];
             qf[1] = q[1];
             qf[2] = q[2];
             final_done[fid] = 1;
         }
+        if (twins.active && twins.boundary[i]) detail::twinInsert(twins.grid, qpos, v);
         triple += 3 * size_t(n);
         last[0] = q[0];
         last[1] = q[1];
         last[2] = q[2];
-        if (reader.pos.overrun() || reader.pos_raw.overrun()) return Result::CorruptStream;
+        if (reader.pos.overrun() || reader.pos_raw.overrun() || (twins.active && twins.rd.overrun()))
+            return Result::CorruptStream;
     }
+    if (twins.active && !twins.rd.finishedExactly()) return Result::CorruptStream;
     for (size_t fid = final_count; fid < vn; ++fid) {
         int32_t* qf = &qpos_final[3 * fid];
         const uint32_t no_spread[3] = {0, 0, 0};
@@ -709,6 +863,7 @@ Result decodeNormals(const uint8_t* stream, const ValenceInfo& info, const Scrat
     const int32_t* qpos_final = reinterpret_cast<const int32_t*>(s.base + l.qpos_final);
     int64_t* sum = reinterpret_cast<int64_t*>(s.base + l.normal_sum);
     uint32_t* qnorm = s.u32(l.qnorm);
+    const uint32_t* twin_of = info.twin_bytes > 0 ? s.u32(l.twin_of) : nullptr;
     for (size_t i = 0; i < 3 * vn; ++i) sum[i] = 0;
     for (size_t t = 0; t < tn; ++t) detail::addFaceNormal(qpos_final, &output.indices[3 * t], sum);
     ResidualModel<2, kValenceNormalContexts> nrm_model;
@@ -719,7 +874,7 @@ Result decodeNormals(const uint8_t* stream, const ValenceInfo& info, const Scrat
     uint32_t nrm_length[2] = {0, 0};
     for (size_t x = 0; x < vn; ++x) {
         uint32_t p[2];
-        detail::predictNormal(&sum[3 * x], qnorm, x, nb, p);
+        detail::predictNormalTwin(&sum[3 * x], qnorm, x, twin_of ? twin_of[x] : kNone, nb, p);
         for (int j = 0; j < 2; ++j) {
             int32_t res;
             uint32_t length;
@@ -738,6 +893,162 @@ Result decodeNormals(const uint8_t* stream, const ValenceInfo& info, const Scrat
     return Result::Ok;
 }
 
+// Residual models of one UV or colour set (docs/format/valence.md "Attributes").
+using AttributeModel = ResidualModel<4, kValenceAttributeContexts>;
+
+// Reads one vertex's UV or colour value given its prediction; false on a corrupt stream.
+inline bool readAttributeValue(RangeDecoder& rd, BitReader& raw, AttributeModel& model, uint32_t components,
+                               uint32_t bits, bool decorrelated, uint32_t n, const int32_t* pred,
+                               uint32_t* prev_length, uint32_t* prev_sign, int32_t* out) {
+    const uint32_t mask = (1u << bits) - 1;
+    const int32_t half = int32_t(1) << (bits - 1);
+    uint32_t earlier = 0, first_sign = 0, first = 0;
+    for (uint32_t j = 0; j < components; ++j) {
+        int32_t res;
+        uint32_t length;
+        const uint32_t ctx = detail::attributeContext(j, n, j == 0 ? *prev_length : earlier);
+        if (!model.decode(rd, raw, int(j), ctx, &res, &length, prev_sign[j] * 3 + first_sign)) return false;
+        if (res < -half || res >= half) return false;
+        prev_sign[j] = detail::signClass(res);
+        if (j == 0) {
+            first_sign = prev_sign[0];
+            *prev_length = length;
+        }
+        earlier = length > earlier ? length : earlier;
+        // Decorrelated channels 1..: the coded value is the residual minus channel 0's (mod 2^bits).
+        const uint32_t r = uint32_t(res) + (decorrelated && j > 0 ? first : 0u);
+        if (j == 0) first = uint32_t(res);
+        out[j] = int32_t((uint32_t(pred[j]) + r) & mask);
+    }
+    return true;
+}
+
+// A UV or colour set: predicted over the position plan (same order, same triples), copies taking their
+// final vertex's value, then the vertices no triangle uses from the previous value.
+LODRT_VALENCE_NOINLINE Result decodeAttribute(const uint8_t* stream, const ValenceInfo& info, uint32_t index,
+                                              const ScratchLayout& l, Scratch s, const detail::PositionPlan& plan,
+                                              uint32_t final_count, const ValenceOutput& output) {
+    const ValenceAttribute& at = info.attributes[index];
+    const size_t vn = info.vertex_count;
+    const uint32_t c = at.components;
+    const bool decorrelated = detail::decorrelatedChannels(at.predictor);
+    RangeDecoder rd;
+    if (!rd.init(stream, at.bytes)) return Result::CorruptStream;
+    BitReader raw;
+    raw.init(stream + at.bytes, at.raw_bytes);
+    AttributeModel model;
+    model.init();
+    const uint32_t* final_of = s.u32(l.final_of);
+    const int32_t* qpos = reinterpret_cast<const int32_t*>(s.base + l.qpos);
+    int32_t* qa = reinterpret_cast<int32_t*>(s.base + l.attr_closed);
+    int32_t* qf = reinterpret_cast<int32_t*>(s.base + l.attr_final[index]);
+    uint8_t* final_done = s.base + l.final_done;
+    if (vn > 0) std::memset(final_done, 0, vn);
+    const int32_t qmax = int32_t((1u << at.bits) - 1);
+    int32_t last[4] = {(qmax + 1) / 2, (qmax + 1) / 2, (qmax + 1) / 2, (qmax + 1) / 2};
+    uint32_t prev_length = 0, prev_sign[4] = {0, 0, 0, 0};
+    const uint32_t* triple = plan.triples;
+    for (uint32_t i = 0; i < plan.ordered; ++i) {
+        const uint32_t v = plan.order[i], n = plan.count[i];
+        const uint32_t fid = final_of[v];
+        int32_t* q = &qa[4 * size_t(v)];
+        int32_t* f = &qf[c * size_t(fid)];
+        if (final_done[fid]) {
+            for (uint32_t j = 0; j < c; ++j) q[j] = f[j];
+        } else {
+            int32_t pred[4];
+            detail::predictAttribute(qa, c, qpos, v, triple, n, plan.neighbour[i], last, at.predictor, qmax, pred);
+            if (!readAttributeValue(rd, raw, model, c, at.bits, decorrelated, n, pred, &prev_length, prev_sign, q))
+                return Result::CorruptStream;
+            for (uint32_t j = 0; j < c; ++j) f[j] = q[j];
+            final_done[fid] = 1;
+        }
+        triple += 3 * size_t(n);
+        for (uint32_t j = 0; j < c; ++j) last[j] = q[j];
+        if (rd.overrun() || raw.overrun()) return Result::CorruptStream;
+    }
+    for (size_t fid = final_count; fid < vn; ++fid) {
+        int32_t* f = &qf[c * fid];
+        if (!readAttributeValue(rd, raw, model, c, at.bits, decorrelated, 0, last, &prev_length, prev_sign, f))
+            return Result::CorruptStream;
+        for (uint32_t j = 0; j < c; ++j) last[j] = f[j];
+        if (rd.overrun() || raw.overrun()) return Result::CorruptStream;
+    }
+    if (!rd.finishedExactly() || !raw.finishedExactly()) return Result::CorruptStream;
+    float* out = output.attributes[index];
+    if (out) {
+        float step[4] = {0.0f, 0.0f, 0.0f, 0.0f};
+        for (uint32_t j = 0; j < c; ++j) step[j] = qmax > 0 ? at.size[j] / float(qmax) : 0.0f;
+        for (size_t x = 0; x < vn; ++x)
+            for (uint32_t j = 0; j < c; ++j) out[c * x + j] = at.min[j] + float(qf[c * x + j]) * step[j];
+    }
+    return Result::Ok;
+}
+
+// Tangents, in final order after the UV and colour sets before them: the octahedral pair predicted from
+// the UV tangent direction summed over the vertex's triangles (on its UV attribute), the handedness in
+// the context of their summed UV orientation.
+LODRT_VALENCE_NOINLINE Result decodeTangent(const uint8_t* stream, const ValenceInfo& info, uint32_t index,
+                                            const ScratchLayout& l, Scratch s, const ValenceOutput& output) {
+    const ValenceAttribute& at = info.attributes[index];
+    const size_t vn = info.vertex_count, tn = info.triangle_count;
+    RangeDecoder rd;
+    if (!rd.init(stream, at.bytes)) return Result::CorruptStream;
+    BitReader raw;
+    raw.init(stream + at.bytes, at.raw_bytes);
+    const int32_t* qpos_final = reinterpret_cast<const int32_t*>(s.base + l.qpos_final);
+    int64_t* sum = reinterpret_cast<int64_t*>(s.base + l.tangent_sum);
+    uint32_t* qt = s.u32(l.attr_final[index]);
+    for (size_t i = 0; i < 4 * vn; ++i) sum[i] = 0;
+    if (at.predictor != kValenceNoReference) {
+        const int32_t* quv = reinterpret_cast<const int32_t*>(s.base + l.attr_final[at.predictor]);
+        for (size_t t = 0; t < tn; ++t) detail::addFaceTangent(qpos_final, quv, &output.indices[3 * t], sum);
+    }
+    ResidualModel<2, kValenceNormalContexts> model;
+    model.init();
+    uint32_t sign_models[kValenceTangentSignContexts];
+    detail::initRangeProbs(sign_models, kValenceTangentSignContexts);
+    const uint32_t nb = at.bits, mask = (1u << nb) - 1;
+    const int32_t half = int32_t(1) << (nb - 1);
+    uint32_t length[2] = {0, 0};
+    float* out = output.attributes[index];
+    for (size_t x = 0; x < vn; ++x) {
+        uint32_t p[2];
+        detail::predictNormal(&sum[4 * x], qt, x, nb, p);
+        for (int j = 0; j < 2; ++j) {
+            int32_t res;
+            uint32_t k;
+            const uint32_t ctx = length[j] < kValenceNormalContexts ? length[j] : kValenceNormalContexts - 1;
+            if (!model.decode(rd, raw, j, ctx, &res, &k)) return Result::CorruptStream;
+            if (res < -half || res >= half) return Result::CorruptStream;
+            length[j] = k;
+            qt[2 * x + size_t(j)] = (p[j] + uint32_t(res)) & mask;
+        }
+        const uint32_t negative = rd.bit(sign_models[detail::tangentSignContext(sum[4 * x + 3])]);
+        if (out) {
+            octahedralDecode(&qt[2 * x], nb, &out[4 * x]);
+            out[4 * x + 3] = negative ? -1.0f : 1.0f;
+        }
+        if (rd.overrun() || raw.overrun()) return Result::CorruptStream;
+    }
+    if (!rd.finishedExactly() || !raw.finishedExactly()) return Result::CorruptStream;
+    return Result::Ok;
+}
+
+// Every attribute of the table, in table order, from `stream` (just after the normal parts).
+Result decodeAttributes(const uint8_t* stream, const ValenceInfo& info, const ScratchLayout& l, Scratch s,
+                        const detail::PositionPlan& plan, uint32_t final_count, const ValenceOutput& output) {
+    for (uint32_t i = 0; i < info.attribute_count; ++i) {
+        const ValenceAttribute& at = info.attributes[i];
+        const Result r = at.kind == kValenceAttributeTangent
+                             ? decodeTangent(stream, info, i, l, s, output)
+                             : decodeAttribute(stream, info, i, l, s, plan, final_count, output);
+        if (r != Result::Ok) return r;
+        stream += at.bytes + size_t(at.raw_bytes);
+    }
+    return Result::Ok;
+}
+
 } // namespace
 
 Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& output) {
@@ -752,10 +1063,15 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
     if (output.index_capacity < 3 * tn || output.position_capacity < 3 * vn || output.scratch_size < l.total ||
         (output.normals && info.has_normals && output.normal_capacity < 3 * vn))
         return Result::BufferTooSmall;
+    for (uint32_t i = 0; i < info.attribute_count; ++i)
+        if (output.attributes[i] && output.attribute_capacity[i] < size_t(info.attributes[i].components) * vn)
+            return Result::BufferTooSmall;
     const Scratch s{static_cast<uint8_t*>(output.scratch)};
 
     // 1. Connectivity: the conquest, then the duplicate list.
     const uint8_t* stream = data + kValenceHeaderSize;
+    if (info.attribute_count > 0)
+        stream += kValenceAttributeTablePrefix + size_t(info.attribute_count) * kValenceAttributeRecordSize;
     detail::Conquest<ConnectivityReader> conquest;
     ConnectivityReader reader;
     r = runConquest(stream, info, l, s, conquest, reader);
@@ -766,10 +1082,16 @@ Result valenceDecode(const uint8_t* data, size_t size, const ValenceOutput& outp
     r = writeTriangles(info, conquest.a, s.u32(l.final_of), output.indices);
     if (r != Result::Ok) return r;
     stream += info.connectivity_bytes;
-    r = decodePositions(data, stream, info, l, s, conquest.a, final_count, output);
+    detail::PositionPlan plan;
+    r = decodePositions(data, stream, info, l, s, conquest.a, final_count, output, plan);
     if (r != Result::Ok) return r;
-    stream += info.position_bytes + size_t(info.position_raw_bytes);
-    return info.has_normals ? decodeNormals(stream, info, l, s, output) : Result::Ok;
+    stream += info.position_bytes + size_t(info.position_raw_bytes) + info.twin_bytes;
+    if (info.has_normals) {
+        r = decodeNormals(stream, info, l, s, output);
+        if (r != Result::Ok) return r;
+    }
+    stream += info.normal_bytes + size_t(info.normal_raw_bytes);
+    return decodeAttributes(stream, info, l, s, plan, final_count, output);
 }
 
 } // namespace lodrt

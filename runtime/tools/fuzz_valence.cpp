@@ -24,6 +24,13 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     out.normal_capacity = normals.size();
     out.scratch = scratch.data();
     out.scratch_size = scratch.size() * 8;
+    // Every attribute of the table (UV sets, colours, tangents) into a buffer of its exact size.
+    std::vector<std::vector<float>> attributes(info.attribute_count);
+    for (uint32_t i = 0; i < info.attribute_count; ++i) {
+        attributes[i].resize(size_t(info.attributes[i].components) * info.vertex_count);
+        out.attributes[i] = attributes[i].data();
+        out.attribute_capacity[i] = attributes[i].size();
+    }
     if (lodrt::valenceDecode(data, size, out) == lodrt::Result::Ok) {
         for (uint32_t i : indices)
             if (i >= info.vertex_count) __builtin_trap();

@@ -830,8 +830,8 @@ std::string describe(lodrt::Result r, const std::vector<uint8_t>& bytes) {
         break;
     case lodrt::Result::UnsupportedVersion:
         what = "format version " + std::to_string(bytes.size() >= 6 ? bytes[4] | (bytes[5] << 8) : 0) +
-               " is not supported (this decoder reads version " + std::to_string(kValenceVersion) +
-               "; re-encode the mesh)";
+               " is not supported (this decoder reads versions " + std::to_string(kValenceVersionWithoutAttributes) +
+               " and " + std::to_string(kValenceVersion) + "; re-encode the mesh)";
         break;
     case lodrt::Result::TrailingBytes:
         what = "bytes after the streams the header announces";
@@ -854,6 +854,20 @@ Status checkEncodable(const Mesh& mesh, const ValenceEncodeOptions& options, boo
                             " outside [8, 16]");
     if (normals && (options.normal_bits < kValenceMinNormalBits || options.normal_bits > kValenceMaxNormalBits))
         return invalidInput("valence encoder: normal bits " + std::to_string(options.normal_bits) + " outside [4, 16]");
+    if (options.encode_attributes) {
+        const size_t count = mesh.uvs.size() + (mesh.hasColors() ? 1 : 0) + (mesh.hasTangents() ? 1 : 0);
+        if (count > kValenceMaxAttributes)
+            return invalidInput("valence encoder: " + std::to_string(count) + " attributes exceed the format limit of " +
+                                std::to_string(kValenceMaxAttributes));
+        const std::pair<const char*, uint32_t> bits[] = {
+            {"UV", mesh.uvs.empty() ? kValenceMinAttributeBits : options.uv_bits},
+            {"colour", mesh.hasColors() ? options.color_bits : kValenceMinAttributeBits},
+            {"tangent", mesh.hasTangents() ? options.tangent_bits : kValenceMinAttributeBits}};
+        for (const auto& [name, b] : bits)
+            if (b < kValenceMinAttributeBits || b > kValenceMaxAttributeBits)
+                return invalidInput(std::string("valence encoder: ") + name + " bits " + std::to_string(b) +
+                                    " outside [4, 16]");
+    }
     const size_t vn = mesh.vertexCount(), fn = mesh.faceCount();
     // Cutting can copy each corner's vertex and cap each boundary edge: keep the closed counts in range.
     if (vn > kValenceMaxCount / 4 || fn > kValenceMaxCount / 4)
@@ -996,8 +1010,9 @@ public:
     PositionWalk(const lodrt::detail::ConquestArrays& a, const FinalOrder& order, const Quantization& quantized,
                  size_t vn, uint32_t vc, uint32_t tc)
         : order_(order), quantized_(quantized), qpos_(3 * size_t(vc), 0), qpos_final_(3 * vn), plan_order_(vc),
-          count_(vc), neighbour_(vc), triples_(9 * size_t(tc)) {
+          count_(vc), neighbour_(vc), triples_(9 * size_t(tc)), boundary_(vc, 0) {
         plan_.order = plan_order_.data();
+        plan_.boundary = boundary_.data();
         plan_.count = count_.data();
         plan_.neighbour = neighbour_.data();
         plan_.triples = triples_.get();
@@ -1009,6 +1024,7 @@ public:
                                                     a.vertex_flags, a.vertex_valence, vc, ordered.data(),
                                                     stack0.data(), stack1.data(), stack2.data(), &plan_);
         }
+        twin_.assign(plan_.ordered, kNone);
         isolated_.resize(vn - order.referenced);
         final_done_.assign(vn, 0);
         for (size_t v = 0; v < vn; ++v)
@@ -1021,6 +1037,16 @@ public:
     const I32Array& finalPositions() const { return qpos_final_; }
     // The prediction triples are only read by walks.
     void releasePlan() { triples_.reset(); }
+    // Quantized positions per engine vertex, complete after a walk of the whole plan.
+    const int32_t* closedPositions() const { return qpos_.data(); }
+    // Calls f(engine vertex, its triples, their count, its neighbour) for every plan entry in order.
+    template <class F> void forEachPlanned(F&& f) const {
+        const uint32_t* triple = plan_.triples;
+        for (uint32_t i = 0; i < plan_.ordered; ++i) {
+            f(plan_order_[i], triple, count_[i], neighbour_[i]);
+            triple += 3 * size_t(count_[i]);
+        }
+    }
 
     // Visits every coded coordinate in stream order with everything its coding needs. The contexts do
     // not depend on how a coordinate is coded (a snapped one counts with the length and sign of
@@ -1044,11 +1070,13 @@ public:
             int32_t* q = &qpos_[3 * size_t(ev)];
             for (int j = 0; j < 3; ++j) q[j] = quantized_.qpos[3 * size_t(src) + size_t(j)];
             if (!final_done_[fid]) {
-                int32_t pred[3];
-                uint32_t scale = 0, spread[3];
-                lodrt::detail::predictFromPlan(qpos_.data(), t, n, neighbour_[i], last, pred, &scale, spread);
-                vertex(mask, prev_sign, q, pred, lodrt::detail::scaleContext(scale, n), spread, t, n, neighbour_[i],
-                       code);
+                if (twin_[i] == kNone) { // a twin takes its partner's position: nothing coded here
+                    int32_t pred[3];
+                    uint32_t scale = 0, spread[3];
+                    lodrt::detail::predictFromPlan(qpos_.data(), t, n, neighbour_[i], last, pred, &scale, spread);
+                    vertex(mask, prev_sign, q, pred, lodrt::detail::scaleContext(scale, n), spread, t, n,
+                           neighbour_[i], code);
+                }
                 for (int j = 0; j < 3; ++j) qpos_final_[3 * size_t(fid) + size_t(j)] = q[j];
                 final_done_[fid] = 1;
             }
@@ -1067,7 +1095,94 @@ public:
         }
     }
 
+    // Position twins (docs/format/valence.md "Twins"): with cells of 2^shift units, every boundary
+    // vertex's candidate and whether it is the vertex's twin, in stream order (the decisions the twin
+    // part codes); the hits are skipped by later walks and paired in twin_of (final vertices).
+    struct TwinDecision {
+        uint32_t ctx;
+        bool hit;
+    };
+    std::vector<TwinDecision> decideTwins(uint32_t shift, std::vector<uint32_t>& twin_of) {
+        std::fill(final_done_.begin(), final_done_.end(), uint8_t(0));
+        std::fill(twin_.begin(), twin_.end(), kNone);
+        const uint32_t vc = uint32_t(qpos_.size() / 3);
+        size_t slots = kValenceTwinMinSlots;
+        while (slots < 2 * size_t(vc)) slots *= 2;
+        U32Array head(slots, kNone), next(vc, kNone);
+        lodrt::detail::TwinGrid grid;
+        grid.head = head.data();
+        grid.next = next.data();
+        grid.mask = uint32_t(slots - 1);
+        grid.shift = shift;
+        grid.qmax = int32_t(quantized_.qmax);
+        std::vector<TwinDecision> out;
+        forEachEntry([&](uint32_t i, uint32_t ev, uint32_t fid, const int32_t* pred, const uint32_t* t, uint32_t n) {
+            if (pred && boundary_[i]) {
+                uint32_t ctx = 0;
+                const uint32_t c = lodrt::detail::twinCandidate(grid, qpos_.data(), pred, t, n, neighbour_[i], &ctx);
+                if (c != kNone) {
+                    const bool hit = std::equal(&qpos_[3 * size_t(c)], &qpos_[3 * size_t(c)] + 3, &qpos_[3 * size_t(ev)]);
+                    out.push_back({ctx, hit});
+                    if (hit) {
+                        twin_[i] = c;
+                        const uint32_t other = order_.final_of[c];
+                        if (twin_of[fid] == kNone) twin_of[fid] = other;
+                        if (twin_of[other] == kNone) twin_of[other] = fid;
+                    }
+                }
+            }
+            if (boundary_[i]) lodrt::detail::twinInsert(grid, qpos_.data(), ev);
+        });
+        return out;
+    }
+    // Bit length of the median prediction error (largest coordinate) of the boundary vertices: the
+    // twin grid's cell shift, so that a typical twin lies within the cells searched.
+    uint32_t twinShift() {
+        std::fill(final_done_.begin(), final_done_.end(), uint8_t(0));
+        std::vector<uint32_t> errors;
+        forEachEntry([&](uint32_t i, uint32_t ev, uint32_t, const int32_t* pred, const uint32_t*, uint32_t) {
+            if (!pred || !boundary_[i]) return;
+            uint32_t m = 0;
+            for (int j = 0; j < 3; ++j) m = std::max(m, uint32_t(std::abs(qpos_[3 * size_t(ev) + size_t(j)] - pred[j])));
+            errors.push_back(m);
+        });
+        if (errors.empty()) return 0;
+        std::nth_element(errors.begin(), errors.begin() + std::ptrdiff_t(errors.size() / 2), errors.end());
+        return std::min(lodrt::detail::bitLength(errors[errors.size() / 2]), kValenceMaxTwinShift);
+    }
+    bool anyTwin() const {
+        return std::any_of(twin_.begin(), twin_.end(), [](uint32_t t) { return t != kNone; });
+    }
+    void clearTwins() { std::fill(twin_.begin(), twin_.end(), kNone); }
+
 private:
+    // Plan entries in order with their engine vertex, final vertex and prediction (null for a copy of
+    // a vertex already coded); qpos_ holds every position up to the entry's own, final_done_ is kept.
+    template <class F> void forEachEntry(F&& f) {
+        const uint32_t qmax = quantized_.qmax;
+        int32_t last[3] = {int32_t(qmax + 1) / 2, int32_t(qmax + 1) / 2, int32_t(qmax + 1) / 2};
+        const uint32_t* triple = plan_.triples;
+        for (uint32_t i = 0; i < plan_.ordered; ++i) {
+            const uint32_t ev = plan_order_[i], n = count_[i];
+            const uint32_t* t = triple;
+            triple += 3 * size_t(n);
+            const uint32_t fid = order_.final_of[ev];
+            if (fid == kNone) continue;
+            int32_t* q = &qpos_[3 * size_t(ev)];
+            for (int j = 0; j < 3; ++j) q[j] = quantized_.qpos[3 * size_t(order_.source_of_engine[ev]) + size_t(j)];
+            if (!final_done_[fid]) {
+                int32_t pred[3];
+                uint32_t scale = 0, spread[3];
+                lodrt::detail::predictFromPlan(qpos_.data(), t, n, neighbour_[i], last, pred, &scale, spread);
+                f(i, ev, fid, pred, t, n);
+                final_done_[fid] = 1;
+            } else {
+                f(i, ev, fid, static_cast<const int32_t*>(nullptr), t, n);
+            }
+            for (int j = 0; j < 3; ++j) last[j] = q[j];
+        }
+    }
+
     // One vertex: `q` its coordinates, `t`/`n`/`nb` its plan entry (n = 0, nb = kNone: none).
     template <class Code>
     void vertex(uint32_t mask, uint32_t* prev_sign, const int32_t* q, const int32_t* pred, uint32_t ctx,
@@ -1108,6 +1223,8 @@ private:
     bool planned_ = false;
     std::vector<uint32_t> isolated_;
     U8Array final_done_;
+    U8Array boundary_;           // per plan entry: a dummy neighbour (plan_.boundary)
+    std::vector<uint32_t> twin_; // per plan entry: the twin whose position it takes, kNone
 };
 
 // Which components to snap and which to code with spread contexts: every component sized all four
@@ -1191,10 +1308,53 @@ void codePositions(const CodecArray<CodedValue>& walked, uint16_t flags_pos, Ran
     }
 }
 
+// Position twins: decided once on the grid whose cells fit the boundary vertices' median prediction
+// error, and coded only when at least an eighth of the decisions are hits (each decision costs a
+// bit at worst, a hit saves a whole position). Leaves twin_of empty and shift 0 without twins.
+void codeTwins(PositionWalk& walk, size_t vn, std::vector<uint32_t>& twin_of, uint32_t& shift,
+               std::vector<uint8_t>& bytes, ValenceEncodeResult& result) {
+    // Cells from one step finer than the median error to three steps coarser (a seam copy's
+    // prediction is worse than a typical boundary vertex's): the most hits wins (ties: the fewest
+    // decisions, then the finer cell).
+    const uint32_t median = walk.twinShift();
+    size_t best_hits = 0, best_decisions = 0;
+    shift = median;
+    bool first = true;
+    for (uint32_t step = 0; step <= 4; ++step) {
+        const uint32_t s = std::min(median + step - std::min(median, 1u), kValenceMaxTwinShift);
+        std::vector<uint32_t> scratch(vn, kNone);
+        const auto d = walk.decideTwins(s, scratch);
+        const size_t h = size_t(std::count_if(d.begin(), d.end(), [](const auto& x) { return x.hit; }));
+        if (first || h > best_hits || (h == best_hits && d.size() < best_decisions)) {
+            best_hits = h;
+            best_decisions = d.size();
+            shift = s;
+            first = false;
+        }
+    }
+    twin_of.assign(vn, kNone);
+    const auto decisions = walk.decideTwins(shift, twin_of);
+    const size_t hits = size_t(std::count_if(decisions.begin(), decisions.end(), [](const auto& d) { return d.hit; }));
+    if (hits == 0 || hits * 8 < decisions.size()) {
+        walk.clearTwins();
+        twin_of.clear();
+        shift = 0;
+        return;
+    }
+    result.twin_decisions = decisions.size();
+    result.twin_vertices = hits;
+    RangeEncoder rc;
+    uint32_t models[lodrt::detail::kTwinContexts];
+    initRangeProbs(models, lodrt::detail::kTwinContexts);
+    for (const auto& d : decisions) rc.bit(models[d.ctx], d.hit ? 1u : 0u);
+    bytes = rc.finish();
+}
+
 // Normals after all positions, in final order, each predicted from the exact sum of its faces' normals
 // on the quantized positions (the decoder's step 3).
 void codeNormals(const Mesh& mesh, uint32_t nb, const FinalOrder& order, const lodrt::detail::ConquestArrays& a,
-                 uint32_t tc, const I32Array& qpos_final, RangeEncoder& nrm, BitWriter& nrm_raw) {
+                 uint32_t tc, const I32Array& qpos_final, const uint32_t* twin_of, RangeEncoder& nrm,
+                 BitWriter& nrm_raw) {
     const size_t vn = mesh.vertexCount();
     U32Array qnorm(2 * vn);
     for (size_t i = 0; i < vn; ++i) {
@@ -1219,12 +1379,302 @@ void codeNormals(const Mesh& mesh, uint32_t nb, const FinalOrder& order, const l
     uint32_t nrm_length[2] = {0, 0};
     for (size_t x = 0; x < vn; ++x) {
         uint32_t p[2];
-        lodrt::detail::predictNormal(&sum[3 * x], qnorm.data(), x, nb, p);
+        lodrt::detail::predictNormalTwin(&sum[3 * x], qnorm.data(), x, twin_of ? twin_of[x] : kNone, nb, p);
         for (int j = 0; j < 2; ++j) {
             int32_t r = int32_t((qnorm[2 * x + size_t(j)] - p[j]) & mask);
             if (r >= half) r -= int32_t(mask) + 1;
             const uint32_t ctx = std::min(nrm_length[j], kValenceNormalContexts - 1);
             nrm_length[j] = nrm.residual(nrm_model, nrm_raw, j, ctx, r);
+        }
+    }
+}
+
+// ---- Attributes (format version 7): UV sets, colours, tangents (docs/format/valence.md "Attributes").
+
+using AttributeModel = ResidualModel<4, kValenceAttributeContexts>;
+
+// One attribute as the header's table records it, with its coded parts.
+struct CodedAttribute {
+    uint8_t kind = 0, components = 0, bits = 0, predictor = 0;
+    uint16_t set = 0;
+    float min[4] = {0, 0, 0, 0}, size[4] = {0, 0, 0, 0};
+    std::vector<uint8_t> range, raw;
+    double max_error = 0.0;
+};
+
+// Quantized UV or colour values, 4 per input vertex, in the attribute's own range: per component for
+// colours, one square range for a UV set (so that the geometric prediction's right angles stay right
+// angles in quantized units).
+Status quantizeAttribute(const Mesh& mesh, CodedAttribute& at, I32Array& q) {
+    const size_t vn = mesh.vertexCount();
+    const uint32_t c = at.components;
+    auto value = [&](size_t i, uint32_t j) -> float {
+        if (at.kind == kValenceAttributeUv) return j == 0 ? mesh.uvs[at.set][i].x : mesh.uvs[at.set][i].y;
+        const Vec4f& col = mesh.colors[i];
+        return j == 0 ? col.x : (j == 1 ? col.y : (j == 2 ? col.z : col.w));
+    };
+    float lo[4] = {0, 0, 0, 0}, hi[4] = {0, 0, 0, 0};
+    for (size_t i = 0; i < vn; ++i)
+        for (uint32_t j = 0; j < c; ++j) {
+            const float x = value(i, j);
+            if (!std::isfinite(x))
+                return invalidInput("valence encoder: vertex " + std::to_string(i) +
+                                    (at.kind == kValenceAttributeUv ? ": UV set " + std::to_string(at.set) : ": colour") +
+                                    " is not finite");
+            lo[j] = i == 0 || x < lo[j] ? x : lo[j];
+            hi[j] = i == 0 || x > hi[j] ? x : hi[j];
+        }
+    float size[4] = {0, 0, 0, 0};
+    for (uint32_t j = 0; j < c; ++j) size[j] = hi[j] - lo[j];
+    if (at.kind == kValenceAttributeUv) size[0] = size[1] = std::max(size[0], size[1]);
+    const uint32_t qmax = (1u << at.bits) - 1;
+    for (uint32_t j = 0; j < c; ++j) {
+        if (!std::isfinite(size[j])) return invalidInput("valence encoder: attribute range overflows a float");
+        at.min[j] = lo[j];
+        at.size[j] = size[j];
+    }
+    q.assign(4 * vn, 0);
+    for (size_t i = 0; i < vn; ++i)
+        for (uint32_t j = 0; j < c; ++j) {
+            const float x = value(i, j);
+            const double t = size[j] > 0.0f ? double(x - lo[j]) / double(size[j]) * qmax : 0.0;
+            const long v = std::clamp<long>(long(t + 0.5), 0, long(qmax));
+            q[4 * i + j] = int32_t(v);
+            const double decoded = double(lo[j] + float(v) * (qmax > 0 ? size[j] / float(qmax) : 0.0f));
+            at.max_error = std::max(at.max_error, std::fabs(decoded - double(x)));
+        }
+    return Status::okStatus();
+}
+
+// Codes one vertex's UV or colour residuals (wrapped to [-2^(bits-1), 2^(bits-1))); the decoder's
+// readAttributeValue.
+void codeAttributeValue(RangeEncoder& rc, BitWriter& raw, AttributeModel& model, const CodedAttribute& at,
+                        uint32_t n, const int32_t* value, const int32_t* pred, uint32_t& prev_length,
+                        uint32_t* prev_sign) {
+    const uint32_t mask = (1u << at.bits) - 1;
+    const int32_t half = int32_t(1) << (at.bits - 1);
+    const bool decorrelated = lodrt::detail::decorrelatedChannels(at.predictor);
+    uint32_t earlier = 0, first_sign = 0, first = 0;
+    for (uint32_t j = 0; j < at.components; ++j) {
+        const uint32_t full = uint32_t(value[j] - pred[j]);
+        if (j == 0) first = full;
+        int32_t r = int32_t((full - (decorrelated && j > 0 ? first : 0u)) & mask);
+        if (r >= half) r -= int32_t(mask) + 1;
+        const uint32_t ctx = lodrt::detail::attributeContext(j, n, j == 0 ? prev_length : earlier);
+        const uint32_t k = rc.residual(model, raw, int(j), ctx, r, prev_sign[j] * 3 + first_sign);
+        prev_sign[j] = lodrt::detail::signClass(r);
+        if (j == 0) {
+            first_sign = prev_sign[0];
+            prev_length = k;
+        }
+        earlier = std::max(earlier, k);
+    }
+}
+
+// A UV or colour set over the position plan (the decoder's decodeAttribute), from its quantized input
+// values `q`; `final_values` receives them in final order (components per vertex).
+void codeAttribute(const PositionWalk& walk, const FinalOrder& order, const I32Array& q, size_t vn, uint32_t vc,
+                   CodedAttribute& at, I32Array& final_values) {
+    const uint32_t c = at.components;
+    const int32_t qmax = int32_t((1u << at.bits) - 1);
+    RangeEncoder rc;
+    BitWriter raw;
+    auto model = std::make_unique<AttributeModel>();
+    model->init();
+    I32Array qa(4 * size_t(vc), 0);
+    final_values.assign(size_t(c) * vn, 0);
+    U8Array done(vn, 0);
+    int32_t last[4] = {(qmax + 1) / 2, (qmax + 1) / 2, (qmax + 1) / 2, (qmax + 1) / 2};
+    uint32_t prev_length = 0, prev_sign[4] = {0, 0, 0, 0};
+    const int32_t* qpos = walk.closedPositions();
+    walk.forEachPlanned([&](uint32_t ev, const uint32_t* t, uint32_t n, uint32_t neighbour) {
+        const uint32_t fid = order.final_of[ev];
+        if (fid == kNone) return;
+        const int32_t* value = &q[4 * size_t(order.source_of_engine[ev])];
+        for (uint32_t j = 0; j < c; ++j) qa[4 * size_t(ev) + j] = value[j];
+        if (!done[fid]) {
+            int32_t pred[4];
+            lodrt::detail::predictAttribute(qa.data(), c, qpos, ev, t, n, neighbour, last, at.predictor, qmax, pred);
+            codeAttributeValue(rc, raw, *model, at, n, value, pred, prev_length, prev_sign);
+            for (uint32_t j = 0; j < c; ++j) final_values[size_t(c) * fid + j] = value[j];
+            done[fid] = 1;
+        }
+        for (uint32_t j = 0; j < c; ++j) last[j] = value[j];
+    });
+    for (size_t v = 0; v < vn; ++v) {
+        const uint32_t fid = order.new_of[v];
+        if (fid < order.referenced) continue;
+        for (uint32_t j = 0; j < c; ++j) final_values[size_t(c) * fid + j] = q[4 * v + j];
+    }
+    for (size_t fid = order.referenced; fid < vn; ++fid) {
+        const int32_t* value = &final_values[size_t(c) * fid];
+        codeAttributeValue(rc, raw, *model, at, 0, value, last, prev_length, prev_sign);
+        for (uint32_t j = 0; j < c; ++j) last[j] = value[j];
+    }
+    at.range = rc.finish();
+    at.raw = raw.finish();
+}
+
+// Tangents in final order (the decoder's decodeTangent); `uv` the final-order quantized values of the
+// UV attribute named by at.predictor (null for none).
+void codeTangents(const Mesh& mesh, const FinalOrder& order, const lodrt::detail::ConquestArrays& a, uint32_t tc,
+                  const I32Array& qpos_final, const int32_t* uv, CodedAttribute& at) {
+    const size_t vn = mesh.vertexCount();
+    const uint32_t nb = at.bits, mask = (1u << nb) - 1;
+    U32Array qt(2 * vn);
+    std::vector<uint8_t> negative(vn);
+    for (size_t i = 0; i < vn; ++i) {
+        const Vec4f& t = mesh.tangents[i];
+        const float n[3] = {t.x, t.y, t.z};
+        const size_t f = order.new_of[i];
+        lodrt::octahedralEncode(n, nb, &qt[2 * f]);
+        negative[f] = t.w < 0.0f ? 1 : 0;
+        float d[3];
+        lodrt::octahedralDecode(&qt[2 * f], nb, d);
+        const double len = std::sqrt(double(t.x) * t.x + double(t.y) * t.y + double(t.z) * t.z);
+        if (len > 0.0 && std::isfinite(len))
+            for (int j = 0; j < 3; ++j) at.max_error = std::max(at.max_error, std::fabs(double(d[j]) - n[j] / len));
+    }
+    CodecArray<int64_t> sum(4 * vn, 0);
+    if (uv)
+        for (uint32_t t = 0; t < tc; ++t) {
+            const uint32_t* cv = &a.corner_vertex[3 * size_t(t)];
+            if (!isOutputTriangle(a, cv)) continue;
+            const uint32_t f[3] = {order.final_of[cv[0]], order.final_of[cv[1]], order.final_of[cv[2]]};
+            lodrt::detail::addFaceTangent(qpos_final.data(), uv, f, sum.data());
+        }
+    RangeEncoder rc;
+    BitWriter raw;
+    ResidualModel<2, kValenceNormalContexts> model;
+    model.init();
+    uint32_t sign_models[kValenceTangentSignContexts];
+    initRangeProbs(sign_models, kValenceTangentSignContexts);
+    const int32_t half = int32_t(1) << (nb - 1);
+    uint32_t length[2] = {0, 0};
+    for (size_t x = 0; x < vn; ++x) {
+        uint32_t p[2];
+        lodrt::detail::predictNormal(&sum[4 * x], qt.data(), x, nb, p);
+        for (int j = 0; j < 2; ++j) {
+            int32_t r = int32_t((qt[2 * x + size_t(j)] - p[j]) & mask);
+            if (r >= half) r -= int32_t(mask) + 1;
+            length[j] = rc.residual(model, raw, j, std::min(length[j], kValenceNormalContexts - 1), r);
+        }
+        rc.bit(sign_models[lodrt::detail::tangentSignContext(sum[4 * x + 3])], negative[x]);
+    }
+    at.range = rc.finish();
+    at.raw = raw.finish();
+}
+
+// Every attribute the options and the mesh have, coded: UV sets (each with the smaller of its two
+// predictors), then the colours, then the tangents (predicted on UV set 0 when there is one).
+Result<std::vector<CodedAttribute>> codeAttributes(const Mesh& mesh, const ValenceEncodeOptions& options,
+                                                   const PositionWalk& walk, const FinalOrder& order,
+                                                   const lodrt::detail::ConquestArrays& a, uint32_t vc, uint32_t tc) {
+    std::vector<CodedAttribute> out;
+    const size_t vn = mesh.vertexCount();
+    I32Array q, uv0_final;
+    for (size_t s = 0; s < mesh.uvs.size(); ++s) {
+        CodedAttribute base;
+        base.kind = kValenceAttributeUv;
+        base.components = 2;
+        base.bits = uint8_t(options.uv_bits);
+        base.set = uint16_t(s);
+        LODBAKE_RETURN_IF_ERROR(quantizeAttribute(mesh, base, q));
+        CodedAttribute best;
+        I32Array best_final;
+        bool have = false;
+        for (uint8_t predictor : {kValencePredictUvGeometric, kValencePredictParallelogram}) {
+            CodedAttribute at = base;
+            at.predictor = predictor;
+            I32Array final_values;
+            codeAttribute(walk, order, q, vn, vc, at, final_values);
+            if (!have || at.range.size() + at.raw.size() < best.range.size() + best.raw.size()) {
+                best = std::move(at);
+                best_final = std::move(final_values);
+                have = true;
+            }
+        }
+        if (s == 0) uv0_final = std::move(best_final);
+        out.push_back(std::move(best));
+    }
+    if (mesh.hasColors()) {
+        // Parallelogram or neighbour mean, channels coded on their own or relative to channel 0's
+        // residual (a scan's colour errors are mostly in brightness, shared by the channels):
+        // whichever of the four is smallest.
+        CodedAttribute base;
+        base.kind = kValenceAttributeColor;
+        const bool opaque = std::all_of(mesh.colors.begin(), mesh.colors.end(), [](const Vec4f& c) { return c.w == 1.0f; });
+        base.components = opaque ? 3 : 4;
+        base.bits = uint8_t(options.color_bits);
+        LODBAKE_RETURN_IF_ERROR(quantizeAttribute(mesh, base, q));
+        CodedAttribute best;
+        for (uint8_t predictor : {kValencePredictParallelogram, kValencePredictColorDecorrelated,
+                                  kValencePredictNeighbourMean, kValencePredictNeighbourMeanDecorrelated}) {
+            CodedAttribute at = base;
+            at.predictor = predictor;
+            I32Array final_values;
+            codeAttribute(walk, order, q, vn, vc, at, final_values);
+            if (predictor == kValencePredictParallelogram ||
+                at.range.size() + at.raw.size() < best.range.size() + best.raw.size())
+                best = std::move(at);
+        }
+        out.push_back(std::move(best));
+    }
+    if (mesh.hasTangents()) {
+        CodedAttribute at;
+        at.kind = kValenceAttributeTangent;
+        at.components = 4;
+        at.bits = uint8_t(options.tangent_bits);
+        at.predictor = mesh.uvs.empty() ? kValenceNoReference : 0;
+        codeTangents(mesh, order, a, tc, walk.finalPositions(), mesh.uvs.empty() ? nullptr : uv0_final.data(), at);
+        out.push_back(std::move(at));
+    }
+    return out;
+}
+
+// The attribute table (format.h, kValenceFlagAttributes) for `attributes`.
+std::vector<uint8_t> attributeTable(const std::vector<CodedAttribute>& attributes, size_t twin_bytes,
+                                    uint32_t twin_shift) {
+    std::vector<uint8_t> t(kValenceAttributeTablePrefix + attributes.size() * kValenceAttributeRecordSize, 0);
+    put32(t, 0, uint32_t(attributes.size()));
+    put32(t, 4, uint32_t(twin_bytes));
+    t[8] = uint8_t(twin_shift);
+    for (size_t i = 0; i < attributes.size(); ++i) {
+        const CodedAttribute& at = attributes[i];
+        const size_t o = kValenceAttributeTablePrefix + i * kValenceAttributeRecordSize;
+        t[o] = at.kind;
+        t[o + 1] = at.components;
+        t[o + 2] = at.bits;
+        t[o + 3] = at.predictor;
+        t[o + 4] = uint8_t(at.set);
+        t[o + 5] = uint8_t(at.set >> 8);
+        for (size_t j = 0; j < 4; ++j) {
+            putF32(t, o + 8 + 4 * j, at.min[j]);
+            putF32(t, o + 24 + 4 * j, at.size[j]);
+        }
+        put32(t, o + 40, uint32_t(at.range.size()));
+        put32(t, o + 44, uint32_t(at.raw.size()));
+    }
+    return t;
+}
+
+// The decoded attributes into the mesh's UV sets, colours (alpha 1 for RGB) and tangents.
+void copyAttributes(const lodrt::ValenceInfo& info, const std::vector<std::vector<float>>& decoded, Mesh& mesh) {
+    const size_t vn = info.vertex_count;
+    for (uint32_t i = 0; i < info.attribute_count; ++i) {
+        const lodrt::ValenceAttribute& at = info.attributes[i];
+        const std::vector<float>& d = decoded[i];
+        if (at.kind == kValenceAttributeUv) {
+            if (mesh.uvs.size() <= at.set) mesh.uvs.resize(size_t(at.set) + 1, std::vector<Vec2f>(vn, Vec2f{0, 0}));
+            for (size_t v = 0; v < vn; ++v) mesh.uvs[at.set][v] = Vec2f{d[2 * v], d[2 * v + 1]};
+        } else if (at.kind == kValenceAttributeColor) {
+            mesh.colors.resize(vn);
+            const size_t c = at.components;
+            for (size_t v = 0; v < vn; ++v)
+                mesh.colors[v] = Vec4f{d[c * v], d[c * v + 1], d[c * v + 2], c == 4 ? d[c * v + 3] : 1.0f};
+        } else {
+            mesh.tangents.resize(vn);
+            for (size_t v = 0; v < vn; ++v) mesh.tangents[v] = Vec4f{d[4 * v], d[4 * v + 1], d[4 * v + 2], d[4 * v + 3]};
         }
     }
 }
@@ -1255,6 +1705,13 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
 
     PositionWalk walk(a, order, quantized, vn, vc, tc);
     if (!walk.planned()) return internalError("valence encoder: broken corner cycle");
+    // Twins only in a stream with attributes (version 7): without them the bytes stay version 6's.
+    const bool has_attributes =
+        options.encode_attributes && (!mesh.uvs.empty() || mesh.hasColors() || mesh.hasTangents());
+    std::vector<uint32_t> twin_of;
+    uint32_t twin_shift = 0;
+    std::vector<uint8_t> twin_bytes;
+    if (has_attributes) codeTwins(walk, vn, twin_of, twin_shift, twin_bytes, result);
     uint16_t flags_pos = 0;
     RangeEncoder pos;
     BitWriter pos_raw;
@@ -1263,10 +1720,16 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
         flags_pos = choosePositionFlags(walk, vn, walked);
         codePositions(walked, flags_pos, pos, pos_raw);
     }
+    std::vector<CodedAttribute> attributes;
+    if (options.encode_attributes) {
+        LODBAKE_ASSIGN_OR_RETURN(attributes, codeAttributes(mesh, options, walk, order, a, vc, tc));
+    }
     walk.releasePlan();
     RangeEncoder nrm;
     BitWriter nrm_raw;
-    if (normals) codeNormals(mesh, options.normal_bits, order, a, tc, walk.finalPositions(), nrm, nrm_raw);
+    if (normals)
+        codeNormals(mesh, options.normal_bits, order, a, tc, walk.finalPositions(), twin_of.empty() ? nullptr : twin_of.data(),
+                    nrm, nrm_raw);
 
     std::vector<uint8_t> conn_bytes = attempt->conn.finish(), pos_bytes = pos.finish(),
                          pos_raw_bytes = pos_raw.finish(), nrm_bytes, nrm_raw_bytes;
@@ -1277,9 +1740,12 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
     std::vector<uint8_t>& out = result.bytes;
     out.assign(kValenceHeaderSize, 0);
     put32(out, 0, kValenceMagic);
-    out[4] = uint8_t(kValenceVersion);
-    out[5] = uint8_t(kValenceVersion >> 8);
-    const uint16_t flags = uint16_t((normals ? kValenceFlagNormals : 0) | flags_pos);
+    // Without attributes the stream is a version 6 one, byte for byte (format.h).
+    const uint16_t version = attributes.empty() ? kValenceVersionWithoutAttributes : kValenceVersion;
+    out[4] = uint8_t(version);
+    out[5] = uint8_t(version >> 8);
+    const uint16_t flags =
+        uint16_t((normals ? kValenceFlagNormals : 0) | flags_pos | (attributes.empty() ? 0 : kValenceFlagAttributes));
     out[6] = uint8_t(flags);
     out[7] = uint8_t(flags >> 8);
     put32(out, 8, uint32_t(vn));
@@ -1295,11 +1761,27 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
     put32(out, 52, uint32_t(nrm_bytes.size()));
     put32(out, 56, uint32_t(pos_raw_bytes.size()));
     put32(out, 60, uint32_t(nrm_raw_bytes.size()));
-    for (const std::vector<uint8_t>* part : {&conn_bytes, &pos_bytes, &pos_raw_bytes, &nrm_bytes, &nrm_raw_bytes})
+    if (!attributes.empty()) {
+        const std::vector<uint8_t> table = attributeTable(attributes, twin_bytes.size(), twin_shift);
+        out.insert(out.end(), table.begin(), table.end());
+    }
+    result.header_bytes = out.size();
+    for (const std::vector<uint8_t>* part :
+         {&conn_bytes, &pos_bytes, &pos_raw_bytes, &twin_bytes, &nrm_bytes, &nrm_raw_bytes})
         out.insert(out.end(), part->begin(), part->end());
-    result.header_bytes = kValenceHeaderSize;
+    for (const CodedAttribute& at : attributes) {
+        out.insert(out.end(), at.range.begin(), at.range.end());
+        out.insert(out.end(), at.raw.begin(), at.raw.end());
+        ValenceAttributeReport report;
+        report.kind = at.kind;
+        report.set = at.set;
+        report.bits = at.bits;
+        report.bytes = at.range.size() + at.raw.size();
+        report.max_error = at.max_error;
+        result.attributes.push_back(report);
+    }
     result.connectivity_bytes = conn_bytes.size();
-    result.position_bytes = pos_bytes.size() + pos_raw_bytes.size();
+    result.position_bytes = pos_bytes.size() + pos_raw_bytes.size() + twin_bytes.size();
     result.normal_bytes = nrm_bytes.size() + nrm_raw_bytes.size();
     result.cut_vertex_copies = order.dups.size();
     result.dummy_vertices = vc - order.rank;
@@ -1328,6 +1810,12 @@ Result<Mesh> decodeValence(const std::vector<uint8_t>& bytes, const std::string&
     output.normal_capacity = normals.size();
     output.scratch = scratch.get();
     output.scratch_size = scratch_words * 8;
+    std::vector<std::vector<float>> attributes(info.attribute_count);
+    for (uint32_t i = 0; i < info.attribute_count; ++i) {
+        attributes[i].resize(size_t(info.attributes[i].components) * info.vertex_count);
+        output.attributes[i] = attributes[i].data();
+        output.attribute_capacity[i] = attributes[i].size();
+    }
     r = lodrt::valenceDecode(bytes.data(), bytes.size(), output);
     scratch.reset(); // before the copies below: they need no scratch
     if (r != lodrt::Result::Ok) return invalidInput(name + ": streams: " + describe(r, bytes));
@@ -1340,6 +1828,7 @@ Result<Mesh> decodeValence(const std::vector<uint8_t>& bytes, const std::string&
         for (size_t i = 0; i < info.vertex_count; ++i)
             mesh.normals[i] = Vec3f{normals[3 * i], normals[3 * i + 1], normals[3 * i + 2]};
     }
+    copyAttributes(info, attributes, mesh);
     return mesh;
 }
 

@@ -3,8 +3,9 @@
 //
 // The codec chooses its own vertex and triangle order. Rather than carrying a remapping table, the
 // level's mesh is renumbered into that order before the plain accessors are written, so a reader
-// that decodes a stream gets exactly the triangles (same index triples) the plain indices hold,
-// and attributes the codec does not code (UVs, colours, tangents) stay valid as plain accessors.
+// that decodes a stream gets exactly the triangles (same index triples) the plain indices hold.
+// Positions, normals, UV sets, colours and tangents are all in the stream (its "attributes" map names
+// them), so a compact pack drops every one of their plain accessors.
 // A level with several primitives (materials, scan sets) is laid out primitive by primitive, each
 // primitive's vertices a range of its own in its stream's decoded order.
 #include "lodbake/stream/stream.h"
@@ -92,6 +93,7 @@ struct CodedStream {
     std::vector<uint32_t> new_vertex_of; // input vertex -> decoded vertex
     DecodedIndices indices;              // the decoder's
     bool has_normals = false;
+    std::vector<codec::ValenceAttributeReport> attributes; // in stream order
 };
 
 // An uninitialised array on core/large_array.h's storage: from 2 MB on it is mapped on its own and
@@ -150,6 +152,9 @@ Result<CodedStream> codeStream(const Mesh& mesh, const ValencePrecision& precisi
     encode_options.position_bits = precision.position_bits;
     encode_options.normal_bits = precision.normal_bits;
     encode_options.encode_normals = mesh.hasNormals();
+    encode_options.uv_bits = precision.uv_bits;
+    encode_options.color_bits = precision.color_bits;
+    encode_options.tangent_bits = precision.tangent_bits;
     Result<codec::ValenceEncodeResult> encoded = codec::encodeValence(mesh, encode_options);
     if (!encoded.ok()) return Status(encoded.status().code(), where + ": " + encoded.status().message());
     // The decoder's scratch is one large block that the allocator maps fresh, while the coder's freed
@@ -165,6 +170,7 @@ Result<CodedStream> codeStream(const Mesh& mesh, const ValencePrecision& precisi
     out.new_vertex_of = std::move(encoded->new_vertex_of);
     out.indices = std::move(decoded);
     out.has_normals = mesh.hasNormals();
+    out.attributes = std::move(encoded->attributes);
     return out;
 }
 
@@ -172,12 +178,27 @@ PackExtension streamExtension(CodedStream& stream, const ValencePrecision& preci
     JsonNode attributes = JsonNode::object();
     if (stream.has_normals) attributes.set("NORMAL", uint64_t(1));
     attributes.set("POSITION", uint64_t(0));
+    // The stream's attribute table, in order, takes the ids from 2 on.
+    bool uv = false, color = false, tangent = false;
+    for (size_t i = 0; i < stream.attributes.size(); ++i) {
+        const codec::ValenceAttributeReport& a = stream.attributes[i];
+        std::string name = "TANGENT";
+        if (a.kind == lodrt::format::kValenceAttributeUv) name = "TEXCOORD_" + std::to_string(a.set);
+        if (a.kind == lodrt::format::kValenceAttributeColor) name = "COLOR_" + std::to_string(a.set);
+        attributes.set(name, uint64_t(2 + i));
+        uv = uv || a.kind == lodrt::format::kValenceAttributeUv;
+        color = color || a.kind == lodrt::format::kValenceAttributeColor;
+        tangent = tangent || a.kind == lodrt::format::kValenceAttributeTangent;
+    }
     PackExtension e;
     e.name = lodrt::format::kExtValenceCompression;
     e.json = JsonNode::object();
     e.json.set("attributes", std::move(attributes));
+    if (color) e.json.set("colorBits", uint64_t(precision.color_bits));
     if (stream.has_normals) e.json.set("normalBits", uint64_t(precision.normal_bits));
     e.json.set("positionBits", uint64_t(precision.position_bits));
+    if (tangent) e.json.set("tangentBits", uint64_t(precision.tangent_bits));
+    if (uv) e.json.set("uvBits", uint64_t(precision.uv_bits));
     e.blobs.push_back(std::move(stream.bytes));
     e.blob_view_members.push_back("bufferView");
     e.is_stream = true;
@@ -239,6 +260,9 @@ Result<PackStreamCommit> prepareMulti(const ValencePrecision& precision, const s
         Mesh local;
         local.positions = gather(mesh.positions, used);
         local.normals = gather(mesh.normals, used);
+        local.tangents = gather(mesh.tangents, used);
+        local.colors = gather(mesh.colors, used);
+        for (const std::vector<Vec2f>& uv : mesh.uvs) local.uvs.push_back(gather(uv, used));
         local.indices.reserve(range.index_count);
         for (uint32_t i = range.first_index; i < range.first_index + range.index_count; ++i)
             local.indices.push_back(local_of[mesh.indices[i]]);
@@ -382,6 +406,9 @@ ValencePrecision valencePrecision(const ValenceStreamOptions& options, const Lod
     ValencePrecision p;
     p.position_bits = options.position_bits;
     p.normal_bits = options.normal_bits;
+    p.uv_bits = options.uv_bits;
+    p.color_bits = options.color_bits;
+    p.tangent_bits = options.tangent_bits;
     const double cube = cubeSize(mesh);
     p.max_displacement = displacementBound(cube, p.position_bits);
     p.max_normal_angle = mesh.hasNormals() ? octahedralMaxAngle(p.normal_bits) : 0.0;

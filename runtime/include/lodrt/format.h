@@ -58,7 +58,11 @@ constexpr uint32_t kPfrepLogCodeSteps = 8;
 // then the connectivity, position and normal streams, back to back; the position and normal streams
 // each have a range-coded part followed by a raw bit part (the low mantissa bits of the residuals).
 constexpr uint32_t kValenceMagic = 0x4D42424Cu; // "LBBM" little-endian
-constexpr uint16_t kValenceVersion = 6; // 5: neighbour-coordinate (snap) flags; 6: spread contexts flags
+constexpr uint16_t kValenceVersion = 7; // 5: neighbour-coordinate (snap) flags; 6: spread contexts flags;
+                                        // 7: attribute table (UV sets, colours, tangents)
+// A stream without extra attributes is written as version 6 (the same bytes a version 6 encoder
+// writes); decoders accept both. Version 7 requires the attribute table (kValenceFlagAttributes).
+constexpr uint16_t kValenceVersionWithoutAttributes = 6;
 constexpr uint32_t kValenceHeaderSize = 64;
 // Header fields (byte offset: type): 0 u32 magic, 4 u16 version, 6 u16 flags, 8 u32 vertex_count,
 // 12 u32 triangle_count, 16 u32 closed_vertex_count, 20 u32 closed_triangle_count, 24 u8 position_bits,
@@ -75,7 +79,44 @@ constexpr uint16_t kValenceFlagSnapX = 2u; // component j: kValenceFlagSnapX << 
 // more parallelograms reads its residual length in a context of how far those parallelograms disagree
 // on the component (docs/format/valence.md "Positions"). Set where it makes the component smaller.
 constexpr uint16_t kValenceFlagSpreadX = 16u; // component j: kValenceFlagSpreadX << j
-constexpr uint16_t kValenceKnownFlags = 127u;
+// Flag bit 7 (version 7 only, and required there): an attribute table follows the header: u32 count
+// A (1..kValenceMaxAttributes), u32 twin part bytes (0: no twins), u8 twin cell shift (0..16), three
+// zero bytes (kValenceAttributeTablePrefix in all), then A records of kValenceAttributeRecordSize bytes:
+//   0 u8 kind (kValenceAttribute*), 1 u8 components, 2 u8 bits, 3 u8 predictor (UV) or the index of
+//   the UV attribute a tangent is predicted from (kValenceNoReference: none), 4 u16 set (TEXCOORD_n /
+//   COLOR_n), 6 u16 zero, 8 f32[4] min, 24 f32[4] size (unused components 0), 40 u32 range-coded
+//   bytes, 44 u32 raw bit bytes. Each attribute's two parts follow the normal parts in table order.
+constexpr uint16_t kValenceFlagAttributes = 128u;
+constexpr uint16_t kValenceKnownFlags = 255u;
+constexpr uint32_t kValenceMaxAttributes = 16;
+constexpr uint32_t kValenceAttributeRecordSize = 48;
+constexpr uint32_t kValenceAttributeTablePrefix = 12;
+// Position twins (docs/format/valence.md "Twins"): a range-coded part between the position raw bits
+// and the normals, one decision per boundary vertex that has a candidate.
+constexpr uint32_t kValenceMaxTwinShift = 16;
+constexpr uint32_t kValenceTwinChainLimit = 16; // grid vertices looked at per cell (bounds a hostile stream's time)
+constexpr uint32_t kValenceTwinContexts = 18;   // bit length of the candidate's distance from the prediction
+constexpr uint32_t kValenceTwinHash[3] = {73856093u, 19349663u, 83492791u}; // cell -> slot multipliers
+constexpr uint32_t kValenceTwinMinSlots = 16; // slots: a power of two, at least this and twice Vc
+constexpr uint8_t kValenceAttributeUv = 1;      // 2 components, quantized in their own range
+constexpr uint8_t kValenceAttributeColor = 2;   // 3 (RGB) or 4 (RGBA) components
+constexpr uint8_t kValenceAttributeTangent = 3; // octahedral xyz (2 components) + handedness sign
+constexpr uint8_t kValencePredictParallelogram = 0; // UV and colour: mean of the parallelograms
+constexpr uint8_t kValencePredictUvGeometric = 1;   // UV: from the positions (docs/format/valence.md)
+constexpr uint8_t kValencePredictColorDecorrelated = 2; // colour: parallelogram, channels 1.. coded
+                                                        // relative to channel 0's residual
+constexpr uint8_t kValencePredictNeighbourMean = 3;     // colour: mean of the triples' a and b
+constexpr uint8_t kValencePredictNeighbourMeanDecorrelated = 4; // colour: that, channels as in 2
+constexpr uint8_t kValenceNoReference = 255;
+constexpr uint32_t kValenceMinAttributeBits = 4;
+constexpr uint32_t kValenceMaxAttributeBits = 16;
+// Residual length contexts of a UV or colour component: 3 classes of the vertex's parallelogram count
+// (0, 1, 2 or more) times 17 lengths (of the previous vertex's residual for component 0, of this
+// vertex's earlier components' largest residual for the others), per component.
+constexpr uint32_t kValenceAttributeLengths = 17;
+constexpr uint32_t kValenceAttributeContexts = 2 * 3 * kValenceAttributeLengths;
+constexpr uint32_t kValenceTangentSignContexts = 3; // predicted handedness: +, -, none
+constexpr uint32_t kValenceAttributesPerByte = 1024; // vertices per attribute range-coded byte (2 values each at least)
 constexpr uint32_t kValenceSnapDistanceBuckets = 16; // bit length of |candidate - prediction|, capped
 constexpr uint32_t kValenceSnapMultiplicity = 5;     // 0..4 triple entries holding the candidate value
 constexpr uint32_t kValenceSnapContexts = kValenceSnapDistanceBuckets * kValenceSnapMultiplicity;

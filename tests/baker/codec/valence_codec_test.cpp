@@ -354,7 +354,15 @@ lodrt::Result decodeChecked(const std::vector<uint8_t>& bytes) {
     out.normal_capacity = normals.size() - 4;
     out.scratch = scratch.data();
     out.scratch_size = (scratch.size() - 4) * 8;
+    std::vector<std::vector<float>> attributes(info.attribute_count);
+    for (uint32_t i = 0; i < info.attribute_count; ++i) {
+        attributes[i].assign(size_t(info.attributes[i].components) * info.vertex_count + 4, 1234.5f);
+        out.attributes[i] = attributes[i].data();
+        out.attribute_capacity[i] = attributes[i].size() - 4;
+    }
     r = lodrt::valenceDecode(bytes.data(), bytes.size(), out);
+    for (const std::vector<float>& a : attributes)
+        for (int i = 0; i < 4; ++i) EXPECT_EQ(a[a.size() - 1 - size_t(i)], 1234.5f);
     for (int i = 0; i < 4; ++i) {
         EXPECT_EQ(indices[indices.size() - 1 - i], kGuard);
         EXPECT_EQ(positions[positions.size() - 1 - i], 1234.5f);
@@ -514,12 +522,310 @@ TEST(ValenceCodecTest, MultiSymbolModelsFollowTheSpec) {
     expectCdfModelFollowsTheSpec<lodrt::detail::ConnectivitySymbolModel>(7, 8);
 }
 
+// ---- attributes (format version 7) ----
+
+// A torus laid out as a (nu + 1) x (nv + 1) grid whose last row and column repeat the first ones'
+// positions with other UVs (the UV seams of a wrapped texture: the copies are separate vertices, so
+// the seam is a cut in the connectivity). UV set 0 is the texture, set 1 a scaled and shifted copy
+// (a lightmap), RGBA colours vary smoothly, tangents follow increasing u with the handedness flipped
+// on the second half, and one vertex no triangle uses carries attributes too.
+Mesh texturedTorus(int nu, int nv) {
+    Mesh m;
+    const float kPi = 3.14159265358979f;
+    m.uvs.resize(2);
+    for (int i = 0; i <= nu; ++i)
+        for (int j = 0; j <= nv; ++j) {
+            const float u = 2 * kPi * float(i % nu) / float(nu), v = 2 * kPi * float(j % nv) / float(nv);
+            m.positions.push_back(Vec3f{(2 + std::cos(v)) * std::cos(u), (2 + std::cos(v)) * std::sin(u), std::sin(v)});
+            m.normals.push_back(Vec3f{std::cos(v) * std::cos(u), std::cos(v) * std::sin(u), std::sin(v)});
+            const float s = float(i) / float(nu), t = float(j) / float(nv);
+            m.uvs[0].push_back(lodbake::Vec2f{s, t});
+            m.uvs[1].push_back(lodbake::Vec2f{0.25f + 0.5f * s, 0.1f + 0.3f * t});
+            m.colors.push_back(lodbake::Vec4f{0.5f + 0.5f * std::cos(u), 0.5f + 0.5f * std::sin(v), s, 0.25f + 0.5f * t});
+            m.tangents.push_back(lodbake::Vec4f{-std::sin(u), std::cos(u), 0.0f, i < nu / 2 ? 1.0f : -1.0f});
+        }
+    const int w = nv + 1;
+    for (int i = 0; i < nu; ++i)
+        for (int j = 0; j < nv; ++j) {
+            const uint32_t a = uint32_t(i * w + j), b = uint32_t((i + 1) * w + j), c = a + 1, d = b + 1;
+            m.indices.insert(m.indices.end(), {a, b, d, a, d, c});
+        }
+    m.positions.push_back(Vec3f{0.0f, 0.0f, 3.0f});
+    m.normals.push_back(Vec3f{0.0f, 0.0f, 1.0f});
+    m.uvs[0].push_back(lodbake::Vec2f{0.5f, 0.5f});
+    m.uvs[1].push_back(lodbake::Vec2f{0.3f, 0.2f});
+    m.colors.push_back(lodbake::Vec4f{1.0f, 0.0f, 0.0f, 1.0f});
+    m.tangents.push_back(lodbake::Vec4f{1.0f, 0.0f, 0.0f, -1.0f});
+    return m;
+}
+
+std::vector<uint8_t> attributeStream() {
+    auto enc = encodeValence(texturedTorus(12, 8), {});
+    EXPECT_TRUE(enc.ok());
+    return enc->bytes;
+}
+
+// Every attribute decodes within its quantization: UVs and colours within half a step of their
+// range, tangents within the octahedral step with the handedness exact; triangles and positions as
+// for any stream (expectRoundTrip).
+TEST(ValenceCodecTest, AttributesRoundTripWithinTheirQuantization) {
+    const Mesh in = texturedTorus(24, 12);
+    for (uint32_t uv_bits : {10u, 12u, 16u}) {
+        ValenceEncodeOptions options;
+        options.uv_bits = uv_bits;
+        options.color_bits = uv_bits == 16 ? 12 : 8;
+        options.tangent_bits = uv_bits == 10 ? 8 : 10;
+        ValenceEncodeResult enc;
+        expectRoundTrip(in, options, &enc);
+        ASSERT_EQ(enc.attributes.size(), 4u); // two UV sets, colours, tangents
+        auto dec = decodeValence(enc.bytes, "textured");
+        ASSERT_TRUE(dec.ok()) << dec.status().message();
+        const Mesh& m = *dec;
+        ASSERT_EQ(m.uvs.size(), 2u);
+        ASSERT_TRUE(m.hasColors());
+        ASSERT_TRUE(m.hasTangents());
+        for (size_t s = 0; s < 2; ++s) {
+            float lo[2] = {1e9f, 1e9f}, hi[2] = {-1e9f, -1e9f};
+            for (const lodbake::Vec2f& t : in.uvs[s]) {
+                lo[0] = std::min(lo[0], t.x), hi[0] = std::max(hi[0], t.x);
+                lo[1] = std::min(lo[1], t.y), hi[1] = std::max(hi[1], t.y);
+            }
+            const double range = std::max(hi[0] - lo[0], hi[1] - lo[1]);
+            const double tol = 0.5 * range / double((1u << uv_bits) - 1) + 1e-6;
+            double worst = 0.0;
+            for (size_t v = 0; v < in.vertexCount(); ++v) {
+                const lodbake::Vec2f& a = in.uvs[s][v];
+                const lodbake::Vec2f& b = m.uvs[s][enc.new_vertex_of[v]];
+                worst = std::max({worst, double(std::fabs(a.x - b.x)), double(std::fabs(a.y - b.y))});
+            }
+            EXPECT_LE(worst, tol) << "UV set " << s << " at " << uv_bits << " bits";
+            EXPECT_NEAR(worst, enc.attributes[s].max_error, 1e-6);
+        }
+        double worst_color = 0.0;
+        for (size_t v = 0; v < in.vertexCount(); ++v) {
+            const lodbake::Vec4f& a = in.colors[v];
+            const lodbake::Vec4f& b = m.colors[enc.new_vertex_of[v]];
+            worst_color = std::max({worst_color, double(std::fabs(a.x - b.x)), double(std::fabs(a.y - b.y)),
+                                    double(std::fabs(a.z - b.z)), double(std::fabs(a.w - b.w))});
+        }
+        EXPECT_LE(worst_color, 0.5 / double((1u << options.color_bits) - 1) + 1e-6);
+        const double tol_t = 4.0 / double((1u << options.tangent_bits) - 1);
+        for (size_t v = 0; v < in.vertexCount(); ++v) {
+            const lodbake::Vec4f& a = in.tangents[v];
+            const lodbake::Vec4f& b = m.tangents[enc.new_vertex_of[v]];
+            const double d = std::sqrt(double(a.x - b.x) * (a.x - b.x) + double(a.y - b.y) * (a.y - b.y) +
+                                       double(a.z - b.z) * (a.z - b.z));
+            ASSERT_LE(d, tol_t) << "tangent " << v;
+            ASSERT_EQ(a.w, b.w) << "handedness " << v;
+        }
+    }
+}
+
+// Without attributes (or with them switched off) the stream is version 6, byte for byte what the
+// position and normal coder alone writes; with them, version 7 with the table flag.
+TEST(ValenceCodecTest, AttributesOnlyChangeStreamsThatHaveThem) {
+    Mesh plain = texturedTorus(12, 8);
+    ValenceEncodeOptions off;
+    off.encode_attributes = false;
+    auto without = encodeValence(plain, off);
+    ASSERT_TRUE(without.ok());
+    plain.uvs.clear();
+    plain.colors.clear();
+    plain.tangents.clear();
+    auto bare = encodeValence(plain, {});
+    ASSERT_TRUE(bare.ok());
+    EXPECT_EQ(without->bytes, bare->bytes);
+    EXPECT_EQ(bare->bytes[4], lodrt::format::kValenceVersionWithoutAttributes);
+    EXPECT_TRUE(bare->attributes.empty());
+    const std::vector<uint8_t> with = attributeStream();
+    EXPECT_EQ(with[4], lodrt::format::kValenceVersion);
+    EXPECT_NE(streamFlags(with) & lodrt::format::kValenceFlagAttributes, 0u);
+}
+
+// The seam copies of the textured torus take their positions from their twins: fewer position bytes
+// than the same mesh coded without twins (its attributes switched off codes no twins), and the same
+// decoded positions (expectRoundTrip checks them against the input).
+TEST(ValenceCodecTest, SeamTwinsCostLessThanCodedPositions) {
+    const Mesh in = texturedTorus(48, 24);
+    ValenceEncodeResult with;
+    expectRoundTrip(in, {}, &with);
+    lodrt::ValenceInfo info;
+    ASSERT_EQ(lodrt::valenceReadInfo(with.bytes.data(), with.bytes.size(), &info), lodrt::Result::Ok);
+    EXPECT_GT(info.twin_bytes, 0u);
+    ValenceEncodeOptions off;
+    off.encode_attributes = false;
+    auto without = encodeValence(in, off);
+    ASSERT_TRUE(without.ok());
+    EXPECT_LT(with.position_bytes + with.normal_bytes, without->position_bytes + without->normal_bytes);
+}
+
+// Vertex ids beyond 16 bits: every attribute of a 68,572-vertex textured torus (seams, twins, two
+// UV sets, colours, tangents) decodes; UVs within half their step, handedness exact.
+TEST(ValenceCodecTest, AttributesBeyondSixteenBitVertexIds) {
+    Mesh in = texturedTorus(400, 170);
+    in.normals.clear(); // expectRoundTrip's normal bound is tighter than some of these many directions need
+    ASSERT_GT(in.vertexCount(), 65536u);
+    ValenceEncodeResult enc;
+    expectRoundTrip(in, {}, &enc);
+    ASSERT_FALSE(enc.bytes.empty());
+    auto dec = decodeValence(enc.bytes, "large");
+    ASSERT_TRUE(dec.ok()) << dec.status().message();
+    ASSERT_EQ(enc.attributes.size(), 4u);
+    EXPECT_GT(enc.twin_vertices, 0u);
+    double worst_uv = 0.0;
+    for (size_t v = 0; v < in.vertexCount(); ++v) {
+        const lodbake::Vec2f& a = in.uvs[0][v];
+        const lodbake::Vec2f& b = dec->uvs[0][enc.new_vertex_of[v]];
+        worst_uv = std::max({worst_uv, double(std::fabs(a.x - b.x)), double(std::fabs(a.y - b.y))});
+        ASSERT_EQ(in.tangents[v].w, dec->tangents[enc.new_vertex_of[v]].w) << v;
+    }
+    EXPECT_LE(worst_uv, 0.5 / 4095.0 + 1e-6);
+}
+
+// encode's attribute options and report: a textured, coloured glb with tangents, every attribute in
+// the JSON report with its bytes; decode writes them back; bits out of range are usage errors.
+TEST(ValenceCodecTest, CliEncodesAttributes) {
+    const std::string dir = lodbake_test::scratchDir();
+    const std::string in = dir + "/valence_textured.glb", lbm = dir + "/valence_textured.lbm",
+                      out = dir + "/valence_textured_back.glb";
+    lodbake::Diagnostics diag;
+    ASSERT_TRUE(lodbake::writeMesh(texturedTorus(12, 8), in, {}, diag).ok());
+    CliRun enc = runCli("encode '" + in + "' -o '" + lbm + "' --uv-bits 10 --color-bits 6 --tangent-bits 9 --json");
+    ASSERT_EQ(enc.exit_code, 0) << enc.err;
+    for (const char* key : {"\"attributes\"", "\"kind\": \"uv\"", "\"kind\": \"color\"", "\"kind\": \"tangent\"",
+                            "\"bits\": 10", "\"bits\": 6", "\"bits\": 9", "\"max_error\""})
+        EXPECT_NE(enc.out.find(key), std::string::npos) << key << "\n" << enc.out;
+    CliRun dec = runCli("decode '" + lbm + "' -o '" + out + "'");
+    ASSERT_EQ(dec.exit_code, 0) << dec.err;
+    auto back = lodbake::readMesh(out, {}, diag);
+    ASSERT_TRUE(back.ok());
+    EXPECT_FALSE(back->mesh.uvs.empty());
+    EXPECT_TRUE(back->mesh.hasTangents());
+    for (const char* flag : {"--uv-bits 3", "--color-bits 17", "--tangent-bits 2"})
+        EXPECT_EQ(runCli("encode '" + in + "' -o '" + lbm + "' " + flag).exit_code, 2) << flag;
+}
+
+TEST(ValenceCodecTest, RejectsBadAttributeOptions) {
+    const Mesh in = texturedTorus(6, 4);
+    for (uint32_t bad : {3u, 17u}) {
+        ValenceEncodeOptions o;
+        o.uv_bits = bad;
+        EXPECT_FALSE(encodeValence(in, o).ok());
+        o = {};
+        o.color_bits = bad;
+        EXPECT_FALSE(encodeValence(in, o).ok());
+        o = {};
+        o.tangent_bits = bad;
+        EXPECT_FALSE(encodeValence(in, o).ok());
+    }
+    Mesh nan = in;
+    nan.uvs[0][3].x = std::nanf("");
+    auto r = encodeValence(nan, {});
+    ASSERT_FALSE(r.ok());
+    EXPECT_NE(r.status().message().find("vertex 3: UV set 0 is not finite"), std::string::npos) << r.status().message();
+}
+
+// The attribute table is checked field by field before anything is decoded.
+TEST(ValenceDecoderSafetyTest, AttributeTableIsChecked) {
+    const std::vector<uint8_t> bytes = attributeStream();
+    ASSERT_EQ(decodeChecked(bytes), lodrt::Result::Ok);
+    const size_t table = lodrt::format::kValenceHeaderSize;
+    const size_t rec = table + lodrt::format::kValenceAttributeTablePrefix; // first record: UV set 0
+    const size_t tangent = rec + 3 * lodrt::format::kValenceAttributeRecordSize;
+    ASSERT_EQ(bytes[tangent], lodrt::format::kValenceAttributeTangent);
+    struct Patch {
+        size_t at;
+        uint8_t value;
+        const char* what;
+    } patches[] = {{table, 0, "no attributes"},
+                   {table, 17, "too many attributes"},
+                   {table + 8, 17, "twin cell shift 17"},
+                   {table + 9, 1, "table prefix padding"},
+                   {rec, 9, "unknown kind"},
+                   {rec + 1, 3, "UV with 3 components"},
+                   {rec + 2, 3, "3 bits"},
+                   {rec + 2, 17, "17 bits"},
+                   {rec + 3, 2, "unknown predictor"},
+                   {rec + 6, 1, "reserved field"},
+                   {rec + 24 + 3, 0xBF, "negative size"},
+                   {rec + 24 + 8 + 3, 0x3F, "range of an unused component"},
+                   {rec + 2 * lodrt::format::kValenceAttributeRecordSize + 3, 1, "colours with the UV predictor"},
+                   {tangent + 3, 3, "tangent predicted from itself"},
+                   {tangent + 3, 2, "tangent predicted from the colours"},
+                   {4, lodrt::format::kValenceVersionWithoutAttributes, "table in a version 6 stream"}};
+    for (const Patch& p : patches) {
+        auto bad = bytes;
+        bad[p.at] = p.value;
+        const lodrt::Result r = decodeChecked(bad);
+        EXPECT_TRUE(r == lodrt::Result::CorruptStream || r == lodrt::Result::Truncated ||
+                    r == lodrt::Result::TrailingBytes)
+            << p.what << ": " << lodrt::resultName(r);
+    }
+    auto infinite = bytes;
+    infinite[rec + 8 + 2] = 0x80; // min[0] = +infinity
+    infinite[rec + 8 + 3] = 0x7F;
+    EXPECT_EQ(decodeChecked(infinite), lodrt::Result::CorruptStream);
+    auto no_flag = bytes;
+    no_flag[6] = uint8_t(no_flag[6] & ~lodrt::format::kValenceFlagAttributes);
+    EXPECT_EQ(decodeChecked(no_flag), lodrt::Result::CorruptStream);
+}
+
+// Each attribute's range-coded part cut short (its length patched, the file size matching) and each
+// raw part's last bit flipped: corrupt, or (a flipped data bit) a different value, never a read past
+// the part.
+TEST(ValenceDecoderSafetyTest, AttributePartsCutShortAreCorrupt) {
+    const std::vector<uint8_t> bytes = attributeStream();
+    lodrt::ValenceInfo info;
+    ASSERT_EQ(lodrt::valenceReadInfo(bytes.data(), bytes.size(), &info), lodrt::Result::Ok);
+    ASSERT_EQ(info.attribute_count, 4u);
+    const size_t table = lodrt::format::kValenceHeaderSize + lodrt::format::kValenceAttributeTablePrefix;
+    // The twin part (the torus's seams have twins): cut short, its decisions run out.
+    ASSERT_GT(info.twin_bytes, 0u);
+    const size_t twin_end = table + info.attribute_count * lodrt::format::kValenceAttributeRecordSize +
+                            info.connectivity_bytes + info.position_bytes + info.position_raw_bytes + info.twin_bytes;
+    for (uint32_t cut = 1; cut <= 6 && cut < info.twin_bytes; ++cut) {
+        std::vector<uint8_t> bad(bytes.begin(), bytes.begin() + long(twin_end - cut));
+        bad.insert(bad.end(), bytes.begin() + long(twin_end), bytes.end());
+        const uint32_t length = info.twin_bytes - cut;
+        for (int k = 0; k < 4; ++k) bad[lodrt::format::kValenceHeaderSize + 4 + size_t(k)] = uint8_t(length >> (8 * k));
+        EXPECT_EQ(decodeChecked(bad), lodrt::Result::CorruptStream) << "twin part, " << cut << " cut";
+    }
+    size_t at = twin_end + info.normal_bytes + info.normal_raw_bytes;
+    for (uint32_t i = 0; i < info.attribute_count; ++i) {
+        const lodrt::ValenceAttribute& a = info.attributes[i];
+        const size_t field = table + i * lodrt::format::kValenceAttributeRecordSize + 40;
+        const size_t end = at + a.bytes;
+        for (uint32_t cut = 1; cut <= 6 && cut < a.bytes; ++cut) {
+            std::vector<uint8_t> bad(bytes.begin(), bytes.begin() + long(end - cut));
+            bad.insert(bad.end(), bytes.begin() + long(end), bytes.end());
+            const uint32_t length = a.bytes - cut;
+            for (int k = 0; k < 4; ++k) bad[field + size_t(k)] = uint8_t(length >> (8 * k));
+            EXPECT_EQ(decodeChecked(bad), lodrt::Result::CorruptStream) << "attribute " << i << ", " << cut << " cut";
+        }
+        if (a.raw_bytes > 0) {
+            auto bad = bytes;
+            bad[end + a.raw_bytes - 1] ^= 0x80;
+            const lodrt::Result r = decodeChecked(bad);
+            if (r == lodrt::Result::Ok) {
+                const auto x = decodeValence(bad, "flipped"), y = decodeValence(bytes, "original");
+                ASSERT_TRUE(x.ok() && y.ok());
+                EXPECT_TRUE(x->uvs != y->uvs || x->colors != y->colors || x->tangents != y->tangents)
+                    << "attribute " << i << ": a raw bit ignored";
+            } else {
+                EXPECT_EQ(r, lodrt::Result::CorruptStream);
+            }
+        }
+        at = end + a.raw_bytes;
+    }
+    EXPECT_EQ(at, bytes.size());
+}
+
 TEST(ValenceDecoderSafetyTest, ValidStreamDecodes) {
     EXPECT_EQ(decodeChecked(sampleStream()), lodrt::Result::Ok);
 }
 
 TEST(ValenceDecoderSafetyTest, EveryTruncatedPrefixFails) {
-    for (const std::vector<uint8_t>& bytes : {sampleStream(), snapStream(), spreadStream()})
+    for (const std::vector<uint8_t>& bytes : {sampleStream(), snapStream(), spreadStream(), attributeStream()})
         for (size_t n = 0; n < bytes.size(); ++n) {
             std::vector<uint8_t> cut(bytes.begin(), bytes.begin() + long(n));
             lodrt::Result r = decodeChecked(cut);
@@ -552,13 +858,15 @@ TEST(ValenceDecoderSafetyTest, TrailingBytesBadMagicUnknownVersion) {
 // A stream of the previous format version is refused with a message naming both versions.
 TEST(ValenceDecoderSafetyTest, OldVersionIsRefusedClearly) {
     auto old = sampleStream();
-    old[4] = uint8_t(lodrt::format::kValenceVersion - 1);
+    const uint32_t previous = lodrt::format::kValenceVersionWithoutAttributes - 1;
+    old[4] = uint8_t(previous);
     EXPECT_EQ(decodeChecked(old), lodrt::Result::UnsupportedVersion);
     auto dec = decodeValence(old, "old.lbm");
     ASSERT_FALSE(dec.ok());
     const std::string& msg = dec.status().message();
-    EXPECT_NE(msg.find("old.lbm: header: format version " + std::to_string(lodrt::format::kValenceVersion - 1) +
-                       " is not supported (this decoder reads version " +
+    EXPECT_NE(msg.find("old.lbm: header: format version " + std::to_string(previous) +
+                       " is not supported (this decoder reads versions " +
+                       std::to_string(lodrt::format::kValenceVersionWithoutAttributes) + " and " +
                        std::to_string(lodrt::format::kValenceVersion)),
               std::string::npos)
         << msg;
@@ -665,7 +973,7 @@ TEST(ValenceDecoderSafetyTest, SmallBuffersAreRefused) {
 }
 
 TEST(ValenceDecoderSafetyTest, RandomCorruptionNeverCrashes) {
-    for (const std::vector<uint8_t>& bytes : {sampleStream(), snapStream(), spreadStream()}) {
+    for (const std::vector<uint8_t>& bytes : {sampleStream(), snapStream(), spreadStream(), attributeStream()}) {
         std::mt19937 rng(12345);
         int failures = 0;
         for (int trial = 0; trial < 3000; ++trial) {

@@ -258,13 +258,14 @@ TEST(ValenceStreamTest, CompactPackDropsOnlyThePlainDataTheStreamSupplies) {
     ASSERT_EQ(c["meshes"].size(), 2u);
     for (const nlohmann::json& mesh : c["meshes"]) {
         const nlohmann::json& prim = mesh["primitives"][0];
-        for (const char* dropped : {"POSITION", "NORMAL"}) {
+        // UVs are in the stream too (format version 7): every plain vertex accessor goes.
+        for (const char* dropped : {"POSITION", "NORMAL", "TEXCOORD_0"}) {
             const nlohmann::json& acc = c["accessors"][prim["attributes"][dropped].get<size_t>()];
             EXPECT_FALSE(acc.contains("bufferView")) << dropped;
             EXPECT_GT(acc["count"].get<int>(), 0);
         }
+        EXPECT_TRUE(prim["extensions"][kExt]["attributes"].contains("TEXCOORD_0"));
         EXPECT_FALSE(c["accessors"][prim["indices"].get<size_t>()].contains("bufferView"));
-        EXPECT_TRUE(c["accessors"][prim["attributes"]["TEXCOORD_0"].get<size_t>()].contains("bufferView"));
         EXPECT_TRUE(c["accessors"][prim["attributes"]["POSITION"].get<size_t>()].contains("min"));
     }
     // The runtime reads the compact pack, and its streams are the plain pack's, byte for byte.
@@ -393,10 +394,9 @@ TEST(ValenceStreamTest, MultiPrimitivePacksRoundTripAndValidate) {
         ASSERT_EQ(mesh["primitives"].size(), 2u);
         for (const nlohmann::json& prim : mesh["primitives"]) {
             EXPECT_TRUE(prim["extensions"].contains(kExt));
-            for (const char* dropped : {"POSITION", "NORMAL"})
+            for (const char* dropped : {"POSITION", "NORMAL", "TEXCOORD_0"})
                 EXPECT_FALSE(c["accessors"][prim["attributes"][dropped].get<size_t>()].contains("bufferView"));
             EXPECT_FALSE(c["accessors"][prim["indices"].get<size_t>()].contains("bufferView"));
-            EXPECT_TRUE(c["accessors"][prim["attributes"]["TEXCOORD_0"].get<size_t>()].contains("bufferView"));
             for (auto it = prim["attributes"].begin(); it != prim["attributes"].end(); ++it)
                 EXPECT_TRUE(accessors.insert(it.value().get<size_t>()).second) << "accessor shared by two primitives";
         }
@@ -540,7 +540,13 @@ TEST(ValenceStreamSchemaTest, SchemaRejectsBrokenObjects) {
         {"bits", R"({"bufferView": 0, "attributes": {"POSITION": 0}, "positionBits": 20})"},
         {"normal_bits_missing", R"({"bufferView": 0, "attributes": {"POSITION": 0, "NORMAL": 1}, "positionBits": 14})"},
         {"unknown_attribute",
+         R"({"bufferView": 0, "attributes": {"POSITION": 0, "JOINTS_0": 2}, "positionBits": 14})"},
+        {"uv_bits_missing",
          R"({"bufferView": 0, "attributes": {"POSITION": 0, "TEXCOORD_0": 2}, "positionBits": 14})"},
+        {"tangent_bits_without_tangents",
+         R"({"bufferView": 0, "attributes": {"POSITION": 0}, "positionBits": 14, "tangentBits": 10})"},
+        {"color_bits_missing",
+         R"({"bufferView": 0, "attributes": {"POSITION": 0, "COLOR_0": 2}, "positionBits": 14})"},
     };
     for (const auto& [name, text] : bad) {
         const std::string file = outDir() + "/bad_" + name + ".json";
@@ -552,6 +558,86 @@ TEST(ValenceStreamSchemaTest, SchemaRejectsBrokenObjects) {
                                "normalBits": 8})";
     const CommandResult v = validateObjects({good});
     EXPECT_EQ(v.exit_code, 0) << v.output;
+    const std::string textured = outDir() + "/good_textured.json";
+    std::ofstream(textured) << R"({"bufferView": 3, "attributes": {"POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2,
+                                   "COLOR_0": 3, "TANGENT": 4}, "positionBits": 14, "normalBits": 8,
+                                   "uvBits": 12, "colorBits": 8, "tangentBits": 10})";
+    const CommandResult vt = validateObjects({textured});
+    EXPECT_EQ(vt.exit_code, 0) << vt.output;
+}
+
+// A compact pack draws what the plain pack draws: for the textured shared assets, every primitive's
+// stream decodes (with every attribute) to the level's plain data, which a plain pack writes: the
+// same indices, positions within the position step, UVs within half the UV step, tangents within
+// the octahedral step with the same handedness.
+TEST(ValenceStreamSharedMeshesTest, TexturedStreamsCarryThePlainGeometryAndAttributes) {
+    LODBAKE_REQUIRE_SHARED_MESHES();
+    for (const char* name : {"spot.obj", "nefertiti_fraunhofer_textured.glb"}) {
+        Diagnostics diagnostics;
+        Result<LoadedMesh> loaded = readMesh(lodbake_test::sharedMesh(name), ReadOptions{}, diagnostics);
+        ASSERT_TRUE(loaded.ok()) << loaded.status().message();
+        PackLevel level;
+        level.mesh = loaded->mesh;
+        ASSERT_FALSE(level.mesh.uvs.empty()) << name;
+        ASSERT_TRUE(lodbake_test::encodeStreamLevel(valenceStreamEncoder(), LodChain{}, 0, level).ok()) << name;
+        const Mesh& m = level.mesh;
+        for (size_t p = 0; p < level.primitive_extensions.size(); ++p) {
+            const PackExtension& e = level.primitive_extensions[p][0];
+            const std::vector<uint8_t>& blob = e.blobs[0];
+            lodrt::ValenceInfo info;
+            ASSERT_EQ(lodrt::valenceReadInfo(blob.data(), blob.size(), &info), lodrt::Result::Ok);
+            const uint32_t first = level.primitive_vertex_ranges.empty() ? 0 : level.primitive_vertex_ranges[p].first;
+            std::vector<uint32_t> indices(3 * size_t(info.triangle_count));
+            std::vector<float> positions(3 * size_t(info.vertex_count));
+            std::vector<std::vector<float>> attributes(info.attribute_count);
+            std::vector<uint64_t> scratch((lodrt::valenceScratchSize(info) + 7) / 8);
+            lodrt::ValenceOutput out;
+            out.indices = indices.data();
+            out.index_capacity = indices.size();
+            out.positions = positions.data();
+            out.position_capacity = positions.size();
+            for (uint32_t i = 0; i < info.attribute_count; ++i) {
+                attributes[i].resize(size_t(info.attributes[i].components) * info.vertex_count);
+                out.attributes[i] = attributes[i].data();
+                out.attribute_capacity[i] = attributes[i].size();
+            }
+            out.scratch = scratch.data();
+            out.scratch_size = scratch.size() * 8;
+            ASSERT_EQ(lodrt::valenceDecode(blob.data(), blob.size(), out), lodrt::Result::Ok) << name;
+            const SubMesh range = m.submeshes.empty() ? SubMesh{"", 0, uint32_t(m.indices.size()), MaterialId::invalid()}
+                                                      : m.submeshes[p];
+            for (size_t i = 0; i < indices.size(); ++i) ASSERT_EQ(indices[i] + first, m.indices[range.first_index + i]);
+            const double step = quantizationStep(info);
+            for (size_t v = 0; v < info.vertex_count; ++v)
+                for (int k = 0; k < 3; ++k)
+                    ASSERT_NEAR(positions[3 * v + size_t(k)], (&m.positions[first + v].x)[k], step) << name << " " << v;
+            bool saw_uv = false;
+            for (uint32_t i = 0; i < info.attribute_count; ++i) {
+                const lodrt::ValenceAttribute& a = info.attributes[i];
+                const std::vector<float>& d = attributes[i];
+                if (a.kind == lodrt::format::kValenceAttributeUv) {
+                    saw_uv = true;
+                    const double half = 0.5 * double(a.size[0]) / double((1u << a.bits) - 1) + 1e-6;
+                    for (size_t v = 0; v < info.vertex_count; ++v) {
+                        ASSERT_NEAR(d[2 * v], m.uvs[a.set][first + v].x, half) << name << " uv " << v;
+                        ASSERT_NEAR(d[2 * v + 1], m.uvs[a.set][first + v].y, half) << name << " uv " << v;
+                    }
+                } else if (a.kind == lodrt::format::kValenceAttributeTangent) {
+                    const double tol = 4.0 / double((1u << a.bits) - 1);
+                    for (size_t v = 0; v < info.vertex_count; ++v) {
+                        const Vec4f& t = m.tangents[first + v];
+                        const double len = std::sqrt(double(t.x) * t.x + double(t.y) * t.y + double(t.z) * t.z);
+                        if (!(len > 0.0)) continue;
+                        ASSERT_NEAR(d[4 * v], t.x / len, tol) << name << " tangent " << v;
+                        ASSERT_NEAR(d[4 * v + 1], t.y / len, tol) << name << " tangent " << v;
+                        ASSERT_NEAR(d[4 * v + 2], t.z / len, tol) << name << " tangent " << v;
+                        ASSERT_EQ(d[4 * v + 3] < 0.0f, t.w < 0.0f) << name << " handedness " << v;
+                    }
+                }
+            }
+            EXPECT_TRUE(saw_uv) << name;
+        }
+    }
 }
 
 } // namespace

@@ -75,6 +75,9 @@ PackStreamEncoder makeStreamEncoder(
 struct ValenceStreamOptions {
     uint32_t position_bits = 14; // 8..16, per coordinate in the bounding cube
     uint32_t normal_bits = 8;    // octahedral bits per component, 4..16
+    uint32_t uv_bits = 12;       // UV sets, colours and tangents (codec::ValenceEncodeOptions), 4..16
+    uint32_t color_bits = 8;
+    uint32_t tangent_bits = 10;
     bool adaptive = false;
     double error_fraction = 0.25; // (0, 1]: largest quantization displacement / the level's mean error
     /// Called between coding a primitive and decoding it for the check, when the coder's working set
@@ -86,6 +89,9 @@ struct ValenceStreamOptions {
 struct ValencePrecision {
     uint32_t position_bits = 14;
     uint32_t normal_bits = 8;
+    uint32_t uv_bits = 12; // the attributes keep the options' bits on every level
+    uint32_t color_bits = 8;
+    uint32_t tangent_bits = 10;
     double max_displacement = 0; // largest distance quantization can move a vertex: sqrt(3)/2 * step
     double max_normal_angle = 0; // largest angle (radians) the normal quantization can turn a unit normal
 };

@@ -21,6 +21,7 @@
 //      /   \          a stacked list (merge). A node whose wedge is one triangle is closed:
 //     f --- n         triangle (next, k, prev), and the node leaves its list.
 
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 
@@ -490,6 +491,7 @@ struct PositionPlan {
     uint32_t* count = nullptr;     // per entry of order: its parallelograms (triples)
     uint32_t* neighbour = nullptr; // per entry: the first known neighbour a met in the walk, kNone if none
     uint32_t* triples = nullptr;   // (a, b, w) of every parallelogram a + b - w, entry after entry
+    uint8_t* boundary = nullptr;   // optional, per entry: 1 when the vertex has a dummy neighbour
     uint32_t max_triples = 0;
     uint32_t ordered = 0;      // entries of order filled
     uint32_t triple_count = 0; // triples filled
@@ -532,7 +534,7 @@ inline bool planPositions(const uint32_t* cv, const uint32_t* opp, const uint32_
         }
         state[v] |= kOrdered;
         plan->order[count] = v;
-        uint32_t n = 0, neighbour = kNone;
+        uint32_t n = 0, neighbour = kNone, boundary = 0;
         // Each triangle (v, a, b) with exactly one of a, b ordered now has both others of the
         // unordered one ordered.
         const uint32_t c0 = vertex_corner[v];
@@ -545,6 +547,7 @@ inline bool planPositions(const uint32_t* cv, const uint32_t* opp, const uint32_
             const uint32_t cn = i3 == 2 ? t3 : c + 1, cp = i3 == 0 ? t3 + 2 : c - 1;
             const uint32_t va = cv[cn], vb = cv[cp];
             const uint32_t sa = state[va], sb = state[vb];
+            boundary |= (sa | sb) & kDummy;
             const uint32_t oa = sa & kOrdered, ob = sb & kOrdered;
             if (oa != ob) {
                 const uint32_t u = oa ? vb : va;
@@ -578,6 +581,7 @@ inline bool planPositions(const uint32_t* cv, const uint32_t* opp, const uint32_
         }
         plan->count[count] = n;
         plan->neighbour[count] = neighbour;
+        if (plan->boundary) plan->boundary[count] = boundary ? 1 : 0;
         ++count;
     }
     plan->ordered = count;
@@ -795,6 +799,219 @@ inline bool snapCandidates(const int32_t* qpos, const uint32_t* t, uint32_t n, u
 constexpr uint32_t kSignContexts = 9;
 inline uint32_t signClass(int32_t r) {
     return r > 0 ? 1u : (r < 0 ? 2u : 0u);
+}
+
+
+/// Prediction of a UV or colour value (format version 7, docs/format/valence.md "Attributes") of vertex
+/// v from its plan entry (`n` triples at `t`, `neighbour`): `qa` holds the attribute's quantized
+/// values, 4 per closed vertex (components beyond `components` unused); `qpos`, 3 per closed vertex,
+/// the quantized positions (all decoded before any attribute). With kValencePredictParallelogram
+/// the mean of the parallelograms a + b - w rounded half away from zero; with kValencePredictUvGeometric
+/// (two components) each triple instead places v in UV space where its position lies relative to the
+/// edge ab: at the same fraction along a->b and the same distance from it relative to the edge's
+/// length, on the side away from w, and the mean of those is rounded half up. A triple whose edge
+/// has no length in space or whose w lies on the edge's line in UV space gives its parallelogram.
+/// Without triples: the neighbour's value, else `last`. Clamped to [0, qmax].
+/// The geometric prediction uses double arithmetic in one fixed order of correctly rounded operations
+/// (+, -, *, /, sqrt), so the encoder and the decoder compute the same bits.
+inline void predictAttribute(const int32_t* qa, uint32_t components, const int32_t* qpos, uint32_t v,
+                             const uint32_t* t, uint32_t n, uint32_t neighbour, const int32_t* last,
+                             uint32_t predictor, int32_t qmax, int32_t* out) {
+    if (n == 0) {
+        const int32_t* src = neighbour != kNone ? &qa[4 * size_t(neighbour)] : last;
+        for (uint32_t j = 0; j < components; ++j) out[j] = src[j];
+        return;
+    }
+    if (predictor == format::kValencePredictUvGeometric && components == 2) {
+        const int32_t* pv = &qpos[3 * size_t(v)];
+        double acc[2] = {0.0, 0.0};
+        for (uint32_t i = 0; i < n; ++i) {
+            const uint32_t* e = t + 3 * size_t(i);
+            const int32_t* pa = &qpos[3 * size_t(e[0])];
+            const int32_t* pb = &qpos[3 * size_t(e[1])];
+            const int32_t* ua = &qa[4 * size_t(e[0])];
+            const int32_t* ub = &qa[4 * size_t(e[1])];
+            const int32_t* uw = &qa[4 * size_t(e[2])];
+            const double ex = double(pb[0] - pa[0]), ey = double(pb[1] - pa[1]), ez = double(pb[2] - pa[2]);
+            const double fx = double(pv[0] - pa[0]), fy = double(pv[1] - pa[1]), fz = double(pv[2] - pa[2]);
+            const double gx = double(ub[0] - ua[0]), gy = double(ub[1] - ua[1]);
+            const double wx = double(uw[0] - ua[0]), wy = double(uw[1] - ua[1]);
+            const double l2 = ex * ex + ey * ey + ez * ez;
+            const double side = gx * wy - gy * wx; // w's side of a->b in UV space (perp(g) . (w - a))
+            if (l2 > 0.0 && side != 0.0) {
+                const double d = ex * fx + ey * fy + ez * fz;
+                const double s = d / l2;
+                const double dd = d * s;
+                const double h2 = fx * fx + fy * fy + fz * fz - dd;
+                const double h = h2 > 0.0 ? std::sqrt(h2 / l2) : 0.0;
+                const double away = side > 0.0 ? -h : h;
+                acc[0] += double(ua[0]) + s * gx - away * gy;
+                acc[1] += double(ua[1]) + s * gy + away * gx;
+            } else {
+                acc[0] += double(ua[0] + ub[0] - uw[0]);
+                acc[1] += double(ua[1] + ub[1] - uw[1]);
+            }
+        }
+        for (uint32_t j = 0; j < 2; ++j) {
+            const double m = std::floor(acc[j] / double(n) + 0.5);
+            out[j] = m < 0.0 ? 0 : (m > double(qmax) ? qmax : int32_t(m));
+        }
+        return;
+    }
+    // Neighbour mean: the average of the 2n values at a and b (noisy colours: a parallelogram adds
+    // the noise of three vertices, a mean of many averages it out).
+    const bool mean = predictor == format::kValencePredictNeighbourMean ||
+                      predictor == format::kValencePredictNeighbourMeanDecorrelated;
+    for (uint32_t j = 0; j < components; ++j) {
+        int64_t sum = 0;
+        for (uint32_t i = 0; i < n; ++i) {
+            const uint32_t* e = t + 3 * size_t(i);
+            sum += int64_t(qa[4 * size_t(e[0]) + j]) + qa[4 * size_t(e[1]) + j] - (mean ? 0 : qa[4 * size_t(e[2]) + j]);
+        }
+        const int64_t m = divRound(sum, int64_t(mean ? 2 * n : n));
+        out[j] = m < 0 ? 0 : (m > qmax ? qmax : int32_t(m));
+    }
+}
+
+/// Whether a colour predictor codes channels 1.. relative to channel 0's residual.
+inline bool decorrelatedChannels(uint32_t predictor) {
+    return predictor == format::kValencePredictColorDecorrelated ||
+           predictor == format::kValencePredictNeighbourMeanDecorrelated;
+}
+
+/// Length context of component j of a UV or colour value: `count` the vertex's parallelogram count,
+/// `length` the previous vertex's residual length of component 0 (j = 0) or the largest residual
+/// length of this vertex's earlier components (j > 0).
+inline uint32_t attributeContext(uint32_t j, uint32_t count, uint32_t length) {
+    const uint32_t cls = count < 2 ? count : 2;
+    const uint32_t l = length < format::kValenceAttributeLengths ? length : format::kValenceAttributeLengths - 1;
+    return (j == 0 ? 0 : 3 * format::kValenceAttributeLengths) + cls * format::kValenceAttributeLengths + l;
+}
+
+/// Adds output triangle f's UV tangent direction to its three vertices (`sum`, 4 per vertex: xyz and
+/// the UV orientation): with edges e1 = p1 - p0, e2 = p2 - p0 over the quantized positions `qpos`
+/// (3 per vertex) and (du_i, dv_i) over the quantized UVs `quv` (2 per vertex), the direction of
+/// increasing u is (e1 dv2 - e2 dv1) / det with det = du1 dv2 - du2 dv1; the sum takes it times
+/// sign(det) (area weighted) and adds det itself as the orientation.
+inline void addFaceTangent(const int32_t* qpos, const int32_t* quv, const uint32_t f[3], int64_t* sum) {
+    const int32_t* p0 = &qpos[3 * size_t(f[0])];
+    const int32_t* p1 = &qpos[3 * size_t(f[1])];
+    const int32_t* p2 = &qpos[3 * size_t(f[2])];
+    const int32_t* t0 = &quv[2 * size_t(f[0])];
+    const int32_t* t1 = &quv[2 * size_t(f[1])];
+    const int32_t* t2 = &quv[2 * size_t(f[2])];
+    const int64_t du1 = t1[0] - t0[0], dv1 = t1[1] - t0[1], du2 = t2[0] - t0[0], dv2 = t2[1] - t0[1];
+    const int64_t det = du1 * dv2 - du2 * dv1;
+    const int64_t sg = det > 0 ? 1 : (det < 0 ? -1 : 0);
+    int64_t d[3];
+    for (int j = 0; j < 3; ++j) d[j] = sg * ((int64_t(p1[j]) - p0[j]) * dv2 - (int64_t(p2[j]) - p0[j]) * dv1);
+    for (int c = 0; c < 3; ++c) {
+        int64_t* s4 = &sum[4 * size_t(f[c])];
+        s4[0] += d[0];
+        s4[1] += d[1];
+        s4[2] += d[2];
+        s4[3] += det;
+    }
+}
+
+/// Handedness context of a tangent from its vertex's summed UV orientation: 0 positive, 1 negative,
+/// 2 none.
+inline uint32_t tangentSignContext(int64_t orientation) {
+    return orientation > 0 ? 0u : (orientation < 0 ? 1u : 2u);
+}
+
+
+/// Position twins (format version 7, docs/format/valence.md "Twins"): a vertex on a boundary of the
+/// coded connectivity (a UV seam's side) usually has the position of a vertex on the seam's other
+/// side. A grid of cells 2^shift quantized units wide holds the boundary vertices coded so far
+/// (`head`: one chain per hash slot, `mask + 1` slots; `next`: per closed vertex); the candidate of a
+/// vertex is the one nearest its prediction among the chains of the 27 cells around it.
+constexpr uint32_t kTwinChainLimit = format::kValenceTwinChainLimit;
+constexpr uint32_t kTwinContexts = format::kValenceTwinContexts;
+struct TwinGrid {
+    uint32_t* head = nullptr;
+    uint32_t* next = nullptr;
+    uint32_t mask = 0;
+    uint32_t shift = 0;
+    int32_t qmax = 0;
+};
+inline uint32_t twinSlot(const TwinGrid& g, const int32_t c[3]) {
+    return (uint32_t(c[0]) * format::kValenceTwinHash[0] ^ uint32_t(c[1]) * format::kValenceTwinHash[1] ^
+            uint32_t(c[2]) * format::kValenceTwinHash[2]) &
+           g.mask;
+}
+inline void twinCell(const TwinGrid& g, const int32_t* p, int32_t c[3]) {
+    for (int j = 0; j < 3; ++j) {
+        const int32_t x = p[j] < 0 ? 0 : (p[j] > g.qmax ? g.qmax : p[j]);
+        c[j] = x >> g.shift;
+    }
+}
+inline void twinInsert(TwinGrid& g, const int32_t* qpos, uint32_t v) {
+    int32_t c[3];
+    twinCell(g, &qpos[3 * size_t(v)], c);
+    const uint32_t slot = twinSlot(g, c);
+    g.next[v] = g.head[slot];
+    g.head[slot] = v;
+}
+/// Whether u is one of the vertex's known neighbours: the a or b of one of its `n` triples `t`, or
+/// `neighbour` (its twin, on the seam's other side, never is).
+inline bool knownNeighbour(uint32_t u, const uint32_t* t, uint32_t n, uint32_t neighbour) {
+    if (u == neighbour) return true;
+    for (uint32_t i = 0; i < n; ++i)
+        if (t[3 * size_t(i)] == u || t[3 * size_t(i) + 1] == u) return true;
+    return false;
+}
+
+/// The candidate nearest `pred` (squared distance; the first met wins ties; cells in z, y, x order
+/// from -1 to +1, each chain newest first, at most kTwinChainLimit vertices of it, the vertex's known
+/// neighbours skipped), kNone without one; *ctx its context.
+inline uint32_t twinCandidate(const TwinGrid& g, const int32_t* qpos, const int32_t pred[3], const uint32_t* t,
+                              uint32_t n, uint32_t neighbour, uint32_t* ctx) {
+    int32_t c[3];
+    twinCell(g, pred, c);
+    uint32_t best = kNone;
+    uint64_t best_d = ~uint64_t(0);
+    for (int32_t dz = -1; dz <= 1; ++dz)
+        for (int32_t dy = -1; dy <= 1; ++dy)
+            for (int32_t dx = -1; dx <= 1; ++dx) {
+                const int32_t cell[3] = {c[0] + dx, c[1] + dy, c[2] + dz};
+                uint32_t v = g.head[twinSlot(g, cell)];
+                for (uint32_t k = 0; v != kNone && k < kTwinChainLimit; ++k, v = g.next[v]) {
+                    const int32_t* p = &qpos[3 * size_t(v)];
+                    uint64_t d = 0;
+                    for (int j = 0; j < 3; ++j) {
+                        const int64_t e = int64_t(p[j]) - pred[j];
+                        d += uint64_t(e * e);
+                    }
+                    if (d < best_d && !knownNeighbour(v, t, n, neighbour)) {
+                        best_d = d;
+                        best = v;
+                    }
+                }
+            }
+    if (best != kNone) {
+        uint32_t m = 0;
+        for (int j = 0; j < 3; ++j) {
+            const int64_t e = int64_t(qpos[3 * size_t(best) + size_t(j)]) - pred[j];
+            const uint64_t a = uint64_t(e < 0 ? -e : e);
+            m = a > m ? uint32_t(a > 0xFFFFFFFFu ? 0xFFFFFFFFu : a) : m;
+        }
+        const uint32_t b = bitLength(m);
+        *ctx = b < kTwinContexts ? b : kTwinContexts - 1;
+    }
+    return best;
+}
+
+/// Normal prediction with twins: a vertex whose twin partner comes earlier in final order takes the
+/// partner's coded normal (a UV seam rarely splits the normal); else predictNormal.
+inline void predictNormalTwin(const int64_t* s3, const uint32_t* qnorm, size_t x, uint32_t partner, uint32_t bits,
+                              uint32_t p[2]) {
+    if (partner != kNone && partner < x) {
+        p[0] = qnorm[2 * size_t(partner)];
+        p[1] = qnorm[2 * size_t(partner) + 1];
+    } else {
+        predictNormal(s3, qnorm, x, bits, p);
+    }
 }
 
 } // namespace detail
