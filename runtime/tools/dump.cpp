@@ -311,6 +311,7 @@ void measureMesh(const lodrt::Pack& pack, uint32_t mesh_index, LodLevelRow& row)
 struct DecodedPrimitive {
     std::vector<float> positions;
     std::vector<uint32_t> indices;
+    loddump::StreamShading shading; // decoded from the stream only (compact packs)
 };
 
 // Decodes primitive `p` of mesh `m`'s LODBAKE_valence_compression stream. Returns false with *error
@@ -366,7 +367,8 @@ bool decodeValencePrimitive(const lodrt::Pack& pack, uint32_t prim_index, Decode
     }
     out->positions.assign(size_t(info.vertex_count) * 3, 0.0f);
     out->indices.assign(size_t(info.triangle_count) * 3, 0);
-    std::vector<float> normals(info.has_normals ? size_t(info.vertex_count) * 3 : 0);
+    std::vector<float>& normals = out->shading.normals;
+    normals.assign(info.has_normals ? size_t(info.vertex_count) * 3 : 0, 0.0f);
     std::vector<uint64_t> scratch((lodrt::valenceScratchSize(info) + 7) / 8);
     lodrt::ValenceOutput output;
     output.indices = out->indices.data();
@@ -375,6 +377,19 @@ bool decodeValencePrimitive(const lodrt::Pack& pack, uint32_t prim_index, Decode
     output.position_capacity = out->positions.size();
     output.normals = normals.empty() ? nullptr : normals.data();
     output.normal_capacity = normals.size();
+    // The attributes the contact sheet shades with: UV sets 0 and 1 and the tangents.
+    for (uint32_t a = 0; a < info.attribute_count; ++a) {
+        const lodrt::ValenceAttribute& attribute = info.attributes[a];
+        std::vector<float>* target = nullptr;
+        if (attribute.kind == lodrt::format::kValenceAttributeUv && attribute.set < 2)
+            target = &out->shading.uvs[attribute.set];
+        else if (attribute.kind == lodrt::format::kValenceAttributeTangent)
+            target = &out->shading.tangents;
+        if (!target || !target->empty()) continue;
+        target->assign(size_t(info.vertex_count) * attribute.components, 0.0f);
+        output.attributes[a] = target->data();
+        output.attribute_capacity[a] = target->size();
+    }
     output.scratch = scratch.data();
     output.scratch_size = scratch.size() * 8;
     r = lodrt::valenceDecode(data, size_t(size), output);
@@ -934,7 +949,7 @@ loddump::SheetMesh levelTriangles(const lodrt::Pack& pack, const LodLevelRow& ro
         const uint32_t base = uint32_t(out.positions.size() / 3);
         out.positions.insert(out.positions.end(), d.positions.begin(), d.positions.end());
         for (uint32_t i : d.indices) out.indices.push_back(base + i);
-        loddump::appendShading(pack, prim, d.positions.size() / 3, d.indices.size() / 3, textures, &out);
+        loddump::appendShading(pack, prim, d.positions.size() / 3, d.indices.size() / 3, d.shading, textures, &out);
     }
     return out;
 }

@@ -135,8 +135,22 @@ const SheetTexture* SheetTextures::texture(uint64_t index) {
     return decoded_[index].get();
 }
 
+namespace {
+
+// Appends the decoded stream `values` when it holds `count` elements, else the accessor's.
+void appendStreamOrAccessor(const lodrt::Pack& pack, const lodrt::PrimitiveInfo& prim, const char* name,
+                            uint32_t components, size_t count, const std::vector<float>& values,
+                            std::vector<float>* out) {
+    if (values.size() == count * components)
+        out->insert(out->end(), values.begin(), values.end());
+    else
+        appendStream(pack, prim, name, components, count, out);
+}
+
+} // namespace
+
 void appendShading(const lodrt::Pack& pack, const lodrt::PrimitiveInfo& prim, size_t vertex_count,
-                   size_t triangle_count, SheetTextures& textures, SheetMesh* out) {
+                   size_t triangle_count, const StreamShading& decoded, SheetTextures& textures, SheetMesh* out) {
     const uint32_t material_count = pack.materialCount();
     if (material_count == 0) return;
     if (out->materials.empty()) {
@@ -151,10 +165,10 @@ void appendShading(const lodrt::Pack& pack, const lodrt::PrimitiveInfo& prim, si
     out->tangents.resize(vertices_before * 4, 0.0f);
     for (std::vector<float>& set : out->uvs) set.resize(vertices_before * 2, 0.0f);
     out->triangle_material.resize(out->indices.size() / 3 - triangle_count, material_count);
-    appendStream(pack, prim, "NORMAL", 3, vertex_count, &out->normals);
-    appendStream(pack, prim, "TANGENT", 4, vertex_count, &out->tangents);
-    appendStream(pack, prim, "TEXCOORD_0", 2, vertex_count, &out->uvs[0]);
-    appendStream(pack, prim, "TEXCOORD_1", 2, vertex_count, &out->uvs[1]);
+    appendStreamOrAccessor(pack, prim, "NORMAL", 3, vertex_count, decoded.normals, &out->normals);
+    appendStreamOrAccessor(pack, prim, "TANGENT", 4, vertex_count, decoded.tangents, &out->tangents);
+    appendStreamOrAccessor(pack, prim, "TEXCOORD_0", 2, vertex_count, decoded.uvs[0], &out->uvs[0]);
+    appendStreamOrAccessor(pack, prim, "TEXCOORD_1", 2, vertex_count, decoded.uvs[1], &out->uvs[1]);
     const uint32_t material = prim.material < material_count ? prim.material : material_count;
     out->triangle_material.resize(out->indices.size() / 3, material);
 }

@@ -35,11 +35,20 @@ private:
     std::vector<std::string> problems_;
 };
 
+/// A primitive's shading attributes decoded from its LODBAKE_valence_compression stream (compact
+/// packs, whose plain accessors have no data). An empty vector: the stream does not code it.
+struct StreamShading {
+    std::vector<float> normals;  // 3 per vertex
+    std::vector<float> tangents; // 4 per vertex
+    std::vector<float> uvs[2];   // TEXCOORD_0 and TEXCOORD_1, 2 per vertex
+};
+
 /// Appends primitive `prim`'s shading data for `vertex_count` vertices and `triangle_count` triangles
 /// (its positions and indices are appended by the caller): NORMAL, TANGENT, TEXCOORD_0 and
-/// TEXCOORD_1 (zeros where a stream is absent or unreadable), and its material for each triangle.
-/// Packs without materials add nothing, so their levels stay flat shaded.
+/// TEXCOORD_1 from `decoded` when it has them (else from the accessors; zeros where a stream is absent
+/// or unreadable), and its material for each triangle. Packs without materials add nothing, so their
+/// levels stay flat shaded.
 void appendShading(const lodrt::Pack& pack, const lodrt::PrimitiveInfo& prim, size_t vertex_count,
-                   size_t triangle_count, SheetTextures& textures, SheetMesh* out);
+                   size_t triangle_count, const StreamShading& decoded, SheetTextures& textures, SheetMesh* out);
 
 } // namespace loddump

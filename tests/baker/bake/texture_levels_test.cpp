@@ -284,4 +284,45 @@ TEST(TexturedRenderTest, ContactSheetShowsTheNormalMap) {
     EXPECT_LT(left, 0.8 * right) << "left third " << left << ", right third " << right;
 }
 
+// A compact pack has no plain attribute data: the contact sheet must take the UVs and tangents from
+// the valence stream and show every level as the plain pack does, up to the quantization (positions
+// at 14 bits and UVs at 12 move a few pixels' worth of colour at most on the textured Nefertiti).
+TEST(TexturedRenderTest, CompactPackRendersLikeThePlainPack) {
+    LODBAKE_REQUIRE_SHARED_MESHES();
+    const std::string dir = freshDir("render_compact");
+    const std::string input = lodbake_test::sharedMesh("nefertiti_fraunhofer_textured.glb");
+    const std::string cli = lodbake_test::withoutLeakCheck() + shellQuote(lodbake_test::lodbakeCli()) + " bake " +
+                            shellQuote(input) + " --quiet --no-progressive-fans -o ";
+    ASSERT_EQ(runCommand(cli + shellQuote(dir + "/plain.glb")).exit_code, 0);
+    ASSERT_EQ(runCommand(cli + shellQuote(dir + "/compact.glb") + " --compact").exit_code, 0);
+    for (const char* name : {"plain", "compact"}) {
+        const CommandResult r = runCommand(lodbake_test::withoutLeakCheck() + shellQuote(LODBAKE_TEST_LODDUMP) + " " +
+                                           shellQuote(dir + "/" + name + ".glb") + " --render " +
+                                           shellQuote(dir + "/" + name + ".png"));
+        ASSERT_EQ(r.exit_code, 0) << r.output;
+    }
+    const auto plain = lodbake::decodeImage(bytesOf(dir + "/plain.png"), "plain.png");
+    const auto compact = lodbake::decodeImage(bytesOf(dir + "/compact.png"), "compact.png");
+    ASSERT_TRUE(plain.ok() && compact.ok());
+    ASSERT_EQ(plain->width, compact->width);
+    ASSERT_EQ(plain->height, compact->height);
+    ASSERT_EQ(plain->samples.size(), compact->samples.size());
+    // Textured pixels are far from grey; an untextured (flat) compact render would share few of them.
+    size_t object = 0, far = 0;
+    double sum = 0;
+    for (size_t i = 0; i + 2 < plain->samples.size(); i += 3) {
+        const uint8_t* a = &plain->samples[i];
+        const uint8_t* b = &compact->samples[i];
+        if (a[0] == 236 && a[1] == 236 && a[2] == 240) continue; // background
+        ++object;
+        int worst = 0;
+        for (int k = 0; k < 3; ++k) worst = std::max(worst, std::abs(int(a[k]) - int(b[k])));
+        sum += worst;
+        far += worst > 48;
+    }
+    ASSERT_GT(object, 20000u);
+    EXPECT_LT(sum / double(object), 6.0) << "mean largest channel difference over " << object << " pixels";
+    EXPECT_LT(double(far), 0.03 * double(object)) << far << " of " << object << " pixels differ by more than 48";
+}
+
 } // namespace
