@@ -8,7 +8,8 @@
 #   --check     passed to every bench; the script exits 1 when any bar is not met.
 #   --quick     smaller inputs and fewer runs (the bars whose input is fixed, such as the bake and
 #               memory bars on dragon_poisson, keep it).
-#   --only      run only the named benches (e.g. --only codec_bench,pfrep_bench).
+#   --only      run only the named benches (e.g. --only codec_bench,pfrep_bench; the scripts by their
+#               name without .sh: bench-textured, bench-merge).
 # The script exits 1 when a bench fails to run, whatever --check says. Logs: BENCH_LOG_DIR
 # (default BUILD_DIR/bench_logs). The anchors of simplify_bench and pack_size_bench come from npm
 # (scripts/node-bench); they are installed with `npm ci` when missing.
@@ -78,6 +79,8 @@ if [ $quick = 1 ]; then
     add runtime_bench --frames 50
     add simplify_bench bunny_zipper.ply lucy100k.ply
     add simplify_bench --speed-only --runs 1 dragon_poisson.ply
+    add scripts/bench-textured.sh "$meshes/spot.obj"
+    add scripts/bench-merge.sh "$build_dir"
 else
     add bake_bench --runs 3 --bar-only
     add bake_stages_bench --runs 3 --from-chain "$meshes/dragon_poisson.ply"
@@ -92,6 +95,8 @@ else
     add repair_bench
     add runtime_bench
     add simplify_bench
+    add scripts/bench-textured.sh
+    add scripts/bench-merge.sh "$build_dir"
 fi
 
 summary="$log_dir/summary.txt"
@@ -103,12 +108,19 @@ for entry in "${runs[@]}"; do
     # shellcheck disable=SC2206 # entries are space-separated words without spaces of their own
     words=($entry)
     name=${words[0]}
+    # The benches whose anchor is a command-line tool are scripts (scripts/bench-*.sh); the rest are
+    # programs of tests/benchmarks.
+    program="$bin/$name"
+    if [[ $name == scripts/* ]]; then
+        program=$name
+        name=$(basename "$name" .sh)
+    fi
     wanted "$name" || continue
     n=$((n + 1))
     log="$log_dir/$n-$name.log"
     echo "== $entry" | sed "s|$meshes|MESHES|g"
     start=$(date +%s)
-    "$bin/$name" "${words[@]:1}" "${checkflag[@]}" > "$log" 2>&1
+    BUILD_DIR="$build_dir" "$program" "${words[@]:1}" "${checkflag[@]}" > "$log" 2>&1
     rc=$?
     secs=$(( $(date +%s) - start ))
     grep -E '^(BAR|NOBAR)\|' "$log" | sed "s/^/$n|/" >> "$summary"
