@@ -17,9 +17,6 @@
 #include <set>
 #include <string>
 #include <vector>
-#if defined(__GLIBC__)
-#include <malloc.h>
-#endif
 
 #include "lodbake/bake/bake.h"
 #include "lodbake/bake/batch.h"
@@ -261,31 +258,6 @@ std::string jobReport(const BakeJob& job, const BakeJobResult& r) {
     return head + "," + body.substr(open + 1);
 }
 
-// Allocator policy is the program's business, not the library's (docs/cli.md, "Environment"). A bake
-// allocates and frees arrays of hundreds of megabytes stage after stage (with several threads, from
-// several glibc arenas); glibc keeps most freed pages resident (its heap is not returned while
-// fragmented, and freeing a large block raises its mmap threshold, so the next stage's arrays come
-// from the heap too), so the resident size of one stage would add to the next one's. Giving the free
-// pages back whenever a stage ends, and where a stage frees one working set before building the next
-// (BakeHooks::release_memory), keeps the peak near that of the largest working set.
-void releaseFreeMemory() {
-#if defined(__GLIBC__)
-    malloc_trim(0);
-#endif
-}
-
-// Inside a stage no hook helps: a working set freed while the next one grows stays resident below
-// it. So blocks of 16 MiB and more are mapped and unmapped on their own, and free memory at the top
-// of the heap goes back at once (a fixed mmap threshold, which also stops glibc from raising its
-// trim threshold). A smaller mmap threshold saves little more memory and costs CPU time in page
-// faults. glibc's own environment settings for either threshold take precedence.
-void setAllocatorPolicy() {
-#if defined(__GLIBC__)
-    if (std::getenv("MALLOC_MMAP_THRESHOLD_") == nullptr) mallopt(M_MMAP_THRESHOLD, 16 << 20);
-    if (std::getenv("MALLOC_TRIM_THRESHOLD_") == nullptr) mallopt(M_TRIM_THRESHOLD, 128 << 10);
-#endif
-}
-
 // A step of runBake that may end the run: kContinue, or the exit code to return.
 constexpr int kContinue = -1;
 
@@ -505,7 +477,6 @@ void printSummaries(const std::vector<BakeJob>& jobs, const std::vector<BakeJobR
 } // namespace
 
 int runBake(int argc, char** argv) {
-    setAllocatorPolicy();
     Args args;
     int code = 0;
     if (!parseArgs(argc, argv, 2,
@@ -569,11 +540,9 @@ int runBake(int argc, char** argv) {
     ProgressPrinter printer(jobs, quiet);
     BatchHooks hooks;
     hooks.stage_done = [&](size_t job, size_t input, BakeStage stage, const StageTime&) {
-        releaseFreeMemory();
         printer.stageDone(job, input, stage);
     };
     hooks.job_done = [&](size_t job, const BakeJobResult& r) { printer.jobDone(job, r); };
-    hooks.release_memory = releaseFreeMemory;
     const Clock::time_point start = Clock::now();
     const double cpu_start = processCpuSeconds();
     std::vector<BakeJobResult> results = runBakeJobs(jobs, options, hooks);

@@ -43,6 +43,21 @@ bool resolve(const SelectionParams& p, Resolved* out) {
     return true;
 }
 
+// The switch policy, as the baker computes it in double (baker/include/lodbake/core/lod_policy.h,
+// same names; LodPolicyAgreementTest holds the two to the same numbers). A level of error e is
+// acceptable from its switch distance on, where e projects to the pixel threshold p:
+// d = e · H / (2 · p · tan(fov / 2)) = e · k / p, with k = H / (2 tan(fov / 2)) resolved once
+// (Resolved::k).
+inline float switchDistance(float error, float k, float pixel_threshold) {
+    return error * k / pixel_threshold;
+}
+
+// The far edge of the hysteresis band around a switch distance d (the baker's hysteresisBand):
+// the level is taken only beyond d (1 + h).
+inline float hysteresisFar(float switch_distance, float hysteresis) {
+    return switch_distance * (1 + hysteresis);
+}
+
 inline uint8_t clampLevel(uint8_t current, uint32_t lo, uint32_t hi) {
     uint32_t c = current == kNoLevel ? hi : current;
     c = c < lo ? lo : c;
@@ -140,8 +155,8 @@ Result LodTable::update(const ModelSet& models, const SelectionParams& params) {
                     a = level.band_near;
                     c = level.band_far;
                 } else {
-                    a = level.hausdorff_error * r.k / r.threshold;
-                    c = a * (1 + r.hysteresis);
+                    a = switchDistance(level.hausdorff_error, r.k, r.threshold);
+                    c = hysteresisFar(a, r.hysteresis);
                 }
                 a *= r.bias_scale;
                 c *= r.bias_scale;

@@ -4,14 +4,20 @@
 // from the original on 2 threads, in the same run. Prints both times and the ratio; the bar
 // (docs/bake.md) is ≤ 3 on the median of --runs runs of each side, alternating.
 //
-// usage: bake_bench [--runs N] [--stages] [--bar-only] [--check] [MESH]
+// usage: bake_bench [--runs N] [--stages] [--bar-only] [--cli PATH] [--check] [MESH]
 //        (default dragon_poisson.ply from ../shared/meshes; --bar-only skips the in-process breakdown;
+//        --cli: the lodbake program to run instead of this build's, e.g. an older build to compare;
 //        --check: exit 1 when the bar is not met)
+// The peak resident size of every CLI run (the child's maximum RSS) is printed with the times.
 // --stages: instead, every stage of a bake run on its own in process, at 1 and 2 threads, with its
 // wall time, process and thread CPU time and peak resident size (what each stage costs alone).
 // Not a ctest: these machines are noisy, so the median of N runs of each side is compared.
 
+#include <fcntl.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
 #include <time.h>
+#include <unistd.h>
 #if defined(__GLIBC__)
 #include <malloc.h>
 #endif
@@ -48,10 +54,28 @@ double now() {
     return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
-std::string shellQuote(const std::string& s) {
-    std::string out = "'";
-    for (char c : s) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
-    return out + "'";
+// Runs `args` (args[0] is the program) with stdout and stderr on /dev/null and waits for it. Returns
+// false when it could not run or did not exit with 0; `peak_mib` receives its maximum resident size.
+bool runChild(const std::vector<std::string>& args, double& peak_mib) {
+    std::vector<char*> argv;
+    for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    const pid_t pid = ::fork();
+    if (pid < 0) return false;
+    if (pid == 0) {
+        const int null = ::open("/dev/null", O_WRONLY);
+        if (null >= 0) {
+            ::dup2(null, STDOUT_FILENO);
+            ::dup2(null, STDERR_FILENO);
+        }
+        ::execv(argv[0], argv.data());
+        ::_exit(127);
+    }
+    int status = 0;
+    rusage usage{};
+    if (::wait4(pid, &status, 0, &usage) != pid) return false;
+    peak_mib = double(usage.ru_maxrss) / 1024.0; // KiB on Linux
+    return WIFEXITED(status) && WEXITSTATUS(status) == 0;
 }
 
 // The preset's levels with meshopt_simplify, each from the original, levels spread over 2 threads.
@@ -96,8 +120,9 @@ void resetPeak() {
 }
 
 // One step of the in-process breakdown: wall, process CPU (all threads), CPU of this thread, and
-// the peak resident size reached during the step. Free pages are given back first, as the CLI does
-// at the end of every stage, so a step's peak does not include what earlier steps left in the heap.
+// the peak resident size reached during the step. The bench gives free pages back first, so a
+// step's peak does not include what earlier steps left in the heap (an attribution of this
+// in-process breakdown only: the CLI runs above leave the allocator alone).
 template <class F> void step(const char* name, F&& f) {
 #if defined(__GLIBC__)
     malloc_trim(0);
@@ -188,6 +213,7 @@ int main(int argc, char** argv) {
     std::string mesh_path = std::string(LODBAKE_BENCH_MESHES_DIR) + "/dragon_poisson.ply";
     int runs = 3;
     bool stages_only = false, bar_only = false;
+    std::string cli = LODBAKE_BENCH_CLI;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
         if (a == "--runs" && i + 1 < argc) {
@@ -196,10 +222,12 @@ int main(int argc, char** argv) {
             stages_only = true;
         } else if (a == "--bar-only") {
             bar_only = true;
+        } else if (a == "--cli" && i + 1 < argc) {
+            cli = argv[++i];
         } else if (!a.empty() && a[0] != '-') {
             mesh_path = a;
         } else {
-            std::fprintf(stderr, "usage: bake_bench [--runs N] [--stages] [--bar-only] [--check] [MESH]\n");
+            std::fprintf(stderr, "usage: bake_bench [--runs N] [--stages] [--bar-only] [--cli PATH] [--check] [MESH]\n");
             return 2;
         }
     }
@@ -227,17 +255,18 @@ int main(int argc, char** argv) {
         return 0;
     }
     const std::string out = std::string(LODBAKE_BENCH_OUT_DIR) + "/bake_bench.glb";
-    const std::string command = shellQuote(LODBAKE_BENCH_CLI) + " bake " + shellQuote(mesh_path) + " --preset " +
-                                shellQuote(preset) + " --threads 2 -o " + shellQuote(out) + " > /dev/null 2>&1";
-    std::vector<double> ours_runs, native_runs;
+    const std::vector<std::string> command{cli, "bake", mesh_path, "--preset", preset, "--threads", "2", "-o", out};
+    std::vector<double> ours_runs, native_runs, peak_runs;
     std::vector<size_t> triangles;
     for (int r = 0; r < runs; ++r) {
         const double start = now();
-        if (std::system(command.c_str()) != 0) {
-            std::fprintf(stderr, "error: '%s' failed\n", command.c_str());
+        double peak = 0;
+        if (!runChild(command, peak)) {
+            std::fprintf(stderr, "error: '%s bake %s' failed\n", cli.c_str(), mesh_path.c_str());
             return 1;
         }
         ours_runs.push_back(now() - start);
+        peak_runs.push_back(peak);
         native_runs.push_back(nativeSeconds(mesh, settings.lod_ratios, triangles));
     }
     const double ours = lodbake_bench::median(ours_runs), native = lodbake_bench::median(native_runs);
@@ -275,6 +304,9 @@ int main(int argc, char** argv) {
                 "meshopt_simplify (2 threads) median %.3f s (best %.3f); ratio of medians %.2f; %d runs each\n",
                 ours, *std::min_element(ours_runs.begin(), ours_runs.end()), native,
                 *std::min_element(native_runs.begin(), native_runs.end()), ours / native, runs);
+    std::printf("lodbake bake peak resident size: median %.1f MiB (runs:", lodbake_bench::median(peak_runs));
+    for (double p : peak_runs) std::printf(" %.1f", p);
+    std::printf(")\n");
     lodbake_bench::Bars bars("bake_bench");
     const std::string mesh_name = mesh_path.substr(mesh_path.find_last_of('/') + 1);
     bars.ratio("bake time / native meshopt_simplify, " + mesh_name + ", 2 threads (s)", ours, native, 3.0,

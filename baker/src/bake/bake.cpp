@@ -116,7 +116,7 @@ LodChainOptions chainOptions(const BakeSettings& settings, const std::vector<Pac
 // AssetTasks holds those tasks and what they produce; each task writes its own members.
 class AssetTasks {
 public:
-    AssetTasks(Mesh& mesh, LodChain& chain, const LodChainOptions& chain_options, const BakeSettings& settings,
+    AssetTasks(const Mesh& mesh, LodChain& chain, const LodChainOptions& chain_options, const BakeSettings& settings,
                const std::vector<PackStreamEncoder>& encoders, const std::string& name, size_t index,
                const BakeHooks& hooks)
         : mesh_(mesh), chain_(chain), chain_options_(chain_options), settings_(settings), encoders_(encoders),
@@ -157,29 +157,11 @@ private:
         }
     }
 
+    // Every task only reads LOD0 and the chain: a stage that needs LOD0's geometry alone takes a view
+    // of it (MeshView), so nothing is moved out of the mesh while the others read it.
     Status runPhase(const std::vector<PhaseTask>& phase) {
-        // The reference sides and the geometry-only streams read positions and indices only (a PFRep
-        // build would copy them out of a mesh with attributes). When nothing else in the phase reads
-        // LOD0, they are lent to a geometry-only mesh instead of copied: the same input, one copy less
-        // at the peak.
-        bool geometry_only = true;
-        for (const PhaseTask& task : phase)
-            geometry_only &= task.kind == PhaseTask::Kind::MeasureReference ||
-                             (task.kind == PhaseTask::Kind::Lod0Encoder && encoders_[task.index].needs.geometry_only);
-        Mesh geometry;
-        if (geometry_only) {
-            geometry.positions = std::move(mesh_.positions);
-            geometry.indices = std::move(mesh_.indices);
-            lod0_view_ = &geometry;
-        }
         std::atomic<size_t> next{0};
-        const Status run = parallelFor(phase.size(), 1, [&](size_t) { runTask(phase[next.fetch_add(1)]); });
-        if (geometry_only) {
-            mesh_.positions = std::move(geometry.positions);
-            mesh_.indices = std::move(geometry.indices);
-            lod0_view_ = &mesh_;
-        }
-        return run;
+        return parallelFor(phase.size(), 1, [&](size_t) { runTask(phase[next.fetch_add(1)]); });
     }
 
     void runTask(const PhaseTask& task) {
@@ -222,7 +204,7 @@ private:
         std::vector<const Mesh*> meshes;
         for (size_t l = first; l < level_count_; ++l) meshes.push_back(&levelMesh(l));
         Result<std::vector<Result<OneSidedDistance>>> sides =
-            measureReferenceSides(*lod0_view_, meshes, chain_options_.distance);
+            measureReferenceSides(mesh_, meshes, chain_options_.distance);
         if (!sides.ok()) return;
         reference_sides_.assign(first - 1, internalError("not measured beforehand"));
         for (Result<OneSidedDistance>& side : *sides) reference_sides_.push_back(std::move(side));
@@ -230,8 +212,7 @@ private:
 
     void prepareLod0(size_t e) {
         StageTimer timer(hooks_, index_, stageOf(e), 0);
-        // A geometry-only stream may get LOD0's positions and indices alone (lod0_view_).
-        commits[e * level_count_] = encoders_[e].prepare(chain_, 0, encoders_[e].needs.geometry_only ? *lod0_view_ : mesh_);
+        commits[e * level_count_] = encoders_[e].prepare(chain_, 0, mesh_);
     }
 
     void prepareLevel(size_t l) {
@@ -246,7 +227,7 @@ private:
         }
     }
 
-    Mesh& mesh_;
+    const Mesh& mesh_;
     LodChain& chain_;
     const LodChainOptions& chain_options_;
     const BakeSettings& settings_;
@@ -269,9 +250,6 @@ private:
     std::vector<Result<OneSidedDistance>> reference_sides_;
     std::vector<bool> level_with_measure_;
     std::vector<size_t> nested_levels_;
-    // LOD0 as the running phase's tasks may read it: LOD0 itself, or its positions and indices lent to
-    // a geometry-only mesh (runPhase).
-    const Mesh* lod0_view_ = &mesh_;
     Status deferred_ = Status::okStatus();
 };
 

@@ -3,6 +3,8 @@
 
 #include <algorithm>
 
+#include "lodbake/core/lod_policy.h"
+
 namespace lodbake {
 
 LodMetrics lodMetrics(const Mesh& full, const LodChain& chain, const ScreenParams& screen, double hysteresis) {
@@ -32,10 +34,12 @@ LodMetrics lodMetrics(const Mesh& full, const LodChain& chain, const ScreenParam
         l.mean_error = std::max(l.mean_error, prev.mean_error);
         l.hausdorff_error_rel = std::max(l.hausdorff_error_rel, prev.hausdorff_error_rel);
         l.mean_error_rel = std::max(l.mean_error_rel, prev.mean_error_rel);
-        l.switch_distance = std::max(switchDistance(l.hausdorff_error, screen), prev.switch_distance);
+        // The switch policy (core/lod_policy.h).
+        l.switch_distance = levelSwitchDistance(l.hausdorff_error, prev.switch_distance, screen);
         l.screen_coverage = screenCoverage(chain.bounding_radius, l.switch_distance, screen);
-        l.hysteresis_near = l.switch_distance * (1.0 - hysteresis);
-        l.hysteresis_far = l.switch_distance * (1.0 + hysteresis);
+        const HysteresisBand band = hysteresisBand(l.switch_distance, hysteresis);
+        l.hysteresis_near = band.near;
+        l.hysteresis_far = band.far;
         m.levels.push_back(l);
     }
     return m;

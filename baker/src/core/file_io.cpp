@@ -20,15 +20,13 @@ namespace {
 
 std::string errnoText() { return std::strerror(errno); }
 
-} // namespace
-
-Result<std::vector<uint8_t>> readFileBytes(const std::string& path, uint64_t max_size_bytes) {
+template <class Bytes> Result<Bytes> readWholeFile(const std::string& path, uint64_t max_size_bytes) {
     struct stat st {};
     if (::stat(path.c_str(), &st) != 0) return ioError(path + ": cannot open: " + errnoText());
     if (S_ISDIR(st.st_mode)) return ioError(path + ": is a directory, expected a file");
     FILE* f = std::fopen(path.c_str(), "rb");
     if (!f) return ioError(path + ": cannot open: " + errnoText());
-    std::vector<uint8_t> bytes;
+    Bytes bytes;
     if (S_ISREG(st.st_mode)) {
         if (uint64_t(st.st_size) > max_size_bytes) {
             std::fclose(f);
@@ -55,6 +53,16 @@ Result<std::vector<uint8_t>> readFileBytes(const std::string& path, uint64_t max
     }
     std::fclose(f);
     return bytes;
+}
+
+} // namespace
+
+Result<std::vector<uint8_t>> readFileBytes(const std::string& path, uint64_t max_size_bytes) {
+    return readWholeFile<std::vector<uint8_t>>(path, max_size_bytes);
+}
+
+Result<FileBytes> readLargeFile(const std::string& path, uint64_t max_size_bytes) {
+    return readWholeFile<FileBytes>(path, max_size_bytes);
 }
 
 AtomicFileWriter::~AtomicFileWriter() { discard(); }

@@ -57,7 +57,7 @@ Result<LoadedMesh> readMesh(const std::string& path, const ReadOptions& options,
         if (conf.ok()) LODBAKE_RETURN_IF_ERROR(checkMeshConsistency(conf->mesh, path));
         return conf;
     }
-    LODBAKE_ASSIGN_OR_RETURN(std::vector<uint8_t> bytes, readFileBytes(path));
+    LODBAKE_ASSIGN_OR_RETURN(FileBytes bytes, readLargeFile(path));
     SourceInfo side;
     Result<LoadedMesh> result = [&]() -> Result<LoadedMesh> {
         switch (format) {

@@ -811,7 +811,7 @@ Result<PfrepBuild> buildPfrepFromSequence(const CollapseSequence& sequence,
     return buildBlob(sequence, point_triangles, diagnostics, nullptr, nullptr);
 }
 
-Status chainPoints(const Mesh& mesh, std::vector<Vec3f>& positions, std::vector<uint32_t>& triangles) {
+Status chainPoints(const MeshView& mesh, std::vector<Vec3f>& positions, std::vector<uint32_t>& triangles) {
     // Weld by bit-identical position (each vertex to the first vertex at its position, by sorting), then
     // number the points in order of first use by the faces that are not degenerate by position: the
     // simplifier's own numbering (lod_chain.h).
@@ -862,7 +862,7 @@ Status chainPoints(const Mesh& mesh, std::vector<Vec3f>& positions, std::vector<
     return Status::okStatus();
 }
 
-Result<PfrepBuild> buildPfrepFromChain(const Mesh& mesh, const CollapsePairLog& removals, Diagnostics& diagnostics) {
+Result<PfrepBuild> buildPfrepFromChain(const MeshView& mesh, const CollapsePairLog& removals, Diagnostics& diagnostics) {
     CollapseSequence sequence;
     std::vector<uint32_t> triangles;
     LODBAKE_RETURN_IF_ERROR(chainPoints(mesh, sequence.point_positions, triangles));

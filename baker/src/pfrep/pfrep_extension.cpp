@@ -36,7 +36,7 @@ PfrepExtensionObject headerObject(const PfrepBuild& build) {
 
 } // namespace
 
-Result<PfrepExtensionObject> buildPfrepExtension(const Mesh& lod0, const std::vector<double>& level_ratios,
+Result<PfrepExtensionObject> buildPfrepExtension(const MeshView& lod0, const std::vector<double>& level_ratios,
                                                  const PfrepOptions& options, Diagnostics& diagnostics) {
     for (size_t l = 0; l < level_ratios.size(); ++l)
         if (!(level_ratios[l] > 0.0 && level_ratios[l] <= 1.0))
@@ -46,15 +46,12 @@ Result<PfrepExtensionObject> buildPfrepExtension(const Mesh& lod0, const std::ve
     // The blob stores positions only, so its collapse order is chosen on the geometry alone: the
     // attributes' quadrics and seams would cost time and memory (per-wedge quadrics of the whole
     // full-detail mesh) and only steer the order towards data the blob does not keep. Materials go
-    // too: the blob is one set of triangles.
+    // too: the blob is one set of triangles. The simplifier takes a Mesh, so the half-edge pass gets
+    // its own copy of the geometry.
     Mesh geometry;
-    const bool has_attributes = lod0.hasNormals() || lod0.hasTangents() || lod0.hasColors() || !lod0.uvs.empty() ||
-                                !lod0.submeshes.empty();
-    if (has_attributes) {
-        geometry.positions = lod0.positions;
-        geometry.indices = lod0.indices;
-    }
-    LODBAKE_ASSIGN_OR_RETURN(PfrepBuild build, buildPfrep(has_attributes ? geometry : lod0, options, diagnostics));
+    geometry.positions.assign(lod0.positions.begin(), lod0.positions.end());
+    geometry.indices.assign(lod0.indices.begin(), lod0.indices.end());
+    LODBAKE_ASSIGN_OR_RETURN(PfrepBuild build, buildPfrep(geometry, options, diagnostics));
     PfrepExtensionObject out = headerObject(build);
     const std::vector<uint32_t>& counts = build.level_triangles;
     for (double ratio : level_ratios) {
@@ -69,7 +66,7 @@ Result<PfrepExtensionObject> buildPfrepExtension(const Mesh& lod0, const std::ve
     return finishObject(std::move(build), std::move(out));
 }
 
-Result<PfrepExtensionObject> buildPfrepExtension(const Mesh& lod0, const LodChain& chain, const PfrepOptions& options,
+Result<PfrepExtensionObject> buildPfrepExtension(const MeshView& lod0, const LodChain& chain, const PfrepOptions& options,
                                                  Diagnostics& diagnostics) {
     if (!chain.removals_complete) {
         std::vector<double> ratios{1.0};

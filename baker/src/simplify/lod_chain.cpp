@@ -26,19 +26,6 @@ constexpr const char* kStallReason = "no valid collapse left";
 
 } // namespace
 
-double switchDistance(double error, const ScreenParams& screen) {
-    if (!(error > 0.0)) return 0.0;
-    const double t = std::tan(screen.vertical_fov_rad * 0.5);
-    if (!(screen.pixel_threshold > 0.0) || !(t > 0.0) || !std::isfinite(t)) return HUGE_VAL;
-    return error * screen.viewport_height_px / (2.0 * screen.pixel_threshold * t);
-}
-
-double screenCoverage(double radius, double distance, const ScreenParams& screen) {
-    const double t = std::tan(screen.vertical_fov_rad * 0.5);
-    if (!(distance > 0.0) || !(t > 0.0)) return 1.0;
-    return std::min(1.0, radius / (distance * t));
-}
-
 Result<LodChain> buildLodChain(const Mesh& mesh, const LodChainOptions& options, Diagnostics& diagnostics) {
     std::vector<double> ratios = options.ratios;
     for (double r : ratios) {
@@ -177,7 +164,7 @@ void updateSwitchDistances(LodChain& chain, const ScreenParams& screen) {
     double previous = 0.0;
     for (LodLevel& level : chain.levels) {
         const double e = level.has_distance ? level.distance.hausdorff : level.quadric_error;
-        level.switch_distance = std::max(previous, switchDistance(e, screen));
+        level.switch_distance = levelSwitchDistance(e, previous, screen);
         previous = level.switch_distance;
         level.screen_coverage = screenCoverage(chain.bounding_radius, level.switch_distance, screen);
     }

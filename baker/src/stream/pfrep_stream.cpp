@@ -14,7 +14,6 @@ std::optional<PackStreamEncoder> progressiveFansStream(const StreamSettings& set
     if (!settings.progressive_fans) return std::nullopt;
     StreamNeeds needs;
     needs.lod0_only = true;
-    needs.geometry_only = true; // the blob stores positions only (buildPfrepExtension)
     // pfrep_from_chain: the blob is built from the chain's own pass, read as vertex removals
     // (docs/bake.md); otherwise it runs a half-edge simplification of its own.
     needs.collapse_record = settings.pfrep_from_chain;
@@ -26,7 +25,7 @@ std::optional<PackStreamEncoder> progressiveFansStream(const StreamSettings& set
             if (level_index != 0 || mesh.faceCount() == 0) return PackStreamCommit();
             Diagnostics diagnostics; // notes only (e.g. nothing removable); the blob is valid either way
             // From the chain's own collapses when it recorded them (LodChain::removals), else its own
-            // half-edge simplification.
+            // half-edge simplification; either reads LOD0's geometry only, as a view (MeshView).
             LODBAKE_ASSIGN_OR_RETURN(PfrepExtensionObject object,
                                      buildPfrepExtension(mesh, chain, PfrepOptions{}, diagnostics));
             auto e = std::make_shared<PackExtension>();

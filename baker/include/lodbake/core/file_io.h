@@ -6,12 +6,23 @@
 #include <string>
 #include <vector>
 
+#include "lodbake/core/mapped_array.h"
 #include "lodbake/core/status.h"
 
 namespace lodbake {
 
 /// Reads a whole file. Errors name the path. Refuses files larger than `max_size_bytes`.
 Result<std::vector<uint8_t>> readFileBytes(const std::string& path, uint64_t max_size_bytes = (uint64_t(1) << 34));
+
+/// The bytes of a large file read once and dropped once parsed (the mesh a run loads), on a mapping
+/// of their own (core/mapped_array.h). They are the largest short-lived array of a run: freeing them
+/// returns the memory at once, and leaves malloc's heap as it was. (glibc adapts its mmap and trim
+/// thresholds to the largest mapped block it frees, up to 32 MiB: after that every array below that
+/// size would come from its arenas, and up to twice that size of free memory could stay resident in
+/// each.)
+using FileBytes = detail::MappedArray<uint8_t, detail::MappedPages::Small>;
+/// readFileBytes into FileBytes.
+Result<FileBytes> readLargeFile(const std::string& path, uint64_t max_size_bytes = (uint64_t(1) << 34));
 
 /// Writes one or more files so that either all appear complete or none does: every file is written
 /// to a temporary name in its destination folder first, and renamed only after all writes succeeded.

@@ -88,6 +88,41 @@ struct Mesh {
     const Vec3f& position(VertexId v) const { return positions[v.value]; }
 };
 
+/// A read-only view of an array another object owns (C++17 has no std::span).
+template <class T>
+class ArrayView {
+public:
+    ArrayView() = default;
+    ArrayView(const T* data, size_t size) : data_(data), size_(size) {}
+    ArrayView(const std::vector<T>& v) : data_(v.data()), size_(v.size()) {} // NOLINT: implicit by design
+
+    const T* data() const { return data_; }
+    size_t size() const { return size_; }
+    bool empty() const { return size_ == 0; }
+    const T& operator[](size_t i) const { return data_[i]; }
+    const T* begin() const { return data_; }
+    const T* end() const { return data_ + size_; }
+
+private:
+    const T* data_ = nullptr;
+    size_t size_ = 0;
+};
+
+/// A mesh's geometry lent without a copy: its positions and triangles, pointing into the arrays of a
+/// Mesh that outlives the view. A stage that reads only the geometry takes a MeshView, so LOD0 can
+/// be read by it while other tasks read the same Mesh, and nothing is moved out or copied.
+struct MeshView {
+    ArrayView<Vec3f> positions;  // defines vertexCount()
+    ArrayView<uint32_t> indices; // 3 per triangle
+
+    MeshView() = default;
+    MeshView(ArrayView<Vec3f> p, ArrayView<uint32_t> i) : positions(p), indices(i) {}
+    MeshView(const Mesh& mesh) : positions(mesh.positions), indices(mesh.indices) {} // NOLINT: implicit by design
+
+    size_t vertexCount() const { return positions.size(); }
+    size_t faceCount() const { return indices.size() / 3; }
+};
+
 /// Axis-aligned bounding box. Empty (min > max) when built from no points.
 struct Aabb {
     Vec3f min{1.0f, 1.0f, 1.0f};

@@ -51,7 +51,7 @@ Result<PfrepBuild> buildPfrepFromSequence(const CollapseSequence& sequence, cons
 
 /// Points of `mesh` as the simplifier numbers them (lod_chain.h: bit-identical positions welded,
 /// numbered in order of first use by the faces not degenerate by position) and those faces' points.
-Status chainPoints(const Mesh& mesh, std::vector<Vec3f>& positions, std::vector<uint32_t>& triangles);
+Status chainPoints(const MeshView& mesh, std::vector<Vec3f>& positions, std::vector<uint32_t>& triangles);
 
 /// Builds the blob from a discrete chain's own simplification pass (LodChain::removals, recorded with
 /// LodChainOptions::record_removals) over `mesh`, the chain's input: each full-edge collapse is read
@@ -60,7 +60,7 @@ Status chainPoints(const Mesh& mesh, std::vector<Vec3f>& positions, std::vector<
 /// moved its points). The end that stays is the one with the lower error for the merged point's
 /// face-plane quadric, as the half-edge simplifier chooses its direction, or the chain's kept end
 /// when the chain did not move it.
-Result<PfrepBuild> buildPfrepFromChain(const Mesh& mesh, const CollapsePairLog& removals, Diagnostics& diagnostics);
+Result<PfrepBuild> buildPfrepFromChain(const MeshView& mesh, const CollapsePairLog& removals, Diagnostics& diagnostics);
 
 /// Runs the half-edge simplifier on `mesh` and builds the blob.
 Result<PfrepBuild> buildPfrep(const Mesh& mesh, const PfrepOptions& options, Diagnostics& diagnostics);

@@ -37,7 +37,9 @@ struct PfrepExtensionObject {
 /// `level_ratios` (fractions of lod0's triangles, highest detail first; the first is usually 1),
 /// the smallest removal count whose level has at most ratio · triangle_count triangles (the coarsest
 /// level when none has). InvalidInput when a ratio is not in (0, 1] or the mesh has no triangle.
-Result<PfrepExtensionObject> buildPfrepExtension(const Mesh& lod0, const std::vector<double>& level_ratios,
+/// The blob stores positions only, so both builds read LOD0's geometry alone, as a view of the
+/// caller's mesh (which other stages may read meanwhile).
+Result<PfrepExtensionObject> buildPfrepExtension(const MeshView& lod0, const std::vector<double>& level_ratios,
                                                  const PfrepOptions& options, Diagnostics& diagnostics);
 
 /// The same from a discrete chain of `lod0` (its input): when the chain recorded its collapses as
@@ -45,7 +47,7 @@ Result<PfrepExtensionObject> buildPfrepExtension(const Mesh& lod0, const std::ve
 /// from them (buildPfrepFromChain: no simplification of its own) and chain level i is the blob level
 /// at its collapse count, with exactly its triangles; otherwise buildPfrepExtension(lod0, ratios of
 /// 1 and the chain's levels, options). `options` only applies to that fallback.
-Result<PfrepExtensionObject> buildPfrepExtension(const Mesh& lod0, const LodChain& chain, const PfrepOptions& options,
+Result<PfrepExtensionObject> buildPfrepExtension(const MeshView& lod0, const LodChain& chain, const PfrepOptions& options,
                                                  Diagnostics& diagnostics);
 
 } // namespace lodbake

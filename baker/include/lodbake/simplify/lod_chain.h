@@ -32,6 +32,7 @@
 #include <vector>
 
 #include "lodbake/core/diagnostics.h"
+#include "lodbake/core/lod_policy.h"
 #include "lodbake/core/mapped_array.h"
 #include "lodbake/core/mesh.h"
 #include "lodbake/core/status.h"
@@ -170,15 +171,6 @@ private:
     size_t count_ = 0;
 };
 
-/// How switch distances are derived (docs/simplify.md): the level whose Hausdorff error is e is
-/// used from the distance d at which e projects to `pixel_threshold` pixels,
-/// d = e · viewport_height_px / (2 · pixel_threshold · tan(vertical_fov_rad / 2)).
-struct ScreenParams {
-    double pixel_threshold = 1.0; // largest tolerated screen-space error, pixels
-    double viewport_height_px = 1080.0;
-    double vertical_fov_rad = 1.0471975511965976; // 60 degrees
-};
-
 struct LodChainOptions {
     std::vector<double> ratios{0.5, 0.25, 0.1, 0.03, 0.01}; // per level, fraction of input triangles
     SimplifyOptions simplify;                               // validity rules and weights (its targets are ignored)
@@ -219,12 +211,6 @@ struct LodChain {
     double bounding_radius = 0; // input bounding sphere radius (half the box diagonal)
 };
 
-/// d = e · H / (2 · p · tan(fov / 2)); 0 for e ≤ 0, +inf when p ≤ 0 or fov invalid.
-double switchDistance(double error, const ScreenParams& screen);
-/// Fraction of the viewport height covered by a sphere of `radius` at `distance` (the projected
-/// diameter, 2 r / (2 d tan(fov/2))), capped at 1 (so 1 when distance ≤ 0).
-double screenCoverage(double radius, double distance, const ScreenParams& screen);
-
 /// Builds the chain. Ratios must lie in (0, 1]; duplicates are dropped, the rest sorted in
 /// decreasing order. A level that cannot be reached is the smallest valid mesh, with
 /// reached_target = false and a note giving the reason; the levels after it (and any level whose
@@ -244,9 +230,9 @@ void measureLodChain(const Mesh& mesh, LodChain& chain, const LodChainOptions& o
 void measureLodChain(const Mesh& mesh, LodChain& chain, const LodChainOptions& options,
                      const std::vector<const OneSidedDistance*>& reference_sides, Diagnostics& diagnostics);
 
-/// Switch distance and screen coverage of every level: from its measured Hausdorff error when there
-/// is one, else its quadric estimate, made non-decreasing down the chain so selection by distance is
-/// monotone.
+/// Switch distance and screen coverage of every level (the policy of core/lod_policy.h): from its
+/// measured Hausdorff error when there is one, else its quadric estimate, made non-decreasing down
+/// the chain so selection by distance is monotone.
 void updateSwitchDistances(LodChain& chain, const ScreenParams& screen);
 
 } // namespace lodbake

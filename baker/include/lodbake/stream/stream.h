@@ -26,8 +26,6 @@ struct StreamNeeds {
     /// Codes LOD0 alone (a structure of the whole mesh, such as a progressive representation): its
     /// prepare runs once, on LOD0, first among the asset's tasks; the other levels are not asked.
     bool lod0_only = false;
-    /// Reads positions and indices only: with lod0_only, LOD0 may be lent without its attributes.
-    bool geometry_only = false;
     /// Reads the chain's collapse record (LodChain::removals; the chain then records it).
     bool collapse_record = false;
     /// Reads the measured errors of chain.levels: the prepare steps of the levels after LOD0 run after
