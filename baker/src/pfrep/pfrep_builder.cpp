@@ -884,9 +884,9 @@ Result<PfrepBuild> buildPfrepFromChain(const MeshView& mesh, const CollapsePairL
     sequence.records.reserve(removals.size());
     CollapsePairLog::Reader reader(removals);
     uint32_t u = 0, v = 0;
-    bool kept_stays = false, removed_nearer = false;
+    bool kept_stays = false;
     for (size_t r = 0; r < removals.size(); ++r) {
-        if (!reader.next(u, v, kept_stays, removed_nearer) || u >= point_count || v >= point_count || u == v)
+        if (!reader.next(u, v, kept_stays) || u >= point_count || v >= point_count || u == v)
             return invalidInput("pfrep: collapse " + std::to_string(r) + ": bad points in the chain's log");
         uint32_t removed = rep[u], kept = rep[v];
         // When the chain did not move its kept point (a corner, or a border or seam point whose edge

@@ -564,10 +564,8 @@ void EdgeCollapser::collapse(Worker& w, const Candidate& c, const WedgePair* pai
     mergeWedges(c, pairs, pair_count, sequence);
     if (sequence) sequence->records.push_back(record);
     if (removal_log_) {
-        const Vec3d pv = toD(position_[v]) - c.position, pu = toD(position_[u]) - c.position;
         CollapsePairLog& log = w.heap ? w.removals : *removal_log_; // a part: its own, appended at the merge
-        log.add(u, v, p.x == position_[v].x && p.y == position_[v].y && p.z == position_[v].z,
-                dot(pu, pu) < dot(pv, pv));
+        log.add(u, v, p.x == position_[v].x && p.y == position_[v].y && p.z == position_[v].z);
     }
     if (has_penalty_) {
         // v now stands for the input points of both; it keeps the one further from its new fan.

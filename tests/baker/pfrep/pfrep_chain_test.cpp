@@ -48,8 +48,8 @@ struct MergedPoints {
     std::vector<uint32_t> parent;
 };
 
-// The log's flags against a replay of the full records: kept_stays says the merged position is the
-// kept point's position before the collapse, removed_nearer that the removed point was nearer to it.
+// The log's flag against a replay of the full records: kept_stays says the merged position is the
+// kept point's position before the collapse.
 // Returns how many collapses kept their point in place.
 size_t checkFlags(const lodbake::LodChain& chain) {
     std::vector<lodbake::Vec3f> at = chain.sequence.point_positions;
@@ -57,11 +57,9 @@ size_t checkFlags(const lodbake::LodChain& chain) {
     size_t stays_count = 0;
     for (const lodbake::CollapseRecord& r : chain.sequence.records) {
         uint32_t u = 0, v = 0;
-        bool stays = false, nearer = false;
-        EXPECT_TRUE(reader.next(u, v, stays, nearer));
+        bool stays = false;
+        EXPECT_TRUE(reader.next(u, v, stays));
         EXPECT_EQ(stays, sameBits(at[v], r.position));
-        const lodbake::Vec3d p(r.position), du = lodbake::Vec3d(at[u]) - p, dv = lodbake::Vec3d(at[v]) - p;
-        EXPECT_EQ(nearer, dot(du, du) < dot(dv, dv));
         stays_count += stays;
         at[v] = r.position;
     }
@@ -111,17 +109,16 @@ TEST(CollapsePairLogTest, RoundTripsPairsInBothDirectionsAndRefusesACutStream) {
     }
     uint32_t a = 0, b = 0;
     EXPECT_FALSE(reader.next(a, b));
-    // The two flags travel with their entry.
+    // The flag travels with its entry.
     lodbake::CollapsePairLog flagged;
-    for (uint32_t i = 0; i < 8; ++i) flagged.add(1000 + i, 999 - i * 100, i & 1, (i >> 1) & 1);
+    for (uint32_t i = 0; i < 8; ++i) flagged.add(1000 + i, 999 - i * 100, i & 1);
     lodbake::CollapsePairLog::Reader flags(flagged);
     for (uint32_t i = 0; i < 8; ++i) {
-        bool stays = false, nearer = false;
-        ASSERT_TRUE(flags.next(a, b, stays, nearer));
+        bool stays = false;
+        ASSERT_TRUE(flags.next(a, b, stays));
         EXPECT_EQ(a, 1000 + i);
         EXPECT_EQ(b, 999 - i * 100);
         EXPECT_EQ(stays, bool(i & 1));
-        EXPECT_EQ(nearer, bool((i >> 1) & 1));
     }
 }
 

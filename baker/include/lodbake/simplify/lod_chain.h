@@ -98,11 +98,10 @@ struct CollapseSequence {
 /// kept - removed times 2 plus kept_stays, each as an LEB128 varint (ids below 2^30).
 class CollapsePairLog {
 public:
-    void add(uint32_t removed, uint32_t kept, bool kept_stays = false, bool removed_nearer = false) {
+    void add(uint32_t removed, uint32_t kept, bool kept_stays = false) {
         putVarint(removed);
         const int64_t d = int64_t(kept) - int64_t(removed);
-        putVarint(uint64_t(d < 0 ? ((-d) << 1) - 1 : d << 1) << 2 | uint64_t(removed_nearer) << 1 |
-                  uint64_t(kept_stays));
+        putVarint(uint64_t(d < 0 ? ((-d) << 1) - 1 : d << 1) << 1 | uint64_t(kept_stays));
         ++count_;
     }
     /// Appends `other`'s entries after this log's (entries are self-contained, so the bytes concatenate).
@@ -127,16 +126,15 @@ public:
     public:
         explicit Reader(const CollapsePairLog& log) : p_(log.bytes_.data()), end_(log.bytes_.data() + log.bytes_.size()) {}
         bool next(uint32_t& removed, uint32_t& kept) {
-            bool stays = false, nearer = false;
-            return next(removed, kept, stays, nearer);
+            bool stays = false;
+            return next(removed, kept, stays);
         }
-        bool next(uint32_t& removed, uint32_t& kept, bool& kept_stays, bool& removed_nearer) {
+        bool next(uint32_t& removed, uint32_t& kept, bool& kept_stays) {
             uint64_t r = 0, f = 0;
             if (!getVarint(r) || !getVarint(f) || r > 0xffffffffu) return false;
             removed = uint32_t(r);
             kept_stays = f & 1;
-            removed_nearer = (f >> 1) & 1;
-            const uint64_t z = f >> 2;
+            const uint64_t z = f >> 1;
             const int64_t d = (z & 1) ? -int64_t((z + 1) >> 1) : int64_t(z >> 1);
             const int64_t k = int64_t(removed) + d;
             if (k < 0 || k > int64_t(0xffffffffu)) return false;
