@@ -19,6 +19,7 @@
 
 #include "contact_sheet.h"
 #include "sheet_materials.h"
+#include "tool_module.h"
 #include "lodrt/format.h"
 #include "lodrt/lodrt.h"
 #include "lodrt/pfrep.h"
@@ -969,33 +970,17 @@ struct ImageModule {
 // ../lib/lodbake/), then the build tree.
 bool loadImageModule(ImageModule* module, std::string* error) {
 #ifdef LODDUMP_OIIO_MODULE_NAME
-    std::vector<std::string> candidates;
-    if (const char* env = std::getenv("LODDUMP_OIIO_MODULE")) candidates.push_back(env);
-    char exe[4096];
-    const ssize_t n = readlink("/proc/self/exe", exe, sizeof(exe) - 1);
-    if (n > 0) {
-        exe[n] = '\0';
-        std::string dir(exe);
-        dir = dir.substr(0, dir.find_last_of('/'));
-        candidates.push_back(dir + "/../lib/lodbake/" LODDUMP_OIIO_MODULE_NAME);
-        candidates.push_back(dir + "/" LODDUMP_OIIO_MODULE_NAME);
-    }
-    candidates.push_back(LODDUMP_OIIO_MODULE_BUILD_PATH);
-    std::string tried;
-    for (const std::string& path : candidates) {
-        void* handle = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
-        if (!handle) {
-            const char* why = dlerror();
-            tried += "\n  " + path + ": " + (why ? why : "?");
-            continue;
-        }
+    const auto resolve = [module](void* handle) {
         module->write = reinterpret_cast<WriteRgb8>(dlsym(handle, "loddump_write_rgb8"));
         module->read = reinterpret_cast<ReadRgba8>(dlsym(handle, "loddump_read_rgba8"));
         module->release = reinterpret_cast<FreeFn>(dlsym(handle, "loddump_free"));
-        if (module->write && module->read && module->release) return true;
-        tried += "\n  " + path + ": not loddump's image module (loddump_write_rgb8, loddump_read_rgba8, loddump_free)";
-    }
-    *error = "cannot load the image module (OpenImageIO):" + tried;
+        return module->write && module->read && module->release;
+    };
+    if (lodtools::openToolModule("LODDUMP_OIIO_MODULE", LODDUMP_OIIO_MODULE_NAME, LODDUMP_OIIO_MODULE_BUILD_PATH,
+                                 "loddump's image module (OpenImageIO: loddump_write_rgb8, loddump_read_rgba8, "
+                                 "loddump_free)",
+                                 resolve, error))
+        return true;
 #else
     (void)module;
     *error = "this loddump was built without OpenImageIO, so --render is not available";

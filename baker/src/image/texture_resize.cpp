@@ -4,15 +4,13 @@
 // <executable dir>/../lib/lodbake/, <executable dir>/, then the build tree it was built in.
 #include "lodbake/image/texture_resize.h"
 
-#include <dlfcn.h>
-#include <unistd.h>
-
 #include <algorithm>
 #include <climits>
 #include <cmath>
 #include <cstdlib>
 #include <mutex>
 
+#include "core/module_loader.h"
 #include "core/parallel.h"
 #include "image/oiio_module.h"
 #include "image/texture_pyramid.h"
@@ -26,15 +24,6 @@ bool isPngOrJpeg(const std::vector<uint8_t>& b) {
            (b.size() >= 3 && b[0] == 0xFF && b[1] == 0xD8 && b[2] == 0xFF);
 }
 
-std::string executableDir() {
-    char buf[PATH_MAX];
-    const ssize_t n = readlink("/proc/self/exe", buf, sizeof(buf) - 1);
-    if (n <= 0) return "";
-    std::string path(buf, size_t(n));
-    const size_t slash = path.find_last_of('/');
-    return slash == std::string::npos ? "" : path.substr(0, slash);
-}
-
 struct Loaded {
     const oiio_module::Api* api = nullptr;
     std::string error;
@@ -44,32 +33,9 @@ const Loaded& loadModule() {
     static Loaded loaded;
     static std::once_flag once;
     std::call_once(once, [] {
-        std::vector<std::string> candidates;
-        if (const char* env = std::getenv("LODBAKE_OIIO_MODULE")) candidates.push_back(env);
-        const std::string dir = executableDir();
-        if (!dir.empty()) {
-            candidates.push_back(dir + "/../lib/lodbake/" LODBAKE_OIIO_MODULE_NAME);
-            candidates.push_back(dir + "/" LODBAKE_OIIO_MODULE_NAME);
-        }
-        candidates.push_back(LODBAKE_OIIO_MODULE_BUILD_PATH);
-        std::string tried;
-        for (const std::string& path : candidates) {
-            void* handle = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
-            if (!handle) {
-                tried += (tried.empty() ? "" : "; ") + std::string(dlerror());
-                continue;
-            }
-            using Entry = const oiio_module::Api* (*)();
-            auto entry = reinterpret_cast<Entry>(dlsym(handle, "lodbake_oiio_api"));
-            const oiio_module::Api* api = entry ? entry() : nullptr;
-            if (api && api->version == oiio_module::kApiVersion) {
-                loaded.api = api; // stays loaded for the life of the process
-                return;
-            }
-            tried += (tried.empty() ? "" : "; ") + path + ": not a compatible lodbake OpenImageIO module";
-            dlclose(handle);
-        }
-        loaded.error = "cannot load the OpenImageIO module (" + tried + ")";
+        const detail::ModuleSpec spec{"LODBAKE_OIIO_MODULE", LODBAKE_OIIO_MODULE_NAME, LODBAKE_OIIO_MODULE_BUILD_PATH,
+                                      "lodbake_oiio_api", "OpenImageIO"};
+        loaded.api = detail::openModule<oiio_module::Api>(spec, oiio_module::kApiVersion, &loaded.error);
     });
     return loaded;
 }

@@ -2,9 +2,6 @@
 // liblodbake_open3d, density trimming, colour transfer and the distance report.
 #include "lodbake/reconstruct/merge.h"
 
-#include <dlfcn.h>
-#include <unistd.h>
-
 #include <algorithm>
 #include <array>
 #include <climits>
@@ -17,6 +14,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/module_loader.h"
 #include "core/parallel.h"
 #include "lodbake/core/bvh.h"
 #include "reconstruct/open3d_module.h"
@@ -25,51 +23,18 @@ namespace lodbake {
 
 namespace {
 
-std::string executableDir() {
-    char buf[PATH_MAX];
-    const ssize_t n = readlink("/proc/self/exe", buf, sizeof(buf) - 1);
-    if (n <= 0) return "";
-    std::string path(buf, size_t(n));
-    const size_t slash = path.find_last_of('/');
-    return slash == std::string::npos ? "" : path.substr(0, slash);
-}
-
 struct Loaded {
     const open3d_module::Api* api = nullptr;
     std::string error;
 };
 
-// Search order: $LODBAKE_OPEN3D_MODULE, <exe dir>/../lib/lodbake/, <exe dir>/, the build tree.
 const Loaded& loadModule() {
     static Loaded loaded;
     static std::once_flag once;
     std::call_once(once, [] {
-        std::vector<std::string> candidates;
-        if (const char* env = std::getenv("LODBAKE_OPEN3D_MODULE")) candidates.push_back(env);
-        const std::string dir = executableDir();
-        if (!dir.empty()) {
-            candidates.push_back(dir + "/../lib/lodbake/" LODBAKE_OPEN3D_MODULE_NAME);
-            candidates.push_back(dir + "/" LODBAKE_OPEN3D_MODULE_NAME);
-        }
-        candidates.push_back(LODBAKE_OPEN3D_MODULE_BUILD_PATH);
-        std::string tried;
-        for (const std::string& path : candidates) {
-            void* handle = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
-            if (!handle) {
-                tried += (tried.empty() ? "" : "; ") + std::string(dlerror());
-                continue;
-            }
-            using Entry = const open3d_module::Api* (*)();
-            auto entry = reinterpret_cast<Entry>(dlsym(handle, "lodbake_open3d_api"));
-            const open3d_module::Api* api = entry ? entry() : nullptr;
-            if (api && api->version == open3d_module::kApiVersion) {
-                loaded.api = api; // stays loaded for the life of the process
-                return;
-            }
-            tried += (tried.empty() ? "" : "; ") + path + ": not a compatible lodbake Open3D module";
-            dlclose(handle);
-        }
-        loaded.error = "cannot load the Open3D module (" + tried + ")";
+        const detail::ModuleSpec spec{"LODBAKE_OPEN3D_MODULE", LODBAKE_OPEN3D_MODULE_NAME,
+                                      LODBAKE_OPEN3D_MODULE_BUILD_PATH, "lodbake_open3d_api", "Open3D"};
+        loaded.api = detail::openModule<open3d_module::Api>(spec, open3d_module::kApiVersion, &loaded.error);
     });
     return loaded;
 }

@@ -19,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "../tool_module.h"
 #include "gl_renderer.h"
 #include "../../examples/sample_scene.h"
 #include "view_scene.h"
@@ -168,30 +169,14 @@ using WriteRgb8 = int (*)(const char*, const uint8_t*, uint32_t, uint32_t, char*
 // way: $LODDUMP_OIIO_MODULE, then the install layout, then beside the executable, then the build tree.
 WriteRgb8 loadImageWriter(std::string* error) {
 #ifdef LODVIEW_PNG_MODULE_NAME
-    std::vector<std::string> candidates;
-    if (const char* env = std::getenv("LODDUMP_OIIO_MODULE")) candidates.push_back(env);
-    char exe[4096];
-    const ssize_t n = readlink("/proc/self/exe", exe, sizeof(exe) - 1);
-    if (n > 0) {
-        exe[n] = '\0';
-        std::string dir(exe);
-        dir = dir.substr(0, dir.find_last_of('/'));
-        candidates.push_back(dir + "/../lib/lodbake/" LODVIEW_PNG_MODULE_NAME);
-        candidates.push_back(dir + "/" LODVIEW_PNG_MODULE_NAME);
-    }
-    candidates.push_back(LODVIEW_PNG_MODULE_BUILD_PATH);
-    std::string tried;
-    for (const std::string& path : candidates) {
-        void* handle = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
-        if (!handle) {
-            const char* why = dlerror();
-            tried += "\n  " + path + ": " + (why ? why : "?");
-            continue;
-        }
-        if (void* entry = dlsym(handle, "loddump_write_rgb8")) return reinterpret_cast<WriteRgb8>(entry);
-        tried += "\n  " + path + ": no loddump_write_rgb8";
-    }
-    *error = "cannot load the PNG module (OpenImageIO):" + tried;
+    WriteRgb8 write = nullptr;
+    const auto resolve = [&write](void* handle) {
+        write = reinterpret_cast<WriteRgb8>(dlsym(handle, "loddump_write_rgb8"));
+        return write != nullptr;
+    };
+    if (lodtools::openToolModule("LODDUMP_OIIO_MODULE", LODVIEW_PNG_MODULE_NAME, LODVIEW_PNG_MODULE_BUILD_PATH,
+                                 "the PNG module (OpenImageIO: loddump_write_rgb8)", resolve, error))
+        return write;
 #else
     *error = "this lodview was built without OpenImageIO, so --screenshot is not available";
 #endif
