@@ -128,7 +128,8 @@ cat >"$out/manifest/no_preset.json" <<'JSON'
 JSON
 # Cache files: the entry and side-file list a real bake stores (the quad's MTL and textures make a
 # list with side files).
-"$lodbake" bake "$tmp/quad.obj" -o "$tmp/quad_cached.glb" --levels 0.5 --cache-dir "$tmp/cache" --quiet
+"$lodbake" bake "$tmp/quad.obj" -o "$tmp/quad_cached.glb" --levels 0.5 --cache-dir "$tmp/cache" --quiet \
+    --keep-unreadable-images # the fake PNG bytes stand in for any texture a cache entry lists
 cp "$tmp"/cache/v2/packs/*.bin "$tmp"/cache/v2/deps/*.txt "$out/cache/"
 
 # Runtime inputs: a baked pack, PFRep blobs, .lbm streams.
