@@ -17,6 +17,7 @@
 #include "core/module_loader.h"
 #include "core/parallel.h"
 #include "lodbake/core/bvh.h"
+#include "lodbake/core/mapped_array.h"
 #include "reconstruct/open3d_module.h"
 
 namespace lodbake {
@@ -39,7 +40,13 @@ const Loaded& loadModule() {
     return loaded;
 }
 
-uint32_t findRoot(std::vector<uint32_t>& parent, uint32_t v) {
+// Per-vertex labels and flags live in storage mapped on their own: the overlap test runs on every
+// bake with --merge auto, and freeing blocks of this size from malloc would raise glibc's adaptive
+// mmap threshold, so that the bake's later arrays of that size stay resident in its arenas.
+using VertexLabels = detail::MappedArray<uint32_t, detail::MappedPages::Small>;
+using VertexFlags = detail::MappedArray<uint8_t, detail::MappedPages::Small>;
+
+uint32_t findRoot(VertexLabels& parent, uint32_t v) {
     while (parent[v] != v) {
         parent[v] = parent[parent[v]];
         v = parent[v];
@@ -47,7 +54,7 @@ uint32_t findRoot(std::vector<uint32_t>& parent, uint32_t v) {
     return v;
 }
 
-void unite(std::vector<uint32_t>& parent, uint32_t x, uint32_t y) {
+void unite(VertexLabels& parent, uint32_t x, uint32_t y) {
     uint32_t a = findRoot(parent, x), b = findRoot(parent, y);
     if (a == b) return;
     if (b < a) std::swap(a, b);
@@ -57,8 +64,8 @@ void unite(std::vector<uint32_t>& parent, uint32_t x, uint32_t y) {
 // Component of every vertex (the smallest vertex id in it; unreferenced vertices are their own).
 // With `join_positions`, vertices at one position are joined: attribute seams (UV charts) split
 // vertices, not surfaces.
-std::vector<uint32_t> vertexComponents(const Mesh& mesh, bool join_positions = true) {
-    std::vector<uint32_t> parent(mesh.vertexCount());
+VertexLabels vertexComponents(const Mesh& mesh, bool join_positions = true) {
+    VertexLabels parent(mesh.vertexCount());
     std::iota(parent.begin(), parent.end(), 0u);
     for (size_t i = 0; i + 2 < mesh.indices.size(); i += 3)
         for (size_t k = 1; k < 3; ++k) unite(parent, mesh.indices[i], mesh.indices[i + k]);
@@ -66,7 +73,7 @@ std::vector<uint32_t> vertexComponents(const Mesh& mesh, bool join_positions = t
         for (uint32_t v = 0; v < parent.size(); ++v) parent[v] = findRoot(parent, v);
         return parent;
     }
-    std::vector<uint32_t> order(mesh.vertexCount());
+    VertexLabels order(mesh.vertexCount());
     std::iota(order.begin(), order.end(), 0u);
     auto key = [&](uint32_t v) {
         const Vec3f& p = mesh.positions[v];
@@ -82,8 +89,8 @@ std::vector<uint32_t> vertexComponents(const Mesh& mesh, bool join_positions = t
     return parent;
 }
 
-std::vector<uint8_t> referencedVertices(const Mesh& mesh) {
-    std::vector<uint8_t> used(mesh.vertexCount(), 0);
+VertexFlags referencedVertices(const Mesh& mesh) {
+    VertexFlags used(mesh.vertexCount(), 0);
     for (uint32_t i : mesh.indices) used[i] = 1;
     return used;
 }
@@ -146,8 +153,8 @@ Samples collectSamples(const Mesh& mesh) {
 
 size_t countViews(const Mesh& mesh) {
     if (mesh.submeshes.size() > 1) return mesh.submeshes.size();
-    const std::vector<uint32_t> comp = vertexComponents(mesh);
-    const std::vector<uint8_t> used = referencedVertices(mesh);
+    const VertexLabels comp = vertexComponents(mesh);
+    const VertexFlags used = referencedVertices(mesh);
     size_t n = 0;
     for (uint32_t v = 0; v < comp.size(); ++v) n += used[v] && comp[v] == v;
     return n;
@@ -281,15 +288,15 @@ double overlappingSheetFraction(const Mesh& mesh) {
     if (mesh.indices.size() % 3 != 0) return 0.0;
     for (uint32_t i : mesh.indices)
         if (i >= mesh.vertexCount()) return 0.0; // inconsistent: the repair that follows reports it
-    const std::vector<uint8_t> used = referencedVertices(mesh);
-    auto countRoots = [&](const std::vector<uint32_t>& c) {
+    const VertexFlags used = referencedVertices(mesh);
+    auto countRoots = [&](const VertexLabels& c) {
         size_t n = 0;
         for (uint32_t v = 0; v < c.size(); ++v) n += used[v] && c[v] == v;
         return n;
     };
     // Most inputs are one connected surface: that needs no sort of the positions.
     if (countRoots(vertexComponents(mesh, false)) < 2) return 0.0;
-    const std::vector<uint32_t> comp = vertexComponents(mesh);
+    const VertexLabels comp = vertexComponents(mesh);
     size_t roots = 0, referenced = 0;
     for (uint32_t v = 0; v < comp.size(); ++v) {
         roots += used[v] && comp[v] == v;
