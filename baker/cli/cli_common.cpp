@@ -34,6 +34,18 @@ int usageError(const std::string& message) {
     return kExitUsage;
 }
 
+int meshInputAndOutput(const Args& args, const char* command, std::string* in, std::string* out) {
+    if (args.positional.size() != 1) return usageError(std::string(command) + " takes exactly one input file");
+    const auto output = args.values.find("--output");
+    if (output == args.values.end()) return usageError(std::string(command) + " needs -o OUT");
+    *in = args.positional[0];
+    *out = output->second;
+    if (formatFromPath(*out) == MeshFormat::Unknown)
+        return usageError("output '" + *out + "' has an unknown extension, expected .ply .obj .off .gltf or .glb");
+    if (isSameFile(*in, *out)) return usageError("output '" + *out + "' is the input file; the input is never modified");
+    return kExitOk;
+}
+
 // Returns false (after printing) on a usage error.
 const char* const kReaderLimitHelp =
     "Input limits (any subcommand; files claiming more are refused before anything is allocated):\n"

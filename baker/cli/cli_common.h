@@ -39,6 +39,10 @@ struct OptionSpec {
 };
 
 int usageError(const std::string& message);
+/// The one input file and the mesh output `-o OUT` of a command that reads a mesh and writes one
+/// (repair, merge): kExitOk with *in and *out set, or the exit code of the usage error it printed
+/// (not one input, no -o, an output extension that is not a mesh format, the output is the input).
+int meshInputAndOutput(const Args& args, const char* command, std::string* in, std::string* out);
 // Returns false (after printing) on a usage error.
 bool parseArgs(int argc, char** argv, int first, const std::vector<OptionSpec>& specs, Args& args, int& exit_code);
 void printDiagnostics(const Diagnostics& diagnostics);

@@ -109,13 +109,8 @@ int runRepair(int argc, char** argv) {
         std::fputs(kReaderLimitHelp, stdout);
         return kExitOk;
     }
-    if (args.positional.size() != 1) return usageError("repair takes exactly one input file");
-    if (!args.values.count("--output")) return usageError("repair needs -o OUT");
-    const std::string& in = args.positional[0];
-    const std::string& out = args.values["--output"];
-    if (formatFromPath(out) == MeshFormat::Unknown)
-        return usageError("output '" + out + "' has an unknown extension, expected .ply .obj .off .gltf or .glb");
-    if (isSameFile(in, out)) return usageError("output '" + out + "' is the input file; the input is never modified");
+    std::string in, out;
+    if (const int usage = meshInputAndOutput(args, "repair", &in, &out); usage != kExitOk) return usage;
 
     RepairOptions opt;
     auto number = [&](const char* flag, double lo, double hi, double& v) {
