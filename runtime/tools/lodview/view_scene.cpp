@@ -16,6 +16,9 @@ namespace lodview {
 namespace {
 
 using Clock = std::chrono::steady_clock;
+// Longest wait for outstanding level reads in a synchronous (benchmark) frame; local reads take
+// milliseconds, so reaching it means a read that never completes.
+constexpr std::chrono::seconds kStreamWaitLimit{120};
 
 double msSince(Clock::time_point t0) {
     return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
@@ -274,38 +277,40 @@ void View::selectPack(Pack& pack, const float eye[3]) {
                             pack.demand.data());
 }
 
+// True when every visible instance's selected level is resident.
+bool View::selectedResident() const {
+    for (const auto& pack : packs_) {
+        const uint8_t* resident = pack->streamer.residentTable();
+        for (size_t i = pack->first; i < pack->first + pack->count; ++i)
+            if (visibility_[i] != lodrt::Containment::Outside &&
+                resident[model_[i] * lodrt::kMaxLevels + level_[i]] != level_[i])
+                return false;
+    }
+    return true;
+}
+
 // Benchmark runs draw exactly the selected levels: keep updating the streamers until every
 // visible instance's selected level is resident, or until nothing more can be fetched (a budget
-// too small for it). Returns false when some instance still draws coarser.
-bool View::waitForSelected(const float eye[3]) {
-    (void)eye;
-    for (;;) {
-        bool satisfied = true, busy = false;
-        for (auto& pack : packs_) {
-            const uint8_t* resident = pack->streamer.residentTable();
-            for (size_t i = pack->first; i < pack->first + pack->count; ++i)
-                if (visibility_[i] != lodrt::Containment::Outside &&
-                    resident[model_[i] * lodrt::kMaxLevels + level_[i]] != level_[i])
-                    satisfied = false;
-        }
-        if (satisfied) return true;
+// too small for it: the frame then draws coarser and says so in its report). A streamer that stays
+// busy past kStreamWaitLimit means reads that never finish, which is an error, not a long frame.
+bool View::waitForSelected(std::string* error) {
+    const Clock::time_point start = Clock::now();
+    while (!selectedResident()) {
         std::this_thread::sleep_for(std::chrono::microseconds(200));
+        bool busy = false;
         for (auto& pack : packs_) {
             pack->streamer.update(pack->demand.data());
             busy = busy || !pack->streamer.idle();
         }
-        if (!busy) {
-            bool again = true; // one more pass after the last job landed
-            for (auto& pack : packs_) {
-                const uint8_t* resident = pack->streamer.residentTable();
-                for (size_t i = pack->first; i < pack->first + pack->count; ++i)
-                    if (visibility_[i] != lodrt::Containment::Outside &&
-                        resident[model_[i] * lodrt::kMaxLevels + level_[i]] != level_[i])
-                        again = false;
-            }
-            return again;
+        if (!busy) return true; // nothing outstanding: what is still missing does not fit the budget
+        if (Clock::now() - start > kStreamWaitLimit) {
+            *error = "streaming: level reads still outstanding after " +
+                     std::to_string(std::chrono::duration_cast<std::chrono::seconds>(kStreamWaitLimit).count()) +
+                     " s while waiting for the selected levels";
+            return false;
         }
     }
+    return true;
 }
 
 bool View::mirrorResident(Renderer* renderer, std::string* error) {
@@ -361,8 +366,9 @@ bool View::update(const float eye[3], const float view_proj[16], Renderer* rende
 
     if (config_.sync_streaming) {
         t0 = Clock::now();
-        waitForSelected(eye);
+        const bool settled = waitForSelected(error);
         stats->wait_ms = msSince(t0);
+        if (!settled) return false;
     }
     // Draw levels against what is resident after this frame's update.
     for (auto& pack : packs_) {

@@ -70,11 +70,12 @@ public:
 
 private:
     void loop();
-    std::thread thread_;
     std::deque<std::pair<void (*)(void*), void*>> queue_;
     std::mutex mutex_;
     std::condition_variable cv_;
     bool stop_ = false;
+    // Last: members are constructed in declaration order, and the worker uses all of the above.
+    std::thread thread_;
 };
 
 class View {
@@ -117,7 +118,8 @@ public:
 private:
     bool placeInstances(std::string* error);
     void selectPack(Pack& pack, const float eye[3]);
-    bool waitForSelected(const float eye[3]);
+    bool selectedResident() const;
+    bool waitForSelected(std::string* error);
     bool mirrorResident(Renderer* renderer, std::string* error);
     void measure(const float eye[3], FrameStats* stats) const;
     bool refinePfrep(const lodrt::Frustum& frustum, const float eye[3], Renderer* renderer, FrameStats* stats,
