@@ -27,7 +27,8 @@ const { parseGlb, lodLevels, breakPack } = require("./glb.js");
 
 const kSkip = 77;
 const kPageDir = path.join(__dirname, "page");
-const kLibraries = { babylon: ["babylonjs", "babylonjs-loaders"], three: ["three"] };
+// The packages each client page loads (Babylon's page also takes meshoptimizer's decoder from three).
+const kLibraries = { babylon: ["babylonjs", "babylonjs-loaders", "three"], three: ["three"] };
 // Thresholds of the checks. A rendered model covers far more than 1 % of the frame (the camera is
 // fitted to it); textures change the mean colour by more than a few 8-bit steps and at least double
 // the chromaticity spread of the flat-coloured render.
@@ -65,12 +66,22 @@ function bake(args) {
     return run.status === null ? 1 : run.status;
 }
 
+function isExecutable(file) {
+    try {
+        fs.accessSync(file, fs.constants.X_OK);
+        return fs.statSync(file).isFile();
+    } catch (_) {
+        return false;
+    }
+}
+
+// The configured path first (found at configure time), then PATH, so that Chromium installed after
+// configuring is found too.
 function findChromium(configured) {
-    if (configured && fs.existsSync(configured)) return configured;
-    for (const dir of (process.env.PATH || "").split(path.delimiter)) {
+    if (configured && isExecutable(configured)) return configured;
+    for (const dir of (process.env.PATH || "").split(path.delimiter).filter(Boolean)) {
         for (const name of ["chromium", "chromium-browser", "google-chrome"]) {
-            const candidate = path.join(dir, name);
-            if (dir && fs.existsSync(candidate)) return candidate;
+            if (isExecutable(path.join(dir, name))) return path.join(dir, name);
         }
     }
     return null;
@@ -113,6 +124,8 @@ function startServer(pack, libraries, nodeModules, onResult) {
         let file = null;
         const parts = url.pathname.split("/").filter(Boolean);
         if (parts[0] === "page" && parts.length === 2) file = path.join(kPageDir, parts[1]);
+        // meshoptimizer's own decoder, as three.js ships it: Babylon.js would fetch it from its CDN.
+        if (url.pathname === "/decoder/meshopt_decoder.module.js") file = path.join(nodeModules, "three/examples/jsm/libs/meshopt_decoder.module.js");
         if (parts[0] === "lib" && libraries.includes(parts[1])) {
             const root = path.join(nodeModules, parts[1]);
             const candidate = path.normalize(path.join(root, ...parts.slice(2)));
@@ -145,6 +158,7 @@ async function runClient(chromium, client, pack, libraries, nodeModules, size, t
     let browserLog = "";
     browser.stderr.on("data", (d) => { browserLog = (browserLog + d).slice(-4000); });
     browser.on("exit", (code) => finish({ exited: code }));
+    browser.on("error", (error) => finish({ exited: error.message }));
     const timer = setTimeout(() => finish({ timeout: true }), timeoutSeconds * 1000);
     const outcome = await done;
     clearTimeout(timer);

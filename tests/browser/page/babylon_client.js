@@ -5,6 +5,10 @@
 (async function () {
     "use strict";
     const probe = window.lodbakeProbe;
+    // EXT_meshopt_compression: Babylon fetches meshoptimizer's decoder from its CDN and uses the
+    // global MeshoptDecoder; the test serves the same decoder locally (tests run offline).
+    window.MeshoptDecoder = (await import("/decoder/meshopt_decoder.module.js")).MeshoptDecoder;
+    BABYLON.MeshoptCompression.Configuration.decoder.url = URL.createObjectURL(new Blob([""], { type: "text/javascript" }));
     const canvas = probe.makeCanvas();
     const engine = new BABYLON.Engine(canvas, false, { preserveDrawingBuffer: true, antialias: false }, false);
     const scene = new BABYLON.Scene(engine);

@@ -2,6 +2,7 @@
 // node, LOD0; renders it with and without its base colour textures and posts the measurements.
 import * as THREE from "three";
 import { GLTFLoader } from "three/addons/loaders/GLTFLoader.js";
+import { MeshoptDecoder } from "three/addons/libs/meshopt_decoder.module.js";
 
 const probe = window.lodbakeProbe;
 try {
@@ -15,7 +16,7 @@ try {
     renderer.render(scene, camera);
     const background = probe.backgroundOf(probe.readPixels(canvas));
 
-    const gltf = await new GLTFLoader().loadAsync(probe.params.pack);
+    const gltf = await new GLTFLoader().setMeshoptDecoder(MeshoptDecoder).loadAsync(probe.params.pack);
     scene.add(gltf.scene);
     const box = new THREE.Box3().setFromObject(gltf.scene);
     const sphere = box.getBoundingSphere(new THREE.Sphere());
