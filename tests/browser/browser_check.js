@@ -7,15 +7,16 @@
 //   browser_check.js bake --lodbake EXE --source MESH --out PACK [-- BAKE_OPTION...]
 //   browser_check.js check --client babylon|three --pack PACK --expect plain|textured[,uses=EXT...]
 //       --node-modules DIR --out DIR [--chromium EXE] [--size WxH] [--timeout S]
-//       [--break truncate|flat-texture|drop-level --expect-failure TEXT]
+//       [--break truncate|flat-texture|drop-level|zero-positions --expect-failure TEXT]
 //
 // check passes (exit 0) when the client renders a non-blank image of the requested size and, for
 // Babylon, received every MSFT_lod level of the pack, coarsest first, each drawing exactly its
-// level's indices (three.js, without MSFT_lod, must draw LOD0's); with `textured`, when the
-// rendered colours change once the base colour textures are taken away. Every failed check is one
-// stderr line `<pack>: <client>: <what was expected>`, exit 1. Exit 77 (skipped, with the reason)
-// when Chromium or the npm packages are missing, unless LODBAKE_REQUIRE_BROWSER is set, or the
-// source mesh of a bake is missing, unless LODBAKE_REQUIRE_SHARED_MESHES is set.
+// level's indices (three.js, without MSFT_lod, must draw LOD0's); with `textured`, when the albedo
+// recovered from renders with and without the base colour textures varies over the surface. Every
+// failed check is one stderr line `<pack>: <client>: <what was expected>`, exit 1. Exit 77
+// (skipped, with the reason) when Chromium or the npm packages are missing, unless
+// LODBAKE_REQUIRE_BROWSER is set, or the source mesh of a bake is missing, unless
+// LODBAKE_REQUIRE_SHARED_MESHES is set.
 // A control (--break) serves a copy of the pack broken on purpose and passes only when the check
 // fails with a message containing --expect-failure.
 "use strict";
@@ -30,12 +31,13 @@ const kPageDir = path.join(__dirname, "page");
 // The packages each client page loads (Babylon's page also takes meshoptimizer's decoder from three).
 const kLibraries = { babylon: ["babylonjs", "babylonjs-loaders", "three"], three: ["three"] };
 // Thresholds of the checks. A rendered model covers far more than 1 % of the frame (the camera is
-// fitted to it); textures change the mean colour by more than a few 8-bit steps and at least double
-// the chromaticity spread of the flat-coloured render.
+// fitted to it). Textures change the mean colour by more than a few 8-bit steps, and the albedo
+// recovered from the textured and untextured renders varies over the surface: a base colour texture
+// of one flat colour, whatever its hue, stays near 0 (shading, specular and rounding only), a
+// photographic texture far above.
 const kMinForeground = 0.01;
 const kMinTextureDifference = 4;
-const kMinChromaRatio = 2;
-const kMinChromaSpread = 0.01;
+const kMinAlbedoVariation = 0.25;
 
 function required(name) {
     return !["", "0", undefined].includes(process.env[name]);
@@ -88,7 +90,8 @@ function findChromium(configured) {
 }
 
 function contentType(file) {
-    return { ".html": "text/html", ".js": "text/javascript", ".glb": "model/gltf-binary", ".map": "application/json" }[path.extname(file)] || "application/octet-stream";
+    const types = { ".html": "text/html", ".js": "text/javascript", ".map": "application/json" };
+    return types[path.extname(file)] || "application/octet-stream";
 }
 
 // Serves /page/*, /lib/<package>/* (the client's packages only), /pack.glb with HTTP range
@@ -114,7 +117,11 @@ function startServer(pack, libraries, nodeModules, onResult) {
                     return res.end();
                 }
                 served.packBytes += end - start + 1;
-                res.writeHead(206, { "Content-Type": "model/gltf-binary", "Content-Range": `bytes ${start}-${end}/${pack.length}`, "Accept-Ranges": "bytes" });
+                res.writeHead(206, {
+                    "Content-Type": "model/gltf-binary",
+                    "Content-Range": `bytes ${start}-${end}/${pack.length}`,
+                    "Accept-Ranges": "bytes",
+                });
                 return res.end(pack.subarray(start, end + 1));
             }
             served.packBytes += pack.length;
@@ -125,7 +132,9 @@ function startServer(pack, libraries, nodeModules, onResult) {
         const parts = url.pathname.split("/").filter(Boolean);
         if (parts[0] === "page" && parts.length === 2) file = path.join(kPageDir, parts[1]);
         // meshoptimizer's own decoder, as three.js ships it: Babylon.js would fetch it from its CDN.
-        if (url.pathname === "/decoder/meshopt_decoder.module.js") file = path.join(nodeModules, "three/examples/jsm/libs/meshopt_decoder.module.js");
+        if (url.pathname === "/decoder/meshopt_decoder.module.js") {
+            file = path.join(nodeModules, "three/examples/jsm/libs/meshopt_decoder.module.js");
+        }
         if (parts[0] === "lib" && libraries.includes(parts[1])) {
             const root = path.join(nodeModules, parts[1]);
             const candidate = path.normalize(path.join(root, ...parts.slice(2)));
@@ -165,8 +174,11 @@ async function runClient(chromium, client, pack, libraries, nodeModules, size, t
     try { process.kill(-browser.pid, "SIGKILL"); } catch (_) { /* already gone */ }
     server.close();
     fs.rmSync(profile, { recursive: true, force: true });
-    if (outcome.timeout) return { error: `no result within ${timeoutSeconds} s (Chromium stderr tail: ${browserLog.slice(-600)})` };
-    if (outcome.exited !== undefined) return { error: `Chromium exited (${outcome.exited}) before the page posted a result: ${browserLog.slice(-600)}` };
+    const tail = browserLog.slice(-600);
+    if (outcome.timeout) return { error: `no result within ${timeoutSeconds} s (Chromium stderr tail: ${tail})` };
+    if (outcome.exited !== undefined) {
+        return { error: `Chromium exited (${outcome.exited}) before the page posted a result: ${tail}` };
+    }
     const result = JSON.parse(outcome.body);
     result.served = outcome.served;
     return result;
@@ -183,27 +195,46 @@ function judge(result, client, levels, expect, size) {
     if (result.error) return [`the client failed to load or render the pack: ${result.error.split("\n")[0]}`];
     const png = pngSize(result.png);
     for (const [what, got] of [["canvas", result.canvas], ["drawing buffer", result.render], ["rendered image", png]]) {
-        if (got.width !== size[0] || got.height !== size[1]) failures.push(`${what} ${got.width}x${got.height}, expected ${size[0]}x${size[1]}`);
+        if (got.width !== size[0] || got.height !== size[1]) {
+            failures.push(`${what} ${got.width}x${got.height}, expected ${size[0]}x${size[1]}`);
+        }
     }
-    const coverage = result.textured.foreground / result.textured.pixels;
-    if (!(coverage >= kMinForeground)) failures.push(`blank image: ${result.textured.foreground} of ${result.textured.pixels} pixels differ from the background, expected at least ${(kMinForeground * 100).toFixed(0)} %`);
+    const t = result.textured;
+    if (!(t.foreground / t.pixels >= kMinForeground)) {
+        failures.push(`blank image: ${t.foreground} of ${t.pixels} pixels differ from the background, ` +
+            `expected at least ${(kMinForeground * 100).toFixed(0)} %`);
+    }
 
     const drawn = result.drawnMeshes.reduce((sum, m) => sum + m.indices, 0);
     if (client === "babylon") {
-        if (levels.length > 1 && !result.msftLodExtension) failures.push("the MSFT_lod extension of the loader was not used");
         const got = result.lodEvents.map((e) => e.indices);
         const want = levels.map((l) => l.indices).reverse(); // coarsest first
-        if (levels.length > 1 && got.length !== want.length) failures.push(`received ${got.length} of ${want.length} MSFT_lod levels (indices drawn per level: ${got.join(" ")}; pack: ${want.join(" ")})`);
-        else if (levels.length > 1 && got.some((n, i) => n !== want[i])) failures.push(`indices drawn per MSFT_lod level ${got.join(" ")}, expected the pack's ${want.join(" ")} (coarsest first)`);
+        if (levels.length > 1 && !result.msftLodExtension) {
+            failures.push("the MSFT_lod extension of the loader was not used");
+        } else if (levels.length > 1 && got.length !== want.length) {
+            failures.push(`received ${got.length} of ${want.length} MSFT_lod levels ` +
+                `(indices drawn per level: ${got.join(" ")}; pack: ${want.join(" ")})`);
+        } else if (levels.length > 1 && got.some((n, i) => n !== want[i])) {
+            failures.push(`indices drawn per MSFT_lod level ${got.join(" ")}, ` +
+                `expected the pack's ${want.join(" ")} (coarsest first)`);
+        }
     }
-    if (drawn !== levels[0].indices) failures.push(`finally draws ${drawn} indices, expected LOD0's ${levels[0].indices}`);
+    if (drawn !== levels[0].indices) {
+        failures.push(`finally draws ${drawn} indices, expected LOD0's ${levels[0].indices}`);
+    }
 
     if (expect.textured) {
         if (!result.textures.length) failures.push("no base colour texture on the drawn meshes");
-        const t = result.textured, u = result.untextured;
-        if (u) {
-            if (!(result.texturedVsUntextured >= kMinTextureDifference)) failures.push(`textures do not show: mean colour difference to the untextured render ${result.texturedVsUntextured.toFixed(2)}, expected >= ${kMinTextureDifference}`);
-            if (!(t.chromaSpread >= kMinChromaSpread && t.chromaSpread >= kMinChromaRatio * u.chromaSpread)) failures.push(`textures do not show: chromaticity spread ${t.chromaSpread.toFixed(4)} textured vs ${u.chromaSpread.toFixed(4)} untextured, expected >= ${kMinChromaRatio}x and >= ${kMinChromaSpread}`);
+        if (result.untextured) {
+            if (!(result.texturedVsUntextured >= kMinTextureDifference)) {
+                failures.push("textures do not show: mean colour difference to the untextured render " +
+                    `${result.texturedVsUntextured.toFixed(2)}, expected >= ${kMinTextureDifference}`);
+            }
+            if (!(result.albedo.variation >= kMinAlbedoVariation)) {
+                const { variation, pixels } = result.albedo;
+                failures.push(`textures do not show: albedo variation ${variation.toFixed(3)} over ${pixels} lit ` +
+                    `pixels, expected >= ${kMinAlbedoVariation} (one flat colour is near 0)`);
+            }
         }
     }
     return failures;
@@ -221,7 +252,9 @@ function parseExpect(text) {
 }
 
 async function check(args) {
-    for (const key of ["client", "pack", "node-modules", "out"]) if (!args[key]) throw new Error(`check: --${key} was expected`);
+    for (const key of ["client", "pack", "node-modules", "out"]) {
+        if (!args[key]) throw new Error(`check: --${key} was expected`);
+    }
     const client = args.client;
     if (!kLibraries[client]) throw new Error(`--client: babylon or three was expected, got "${client}"`);
     const label = `${args.pack}: ${client}`;
@@ -232,7 +265,10 @@ async function check(args) {
     const chromium = findChromium(args.chromium);
     if (!chromium) return skip("Chromium not found (Debian package chromium; scripts/install-deps.sh installs it)");
     for (const lib of kLibraries[client]) {
-        if (!fs.existsSync(path.join(args["node-modules"], lib, "package.json"))) return skip(`${path.join(args["node-modules"], lib)}: missing (npm ci in scripts/node; scripts/install-deps.sh runs it)`);
+        const dir = path.join(args["node-modules"], lib);
+        if (!fs.existsSync(path.join(dir, "package.json"))) {
+            return skip(`${dir}: missing (npm ci in scripts/node; scripts/install-deps.sh runs it)`);
+        }
     }
     if (!fs.existsSync(args.pack)) {
         console.error(`${args.pack}: missing: the pack was expected from its Browser.Bake test`);
@@ -243,8 +279,12 @@ async function check(args) {
     const { json } = parseGlb(original);
     const levels = lodLevels(json);
     const problems = [];
-    for (const ext of expect.uses) if (!(json.extensionsUsed || []).includes(ext)) problems.push(`extensionsUsed lacks ${ext}`);
-    if (expect.textured && !(json.images || []).length) problems.push("a textured pack was expected, the pack has no images");
+    for (const ext of expect.uses) {
+        if (!(json.extensionsUsed || []).includes(ext)) problems.push(`extensionsUsed lacks ${ext}`);
+    }
+    if (expect.textured && !(json.images || []).length) {
+        problems.push("a textured pack was expected, the pack has no images");
+    }
     const served = args.break ? breakPack(original, args.break) : original;
     const size = (args.size || "320x240").split("x").map(Number);
     fs.mkdirSync(args.out, { recursive: true });
@@ -259,16 +299,19 @@ async function check(args) {
 
     const t = result.textured;
     console.log(`summary: ${client} ${result.version || "?"}, ${seconds} s, levels ${levels.length}` +
-        (result.lodEvents ? `, MSFT_lod levels received ${result.lodEvents.length} (indices ${result.lodEvents.map((e) => e.indices).join(" ")})` : "") +
-        (t ? `, foreground ${(100 * t.foreground / t.pixels).toFixed(1)} %, chroma spread ${t.chromaSpread.toFixed(4)}` : "") +
-        (result.untextured ? ` (untextured ${result.untextured.chromaSpread.toFixed(4)}, difference ${result.texturedVsUntextured.toFixed(2)})` : "") +
+        (result.lodEvents ? `, MSFT_lod levels received ${result.lodEvents.length} ` +
+            `(indices ${result.lodEvents.map((e) => e.indices).join(" ")})` : "") +
+        (t ? `, foreground ${(100 * t.foreground / t.pixels).toFixed(1)} %` : "") +
+        (result.untextured ? `, against the untextured render: mean difference ` +
+            `${result.texturedVsUntextured.toFixed(1)}, albedo variation ${result.albedo.variation.toFixed(3)}` : "") +
         (result.served ? `, pack requests ${result.served.packRequests}, bytes ${result.served.packBytes}` : ""));
     for (const line of result.console || []) console.log(`console ${line}`);
     for (const p of problems) console.error(`${label}: ${p}`);
 
     if (args["expect-failure"] !== undefined) {
         if (problems.some((p) => p.includes(args["expect-failure"]))) {
-            console.log(`control: the ${args.break || "unbroken"} pack failed as expected ("${args["expect-failure"]}")`);
+            console.log(`control: the ${args.break || "unbroken"} pack failed as expected ` +
+                `("${args["expect-failure"]}")`);
             return 0;
         }
         console.error(`${label}: control: a failure containing "${args["expect-failure"]}" was expected`);

@@ -10,13 +10,19 @@ const kBin = 0x004e4942;
 // Returns { json, bin } or throws with what is wrong.
 function parseGlb(bytes) {
     if (bytes.length < 20 || bytes.readUInt32LE(0) !== kMagic) throw new Error("not a GLB file (magic)");
-    if (bytes.readUInt32LE(8) !== bytes.length) throw new Error(`GLB length field ${bytes.readUInt32LE(8)} != file size ${bytes.length}`);
+    if (bytes.readUInt32LE(8) !== bytes.length) {
+        throw new Error(`GLB length field ${bytes.readUInt32LE(8)} != file size ${bytes.length}`);
+    }
     const jsonLength = bytes.readUInt32LE(12);
-    if (bytes.readUInt32LE(16) !== kJson || 20 + jsonLength > bytes.length) throw new Error("GLB JSON chunk is missing or truncated");
+    if (bytes.readUInt32LE(16) !== kJson || 20 + jsonLength > bytes.length) {
+        throw new Error("GLB JSON chunk is missing or truncated");
+    }
     const json = JSON.parse(bytes.subarray(20, 20 + jsonLength).toString("utf8"));
     let bin = Buffer.alloc(0);
     const at = 20 + jsonLength;
-    if (at + 8 <= bytes.length && bytes.readUInt32LE(at + 4) === kBin) bin = bytes.subarray(at + 8, at + 8 + bytes.readUInt32LE(at));
+    if (at + 8 <= bytes.length && bytes.readUInt32LE(at + 4) === kBin) {
+        bin = bytes.subarray(at + 8, at + 8 + bytes.readUInt32LE(at));
+    }
     return { json, bin };
 }
 
@@ -49,12 +55,13 @@ function writeGlb(json, bin) {
 function lodLevels(json) {
     const nodes = json.nodes || [];
     const root = nodes.find((n) => n.extensions && n.extensions.MSFT_lod);
-    const chain = root ? [root, ...root.extensions.MSFT_lod.ids.map((id) => nodes[id])] : nodes.filter((n) => n.mesh !== undefined).slice(0, 1);
+    const chain = root ? [root, ...root.extensions.MSFT_lod.ids.map((id) => nodes[id])]
+        : nodes.filter((n) => n.mesh !== undefined).slice(0, 1);
     return chain.map((node) => {
         const mesh = json.meshes[node.mesh];
         let indices = 0;
         for (const p of mesh.primitives) {
-            const accessor = p.indices !== undefined ? json.accessors[p.indices] : json.accessors[p.attributes.POSITION];
+            const accessor = json.accessors[p.indices !== undefined ? p.indices : p.attributes.POSITION];
             indices += accessor.count;
         }
         return { node: node.name, indices, materials: mesh.primitives.map((p) => p.material) };
@@ -95,20 +102,22 @@ function flatPng(rgb) {
 
 // A copy of the pack broken on purpose, for the control tests:
 //   truncate     - the file cut in the middle of LOD0's positions;
-//   flat-texture - every base colour texture's image replaced by one flat grey PNG;
-//   drop-level   - the finest level left out of MSFT_lod's ids, so a client receives one level less.
+//   flat-texture - every base colour texture's image replaced by a PNG of one flat colour;
+//   drop-level   - the finest level left out of MSFT_lod's ids, so a client receives one level less;
+//   zero-positions - every level's positions zeroed, so the pack draws nothing.
 function breakPack(bytes, how) {
     const { json, bin } = parseGlb(bytes);
     if (how === "truncate") {
         // Cut in the middle of LOD0's positions, which every client draws (a cut elsewhere may
         // only remove data a client does not read: three.js reads LOD0 only).
         const lod0 = json.nodes[json.scenes[json.scene || 0].nodes[0]];
-        const view = json.bufferViews[json.accessors[json.meshes[lod0.mesh].primitives[0].attributes.POSITION].bufferView];
+        const positions = json.accessors[json.meshes[lod0.mesh].primitives[0].attributes.POSITION];
+        const view = json.bufferViews[positions.bufferView];
         const binStart = 20 + bytes.readUInt32LE(12) + 8;
         return bytes.subarray(0, binStart + (view.byteOffset || 0) + Math.floor(view.byteLength / 2));
     }
     if (how === "flat-texture") {
-        const png = flatPng([128, 128, 128]);
+        const png = flatPng([200, 120, 60]); // a saturated colour: the hue alone must not pass as a texture
         const offset = bin.length + ((4 - (bin.length % 4)) % 4);
         json.bufferViews.push({ buffer: 0, byteOffset: offset, byteLength: png.length });
         const view = json.bufferViews.length - 1;
@@ -125,14 +134,27 @@ function breakPack(bytes, how) {
     }
     if (how === "drop-level") {
         const root = json.nodes.find((n) => n.extensions && n.extensions.MSFT_lod);
-        if (!root || root.extensions.MSFT_lod.ids.length < 1) throw new Error("drop-level: the pack has no MSFT_lod levels to drop");
+        if (!root || root.extensions.MSFT_lod.ids.length < 1) {
+            throw new Error("drop-level: the pack has no MSFT_lod levels to drop");
+        }
         // The finest level is the node's own mesh: LOD1's mesh takes its place.
         const ids = root.extensions.MSFT_lod.ids;
         root.mesh = json.nodes[ids[0]].mesh;
         root.extensions.MSFT_lod.ids = ids.slice(1);
         return writeGlb(json, bin);
     }
-    throw new Error(`unknown --break mode "${how}" (truncate, flat-texture, drop-level)`);
+    if (how === "zero-positions") {
+        // Every vertex at the origin (accessor bounds left as they were): a valid file that draws nothing.
+        const copy = Buffer.from(bin);
+        for (const mesh of json.meshes) {
+            for (const p of mesh.primitives) {
+                const view = json.bufferViews[json.accessors[p.attributes.POSITION].bufferView];
+                copy.fill(0, view.byteOffset || 0, (view.byteOffset || 0) + view.byteLength);
+            }
+        }
+        return writeGlb(json, copy);
+    }
+    throw new Error(`unknown --break mode "${how}" (truncate, flat-texture, drop-level, zero-positions)`);
 }
 
 module.exports = { parseGlb, writeGlb, lodLevels, breakPack, flatPng };

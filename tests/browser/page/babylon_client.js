@@ -8,7 +8,8 @@
     // EXT_meshopt_compression: Babylon fetches meshoptimizer's decoder from its CDN and uses the
     // global MeshoptDecoder; the test serves the same decoder locally (tests run offline).
     window.MeshoptDecoder = (await import("/decoder/meshopt_decoder.module.js")).MeshoptDecoder;
-    BABYLON.MeshoptCompression.Configuration.decoder.url = URL.createObjectURL(new Blob([""], { type: "text/javascript" }));
+    const emptyScript = new Blob([""], { type: "text/javascript" });
+    BABYLON.MeshoptCompression.Configuration.decoder.url = URL.createObjectURL(emptyScript);
     const canvas = probe.makeCanvas();
     const engine = new BABYLON.Engine(canvas, false, { preserveDrawingBuffer: true, antialias: false }, false);
     const scene = new BABYLON.Scene(engine);
@@ -35,7 +36,8 @@
     new BABYLON.FreeCamera("background", BABYLON.Vector3.Zero(), scene); // replaced once the model is in
     scene.render();
     const background = probe.backgroundOf(probe.readPixels(canvas));
-    await BABYLON.AppendSceneAsync(probe.params.pack, scene, { pluginExtension: ".glb", pluginOptions: { gltf: { useRangeRequests: true } } });
+    await BABYLON.AppendSceneAsync(probe.params.pack, scene,
+        { pluginExtension: ".glb", pluginOptions: { gltf: { useRangeRequests: true } } });
     if (!complete) throw new Error("the glTF loader plugin was not activated");
     await complete;
 
@@ -68,6 +70,7 @@
         const flat = await render();
         result.untextured = probe.measure(flat, background);
         result.texturedVsUntextured = probe.difference(textured, flat, background);
+        result.albedo = probe.albedoVariation(textured, flat, background);
     }
     probe.post(result);
 })().catch(window.lodbakeProbe.fail);

@@ -25,7 +25,8 @@
     }
     function fail(error) {
         // Babylon wraps the cause of a failed load in innerError.
-        const inner = error && error.innerError ? ": " + (error.innerError.message || JSON.stringify(error.innerError)) : "";
+        const cause = error && error.innerError;
+        const inner = cause ? ": " + (cause.message || JSON.stringify(cause)) : "";
         post({ error: (String(error && error.stack ? error.stack : error) + inner).slice(0, 2000) });
     }
     window.addEventListener("error", (e) => fail(e.error || e.message));
@@ -62,26 +63,18 @@
             Math.abs(data[i + 2] - background[2]) > kBackgroundTolerance;
     }
 
-    // Foreground pixel count and the spread of chromaticity over lit foreground pixels: a surface of
-    // one flat colour under white light keeps one chromaticity (shading scales r, g and b alike),
-    // so a texture shows as a larger spread.
+    // Foreground pixel count and mean colour.
     function measure(frame, background) {
         const d = frame.data;
-        let foreground = 0, lit = 0, sr = 0, sg = 0, srr = 0, sgg = 0;
+        let foreground = 0;
         const mean = [0, 0, 0];
         for (let i = 0; i < d.length; i += 4) {
             if (!isForeground(d, i, background)) continue;
             ++foreground;
             mean[0] += d[i]; mean[1] += d[i + 1]; mean[2] += d[i + 2];
-            const sum = d[i] + d[i + 1] + d[i + 2];
-            if (sum < 60) continue; // too dark for a stable chromaticity
-            const r = d[i] / sum, g = d[i + 1] / sum;
-            ++lit; sr += r; sg += g; srr += r * r; sgg += g * g;
         }
-        const spread = lit ? Math.sqrt(Math.max(0, srr / lit - (sr / lit) ** 2) + Math.max(0, sgg / lit - (sg / lit) ** 2)) : 0;
         return {
             width: frame.width, height: frame.height, pixels: frame.width * frame.height, foreground,
-            litForeground: lit, chromaSpread: spread,
             meanColor: mean.map((v) => (foreground ? v / foreground : 0)),
         };
     }
@@ -92,9 +85,40 @@
         for (let i = 0; i < a.data.length; i += 4) {
             if (!isForeground(a.data, i, background) || !isForeground(b.data, i, background)) continue;
             ++n;
-            sum += (Math.abs(a.data[i] - b.data[i]) + Math.abs(a.data[i + 1] - b.data[i + 1]) + Math.abs(a.data[i + 2] - b.data[i + 2])) / 3;
+            for (let c = 0; c < 3; ++c) sum += Math.abs(a.data[i + c] - b.data[i + c]) / 3;
         }
         return n ? sum / n : 0;
+    }
+
+    const toLinear = (v) => { const c = v / 255; return c <= 0.04045 ? c / 12.92 : ((c + 0.055) / 1.055) ** 2.4; };
+
+    // How much the surface's albedo varies, estimated from two renders that differ only in the base
+    // colour texture: textured = albedo * shading and untextured (white base colour) = shading in
+    // linear light, so their per-pixel ratio is the albedo. Returns the ratio's coefficient of
+    // variation (standard deviation over mean) over well-lit pixels, averaged over r, g and b: near
+    // 0 for one flat colour of any hue, large for a texture with detail.
+    function albedoVariation(textured, untextured, background) {
+        const a = textured.data, b = untextured.data;
+        const sum = [0, 0, 0], sq = [0, 0, 0];
+        let n = 0;
+        for (let i = 0; i < a.length; i += 4) {
+            if (!isForeground(a, i, background) || !isForeground(b, i, background)) continue;
+            const shade = [toLinear(b[i]), toLinear(b[i + 1]), toLinear(b[i + 2])];
+            if (Math.min(...shade) < 0.05) continue; // too dark for a stable ratio
+            ++n;
+            for (let c = 0; c < 3; ++c) {
+                const ratio = toLinear(a[i + c]) / shade[c];
+                sum[c] += ratio;
+                sq[c] += ratio * ratio;
+            }
+        }
+        if (!n) return { pixels: 0, variation: 0 };
+        let variation = 0;
+        for (let c = 0; c < 3; ++c) {
+            const mean = sum[c] / n;
+            variation += mean > 0 ? Math.sqrt(Math.max(0, sq[c] / n - mean * mean)) / mean / 3 : 0;
+        }
+        return { pixels: n, variation };
     }
 
     function backgroundOf(frame) {
@@ -102,5 +126,7 @@
         return [d[0], d[1], d[2]];
     }
 
-    window.lodbakeProbe = { params, makeCanvas, readPixels, measure, difference, backgroundOf, post, fail };
+    window.lodbakeProbe = {
+        params, makeCanvas, readPixels, measure, difference, albedoVariation, backgroundOf, post, fail,
+    };
 })();

@@ -20,7 +20,7 @@ try {
     scene.add(gltf.scene);
     const box = new THREE.Box3().setFromObject(gltf.scene);
     const sphere = box.getBoundingSphere(new THREE.Sphere());
-    if (!(sphere.radius > 0)) throw new Error("the loaded scene has an empty bounding box");
+    if (!(sphere.radius > 0)) sphere.radius = 1; // nothing to frame: the render shows it as blank
     const distance = sphere.radius / Math.sin(THREE.MathUtils.degToRad(camera.fov / 2));
     camera.position.copy(sphere.center).add(new THREE.Vector3(0, 0, distance));
     camera.near = distance / 100;
@@ -42,7 +42,10 @@ try {
         client: "three", version: THREE.REVISION,
         canvas: { width: canvas.width, height: canvas.height },
         render: { width: renderer.domElement.width, height: renderer.domElement.height },
-        drawnMeshes: meshes.map((m) => ({ name: m.name, indices: m.geometry.index ? m.geometry.index.count : m.geometry.attributes.position.count })),
+        drawnMeshes: meshes.map((m) => ({
+            name: m.name,
+            indices: m.geometry.index ? m.geometry.index.count : m.geometry.attributes.position.count,
+        })),
         textures, background,
         textured: probe.measure(textured, background), png: textured.png,
     };
@@ -51,6 +54,7 @@ try {
         const flat = render();
         result.untextured = probe.measure(flat, background);
         result.texturedVsUntextured = probe.difference(textured, flat, background);
+        result.albedo = probe.albedoVariation(textured, flat, background);
     }
     probe.post(result);
 } catch (error) {
