@@ -166,12 +166,17 @@ async function runClient(chromium, client, pack, libraries, nodeModules, size, t
     ], { detached: true, stdio: ["ignore", "ignore", "pipe"] });
     let browserLog = "";
     browser.stderr.on("data", (d) => { browserLog = (browserLog + d).slice(-4000); });
+    const exited = new Promise((resolve) => browser.on("exit", resolve));
     browser.on("exit", (code) => finish({ exited: code }));
     browser.on("error", (error) => finish({ exited: error.message }));
     const timer = setTimeout(() => finish({ timeout: true }), timeoutSeconds * 1000);
     const outcome = await done;
     clearTimeout(timer);
-    try { process.kill(-browser.pid, "SIGKILL"); } catch (_) { /* already gone */ }
+    // The whole process group: Chromium's zygote, GPU and renderer processes too.
+    if (browser.pid !== undefined) { // undefined: the spawn itself failed
+        try { process.kill(-browser.pid, "SIGKILL"); } catch (_) { /* already gone */ }
+        if (browser.exitCode === null && browser.signalCode === null) await exited;
+    }
     server.close();
     fs.rmSync(profile, { recursive: true, force: true });
     const tail = browserLog.slice(-600);

@@ -1,7 +1,8 @@
 // Loads the pack with Babylon.js's glTF loader over HTTP range requests, as a streaming client
-// would, records every MSFT_lod level the loader reports (coarsest first) with the triangles then
+// would, records every MSFT_lod level the loader reports (coarsest first) with the indices then
 // drawn, renders the finest level with and without its base colour textures and posts the
-// measurements.
+// measurements. The loader's options stay at their defaults, as a user gets them (MSFT_lod loads
+// at most maxLODsToLoad = 10 levels).
 (async function () {
     "use strict";
     const probe = window.lodbakeProbe;
