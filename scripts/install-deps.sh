@@ -3,7 +3,9 @@
 # Clang with libclang-rt-14-dev, its sanitizer and libFuzzer runtimes, which --no-install-recommends
 # would leave out, for the sanitizer job and the fuzzers), the libraries (tinygltf, Draco,
 # OpenImageIO, oneTBB, GoogleTest, nlohmann-json), the tools the tests and benchmarks run (Draco
-# CLI, meshoptimizer, Open3D for ../shared/eval, Universal Ctags for the function-length check) and the Khronos glTF-Validator from npm. Safe to run again: it installs only what is missing.
+# CLI, meshoptimizer, Open3D for ../shared/eval, Universal Ctags for the function-length check,
+# Chromium for the browser tests) and the npm packages of scripts/node (Khronos glTF-Validator,
+# Babylon.js, three.js). Safe to run again: it installs only what is missing.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -22,6 +24,8 @@ packages=(
     libglfw3-dev libepoxy-dev libgl-dev libgl1-mesa-dri xvfb xauth libstb-dev
     # The range-scan merge's screened Poisson reconstruction (baker/src/reconstruct/, liblodbake_open3d).
     libopen3d-dev
+    # The browser tests (tests/browser): headless Chromium draws packs with Babylon.js and three.js.
+    chromium
 )
 # Node.js: machines of this kind ship it (with npm bundled); Debian's own npm package conflicts with
 # such a build, so only ask apt for node and npm when the commands are missing.
@@ -40,8 +44,11 @@ if ((${#missing[@]})); then
     DEBIAN_FRONTEND=noninteractive "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 fi
 
-# Node tools used by the tests (versions pinned by scripts/node/package-lock.json).
-if [ ! -d scripts/node/node_modules/gltf-validator ]; then
+# Node tools used by the tests (versions pinned by scripts/node/package-lock.json): installed when a
+# dependency of scripts/node/package.json is missing or at another version.
+if ! node -e 'const p = require("./scripts/node/package.json");
+    for (const [name, version] of Object.entries(p.dependencies))
+        if (require(`./scripts/node/node_modules/${name}/package.json`).version !== version) process.exit(1);' 2>/dev/null; then
     echo "installing npm packages for the tests (scripts/node)"
     (cd scripts/node && npm ci --no-audit --no-fund --loglevel=error)
 fi

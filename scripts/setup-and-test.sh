@@ -10,6 +10,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 export LODBAKE_REQUIRE_SHARED_MESHES=1 # tests needing ../shared fail instead of skipping when it is missing
 export LODBAKE_REQUIRE_LODVIEW=1 # the lodview test fails instead of skipping when lodview or xvfb-run is missing
+export LODBAKE_REQUIRE_BROWSER=1 # the browser tests fail instead of skipping when Chromium or the npm packages are missing
 
 t0=$(date +%s)
 timings=()
