@@ -39,9 +39,13 @@ struct OptionSpec {
 };
 
 int usageError(const std::string& message);
-/// The one input file and the mesh output `-o OUT` of a command that reads a mesh and writes one
-/// (repair, merge): kExitOk with *in and *out set, or the exit code of the usage error it printed
-/// (not one input, no -o, an output extension that is not a mesh format, the output is the input).
+/// The one input file and the output `-o OUT` of a command that reads a file and writes one:
+/// kExitOk with *in and *out set, or the exit code of the usage error it printed (not one input,
+/// no -o, named `output_form` in the message, or the output is the input).
+int inputAndOutput(const Args& args, const char* command, const char* output_form, std::string* in,
+                   std::string* out);
+/// inputAndOutput for a mesh output (convert, repair, merge, simplify, decode): also a usage error
+/// when the output's extension is not a mesh format that can be written.
 int meshInputAndOutput(const Args& args, const char* command, std::string* in, std::string* out);
 // Returns false (after printing) on a usage error.
 bool parseArgs(int argc, char** argv, int first, const std::vector<OptionSpec>& specs, Args& args, int& exit_code);
