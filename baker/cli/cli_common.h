@@ -59,6 +59,14 @@ bool parseNumber(const std::string& text, double& out);
 bool parseList(const std::string& text, std::vector<double>& out);
 void writeDistanceJson(JsonWriter& j, const DistanceResult& d);
 
+/// True when `text` is a bundled preset's name (letters, digits, '_' and '-'), not a path.
+bool isPresetName(const std::string& text);
+/// `--preset NAME|FILE`: a name is looked up among the presets installed with lodbake
+/// (share/lodbake/presets/NAME.json, found relative to the executable), anything else is a path.
+/// kExitOk with *path set, or the exit code of the error it printed (an unknown name lists the
+/// bundled ones).
+int resolvePreset(const std::string& preset, std::string* path);
+
 // Subcommands: each returns the process exit code.
 int runInfo(int argc, char** argv);
 int runConvert(int argc, char** argv);

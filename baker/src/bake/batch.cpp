@@ -48,6 +48,15 @@ uint64_t inputBytes(const std::string& path) {
     return bytes;
 }
 
+// True when the file at `path` exists and holds exactly `bytes`.
+bool fileHolds(const std::string& path, const std::vector<uint8_t>& bytes) {
+    std::error_code ec;
+    const uintmax_t size = std::filesystem::file_size(path, ec);
+    if (ec || size != bytes.size()) return false;
+    Result<std::vector<uint8_t>> existing = readFileBytes(path);
+    return existing.ok() && *existing == bytes;
+}
+
 double secondsSince(Clock::time_point t) {
     return std::chrono::duration<double>(Clock::now() - t).count();
 }
@@ -102,10 +111,13 @@ void runJob(const BakeJob& job, size_t index, const BatchOptions& options, const
             const Clock::time_point w = Clock::now();
             const double w_cpu = processCpuSeconds(), w_thread_cpu = threadCpuSeconds();
             result.staged = std::make_unique<AtomicFileWriter>();
-            result.status = result.staged->add(job.output, lookup.entry.glb);
+            // An output that already holds these bytes keeps its file and its time stamp.
+            result.unchanged = fileHolds(job.output, lookup.entry.glb);
+            if (!result.unchanged) result.status = result.staged->add(job.output, lookup.entry.glb);
             timed(kWholePack, BakeStage::Write, w, w_cpu, w_thread_cpu);
             if (!result.status.ok()) return;
             result.cache_hit = true;
+            result.cache_key = lookup.result.hex();
             for (const auto& files : lookup.files_read)
                 result.files_read.insert(result.files_read.end(), files.begin(), files.end());
             result.report_json = std::move(lookup.entry.report_json);
