@@ -448,8 +448,7 @@ Status stageUnlessUnchanged(AtomicFileWriter& writer, const std::string& path, c
     std::error_code ec;
     if (fs::file_size(path, ec) == text.size() && !ec) {
         Result<std::vector<uint8_t>> existing = readFileBytes(path);
-        if (existing.ok() && std::equal(existing->begin(), existing->end(), text.begin(), text.end()))
-            return Status::okStatus();
+        if (existing.ok() && std::string(existing->begin(), existing->end()) == text) return Status::okStatus();
     }
     return writer.add(path, text);
 }
