@@ -150,6 +150,14 @@ public:
         redraw(false);
     }
 
+    void stageRunning(size_t job, size_t input, BakeStage stage, bool running) {
+        std::lock_guard<std::mutex> lock(mutex_);
+        const BakeStage shown = progress_.shownStage();
+        progress_.stageRunning(job, input, stage, running);
+        // A new stage is drawn at once: it may run for a long time with no event to redraw on.
+        redraw(progress_.shownStage() != shown);
+    }
+
     void jobDone(size_t job, const BakeJobResult& r) {
         std::lock_guard<std::mutex> lock(mutex_);
         progress_.jobDone(job);
@@ -581,6 +589,9 @@ int runBake(int argc, char** argv) {
     BatchHooks hooks;
     hooks.stage_done = [&](size_t job, size_t input, BakeStage stage, const StageTime&) {
         printer.stageDone(job, input, stage);
+    };
+    hooks.stage_running = [&](size_t job, size_t input, BakeStage stage, bool running) {
+        printer.stageRunning(job, input, stage, running);
     };
     hooks.job_done = [&](size_t job, const BakeJobResult& r) { printer.jobDone(job, r); };
     const Clock::time_point start = Clock::now();

@@ -83,8 +83,12 @@ void runJob(const BakeJob& job, size_t index, const BatchOptions& options, const
         }
         if (hooks.stage_done) hooks.stage_done(index, input, stage, time);
     };
+    auto running = [&](size_t input, BakeStage stage, bool on) {
+        if (hooks.stage_running) hooks.stage_running(index, input, stage, on);
+    };
     // Stages timed here (not by bake()) run on this thread alone.
     auto timed = [&](size_t input, BakeStage stage, Clock::time_point wall, double cpu, double thread_cpu) {
+        running(input, stage, false);
         StageTime time;
         time.wall_seconds = secondsSince(wall);
         time.cpu_seconds = processCpuSeconds() - cpu;
@@ -100,6 +104,7 @@ void runJob(const BakeJob& job, size_t index, const BatchOptions& options, const
     if (use_cache) {
         const Clock::time_point t = Clock::now();
         const double cpu = processCpuSeconds(), thread_cpu = threadCpuSeconds();
+        running(kWholePack, BakeStage::Load, true);
         Result<CacheLookup> found = cacheLookup(options.cache_dir, job.inputs, names, job.settings);
         timed(kWholePack, BakeStage::Load, t, cpu, thread_cpu);
         if (!found.ok()) {
@@ -110,6 +115,7 @@ void runJob(const BakeJob& job, size_t index, const BatchOptions& options, const
         if (lookup.hit) {
             const Clock::time_point w = Clock::now();
             const double w_cpu = processCpuSeconds(), w_thread_cpu = threadCpuSeconds();
+            running(kWholePack, BakeStage::Write, true);
             result.staged = std::make_unique<AtomicFileWriter>();
             // An output that already holds these bytes keeps its file and its time stamp.
             result.unchanged = fileHolds(job.output, lookup.entry.glb);
@@ -133,6 +139,7 @@ void runJob(const BakeJob& job, size_t index, const BatchOptions& options, const
     for (size_t i = 0; i < job.inputs.size(); ++i) {
         const Clock::time_point t = Clock::now();
         const double cpu = processCpuSeconds(), thread_cpu = threadCpuSeconds();
+        running(i, BakeStage::Load, true);
         Result<LoadedMesh> loaded = readMesh(job.inputs[i], options.read, result.diagnostics);
         timed(i, BakeStage::Load, t, cpu, thread_cpu);
         if (!loaded.ok()) {
@@ -148,6 +155,7 @@ void runJob(const BakeJob& job, size_t index, const BatchOptions& options, const
     settings.threads = 0; // the batch's thread limit applies
     BakeHooks bake_hooks;
     bake_hooks.stage_done = stageDone;
+    bake_hooks.stage_running = running;
     bake_hooks.release_memory = hooks.release_memory;
     Result<BakeOutput> baked = bake(std::move(inputs), settings, result.diagnostics, bake_hooks);
     if (!baked.ok()) {
@@ -159,6 +167,7 @@ void runJob(const BakeJob& job, size_t index, const BatchOptions& options, const
     result.pack_bytes = baked->glb.size();
     const Clock::time_point w = Clock::now();
     const double w_cpu = processCpuSeconds(), w_thread_cpu = threadCpuSeconds();
+    running(kWholePack, BakeStage::Write, true);
     result.staged = std::make_unique<AtomicFileWriter>();
     result.status = result.staged->add(job.output, baked->glb);
     timed(kWholePack, BakeStage::Write, w, w_cpu, w_thread_cpu);

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdio>
 #include <ctime>
+#include <iterator>
 
 namespace lodbake {
 
@@ -109,7 +110,27 @@ void BatchProgress::stageDone(size_t job, size_t input, BakeStage stage) {
     last_stage_ = stage;
 }
 
+void BatchProgress::stageRunning(size_t job, size_t /*input*/, BakeStage stage, bool running) {
+    if (job >= done_.size() || stage == BakeStage::Count) return;
+    int& count = running_[{job, stage}];
+    count = running ? count + 1 : std::max(0, count - 1);
+    if (running) last_job_ = job;
+}
+
+BakeStage BatchProgress::shownStage() const {
+    BakeStage shown = last_stage_;
+    double largest = -1;
+    for (const auto& [key, count] : running_)
+        if (key.first == last_job_ && count > 0 && kStageShare[size_t(key.second)] > largest) {
+            largest = kStageShare[size_t(key.second)];
+            shown = key.second;
+        }
+    return shown;
+}
+
 void BatchProgress::jobDone(size_t job) {
+    for (auto it = running_.begin(); it != running_.end();)
+        it = it->first.first == job ? running_.erase(it) : std::next(it);
     if (job >= done_.size() || done_[job] >= 1.0) return;
     done_[job] = 1.0;
     ++jobs_done_;
@@ -143,7 +164,7 @@ std::string BatchProgress::barLine(double elapsed_seconds, size_t width) const {
     char pct[16];
     std::snprintf(pct, sizeof(pct), "%3d%%", int(std::floor(f * 100.0 + 1e-9)));
     std::string tail = std::string("  ") + pct + "  " + std::to_string(jobs_done_) + "/" + std::to_string(jobCount());
-    if (last_job_ < names_.size()) tail += std::string("  ") + bakeStageName(last_stage_) + " " + names_[last_job_];
+    if (last_job_ < names_.size()) tail += std::string("  ") + bakeStageName(shownStage()) + " " + names_[last_job_];
     const double eta = etaSeconds(elapsed_seconds);
     tail += "  ETA " + (eta < 0 ? std::string("--:--") : formatDuration(eta));
     const size_t bar_cells = width > tail.size() + 12 ? std::min<size_t>(40, width - tail.size() - 2) : 10;

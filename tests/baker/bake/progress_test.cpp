@@ -71,6 +71,31 @@ TEST(BatchProgressTest, StagesRunSeveralTimesEarnTheirShareRunByRun) {
     EXPECT_NEAR(one.fraction(), 0.31, 1e-12);
 }
 
+// The bar names the stage that is running (the one with the largest share when several run side by
+// side), and the last one finished when nothing runs.
+TEST(BatchProgressTest, BarNamesTheRunningStage) {
+    BatchProgress p({1.0, 1.0}, {1, 1}, {"dragon.glb", "bunny.glb"}, {6, 6});
+    p.stageRunning(0, 0, BakeStage::LodChain, true);
+    EXPECT_NE(p.barLine(1.0, 120).find("lod_chain dragon.glb"), std::string::npos) << p.barLine(1.0, 120);
+    p.stageRunning(0, 0, BakeStage::LodChain, false);
+    p.stageDone(0, 0, BakeStage::LodChain);
+    p.stageRunning(0, 0, BakeStage::Pfrep, true);
+    p.stageRunning(0, 0, BakeStage::Measure, true);
+    p.stageRunning(0, 0, BakeStage::Encode, true);
+    EXPECT_EQ(p.shownStage(), BakeStage::Measure);
+    p.stageRunning(0, 0, BakeStage::Measure, false);
+    EXPECT_EQ(p.shownStage(), BakeStage::Encode);
+    p.stageRunning(0, 0, BakeStage::Encode, false); // a run with nothing to code ends without a time
+    p.stageRunning(0, 0, BakeStage::Pfrep, false);
+    p.stageDone(0, 0, BakeStage::Pfrep);
+    EXPECT_EQ(p.shownStage(), BakeStage::Pfrep); // nothing runs: the last stage finished
+    p.stageRunning(1, 0, BakeStage::Repair, true); // another pack moves: the bar follows it
+    EXPECT_NE(p.barLine(1.0, 120).find("repair bunny.glb"), std::string::npos) << p.barLine(1.0, 120);
+    p.jobDone(1); // its runs are over with it
+    p.stageRunning(0, 0, BakeStage::Pack, true);
+    EXPECT_NE(p.barLine(1.0, 120).find("pack dragon.glb"), std::string::npos) << p.barLine(1.0, 120);
+}
+
 TEST(BatchProgressTest, BarShowsPercentJobsStageAndEtaWithinTheWidth) {
     BatchProgress p({1.0, 1.0}, {1, 1}, {"rock.glb", "tree.glb"});
     p.stageDone(1, 0, BakeStage::Load);
@@ -103,6 +128,9 @@ TEST(BatchProgressTest, CliDrawsTheBarOnlyOnATerminal) {
     EXPECT_NE(tty.output.find("\r\033[K["), std::string::npos) << tty.output;
     EXPECT_NE(tty.output.find("100%"), std::string::npos) << tty.output;
     EXPECT_NE(tty.output.find("ETA"), std::string::npos) << tty.output;
+    // The bar names the stage and the pack (which stage is shown when: BarNamesTheRunningStage); the
+    // rock's repair, with the merge of its scans, runs long enough to be drawn.
+    EXPECT_NE(tty.output.find("repair rock.glb"), std::string::npos) << tty.output;
     EXPECT_EQ(tty.output.find("lodbake: [1/1]"), std::string::npos) << "plain lines on a terminal";
     const auto quiet =
         lodbake_test::runCommand("script -qfec " + lodbake_test::shellQuote(bake + " --quiet") + " /dev/null");

@@ -65,6 +65,7 @@ struct BakeJobResult {
 /// Observers of runBakeJobs, called from worker threads (the callee synchronises).
 struct BatchHooks {
     std::function<void(size_t job, size_t input, BakeStage stage, const StageTime& time)> stage_done;
+    std::function<void(size_t job, size_t input, BakeStage stage, bool running)> stage_running; // BakeHooks'
     std::function<void(size_t job, const BakeJobResult& result)> job_done;
     std::function<void()> release_memory; // passed to bake() as BakeHooks::release_memory
 };
