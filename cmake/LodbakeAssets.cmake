@@ -1,6 +1,6 @@
 # lodbake_add_assets: bake meshes into LOD packs as part of a CMake build (docs/pipeline.md).
 #
-#   lodbake_add_assets(TARGET <name> PRESET <preset.json> SOURCES <mesh>...
+#   lodbake_add_assets(TARGET <name> PRESET <preset.json | bundled name> SOURCES <mesh>...
 #                      [OUTPUT_DIR <dir>] [CACHE_DIR <dir>] [THREADS <n>] [OPTIONS <extra bake flags>...])
 #
 # One custom command per source: `lodbake bake SOURCE -o OUTPUT_DIR/<stem>.glb --preset PRESET
@@ -41,7 +41,14 @@ function(lodbake_add_assets)
     else()
         set(out_dir "${CMAKE_CURRENT_BINARY_DIR}/${arg_TARGET}")
     endif()
-    get_filename_component(preset "${arg_PRESET}" ABSOLUTE BASE_DIR "${CMAKE_CURRENT_SOURCE_DIR}")
+    if(arg_PRESET MATCHES "^[A-Za-z0-9_-]+$")
+        # A bundled preset's name (`lodbake bake --preset mobile`): the depfile lists the file it names.
+        set(preset "${arg_PRESET}")
+        set(preset_file)
+    else()
+        get_filename_component(preset "${arg_PRESET}" ABSOLUTE BASE_DIR "${CMAKE_CURRENT_SOURCE_DIR}")
+        set(preset_file "${preset}")
+    endif()
     set(extra ${arg_OPTIONS})
     if(arg_CACHE_DIR)
         get_filename_component(cache_dir "${arg_CACHE_DIR}" ABSOLUTE BASE_DIR "${CMAKE_CURRENT_BINARY_DIR}")
@@ -68,7 +75,7 @@ function(lodbake_add_assets)
             COMMAND "${CMAKE_COMMAND}" -E make_directory "${out_dir}"
             COMMAND ${baker} bake "${source_abs}" -o "${pack}" --preset "${preset}" --depfile "${pack}.d" --quiet
                     ${extra}
-            DEPENDS "${source_abs}" "${preset}" ${baker}
+            DEPENDS "${source_abs}" ${preset_file} ${baker}
             DEPFILE "${pack}.d"
             COMMENT "Baking LOD pack ${shown}"
             VERBATIM)

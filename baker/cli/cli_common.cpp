@@ -34,15 +34,22 @@ int usageError(const std::string& message) {
     return kExitUsage;
 }
 
-int meshInputAndOutput(const Args& args, const char* command, std::string* in, std::string* out) {
+int inputAndOutput(const Args& args, const char* command, const char* output_form, std::string* in,
+                   std::string* out) {
     if (args.positional.size() != 1) return usageError(std::string(command) + " takes exactly one input file");
     const auto output = args.values.find("--output");
-    if (output == args.values.end()) return usageError(std::string(command) + " needs -o OUT");
+    if (output == args.values.end()) return usageError(std::string(command) + " needs -o " + output_form);
     *in = args.positional[0];
     *out = output->second;
-    if (formatFromPath(*out) == MeshFormat::Unknown)
-        return usageError("output '" + *out + "' has an unknown extension, expected .ply .obj .off .gltf or .glb");
     if (isSameFile(*in, *out)) return usageError("output '" + *out + "' is the input file; the input is never modified");
+    return kExitOk;
+}
+
+int meshInputAndOutput(const Args& args, const char* command, std::string* in, std::string* out) {
+    if (const int code = inputAndOutput(args, command, "OUT", in, out); code != kExitOk) return code;
+    const MeshFormat format = formatFromPath(*out);
+    if (format == MeshFormat::Unknown || format == MeshFormat::Conf) // .conf scan sets are read, never written
+        return usageError("output '" + *out + "' has an unknown extension, expected .ply .obj .off .gltf or .glb");
     return kExitOk;
 }
 

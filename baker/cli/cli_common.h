@@ -39,9 +39,13 @@ struct OptionSpec {
 };
 
 int usageError(const std::string& message);
-/// The one input file and the mesh output `-o OUT` of a command that reads a mesh and writes one
-/// (repair, merge): kExitOk with *in and *out set, or the exit code of the usage error it printed
-/// (not one input, no -o, an output extension that is not a mesh format, the output is the input).
+/// The one input file and the output `-o OUT` of a command that reads a file and writes one:
+/// kExitOk with *in and *out set, or the exit code of the usage error it printed (not one input,
+/// no -o, named `output_form` in the message, or the output is the input).
+int inputAndOutput(const Args& args, const char* command, const char* output_form, std::string* in,
+                   std::string* out);
+/// inputAndOutput for a mesh output (convert, repair, merge, simplify, decode): also a usage error
+/// when the output's extension is not a mesh format that can be written.
 int meshInputAndOutput(const Args& args, const char* command, std::string* in, std::string* out);
 // Returns false (after printing) on a usage error.
 bool parseArgs(int argc, char** argv, int first, const std::vector<OptionSpec>& specs, Args& args, int& exit_code);
@@ -54,6 +58,14 @@ bool parseNumber(const std::string& text, double& out);
 // Splits "1,0.5" into numbers; false on any malformed item.
 bool parseList(const std::string& text, std::vector<double>& out);
 void writeDistanceJson(JsonWriter& j, const DistanceResult& d);
+
+/// True when `text` is a bundled preset's name (letters, digits, '_' and '-'), not a path.
+bool isPresetName(const std::string& text);
+/// `--preset NAME|FILE`: a name is looked up among the presets installed with lodbake
+/// (share/lodbake/presets/NAME.json, found relative to the executable), anything else is a path.
+/// kExitOk with *path set, or the exit code of the error it printed (an unknown name lists the
+/// bundled ones).
+int resolvePreset(const std::string& preset, std::string* path);
 
 // Subcommands: each returns the process exit code.
 int runInfo(int argc, char** argv);

@@ -81,12 +81,9 @@ int runEncode(int argc, char** argv) {
         std::fputs(kReaderLimitHelp, stdout);
         return kExitOk;
     }
-    if (args.positional.size() != 1) return usageError("encode takes exactly one input file");
-    if (!args.values.count("--output")) return usageError("encode needs -o OUT.lbm");
-    const std::string& in = args.positional[0];
-    const std::string& out = args.values["--output"];
+    std::string in, out;
+    if (const int c = inputAndOutput(args, "encode", "OUT.lbm", &in, &out); c != kExitOk) return c;
     if (lowerExtension(out) != ".lbm") return usageError("output '" + out + "' must end in .lbm");
-    if (isSameFile(in, out)) return usageError("output '" + out + "' is the input file; the input is never modified");
     codec::ValenceEncodeOptions options;
     for (auto [flag, field, lo, hi] : {std::make_tuple("--bits", &options.position_bits, 8u, 16u),
                                        std::make_tuple("--normal-bits", &options.normal_bits, 4u, 16u),
@@ -169,13 +166,8 @@ int runDecode(int argc, char** argv) {
         std::fputs(kDecodeHelp, stdout);
         return kExitOk;
     }
-    if (args.positional.size() != 1) return usageError("decode takes exactly one input file");
-    if (!args.values.count("--output")) return usageError("decode needs -o OUT");
-    const std::string& in = args.positional[0];
-    const std::string& out = args.values["--output"];
-    if (formatFromPath(out) == MeshFormat::Unknown || formatFromPath(out) == MeshFormat::Conf)
-        return usageError("output '" + out + "' has an unknown extension, expected .ply .obj .off .gltf or .glb");
-    if (isSameFile(in, out)) return usageError("output '" + out + "' is the input file; the input is never modified");
+    std::string in, out;
+    if (const int c = meshInputAndOutput(args, "decode", &in, &out); c != kExitOk) return c;
     Result<std::vector<uint8_t>> bytes = readFileBytes(in);
     if (!bytes.ok()) return reportError(bytes.status());
     Result<Mesh> mesh = codec::decodeValence(*bytes, in);

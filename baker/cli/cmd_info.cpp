@@ -154,13 +154,8 @@ int runConvert(int argc, char** argv) {
         std::fputs(kReaderLimitHelp, stdout);
         return kExitOk;
     }
-    if (args.positional.size() != 1) return usageError("convert takes exactly one input file");
-    if (!args.values.count("--output")) return usageError("convert needs -o OUT");
-    const std::string& in = args.positional[0];
-    const std::string& out = args.values["--output"];
-    if (formatFromPath(out) == MeshFormat::Unknown || formatFromPath(out) == MeshFormat::Conf)
-        return usageError("output '" + out + "' has an unknown extension, expected .ply .obj .off .gltf or .glb");
-    if (isSameFile(in, out)) return usageError("output '" + out + "' is the input file; the input is never modified");
+    std::string in, out;
+    if (const int c = meshInputAndOutput(args, "convert", &in, &out); c != kExitOk) return c;
 
     Diagnostics diagnostics;
     Result<LoadedMesh> loaded = readMesh(in, args.read, diagnostics);

@@ -60,11 +60,8 @@ int runPfrep(int argc, char** argv) {
         std::fputs(kReaderLimitHelp, stdout);
         return kExitOk;
     }
-    if (args.positional.size() != 1) return usageError("pfrep takes exactly one input file");
-    if (!args.values.count("--output")) return usageError("pfrep needs -o OUT");
-    const std::string& in = args.positional[0];
-    const std::string& out = args.values["--output"];
-    if (isSameFile(in, out)) return usageError("output '" + out + "' is the input file; the input is never modified");
+    std::string in, out;
+    if (const int c = inputAndOutput(args, "pfrep", "OUT", &in, &out); c != kExitOk) return c;
     Diagnostics diagnostics;
     if (args.values.count("--extract")) {
         if (args.values.count("--ratio")) return usageError("--ratio applies to building, not to --extract");

@@ -239,13 +239,8 @@ int runSimplify(int argc, char** argv) {
         std::fputs(kReaderLimitHelp, stdout);
         return kExitOk;
     }
-    if (args.positional.size() != 1) return usageError("simplify takes exactly one input file");
-    if (!args.values.count("--output")) return usageError("simplify needs -o OUT");
-    const std::string& in = args.positional[0];
-    const std::string& out = args.values["--output"];
-    if (formatFromPath(out) == MeshFormat::Unknown)
-        return usageError("output '" + out + "' has an unknown extension, expected .ply .obj .off .gltf or .glb");
-    if (isSameFile(in, out)) return usageError("output '" + out + "' is the input file; the input is never modified");
+    std::string in, out;
+    if (const int c = meshInputAndOutput(args, "simplify", &in, &out); c != kExitOk) return c;
     const std::string method = args.values.count("--method") ? args.values["--method"] : "qem";
     if (method == "multilevel") return runMultilevel(args, in, out);
     if (method != "qem") return usageError("--method expects qem or multilevel, got '" + method + "'");

@@ -142,7 +142,7 @@ struct LodLevelRow {
     bool has_metrics = false;
     double hausdorff = 0, mean = 0, hausdorff_rel = 0, mean_rel = 0, switch_distance = 0, metric_coverage = 0;
     bool has_coverage = false;
-    double coverage = 0; // MSFT_screencoverage
+    double coverage = 0; // MSFT_screencoverage: the level is shown while the coverage is at least this
     // Bytes stored per stream, and the same data as float32 components / uint32 indices ("raw").
     uint64_t plain_bytes = 0, plain_raw = 0;
     uint64_t valence_bytes = 0, valence_raw = 0;
@@ -697,6 +697,27 @@ LodReport analyseLods(const lodrt::Pack& pack) {
     return report;
 }
 
+// The `coverage` column: the screen coverage at which level `l` takes over, the value the bake's
+// report lists (LODBAKE_lod_metrics screenCoverage, at the level's switch distance), so the column
+// sits with switch_dist. Without the metrics, the finer level's MSFT_screencoverage (where it hands
+// over), 1 for level 0. False when the pack says neither.
+bool levelCoverage(const LodGroup& g, uint32_t l, double* coverage) {
+    const LodLevelRow& r = g.levels[l];
+    if (r.has_metrics) {
+        *coverage = r.metric_coverage;
+        return true;
+    }
+    if (l == 0 && r.has_coverage) {
+        *coverage = 1.0;
+        return true;
+    }
+    if (l > 0 && g.levels[l - 1].has_coverage) {
+        *coverage = g.levels[l - 1].coverage;
+        return true;
+    }
+    return false;
+}
+
 bool levelSelected(int level_filter, uint32_t level) {
     return level_filter < 0 || uint32_t(level_filter) == level;
 }
@@ -728,7 +749,8 @@ void printLodText(const lodrt::Pack& pack, const LodReport& report, int level_fi
                 std::snprintf(mn, sizeof(mn), "%.4g", r.mean);
                 std::snprintf(sw, sizeof(sw), "%.4g", r.switch_distance);
             }
-            if (r.has_coverage) std::snprintf(cov, sizeof(cov), "%.4g", r.coverage);
+            double coverage = 0;
+            if (levelCoverage(g, l, &coverage)) std::snprintf(cov, sizeof(cov), "%.4g", coverage);
             std::printf("  %-5u %5u %5d %10llu %10llu %11s %11s %9s %11s %17s %17s %17s\n", l, r.node,
                         r.mesh == lodrt::kNoIndex ? -1 : int(r.mesh), ull(r.triangles), ull(r.vertices), hd, mn, cov,
                         sw, streamCell(true, r.plain_bytes, r.plain_raw).c_str(),
@@ -759,13 +781,19 @@ std::string lodJson(const lodrt::Pack& pack, const LodReport& report, int level_
         for (uint32_t l = 0; l < g.levels.size(); ++l) {
             if (!levelSelected(level_filter, l)) continue;
             const LodLevelRow& r = g.levels[l];
+            double coverage = 0;
+            levelCoverage(g, l, &coverage);
             std::snprintf(buf, sizeof(buf),
                           "{\"level\": %u, \"node\": %u, \"triangles\": %llu, \"vertices\": %llu, \"bytes\": %llu, "
                           "\"hausdorffError\": %.17g, \"meanError\": %.17g, \"switchDistance\": %.17g, "
                           "\"screenCoverage\": %.17g, \"streams\": {\"plain\": {\"bytes\": %llu, \"rawBytes\": %llu}",
                           l, r.node, ull(r.triangles), ull(r.vertices), ull(r.bytes), r.hausdorff, r.mean,
-                          r.switch_distance, r.coverage, ull(r.plain_bytes), ull(r.plain_raw));
+                          r.switch_distance, coverage, ull(r.plain_bytes), ull(r.plain_raw));
             std::string streams = buf;
+            if (r.has_coverage) {
+                std::snprintf(buf, sizeof(buf), ", \"msftScreenCoverage\": %.17g", r.coverage);
+                streams.insert(streams.find(", \"streams\""), buf);
+            }
             if (r.has_valence) {
                 std::snprintf(buf, sizeof(buf), ", \"valence\": {\"bytes\": %llu, \"rawBytes\": %llu}",
                               ull(r.valence_bytes), ull(r.valence_raw));

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -233,3 +234,73 @@ TEST(MalformedCorpusTest, EveryFileIsListed) {
     }
     EXPECT_GT(listed, 0u);
 }
+
+namespace {
+
+// --preset NAME resolves a bundled preset from share/lodbake/presets beside the executable (the
+// build tree has the install layout): the same settings as the file in configs/, listed as read in
+// the depfile; a path still names a file; an unknown name is a usage error listing the names.
+TEST(PresetCliTest, BundledPresetsByNameAndFilesByPath) {
+    for (const char* name : {"desktop", "mobile", "vr", "archive"}) {
+        const std::string file = lodbake_test::sourceDir() + "/configs/" + name + ".json";
+        const RunResult by_name = runCli({"bake", "--print-config", "--preset", name});
+        const RunResult by_path = runCli({"bake", "--print-config", "--preset", file});
+        ASSERT_EQ(by_name.exit_code, 0) << name << ": " << by_name.err;
+        ASSERT_EQ(by_path.exit_code, 0) << name << ": " << by_path.err;
+        EXPECT_EQ(by_name.out, by_path.out) << name;
+        EXPECT_NE(by_name.out, runCli({"bake", "--print-config"}).out) << name << " changes nothing";
+    }
+    const RunResult unknown = runCli({"bake", "--print-config", "--preset", "fastest"});
+    EXPECT_EQ(unknown.exit_code, 2);
+    ASSERT_EQ(lines(unknown.err).size(), 1u) << unknown.err;
+    EXPECT_NE(unknown.err.find("unknown preset 'fastest': the bundled presets are archive, desktop, mobile, vr"),
+              std::string::npos)
+        << unknown.err;
+    // Anything with '/' or '.' is a path: a missing file is an input error naming it.
+    const RunResult missing = runCli({"bake", "--print-config", "--preset", "mobile.json"});
+    EXPECT_EQ(missing.exit_code, 1);
+    EXPECT_NE(missing.err.find("error: mobile.json: "), std::string::npos) << missing.err;
+
+    const std::string dir = lodbake_test::scratchDir() + "/preset_cli_" + std::to_string(::getpid());
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    const std::string mesh = lodbake_test::sourceDir() + "/assets/samples/rock_scan/rock.conf";
+    const RunResult baked = runCli({"bake", mesh, "-o", dir + "/rock.glb", "--preset", "mobile", "--levels", "0.5",
+                                    "--merge", "off", "--depfile", dir + "/rock.d", "--quiet"});
+    ASSERT_EQ(baked.exit_code, 0) << baked.err;
+    const std::string depfile = readTextFile(dir + "/rock.d");
+    EXPECT_NE(depfile.find("share/lodbake/presets/mobile.json"), std::string::npos) << depfile;
+    const std::string listed = depfile.substr(depfile.find(':') + 1);
+    const size_t at = listed.find("/share/lodbake/presets/mobile.json");
+    ASSERT_NE(at, std::string::npos);
+    const size_t begin = listed.find_last_of(" \t\\\n", at) + 1;
+    const std::string preset_path = listed.substr(begin, at + std::strlen("/share/lodbake/presets/mobile.json") - begin);
+    EXPECT_EQ(readTextFile(preset_path), readTextFile(lodbake_test::sourceDir() + "/configs/mobile.json"))
+        << preset_path;
+}
+
+// Every command that reads one file and writes one refuses the same usage mistakes the same way.
+TEST(OutputCheckCliTest, OneInputAnOutputThatIsNotTheInput) {
+    const std::string in = lodbake_test::sourceDir() + "/assets/samples/rock_scan/rock.conf";
+    for (const char* command : {"convert", "repair", "merge", "simplify", "decode", "encode", "pfrep"}) {
+        SCOPED_TRACE(command);
+        const RunResult none = runCli({command, "-o", "x.ply"});
+        EXPECT_EQ(none.exit_code, 2);
+        EXPECT_NE(none.err.find(std::string(command) + " takes exactly one input file"), std::string::npos)
+            << none.err;
+        const RunResult no_output = runCli({command, in});
+        EXPECT_EQ(no_output.exit_code, 2);
+        EXPECT_NE(no_output.err.find(std::string(command) + " needs -o OUT"), std::string::npos) << no_output.err;
+        const RunResult same = runCli({command, in, "-o", in});
+        EXPECT_EQ(same.exit_code, 2);
+        EXPECT_EQ(lines(same.err).size(), 1u) << same.err;
+    }
+    // A .conf scan set is read, never written.
+    for (const char* command : {"convert", "repair", "merge", "decode"}) {
+        const RunResult conf = runCli({command, in, "-o", lodbake_test::scratchDir() + "/out.conf"});
+        EXPECT_EQ(conf.exit_code, 2) << command;
+        EXPECT_NE(conf.err.find("has an unknown extension"), std::string::npos) << command << ": " << conf.err;
+    }
+}
+
+} // namespace

@@ -48,6 +48,15 @@ uint64_t inputBytes(const std::string& path) {
     return bytes;
 }
 
+// True when the file at `path` exists and holds exactly `bytes`.
+bool fileHolds(const std::string& path, const std::vector<uint8_t>& bytes) {
+    std::error_code ec;
+    const uintmax_t size = std::filesystem::file_size(path, ec);
+    if (ec || size != bytes.size()) return false;
+    Result<std::vector<uint8_t>> existing = readFileBytes(path);
+    return existing.ok() && *existing == bytes;
+}
+
 double secondsSince(Clock::time_point t) {
     return std::chrono::duration<double>(Clock::now() - t).count();
 }
@@ -74,8 +83,12 @@ void runJob(const BakeJob& job, size_t index, const BatchOptions& options, const
         }
         if (hooks.stage_done) hooks.stage_done(index, input, stage, time);
     };
+    auto running = [&](size_t input, BakeStage stage, bool on) {
+        if (hooks.stage_running) hooks.stage_running(index, input, stage, on);
+    };
     // Stages timed here (not by bake()) run on this thread alone.
     auto timed = [&](size_t input, BakeStage stage, Clock::time_point wall, double cpu, double thread_cpu) {
+        running(input, stage, false);
         StageTime time;
         time.wall_seconds = secondsSince(wall);
         time.cpu_seconds = processCpuSeconds() - cpu;
@@ -91,6 +104,7 @@ void runJob(const BakeJob& job, size_t index, const BatchOptions& options, const
     if (use_cache) {
         const Clock::time_point t = Clock::now();
         const double cpu = processCpuSeconds(), thread_cpu = threadCpuSeconds();
+        running(kWholePack, BakeStage::Load, true);
         Result<CacheLookup> found = cacheLookup(options.cache_dir, job.inputs, names, job.settings);
         timed(kWholePack, BakeStage::Load, t, cpu, thread_cpu);
         if (!found.ok()) {
@@ -101,11 +115,15 @@ void runJob(const BakeJob& job, size_t index, const BatchOptions& options, const
         if (lookup.hit) {
             const Clock::time_point w = Clock::now();
             const double w_cpu = processCpuSeconds(), w_thread_cpu = threadCpuSeconds();
+            running(kWholePack, BakeStage::Write, true);
             result.staged = std::make_unique<AtomicFileWriter>();
-            result.status = result.staged->add(job.output, lookup.entry.glb);
+            // An output that already holds these bytes keeps its file and its time stamp.
+            result.unchanged = fileHolds(job.output, lookup.entry.glb);
+            if (!result.unchanged) result.status = result.staged->add(job.output, lookup.entry.glb);
             timed(kWholePack, BakeStage::Write, w, w_cpu, w_thread_cpu);
             if (!result.status.ok()) return;
             result.cache_hit = true;
+            result.cache_key = lookup.result.hex();
             for (const auto& files : lookup.files_read)
                 result.files_read.insert(result.files_read.end(), files.begin(), files.end());
             result.report_json = std::move(lookup.entry.report_json);
@@ -121,6 +139,7 @@ void runJob(const BakeJob& job, size_t index, const BatchOptions& options, const
     for (size_t i = 0; i < job.inputs.size(); ++i) {
         const Clock::time_point t = Clock::now();
         const double cpu = processCpuSeconds(), thread_cpu = threadCpuSeconds();
+        running(i, BakeStage::Load, true);
         Result<LoadedMesh> loaded = readMesh(job.inputs[i], options.read, result.diagnostics);
         timed(i, BakeStage::Load, t, cpu, thread_cpu);
         if (!loaded.ok()) {
@@ -136,6 +155,7 @@ void runJob(const BakeJob& job, size_t index, const BatchOptions& options, const
     settings.threads = 0; // the batch's thread limit applies
     BakeHooks bake_hooks;
     bake_hooks.stage_done = stageDone;
+    bake_hooks.stage_running = running;
     bake_hooks.release_memory = hooks.release_memory;
     Result<BakeOutput> baked = bake(std::move(inputs), settings, result.diagnostics, bake_hooks);
     if (!baked.ok()) {
@@ -147,6 +167,7 @@ void runJob(const BakeJob& job, size_t index, const BatchOptions& options, const
     result.pack_bytes = baked->glb.size();
     const Clock::time_point w = Clock::now();
     const double w_cpu = processCpuSeconds(), w_thread_cpu = threadCpuSeconds();
+    running(kWholePack, BakeStage::Write, true);
     result.staged = std::make_unique<AtomicFileWriter>();
     result.status = result.staged->add(job.output, baked->glb);
     timed(kWholePack, BakeStage::Write, w, w_cpu, w_thread_cpu);

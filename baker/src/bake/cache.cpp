@@ -188,6 +188,7 @@ Result<CacheLookup> cacheLookup(const std::string& cache_dir, const std::vector<
     Result<std::vector<uint8_t>> bytes = readFileBytes(packPath(cache_dir, *key));
     if (!bytes.ok() || !parseCacheEntry(*bytes, lookup.entry)) return lookup;
     lookup.hit = true;
+    lookup.result = *key;
     lookup.files_read.resize(inputs.size());
     for (size_t i = 0; i < inputs.size(); ++i) {
         lookup.files_read[i].push_back(inputs[i]);

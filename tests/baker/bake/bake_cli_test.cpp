@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -131,6 +132,36 @@ TEST(BakeCliTest, RockSampleBakesIntoAValidDeterministicPackThatLoddumpReads) {
         ASSERT_EQ(report["assets"].size(), 1u);
         EXPECT_EQ(report["assets"][0]["levels"].size(), 6u);
         EXPECT_EQ(report["packBytes"].get<size_t>(), bytesOf(rock1).size());
+    }
+    {
+        // loddump's coverage column and the report's screenCoverage are one quantity: the screen
+        // coverage at which the level takes over (1 for LOD0), as the pack stores it (7 digits).
+        SCOPED_TRACE("LoddumpCoverageIsTheReportsCoverage");
+        std::ifstream report_stream(report_path);
+        const nlohmann::json report = nlohmann::json::parse(report_stream);
+        const nlohmann::json& levels = report["assets"][0]["levels"];
+        const CommandResult json_run =
+            runCommand("(" + shellQuote(LODBAKE_TEST_LODDUMP) + " --json " + shellQuote(rock1) + " 2>/dev/null)");
+        ASSERT_EQ(json_run.exit_code, 0) << json_run.output;
+        const nlohmann::json dump = nlohmann::json::parse(json_run.output);
+        const nlohmann::json& rows = dump["lodGroups"][0]["levels"];
+        ASSERT_EQ(rows.size(), levels.size());
+        const CommandResult text = loddump(shellQuote(rock1));
+        const nlohmann::json msft =
+            lodbake_test::glbJson(bytesOf(rock1))["nodes"][0]["extras"]["MSFT_screencoverage"];
+        for (size_t l = 0; l < levels.size(); ++l) {
+            const double reported = levels[l]["screenCoverage"].get<double>();
+            const double dumped = rows[l]["screenCoverage"].get<double>();
+            EXPECT_NEAR(dumped, reported, 1e-6 * reported) << "level " << l;
+            EXPECT_EQ(rows[l]["msftScreenCoverage"].get<double>(), msft[l].get<double>()) << "level " << l;
+            char cell[32];
+            std::snprintf(cell, sizeof(cell), " %.4g ", reported);
+            const size_t row = text.output.find("\n  " + std::to_string(l) + "  ");
+            ASSERT_NE(row, std::string::npos) << text.output;
+            const std::string line = text.output.substr(row + 1, text.output.find('\n', row + 1) - row - 1);
+            EXPECT_NE(line.find(cell), std::string::npos) << "level " << l << ": " << line << " lacks" << cell;
+        }
+        EXPECT_EQ(levels[0]["screenCoverage"].get<double>(), 1.0);
     }
     {
         SCOPED_TRACE("ReportTimelineListsEveryStageRunAsItBegan");

@@ -12,6 +12,7 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <regex>
 #include <sstream>
 #include <thread>
 
@@ -163,30 +164,54 @@ TEST(PipelineCliTest, CacheHitReusesThePackAndAnyChangedInputMisses) {
     const std::vector<uint8_t> cold_bytes = bytesOf(d + "/out.glb");
     const std::string cold_deps = textOf(d + "/out.d");
     EXPECT_EQ(nlohmann::json::parse(textOf(d + "/r.json"))["cache"], "miss");
-    EXPECT_EQ(cold.err.find("cache hit"), std::string::npos);
+    EXPECT_EQ(cold.out.find("cache hit"), std::string::npos);
     fs::remove(d + "/out.glb");
 
     const BakeRun warm = bakeIn(d, common + " --threads 1");
     ASSERT_EQ(warm.exit_code, 0) << warm.err;
-    EXPECT_NE(warm.err.find("note: out.glb: cache hit"), std::string::npos) << warm.err;
     EXPECT_EQ(bytesOf(d + "/out.glb"), cold_bytes);
     EXPECT_EQ(textOf(d + "/out.d"), cold_deps); // a hit still lists the MTL and the texture
     const nlohmann::json report = nlohmann::json::parse(textOf(d + "/r.json"));
     EXPECT_EQ(report["cache"], "hit");
     EXPECT_EQ(report["assets"][0]["name"], "crate");
-    EXPECT_EQ(warm.out, cold.out.substr(0, cold.out.find("wrote")) + "wrote out.glb (" +
-                            std::to_string(cold_bytes.size()) + " bytes, cache hit)\n");
+    // A hit prints one line, naming the cache entry, and nothing else (no summary, note or progress).
+    const std::vector<std::string> entries = listDir(d + "/cache/v2/packs");
+    ASSERT_EQ(entries.size(), 1u);
+    const std::string key = entries[0].substr(0, entries[0].find('.'));
+    EXPECT_EQ(warm.out, "cache hit: out.glb (" + std::to_string(cold_bytes.size()) + " bytes, key " + key +
+                            ", written)\n");
+    EXPECT_EQ(warm.err, "");
+
+    // Again, with the pack in place: the output, the depfile and their time stamps are left alone.
+    const fs::file_time_type pack_time = fs::last_write_time(d + "/out.glb");
+    const fs::file_time_type deps_time = fs::last_write_time(d + "/out.d");
+    const BakeRun again = bakeIn(d, common);
+    ASSERT_EQ(again.exit_code, 0) << again.err;
+    EXPECT_EQ(again.out, "cache hit: out.glb (" + std::to_string(cold_bytes.size()) + " bytes, key " + key +
+                             ", file unchanged)\n");
+    EXPECT_EQ(again.err, "");
+    EXPECT_EQ(fs::last_write_time(d + "/out.glb"), pack_time);
+    EXPECT_EQ(fs::last_write_time(d + "/out.d"), deps_time);
+    EXPECT_EQ(bytesOf(d + "/out.glb"), cold_bytes);
+    // A pack that differs from the cached one is replaced.
+    std::vector<uint8_t> damaged = cold_bytes;
+    damaged[damaged.size() / 2] ^= 1;
+    ASSERT_TRUE(lodbake::writeFileAtomic(d + "/out.glb", damaged.data(), damaged.size()).ok());
+    const BakeRun replaced = bakeIn(d, common);
+    ASSERT_EQ(replaced.exit_code, 0) << replaced.err;
+    EXPECT_NE(replaced.out.find(", written)"), std::string::npos) << replaced.out;
+    EXPECT_EQ(bytesOf(d + "/out.glb"), cold_bytes);
 
     // A changed texture (named only inside the MTL) misses and bakes different bytes.
     fs::copy_file(d + "/assets/textures/barrel.png", d + "/assets/textures/crate.png",
                   fs::copy_options::overwrite_existing);
     const BakeRun texture = bakeIn(d, common);
     ASSERT_EQ(texture.exit_code, 0) << texture.err;
-    EXPECT_EQ(texture.err.find("cache hit"), std::string::npos);
+    EXPECT_EQ(texture.out.find("cache hit"), std::string::npos);
     EXPECT_NE(bytesOf(d + "/out.glb"), cold_bytes);
     // Other settings miss too; the same settings again hit.
-    EXPECT_EQ(bakeIn(d, common + " --levels 0.5").err.find("cache hit"), std::string::npos);
-    EXPECT_NE(bakeIn(d, common + " --levels 0.5").err.find("cache hit"), std::string::npos);
+    EXPECT_EQ(bakeIn(d, common + " --levels 0.5").out.find("cache hit"), std::string::npos);
+    EXPECT_NE(bakeIn(d, common + " --levels 0.5").out.find("cache hit"), std::string::npos);
     // Bakers sharing one cache concurrently: all succeed with the same bytes, one entry per key.
     fs::remove_all(d + "/cache");
     std::string parallel = "(cd " + shellQuote(d) + " || exit 1; ";
@@ -199,7 +224,7 @@ TEST(PipelineCliTest, CacheHitReusesThePackAndAnyChangedInputMisses) {
     EXPECT_FALSE(bytesOf(d + "/rock0.glb").empty());
     EXPECT_EQ(listDir(d + "/cache/v2/packs").size(), 1u);
     EXPECT_NE(
-        bakeIn(d, "assets/rock.ply -o rock4.glb --preset assets/light.json --cache-dir cache").err.find("cache hit"),
+        bakeIn(d, "assets/rock.ply -o rock4.glb --preset assets/light.json --cache-dir cache").out.find("cache hit"),
         std::string::npos);
     // No temporaries left in the cache.
     for (const char* sub : {"cache/v2/packs", "cache/v2/deps"})
@@ -256,7 +281,7 @@ TEST(PipelineCliTest, DamagedCacheEntriesMissAndAreRebaked) {
     damage(list, short_list, "side-file list cut short");
     // Undamaged, it hits again.
     fs::remove(d + "/out.glb");
-    EXPECT_NE(bakeIn(d, "assets/crate.obj -o out.glb --preset assets/light.json --cache-dir cache").err.find(
+    EXPECT_NE(bakeIn(d, "assets/crate.obj -o out.glb --preset assets/light.json --cache-dir cache").out.find(
                   "cache hit"),
               std::string::npos);
     EXPECT_EQ(bytesOf(d + "/out.glb"), good);
@@ -351,6 +376,13 @@ TEST(PipelineCliTest, ExitCodesQuietAndPlainProgress) {
     const BakeRun plain = bakeIn(d, "assets/rock.ply -o plain.glb --preset assets/light.json");
     ASSERT_EQ(plain.exit_code, 0);
     EXPECT_NE(plain.err.find("lodbake: [1/1] plain.glb: baked in"), std::string::npos) << plain.err;
+    // The line names the three stages that took the most time, slowest first.
+    std::smatch m;
+    const std::string stage = "(load|repair|lod_chain|measure|pfrep|textures|encode|pack|write) ([0-9]+\\.[0-9]{2}) s";
+    ASSERT_TRUE(std::regex_search(plain.err, m, std::regex("baked in [0-9.]+ s \\(" + stage + ", " + stage + ", " + stage + "\\)\n")))
+        << plain.err;
+    EXPECT_GE(std::stod(m[2].str()), std::stod(m[4].str()));
+    EXPECT_GE(std::stod(m[4].str()), std::stod(m[6].str()));
     EXPECT_EQ(plain.err.find('\r'), std::string::npos);
     // --quiet: nothing at all on success (crate.obj has notes: two unused vertices).
     const BakeRun quiet = bakeIn(d, "assets/crate.obj -o quiet.glb --preset assets/light.json --quiet");

@@ -37,6 +37,8 @@ struct BakeJobResult {
     Status status = Status::okStatus();
     Diagnostics diagnostics; // warnings of this job, in stage order
     bool cache_hit = false;
+    std::string cache_key;   // on a hit: the key of the cache entry (packs/<key>.bin)
+    bool unchanged = false;  // on a hit: the output already held the pack's bytes, so it is left untouched
     std::string cache_warning;           // a cache store that failed (the pack itself is fine)
     std::vector<std::string> files_read; // every input file read (inputs, MTL, textures, scans...)
     std::string report_json;             // bakeReportJson of the pack
@@ -63,6 +65,7 @@ struct BakeJobResult {
 /// Observers of runBakeJobs, called from worker threads (the callee synchronises).
 struct BatchHooks {
     std::function<void(size_t job, size_t input, BakeStage stage, const StageTime& time)> stage_done;
+    std::function<void(size_t job, size_t input, BakeStage stage, bool running)> stage_running; // BakeHooks'
     std::function<void(size_t job, const BakeJobResult& result)> job_done;
     std::function<void()> release_memory; // passed to bake() as BakeHooks::release_memory
 };

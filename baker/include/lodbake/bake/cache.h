@@ -41,6 +41,7 @@ struct CacheLookup {
     bool hit = false;
     CacheKey primary;
     CacheEntry entry;                                 // valid when hit
+    CacheKey result;                                  // when hit: the key the entry is stored under
     std::vector<std::vector<std::string>> files_read; // when hit: per input, the input then its side files
 };
 

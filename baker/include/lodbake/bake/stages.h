@@ -53,6 +53,9 @@ struct StageTime {
 struct BakeHooks {
     /// `stage` of input `input` (or kWholePack) finished.
     std::function<void(size_t input, BakeStage stage, const StageTime& time)> stage_done;
+    /// A run of `stage` began (running = true) or ended, finished or with nothing done (false), so a
+    /// progress display can name what is running. Optional.
+    std::function<void(size_t input, BakeStage stage, bool running)> stage_running;
     /// A large working set inside a stage was just freed and the next one is about to be built (for
     /// instance between coding a level and decoding it for the check). A program whose allocator
     /// keeps freed pages resident can return them here, so the two do not add up; the bake itself
@@ -65,13 +68,20 @@ class StageTimer {
 public:
     StageTimer(const BakeHooks& hooks, size_t input, BakeStage stage, size_t level = StageTime::kNoLevel)
         : hooks_(hooks), input_(input), stage_(stage), level_(level), start_(std::chrono::steady_clock::now()),
-          cpu_start_(processCpuSeconds()), thread_cpu_start_(threadCpuSeconds()) {}
+          cpu_start_(processCpuSeconds()), thread_cpu_start_(threadCpuSeconds()) {
+        if (hooks_.stage_running) hooks_.stage_running(input_, stage_, true);
+    }
     ~StageTimer() { finish(); }
-    /// Reports nothing (a run that did no work, e.g. an encoder that codes LOD0 only, asked for another level).
-    void cancel() { done_ = true; }
-    void finish() {
-        if (done_ || !hooks_.stage_done) return;
+    /// Reports no time (a run that did no work, e.g. an encoder that codes LOD0 only, asked for another level).
+    void cancel() {
+        if (!done_ && hooks_.stage_running) hooks_.stage_running(input_, stage_, false);
         done_ = true;
+    }
+    void finish() {
+        if (done_) return;
+        done_ = true;
+        if (hooks_.stage_running) hooks_.stage_running(input_, stage_, false);
+        if (!hooks_.stage_done) return;
         StageTime time;
         time.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
         time.cpu_seconds = processCpuSeconds() - cpu_start_;
