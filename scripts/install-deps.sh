@@ -22,6 +22,8 @@ packages=(
     libglfw3-dev libepoxy-dev libgl-dev libgl1-mesa-dri xvfb xauth libstb-dev
     # The range-scan merge's screened Poisson reconstruction (baker/src/reconstruct/, liblodbake_open3d).
     libopen3d-dev
+    # The cluster LOD builder's graph partition (baker/src/cluster/).
+    libmetis-dev
 )
 # Node.js: machines of this kind ship it (with npm bundled); Debian's own npm package conflicts with
 # such a build, so only ask apt for node and npm when the commands are missing.
