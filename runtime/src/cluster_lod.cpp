@@ -43,8 +43,8 @@ Result validateGroups(const ClusterLodView& lod, uint32_t with_parent) {
     for (uint32_t g = 0; g < lod.group_count; ++g) {
         const ClusterLodGroup& group = lod.groups[g];
         if (!rangeFits(group.first_child, group.child_count, lod.group_child_count)) return Result::OutOfBounds;
-        if (!finiteSphere(group.lod_center, group.lod_radius) || !finiteSphere(group.bounds_center, group.bounds_radius) ||
-            !std::isfinite(group.error) || group.error < 0)
+        if (!finiteSphere(group.lod_center, group.lod_radius) ||
+            !finiteSphere(group.bounds_center, group.bounds_radius) || !std::isfinite(group.error) || group.error < 0)
             return Result::BadStructure;
         for (uint32_t i = 0; i < group.child_count; ++i) {
             const uint32_t c = lod.group_children[group.first_child + i];
@@ -61,9 +61,9 @@ Result validateGroups(const ClusterLodView& lod, uint32_t with_parent) {
 Frustum modelFrustum(const Frustum& world, const ClusterInstance& instance) {
     Frustum model = world;
     for (auto& p : model.planes)
-        p[3] = (p[0] * instance.translation[0] + p[1] * instance.translation[1] + p[2] * instance.translation[2] +
-                p[3]) /
-               instance.scale;
+        p[3] =
+            (p[0] * instance.translation[0] + p[1] * instance.translation[1] + p[2] * instance.translation[2] + p[3]) /
+            instance.scale;
     return model;
 }
 

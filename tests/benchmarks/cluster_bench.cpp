@@ -143,6 +143,15 @@ void buildTimeBar(const lodbake::Mesh& mesh, lodbake::ClusterLodHierarchy& hiera
                 hierarchy.clusters.size(), hierarchy.lod0_cluster_count, hierarchy.groups.size(), tiny, largest,
                 hierarchy.level_count, hierarchy.roots.size(),
                 hierarchy.groups.empty() ? 0.0 : double(hierarchy.groups.back().error));
+    std::vector<size_t> level_clusters(hierarchy.level_count + 1, 0), level_triangles(hierarchy.level_count + 1, 0);
+    for (const auto& c : hierarchy.clusters) {
+        const uint32_t depth = c.self_group == lodrt::kClusterNone ? 0 : hierarchy.groups[c.self_group].depth;
+        ++level_clusters[depth];
+        level_triangles[depth] += c.triangle_count;
+    }
+    std::printf("levels (clusters/triangles):");
+    for (size_t l = 0; l < level_clusters.size(); ++l) std::printf(" %zu/%zu", level_clusters[l], level_triangles[l]);
+    std::printf("\n");
     std::printf("build: cluster hierarchy %.2f s wall, %.2f s cpu; discrete chain (with measured errors) %.2f s wall, "
                 "%.2f s cpu\n",
                 cluster_t.first, cluster_t.second, chain_t.first, chain_t.second);
@@ -263,8 +272,7 @@ void flyByBar(const lodbake::Mesh& mesh, const lodbake::ClusterLodHierarchy& h, 
         // The discrete chain in world units: distances divided by the scale, as selectLevels does.
         const float eye_model[3] = {eye[0] / scale + c.x, eye[1] / scale + c.y, eye[2] / scale + c.z};
         const float center_model[3] = {c.x, c.y, c.z};
-        const size_t chain_tris =
-            chainLevelTriangles(mesh, chain, center_model, world_radius / scale, eye_model, k);
+        const size_t chain_tris = chainLevelTriangles(mesh, chain, center_model, world_radius / scale, eye_model, k);
         const double ratio = double(st.triangles) / double(chain_tris);
         worst = std::max(worst, ratio);
         sum_ratio += ratio;

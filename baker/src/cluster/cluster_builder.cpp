@@ -42,9 +42,9 @@ struct BuildCluster {
 struct GroupResult {
     Status status = Status::okStatus();
     double hausdorff = 0;
-    std::vector<Vec3f> positions;            // output vertices
-    std::vector<uint32_t> point_of;          // per output vertex: point id, or kNewPoint
-    std::vector<uint32_t> indices;           // output triangles, output vertex ids
+    std::vector<Vec3f> positions;             // output vertices
+    std::vector<uint32_t> point_of;           // per output vertex: point id, or kNewPoint
+    std::vector<uint32_t> indices;            // output triangles, output vertex ids
     std::vector<std::vector<uint32_t>> split; // output clusters: triangle indices into `indices` / 3
 };
 
@@ -57,7 +57,9 @@ float roundUpFloat(double v) {
 struct PositionKey {
     uint32_t bits[3];
     bool operator<(const PositionKey& o) const {
-        return std::lexicographical_compare(bits, bits + 3, o.bits, o.bits + 3);
+        if (bits[0] != o.bits[0]) return bits[0] < o.bits[0];
+        if (bits[1] != o.bits[1]) return bits[1] < o.bits[1];
+        return bits[2] < o.bits[2];
     }
     bool operator==(const PositionKey& o) const {
         return bits[0] == o.bits[0] && bits[1] == o.bits[1] && bits[2] == o.bits[2];
@@ -319,8 +321,7 @@ Status Builder::buildLevel(std::vector<uint32_t>& level, uint32_t depth) {
     for (auto& part : parts)
         for (uint32_t& v : part) v = level[v];
     std::vector<GroupResult> results(parts.size());
-    LODBAKE_RETURN_IF_ERROR(
-        parallelFor(parts.size(), 1, [&](size_t i) { results[i] = simplifyGroup(parts[i]); }));
+    LODBAKE_RETURN_IF_ERROR(parallelFor(parts.size(), 1, [&](size_t i) { results[i] = simplifyGroup(parts[i]); }));
     std::vector<uint32_t> next;
     for (size_t i = 0; i < parts.size(); ++i) {
         LODBAKE_RETURN_IF_ERROR(results[i].status);

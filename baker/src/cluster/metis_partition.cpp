@@ -59,7 +59,8 @@ void mergeSmallParts(const WeightedGraph& g, std::vector<uint32_t>& part_of, uin
         if (size[p] == 0 || size[p] >= min_size) continue;
         std::fill(shared.begin(), shared.end(), 0);
         for (uint32_t v : members[p])
-            for (uint32_t e = g.row_begin[v]; e < g.row_begin[v + 1]; ++e) shared[part_of[g.neighbour[e]]] += g.weight[e];
+            for (uint32_t e = g.row_begin[v]; e < g.row_begin[v + 1]; ++e)
+                shared[part_of[g.neighbour[e]]] += g.weight[e];
         uint32_t best = p;
         for (uint32_t q = 0; q < part_count; ++q) {
             if (q == p || shared[q] == 0 || size[q] + size[p] > max_size) continue;

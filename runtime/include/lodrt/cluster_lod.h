@@ -77,8 +77,8 @@ struct ClusterLodView {
 /// Checks what the cut relies on, treating every field as untrusted: every index and range in bounds,
 /// finite non-negative errors and radii, every cluster's parent_group listing it among its children
 /// and every root without a parent. Returns Ok, OutOfBounds (an index or range outside its array) or
-/// BadStructure (a non-finite or negative value, a child list that disagrees with parent_group). Monotonicity is a property of a good
-/// bake, not a safety condition: the walk terminates and stays in bounds without it.
+/// BadStructure (a non-finite or negative value, a child list that disagrees with parent_group). Monotonicity is a
+/// property of a good bake, not a safety condition: the walk terminates and stays in bounds without it.
 LODRT_API Result validateClusterLod(const ClusterLodView& lod);
 
 /// Bytes of scratch one cut needs for `lod` (group visit stamps and the walk's stack).

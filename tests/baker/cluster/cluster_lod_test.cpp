@@ -132,7 +132,8 @@ public:
     /// Boundary edges of the cut that LOD0 lacks.
     size_t cracks(const uint32_t* cut, size_t count, std::string* first = nullptr) const {
         std::vector<Edge> e;
-        for (size_t i = 0; i < count; ++i) e.insert(e.end(), cluster_edges_[cut[i]].begin(), cluster_edges_[cut[i]].end());
+        for (size_t i = 0; i < count; ++i)
+            e.insert(e.end(), cluster_edges_[cut[i]].begin(), cluster_edges_[cut[i]].end());
         size_t bad = 0;
         for (Edge x : singleEdges(std::move(e)))
             if (!std::binary_search(lod0_boundary_.begin(), lod0_boundary_.end(), x)) {
@@ -156,7 +157,6 @@ private:
     }
 
 public:
-
 private:
     const ClusterLodHierarchy& h_;
     PositionIds ids_;
@@ -170,7 +170,8 @@ void expectLimitsAndMonotonic(const ClusterLodHierarchy& h) {
         EXPECT_LE(c.triangle_count, 128u);
         EXPECT_LE(c.vertex_count, 255u);
         EXPECT_GT(c.triangle_count, 0u);
-        for (uint32_t i = 0; i < c.triangle_count * 3; ++i) EXPECT_LT(h.indices[c.first_triangle * 3 + i], c.vertex_count);
+        for (uint32_t i = 0; i < c.triangle_count * 3; ++i)
+            EXPECT_LT(h.indices[c.first_triangle * 3 + i], c.vertex_count);
     }
     for (size_t g = 0; g < h.groups.size(); ++g) {
         const auto& group = h.groups[g];
@@ -238,7 +239,8 @@ void expectCrackFree(const Mesh& lod0, const ClusterLodHierarchy& h, int views, 
         const Vec3f& anchor = lod0.positions[rng() % lod0.positions.size()];
         const float z = 2 * unit(rng) - 1, phi = 6.2831853f * unit(rng), s = std::sqrt(1 - z * z);
         const float dist = radius * 0.3f * std::pow(100.0f, unit(rng));
-        const float eye[3] = {anchor.x + dist * s * std::cos(phi), anchor.y + dist * s * std::sin(phi), anchor.z + dist * z};
+        const float eye[3] = {anchor.x + dist * s * std::cos(phi), anchor.y + dist * s * std::sin(phi),
+                              anchor.z + dist * z};
         const float threshold = 0.25f * std::pow(64.0f, unit(rng));
         const lodrt::ClusterCutStats st = runner.cut(eye, nullptr, threshold);
         ASSERT_EQ(st.written, st.selected);
@@ -280,7 +282,8 @@ TEST(ClusterLodTest, FrustumCutIsTheFullCutLessOutsideClusters) {
     std::vector<uint32_t> full_cut(runner.out.begin(), runner.out.begin() + full.written);
     // A frustum looking along +x from the eye: roughly half of the grid is outside.
     lodrt::Frustum f;
-    const float planes[6][4] = {{1, 0, 0, -0.1f}, {-1, 0, 0, 10}, {0, 1, 0, 10}, {0, -1, 0, 0.6f}, {0, 0, 1, 10}, {0, 0, -1, 10}};
+    const float planes[6][4] = {{1, 0, 0, -0.1f}, {-1, 0, 0, 10}, {0, 1, 0, 10},
+                                {0, -1, 0, 0.6f}, {0, 0, 1, 10},  {0, 0, -1, 10}};
     std::memcpy(f.planes, planes, sizeof planes);
     const auto culled = runner.cut(eye, &f, 1.0f);
     std::vector<uint32_t> expected;

@@ -29,11 +29,12 @@ namespace lodbake {
 struct ClusterLodOptions {
     uint32_t max_triangles = lodrt::ClusterLodCluster::kMaxTriangles; // per cluster, at most the format's 128
     uint32_t max_vertices = lodrt::ClusterLodCluster::kMaxVertices;   // per cluster, at most the format's 255
-    uint32_t group_size = 8;      // clusters per group the partition aims at
-    uint32_t min_group_size = 4;  // smaller parts are merged into a neighbouring group when one has room
-    uint32_t max_group_size = 32; // larger parts are cut
-    float simplify_ratio = 0.5f;  // triangles a group keeps after simplification
-    float samples_per_triangle = 2.0f; // area-uniform samples per triangle measuring a group's error
+    uint32_t group_size = 8;                                          // clusters per group the partition aims at
+    uint32_t min_group_size = 4;       // smaller parts are merged into a neighbouring group when one has room
+    uint32_t max_group_size = 32;      // larger parts are cut
+    float simplify_ratio = 0.5f;       // triangles a group keeps after simplification
+    float samples_per_triangle = 0.5f; // area-uniform samples per triangle measuring a group's error
+                                       // (every vertex is measured too)
     uint64_t seed = 1;                 // METIS seed and distance sampling seed
     uint32_t max_levels = 48;          // guard against a hierarchy that stops shrinking
     float min_level_reduction = 0.05f; // stop when a level keeps more than (1 - this) of the triangles
