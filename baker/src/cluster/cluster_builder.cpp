@@ -121,7 +121,7 @@ Status weldInput(const MeshView& lod0, std::vector<Vec3f>& points, std::vector<u
 
 class Builder {
 public:
-    Builder(const ClusterLodOptions& options) : o_(options) {}
+    explicit Builder(const ClusterLodOptions& options) : o_(options) {}
 
     Status run(const MeshView& lod0, ClusterLodHierarchy& out);
 
@@ -173,14 +173,25 @@ void Builder::addClusters(const std::vector<uint32_t>& tris, const std::vector<s
 // Clusters of the level as a graph: an edge between two clusters weighted by the triangle edges
 // (point pairs) they share; vertex weights are triangle counts, so groups balance their size.
 WeightedGraph Builder::adjacency(const std::vector<uint32_t>& level) const {
+    // Only a cluster's own border edges (used once inside it) can be shared with another cluster;
+    // an interior edge is used twice by the cluster itself, so it is dropped before the global sort.
     std::vector<std::pair<uint64_t, uint32_t>> edges;
+    std::vector<uint64_t> local;
     for (uint32_t i = 0; i < level.size(); ++i) {
         const auto& t = clusters_[level[i]].tris;
+        local.clear();
         for (size_t f = 0; f < t.size(); f += 3)
             for (int k = 0; k < 3; ++k) {
                 const uint32_t a = t[f + k], b = t[f + (k + 1) % 3];
-                edges.push_back({uint64_t(std::min(a, b)) << 32 | std::max(a, b), i});
+                local.push_back(uint64_t(std::min(a, b)) << 32 | std::max(a, b));
             }
+        std::sort(local.begin(), local.end());
+        for (size_t e = 0; e < local.size();) {
+            size_t j = e;
+            while (j < local.size() && local[j] == local[e]) ++j;
+            if (j - e != 2) edges.push_back({local[e], i}); // 1: border; more: a non-manifold edge
+            e = j;
+        }
     }
     std::sort(edges.begin(), edges.end());
     std::vector<std::pair<uint32_t, uint32_t>> pairs; // (cluster, neighbour), both directions
@@ -189,7 +200,7 @@ WeightedGraph Builder::adjacency(const std::vector<uint32_t>& level) const {
         while (j < edges.size() && edges[j].first == edges[i].first) ++j;
         for (size_t a = i; a < j; ++a)
             for (size_t b = a + 1; b < j; ++b)
-                if (edges[a].second != edges[b].second && (b == a + 1 || edges[b].second != edges[b - 1].second)) {
+                if (edges[a].second != edges[b].second) {
                     pairs.push_back({edges[a].second, edges[b].second});
                     pairs.push_back({edges[b].second, edges[a].second});
                 }
@@ -344,17 +355,13 @@ void Builder::flatten(ClusterLodHierarchy& out) const {
         rec.first_vertex = uint32_t(out.positions.size());
         rec.first_triangle = uint32_t(out.indices.size() / 3);
         rec.triangle_count = uint32_t(c.tris.size() / 3);
-        local.clear();
-        for (uint32_t p : c.tris) {
-            auto it = std::find(local.begin(), local.end(), p);
-            if (it == local.end()) {
-                out.indices.push_back(uint8_t(local.size()));
-                local.push_back(p);
-                out.positions.push_back(points_[p]);
-            } else {
-                out.indices.push_back(uint8_t(it - local.begin()));
-            }
-        }
+        // Local vertices in ascending point order (a sorted list, looked up by bisection).
+        local.assign(c.tris.begin(), c.tris.end());
+        std::sort(local.begin(), local.end());
+        local.erase(std::unique(local.begin(), local.end()), local.end());
+        for (uint32_t p : local) out.positions.push_back(points_[p]);
+        for (uint32_t p : c.tris)
+            out.indices.push_back(uint8_t(std::lower_bound(local.begin(), local.end(), p) - local.begin()));
         rec.vertex_count = uint32_t(local.size());
         out.clusters.push_back(rec);
     }
