@@ -40,6 +40,7 @@ if [ ! -d "$meshes" ]; then
 fi
 benches="bake_bench bake_stages_bench batch_bench codec_bench collapse_bench distance_bench multilevel_bench
 pack_size_bench pfrep_bench read_bench repair_bench runtime_bench simplify_bench"
+benches="$benches cluster_bench"
 for b in $benches; do
     if [ ! -x "$bin/$b" ]; then
         echo "bench.sh: $bin/$b: not built (configure with -DLODBAKE_BUILD_BENCHMARKS=ON and build; BUILD_DIR=$build_dir)" >&2
@@ -79,6 +80,7 @@ if [ $quick = 1 ]; then
     add runtime_bench --frames 50
     add simplify_bench bunny_zipper.ply lucy100k.ply
     add simplify_bench --speed-only --runs 1 dragon_poisson.ply
+    add cluster_bench --mesh "$meshes/igea.ply" --frames 50
     add scripts/bench-textured.sh "$meshes/spot.obj"
     add scripts/bench-merge.sh "$build_dir"
 else
@@ -95,6 +97,7 @@ else
     add repair_bench
     add runtime_bench
     add simplify_bench
+    add cluster_bench
     add scripts/bench-textured.sh
     add scripts/bench-merge.sh "$build_dir"
 fi

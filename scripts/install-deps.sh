@@ -26,6 +26,8 @@ packages=(
     libopen3d-dev
     # The browser tests (tests/browser): headless Chromium draws packs with Babylon.js and three.js.
     chromium
+    # The cluster LOD builder's graph partition (baker/src/cluster/).
+    libmetis-dev
 )
 # Node.js: machines of this kind ship it (with npm bundled); Debian's own npm package conflicts with
 # such a build, so only ask apt for node and npm when the commands are missing.

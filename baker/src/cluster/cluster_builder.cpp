@@ -1,0 +1,428 @@
+// The cluster LOD builder (lodbake/cluster/cluster_lod.h; docs/cluster_lod.md). The scheme is the
+// one of Karis et al., "Nanite: A Deep Dive" (SIGGRAPH 2021 course) and of meshoptimizer's
+// clusterlod.h: cluster, then repeatedly group neighbouring clusters, simplify each group with its
+// border locked and split it again. Positions only: points are welded by bit-identical position,
+// and a group's border points keep their ids (the simplifier leaves locked points in place), so the
+// adjacency of the next level is found by point ids.
+
+#include "lodbake/cluster/cluster_lod.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <string>
+
+#include "cluster/cluster_internal.h"
+#include "core/parallel.h"
+#include "lodbake/simplify/mesh_distance.h"
+#include "lodbake/simplify/simplify.h"
+
+namespace lodbake {
+
+using namespace cluster_detail;
+
+namespace {
+
+constexpr uint32_t kNone = lodrt::kClusterNone;
+constexpr uint32_t kNewPoint = 0x80000000u; // an output vertex that is not one of the group's points
+
+struct BuildCluster {
+    std::vector<uint32_t> tris; // point ids, 3 per triangle
+    uint32_t self_group = kNone;
+    uint32_t parent_group = kNone;
+    float center[3] = {}; // geometry sphere
+    float radius = 0;
+    float lod_center[3] = {}; // own LOD sphere and error (its self group's; LOD0: geometry sphere, 0)
+    float lod_radius = 0;
+    float error = 0;
+};
+
+// What simplifying one group produced, before it is committed (computed in parallel).
+struct GroupResult {
+    Status status = Status::okStatus();
+    double hausdorff = 0;
+    std::vector<Vec3f> positions;             // output vertices
+    std::vector<uint32_t> point_of;           // per output vertex: point id, or kNewPoint
+    std::vector<uint32_t> indices;            // output triangles, output vertex ids
+    std::vector<std::vector<uint32_t>> split; // output clusters: triangle indices into `indices` / 3
+};
+
+float roundUpFloat(double v) {
+    float f = float(v);
+    if (double(f) < v) f = std::nextafter(f, std::numeric_limits<float>::infinity());
+    return f;
+}
+
+struct PositionKey {
+    uint32_t bits[3];
+    bool operator<(const PositionKey& o) const {
+        if (bits[0] != o.bits[0]) return bits[0] < o.bits[0];
+        if (bits[1] != o.bits[1]) return bits[1] < o.bits[1];
+        return bits[2] < o.bits[2];
+    }
+    bool operator==(const PositionKey& o) const {
+        return bits[0] == o.bits[0] && bits[1] == o.bits[1] && bits[2] == o.bits[2];
+    }
+};
+
+PositionKey keyOf(const Vec3f& p) {
+    PositionKey k;
+    const float v[3] = {p.x + 0.0f, p.y + 0.0f, p.z + 0.0f}; // -0 and +0 are one position
+    for (int a = 0; a < 3; ++a) std::memcpy(&k.bits[a], &v[a], 4);
+    return k;
+}
+
+Status checkOptions(const ClusterLodOptions& o) {
+    if (o.max_triangles < 1 || o.max_triangles > lodrt::ClusterLodCluster::kMaxTriangles || o.max_vertices < 3 ||
+        o.max_vertices > lodrt::ClusterLodCluster::kMaxVertices)
+        return invalidInput("cluster lod: cluster limits: expected 1..128 triangles and 3..255 vertices");
+    if (o.group_size < 2 || o.min_group_size < 1 || o.max_group_size < o.group_size || o.min_group_size > o.group_size)
+        return invalidInput("cluster lod: group sizes: expected 1 <= min <= size <= max, size >= 2");
+    if (!(o.simplify_ratio > 0 && o.simplify_ratio < 1) || !(o.samples_per_triangle >= 0) ||
+        !(o.min_level_reduction >= 0 && o.min_level_reduction < 1))
+        return invalidInput("cluster lod: simplify_ratio and min_level_reduction: expected values in (0, 1)");
+    return Status::okStatus();
+}
+
+// Welds LOD0's vertices by bit-identical position into points; triangles with a repeated point are
+// dropped (zero area: the simplifier drops them too, and they would break edge counting).
+Status weldInput(const MeshView& lod0, std::vector<Vec3f>& points, std::vector<uint32_t>& tris) {
+    const size_t n = lod0.vertexCount();
+    for (size_t v = 0; v < n; ++v)
+        if (!isFinite(lod0.positions[v]))
+            return invalidInput("cluster lod: vertex " + std::to_string(v) + ": expected a finite position");
+    std::vector<std::pair<PositionKey, uint32_t>> keys(n);
+    for (size_t v = 0; v < n; ++v) keys[v] = {keyOf(lod0.positions[v]), uint32_t(v)};
+    std::sort(keys.begin(), keys.end(), [](const auto& a, const auto& b) {
+        return a.first < b.first || (a.first == b.first && a.second < b.second);
+    });
+    std::vector<uint32_t> point_of(n);
+    for (size_t i = 0; i < n; ++i) {
+        if (i == 0 || !(keys[i].first == keys[i - 1].first)) points.push_back(lod0.positions[keys[i].second]);
+        point_of[keys[i].second] = uint32_t(points.size() - 1);
+    }
+    const size_t face_count = lod0.faceCount();
+    for (size_t f = 0; f < face_count; ++f) {
+        uint32_t t[3];
+        for (int k = 0; k < 3; ++k) {
+            const uint32_t v = lod0.indices[f * 3 + k];
+            if (v >= n)
+                return invalidInput("cluster lod: triangle " + std::to_string(f) + ": index " + std::to_string(v) +
+                                    " out of range (" + std::to_string(n) + " vertices)");
+            t[k] = point_of[v];
+        }
+        if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue;
+        tris.insert(tris.end(), t, t + 3);
+    }
+    if (tris.empty()) return invalidInput("cluster lod: mesh: expected at least one triangle");
+    return Status::okStatus();
+}
+
+class Builder {
+public:
+    explicit Builder(const ClusterLodOptions& options) : o_(options) {}
+
+    Status run(const MeshView& lod0, ClusterLodHierarchy& out);
+
+private:
+    void addClusters(const std::vector<uint32_t>& tris, const std::vector<std::vector<uint32_t>>& split,
+                     const std::vector<uint32_t>& point_ids, uint32_t self_group, std::vector<uint32_t>& level);
+    WeightedGraph adjacency(const std::vector<uint32_t>& level) const;
+    GroupResult simplifyGroup(const std::vector<uint32_t>& members) const;
+    void commitGroup(const std::vector<uint32_t>& members, GroupResult& r, uint32_t depth,
+                     std::vector<uint32_t>& next_level);
+    Status buildLevel(std::vector<uint32_t>& level, uint32_t depth);
+    void flatten(ClusterLodHierarchy& out) const;
+
+    const ClusterLodOptions& o_;
+    std::vector<Vec3f> points_;
+    std::vector<BuildCluster> clusters_;
+    std::vector<lodrt::ClusterLodGroup> groups_;
+    std::vector<std::vector<uint32_t>> group_members_;
+};
+
+// Appends clusters made of the triangles split lists; `point_ids` maps the triangles' vertex ids to
+// point ids (empty: they are point ids already).
+void Builder::addClusters(const std::vector<uint32_t>& tris, const std::vector<std::vector<uint32_t>>& split,
+                          const std::vector<uint32_t>& point_ids, uint32_t self_group, std::vector<uint32_t>& level) {
+    for (const auto& part : split) {
+        BuildCluster c;
+        c.tris.reserve(part.size() * 3);
+        for (uint32_t t : part)
+            for (int k = 0; k < 3; ++k) {
+                const uint32_t v = tris[size_t(t) * 3 + k];
+                c.tris.push_back(point_ids.empty() ? v : point_ids[v]);
+            }
+        boundingSphere(points_.data(), c.tris.data(), c.tris.size(), c.center, c.radius);
+        c.self_group = self_group;
+        if (self_group == kNone) {
+            std::copy(c.center, c.center + 3, c.lod_center);
+            c.lod_radius = c.radius;
+        } else {
+            const lodrt::ClusterLodGroup& g = groups_[self_group];
+            std::copy(g.lod_center, g.lod_center + 3, c.lod_center);
+            c.lod_radius = g.lod_radius;
+            c.error = g.error;
+        }
+        level.push_back(uint32_t(clusters_.size()));
+        clusters_.push_back(std::move(c));
+    }
+}
+
+// Clusters of the level as a graph: an edge between two clusters weighted by the triangle edges
+// (point pairs) they share; vertex weights are triangle counts, so groups balance their size.
+WeightedGraph Builder::adjacency(const std::vector<uint32_t>& level) const {
+    // Only a cluster's own border edges (used once inside it) can be shared with another cluster;
+    // an interior edge is used twice by the cluster itself, so it is dropped before the global sort.
+    std::vector<std::pair<uint64_t, uint32_t>> edges;
+    std::vector<uint64_t> local;
+    for (uint32_t i = 0; i < level.size(); ++i) {
+        const auto& t = clusters_[level[i]].tris;
+        local.clear();
+        for (size_t f = 0; f < t.size(); f += 3)
+            for (int k = 0; k < 3; ++k) {
+                const uint32_t a = t[f + k], b = t[f + (k + 1) % 3];
+                local.push_back(uint64_t(std::min(a, b)) << 32 | std::max(a, b));
+            }
+        std::sort(local.begin(), local.end());
+        for (size_t e = 0; e < local.size();) {
+            size_t j = e;
+            while (j < local.size() && local[j] == local[e]) ++j;
+            if (j - e != 2) edges.push_back({local[e], i}); // 1: border; more: a non-manifold edge
+            e = j;
+        }
+    }
+    std::sort(edges.begin(), edges.end());
+    std::vector<std::pair<uint32_t, uint32_t>> pairs; // (cluster, neighbour), both directions
+    for (size_t i = 0; i < edges.size();) {
+        size_t j = i;
+        while (j < edges.size() && edges[j].first == edges[i].first) ++j;
+        for (size_t a = i; a < j; ++a)
+            for (size_t b = a + 1; b < j; ++b)
+                if (edges[a].second != edges[b].second) {
+                    pairs.push_back({edges[a].second, edges[b].second});
+                    pairs.push_back({edges[b].second, edges[a].second});
+                }
+        i = j;
+    }
+    std::sort(pairs.begin(), pairs.end());
+    WeightedGraph g;
+    g.row_begin.assign(level.size() + 1, 0);
+    for (size_t i = 0; i < pairs.size();) {
+        size_t j = i;
+        while (j < pairs.size() && pairs[j] == pairs[i]) ++j;
+        g.neighbour.push_back(pairs[i].second);
+        g.weight.push_back(uint32_t(j - i));
+        ++g.row_begin[pairs[i].first + 1];
+        i = j;
+    }
+    for (size_t v = 0; v < level.size(); ++v) g.row_begin[v + 1] += g.row_begin[v];
+    g.vertex_weight.resize(level.size());
+    for (size_t v = 0; v < level.size(); ++v) g.vertex_weight[v] = uint32_t(clusters_[level[v]].tris.size() / 3);
+    return g;
+}
+
+// Merges the group's clusters, simplifies the merge with its border locked, measures the distance
+// between the two and splits the result (read-only on the builder: runs in parallel).
+GroupResult Builder::simplifyGroup(const std::vector<uint32_t>& members) const {
+    GroupResult r;
+    std::vector<uint32_t> ids;
+    for (uint32_t c : members) ids.insert(ids.end(), clusters_[c].tris.begin(), clusters_[c].tris.end());
+    Mesh merged;
+    merged.indices.reserve(ids.size());
+    std::vector<uint32_t> point_ids = ids;
+    std::sort(point_ids.begin(), point_ids.end());
+    point_ids.erase(std::unique(point_ids.begin(), point_ids.end()), point_ids.end());
+    for (uint32_t p : point_ids) merged.positions.push_back(points_[p]);
+    for (uint32_t p : ids)
+        merged.indices.push_back(uint32_t(std::lower_bound(point_ids.begin(), point_ids.end(), p) - point_ids.begin()));
+
+    SimplifyOptions so;
+    so.target_ratio = 0;
+    so.target_triangles = std::max<uint32_t>(1, uint32_t(std::lround(double(merged.faceCount()) * o_.simplify_ratio)));
+    so.lock_border = true;
+    so.refine_late_levels = false;
+    Diagnostics ignored; // notes about unreachable targets: the level's progress is judged by the caller
+    Result<SimplifyOutput> s = simplify(merged, so, ignored);
+    if (!s.ok()) {
+        r.status = s.status();
+        return r;
+    }
+    Mesh& out = s->mesh;
+    DistanceOptions dopt;
+    dopt.sample_count = uint32_t(std::ceil(double(merged.faceCount()) * o_.samples_per_triangle));
+    dopt.seed = o_.seed;
+    Result<DistanceResult> d = measureSurfaceDistance(merged, out, dopt);
+    if (d.ok()) {
+        r.hausdorff = d->hausdorff;
+    } else {
+        // Nothing of non-zero area to sample: the group's own extent bounds the distance.
+        Aabb box;
+        for (const Vec3f& p : merged.positions) box.expand(p);
+        r.hausdorff = box.diagonal();
+    }
+    // Output vertices at a point of the merge (the locked border, and points that did not move)
+    // keep its id; the others are new points.
+    std::vector<std::pair<PositionKey, uint32_t>> keys(merged.positions.size());
+    for (size_t i = 0; i < keys.size(); ++i) keys[i] = {keyOf(merged.positions[i]), point_ids[i]};
+    std::sort(keys.begin(), keys.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    r.point_of.resize(out.positions.size(), kNewPoint);
+    for (size_t v = 0; v < out.positions.size(); ++v) {
+        const PositionKey k = keyOf(out.positions[v]);
+        auto it = std::lower_bound(keys.begin(), keys.end(), k,
+                                   [](const auto& e, const PositionKey& key) { return e.first < key; });
+        if (it != keys.end() && it->first == k) r.point_of[v] = it->second;
+    }
+    r.split = splitIntoClusters(out.positions, out.indices, o_.max_triangles, o_.max_vertices);
+    r.positions = std::move(out.positions);
+    r.indices = std::move(out.indices);
+    return r;
+}
+
+// Records the group (error and spheres, monotonic over its inputs), gives new points their ids in
+// output order and adds its output clusters to the next level.
+void Builder::commitGroup(const std::vector<uint32_t>& members, GroupResult& r, uint32_t depth,
+                          std::vector<uint32_t>& next_level) {
+    const uint32_t g = uint32_t(groups_.size());
+    lodrt::ClusterLodGroup group;
+    double child_error = 0;
+    std::vector<const float*> centers;
+    std::vector<float> radii;
+    for (uint32_t c : members) {
+        child_error = std::max(child_error, double(clusters_[c].error));
+        centers.push_back(clusters_[c].lod_center);
+        radii.push_back(clusters_[c].lod_radius);
+        clusters_[c].parent_group = g;
+    }
+    group.error = roundUpFloat(child_error + r.hausdorff);
+    enclosingSphere(centers, radii, group.lod_center, group.lod_radius);
+    group.depth = depth;
+    groups_.push_back(group);
+    group_members_.push_back(members);
+
+    for (uint32_t& p : r.point_of)
+        if (p == kNewPoint) {
+            p = uint32_t(points_.size());
+            points_.push_back(r.positions[&p - r.point_of.data()]);
+        }
+    const size_t first_output = clusters_.size();
+    addClusters(r.indices, r.split, r.point_of, g, next_level);
+    // The culling sphere encloses the outputs and everything below the group (an input's own
+    // group's culling sphere, or an LOD0 input's geometry), so spheres nest down the DAG and culling
+    // a group never hides a finer cluster that is in view.
+    centers.clear();
+    radii.clear();
+    for (uint32_t c : members) {
+        const uint32_t below = clusters_[c].self_group;
+        centers.push_back(below == kNone ? clusters_[c].center : groups_[below].bounds_center);
+        radii.push_back(below == kNone ? clusters_[c].radius : groups_[below].bounds_radius);
+    }
+    for (size_t c = first_output; c < clusters_.size(); ++c) {
+        centers.push_back(clusters_[c].center);
+        radii.push_back(clusters_[c].radius);
+    }
+    enclosingSphere(centers, radii, groups_[g].bounds_center, groups_[g].bounds_radius);
+}
+
+Status Builder::buildLevel(std::vector<uint32_t>& level, uint32_t depth) {
+    const WeightedGraph graph = adjacency(level);
+    LODBAKE_ASSIGN_OR_RETURN(std::vector<std::vector<uint32_t>> parts,
+                             partitionGraph(graph, o_.group_size, o_.min_group_size, o_.max_group_size, o_.seed));
+    for (auto& part : parts)
+        for (uint32_t& v : part) v = level[v];
+    std::vector<GroupResult> results(parts.size());
+    LODBAKE_RETURN_IF_ERROR(parallelFor(parts.size(), 1, [&](size_t i) { results[i] = simplifyGroup(parts[i]); }));
+    std::vector<uint32_t> next;
+    for (size_t i = 0; i < parts.size(); ++i) {
+        LODBAKE_RETURN_IF_ERROR(results[i].status);
+        commitGroup(parts[i], results[i], depth, next);
+        GroupResult().positions.swap(results[i].positions); // free as we go
+    }
+    level.swap(next);
+    return Status::okStatus();
+}
+
+void Builder::flatten(ClusterLodHierarchy& out) const {
+    out.clusters.reserve(clusters_.size());
+    std::vector<uint32_t> local;
+    for (const BuildCluster& c : clusters_) {
+        lodrt::ClusterLodCluster rec;
+        std::copy(c.center, c.center + 3, rec.center);
+        rec.radius = c.radius;
+        rec.self_group = c.self_group;
+        rec.parent_group = c.parent_group;
+        rec.first_vertex = uint32_t(out.positions.size());
+        rec.first_triangle = uint32_t(out.indices.size() / 3);
+        rec.triangle_count = uint32_t(c.tris.size() / 3);
+        // Local vertices in ascending point order (a sorted list, looked up by bisection).
+        local.assign(c.tris.begin(), c.tris.end());
+        std::sort(local.begin(), local.end());
+        local.erase(std::unique(local.begin(), local.end()), local.end());
+        for (uint32_t p : local) out.positions.push_back(points_[p]);
+        for (uint32_t p : c.tris)
+            out.indices.push_back(uint8_t(std::lower_bound(local.begin(), local.end(), p) - local.begin()));
+        rec.vertex_count = uint32_t(local.size());
+        out.clusters.push_back(rec);
+    }
+    out.groups = groups_;
+    for (size_t g = 0; g < groups_.size(); ++g) {
+        out.groups[g].first_child = uint32_t(out.group_children.size());
+        out.groups[g].child_count = uint32_t(group_members_[g].size());
+        out.group_children.insert(out.group_children.end(), group_members_[g].begin(), group_members_[g].end());
+    }
+}
+
+Status Builder::run(const MeshView& lod0, ClusterLodHierarchy& out) {
+    std::vector<uint32_t> tris;
+    LODBAKE_RETURN_IF_ERROR(weldInput(lod0, points_, tris));
+    std::vector<uint32_t> level;
+    addClusters(tris, splitIntoClusters(points_, tris, o_.max_triangles, o_.max_vertices), {}, kNone, level);
+    out.lod0_cluster_count = uint32_t(level.size());
+    size_t triangles = tris.size() / 3;
+    uint32_t depth = 0;
+    while (level.size() > 1 && depth < o_.max_levels) {
+        LODBAKE_RETURN_IF_ERROR(buildLevel(level, ++depth));
+        size_t next_triangles = 0;
+        for (uint32_t c : level) next_triangles += clusters_[c].tris.size() / 3;
+        const bool stalled = double(next_triangles) > double(triangles) * (1.0 - o_.min_level_reduction);
+        triangles = next_triangles;
+        if (stalled) break;
+    }
+    out.level_count = depth;
+    out.reached_single_group = level.size() == 1;
+    out.roots = level;
+    flatten(out);
+    return Status::okStatus();
+}
+
+} // namespace
+
+lodrt::ClusterLodView ClusterLodHierarchy::view() const {
+    lodrt::ClusterLodView v;
+    v.clusters = clusters.data();
+    v.cluster_count = uint32_t(clusters.size());
+    v.groups = groups.data();
+    v.group_count = uint32_t(groups.size());
+    v.group_children = group_children.data();
+    v.group_child_count = uint32_t(group_children.size());
+    v.roots = roots.data();
+    v.root_count = uint32_t(roots.size());
+    v.vertex_count = uint32_t(positions.size());
+    v.triangle_count = uint32_t(indices.size() / 3);
+    return v;
+}
+
+Result<ClusterLodHierarchy> buildClusterLod(const MeshView& lod0, const ClusterLodOptions& options,
+                                            Diagnostics& diagnostics) {
+    LODBAKE_RETURN_IF_ERROR(checkOptions(options));
+    ClusterLodHierarchy out;
+    Builder builder(options);
+    LODBAKE_RETURN_IF_ERROR(builder.run(lod0, out));
+    if (!out.reached_single_group)
+        diagnostics.note("cluster lod: " + std::to_string(out.roots.size()) +
+                         " root clusters: a level stopped shrinking (locked borders or open boundaries)");
+    return out;
+}
+
+} // namespace lodbake

@@ -1,0 +1,383 @@
+// The cluster LOD builder (lodbake/cluster/cluster_lod.h) and the runtime cut over what it builds
+// (lodrt/cluster_lod.h): limits, monotonic errors, determinism, and the crack-free bar (for random
+// views, the cut has no boundary edge that LOD0 lacks).
+
+#include "lodbake/cluster/cluster_lod.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <iterator>
+#include <array>
+#include <map>
+#include <random>
+#include <string>
+
+#include "core/parallel.h"
+#include "lodbake/io/mesh_io.h"
+#include "lodrt/cluster_lod.h"
+#include "test_paths.h"
+
+namespace {
+
+using lodbake::ClusterLodHierarchy;
+using lodbake::Mesh;
+using lodbake::Vec3f;
+
+Mesh gridMesh(int n) {
+    Mesh m;
+    for (int y = 0; y <= n; ++y)
+        for (int x = 0; x <= n; ++x)
+            m.positions.push_back(Vec3f(float(x) / n, float(y) / n, 0.05f * std::sin(float(x * 7 + y * 3) / n)));
+    for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x) {
+            const uint32_t a = uint32_t(y * (n + 1) + x), b = a + 1, c = a + uint32_t(n + 1), d = c + 1;
+            m.indices.insert(m.indices.end(), {a, b, d, a, d, c});
+        }
+    return m;
+}
+
+ClusterLodHierarchy build(const Mesh& mesh) {
+    lodbake::Diagnostics d;
+    auto h = lodbake::buildClusterLod(mesh, lodbake::ClusterLodOptions(), d);
+    EXPECT_TRUE(h.ok()) << h.status().message();
+    return h.ok() ? std::move(h.value()) : ClusterLodHierarchy();
+}
+
+struct PositionIds {
+    std::map<std::array<uint32_t, 3>, uint32_t> ids;
+    uint32_t of(const Vec3f& p) {
+        std::array<uint32_t, 3> k;
+        const float v[3] = {p.x + 0.0f, p.y + 0.0f, p.z + 0.0f};
+        std::memcpy(k.data(), v, 12);
+        return ids.emplace(k, uint32_t(ids.size())).first->second;
+    }
+};
+
+using Edge = uint64_t;
+Edge edgeOf(uint32_t a, uint32_t b) {
+    return uint64_t(std::min(a, b)) << 32 | std::max(a, b);
+}
+
+// Edges used once in a list of edges (each triangle edge listed once per use).
+std::vector<Edge> singleEdges(std::vector<Edge> edges) {
+    std::sort(edges.begin(), edges.end());
+    std::vector<Edge> out;
+    for (size_t i = 0; i < edges.size();) {
+        size_t j = i;
+        while (j < edges.size() && edges[j] == edges[i]) ++j;
+        if (j - i == 1) out.push_back(edges[i]);
+        i = j;
+    }
+    return out;
+}
+
+// Edges by position of LOD0 and of every cluster (each use), computed once; a cut's boundary is
+// the edges its clusters use once in all.
+class CrackChecker {
+public:
+    /// Groups whose outputs' boundary (by position) differs from their inputs': the border a group
+    /// shares with its neighbours must survive its simplification unchanged.
+    std::string groupBorderMismatch() const {
+        std::vector<std::vector<uint32_t>> outputs(h_.groups.size());
+        for (uint32_t c = 0; c < h_.clusters.size(); ++c)
+            if (h_.clusters[c].self_group != lodrt::kClusterNone) outputs[h_.clusters[c].self_group].push_back(c);
+        for (size_t g = 0; g < h_.groups.size(); ++g) {
+            std::vector<Edge> in, out;
+            for (uint32_t i = 0; i < h_.groups[g].child_count; ++i) {
+                const auto& e = cluster_edges_[h_.group_children[h_.groups[g].first_child + i]];
+                in.insert(in.end(), e.begin(), e.end());
+            }
+            for (uint32_t c : outputs[g]) out.insert(out.end(), cluster_edges_[c].begin(), cluster_edges_[c].end());
+            const std::vector<Edge> a = singleEdges(in), b = singleEdges(out);
+            if (a != b) {
+                std::vector<Edge> only_out;
+                std::set_difference(b.begin(), b.end(), a.begin(), a.end(), std::back_inserter(only_out));
+                return "group " + std::to_string(g) + ": inputs' border " + std::to_string(a.size()) +
+                       " edges, outputs' " + std::to_string(b.size()) + ", " + std::to_string(only_out.size()) +
+                       " only in the outputs";
+            }
+        }
+        return "";
+    }
+
+    CrackChecker(const Mesh& lod0, const ClusterLodHierarchy& h) : h_(h) {
+        std::vector<Edge> edges;
+        for (size_t f = 0; f < lod0.faceCount(); ++f) {
+            uint32_t t[3];
+            for (int k = 0; k < 3; ++k) t[k] = ids_.of(lod0.positions[lod0.indices[f * 3 + k]]);
+            if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue; // the builder drops these too
+            for (int k = 0; k < 3; ++k) edges.push_back(edgeOf(t[k], t[(k + 1) % 3]));
+        }
+        lod0_boundary_ = singleEdges(edges);
+        cluster_edges_.resize(h.clusters.size());
+        for (size_t c = 0; c < h.clusters.size(); ++c) {
+            const auto& cl = h.clusters[c];
+            std::vector<Edge> e;
+            for (uint32_t t = 0; t < cl.triangle_count; ++t) {
+                uint32_t v[3];
+                for (int k = 0; k < 3; ++k)
+                    v[k] = ids_.of(h.positions[cl.first_vertex + h.indices[(size_t(cl.first_triangle) + t) * 3 + k]]);
+                for (int k = 0; k < 3; ++k) e.push_back(edgeOf(v[k], v[(k + 1) % 3]));
+            }
+            // Every use, not only the cluster's single edges: an edge of more than two triangles
+            // (non-manifold spots the simplifier leaves alone) may be spread over several clusters.
+            std::sort(e.begin(), e.end());
+            cluster_edges_[c] = std::move(e);
+        }
+    }
+
+    /// Boundary edges of the cut that LOD0 lacks.
+    size_t cracks(const uint32_t* cut, size_t count, std::string* first = nullptr) const {
+        std::vector<Edge> e;
+        for (size_t i = 0; i < count; ++i)
+            e.insert(e.end(), cluster_edges_[cut[i]].begin(), cluster_edges_[cut[i]].end());
+        size_t bad = 0;
+        for (Edge x : singleEdges(std::move(e)))
+            if (!std::binary_search(lod0_boundary_.begin(), lod0_boundary_.end(), x)) {
+                if (bad++ == 0 && first) *first = describe(x, cut, count);
+            }
+        return bad;
+    }
+
+private:
+    // The clusters of the cut whose single edges hold the edge, with their groups: what a failure
+    // needs to be understood.
+    std::string describe(Edge x, const uint32_t* cut, size_t count) const {
+        std::string s = "edge points " + std::to_string(x >> 32) + "-" + std::to_string(x & 0xffffffffu) + ":";
+        for (size_t i = 0; i < count; ++i)
+            if (std::binary_search(cluster_edges_[cut[i]].begin(), cluster_edges_[cut[i]].end(), x)) {
+                const auto& cl = h_.clusters[cut[i]];
+                s += " cluster " + std::to_string(cut[i]) + " self " + std::to_string(int(cl.self_group)) + " parent " +
+                     std::to_string(int(cl.parent_group));
+            }
+        return s;
+    }
+
+public:
+private:
+    const ClusterLodHierarchy& h_;
+    PositionIds ids_;
+    std::vector<Edge> lod0_boundary_;
+    std::vector<std::vector<Edge>> cluster_edges_;
+};
+
+void expectLimitsAndMonotonic(const ClusterLodHierarchy& h) {
+    ASSERT_EQ(lodrt::validateClusterLod(h.view()), lodrt::Result::Ok);
+    for (const auto& c : h.clusters) {
+        EXPECT_LE(c.triangle_count, 128u);
+        EXPECT_LE(c.vertex_count, 255u);
+        EXPECT_GT(c.triangle_count, 0u);
+        for (uint32_t i = 0; i < c.triangle_count * 3; ++i)
+            EXPECT_LT(h.indices[c.first_triangle * 3 + i], c.vertex_count);
+    }
+    for (size_t g = 0; g < h.groups.size(); ++g) {
+        const auto& group = h.groups[g];
+        EXPECT_LE(group.child_count, 32u);
+        for (uint32_t i = 0; i < group.child_count; ++i) {
+            const auto& child = h.clusters[h.group_children[group.first_child + i]];
+            float err = 0, r = child.radius;
+            const float* c = child.center;
+            if (child.self_group != lodrt::kClusterNone) {
+                const auto& below = h.groups[child.self_group];
+                err = below.error;
+                r = below.lod_radius;
+                c = below.lod_center;
+                EXPECT_LT(below.depth, group.depth);
+                const double bd = std::sqrt(std::pow(double(below.bounds_center[0]) - group.bounds_center[0], 2) +
+                                            std::pow(double(below.bounds_center[1]) - group.bounds_center[1], 2) +
+                                            std::pow(double(below.bounds_center[2]) - group.bounds_center[2], 2));
+                EXPECT_LE(bd + below.bounds_radius, double(group.bounds_radius)) << "group " << g;
+            }
+            EXPECT_GE(group.error, err) << "group " << g;
+            const double d = std::sqrt(std::pow(double(c[0]) - group.lod_center[0], 2) +
+                                       std::pow(double(c[1]) - group.lod_center[1], 2) +
+                                       std::pow(double(c[2]) - group.lod_center[2], 2));
+            EXPECT_LE(d + r, double(group.lod_radius)) << "group " << g;
+        }
+    }
+}
+
+struct CutRunner {
+    const ClusterLodHierarchy& h;
+    std::vector<uint32_t> scratch_words;
+    lodrt::ClusterCutScratch scratch;
+    std::vector<uint32_t> out;
+
+    explicit CutRunner(const ClusterLodHierarchy& hierarchy) : h(hierarchy) {
+        scratch_words.assign(lodrt::clusterCutScratchBytes(h.view()) / 4 + 1, 0);
+        scratch.memory = scratch_words.data();
+        scratch.size_bytes = scratch_words.size() * 4;
+        out.resize(h.clusters.size());
+    }
+    lodrt::ClusterCutStats cut(const float eye[3], const lodrt::Frustum* frustum, float threshold) {
+        lodrt::SelectionParams params;
+        params.pixel_threshold = threshold;
+        lodrt::ClusterCutStats stats;
+        EXPECT_EQ(lodrt::selectClusterCut(h.view(), lodrt::ClusterInstance(), eye, frustum, params, scratch, out.data(),
+                                          uint32_t(out.size()), &stats),
+                  lodrt::Result::Ok);
+        return stats;
+    }
+};
+
+// Random views around the mesh: eye at 0.3 to 30 bounding radii from a random surface point, pixel
+// thresholds from 0.25 to 16.
+void expectCrackFree(const Mesh& lod0, const ClusterLodHierarchy& h, int views, uint32_t seed) {
+    CrackChecker checker(lod0, h);
+    EXPECT_EQ(checker.groupBorderMismatch(), "");
+    CutRunner runner(h);
+    lodbake::Aabb box;
+    for (const Vec3f& p : lod0.positions) box.expand(p);
+    const float radius = float(box.diagonal() * 0.5);
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+    size_t total = 0, finest = 0, coarsest = h.clusters.size();
+    for (int v = 0; v < views; ++v) {
+        const Vec3f& anchor = lod0.positions[rng() % lod0.positions.size()];
+        const float z = 2 * unit(rng) - 1, phi = 6.2831853f * unit(rng), s = std::sqrt(1 - z * z);
+        const float dist = radius * 0.3f * std::pow(100.0f, unit(rng));
+        const float eye[3] = {anchor.x + dist * s * std::cos(phi), anchor.y + dist * s * std::sin(phi),
+                              anchor.z + dist * z};
+        const float threshold = 0.25f * std::pow(64.0f, unit(rng));
+        const lodrt::ClusterCutStats st = runner.cut(eye, nullptr, threshold);
+        ASSERT_EQ(st.written, st.selected);
+        std::string first;
+        ASSERT_EQ(checker.cracks(runner.out.data(), st.written, &first), 0u)
+            << "view " << v << " eye distance " << dist << ": " << first;
+        total += st.selected;
+        finest = std::max<size_t>(finest, st.selected);
+        coarsest = std::min<size_t>(coarsest, st.selected);
+    }
+    // The views reach different depths: a cut that never changes would pass trivially.
+    EXPECT_LT(coarsest, finest);
+    ::testing::Test::RecordProperty("mean_cut_clusters", std::to_string(total / size_t(views)));
+}
+
+TEST(ClusterLodTest, GridHierarchyIsWithinLimitsAndMonotonic) {
+    const Mesh mesh = gridMesh(90);
+    const ClusterLodHierarchy h = build(mesh);
+    ASSERT_FALSE(h.clusters.empty());
+    EXPECT_GT(h.level_count, 3u);
+    // Every LOD0 triangle is in exactly one LOD0 cluster.
+    size_t lod0_triangles = 0;
+    for (uint32_t c = 0; c < h.lod0_cluster_count; ++c) lod0_triangles += h.clusters[c].triangle_count;
+    EXPECT_EQ(lod0_triangles, mesh.faceCount());
+    expectLimitsAndMonotonic(h);
+}
+
+TEST(ClusterLodTest, GridCutsAreCrackFree) {
+    const Mesh mesh = gridMesh(90);
+    expectCrackFree(mesh, build(mesh), 300, 7);
+}
+
+TEST(ClusterLodTest, FrustumCutIsTheFullCutLessOutsideClusters) {
+    const Mesh mesh = gridMesh(90);
+    const ClusterLodHierarchy h = build(mesh);
+    CutRunner runner(h);
+    const float eye[3] = {0.1f, 0.2f, 0.3f};
+    const auto full = runner.cut(eye, nullptr, 1.0f);
+    std::vector<uint32_t> full_cut(runner.out.begin(), runner.out.begin() + full.written);
+    // A frustum looking along +x from the eye: roughly half of the grid is outside.
+    lodrt::Frustum f;
+    const float planes[6][4] = {{1, 0, 0, -0.1f}, {-1, 0, 0, 10}, {0, 1, 0, 10},
+                                {0, -1, 0, 0.6f}, {0, 0, 1, 10},  {0, 0, -1, 10}};
+    std::memcpy(f.planes, planes, sizeof planes);
+    const auto culled = runner.cut(eye, &f, 1.0f);
+    std::vector<uint32_t> expected;
+    for (uint32_t c : full_cut)
+        if (lodrt::classifySphere(f, h.clusters[c].center, h.clusters[c].radius) != lodrt::Containment::Outside)
+            expected.push_back(c);
+    std::vector<uint32_t> got(runner.out.begin(), runner.out.begin() + culled.written);
+    std::sort(expected.begin(), expected.end());
+    std::sort(got.begin(), got.end());
+    EXPECT_EQ(got, expected);
+    EXPECT_LT(got.size(), full_cut.size());
+    EXPECT_LE(culled.groups_visited, full.groups_visited);
+}
+
+TEST(ClusterLodTest, ValidateRejectsBrokenHierarchies) {
+    const Mesh mesh = gridMesh(40);
+    ClusterLodHierarchy h = build(mesh);
+    ASSERT_EQ(lodrt::validateClusterLod(h.view()), lodrt::Result::Ok);
+    ClusterLodHierarchy bad = h;
+    bad.clusters[0].parent_group = uint32_t(bad.groups.size());
+    EXPECT_EQ(lodrt::validateClusterLod(bad.view()), lodrt::Result::OutOfBounds);
+    bad = h;
+    bad.clusters[0].first_vertex = uint32_t(bad.positions.size());
+    EXPECT_EQ(lodrt::validateClusterLod(bad.view()), lodrt::Result::OutOfBounds);
+    bad = h;
+    bad.groups[0].error = NAN;
+    EXPECT_EQ(lodrt::validateClusterLod(bad.view()), lodrt::Result::BadStructure);
+    bad = h;
+    bad.group_children[0] = bad.group_children.back(); // a child of the last group
+    EXPECT_EQ(lodrt::validateClusterLod(bad.view()), lodrt::Result::BadStructure);
+    bad = h;
+    bad.roots.push_back(0);
+    EXPECT_EQ(lodrt::validateClusterLod(bad.view()), lodrt::Result::BadStructure);
+}
+
+TEST(ClusterLodTest, RejectsBadInput) {
+    Mesh mesh = gridMesh(4);
+    mesh.indices[5] = 1000;
+    lodbake::Diagnostics d;
+    auto h = lodbake::buildClusterLod(mesh, lodbake::ClusterLodOptions(), d);
+    ASSERT_FALSE(h.ok());
+    EXPECT_NE(h.status().message().find("out of range"), std::string::npos);
+    mesh = gridMesh(4);
+    mesh.positions[3].x = NAN;
+    EXPECT_FALSE(lodbake::buildClusterLod(mesh, lodbake::ClusterLodOptions(), d).ok());
+    lodbake::ClusterLodOptions o;
+    o.max_triangles = 300;
+    EXPECT_FALSE(lodbake::buildClusterLod(gridMesh(4), o, d).ok());
+}
+
+Mesh loadShared(const std::string& name) {
+    lodbake::Diagnostics d;
+    auto loaded = lodbake::readMesh(lodbake_test::sharedMesh(name), lodbake::ReadOptions(), d);
+    EXPECT_TRUE(loaded.ok()) << name;
+    return loaded.ok() ? std::move(loaded->mesh) : Mesh();
+}
+
+class ClusterLodSharedTest : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(ClusterLodSharedTest, ThousandRandomViewsAreCrackFree) {
+    LODBAKE_REQUIRE_SHARED_MESHES();
+    const Mesh mesh = loadShared(GetParam());
+    ASSERT_GT(mesh.faceCount(), 0u);
+    const ClusterLodHierarchy h = build(mesh);
+    expectLimitsAndMonotonic(h);
+    expectCrackFree(mesh, h, 1000, 11);
+}
+
+INSTANTIATE_TEST_SUITE_P(Scans, ClusterLodSharedTest, ::testing::Values("igea.ply", "dragon_poisson.ply"),
+                         [](const auto& param_info) {
+                             std::string n = param_info.param;
+                             return n.substr(0, n.find('.'));
+                         });
+
+TEST(ClusterLodTest, SameBytesAtOneAndTwoThreads) {
+    LODBAKE_REQUIRE_SHARED_MESHES();
+    const Mesh mesh = loadShared("igea.ply");
+    ClusterLodHierarchy one, two;
+    {
+        lodbake::ScopedThreadLimit limit(1);
+        one = build(mesh);
+    }
+    {
+        lodbake::ScopedThreadLimit limit(2);
+        two = build(mesh);
+    }
+    ASSERT_EQ(one.clusters.size(), two.clusters.size());
+    ASSERT_EQ(one.groups.size(), two.groups.size());
+    EXPECT_EQ(0, std::memcmp(one.clusters.data(), two.clusters.data(), one.clusters.size() * sizeof one.clusters[0]));
+    EXPECT_EQ(0, std::memcmp(one.groups.data(), two.groups.data(), one.groups.size() * sizeof one.groups[0]));
+    EXPECT_EQ(one.group_children, two.group_children);
+    EXPECT_EQ(one.roots, two.roots);
+    EXPECT_EQ(one.positions, two.positions);
+    EXPECT_EQ(one.indices, two.indices);
+}
+
+} // namespace
