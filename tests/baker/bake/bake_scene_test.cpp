@@ -317,6 +317,25 @@ TEST(BakeSceneTest, TwoMeshSceneBakesIntoOneGroupPerMeshNodeWithTheInputsNodes) 
         EXPECT_NEAR(models.model(2).world_transform[12], 3.0, 1e-6);
     }
     {
+        SCOPED_TRACE("OtherInputsBesideASceneAreOneRootNodeEach");
+        lodbake::Mesh ring;
+        const Grid g = torus(1.0f, 0.25f, 32, 16);
+        for (size_t i = 0; i < g.positions.size(); i += 3)
+            ring.positions.push_back(lodbake::Vec3f(g.positions[i], g.positions[i + 1], g.positions[i + 2]));
+        ring.indices = g.indices;
+        const std::string ply = outDir() + "/extra_ring.ply", mixed = outDir() + "/scene_mixed.glb";
+        lodbake::Diagnostics diagnostics;
+        ASSERT_TRUE(lodbake::writeMesh(ring, ply, lodbake::WriteOptions{}, diagnostics).ok());
+        const CommandResult m = bake(common + " " + shellQuote(ply) + " -o " + shellQuote(mixed));
+        ASSERT_EQ(m.exit_code, 0) << m.output;
+        const json both = lodbake_test::glbJson(bytesOf(mixed));
+        EXPECT_EQ(both["scenes"][0]["nodes"], (json{0, 3, 4}));
+        EXPECT_EQ(both["nodes"][4]["name"], "extra_ring");
+        EXPECT_EQ(both["nodes"][4]["extensions"]["MSFT_lod"]["ids"].size(), 2u);
+        EXPECT_FALSE(both["nodes"][4].contains("matrix"));
+        expectSameNode(input["nodes"][1], both["nodes"][1]);
+    }
+    {
         SCOPED_TRACE("MergeSceneGivesOneGroup");
         const CommandResult m = bake(common + " --merge-scene -o " + shellQuote(merged));
         ASSERT_EQ(m.exit_code, 0) << m.output;
