@@ -1301,9 +1301,11 @@ void keepUsedMaterials(const Mesh& all, Mesh& mesh) {
     for (Material& material : mesh.materials)
         for (TextureSlot* slot : {&material.base_color_texture, &material.metallic_roughness_texture,
                                   &material.normal_texture, &material.occlusion_texture, &material.emissive_texture})
-            if (slot->isSet()) slot->texture = texture_map[size_t(slot->texture)];
+            if (slot->isSet() && size_t(slot->texture) < texture_map.size())
+                slot->texture = texture_map[size_t(slot->texture)];
     for (SubMesh& sub : mesh.submeshes)
-        if (sub.material.isValid()) sub.material = MaterialId(uint32_t(material_map[sub.material.value]));
+        if (sub.material.isValid() && sub.material.value < material_map.size())
+            sub.material = MaterialId(uint32_t(material_map[sub.material.value]));
 }
 
 // Reads glTF mesh `m` once, in its own space, with the materials it uses.
