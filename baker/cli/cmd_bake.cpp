@@ -45,7 +45,8 @@ const char* kBakeHelp = R"(usage: lodbake bake IN... -o OUT.glb [--preset FILE] 
 Per input: repair -> LOD chain (errors measured against the repaired input, switch distances) ->
 texture levels (each level's textures downscaled to its on-screen size) -> one GLB pack. Each input
 (each mesh node of a glTF scene) becomes a LOD group: an MSFT_lod node (highest detail first) with
-MSFT_screencoverage in its extras and LODBAKE_lod_metrics; every level is a plain glTF mesh. Packs of a batch are baked in parallel;
+MSFT_screencoverage in its extras and LODBAKE_lod_metrics; every level is a plain glTF mesh. Packs
+of a batch are baked in parallel;
 their bytes do not depend on the thread count, the schedule, the current directory or input paths.
 See docs/bake.md and docs/pipeline.md.
 

@@ -1,7 +1,7 @@
 // libFuzzer target for the glTF 2.0 / GLB importer (lodbake/io/gltf.h) with Draco, straight
-// from memory, read flattened and as a scene graph. Inputs starting with "glTF" take the GLB path, others the JSON path. Every external
-// buffer or image URI is served the input itself, which covers self-referencing buffers. Run with
-// scripts/fuzz.sh gltf SECONDS.
+// from memory, read flattened and as a scene graph. Inputs starting with "glTF" take the GLB path,
+// others the JSON path. Every external buffer or image URI is served the input itself, which covers
+// self-referencing buffers. Run with scripts/fuzz.sh gltf SECONDS.
 #include <cstddef>
 #include <cstdint>
 #include <string>

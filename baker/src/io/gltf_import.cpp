@@ -1261,7 +1261,7 @@ Status walkScene(const tinygltf::Model& model, const std::string& name, SceneWal
         if (index < 0 || size_t(index) >= model.nodes.size())
             return invalidInput(where + ": does not exist (" + std::to_string(model.nodes.size()) + " nodes)");
         if (walk.reached[size_t(index)])
-            return invalidInput(where + ": reached twice from the scene (expected every node to have one parent)");
+            return invalidInput(where + ": reached twice from the scene (a cycle or a shared child; expected a tree)");
         walk.reached[size_t(index)] = true;
         const tinygltf::Node& node = model.nodes[size_t(index)];
         LODBAKE_ASSIGN_OR_RETURN(Mat4 local, localMatrix(node, where));
@@ -1320,7 +1320,8 @@ Result<Mesh> readLocalMesh(const tinygltf::Model& model, int m, const Mesh& all,
     counts.file_vertex_count += source.file_vertex_count;
     counts.file_face_count += source.file_face_count;
     if (counts.file_vertex_count > options.max_vertex_count || counts.file_face_count > options.max_face_count)
-        return resourceLimit(name + ": mesh " + std::to_string(m) + ": the scene exceeds the reader's vertex or face limit");
+        return resourceLimit(name + ": mesh " + std::to_string(m) +
+                             ": the scene exceeds the reader's vertex or face limit");
     Mesh mesh;
     mergeParts(parts, mesh);
     keepUsedMaterials(all, mesh);
@@ -1397,7 +1398,8 @@ Result<LoadedScene> readGltfSceneImpl(const uint8_t* data, size_t size, const st
     }
     if (walk.mesh_nodes < 2) {
         LoadedScene flat;
-        LODBAKE_ASSIGN_OR_RETURN(flat.flat, flattenModel(model, prepass, quantized, is_glb, name, options, diagnostics));
+        LODBAKE_ASSIGN_OR_RETURN(flat.flat,
+                                 flattenModel(model, prepass, quantized, is_glb, name, options, diagnostics));
         return flat;
     }
     return buildScene(model, walk, prepass, quantized, is_glb, name, options, diagnostics);

@@ -291,8 +291,10 @@ Result<std::vector<int>> addAssetMeshes(tinygltf::Model& model, BufferBuilder& b
         const std::string level_name = asset.name + "_lod" + std::to_string(l);
         std::vector<std::pair<uint32_t, uint32_t>> ranges;
         for (const PackLevel::VertexRange& r : level.primitive_vertex_ranges) ranges.emplace_back(r.first, r.count);
-        Result<int> mesh_index = addMeshToModel(model, buffer, level.mesh, &dedupe, ranges.empty() ? nullptr : &ranges);
-        if (!mesh_index.ok()) return Status(mesh_index.status().code(), level_name + ": " + mesh_index.status().message());
+        Result<int> mesh_index =
+            addMeshToModel(model, buffer, level.mesh, &dedupe, ranges.empty() ? nullptr : &ranges);
+        if (!mesh_index.ok())
+            return Status(mesh_index.status().code(), level_name + ": " + mesh_index.status().message());
         tinygltf::Mesh& gmesh = model.meshes[size_t(*mesh_index)];
         gmesh.name = level_name;
         ViewPatch where;
@@ -442,7 +444,8 @@ Status addSceneGraph(tinygltf::Model& model, BufferBuilder& buffer, ModelDedupe&
         if (first < 0) {
             first_instance[size_t(a)] = int(n);
             for (const PackExtension& e : asset.node_extensions)
-                LODBAKE_RETURN_IF_ERROR(addExtension(e, buffer, model.nodes[n].extensions, used, streams, where, patches));
+                LODBAKE_RETURN_IF_ERROR(
+                    addExtension(e, buffer, model.nodes[n].extensions, used, streams, where, patches));
             continue;
         }
         for (const PackExtension& e : asset.node_extensions)

@@ -74,21 +74,30 @@ void addMesh(json& doc, std::vector<uint8_t>& bin, const std::string& name, cons
     const size_t p = lodbake_test::appendValues(bin, g.positions);
     const size_t i = lodbake_test::appendValues(bin, g.indices);
     const size_t views = doc["bufferViews"].size(), accessors = doc["accessors"].size();
-    doc["bufferViews"].push_back({{"buffer", 0}, {"byteOffset", p}, {"byteLength", g.positions.size() * 4}, {"target", 34962}});
-    doc["bufferViews"].push_back({{"buffer", 0}, {"byteOffset", i}, {"byteLength", g.indices.size() * 4}, {"target", 34963}});
-    doc["accessors"].push_back({{"bufferView", views}, {"componentType", 5126}, {"count", g.positions.size() / 3},
-                                {"type", "VEC3"}, {"min", {lo[0], lo[1], lo[2]}}, {"max", {hi[0], hi[1], hi[2]}}});
+    doc["bufferViews"].push_back(
+        {{"buffer", 0}, {"byteOffset", p}, {"byteLength", g.positions.size() * 4}, {"target", 34962}});
+    doc["bufferViews"].push_back(
+        {{"buffer", 0}, {"byteOffset", i}, {"byteLength", g.indices.size() * 4}, {"target", 34963}});
+    doc["accessors"].push_back({{"bufferView", views},
+                                {"componentType", 5126},
+                                {"count", g.positions.size() / 3},
+                                {"type", "VEC3"},
+                                {"min", {lo[0], lo[1], lo[2]}},
+                                {"max", {hi[0], hi[1], hi[2]}}});
     doc["accessors"].push_back(
         {{"bufferView", views + 1}, {"componentType", 5125}, {"count", g.indices.size()}, {"type", "SCALAR"}});
     doc["meshes"].push_back(
         {{"name", name},
-         {"primitives", {{{"attributes", {{"POSITION", accessors}}}, {"indices", accessors + 1}, {"material", material}}}}});
+         {"primitives",
+          {{{"attributes", {{"POSITION", accessors}}}, {"indices", accessors + 1}, {"material", material}}}}});
 }
 
 // Root (translated) -> Ring (mesh 0, rotated 45 degrees about y and translated) and PostA (mesh 1);
 // PostB (mesh 1 again, a matrix) is a second root; Orphan is in no scene and is dropped.
 json sceneJson(std::vector<uint8_t>& bin) {
-    json doc = {{"asset", {{"version", "2.0"}}}, {"bufferViews", json::array()}, {"accessors", json::array()},
+    json doc = {{"asset", {{"version", "2.0"}}},
+                {"bufferViews", json::array()},
+                {"accessors", json::array()},
                 {"meshes", json::array()}};
     addMesh(doc, bin, "RingMesh", torus(1.0f, 0.3f, 48, 24), 0);
     addMesh(doc, bin, "PostMesh", torus(0.6f, 0.4f, 40, 20), 1);
@@ -159,7 +168,8 @@ TEST(GltfSceneImportTest, KeepsNodesNamesTransformsAndReadsEachMeshOnce) {
     single["buffers"][0]["byteLength"] = bin.size();
     const std::vector<uint8_t> glb = lodbake_test::makeGlb(single, bin);
     lodbake::Result<lodbake::LoadedScene> flat = lodbake::readGltfSceneFromMemory(
-        glb.data(), glb.size(), "single.glb", [](const std::string&) -> lodbake::Result<std::vector<uint8_t>> {
+        glb.data(), glb.size(), "single.glb",
+        [](const std::string&) -> lodbake::Result<std::vector<uint8_t>> {
             return lodbake::invalidInput("no side files");
         },
         lodbake::ReadOptions{}, diagnostics);
@@ -178,13 +188,14 @@ TEST(GltfSceneImportTest, ANodeReachedTwiceIsAnError) {
     const std::vector<uint8_t> glb = lodbake_test::makeGlb(doc, bin);
     lodbake::Diagnostics diagnostics;
     lodbake::Result<lodbake::LoadedScene> scene = lodbake::readGltfSceneFromMemory(
-        glb.data(), glb.size(), "shared.glb", [](const std::string&) -> lodbake::Result<std::vector<uint8_t>> {
+        glb.data(), glb.size(), "shared.glb",
+        [](const std::string&) -> lodbake::Result<std::vector<uint8_t>> {
             return lodbake::invalidInput("no side files");
         },
         lodbake::ReadOptions{}, diagnostics);
     ASSERT_FALSE(scene.ok());
     EXPECT_EQ(scene.status().message(),
-              "shared.glb: node 2: reached twice from the scene (expected every node to have one parent)");
+              "shared.glb: node 2: reached twice from the scene (a cycle or a shared child; expected a tree)");
 }
 
 // Expects the pack node `n` to have the input node's name and transform members.
@@ -204,7 +215,8 @@ TEST(BakeSceneTest, TwoMeshSceneBakesIntoOneGroupPerMeshNodeWithTheInputsNodes) 
     const std::string pack1 = outDir() + "/scene_t1.glb", pack2 = outDir() + "/scene_t2.glb";
     const std::string merged = outDir() + "/scene_merged.glb", report = outDir() + "/scene_report.json";
     const std::string common = shellQuote(in) + " --levels 0.5,0.25 --quiet";
-    const CommandResult run1 = bake(common + " --threads 1 -o " + shellQuote(pack1) + " --report " + shellQuote(report));
+    const CommandResult run1 =
+        bake(common + " --threads 1 -o " + shellQuote(pack1) + " --report " + shellQuote(report));
     ASSERT_EQ(run1.exit_code, 0) << run1.output;
     const CommandResult run2 = bake(common + " --threads 2 -o " + shellQuote(pack2));
     ASSERT_EQ(run2.exit_code, 0) << run2.output;
