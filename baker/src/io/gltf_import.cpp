@@ -1229,7 +1229,6 @@ Result<LoadedMesh> flattenModel(const tinygltf::Model& model, const JsonPrepass&
     return loaded;
 }
 
-
 // ---- Scene graph (readGltfSceneFromMemory) ------------------------------------------------------
 
 bool hasTrianglePrimitive(const tinygltf::Mesh& mesh) {
