@@ -45,8 +45,9 @@ const char* kBakeHelp = R"(usage: lodbake bake IN... -o OUT.glb [--preset NAME|F
 
 Per input: repair -> LOD chain (errors measured against the repaired input, switch distances) ->
 texture levels (each level's textures downscaled to its on-screen size) -> one GLB pack. Each input
-becomes a LOD group: an MSFT_lod node (highest detail first) with MSFT_screencoverage in its extras
-and LODBAKE_lod_metrics; every level is a plain glTF mesh. Packs of a batch are baked in parallel;
+(each mesh node of a glTF scene) becomes a LOD group: an MSFT_lod node (highest detail first) with
+MSFT_screencoverage in its extras and LODBAKE_lod_metrics; every level is a plain glTF mesh. Packs
+of a batch are baked in parallel;
 their bytes do not depend on the thread count, the schedule, the current directory or input paths.
 See docs/bake.md and docs/pipeline.md.
 
@@ -77,6 +78,10 @@ options:
   --keep-unreadable-images  ship an image that is not a decodable PNG/JPEG byte for byte in every
                         level (with a warning) instead of failing (preset key
                         textures.keep_unreadable_images)
+  --merge-scene         glTF scenes: every mesh node into one LOD group, node transforms applied
+                        (preset key merge_scene); without it each mesh node is its own LOD group
+                        and the hierarchy, names, transforms and instancing are kept (docs/bake.md
+                        "Scenes")
   --report R.json       write per-level metrics, texture sizes, cache use and stage timings as JSON
   --depfile OUT.d       write a Makefile-syntax depfile listing every file read
   --cache-dir DIR       reuse packs whose inputs, settings and baker version are unchanged
@@ -103,6 +108,7 @@ struct CliOverrides {
     bool has_merge = false;
     MergeMode merge = MergeMode::Auto;
     bool keep_unreadable_images = false;
+    bool merge_scene = false;
 };
 
 void applyOverrides(const CliOverrides& o, BakeSettings& s) {
@@ -118,6 +124,7 @@ void applyOverrides(const CliOverrides& o, BakeSettings& s) {
     if (o.remove_covered_components) s.remove_covered_components = true;
     if (o.has_merge) s.merge = o.merge;
     if (o.keep_unreadable_images) s.textures.keep_unreadable_images = true;
+    if (o.merge_scene) s.merge_scene = true;
 }
 
 bool isFolderTarget(const std::string& out) {
@@ -342,6 +349,7 @@ int parseOverrides(Args& args, CliOverrides& overrides) {
         overrides.has_merge = true;
     }
     overrides.keep_unreadable_images = args.flags.count("--keep-unreadable-images") > 0;
+    overrides.merge_scene = args.flags.count("--merge-scene") > 0;
     if (overrides.adaptive_precision && overrides.no_adaptive_precision)
         return usageError("--adaptive-precision and --no-adaptive-precision exclude each other");
     if (overrides.pfrep_from_chain && overrides.no_pfrep_from_chain)
@@ -540,6 +548,7 @@ int runBake(int argc, char** argv) {
                     {"--no-adaptive-precision", nullptr, false},
                     {"--remove-covered-components", nullptr, false}, {"--merge", nullptr, true},
                     {"--keep-unreadable-images", nullptr, false},
+                    {"--merge-scene", nullptr, false},
                     {"--report", nullptr, true},
                     {"--depfile", nullptr, true},
                     {"--cache-dir", nullptr, true},

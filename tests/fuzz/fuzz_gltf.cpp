@@ -1,7 +1,7 @@
 // libFuzzer target for the glTF 2.0 / GLB importer (lodbake/io/gltf.h) with Draco, straight
-// from memory. Inputs starting with "glTF" take the GLB path, others the JSON path. Every external
-// buffer or image URI is served the input itself, which covers self-referencing buffers. Run with
-// scripts/fuzz.sh gltf SECONDS.
+// from memory, read flattened and as a scene graph. Inputs starting with "glTF" take the GLB path,
+// others the JSON path. Every external buffer or image URI is served the input itself, which covers
+// self-referencing buffers. Run with scripts/fuzz.sh gltf SECONDS.
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -23,5 +23,23 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     lodbake_fuzz::checkLoaded(lodbake::readGltfFromMemory(input.data(), input.size(),
                                                           is_glb ? "fuzz/model.glb" : "fuzz/model.gltf", loader,
                                                           options, diagnostics));
+    // The scene-graph reading of the same bytes: every mesh consistent, every index in range.
+    side_requests = 0;
+    lodbake::Result<lodbake::LoadedScene> scene = lodbake::readGltfSceneFromMemory(
+        input.data(), input.size(), is_glb ? "fuzz/model.glb" : "fuzz/model.gltf", loader, options, diagnostics);
+    if (!scene.ok() || !scene->isGraph()) {
+        lodbake_fuzz::checkLoaded(scene.ok() ? lodbake::Result<lodbake::LoadedMesh>(std::move(scene->flat))
+                                             : lodbake::Result<lodbake::LoadedMesh>(scene.status()));
+        return 0;
+    }
+    for (const lodbake::Mesh& mesh : scene->meshes)
+        if (!lodbake::checkMeshConsistency(mesh, "fuzz").ok()) __builtin_trap();
+    for (const lodbake::SceneNode& node : scene->nodes) {
+        if (node.mesh >= int32_t(scene->meshes.size())) __builtin_trap();
+        for (uint32_t c : node.children)
+            if (c >= scene->nodes.size()) __builtin_trap();
+    }
+    for (uint32_t r : scene->roots)
+        if (r >= scene->nodes.size()) __builtin_trap();
     return 0;
 }

@@ -310,6 +310,11 @@ Result<BakeOutput> bake(std::vector<BakeInput> inputs, const BakeSettings& setti
 
 Result<BakeOutput> bake(std::vector<BakeInput> inputs, const BakeSettings& settings, Diagnostics& diagnostics,
                         const BakeHooks& hooks) {
+    return bakeScene(std::move(inputs), PackScene{}, settings, diagnostics, hooks);
+}
+
+Result<BakeOutput> bakeScene(std::vector<BakeInput> inputs, PackScene scene, const BakeSettings& settings,
+                             Diagnostics& diagnostics, const BakeHooks& hooks) {
     LODBAKE_RETURN_IF_ERROR(validateSettings(settings, "settings"));
     if (inputs.empty()) return invalidInput("bake: no input meshes");
     std::unique_ptr<ScopedThreadLimit> limit;
@@ -352,6 +357,7 @@ Result<BakeOutput> bake(std::vector<BakeInput> inputs, const BakeSettings& setti
         output.assets.push_back(std::move(slot.report));
     }
     LODBAKE_RETURN_IF_ERROR(checkCompact(description));
+    description.scene = std::move(scene);
     StageTimer pack_timer(hooks, kWholePack, BakeStage::Pack);
     LODBAKE_ASSIGN_OR_RETURN(output.glb, writePackGlb(std::move(description)));
     return output;

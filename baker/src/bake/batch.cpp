@@ -61,6 +61,52 @@ double secondsSince(Clock::time_point t) {
     return std::chrono::duration<double>(Clock::now() - t).count();
 }
 
+// An input as a scene graph (glTF with several mesh nodes, unless merge_scene), else one mesh.
+Result<LoadedScene> readInputScene(const std::string& path, const BakeSettings& settings, const ReadOptions& read,
+                                   Diagnostics& diagnostics) {
+    if (!settings.merge_scene) return readMeshScene(path, read, diagnostics);
+    LoadedScene scene;
+    LODBAKE_ASSIGN_OR_RETURN(scene.flat, readMesh(path, read, diagnostics));
+    return scene;
+}
+
+// Appends an input's meshes to `inputs` and its nodes to `scene` (an input without a graph: one
+// root node named after its group). A graph's meshes are named after the glTF mesh, else the first
+// node that instances it, else "<group>_<mesh index>".
+void addToScene(const std::string& name, LoadedScene loaded, std::vector<BakeInput>& inputs, PackScene& scene) {
+    if (!loaded.isGraph()) {
+        PackNode node;
+        node.name_from_asset = true;
+        node.asset = int32_t(inputs.size());
+        scene.roots.push_back(uint32_t(scene.nodes.size()));
+        scene.nodes.push_back(std::move(node));
+        inputs.push_back({name, std::move(loaded.flat.mesh)});
+        return;
+    }
+    const uint32_t node_base = uint32_t(scene.nodes.size());
+    const int32_t asset_base = int32_t(inputs.size());
+    for (size_t m = 0; m < loaded.meshes.size(); ++m) {
+        std::string group = loaded.mesh_names[m];
+        for (const SceneNode& node : loaded.nodes)
+            if (group.empty() && node.mesh == int32_t(m)) group = node.name;
+        if (group.empty()) group = name + "_" + std::to_string(m);
+        inputs.push_back({group, std::move(loaded.meshes[m])});
+    }
+    for (SceneNode& from : loaded.nodes) {
+        PackNode node;
+        node.name = std::move(from.name);
+        node.matrix = std::move(from.matrix);
+        node.translation = std::move(from.translation);
+        node.rotation = std::move(from.rotation);
+        node.scale = std::move(from.scale);
+        node.world = from.world;
+        for (uint32_t c : from.children) node.children.push_back(node_base + c);
+        node.asset = from.mesh >= 0 ? asset_base + from.mesh : -1;
+        scene.nodes.push_back(std::move(node));
+    }
+    for (uint32_t r : loaded.roots) scene.roots.push_back(node_base + r);
+}
+
 void runJob(const BakeJob& job, size_t index, const BatchOptions& options, const BatchHooks& hooks,
             BakeJobResult& result) {
     const Clock::time_point start = Clock::now();
@@ -135,29 +181,33 @@ void runJob(const BakeJob& job, size_t index, const BatchOptions& options, const
     }
 
     std::vector<BakeInput> inputs;
+    PackScene scene;
+    bool has_graph = false;
     std::vector<std::vector<std::string>> files_read;
     for (size_t i = 0; i < job.inputs.size(); ++i) {
         const Clock::time_point t = Clock::now();
         const double cpu = processCpuSeconds(), thread_cpu = threadCpuSeconds();
         running(i, BakeStage::Load, true);
-        Result<LoadedMesh> loaded = readMesh(job.inputs[i], options.read, result.diagnostics);
+        Result<LoadedScene> loaded = readInputScene(job.inputs[i], job.settings, options.read, result.diagnostics);
         timed(i, BakeStage::Load, t, cpu, thread_cpu);
         if (!loaded.ok()) {
             result.status = loaded.status();
             return;
         }
-        files_read.push_back(loaded->source.files_read);
-        result.files_read.insert(result.files_read.end(), loaded->source.files_read.begin(),
-                                 loaded->source.files_read.end());
-        inputs.push_back({names[i], std::move(loaded->mesh)});
+        const SourceInfo& source = loaded->isGraph() ? loaded->source : loaded->flat.source;
+        files_read.push_back(source.files_read);
+        result.files_read.insert(result.files_read.end(), source.files_read.begin(), source.files_read.end());
+        has_graph |= loaded->isGraph();
+        addToScene(names[i], std::move(loaded).value(), inputs, scene);
     }
+    if (!has_graph) scene = PackScene{}; // no graph anywhere: the pack layout of plain inputs
     BakeSettings settings = job.settings;
     settings.threads = 0; // the batch's thread limit applies
     BakeHooks bake_hooks;
     bake_hooks.stage_done = stageDone;
     bake_hooks.stage_running = running;
     bake_hooks.release_memory = hooks.release_memory;
-    Result<BakeOutput> baked = bake(std::move(inputs), settings, result.diagnostics, bake_hooks);
+    Result<BakeOutput> baked = bakeScene(std::move(inputs), std::move(scene), settings, result.diagnostics, bake_hooks);
     if (!baked.ok()) {
         result.status = baked.status();
         return;

@@ -153,6 +153,7 @@ Status applyImpl(const Json& root, const std::string& name, BakeSettings& s) {
                  return expected(w, "one of \"auto\", \"poisson\", \"off\"", v);
              return Status::okStatus();
          }},
+        {"merge_scene", [&](const Json& v, const std::string& w) { return readBool(v, w, s.merge_scene); }},
         {"stream_precision",
          [&](const Json& v, const std::string&) {
              return applyObject(v, name, "/stream_precision", precision_handlers);
@@ -238,6 +239,7 @@ std::string settingsToJson(const BakeSettings& s) {
         j["pfrep_from_chain"] = s.pfrep_from_chain;
         j["remove_covered_components"] = s.remove_covered_components;
         j["merge"] = mergeModeName(s.merge);
+        j["merge_scene"] = s.merge_scene;
         j["stream_precision"] = {{"adaptive", s.stream_precision.adaptive},
                                  {"error_fraction", s.stream_precision.error_fraction},
                                  {"normal_bits", s.stream_precision.normal_bits},

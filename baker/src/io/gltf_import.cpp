@@ -1,6 +1,6 @@
 // glTF 2.0 / GLB import: container and reference checks, tinygltf parsing (images kept encoded),
 // accessor decoding with full bounds checks, KHR_mesh_quantization, KHR_draco_mesh_compression,
-// and scene flattening with node transforms applied.
+// and scene flattening with node transforms applied, or the scene kept as a graph of meshes read once.
 #include "lodbake/io/gltf.h"
 
 #include <algorithm>
@@ -1181,6 +1181,21 @@ void dropUnsampledTextures(const std::string& name, Diagnostics& diagnostics, Me
     }
 }
 
+// The extensions the document requires must be ones this reader decodes; returns whether its
+// accessors may be quantized (KHR_mesh_quantization).
+Result<bool> checkRequiredExtensions(const tinygltf::Model& model, const std::string& name) {
+    bool quantized = false;
+    for (const std::string& e : model.extensionsUsed)
+        if (e == lodrt::format::kExtKhrMeshQuantization) quantized = true;
+    for (const std::string& e : model.extensionsRequired)
+        if (e != lodrt::format::kExtKhrMeshQuantization && e != kDracoExtension)
+            return unsupported(name + ": extensionsRequired: extension \"" + e + "\" is not supported");
+    return quantized;
+}
+
+Result<LoadedMesh> flattenModel(const tinygltf::Model& model, const JsonPrepass& prepass, bool quantized, bool is_glb,
+                                const std::string& name, const ReadOptions& options, Diagnostics& diagnostics);
+
 Result<LoadedMesh> readGltfImpl(const uint8_t* data, size_t size, const std::string& name,
                                 const SideFileLoader& load_side_file, const ReadOptions& options,
                                 Diagnostics& diagnostics) {
@@ -1189,14 +1204,13 @@ Result<LoadedMesh> readGltfImpl(const uint8_t* data, size_t size, const std::str
     tinygltf::Model model;
     LODBAKE_RETURN_IF_ERROR(
         parseGltfDocument(data, size, name, load_side_file, options, diagnostics, is_glb, prepass, model));
+    LODBAKE_ASSIGN_OR_RETURN(const bool quantized, checkRequiredExtensions(model, name));
+    return flattenModel(model, prepass, quantized, is_glb, name, options, diagnostics);
+}
 
-    bool quantized = false;
-    for (const std::string& e : model.extensionsUsed)
-        if (e == lodrt::format::kExtKhrMeshQuantization) quantized = true;
-    for (const std::string& e : model.extensionsRequired)
-        if (e != lodrt::format::kExtKhrMeshQuantization && e != kDracoExtension)
-            return unsupported(name + ": extensionsRequired: extension \"" + e + "\" is not supported");
-
+// Every mesh instance of the parsed document, in world space, as one mesh (readGltfFromMemory).
+Result<LoadedMesh> flattenModel(const tinygltf::Model& model, const JsonPrepass& prepass, bool quantized, bool is_glb,
+                                const std::string& name, const ReadOptions& options, Diagnostics& diagnostics) {
     LoadedMesh loaded;
     loaded.source.encoding = is_glb ? "glb" : "gltf";
     loaded.source.face_kind = "triangles";
@@ -1215,6 +1229,181 @@ Result<LoadedMesh> readGltfImpl(const uint8_t* data, size_t size, const std::str
     return loaded;
 }
 
+// ---- Scene graph (readGltfSceneFromMemory) ------------------------------------------------------
+
+bool hasTrianglePrimitive(const tinygltf::Mesh& mesh) {
+    for (const tinygltf::Primitive& p : mesh.primitives)
+        if (!(p.mode >= TINYGLTF_MODE_POINTS && p.mode <= TINYGLTF_MODE_LINE_STRIP)) return true;
+    return false;
+}
+
+// The nodes the default scene reaches, with their world transforms. glTF nodes form strict trees,
+// so a node reached twice (a shared child, a cycle, a root listed twice) is an error: the graph kept
+// would not say which parent places it.
+struct SceneWalk {
+    std::vector<bool> reached;
+    std::vector<Mat4> world;
+    size_t mesh_nodes = 0; // reached nodes whose mesh has a triangle primitive
+};
+
+Status walkScene(const tinygltf::Model& model, const std::string& name, SceneWalk& walk) {
+    walk.reached.assign(model.nodes.size(), false);
+    walk.world.assign(model.nodes.size(), identity());
+    const int scene_index = model.defaultScene >= 0 ? model.defaultScene : 0;
+    std::vector<std::pair<int, Mat4>> stack;
+    const auto& roots = model.scenes[size_t(scene_index)].nodes;
+    for (auto it = roots.rbegin(); it != roots.rend(); ++it) stack.push_back({*it, identity()});
+    while (!stack.empty()) {
+        const auto [index, parent] = stack.back();
+        stack.pop_back();
+        const std::string where = name + ": node " + std::to_string(index);
+        if (index < 0 || size_t(index) >= model.nodes.size())
+            return invalidInput(where + ": does not exist (" + std::to_string(model.nodes.size()) + " nodes)");
+        if (walk.reached[size_t(index)])
+            return invalidInput(where + ": reached twice from the scene (a cycle or a shared child; expected a tree)");
+        walk.reached[size_t(index)] = true;
+        const tinygltf::Node& node = model.nodes[size_t(index)];
+        LODBAKE_ASSIGN_OR_RETURN(Mat4 local, localMatrix(node, where));
+        walk.world[size_t(index)] = multiply(parent, local);
+        if (node.mesh >= 0) {
+            if (size_t(node.mesh) >= model.meshes.size())
+                return invalidInput(where + ": mesh " + std::to_string(node.mesh) + " does not exist");
+            if (hasTrianglePrimitive(model.meshes[size_t(node.mesh)])) ++walk.mesh_nodes;
+        }
+        for (auto it = node.children.rbegin(); it != node.children.rend(); ++it)
+            stack.push_back({*it, walk.world[size_t(index)]});
+    }
+    return Status::okStatus();
+}
+
+// Gives `mesh` copies of the materials its sub-meshes use and of the textures those sample (in file
+// order, renumbered), so each mesh of a scene carries only what it draws.
+void keepUsedMaterials(const Mesh& all, Mesh& mesh) {
+    std::vector<int> material_map(all.materials.size(), -1);
+    for (const SubMesh& sub : mesh.submeshes)
+        if (sub.material.isValid() && sub.material.value < all.materials.size()) material_map[sub.material.value] = 0;
+    std::vector<int> texture_map(all.textures.size(), -1);
+    for (size_t m = 0; m < all.materials.size(); ++m) {
+        if (material_map[m] < 0) continue;
+        material_map[m] = int(mesh.materials.size());
+        mesh.materials.push_back(all.materials[m]);
+    }
+    for (Material& material : mesh.materials)
+        for (TextureSlot* slot : {&material.base_color_texture, &material.metallic_roughness_texture,
+                                  &material.normal_texture, &material.occlusion_texture, &material.emissive_texture})
+            if (slot->isSet() && size_t(slot->texture) < all.textures.size()) texture_map[size_t(slot->texture)] = 0;
+    for (size_t t = 0; t < all.textures.size(); ++t) {
+        if (texture_map[t] < 0) continue;
+        texture_map[t] = int(mesh.textures.size());
+        mesh.textures.push_back(all.textures[t]);
+    }
+    for (Material& material : mesh.materials)
+        for (TextureSlot* slot : {&material.base_color_texture, &material.metallic_roughness_texture,
+                                  &material.normal_texture, &material.occlusion_texture, &material.emissive_texture})
+            if (slot->isSet() && size_t(slot->texture) < texture_map.size())
+                slot->texture = texture_map[size_t(slot->texture)];
+    for (SubMesh& sub : mesh.submeshes)
+        if (sub.material.isValid() && sub.material.value < material_map.size())
+            sub.material = MaterialId(uint32_t(material_map[sub.material.value]));
+}
+
+// Reads glTF mesh `m` once, in its own space, with the materials it uses.
+Result<Mesh> readLocalMesh(const tinygltf::Model& model, int m, const Mesh& all, const JsonPrepass& prepass,
+                           const std::string& name, bool quantized, const ReadOptions& options,
+                           Diagnostics& diagnostics, SourceInfo& counts) {
+    std::vector<PrimitiveData> parts;
+    SourceInfo source;
+    LODBAKE_RETURN_IF_ERROR(readInstanceParts(model, {Instance{m, identity()}}, prepass, name, quantized, options,
+                                              diagnostics, parts, source));
+    if (source.encoding == "+draco" && counts.encoding.find("+draco") == std::string::npos) counts.encoding += "+draco";
+    counts.file_vertex_count += source.file_vertex_count;
+    counts.file_face_count += source.file_face_count;
+    if (counts.file_vertex_count > options.max_vertex_count || counts.file_face_count > options.max_face_count)
+        return resourceLimit(name + ": mesh " + std::to_string(m) +
+                             ": the scene exceeds the reader's vertex or face limit");
+    Mesh mesh;
+    mergeParts(parts, mesh);
+    keepUsedMaterials(all, mesh);
+    const std::string& mesh_name = model.meshes[size_t(m)].name;
+    dropUnsampledTextures(name + ": mesh \"" + (mesh_name.empty() ? std::to_string(m) : mesh_name) + "\"",
+                          diagnostics, mesh);
+    LODBAKE_RETURN_IF_ERROR(checkMeshConsistency(mesh, name));
+    return mesh;
+}
+
+// The reached nodes in file order, each mesh read once (meshes without triangles are left out and
+// their nodes kept without a mesh).
+Result<LoadedScene> buildScene(const tinygltf::Model& model, const SceneWalk& walk, const JsonPrepass& prepass,
+                               bool quantized, bool is_glb, const std::string& name, const ReadOptions& options,
+                               Diagnostics& diagnostics) {
+    LoadedScene scene;
+    scene.source.encoding = is_glb ? "glb" : "gltf";
+    scene.source.face_kind = "triangles";
+    Mesh all;
+    LODBAKE_RETURN_IF_ERROR(importMaterials(model, name, options, all, diagnostics));
+    std::vector<int> node_map(model.nodes.size(), -1), mesh_map(model.meshes.size(), -1);
+    for (size_t n = 0; n < model.nodes.size(); ++n) {
+        if (!walk.reached[n]) continue;
+        node_map[n] = int(scene.nodes.size());
+        const tinygltf::Node& node = model.nodes[n];
+        SceneNode out;
+        out.name = node.name;
+        out.matrix = node.matrix;
+        out.translation = node.translation;
+        out.rotation = node.rotation;
+        out.scale = node.scale;
+        out.world = walk.world[n];
+        const int m = node.mesh;
+        if (m >= 0 && !hasTrianglePrimitive(model.meshes[size_t(m)])) {
+            diagnostics.note(name + ": node " + std::to_string(n) + ": mesh " + std::to_string(m) +
+                             " has no triangle primitive; the node is kept without it");
+        } else if (m >= 0) {
+            if (mesh_map[size_t(m)] < 0) {
+                LODBAKE_ASSIGN_OR_RETURN(Mesh mesh, readLocalMesh(model, m, all, prepass, name, quantized, options,
+                                                                  diagnostics, scene.source));
+                mesh_map[size_t(m)] = int(scene.meshes.size());
+                scene.meshes.push_back(std::move(mesh));
+                scene.mesh_names.push_back(model.meshes[size_t(m)].name);
+            }
+            out.mesh = mesh_map[size_t(m)];
+        }
+        scene.nodes.push_back(std::move(out));
+    }
+    for (size_t n = 0; n < model.nodes.size(); ++n) {
+        if (!walk.reached[n]) continue;
+        for (int child : model.nodes[n].children)
+            scene.nodes[size_t(node_map[n])].children.push_back(uint32_t(node_map[size_t(child)]));
+    }
+    const int scene_index = model.defaultScene >= 0 ? model.defaultScene : 0;
+    for (int root : model.scenes[size_t(scene_index)].nodes) scene.roots.push_back(uint32_t(node_map[size_t(root)]));
+    return scene;
+}
+
+Result<LoadedScene> readGltfSceneImpl(const uint8_t* data, size_t size, const std::string& name,
+                                      const SideFileLoader& load_side_file, const ReadOptions& options,
+                                      Diagnostics& diagnostics) {
+    const bool is_glb = size >= 4 && readU32(data) == kGlbMagic;
+    JsonPrepass prepass;
+    tinygltf::Model model;
+    LODBAKE_RETURN_IF_ERROR(
+        parseGltfDocument(data, size, name, load_side_file, options, diagnostics, is_glb, prepass, model));
+    LODBAKE_ASSIGN_OR_RETURN(const bool quantized, checkRequiredExtensions(model, name));
+    SceneWalk walk;
+    if (!model.scenes.empty()) {
+        const int scene_index = model.defaultScene >= 0 ? model.defaultScene : 0;
+        if (size_t(scene_index) >= model.scenes.size())
+            return invalidInput(name + ": scene: default scene " + std::to_string(scene_index) + " does not exist");
+        LODBAKE_RETURN_IF_ERROR(walkScene(model, name, walk));
+    }
+    if (walk.mesh_nodes < 2) {
+        LoadedScene flat;
+        LODBAKE_ASSIGN_OR_RETURN(flat.flat,
+                                 flattenModel(model, prepass, quantized, is_glb, name, options, diagnostics));
+        return flat;
+    }
+    return buildScene(model, walk, prepass, quantized, is_glb, name, options, diagnostics);
+}
+
 } // namespace
 
 Result<LoadedMesh> readGltfFromMemory(const uint8_t* data, size_t size, const std::string& name,
@@ -1222,6 +1411,16 @@ Result<LoadedMesh> readGltfFromMemory(const uint8_t* data, size_t size, const st
                                       Diagnostics& diagnostics) {
     try {
         return readGltfImpl(data, size, name, load_side_file, options, diagnostics);
+    } catch (const std::exception& e) {
+        return invalidInput(name + ": glTF parser failed: " + std::string(e.what()));
+    }
+}
+
+Result<LoadedScene> readGltfSceneFromMemory(const uint8_t* data, size_t size, const std::string& name,
+                                            const SideFileLoader& load_side_file, const ReadOptions& options,
+                                            Diagnostics& diagnostics) {
+    try {
+        return readGltfSceneImpl(data, size, name, load_side_file, options, diagnostics);
     } catch (const std::exception& e) {
         return invalidInput(name + ": glTF parser failed: " + std::string(e.what()));
     }

@@ -83,6 +83,27 @@ Result<LoadedMesh> readMesh(const std::string& path, const ReadOptions& options,
     return loaded;
 }
 
+Result<LoadedScene> readMeshScene(const std::string& path, const ReadOptions& options, Diagnostics& diagnostics) {
+    const MeshFormat format = formatFromPath(path);
+    LoadedScene scene;
+    if (format != MeshFormat::Gltf && format != MeshFormat::Glb) {
+        LODBAKE_ASSIGN_OR_RETURN(scene.flat, readMesh(path, options, diagnostics));
+        return scene;
+    }
+    LODBAKE_ASSIGN_OR_RETURN(FileBytes bytes, readLargeFile(path));
+    SourceInfo side;
+    LODBAKE_ASSIGN_OR_RETURN(scene,
+                             readGltfSceneFromMemory(bytes.data(), bytes.size(), path, fileLoader(side), options,
+                                                     diagnostics));
+    SourceInfo& source = scene.isGraph() ? scene.source : scene.flat.source;
+    source.format = format;
+    source.files_read.clear();
+    source.files_read.push_back(path);
+    for (const std::string& f : side.files_read) source.files_read.push_back(f);
+    if (!scene.isGraph()) LODBAKE_RETURN_IF_ERROR(checkMeshConsistency(scene.flat.mesh, path));
+    return scene;
+}
+
 Status writeMesh(const Mesh& mesh, const std::string& path, const WriteOptions& options, Diagnostics& diagnostics) {
     (void)diagnostics;
     LODBAKE_RETURN_IF_ERROR(checkMeshConsistency(mesh, path));

@@ -278,6 +278,190 @@ size_t binaryBound(const PackDescription& description) {
     return bytes;
 }
 
+// The asset's level meshes with their mesh and primitive extensions, in level order; returns their
+// mesh indices. `owned`, when set, is the asset itself: each level is released once in the model.
+Result<std::vector<int>> addAssetMeshes(tinygltf::Model& model, BufferBuilder& buffer, ModelDedupe& dedupe,
+                                        const PackAsset& asset, PackAsset* owned, std::set<std::string>& used,
+                                        std::set<std::string>& streams, std::vector<ViewPatch>& patches) {
+    if (asset.levels.empty()) return invalidInput("pack: asset \"" + asset.name + "\" has no levels");
+    dedupe.first_material = model.materials.size(); // share materials within one asset only
+    std::vector<int> meshes;
+    for (size_t l = 0; l < asset.levels.size(); ++l) {
+        const PackLevel& level = asset.levels[l];
+        const std::string level_name = asset.name + "_lod" + std::to_string(l);
+        std::vector<std::pair<uint32_t, uint32_t>> ranges;
+        for (const PackLevel::VertexRange& r : level.primitive_vertex_ranges) ranges.emplace_back(r.first, r.count);
+        Result<int> mesh_index =
+            addMeshToModel(model, buffer, level.mesh, &dedupe, ranges.empty() ? nullptr : &ranges);
+        if (!mesh_index.ok())
+            return Status(mesh_index.status().code(), level_name + ": " + mesh_index.status().message());
+        tinygltf::Mesh& gmesh = model.meshes[size_t(*mesh_index)];
+        gmesh.name = level_name;
+        ViewPatch where;
+        where.object = size_t(*mesh_index);
+        for (const PackExtension& e : level.mesh_extensions)
+            LODBAKE_RETURN_IF_ERROR(addExtension(e, buffer, gmesh.extensions, used, streams, where, patches));
+        if (!level.primitive_extensions.empty() && level.primitive_extensions.size() != gmesh.primitives.size())
+            return internalError(level_name + ": primitive extension lists do not match the primitives");
+        where.scope = ViewPatch::Scope::Primitive;
+        for (size_t p = 0; p < level.primitive_extensions.size(); ++p) {
+            where.primitive = p;
+            for (const PackExtension& e : level.primitive_extensions[p])
+                LODBAKE_RETURN_IF_ERROR(
+                    addExtension(e, buffer, gmesh.primitives[p].extensions, used, streams, where, patches));
+        }
+        if (owned) releaseLevel(owned->levels[l]);
+        meshes.push_back(*mesh_index);
+    }
+    return meshes;
+}
+
+// MSFT_lod on nodes[0] (the other nodes, coarser in order) and its MSFT_screencoverage extras.
+void setLodGroup(tinygltf::Model& model, const std::vector<int>& nodes, const std::vector<double>& screen_coverage,
+                 std::set<std::string>& used) {
+    if (nodes.size() < 2) return;
+    tinygltf::Node& root = model.nodes[size_t(nodes[0])];
+    tinygltf::Value::Array ids;
+    for (size_t l = 1; l < nodes.size(); ++l) ids.push_back(tinygltf::Value(nodes[l]));
+    tinygltf::Value::Object lod;
+    lod["ids"] = tinygltf::Value(std::move(ids));
+    root.extensions[lodrt::format::kExtMsftLod] = tinygltf::Value(std::move(lod));
+    used.insert(lodrt::format::kExtMsftLod);
+    if (screen_coverage.size() == nodes.size()) {
+        tinygltf::Value::Array coverage;
+        for (double c : screen_coverage) coverage.push_back(tinygltf::Value(c));
+        tinygltf::Value::Object extras;
+        extras[lodrt::format::kMsftScreenCoverage] = tinygltf::Value(std::move(coverage));
+        root.extras = tinygltf::Value(std::move(extras));
+    }
+}
+
+// ---- Scene graphs (PackScene) -------------------------------------------------------------------
+
+// Indices in range, one parent per node, roots without a parent, transforms of the right sizes.
+Status checkScene(const PackDescription& description) {
+    const PackScene& scene = description.scene;
+    std::vector<int> parents(scene.nodes.size(), 0);
+    for (size_t n = 0; n < scene.nodes.size(); ++n) {
+        const PackNode& node = scene.nodes[n];
+        const std::string where = "pack: scene node " + std::to_string(n);
+        if (node.asset >= 0 && size_t(node.asset) >= description.assets.size())
+            return internalError(where + ": asset " + std::to_string(node.asset) + " does not exist");
+        if (!node.matrix.empty() && node.matrix.size() != 16) return internalError(where + ": matrix needs 16 numbers");
+        if ((!node.translation.empty() && node.translation.size() != 3) ||
+            (!node.rotation.empty() && node.rotation.size() != 4) || (!node.scale.empty() && node.scale.size() != 3))
+            return internalError(where + ": translation, rotation or scale of the wrong size");
+        for (uint32_t c : node.children) {
+            if (c >= scene.nodes.size() || ++parents[c] > 1)
+                return internalError(where + ": child " + std::to_string(c) + " missing or with two parents");
+        }
+    }
+    for (uint32_t r : scene.roots)
+        if (r >= scene.nodes.size() || parents[r] != 0)
+            return internalError("pack: scene root " + std::to_string(r) + " missing or a child");
+    if (scene.roots.empty()) return internalError("pack: scene without roots");
+    return Status::okStatus();
+}
+
+bool isIdentity(const std::array<double, 16>& m) {
+    for (size_t i = 0; i < 16; ++i)
+        if (m[i] != (i % 5 == 0 ? 1.0 : 0.0)) return false;
+    return true;
+}
+
+// The input's local transform, as written.
+void setLocalTransform(const PackNode& from, tinygltf::Node& node) {
+    if (!from.matrix.empty()) {
+        node.matrix = from.matrix;
+        return;
+    }
+    node.translation = from.translation;
+    node.rotation = from.rotation;
+    node.scale = from.scale;
+}
+
+// The lower levels of the group on scene node `n` (model node `n`): nodes outside the scene (as
+// MSFT_lod has them) placed where LOD0 is: a root's own transform, a child's world matrix (an
+// engine puts a lower level in LOD0's place with the level node's own transform).
+void addLowerLevelNodes(tinygltf::Model& model, const PackScene& scene, size_t n, bool is_root,
+                        const std::string& base_name, const std::vector<int>& meshes, std::vector<int>& nodes) {
+    const PackNode& from = scene.nodes[n];
+    nodes.push_back(int(n));
+    for (size_t l = 1; l < meshes.size(); ++l) {
+        tinygltf::Node node;
+        node.name = base_name + "_lod" + std::to_string(l);
+        node.mesh = meshes[l];
+        if (is_root)
+            setLocalTransform(from, node);
+        else if (!isIdentity(from.world))
+            node.matrix.assign(from.world.begin(), from.world.end());
+        model.nodes.push_back(std::move(node));
+        nodes.push_back(int(model.nodes.size() - 1));
+    }
+}
+
+// The scene graph: every PackScene node as model node of the same index (name, transform, children),
+// each asset's level meshes written once, and on every node that names an asset a LOD group over
+// nodes of its own that share those meshes. The asset's node extensions are written with the first
+// such node; later instances copy them (their buffer views are shared).
+Status addSceneGraph(tinygltf::Model& model, BufferBuilder& buffer, ModelDedupe& dedupe,
+                     const PackDescription& description, PackDescription* owned, std::set<std::string>& used,
+                     std::set<std::string>& streams, std::vector<ViewPatch>& patches, tinygltf::Scene& out) {
+    LODBAKE_RETURN_IF_ERROR(checkScene(description));
+    const PackScene& scene = description.scene;
+    std::vector<std::vector<int>> asset_meshes;
+    for (size_t a = 0; a < description.assets.size(); ++a) {
+        LODBAKE_ASSIGN_OR_RETURN(std::vector<int> meshes,
+                                 addAssetMeshes(model, buffer, dedupe, description.assets[a],
+                                                owned ? &owned->assets[a] : nullptr, used, streams, patches));
+        asset_meshes.push_back(std::move(meshes));
+    }
+    std::vector<bool> is_child(scene.nodes.size(), false);
+    for (const PackNode& from : scene.nodes) {
+        tinygltf::Node node;
+        node.name = from.name_from_asset && from.asset >= 0 ? description.assets[size_t(from.asset)].name : from.name;
+        setLocalTransform(from, node);
+        for (uint32_t c : from.children) {
+            node.children.push_back(int(c));
+            is_child[c] = true;
+        }
+        if (from.asset >= 0) node.mesh = asset_meshes[size_t(from.asset)][0];
+        model.nodes.push_back(std::move(node));
+    }
+    std::vector<int> first_instance(description.assets.size(), -1);
+    for (size_t n = 0; n < scene.nodes.size(); ++n) {
+        const int a = scene.nodes[n].asset;
+        if (a < 0) continue;
+        const PackAsset& asset = description.assets[size_t(a)];
+        const std::string base = model.nodes[n].name.empty() ? asset.name : model.nodes[n].name;
+        std::vector<int> nodes;
+        addLowerLevelNodes(model, scene, n, !is_child[n], base, asset_meshes[size_t(a)], nodes);
+        setLodGroup(model, nodes, asset.screen_coverage, used);
+        ViewPatch where;
+        where.scope = ViewPatch::Scope::Node;
+        where.object = n;
+        const int first = first_instance[size_t(a)];
+        if (first < 0) {
+            first_instance[size_t(a)] = int(n);
+            for (const PackExtension& e : asset.node_extensions)
+                LODBAKE_RETURN_IF_ERROR(
+                    addExtension(e, buffer, model.nodes[n].extensions, used, streams, where, patches));
+            continue;
+        }
+        for (const PackExtension& e : asset.node_extensions)
+            model.nodes[n].extensions[e.name] = model.nodes[size_t(first)].extensions[e.name];
+        const size_t patch_count = patches.size();
+        for (size_t p = 0; p < patch_count; ++p)
+            if (patches[p].scope == ViewPatch::Scope::Node && patches[p].object == size_t(first)) {
+                ViewPatch copy = patches[p];
+                copy.object = n;
+                patches.push_back(std::move(copy));
+            }
+    }
+    for (uint32_t r : scene.roots) out.nodes.push_back(int(r));
+    return Status::okStatus();
+}
+
 // `owned`, when set, is `description` itself: each level's data is released as soon as the model
 // holds a copy, so the pack's bytes never exist twice beside all the meshes.
 Result<std::vector<uint8_t>> writeImpl(const PackDescription& description, PackDescription* owned) {
@@ -290,58 +474,25 @@ Result<std::vector<uint8_t>> writeImpl(const PackDescription& description, PackD
     std::set<std::string> used, streams;
     std::vector<ViewPatch> patches;
     tinygltf::Scene scene;
-    for (size_t a = 0; a < description.assets.size(); ++a) {
+    if (!description.scene.empty()) {
+        LODBAKE_RETURN_IF_ERROR(
+            addSceneGraph(model, buffer, dedupe, description, owned, used, streams, patches, scene));
+    }
+    for (size_t a = 0; a < description.assets.size() && description.scene.empty(); ++a) {
         const PackAsset& asset = description.assets[a];
-        if (asset.levels.empty()) return invalidInput("pack: asset \"" + asset.name + "\" has no levels");
-        dedupe.first_material = model.materials.size(); // share materials within one asset only
+        LODBAKE_ASSIGN_OR_RETURN(std::vector<int> meshes,
+                                 addAssetMeshes(model, buffer, dedupe, asset, owned ? &owned->assets[a] : nullptr,
+                                                used, streams, patches));
         std::vector<int> nodes;
-        for (size_t l = 0; l < asset.levels.size(); ++l) {
-            const PackLevel& level = asset.levels[l];
-            const std::string level_name = asset.name + "_lod" + std::to_string(l);
-            std::vector<std::pair<uint32_t, uint32_t>> ranges;
-            for (const PackLevel::VertexRange& r : level.primitive_vertex_ranges) ranges.emplace_back(r.first, r.count);
-            Result<int> mesh_index =
-                addMeshToModel(model, buffer, level.mesh, &dedupe, ranges.empty() ? nullptr : &ranges);
-            if (!mesh_index.ok())
-                return Status(mesh_index.status().code(), level_name + ": " + mesh_index.status().message());
-            tinygltf::Mesh& gmesh = model.meshes[size_t(*mesh_index)];
-            gmesh.name = level_name;
-            ViewPatch where;
-            where.object = size_t(*mesh_index);
-            for (const PackExtension& e : level.mesh_extensions)
-                LODBAKE_RETURN_IF_ERROR(addExtension(e, buffer, gmesh.extensions, used, streams, where, patches));
-            if (!level.primitive_extensions.empty() && level.primitive_extensions.size() != gmesh.primitives.size())
-                return internalError(level_name + ": primitive extension lists do not match the primitives");
-            where.scope = ViewPatch::Scope::Primitive;
-            for (size_t p = 0; p < level.primitive_extensions.size(); ++p) {
-                where.primitive = p;
-                for (const PackExtension& e : level.primitive_extensions[p])
-                    LODBAKE_RETURN_IF_ERROR(
-                        addExtension(e, buffer, gmesh.primitives[p].extensions, used, streams, where, patches));
-            }
-            if (owned) releaseLevel(owned->assets[a].levels[l]);
+        for (size_t l = 0; l < meshes.size(); ++l) {
             tinygltf::Node node;
-            node.name = l == 0 ? asset.name : level_name;
-            node.mesh = *mesh_index;
+            node.name = l == 0 ? asset.name : asset.name + "_lod" + std::to_string(l);
+            node.mesh = meshes[l];
             model.nodes.push_back(std::move(node));
             nodes.push_back(int(model.nodes.size() - 1));
         }
+        setLodGroup(model, nodes, asset.screen_coverage, used);
         tinygltf::Node& root = model.nodes[size_t(nodes[0])];
-        if (nodes.size() > 1) {
-            tinygltf::Value::Array ids;
-            for (size_t l = 1; l < nodes.size(); ++l) ids.push_back(tinygltf::Value(nodes[l]));
-            tinygltf::Value::Object lod;
-            lod["ids"] = tinygltf::Value(std::move(ids));
-            root.extensions[lodrt::format::kExtMsftLod] = tinygltf::Value(std::move(lod));
-            used.insert(lodrt::format::kExtMsftLod);
-            if (asset.screen_coverage.size() == nodes.size()) {
-                tinygltf::Value::Array coverage;
-                for (double c : asset.screen_coverage) coverage.push_back(tinygltf::Value(c));
-                tinygltf::Value::Object extras;
-                extras[lodrt::format::kMsftScreenCoverage] = tinygltf::Value(std::move(coverage));
-                root.extras = tinygltf::Value(std::move(extras));
-            }
-        }
         ViewPatch where;
         where.scope = ViewPatch::Scope::Node;
         where.object = size_t(nodes[0]);

@@ -106,7 +106,9 @@ TEST(BakeConfigTest, PrintedConfigHasSortedKeysRoundTripsAndMatchesTheSchema) {
     std::istringstream lines(text);
     for (std::string line; std::getline(lines, line);)
         if (line.rfind("  \"", 0) == 0) keys.push_back(line.substr(3, line.find('"', 3) - 3));
-    ASSERT_EQ(keys.size(), 16u) << text;
+    // Every schema property, each once (the schema lists "version" too).
+    std::ifstream schema_in(lodbake_test::sourceDir() + "/schemas/config/bake_preset.schema.json");
+    ASSERT_EQ(keys.size(), nlohmann::json::parse(schema_in)["properties"].size()) << text;
     EXPECT_TRUE(std::is_sorted(keys.begin(), keys.end())) << text;
     BakeSettings again;
     ASSERT_TRUE(applyPresetJson(text, "printed", again).ok());

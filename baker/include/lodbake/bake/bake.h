@@ -51,6 +51,12 @@ Result<BakeOutput> bake(std::vector<BakeInput> inputs, const BakeSettings& setti
 Result<BakeOutput> bake(std::vector<BakeInput> inputs, const BakeSettings& settings, Diagnostics& diagnostics,
                         const BakeHooks& hooks);
 
+/// As above for inputs that keep a scene graph (docs/bake.md "Scenes"): `scene`'s nodes name inputs
+/// by index (PackNode::asset); each input is baked once however many nodes instance it, and the
+/// pack holds the graph with a LOD group on every node that names an input. An empty scene is bake().
+Result<BakeOutput> bakeScene(std::vector<BakeInput> inputs, PackScene scene, const BakeSettings& settings,
+                             Diagnostics& diagnostics, const BakeHooks& hooks);
+
 /// The report as JSON (stable key order): settings echo, per asset the repair leftovers, every
 /// level's metrics and texture sizes, and the pack size.
 std::string bakeReportJson(const BakeOutput& output, const BakeSettings& settings);

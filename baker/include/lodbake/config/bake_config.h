@@ -63,6 +63,8 @@ struct BakeSettings {
                                             // error of the rest (SimplifyOptions::remove_covered_components)
     StreamPrecisionSettings stream_precision;
     MergeMode merge = MergeMode::Auto; // merge overlapping range views into one surface before the chain
+    bool merge_scene = false; // glTF scenes: all mesh nodes as one LOD group (transforms applied) instead of
+                              // one group per mesh node with the hierarchy kept
 };
 
 /// Applies the preset text `json_text` (from file `name`, used in messages) over `settings`. Keys are

@@ -29,6 +29,15 @@ Result<LoadedMesh> readGltfFromMemory(const uint8_t* data, size_t size, const st
                                       const SideFileLoader& load_side_file, const ReadOptions& options,
                                       Diagnostics& diagnostics);
 
+/// Reads a glTF document as a scene graph (LoadedScene, mesh_io.h) when its default scene instances
+/// two or more mesh nodes with triangles; otherwise returns `flat` = readGltfFromMemory(). Meshes are
+/// read once each, untransformed; nodes keep their names, their transforms as written, their children
+/// and their mesh (-1 when the mesh has no triangle primitive). Same checks and messages as
+/// readGltfFromMemory.
+Result<LoadedScene> readGltfSceneFromMemory(const uint8_t* data, size_t size, const std::string& name,
+                                            const SideFileLoader& load_side_file, const ReadOptions& options,
+                                            Diagnostics& diagnostics);
+
 struct GltfWriteOptions {
     bool binary = true;   // GLB (true) or .gltf JSON with a side .bin
     std::string bin_name; // .gltf only: name of the side buffer file (written percent-encoded)

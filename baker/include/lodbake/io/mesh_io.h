@@ -3,6 +3,7 @@
 // check the magic bytes). Per-format entry points are in ply.h, obj.h, off.h, conf.h and gltf.h; they
 // share the plain types declared here.
 
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -54,6 +55,38 @@ using SideFileLoader = std::function<Result<std::vector<uint8_t>>(const std::str
 /// Loads a file as one flattened mesh (glTF: all triangle primitives, node transforms applied).
 /// Errors are one line naming the file, the element and what was expected.
 Result<LoadedMesh> readMesh(const std::string& path, const ReadOptions& options, Diagnostics& diagnostics);
+
+/// One node of a scene kept as a graph (glTF): its name, its local transform exactly as the file
+/// wrote it (a matrix, or any of translation / rotation / scale), its world transform, its children
+/// and the mesh it instances. Two nodes with the same `mesh` instance one mesh.
+struct SceneNode {
+    std::string name;
+    std::vector<double> matrix;      // 16 numbers, column-major, or empty
+    std::vector<double> translation; // 3 numbers or empty
+    std::vector<double> rotation;    // unit quaternion x, y, z, w, or empty
+    std::vector<double> scale;       // 3 numbers or empty
+    std::array<double, 16> world{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1}; // parents' transforms composed
+    std::vector<uint32_t> children;  // indices into LoadedScene::nodes
+    int32_t mesh = -1;               // index into LoadedScene::meshes, -1 for none
+};
+
+/// A file read either as a scene graph or as one flattened mesh. glTF scenes whose default scene
+/// instances two or more mesh nodes are kept as a graph: every distinct glTF mesh with triangles in
+/// its own (local) space, holding only the materials and textures it uses, and the nodes reachable
+/// from the default scene in file order. Everything else (one mesh node, no scene, PLY/OBJ/OFF/.conf)
+/// is `flat`, exactly what readMesh() returns.
+struct LoadedScene {
+    std::vector<Mesh> meshes;
+    std::vector<std::string> mesh_names; // the glTF mesh names (may be empty)
+    std::vector<SceneNode> nodes;        // empty: not a graph, see `flat`
+    std::vector<uint32_t> roots;         // the default scene's nodes
+    SourceInfo source;                   // graph only (else flat.source)
+    LoadedMesh flat;
+    bool isGraph() const { return !nodes.empty(); }
+};
+
+/// Reads `path` as a scene (see LoadedScene); formats without a scene graph give `flat`.
+Result<LoadedScene> readMeshScene(const std::string& path, const ReadOptions& options, Diagnostics& diagnostics);
 
 struct WriteOptions {
     bool ply_binary = true; // PLY: binary_little_endian (true) or ascii

@@ -2,15 +2,16 @@
 // The pack description: what goes into a baked glTF pack, independent of any glTF library.
 // writePackGlb (pack_glb.h) serialises it.
 //
-// Layout: one LOD group per baked asset. The group's LOD0 node is in the scene and carries MSFT_lod
-// (ids of the lower-detail nodes, highest detail first), extras.MSFT_screencoverage and the
-// LODBAKE_lod_metrics extension. Every level is an ordinary glTF mesh, so viewers without our
-// extensions show LOD0.
+// Layout: one LOD group per baked asset (or, with a PackScene, per node that names an asset). The
+// group's LOD0 node is in the scene and carries MSFT_lod (ids of the lower-detail nodes, highest
+// detail first), extras.MSFT_screencoverage and the LODBAKE_lod_metrics extension. Every level is an
+// ordinary glTF mesh, so viewers without our extensions show LOD0.
 //
 // Extensions are structured data (PackExtension: a JsonNode object plus binary blobs that the writer
 // stores as buffer views, writing each view's index into the named member of the object), added by
 // the bake and by the streams (lodbake/stream/stream.h). This module depends on core only.
 
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -50,8 +51,31 @@ struct PackAsset {
     std::vector<PackExtension> node_extensions; // on the LOD0 node
 };
 
+/// A node of a kept scene graph. A node with an asset is that asset's LOD group: it holds LOD0 and
+/// MSFT_lod, and the asset's lower levels get nodes of their own outside the scene (placed by this
+/// node's world transform). Several nodes may name one asset (instancing: the meshes are shared).
+struct PackNode {
+    std::string name;
+    bool name_from_asset = false;    // take the asset's name (an input baked without a graph)
+    std::vector<double> matrix;      // the local transform as the input wrote it: 16 numbers, or
+    std::vector<double> translation; // any of translation (3), rotation (4, x y z w), scale (3)
+    std::vector<double> rotation;
+    std::vector<double> scale;
+    std::array<double, 16> world{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1}; // column-major
+    std::vector<uint32_t> children; // indices into PackScene::nodes
+    int32_t asset = -1;             // index into PackDescription::assets, -1 for none
+};
+
+/// The node hierarchy a pack keeps (docs/bake.md "Scenes"). Empty: one root node per asset.
+struct PackScene {
+    std::vector<PackNode> nodes;
+    std::vector<uint32_t> roots;
+    bool empty() const { return nodes.empty(); }
+};
+
 struct PackDescription {
     std::vector<PackAsset> assets;
+    PackScene scene; // empty: one LOD group node per asset in the scene
     bool compact = false; // stream extensions go into extensionsRequired
 };
 
