@@ -329,9 +329,12 @@ Result<BakeOutput> bake(std::vector<BakeInput> inputs, const BakeSettings& setti
     streams.valence.release_memory = hooks.release_memory;
     streams.progressive_fans = settings.progressive_fans;
     streams.pfrep_from_chain = settings.pfrep_from_chain;
-    const std::vector<PackStreamEncoder> encoders = builtinStreamEncoders(streams);
+    // A --web pack is for clients that read none of our streams (docs/format/web.md).
+    const std::vector<PackStreamEncoder> encoders =
+        settings.web ? std::vector<PackStreamEncoder>() : builtinStreamEncoders(streams);
     PackDescription description;
     description.compact = settings.compact;
+    description.web = settings.web;
     // Fail before the expensive stages when no stream encoder exists at all.
     if (settings.compact && encoders.empty()) LODBAKE_RETURN_IF_ERROR(checkCompact(description));
 

@@ -14,6 +14,7 @@
 #include "lodbake/pack/pack_glb.h"
 
 #include "io/gltf_model.h"
+#include "pack/web_meshopt.h"
 #include "lodbake/core/json_writer.h"
 #include "lodbake/pack/pack.h"
 #include "lodbake/version.h"
@@ -219,7 +220,9 @@ void appendU32(std::vector<uint8_t>& out, uint32_t v) {
 // the same model with that buffer empty (its JSON then says "byteLength":0 and it has no BIN chunk).
 // Same layout as tinygltf's WriteBinaryGltfStream: 12-byte header, the JSON chunk padded with spaces
 // to 4 bytes, the BIN chunk padded with zeros. `bin` becomes the result (its bytes move once).
-Result<std::vector<uint8_t>> assembleGlb(const std::vector<uint8_t>& shell, std::vector<uint8_t> bin) {
+// `extra_buffers`: JSON text of the buffers after buffer 0 (the --web fallback buffer), or empty.
+Result<std::vector<uint8_t>> assembleGlb(const std::vector<uint8_t>& shell, std::vector<uint8_t> bin,
+                                         const std::string& extra_buffers) {
     if (shell.size() < 20) return internalError("pack: tinygltf wrote no GLB header");
     uint32_t json_chunk = 0;
     for (int k = 0; k < 4; ++k) json_chunk |= uint32_t(shell[12 + size_t(k)]) << (8 * k);
@@ -232,7 +235,10 @@ Result<std::vector<uint8_t>> assembleGlb(const std::vector<uint8_t>& shell, std:
         return internalError("pack: the GLB's buffer entry was not found");
     const uint64_t bin_size = bin.size();
     if (bin_size > 0xffffffffull - 64 - json.size()) return resourceLimit("pack: GLB larger than 4 GiB");
-    if (bin_size > 0) json.replace(at, empty.size(), "\"buffers\":[{\"byteLength\":" + std::to_string(bin_size) + "}]");
+    if (bin_size > 0)
+        json.replace(at, empty.size(),
+                     "\"buffers\":[{\"byteLength\":" + std::to_string(bin_size) + "}" +
+                         (extra_buffers.empty() ? "" : "," + extra_buffers) + "]");
     const uint32_t json_pad = uint32_t((4 - json.size() % 4) % 4), bin_pad = uint32_t((4 - bin_size % 4) % 4);
     const uint32_t json_length = uint32_t(json.size()) + json_pad;
     const uint32_t total = 12 + 8 + json_length + (bin_size ? 8 + uint32_t(bin_size) + bin_pad : 0);
@@ -300,8 +306,9 @@ Result<std::vector<uint8_t>> writeImpl(const PackDescription& description, PackD
             const std::string level_name = asset.name + "_lod" + std::to_string(l);
             std::vector<std::pair<uint32_t, uint32_t>> ranges;
             for (const PackLevel::VertexRange& r : level.primitive_vertex_ranges) ranges.emplace_back(r.first, r.count);
-            Result<int> mesh_index =
-                addMeshToModel(model, buffer, level.mesh, &dedupe, ranges.empty() ? nullptr : &ranges);
+            const Mesh web_mesh = description.web ? webLevelOrder(level.mesh) : Mesh();
+            Result<int> mesh_index = addMeshToModel(model, buffer, description.web ? web_mesh : level.mesh, &dedupe,
+                                                    ranges.empty() ? nullptr : &ranges);
             if (!mesh_index.ok())
                 return Status(mesh_index.status().code(), level_name + ": " + mesh_index.status().message());
             tinygltf::Mesh& gmesh = model.meshes[size_t(*mesh_index)];
@@ -352,11 +359,20 @@ Result<std::vector<uint8_t>> writeImpl(const PackDescription& description, PackD
     if (scene.nodes.empty()) return invalidInput("pack: nothing to write");
     model.scenes.push_back(std::move(scene));
     model.defaultScene = 0;
-    model.extensionsUsed.assign(used.begin(), used.end());
-    if (description.compact) model.extensionsRequired.assign(streams.begin(), streams.end());
-
     std::vector<uint8_t> bin = buffer.finish();
-    if (description.compact) bin = dropStreamedAccessors(model, streams, bin, patches);
+    WebViews web;
+    std::set<std::string> required = description.compact ? streams : std::set<std::string>();
+    if (description.web) {
+        LODBAKE_RETURN_IF_ERROR(encodeWebAccessors(model, bin, web));
+        required.insert(lodrt::format::kExtMeshoptCompression); // its fallback buffer has no bytes
+        if (web.quantized) required.insert(lodrt::format::kExtKhrMeshQuantization);
+        used.insert(required.begin(), required.end());
+    }
+    model.extensionsUsed.assign(used.begin(), used.end());
+    model.extensionsRequired.assign(required.begin(), required.end());
+    if (description.compact || description.web)
+        bin = dropStreamedAccessors(model, description.compact ? streams : std::set<std::string>(), bin, patches);
+    if (description.web) appendWebViews(model, bin, web);
     // tinygltf copies a buffer's data before writing it (and the GLB holds it a third time), so the
     // model is written with an empty buffer and the GLB is assembled here around the binary chunk,
     // byte for byte as tinygltf lays it out: the pack's bytes exist at most twice, briefly.
@@ -369,7 +385,7 @@ Result<std::vector<uint8_t>> writeImpl(const PackDescription& description, PackD
         if (!writer.WriteGltfSceneToStream(&model, stream, false, true) || !stream)
             return internalError("pack: tinygltf failed");
     }
-    return assembleGlb(shell, std::move(bin));
+    return assembleGlb(shell, std::move(bin), description.web ? webFallbackBufferJson(web) : std::string());
 }
 
 } // namespace

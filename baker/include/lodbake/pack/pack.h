@@ -53,6 +53,7 @@ struct PackAsset {
 struct PackDescription {
     std::vector<PackAsset> assets;
     bool compact = false; // stream extensions go into extensionsRequired
+    bool web = false;     // levels quantized and EXT_meshopt_compression-compressed (docs/format/web.md)
 };
 
 /// Per-level metrics in the form LODBAKE_lod_metrics stores (schemas/LODBAKE_lod_metrics).
