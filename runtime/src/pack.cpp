@@ -11,6 +11,7 @@
 #include <new>
 
 #include "lodrt/format.h"
+#include "lodrt/meshopt.h"
 #include "memory.h"
 
 namespace lodrt {
@@ -296,6 +297,7 @@ struct PackLoader {
             // Streams lodrt has decoders for (lodrt/valence.h, lodrt/pfrep.h) are not worth a warning.
             bool decoded = false;
             for (const char* stream : format::kDecodedStreamExtensions) decoded |= name.string() == stream;
+            decoded |= name.string() == format::kExtMeshoptCompression || name.string() == format::kExtKhrMeshQuantization;
             if (decoded) continue;
             char pointer[64], shown[96];
             std::snprintf(pointer, sizeof(pointer), "/extensionsRequired/%u", i);
@@ -332,9 +334,12 @@ struct PackLoader {
                 if (r != Result::Ok) return r;
                 continue;
             }
-            if (i != 0 || !glb.is_binary || glb.bin_size == 0)
-                return fail(Result::BadGltf, "%s: no uri, but only buffer 0 of a GLB with a BIN chunk may omit it",
-                            path);
+            if (i != 0 || !glb.is_binary || glb.bin_size == 0) {
+                // An EXT_meshopt_compression fallback buffer, if only compressed views use it
+                // (checked in loadBufferViews).
+                info.is_fallback = true;
+                continue;
+            }
             // The BIN chunk is padded to 4 bytes, so it may exceed byteLength by up to 3.
             if (info.byte_length > glb.bin_size || glb.bin_size - info.byte_length > 3)
                 return fail(Result::OutOfBounds, "%s/byteLength: %llu bytes, but the BIN chunk has %zu", path,
@@ -372,6 +377,12 @@ struct PackLoader {
                 return fail(Result::BadGltf, "%s/byteStride: %llu; expected a multiple of 4 in [4, 252]", path,
                             static_cast<unsigned long long>(stride));
             info.byte_stride = uint32_t(stride);
+            if (pack->buffers_[info.buffer].is_fallback &&
+                !json.find("extensions").find(format::kExtMeshoptCompression).isValid())
+                return fail(Result::BadGltf,
+                            "%s: buffer %u has no uri, but only buffer 0 of a GLB with a BIN chunk may omit it "
+                            "(or a fallback buffer that only EXT_meshopt_compression views use)",
+                            path, info.buffer);
             const uint64_t buffer_length = pack->buffers_[info.buffer].byte_length;
             // Both terms are at most 2^53, so the sum cannot wrap.
             if (info.byte_offset + info.byte_length > buffer_length)
@@ -379,6 +390,19 @@ struct PackLoader {
                             static_cast<unsigned long long>(info.byte_offset),
                             static_cast<unsigned long long>(info.byte_offset + info.byte_length), info.buffer,
                             static_cast<unsigned long long>(buffer_length));
+        }
+        return checkMeshoptViews();
+    }
+
+    // Every EXT_meshopt_compression object follows the extension's rules (lodrt/meshopt.h).
+    Result checkMeshoptViews() {
+        for (uint32_t i = 0; i < pack->buffer_view_count_; ++i) {
+            MeshoptViewInfo info;
+            const char* what = "invalid";
+            const Result r = meshoptViewInfo(*pack, i, &info, &what);
+            if (r == Result::NotLoaded) continue;
+            if (r != Result::Ok)
+                return fail(r, "/bufferViews/%u/extensions/%s/%s", i, format::kExtMeshoptCompression, what);
         }
         return Result::Ok;
     }

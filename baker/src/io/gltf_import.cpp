@@ -17,6 +17,7 @@
 #include <tiny_gltf.h>
 
 #include "io/draco_decode.h"
+#include "io/gltf_meshopt.h"
 #include "lodbake/core/file_io.h"
 #include "lodbake/core/json_limits.h"
 #include "lodrt/format.h"
@@ -163,6 +164,7 @@ Status checkJsonReferences(const uint8_t* json_bytes, size_t json_size, const st
             }
         }
     }
+    replaceMeshoptFallbacks(root, prepass.is_changed);
     if (prepass.is_changed) prepass.json_text = root.dump();
     return Status::okStatus();
 }
@@ -1194,8 +1196,10 @@ Result<LoadedMesh> readGltfImpl(const uint8_t* data, size_t size, const std::str
     for (const std::string& e : model.extensionsUsed)
         if (e == lodrt::format::kExtKhrMeshQuantization) quantized = true;
     for (const std::string& e : model.extensionsRequired)
-        if (e != lodrt::format::kExtKhrMeshQuantization && e != kDracoExtension)
+        if (e != lodrt::format::kExtKhrMeshQuantization && e != kDracoExtension &&
+            e != lodrt::format::kExtMeshoptCompression)
             return unsupported(name + ": extensionsRequired: extension \"" + e + "\" is not supported");
+    LODBAKE_RETURN_IF_ERROR(decodeMeshoptViews(model, name));
 
     LoadedMesh loaded;
     loaded.source.encoding = is_glb ? "glb" : "gltf";

@@ -220,15 +220,17 @@ void appendU32(std::vector<uint8_t>& out, uint32_t v) {
 // the same model with that buffer empty (its JSON then says "byteLength":0 and it has no BIN chunk).
 // Same layout as tinygltf's WriteBinaryGltfStream: 12-byte header, the JSON chunk padded with spaces
 // to 4 bytes, the BIN chunk padded with zeros. `bin` becomes the result (its bytes move once).
-// `extra_buffers`: JSON text of the buffers after buffer 0 (the --web fallback buffer), or empty.
+// `web`: the --web pack's compressed views (their extension objects and the fallback buffer), or null.
 Result<std::vector<uint8_t>> assembleGlb(const std::vector<uint8_t>& shell, std::vector<uint8_t> bin,
-                                         const std::string& extra_buffers) {
+                                         const WebViews* web) {
     if (shell.size() < 20) return internalError("pack: tinygltf wrote no GLB header");
     uint32_t json_chunk = 0;
     for (int k = 0; k < 4; ++k) json_chunk |= uint32_t(shell[12 + size_t(k)]) << (8 * k);
     if (size_t(json_chunk) + 20 > shell.size()) return internalError("pack: tinygltf wrote a short JSON chunk");
     std::string json(shell.begin() + 20, shell.begin() + 20 + std::ptrdiff_t(json_chunk));
     while (!json.empty() && json.back() == ' ') json.pop_back();
+    if (web) LODBAKE_RETURN_IF_ERROR(webPatchJson(json, *web));
+    const std::string extra_buffers = web ? webFallbackBufferJson(*web) : std::string();
     const std::string empty = "\"buffers\":[{\"byteLength\":0}]";
     const size_t at = json.find(empty);
     if (at == std::string::npos || json.find(empty, at + 1) != std::string::npos)
@@ -385,7 +387,7 @@ Result<std::vector<uint8_t>> writeImpl(const PackDescription& description, PackD
         if (!writer.WriteGltfSceneToStream(&model, stream, false, true) || !stream)
             return internalError("pack: tinygltf failed");
     }
-    return assembleGlb(shell, std::move(bin), description.web ? webFallbackBufferJson(web) : std::string());
+    return assembleGlb(shell, std::move(bin), description.web ? &web : nullptr);
 }
 
 } // namespace

@@ -11,7 +11,6 @@
 #include <cmath>
 #include <cstring>
 #include <map>
-#include <climits>
 #include <mutex>
 
 #include <meshoptimizer.h>
@@ -273,24 +272,19 @@ Status encodeWebAccessors(tinygltf::Model& model, const std::vector<uint8_t>& bi
     return Status::okStatus();
 }
 
-// A JSON integer for a byte count (tinygltf's int when it fits, else an exact double).
-tinygltf::Value sizeValue(uint64_t v) {
-    return v <= uint64_t(INT_MAX) ? tinygltf::Value(int(v)) : tinygltf::Value(double(v));
-}
-
 void appendWebViews(tinygltf::Model& model, std::vector<uint8_t>& bin, WebViews& views) {
     uint64_t fallback = 0;
+    views.extension_json.clear();
     for (const WebViews::View& v : views.views) {
         while (bin.size() % 4 != 0) bin.push_back(0);
-        tinygltf::Value::Object ext;
-        ext["buffer"] = tinygltf::Value(0);
-        ext["byteOffset"] = sizeValue(bin.size());
-        ext["byteLength"] = sizeValue(v.bytes.size());
-        ext["byteStride"] = tinygltf::Value(int(v.stride));
-        ext["count"] = sizeValue(v.count);
-        ext["mode"] = tinygltf::Value(std::string(v.mode));
+        // Sorted keys, as the rest of the pack's JSON.
+        std::string ext = "{\"buffer\":0,\"byteLength\":" + std::to_string(v.bytes.size()) +
+                          ",\"byteOffset\":" + std::to_string(bin.size()) + ",\"byteStride\":" +
+                          std::to_string(v.stride) + ",\"count\":" + std::to_string(v.count);
         if (v.filter && std::strcmp(v.filter, fmt::kMeshoptFilterNone) != 0)
-            ext["filter"] = tinygltf::Value(std::string(v.filter));
+            ext += ",\"filter\":\"" + std::string(v.filter) + "\"";
+        ext += ",\"mode\":\"" + std::string(v.mode) + "\"}";
+        views.extension_json.push_back(std::move(ext));
         bin.insert(bin.end(), v.bytes.begin(), v.bytes.end());
 
         tinygltf::BufferView view;
@@ -299,13 +293,27 @@ void appendWebViews(tinygltf::Model& model, std::vector<uint8_t>& bin, WebViews&
         view.byteLength = v.count * v.stride;
         if (v.target == TINYGLTF_TARGET_ARRAY_BUFFER) view.byteStride = v.stride;
         view.target = v.target;
-        view.extensions[fmt::kExtMeshoptCompression] = tinygltf::Value(std::move(ext));
+        // tinygltf does not write bufferView extensions: a marker name holds the place of the
+        // extension object, which webPatchJson puts into the JSON text.
+        view.name = "\x01meshopt" + std::to_string(views.extension_json.size() - 1);
         fallback += (view.byteLength + 3) / 4 * 4;
         model.bufferViews.push_back(std::move(view));
         for (int a : v.accessors) model.accessors[size_t(a)].bufferView = int(model.bufferViews.size() - 1);
     }
     while (bin.size() % 4 != 0) bin.push_back(0);
     views.fallback_bytes = fallback;
+}
+
+Status webPatchJson(std::string& json, const WebViews& views) {
+    for (size_t i = 0; i < views.extension_json.size(); ++i) {
+        const std::string marker = "\"name\":\"\\u0001meshopt" + std::to_string(i) + "\"";
+        const size_t at = json.find(marker);
+        if (at == std::string::npos || json.find(marker, at + 1) != std::string::npos)
+            return internalError("pack: --web: the place of compressed view " + std::to_string(i) + " was not found");
+        json.replace(at, marker.size(),
+                     "\"extensions\":{\"" + std::string(fmt::kExtMeshoptCompression) + "\":" + views.extension_json[i] + "}");
+    }
+    return Status::okStatus();
 }
 
 std::string webFallbackBufferJson(const WebViews& views) {

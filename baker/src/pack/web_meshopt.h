@@ -38,6 +38,7 @@ struct WebViews {
     };
     std::vector<View> views;
     uint64_t fallback_bytes = 0; // byteLength of the fallback buffer
+    std::vector<std::string> extension_json; // per view, its EXT_meshopt_compression object (appendWebViews)
     bool quantized = false;      // some attribute is no longer float (KHR_mesh_quantization is used)
 };
 
@@ -49,6 +50,10 @@ Status encodeWebAccessors(tinygltf::Model& model, const std::vector<uint8_t>& bi
 /// Appends the compressed streams to `bin` (4-byte aligned) and adds their buffer views: each decodes
 /// into buffer 1, the fallback buffer, and carries the EXT_meshopt_compression object.
 void appendWebViews(tinygltf::Model& model, std::vector<uint8_t>& bin, WebViews& views);
+
+/// Puts each compressed view's EXT_meshopt_compression object into the JSON text tinygltf wrote (in
+/// place of the marker name appendWebViews gave the view).
+Status webPatchJson(std::string& json, const WebViews& views);
 
 /// The fallback buffer's JSON text, as the GLB writer places it after buffer 0.
 std::string webFallbackBufferJson(const WebViews& views);
