@@ -308,6 +308,20 @@ struct PackLoader {
         return Result::Ok;
     }
 
+    // True when some bufferView uses buffer `b` and every one that does is EXT_meshopt_compression
+    // compressed (a fallback buffer's rule).
+    bool onlyCompressedViewsUse(uint32_t b) {
+        const JsonValue views = pack->document_->root().find("bufferViews");
+        bool used = false;
+        for (uint32_t v = 0; v < views.size(); ++v) {
+            uint64_t buffer = 0;
+            if (!views.at(v).find("buffer").asUint64(&buffer) || buffer != b) continue;
+            if (!views.at(v).find("extensions").find(format::kExtMeshoptCompression).isValid()) return false;
+            used = true;
+        }
+        return used;
+    }
+
     Result loadBuffers() {
         JsonValue array;
         Result r = getRootArray("buffers", &array);
@@ -335,8 +349,12 @@ struct PackLoader {
                 continue;
             }
             if (i != 0 || !glb.is_binary || glb.bin_size == 0) {
-                // An EXT_meshopt_compression fallback buffer, if only compressed views use it
-                // (checked in loadBufferViews).
+                // Else an EXT_meshopt_compression fallback buffer (lodrt/meshopt.h).
+                if (!onlyCompressedViewsUse(i))
+                    return fail(Result::BadGltf,
+                                "%s: no uri, but only buffer 0 of a GLB with a BIN chunk may omit it (or a fallback "
+                                "buffer only EXT_meshopt_compression views use)",
+                                path);
                 info.is_fallback = true;
                 continue;
             }
@@ -377,12 +395,6 @@ struct PackLoader {
                 return fail(Result::BadGltf, "%s/byteStride: %llu; expected a multiple of 4 in [4, 252]", path,
                             static_cast<unsigned long long>(stride));
             info.byte_stride = uint32_t(stride);
-            if (pack->buffers_[info.buffer].is_fallback &&
-                !json.find("extensions").find(format::kExtMeshoptCompression).isValid())
-                return fail(Result::BadGltf,
-                            "%s: buffer %u has no uri, but only buffer 0 of a GLB with a BIN chunk may omit it "
-                            "(or a fallback buffer that only EXT_meshopt_compression views use)",
-                            path, info.buffer);
             const uint64_t buffer_length = pack->buffers_[info.buffer].byte_length;
             // Both terms are at most 2^53, so the sum cannot wrap.
             if (info.byte_offset + info.byte_length > buffer_length)
