@@ -297,6 +297,7 @@ Result<std::vector<uint8_t>> writeImpl(const PackDescription& description, PackD
     ModelDedupe dedupe;
     std::set<std::string> used, streams;
     std::vector<ViewPatch> patches;
+    WebViews web;
     tinygltf::Scene scene;
     for (size_t a = 0; a < description.assets.size(); ++a) {
         const PackAsset& asset = description.assets[a];
@@ -315,6 +316,8 @@ Result<std::vector<uint8_t>> writeImpl(const PackDescription& description, PackD
                 return Status(mesh_index.status().code(), level_name + ": " + mesh_index.status().message());
             tinygltf::Mesh& gmesh = model.meshes[size_t(*mesh_index)];
             gmesh.name = level_name;
+            web.mesh_position_step.resize(model.meshes.size());
+            web.mesh_position_step[size_t(*mesh_index)] = level.web_position_step;
             ViewPatch where;
             where.object = size_t(*mesh_index);
             for (const PackExtension& e : level.mesh_extensions)
@@ -362,7 +365,6 @@ Result<std::vector<uint8_t>> writeImpl(const PackDescription& description, PackD
     model.scenes.push_back(std::move(scene));
     model.defaultScene = 0;
     std::vector<uint8_t> bin = buffer.finish();
-    WebViews web;
     std::set<std::string> required = description.compact ? streams : std::set<std::string>();
     if (description.web) {
         LODBAKE_RETURN_IF_ERROR(encodeWebAccessors(model, bin, web));

@@ -69,8 +69,8 @@ uint32_t expValue(int exponent, int32_t mantissa) {
     return (uint32_t(uint8_t(int8_t(exponent))) << 24) | (uint32_t(mantissa) & 0xFFFFFFu);
 }
 
-WebViews::View encodePositions(tinygltf::Accessor& a, const std::vector<float>& xyz) {
-    const int e = webPositionExponent(xyz.data(), a.count);
+WebViews::View encodePositions(tinygltf::Accessor& a, const std::vector<float>& xyz, double max_step) {
+    const int e = webPositionExponent(xyz.data(), a.count, max_step);
     std::vector<uint32_t> words(xyz.size());
     std::vector<double> lo(3, 0.0), hi(3, 0.0);
     for (size_t i = 0; i < xyz.size(); ++i) {
@@ -164,11 +164,11 @@ bool inUnitRange(const std::vector<float>& values) {
 }
 
 Result<WebViews::View> encodeAttribute(const tinygltf::Model& model, const std::string& name, tinygltf::Accessor& a,
-                                       const std::vector<uint8_t>& bin) {
+                                       const std::vector<uint8_t>& bin, double max_step) {
     const size_t components = componentsOf(a.type);
     if (components == 0) return internalError("pack: --web: attribute " + name + " is not a vector");
     LODBAKE_ASSIGN_OR_RETURN(std::vector<float> values, readFloats(model, a, components, bin));
-    if (name == "POSITION" && components == 3) return encodePositions(a, values);
+    if (name == "POSITION" && components == 3) return encodePositions(a, values, max_step);
     if ((name == "NORMAL" && components == 3) || (name == "TANGENT" && components == 4))
         return encodeOctahedral(a, values, components);
     const bool unorm = name.rfind("TEXCOORD_", 0) == 0 || name.rfind("COLOR_", 0) == 0;
@@ -200,11 +200,11 @@ Mesh webLevelOrder(const Mesh& mesh) {
     Mesh out = mesh;
     const size_t n = mesh.vertexCount();
     if (mesh.submeshes.empty()) {
-        meshopt_optimizeVertexCache(out.indices.data(), mesh.indices.data(), mesh.indices.size(), n);
+        meshopt_optimizeVertexCacheStrip(out.indices.data(), mesh.indices.data(), mesh.indices.size(), n);
     } else {
         for (const SubMesh& s : mesh.submeshes)
             if (s.index_count > 0)
-                meshopt_optimizeVertexCache(out.indices.data() + s.first_index, mesh.indices.data() + s.first_index,
+                meshopt_optimizeVertexCacheStrip(out.indices.data() + s.first_index, mesh.indices.data() + s.first_index,
                                             s.index_count, n);
     }
     std::vector<unsigned int> remap(n);
@@ -225,7 +225,7 @@ Mesh webLevelOrder(const Mesh& mesh) {
     return out;
 }
 
-int webPositionExponent(const float* xyz, size_t count) {
+int webPositionExponent(const float* xyz, size_t count, double max_step) {
     double lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0}, largest = 0;
     for (size_t i = 0; i < count; ++i)
         for (size_t c = 0; c < 3; ++c) {
@@ -237,6 +237,7 @@ int webPositionExponent(const float* xyz, size_t count) {
     const double extent = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]});
     int e = -100;
     if (extent > 0) e = int(std::floor(std::log2(extent / double((1u << fmt::kWebPositionBits) - 1))));
+    if (max_step > 0 && std::isfinite(max_step)) e = std::max(e, int(std::floor(std::log2(max_step))));
     // |mantissa| < 2^23 for every coordinate (the 24-bit two's complement field).
     while (e < 100 && std::ldexp(largest, -e) >= double(1 << 23) - 1) ++e;
     return std::min(std::max(e, -100), 100);
@@ -249,12 +250,13 @@ Status encodeWebAccessors(tinygltf::Model& model, const std::vector<uint8_t>& bi
         done[accessor] = out.views.size();
         out.views.push_back(std::move(view));
     };
-    for (tinygltf::Mesh& mesh : model.meshes)
-        for (tinygltf::Primitive& primitive : mesh.primitives) {
+    for (size_t m = 0; m < model.meshes.size(); ++m)
+        for (tinygltf::Primitive& primitive : model.meshes[m].primitives) {
+            const double max_step = m < out.mesh_position_step.size() ? out.mesh_position_step[m] : 0.0;
             for (const auto& [name, index] : primitive.attributes) {
                 if (index < 0 || done.count(index)) continue;
                 tinygltf::Accessor& a = model.accessors[size_t(index)];
-                LODBAKE_ASSIGN_OR_RETURN(WebViews::View view, encodeAttribute(model, name, a, bin));
+                LODBAKE_ASSIGN_OR_RETURN(WebViews::View view, encodeAttribute(model, name, a, bin, max_step));
                 if (a.componentType != TINYGLTF_COMPONENT_TYPE_FLOAT) out.quantized = true;
                 record(index, std::move(view));
             }

@@ -21,9 +21,10 @@ namespace lodbake {
 Mesh webLevelOrder(const Mesh& mesh);
 
 /// The power-of-two grid step --web stores positions on: the largest power of two not above the largest
-/// extent / (2^kWebPositionBits - 1), coarsened only when a coordinate would not fit the 24-bit mantissa
-/// of the EXPONENTIAL filter. Returns its exponent (step = 2^exponent).
-int webPositionExponent(const float* xyz, size_t count);
+/// extent / (2^kWebPositionBits - 1), or not above `max_step` when that is coarser, and coarsened
+/// further only when a coordinate would not fit the 24-bit mantissa of the EXPONENTIAL filter.
+/// Returns its exponent (step = 2^exponent).
+int webPositionExponent(const float* xyz, size_t count, double max_step = 0);
 
 /// Compressed views waiting for their place in the binary chunk.
 struct WebViews {
@@ -37,6 +38,7 @@ struct WebViews {
         std::vector<int> accessors; // the accessors that read it
     };
     std::vector<View> views;
+    std::vector<double> mesh_position_step; // per glTF mesh, its level's web_position_step (input)
     uint64_t fallback_bytes = 0; // byteLength of the fallback buffer
     std::vector<std::string> extension_json; // per view, its EXT_meshopt_compression object (appendWebViews)
     bool quantized = false;      // some attribute is no longer float (KHR_mesh_quantization is used)

@@ -41,6 +41,8 @@ struct PackLevel {
         uint32_t count = 0;
     };
     std::vector<VertexRange> primitive_vertex_ranges;
+    /// --web: the coarsest position grid step the level accepts (0: the default grid only).
+    double web_position_step = 0;
 };
 
 struct PackAsset {
