@@ -26,7 +26,7 @@ cp "$root"/configs/*.json "$out/preset/"
 # renamed folder cannot shrink the seeds silently).
 cp "$root"/tests/malformed/preset/*.json "$out/preset/"
 cp "$root"/tests/malformed/lbm/*.lbm "$out/valence/"
-cp "$root"/tests/malformed/meshopt/*.bin "$out/meshopt/"
+cp "$root"/tests/fuzz/seeds/meshopt/* "$out/meshopt/"
 cp "$root"/tests/malformed/lbp/*.lbp "$out/pfrep/"
 cp "$root"/tests/malformed/pack/*.glb "$out/pack/"
 cp "$root"/tests/malformed/conf/*.conf "$out/conf/"
