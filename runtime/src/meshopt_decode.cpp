@@ -168,19 +168,28 @@ bool decodeFreeTriangle(TriangleState& s, uint8_t code, const uint8_t* aux, cons
 }
 
 bool parseMode(std::string_view text, MeshoptMode* out) {
-    if (text == fmt::kMeshoptModeAttributes) *out = MeshoptMode::Attributes;
-    else if (text == fmt::kMeshoptModeTriangles) *out = MeshoptMode::Triangles;
-    else if (text == fmt::kMeshoptModeIndices) *out = MeshoptMode::Indices;
-    else return false;
+    if (text == fmt::kMeshoptModeAttributes)
+        *out = MeshoptMode::Attributes;
+    else if (text == fmt::kMeshoptModeTriangles)
+        *out = MeshoptMode::Triangles;
+    else if (text == fmt::kMeshoptModeIndices)
+        *out = MeshoptMode::Indices;
+    else
+        return false;
     return true;
 }
 
 bool parseFilter(std::string_view text, MeshoptFilter* out) {
-    if (text == fmt::kMeshoptFilterNone) *out = MeshoptFilter::None;
-    else if (text == fmt::kMeshoptFilterOctahedral) *out = MeshoptFilter::Octahedral;
-    else if (text == fmt::kMeshoptFilterQuaternion) *out = MeshoptFilter::Quaternion;
-    else if (text == fmt::kMeshoptFilterExponential) *out = MeshoptFilter::Exponential;
-    else return false;
+    if (text == fmt::kMeshoptFilterNone)
+        *out = MeshoptFilter::None;
+    else if (text == fmt::kMeshoptFilterOctahedral)
+        *out = MeshoptFilter::Octahedral;
+    else if (text == fmt::kMeshoptFilterQuaternion)
+        *out = MeshoptFilter::Quaternion;
+    else if (text == fmt::kMeshoptFilterExponential)
+        *out = MeshoptFilter::Exponential;
+    else
+        return false;
     return true;
 }
 
@@ -428,7 +437,8 @@ Result meshoptViewInfo(const Pack& pack, uint32_t view, MeshoptViewInfo* out, co
     if (!ext.isObject()) return bad("expected an object");
     uint64_t buffer = 0, stride = 0;
     MeshoptViewInfo info;
-    if (!ext.find("buffer").asUint64(&buffer) || buffer >= pack.bufferCount() || pack.buffer(uint32_t(buffer)).is_fallback)
+    if (!ext.find("buffer").asUint64(&buffer) || buffer >= pack.bufferCount() ||
+        pack.buffer(uint32_t(buffer)).is_fallback)
         return bad("buffer: expected the index of a buffer with bytes");
     info.buffer = uint32_t(buffer);
     const JsonValue offset = ext.find("byteOffset");
@@ -439,18 +449,23 @@ Result meshoptViewInfo(const Pack& pack, uint32_t view, MeshoptViewInfo* out, co
     info.stride = uint32_t(stride);
     if (!ext.find("count").asUint64(&info.count)) return bad("count: expected an integer >= 0");
     const JsonValue mode = ext.find("mode"), filter = ext.find("filter");
-    if (!mode.isString() || !parseMode(mode.string(), &info.mode)) return bad("mode: expected ATTRIBUTES, TRIANGLES or INDICES");
+    if (!mode.isString() || !parseMode(mode.string(), &info.mode))
+        return bad("mode: expected ATTRIBUTES, TRIANGLES or INDICES");
     if (filter.isValid() && (!filter.isString() || !parseFilter(filter.string(), &info.filter)))
         return bad("filter: expected NONE, OCTAHEDRAL, QUATERNION or EXPONENTIAL");
-    if (parent.byte_stride && parent.byte_stride != info.stride) return bad("byteStride: differs from the bufferView's");
+    if (parent.byte_stride && parent.byte_stride != info.stride)
+        return bad("byteStride: differs from the bufferView's");
     // count <= 2^53 / 256 keeps count * stride exact.
     if (info.count > (uint64_t(1) << 45) || info.count * info.stride != parent.byte_length)
         return bad("count: count * byteStride must equal the bufferView's byteLength");
-    if (info.mode == MeshoptMode::Attributes && info.stride % 4 != 0) return bad("byteStride: ATTRIBUTES needs a multiple of 4");
+    if (info.mode == MeshoptMode::Attributes && info.stride % 4 != 0)
+        return bad("byteStride: ATTRIBUTES needs a multiple of 4");
     if (info.mode != MeshoptMode::Attributes && (info.stride != 2 && info.stride != 4))
         return bad("byteStride: index modes need 2 or 4");
-    if (info.mode == MeshoptMode::Triangles && info.count % 3 != 0) return bad("count: TRIANGLES needs a multiple of 3");
-    if (info.mode != MeshoptMode::Attributes && info.filter != MeshoptFilter::None) return bad("filter: index modes take none");
+    if (info.mode == MeshoptMode::Triangles && info.count % 3 != 0)
+        return bad("count: TRIANGLES needs a multiple of 3");
+    if (info.mode != MeshoptMode::Attributes && info.filter != MeshoptFilter::None)
+        return bad("filter: index modes take none");
     if ((info.filter == MeshoptFilter::Octahedral && info.stride != 4 && info.stride != 8) ||
         (info.filter == MeshoptFilter::Quaternion && info.stride != 8))
         return bad("filter: does not suit byteStride");

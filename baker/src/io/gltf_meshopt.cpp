@@ -53,15 +53,24 @@ Status decodeView(tinygltf::Model& model, size_t index, const std::string& where
     info.count = count;
     const std::string mode = ext.Get("mode").IsString() ? ext.Get("mode").Get<std::string>() : "";
     const std::string filter = ext.Get("filter").IsString() ? ext.Get("filter").Get<std::string>() : "NONE";
-    if (mode == fmt::kMeshoptModeAttributes) info.mode = lodrt::MeshoptMode::Attributes;
-    else if (mode == fmt::kMeshoptModeTriangles) info.mode = lodrt::MeshoptMode::Triangles;
-    else if (mode == fmt::kMeshoptModeIndices) info.mode = lodrt::MeshoptMode::Indices;
-    else return invalidInput(where + ": mode: expected ATTRIBUTES, TRIANGLES or INDICES");
-    if (filter == fmt::kMeshoptFilterNone) info.filter = lodrt::MeshoptFilter::None;
-    else if (filter == fmt::kMeshoptFilterOctahedral) info.filter = lodrt::MeshoptFilter::Octahedral;
-    else if (filter == fmt::kMeshoptFilterQuaternion) info.filter = lodrt::MeshoptFilter::Quaternion;
-    else if (filter == fmt::kMeshoptFilterExponential) info.filter = lodrt::MeshoptFilter::Exponential;
-    else return invalidInput(where + ": filter: expected NONE, OCTAHEDRAL, QUATERNION or EXPONENTIAL");
+    if (mode == fmt::kMeshoptModeAttributes)
+        info.mode = lodrt::MeshoptMode::Attributes;
+    else if (mode == fmt::kMeshoptModeTriangles)
+        info.mode = lodrt::MeshoptMode::Triangles;
+    else if (mode == fmt::kMeshoptModeIndices)
+        info.mode = lodrt::MeshoptMode::Indices;
+    else
+        return invalidInput(where + ": mode: expected ATTRIBUTES, TRIANGLES or INDICES");
+    if (filter == fmt::kMeshoptFilterNone)
+        info.filter = lodrt::MeshoptFilter::None;
+    else if (filter == fmt::kMeshoptFilterOctahedral)
+        info.filter = lodrt::MeshoptFilter::Octahedral;
+    else if (filter == fmt::kMeshoptFilterQuaternion)
+        info.filter = lodrt::MeshoptFilter::Quaternion;
+    else if (filter == fmt::kMeshoptFilterExponential)
+        info.filter = lodrt::MeshoptFilter::Exponential;
+    else
+        return invalidInput(where + ": filter: expected NONE, OCTAHEDRAL, QUATERNION or EXPONENTIAL");
     if (stride == 0 || stride > fmt::kMeshoptMaxVertexStride || count > (uint64_t(1) << 40) ||
         count * stride != view.byteLength)
         return invalidInput(where + ": count * byteStride must equal the bufferView's byteLength");
@@ -69,8 +78,8 @@ Status decodeView(tinygltf::Model& model, size_t index, const std::string& where
         return invalidInput(where + ": " + std::to_string(length) + " compressed bytes cannot hold " +
                             std::to_string(count * stride) + " bytes");
     std::vector<unsigned char> decoded(size_t(count * stride));
-    const lodrt::Result r = lodrt::meshoptDecodeView(info, source.data() + offset, size_t(length), decoded.data(),
-                                                     decoded.size());
+    const lodrt::Result r =
+        lodrt::meshoptDecodeView(info, source.data() + offset, size_t(length), decoded.data(), decoded.size());
     if (r != lodrt::Result::Ok)
         return invalidInput(where + ": the compressed stream does not decode (" + lodrt::resultName(r) + ")");
     tinygltf::Buffer out;
@@ -110,9 +119,8 @@ void replaceMeshoptFallbacks(nlohmann::json& root, bool& changed) {
 Status decodeMeshoptViews(tinygltf::Model& model, const std::string& name) {
     for (size_t i = 0; i < model.bufferViews.size(); ++i)
         if (model.bufferViews[i].extensions.count(fmt::kExtMeshoptCompression))
-            LODBAKE_RETURN_IF_ERROR(decodeView(model, i,
-                                               name + ": bufferView " + std::to_string(i) + ": " +
-                                                   fmt::kExtMeshoptCompression));
+            LODBAKE_RETURN_IF_ERROR(
+                decodeView(model, i, name + ": bufferView " + std::to_string(i) + ": " + fmt::kExtMeshoptCompression));
     return Status::okStatus();
 }
 

@@ -44,7 +44,7 @@ Result<std::vector<uint32_t>> readIndices(const tinygltf::Model& model, const ti
     if (a.bufferView < 0 || a.sparse.isSparse) return internalError("pack: --web: index accessor without data");
     const size_t size = a.componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT ? 2
                         : a.componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT ? 4
-                                                                                   : 0;
+                                                                                  : 0;
     if (size == 0) return internalError("pack: --web: index accessor is neither u16 nor u32");
     const tinygltf::BufferView& view = model.bufferViews[size_t(a.bufferView)];
     const size_t begin = view.byteOffset + a.byteOffset;
@@ -204,8 +204,8 @@ Mesh webLevelOrder(const Mesh& mesh) {
     } else {
         for (const SubMesh& s : mesh.submeshes)
             if (s.index_count > 0)
-                meshopt_optimizeVertexCacheStrip(out.indices.data() + s.first_index, mesh.indices.data() + s.first_index,
-                                            s.index_count, n);
+                meshopt_optimizeVertexCacheStrip(out.indices.data() + s.first_index,
+                                                 mesh.indices.data() + s.first_index, s.index_count, n);
     }
     std::vector<unsigned int> remap(n);
     const size_t used = meshopt_optimizeVertexFetchRemap(remap.data(), out.indices.data(), out.indices.size(), n);
@@ -281,8 +281,8 @@ void appendWebViews(tinygltf::Model& model, std::vector<uint8_t>& bin, WebViews&
         while (bin.size() % 4 != 0) bin.push_back(0);
         // Sorted keys, as the rest of the pack's JSON.
         std::string ext = "{\"buffer\":0,\"byteLength\":" + std::to_string(v.bytes.size()) +
-                          ",\"byteOffset\":" + std::to_string(bin.size()) + ",\"byteStride\":" +
-                          std::to_string(v.stride) + ",\"count\":" + std::to_string(v.count);
+                          ",\"byteOffset\":" + std::to_string(bin.size()) +
+                          ",\"byteStride\":" + std::to_string(v.stride) + ",\"count\":" + std::to_string(v.count);
         if (v.filter && std::strcmp(v.filter, fmt::kMeshoptFilterNone) != 0)
             ext += ",\"filter\":\"" + std::string(v.filter) + "\"";
         ext += ",\"mode\":\"" + std::string(v.mode) + "\"}";
@@ -313,7 +313,8 @@ Status webPatchJson(std::string& json, const WebViews& views) {
         if (at == std::string::npos || json.find(marker, at + 1) != std::string::npos)
             return internalError("pack: --web: the place of compressed view " + std::to_string(i) + " was not found");
         json.replace(at, marker.size(),
-                     "\"extensions\":{\"" + std::string(fmt::kExtMeshoptCompression) + "\":" + views.extension_json[i] + "}");
+                     "\"extensions\":{\"" + std::string(fmt::kExtMeshoptCompression) + "\":" + views.extension_json[i] +
+                         "}");
     }
     return Status::okStatus();
 }

@@ -38,10 +38,10 @@ struct WebViews {
         std::vector<int> accessors; // the accessors that read it
     };
     std::vector<View> views;
-    std::vector<double> mesh_position_step; // per glTF mesh, its level's web_position_step (input)
-    uint64_t fallback_bytes = 0; // byteLength of the fallback buffer
+    std::vector<double> mesh_position_step;  // per glTF mesh, its level's web_position_step (input)
+    uint64_t fallback_bytes = 0;             // byteLength of the fallback buffer
     std::vector<std::string> extension_json; // per view, its EXT_meshopt_compression object (appendWebViews)
-    bool quantized = false;      // some attribute is no longer float (KHR_mesh_quantization is used)
+    bool quantized = false;                  // some attribute is no longer float (KHR_mesh_quantization is used)
 };
 
 /// Encodes every accessor a mesh primitive reads (attributes and indices): quantized, compressed, the

@@ -69,7 +69,7 @@ LODRT_API uint64_t accessorScratchBytes(const Pack& pack, uint32_t accessor);
 /// OutOfBounds when the bytes are not in `bin`; NotLoaded for an accessor without a buffer view or
 /// a sparse one; the decoders' results.
 LODRT_API Result readAccessorFloats(const Pack& pack, uint32_t accessor, const BinBytes& bin, float* out,
-                                   size_t capacity, uint8_t* scratch, size_t scratch_size);
+                                    size_t capacity, uint8_t* scratch, size_t scratch_size);
 /// Accessor `accessor` as uint32 indices into out[0, capacity), each checked below vertex_count
 /// (OutOfBounds otherwise). Same results as readAccessorFloats.
 LODRT_API Result readAccessorIndices(const Pack& pack, uint32_t accessor, const BinBytes& bin, uint64_t vertex_count,

@@ -105,8 +105,9 @@ TEST(MeshoptDecodeTest, VertexStreamsDecodeAsMeshoptEncodedThem) {
 std::vector<uint32_t> rotated(const std::vector<uint32_t>& idx) {
     std::vector<uint32_t> out(idx.size());
     for (size_t t = 0; t + 3 <= idx.size(); t += 3) {
-        const size_t first = size_t(std::min_element(idx.begin() + std::ptrdiff_t(t), idx.begin() + std::ptrdiff_t(t + 3)) -
-                                    (idx.begin() + std::ptrdiff_t(t)));
+        const size_t first =
+            size_t(std::min_element(idx.begin() + std::ptrdiff_t(t), idx.begin() + std::ptrdiff_t(t + 3)) -
+                   (idx.begin() + std::ptrdiff_t(t)));
         for (size_t k = 0; k < 3; ++k) out[t + k] = idx[t + (first + k) % 3];
     }
     return out;
@@ -130,8 +131,9 @@ TEST(MeshoptDecodeTest, TriangleAndSequenceStreamsDecodeAsMeshoptEncodedThem) {
         EXPECT_EQ(rotated(reference), rotated(*idx));
         for (size_t size : {2u, 4u}) {
             std::vector<uint8_t> decoded(idx->size() * size);
-            ASSERT_EQ(lodrt::meshoptDecodeIndexBuffer(decoded.data(), idx->size(), size, encoded.data(), encoded.size()),
-                      lodrt::Result::Ok);
+            ASSERT_EQ(
+                lodrt::meshoptDecodeIndexBuffer(decoded.data(), idx->size(), size, encoded.data(), encoded.size()),
+                lodrt::Result::Ok);
             for (size_t i = 0; i < idx->size(); ++i) {
                 uint32_t v = 0;
                 std::memcpy(&v, &decoded[i * size], size);
@@ -159,7 +161,8 @@ TEST(MeshoptDecodeTest, FiltersMatchMeshoptsDecoders) {
         for (int c = 0; c < 3; ++c) vectors[i * 4 + size_t(c)] = v[c] / l3;
         vectors[i * 4 + 3] = v[3] < 0 ? -1.0f : 1.0f;
         for (int c = 0; c < 4; ++c) quats[i * 4 + size_t(c)] = v[c] / l4;
-        for (int c = 0; c < 3; ++c) floats[i * 3 + size_t(c)] = (rng.unit() - 0.5f) * std::ldexp(1.0f, int(i % 40) - 20);
+        for (int c = 0; c < 3; ++c)
+            floats[i * 3 + size_t(c)] = (rng.unit() - 0.5f) * std::ldexp(1.0f, int(i % 40) - 20);
     }
     auto compare = [](const std::vector<uint8_t>& a, const std::vector<uint8_t>& b, size_t component, int tolerance) {
         for (size_t i = 0; i < a.size(); i += component) {
@@ -181,7 +184,8 @@ TEST(MeshoptDecodeTest, FiltersMatchMeshoptsDecoders) {
         meshopt_encodeFilterOct(ours.data(), n, stride, bits, vectors.data());
         std::vector<uint8_t> theirs = ours;
         meshopt_decodeFilterOct(theirs.data(), n, stride);
-        ASSERT_EQ(lodrt::meshoptApplyFilter(lodrt::MeshoptFilter::Octahedral, ours.data(), n, stride), lodrt::Result::Ok);
+        ASSERT_EQ(lodrt::meshoptApplyFilter(lodrt::MeshoptFilter::Octahedral, ours.data(), n, stride),
+                  lodrt::Result::Ok);
         compare(ours, theirs, stride / 4, 1);
     }
     std::vector<uint8_t> q(n * 8);
@@ -339,7 +343,8 @@ int gridExponent(const std::vector<float>& values) {
 
 CommandResult validate(const std::string& file) {
     return runCommand(shellQuote(LODBAKE_TEST_NODE) + " " +
-                      shellQuote(lodbake_test::sourceDir() + "/scripts/node/validate-gltf.js") + " " + shellQuote(file));
+                      shellQuote(lodbake_test::sourceDir() + "/scripts/node/validate-gltf.js") + " " +
+                      shellQuote(file));
 }
 
 TEST(WebPackTest, BakeWebIsValidatorCleanAndLodrtDecodesThePlainLevels) {
@@ -363,7 +368,7 @@ TEST(WebPackTest, BakeWebIsValidatorCleanAndLodrtDecodesThePlainLevels) {
     ASSERT_EQ(w.models.modelCount(), 1u);
     ASSERT_EQ(w.models.model(0).level_count, p.models.model(0).level_count);
     EXPECT_EQ(w.models.model(0).error_source, lodrt::ErrorSource::Measured); // LODBAKE_lod_metrics kept
-    EXPECT_GT(w.models.model(0).level_count, 3u);                           // MSFT_lod kept
+    EXPECT_GT(w.models.model(0).level_count, 3u);                            // MSFT_lod kept
     for (uint32_t l = 0; l < w.models.model(0).level_count; ++l) {
         const lodrt::LevelInfo& wl = w.models.modelLevel(0, l);
         EXPECT_GT(wl.data_size, 0u) << "level " << l << " is not streamable";
