@@ -11,7 +11,7 @@ root=$(cd "$(dirname "$0")/.." && pwd)
 mkdir -p "$out"
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
-for t in gltf obj off ply preset conf manifest cache lod pack pfrep valence; do mkdir -p "$out/$t"; done
+for t in gltf obj off ply preset conf manifest cache lod pack pfrep valence meshopt; do mkdir -p "$out/$t"; done
 
 cp "$root"/tests/malformed/ply/*.ply "$out/ply/"
 cp "$root"/tests/malformed/off/*.off "$out/off/"
@@ -26,6 +26,7 @@ cp "$root"/configs/*.json "$out/preset/"
 # renamed folder cannot shrink the seeds silently).
 cp "$root"/tests/malformed/preset/*.json "$out/preset/"
 cp "$root"/tests/malformed/lbm/*.lbm "$out/valence/"
+cp "$root"/tests/fuzz/seeds/meshopt/* "$out/meshopt/"
 cp "$root"/tests/malformed/lbp/*.lbp "$out/pfrep/"
 cp "$root"/tests/malformed/pack/*.glb "$out/pack/"
 cp "$root"/tests/malformed/conf/*.conf "$out/conf/"
@@ -135,6 +136,9 @@ cp "$tmp"/cache/v2/packs/*.bin "$tmp"/cache/v2/deps/*.txt "$out/cache/"
 # Runtime inputs: a baked pack, PFRep blobs, .lbm streams.
 "$lodbake" bake "$tmp/tet.off" -o "$out/pack/tet_pack.glb" --levels 1 >/dev/null 2>&1 || true
 "$lodbake" bake "$tmp/rock.ply" -o "$out/pack/rock_pack.glb" --levels 0.5,0.2 >/dev/null
+# The --web form (EXT_meshopt_compression views, fallback buffer) for the pack, lod and glTF readers.
+"$lodbake" bake "$tmp/rock.ply" -o "$out/pack/rock_web.glb" --levels 0.5,0.2 --web >/dev/null
+cp "$out/pack/rock_web.glb" "$out/gltf/rock_web.glb"
 "$lodbake" pfrep "$tmp/tet.off" -o "$out/pfrep/tet.lbp" >/dev/null
 "$lodbake" pfrep "$tmp/rock.ply" -o "$out/pfrep/rock.lbp" >/dev/null
 "$lodbake" encode "$tmp/tet.off" -o "$out/valence/tet.lbm" --bits 10 >/dev/null

@@ -54,3 +54,9 @@ if ! node -e 'const p = require("./scripts/node/package.json");
     echo "installing npm packages for the tests (scripts/node)"
     (cd scripts/node && npm ci --no-audit --no-fund --loglevel=error)
 fi
+# gltfpack (pinned by scripts/node-bench/package-lock.json): the benchmarks' anchor, and the
+# EXT_meshopt_compression files WebPackTest opens (it skips without it).
+if [ ! -x scripts/node-bench/node_modules/.bin/gltfpack ]; then
+    echo "installing npm packages for the benchmarks and the web-pack tests (scripts/node-bench)"
+    (cd scripts/node-bench && npm ci --no-audit --no-fund --loglevel=error)
+fi

@@ -56,7 +56,7 @@ if [ "${LODBAKE_SKIP_SANITIZERS:-0}" != 1 ]; then
     step "sanitizer tests"
 
     smoke=${LODBAKE_FUZZ_SMOKE_SECONDS:-8}
-    for target in ply obj off gltf preset conf manifest cache lod pack pfrep valence; do
+    for target in ply obj off gltf preset conf manifest cache lod pack pfrep valence meshopt; do
         echo "fuzz smoke: $target ${smoke}s"
         LODBAKE_FUZZ_BUILD_DIR="$asan_dir" LODBAKE_FUZZ_NO_BUILD=1 LODBAKE_CLI="$build_dir/baker/lodbake" \
             scripts/fuzz.sh "$target" "$smoke" >"$asan_dir/fuzz-smoke-$target.log" 2>&1 || {

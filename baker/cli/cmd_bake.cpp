@@ -60,6 +60,8 @@ options:
   --levels LIST         override lod_ratios: comma-separated triangle ratios in (0, 1]
   --pixels P            override pixel_threshold
   --compact             compressed-only pack: valence streams replace the plain level data
+  --web                 web pack: every level quantized and EXT_meshopt_compression-compressed
+                        (Babylon.js, three.js), no LODBAKE_ streams; not with --compact (preset key web)
   --no-progressive-fans do not embed LOD0's PFRep blob (preset key progressive_fans)
   --pfrep-from-chain    build that blob from the LOD chain's own collapses: one simplification
                         instead of two (about 1 s less on a 1 M-triangle scan), coarser PFRep
@@ -99,6 +101,7 @@ struct CliOverrides {
     bool has_pixels = false;
     double pixels = 0;
     bool compact = false;
+    bool web = false;
     bool no_progressive_fans = false;
     bool pfrep_from_chain = false;
     bool no_pfrep_from_chain = false;
@@ -116,6 +119,7 @@ void applyOverrides(const CliOverrides& o, BakeSettings& s) {
     if (o.has_levels) s.lod_ratios = o.levels;
     if (o.has_pixels) s.pixel_threshold = o.pixels;
     if (o.compact) s.compact = true;
+    if (o.web) s.web = true;
     if (o.no_progressive_fans) s.progressive_fans = false;
     if (o.pfrep_from_chain) s.pfrep_from_chain = true;
     if (o.no_pfrep_from_chain) s.pfrep_from_chain = false;
@@ -337,6 +341,7 @@ int parseOverrides(Args& args, CliOverrides& overrides) {
         overrides.pixels = p;
     }
     overrides.compact = args.flags.count("--compact") > 0;
+    overrides.web = args.flags.count("--web") > 0;
     overrides.no_progressive_fans = args.flags.count("--no-progressive-fans") > 0;
     overrides.pfrep_from_chain = args.flags.count("--pfrep-from-chain") > 0;
     overrides.no_pfrep_from_chain = args.flags.count("--no-pfrep-from-chain") > 0;
@@ -541,6 +546,7 @@ int runBake(int argc, char** argv) {
                     {"--levels", nullptr, true},
                     {"--pixels", nullptr, true},
                     {"--compact", nullptr, false},
+                    {"--web", nullptr, false},
                     {"--no-progressive-fans", nullptr, false},
                     {"--pfrep-from-chain", nullptr, false},
                     {"--no-pfrep-from-chain", nullptr, false},

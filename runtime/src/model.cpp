@@ -3,6 +3,7 @@
 // wording as loddump).
 
 #include "lodrt/model.h"
+#include "lodrt/meshopt.h"
 
 #include <cassert>
 #include <cmath>
@@ -293,12 +294,18 @@ struct ModelBuilder {
                 const AccessorInfo& acc = pack->accessor(acc_index);
                 if (acc.buffer_view == kNoIndex) continue;
                 const BufferViewInfo& view = pack->bufferView(acc.buffer_view);
-                if (!pack->buffer(view.buffer).is_glb_bin || acc.is_sparse) {
+                // A compressed view's bytes are its EXT_meshopt_compression range (lodrt/meshopt.h).
+                MeshoptViewInfo compressed;
+                const bool is_compressed = meshoptViewInfo(*pack, acc.buffer_view, &compressed) == Result::Ok;
+                const uint32_t buffer = is_compressed ? compressed.buffer : view.buffer;
+                const uint64_t first = is_compressed ? compressed.byte_offset : view.byte_offset;
+                const uint64_t end = first + (is_compressed ? compressed.byte_length : view.byte_length);
+                if (!pack->buffer(buffer).is_glb_bin || acc.is_sparse) {
                     streamable = false;
                     continue;
                 }
-                if (view.byte_offset < lo) lo = view.byte_offset;
-                if (view.byte_offset + view.byte_length > hi) hi = view.byte_offset + view.byte_length;
+                if (first < lo) lo = first;
+                if (end > hi) hi = end;
             }
         }
         if (streamable && hi > lo) {

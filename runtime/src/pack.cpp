@@ -11,6 +11,7 @@
 #include <new>
 
 #include "lodrt/format.h"
+#include "lodrt/meshopt.h"
 #include "memory.h"
 
 namespace lodrt {
@@ -296,6 +297,7 @@ struct PackLoader {
             // Streams lodrt has decoders for (lodrt/valence.h, lodrt/pfrep.h) are not worth a warning.
             bool decoded = false;
             for (const char* stream : format::kDecodedStreamExtensions) decoded |= name.string() == stream;
+            decoded |= name.string() == format::kExtMeshoptCompression || name.string() == format::kExtKhrMeshQuantization;
             if (decoded) continue;
             char pointer[64], shown[96];
             std::snprintf(pointer, sizeof(pointer), "/extensionsRequired/%u", i);
@@ -304,6 +306,20 @@ struct PackLoader {
             if (r != Result::Ok) return r;
         }
         return Result::Ok;
+    }
+
+    // True when some bufferView uses buffer `b` and every one that does is EXT_meshopt_compression
+    // compressed (a fallback buffer's rule).
+    bool onlyCompressedViewsUse(uint32_t b) {
+        const JsonValue views = pack->document_->root().find("bufferViews");
+        bool used = false;
+        for (uint32_t v = 0; v < views.size(); ++v) {
+            uint64_t buffer = 0;
+            if (!views.at(v).find("buffer").asUint64(&buffer) || buffer != b) continue;
+            if (!views.at(v).find("extensions").find(format::kExtMeshoptCompression).isValid()) return false;
+            used = true;
+        }
+        return used;
     }
 
     Result loadBuffers() {
@@ -332,9 +348,16 @@ struct PackLoader {
                 if (r != Result::Ok) return r;
                 continue;
             }
-            if (i != 0 || !glb.is_binary || glb.bin_size == 0)
-                return fail(Result::BadGltf, "%s: no uri, but only buffer 0 of a GLB with a BIN chunk may omit it",
-                            path);
+            if (i != 0 || !glb.is_binary || glb.bin_size == 0) {
+                // Else an EXT_meshopt_compression fallback buffer (lodrt/meshopt.h).
+                if (!onlyCompressedViewsUse(i))
+                    return fail(Result::BadGltf,
+                                "%s: no uri, but only buffer 0 of a GLB with a BIN chunk may omit it (or a fallback "
+                                "buffer only EXT_meshopt_compression views use)",
+                                path);
+                info.is_fallback = true;
+                continue;
+            }
             // The BIN chunk is padded to 4 bytes, so it may exceed byteLength by up to 3.
             if (info.byte_length > glb.bin_size || glb.bin_size - info.byte_length > 3)
                 return fail(Result::OutOfBounds, "%s/byteLength: %llu bytes, but the BIN chunk has %zu", path,
@@ -379,6 +402,19 @@ struct PackLoader {
                             static_cast<unsigned long long>(info.byte_offset),
                             static_cast<unsigned long long>(info.byte_offset + info.byte_length), info.buffer,
                             static_cast<unsigned long long>(buffer_length));
+        }
+        return checkMeshoptViews();
+    }
+
+    // Every EXT_meshopt_compression object follows the extension's rules (lodrt/meshopt.h).
+    Result checkMeshoptViews() {
+        for (uint32_t i = 0; i < pack->buffer_view_count_; ++i) {
+            MeshoptViewInfo info;
+            const char* what = "invalid";
+            const Result r = meshoptViewInfo(*pack, i, &info, &what);
+            if (r == Result::NotLoaded) continue;
+            if (r != Result::Ok)
+                return fail(r, "/bufferViews/%u/extensions/%s/%s", i, format::kExtMeshoptCompression, what);
         }
         return Result::Ok;
     }

@@ -34,6 +34,8 @@ Result checkLevelIndices(const Pack& pack, const LevelInfo& level, const uint8_t
         const AccessorInfo& acc = pack.accessor(prim.indices);
         if (acc.buffer_view == kNoIndex || acc.is_sparse) continue;
         const BufferViewInfo& view = pack.bufferView(acc.buffer_view);
+        // Compressed indices (EXT_meshopt_compression) are checked when decoded (readAccessorIndices).
+        if (!pack.buffer(view.buffer).is_glb_bin) continue;
         const uint32_t size = componentSize(acc.component_type);
         const uint64_t stride = view.byte_stride ? view.byte_stride : size;
         // The level range covers the view (model.cpp); the Pack checked the accessor fits the view.

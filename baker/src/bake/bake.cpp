@@ -277,6 +277,17 @@ Status assemblePackAsset(const std::string& name, Mesh& mesh, LodChain& chain, A
     return Status::okStatus();
 }
 
+// --web with adaptive precision: each level after LOD0 may store its positions on a grid whose
+// rounding moves a vertex by at most error_fraction of the level's measured mean error, as the
+// streams' adaptive precision does (docs/format/web.md).
+void setWebPositionSteps(const BakeSettings& settings, AssetSlot& slot) {
+    if (!settings.web || !settings.stream_precision.adaptive) return;
+    const std::vector<LodMetricsLevel>& levels = slot.report.metrics.levels;
+    for (size_t l = 1; l < slot.asset.levels.size() && l < levels.size(); ++l)
+        slot.asset.levels[l].web_position_step =
+            settings.stream_precision.error_fraction * levels[l].mean_error / (std::sqrt(3.0) / 2.0);
+}
+
 Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vector<PackStreamEncoder>& encoders,
                  AssetSlot& slot, size_t index, const BakeHooks& hooks) {
     LODBAKE_RETURN_IF_ERROR(repairInput(input, settings, slot, index, hooks));
@@ -299,7 +310,9 @@ Status bakeAsset(BakeInput& input, const BakeSettings& settings, const std::vect
     }
     if (!tasks.textures.ok()) return tasks.textures.status();
     for (const Result<PackStreamCommit>& commit : tasks.commits) LODBAKE_RETURN_IF_ERROR(commit.status());
-    return assemblePackAsset(input.name, input.mesh, chain, tasks, encoders, slot);
+    LODBAKE_RETURN_IF_ERROR(assemblePackAsset(input.name, input.mesh, chain, tasks, encoders, slot));
+    setWebPositionSteps(settings, slot);
+    return Status::okStatus();
 }
 
 } // namespace
@@ -334,9 +347,12 @@ Result<BakeOutput> bakeScene(std::vector<BakeInput> inputs, PackScene scene, con
     streams.valence.release_memory = hooks.release_memory;
     streams.progressive_fans = settings.progressive_fans;
     streams.pfrep_from_chain = settings.pfrep_from_chain;
-    const std::vector<PackStreamEncoder> encoders = builtinStreamEncoders(streams);
+    // A --web pack is for clients that read none of our streams (docs/format/web.md).
+    const std::vector<PackStreamEncoder> encoders =
+        settings.web ? std::vector<PackStreamEncoder>() : builtinStreamEncoders(streams);
     PackDescription description;
     description.compact = settings.compact;
+    description.web = settings.web;
     // Fail before the expensive stages when no stream encoder exists at all.
     if (settings.compact && encoders.empty()) LODBAKE_RETURN_IF_ERROR(checkCompact(description));
 

@@ -143,6 +143,7 @@ Status applyImpl(const Json& root, const std::string& name, BakeSettings& s) {
          [&](const Json& v, const std::string&) { return applyObject(v, name, "/textures", texture_handlers); }},
         {"threads", [&](const Json& v, const std::string& w) { return readUint(v, w, 0, 1024, s.threads); }},
         {"compact", [&](const Json& v, const std::string& w) { return readBool(v, w, s.compact); }},
+        {"web", [&](const Json& v, const std::string& w) { return readBool(v, w, s.web); }},
         {"progressive_fans", [&](const Json& v, const std::string& w) { return readBool(v, w, s.progressive_fans); }},
         {"pfrep_from_chain", [&](const Json& v, const std::string& w) { return readBool(v, w, s.pfrep_from_chain); }},
         {"remove_covered_components",
@@ -195,6 +196,9 @@ Status validateSettings(const BakeSettings& settings, const std::string& name) {
     if (settings.textures.min_size_px > settings.textures.max_size_px)
         return invalidInput(name + ": /textures: min_size_px " + std::to_string(settings.textures.min_size_px) +
                             " must not exceed max_size_px " + std::to_string(settings.textures.max_size_px));
+    // --compact keeps the level data only in LODBAKE_ streams, --web only in EXT_meshopt_compression.
+    if (settings.compact && settings.web)
+        return invalidInput(name + ": /web: cannot be combined with compact (a pack keeps its level data in one form)");
     return Status::okStatus();
 }
 
@@ -235,6 +239,7 @@ std::string settingsToJson(const BakeSettings& s) {
                          {"keep_unreadable_images", s.textures.keep_unreadable_images}};
         j["threads"] = s.threads;
         j["compact"] = s.compact;
+        j["web"] = s.web;
         j["progressive_fans"] = s.progressive_fans;
         j["pfrep_from_chain"] = s.pfrep_from_chain;
         j["remove_covered_components"] = s.remove_covered_components;

@@ -17,6 +17,7 @@
 #include <tiny_gltf.h>
 
 #include "io/draco_decode.h"
+#include "io/gltf_meshopt.h"
 #include "lodbake/core/file_io.h"
 #include "lodbake/core/json_limits.h"
 #include "lodrt/format.h"
@@ -163,6 +164,7 @@ Status checkJsonReferences(const uint8_t* json_bytes, size_t json_size, const st
             }
         }
     }
+    replaceMeshoptFallbacks(root, prepass.is_changed);
     if (prepass.is_changed) prepass.json_text = root.dump();
     return Status::okStatus();
 }
@@ -1188,7 +1190,8 @@ Result<bool> checkRequiredExtensions(const tinygltf::Model& model, const std::st
     for (const std::string& e : model.extensionsUsed)
         if (e == lodrt::format::kExtKhrMeshQuantization) quantized = true;
     for (const std::string& e : model.extensionsRequired)
-        if (e != lodrt::format::kExtKhrMeshQuantization && e != kDracoExtension)
+        if (e != lodrt::format::kExtKhrMeshQuantization && e != kDracoExtension &&
+            e != lodrt::format::kExtMeshoptCompression)
             return unsupported(name + ": extensionsRequired: extension \"" + e + "\" is not supported");
     return quantized;
 }
@@ -1205,6 +1208,7 @@ Result<LoadedMesh> readGltfImpl(const uint8_t* data, size_t size, const std::str
     LODBAKE_RETURN_IF_ERROR(
         parseGltfDocument(data, size, name, load_side_file, options, diagnostics, is_glb, prepass, model));
     LODBAKE_ASSIGN_OR_RETURN(const bool quantized, checkRequiredExtensions(model, name));
+    LODBAKE_RETURN_IF_ERROR(decodeMeshoptViews(model, name));
     return flattenModel(model, prepass, quantized, is_glb, name, options, diagnostics);
 }
 
@@ -1388,6 +1392,7 @@ Result<LoadedScene> readGltfSceneImpl(const uint8_t* data, size_t size, const st
     LODBAKE_RETURN_IF_ERROR(
         parseGltfDocument(data, size, name, load_side_file, options, diagnostics, is_glb, prepass, model));
     LODBAKE_ASSIGN_OR_RETURN(const bool quantized, checkRequiredExtensions(model, name));
+    LODBAKE_RETURN_IF_ERROR(decodeMeshoptViews(model, name));
     SceneWalk walk;
     if (!model.scenes.empty()) {
         const int scene_index = model.defaultScene >= 0 ? model.defaultScene : 0;

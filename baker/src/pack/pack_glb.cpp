@@ -14,6 +14,7 @@
 #include "lodbake/pack/pack_glb.h"
 
 #include "io/gltf_model.h"
+#include "pack/web_meshopt.h"
 #include "lodbake/core/json_writer.h"
 #include "lodbake/pack/pack.h"
 #include "lodbake/version.h"
@@ -219,20 +220,27 @@ void appendU32(std::vector<uint8_t>& out, uint32_t v) {
 // the same model with that buffer empty (its JSON then says "byteLength":0 and it has no BIN chunk).
 // Same layout as tinygltf's WriteBinaryGltfStream: 12-byte header, the JSON chunk padded with spaces
 // to 4 bytes, the BIN chunk padded with zeros. `bin` becomes the result (its bytes move once).
-Result<std::vector<uint8_t>> assembleGlb(const std::vector<uint8_t>& shell, std::vector<uint8_t> bin) {
+// `web`: the --web pack's compressed views (their extension objects and the fallback buffer), or null.
+Result<std::vector<uint8_t>> assembleGlb(const std::vector<uint8_t>& shell, std::vector<uint8_t> bin,
+                                         const WebViews* web) {
     if (shell.size() < 20) return internalError("pack: tinygltf wrote no GLB header");
     uint32_t json_chunk = 0;
     for (int k = 0; k < 4; ++k) json_chunk |= uint32_t(shell[12 + size_t(k)]) << (8 * k);
     if (size_t(json_chunk) + 20 > shell.size()) return internalError("pack: tinygltf wrote a short JSON chunk");
     std::string json(shell.begin() + 20, shell.begin() + 20 + std::ptrdiff_t(json_chunk));
     while (!json.empty() && json.back() == ' ') json.pop_back();
+    if (web) LODBAKE_RETURN_IF_ERROR(webPatchJson(json, *web));
+    const std::string extra_buffers = web ? webFallbackBufferJson(*web) : std::string();
     const std::string empty = "\"buffers\":[{\"byteLength\":0}]";
     const size_t at = json.find(empty);
     if (at == std::string::npos || json.find(empty, at + 1) != std::string::npos)
         return internalError("pack: the GLB's buffer entry was not found");
     const uint64_t bin_size = bin.size();
     if (bin_size > 0xffffffffull - 64 - json.size()) return resourceLimit("pack: GLB larger than 4 GiB");
-    if (bin_size > 0) json.replace(at, empty.size(), "\"buffers\":[{\"byteLength\":" + std::to_string(bin_size) + "}]");
+    if (bin_size > 0)
+        json.replace(at, empty.size(),
+                     "\"buffers\":[{\"byteLength\":" + std::to_string(bin_size) + "}" +
+                         (extra_buffers.empty() ? "" : "," + extra_buffers) + "]");
     const uint32_t json_pad = uint32_t((4 - json.size() % 4) % 4), bin_pad = uint32_t((4 - bin_size % 4) % 4);
     const uint32_t json_length = uint32_t(json.size()) + json_pad;
     const uint32_t total = 12 + 8 + json_length + (bin_size ? 8 + uint32_t(bin_size) + bin_pad : 0);
@@ -280,9 +288,11 @@ size_t binaryBound(const PackDescription& description) {
 
 // The asset's level meshes with their mesh and primitive extensions, in level order; returns their
 // mesh indices. `owned`, when set, is the asset itself: each level is released once in the model.
+// `web`: the --web pack's compressed views (levels in web order, each mesh's position step), or null.
 Result<std::vector<int>> addAssetMeshes(tinygltf::Model& model, BufferBuilder& buffer, ModelDedupe& dedupe,
                                         const PackAsset& asset, PackAsset* owned, std::set<std::string>& used,
-                                        std::set<std::string>& streams, std::vector<ViewPatch>& patches) {
+                                        std::set<std::string>& streams, std::vector<ViewPatch>& patches,
+                                        WebViews* web) {
     if (asset.levels.empty()) return invalidInput("pack: asset \"" + asset.name + "\" has no levels");
     dedupe.first_material = model.materials.size(); // share materials within one asset only
     std::vector<int> meshes;
@@ -291,12 +301,17 @@ Result<std::vector<int>> addAssetMeshes(tinygltf::Model& model, BufferBuilder& b
         const std::string level_name = asset.name + "_lod" + std::to_string(l);
         std::vector<std::pair<uint32_t, uint32_t>> ranges;
         for (const PackLevel::VertexRange& r : level.primitive_vertex_ranges) ranges.emplace_back(r.first, r.count);
+        const Mesh web_mesh = web ? webLevelOrder(level.mesh) : Mesh();
         Result<int> mesh_index =
-            addMeshToModel(model, buffer, level.mesh, &dedupe, ranges.empty() ? nullptr : &ranges);
+            addMeshToModel(model, buffer, web ? web_mesh : level.mesh, &dedupe, ranges.empty() ? nullptr : &ranges);
         if (!mesh_index.ok())
             return Status(mesh_index.status().code(), level_name + ": " + mesh_index.status().message());
         tinygltf::Mesh& gmesh = model.meshes[size_t(*mesh_index)];
         gmesh.name = level_name;
+        if (web) {
+            web->mesh_position_step.resize(model.meshes.size());
+            web->mesh_position_step[size_t(*mesh_index)] = level.web_position_step;
+        }
         ViewPatch where;
         where.object = size_t(*mesh_index);
         for (const PackExtension& e : level.mesh_extensions)
@@ -406,14 +421,15 @@ void addLowerLevelNodes(tinygltf::Model& model, const PackScene& scene, size_t n
 // such node; later instances copy them (their buffer views are shared).
 Status addSceneGraph(tinygltf::Model& model, BufferBuilder& buffer, ModelDedupe& dedupe,
                      const PackDescription& description, PackDescription* owned, std::set<std::string>& used,
-                     std::set<std::string>& streams, std::vector<ViewPatch>& patches, tinygltf::Scene& out) {
+                     std::set<std::string>& streams, std::vector<ViewPatch>& patches, WebViews* web,
+                     tinygltf::Scene& out) {
     LODBAKE_RETURN_IF_ERROR(checkScene(description));
     const PackScene& scene = description.scene;
     std::vector<std::vector<int>> asset_meshes;
     for (size_t a = 0; a < description.assets.size(); ++a) {
         LODBAKE_ASSIGN_OR_RETURN(std::vector<int> meshes,
                                  addAssetMeshes(model, buffer, dedupe, description.assets[a],
-                                                owned ? &owned->assets[a] : nullptr, used, streams, patches));
+                                                owned ? &owned->assets[a] : nullptr, used, streams, patches, web));
         asset_meshes.push_back(std::move(meshes));
     }
     std::vector<bool> is_child(scene.nodes.size(), false);
@@ -473,16 +489,18 @@ Result<std::vector<uint8_t>> writeImpl(const PackDescription& description, PackD
     ModelDedupe dedupe;
     std::set<std::string> used, streams;
     std::vector<ViewPatch> patches;
+    WebViews web;
     tinygltf::Scene scene;
     if (!description.scene.empty()) {
         LODBAKE_RETURN_IF_ERROR(
-            addSceneGraph(model, buffer, dedupe, description, owned, used, streams, patches, scene));
+            addSceneGraph(model, buffer, dedupe, description, owned, used, streams, patches,
+                          description.web ? &web : nullptr, scene));
     }
     for (size_t a = 0; a < description.assets.size() && description.scene.empty(); ++a) {
         const PackAsset& asset = description.assets[a];
         LODBAKE_ASSIGN_OR_RETURN(std::vector<int> meshes,
                                  addAssetMeshes(model, buffer, dedupe, asset, owned ? &owned->assets[a] : nullptr,
-                                                used, streams, patches));
+                                                used, streams, patches, description.web ? &web : nullptr));
         std::vector<int> nodes;
         for (size_t l = 0; l < meshes.size(); ++l) {
             tinygltf::Node node;
@@ -503,11 +521,19 @@ Result<std::vector<uint8_t>> writeImpl(const PackDescription& description, PackD
     if (scene.nodes.empty()) return invalidInput("pack: nothing to write");
     model.scenes.push_back(std::move(scene));
     model.defaultScene = 0;
-    model.extensionsUsed.assign(used.begin(), used.end());
-    if (description.compact) model.extensionsRequired.assign(streams.begin(), streams.end());
-
     std::vector<uint8_t> bin = buffer.finish();
-    if (description.compact) bin = dropStreamedAccessors(model, streams, bin, patches);
+    std::set<std::string> required = description.compact ? streams : std::set<std::string>();
+    if (description.web) {
+        LODBAKE_RETURN_IF_ERROR(encodeWebAccessors(model, bin, web));
+        required.insert(lodrt::format::kExtMeshoptCompression); // its fallback buffer has no bytes
+        if (web.quantized) required.insert(lodrt::format::kExtKhrMeshQuantization);
+        used.insert(required.begin(), required.end());
+    }
+    model.extensionsUsed.assign(used.begin(), used.end());
+    model.extensionsRequired.assign(required.begin(), required.end());
+    if (description.compact || description.web)
+        bin = dropStreamedAccessors(model, description.compact ? streams : std::set<std::string>(), bin, patches);
+    if (description.web) appendWebViews(model, bin, web);
     // tinygltf copies a buffer's data before writing it (and the GLB holds it a third time), so the
     // model is written with an empty buffer and the GLB is assembled here around the binary chunk,
     // byte for byte as tinygltf lays it out: the pack's bytes exist at most twice, briefly.
@@ -520,7 +546,7 @@ Result<std::vector<uint8_t>> writeImpl(const PackDescription& description, PackD
         if (!writer.WriteGltfSceneToStream(&model, stream, false, true) || !stream)
             return internalError("pack: tinygltf failed");
     }
-    return assembleGlb(shell, std::move(bin));
+    return assembleGlb(shell, std::move(bin), description.web ? &web : nullptr);
 }
 
 } // namespace

@@ -28,6 +28,30 @@ constexpr const char kExtKhrMeshQuantization[] = "KHR_mesh_quantization";
 // The stream extensions lodrt decodes (lodrt/valence.h, lodrt/pfrep.h): a pack may require them.
 constexpr const char* const kDecodedStreamExtensions[] = {kExtValenceCompression, kExtProgressiveFans};
 
+// EXT_meshopt_compression (KhronosGroup/glTF extensions/2.0/Vendor/EXT_meshopt_compression): the
+// bufferView extension object, its modes and filters, the codec headers and the members of a fallback
+// buffer (one with no uri and no data, referenced only by compressed views). docs/format/web.md.
+constexpr const char kExtMeshoptCompression[] = "EXT_meshopt_compression";
+constexpr const char kMeshoptModeAttributes[] = "ATTRIBUTES";
+constexpr const char kMeshoptModeTriangles[] = "TRIANGLES";
+constexpr const char kMeshoptModeIndices[] = "INDICES";
+constexpr const char kMeshoptFilterNone[] = "NONE";
+constexpr const char kMeshoptFilterOctahedral[] = "OCTAHEDRAL";
+constexpr const char kMeshoptFilterQuaternion[] = "QUATERNION";
+constexpr const char kMeshoptFilterExponential[] = "EXPONENTIAL";
+constexpr const char kMeshoptFallback[] = "fallback";
+constexpr uint8_t kMeshoptVertexHeader = 0xA0;   // high nibble; low nibble: vertex codec version (0 or 1)
+constexpr uint8_t kMeshoptIndexHeader = 0xE0;    // triangle codec; low nibble: version (0 or 1)
+constexpr uint8_t kMeshoptSequenceHeader = 0xD0; // index sequence codec; low nibble: version 1
+constexpr uint32_t kMeshoptMaxVertexStride = 256;
+constexpr uint32_t kMeshoptVertexBlockMax = 8192;  // bytes of one decoded vertex block (all vertices x stride)
+constexpr uint32_t kMeshoptVertexGroup = 16;       // vertices per byte group
+constexpr uint32_t kMeshoptVertexTail = 32;        // minimal tail (the first vertex; padding) of a vertex stream
+// The --web writer: positions on a power-of-two grid at least this fine over the level's largest
+// extent (EXPONENTIAL filter), normals and tangents 8-bit octahedral, UVs in [0,1] as unorm16.
+constexpr uint32_t kWebPositionBits = 14;
+constexpr uint32_t kWebNormalBits = 8;
+
 // PFRep progressive fans (docs/format/pfrep.md). Little-endian; all offsets are byte offsets from the
 // start of the blob. Vertex ids are removal ranks: vertex i is the i-th vertex removed by the
 // half-edge-collapse sequence, ids >= removed_count are never removed.

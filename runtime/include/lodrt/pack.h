@@ -50,6 +50,7 @@ struct BufferInfo {
     uint64_t byte_length = 0;
     bool is_glb_bin = false; // the data is the GLB BIN chunk (the only bytes lodrt can see)
     bool has_uri = false;    // external or data: URI; lodrt does no IO, so its bytes are unavailable
+    bool is_fallback = false; // no uri and no bytes: only EXT_meshopt_compression views may use it (lodrt/meshopt.h)
     JsonValue json;
 };
 

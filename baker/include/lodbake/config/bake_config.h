@@ -56,6 +56,7 @@ struct BakeSettings {
     TextureLodSettings textures;
     uint32_t threads = 0;         // worker threads; 0: all cores (the output does not depend on it)
     bool compact = false;         // list our stream extensions in extensionsRequired
+    bool web = false; // levels as KHR_mesh_quantization + EXT_meshopt_compression, no LODBAKE_ streams (docs/format/web.md)
     bool progressive_fans = true; // embed LOD0's PFRep blob (LODBAKE_progressive_fans) in the pack
     bool pfrep_from_chain = false; // build that blob from the chain's own collapses (one simplification,
                                    // faster, coarser PFRep levels) instead of its own half-edge pass

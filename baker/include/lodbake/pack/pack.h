@@ -42,6 +42,8 @@ struct PackLevel {
         uint32_t count = 0;
     };
     std::vector<VertexRange> primitive_vertex_ranges;
+    /// --web: the coarsest position grid step the level accepts (0: the default grid only).
+    double web_position_step = 0;
 };
 
 struct PackAsset {
@@ -77,6 +79,7 @@ struct PackDescription {
     std::vector<PackAsset> assets;
     PackScene scene; // empty: one LOD group node per asset in the scene
     bool compact = false; // stream extensions go into extensionsRequired
+    bool web = false;     // levels quantized and EXT_meshopt_compression-compressed (docs/format/web.md)
 };
 
 /// Per-level metrics in the form LODBAKE_lod_metrics stores (schemas/LODBAKE_lod_metrics).
