@@ -1,0 +1,403 @@
+#pragma once
+// PFRep format 3 (docs/format/pfrep.md, "Format 3"): the coding of one vertex's entry and record,
+// written once as a template over the coder so the baker's encoder and lodrt's decoder cannot
+// disagree. A coder passes each value through: `v = coder.bit(prob, v)` codes v when encoding and
+// returns the decoded value (ignoring its argument) when decoding.
+//
+// Predictions use only what the decoder already has, vertices being coded in increasing rank:
+// the entries of lower ranks (their fans A_d) and their records. A dependency d of vertex i is a
+// lower-ranked vertex whose fan mentions i (its removal re-created triangles around i), so the
+// dependencies are flags over the list of i's "mentioners"; i's neighbours were mostly neighbours of
+// those same vertices, so they are indices into the mentioners' fans ("candidates"); the criterion
+// codes grow along dependencies, so they are coded as differences from the dependencies' maximum.
+//
+// Also here: the canonical writer of a format 2 entry, which the decoder uses to rebuild the
+// format 2 blob and the encoder to check that a blob is canonical (exactly reproducible).
+
+#include <algorithm>
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
+
+#include "lodrt/detail/valence_model.h"
+#include "lodrt/format.h"
+
+namespace lodrt {
+namespace detail {
+
+constexpr uint32_t kPfrepMaxFan = 63 + 65535;       // longest A_i a format 2 entry can hold
+constexpr uint32_t kPfrepMaxDependencies = 7 + 65535; // most dependency groups of one entry
+
+struct PfrepUintModel {
+    uint32_t klass[1u << format::kValenceClassTreeBits];
+    uint32_t top[33];
+    void init() {
+        initRangeProbs(klass, sizeof(klass) / 4);
+        initRangeProbs(top, sizeof(top) / 4);
+    }
+};
+
+/// Every adaptive model of a format 3 stream (all start at 1/2).
+struct PfrepCodecModels {
+    PfrepUintModel block_bytes;
+    PfrepUintModel fan_count[2];
+    uint32_t is_dependency[8];
+    PfrepUintModel extra_dependencies, extra_dependency_distance;
+    uint32_t has_original[2];
+    uint32_t in_candidates[3];
+    PfrepUintModel candidate_step[2];
+    PfrepUintModel neighbour_distance;
+    uint32_t group_same[2];
+    PfrepUintModel group[2];
+    PfrepUintModel position[3][2];
+    PfrepUintModel radius[2];
+    PfrepUintModel error[4];
+    uint32_t cone_angle[17][16];
+    PfrepUintModel cone_axis[2][2];
+    void init() {
+        block_bytes.init();
+        for (auto& u : fan_count) u.init();
+        initRangeProbs(is_dependency, 8);
+        extra_dependencies.init();
+        extra_dependency_distance.init();
+        initRangeProbs(has_original, 2);
+        initRangeProbs(in_candidates, 3);
+        for (auto& u : candidate_step) u.init();
+        neighbour_distance.init();
+        initRangeProbs(group_same, 2);
+        for (auto& u : group) u.init();
+        for (auto& a : position)
+            for (auto& u : a) u.init();
+        for (auto& u : radius) u.init();
+        for (auto& u : error) u.init();
+        initRangeProbs(&cone_angle[0][0], 17 * 16);
+        for (auto& a : cone_axis)
+            for (auto& u : a) u.init();
+    }
+};
+
+/// One vertex of the table: its format 2 entry, unpacked, and its 10-byte record.
+struct PfrepEntry {
+    uint32_t n = 0;            // length of A_i
+    uint32_t m = 0;            // dependency groups
+    uint32_t has_original = 0; // 1 when some slot holds an input triangle
+    uint32_t* neighbours = nullptr;   // A_i (capacity kPfrepMaxFan)
+    uint32_t* dependencies = nullptr; // increasing (capacity kPfrepMaxDependencies)
+    uint32_t* groups = nullptr;       // per slot: 0 none, 1 input triangle, 2 + k dependency k
+    uint8_t record[format::kPfrepVertexRecordSize] = {};
+};
+
+/// What encoder and decoder keep while coding vertices in increasing rank (caller memory).
+struct PfrepCodecState {
+    uint32_t vertex_count = 0, removed_count = 0, block_shift = 0;
+    const uint32_t* block_offset = nullptr; // per block: byte offset of its records in `blob`
+    const uint8_t* blob = nullptr;          // the format 2 blob: records of ranks < i are read back
+    uint32_t* head = nullptr;          // per vertex: its latest mention, kNone when none
+    uint32_t* candidate_stamp = nullptr; // per vertex: i + 1 while it is a candidate of vertex i
+    uint32_t* candidate_index = nullptr; // per vertex: its index in `candidates`
+    uint32_t* mention_stamp = nullptr;   // per vertex: i + 1 once entry i mentioned it
+    uint32_t* fan_begin = nullptr;       // per vertex + 1: where its A_i starts in `fans`
+    uint32_t* fans = nullptr;            // every A_i, in rank order (total_slots values)
+    uint32_t* mention_next = nullptr;    // per mention: the mention before it of the same vertex
+    uint32_t* mention_entry = nullptr;   // per mention: the entry that mentions
+    uint32_t* candidates = nullptr;      // kPfrepCandidateLimit values
+    uint32_t* mentioners = nullptr;      // kPfrepMentionerLimit values
+    uint32_t total_slots = 0, used_slots = 0, used_mentions = 0;
+
+    const uint8_t* record(uint32_t v) const {
+        const uint32_t b = v >> block_shift;
+        return blob + block_offset[b] + size_t(v - (b << block_shift)) * format::kPfrepVertexRecordSize;
+    }
+};
+
+inline uint32_t pfrepLoad16(const uint8_t* p) { return uint32_t(p[0]) | (uint32_t(p[1]) << 8); }
+inline void pfrepStore16(uint8_t* p, uint32_t v) {
+    p[0] = uint8_t(v);
+    p[1] = uint8_t(v >> 8);
+}
+inline uint64_t pfrepZigzag(int64_t v) { return v < 0 ? uint64_t(-v) * 2 - 1 : uint64_t(v) * 2; }
+inline int64_t pfrepUnzigzag(uint64_t z) { return (z & 1) ? -int64_t((z + 1) / 2) : int64_t(z / 2); }
+
+/// Codes a signed difference value - prediction of a field whose values lie in [0, limit]; false
+/// when the decoded value falls outside.
+template <class Coder>
+bool pfrepCodeField(Coder& c, PfrepUintModel& model, uint32_t prediction, uint32_t limit, uint32_t* value) {
+    const uint64_t z = c.uint(model, Coder::kEncoding ? pfrepZigzag(int64_t(*value) - int64_t(prediction)) : 0);
+    const int64_t v = int64_t(prediction) + pfrepUnzigzag(z);
+    if (c.failed() || v < 0 || v > int64_t(limit)) return false;
+    *value = uint32_t(v);
+    return true;
+}
+
+/// The vertices whose fans mention i (latest first) and, among them, i's dependencies.
+template <class Coder>
+bool pfrepCodeDependencies(Coder& c, PfrepCodecModels& models, PfrepCodecState& s, uint32_t i, PfrepEntry& e,
+                           uint32_t* mentioner_count) {
+    uint32_t mc = 0;
+    for (uint32_t t = s.head[i]; t != kNone && mc < format::kPfrepMentionerLimit; t = s.mention_next[t])
+        s.mentioners[mc++] = s.mention_entry[t];
+    *mentioner_count = mc;
+    auto isDependency = [&](uint32_t d) {
+        return std::binary_search(e.dependencies, e.dependencies + e.m, d);
+    };
+    uint32_t found = 0;
+    uint32_t* out = Coder::kEncoding ? nullptr : e.dependencies;
+    for (uint32_t k = 0; k < mc; ++k) {
+        const uint32_t d = s.mentioners[k];
+        const uint32_t ctx = std::min(k, 3u) * 2 + (found > 0 ? 1u : 0u);
+        const uint32_t flag = c.bit(models.is_dependency[ctx], Coder::kEncoding ? uint32_t(isDependency(d)) : 0u);
+        if (flag) {
+            if (out) out[found] = d;
+            ++found;
+        }
+    }
+    // Dependencies that are not mentioners (never in a blob the builder writes, but representable).
+    uint32_t extra_count = 0;
+    if (Coder::kEncoding) extra_count = e.m - found;
+    extra_count = uint32_t(c.uint(models.extra_dependencies, extra_count));
+    if (c.failed() || uint64_t(found) + extra_count > kPfrepMaxDependencies) return false;
+    uint32_t k = 0;
+    for (uint32_t x = 0; x < extra_count; ++x) {
+        uint32_t d = 0;
+        if (Coder::kEncoding) {
+            while (std::find(s.mentioners, s.mentioners + mc, e.dependencies[k]) != s.mentioners + mc) ++k;
+            d = e.dependencies[k++];
+        }
+        const uint64_t distance = c.uint(models.extra_dependency_distance, Coder::kEncoding ? i - 1 - d : 0);
+        if (c.failed() || distance >= i) return false;
+        if (out) out[found + x] = uint32_t(i - 1 - distance);
+    }
+    if (!Coder::kEncoding) {
+        e.m = found + extra_count;
+        std::sort(e.dependencies, e.dependencies + e.m);
+        for (uint32_t x = 1; x < e.m; ++x)
+            if (e.dependencies[x] == e.dependencies[x - 1]) return false;
+    }
+    return true;
+}
+
+/// Candidates for i's neighbours: the fans of its dependencies, then of its other mentioners, each
+/// vertex once, only ranks above i, bounded in count and in values scanned.
+struct PfrepCandidates {
+    PfrepCodecState& s;
+    uint32_t i;
+    uint32_t count = 0, scanned = 0;
+    void addFan(uint32_t d) {
+        for (uint32_t t = s.fan_begin[d]; t < s.fan_begin[d + 1]; ++t) {
+            if (count == format::kPfrepCandidateLimit || scanned == format::kPfrepCandidateScanLimit) return;
+            ++scanned;
+            const uint32_t v = s.fans[t];
+            if (v <= i || s.candidate_stamp[v] == i + 1) continue;
+            s.candidate_stamp[v] = i + 1;
+            s.candidate_index[v] = count;
+            s.candidates[count++] = v;
+        }
+    }
+};
+
+template <class Coder>
+bool pfrepCodeFan(Coder& c, PfrepCodecModels& models, PfrepCodecState& s, uint32_t i, PfrepEntry& e,
+                  uint32_t mentioner_count) {
+    PfrepCandidates cand{s, i};
+    for (uint32_t pass = 0; pass < 2; ++pass)
+        for (uint32_t k = 0; k < mentioner_count; ++k) {
+            const uint32_t d = s.mentioners[k];
+            if (std::binary_search(e.dependencies, e.dependencies + e.m, d) == (pass == 0)) cand.addFan(d);
+        }
+    uint32_t ctx_previous = 0;   // 0: first neighbour, 1: the previous was a candidate, 2: it was not
+    uint32_t predicted = 0;      // index of the candidate expected next
+    for (uint32_t k = 0; k < e.n; ++k) {
+        uint32_t a = Coder::kEncoding ? e.neighbours[k] : 0;
+        uint32_t in = 0;
+        const uint32_t count = cand.count;
+        if (count > 0)
+            in = c.bit(models.in_candidates[ctx_previous],
+                       Coder::kEncoding ? uint32_t(s.candidate_stamp[a] == i + 1) : 0u);
+        if (in) {
+            // The step forward from the expected candidate, cyclically.
+            const uint32_t from = predicted % count;
+            const uint64_t step = c.uint(models.candidate_step[ctx_previous == 1 ? 1 : 0],
+                                         Coder::kEncoding ? (s.candidate_index[a] + count - from) % count : 0);
+            if (c.failed() || step >= count) return false;
+            const uint32_t index = uint32_t((from + step) % count);
+            a = s.candidates[index];
+            predicted = index + 1;
+            ctx_previous = 1;
+        } else {
+            const uint64_t distance = c.uint(models.neighbour_distance, Coder::kEncoding ? a - i - 1 : 0);
+            if (c.failed() || uint64_t(i) + 1 + distance >= s.vertex_count) return false;
+            a = uint32_t(i + 1 + distance);
+            predicted = count;
+            ctx_previous = 2;
+        }
+        e.neighbours[k] = a;
+    }
+    return true;
+}
+
+// Slot groups: per slot, "same group as the slot before", else the group among the others.
+template <class Coder> bool pfrepCodeGroups(Coder& c, PfrepCodecModels& models, PfrepEntry& e) {
+    const uint32_t groups = 1 + e.has_original + e.m;
+    auto toCode = [&](uint32_t g) { return g <= 1 ? g : g - 1 + e.has_original; };
+    auto fromCode = [&](uint32_t g) { return g == 0 ? 0u : e.has_original && g == 1 ? 1u : g + 1 - e.has_original; };
+    uint32_t previous = 0;
+    for (uint32_t k = 0; k < e.n; ++k) {
+        uint32_t g = Coder::kEncoding ? toCode(e.groups[k]) : 0;
+        if (groups > 1) {
+            uint32_t same = 0;
+            if (k > 0) same = c.bit(models.group_same[previous == 0 ? 0 : 1], Coder::kEncoding ? uint32_t(g == previous) : 0u);
+            if (!same) {
+                const uint32_t alternatives = k > 0 ? groups - 1 : groups;
+                const uint32_t coded = k > 0 && g > previous ? g - 1 : g;
+                const uint64_t v = c.uint(models.group[k > 0 ? 1 : 0], Coder::kEncoding ? coded : 0);
+                if (c.failed() || v >= alternatives) return false;
+                g = k > 0 && v >= previous ? uint32_t(v) + 1 : uint32_t(v);
+            } else {
+                g = previous;
+            }
+        }
+        previous = g;
+        e.groups[k] = fromCode(g);
+    }
+    return true;
+}
+
+// The record's criterion codes: radius and error predicted by the dependencies' maximum (they grow
+// along dependencies), the cone from the latest dependency. Positions come in a second pass.
+template <class Coder>
+bool pfrepCodeCriterion(Coder& c, PfrepCodecModels& models, const PfrepCodecState& s, uint32_t i, PfrepEntry& e,
+                        uint32_t mentioner_count) {
+    uint32_t radius = 0, error = 0, angle = 16;
+    for (uint32_t k = 0; k < e.m; ++k) {
+        const uint8_t* r = s.record(e.dependencies[k]);
+        radius = std::max<uint32_t>(radius, r[6]);
+        error = std::max<uint32_t>(error, r[7]);
+        angle = std::max<uint32_t>(angle == 16 ? 0 : angle, pfrepLoad16(r + 8) >> 12);
+    }
+    const uint32_t with = e.m > 0 ? 1 : 0;
+    uint32_t v = e.record[6];
+    if (!pfrepCodeField(c, models.radius[with], radius, 255, &v)) return false;
+    e.record[6] = uint8_t(v);
+    v = e.record[7];
+    if (!pfrepCodeField(c, models.error[(i < s.removed_count ? 2 : 0) + with], error, 255, &v)) return false;
+    e.record[7] = uint8_t(v);
+    const uint32_t cone = pfrepLoad16(e.record + 8);
+    const uint32_t coded_angle = c.tree(models.cone_angle[angle], 4, cone >> 12);
+    uint32_t axis[2] = {cone & 63, (cone >> 6) & 63};
+    const uint32_t* ref = e.m > 0 ? &e.dependencies[e.m - 1] : mentioner_count > 0 ? &s.mentioners[0] : nullptr;
+    const uint32_t ref_cone = ref ? pfrepLoad16(s.record(*ref) + 8) : 0;
+    for (int a = 0; a < 2; ++a)
+        if (!pfrepCodeField(c, models.cone_axis[a][ref ? 1 : 0], (ref_cone >> (6 * a)) & 63, 63, &axis[a]))
+            return false;
+    pfrepStore16(e.record + 8, axis[0] | (axis[1] << 6) | (coded_angle << 12));
+    return !c.failed();
+}
+
+/// Codes vertex i (entry then record) and appends its fan to the state. False on a corrupt stream
+/// (decoding) or a value the format cannot hold.
+template <class Coder> bool pfrepCodeVertex(Coder& c, PfrepCodecModels& models, PfrepCodecState& s, uint32_t i, PfrepEntry& e) {
+    uint32_t mentioner_count = 0;
+    if (!pfrepCodeDependencies(c, models, s, i, e, &mentioner_count)) return false;
+    const uint64_t n = c.uint(models.fan_count[e.m > 0 ? 1 : 0], e.n);
+    if (c.failed() || n > kPfrepMaxFan || s.used_slots + n > s.total_slots) return false;
+    e.n = uint32_t(n);
+    e.has_original = c.bit(models.has_original[e.m > 0 ? 1 : 0], e.has_original);
+    if (!pfrepCodeFan(c, models, s, i, e, mentioner_count)) return false;
+    if (!pfrepCodeGroups(c, models, e)) return false;
+    if (!pfrepCodeCriterion(c, models, s, i, e, mentioner_count)) return false;
+    // Register the fan: its values for later candidates, each distinct vertex as mentioned by i.
+    s.fan_begin[i] = s.used_slots;
+    for (uint32_t k = 0; k < e.n; ++k) {
+        const uint32_t a = e.neighbours[k];
+        s.fans[s.used_slots++] = a;
+        if (s.mention_stamp[a] == i + 1) continue;
+        s.mention_stamp[a] = i + 1;
+        s.mention_next[s.used_mentions] = s.head[a];
+        s.mention_entry[s.used_mentions] = i;
+        s.head[a] = s.used_mentions++;
+    }
+    s.fan_begin[i + 1] = s.used_slots;
+    return true;
+}
+
+/// Position of vertex i, coded in DECREASING rank after every entry: its fan's vertices rank above
+/// it, so their positions are known, and i lies amid them (its neighbourhood when it was removed).
+/// `record` holds i's record and receives the position; the prediction is the mean of the distinct
+/// fan vertices, or the position of i + 1 for an empty fan.
+template <class Coder>
+bool pfrepCodePosition(Coder& c, PfrepCodecModels& models, const PfrepCodecState& s, uint32_t i, uint8_t* record) {
+    uint64_t sum[3] = {0, 0, 0};
+    uint32_t count = 0;
+    for (uint32_t t = s.fan_begin[i]; t < s.fan_begin[i + 1]; ++t) {
+        const uint8_t* r = s.record(s.fans[t]);
+        for (int a = 0; a < 3; ++a) sum[a] += pfrepLoad16(r + 2 * a);
+        ++count;
+    }
+    uint32_t pred[3] = {0, 0, 0};
+    for (int a = 0; a < 3; ++a)
+        pred[a] = count > 0 ? uint32_t((sum[a] + count / 2) / count)
+                            : i + 1 < s.vertex_count ? pfrepLoad16(s.record(i + 1) + 2 * a) : 0;
+    for (int a = 0; a < 3; ++a) {
+        uint32_t q = pfrepLoad16(record + 2 * a);
+        if (!pfrepCodeField(c, models.position[a][count > 0 ? 1 : 0], pred[a], 0xFFFF, &q)) return false;
+        pfrepStore16(record + 2 * a, q);
+    }
+    return true;
+}
+
+inline uint32_t pfrepBitWidth(uint32_t v) { return v == 0 ? 0 : 32 - uint32_t(__builtin_clz(v)); }
+
+/// Bytes of entry i written canonically (docs/format/pfrep.md "Entry i"): counts with escapes,
+/// the smallest widths that hold the codes, masks in group order.
+inline size_t pfrepEntryBytes(const PfrepEntry& e, uint32_t i) {
+    uint32_t max_neighbour = 0, max_dependency = 0;
+    for (uint32_t k = 0; k < e.n; ++k) max_neighbour = std::max(max_neighbour, e.neighbours[k] - i - 1);
+    for (uint32_t k = 0; k < e.m; ++k) max_dependency = std::max(max_dependency, i - 1 - e.dependencies[k]);
+    uint64_t bits = format::kPfrepCountBits + (e.n >= 63 ? format::kPfrepCountEscapeBits : 0) +
+                    format::kPfrepDependencyCountBits + (e.m >= 7 ? format::kPfrepCountEscapeBits : 0) + 1 +
+                    format::kPfrepWidthBits + (e.m > 0 ? format::kPfrepWidthBits : 0);
+    bits += uint64_t(e.n) * pfrepBitWidth(max_neighbour) + uint64_t(e.has_original) * e.n +
+            uint64_t(e.m) * (pfrepBitWidth(max_dependency) + e.n);
+    return size_t((bits + 7) / 8);
+}
+
+/// Writes entry i at out (pfrepEntryBytes(e, i) bytes, zeroed here first).
+inline void pfrepWriteEntry(const PfrepEntry& e, uint32_t i, uint8_t* out) {
+    const size_t size = pfrepEntryBytes(e, i);
+    std::memset(out, 0, size);
+    uint64_t at = 0;
+    auto put = [&](uint64_t value, uint32_t bits) {
+        for (uint32_t b = 0; b < bits; ++b, ++at)
+            if ((value >> b) & 1) out[at >> 3] |= uint8_t(1u << (at & 7));
+    };
+    auto putCount = [&](uint32_t count, uint32_t bits) {
+        const uint32_t escape = (1u << bits) - 1;
+        if (count < escape) {
+            put(count, bits);
+        } else {
+            put(escape, bits);
+            put(count - escape, format::kPfrepCountEscapeBits);
+        }
+    };
+    uint32_t max_neighbour = 0, max_dependency = 0;
+    for (uint32_t k = 0; k < e.n; ++k) max_neighbour = std::max(max_neighbour, e.neighbours[k] - i - 1);
+    for (uint32_t k = 0; k < e.m; ++k) max_dependency = std::max(max_dependency, i - 1 - e.dependencies[k]);
+    const uint32_t wa = pfrepBitWidth(max_neighbour), wd = pfrepBitWidth(max_dependency);
+    putCount(e.n, format::kPfrepCountBits);
+    putCount(e.m, format::kPfrepDependencyCountBits);
+    put(e.has_original, 1);
+    put(wa, format::kPfrepWidthBits);
+    if (e.m > 0) put(wd, format::kPfrepWidthBits);
+    for (uint32_t k = 0; k < e.n; ++k) put(e.neighbours[k] - i - 1, wa);
+    auto putMask = [&](uint32_t group) {
+        for (uint32_t k = 0; k < e.n; ++k) put(e.groups[k] == group ? 1 : 0, 1);
+    };
+    if (e.has_original) putMask(1);
+    for (uint32_t k = 0; k < e.m; ++k) {
+        put(i - 1 - e.dependencies[k], wd);
+        putMask(2 + k);
+    }
+}
+
+} // namespace detail
+} // namespace lodrt
