@@ -59,8 +59,7 @@ Result readHeader(const uint8_t* p, size_t size, Header& h) {
 
 // Scratch layout, in uint32 values (the codec models first, then the state's arrays).
 struct Layout {
-    size_t models, head, candidate_stamp, candidate_index, mention_stamp, fan_begin, fans, mention_next,
-        mention_entry, candidates, mentioners, neighbours, dependencies, groups, block_offset, cursor, total;
+    size_t models, mention_count, mentions, candidate_stamp, candidate_index, mention_stamp, fan_begin, fans, candidates, mentioners, neighbours, dependencies, groups, block_offset, cursor, total;
 };
 
 Layout layout(const Header& h) {
@@ -73,16 +72,15 @@ Layout layout(const Header& h) {
     };
     const size_t v = h.vertex_count, t = h.total_slots;
     l.models = take((sizeof(detail::PfrepCodecModels) + 3) / 4);
-    l.head = take(v);
+    l.mention_count = take(v);
+    l.mentions = take(v * format::kPfrepMentionSlots);
     l.candidate_stamp = take(v);
     l.candidate_index = take(v);
     l.mention_stamp = take(v);
     l.fan_begin = take(v + 1);
     l.fans = take(t);
-    l.mention_next = take(t);
-    l.mention_entry = take(t);
     l.candidates = take(format::kPfrepCandidateLimit);
-    l.mentioners = take(format::kPfrepMentionerLimit);
+    l.mentioners = take(format::kPfrepMentionSlots);
     l.neighbours = take(detail::kPfrepMaxFan);
     l.dependencies = take(detail::kPfrepMaxDependencies);
     l.groups = take(detail::kPfrepMaxFan);
@@ -193,18 +191,17 @@ Result pfrepDecompress(const void* data, size_t size, void* out, size_t out_capa
     s.block_shift = h.block_shift;
     s.block_offset = w + l.block_offset;
     s.blob = o;
-    s.head = w + l.head;
+    s.mention_count = w + l.mention_count;
+    s.mentions = w + l.mentions;
     s.candidate_stamp = w + l.candidate_stamp;
     s.candidate_index = w + l.candidate_index;
     s.mention_stamp = w + l.mention_stamp;
     s.fan_begin = w + l.fan_begin;
     s.fans = w + l.fans;
-    s.mention_next = w + l.mention_next;
-    s.mention_entry = w + l.mention_entry;
     s.candidates = w + l.candidates;
     s.mentioners = w + l.mentioners;
     s.total_slots = h.total_slots;
-    std::fill(s.head, s.head + h.vertex_count, kNone);
+    std::fill(s.mention_count, s.mention_count + h.vertex_count, 0u);
     std::fill(s.candidate_stamp, s.candidate_stamp + h.vertex_count, 0u);
     std::fill(s.mention_stamp, s.mention_stamp + h.vertex_count, 0u);
     s.fan_begin[0] = 0;

@@ -86,8 +86,7 @@ bool parseEntry(const uint8_t* entry, uint32_t i, PfrepEntry& e) {
 }
 
 struct Arrays {
-    std::vector<uint32_t> head, candidate_stamp, candidate_index, mention_stamp, fan_begin, fans, mention_next,
-        mention_entry, candidates, mentioners, block_offset, neighbours, dependencies, groups;
+    std::vector<uint32_t> mention_count, mentions, candidate_stamp, candidate_index, mention_stamp, fan_begin, fans, candidates, mentioners, block_offset, neighbours, dependencies, groups;
 };
 
 } // namespace
@@ -117,16 +116,15 @@ Result<std::vector<uint8_t>> compressPfrep(const std::vector<uint8_t>& blob) {
         total_slots += r.count(fmt::kPfrepCountBits);
     }
     if (total_slots > 0xFFFFFFFFu) return resourceLimit("pfrep: too many fan slots for format 3");
-    a.head.assign(vertex_count, lodrt::detail::kNone);
+    a.mention_count.assign(vertex_count, 0);
+    a.mentions.assign(size_t(vertex_count) * fmt::kPfrepMentionSlots, 0);
     a.candidate_stamp.assign(vertex_count, 0);
     a.candidate_index.assign(vertex_count, 0);
     a.mention_stamp.assign(vertex_count, 0);
     a.fan_begin.assign(size_t(vertex_count) + 1, 0);
     a.fans.resize(total_slots);
-    a.mention_next.resize(total_slots);
-    a.mention_entry.resize(total_slots);
     a.candidates.resize(fmt::kPfrepCandidateLimit);
-    a.mentioners.resize(fmt::kPfrepMentionerLimit);
+    a.mentioners.resize(fmt::kPfrepMentionSlots);
     a.neighbours.resize(lodrt::detail::kPfrepMaxFan);
     a.dependencies.resize(lodrt::detail::kPfrepMaxDependencies);
     a.groups.resize(lodrt::detail::kPfrepMaxFan);
@@ -136,14 +134,13 @@ Result<std::vector<uint8_t>> compressPfrep(const std::vector<uint8_t>& blob) {
     s.block_shift = shift;
     s.block_offset = a.block_offset.data();
     s.blob = blob.data();
-    s.head = a.head.data();
+    s.mention_count = a.mention_count.data();
+    s.mentions = a.mentions.data();
     s.candidate_stamp = a.candidate_stamp.data();
     s.candidate_index = a.candidate_index.data();
     s.mention_stamp = a.mention_stamp.data();
     s.fan_begin = a.fan_begin.data();
     s.fans = a.fans.data();
-    s.mention_next = a.mention_next.data();
-    s.mention_entry = a.mention_entry.data();
     s.candidates = a.candidates.data();
     s.mentioners = a.mentioners.data();
     s.total_slots = uint32_t(total_slots);

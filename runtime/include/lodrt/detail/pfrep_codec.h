@@ -92,17 +92,16 @@ struct PfrepCodecState {
     uint32_t vertex_count = 0, removed_count = 0, block_shift = 0;
     const uint32_t* block_offset = nullptr; // per block: byte offset of its records in `blob`
     const uint8_t* blob = nullptr;          // the format 2 blob: records of ranks < i are read back
-    uint32_t* head = nullptr;          // per vertex: its latest mention, kNone when none
+    uint32_t* mention_count = nullptr; // per vertex: entries that mentioned it so far
+    uint32_t* mentions = nullptr;      // per vertex, kPfrepMentionSlots: the latest of those entries (a ring)
     uint32_t* candidate_stamp = nullptr; // per vertex: i + 1 while it is a candidate of vertex i
     uint32_t* candidate_index = nullptr; // per vertex: its index in `candidates`
     uint32_t* mention_stamp = nullptr;   // per vertex: i + 1 once entry i mentioned it
     uint32_t* fan_begin = nullptr;       // per vertex + 1: where its A_i starts in `fans`
     uint32_t* fans = nullptr;            // every A_i, in rank order (total_slots values)
-    uint32_t* mention_next = nullptr;    // per mention: the mention before it of the same vertex
-    uint32_t* mention_entry = nullptr;   // per mention: the entry that mentions
     uint32_t* candidates = nullptr;      // kPfrepCandidateLimit values
-    uint32_t* mentioners = nullptr;      // kPfrepMentionerLimit values
-    uint32_t total_slots = 0, used_slots = 0, used_mentions = 0;
+    uint32_t* mentioners = nullptr;      // kPfrepMentionSlots values
+    uint32_t total_slots = 0, used_slots = 0;
 
     const uint8_t* record(uint32_t v) const {
         const uint32_t b = v >> block_shift;
@@ -129,13 +128,16 @@ bool pfrepCodeField(Coder& c, PfrepUintModel& model, uint32_t prediction, uint32
     return true;
 }
 
-/// The vertices whose fans mention i (latest first) and, among them, i's dependencies.
+/// The latest vertices whose fans mention i (latest first) and, among them, i's dependencies.
 template <class Coder>
 bool pfrepCodeDependencies(Coder& c, PfrepCodecModels& models, PfrepCodecState& s, uint32_t i, PfrepEntry& e,
                            uint32_t* mentioner_count) {
     uint32_t mc = 0;
-    for (uint32_t t = s.head[i]; t != kNone && mc < format::kPfrepMentionerLimit; t = s.mention_next[t])
-        s.mentioners[mc++] = s.mention_entry[t];
+    // The latest kPfrepMentionSlots mentioners, latest first: one cache line per vertex.
+    const uint32_t seen = s.mention_count[i];
+    const uint32_t* ring = s.mentions + size_t(i) * format::kPfrepMentionSlots;
+    for (; mc < seen && mc < format::kPfrepMentionSlots; ++mc)
+        s.mentioners[mc] = ring[(seen - 1 - mc) % format::kPfrepMentionSlots];
     *mentioner_count = mc;
     auto isDependency = [&](uint32_t d) {
         return std::binary_search(e.dependencies, e.dependencies + e.m, d);
@@ -312,9 +314,8 @@ template <class Coder> bool pfrepCodeVertex(Coder& c, PfrepCodecModels& models, 
         s.fans[s.used_slots++] = a;
         if (s.mention_stamp[a] == i + 1) continue;
         s.mention_stamp[a] = i + 1;
-        s.mention_next[s.used_mentions] = s.head[a];
-        s.mention_entry[s.used_mentions] = i;
-        s.head[a] = s.used_mentions++;
+        s.mentions[size_t(a) * format::kPfrepMentionSlots + s.mention_count[a] % format::kPfrepMentionSlots] = i;
+        ++s.mention_count[a];
     }
     s.fan_begin[i + 1] = s.used_slots;
     return true;
@@ -345,7 +346,11 @@ bool pfrepCodePosition(Coder& c, PfrepCodecModels& models, const PfrepCodecState
     return true;
 }
 
-inline uint32_t pfrepBitWidth(uint32_t v) { return v == 0 ? 0 : 32 - uint32_t(__builtin_clz(v)); }
+inline uint32_t pfrepBitWidth(uint32_t v) {
+    uint32_t w = 0;
+    while (w < 32 && (v >> w) != 0) ++w;
+    return w;
+}
 
 /// Bytes of entry i written canonically (docs/format/pfrep.md "Entry i"): counts with escapes,
 /// the smallest widths that hold the codes, masks in group order.
@@ -361,14 +366,21 @@ inline size_t pfrepEntryBytes(const PfrepEntry& e, uint32_t i) {
     return size_t((bits + 7) / 8);
 }
 
-/// Writes entry i at out (pfrepEntryBytes(e, i) bytes, zeroed here first).
+/// Writes entry i at out (exactly pfrepEntryBytes(e, i) bytes).
 inline void pfrepWriteEntry(const PfrepEntry& e, uint32_t i, uint8_t* out) {
-    const size_t size = pfrepEntryBytes(e, i);
-    std::memset(out, 0, size);
-    uint64_t at = 0;
+    // Bits gather in a 64-bit accumulator, flushed a byte at a time (at most 32 bits per put).
+    uint64_t pending = 0;
+    uint32_t pending_bits = 0;
+    size_t at = 0;
     auto put = [&](uint64_t value, uint32_t bits) {
-        for (uint32_t b = 0; b < bits; ++b, ++at)
-            if ((value >> b) & 1) out[at >> 3] |= uint8_t(1u << (at & 7));
+        if (bits == 0) return;
+        pending |= (value & ((uint64_t(1) << bits) - 1)) << pending_bits;
+        pending_bits += bits;
+        while (pending_bits >= 8) {
+            out[at++] = uint8_t(pending);
+            pending >>= 8;
+            pending_bits -= 8;
+        }
     };
     auto putCount = [&](uint32_t count, uint32_t bits) {
         const uint32_t escape = (1u << bits) - 1;
@@ -390,13 +402,20 @@ inline void pfrepWriteEntry(const PfrepEntry& e, uint32_t i, uint8_t* out) {
     if (e.m > 0) put(wd, format::kPfrepWidthBits);
     for (uint32_t k = 0; k < e.n; ++k) put(e.neighbours[k] - i - 1, wa);
     auto putMask = [&](uint32_t group) {
-        for (uint32_t k = 0; k < e.n; ++k) put(e.groups[k] == group ? 1 : 0, 1);
+        for (uint32_t k = 0; k < e.n; k += 32) {
+            const uint32_t take = std::min(32u, e.n - k);
+            uint64_t word = 0;
+            for (uint32_t b = 0; b < take; ++b) word |= uint64_t(e.groups[k + b] == group) << b;
+            put(word, take);
+        }
     };
     if (e.has_original) putMask(1);
     for (uint32_t k = 0; k < e.m; ++k) {
         put(i - 1 - e.dependencies[k], wd);
         putMask(2 + k);
     }
+    if (pending_bits > 0) out[at++] = uint8_t(pending);
+
 }
 
 } // namespace detail
