@@ -50,8 +50,9 @@ options:
 // Opens a blob of format 2 or 3; a format 3 blob is decoded into `decoded`.
 lodrt::Result openAnyPfrep(const std::vector<uint8_t>& bytes, std::vector<uint8_t>& decoded, lodrt::PfrepModel* model) {
     lodrt::PfrepCompressedInfo info;
-    if (lodrt::pfrepCompressedInfo(bytes.data(), bytes.size(), &info) != lodrt::Result::Ok)
-        return lodrt::openPfrep(bytes.data(), bytes.size(), model);
+    const lodrt::Result header = lodrt::pfrepCompressedInfo(bytes.data(), bytes.size(), &info);
+    if (header == lodrt::Result::UnsupportedVersion) return lodrt::openPfrep(bytes.data(), bytes.size(), model);
+    if (header != lodrt::Result::Ok) return header;
     decoded.resize(info.decoded_bytes);
     std::vector<uint64_t> scratch((info.scratch_bytes + 7) / 8);
     return lodrt::pfrepDecompress(bytes.data(), bytes.size(), decoded.data(), decoded.size(), scratch.data(),
