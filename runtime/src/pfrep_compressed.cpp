@@ -201,6 +201,12 @@ Result pfrepDecompress(const void* data, size_t size, void* out, size_t out_capa
     s.candidates = w + l.candidates;
     s.mentioners = w + l.mentioners;
     s.total_slots = h.total_slots;
+    float step[3];
+    for (int a = 0; a < 3; ++a) {
+        const uint32_t bits = load32(in + 36 + 4 * a);
+        std::memcpy(&step[a], &bits, 4);
+    }
+    detail::pfrepAxisWeights(step, s.axis_weight);
     std::fill(s.mention_count, s.mention_count + h.vertex_count, 0u);
     std::fill(s.candidate_stamp, s.candidate_stamp + h.vertex_count, 0u);
     std::fill(s.mention_stamp, s.mention_stamp + h.vertex_count, 0u);

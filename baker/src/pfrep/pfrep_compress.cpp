@@ -144,6 +144,7 @@ Result<std::vector<uint8_t>> compressPfrep(const std::vector<uint8_t>& blob) {
     s.candidates = a.candidates.data();
     s.mentioners = a.mentioners.data();
     s.total_slots = uint32_t(total_slots);
+    lodrt::detail::pfrepAxisWeights(model.position_step, s.axis_weight);
     auto models = std::make_unique<lodrt::detail::PfrepCodecModels>();
     models->init();
     EncodeCoder c;
@@ -175,7 +176,7 @@ Result<std::vector<uint8_t>> compressPfrep(const std::vector<uint8_t>& blob) {
         uint8_t record[fmt::kPfrepVertexRecordSize];
         std::memcpy(record, s.record(i), sizeof(record));
         if (!lodrt::detail::pfrepCodePosition(c, *models, s, i, record))
-            return invalidInput("pfrep: vertex " + std::to_string(i) + ": position not format 3 codable");
+            return invalidInput("pfrep: vertex " + std::to_string(i) + ": position or cone not format 3 codable");
     }
     std::vector<uint8_t> out(blob.begin(), blob.begin() + fmt::kPfrepHeaderSize);
     store32(out.data() + 4, fmt::kPfrepVersionCompressed);

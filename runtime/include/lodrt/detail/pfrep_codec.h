@@ -27,6 +27,7 @@ namespace detail {
 
 constexpr uint32_t kPfrepMaxFan = 63 + 65535;       // longest A_i a format 2 entry can hold
 constexpr uint32_t kPfrepMaxDependencies = 7 + 65535; // most dependency groups of one entry
+constexpr uint32_t kPfrepSlotTriangle = 0x80000000u;  // PfrepCodecState::fans: the slot holds a triangle
 
 struct PfrepUintModel {
     uint32_t klass[1u << format::kValenceClassTreeBits];
@@ -47,7 +48,7 @@ struct PfrepCodecModels {
     uint32_t in_candidates[3];
     PfrepUintModel candidate_step[2];
     PfrepUintModel neighbour_distance;
-    uint32_t group_same[2];
+    uint32_t group_same[3];
     PfrepUintModel group[2];
     PfrepUintModel position[3][2];
     PfrepUintModel radius[2];
@@ -64,7 +65,7 @@ struct PfrepCodecModels {
         initRangeProbs(in_candidates, 3);
         for (auto& u : candidate_step) u.init();
         neighbour_distance.init();
-        initRangeProbs(group_same, 2);
+        initRangeProbs(group_same, 3);
         for (auto& u : group) u.init();
         for (auto& a : position)
             for (auto& u : a) u.init();
@@ -102,6 +103,7 @@ struct PfrepCodecState {
     uint32_t* candidates = nullptr;      // kPfrepCandidateLimit values
     uint32_t* mentioners = nullptr;      // kPfrepMentionSlots values
     uint32_t total_slots = 0, used_slots = 0;
+    int64_t axis_weight[3] = {0, 0, 0}; // pfrepAxisWeights of the header's position_step
 
     const uint8_t* record(uint32_t v) const {
         const uint32_t b = v >> block_shift;
@@ -188,7 +190,7 @@ struct PfrepCandidates {
         for (uint32_t t = s.fan_begin[d]; t < s.fan_begin[d + 1]; ++t) {
             if (count == format::kPfrepCandidateLimit || scanned == format::kPfrepCandidateScanLimit) return;
             ++scanned;
-            const uint32_t v = s.fans[t];
+            const uint32_t v = s.fans[t] & ~kPfrepSlotTriangle;
             if (v <= i || s.candidate_stamp[v] == i + 1) continue;
             s.candidate_stamp[v] = i + 1;
             s.candidate_index[v] = count;
@@ -237,8 +239,30 @@ bool pfrepCodeFan(Coder& c, PfrepCodecModels& models, PfrepCodecState& s, uint32
     return true;
 }
 
-// Slot groups: per slot, "same group as the slot before", else the group among the others.
-template <class Coder> bool pfrepCodeGroups(Coder& c, PfrepCodecModels& models, PfrepEntry& e) {
+// The dependency group slot (a, b) is predicted to be in: the latest dependency d whose fan holds
+// both a and b (d's removal with i kept re-creates d's triangle (d, a, b) as (i, a, b)); 0 when none
+// does (or the entry is too large to look: more than 16 dependencies or a fan over 64).
+inline uint32_t pfrepPredictGroup(const PfrepCodecState& s, const PfrepEntry& e, uint32_t a, uint32_t b) {
+    if (e.m > 16) return 0;
+    for (uint32_t k = e.m; k-- > 0;) {
+        const uint32_t d = e.dependencies[k];
+        const uint32_t begin = s.fan_begin[d], end = s.fan_begin[d + 1];
+        if (end - begin > 64) continue;
+        bool has_a = false, has_b = false;
+        for (uint32_t t = begin; t < end; ++t) {
+            const uint32_t v = s.fans[t] & ~kPfrepSlotTriangle;
+            has_a |= v == a;
+            has_b |= v == b;
+        }
+        if (has_a && has_b) return 2 + k;
+    }
+    return 0;
+}
+
+// Slot groups: per slot, "the expected group" (the predicted dependency, else the previous slot's
+// group), else the group among the others.
+template <class Coder>
+bool pfrepCodeGroups(Coder& c, PfrepCodecModels& models, const PfrepCodecState& s, PfrepEntry& e) {
     const uint32_t groups = 1 + e.has_original + e.m;
     auto toCode = [&](uint32_t g) { return g <= 1 ? g : g - 1 + e.has_original; };
     auto fromCode = [&](uint32_t g) { return g == 0 ? 0u : e.has_original && g == 1 ? 1u : g + 1 - e.has_original; };
@@ -246,16 +270,22 @@ template <class Coder> bool pfrepCodeGroups(Coder& c, PfrepCodecModels& models, 
     for (uint32_t k = 0; k < e.n; ++k) {
         uint32_t g = Coder::kEncoding ? toCode(e.groups[k]) : 0;
         if (groups > 1) {
+            const uint32_t predicted = pfrepPredictGroup(s, e, e.neighbours[k], e.neighbours[(k + 1) % e.n]);
+            const bool has_reference = k > 0 || predicted != 0;
+            const uint32_t reference = predicted != 0 ? toCode(predicted) : previous;
             uint32_t same = 0;
-            if (k > 0) same = c.bit(models.group_same[previous == 0 ? 0 : 1], Coder::kEncoding ? uint32_t(g == previous) : 0u);
+            if (has_reference) {
+                const uint32_t ctx = predicted != 0 ? 2u : previous == 0 ? 0u : 1u;
+                same = c.bit(models.group_same[ctx], Coder::kEncoding ? uint32_t(g == reference) : 0u);
+            }
             if (!same) {
-                const uint32_t alternatives = k > 0 ? groups - 1 : groups;
-                const uint32_t coded = k > 0 && g > previous ? g - 1 : g;
-                const uint64_t v = c.uint(models.group[k > 0 ? 1 : 0], Coder::kEncoding ? coded : 0);
+                const uint32_t alternatives = has_reference ? groups - 1 : groups;
+                const uint32_t coded = has_reference && g > reference ? g - 1 : g;
+                const uint64_t v = c.uint(models.group[has_reference ? 1 : 0], Coder::kEncoding ? coded : 0);
                 if (c.failed() || v >= alternatives) return false;
-                g = k > 0 && v >= previous ? uint32_t(v) + 1 : uint32_t(v);
+                g = has_reference && v >= reference ? uint32_t(v) + 1 : uint32_t(v);
             } else {
-                g = previous;
+                g = reference;
             }
         }
         previous = g;
@@ -265,10 +295,10 @@ template <class Coder> bool pfrepCodeGroups(Coder& c, PfrepCodecModels& models, 
 }
 
 // The record's criterion codes: radius and error predicted by the dependencies' maximum (they grow
-// along dependencies), the cone from the latest dependency. Positions come in a second pass.
+// along dependencies), the cone angle in the context of theirs. Position and cone axis come in the
+// second pass.
 template <class Coder>
-bool pfrepCodeCriterion(Coder& c, PfrepCodecModels& models, const PfrepCodecState& s, uint32_t i, PfrepEntry& e,
-                        uint32_t mentioner_count) {
+bool pfrepCodeCriterion(Coder& c, PfrepCodecModels& models, const PfrepCodecState& s, uint32_t i, PfrepEntry& e) {
     uint32_t radius = 0, error = 0, angle = 16;
     for (uint32_t k = 0; k < e.m; ++k) {
         const uint8_t* r = s.record(e.dependencies[k]);
@@ -285,13 +315,8 @@ bool pfrepCodeCriterion(Coder& c, PfrepCodecModels& models, const PfrepCodecStat
     e.record[7] = uint8_t(v);
     const uint32_t cone = pfrepLoad16(e.record + 8);
     const uint32_t coded_angle = c.tree(models.cone_angle[angle], 4, cone >> 12);
-    uint32_t axis[2] = {cone & 63, (cone >> 6) & 63};
-    const uint32_t* ref = e.m > 0 ? &e.dependencies[e.m - 1] : mentioner_count > 0 ? &s.mentioners[0] : nullptr;
-    const uint32_t ref_cone = ref ? pfrepLoad16(s.record(*ref) + 8) : 0;
-    for (int a = 0; a < 2; ++a)
-        if (!pfrepCodeField(c, models.cone_axis[a][ref ? 1 : 0], (ref_cone >> (6 * a)) & 63, 63, &axis[a]))
-            return false;
-    pfrepStore16(e.record + 8, axis[0] | (axis[1] << 6) | (coded_angle << 12));
+    // The axis comes with the position, in the second pass.
+    pfrepStore16(e.record + 8, (Coder::kEncoding ? cone & 0xFFF : 0u) | (coded_angle << 12));
     return !c.failed();
 }
 
@@ -305,13 +330,14 @@ template <class Coder> bool pfrepCodeVertex(Coder& c, PfrepCodecModels& models, 
     e.n = uint32_t(n);
     e.has_original = c.bit(models.has_original[e.m > 0 ? 1 : 0], e.has_original);
     if (!pfrepCodeFan(c, models, s, i, e, mentioner_count)) return false;
-    if (!pfrepCodeGroups(c, models, e)) return false;
-    if (!pfrepCodeCriterion(c, models, s, i, e, mentioner_count)) return false;
-    // Register the fan: its values for later candidates, each distinct vertex as mentioned by i.
+    if (!pfrepCodeGroups(c, models, s, e)) return false;
+    if (!pfrepCodeCriterion(c, models, s, i, e)) return false;
+    // Register the fan: its values for later candidates (bit 31: the slot holds a triangle), each
+    // distinct vertex as mentioned by i.
     s.fan_begin[i] = s.used_slots;
     for (uint32_t k = 0; k < e.n; ++k) {
         const uint32_t a = e.neighbours[k];
-        s.fans[s.used_slots++] = a;
+        s.fans[s.used_slots++] = a | (e.groups[k] != 0 ? kPfrepSlotTriangle : 0u);
         if (s.mention_stamp[a] == i + 1) continue;
         s.mention_stamp[a] = i + 1;
         s.mentions[size_t(a) * format::kPfrepMentionSlots + s.mention_count[a] % format::kPfrepMentionSlots] = i;
@@ -321,16 +347,72 @@ template <class Coder> bool pfrepCodeVertex(Coder& c, PfrepCodecModels& models, 
     return true;
 }
 
-/// Position of vertex i, coded in DECREASING rank after every entry: its fan's vertices rank above
+/// Integer weights of the three axes (position_step relative to the largest, in 1024ths), so the
+/// fan normal below is computed in integers and encoder and decoder agree on every platform.
+inline void pfrepAxisWeights(const float step[3], int64_t out[3]) {
+    const double largest = std::max({double(step[0]), double(step[1]), double(step[2])});
+    for (int a = 0; a < 3; ++a) {
+        const double w = largest > 0 && step[a] > 0 ? double(step[a]) / largest * 1024.0 : 0.0;
+        out[a] = w >= 0 && w <= 1024.0 ? int64_t(w + 0.5) : 0;
+    }
+}
+
+/// Octahedral code (6 + 6 bits, as the builder's cone axis) of the sum of the normals of the first
+/// 64 triangles of vertex i's fan, from the quantized positions; false when the sum is zero.
+inline bool pfrepFanAxis(const PfrepCodecState& s, uint32_t i, const uint8_t* record, uint32_t out[2]) {
+    const uint32_t begin = s.fan_begin[i], count = s.fan_begin[i + 1] - begin;
+    int64_t n[3] = {0, 0, 0};
+    int64_t pi[3];
+    for (int a = 0; a < 3; ++a) pi[a] = pfrepLoad16(record + 2 * a);
+    uint32_t used = 0;
+    for (uint32_t j = 0; j < count && used < 64; ++j) {
+        const uint32_t t = s.fans[begin + j];
+        if (!(t & kPfrepSlotTriangle)) continue;
+        ++used;
+        const uint8_t* ra = s.record(t & ~kPfrepSlotTriangle);
+        const uint8_t* rb = s.record(s.fans[begin + (j + 1) % count] & ~kPfrepSlotTriangle);
+        int64_t u[3], v[3];
+        for (int a = 0; a < 3; ++a) {
+            u[a] = (int64_t(pfrepLoad16(ra + 2 * a)) - pi[a]) * s.axis_weight[a];
+            v[a] = (int64_t(pfrepLoad16(rb + 2 * a)) - pi[a]) * s.axis_weight[a];
+        }
+        // |u|, |v| < 2^27 per component: each product < 2^54, 64 sums < 2^61.
+        n[0] += u[1] * v[2] - u[2] * v[1];
+        n[1] += u[2] * v[0] - u[0] * v[2];
+        n[2] += u[0] * v[1] - u[1] * v[0];
+    }
+    auto magnitude = [](int64_t x) { return x < 0 ? -x : x; };
+    int64_t sum = magnitude(n[0]) + magnitude(n[1]) + magnitude(n[2]);
+    if (sum == 0) return false;
+    while (sum >= (int64_t(1) << 40)) { // 63 * 2 * sum stays far inside 64 bits
+        for (int64_t& x : n) x /= 2;
+        sum = magnitude(n[0]) + magnitude(n[1]) + magnitude(n[2]);
+    }
+    if (sum == 0) return false;
+    int64_t x = n[0], y = n[1];
+    if (n[2] < 0) { // the lower hemisphere folds over the diagonals
+        const int64_t fx = (sum - magnitude(y)) * (x >= 0 ? 1 : -1);
+        const int64_t fy = (sum - magnitude(x)) * (y >= 0 ? 1 : -1);
+        x = fx;
+        y = fy;
+    }
+    // round(63 · (x / sum + 1) / 2), halves up, as the builder's lround of a non-negative value.
+    out[0] = uint32_t(std::min<int64_t>(63, (63 * (x + sum) + sum) / (2 * sum)));
+    out[1] = uint32_t(std::min<int64_t>(63, (63 * (y + sum) + sum) / (2 * sum)));
+    return true;
+}
+
+/// Position and cone axis of vertex i, coded in DECREASING rank after every entry: its fan's vertices rank above
 /// it, so their positions are known, and i lies amid them (its neighbourhood when it was removed).
-/// `record` holds i's record and receives the position; the prediction is the mean of the distinct
-/// fan vertices, or the position of i + 1 for an empty fan.
+/// `record` holds i's record and receives the position; the prediction is the mean of the fan's
+/// values, or the position of i + 1 for an empty fan. Then the cone axis, predicted by the fan's
+/// normal (pfrepFanAxis).
 template <class Coder>
 bool pfrepCodePosition(Coder& c, PfrepCodecModels& models, const PfrepCodecState& s, uint32_t i, uint8_t* record) {
     uint64_t sum[3] = {0, 0, 0};
     uint32_t count = 0;
     for (uint32_t t = s.fan_begin[i]; t < s.fan_begin[i + 1]; ++t) {
-        const uint8_t* r = s.record(s.fans[t]);
+        const uint8_t* r = s.record(s.fans[t] & ~kPfrepSlotTriangle);
         for (int a = 0; a < 3; ++a) sum[a] += pfrepLoad16(r + 2 * a);
         ++count;
     }
@@ -343,6 +425,14 @@ bool pfrepCodePosition(Coder& c, PfrepCodecModels& models, const PfrepCodecState
         if (!pfrepCodeField(c, models.position[a][count > 0 ? 1 : 0], pred[a], 0xFFFF, &q)) return false;
         pfrepStore16(record + 2 * a, q);
     }
+    // The cone axis, predicted by the octahedral code of the fan's normal.
+    uint32_t predicted_axis[2] = {0, 0};
+    const bool has_normal = pfrepFanAxis(s, i, record, predicted_axis);
+    const uint32_t cone = pfrepLoad16(record + 8);
+    uint32_t axis[2] = {cone & 63, (cone >> 6) & 63};
+    for (int a = 0; a < 2; ++a)
+        if (!pfrepCodeField(c, models.cone_axis[a][has_normal ? 1 : 0], predicted_axis[a], 63, &axis[a])) return false;
+    pfrepStore16(record + 8, axis[0] | (axis[1] << 6) | (cone & 0xF000u));
     return true;
 }
 
