@@ -41,7 +41,7 @@ struct PfrepUintModel {
 /// Every adaptive model of a format 3 stream (all start at 1/2).
 struct PfrepCodecModels {
     PfrepUintModel block_bytes;
-    PfrepUintModel fan_count[2];
+    PfrepUintModel fan_count[4];
     uint32_t is_dependency[8];
     PfrepUintModel extra_dependencies, extra_dependency_distance;
     uint32_t has_original[2];
@@ -50,9 +50,9 @@ struct PfrepCodecModels {
     PfrepUintModel neighbour_distance;
     uint32_t group_same[3];
     PfrepUintModel group[2];
-    PfrepUintModel position[3][2];
-    PfrepUintModel radius[2];
-    PfrepUintModel error[4];
+    PfrepUintModel position[3][10];
+    PfrepUintModel radius[3];
+    PfrepUintModel error[6];
     uint32_t cone_angle[17][16];
     PfrepUintModel cone_axis[2][2];
     void init() {
@@ -110,6 +110,12 @@ struct PfrepCodecState {
         return blob + block_offset[b] + size_t(v - (b << block_shift)) * format::kPfrepVertexRecordSize;
     }
 };
+
+inline uint32_t pfrepBitWidth(uint32_t v) {
+    uint32_t w = 0;
+    while (w < 32 && (v >> w) != 0) ++w;
+    return w;
+}
 
 inline uint32_t pfrepLoad16(const uint8_t* p) { return uint32_t(p[0]) | (uint32_t(p[1]) << 8); }
 inline void pfrepStore16(uint8_t* p, uint32_t v) {
@@ -186,11 +192,13 @@ struct PfrepCandidates {
     PfrepCodecState& s;
     uint32_t i;
     uint32_t count = 0, scanned = 0;
+    uint32_t after_i = kNone; // index the candidate following the first i in a fan got (or would get)
     void addFan(uint32_t d) {
         for (uint32_t t = s.fan_begin[d]; t < s.fan_begin[d + 1]; ++t) {
             if (count == format::kPfrepCandidateLimit || scanned == format::kPfrepCandidateScanLimit) return;
             ++scanned;
             const uint32_t v = s.fans[t] & ~kPfrepSlotTriangle;
+            if (v == i && after_i == kNone) after_i = count;
             if (v <= i || s.candidate_stamp[v] == i + 1) continue;
             s.candidate_stamp[v] = i + 1;
             s.candidate_index[v] = count;
@@ -209,7 +217,10 @@ bool pfrepCodeFan(Coder& c, PfrepCodecModels& models, PfrepCodecState& s, uint32
             if (std::binary_search(e.dependencies, e.dependencies + e.m, d) == (pass == 0)) cand.addFan(d);
         }
     uint32_t ctx_previous = 0;   // 0: first neighbour, 1: the previous was a candidate, 2: it was not
-    uint32_t predicted = 0;      // index of the candidate expected next
+    // The candidate expected next: after a candidate, the one listed after it; at the start and after
+    // a vertex that is not a candidate, the one listed after i in the first fan that holds i.
+    const uint32_t restart = cand.after_i == kNone ? 0 : cand.after_i;
+    uint32_t predicted = restart;
     for (uint32_t k = 0; k < e.n; ++k) {
         uint32_t a = Coder::kEncoding ? e.neighbours[k] : 0;
         uint32_t in = 0;
@@ -231,7 +242,7 @@ bool pfrepCodeFan(Coder& c, PfrepCodecModels& models, PfrepCodecState& s, uint32
             const uint64_t distance = c.uint(models.neighbour_distance, Coder::kEncoding ? a - i - 1 : 0);
             if (c.failed() || uint64_t(i) + 1 + distance >= s.vertex_count) return false;
             a = uint32_t(i + 1 + distance);
-            predicted = count;
+            predicted = restart;
             ctx_previous = 2;
         }
         e.neighbours[k] = a;
@@ -306,12 +317,12 @@ bool pfrepCodeCriterion(Coder& c, PfrepCodecModels& models, const PfrepCodecStat
         error = std::max<uint32_t>(error, r[7]);
         angle = std::max<uint32_t>(angle == 16 ? 0 : angle, pfrepLoad16(r + 8) >> 12);
     }
-    const uint32_t with = e.m > 0 ? 1 : 0;
+    const uint32_t with = std::min(e.m, 2u);
     uint32_t v = e.record[6];
     if (!pfrepCodeField(c, models.radius[with], radius, 255, &v)) return false;
     e.record[6] = uint8_t(v);
     v = e.record[7];
-    if (!pfrepCodeField(c, models.error[(i < s.removed_count ? 2 : 0) + with], error, 255, &v)) return false;
+    if (!pfrepCodeField(c, models.error[(i < s.removed_count ? 3 : 0) + with], error, 255, &v)) return false;
     e.record[7] = uint8_t(v);
     const uint32_t cone = pfrepLoad16(e.record + 8);
     const uint32_t coded_angle = c.tree(models.cone_angle[angle], 4, cone >> 12);
@@ -325,7 +336,7 @@ bool pfrepCodeCriterion(Coder& c, PfrepCodecModels& models, const PfrepCodecStat
 template <class Coder> bool pfrepCodeVertex(Coder& c, PfrepCodecModels& models, PfrepCodecState& s, uint32_t i, PfrepEntry& e) {
     uint32_t mentioner_count = 0;
     if (!pfrepCodeDependencies(c, models, s, i, e, &mentioner_count)) return false;
-    const uint64_t n = c.uint(models.fan_count[e.m > 0 ? 1 : 0], e.n);
+    const uint64_t n = c.uint(models.fan_count[std::min(e.m, 3u)], e.n);
     if (c.failed() || n > kPfrepMaxFan || s.used_slots + n > s.total_slots) return false;
     e.n = uint32_t(n);
     e.has_original = c.bit(models.has_original[e.m > 0 ? 1 : 0], e.has_original);
@@ -411,9 +422,15 @@ template <class Coder>
 bool pfrepCodePosition(Coder& c, PfrepCodecModels& models, const PfrepCodecState& s, uint32_t i, uint8_t* record) {
     uint64_t sum[3] = {0, 0, 0};
     uint32_t count = 0;
+    uint32_t low[3] = {0xFFFF, 0xFFFF, 0xFFFF}, high[3] = {0, 0, 0};
     for (uint32_t t = s.fan_begin[i]; t < s.fan_begin[i + 1]; ++t) {
         const uint8_t* r = s.record(s.fans[t] & ~kPfrepSlotTriangle);
-        for (int a = 0; a < 3; ++a) sum[a] += pfrepLoad16(r + 2 * a);
+        for (int a = 0; a < 3; ++a) {
+            const uint32_t q = pfrepLoad16(r + 2 * a);
+            sum[a] += q;
+            low[a] = std::min(low[a], q);
+            high[a] = std::max(high[a], q);
+        }
         ++count;
     }
     uint32_t pred[3] = {0, 0, 0};
@@ -422,7 +439,10 @@ bool pfrepCodePosition(Coder& c, PfrepCodecModels& models, const PfrepCodecState
                             : i + 1 < s.vertex_count ? pfrepLoad16(s.record(i + 1) + 2 * a) : 0;
     for (int a = 0; a < 3; ++a) {
         uint32_t q = pfrepLoad16(record + 2 * a);
-        if (!pfrepCodeField(c, models.position[a][count > 0 ? 1 : 0], pred[a], 0xFFFF, &q)) return false;
+        // Context: 0 without a fan, else 1 + half the bit length of the fan's extent on this axis
+        // (the residual scales with the fan).
+        const uint32_t ctx = count > 0 ? 1 + pfrepBitWidth(high[a] - low[a]) / 2 : 0;
+        if (!pfrepCodeField(c, models.position[a][ctx], pred[a], 0xFFFF, &q)) return false;
         pfrepStore16(record + 2 * a, q);
     }
     // The cone axis, predicted by the octahedral code of the fan's normal.
@@ -436,11 +456,6 @@ bool pfrepCodePosition(Coder& c, PfrepCodecModels& models, const PfrepCodecState
     return true;
 }
 
-inline uint32_t pfrepBitWidth(uint32_t v) {
-    uint32_t w = 0;
-    while (w < 32 && (v >> w) != 0) ++w;
-    return w;
-}
 
 /// Bytes of entry i written canonically (docs/format/pfrep.md "Entry i"): counts with escapes,
 /// the smallest widths that hold the codes, masks in group order.
