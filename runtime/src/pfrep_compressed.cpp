@@ -2,6 +2,7 @@
 // and criterion codes) and one in decreasing rank (positions) rebuild the format 2 blob it was made from, byte for byte, in caller memory; openPfrep then
 // validates that blob as it validates any other, so extraction and refinement run on the same bytes
 // and give the same results as on the format 2 blob.
+#include <cstdint>
 #include <cstring>
 
 #include "lodrt/detail/pfrep_codec.h"
@@ -59,18 +60,19 @@ Result readHeader(const uint8_t* p, size_t size, Header& h) {
 
 // Scratch layout, in uint32 values (the codec models first, then the state's arrays).
 struct Layout {
-    size_t models, mention_count, mentions, candidate_stamp, candidate_index, mention_stamp, fan_begin, fans, candidates, mentioners, neighbours, dependencies, groups, block_offset, cursor, total;
+    uint64_t models, mention_count, mentions, candidate_stamp, candidate_index, mention_stamp, fan_begin, fans, candidates, mentioners, neighbours, dependencies, groups, block_offset, cursor, total;
 };
 
 Layout layout(const Header& h) {
     Layout l;
-    size_t at = 0;
-    auto take = [&](size_t values) {
-        const size_t start = at;
-        at += (values + 1) & ~size_t(1); // 8-byte steps
+    // 64-bit arithmetic: the sizes must not wrap where size_t is 32 bits (checked by fitsSizeT).
+    uint64_t at = 0;
+    auto take = [&](uint64_t values) {
+        const uint64_t start = at;
+        at += (values + 1) & ~uint64_t(1); // 8-byte steps
         return start;
     };
-    const size_t v = h.vertex_count, t = h.total_slots;
+    const uint64_t v = h.vertex_count, t = h.total_slots;
     l.models = take((sizeof(detail::PfrepCodecModels) + 3) / 4);
     l.mention_count = take(v);
     l.mentions = take(v * format::kPfrepMentionSlots);
@@ -162,7 +164,9 @@ Result pfrepCompressedInfo(const void* data, size_t size, PfrepCompressedInfo* i
     if (r != Result::Ok) return r;
     info->vertex_count = h.vertex_count;
     info->decoded_bytes = h.expanded_size;
-    info->scratch_bytes = layout(h).total * 4;
+    const Layout l = layout(h);
+    if (l.total > SIZE_MAX / 4) return Result::BadStructure; // more than this platform can address
+    info->scratch_bytes = size_t(l.total * 4);
     return Result::Ok;
 }
 
@@ -174,6 +178,7 @@ Result pfrepDecompress(const void* data, size_t size, void* out, size_t out_capa
     Result r = readHeader(in, size, h);
     if (r != Result::Ok) return r;
     const Layout l = layout(h);
+    if (l.total > SIZE_MAX / 4) return Result::BadStructure;
     if (out_capacity < h.expanded_size || scratch_bytes < l.total * 4) return Result::BufferTooSmall;
     if ((reinterpret_cast<uintptr_t>(scratch) & 7) != 0) return Result::InvalidArgument;
     uint32_t* w = static_cast<uint32_t*>(scratch);

@@ -48,6 +48,8 @@ struct PfrepCodecModels {
     uint32_t in_candidates[3];
     PfrepUintModel candidate_step[2];
     PfrepUintModel neighbour_distance;
+    uint32_t in_second[2];
+    PfrepUintModel second_step;
     uint32_t group_same[3];
     PfrepUintModel group[2];
     PfrepUintModel position[3][10];
@@ -65,6 +67,8 @@ struct PfrepCodecModels {
         initRangeProbs(in_candidates, 3);
         for (auto& u : candidate_step) u.init();
         neighbour_distance.init();
+        initRangeProbs(in_second, 2);
+        second_step.init();
         initRangeProbs(group_same, 3);
         for (auto& u : group) u.init();
         for (auto& a : position)
@@ -205,6 +209,13 @@ struct PfrepCandidates {
             s.candidates[count++] = v;
         }
     }
+    // The fans of the latest entries that mention a (its neighbours when they were removed).
+    void addMentionersOf(uint32_t a) {
+        const uint32_t seen = s.mention_count[a];
+        const uint32_t* ring = s.mentions + size_t(a) * format::kPfrepMentionSlots;
+        for (uint32_t k = 0; k < seen && k < format::kPfrepMentionSlots; ++k)
+            addFan(ring[(seen - 1 - k) % format::kPfrepMentionSlots]);
+    }
 };
 
 template <class Coder>
@@ -216,28 +227,42 @@ bool pfrepCodeFan(Coder& c, PfrepCodecModels& models, PfrepCodecState& s, uint32
             const uint32_t d = s.mentioners[k];
             if (std::binary_search(e.dependencies, e.dependencies + e.m, d) == (pass == 0)) cand.addFan(d);
         }
+    // The first `primary` candidates come from i's mentioners; the rest ("second ring") from the
+    // entries that mention the neighbours coded so far, added as each one is coded.
+    const uint32_t primary = cand.count;
     uint32_t ctx_previous = 0;   // 0: first neighbour, 1: the previous was a candidate, 2: it was not
     // The candidate expected next: after a candidate, the one listed after it; at the start and after
     // a vertex that is not a candidate, the one listed after i in the first fan that holds i.
-    const uint32_t restart = cand.after_i == kNone ? 0 : cand.after_i;
+    const uint32_t restart = cand.after_i == kNone || cand.after_i >= primary ? 0 : cand.after_i;
     uint32_t predicted = restart;
+    uint32_t second_from = primary; // where the latest second-ring fans start
     for (uint32_t k = 0; k < e.n; ++k) {
         uint32_t a = Coder::kEncoding ? e.neighbours[k] : 0;
+        const bool listed = Coder::kEncoding && s.candidate_stamp[a] == i + 1;
         uint32_t in = 0;
-        const uint32_t count = cand.count;
-        if (count > 0)
-            in = c.bit(models.in_candidates[ctx_previous],
-                       Coder::kEncoding ? uint32_t(s.candidate_stamp[a] == i + 1) : 0u);
+        if (primary > 0)
+            in = c.bit(models.in_candidates[ctx_previous], Coder::kEncoding ? uint32_t(listed && s.candidate_index[a] < primary) : 0u);
+        uint32_t in_second = 0;
+        if (!in && cand.count > primary)
+            in_second = c.bit(models.in_second[ctx_previous == 0 ? 0 : 1], Coder::kEncoding ? uint32_t(listed) : 0u);
         if (in) {
             // The step forward from the expected candidate, cyclically.
-            const uint32_t from = predicted % count;
+            const uint32_t from = predicted % primary;
             const uint64_t step = c.uint(models.candidate_step[ctx_previous == 1 ? 1 : 0],
-                                         Coder::kEncoding ? (s.candidate_index[a] + count - from) % count : 0);
-            if (c.failed() || step >= count) return false;
-            const uint32_t index = uint32_t((from + step) % count);
+                                         Coder::kEncoding ? (s.candidate_index[a] + primary - from) % primary : 0);
+            if (c.failed() || step >= primary) return false;
+            const uint32_t index = uint32_t((from + step) % primary);
             a = s.candidates[index];
             predicted = index + 1;
             ctx_previous = 1;
+        } else if (in_second) {
+            const uint32_t count = cand.count - primary, from = second_from - primary;
+            const uint64_t step = c.uint(models.second_step,
+                                         Coder::kEncoding ? (s.candidate_index[a] - primary + count - from) % count : 0);
+            if (c.failed() || step >= count) return false;
+            a = s.candidates[primary + uint32_t((from + step) % count)];
+            predicted = restart;
+            ctx_previous = 2;
         } else {
             const uint64_t distance = c.uint(models.neighbour_distance, Coder::kEncoding ? a - i - 1 : 0);
             if (c.failed() || uint64_t(i) + 1 + distance >= s.vertex_count) return false;
@@ -246,6 +271,9 @@ bool pfrepCodeFan(Coder& c, PfrepCodecModels& models, PfrepCodecState& s, uint32
             ctx_previous = 2;
         }
         e.neighbours[k] = a;
+        second_from = cand.count < format::kPfrepCandidateLimit ? cand.count : primary;
+        cand.addMentionersOf(a);
+        if (second_from >= cand.count) second_from = primary;
     }
     return true;
 }
