@@ -141,6 +141,8 @@ cp "$tmp"/cache/v2/packs/*.bin "$tmp"/cache/v2/deps/*.txt "$out/cache/"
 cp "$out/pack/rock_web.glb" "$out/gltf/rock_web.glb"
 "$lodbake" pfrep "$tmp/tet.off" -o "$out/pfrep/tet.lbp" >/dev/null
 "$lodbake" pfrep "$tmp/rock.ply" -o "$out/pfrep/rock.lbp" >/dev/null
+"$lodbake" pfrep "$tmp/tet.off" -o "$out/pfrep/tet_f2.lbp" --format 2 >/dev/null
+"$lodbake" pfrep "$tmp/rock.ply" -o "$out/pfrep/rock_f2.lbp" --format 2 >/dev/null
 "$lodbake" encode "$tmp/tet.off" -o "$out/valence/tet.lbm" --bits 10 >/dev/null
 "$lodbake" encode "$tmp/rock.ply" -o "$out/valence/rock.lbm" --bits 8 >/dev/null
 # Attribute paths of the .lbm decoder: the tetrahedron's colours (above), the quad's UVs and tangents.

@@ -19,6 +19,7 @@
 #include "lodbake/core/json_writer.h"
 #include "lodbake/io/mesh_io.h"
 #include "lodbake/pfrep/pfrep_builder.h"
+#include "lodbake/pfrep/pfrep_compress.h"
 #include "lodbake/simplify/lod_chain.h"
 #include "lodbake/simplify/mesh_distance.h"
 #include "lodbake/simplify/simplify.h"
@@ -31,19 +32,32 @@ namespace lodbake::cli {
 
 namespace {
 
-const char* kPfrepHelp = R"(usage: lodbake pfrep IN -o OUT.lbp [--ratio R]
+const char* kPfrepHelp = R"(usage: lodbake pfrep IN -o OUT.lbp [--ratio R] [--format 2|3]
        lodbake pfrep --extract K IN.lbp -o OUT
 
 Builds a PFRep blob (progressive fans, docs/format/pfrep.md) from a half-edge-collapse
 simplification of IN down to R of its triangles (default 0: as far as valid collapses go), or
-extracts from a blob the mesh after K vertex removals (0: full detail) and writes it as a mesh
-file (.ply .obj .off .gltf .glb; positions only, dequantized).
+extracts from a blob (format 2 or 3) the mesh after K vertex removals (0: full detail) and writes
+it as a mesh file (.ply .obj .off .gltf .glb; positions only, dequantized).
 
 options:
   -o, --output OUT   output file
   --ratio R          target fraction of triangles in [0, 1] (build only)
+  --format F         3 (default): range-coded; 2: the uncompressed, prefix-streamable layout
   --extract K        extract level K instead of building
 )";
+
+// Opens a blob of format 2 or 3; a format 3 blob is decoded into `decoded`.
+lodrt::Result openAnyPfrep(const std::vector<uint8_t>& bytes, std::vector<uint8_t>& decoded, lodrt::PfrepModel* model) {
+    lodrt::PfrepCompressedInfo info;
+    const lodrt::Result header = lodrt::pfrepCompressedInfo(bytes.data(), bytes.size(), &info);
+    if (header == lodrt::Result::UnsupportedVersion) return lodrt::openPfrep(bytes.data(), bytes.size(), model);
+    if (header != lodrt::Result::Ok) return header;
+    decoded.resize(info.decoded_bytes);
+    std::vector<uint64_t> scratch((info.scratch_bytes + 7) / 8);
+    return lodrt::pfrepDecompress(bytes.data(), bytes.size(), decoded.data(), decoded.size(), scratch.data(),
+                                  scratch.size() * 8, model);
+}
 
 } // namespace
 
@@ -52,7 +66,7 @@ int runPfrep(int argc, char** argv) {
     int code = 0;
     if (!parseArgs(argc, argv, 2,
                    {{"--output", "-o", true}, {"--ratio", nullptr, true}, {"--extract", nullptr, true},
-                    {"--help", "-h", false}},
+                    {"--format", nullptr, true}, {"--help", "-h", false}},
                    args, code))
         return code;
     if (args.flags.count("--help")) {
@@ -65,6 +79,7 @@ int runPfrep(int argc, char** argv) {
     Diagnostics diagnostics;
     if (args.values.count("--extract")) {
         if (args.values.count("--ratio")) return usageError("--ratio applies to building, not to --extract");
+        if (args.values.count("--format")) return usageError("--format applies to building, not to --extract");
         double level = 0;
         if (!parseNumber(args.values["--extract"], level) || !(level >= 0 && level <= 4e9) || level != std::floor(level))
             return usageError("--extract expects a non-negative integer, got '" + args.values["--extract"] + "'");
@@ -73,7 +88,8 @@ int runPfrep(int argc, char** argv) {
         Result<std::vector<uint8_t>> bytes = readFileBytes(in);
         if (!bytes.ok()) return reportError(bytes.status());
         lodrt::PfrepModel model;
-        const lodrt::Result opened = lodrt::openPfrep(bytes->data(), bytes->size(), &model);
+        std::vector<uint8_t> decoded;
+        const lodrt::Result opened = openAnyPfrep(*bytes, decoded, &model);
         if (opened != lodrt::Result::Ok)
             return reportError(invalidInput(in + ": pfrep blob: " + lodrt::resultName(opened)));
         if (level > model.removed_count)
@@ -114,6 +130,12 @@ int runPfrep(int argc, char** argv) {
             return usageError("--ratio expects a number in [0, 1], got '" + args.values["--ratio"] + "'");
         options.target_ratio = float(value);
     }
+    bool compressed = true;
+    if (args.values.count("--format")) {
+        const std::string& f = args.values["--format"];
+        if (f != "2" && f != "3") return usageError("--format expects 2 or 3, got '" + f + "'");
+        compressed = f == "3";
+    }
     Result<LoadedMesh> loaded = readMesh(in, args.read, diagnostics);
     if (!loaded.ok()) {
         printDiagnostics(diagnostics);
@@ -124,13 +146,22 @@ int runPfrep(int argc, char** argv) {
         printDiagnostics(diagnostics);
         return reportError(build.status().withPrefix(in));
     }
+    if (compressed) {
+        Result<std::vector<uint8_t>> coded = compressPfrep(build->blob);
+        if (!coded.ok()) {
+            printDiagnostics(diagnostics);
+            return reportError(coded.status().withPrefix(in));
+        }
+        build->blob = std::move(*coded);
+    }
     const Status written = writeFileAtomic(out, build->blob.data(), build->blob.size());
     printDiagnostics(diagnostics);
     if (!written.ok()) return reportError(written);
     const size_t vertices = build->rank_point.size();
-    std::printf("%s: %zu vertices (%zu removable), %zu triangles at level 0, %zu stored, %zu bytes (%.2f bytes/vertex)\n",
+    std::printf("%s: %zu vertices (%zu removable), %zu triangles at level 0, %zu stored, format %d, %zu bytes (%.2f "
+                "bytes/vertex)\n",
                 out.c_str(), vertices, build->removed, build->level0_triangles, build->stored_triangles,
-                build->blob.size(), vertices ? double(build->blob.size()) / double(vertices) : 0.0);
+                compressed ? 3 : 2, build->blob.size(), vertices ? double(build->blob.size()) / double(vertices) : 0.0);
     return kExitOk;
 }
 

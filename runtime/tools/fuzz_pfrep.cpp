@@ -1,5 +1,6 @@
 // libFuzzer target for the PFRep reader (lodrt/pfrep.h): open (whole, and as a prefix that then
-// grows to the whole input), then every extraction and refinement entry point on whatever opened.
+// grows to the whole input), then every extraction and refinement entry point on whatever opened;
+// a format 3 input is decoded (pfrepDecompress) and the result exercised the same way.
 // Build with -DLODRT_BUILD_FUZZERS=ON and Clang; run as `lodrt_fuzz_pfrep CORPUS_DIR` (blobs written
 // by `lodbake pfrep` make a good seed corpus).
 #include <cstddef>
@@ -45,9 +46,24 @@ void exercise(const lodrt::PfrepModel& model) {
 
 } // namespace
 
+// Format 3: decoded into buffers of exactly the sizes the header asks for (capped, so a header that
+// announces a huge mesh costs nothing), then exercised.
+void decodeCompressed(const std::vector<uint8_t>& blob) {
+    lodrt::PfrepCompressedInfo info;
+    if (lodrt::pfrepCompressedInfo(blob.data(), blob.size(), &info) != lodrt::Result::Ok) return;
+    if (info.vertex_count > (1u << 20) || info.decoded_bytes > (64u << 20) || info.scratch_bytes > (256u << 20)) return;
+    std::vector<uint8_t> decoded(info.decoded_bytes);
+    std::vector<uint64_t> scratch((info.scratch_bytes + 7) / 8);
+    lodrt::PfrepModel model;
+    if (lodrt::pfrepDecompress(blob.data(), blob.size(), decoded.data(), decoded.size(), scratch.data(),
+                               info.scratch_bytes, &model) == lodrt::Result::Ok)
+        exercise(model);
+}
+
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     // The reader copies nothing; a copy of exactly `size` bytes lets ASan see any read past the end.
     std::vector<uint8_t> blob(data, data + size);
+    decodeCompressed(blob);
     lodrt::PfrepModel model;
     if (lodrt::openPfrep(blob.data(), blob.size(), &model) == lodrt::Result::Ok) exercise(model);
     // Streaming: a prefix (cut where the last byte says), then the rest arriving in a moved buffer.

@@ -8,7 +8,10 @@
 // is printed with an anchor measured in the same run for scale (2: a memcpy of the same triangle list,
 // 3: reading every instance's mask once per frame). 1 is judged on the worst scan, 2 on the worst k in
 // thread CPU time, 3 on the median frame in thread CPU time (the machine is shared).
-// usage: pfrep_bench [--quick | --refine | --quality | --shared MESH] [--check]
+//   5. --format3: format 3 (compressed) on the six scans of issue 30: bytes per vertex of format 2 and
+//      format 3 (bar: <= 6, must <= 10), whole-blob decode speed (bar: >= 30 M vertices/s, thread
+//      CPU, best of 3), and the decoded blob compared with format 2 byte for byte.
+// usage: pfrep_bench [--quick | --refine | --quality | --format3 | --shared MESH] [--check]
 //   quick: skips the largest scans in part 1 (part 2 then runs on igea) and part 4; refine: part 3 only;
 //   --check: exit 1 when a bar is not met.
 #include <algorithm>
@@ -23,6 +26,7 @@
 #include "bench_timing.h"
 #include "lodbake/io/mesh_io.h"
 #include "lodbake/pfrep/pfrep_builder.h"
+#include "lodbake/pfrep/pfrep_compress.h"
 #include "lodbake/simplify/lod_chain.h"
 #include "lodbake/simplify/mesh_distance.h"
 #include "lodrt/pfrep.h"
@@ -270,6 +274,83 @@ int sharedChain(const char* name) {
     return 0;
 }
 
+// --format3: the blob `lodbake pfrep` and a bake without a preset write (own half-edge pass, no
+// repair here), coded as format 3 and decoded again.
+int format3(bool check) {
+    lodbake_bench::Bars bars("pfrep_bench");
+    using lodbake_bench::Limit;
+    double worst = -1, slowest = HUGE_VAL;
+    std::string worst_name, slowest_name;
+    bool all_equal = true;
+    size_t measured = 0;
+    const std::vector<std::string> scans = {"bunny_zipper.ply", "igea.ply", "lucy100k.ply",
+                                            "nefertiti.obj", "dragon_poisson.ply", "dragon_stand_merged.ply"};
+    for (const std::string& name : scans) {
+        lodbake::Mesh mesh;
+        if (!load(name, mesh)) continue;
+        lodbake::PfrepBuild build;
+        double seconds = 0;
+        if (!bake(mesh, build, seconds)) continue;
+        double t0 = threadCpuSeconds();
+        auto coded = lodbake::compressPfrep(build.blob);
+        const double encode_s = threadCpuSeconds() - t0;
+        if (!coded.ok()) {
+            std::printf("  %s: %s\n", name.c_str(), coded.status().message().c_str());
+            continue;
+        }
+        lodrt::PfrepCompressedInfo info;
+        if (lodrt::pfrepCompressedInfo(coded->data(), coded->size(), &info) != lodrt::Result::Ok) continue;
+        std::vector<uint8_t> decoded(info.decoded_bytes);
+        std::vector<uint64_t> scratch((info.scratch_bytes + 7) / 8);
+        double best = HUGE_VAL;
+        lodrt::Result r = lodrt::Result::Ok;
+        for (int rep = 0; rep < 3; ++rep) {
+            lodrt::PfrepModel model;
+            t0 = threadCpuSeconds();
+            r = lodrt::pfrepDecompress(coded->data(), coded->size(), decoded.data(), decoded.size(), scratch.data(),
+                                       info.scratch_bytes, &model);
+            best = std::min(best, threadCpuSeconds() - t0);
+        }
+        const bool equal = r == lodrt::Result::Ok && decoded == build.blob;
+        all_equal &= equal;
+        ++measured;
+        const double vertices = double(build.rank_point.size());
+        const double per_vertex = double(coded->size()) / vertices;
+        const double speed = vertices / best / 1e6;
+        if (per_vertex > worst) {
+            worst = per_vertex;
+            worst_name = name;
+        }
+        if (speed < slowest) {
+            slowest = speed;
+            slowest_name = name;
+        }
+        std::printf("  %-24s V %8zu  format 2 %9zu bytes (%.2f B/vertex)  format 3 %9zu bytes (%.2f B/vertex, "
+                    "%.2fx smaller)  encode %.2f s  decode %.1f ms (%.2f M vertices/s; %.1f ms of it opening the "
+                    "decoded blob)  %s\n",
+                    name.c_str(), build.rank_point.size(), build.blob.size(), double(build.blob.size()) / vertices,
+                    coded->size(), per_vertex, double(build.blob.size()) / double(coded->size()), encode_s,
+                    best * 1e3, speed, [&] {
+                        lodrt::PfrepModel m;
+                        const double t = threadCpuSeconds();
+                        lodrt::openPfrep(build.blob.data(), build.blob.size(), &m);
+                        return (threadCpuSeconds() - t) * 1e3;
+                    }(),
+                    equal ? "decodes to format 2 exactly" : "DIFFERS FROM FORMAT 2");
+    }
+    if (measured < scans.size()) {
+        bars.unmeasured("format 3 bytes per vertex", 6, Limit::AtMost, false);
+        bars.unmeasured("format 3 decode M vertices/s", 30, Limit::AtLeast, false);
+    } else {
+        bars.absolute("format 3 bytes per vertex (worst: " + worst_name + ", 6 scans; must <= 10)", worst, 6,
+                      Limit::AtMost);
+        bars.absolute("format 3 whole-blob decode M vertices/s, thread CPU (slowest: " + slowest_name + ")", slowest,
+                      30, Limit::AtLeast);
+    }
+    bars.absolute("format 3 scans not decoding to their format 2 blob", all_equal ? 0 : 1, 0, Limit::AtMost);
+    return bars.finish(check);
+}
+
 } // namespace
 
 int main(int argc, char** argv) {
@@ -280,6 +361,7 @@ int main(int argc, char** argv) {
     const bool quick = argc > 1 && std::strcmp(argv[1], "--quick") == 0;
     const bool refine_only = argc > 1 && std::strcmp(argv[1], "--refine") == 0;
     if (argc > 1 && std::strcmp(argv[1], "--quality") == 0) return qualityVariants();
+    if (argc > 1 && std::strcmp(argv[1], "--format3") == 0) return format3(check);
     // Refinement knobs: --frame-budget N (mask bits changed per frame over all instances, in a
     // rotating instance order; 0 = none), --cull-band R (PfrepView::cull_hysteresis, radians).
     // --interleave N: instance i is refined on frames where (i + frame) % N == 0 (N = 1: every frame).

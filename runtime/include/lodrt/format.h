@@ -78,6 +78,13 @@ constexpr uint32_t kPfrepCountEscapeBits = 16;
 constexpr uint32_t kPfrepWidthBits = 5;
 // Log-scale codes: value(code) = 0 for code 0, else error_unit * 2^((code - 1) / 8).
 constexpr uint32_t kPfrepLogCodeSteps = 8;
+// PFRep format 3 (docs/format/pfrep.md "Format 3"): the same header fields as version 2 except
+// bytes 52 (the format 2 blob_size it decodes to) and 56 (total_slots: the sum of every entry's n),
+// then one range-coded stream (lodrt/detail/pfrep_codec.h) to the end of the blob.
+constexpr uint32_t kPfrepVersionCompressed = 3;
+constexpr uint32_t kPfrepMentionSlots = 8;         // latest mentioners of a vertex kept
+constexpr uint32_t kPfrepCandidateLimit = 256;     // neighbour candidates of a vertex
+constexpr uint32_t kPfrepCandidateScanLimit = 4096; // fan values scanned for them
 // Compressed mesh (.lbm), docs/format/valence.md. Little-endian header of kValenceHeaderSize bytes,
 // then the connectivity, position and normal streams, back to back; the position and normal streams
 // each have a range-coded part followed by a raw bit part (the low mantissa bits of the residuals).

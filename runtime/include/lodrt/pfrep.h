@@ -77,6 +77,28 @@ LODRT_API uint64_t pfrepPrefixBytesForLevel(const PfrepModel& model, uint32_t le
 /// hold kPfrepHeaderSize bytes; 0 when they are not a PFRep header of a supported version.
 LODRT_API uint64_t pfrepDirectoryBytes(const void* header, size_t size);
 
+// ---- Format 3 (compressed; docs/format/pfrep.md "Format 3"). ----
+// A format 3 blob is the range-coded form of a format 2 blob. It decodes, in one pass, to exactly
+// the format 2 bytes it was made from, which then open as any format 2 blob (same extraction and
+// refinement, same speed). The decoder treats every byte as hostile: a bad stream gives an error,
+// never a read or write outside the buffers given.
+
+struct PfrepCompressedInfo {
+    uint32_t vertex_count = 0;
+    uint32_t decoded_bytes = 0; // size of the format 2 blob it decodes to
+    size_t scratch_bytes = 0;   // scratch pfrepDecompress needs (8-byte aligned)
+};
+
+/// Reads the header of a format 3 blob: Truncated / BadMagic / UnsupportedVersion / BadStructure.
+LODRT_API Result pfrepCompressedInfo(const void* data, size_t size, PfrepCompressedInfo* info);
+
+/// Decodes a format 3 blob data[0, size) into out[0, info.decoded_bytes) and opens the result as
+/// openPfrep does (the model points into `out`, which must outlive it). `scratch` (8-byte aligned,
+/// info.scratch_bytes) is free again on return. BufferTooSmall when a buffer is short;
+/// CorruptStream / Truncated on a bad stream; otherwise openPfrep's codes for the decoded blob.
+LODRT_API Result pfrepDecompress(const void* data, size_t size, void* out, size_t out_capacity, void* scratch,
+                                 size_t scratch_bytes, PfrepModel* model);
+
 /// Dequantized positions of every vertex (3 floats each) into `out` of `capacity` floats
 /// (needs 3 * vertex_count). Vertices not loaded yet get 0.
 LODRT_API Result pfrepDecodePositions(const PfrepModel& model, float* out, size_t capacity);

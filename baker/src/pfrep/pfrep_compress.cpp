@@ -1,0 +1,201 @@
+// PFRep format 3 encoder: reads a validated format 2 blob entry by entry and codes every vertex in
+// rank order with the coding shared with lodrt's decoder (lodrt/detail/pfrep_codec.h).
+#include "lodbake/pfrep/pfrep_compress.h"
+
+#include <algorithm>
+#include <cstring>
+#include <memory>
+#include <string>
+
+#include "codec/range_encoder.h"
+#include "lodrt/detail/pfrep_codec.h"
+#include "lodrt/format.h"
+#include "lodrt/pfrep.h"
+
+namespace lodbake {
+namespace {
+
+namespace fmt = lodrt::format;
+using lodrt::detail::PfrepEntry;
+
+uint32_t load32(const uint8_t* p) {
+    return uint32_t(p[0]) | (uint32_t(p[1]) << 8) | (uint32_t(p[2]) << 16) | (uint32_t(p[3]) << 24);
+}
+void store32(uint8_t* p, uint32_t v) {
+    for (int k = 0; k < 4; ++k) p[k] = uint8_t(v >> (8 * k));
+}
+
+struct EncodeCoder {
+    static constexpr bool kEncoding = true;
+    codec::RangeEncoder enc;
+    uint32_t bit(uint32_t& prob, uint32_t b) {
+        enc.bit(prob, b);
+        return b;
+    }
+    uint32_t tree(uint32_t* probs, uint32_t bits, uint32_t v) {
+        enc.tree(probs, bits, v);
+        return v;
+    }
+    uint64_t uint(lodrt::detail::PfrepUintModel& model, uint64_t v) {
+        enc.uint(model.klass, model.top, v);
+        return v;
+    }
+    bool failed() const { return false; }
+};
+
+// Bits of a format 2 entry, least significant first (the blob is validated: reads stay inside).
+struct BitCursor {
+    const uint8_t* data;
+    uint64_t at;
+    uint32_t read(uint32_t bits) {
+        uint32_t v = 0;
+        for (uint32_t b = 0; b < bits; ++b, ++at) v |= uint32_t((data[at >> 3] >> (at & 7)) & 1) << b;
+        return v;
+    }
+    uint32_t count(uint32_t bits) {
+        const uint32_t v = read(bits);
+        return v == (1u << bits) - 1 ? v + read(fmt::kPfrepCountEscapeBits) : v;
+    }
+};
+
+// Entry i of the blob, unpacked into e (whose arrays have the detail::kPfrepMax* capacities);
+// false when a slot is in two groups.
+bool parseEntry(const uint8_t* entry, uint32_t i, PfrepEntry& e) {
+    BitCursor r{entry, 0};
+    e.n = r.count(fmt::kPfrepCountBits);
+    e.m = r.count(fmt::kPfrepDependencyCountBits);
+    e.has_original = r.read(1);
+    const uint32_t wa = r.read(fmt::kPfrepWidthBits);
+    const uint32_t wd = e.m > 0 ? r.read(fmt::kPfrepWidthBits) : 0;
+    for (uint32_t k = 0; k < e.n; ++k) e.neighbours[k] = i + 1 + r.read(wa);
+    std::fill(e.groups, e.groups + e.n, 0u);
+    auto readMask = [&](uint32_t group) {
+        for (uint32_t k = 0; k < e.n; ++k) {
+            if (!r.read(1)) continue;
+            if (e.groups[k] != 0) return false;
+            e.groups[k] = group;
+        }
+        return true;
+    };
+    if (e.has_original && !readMask(1)) return false;
+    for (uint32_t k = 0; k < e.m; ++k) {
+        e.dependencies[k] = i - 1 - r.read(wd);
+        if (!readMask(2 + k)) return false;
+    }
+    return true;
+}
+
+struct Arrays {
+    std::vector<uint32_t> mention_count, mentions, candidate_stamp, candidate_index, mention_stamp, fan_begin, fans, candidates, mentioners, block_offset, neighbours, dependencies, groups;
+};
+
+} // namespace
+
+Result<std::vector<uint8_t>> compressPfrep(const std::vector<uint8_t>& blob) {
+    lodrt::PfrepModel model;
+    const lodrt::Result opened = lodrt::openPfrep(blob.data(), blob.size(), &model);
+    if (opened != lodrt::Result::Ok)
+        return invalidInput(std::string("pfrep: format 2 blob: ") + lodrt::resultName(opened));
+    const uint32_t vertex_count = model.vertex_count, shift = model.block_shift, blocks = model.block_count;
+    Arrays a;
+    a.block_offset.resize(blocks);
+    for (uint32_t b = 0; b < blocks; ++b) a.block_offset[b] = load32(blob.data() + fmt::kPfrepHeaderSize + size_t(b) * 4);
+    auto blockCount = [&](uint32_t b) {
+        return uint32_t(std::min<uint64_t>(uint64_t(b + 1) << shift, vertex_count) - (uint64_t(b) << shift));
+    };
+    auto blockEnd = [&](uint32_t b) { return b == 0 ? uint32_t(blob.size()) : a.block_offset[b - 1]; };
+    auto streamStart = [&](uint32_t b) {
+        return a.block_offset[b] + blockCount(b) * (fmt::kPfrepVertexRecordSize + 2);
+    };
+    // Total slots (the sum of every n), from the entries' counts.
+    uint64_t total_slots = 0;
+    for (uint32_t i = 0; i < vertex_count; ++i) {
+        const uint32_t b = i >> shift, first = b << shift;
+        const uint8_t* rel = blob.data() + a.block_offset[b] + size_t(blockCount(b)) * fmt::kPfrepVertexRecordSize;
+        BitCursor r{blob.data() + streamStart(b) + lodrt::detail::pfrepLoad16(rel + 2 * (i - first)), 0};
+        total_slots += r.count(fmt::kPfrepCountBits);
+    }
+    if (total_slots > 0xFFFFFFFFu) return resourceLimit("pfrep: too many fan slots for format 3");
+    a.mention_count.assign(vertex_count, 0);
+    a.mentions.assign(size_t(vertex_count) * fmt::kPfrepMentionSlots, 0);
+    a.candidate_stamp.assign(vertex_count, 0);
+    a.candidate_index.assign(vertex_count, 0);
+    a.mention_stamp.assign(vertex_count, 0);
+    a.fan_begin.assign(size_t(vertex_count) + 1, 0);
+    a.fans.resize(total_slots);
+    a.candidates.resize(fmt::kPfrepCandidateLimit);
+    a.mentioners.resize(fmt::kPfrepMentionSlots);
+    a.neighbours.resize(lodrt::detail::kPfrepMaxFan);
+    a.dependencies.resize(lodrt::detail::kPfrepMaxDependencies);
+    a.groups.resize(lodrt::detail::kPfrepMaxFan);
+    lodrt::detail::PfrepCodecState s;
+    s.vertex_count = vertex_count;
+    s.removed_count = model.removed_count;
+    s.block_shift = shift;
+    s.block_offset = a.block_offset.data();
+    s.blob = blob.data();
+    s.mention_count = a.mention_count.data();
+    s.mentions = a.mentions.data();
+    s.candidate_stamp = a.candidate_stamp.data();
+    s.candidate_index = a.candidate_index.data();
+    s.mention_stamp = a.mention_stamp.data();
+    s.fan_begin = a.fan_begin.data();
+    s.fans = a.fans.data();
+    s.candidates = a.candidates.data();
+    s.mentioners = a.mentioners.data();
+    s.total_slots = uint32_t(total_slots);
+    lodrt::detail::pfrepAxisWeights(model.position_step, s.axis_weight);
+    auto models = std::make_unique<lodrt::detail::PfrepCodecModels>();
+    models->init();
+    EncodeCoder c;
+    for (uint32_t b = 0; b < blocks; ++b) c.uint(models->block_bytes, blockEnd(b) - fmt::kPfrepStreamPadding - streamStart(b));
+    PfrepEntry e;
+    e.neighbours = a.neighbours.data();
+    e.dependencies = a.dependencies.data();
+    e.groups = a.groups.data();
+    std::vector<uint8_t> rewritten;
+    for (uint32_t i = 0; i < vertex_count; ++i) {
+        const uint32_t b = i >> shift, first = b << shift, count = blockCount(b);
+        const uint8_t* records = blob.data() + a.block_offset[b];
+        const uint8_t* rel = records + size_t(count) * fmt::kPfrepVertexRecordSize;
+        const uint32_t start = streamStart(b) + lodrt::detail::pfrepLoad16(rel + 2 * (i - first));
+        const uint32_t end = i + 1 < first + count ? streamStart(b) + lodrt::detail::pfrepLoad16(rel + 2 * (i + 1 - first))
+                                                   : blockEnd(b) - fmt::kPfrepStreamPadding;
+        if (!parseEntry(blob.data() + start, i, e))
+            return invalidInput("pfrep: entry " + std::to_string(i) + ": a slot in two groups (not format 3 codable)");
+        const size_t bytes = lodrt::detail::pfrepEntryBytes(e, i);
+        rewritten.assign(bytes, 0);
+        lodrt::detail::pfrepWriteEntry(e, i, rewritten.data());
+        if (bytes != end - start || std::memcmp(rewritten.data(), blob.data() + start, bytes) != 0)
+            return invalidInput("pfrep: entry " + std::to_string(i) + ": not written canonically (not format 3 codable)");
+        std::memcpy(e.record, records + size_t(i - first) * fmt::kPfrepVertexRecordSize, fmt::kPfrepVertexRecordSize);
+        if (!lodrt::detail::pfrepCodeVertex(c, *models, s, i, e))
+            return invalidInput("pfrep: entry " + std::to_string(i) + ": not format 3 codable");
+    }
+    for (uint32_t i = vertex_count; i-- > 0;) {
+        uint8_t record[fmt::kPfrepVertexRecordSize];
+        std::memcpy(record, s.record(i), sizeof(record));
+        if (!lodrt::detail::pfrepCodePosition(c, *models, s, i, record))
+            return invalidInput("pfrep: vertex " + std::to_string(i) + ": position or cone not format 3 codable");
+    }
+    std::vector<uint8_t> out(blob.begin(), blob.begin() + fmt::kPfrepHeaderSize);
+    store32(out.data() + 4, fmt::kPfrepVersionCompressed);
+    store32(out.data() + 52, uint32_t(blob.size()));
+    store32(out.data() + 56, uint32_t(total_slots));
+    const std::vector<uint8_t> coded = c.enc.finish();
+    out.insert(out.end(), coded.begin(), coded.end());
+    // Decode it again: what leaves here rebuilds `blob` exactly.
+    lodrt::PfrepCompressedInfo info;
+    if (lodrt::pfrepCompressedInfo(out.data(), out.size(), &info) != lodrt::Result::Ok)
+        return internalError("pfrep: format 3 header does not read back");
+    std::vector<uint8_t> decoded(info.decoded_bytes);
+    std::vector<uint64_t> scratch((info.scratch_bytes + 7) / 8);
+    lodrt::PfrepModel check;
+    const lodrt::Result r =
+        lodrt::pfrepDecompress(out.data(), out.size(), decoded.data(), decoded.size(), scratch.data(), scratch.size() * 8, &check);
+    if (r != lodrt::Result::Ok || decoded != blob)
+        return internalError(std::string("pfrep: format 3 does not decode to its blob: ") + lodrt::resultName(r));
+    return out;
+}
+
+} // namespace lodbake
