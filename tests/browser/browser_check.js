@@ -4,7 +4,7 @@
 // Chromium (WebGL through SwiftShader, so no GPU is needed), receives the page's measurements and
 // checks them against what the pack says. Node's standard library only.
 //
-//   browser_check.js bake --lodbake EXE --source MESH --out PACK [-- BAKE_OPTION...]
+//   browser_check.js bake --lodbake EXE --source MESH|scene:MESH_A+MESH_B --out PACK [-- BAKE_OPTION...]
 //   browser_check.js check --client babylon|three --pack PACK --expect plain|textured[,uses=EXT...]
 //       --node-modules DIR --out DIR [--chromium EXE] [--size WxH] [--timeout S]
 //       [--break truncate|flat-texture|drop-level|zero-positions --expect-failure TEXT]
@@ -17,6 +17,9 @@
 // (skipped, with the reason) when Chromium or the npm packages are missing, unless
 // LODBAKE_REQUIRE_BROWSER is set, or the source mesh of a bake is missing, unless
 // LODBAKE_REQUIRE_SHARED_MESHES is set.
+// bake with `scene:A+B` first writes a glTF scene of the two meshes (converted by `lodbake convert`):
+// A at two nodes (instanced), B rotated and scaled to A's size at a third, every node named; the
+// bake must keep them as three LOD groups with those names (checked here, before any client).
 // A control (--break) serves a copy of the pack broken on purpose and passes only when the check
 // fails with a message containing --expect-failure.
 "use strict";
@@ -24,7 +27,7 @@ const fs = require("fs");
 const http = require("http");
 const path = require("path");
 const { spawn, spawnSync } = require("child_process");
-const { parseGlb, lodLevels, breakPack } = require("./glb.js");
+const { parseGlb, lodLevels, sceneOf, breakPack } = require("./glb.js");
 
 const kSkip = 77;
 const kPageDir = path.join(__dirname, "page");
@@ -59,13 +62,53 @@ function parseArgs(argv) {
 
 function bake(args) {
     for (const key of ["lodbake", "source", "out"]) if (!args[key]) throw new Error(`bake: --${key} was expected`);
-    if (!fs.existsSync(args.source)) {
-        console.error(`browser test: ${args.source}: missing (the shared meshes next to the repository)`);
-        return required("LODBAKE_REQUIRE_SHARED_MESHES") ? 1 : kSkip;
+    const sources = args.source.startsWith("scene:") ? args.source.slice(6).split("+") : [args.source];
+    for (const source of sources) {
+        if (!fs.existsSync(source)) {
+            console.error(`browser test: ${source}: missing (the shared meshes next to the repository)`);
+            return required("LODBAKE_REQUIRE_SHARED_MESHES") ? 1 : kSkip;
+        }
     }
     fs.mkdirSync(path.dirname(args.out), { recursive: true });
-    const run = spawnSync(args.lodbake, ["bake", args.source, "-o", args.out, ...args.rest], { stdio: "inherit" });
-    return run.status === null ? 1 : run.status;
+    const input = sources.length === 1 ? sources[0] : writeScene(args.lodbake, sources, args.out);
+    const run = spawnSync(args.lodbake, ["bake", input, "-o", args.out, ...args.rest], { stdio: "inherit" });
+    if (run.status !== 0 || sources.length === 1) return run.status === null ? 1 : run.status;
+    return checkSceneGroups(args.out);
+}
+
+const kSceneNodes = ["Left", "LeftAgain", "Right"];
+
+// The scene's source GLB next to `out` (see the header); returns its path.
+function writeScene(lodbake, sources, out) {
+    const parts = sources.map((source, i) => {
+        const glb = `${out}.part${i}.glb`;
+        const run = spawnSync(lodbake, ["convert", source, "-o", glb], { stdio: "inherit" });
+        if (run.status !== 0) throw new Error(`${source}: lodbake convert failed`);
+        return parseGlb(fs.readFileSync(glb));
+    });
+    const extent = (part) => {
+        const a = part.json.accessors[part.json.meshes[0].primitives[0].attributes.POSITION];
+        return Math.max(...a.max.map((v, k) => v - a.min[k]));
+    };
+    const size = extent(parts[0]), scale = size / extent(parts[1]);
+    const scene = sceneOf(parts, [
+        [{ name: kSceneNodes[0], translation: [-size, 0, 0] }, { name: kSceneNodes[1], translation: [0, 0, -size] }],
+        [{ name: kSceneNodes[2], translation: [size, 0, 0], rotation: [0, Math.SQRT1_2, 0, Math.SQRT1_2],
+            scale: [scale, scale, scale] }]]);
+    const file = `${out}.scene.glb`;
+    fs.writeFileSync(file, scene);
+    return file;
+}
+
+// The baked scene: one LOD group per input node, named as the input's nodes.
+function checkSceneGroups(pack) {
+    const { json } = parseGlb(fs.readFileSync(pack));
+    const roots = (json.nodes || []).filter((n) => n.extensions && n.extensions.MSFT_lod).map((n) => n.name);
+    if (JSON.stringify(roots) !== JSON.stringify(kSceneNodes)) {
+        console.error(`${pack}: LOD groups ${JSON.stringify(roots)}, expected one per scene node ${JSON.stringify(kSceneNodes)}`);
+        return 1;
+    }
+    return 0;
 }
 
 function isExecutable(file) {

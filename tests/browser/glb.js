@@ -52,20 +52,65 @@ function writeGlb(json, bin) {
 
 // The pack's LOD chain: the first scene node carrying MSFT_lod, its mesh first (LOD0, finest) and
 // then its MSFT_lod ids; for each level, the indices its mesh draws.
+// The levels a client draws, finest first: per MSFT_lod level, the indices of every LOD group's
+// node at that level summed (a pack of several groups, a scene, draws them all at once); a pack
+// without MSFT_lod draws its first mesh node. Groups of different level counts are refused: a
+// client's per-level totals would then not be a level of every group.
 function lodLevels(json) {
     const nodes = json.nodes || [];
-    const root = nodes.find((n) => n.extensions && n.extensions.MSFT_lod);
-    const chain = root ? [root, ...root.extensions.MSFT_lod.ids.map((id) => nodes[id])]
-        : nodes.filter((n) => n.mesh !== undefined).slice(0, 1);
-    return chain.map((node) => {
-        const mesh = json.meshes[node.mesh];
+    const roots = nodes.filter((n) => n.extensions && n.extensions.MSFT_lod);
+    const chains = roots.length ? roots.map((root) => [root, ...root.extensions.MSFT_lod.ids.map((id) => nodes[id])])
+        : [nodes.filter((n) => n.mesh !== undefined).slice(0, 1)];
+    if (chains.some((chain) => chain.length !== chains[0].length)) {
+        throw new Error(`LOD groups of different level counts: ${chains.map((c) => c.length).join(" ")}`);
+    }
+    return chains[0].map((_, level) => {
         let indices = 0;
-        for (const p of mesh.primitives) {
-            const accessor = json.accessors[p.indices !== undefined ? p.indices : p.attributes.POSITION];
-            indices += accessor.count;
+        const materials = [];
+        for (const chain of chains) {
+            const mesh = json.meshes[chain[level].mesh];
+            for (const p of mesh.primitives) {
+                indices += json.accessors[p.indices !== undefined ? p.indices : p.attributes.POSITION].count;
+                materials.push(p.material);
+            }
         }
-        return { node: node.name, indices, materials: mesh.primitives.map((p) => p.material) };
+        return { node: chains.map((chain) => chain[level].name).join("+"), indices, materials };
     });
+}
+
+// One GLB whose default scene places the meshes of several single-mesh GLBs (`parts`, parsed), each
+// part at the nodes `placements[i]` lists ({name, translation, rotation, scale}); a part listed twice is
+// instanced (its mesh written once). Untextured parts only: their materials are dropped.
+function sceneOf(parts, placements) {
+    const json = { asset: { version: "2.0", generator: "lodbake browser test" }, scene: 0, scenes: [{ nodes: [] }],
+        nodes: [], meshes: [], accessors: [], bufferViews: [], buffers: [{ byteLength: 0 }] };
+    const bins = [];
+    let offset = 0;
+    parts.forEach(({ json: part, bin }, i) => {
+        if (part.meshes.length !== 1) throw new Error(`scene part ${i}: one mesh was expected`);
+        const views = json.bufferViews.length, accessors = json.accessors.length;
+        for (const view of part.bufferViews) {
+            json.bufferViews.push({ ...view, buffer: 0, byteOffset: offset + (view.byteOffset || 0) });
+        }
+        for (const accessor of part.accessors) json.accessors.push({ ...accessor, bufferView: accessor.bufferView + views });
+        const mesh = JSON.parse(JSON.stringify(part.meshes[0]));
+        for (const p of mesh.primitives) {
+            delete p.material;
+            for (const key of Object.keys(p.attributes)) p.attributes[key] += accessors;
+            if (p.indices !== undefined) p.indices += accessors;
+        }
+        json.meshes.push(mesh);
+        const padded = pad4(bin, 0);
+        bins.push(padded);
+        offset += padded.length;
+        for (const placement of placements[i]) {
+            json.nodes.push({ ...placement, mesh: json.meshes.length - 1 });
+            json.scenes[0].nodes.push(json.nodes.length - 1);
+        }
+    });
+    const bin = Buffer.concat(bins);
+    json.buffers[0].byteLength = bin.length;
+    return writeGlb(json, bin);
 }
 
 function crc32(bytes) {
@@ -157,4 +202,4 @@ function breakPack(bytes, how) {
     throw new Error(`unknown --break mode "${how}" (truncate, flat-texture, drop-level, zero-positions)`);
 }
 
-module.exports = { parseGlb, writeGlb, lodLevels, breakPack, flatPng };
+module.exports = { parseGlb, writeGlb, lodLevels, sceneOf, breakPack, flatPng };
