@@ -27,39 +27,14 @@
 
 #include "bench_bar.h"
 #include "bench_timing.h"
+#include "heap_count.h"
 #include "lodbake/cluster/cluster_lod.h"
 #include "lodbake/io/mesh_io.h"
 #include "lodbake/simplify/lod_chain.h"
 #include "lodrt/cluster_lod.h"
 #include "lodrt/selection.h"
 
-namespace {
-std::atomic<uint64_t> g_heap_allocations{0};
-}
-#if defined(__GNUC__) && !defined(__clang__) && __GNUC__ >= 11
-#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
-#endif
-void* operator new(size_t size) {
-    ++g_heap_allocations;
-    void* p = std::malloc(size ? size : 1);
-    if (!p) std::abort();
-    return p;
-}
-void* operator new[](size_t size) {
-    return operator new(size);
-}
-void operator delete(void* p) noexcept {
-    std::free(p);
-}
-void operator delete[](void* p) noexcept {
-    std::free(p);
-}
-void operator delete(void* p, size_t) noexcept {
-    std::free(p);
-}
-void operator delete[](void* p, size_t) noexcept {
-    std::free(p);
-}
+using lodbake_bench::g_heap_allocations;
 
 namespace {
 

@@ -33,40 +33,11 @@
 #include "bench_bar.h"
 #include "bench_timing.h"
 #include "lodrt/lodrt.h"
+#include "heap_count.h"
 #include "sample_scene.h"
 
-// ---- heap allocation counting: every operator new and every lodrt allocator hook call ----
-
-namespace {
-std::atomic<uint64_t> g_heap_allocations{0};
-}
-
-// The replacements below pair malloc with free on purpose (both sides are ours).
-#if defined(__GNUC__) && !defined(__clang__) && __GNUC__ >= 11
-#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
-#endif
-
-void* operator new(size_t size) {
-    ++g_heap_allocations;
-    void* p = std::malloc(size ? size : 1);
-    if (!p) std::abort();
-    return p;
-}
-void* operator new[](size_t size) {
-    return operator new(size);
-}
-void operator delete(void* p) noexcept {
-    std::free(p);
-}
-void operator delete[](void* p) noexcept {
-    std::free(p);
-}
-void operator delete(void* p, size_t) noexcept {
-    std::free(p);
-}
-void operator delete[](void* p, size_t) noexcept {
-    std::free(p);
-}
+// Heap allocations are counted by heap_count.cpp (every operator new; lodrt allocator hooks add theirs).
+using lodbake_bench::g_heap_allocations;
 
 namespace {
 

@@ -18,6 +18,7 @@
 
 #include "io/draco_decode.h"
 #include "io/gltf_meshopt.h"
+#include "io/gltf_model.h"
 #include "lodbake/core/file_io.h"
 #include "lodbake/core/json_limits.h"
 #include "lodrt/format.h"
@@ -268,27 +269,6 @@ int componentSize(int component_type) {
     case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT:
     case TINYGLTF_COMPONENT_TYPE_FLOAT:
         return 4;
-    default:
-        return 0;
-    }
-}
-
-int componentCount(int type) {
-    switch (type) {
-    case TINYGLTF_TYPE_SCALAR:
-        return 1;
-    case TINYGLTF_TYPE_VEC2:
-        return 2;
-    case TINYGLTF_TYPE_VEC3:
-        return 3;
-    case TINYGLTF_TYPE_VEC4:
-        return 4;
-    case TINYGLTF_TYPE_MAT2:
-        return 4;
-    case TINYGLTF_TYPE_MAT3:
-        return 9;
-    case TINYGLTF_TYPE_MAT4:
-        return 16;
     default:
         return 0;
     }
@@ -1199,17 +1179,30 @@ Result<bool> checkRequiredExtensions(const tinygltf::Model& model, const std::st
 Result<LoadedMesh> flattenModel(const tinygltf::Model& model, const JsonPrepass& prepass, bool quantized, bool is_glb,
                                 const std::string& name, const ReadOptions& options, Diagnostics& diagnostics);
 
+// A document as both readers start from it: parsed, its required extensions checked and its
+// EXT_meshopt_compression views decoded.
+struct ParsedGltf {
+    tinygltf::Model model;
+    JsonPrepass prepass;
+    bool is_glb = false;
+    bool quantized = false;
+};
+
+Status parseForImport(const uint8_t* data, size_t size, const std::string& name, const SideFileLoader& load_side_file,
+                      const ReadOptions& options, Diagnostics& diagnostics, ParsedGltf& out) {
+    out.is_glb = size >= 4 && readU32(data) == kGlbMagic;
+    LODBAKE_RETURN_IF_ERROR(parseGltfDocument(data, size, name, load_side_file, options, diagnostics, out.is_glb,
+                                              out.prepass, out.model));
+    LODBAKE_ASSIGN_OR_RETURN(out.quantized, checkRequiredExtensions(out.model, name));
+    return decodeMeshoptViews(out.model, name);
+}
+
 Result<LoadedMesh> readGltfImpl(const uint8_t* data, size_t size, const std::string& name,
                                 const SideFileLoader& load_side_file, const ReadOptions& options,
                                 Diagnostics& diagnostics) {
-    const bool is_glb = size >= 4 && readU32(data) == kGlbMagic;
-    JsonPrepass prepass;
-    tinygltf::Model model;
-    LODBAKE_RETURN_IF_ERROR(
-        parseGltfDocument(data, size, name, load_side_file, options, diagnostics, is_glb, prepass, model));
-    LODBAKE_ASSIGN_OR_RETURN(const bool quantized, checkRequiredExtensions(model, name));
-    LODBAKE_RETURN_IF_ERROR(decodeMeshoptViews(model, name));
-    return flattenModel(model, prepass, quantized, is_glb, name, options, diagnostics);
+    ParsedGltf parsed;
+    LODBAKE_RETURN_IF_ERROR(parseForImport(data, size, name, load_side_file, options, diagnostics, parsed));
+    return flattenModel(parsed.model, parsed.prepass, parsed.quantized, parsed.is_glb, name, options, diagnostics);
 }
 
 // Every mesh instance of the parsed document, in world space, as one mesh (readGltfFromMemory).
@@ -1386,13 +1379,9 @@ Result<LoadedScene> buildScene(const tinygltf::Model& model, const SceneWalk& wa
 Result<LoadedScene> readGltfSceneImpl(const uint8_t* data, size_t size, const std::string& name,
                                       const SideFileLoader& load_side_file, const ReadOptions& options,
                                       Diagnostics& diagnostics) {
-    const bool is_glb = size >= 4 && readU32(data) == kGlbMagic;
-    JsonPrepass prepass;
-    tinygltf::Model model;
-    LODBAKE_RETURN_IF_ERROR(
-        parseGltfDocument(data, size, name, load_side_file, options, diagnostics, is_glb, prepass, model));
-    LODBAKE_ASSIGN_OR_RETURN(const bool quantized, checkRequiredExtensions(model, name));
-    LODBAKE_RETURN_IF_ERROR(decodeMeshoptViews(model, name));
+    ParsedGltf parsed;
+    LODBAKE_RETURN_IF_ERROR(parseForImport(data, size, name, load_side_file, options, diagnostics, parsed));
+    const tinygltf::Model& model = parsed.model;
     SceneWalk walk;
     if (!model.scenes.empty()) {
         const int scene_index = model.defaultScene >= 0 ? model.defaultScene : 0;
@@ -1402,11 +1391,11 @@ Result<LoadedScene> readGltfSceneImpl(const uint8_t* data, size_t size, const st
     }
     if (walk.mesh_nodes < 2) {
         LoadedScene flat;
-        LODBAKE_ASSIGN_OR_RETURN(flat.flat,
-                                 flattenModel(model, prepass, quantized, is_glb, name, options, diagnostics));
+        LODBAKE_ASSIGN_OR_RETURN(flat.flat, flattenModel(model, parsed.prepass, parsed.quantized, parsed.is_glb, name,
+                                                         options, diagnostics));
         return flat;
     }
-    return buildScene(model, walk, prepass, quantized, is_glb, name, options, diagnostics);
+    return buildScene(model, walk, parsed.prepass, parsed.quantized, parsed.is_glb, name, options, diagnostics);
 }
 
 } // namespace

@@ -46,6 +46,27 @@ private:
     std::vector<uint8_t> bytes_;
 };
 
+/// Components per element of a glTF accessor type (SCALAR 1 ... MAT4 16); 0 for an unknown type.
+inline int componentCount(int type) {
+    switch (type) {
+    case TINYGLTF_TYPE_SCALAR:
+        return 1;
+    case TINYGLTF_TYPE_VEC2:
+        return 2;
+    case TINYGLTF_TYPE_VEC3:
+        return 3;
+    case TINYGLTF_TYPE_VEC4:
+    case TINYGLTF_TYPE_MAT2:
+        return 4;
+    case TINYGLTF_TYPE_MAT3:
+        return 9;
+    case TINYGLTF_TYPE_MAT4:
+        return 16;
+    default:
+        return 0;
+    }
+}
+
 /// Sharing across the meshes of one model: identical encoded images become one glTF texture, and
 /// identical materials one material.
 struct ModelDedupe {

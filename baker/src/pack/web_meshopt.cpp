@@ -15,6 +15,7 @@
 
 #include <meshoptimizer.h>
 
+#include "io/gltf_model.h"
 #include "lodrt/format.h"
 
 namespace lodbake {
@@ -142,21 +143,6 @@ WebViews::View encodePlainFloats(const tinygltf::Accessor& a, const std::vector<
     return v;
 }
 
-size_t componentsOf(int type) {
-    switch (type) {
-    case TINYGLTF_TYPE_SCALAR:
-        return 1;
-    case TINYGLTF_TYPE_VEC2:
-        return 2;
-    case TINYGLTF_TYPE_VEC3:
-        return 3;
-    case TINYGLTF_TYPE_VEC4:
-        return 4;
-    default:
-        return 0;
-    }
-}
-
 bool inUnitRange(const std::vector<float>& values) {
     for (float f : values)
         if (!(f >= 0.0f && f <= 1.0f)) return false;
@@ -165,7 +151,7 @@ bool inUnitRange(const std::vector<float>& values) {
 
 Result<WebViews::View> encodeAttribute(const tinygltf::Model& model, const std::string& name, tinygltf::Accessor& a,
                                        const std::vector<uint8_t>& bin, double max_step) {
-    const size_t components = componentsOf(a.type);
+    const size_t components = size_t(componentCount(a.type));
     if (components == 0) return internalError("pack: --web: attribute " + name + " is not a vector");
     LODBAKE_ASSIGN_OR_RETURN(std::vector<float> values, readFloats(model, a, components, bin));
     if (name == "POSITION" && components == 3) return encodePositions(a, values, max_step);
