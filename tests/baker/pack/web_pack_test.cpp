@@ -435,7 +435,8 @@ TEST(WebPackTest, GltfpackCompressedFilesOpenInLodrtAndLodbakeInfo) {
 
 // glTF-Transform's `meshopt` (EXT_meshopt_compression with quantization) and `quantize`
 // (KHR_mesh_quantization) outputs of a few shared scans are validator clean when their source is,
-// open in lodrt with every accessor decoded, keep the source's triangles, and open in `lodbake info`.
+// open in lodrt with every accessor decoded and the source's bounds, keep the source's triangles,
+// and open in `lodbake info`.
 TEST(WebPackTest, GltfTransformFilesOpenInLodrtAndLodbakeInfo) {
     LODBAKE_REQUIRE_SHARED_MESHES();
     const std::string transform = lodbake_test::sourceDir() + "/scripts/node-bench/node_modules/.bin/gltf-transform";
@@ -481,6 +482,14 @@ TEST(WebPackTest, GltfTransformFilesOpenInLodrtAndLodbakeInfo) {
                 triangles += md.positions.size() / 9;
             }
             EXPECT_EQ(triangles, source_triangles) << source << " " << command;
+            // The model's bounds (from POSITION min / max, normalized integers mapped as the
+            // elements are, through the node's dequantizing transform) are the source's.
+            ASSERT_EQ(l.models.modelCount(), original.models.modelCount()) << source << " " << command;
+            const lodrt::ModelInfo &a = original.models.model(0), &b = l.models.model(0);
+            const float r = a.world_sphere_radius;
+            EXPECT_NEAR(b.world_sphere_radius, r, 0.01f * r) << source << " " << command;
+            for (int c = 0; c < 3; ++c)
+                EXPECT_NEAR(b.world_sphere_center[c], a.world_sphere_center[c], 0.01f * r) << source << " " << command;
             const CommandResult info = runCommand(cli + " info " + shellQuote(out));
             EXPECT_EQ(info.exit_code, 0) << source << " " << command << ": " << info.output;
             EXPECT_NE(info.output.find(std::to_string(triangles) + " triangles"), std::string::npos)
