@@ -5,6 +5,7 @@
   lodview_check.py --lodview EXE --xvfb-run XVFB --out DIR --textured-source SRC --lodbake EXE --preset P
   lodview_check.py --lodview EXE --xvfb-run XVFB --out DIR --format web|compact --source SRC --lodbake EXE
                    --preset P PLAIN_PACK
+  lodview_check.py --lodview EXE --xvfb-run XVFB --out DIR --gltf-transform EXE --source SRC.glb
   lodview_check.py --missing REASON
 
 Four runs of the same walk on a 3x3 grid (LOD, forced LOD0, colour by level, PFRep refinement),
@@ -29,6 +30,11 @@ time for the levels it decoded. Control: a copy of the pack whose coarsest level
 header must make lodview exit non-zero with a message naming the pack and that level. A --compact pack
 whose levels lodrt cannot stream (its level byte range does not cover the stream's buffer view) is
 skipped (77) with that reason.
+
+--gltf-transform EXE --source SRC.glb: writes SRC with glTF-Transform's `meshopt` and `quantize`
+(normalized integer positions under a dequantizing node transform) and checks a LOD run of each
+like the plain runs (non-blank images, report fields); skipped (77) when EXE or SRC is missing unless
+LODBAKE_REQUIRE_SHARED_MESHES is set (SRC).
 
 --missing: lodview or xvfb-run was not found at configure time. The test is skipped (exit 77)
 unless LODBAKE_REQUIRE_LODVIEW is set (scripts/setup-and-test.sh sets it), when it fails.
@@ -290,6 +296,26 @@ def check_format(args):
     return 0
 
 
+def check_transform(args):
+    """glTF-Transform's meshopt and quantize outputs of args.source draw non-blank images."""
+    for path, what in ((args.gltf_transform, "gltf-transform (npm ci in scripts/node-bench)"), (args.source, "source")):
+        if not os.path.isfile(path):
+            required = what == "source" and os.environ.get("LODBAKE_REQUIRE_SHARED_MESHES", "") not in ("", "0")
+            print(f"lodview glTF-Transform test: {path}: missing {what}", file=sys.stderr)
+            return 1 if required else 77
+    os.makedirs(args.out, exist_ok=True)
+    for command in ("meshopt", "quantize"):
+        out = os.path.join(args.out, f"transform_{command}.glb")
+        proc = subprocess.run([args.gltf_transform, command, args.source, out], capture_output=True, text=True,
+                              timeout=600)
+        if proc.returncode != 0:
+            raise AssertionError(f"gltf-transform {command} {args.source} failed: {proc.stderr.strip()}")
+        args.packs = [out]
+        check_report(f"transform_{command}", run(args, f"transform_{command}", ["--mode", "lod"]))
+    print(f"lodview glTF-Transform check: 2 runs of {FRAMES} frames passed")
+    return 0
+
+
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--textured-source")
@@ -301,6 +327,7 @@ def main():
     parser.add_argument("--missing")
     parser.add_argument("--format", choices=("web", "compact"))
     parser.add_argument("--source")
+    parser.add_argument("--gltf-transform")
     parser.add_argument("packs", nargs="*")
     args = parser.parse_args()
     if args.missing:
@@ -312,6 +339,8 @@ def main():
         return check_textured(args)
     if args.format:
         return check_format(args)
+    if args.gltf_transform:
+        return check_transform(args)
     os.makedirs(args.out, exist_ok=True)
     lod = run(args, "lod", ["--mode", "lod"])
     lod0 = run(args, "lod0", ["--mode", "lod0"])
