@@ -55,8 +55,9 @@ if ! node -e 'const p = require("./scripts/node/package.json");
     (cd scripts/node && npm ci --no-audit --no-fund --loglevel=error)
 fi
 # gltfpack (pinned by scripts/node-bench/package-lock.json): the benchmarks' anchor, and the
-# EXT_meshopt_compression files WebPackTest opens (it skips without it).
-if [ ! -x scripts/node-bench/node_modules/.bin/gltfpack ]; then
+# EXT_meshopt_compression files WebPackTest opens (it skips without it); glTF-Transform's CLI, the
+# other writer whose meshopt and quantize files WebPackTest opens.
+if [ ! -x scripts/node-bench/node_modules/.bin/gltfpack ] || [ ! -x scripts/node-bench/node_modules/.bin/gltf-transform ]; then
     echo "installing npm packages for the benchmarks and the web-pack tests (scripts/node-bench)"
     (cd scripts/node-bench && npm ci --no-audit --no-fund --loglevel=error)
 fi

@@ -279,6 +279,16 @@ int main(int argc, char** argv) {
         }
         std::printf("\n");
     }
+    // The streamer never loads a level whose data is not one byte range of the BIN chunk (data_size
+    // 0), so the run could only report that the model never became drawable; say why instead.
+    for (uint32_t m = 0; m < source.models().modelCount(); ++m)
+        for (uint32_t l = 0; l < source.models().model(m).level_count; ++l)
+            if (source.models().modelLevel(m, l).data_size == 0) {
+                std::fprintf(stderr, "error: %s: model %u level %u: its data is not in a byte range of the BIN chunk "
+                             "that lodrt streams\n", argv[1], m, l);
+                std::fclose(file.file);
+                return 1;
+            }
 
     const int exit_code = runScene(source, args, file_size);
     std::fclose(file.file);

@@ -25,6 +25,27 @@ constexpr float kInf = std::numeric_limits<float>::infinity();
 constexpr double kReferenceTanHalfFov = 0.57735026918962573; // tan(30 degrees)
 constexpr double kReferenceViewportPx = 1080.0;
 
+// A POSITION bound as the accessor's elements mean it: min and max hold the stored values, so a
+// normalized integer accessor's (KHR_mesh_quantization) are mapped as its elements are.
+double boundValue(double v, const AccessorInfo& acc) {
+    if (!acc.normalized) return v;
+    switch (acc.component_type) {
+    case ComponentType::Byte:
+        return std::fmax(v / 127.0, -1.0);
+    case ComponentType::UnsignedByte:
+        return v / 255.0;
+    case ComponentType::Short:
+        return std::fmax(v / 32767.0, -1.0);
+    case ComponentType::UnsignedShort:
+        return v / 65535.0;
+    case ComponentType::UnsignedInt:
+        return v / 4294967295.0;
+    case ComponentType::Float:
+        break;
+    }
+    return v;
+}
+
 bool finiteFloat(double v) {
     return std::isfinite(v) && std::fabs(v) <= double(std::numeric_limits<float>::max());
 }
@@ -277,8 +298,10 @@ struct ModelBuilder {
                         if (mn.size() != 3 || mx.size() != 3)
                             return fail(Result::BadGltf, "/accessors/%u: POSITION needs min and max of 3 numbers",
                                         acc_index);
+                        const AccessorInfo& position = pack->accessor(acc_index);
                         for (uint32_t c = 0; c < 3; ++c) {
-                            const double lo_c = mn.at(c).number(), hi_c = mx.at(c).number();
+                            const double lo_c = boundValue(mn.at(c).number(), position);
+                            const double hi_c = boundValue(mx.at(c).number(), position);
                             if (!mn.at(c).isNumber() || !mx.at(c).isNumber() || !finiteFloat(lo_c) ||
                                 !finiteFloat(hi_c) || lo_c > hi_c)
                                 return fail(Result::BadGltf,

@@ -3,6 +3,9 @@
 
   lodview_check.py --lodview EXE --xvfb-run XVFB --out DIR PACK...
   lodview_check.py --lodview EXE --xvfb-run XVFB --out DIR --textured-source SRC --lodbake EXE --preset P
+  lodview_check.py --lodview EXE --xvfb-run XVFB --out DIR --format web|compact --source SRC --lodbake EXE
+                   --preset P PLAIN_PACK
+  lodview_check.py --lodview EXE --xvfb-run XVFB --out DIR --gltf-transform EXE --source SRC.glb
   lodview_check.py --missing REASON
 
 Four runs of the same walk on a 3x3 grid (LOD, forced LOD0, colour by level, PFRep refinement),
@@ -18,6 +21,20 @@ size checks first reject images built to fail them, so they are known to be able
 --textured-source SRC --lodbake EXE --preset P: bakes SRC (a textured shared scan) and checks
 that every draw call of a plain run uses the base colour texture and none of a colour-by-level run
 does; skipped (77) when SRC is missing unless LODBAKE_REQUIRE_SHARED_MESHES is set.
+
+--format web|compact --source SRC: bakes SRC with --web (EXT_meshopt_compression, KHR_mesh_quantization)
+or --compact (LODBAKE_valence_compression streams only) and runs the LOD and forced LOD0 walks on it and
+on PLAIN_PACK (the plain bake of SRC with the same preset): every frame must show the same visible
+instances, level histogram, draw calls and triangles as the plain pack, a non-blank image, and decode
+time for the levels it decoded. Control: a copy of the pack whose coarsest level's stream has a broken
+header must make lodview exit non-zero with a message naming the pack and that level. A --compact pack
+whose levels lodrt cannot stream (its level byte range does not cover the stream's buffer view) is
+skipped (77) with that reason.
+
+--gltf-transform EXE --source SRC.glb: writes SRC with glTF-Transform's `meshopt` and `quantize`
+(normalized integer positions under a dequantizing node transform) and checks a LOD run of each
+like the plain runs (non-blank images, report fields); skipped (77) when EXE or SRC is missing unless
+LODBAKE_REQUIRE_SHARED_MESHES is set (SRC).
 
 --missing: lodview or xvfb-run was not found at configure time. The test is skipped (exit 77)
 unless LODBAKE_REQUIRE_LODVIEW is set (scripts/setup-and-test.sh sets it), when it fails.
@@ -38,10 +55,11 @@ FRAME_FIELDS = {
     "resident_bytes": int, "bytes_streamed": int, "stream_requests": int, "lodrt_allocations": int, "lodrt_heap_allocations": int,
     "not_drawable": int, "coarser_than_selected": int, "max_sse_px": float, "pfrep_ms": float,
     "pfrep_instances": int, "pfrep_triangles": int, "pfrep_changes": int, "level_histogram": list,
+    "decode_ms": float, "levels_decoded": int, "decode_growths": int,
 }
 SUMMARY_FIELDS = ["frames", "mean_frame_ms", "mean_cpu_ms", "mean_gpu_ms", "mean_triangles", "mean_draw_calls",
                   "max_sse_px", "bytes_streamed", "lodrt_allocations_beyond_requests", "lodrt_heap_allocations",
-                  "frames_drawn_coarser"]
+                  "frames_drawn_coarser", "decode_ms", "levels_decoded", "decode_growths"]
 FRAMES, WIDTH, HEIGHT, GRID = 6, 320, 180, 3
 
 
@@ -109,7 +127,7 @@ def self_test():
     assert image_problem(WIDTH, HEIGHT + 1, shaded, WIDTH, HEIGHT), "a wrong size passed the check"
 
 
-def run(args, name, extra):
+def lodview(args, name, extra):
     prefix = os.path.join(args.out, name)
     report = prefix + ".json"
     cmd = [args.xvfb_run, "-a", "-s", "-screen 0 640x480x24", args.lodview, *args.packs, "--headless",
@@ -119,6 +137,11 @@ def run(args, name, extra):
     proc = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
     sys.stdout.write(proc.stdout)
     sys.stderr.write(proc.stderr)
+    return proc, prefix, report
+
+
+def run(args, name, extra):
+    proc, prefix, report = lodview(args, name, extra)
     if proc.returncode != 0:
         raise AssertionError(f"{name}: lodview exited {proc.returncode}")
     for frame in (0, FRAMES // 2):
@@ -197,6 +220,102 @@ def check_textured(args):
     return 0
 
 
+def glb_json(path):
+    """(bytes, JSON chunk as a dict, offset of the BIN chunk payload) of a GLB."""
+    data = bytearray(open(path, "rb").read())
+    json_length = struct.unpack("<I", data[12:16])[0]
+    doc = json.loads(bytes(data[20:20 + json_length]))
+    return data, doc, 20 + json_length + 8
+
+
+def break_coarsest_stream(src, dst, kind):
+    """Copies pack src to dst with the header byte of its coarsest level's POSITION data stream
+    zeroed (a meshopt attribute stream for web, the valence stream for compact); returns that
+    level's number."""
+    data, doc, bin_at = glb_json(src)
+    root = next(n for n in doc["nodes"] if "MSFT_lod" in n.get("extensions", {}))
+    ids = root["extensions"]["MSFT_lod"]["ids"]
+    prim = doc["meshes"][doc["nodes"][ids[-1]]["mesh"]]["primitives"][0]
+    if kind == "web":
+        view = doc["bufferViews"][doc["accessors"][prim["attributes"]["POSITION"]]["bufferView"]]
+        offset = view["extensions"]["EXT_meshopt_compression"].get("byteOffset", 0)
+    else:
+        view = doc["bufferViews"][prim["extensions"]["LODBAKE_valence_compression"]["bufferView"]]
+        offset = view.get("byteOffset", 0)
+    data[bin_at + offset] ^= 0xFF
+    open(dst, "wb").write(data)
+    return len(ids)
+
+
+COMPACT_UNSTREAMABLE = "its data is not in a byte range of the BIN chunk that lodrt streams"
+
+
+def check_format(args):
+    """A --web or --compact bake of args.source draws what the plain pack draws, frame by frame."""
+    os.makedirs(args.out, exist_ok=True)
+    plain_pack = args.packs[0]
+    pack = os.path.join(args.out, f"{args.format}.glb")
+    bake = subprocess.run([args.lodbake, "bake", args.source, "-o", pack, "--preset", args.preset, f"--{args.format}",
+                           "--quiet"], capture_output=True, text=True, timeout=600)
+    if bake.returncode != 0:
+        raise AssertionError(f"--{args.format} bake of {args.source} failed: {bake.stderr.strip()}")
+    args.packs = [pack]
+    proc, _, _ = lodview(args, f"{args.format}_probe", ["--mode", "lod", "--frames", "1"])
+    if proc.returncode != 0 and COMPACT_UNSTREAMABLE in proc.stderr and args.format == "compact":
+        print("lodview compact test: lodrt's level byte range does not cover the LODBAKE_valence_compression "
+              "streams, so the streamer cannot load a --compact pack's levels", file=sys.stderr)
+        return 77
+    runs = {}
+    for mode in ("lod", "lod0"):
+        args.packs = [plain_pack]
+        runs["plain", mode] = run(args, f"plain_{mode}", ["--mode", mode, "--warmup", "0"])
+        args.packs = [pack]
+        runs[args.format, mode] = run(args, f"{args.format}_{mode}", ["--mode", mode, "--warmup", "0"])
+    for (name, mode), report in runs.items():
+        check_report(f"{name}_{mode}", report)
+    keys = ("visible", "instances_drawn", "draw_calls", "triangles", "level_histogram")
+    for mode in ("lod", "lod0"):
+        plain, other = runs["plain", mode], runs[args.format, mode]
+        for a, b in zip(plain["frames"], other["frames"]):
+            for key in keys:
+                if a[key] != b[key]:
+                    raise AssertionError(f"{args.format}_{mode}: frame {b['frame']}: {key} {b[key]}, "
+                                         f"the plain pack's {a[key]}")
+        if not other["summary"]["levels_decoded"] or other["summary"]["decode_ms"] <= 0:
+            raise AssertionError(f"{args.format}_{mode}: no level decode was reported")
+    broken = os.path.join(args.out, f"{args.format}_broken.glb")
+    level = break_coarsest_stream(pack, broken, args.format)
+    args.packs = [broken]
+    proc, _, _ = lodview(args, f"{args.format}_broken", ["--mode", "lod"])
+    expected = f"{broken}: model 0 level {level}: "
+    if proc.returncode == 0 or expected not in proc.stderr:
+        raise AssertionError(f"{broken}: a broken stream: expected a non-zero exit and '{expected}...', "
+                             f"got exit {proc.returncode}")
+    print(f"lodview --{args.format} check: {len(runs)} runs of {FRAMES} frames matched the plain pack; "
+          "the broken copy was refused")
+    return 0
+
+
+def check_transform(args):
+    """glTF-Transform's meshopt and quantize outputs of args.source draw non-blank images."""
+    for path, what in ((args.gltf_transform, "gltf-transform (npm ci in scripts/node-bench)"), (args.source, "source")):
+        if not os.path.isfile(path):
+            required = what == "source" and os.environ.get("LODBAKE_REQUIRE_SHARED_MESHES", "") not in ("", "0")
+            print(f"lodview glTF-Transform test: {path}: missing {what}", file=sys.stderr)
+            return 1 if required else 77
+    os.makedirs(args.out, exist_ok=True)
+    for command in ("meshopt", "quantize"):
+        out = os.path.join(args.out, f"transform_{command}.glb")
+        proc = subprocess.run([args.gltf_transform, command, args.source, out], capture_output=True, text=True,
+                              timeout=600)
+        if proc.returncode != 0:
+            raise AssertionError(f"gltf-transform {command} {args.source} failed: {proc.stderr.strip()}")
+        args.packs = [out]
+        check_report(f"transform_{command}", run(args, f"transform_{command}", ["--mode", "lod"]))
+    print(f"lodview glTF-Transform check: 2 runs of {FRAMES} frames passed")
+    return 0
+
+
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--textured-source")
@@ -206,6 +325,9 @@ def main():
     parser.add_argument("--xvfb-run")
     parser.add_argument("--out")
     parser.add_argument("--missing")
+    parser.add_argument("--format", choices=("web", "compact"))
+    parser.add_argument("--source")
+    parser.add_argument("--gltf-transform")
     parser.add_argument("packs", nargs="*")
     args = parser.parse_args()
     if args.missing:
@@ -215,6 +337,10 @@ def main():
     self_test()
     if args.textured_source:
         return check_textured(args)
+    if args.format:
+        return check_format(args)
+    if args.gltf_transform:
+        return check_transform(args)
     os.makedirs(args.out, exist_ok=True)
     lod = run(args, "lod", ["--mode", "lod"])
     lod0 = run(args, "lod0", ["--mode", "lod0"])

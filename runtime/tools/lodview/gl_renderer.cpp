@@ -62,55 +62,6 @@ bool compile(GLenum kind, const char* text, GLuint* out, std::string* error) {
     return true;
 }
 
-GLenum glComponentType(lodrt::ComponentType type) {
-    switch (type) {
-    case lodrt::ComponentType::Byte:
-        return GL_BYTE;
-    case lodrt::ComponentType::UnsignedByte:
-        return GL_UNSIGNED_BYTE;
-    case lodrt::ComponentType::Short:
-        return GL_SHORT;
-    case lodrt::ComponentType::UnsignedShort:
-        return GL_UNSIGNED_SHORT;
-    case lodrt::ComponentType::UnsignedInt:
-        return GL_UNSIGNED_INT;
-    case lodrt::ComponentType::Float:
-        return GL_FLOAT;
-    }
-    return GL_FLOAT;
-}
-
-// The accessor of attribute `name` of primitive p, or kNoIndex.
-uint32_t attributeAccessor(const lodrt::Pack& pack, const lodrt::PrimitiveInfo& prim, std::string_view name) {
-    for (uint32_t a = 0; a < prim.attribute_count; ++a) {
-        const lodrt::AttributeInfo& attribute = pack.attribute(prim.first_attribute + a);
-        if (attribute.name == name) return attribute.accessor;
-    }
-    return lodrt::kNoIndex;
-}
-
-uint32_t jsonIndex(const lodrt::JsonValue& value) {
-    uint64_t v = 0;
-    return value.asUint64(&v) && v < lodrt::kNoIndex ? uint32_t(v) : lodrt::kNoIndex;
-}
-
-// The buffer view of the image behind `material`'s base colour texture and the TEXCOORD set it
-// uses, or kNoIndex (the pack is hostile: every step is checked).
-uint32_t baseColourImageView(const lodrt::Pack& pack, uint32_t material, uint32_t* tex_coord) {
-    const lodrt::JsonValue root = pack.document().root();
-    const lodrt::JsonValue info =
-        root.find("materials").at(material).find("pbrMetallicRoughness").find("baseColorTexture");
-    const uint32_t texture = jsonIndex(info.find("index"));
-    const uint32_t set = info.find("texCoord").isValid() ? jsonIndex(info.find("texCoord")) : 0;
-    if (texture == lodrt::kNoIndex || set > 7) return lodrt::kNoIndex;
-    const uint32_t image = jsonIndex(root.find("textures").at(texture).find("source"));
-    if (image == lodrt::kNoIndex) return lodrt::kNoIndex;
-    const uint32_t view = jsonIndex(root.find("images").at(image).find("bufferView"));
-    if (view == lodrt::kNoIndex || view >= pack.bufferViewCount()) return lodrt::kNoIndex;
-    *tex_coord = set;
-    return view;
-}
-
 // Reads and decodes an image buffer view into a mipmapped RGBA8 texture; 0 when it cannot.
 uint32_t loadTexture(const lodrt::PackSource& source, uint32_t view) {
 #ifdef LODVIEW_HAS_STB
@@ -140,25 +91,16 @@ uint32_t loadTexture(const lodrt::PackSource& source, uint32_t view) {
 #endif
 }
 
-// Uploads accessor `accessor` of the level's bytes as vertex attribute `location` of the bound
-// vertex array. False when its data is not inside the level's bytes.
-bool uploadAttribute(const lodrt::PackSource& source, uint32_t model, uint32_t level, const uint8_t* bytes,
-                     uint32_t accessor, GLuint location, GLint components, GpuLevel* out) {
-    const lodrt::Pack& pack = source.pack();
-    const lodrt::AccessorInfo& acc = pack.accessor(accessor);
-    const uint8_t* data = source.accessorData(model, level, bytes, accessor);
-    if (!data || acc.count == 0 || lodrt::componentCount(acc.type) != uint32_t(components)) return false;
-    const uint32_t stride = pack.bufferView(acc.buffer_view).byte_stride;
-    const uint64_t step = stride ? stride : acc.element_size;
+// Uploads `count` elements of `components` floats as vertex attribute `location` of the bound
+// vertex array.
+void uploadFloats(const float* data, size_t count, GLuint location, GLint components, GpuLevel* out) {
     GLuint vbo = 0;
     glGenBuffers(1, &vbo);
     out->buffers.push_back(vbo);
     glBindBuffer(GL_ARRAY_BUFFER, vbo);
-    glBufferData(GL_ARRAY_BUFFER, GLsizeiptr((acc.count - 1) * step + acc.element_size), data, GL_STATIC_DRAW);
+    glBufferData(GL_ARRAY_BUFFER, GLsizeiptr(count * size_t(components) * sizeof(float)), data, GL_STATIC_DRAW);
     glEnableVertexAttribArray(location);
-    glVertexAttribPointer(location, components, glComponentType(acc.component_type),
-                          acc.normalized ? GL_TRUE : GL_FALSE, GLsizei(stride), nullptr);
-    return true;
+    glVertexAttribPointer(location, components, GL_FLOAT, GL_FALSE, 0, nullptr);
 }
 
 } // namespace
@@ -221,58 +163,34 @@ bool Renderer::init(uint32_t width, uint32_t height, std::string* error) {
     return true;
 }
 
-bool Renderer::upload(const lodrt::PackSource& source, uint32_t model, uint32_t level, const uint8_t* bytes,
-                      uint32_t* indices, size_t index_capacity, GpuLevel* out, std::string* error) {
-    const lodrt::Pack& pack = source.pack();
-    const lodrt::LevelInfo& info = source.models().modelLevel(model, level);
-    size_t index_count = 0;
-    if (source.copyLevelIndices(model, level, bytes, indices, index_capacity, &index_count) != lodrt::Result::Ok) {
-        *error = "cannot widen the level's indices";
+bool Renderer::upload(const lodrt::PackSource& source, const LevelDecoder& level, GpuLevel* out, std::string* error) {
+    if (level.primitives().empty()) {
+        *error = "the level has no TRIANGLES primitive";
         return false;
     }
-    const lodrt::MeshInfo& mesh = pack.mesh(info.mesh);
     GLuint ibo = 0;
     glGenBuffers(1, &ibo);
     out->buffers.push_back(ibo);
-    uint32_t first = 0;
-    for (uint32_t p = 0; p < mesh.primitive_count; ++p) {
-        const lodrt::PrimitiveInfo& prim = pack.primitive(mesh.first_primitive + p);
-        if (prim.mode != 4) continue;
-        const uint32_t count = uint32_t(prim.index_count);
+    for (const DecodedPrimitive& prim : level.primitives()) {
         GLuint vao = 0;
         glGenVertexArrays(1, &vao);
         glBindVertexArray(vao);
-        out->ranges.push_back({vao, first, count, 0});
-        const uint32_t position = attributeAccessor(pack, prim, "POSITION");
-        if (position == lodrt::kNoIndex || !uploadAttribute(source, model, level, bytes, position, 0, 3, out)) {
-            glBindVertexArray(0);
-            *error = "a primitive has no POSITION data inside the level's bytes";
-            return false;
-        }
-        uint32_t set = 0;
-        const uint32_t image_view =
-            prim.material == lodrt::kNoIndex ? lodrt::kNoIndex : baseColourImageView(pack, prim.material, &set);
-        const char names[8][11] = {"TEXCOORD_0", "TEXCOORD_1", "TEXCOORD_2", "TEXCOORD_3",
-                                   "TEXCOORD_4", "TEXCOORD_5", "TEXCOORD_6", "TEXCOORD_7"};
-        const uint32_t uv = image_view == lodrt::kNoIndex ? lodrt::kNoIndex : attributeAccessor(pack, prim, names[set]);
-        if (uv != lodrt::kNoIndex && uploadAttribute(source, model, level, bytes, uv, 1, 2, out)) {
-            out->ranges.back().texture = loadTexture(source, image_view);
+        out->ranges.push_back({vao, prim.first_index, prim.index_count, 0});
+        uploadFloats(level.positions() + 3 * size_t(prim.first_vertex), prim.vertex_count, 0, 3, out);
+        if (prim.image_view != lodrt::kNoIndex && prim.has_uv) {
+            uploadFloats(level.uvs() + 2 * size_t(prim.first_vertex), prim.vertex_count, 1, 2, out);
+            out->ranges.back().texture = loadTexture(source, prim.image_view);
             if (out->ranges.back().texture) out->textures.push_back(out->ranges.back().texture);
         }
         glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, ibo);
         glBindVertexArray(0);
-        out->ranges.back().first_index = first;
-        out->triangles += count / 3;
-        first += count;
+        out->triangles += prim.index_count / 3;
     }
     glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, ibo);
-    glBufferData(GL_ELEMENT_ARRAY_BUFFER, GLsizeiptr(index_count * sizeof(uint32_t)), indices, GL_STATIC_DRAW);
+    glBufferData(GL_ELEMENT_ARRAY_BUFFER, GLsizeiptr(size_t(level.indexCount()) * sizeof(uint32_t)), level.indices(),
+                 GL_STATIC_DRAW);
     glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, 0);
     glBindBuffer(GL_ARRAY_BUFFER, 0);
-    if (first != index_count) {
-        *error = "the level's index count does not match its primitives";
-        return false;
-    }
     out->valid = true;
     return true;
 }

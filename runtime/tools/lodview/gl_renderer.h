@@ -1,6 +1,6 @@
 #pragma once
-// lodview's OpenGL 3.3 core side: one GPU copy per resident pack level (vertex buffer of its
-// POSITION accessors as the pack stores them, uint32 index buffer from PackSource::copyLevelIndices),
+// lodview's OpenGL 3.3 core side: one GPU copy per resident pack level (float position and texture
+// coordinate buffers and a uint32 index buffer, as LevelDecoder decoded the level),
 // a flat-shading program, an offscreen framebuffer of the requested size (so a headless run reads
 // back the same pixels an interactive run shows), and GL_TIME_ELAPSED queries for GPU frame time.
 // Needs a current context (GLFW creates it); functions come from libepoxy.
@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "level_decode.h"
 #include "lodrt/lodrt.h"
 
 namespace lodview {
@@ -39,13 +40,12 @@ public:
     /// Compiles the program and creates the framebuffer. False with *error set on failure.
     bool init(uint32_t width, uint32_t height, std::string* error);
 
-    /// Uploads a level from the bytes PackSource::readLevel wrote. A primitive whose material has
-    /// a base colour texture (an image in a buffer view, read with PackSource::readBufferView and
-    /// decoded with stb_image) and the texture coordinates it names gets that texture. `indices` is caller scratch of
-    /// at least source.levelIndexCount(model, level) values. False with *error set when the level
-    /// has no drawable POSITION data.
-    bool upload(const lodrt::PackSource& source, uint32_t model, uint32_t level, const uint8_t* bytes,
-                uint32_t* indices, size_t index_capacity, GpuLevel* out, std::string* error);
+    /// Uploads a level as `level` decoded it: per primitive a float position buffer and, where its
+    /// material has a base colour texture (an image in a buffer view, read with
+    /// PackSource::readBufferView and decoded with stb_image) and the texture coordinates it names,
+    /// a float texture coordinate buffer and that texture; one uint32 index buffer for the level.
+    /// False with *error set when the level has no TRIANGLES primitive.
+    bool upload(const lodrt::PackSource& source, const LevelDecoder& level, GpuLevel* out, std::string* error);
     void release(GpuLevel* level);
 
     /// PFRep instances: one float3 position buffer per model (re-specified in place when more

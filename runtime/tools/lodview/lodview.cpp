@@ -210,7 +210,8 @@ void writeFrameJson(std::FILE* out, const FrameRecord& r, bool last) {
     std::fprintf(out,
                  "    {\"frame\": %d, \"eye\": [%.4f, %.4f, %.4f], \"frame_ms\": %.4f, \"cpu_ms\": %.4f, "
                  "\"gpu_ms\": %.4f, \"cull_ms\": %.5f, \"select_ms\": %.5f, \"stream_ms\": %.5f, "
-                 "\"upload_ms\": %.4f, \"stream_wait_ms\": %.4f, \"visible\": %u, \"culled\": %u, "
+                 "\"upload_ms\": %.4f, \"decode_ms\": %.4f, \"levels_decoded\": %u, \"decode_growths\": %llu, "
+                 "\"stream_wait_ms\": %.4f, \"visible\": %u, \"culled\": %u, "
                  "\"instances_drawn\": %u, \"draw_calls\": %u, \"textured_draw_calls\": %u, \"triangles\": %llu, "
                  "\"levels_resident\": %u, "
                  "\"resident_bytes\": %llu, \"bytes_streamed\": %llu, \"stream_requests\": %u, "
@@ -219,7 +220,8 @@ void writeFrameJson(std::FILE* out, const FrameRecord& r, bool last) {
                  "\"max_sse_px\": %.4f, \"pfrep_ms\": %.4f, \"pfrep_instances\": %u, \"pfrep_triangles\": %llu, "
                  "\"pfrep_changes\": %llu, \"level_histogram\": [",
                  r.frame, r.eye[0], r.eye[1], r.eye[2], r.frame_ms, r.cpu_ms, r.gpu_ms, s.cull_ms, s.select_ms,
-                 s.stream_ms, s.upload_ms, s.wait_ms, s.visible, s.culled, s.instances_drawn, s.draw_calls,
+                 s.stream_ms, s.upload_ms, s.decode_ms, s.levels_decoded,
+                 static_cast<unsigned long long>(s.decode_growths), s.wait_ms, s.visible, s.culled, s.instances_drawn, s.draw_calls,
                  s.textured_draw_calls, static_cast<unsigned long long>(s.triangles), s.levels_resident,
                  static_cast<unsigned long long>(s.resident_bytes), static_cast<unsigned long long>(s.bytes_streamed),
                  s.stream_requests, static_cast<unsigned long long>(s.lodrt_allocations),
@@ -232,6 +234,8 @@ void writeFrameJson(std::FILE* out, const FrameRecord& r, bool last) {
 
 struct Summary {
     double mean_frame_ms = 0, mean_cpu_ms = 0, mean_gpu_ms = 0, mean_triangles = 0, mean_draw_calls = 0;
+    double decode_ms = 0; // total over the frames
+    uint64_t levels_decoded = 0, decode_growths = 0;
     float max_sse_px = 0;
     uint64_t bytes_streamed = 0, allocations_beyond_requests = 0, heap_allocations = 0;
     uint32_t coarser_frames = 0;
@@ -250,6 +254,9 @@ Summary summarize(const std::vector<FrameRecord>& records) {
         if (r.stats.lodrt_allocations > r.stats.stream_requests)
             s.allocations_beyond_requests += r.stats.lodrt_allocations - r.stats.stream_requests;
         s.heap_allocations += r.stats.lodrt_heap_allocations;
+        s.decode_ms += r.stats.decode_ms;
+        s.levels_decoded += r.stats.levels_decoded;
+        s.decode_growths += r.stats.decode_growths;
         if (r.stats.coarser_than_selected || r.stats.not_drawable) ++s.coarser_frames;
     }
     const double n = records.empty() ? 1.0 : double(records.size());
@@ -282,11 +289,12 @@ bool writeReport(const Args& args, const lodview::View& view, const std::vector<
         "  ],\n  \"summary\": {\"frames\": %zu, \"mean_frame_ms\": %.4f, \"mean_cpu_ms\": %.4f, "
         "\"mean_gpu_ms\": %.4f, \"mean_triangles\": %.1f, \"mean_draw_calls\": %.2f, \"max_sse_px\": %.4f, "
         "\"bytes_streamed\": %llu, \"lodrt_allocations_beyond_requests\": %llu, \"lodrt_heap_allocations\": %llu, "
-        "\"frames_drawn_coarser\": %u}\n}\n",
+        "\"frames_drawn_coarser\": %u, \"decode_ms\": %.4f, \"levels_decoded\": %llu, \"decode_growths\": %llu}\n}\n",
         records.size(), s.mean_frame_ms, s.mean_cpu_ms, s.mean_gpu_ms, s.mean_triangles, s.mean_draw_calls,
         double(s.max_sse_px), static_cast<unsigned long long>(s.bytes_streamed),
         static_cast<unsigned long long>(s.allocations_beyond_requests),
-        static_cast<unsigned long long>(s.heap_allocations), s.coarser_frames);
+        static_cast<unsigned long long>(s.heap_allocations), s.coarser_frames, s.decode_ms,
+        static_cast<unsigned long long>(s.levels_decoded), static_cast<unsigned long long>(s.decode_growths));
     const bool ok = std::fclose(out) == 0;
     if (!ok) std::fprintf(stderr, "error: %s: cannot write the report\n", args.report.c_str());
     return ok;

@@ -226,7 +226,6 @@ bool View::init(const ViewConfig& config, std::string* error) {
     params_.vertical_fov = config_.vertical_fov;
     params_.hysteresis = config_.hysteresis;
     k_ = lodrt::pixelsPerUnitAtDistanceOne(params_);
-    size_t max_indices = 0;
     for (auto& pack : packs_) {
         const lodrt::ModelSet& models = pack->source.models();
         lodrt::Result r = pack->table.prepare(models, params_, &allocator_);
@@ -244,11 +243,17 @@ bool View::init(const ViewConfig& config, std::string* error) {
         pack->pfrep_models.resize(models.modelCount());
         pack->pfrep_instances.resize(pack->count);
         pack->gpu.resize(size_t(models.modelCount()) * lodrt::kMaxLevels);
+        // The streamer silently never loads a level whose data is not in one byte range of the BIN
+        // chunk; a view would then draw nothing, so such a pack is refused here.
         for (uint32_t m = 0; m < models.modelCount(); ++m)
             for (uint32_t l = 0; l < models.model(m).level_count; ++l)
-                max_indices = std::max(max_indices, size_t(pack->source.levelIndexCount(m, l)));
+                if (models.modelLevel(m, l).data_size == 0) {
+                    *error = pack->path + ": model " + std::to_string(m) + " level " + std::to_string(l) +
+                             ": its data is not in a byte range of the BIN chunk that lodrt streams";
+                    return false;
+                }
+        decoder_.reserve(pack->source);
     }
-    index_scratch_.resize(std::max<size_t>(max_indices, 1));
     return true;
 }
 
@@ -313,7 +318,8 @@ bool View::waitForSelected(std::string* error) {
     return true;
 }
 
-bool View::mirrorResident(Renderer* renderer, std::string* error) {
+bool View::mirrorResident(Renderer* renderer, FrameStats* stats, std::string* error) {
+    const uint64_t growths_before = decoder_.growths();
     for (auto& pack : packs_) {
         const lodrt::ModelSet& models = pack->source.models();
         for (uint32_t m = 0; m < models.modelCount(); ++m)
@@ -324,17 +330,21 @@ bool View::mirrorResident(Renderer* renderer, std::string* error) {
                     size_t size = 0;
                     const uint8_t* bytes = pack->streamer.levelData(m, l, &size);
                     std::string why;
-                    if (!renderer->upload(pack->source, m, l, bytes, index_scratch_.data(), index_scratch_.size(), &gpu,
-                                          &why)) {
+                    const Clock::time_point t0 = Clock::now();
+                    const bool decoded = decoder_.decode(pack->source, m, l, bytes, size, &why);
+                    stats->decode_ms += msSince(t0);
+                    if (!decoded || !renderer->upload(pack->source, decoder_, &gpu, &why)) {
                         renderer->release(&gpu);
-                        *error = pack->path + ": level " + std::to_string(l) + ": " + why;
+                        *error = pack->path + ": model " + std::to_string(m) + " level " + std::to_string(l) + ": " + why;
                         return false;
                     }
+                    ++stats->levels_decoded;
                 } else if (!resident && gpu.valid) {
                     renderer->release(&gpu); // evicted by the streamer
                 }
             }
     }
+    stats->decode_growths += decoder_.growths() - growths_before;
     return true;
 }
 
@@ -383,8 +393,8 @@ bool View::update(const float eye[3], const float view_proj[16], Renderer* rende
     stats->lodrt_heap_allocations = setup_calls + pool_.heapCalls() - heap_before;
 
     t0 = Clock::now();
-    bool ok = mirrorResident(renderer, error);
-    stats->upload_ms = msSince(t0);
+    bool ok = mirrorResident(renderer, stats, error);
+    stats->upload_ms = msSince(t0) - stats->decode_ms;
     if (ok && config_.mode == LodMode::Pfrep) {
         t0 = Clock::now();
         ok = refinePfrep(frustum, eye, renderer, stats, error);

@@ -3,7 +3,8 @@
 // one Streamer per pack with a byte budget whose reads run on a job thread, a grid of instances of
 // every model of every pack (each scaled to a bounding radius of 1), an InstanceBvh over them, and
 // per frame: cull, select (selectLevels, or level 0 for every visible instance when LOD is forced
-// off), demand, stream, then mirror the streamer's resident levels on the GPU and draw.
+// off), demand, stream, then mirror the streamer's resident levels on the GPU (each new one decoded
+// by LevelDecoder on the frame thread: plain, --web and --compact packs alike) and draw.
 
 #include <atomic>
 #include <condition_variable>
@@ -43,6 +44,9 @@ struct ViewConfig {
 /// What one frame did (times in milliseconds).
 struct FrameStats {
     double cull_ms = 0, select_ms = 0, stream_ms = 0, upload_ms = 0, wait_ms = 0, pfrep_ms = 0;
+    double decode_ms = 0;            // decoding newly resident levels (not part of upload_ms)
+    uint32_t levels_decoded = 0;     // levels decoded and uploaded this frame
+    uint64_t decode_growths = 0;     // decode buffers that had to grow (lodview's, not lodrt's)
     uint32_t visible = 0, culled = 0, draw_calls = 0, instances_drawn = 0;
     uint32_t textured_draw_calls = 0; // draw calls with the material's base colour texture
     uint64_t triangles = 0;
@@ -120,7 +124,7 @@ private:
     void selectPack(Pack& pack, const float eye[3]);
     bool selectedResident() const;
     bool waitForSelected(std::string* error);
-    bool mirrorResident(Renderer* renderer, std::string* error);
+    bool mirrorResident(Renderer* renderer, FrameStats* stats, std::string* error);
     void measure(const float eye[3], FrameStats* stats) const;
     bool refinePfrep(const lodrt::Frustum& frustum, const float eye[3], Renderer* renderer, FrameStats* stats,
                      std::string* error);
@@ -139,7 +143,7 @@ private:
     std::vector<uint8_t> level_, draw_;
     std::vector<lodrt::Containment> visibility_;
     lodrt::InstanceBvh bvh_;
-    std::vector<uint32_t> index_scratch_;
+    LevelDecoder decoder_; // the frame thread's decode buffers, sized at init for the largest level
     lodrt::SelectionParams params_;
     float k_ = 0; // pixels per unit at distance one
 };
