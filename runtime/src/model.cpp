@@ -46,6 +46,25 @@ double boundValue(double v, const AccessorInfo& acc) {
     return v;
 }
 
+// A compact primitive's data is its LODBAKE_valence_compression stream (the accessors it supplies
+// have no buffer view): widens [lo, hi) over the stream's view so streaming the level loads it.
+// Plain primitives (every accessor with its own view) are left as they are.
+void addValenceStreamRange(const Pack& pack, const PrimitiveInfo& prim, uint64_t* lo, uint64_t* hi) {
+    bool supplied = prim.indices != kNoIndex && pack.accessor(prim.indices).buffer_view == kNoIndex;
+    for (uint32_t a = 0; a < prim.attribute_count; ++a)
+        supplied = supplied || pack.accessor(pack.attribute(prim.first_attribute + a).accessor).buffer_view == kNoIndex;
+    if (!supplied) return;
+    const JsonValue stream = prim.json.find("extensions").find(format::kExtValenceCompression);
+    uint64_t stream_view = 0;
+    if (!stream.isObject() || !stream.find("bufferView").asUint64(&stream_view) ||
+        stream_view >= pack.bufferViewCount())
+        return;
+    const BufferViewInfo& view = pack.bufferView(uint32_t(stream_view));
+    if (!pack.buffer(view.buffer).is_glb_bin) return;
+    if (view.byte_offset < *lo) *lo = view.byte_offset;
+    if (view.byte_offset + view.byte_length > *hi) *hi = view.byte_offset + view.byte_length;
+}
+
 bool finiteFloat(double v) {
     return std::isfinite(v) && std::fabs(v) <= double(std::numeric_limits<float>::max());
 }
@@ -330,6 +349,7 @@ struct ModelBuilder {
                 if (first < lo) lo = first;
                 if (end > hi) hi = end;
             }
+            addValenceStreamRange(*pack, prim, &lo, &hi);
         }
         if (streamable && hi > lo) {
             level->data_offset = lo;
