@@ -92,7 +92,9 @@ function sceneOf(parts, placements) {
         for (const view of part.bufferViews) {
             json.bufferViews.push({ ...view, buffer: 0, byteOffset: offset + (view.byteOffset || 0) });
         }
-        for (const accessor of part.accessors) json.accessors.push({ ...accessor, bufferView: accessor.bufferView + views });
+        for (const accessor of part.accessors) {
+            json.accessors.push({ ...accessor, bufferView: accessor.bufferView + views });
+        }
         const mesh = JSON.parse(JSON.stringify(part.meshes[0]));
         for (const p of mesh.primitives) {
             delete p.material;
