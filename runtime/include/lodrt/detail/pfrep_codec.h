@@ -102,6 +102,7 @@ struct PfrepCodecState {
     uint32_t* candidate_stamp = nullptr; // per vertex: i + 1 while it is a candidate of vertex i
     uint32_t* candidate_index = nullptr; // per vertex: its index in `candidates`
     uint32_t* mention_stamp = nullptr;   // per vertex: i + 1 once entry i mentioned it
+    uint32_t* fan_stamp = nullptr;       // per vertex: i + 1 once its fan was scanned whole for vertex i
     uint32_t* fan_begin = nullptr;       // per vertex + 1: where its A_i starts in `fans`
     uint32_t* fans = nullptr;            // every A_i, in rank order (total_slots values)
     uint32_t* candidates = nullptr;      // kPfrepCandidateLimit values
@@ -198,16 +199,37 @@ struct PfrepCandidates {
     uint32_t count = 0, scanned = 0;
     uint32_t after_i = kNone; // index the candidate following the first i in a fan got (or would get)
     void addFan(uint32_t d) {
-        for (uint32_t t = s.fan_begin[d]; t < s.fan_begin[d + 1]; ++t) {
-            if (count == format::kPfrepCandidateLimit || scanned == format::kPfrepCandidateScanLimit) return;
-            ++scanned;
-            const uint32_t v = s.fans[t] & ~kPfrepSlotTriangle;
-            if (v == i && after_i == kNone) after_i = count;
-            if (v <= i || s.candidate_stamp[v] == i + 1) continue;
-            s.candidate_stamp[v] = i + 1;
-            s.candidate_index[v] = count;
-            s.candidates[count++] = v;
+        if (count == format::kPfrepCandidateLimit || scanned == format::kPfrepCandidateScanLimit) return;
+        const uint32_t begin = s.fan_begin[d], length = s.fan_begin[d + 1] - begin;
+        const uint32_t stamp = i + 1;
+        // A fan scanned whole before for this vertex adds nothing new (its vertices above i are
+        // listed, i's place is known): it only counts towards the scan limit. Neighbours share
+        // most of their mentioners, so most fans come again.
+        if (s.fan_stamp[d] == stamp) {
+            scanned = std::min<uint32_t>(format::kPfrepCandidateScanLimit, scanned + length);
+            return;
         }
+        // Locals: the stores below go through uint32_t pointers the compiler must otherwise assume
+        // alias the counters and the state's arrays.
+        const uint32_t* fan = s.fans + begin;
+        uint32_t* candidate_stamp = s.candidate_stamp;
+        uint32_t* candidate_index = s.candidate_index;
+        uint32_t* candidates = s.candidates;
+        uint32_t n = count, at = after_i;
+        const uint32_t take = std::min<uint32_t>(length, format::kPfrepCandidateScanLimit - scanned);
+        uint32_t t = 0;
+        for (; t < take && n < format::kPfrepCandidateLimit; ++t) {
+            const uint32_t v = fan[t] & ~kPfrepSlotTriangle;
+            if (v == i && at == kNone) at = n;
+            if (v <= i || candidate_stamp[v] == stamp) continue;
+            candidate_stamp[v] = stamp;
+            candidate_index[v] = n;
+            candidates[n++] = v;
+        }
+        scanned += t;
+        count = n;
+        after_i = at;
+        if (t == length) s.fan_stamp[d] = stamp;
     }
     // The fans of the latest entries that mention a (its neighbours when they were removed).
     void addMentionersOf(uint32_t a) {
