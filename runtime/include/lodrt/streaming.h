@@ -211,10 +211,15 @@ private:
         uint32_t step_count;    // chain levels + 1
         PfrepStreamState state;
         uint8_t is_failed;
+        uint8_t format;         // 2: streamed as prefixes; 3: read whole and decoded (to format 2)
+        size_t scratch_bytes;   // format 3: pfrepDecompress scratch
     };
     void collect();
     void evict(uint32_t slot);
     bool shrinkPfrep(uint32_t stream);
+    Result readCompressedHeader(PfrepStream& ps);
+    void collectPfrepWhole(Task& t, Result& r);
+    bool preparePfrepWhole(Task& t, PfrepStream& ps, uint64_t size);
     void initPfrepStream(uint32_t model);
     void rebuildResidentTable();
     // update() in steps: score what is wanted, rank the requests, make room, start one.
