@@ -560,7 +560,17 @@ Result Streamer::readCompressedHeader(PfrepStream& ps) {
     PfrepCompressedInfo info;
     const Result r = pfrepCompressedInfo(header, sizeof(header), &info);
     if (r != Result::Ok) return r;
-    if (info.decoded_bytes < format::kPfrepHeaderSize || ps.view_size <= format::kPfrepHeaderSize)
+    // Every vertex has a 10-byte record and a 2-byte offset in the decoded blob and every slot at
+    // least one bit, so the vertex and slot counts (and the scratch they size) are bounded by it.
+    auto load32 = [&ps](size_t at) {
+        return uint32_t(ps.header[at]) | (uint32_t(ps.header[at + 1]) << 8) | (uint32_t(ps.header[at + 2]) << 16) |
+               (uint32_t(ps.header[at + 3]) << 24);
+    };
+    const uint32_t vertices = load32(8), slots = load32(56);
+    if (info.decoded_bytes < format::kPfrepHeaderSize || ps.view_size <= format::kPfrepHeaderSize ||
+        info.decoded_bytes > ps.view_size * format::kPfrepMaxExpansion ||
+        uint64_t(vertices) * (format::kPfrepVertexRecordSize + 2) > info.decoded_bytes ||
+        uint64_t(slots) > uint64_t(info.decoded_bytes) * 8)
         return Result::BadStructure;
     ps.directory_bytes = info.decoded_bytes;
     ps.scratch_bytes = info.scratch_bytes;
