@@ -20,6 +20,10 @@
 // `removals`). Each step is read with PackSource::readBufferView and validated by pfrepExtendPrefix
 // on the job. Prefix bytes count towards the budget; to make room the least useful prefix is
 // shrunk one step at a time (a shorter prefix stays valid), never below the directory.
+// A format 3 blob (the extension object's `format` is 3: range-coded, not prefix-streamable) is read
+// whole after its header and decoded on the job (pfrepDecompress) into the format 2 bytes, which
+// hold every step at once; the budget counts the decoded bytes, and growing back after a shrink
+// decodes it whole again.
 
 #include <atomic>
 #include <cstddef>
