@@ -476,6 +476,56 @@ TEST(PfrepStreamingTest, Format3DecodesWholeToTheFormat2Blob) {
     EXPECT_GE(streamer.stats().resident_bytes, decoded);
 }
 
+// Under the budget a decoded format 3 blob shrinks like a format 2 prefix (its bytes are format 2),
+// and a demand for full detail afterwards decodes the whole blob again, to the same bytes.
+TEST(PfrepStreamingTest, Format3ShrinksUnderTheBudgetAndDecodesAgain) {
+    PackSource source2;
+    ASSERT_EQ(source2.openBytes(bakedPack().data(), bakedPack().size(), nullptr), Result::Ok);
+    const std::vector<uint8_t>& bytes = bakedPack3();
+    ASSERT_FALSE(bytes.empty());
+    PackSource source;
+    ASSERT_EQ(source.openBytes(bytes.data(), bytes.size(), nullptr), Result::Ok);
+    // What is pinned (coarsest levels, both decoded blobs) and model 0's full-detail level.
+    uint64_t pinned = 0;
+    {
+        Streamer probe;
+        ASSERT_EQ(probe.init(&source, nullptr, nullptr), Result::Ok);
+        for (int i = 0; i < 4; ++i) probe.update(nullptr);
+        ASSERT_EQ(probe.pfrepLevel(0), 0);
+        ASSERT_EQ(probe.pfrepLevel(1), 0);
+        pinned = probe.stats().resident_bytes;
+    }
+    const uint64_t level0 = source.models().modelLevel(0, 0).data_size;
+    lodrt::StreamerOptions options;
+    options.budget_bytes = pinned + level0 - 1; // model 0's level 0 fits only if something shrinks
+    Streamer streamer;
+    ASSERT_EQ(streamer.init(&source, nullptr, &options), Result::Ok);
+    for (int i = 0; i < 4; ++i) streamer.update(nullptr);
+    std::vector<ModelDemand> demand(2);
+    demand[0] = {0, 1.0f};
+    demand[1] = {uint8_t(source.models().model(1).level_count - 1), 1.0f}; // coarsest: its blob is worth nothing
+    for (int i = 0; i < 20; ++i) streamer.update(demand.data());
+    EXPECT_GT(streamer.stats().pfrep_shrinks, 0u);
+    EXPECT_NE(streamer.pfrepLevel(1), 0); // shrunk below full detail
+    EXPECT_EQ(streamer.state(0, 0), lodrt::LevelState::Resident);
+    const Blob blob1 = blobOf(source2, 1);
+    if (const lodrt::PfrepModel* m = streamer.pfrepModel(1)) {
+        EXPECT_EQ(std::memcmp(m->data, blob1.bytes.data(), m->size), 0);
+        expectCoveredLevelsMatch(streamer, 1, blob1);
+    }
+    // Full detail of model 1 now matters most: decoded whole again, model 0 makes room.
+    demand[1] = {0, 10.0f};
+    for (int i = 0; i < 20; ++i) streamer.update(demand.data());
+    ASSERT_EQ(streamer.pfrepLevel(1), 0);
+    const lodrt::PfrepModel* m = streamer.pfrepModel(1);
+    ASSERT_NE(m, nullptr);
+    ASSERT_EQ(m->size, blob1.bytes.size());
+    EXPECT_EQ(std::memcmp(m->data, blob1.bytes.data(), m->size), 0);
+    expectCoveredLevelsMatch(streamer, 1, blob1);
+    const lodrt::StreamStats stats = streamer.stats();
+    EXPECT_LE(stats.resident_bytes + stats.in_flight_bytes, options.budget_bytes);
+}
+
 TEST(PfrepStreamingTest, Format3CorruptBlobsNeverCrash) {
     const std::vector<uint8_t>& good = bakedPack3();
     ASSERT_FALSE(good.empty());
