@@ -258,15 +258,31 @@ bool pfrepCodeFan(Coder& c, PfrepCodecModels& models, PfrepCodecState& s, uint32
     const uint32_t restart = cand.after_i == kNone || cand.after_i >= primary ? 0 : cand.after_i;
     uint32_t predicted = restart;
     uint32_t second_from = primary; // where the latest second-ring fans start
+    // The second ring is only looked at for a neighbour that is not a primary candidate, so the
+    // fans of the neighbours coded so far are added then, in coding order (the list, its count and
+    // second_from are what adding each right after it was coded gives); most neighbours are
+    // primary candidates, and the fans of the last ones are never read.
+    uint32_t pending = 0; // e.neighbours[pending, k) have not had their mentioners' fans added
+    auto addPending = [&](uint32_t k) {
+        for (; pending < k; ++pending) {
+            second_from = cand.count < format::kPfrepCandidateLimit ? cand.count : primary;
+            cand.addMentionersOf(e.neighbours[pending]);
+            if (second_from >= cand.count) second_from = primary;
+        }
+    };
     for (uint32_t k = 0; k < e.n; ++k) {
         uint32_t a = Coder::kEncoding ? e.neighbours[k] : 0;
-        const bool listed = Coder::kEncoding && s.candidate_stamp[a] == i + 1;
+        // Primary candidates are listed before any second-ring one: the flag does not depend on
+        // whether the pending fans were added.
         uint32_t in = 0;
         if (primary > 0)
-            in = c.bit(models.in_candidates[ctx_previous], Coder::kEncoding ? uint32_t(listed && s.candidate_index[a] < primary) : 0u);
+            in = c.bit(models.in_candidates[ctx_previous],
+                       Coder::kEncoding ? uint32_t(s.candidate_stamp[a] == i + 1 && s.candidate_index[a] < primary) : 0u);
         uint32_t in_second = 0;
+        if (!in) addPending(k);
         if (!in && cand.count > primary)
-            in_second = c.bit(models.in_second[ctx_previous == 0 ? 0 : 1], Coder::kEncoding ? uint32_t(listed) : 0u);
+            in_second = c.bit(models.in_second[ctx_previous == 0 ? 0 : 1],
+                              Coder::kEncoding ? uint32_t(s.candidate_stamp[a] == i + 1) : 0u);
         if (in) {
             // The step forward from the expected candidate, cyclically.
             const uint32_t from = predicted % primary;
@@ -293,9 +309,6 @@ bool pfrepCodeFan(Coder& c, PfrepCodecModels& models, PfrepCodecState& s, uint32
             ctx_previous = 2;
         }
         e.neighbours[k] = a;
-        second_from = cand.count < format::kPfrepCandidateLimit ? cand.count : primary;
-        cand.addMentionersOf(a);
-        if (second_from >= cand.count) second_from = primary;
     }
     return true;
 }
