@@ -68,6 +68,8 @@ options:
                         levels (preset key pfrep_from_chain; on in desktop, mobile, vr)
   --no-pfrep-from-chain  build it from a half-edge simplification of its own: more accurate PFRep
                         levels (archive's default)
+  --pfrep-format F      3 (default): that blob range-coded, decoded whole by the runtime; 2: the
+                        uncompressed blob, streamed as a growing prefix (preset key pfrep_format)
   --adaptive-precision  levels after LOD0 coded with position/normal bits from their own measured
                         error (preset key stream_precision.adaptive; on in desktop, mobile, vr)
   --no-adaptive-precision  every level coded with LOD0's bits (archive's default)
@@ -105,6 +107,7 @@ struct CliOverrides {
     bool no_progressive_fans = false;
     bool pfrep_from_chain = false;
     bool no_pfrep_from_chain = false;
+    uint32_t pfrep_format = 0; // 0: the preset's
     bool adaptive_precision = false;
     bool no_adaptive_precision = false;
     bool remove_covered_components = false;
@@ -123,6 +126,7 @@ void applyOverrides(const CliOverrides& o, BakeSettings& s) {
     if (o.no_progressive_fans) s.progressive_fans = false;
     if (o.pfrep_from_chain) s.pfrep_from_chain = true;
     if (o.no_pfrep_from_chain) s.pfrep_from_chain = false;
+    if (o.pfrep_format != 0) s.pfrep_format = o.pfrep_format;
     if (o.adaptive_precision) s.stream_precision.adaptive = true;
     if (o.no_adaptive_precision) s.stream_precision.adaptive = false;
     if (o.remove_covered_components) s.remove_covered_components = true;
@@ -345,6 +349,11 @@ int parseOverrides(Args& args, CliOverrides& overrides) {
     overrides.no_progressive_fans = args.flags.count("--no-progressive-fans") > 0;
     overrides.pfrep_from_chain = args.flags.count("--pfrep-from-chain") > 0;
     overrides.no_pfrep_from_chain = args.flags.count("--no-pfrep-from-chain") > 0;
+    if (args.values.count("--pfrep-format")) {
+        const std::string& f = args.values["--pfrep-format"];
+        if (f != "2" && f != "3") return usageError("--pfrep-format expects 2 or 3, got '" + f + "'");
+        overrides.pfrep_format = f == "2" ? 2u : 3u;
+    }
     overrides.adaptive_precision = args.flags.count("--adaptive-precision") > 0;
     overrides.no_adaptive_precision = args.flags.count("--no-adaptive-precision") > 0;
     overrides.remove_covered_components = args.flags.count("--remove-covered-components") > 0;
@@ -550,6 +559,7 @@ int runBake(int argc, char** argv) {
                     {"--no-progressive-fans", nullptr, false},
                     {"--pfrep-from-chain", nullptr, false},
                     {"--no-pfrep-from-chain", nullptr, false},
+                    {"--pfrep-format", nullptr, true},
                     {"--adaptive-precision", nullptr, false},
                     {"--no-adaptive-precision", nullptr, false},
                     {"--remove-covered-components", nullptr, false}, {"--merge", nullptr, true},

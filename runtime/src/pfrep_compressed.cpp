@@ -60,7 +60,7 @@ Result readHeader(const uint8_t* p, size_t size, Header& h) {
 
 // Scratch layout, in uint32 values (the codec models first, then the state's arrays).
 struct Layout {
-    uint64_t models, mention_count, mentions, candidate_stamp, candidate_index, mention_stamp, fan_begin, fans, candidates, mentioners, neighbours, dependencies, groups, block_offset, cursor, total;
+    uint64_t models, mention_count, mentions, candidate_stamp, candidate_index, mention_stamp, fan_stamp, fan_begin, fans, candidates, mentioners, neighbours, dependencies, groups, block_offset, cursor, total;
 };
 
 Layout layout(const Header& h) {
@@ -79,6 +79,7 @@ Layout layout(const Header& h) {
     l.candidate_stamp = take(v);
     l.candidate_index = take(v);
     l.mention_stamp = take(v);
+    l.fan_stamp = take(v);
     l.fan_begin = take(v + 1);
     l.fans = take(t);
     l.candidates = take(format::kPfrepCandidateLimit);
@@ -201,6 +202,7 @@ Result pfrepDecompress(const void* data, size_t size, void* out, size_t out_capa
     s.candidate_stamp = w + l.candidate_stamp;
     s.candidate_index = w + l.candidate_index;
     s.mention_stamp = w + l.mention_stamp;
+    s.fan_stamp = w + l.fan_stamp;
     s.fan_begin = w + l.fan_begin;
     s.fans = w + l.fans;
     s.candidates = w + l.candidates;
@@ -215,6 +217,7 @@ Result pfrepDecompress(const void* data, size_t size, void* out, size_t out_capa
     std::fill(s.mention_count, s.mention_count + h.vertex_count, 0u);
     std::fill(s.candidate_stamp, s.candidate_stamp + h.vertex_count, 0u);
     std::fill(s.mention_stamp, s.mention_stamp + h.vertex_count, 0u);
+    std::fill(s.fan_stamp, s.fan_stamp + h.vertex_count, 0u);
     s.fan_begin[0] = 0;
     detail::PfrepEntry e;
     e.neighbours = w + l.neighbours;

@@ -294,7 +294,7 @@ Result PackSource::copyLevelIndices(uint32_t model, uint32_t level, const uint8_
 // ---- Streamer ----
 
 struct Streamer::Task {
-    enum class Kind : uint8_t { Level, PfrepHeader, PfrepStep };
+    enum class Kind : uint8_t { Level, PfrepHeader, PfrepStep, PfrepWhole };
     const PackSource* source = nullptr;
     Kind kind = Kind::Level;
     uint32_t model = 0, level = 0;
@@ -307,6 +307,14 @@ struct Streamer::Task {
     size_t old_size = 0;
     bool has_prefix = false;
     PfrepModel pfrep; // in: the model of old_data (has_prefix); out: the model of dst
+    // PFRep format 3 (PfrepWhole): the coded blob and the decoder's scratch (one buffer, freed in
+    // collect), the stream's chain levels, and out: every step's prefix bytes and model in dst.
+    uint8_t* coded = nullptr;
+    size_t coded_size = 0, scratch_bytes = 0;
+    const uint32_t* removals = nullptr;
+    uint32_t step_count = 0;
+    uint64_t step_bytes[kMaxLevels + 1] = {};
+    PfrepModel steps[kMaxLevels + 1];
     bool is_busy = false; // frame-thread view
     Result result = Result::Ok;
     std::atomic<uint32_t> done{0};
@@ -317,6 +325,34 @@ struct Streamer::Task {
         if (r != Result::Ok) return r;
         if (!t.has_prefix) return openPfrepPrefix(t.dst, t.size, &t.pfrep);
         return pfrepExtendPrefix(&t.pfrep, t.dst, t.size); // leaves t.pfrep unchanged on error
+    }
+
+    // Format 3: the whole coded blob in one read, decoded into dst (the format 2 bytes), then the
+    // prefix of each step of the decoded blob, as a format 2 stream's steps would be.
+    static Result runPfrepWhole(Task& t) {
+        Result r = t.source->readBufferView(t.view, 0, t.coded, t.coded_size);
+        if (r != Result::Ok) return r;
+        uint8_t* scratch = t.coded + ((t.coded_size + 7) & ~size_t(7));
+        r = pfrepDecompress(t.coded, t.coded_size, t.dst, t.size, scratch, t.scratch_bytes, &t.pfrep);
+        if (r != Result::Ok) return r;
+        if (t.pfrep.blob_size != t.size) return Result::BadStructure;
+        const uint64_t directory = pfrepDirectoryBytes(t.dst, t.size);
+        if (directory == 0) return Result::BadStructure;
+        const uint32_t top = t.step_count - 1;
+        t.step_bytes[0] = directory;
+        for (uint32_t p = 1; p <= top; ++p) {
+            const uint32_t removals = t.removals[top - p];
+            if (removals > t.pfrep.removed_count) return Result::BadStructure;
+            const uint64_t bytes = pfrepPrefixBytesForLevel(t.pfrep, removals);
+            t.step_bytes[p] = bytes > t.step_bytes[p - 1] ? bytes : t.step_bytes[p - 1];
+            if (t.step_bytes[p] > t.size) return Result::BadStructure;
+        }
+        for (uint32_t p = 0; p < top; ++p) {
+            r = openPfrepPrefix(t.dst, size_t(t.step_bytes[p]), &t.steps[p]);
+            if (r != Result::Ok) return r;
+        }
+        t.steps[top] = t.pfrep;
+        return Result::Ok;
     }
 
     static void run(void* task) {
@@ -330,6 +366,9 @@ struct Streamer::Task {
             break;
         case Kind::PfrepStep:
             t->result = runPfrepStep(*t);
+            break;
+        case Kind::PfrepWhole:
+            t->result = runPfrepWhole(*t);
             break;
         }
         t->done.store(1, std::memory_order_release);
@@ -348,7 +387,10 @@ void Streamer::release() {
     for (uint32_t i = 0; i < slot_count_; ++i) detail::deallocateBytes(a, slots_[i].data);
     // A finished but uncollected PFRep step owns its new buffer.
     for (uint32_t i = 0; i < task_count_; ++i)
-        if (tasks_[i].is_busy && tasks_[i].kind == Task::Kind::PfrepStep) detail::deallocateBytes(a, tasks_[i].dst);
+        if (tasks_[i].is_busy && (tasks_[i].kind == Task::Kind::PfrepStep || tasks_[i].kind == Task::Kind::PfrepWhole)) {
+            detail::deallocateBytes(a, tasks_[i].dst);
+            detail::deallocateBytes(a, tasks_[i].coded);
+        }
     for (uint32_t i = 0; i < pfrep_count_; ++i) detail::deallocateBytes(a, pfrep_[i].data);
     for (uint32_t i = 0; i < task_count_; ++i) tasks_[i].~Task();
     detail::deallocateBytes(a, tasks_);
@@ -426,9 +468,18 @@ void Streamer::initPfrepStream(uint32_t m) {
     if (!ext.isObject()) return;
     ps.state = PfrepStreamState::Absent;
     ps.step_count = info.level_count + 1;
+    ps.format = uint8_t(format::kPfrepVersion);
+    ps.scratch_bytes = 0;
     // The extension object is as hostile as the blob: a bad one fails the stream, not the model.
     uint64_t view = 0;
     bool is_ok = ext.find("bufferView").asUint64(&view) && view < pack.bufferViewCount();
+    const JsonValue format_member = ext.find(format::kPfrepExtensionFormatMember);
+    if (format_member.isValid()) {
+        uint64_t f = 0;
+        is_ok = is_ok && format_member.asUint64(&f) &&
+                (f == format::kPfrepVersion || f == format::kPfrepVersionCompressed);
+        ps.format = uint8_t(f);
+    }
     const JsonValue levels = ext.find("levels");
     is_ok = is_ok && levels.isArray() && levels.size() >= info.level_count;
     for (uint32_t l = 0; is_ok && l < info.level_count; ++l) {
@@ -499,6 +550,60 @@ void pointStepsAt(PfrepModel* steps, int32_t top, const uint8_t* data) {
 
 } // namespace
 
+// Format 3: the header gives the decoded size (the bytes the stream holds once resident, its
+// "directory" request: the decoded blob's directory exists only once all of it is decoded) and the
+// decoder's scratch. pfrepCompressedInfo reads the 64 header bytes; it wants room for the coder's
+// first bytes, given here as zeros.
+Result Streamer::readCompressedHeader(PfrepStream& ps) {
+    uint8_t header[format::kPfrepHeaderSize + 8] = {};
+    std::memcpy(header, ps.header, format::kPfrepHeaderSize);
+    PfrepCompressedInfo info;
+    const Result r = pfrepCompressedInfo(header, sizeof(header), &info);
+    if (r != Result::Ok) return r;
+    // Every vertex has a 10-byte record and a 2-byte offset in the decoded blob and every slot at
+    // least one bit, so the vertex and slot counts (and the scratch they size) are bounded by it.
+    auto load32 = [&ps](size_t at) {
+        return uint32_t(ps.header[at]) | (uint32_t(ps.header[at + 1]) << 8) | (uint32_t(ps.header[at + 2]) << 16) |
+               (uint32_t(ps.header[at + 3]) << 24);
+    };
+    const uint32_t vertices = load32(8), slots = load32(56);
+    if (info.decoded_bytes < format::kPfrepHeaderSize || ps.view_size <= format::kPfrepHeaderSize ||
+        info.decoded_bytes > ps.view_size * format::kPfrepMaxExpansion ||
+        uint64_t(vertices) * (format::kPfrepVertexRecordSize + 2) > info.decoded_bytes ||
+        uint64_t(slots) > uint64_t(info.decoded_bytes) * 8)
+        return Result::BadStructure;
+    ps.directory_bytes = info.decoded_bytes;
+    ps.scratch_bytes = info.scratch_bytes;
+    return Result::Ok;
+}
+
+// A format 3 stream decoded whole: every step is resident at once (replacing a shorter prefix held
+// after a shrink); budget accounting counts the decoded bytes.
+void Streamer::collectPfrepWhole(Task& t, Result& r) {
+    const Allocator& a = options_.allocator;
+    PfrepStream& ps = pfrep_[t.slot];
+    stats_.in_flight_bytes -= t.size;
+    detail::deallocateBytes(a, t.coded);
+    t.coded = nullptr;
+    if (r != Result::Ok) {
+        detail::deallocateBytes(a, t.dst);
+        return;
+    }
+    const uint64_t held = ps.step >= 0 ? ps.step_bytes[ps.step] : 0;
+    detail::deallocateBytes(a, ps.data);
+    stats_.streamed_bytes += t.coded_size;
+    stats_.resident_bytes += t.size - held;
+    stats_.pfrep_resident_bytes += t.size - held;
+    ps.data = t.dst;
+    ps.step = int32_t(ps.step_count - 1);
+    for (uint32_t p = 0; p < ps.step_count; ++p) {
+        ps.step_bytes[p] = t.step_bytes[p];
+        ps.steps[p] = t.steps[p];
+        ps.steps[p].criterion_table = nullptr;
+    }
+    pointStepsAt(ps.steps, ps.step, ps.data);
+}
+
 void Streamer::collect() {
     const Allocator& a = options_.allocator;
     for (uint32_t i = 0; i < task_count_; ++i) {
@@ -527,9 +632,14 @@ void Streamer::collect() {
         if (t.kind == Task::Kind::PfrepHeader) {
             if (r == Result::Ok) {
                 stats_.streamed_bytes += t.size;
-                ps.directory_bytes = pfrepDirectoryBytes(ps.header, sizeof(ps.header));
-                if (ps.directory_bytes == 0 || ps.directory_bytes > ps.view_size) r = Result::BadStructure;
+                r = ps.format == format::kPfrepVersionCompressed ? readCompressedHeader(ps) : Result::Ok;
+                if (ps.format != format::kPfrepVersionCompressed) {
+                    ps.directory_bytes = pfrepDirectoryBytes(ps.header, sizeof(ps.header));
+                    if (ps.directory_bytes == 0 || ps.directory_bytes > ps.view_size) r = Result::BadStructure;
+                }
             }
+        } else if (t.kind == Task::Kind::PfrepWhole) {
+            collectPfrepWhole(t, r);
         } else {
             stats_.in_flight_bytes -= t.size;
             if (r == Result::Ok && !t.has_prefix) {
@@ -689,7 +799,8 @@ uint64_t Streamer::requestBytes(uint32_t id, bool* is_pinned) const {
         *is_pinned = true;
         return ps.directory_bytes; // 0 for the header, which lives in the stream itself
     }
-    return ps.step_bytes[ps.step + 1];
+    // Format 3 grows back (after a shrink) only by decoding the whole blob again.
+    return ps.format == format::kPfrepVersionCompressed ? ps.step_bytes[ps.step_count - 1] : ps.step_bytes[ps.step + 1];
 }
 
 // The resident level (or shrinkable PFRep stream) least useful and worth less than `useful`;
@@ -745,6 +856,36 @@ bool Streamer::makeRoom(uint64_t size, float useful) {
     return stats_.resident_bytes + stats_.in_flight_bytes + size <= budget;
 }
 
+// A format 3 stream's whole decode: the decoded blob (counted in flight) and, beside it, the coded
+// blob and the decoder's scratch (transient, freed when the task is collected).
+bool Streamer::preparePfrepWhole(Task& t, PfrepStream& ps, uint64_t size) {
+    const uint64_t coded_room = (ps.view_size + 7) & ~uint64_t(7);
+    uint8_t* data = nullptr;
+    uint8_t* coded = nullptr;
+    if (size <= SIZE_MAX && coded_room + ps.scratch_bytes <= SIZE_MAX) {
+        data = static_cast<uint8_t*>(detail::allocateBytes(options_.allocator, size_t(size)));
+        coded = static_cast<uint8_t*>(detail::allocateBytes(options_.allocator, size_t(coded_room + ps.scratch_bytes)));
+    }
+    if (!data || !coded) {
+        detail::deallocateBytes(options_.allocator, data);
+        detail::deallocateBytes(options_.allocator, coded);
+        ps.state = PfrepStreamState::Failed;
+        ps.is_failed = 1;
+        ++stats_.failures;
+        return false;
+    }
+    t.kind = Task::Kind::PfrepWhole;
+    t.dst = data;
+    t.size = size_t(size);
+    t.coded = coded;
+    t.coded_size = size_t(ps.view_size);
+    t.scratch_bytes = ps.scratch_bytes;
+    t.removals = ps.removals;
+    t.step_count = ps.step_count;
+    stats_.in_flight_bytes += size;
+    return true;
+}
+
 // Sets task `task_index` up to read request `id` (`size` bytes) and marks the level or stream
 // Loading; false (the level or stream marked Failed) when its buffer cannot be allocated.
 bool Streamer::prepareTask(uint32_t task_index, uint32_t id, uint64_t size) {
@@ -778,6 +919,8 @@ bool Streamer::prepareTask(uint32_t task_index, uint32_t id, uint64_t size) {
         t.kind = Task::Kind::PfrepHeader;
         t.dst = ps->header;
         t.size = sizeof(ps->header);
+    } else if (ps->format == format::kPfrepVersionCompressed) {
+        if (!preparePfrepWhole(t, *ps, size)) return false;
     } else {
         uint8_t* data = static_cast<uint8_t*>(detail::allocateBytes(options_.allocator, size_t(size)));
         if (!data) {

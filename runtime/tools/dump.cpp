@@ -499,6 +499,18 @@ void checkPfrepLevels(const lodrt::JsonValue& pfrep, const lodrt::PfrepModel& mo
 }
 
 // Checks every compressed stream of the pack: valence streams decode and agree with the primitive;
+// The extension's blob as a model: format 2 opened in place, format 3 decoded first (into `decoded`).
+lodrt::Result openPackPfrep(uint32_t format, const uint8_t* data, size_t size, std::vector<uint8_t>& decoded,
+                            lodrt::PfrepModel* model) {
+    if (format == lodrt::format::kPfrepVersion) return lodrt::openPfrep(data, size, model);
+    lodrt::PfrepCompressedInfo info;
+    lodrt::Result r = lodrt::pfrepCompressedInfo(data, size, &info);
+    if (r != lodrt::Result::Ok) return r;
+    decoded.resize(info.decoded_bytes);
+    std::vector<uint64_t> scratch((info.scratch_bytes + 7) / 8);
+    return lodrt::pfrepDecompress(data, size, decoded.data(), decoded.size(), scratch.data(), info.scratch_bytes, model);
+}
+
 // PFRep blobs open and code the same full-detail triangle count as the mesh they sit on, and on a
 // group's full-detail mesh agree with the group's levels (checkPfrepLevels).
 void checkStreams(const lodrt::Pack& pack, const std::vector<LodGroup>& groups, std::vector<Problem>& problems) {
@@ -527,10 +539,21 @@ void checkStreams(const lodrt::Pack& pack, const std::vector<LodGroup>& groups, 
             continue;
         }
         if (!data) continue;
+        uint64_t format = lodrt::format::kPfrepVersion;
+        const lodrt::JsonValue format_member = pfrep.find(lodrt::format::kPfrepExtensionFormatMember);
+        if (format_member.isValid() &&
+            (!format_member.asUint64(&format) ||
+             (format != lodrt::format::kPfrepVersion && format != lodrt::format::kPfrepVersionCompressed))) {
+            problems.push_back({where + "/format", "format: expected 2 or 3"});
+            continue;
+        }
         lodrt::PfrepModel model;
-        const lodrt::Result r = lodrt::openPfrep(data, size_t(size), &model);
+        std::vector<uint8_t> decoded; // format 3: the format 2 bytes it decodes to (model points into them)
+        const lodrt::Result r = openPackPfrep(uint32_t(format), data, size_t(size), decoded, &model);
         if (r != lodrt::Result::Ok) {
-            problems.push_back({where, std::string("stream fails to decode: ") + lodrt::resultName(r)});
+            problems.push_back({where, std::string("stream fails to decode") +
+                                           (format == lodrt::format::kPfrepVersion ? ": " : " (format 3): ") +
+                                           lodrt::resultName(r)});
             continue;
         }
         if (model.level0_triangles != mesh_triangles)

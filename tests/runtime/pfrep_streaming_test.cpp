@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "lodbake/bake/bake.h"
+#include "lodrt/format.h"
 #include "lodrt/pfrep.h"
 #include "lodrt/streaming.h"
 #include "manual_jobs.h"
@@ -43,10 +44,12 @@ lodbake::Mesh heightField(int n, float phase) {
     return mesh;
 }
 
-// Two models, each with a multi-block PFRep blob; baked once for the suite.
-const std::vector<uint8_t>& bakedPack() {
-    static const std::vector<uint8_t>* glb = [] {
+// Two models, each with a multi-block PFRep blob (format 2, streamed as prefixes, or format 3,
+// decoded whole); baked once per format for the suite.
+std::vector<uint8_t>* bakePack(uint32_t pfrep_format) {
+    {
         lodbake::BakeSettings settings;
+        settings.pfrep_format = pfrep_format;
         settings.lod_ratios = {0.5, 0.25, 0.1, 0.03};
         settings.error_samples = 2000;
         settings.threads = 2;
@@ -59,7 +62,16 @@ const std::vector<uint8_t>& bakedPack() {
         auto baked = lodbake::bake(std::move(inputs), settings, diagnostics);
         EXPECT_TRUE(baked.ok()) << baked.status().message();
         return new std::vector<uint8_t>(baked.ok() ? baked->glb : std::vector<uint8_t>());
-    }();
+    }
+}
+
+const std::vector<uint8_t>& bakedPack() {
+    static const std::vector<uint8_t>* glb = bakePack(lodrt::format::kPfrepVersion);
+    return *glb;
+}
+
+const std::vector<uint8_t>& bakedPack3() {
+    static const std::vector<uint8_t>* glb = bakePack(lodrt::format::kPfrepVersionCompressed);
     return *glb;
 }
 
@@ -420,4 +432,139 @@ TEST(PfrepStreamingTest, WorkerThreadsReachTheSameResult) {
         expectCoveredLevelsMatch(streamer, 1, blob);
         EXPECT_EQ(streamer.pfrepLevel(0), kNoLevel);
     } // the destructor waits for jobs still running
+}
+
+// Format 3 in a pack: one read of the whole coded blob, decoded on the job thread into the format 2
+// bytes of the same input's format 2 pack, which then serve every chain level at once; the budget
+// counts the decoded bytes.
+TEST(PfrepStreamingTest, Format3DecodesWholeToTheFormat2Blob) {
+    PackSource source2;
+    ASSERT_EQ(source2.openBytes(bakedPack().data(), bakedPack().size(), nullptr), Result::Ok);
+    File file;
+    file.bytes = bakedPack3();
+    ASSERT_FALSE(file.bytes.empty());
+    EXPECT_LT(file.bytes.size(), bakedPack().size());
+    PackSource source;
+    ASSERT_EQ(source.openReader(file.reader(), file.bytes.size(), nullptr), Result::Ok);
+    ManualJobs jobs;
+    const lodrt::JobSystem system = jobs.system();
+    Streamer streamer;
+    ASSERT_EQ(streamer.init(&source, &system, nullptr), Result::Ok);
+    streamer.update(nullptr);
+    EXPECT_EQ(streamer.pfrepState(0), PfrepStreamState::Loading);
+    EXPECT_EQ(streamer.pfrepModel(0), nullptr);
+    for (int i = 0; i < 4; ++i) {
+        jobs.runAll();
+        streamer.update(nullptr);
+    }
+    uint64_t decoded = 0;
+    for (uint32_t model = 0; model < 2; ++model) {
+        SCOPED_TRACE("model " + std::to_string(model));
+        const Blob blob = blobOf(source2, model); // the format 2 pack's blob of the same input
+        ASSERT_EQ(streamer.pfrepState(model), PfrepStreamState::Resident);
+        EXPECT_EQ(streamer.pfrepLevel(model), 0); // every chain level at once
+        const lodrt::PfrepModel* m = streamer.pfrepModel(model);
+        ASSERT_NE(m, nullptr);
+        ASSERT_EQ(m->size, blob.bytes.size());
+        EXPECT_EQ(std::memcmp(m->data, blob.bytes.data(), m->size), 0);
+        EXPECT_EQ(m->loaded_from, 0u);
+        expectCoveredLevelsMatch(streamer, model, blob);
+        decoded += m->size;
+    }
+    EXPECT_EQ(streamer.stats().pfrep_resident_bytes, decoded);
+
+    EXPECT_GE(streamer.stats().resident_bytes, decoded);
+}
+
+// Under the budget a decoded format 3 blob shrinks like a format 2 prefix (its bytes are format 2),
+// and a demand for full detail afterwards decodes the whole blob again, to the same bytes.
+TEST(PfrepStreamingTest, Format3ShrinksUnderTheBudgetAndDecodesAgain) {
+    PackSource source2;
+    ASSERT_EQ(source2.openBytes(bakedPack().data(), bakedPack().size(), nullptr), Result::Ok);
+    const std::vector<uint8_t>& bytes = bakedPack3();
+    ASSERT_FALSE(bytes.empty());
+    PackSource source;
+    ASSERT_EQ(source.openBytes(bytes.data(), bytes.size(), nullptr), Result::Ok);
+    // What is pinned (coarsest levels, both decoded blobs) and model 0's full-detail level.
+    uint64_t pinned = 0;
+    {
+        Streamer probe;
+        ASSERT_EQ(probe.init(&source, nullptr, nullptr), Result::Ok);
+        for (int i = 0; i < 4; ++i) probe.update(nullptr);
+        ASSERT_EQ(probe.pfrepLevel(0), 0);
+        ASSERT_EQ(probe.pfrepLevel(1), 0);
+        pinned = probe.stats().resident_bytes;
+    }
+    const uint64_t level0 = source.models().modelLevel(0, 0).data_size;
+    lodrt::StreamerOptions options;
+    options.budget_bytes = pinned + level0 - 1; // model 0's level 0 fits only if something shrinks
+    Streamer streamer;
+    ASSERT_EQ(streamer.init(&source, nullptr, &options), Result::Ok);
+    for (int i = 0; i < 4; ++i) streamer.update(nullptr);
+    std::vector<ModelDemand> demand(2);
+    demand[0] = {0, 1.0f};
+    demand[1] = {uint8_t(source.models().model(1).level_count - 1), 1.0f}; // coarsest: its blob is worth nothing
+    for (int i = 0; i < 20; ++i) streamer.update(demand.data());
+    EXPECT_GT(streamer.stats().pfrep_shrinks, 0u);
+    EXPECT_NE(streamer.pfrepLevel(1), 0); // shrunk below full detail
+    EXPECT_EQ(streamer.state(0, 0), lodrt::LevelState::Resident);
+    const Blob blob1 = blobOf(source2, 1);
+    if (const lodrt::PfrepModel* m = streamer.pfrepModel(1)) {
+        EXPECT_EQ(std::memcmp(m->data, blob1.bytes.data(), m->size), 0);
+        expectCoveredLevelsMatch(streamer, 1, blob1);
+    }
+    // Full detail of model 1 now matters most: decoded whole again, model 0 makes room.
+    demand[1] = {0, 10.0f};
+    for (int i = 0; i < 20; ++i) streamer.update(demand.data());
+    ASSERT_EQ(streamer.pfrepLevel(1), 0);
+    const lodrt::PfrepModel* m = streamer.pfrepModel(1);
+    ASSERT_NE(m, nullptr);
+    ASSERT_EQ(m->size, blob1.bytes.size());
+    EXPECT_EQ(std::memcmp(m->data, blob1.bytes.data(), m->size), 0);
+    expectCoveredLevelsMatch(streamer, 1, blob1);
+    const lodrt::StreamStats stats = streamer.stats();
+    EXPECT_LE(stats.resident_bytes + stats.in_flight_bytes, options.budget_bytes);
+}
+
+TEST(PfrepStreamingTest, Format3CorruptBlobsNeverCrash) {
+    const std::vector<uint8_t>& good = bakedPack3();
+    ASSERT_FALSE(good.empty());
+    PackSource probe;
+    ASSERT_EQ(probe.openBytes(good.data(), good.size(), nullptr), Result::Ok);
+    const lodrt::Pack& pack = probe.pack();
+    const lodrt::JsonValue ext =
+        pack.mesh(probe.models().modelLevel(0, 0).mesh).json.find("extensions").find("LODBAKE_progressive_fans");
+    uint64_t view = 0, format = 0;
+    ASSERT_TRUE(ext.find("bufferView").asUint64(&view));
+    ASSERT_TRUE(ext.find("format").asUint64(&format));
+    EXPECT_EQ(format, 3u);
+    uint32_t json_length = 0;
+    std::memcpy(&json_length, good.data() + 12, 4);
+    const uint64_t offset = 20 + uint64_t(json_length) + 8 + pack.bufferView(uint32_t(view)).byte_offset;
+    const uint64_t length = pack.bufferView(uint32_t(view)).byte_length;
+    uint32_t seed = 7;
+    auto next = [&seed] {
+        seed = seed * 1664525u + 1013904223u;
+        return seed >> 8;
+    };
+    int failed = 0;
+    for (int iteration = 0; iteration < 100; ++iteration) {
+        std::vector<uint8_t> bytes = good;
+        const uint64_t span = iteration % 2 ? length : std::min<uint64_t>(length, 96);
+        for (int e = 0; e < 1 + iteration % 3; ++e) bytes[offset + next() % span] ^= uint8_t(1 + next() % 255);
+        PackSource source;
+        ASSERT_EQ(source.openBytes(bytes.data(), bytes.size(), nullptr), Result::Ok);
+        Streamer streamer;
+        ASSERT_EQ(streamer.init(&source, nullptr, nullptr), Result::Ok);
+        std::vector<ModelDemand> demand(2, ModelDemand{0, 1.0f});
+        for (int i = 0; i < 10; ++i) streamer.update(demand.data());
+        if (streamer.pfrepState(0) == PfrepStreamState::Failed) ++failed;
+        const lodrt::PfrepModel* m = streamer.pfrepModel(0);
+        if (!m) continue;
+        std::vector<uint32_t> tris(3 * lodrt::pfrepMaxTriangles(*m));
+        size_t count = 0;
+        for (uint32_t k = m->loaded_from; k <= m->removed_count; k += 1 + m->removed_count / 8)
+            EXPECT_EQ(lodrt::pfrepExtractLevel(*m, k, tris.data(), tris.size() / 3, &count), Result::Ok);
+    }
+    EXPECT_GT(failed, 50);
 }

@@ -347,6 +347,7 @@ Result<BakeOutput> bakeScene(std::vector<BakeInput> inputs, PackScene scene, con
     streams.valence.release_memory = hooks.release_memory;
     streams.progressive_fans = settings.progressive_fans;
     streams.pfrep_from_chain = settings.pfrep_from_chain;
+    streams.pfrep_format = settings.pfrep_format;
     // A --web pack is for clients that read none of our streams (docs/format/web.md).
     const std::vector<PackStreamEncoder> encoders =
         settings.web ? std::vector<PackStreamEncoder>() : builtinStreamEncoders(streams);

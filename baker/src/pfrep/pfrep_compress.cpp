@@ -86,7 +86,7 @@ bool parseEntry(const uint8_t* entry, uint32_t i, PfrepEntry& e) {
 }
 
 struct Arrays {
-    std::vector<uint32_t> mention_count, mentions, candidate_stamp, candidate_index, mention_stamp, fan_begin, fans, candidates, mentioners, block_offset, neighbours, dependencies, groups;
+    std::vector<uint32_t> mention_count, mentions, candidate_stamp, candidate_index, mention_stamp, fan_stamp, fan_begin, fans, candidates, mentioners, block_offset, neighbours, dependencies, groups;
 };
 
 } // namespace
@@ -121,6 +121,7 @@ Result<std::vector<uint8_t>> compressPfrep(const std::vector<uint8_t>& blob) {
     a.candidate_stamp.assign(vertex_count, 0);
     a.candidate_index.assign(vertex_count, 0);
     a.mention_stamp.assign(vertex_count, 0);
+    a.fan_stamp.assign(vertex_count, 0);
     a.fan_begin.assign(size_t(vertex_count) + 1, 0);
     a.fans.resize(total_slots);
     a.candidates.resize(fmt::kPfrepCandidateLimit);
@@ -139,6 +140,7 @@ Result<std::vector<uint8_t>> compressPfrep(const std::vector<uint8_t>& blob) {
     s.candidate_stamp = a.candidate_stamp.data();
     s.candidate_index = a.candidate_index.data();
     s.mention_stamp = a.mention_stamp.data();
+    s.fan_stamp = a.fan_stamp.data();
     s.fan_begin = a.fan_begin.data();
     s.fans = a.fans.data();
     s.candidates = a.candidates.data();

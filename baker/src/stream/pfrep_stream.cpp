@@ -4,6 +4,7 @@
 #include <memory>
 #include <optional>
 
+#include "lodbake/pfrep/pfrep_compress.h"
 #include "lodbake/pfrep/pfrep_extension.h"
 #include "lodbake/stream/stream.h"
 #include "lodrt/format.h"
@@ -21,13 +22,20 @@ std::optional<PackStreamEncoder> progressiveFansStream(const StreamSettings& set
     cost.bytes_per_triangle = 190; // its own simplifier or the replay of the chain's collapses
     return makeStreamEncoder(
         lodrt::format::kExtProgressiveFans, needs, cost,
-        [](const LodChain& chain, size_t level_index, const Mesh& mesh) -> Result<PackStreamCommit> {
+        [format = settings.pfrep_format](const LodChain& chain, size_t level_index,
+                                         const Mesh& mesh) -> Result<PackStreamCommit> {
             if (level_index != 0 || mesh.faceCount() == 0) return PackStreamCommit();
             Diagnostics diagnostics; // notes only (e.g. nothing removable); the blob is valid either way
             // From the chain's own collapses when it recorded them (LodChain::removals), else its own
             // half-edge simplification; either reads LOD0's geometry only, as a view (MeshView).
             LODBAKE_ASSIGN_OR_RETURN(PfrepExtensionObject object,
                                      buildPfrepExtension(mesh, chain, PfrepOptions{}, diagnostics));
+            if (format == lodrt::format::kPfrepVersionCompressed) {
+                // Format 3: the same table range-coded; the runtime decodes it whole into the format
+                // 2 bytes. `format` is written only here, so a format 2 object reads as before.
+                LODBAKE_ASSIGN_OR_RETURN(object.blob, compressPfrep(object.blob));
+                object.json.set(lodrt::format::kPfrepExtensionFormatMember, uint64_t(format));
+            }
             auto e = std::make_shared<PackExtension>();
             e->name = lodrt::format::kExtProgressiveFans;
             e->json = std::move(object.json);

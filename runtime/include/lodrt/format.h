@@ -82,6 +82,11 @@ constexpr uint32_t kPfrepLogCodeSteps = 8;
 // bytes 52 (the format 2 blob_size it decodes to) and 56 (total_slots: the sum of every entry's n),
 // then one range-coded stream (lodrt/detail/pfrep_codec.h) to the end of the blob.
 constexpr uint32_t kPfrepVersionCompressed = 3;
+// LODBAKE_progressive_fans member naming the blob's format (absent: kPfrepVersion).
+constexpr const char kPfrepExtensionFormatMember[] = "format";
+// A streamer refuses a format 3 blob in a pack that claims to decode to more than this many times
+// its own size (the coder gains about 3x; the bound keeps a lying header from pinning gigabytes).
+constexpr uint32_t kPfrepMaxExpansion = 64;
 constexpr uint32_t kPfrepMentionSlots = 8;         // latest mentioners of a vertex kept
 constexpr uint32_t kPfrepCandidateLimit = 256;     // neighbour candidates of a vertex
 constexpr uint32_t kPfrepCandidateScanLimit = 4096; // fan values scanned for them

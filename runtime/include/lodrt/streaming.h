@@ -20,6 +20,10 @@
 // `removals`). Each step is read with PackSource::readBufferView and validated by pfrepExtendPrefix
 // on the job. Prefix bytes count towards the budget; to make room the least useful prefix is
 // shrunk one step at a time (a shorter prefix stays valid), never below the directory.
+// A format 3 blob (the extension object's `format` is 3: range-coded, not prefix-streamable) is read
+// whole after its header and decoded on the job (pfrepDecompress) into the format 2 bytes, which
+// hold every step at once; the budget counts the decoded bytes, and growing back after a shrink
+// decodes it whole again.
 
 #include <atomic>
 #include <cstddef>
@@ -211,10 +215,15 @@ private:
         uint32_t step_count;    // chain levels + 1
         PfrepStreamState state;
         uint8_t is_failed;
+        uint8_t format;         // 2: streamed as prefixes; 3: read whole and decoded (to format 2)
+        size_t scratch_bytes;   // format 3: pfrepDecompress scratch
     };
     void collect();
     void evict(uint32_t slot);
     bool shrinkPfrep(uint32_t stream);
+    Result readCompressedHeader(PfrepStream& ps);
+    void collectPfrepWhole(Task& t, Result& r);
+    bool preparePfrepWhole(Task& t, PfrepStream& ps, uint64_t size);
     void initPfrepStream(uint32_t model);
     void rebuildResidentTable();
     // update() in steps: score what is wanted, rank the requests, make room, start one.

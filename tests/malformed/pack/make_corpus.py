@@ -58,13 +58,14 @@ def write_glb(doc, bin_bytes):
     return struct.pack("<III", GLB_MAGIC, 2, 12 + len(body)) + body
 
 
-def bake(cli, tmp):
+def bake(cli, tmp, pfrep_format):
     off = os.path.join(tmp, "sphere.off")
     with open(off, "w") as f:
         f.write(sphere_off())
     out = os.path.join(tmp, "sphere.glb")
     subprocess.run([cli, "bake", off, "-o", out, "--levels", "0.5,0.25", "--preset",
-                    os.path.join(HERE, "..", "..", "..", "configs", "desktop.json"), "--quiet"],
+                    os.path.join(HERE, "..", "..", "..", "configs", "desktop.json"), "--quiet",
+                    "--pfrep-format", str(pfrep_format)],
                    check=True, stdout=subprocess.DEVNULL)
     with open(out, "rb") as f:
         return f.read()
@@ -518,6 +519,49 @@ def valence_normals_not_named(p):
     return valence_path(p, 2) + ": attributes: the stream has normals but NORMAL is not named"
 
 
+# --- LODBAKE_progressive_fans format 3 blobs (`format`: 3; lodrt::pfrepDecompress): their base pack
+# is baked with --pfrep-format 3, every other case's with --pfrep-format 2 ---
+
+FORMAT3_CASES = set()
+
+
+def case3(fn):
+    FORMAT3_CASES.add(fn.__name__)
+    return case(fn)
+
+
+@case3
+def pfrep3_unknown_format(p):
+    p.pfrep()["format"] = 4
+    return pfrep_path(p) + "/format: format: expected 2 or 3"
+
+
+@case3
+def pfrep3_header_version_lies(p):
+    p.patch(p.pfrep()["bufferView"], 4, "<I", 2)
+    return pfrep_path(p) + ": stream fails to decode (format 3): UnsupportedVersion"
+
+
+@case3
+def pfrep3_decoded_size_lies(p):
+    view = p.pfrep()["bufferView"]
+    p.patch(view, 52, "<I", p.read(view, 52, "<I") + 64)
+    return pfrep_path(p) + ": stream fails to decode (format 3): CorruptStream"
+
+
+@case3
+def pfrep3_zero_field_lies(p):
+    p.patch(p.pfrep()["bufferView"], 60, "<I", 1)
+    return pfrep_path(p) + ": stream fails to decode (format 3): BadStructure"
+
+
+@case3
+def pfrep3_header_cut(p):
+    view = p.pfrep()["bufferView"]
+    p.doc["bufferViews"][view]["byteLength"] = 60
+    return pfrep_path(p) + ": stream fails to decode (format 3): Truncated"
+
+
 # --- LODBAKE_progressive_fans blobs: loddump (lodrt::openPfrep / pfrepExtractLevel) ---
 
 @case
@@ -602,12 +646,12 @@ def main():
     if len(sys.argv) != 2:
         sys.exit("usage: make_corpus.py LODBAKE_CLI")
     with tempfile.TemporaryDirectory() as tmp:
-        base = bake(sys.argv[1], tmp)
+        bases = {2: bake(sys.argv[1], tmp, 2), 3: bake(sys.argv[1], tmp, 3)}
     for old in os.listdir(HERE):
         if old.endswith(".glb") or old.endswith(".expected"):
             os.remove(os.path.join(HERE, old))
     for name, fn in CASES.items():
-        p = Pack(base)
+        p = Pack(bases[3 if name in FORMAT3_CASES else 2])
         out = fn(p)
         glb, expected = out if isinstance(out, tuple) else (p.glb(), out)
         assert "\n" not in expected

@@ -122,6 +122,7 @@ struct StreamSettings {
     ValenceStreamOptions valence;
     bool progressive_fans = true; // LODBAKE_progressive_fans on LOD0
     bool pfrep_from_chain = false; // ... built from the chain's own collapses (StreamNeeds::collapse_record)
+    uint32_t pfrep_format = 3;     // ... written as format 3 (range-coded) or 2 (docs/format/pfrep.md)
 };
 
 /// The stream encoders built into this baker that `settings` enable, in the order they run (valence

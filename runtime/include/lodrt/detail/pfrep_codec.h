@@ -102,6 +102,7 @@ struct PfrepCodecState {
     uint32_t* candidate_stamp = nullptr; // per vertex: i + 1 while it is a candidate of vertex i
     uint32_t* candidate_index = nullptr; // per vertex: its index in `candidates`
     uint32_t* mention_stamp = nullptr;   // per vertex: i + 1 once entry i mentioned it
+    uint32_t* fan_stamp = nullptr;       // per vertex: i + 1 once its fan was scanned whole for vertex i
     uint32_t* fan_begin = nullptr;       // per vertex + 1: where its A_i starts in `fans`
     uint32_t* fans = nullptr;            // every A_i, in rank order (total_slots values)
     uint32_t* candidates = nullptr;      // kPfrepCandidateLimit values
@@ -198,16 +199,37 @@ struct PfrepCandidates {
     uint32_t count = 0, scanned = 0;
     uint32_t after_i = kNone; // index the candidate following the first i in a fan got (or would get)
     void addFan(uint32_t d) {
-        for (uint32_t t = s.fan_begin[d]; t < s.fan_begin[d + 1]; ++t) {
-            if (count == format::kPfrepCandidateLimit || scanned == format::kPfrepCandidateScanLimit) return;
-            ++scanned;
-            const uint32_t v = s.fans[t] & ~kPfrepSlotTriangle;
-            if (v == i && after_i == kNone) after_i = count;
-            if (v <= i || s.candidate_stamp[v] == i + 1) continue;
-            s.candidate_stamp[v] = i + 1;
-            s.candidate_index[v] = count;
-            s.candidates[count++] = v;
+        if (count == format::kPfrepCandidateLimit || scanned == format::kPfrepCandidateScanLimit) return;
+        const uint32_t begin = s.fan_begin[d], length = s.fan_begin[d + 1] - begin;
+        const uint32_t stamp = i + 1;
+        // A fan scanned whole before for this vertex adds nothing new (its vertices above i are
+        // listed, i's place is known): it only counts towards the scan limit. Neighbours share
+        // most of their mentioners, so most fans come again.
+        if (s.fan_stamp[d] == stamp) {
+            scanned = std::min<uint32_t>(format::kPfrepCandidateScanLimit, scanned + length);
+            return;
         }
+        // Locals: the stores below go through uint32_t pointers the compiler must otherwise assume
+        // alias the counters and the state's arrays.
+        const uint32_t* fan = s.fans + begin;
+        uint32_t* candidate_stamp = s.candidate_stamp;
+        uint32_t* candidate_index = s.candidate_index;
+        uint32_t* candidates = s.candidates;
+        uint32_t n = count, at = after_i;
+        const uint32_t take = std::min<uint32_t>(length, format::kPfrepCandidateScanLimit - scanned);
+        uint32_t t = 0;
+        for (; t < take && n < format::kPfrepCandidateLimit; ++t) {
+            const uint32_t v = fan[t] & ~kPfrepSlotTriangle;
+            if (v == i && at == kNone) at = n;
+            if (v <= i || candidate_stamp[v] == stamp) continue;
+            candidate_stamp[v] = stamp;
+            candidate_index[v] = n;
+            candidates[n++] = v;
+        }
+        scanned += t;
+        count = n;
+        after_i = at;
+        if (t == length) s.fan_stamp[d] = stamp;
     }
     // The fans of the latest entries that mention a (its neighbours when they were removed).
     void addMentionersOf(uint32_t a) {
@@ -236,15 +258,31 @@ bool pfrepCodeFan(Coder& c, PfrepCodecModels& models, PfrepCodecState& s, uint32
     const uint32_t restart = cand.after_i == kNone || cand.after_i >= primary ? 0 : cand.after_i;
     uint32_t predicted = restart;
     uint32_t second_from = primary; // where the latest second-ring fans start
+    // The second ring is only looked at for a neighbour that is not a primary candidate, so the
+    // fans of the neighbours coded so far are added then, in coding order (the list, its count and
+    // second_from are what adding each right after it was coded gives); most neighbours are
+    // primary candidates, and the fans of the last ones are never read.
+    uint32_t pending = 0; // e.neighbours[pending, k) have not had their mentioners' fans added
+    auto addPending = [&](uint32_t k) {
+        for (; pending < k; ++pending) {
+            second_from = cand.count < format::kPfrepCandidateLimit ? cand.count : primary;
+            cand.addMentionersOf(e.neighbours[pending]);
+            if (second_from >= cand.count) second_from = primary;
+        }
+    };
     for (uint32_t k = 0; k < e.n; ++k) {
         uint32_t a = Coder::kEncoding ? e.neighbours[k] : 0;
-        const bool listed = Coder::kEncoding && s.candidate_stamp[a] == i + 1;
+        // Primary candidates are listed before any second-ring one: the flag does not depend on
+        // whether the pending fans were added.
         uint32_t in = 0;
         if (primary > 0)
-            in = c.bit(models.in_candidates[ctx_previous], Coder::kEncoding ? uint32_t(listed && s.candidate_index[a] < primary) : 0u);
+            in = c.bit(models.in_candidates[ctx_previous],
+                       Coder::kEncoding ? uint32_t(s.candidate_stamp[a] == i + 1 && s.candidate_index[a] < primary) : 0u);
         uint32_t in_second = 0;
+        if (!in) addPending(k);
         if (!in && cand.count > primary)
-            in_second = c.bit(models.in_second[ctx_previous == 0 ? 0 : 1], Coder::kEncoding ? uint32_t(listed) : 0u);
+            in_second = c.bit(models.in_second[ctx_previous == 0 ? 0 : 1],
+                              Coder::kEncoding ? uint32_t(s.candidate_stamp[a] == i + 1) : 0u);
         if (in) {
             // The step forward from the expected candidate, cyclically.
             const uint32_t from = predicted % primary;
@@ -271,9 +309,6 @@ bool pfrepCodeFan(Coder& c, PfrepCodecModels& models, PfrepCodecState& s, uint32
             ctx_previous = 2;
         }
         e.neighbours[k] = a;
-        second_from = cand.count < format::kPfrepCandidateLimit ? cand.count : primary;
-        cand.addMentionersOf(a);
-        if (second_from >= cand.count) second_from = primary;
     }
     return true;
 }
