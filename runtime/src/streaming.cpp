@@ -883,6 +883,7 @@ bool Streamer::preparePfrepWhole(Task& t, PfrepStream& ps, uint64_t size) {
     t.removals = ps.removals;
     t.step_count = ps.step_count;
     stats_.in_flight_bytes += size;
+    ++stats_.pfrep_decodes;
     return true;
 }
 

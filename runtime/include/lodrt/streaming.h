@@ -140,6 +140,9 @@ struct StreamStats {
     uint32_t failures = 0;  // levels or PFRep steps whose read or check failed (never retried)
     uint64_t pfrep_resident_bytes = 0; // PFRep prefix bytes held now (part of resident_bytes)
     uint32_t pfrep_shrinks = 0;        // PFRep prefixes shortened by one step to make room
+    // Format 3 whole-blob decodes started; each job allocates two buffers (the decoded blob, and
+    // the coded blob with the decoder's scratch) where a read allocates one.
+    uint32_t pfrep_decodes = 0;
 };
 
 enum class LevelState : uint8_t { Absent, Loading, Resident, Failed };

@@ -251,8 +251,8 @@ Summary summarize(const std::vector<FrameRecord>& records) {
         s.mean_draw_calls += r.stats.draw_calls;
         s.max_sse_px = std::max(s.max_sse_px, r.stats.max_sse_px);
         s.bytes_streamed += r.stats.bytes_streamed;
-        if (r.stats.lodrt_allocations > r.stats.stream_requests)
-            s.allocations_beyond_requests += r.stats.lodrt_allocations - r.stats.stream_requests;
+        const uint64_t expected = uint64_t(r.stats.stream_requests) + r.stats.pfrep_decodes;
+        if (r.stats.lodrt_allocations > expected) s.allocations_beyond_requests += r.stats.lodrt_allocations - expected;
         s.heap_allocations += r.stats.lodrt_heap_allocations;
         s.decode_ms += r.stats.decode_ms;
         s.levels_decoded += r.stats.levels_decoded;

@@ -65,6 +65,7 @@ struct View::Pack {
     std::vector<PfrepInstance> pfrep_instances;
     uint64_t streamed_before = 0;
     uint32_t requests_before = 0;
+    uint32_t decodes_before = 0;
 
     ~Pack() {
         if (fd >= 0) close(fd);
@@ -386,6 +387,7 @@ bool View::update(const float eye[3], const float view_proj[16], Renderer* rende
     for (auto& pack : packs_) {
         pack->streamed_before = pack->streamer.stats().streamed_bytes;
         pack->requests_before = pack->streamer.stats().requests;
+        pack->decodes_before = pack->streamer.stats().pfrep_decodes;
     }
     Clock::time_point t0 = Clock::now();
     lodrt::Frustum frustum;
@@ -442,6 +444,7 @@ bool View::update(const float eye[3], const float view_proj[16], Renderer* rende
         stats->resident_bytes += s.resident_bytes;
         stats->bytes_streamed += s.streamed_bytes - pack->streamed_before;
         stats->stream_requests += s.requests - pack->requests_before;
+        stats->pfrep_decodes += s.pfrep_decodes - pack->decodes_before;
     }
     measure(eye, stats);
     return ok;

@@ -59,6 +59,7 @@ struct FrameStats {
     uint64_t lodrt_allocations = 0;             // allocator calls made by lodrt during the frame
     uint64_t lodrt_heap_allocations = 0;        // of those, served by malloc instead of the level pool
     uint32_t stream_requests = 0;               // level / PFRep reads the streamers started
+    uint32_t pfrep_decodes = 0;                 // of those, format 3 PFRep decodes (two allocations each)
     uint32_t pfrep_instances = 0;               // instances drawn from their PFRep (Pfrep mode)
     uint64_t pfrep_triangles = 0;               // their triangles (part of `triangles`)
     uint64_t pfrep_changes = 0;                 // mask bits the refinement changed
