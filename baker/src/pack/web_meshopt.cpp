@@ -59,10 +59,17 @@ Result<std::vector<uint32_t>> readIndices(const tinygltf::Model& model, const ti
     return out;
 }
 
-std::vector<uint8_t> encodeVertices(const void* data, size_t count, size_t stride) {
-    std::vector<uint8_t> out(meshopt_encodeVertexBufferBound(count, stride));
-    out.resize(meshopt_encodeVertexBuffer(out.data(), out.size(), data, count, stride));
-    return out;
+// An ATTRIBUTES view of `count` elements of `stride` bytes, vertex-coded, with its filter.
+WebViews::View attributeView(const void* data, size_t count, size_t stride, const char* filter) {
+    WebViews::View v;
+    v.bytes.resize(meshopt_encodeVertexBufferBound(count, stride));
+    v.bytes.resize(meshopt_encodeVertexBuffer(v.bytes.data(), v.bytes.size(), data, count, stride));
+    v.count = count;
+    v.stride = uint32_t(stride);
+    v.mode = fmt::kMeshoptModeAttributes;
+    v.filter = filter;
+    v.target = TINYGLTF_TARGET_ARRAY_BUFFER;
+    return v;
 }
 
 // One 32-bit EXPONENTIAL filter value: exponent in the top byte, 24-bit two's complement mantissa.
@@ -84,14 +91,7 @@ WebViews::View encodePositions(tinygltf::Accessor& a, const std::vector<float>& 
     }
     a.minValues = lo;
     a.maxValues = hi;
-    WebViews::View v;
-    v.bytes = encodeVertices(words.data(), a.count, 12);
-    v.count = a.count;
-    v.stride = 12;
-    v.mode = fmt::kMeshoptModeAttributes;
-    v.filter = fmt::kMeshoptFilterExponential;
-    v.target = TINYGLTF_TARGET_ARRAY_BUFFER;
-    return v;
+    return attributeView(words.data(), a.count, 12, fmt::kMeshoptFilterExponential);
 }
 
 // Normals (3 components, w written 0) and tangents (4, w the handedness) as 8-bit octahedral vectors.
@@ -103,14 +103,7 @@ WebViews::View encodeOctahedral(tinygltf::Accessor& a, const std::vector<float>&
     meshopt_encodeFilterOct(encoded.data(), a.count, 4, int(fmt::kWebNormalBits), xyzw.data());
     a.componentType = TINYGLTF_COMPONENT_TYPE_BYTE;
     a.normalized = true;
-    WebViews::View v;
-    v.bytes = encodeVertices(encoded.data(), a.count, 4);
-    v.count = a.count;
-    v.stride = 4;
-    v.mode = fmt::kMeshoptModeAttributes;
-    v.filter = fmt::kMeshoptFilterOctahedral;
-    v.target = TINYGLTF_TARGET_ARRAY_BUFFER;
-    return v;
+    return attributeView(encoded.data(), a.count, 4, fmt::kMeshoptFilterOctahedral);
 }
 
 // Values in [0, 1] as unsigned 16-bit normalized integers (UVs, colours), padded to a 4-byte stride.
@@ -122,25 +115,11 @@ WebViews::View encodeUnorm16(tinygltf::Accessor& a, const std::vector<float>& va
             out[i * stride / 2 + c] = uint16_t(std::nearbyint(double(values[i * components + c]) * 65535.0));
     a.componentType = TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT;
     a.normalized = true;
-    WebViews::View v;
-    v.bytes = encodeVertices(out.data(), a.count, stride);
-    v.count = a.count;
-    v.stride = uint32_t(stride);
-    v.mode = fmt::kMeshoptModeAttributes;
-    v.filter = fmt::kMeshoptFilterNone;
-    v.target = TINYGLTF_TARGET_ARRAY_BUFFER;
-    return v;
+    return attributeView(out.data(), a.count, stride, fmt::kMeshoptFilterNone);
 }
 
 WebViews::View encodePlainFloats(const tinygltf::Accessor& a, const std::vector<float>& values, size_t components) {
-    WebViews::View v;
-    v.bytes = encodeVertices(values.data(), a.count, components * 4);
-    v.count = a.count;
-    v.stride = uint32_t(components * 4);
-    v.mode = fmt::kMeshoptModeAttributes;
-    v.filter = fmt::kMeshoptFilterNone;
-    v.target = TINYGLTF_TARGET_ARRAY_BUFFER;
-    return v;
+    return attributeView(values.data(), a.count, components * 4, fmt::kMeshoptFilterNone);
 }
 
 bool inUnitRange(const std::vector<float>& values) {
