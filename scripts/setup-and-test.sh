@@ -4,7 +4,8 @@
 #  2. Release build with warnings as errors, every test with CTest;
 #  3. sanitizer build (Clang, AddressSanitizer + UndefinedBehaviorSanitizer, findings abort; the
 #     runtime still without exceptions), every test again, plus the libFuzzer targets;
-#  4. fuzz smoke: each fuzz target for LODBAKE_FUZZ_SMOKE_SECONDS (default 8) from its seeds.
+#  4. fuzz smoke: each fuzz target for LODBAKE_FUZZ_SMOKE_SECONDS (default 8) from its seeds, one
+#     target per core at a time.
 # Set LODBAKE_SKIP_SANITIZERS=1 to stop after step 2. Timings of each step are printed at the end.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -56,16 +57,31 @@ if [ "${LODBAKE_SKIP_SANITIZERS:-0}" != 1 ]; then
     step "sanitizer tests"
 
     smoke=${LODBAKE_FUZZ_SMOKE_SECONDS:-8}
-    for target in ply obj off gltf preset conf manifest cache lod pack pfrep valence meshopt; do
-        echo "fuzz smoke: $target ${smoke}s"
+    fuzz_targets=(ply obj off gltf preset conf manifest cache lod pack pfrep valence meshopt)
+    # Seeds once (fuzz.sh would build them on its first call), then one target per core at a time.
+    ASAN_OPTIONS=detect_leaks=0 scripts/fuzz-seeds.sh "$asan_dir/seeds" "$build_dir/baker/lodbake" \
+        >"$asan_dir/fuzz-seeds.log" 2>&1 || {
+        tail -n 60 "$asan_dir/fuzz-seeds.log"
+        echo "fuzz smoke: building the seeds failed (log: $asan_dir/fuzz-seeds.log)" >&2
+        exit 1
+    }
+    touch "$asan_dir/seeds/.done"
+    export asan_dir build_dir smoke
+    rm -f "$asan_dir"/fuzz-smoke-*.failed
+    # shellcheck disable=SC2016 # expanded by the inner shell
+    printf '%s\n' "${fuzz_targets[@]}" | xargs -P "$jobs" -I{} bash -c '
         LODBAKE_FUZZ_BUILD_DIR="$asan_dir" LODBAKE_FUZZ_NO_BUILD=1 LODBAKE_CLI="$build_dir/baker/lodbake" \
-            scripts/fuzz.sh "$target" "$smoke" >"$asan_dir/fuzz-smoke-$target.log" 2>&1 || {
+            scripts/fuzz.sh {} "$smoke" >"$asan_dir/fuzz-smoke-{}.log" 2>&1 || touch "$asan_dir/fuzz-smoke-{}.failed"'
+    for target in "${fuzz_targets[@]}"; do
+        if [ -e "$asan_dir/fuzz-smoke-$target.failed" ]; then
             tail -n 60 "$asan_dir/fuzz-smoke-$target.log"
             echo "fuzz smoke: $target failed (log: $asan_dir/fuzz-smoke-$target.log)" >&2
             exit 1
-        }
-        grep -E '^(stat::number_of_executed_units|stat::peak_rss_mb)' "$asan_dir/fuzz-smoke-$target.log" | tr '\n' ' '
-        echo
+        fi
+    done
+    for target in "${fuzz_targets[@]}"; do
+        echo "fuzz smoke: $target ${smoke}s $(grep -E '^(stat::number_of_executed_units|stat::peak_rss_mb)' \
+            "$asan_dir/fuzz-smoke-$target.log" | tr '\n' ' ')"
     done
     step "fuzz smoke"
 fi
