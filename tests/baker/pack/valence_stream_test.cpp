@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -460,44 +461,62 @@ TEST(ValenceStreamTest, ScanSetLevelsGetAStreamPerScan) {
 }
 
 // Every shared scan, baked with a light preset (no repair, one coarse level, few error samples): every
-// level carries a stream (every scan is one primitive), and every stream round-trips. The extension objects of all
-// packs are checked against the schema.
-TEST(ValenceStreamSharedMeshesTest, EveryScanRoundTripsThroughTheRuntimeDecoder) {
+// level carries a stream (every scan is one primitive), every stream round-trips, and the pack's
+// extension objects match the schema. One test per scan, so that CTest spreads them over the cores.
+class ValenceStreamScanTest : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(ValenceStreamScanTest, RoundTripsThroughTheRuntimeDecoder) {
     LODBAKE_REQUIRE_SHARED_MESHES();
+    const std::string name = GetParam();
     BakeSettings settings;
     settings.repair = false;
     settings.lod_ratios = {0.01};
     settings.error_samples = 1000;
     settings.textures.enabled = false;
     settings.threads = 2;
+    Diagnostics diagnostics;
+    Result<LoadedMesh> loaded = readMesh(lodbake_test::sharedMesh(name), ReadOptions{}, diagnostics);
+    ASSERT_TRUE(loaded.ok()) << name << ": " << loaded.status().message();
+    std::vector<BakeInput> inputs(1);
+    const std::string stem = fs::path(name).stem().string();
+    inputs[0].name = stem;
+    inputs[0].mesh = std::move(loaded->mesh);
+    Result<BakeOutput> out = bake(std::move(inputs), settings, diagnostics);
+    ASSERT_TRUE(out.ok()) << name << ": " << out.status().message();
     std::vector<nlohmann::json> objects;
-    for (const char* name :
-         {"bunny_zipper.ply", "igea.ply", "igea_tristrips.ply", "lucy100k.ply", "nefertiti.obj", "rocker_arm.obj",
-          "dragon_poisson.ply", "bunny_scan_bun000_tri.ply", "dragon_scan_stand0_tri.ply", "dragon_stand_merged.ply",
-          "fandisk.obj", "spot.obj", "lee_perry_smith/LeePerrySmith.glb", "nefertiti_fraunhofer_textured.glb"}) {
-        Diagnostics diagnostics;
-        Result<LoadedMesh> loaded = readMesh(lodbake_test::sharedMesh(name), ReadOptions{}, diagnostics);
-        ASSERT_TRUE(loaded.ok()) << name << ": " << loaded.status().message();
-        std::vector<BakeInput> inputs(1);
-        inputs[0].name = fs::path(name).stem().string();
-        inputs[0].mesh = std::move(loaded->mesh);
-        Result<BakeOutput> out = bake(std::move(inputs), settings, diagnostics);
-        ASSERT_TRUE(out.ok()) << name << ": " << out.status().message();
-        const size_t streams = checkRoundTrip(out->glb, name, objects);
-        EXPECT_EQ(streams, settings.lod_ratios.size() + 1) << name;
-    }
+    const size_t streams = checkRoundTrip(out->glb, name, objects);
+    EXPECT_EQ(streams, settings.lod_ratios.size() + 1) << name;
     std::vector<std::string> files;
     for (size_t i = 0; i < objects.size(); ++i) {
-        files.push_back(outDir() + "/object_" + std::to_string(i) + ".json");
+        files.push_back(outDir() + "/" + stem + "_object_" + std::to_string(i) + ".json");
         std::ofstream(files.back()) << objects[i].dump();
     }
-    files.push_back(src("schemas/LODBAKE_valence_compression/examples/minimal.gltf"));
-    // The example is a whole glTF document: validate its one extension object.
-    const nlohmann::json example =
-        nlohmann::json::parse(std::ifstream(files.back()))["meshes"][0]["primitives"][0]["extensions"][kExt];
-    files.back() = outDir() + "/example_object.json";
-    std::ofstream(files.back()) << example.dump();
     const CommandResult v = validateObjects(files);
+    EXPECT_EQ(v.exit_code, 0) << v.output;
+}
+
+INSTANTIATE_TEST_SUITE_P(SharedMeshes, ValenceStreamScanTest,
+                         ::testing::Values("bunny_zipper.ply", "igea.ply", "igea_tristrips.ply", "lucy100k.ply",
+                                           "nefertiti.obj", "rocker_arm.obj", "dragon_poisson.ply",
+                                           "bunny_scan_bun000_tri.ply", "dragon_scan_stand0_tri.ply",
+                                           "dragon_stand_merged.ply", "fandisk.obj", "spot.obj",
+                                           "lee_perry_smith/LeePerrySmith.glb",
+                                           "nefertiti_fraunhofer_textured.glb"),
+                         [](const ::testing::TestParamInfo<const char*>& param_info) {
+                             std::string name = fs::path(param_info.param).stem().string();
+                             for (char& c : name)
+                                 if (!std::isalnum(static_cast<unsigned char>(c)))
+                                     c = '_';
+                             return name;
+                         });
+
+// The schema's example is a whole glTF document: its one extension object matches the schema.
+TEST(ValenceStreamSchemaTest, ExampleObjectMatchesTheSchema) {
+    const nlohmann::json example = nlohmann::json::parse(std::ifstream(src(
+        "schemas/LODBAKE_valence_compression/examples/minimal.gltf")))["meshes"][0]["primitives"][0]["extensions"][kExt];
+    const std::string file = outDir() + "/example_object.json";
+    std::ofstream(file) << example.dump();
+    const CommandResult v = validateObjects({file});
     EXPECT_EQ(v.exit_code, 0) << v.output;
 }
 
