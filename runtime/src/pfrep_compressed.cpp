@@ -54,7 +54,6 @@ Result readHeader(const uint8_t* p, size_t size, Header& h) {
         return Result::BadStructure;
     h.block_count = uint32_t((uint64_t(h.vertex_count) + (uint64_t(1) << h.block_shift) - 1) >> h.block_shift);
     if (h.expanded_size < format::kPfrepHeaderSize + uint64_t(h.block_count) * 4) return Result::BadStructure;
-    if (size < format::kPfrepHeaderSize + 5) return Result::Truncated;
     return Result::Ok;
 }
 
@@ -182,6 +181,7 @@ Result pfrepDecompress(const void* data, size_t size, void* out, size_t out_capa
     if (l.total > SIZE_MAX / 4) return Result::BadStructure;
     if (out_capacity < h.expanded_size || scratch_bytes < l.total * 4) return Result::BufferTooSmall;
     if ((reinterpret_cast<uintptr_t>(scratch) & 7) != 0) return Result::InvalidArgument;
+    if (size < format::kPfrepHeaderSize + 5) return Result::Truncated; // the range coder's first bytes
     uint32_t* w = static_cast<uint32_t*>(scratch);
     uint8_t* o = static_cast<uint8_t*>(out);
     std::memset(o, 0, h.expanded_size);

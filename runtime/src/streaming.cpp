@@ -217,6 +217,38 @@ Result PackSource::readLevel(uint32_t model, uint32_t level, uint8_t* dst, size_
     return checkLevelIndices(pack_, info, dst);
 }
 
+namespace {
+
+// The LODBAKE_progressive_fans object of model m (on its level 0 mesh), or an invalid value.
+JsonValue pfrepExtension(const Pack& pack, const ModelSet& models, uint32_t m) {
+    const LevelInfo& level0 = models.level(models.model(m).first_level);
+    if (level0.mesh == kNoIndex || level0.mesh >= pack.meshCount()) return JsonValue();
+    return pack.mesh(level0.mesh).json.find("extensions").find(format::kExtProgressiveFans);
+}
+
+} // namespace
+
+Result PackSource::pfrepDecodeMemory(uint32_t model, uint64_t* decoded_bytes, uint64_t* scratch_bytes) const {
+    if (model >= models_.modelCount() || !decoded_bytes || !scratch_bytes) return Result::InvalidArgument;
+    *decoded_bytes = 0;
+    *scratch_bytes = 0;
+    const JsonValue ext = pfrepExtension(pack_, models_, model);
+    uint64_t view = 0, blob_format = 0;
+    if (!ext.isObject() || !ext.find(format::kPfrepExtensionFormatMember).asUint64(&blob_format) ||
+        blob_format != format::kPfrepVersionCompressed)
+        return Result::Ok;
+    if (!ext.find("bufferView").asUint64(&view) || view >= pack_.bufferViewCount()) return Result::BadStructure;
+    uint8_t header[format::kPfrepHeaderSize];
+    Result r = readBufferView(uint32_t(view), 0, header, sizeof(header));
+    if (r != Result::Ok) return r;
+    PfrepCompressedInfo info;
+    r = pfrepCompressedInfo(header, sizeof(header), &info);
+    if (r != Result::Ok) return r;
+    *decoded_bytes = info.decoded_bytes;
+    *scratch_bytes = info.scratch_bytes;
+    return Result::Ok;
+}
+
 Result PackSource::readBufferView(uint32_t view, uint64_t offset, uint8_t* dst, size_t size) const {
     if (view >= pack_.bufferViewCount() || (!dst && size > 0)) return Result::InvalidArgument;
     const BufferViewInfo& info = pack_.bufferView(view);
@@ -462,9 +494,7 @@ void Streamer::initPfrepStream(uint32_t m) {
     const ModelSet& models = source_->models();
     const Pack& pack = source_->pack();
     const ModelInfo& info = models.model(m);
-    const LevelInfo& level0 = models.level(info.first_level);
-    if (level0.mesh == kNoIndex || level0.mesh >= pack.meshCount()) return;
-    const JsonValue ext = pack.mesh(level0.mesh).json.find("extensions").find(format::kExtProgressiveFans);
+    const JsonValue ext = pfrepExtension(pack, models, m);
     if (!ext.isObject()) return;
     ps.state = PfrepStreamState::Absent;
     ps.step_count = info.level_count + 1;
@@ -552,13 +582,10 @@ void pointStepsAt(PfrepModel* steps, int32_t top, const uint8_t* data) {
 
 // Format 3: the header gives the decoded size (the bytes the stream holds once resident, its
 // "directory" request: the decoded blob's directory exists only once all of it is decoded) and the
-// decoder's scratch. pfrepCompressedInfo reads the 64 header bytes; it wants room for the coder's
-// first bytes, given here as zeros.
+// decoder's scratch.
 Result Streamer::readCompressedHeader(PfrepStream& ps) {
-    uint8_t header[format::kPfrepHeaderSize + 8] = {};
-    std::memcpy(header, ps.header, format::kPfrepHeaderSize);
     PfrepCompressedInfo info;
-    const Result r = pfrepCompressedInfo(header, sizeof(header), &info);
+    const Result r = pfrepCompressedInfo(ps.header, format::kPfrepHeaderSize, &info);
     if (r != Result::Ok) return r;
     // Every vertex has a 10-byte record and a 2-byte offset in the decoded blob and every slot at
     // least one bit, so the vertex and slot counts (and the scratch they size) are bounded by it.

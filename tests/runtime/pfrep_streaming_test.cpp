@@ -470,8 +470,19 @@ TEST(PfrepStreamingTest, Format3DecodesWholeToTheFormat2Blob) {
         EXPECT_EQ(m->loaded_from, 0u);
         expectCoveredLevelsMatch(streamer, model, blob);
         decoded += m->size;
+        // What an engine sizes its allocator by before streaming: the decoded size read from the
+        // header alone, and some scratch; a format 2 pack needs neither.
+        uint64_t header_decoded = 0, scratch = 0;
+        ASSERT_EQ(source.pfrepDecodeMemory(model, &header_decoded, &scratch), Result::Ok);
+        EXPECT_EQ(header_decoded, m->size);
+        EXPECT_GT(scratch, 0u);
+        ASSERT_EQ(source2.pfrepDecodeMemory(model, &header_decoded, &scratch), Result::Ok);
+        EXPECT_EQ(header_decoded, 0u);
+        EXPECT_EQ(scratch, 0u);
     }
     EXPECT_EQ(streamer.stats().pfrep_resident_bytes, decoded);
+    uint64_t d = 0, s = 0;
+    EXPECT_EQ(source.pfrepDecodeMemory(2, &d, &s), Result::InvalidArgument);
 
     EXPECT_GE(streamer.stats().resident_bytes, decoded);
 }

@@ -89,7 +89,8 @@ struct PfrepCompressedInfo {
     size_t scratch_bytes = 0;   // scratch pfrepDecompress needs (8-byte aligned)
 };
 
-/// Reads the header of a format 3 blob: Truncated / BadMagic / UnsupportedVersion / BadStructure.
+/// Reads the header of a format 3 blob (its first format::kPfrepHeaderSize bytes are enough):
+/// Truncated / BadMagic / UnsupportedVersion / BadStructure.
 LODRT_API Result pfrepCompressedInfo(const void* data, size_t size, PfrepCompressedInfo* info);
 
 /// Decodes a format 3 blob data[0, size) into out[0, info.decoded_bytes) and opens the result as

@@ -87,32 +87,14 @@ struct View::Pack {
 };
 
 // Memory the streamer takes to decode a pack's format 3 PFRep blobs (their format 2 bytes and the
-// decoder's scratch, from each blob's header): more than the pack's own bytes, since a blob
-// decodes to about three times its size. Blobs whose header does not read are not counted (the
-// streamer fails those streams anyway).
+// decoder's scratch): more than the pack's own bytes, since a blob decodes to about three times its
+// size. Blobs whose header does not read are not counted (the streamer fails those streams anyway).
 uint64_t compressedPfrepDecodeBytes(const lodrt::PackSource& source) {
-    // pfrepCompressedInfo reads the header and wants the range coder's first bytes after it.
-    constexpr size_t kHeaderRead = lodrt::format::kPfrepHeaderSize + 8;
-    const lodrt::Pack& pack = source.pack();
-    const lodrt::ModelSet& models = source.models();
     uint64_t total = 0;
-    for (uint32_t m = 0; m < models.modelCount(); ++m) {
-        const lodrt::LevelInfo& level0 = models.modelLevel(m, 0);
-        if (level0.mesh >= pack.meshCount()) continue;
-        const lodrt::JsonValue ext =
-            pack.mesh(level0.mesh).json.find("extensions").find(lodrt::format::kExtProgressiveFans);
-        uint64_t view = 0, format = 0;
-        if (!ext.isObject() || !ext.find("bufferView").asUint64(&view) || view >= pack.bufferViewCount() ||
-            !ext.find(lodrt::format::kPfrepExtensionFormatMember).asUint64(&format) ||
-            format != lodrt::format::kPfrepVersionCompressed ||
-            pack.bufferView(uint32_t(view)).byte_length < kHeaderRead)
-            continue;
-        uint8_t header[kHeaderRead];
-        lodrt::PfrepCompressedInfo info;
-        if (source.readBufferView(uint32_t(view), 0, header, sizeof(header)) != lodrt::Result::Ok ||
-            lodrt::pfrepCompressedInfo(header, sizeof(header), &info) != lodrt::Result::Ok)
-            continue;
-        total += uint64_t(info.decoded_bytes) + info.scratch_bytes + 64; // and two blocks of pool headroom
+    for (uint32_t m = 0; m < source.models().modelCount(); ++m) {
+        uint64_t decoded = 0, scratch = 0;
+        if (source.pfrepDecodeMemory(m, &decoded, &scratch) == lodrt::Result::Ok && decoded > 0)
+            total += decoded + scratch + 64; // and two blocks of pool headroom
     }
     return total;
 }
