@@ -27,8 +27,16 @@ namespace {
 constexpr uint32_t kNone = lodrt::kClusterNone;
 constexpr uint32_t kNewPoint = 0x80000000u; // an output vertex that is not one of the group's points
 
+// A cluster's triangles in its local layout, the one the hierarchy stores: its distinct points in
+// ascending id order, and 3 indices into them per triangle.
+struct ClusterLayout {
+    std::vector<uint32_t> verts;  // point ids, ascending (output vertex ids until the group commits)
+    std::vector<uint8_t> local;   // 3 per triangle
+    std::vector<uint16_t> border; // local edges (a << 8 | b, a < b) not used by exactly two of its triangles
+};
+
 struct BuildCluster {
-    std::vector<uint32_t> tris; // point ids, 3 per triangle
+    ClusterLayout layout;
     uint32_t self_group = kNone;
     uint32_t parent_group = kNone;
     float center[3] = {}; // geometry sphere
@@ -44,8 +52,7 @@ struct GroupResult {
     double hausdorff = 0;
     std::vector<Vec3f> positions;             // output vertices
     std::vector<uint32_t> point_of;           // per output vertex: point id, or kNewPoint
-    std::vector<uint32_t> indices;            // output triangles, output vertex ids
-    std::vector<std::vector<uint32_t>> split; // output clusters: triangle indices into `indices` / 3
+    std::vector<ClusterLayout> split;         // output clusters, vertices as output vertex ids
 };
 
 float roundUpFloat(double v) {
@@ -65,6 +72,43 @@ struct PositionKey {
         return bits[0] == o.bits[0] && bits[1] == o.bits[1] && bits[2] == o.bits[2];
     }
 };
+
+// The local layout of the triangles `part` of `tris` (vertex ids, 3 per triangle): the distinct
+// ids ordered by rank(id), which must order them as their final point ids will be. Only a cluster's
+// border edges (used once inside it; more than twice: a non-manifold edge) can be shared with
+// another cluster, so they are kept for the next level's adjacency.
+template <class Rank>
+ClusterLayout layoutOf(const std::vector<uint32_t>& tris, const std::vector<uint32_t>& part, Rank rank) {
+    ClusterLayout c;
+    for (uint32_t t : part) c.verts.insert(c.verts.end(), &tris[size_t(t) * 3], &tris[size_t(t) * 3] + 3);
+    const auto before = [&](uint32_t a, uint32_t b) { return rank(a) < rank(b); };
+    std::sort(c.verts.begin(), c.verts.end(), before);
+    // Two vertices of equal rank become one point (an output vertex at a point of the merge that
+    // another one also lands on): one local vertex.
+    c.verts.erase(std::unique(c.verts.begin(), c.verts.end(), [&](uint32_t a, uint32_t b) { return rank(a) == rank(b); }),
+                  c.verts.end());
+    c.local.reserve(part.size() * 3);
+    for (uint32_t t : part)
+        for (int k = 0; k < 3; ++k)
+            c.local.push_back(
+                uint8_t(std::lower_bound(c.verts.begin(), c.verts.end(), tris[size_t(t) * 3 + k], before) -
+                        c.verts.begin()));
+    std::vector<uint16_t> edges;
+    edges.reserve(c.local.size());
+    for (size_t f = 0; f < c.local.size(); f += 3)
+        for (int k = 0; k < 3; ++k) {
+            const uint8_t a = c.local[f + k], b = c.local[f + (k + 1) % 3];
+            edges.push_back(uint16_t(std::min(a, b) << 8 | std::max(a, b)));
+        }
+    std::sort(edges.begin(), edges.end());
+    for (size_t e = 0; e < edges.size();) {
+        size_t j = e;
+        while (j < edges.size() && edges[j] == edges[e]) ++j;
+        if (j - e != 2) c.border.push_back(edges[e]);
+        e = j;
+    }
+    return c;
+}
 
 PositionKey keyOf(const Vec3f& p) {
     PositionKey k;
@@ -126,8 +170,8 @@ public:
     Status run(const MeshView& lod0, ClusterLodHierarchy& out);
 
 private:
-    void addClusters(const std::vector<uint32_t>& tris, const std::vector<std::vector<uint32_t>>& split,
-                     const std::vector<uint32_t>& point_ids, uint32_t self_group, std::vector<uint32_t>& level);
+    Status addLod0Clusters(const std::vector<uint32_t>& tris, std::vector<uint32_t>& level);
+    void addCluster(ClusterLayout layout, uint32_t self_group, std::vector<uint32_t>& level);
     WeightedGraph adjacency(const std::vector<uint32_t>& level) const;
     GroupResult simplifyGroup(const std::vector<uint32_t>& members) const;
     void commitGroup(const std::vector<uint32_t>& members, GroupResult& r, uint32_t depth,
@@ -142,55 +186,47 @@ private:
     std::vector<std::vector<uint32_t>> group_members_;
 };
 
-// Appends clusters made of the triangles split lists; `point_ids` maps the triangles' vertex ids to
-// point ids (empty: they are point ids already).
-void Builder::addClusters(const std::vector<uint32_t>& tris, const std::vector<std::vector<uint32_t>>& split,
-                          const std::vector<uint32_t>& point_ids, uint32_t self_group, std::vector<uint32_t>& level) {
-    for (const auto& part : split) {
-        BuildCluster c;
-        c.tris.reserve(part.size() * 3);
-        for (uint32_t t : part)
-            for (int k = 0; k < 3; ++k) {
-                const uint32_t v = tris[size_t(t) * 3 + k];
-                c.tris.push_back(point_ids.empty() ? v : point_ids[v]);
-            }
-        boundingSphere(points_.data(), c.tris.data(), c.tris.size(), c.center, c.radius);
-        c.self_group = self_group;
-        if (self_group == kNone) {
-            std::copy(c.center, c.center + 3, c.lod_center);
-            c.lod_radius = c.radius;
-        } else {
-            const lodrt::ClusterLodGroup& g = groups_[self_group];
-            std::copy(g.lod_center, g.lod_center + 3, c.lod_center);
-            c.lod_radius = g.lod_radius;
-            c.error = g.error;
-        }
-        level.push_back(uint32_t(clusters_.size()));
-        clusters_.push_back(std::move(c));
+// Appends a cluster whose layout holds point ids, with its bounding sphere and its LOD sphere and
+// error (its self group's; an LOD0 cluster's are its bounding sphere and 0).
+void Builder::addCluster(ClusterLayout layout, uint32_t self_group, std::vector<uint32_t>& level) {
+    BuildCluster c;
+    c.layout = std::move(layout);
+    boundingSphere(points_.data(), c.layout.verts.data(), c.layout.verts.size(), c.center, c.radius);
+    c.self_group = self_group;
+    if (self_group == kNone) {
+        std::copy(c.center, c.center + 3, c.lod_center);
+        c.lod_radius = c.radius;
+    } else {
+        const lodrt::ClusterLodGroup& g = groups_[self_group];
+        std::copy(g.lod_center, g.lod_center + 3, c.lod_center);
+        c.lod_radius = g.lod_radius;
+        c.error = g.error;
     }
+    level.push_back(uint32_t(clusters_.size()));
+    clusters_.push_back(std::move(c));
+}
+
+// LOD0's clusters: the split of the welded triangles, laid out in parallel (slots in split order).
+Status Builder::addLod0Clusters(const std::vector<uint32_t>& tris, std::vector<uint32_t>& level) {
+    const std::vector<std::vector<uint32_t>> split = splitIntoClusters(points_, tris, o_.max_triangles, o_.max_vertices);
+    std::vector<ClusterLayout> layouts(split.size());
+    LODBAKE_RETURN_IF_ERROR(parallelFor(split.size(), 16, [&](size_t i) {
+        layouts[i] = layoutOf(tris, split[i], [](uint32_t p) { return p; });
+    }));
+    for (ClusterLayout& layout : layouts) addCluster(std::move(layout), kNone, level);
+    return Status::okStatus();
 }
 
 // Clusters of the level as a graph: an edge between two clusters weighted by the triangle edges
 // (point pairs) they share; vertex weights are triangle counts, so groups balance their size.
 WeightedGraph Builder::adjacency(const std::vector<uint32_t>& level) const {
-    // Only a cluster's own border edges (used once inside it) can be shared with another cluster;
-    // an interior edge is used twice by the cluster itself, so it is dropped before the global sort.
     std::vector<std::pair<uint64_t, uint32_t>> edges;
-    std::vector<uint64_t> local;
     for (uint32_t i = 0; i < level.size(); ++i) {
-        const auto& t = clusters_[level[i]].tris;
-        local.clear();
-        for (size_t f = 0; f < t.size(); f += 3)
-            for (int k = 0; k < 3; ++k) {
-                const uint32_t a = t[f + k], b = t[f + (k + 1) % 3];
-                local.push_back(uint64_t(std::min(a, b)) << 32 | std::max(a, b));
-            }
-        std::sort(local.begin(), local.end());
-        for (size_t e = 0; e < local.size();) {
-            size_t j = e;
-            while (j < local.size() && local[j] == local[e]) ++j;
-            if (j - e != 2) edges.push_back({local[e], i}); // 1: border; more: a non-manifold edge
-            e = j;
+        const ClusterLayout& c = clusters_[level[i]].layout;
+        for (uint16_t e : c.border) {
+            // Local order is point order, so the pair is (smaller, larger) already.
+            const uint32_t a = c.verts[e >> 8], b = c.verts[e & 0xff];
+            edges.push_back({uint64_t(a) << 32 | b, i});
         }
     }
     std::sort(edges.begin(), edges.end());
@@ -219,7 +255,7 @@ WeightedGraph Builder::adjacency(const std::vector<uint32_t>& level) const {
     }
     for (size_t v = 0; v < level.size(); ++v) g.row_begin[v + 1] += g.row_begin[v];
     g.vertex_weight.resize(level.size());
-    for (size_t v = 0; v < level.size(); ++v) g.vertex_weight[v] = uint32_t(clusters_[level[v]].tris.size() / 3);
+    for (size_t v = 0; v < level.size(); ++v) g.vertex_weight[v] = uint32_t(clusters_[level[v]].layout.local.size() / 3);
     return g;
 }
 
@@ -227,16 +263,24 @@ WeightedGraph Builder::adjacency(const std::vector<uint32_t>& level) const {
 // between the two and splits the result (read-only on the builder: runs in parallel).
 GroupResult Builder::simplifyGroup(const std::vector<uint32_t>& members) const {
     GroupResult r;
-    std::vector<uint32_t> ids;
-    for (uint32_t c : members) ids.insert(ids.end(), clusters_[c].tris.begin(), clusters_[c].tris.end());
-    Mesh merged;
-    merged.indices.reserve(ids.size());
-    std::vector<uint32_t> point_ids = ids;
+    // The merge's vertices are the members' points in ascending id order; its triangles are the
+    // members' in member order.
+    std::vector<uint32_t> point_ids;
+    for (uint32_t c : members)
+        point_ids.insert(point_ids.end(), clusters_[c].layout.verts.begin(), clusters_[c].layout.verts.end());
     std::sort(point_ids.begin(), point_ids.end());
     point_ids.erase(std::unique(point_ids.begin(), point_ids.end()), point_ids.end());
+    Mesh merged;
+    merged.positions.reserve(point_ids.size());
     for (uint32_t p : point_ids) merged.positions.push_back(points_[p]);
-    for (uint32_t p : ids)
-        merged.indices.push_back(uint32_t(std::lower_bound(point_ids.begin(), point_ids.end(), p) - point_ids.begin()));
+    std::vector<uint32_t> merged_of;
+    for (uint32_t c : members) {
+        const ClusterLayout& layout = clusters_[c].layout;
+        merged_of.clear();
+        for (uint32_t p : layout.verts)
+            merged_of.push_back(uint32_t(std::lower_bound(point_ids.begin(), point_ids.end(), p) - point_ids.begin()));
+        for (uint8_t v : layout.local) merged.indices.push_back(merged_of[v]);
+    }
 
     SimplifyOptions so;
     so.target_ratio = 0;
@@ -274,9 +318,14 @@ GroupResult Builder::simplifyGroup(const std::vector<uint32_t>& members) const {
                                    [](const auto& e, const PositionKey& key) { return e.first < key; });
         if (it != keys.end() && it->first == k) r.point_of[v] = it->second;
     }
-    r.split = splitIntoClusters(out.positions, out.indices, o_.max_triangles, o_.max_vertices);
+    // Output clusters, their vertices ordered as their point ids will be: the merge's points by id,
+    // then the new points, which commitGroup numbers after every existing point in output order.
+    const auto rank = [&](uint32_t v) {
+        return r.point_of[v] == kNewPoint ? uint64_t(1) << 32 | v : uint64_t(r.point_of[v]);
+    };
+    for (const auto& part : splitIntoClusters(out.positions, out.indices, o_.max_triangles, o_.max_vertices))
+        r.split.push_back(layoutOf(out.indices, part, rank));
     r.positions = std::move(out.positions);
-    r.indices = std::move(out.indices);
     return r;
 }
 
@@ -307,7 +356,10 @@ void Builder::commitGroup(const std::vector<uint32_t>& members, GroupResult& r, 
             points_.push_back(r.positions[&p - r.point_of.data()]);
         }
     const size_t first_output = clusters_.size();
-    addClusters(r.indices, r.split, r.point_of, g, next_level);
+    for (ClusterLayout& layout : r.split) {
+        for (uint32_t& v : layout.verts) v = r.point_of[v];
+        addCluster(std::move(layout), g, next_level);
+    }
     // The culling sphere encloses the outputs and everything below the group (an input's own
     // group's culling sphere, or an LOD0 input's geometry), so spheres nest down the DAG and culling
     // a group never hides a finer cluster that is in view.
@@ -345,7 +397,6 @@ Status Builder::buildLevel(std::vector<uint32_t>& level, uint32_t depth) {
 
 void Builder::flatten(ClusterLodHierarchy& out) const {
     out.clusters.reserve(clusters_.size());
-    std::vector<uint32_t> local;
     for (const BuildCluster& c : clusters_) {
         lodrt::ClusterLodCluster rec;
         std::copy(c.center, c.center + 3, rec.center);
@@ -354,15 +405,10 @@ void Builder::flatten(ClusterLodHierarchy& out) const {
         rec.parent_group = c.parent_group;
         rec.first_vertex = uint32_t(out.positions.size());
         rec.first_triangle = uint32_t(out.indices.size() / 3);
-        rec.triangle_count = uint32_t(c.tris.size() / 3);
-        // Local vertices in ascending point order (a sorted list, looked up by bisection).
-        local.assign(c.tris.begin(), c.tris.end());
-        std::sort(local.begin(), local.end());
-        local.erase(std::unique(local.begin(), local.end()), local.end());
-        for (uint32_t p : local) out.positions.push_back(points_[p]);
-        for (uint32_t p : c.tris)
-            out.indices.push_back(uint8_t(std::lower_bound(local.begin(), local.end(), p) - local.begin()));
-        rec.vertex_count = uint32_t(local.size());
+        rec.triangle_count = uint32_t(c.layout.local.size() / 3);
+        for (uint32_t p : c.layout.verts) out.positions.push_back(points_[p]);
+        out.indices.insert(out.indices.end(), c.layout.local.begin(), c.layout.local.end());
+        rec.vertex_count = uint32_t(c.layout.verts.size());
         out.clusters.push_back(rec);
     }
     out.groups = groups_;
@@ -377,14 +423,14 @@ Status Builder::run(const MeshView& lod0, ClusterLodHierarchy& out) {
     std::vector<uint32_t> tris;
     LODBAKE_RETURN_IF_ERROR(weldInput(lod0, points_, tris));
     std::vector<uint32_t> level;
-    addClusters(tris, splitIntoClusters(points_, tris, o_.max_triangles, o_.max_vertices), {}, kNone, level);
+    LODBAKE_RETURN_IF_ERROR(addLod0Clusters(tris, level));
     out.lod0_cluster_count = uint32_t(level.size());
     size_t triangles = tris.size() / 3;
     uint32_t depth = 0;
     while (level.size() > 1 && depth < o_.max_levels) {
         LODBAKE_RETURN_IF_ERROR(buildLevel(level, ++depth));
         size_t next_triangles = 0;
-        for (uint32_t c : level) next_triangles += clusters_[c].tris.size() / 3;
+        for (uint32_t c : level) next_triangles += clusters_[c].layout.local.size() / 3;
         const bool stalled = double(next_triangles) > double(triangles) * (1.0 - o_.min_level_reduction);
         triangles = next_triangles;
         if (stalled) break;
