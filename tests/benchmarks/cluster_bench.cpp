@@ -127,6 +127,28 @@ void buildTimeBar(const lodbake::Mesh& mesh, lodbake::ClusterLodHierarchy& hiera
     std::printf("levels (clusters/triangles):");
     for (size_t l = 0; l < level_clusters.size(); ++l) std::printf(" %zu/%zu", level_clusters[l], level_triangles[l]);
     std::printf("\n");
+    // The largest group error per depth, relative to the mesh's bounding-box diagonal: what a change
+    // of the builder must keep or lower.
+    std::vector<double> depth_error(hierarchy.level_count + 1, 0.0);
+    for (const auto& g : hierarchy.groups) depth_error[g.depth] = std::max(depth_error[g.depth], double(g.error));
+    lodbake::Aabb box;
+    for (const auto& p : mesh.positions) box.expand(p);
+    std::printf("largest group error per depth (x 1e-4 of the diagonal):");
+    for (size_t l = 1; l < depth_error.size(); ++l) std::printf(" %.3f", depth_error[l] / box.diagonal() * 1e4);
+    std::printf("\n");
+    // FNV-1a over the hierarchy's arrays: equal prints mean an identical hierarchy.
+    uint64_t fingerprint = 1469598103934665603ull;
+    auto mix = [&](const void* data, size_t bytes) {
+        const auto* p = static_cast<const unsigned char*>(data);
+        for (size_t i = 0; i < bytes; ++i) fingerprint = (fingerprint ^ p[i]) * 1099511628211ull;
+    };
+    mix(hierarchy.clusters.data(), hierarchy.clusters.size() * sizeof(hierarchy.clusters[0]));
+    mix(hierarchy.groups.data(), hierarchy.groups.size() * sizeof(hierarchy.groups[0]));
+    mix(hierarchy.group_children.data(), hierarchy.group_children.size() * 4);
+    mix(hierarchy.roots.data(), hierarchy.roots.size() * 4);
+    mix(hierarchy.positions.data(), hierarchy.positions.size() * sizeof(hierarchy.positions[0]));
+    mix(hierarchy.indices.data(), hierarchy.indices.size());
+    std::printf("hierarchy fingerprint %016llx\n", (unsigned long long)fingerprint);
     std::printf("build: cluster hierarchy %.2f s wall, %.2f s cpu; discrete chain (with measured errors) %.2f s wall, "
                 "%.2f s cpu\n",
                 cluster_t.first, cluster_t.second, chain_t.first, chain_t.second);
