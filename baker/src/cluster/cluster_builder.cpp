@@ -15,7 +15,6 @@
 
 #include "cluster/cluster_internal.h"
 #include "core/parallel.h"
-#include "lodbake/simplify/mesh_distance.h"
 #include "lodbake/simplify/simplify.h"
 
 namespace lodbake {
@@ -25,7 +24,7 @@ using namespace cluster_detail;
 namespace {
 
 constexpr uint32_t kNone = lodrt::kClusterNone;
-constexpr uint32_t kNewPoint = 0x80000000u; // an output vertex that is not one of the group's points
+constexpr uint32_t kNewPoint = kNewPointId; // an output vertex that is not one of the group's points
 
 // A cluster's triangles in its local layout, the one the hierarchy stores: its distinct points in
 // ascending id order, and 3 indices into them per triangle.
@@ -80,19 +79,19 @@ struct PositionKey {
 template <class Rank>
 ClusterLayout layoutOf(const std::vector<uint32_t>& tris, const std::vector<uint32_t>& part, Rank rank) {
     ClusterLayout c;
-    for (uint32_t t : part) c.verts.insert(c.verts.end(), &tris[size_t(t) * 3], &tris[size_t(t) * 3] + 3);
-    const auto before = [&](uint32_t a, uint32_t b) { return rank(a) < rank(b); };
-    std::sort(c.verts.begin(), c.verts.end(), before);
-    // Two vertices of equal rank become one point (an output vertex at a point of the merge that
-    // another one also lands on): one local vertex.
-    c.verts.erase(std::unique(c.verts.begin(), c.verts.end(), [&](uint32_t a, uint32_t b) { return rank(a) == rank(b); }),
-                  c.verts.end());
-    c.local.reserve(part.size() * 3);
-    for (uint32_t t : part)
-        for (int k = 0; k < 3; ++k)
-            c.local.push_back(
-                uint8_t(std::lower_bound(c.verts.begin(), c.verts.end(), tris[size_t(t) * 3 + k], before) -
-                        c.verts.begin()));
+    // One sort of (rank, corner) keys gives the distinct vertices in rank order and each corner's
+    // local index; two vertices of equal rank (an output vertex at a point of the merge that another
+    // one also lands on) become one local vertex, as they become one point.
+    const size_t corners = part.size() * 3;
+    std::vector<uint64_t> keys(corners);
+    for (size_t i = 0; i < corners; ++i) keys[i] = uint64_t(rank(tris[size_t(part[i / 3]) * 3 + i % 3])) << 10 | i;
+    std::sort(keys.begin(), keys.end());
+    c.local.resize(corners);
+    for (size_t i = 0; i < corners; ++i) {
+        const uint32_t corner = uint32_t(keys[i] & 1023);
+        if (i == 0 || keys[i] >> 10 != keys[i - 1] >> 10) c.verts.push_back(tris[size_t(part[corner / 3]) * 3 + corner % 3]);
+        c.local[corner] = uint8_t(c.verts.size() - 1);
+    }
     std::vector<uint16_t> edges;
     edges.reserve(c.local.size());
     for (size_t f = 0; f < c.local.size(); f += 3)
@@ -176,7 +175,8 @@ private:
     GroupResult simplifyGroup(const std::vector<uint32_t>& members) const;
     void commitGroup(const std::vector<uint32_t>& members, GroupResult& r, uint32_t depth,
                      std::vector<uint32_t>& next_level);
-    Status buildLevel(std::vector<uint32_t>& level, uint32_t depth);
+    Status buildLevel(std::vector<uint32_t>& level, uint32_t depth, uint32_t group_size);
+    void rollBack(const std::vector<uint32_t>& level, size_t clusters, size_t groups, size_t points);
     void flatten(ClusterLodHierarchy& out) const;
 
     const ClusterLodOptions& o_;
@@ -294,18 +294,6 @@ GroupResult Builder::simplifyGroup(const std::vector<uint32_t>& members) const {
         return r;
     }
     Mesh& out = s->mesh;
-    DistanceOptions dopt;
-    dopt.sample_count = uint32_t(std::ceil(double(merged.faceCount()) * o_.samples_per_triangle));
-    dopt.seed = o_.seed;
-    Result<DistanceResult> d = measureSurfaceDistance(merged, out, dopt);
-    if (d.ok()) {
-        r.hausdorff = d->hausdorff;
-    } else {
-        // Nothing of non-zero area to sample: the group's own extent bounds the distance.
-        Aabb box;
-        for (const Vec3f& p : merged.positions) box.expand(p);
-        r.hausdorff = box.diagonal();
-    }
     // Output vertices at a point of the merge (the locked border, and points that did not move)
     // keep its id; the others are new points.
     std::vector<std::pair<PositionKey, uint32_t>> keys(merged.positions.size());
@@ -317,6 +305,19 @@ GroupResult Builder::simplifyGroup(const std::vector<uint32_t>& members) const {
         auto it = std::lower_bound(keys.begin(), keys.end(), k,
                                    [](const auto& e, const PositionKey& key) { return e.first < key; });
         if (it != keys.end() && it->first == k) r.point_of[v] = it->second;
+    }
+    const GroupMeshes meshes{merged.positions, merged.indices, point_ids, out.positions, out.indices, r.point_of};
+    Result<double> d = groupDistance(meshes, o_.samples_per_triangle, o_.seed);
+    if (!d.ok()) {
+        r.status = d.status();
+        return r;
+    }
+    r.hausdorff = *d;
+    if (!std::isfinite(r.hausdorff)) {
+        // No output triangle: the group's own extent bounds the distance.
+        Aabb box;
+        for (const Vec3f& p : merged.positions) box.expand(p);
+        r.hausdorff = box.diagonal();
     }
     // Output clusters, their vertices ordered as their point ids will be: the merge's points by id,
     // then the new points, which commitGroup numbers after every existing point in output order.
@@ -377,10 +378,11 @@ void Builder::commitGroup(const std::vector<uint32_t>& members, GroupResult& r, 
     enclosingSphere(centers, radii, groups_[g].bounds_center, groups_[g].bounds_radius);
 }
 
-Status Builder::buildLevel(std::vector<uint32_t>& level, uint32_t depth) {
+Status Builder::buildLevel(std::vector<uint32_t>& level, uint32_t depth, uint32_t group_size) {
     const WeightedGraph graph = adjacency(level);
     LODBAKE_ASSIGN_OR_RETURN(std::vector<std::vector<uint32_t>> parts,
-                             partitionGraph(graph, o_.group_size, o_.min_group_size, o_.max_group_size, o_.seed));
+                             partitionGraph(graph, group_size, std::min(o_.min_group_size, group_size),
+                                            o_.max_group_size, o_.seed));
     for (auto& part : parts)
         for (uint32_t& v : part) v = level[v];
     std::vector<GroupResult> results(parts.size());
@@ -393,6 +395,15 @@ Status Builder::buildLevel(std::vector<uint32_t>& level, uint32_t depth) {
     }
     level.swap(next);
     return Status::okStatus();
+}
+
+// Undoes a level: drops the clusters, groups and points it added and frees its input clusters again.
+void Builder::rollBack(const std::vector<uint32_t>& level, size_t clusters, size_t groups, size_t points) {
+    clusters_.resize(clusters);
+    groups_.resize(groups);
+    group_members_.resize(groups);
+    points_.resize(points);
+    for (uint32_t c : level) clusters_[c].parent_group = kNone;
 }
 
 void Builder::flatten(ClusterLodHierarchy& out) const {
@@ -426,12 +437,24 @@ Status Builder::run(const MeshView& lod0, ClusterLodHierarchy& out) {
     LODBAKE_RETURN_IF_ERROR(addLod0Clusters(tris, level));
     out.lod0_cluster_count = uint32_t(level.size());
     size_t triangles = tris.size() / 3;
-    uint32_t depth = 0;
+    uint32_t depth = 0, group_size = o_.group_size;
     while (level.size() > 1 && depth < o_.max_levels) {
-        LODBAKE_RETURN_IF_ERROR(buildLevel(level, ++depth));
+        const std::vector<uint32_t> input = level;
+        const size_t clusters = clusters_.size(), groups = groups_.size(), points = points_.size();
+        LODBAKE_RETURN_IF_ERROR(buildLevel(level, depth + 1, group_size));
         size_t next_triangles = 0;
         for (uint32_t c : level) next_triangles += clusters_[c].layout.local.size() / 3;
         const bool stalled = double(next_triangles) > double(triangles) * (1.0 - o_.min_level_reduction);
+        if (stalled && group_size < o_.max_group_size) {
+            // The locked borders between groups hold the level: group again with larger groups, so
+            // that most of those borders fall inside a group and can be simplified; the larger size
+            // stays for the levels above.
+            rollBack(input, clusters, groups, points);
+            level = input;
+            group_size = std::min(o_.max_group_size, group_size * 2);
+            continue;
+        }
+        ++depth;
         triangles = next_triangles;
         if (stalled) break;
     }
