@@ -306,13 +306,12 @@ void flyByBar(const lodbake::Mesh& mesh, const lodbake::ClusterLodHierarchy& h, 
 }
 
 // Crack check over many cuts. Positions become point ids by their bits (-0 is +0), edges are point
-// pairs. A cut's boundary is the edges its clusters use once in all; only edges a cluster does not
-// use exactly twice, or that more than one cluster uses, can be on it, so each cluster keeps those
-// (with how often it uses them) and a view adds up their uses in a counter per edge.
+// pairs. A cut's boundary is the edges its clusters use once in all; only an edge that some cluster
+// does not use exactly twice can be on it, so each cluster keeps those (with how often it uses
+// them) and a view adds up their uses in a counter per edge.
 class CrackCheck {
 public:
     CrackCheck(const lodbake::Mesh& lod0, const lodbake::ClusterLodHierarchy& h) : h_(h) {
-        std::vector<std::pair<uint64_t, uint32_t>> keys; // (position bits hash-free key, slot)
         std::vector<std::array<uint32_t, 3>> bits;
         auto add = [&](const lodbake::Vec3f& p) {
             const float v[3] = {p.x + 0.0f, p.y + 0.0f, p.z + 0.0f};
@@ -362,14 +361,22 @@ public:
         entries_.resize(h.clusters.size());
         for (size_t i = 0; i < uses.size();) {
             size_t j = i;
-            bool several = false;
-            while (j < uses.size() && uses[j].first == uses[i].first) several |= uses[j++].second != uses[i].second;
+            while (j < uses.size() && uses[j].first == uses[i].first) ++j;
+            // An edge every cluster uses exactly twice adds up to an even count in any cut: never on
+            // its boundary. Otherwise every use counts.
+            bool odd_somewhere = false;
+            for (size_t a = i; a < j;) {
+                size_t b = a;
+                while (b < j && uses[b].second == uses[a].second) ++b;
+                odd_somewhere |= b - a != 2;
+                a = b;
+            }
             const uint32_t edge = uint32_t(on_lod0_boundary_.size());
             bool kept = false;
             for (size_t a = i; a < j;) {
                 size_t b = a;
                 while (b < j && uses[b].second == uses[a].second) ++b;
-                if (several || b - a != 2) {
+                if (odd_somewhere) {
                     entries_[uses[a].second].push_back({edge, uint32_t(b - a)});
                     kept = true;
                 }
