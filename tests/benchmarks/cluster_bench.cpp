@@ -311,7 +311,7 @@ void flyByBar(const lodbake::Mesh& mesh, const lodbake::ClusterLodHierarchy& h, 
 // them) and a view adds up their uses in a counter per edge.
 class CrackCheck {
 public:
-    CrackCheck(const lodbake::Mesh& lod0, const lodbake::ClusterLodHierarchy& h) : h_(h) {
+    CrackCheck(const lodbake::Mesh& lod0, const lodbake::ClusterLodHierarchy& h) {
         std::vector<std::array<uint32_t, 3>> bits;
         auto add = [&](const lodbake::Vec3f& p) {
             const float v[3] = {p.x + 0.0f, p.y + 0.0f, p.z + 0.0f};
@@ -408,7 +408,6 @@ private:
         uint32_t edge;
         uint32_t uses;
     };
-    const lodbake::ClusterLodHierarchy& h_;
     std::vector<uint64_t> lod0_boundary_;
     std::vector<uint8_t> on_lod0_boundary_;
     std::vector<std::vector<Entry>> entries_;
