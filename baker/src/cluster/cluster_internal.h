@@ -26,7 +26,7 @@ struct WeightedGraph {
     std::vector<uint32_t> vertex_weight;
 };
 
-/// Partitions the graph into about vertex_count / group_size parts with METIS (k-way, fixed seed),
+/// Partitions the graph into about vertex_count / group_size parts with METIS (recursive bisection, fixed seed),
 /// then merges parts below min_size into the neighbouring part they share the most weight with when
 /// it stays within max_size, and cuts parts above max_size. Returns each part's vertices, ascending,
 /// parts ordered by their smallest vertex. Falls back to a chunked order when METIS reports an error.
