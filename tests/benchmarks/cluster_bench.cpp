@@ -7,12 +7,19 @@
 //     allocations made during the frames counted (bar: 0);
 //  3. triangles of the cut / triangles of the discrete chain's level chosen by the rule of
 //     selectLevels (screen-space error, hysteresis off) at the same 1 px threshold, frame by frame on
-//     a close fly-by of the dragon scaled to 20 m (bar <= 0.3x, must <= 0.5x; judged on the worst
-//     frame, the mean printed beside it), with every drawn cluster's projected error <= 1 px.
+//     a close fly-by of the mesh scaled to --size metres (bounding-box diagonal, default 20) (bar <=
+//     0.3x, must <= 0.5x; judged on the worst frame, the mean printed beside it), with every drawn
+//     cluster's projected error <= 1 px;
+//  4. crack-free cuts: for --views random views (default 1,000; eye at 0.3 to 30 bounding radii from
+//     a random vertex, thresholds 0.25 to 16 px), the cut has no boundary edge (by position) that
+//     LOD0 lacks. The test suite checks the small scans; this runs it on any input, such as the 4x
+//     subdivided dragon_poisson (../shared/eval/subdiv.py IN OUT.ply 1).
+// --build-runs N repeats the two builds (alternating) and judges the median CPU times.
 //
-// usage: cluster_bench [--mesh PLY] [--frames N] [--check]
+// usage: cluster_bench [--mesh PLY] [--frames N] [--size METRES] [--views N] [--build-runs N] [--check]
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -20,6 +27,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <ctime>
+#include <random>
 #include <utility>
 #include <new>
 #include <string>
@@ -96,18 +104,30 @@ template <class F> std::pair<double, double> timed(F&& f) {
     return {nowSeconds() - w0, double(std::clock() - c0) / CLOCKS_PER_SEC};
 }
 
-void buildTimeBar(const lodbake::Mesh& mesh, lodbake::ClusterLodHierarchy& hierarchy, lodbake::LodChain& chain) {
+void buildTimeBar(const lodbake::Mesh& mesh, lodbake::ClusterLodHierarchy& hierarchy, lodbake::LodChain& chain,
+                  int runs) {
     lodbake::Diagnostics d;
-    const auto chain_t = timed([&] {
-        auto c = lodbake::buildLodChain(mesh, lodbake::LodChainOptions(), d);
-        if (!c.ok()) std::abort();
-        chain = std::move(c.value());
-    });
-    const auto cluster_t = timed([&] {
-        auto h = lodbake::buildClusterLod(mesh, lodbake::ClusterLodOptions(), d);
-        if (!h.ok()) std::abort();
-        hierarchy = std::move(h.value());
-    });
+    std::vector<double> chain_wall, chain_cpu, cluster_wall, cluster_cpu;
+    for (int r = 0; r < runs; ++r) {
+        const auto chain_t = timed([&] {
+            auto c = lodbake::buildLodChain(mesh, lodbake::LodChainOptions(), d);
+            if (!c.ok()) std::abort();
+            chain = std::move(c.value());
+        });
+        const auto cluster_t = timed([&] {
+            auto h = lodbake::buildClusterLod(mesh, lodbake::ClusterLodOptions(), d);
+            if (!h.ok()) std::abort();
+            hierarchy = std::move(h.value());
+        });
+        chain_wall.push_back(chain_t.first);
+        chain_cpu.push_back(chain_t.second);
+        cluster_wall.push_back(cluster_t.first);
+        cluster_cpu.push_back(cluster_t.second);
+        std::printf("build run %d: cluster hierarchy %.2f s wall, %.2f s cpu; discrete chain %.2f s wall, %.2f s cpu\n",
+                    r + 1, cluster_t.first, cluster_t.second, chain_t.first, chain_t.second);
+    }
+    const std::pair<double, double> cluster_t{lodbake_bench::median(cluster_wall), lodbake_bench::median(cluster_cpu)};
+    const std::pair<double, double> chain_t{lodbake_bench::median(chain_wall), lodbake_bench::median(chain_cpu)};
     size_t tiny = 0, largest = 0;
     for (const auto& g : hierarchy.groups) {
         tiny += g.child_count < 4;
@@ -127,9 +147,31 @@ void buildTimeBar(const lodbake::Mesh& mesh, lodbake::ClusterLodHierarchy& hiera
     std::printf("levels (clusters/triangles):");
     for (size_t l = 0; l < level_clusters.size(); ++l) std::printf(" %zu/%zu", level_clusters[l], level_triangles[l]);
     std::printf("\n");
-    std::printf("build: cluster hierarchy %.2f s wall, %.2f s cpu; discrete chain (with measured errors) %.2f s wall, "
-                "%.2f s cpu\n",
-                cluster_t.first, cluster_t.second, chain_t.first, chain_t.second);
+    // The largest group error per depth, relative to the mesh's bounding-box diagonal: what a change
+    // of the builder must keep or lower.
+    std::vector<double> depth_error(hierarchy.level_count + 1, 0.0);
+    for (const auto& g : hierarchy.groups) depth_error[g.depth] = std::max(depth_error[g.depth], double(g.error));
+    lodbake::Aabb box;
+    for (const auto& p : mesh.positions) box.expand(p);
+    std::printf("largest group error per depth (x 1e-4 of the diagonal):");
+    for (size_t l = 1; l < depth_error.size(); ++l) std::printf(" %.3f", depth_error[l] / box.diagonal() * 1e4);
+    std::printf("\n");
+    // FNV-1a over the hierarchy's arrays: equal prints mean an identical hierarchy.
+    uint64_t fingerprint = 1469598103934665603ull;
+    auto mix = [&](const void* data, size_t bytes) {
+        const auto* p = static_cast<const unsigned char*>(data);
+        for (size_t i = 0; i < bytes; ++i) fingerprint = (fingerprint ^ p[i]) * 1099511628211ull;
+    };
+    mix(hierarchy.clusters.data(), hierarchy.clusters.size() * sizeof(hierarchy.clusters[0]));
+    mix(hierarchy.groups.data(), hierarchy.groups.size() * sizeof(hierarchy.groups[0]));
+    mix(hierarchy.group_children.data(), hierarchy.group_children.size() * 4);
+    mix(hierarchy.roots.data(), hierarchy.roots.size() * 4);
+    mix(hierarchy.positions.data(), hierarchy.positions.size() * sizeof(hierarchy.positions[0]));
+    mix(hierarchy.indices.data(), hierarchy.indices.size());
+    std::printf("hierarchy fingerprint %016llx\n", (unsigned long long)fingerprint);
+    std::printf("build (median of %d): cluster hierarchy %.2f s wall, %.2f s cpu; discrete chain (with measured errors) "
+                "%.2f s wall, %.2f s cpu; wall ratio %.3f\n",
+                runs, cluster_t.first, cluster_t.second, chain_t.first, chain_t.second, cluster_t.first / chain_t.first);
     g_bars.ratio("build cpu time, hierarchy / discrete chain (bar 1.0, must 2.0)", cluster_t.second, chain_t.second,
                  1.0, Limit::AtMost);
 }
@@ -198,16 +240,16 @@ size_t chainLevelTriangles(const lodbake::Mesh& mesh, const lodbake::LodChain& c
 }
 
 void flyByBar(const lodbake::Mesh& mesh, const lodbake::ClusterLodHierarchy& h, const lodbake::LodChain& chain,
-              int frames) {
+              int frames, float size) {
     const lodrt::ClusterLodView view = h.view();
     lodbake::Aabb box;
     for (const auto& p : mesh.positions) box.expand(p);
-    const float scale = float(20.0 / box.diagonal()); // the dragon scaled to 20 m
+    const float scale = float(size / box.diagonal()); // the mesh scaled to `size` metres
     const lodbake::Vec3f c = box.center();
     lodrt::ClusterInstance inst;
     inst.scale = scale;
     for (int a = 0; a < 3; ++a) inst.translation[a] = -c[a] * scale; // centred at the origin
-    const float world_radius = 10.0f;
+    const float world_radius = size / 2;
     Scratch scratch(view);
     lodrt::SelectionParams params;
     params.pixel_threshold = 1;
@@ -263,15 +305,176 @@ void flyByBar(const lodbake::Mesh& mesh, const lodbake::ClusterLodHierarchy& h, 
     g_bars.absolute("fly-by clusters drawn above 1 px", double(violations), 0, Limit::AtMost);
 }
 
+// Crack check over many cuts. Positions become point ids by their bits (-0 is +0), edges are point
+// pairs. A cut's boundary is the edges its clusters use once in all; only an edge that some cluster
+// does not use exactly twice can be on it, so each cluster keeps those (with how often it uses
+// them) and a view adds up their uses in a counter per edge.
+class CrackCheck {
+public:
+    CrackCheck(const lodbake::Mesh& lod0, const lodbake::ClusterLodHierarchy& h) {
+        std::vector<std::array<uint32_t, 3>> bits;
+        auto add = [&](const lodbake::Vec3f& p) {
+            const float v[3] = {p.x + 0.0f, p.y + 0.0f, p.z + 0.0f};
+            std::array<uint32_t, 3> b;
+            std::memcpy(b.data(), v, 12);
+            bits.push_back(b);
+        };
+        for (const auto& p : lod0.positions) add(p);
+        for (const auto& p : h.positions) add(p);
+        std::vector<uint32_t> order(bits.size());
+        for (uint32_t i = 0; i < order.size(); ++i) order[i] = i;
+        std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return bits[a] < bits[b]; });
+        std::vector<uint32_t> id(bits.size());
+        for (size_t i = 0, next = 0; i < order.size(); ++i) {
+            if (i > 0 && bits[order[i]] != bits[order[i - 1]]) ++next;
+            id[order[i]] = uint32_t(next);
+        }
+        // LOD0's boundary: edges of its non-degenerate triangles used once.
+        std::vector<uint64_t> e;
+        for (size_t f = 0; f < lod0.faceCount(); ++f) {
+            uint32_t t[3];
+            for (int k = 0; k < 3; ++k) t[k] = id[lod0.indices[f * 3 + k]];
+            if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue;
+            for (int k = 0; k < 3; ++k) e.push_back(edgeOf(t[k], t[(k + 1) % 3]));
+        }
+        std::sort(e.begin(), e.end());
+        for (size_t i = 0; i < e.size();) {
+            size_t j = i;
+            while (j < e.size() && e[j] == e[i]) ++j;
+            if (j - i == 1) lod0_boundary_.push_back(e[i]);
+            i = j;
+        }
+        std::vector<uint64_t>().swap(e);
+        // Every use of every edge by every cluster.
+        const size_t base = lod0.positions.size();
+        std::vector<std::pair<uint64_t, uint32_t>> uses;
+        for (uint32_t c = 0; c < h.clusters.size(); ++c) {
+            const auto& cl = h.clusters[c];
+            for (uint32_t t = 0; t < cl.triangle_count; ++t) {
+                uint32_t v[3];
+                for (int k = 0; k < 3; ++k)
+                    v[k] = id[base + cl.first_vertex + h.indices[(size_t(cl.first_triangle) + t) * 3 + k]];
+                for (int k = 0; k < 3; ++k) uses.push_back({edgeOf(v[k], v[(k + 1) % 3]), c});
+            }
+        }
+        std::sort(uses.begin(), uses.end());
+        entries_.resize(h.clusters.size());
+        for (size_t i = 0; i < uses.size();) {
+            size_t j = i;
+            while (j < uses.size() && uses[j].first == uses[i].first) ++j;
+            // An edge every cluster uses exactly twice adds up to an even count in any cut: never on
+            // its boundary. Otherwise every use counts.
+            bool odd_somewhere = false;
+            for (size_t a = i; a < j;) {
+                size_t b = a;
+                while (b < j && uses[b].second == uses[a].second) ++b;
+                odd_somewhere |= b - a != 2;
+                a = b;
+            }
+            const uint32_t edge = uint32_t(on_lod0_boundary_.size());
+            bool kept = false;
+            for (size_t a = i; a < j;) {
+                size_t b = a;
+                while (b < j && uses[b].second == uses[a].second) ++b;
+                if (odd_somewhere) {
+                    entries_[uses[a].second].push_back({edge, uint32_t(b - a)});
+                    kept = true;
+                }
+                a = b;
+            }
+            if (kept)
+                on_lod0_boundary_.push_back(
+                    std::binary_search(lod0_boundary_.begin(), lod0_boundary_.end(), uses[i].first));
+            i = j;
+        }
+        count_.assign(on_lod0_boundary_.size(), 0);
+    }
+
+    /// Boundary edges of the cut that LOD0 lacks.
+    size_t cracks(const uint32_t* cut, size_t n) {
+        for (size_t i = 0; i < n; ++i)
+            for (const Entry& e : entries_[cut[i]]) count_[e.edge] += e.uses;
+        size_t bad = 0;
+        for (size_t i = 0; i < n; ++i)
+            for (const Entry& e : entries_[cut[i]]) bad += count_[e.edge] == 1 && !on_lod0_boundary_[e.edge];
+        for (size_t i = 0; i < n; ++i)
+            for (const Entry& e : entries_[cut[i]]) count_[e.edge] = 0;
+        return bad;
+    }
+
+private:
+    static uint64_t edgeOf(uint32_t a, uint32_t b) { return uint64_t(std::min(a, b)) << 32 | std::max(a, b); }
+    struct Entry {
+        uint32_t edge;
+        uint32_t uses;
+    };
+    std::vector<uint64_t> lod0_boundary_;
+    std::vector<uint8_t> on_lod0_boundary_;
+    std::vector<std::vector<Entry>> entries_;
+    std::vector<uint32_t> count_;
+};
+
+void crackFreeBar(const lodbake::Mesh& mesh, const lodbake::ClusterLodHierarchy& h, int views) {
+    const double t0 = nowSeconds();
+    CrackCheck check(mesh, h);
+    const lodrt::ClusterLodView view = h.view();
+    Scratch scratch(view);
+    lodbake::Aabb box;
+    for (const auto& p : mesh.positions) box.expand(p);
+    const float radius = float(box.diagonal() * 0.5);
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+    size_t cracked_views = 0, cracks = 0, finest = 0, coarsest = SIZE_MAX;
+    for (int v = 0; v < views; ++v) {
+        const lodbake::Vec3f& anchor = mesh.positions[rng() % mesh.positions.size()];
+        const float z = 2 * unit(rng) - 1, phi = 6.2831853f * unit(rng), s = std::sqrt(1 - z * z);
+        const float dist = radius * 0.3f * std::pow(100.0f, unit(rng));
+        const float eye[3] = {anchor.x + dist * s * std::cos(phi), anchor.y + dist * s * std::sin(phi),
+                              anchor.z + dist * z};
+        lodrt::SelectionParams params;
+        params.pixel_threshold = 0.25f * std::pow(64.0f, unit(rng));
+        lodrt::ClusterCutStats st;
+        lodrt::selectClusterCut(view, lodrt::ClusterInstance(), eye, nullptr, params, scratch.cut, scratch.out.data(),
+                                uint32_t(scratch.out.size()), &st);
+        const size_t bad = check.cracks(scratch.out.data(), st.written);
+        cracked_views += bad > 0;
+        cracks += bad;
+        finest = std::max<size_t>(finest, st.written);
+        coarsest = std::min<size_t>(coarsest, st.written);
+    }
+    std::printf("crack check: %d random views, cuts of %zu to %zu clusters, %zu views with cracks (%zu edges), %.1f s\n",
+                views, coarsest, finest, cracked_views, cracks, nowSeconds() - t0);
+    // A cut that never changes would pass trivially: the views must reach different depths.
+    g_bars.absolute("random views whose cut has a boundary edge LOD0 lacks (bar 0)",
+                    coarsest < finest ? double(cracked_views) : NAN, 0, Limit::AtMost);
+}
+
 } // namespace
 
 int main(int argc, char** argv) {
     const bool check = lodbake_bench::takeCheckFlag(argc, argv);
     std::string path = std::string(LODBAKE_BENCH_MESHES_DIR) + "/dragon_poisson.ply";
-    int frames = 200;
-    for (int i = 1; i + 1 < argc; i += 2) {
-        if (std::strcmp(argv[i], "--mesh") == 0) path = argv[i + 1];
-        if (std::strcmp(argv[i], "--frames") == 0) frames = std::max(1, std::atoi(argv[i + 1]));
+    int frames = 200, views = 1000, build_runs = 1;
+    float size = 20;
+    for (int i = 1; i < argc; i += 2) {
+        if (i + 1 >= argc) {
+            std::fprintf(stderr, "cluster_bench: %s: expected a value after it\n", argv[i]);
+            return 2;
+        }
+        if (std::strcmp(argv[i], "--mesh") == 0)
+            path = argv[i + 1];
+        else if (std::strcmp(argv[i], "--frames") == 0)
+            frames = std::max(1, std::atoi(argv[i + 1]));
+        else if (std::strcmp(argv[i], "--views") == 0)
+            views = std::max(0, std::atoi(argv[i + 1]));
+        else if (std::strcmp(argv[i], "--build-runs") == 0)
+            build_runs = std::max(1, std::atoi(argv[i + 1]));
+        else if (std::strcmp(argv[i], "--size") == 0 && std::atof(argv[i + 1]) > 0)
+            size = float(std::atof(argv[i + 1]));
+        else {
+            std::fprintf(stderr, "cluster_bench: %s: unknown option or bad value\n", argv[i]);
+            return 2;
+        }
     }
     lodbake::Diagnostics d;
     auto loaded = lodbake::readMesh(path, lodbake::ReadOptions(), d);
@@ -283,8 +486,9 @@ int main(int argc, char** argv) {
     std::printf("%s: %zu triangles\n", path.c_str(), mesh.faceCount());
     lodbake::ClusterLodHierarchy hierarchy;
     lodbake::LodChain chain;
-    buildTimeBar(mesh, hierarchy, chain);
+    buildTimeBar(mesh, hierarchy, chain, build_runs);
     cutTimeBar(hierarchy, std::min(frames, 60));
-    flyByBar(mesh, hierarchy, chain, frames);
+    flyByBar(mesh, hierarchy, chain, frames, size);
+    if (views > 0) crackFreeBar(mesh, hierarchy, views);
     return g_bars.finish(check);
 }

@@ -15,7 +15,6 @@
 
 #include "cluster/cluster_internal.h"
 #include "core/parallel.h"
-#include "lodbake/simplify/mesh_distance.h"
 #include "lodbake/simplify/simplify.h"
 
 namespace lodbake {
@@ -25,10 +24,18 @@ using namespace cluster_detail;
 namespace {
 
 constexpr uint32_t kNone = lodrt::kClusterNone;
-constexpr uint32_t kNewPoint = 0x80000000u; // an output vertex that is not one of the group's points
+constexpr uint32_t kNewPoint = kNewPointId; // an output vertex that is not one of the group's points
+
+// A cluster's triangles in its local layout, the one the hierarchy stores: its distinct points in
+// ascending id order, and 3 indices into them per triangle.
+struct ClusterLayout {
+    std::vector<uint32_t> verts;  // point ids, ascending (output vertex ids until the group commits)
+    std::vector<uint8_t> local;   // 3 per triangle
+    std::vector<uint16_t> border; // local edges (a << 8 | b, a < b) not used by exactly two of its triangles
+};
 
 struct BuildCluster {
-    std::vector<uint32_t> tris; // point ids, 3 per triangle
+    ClusterLayout layout;
     uint32_t self_group = kNone;
     uint32_t parent_group = kNone;
     float center[3] = {}; // geometry sphere
@@ -44,8 +51,7 @@ struct GroupResult {
     double hausdorff = 0;
     std::vector<Vec3f> positions;             // output vertices
     std::vector<uint32_t> point_of;           // per output vertex: point id, or kNewPoint
-    std::vector<uint32_t> indices;            // output triangles, output vertex ids
-    std::vector<std::vector<uint32_t>> split; // output clusters: triangle indices into `indices` / 3
+    std::vector<ClusterLayout> split;         // output clusters, vertices as output vertex ids
 };
 
 float roundUpFloat(double v) {
@@ -65,6 +71,43 @@ struct PositionKey {
         return bits[0] == o.bits[0] && bits[1] == o.bits[1] && bits[2] == o.bits[2];
     }
 };
+
+// The local layout of the triangles `part` of `tris` (vertex ids, 3 per triangle): the distinct
+// ids ordered by rank(id), which must order them as their final point ids will be. Only a cluster's
+// border edges (used once inside it; more than twice: a non-manifold edge) can be shared with
+// another cluster, so they are kept for the next level's adjacency.
+template <class Rank>
+ClusterLayout layoutOf(const std::vector<uint32_t>& tris, const std::vector<uint32_t>& part, Rank rank) {
+    ClusterLayout c;
+    // One sort of (rank, corner) keys gives the distinct vertices in rank order and each corner's
+    // local index; two vertices of equal rank (an output vertex at a point of the merge that another
+    // one also lands on) become one local vertex, as they become one point.
+    const size_t corners = part.size() * 3;
+    std::vector<uint64_t> keys(corners);
+    for (size_t i = 0; i < corners; ++i) keys[i] = uint64_t(rank(tris[size_t(part[i / 3]) * 3 + i % 3])) << 10 | i;
+    std::sort(keys.begin(), keys.end());
+    c.local.resize(corners);
+    for (size_t i = 0; i < corners; ++i) {
+        const uint32_t corner = uint32_t(keys[i] & 1023);
+        if (i == 0 || keys[i] >> 10 != keys[i - 1] >> 10) c.verts.push_back(tris[size_t(part[corner / 3]) * 3 + corner % 3]);
+        c.local[corner] = uint8_t(c.verts.size() - 1);
+    }
+    std::vector<uint16_t> edges;
+    edges.reserve(c.local.size());
+    for (size_t f = 0; f < c.local.size(); f += 3)
+        for (int k = 0; k < 3; ++k) {
+            const uint8_t a = c.local[f + k], b = c.local[f + (k + 1) % 3];
+            edges.push_back(uint16_t(std::min(a, b) << 8 | std::max(a, b)));
+        }
+    std::sort(edges.begin(), edges.end());
+    for (size_t e = 0; e < edges.size();) {
+        size_t j = e;
+        while (j < edges.size() && edges[j] == edges[e]) ++j;
+        if (j - e != 2) c.border.push_back(edges[e]);
+        e = j;
+    }
+    return c;
+}
 
 PositionKey keyOf(const Vec3f& p) {
     PositionKey k;
@@ -126,13 +169,14 @@ public:
     Status run(const MeshView& lod0, ClusterLodHierarchy& out);
 
 private:
-    void addClusters(const std::vector<uint32_t>& tris, const std::vector<std::vector<uint32_t>>& split,
-                     const std::vector<uint32_t>& point_ids, uint32_t self_group, std::vector<uint32_t>& level);
+    Status addLod0Clusters(const std::vector<uint32_t>& tris, std::vector<uint32_t>& level);
+    void addCluster(ClusterLayout layout, uint32_t self_group, std::vector<uint32_t>& level);
     WeightedGraph adjacency(const std::vector<uint32_t>& level) const;
     GroupResult simplifyGroup(const std::vector<uint32_t>& members) const;
     void commitGroup(const std::vector<uint32_t>& members, GroupResult& r, uint32_t depth,
                      std::vector<uint32_t>& next_level);
-    Status buildLevel(std::vector<uint32_t>& level, uint32_t depth);
+    Status buildLevel(std::vector<uint32_t>& level, uint32_t depth, uint32_t group_size);
+    void rollBack(const std::vector<uint32_t>& level, size_t clusters, size_t groups, size_t points);
     void flatten(ClusterLodHierarchy& out) const;
 
     const ClusterLodOptions& o_;
@@ -142,55 +186,47 @@ private:
     std::vector<std::vector<uint32_t>> group_members_;
 };
 
-// Appends clusters made of the triangles split lists; `point_ids` maps the triangles' vertex ids to
-// point ids (empty: they are point ids already).
-void Builder::addClusters(const std::vector<uint32_t>& tris, const std::vector<std::vector<uint32_t>>& split,
-                          const std::vector<uint32_t>& point_ids, uint32_t self_group, std::vector<uint32_t>& level) {
-    for (const auto& part : split) {
-        BuildCluster c;
-        c.tris.reserve(part.size() * 3);
-        for (uint32_t t : part)
-            for (int k = 0; k < 3; ++k) {
-                const uint32_t v = tris[size_t(t) * 3 + k];
-                c.tris.push_back(point_ids.empty() ? v : point_ids[v]);
-            }
-        boundingSphere(points_.data(), c.tris.data(), c.tris.size(), c.center, c.radius);
-        c.self_group = self_group;
-        if (self_group == kNone) {
-            std::copy(c.center, c.center + 3, c.lod_center);
-            c.lod_radius = c.radius;
-        } else {
-            const lodrt::ClusterLodGroup& g = groups_[self_group];
-            std::copy(g.lod_center, g.lod_center + 3, c.lod_center);
-            c.lod_radius = g.lod_radius;
-            c.error = g.error;
-        }
-        level.push_back(uint32_t(clusters_.size()));
-        clusters_.push_back(std::move(c));
+// Appends a cluster whose layout holds point ids, with its bounding sphere and its LOD sphere and
+// error (its self group's; an LOD0 cluster's are its bounding sphere and 0).
+void Builder::addCluster(ClusterLayout layout, uint32_t self_group, std::vector<uint32_t>& level) {
+    BuildCluster c;
+    c.layout = std::move(layout);
+    boundingSphere(points_.data(), c.layout.verts.data(), c.layout.verts.size(), c.center, c.radius);
+    c.self_group = self_group;
+    if (self_group == kNone) {
+        std::copy(c.center, c.center + 3, c.lod_center);
+        c.lod_radius = c.radius;
+    } else {
+        const lodrt::ClusterLodGroup& g = groups_[self_group];
+        std::copy(g.lod_center, g.lod_center + 3, c.lod_center);
+        c.lod_radius = g.lod_radius;
+        c.error = g.error;
     }
+    level.push_back(uint32_t(clusters_.size()));
+    clusters_.push_back(std::move(c));
+}
+
+// LOD0's clusters: the split of the welded triangles, laid out in parallel (slots in split order).
+Status Builder::addLod0Clusters(const std::vector<uint32_t>& tris, std::vector<uint32_t>& level) {
+    const std::vector<std::vector<uint32_t>> split = splitIntoClusters(points_, tris, o_.max_triangles, o_.max_vertices);
+    std::vector<ClusterLayout> layouts(split.size());
+    LODBAKE_RETURN_IF_ERROR(parallelFor(split.size(), 16, [&](size_t i) {
+        layouts[i] = layoutOf(tris, split[i], [](uint32_t p) { return p; });
+    }));
+    for (ClusterLayout& layout : layouts) addCluster(std::move(layout), kNone, level);
+    return Status::okStatus();
 }
 
 // Clusters of the level as a graph: an edge between two clusters weighted by the triangle edges
 // (point pairs) they share; vertex weights are triangle counts, so groups balance their size.
 WeightedGraph Builder::adjacency(const std::vector<uint32_t>& level) const {
-    // Only a cluster's own border edges (used once inside it) can be shared with another cluster;
-    // an interior edge is used twice by the cluster itself, so it is dropped before the global sort.
     std::vector<std::pair<uint64_t, uint32_t>> edges;
-    std::vector<uint64_t> local;
     for (uint32_t i = 0; i < level.size(); ++i) {
-        const auto& t = clusters_[level[i]].tris;
-        local.clear();
-        for (size_t f = 0; f < t.size(); f += 3)
-            for (int k = 0; k < 3; ++k) {
-                const uint32_t a = t[f + k], b = t[f + (k + 1) % 3];
-                local.push_back(uint64_t(std::min(a, b)) << 32 | std::max(a, b));
-            }
-        std::sort(local.begin(), local.end());
-        for (size_t e = 0; e < local.size();) {
-            size_t j = e;
-            while (j < local.size() && local[j] == local[e]) ++j;
-            if (j - e != 2) edges.push_back({local[e], i}); // 1: border; more: a non-manifold edge
-            e = j;
+        const ClusterLayout& c = clusters_[level[i]].layout;
+        for (uint16_t e : c.border) {
+            // Local order is point order, so the pair is (smaller, larger) already.
+            const uint32_t a = c.verts[e >> 8], b = c.verts[e & 0xff];
+            edges.push_back({uint64_t(a) << 32 | b, i});
         }
     }
     std::sort(edges.begin(), edges.end());
@@ -219,7 +255,7 @@ WeightedGraph Builder::adjacency(const std::vector<uint32_t>& level) const {
     }
     for (size_t v = 0; v < level.size(); ++v) g.row_begin[v + 1] += g.row_begin[v];
     g.vertex_weight.resize(level.size());
-    for (size_t v = 0; v < level.size(); ++v) g.vertex_weight[v] = uint32_t(clusters_[level[v]].tris.size() / 3);
+    for (size_t v = 0; v < level.size(); ++v) g.vertex_weight[v] = uint32_t(clusters_[level[v]].layout.local.size() / 3);
     return g;
 }
 
@@ -227,16 +263,24 @@ WeightedGraph Builder::adjacency(const std::vector<uint32_t>& level) const {
 // between the two and splits the result (read-only on the builder: runs in parallel).
 GroupResult Builder::simplifyGroup(const std::vector<uint32_t>& members) const {
     GroupResult r;
-    std::vector<uint32_t> ids;
-    for (uint32_t c : members) ids.insert(ids.end(), clusters_[c].tris.begin(), clusters_[c].tris.end());
-    Mesh merged;
-    merged.indices.reserve(ids.size());
-    std::vector<uint32_t> point_ids = ids;
+    // The merge's vertices are the members' points in ascending id order; its triangles are the
+    // members' in member order.
+    std::vector<uint32_t> point_ids;
+    for (uint32_t c : members)
+        point_ids.insert(point_ids.end(), clusters_[c].layout.verts.begin(), clusters_[c].layout.verts.end());
     std::sort(point_ids.begin(), point_ids.end());
     point_ids.erase(std::unique(point_ids.begin(), point_ids.end()), point_ids.end());
+    Mesh merged;
+    merged.positions.reserve(point_ids.size());
     for (uint32_t p : point_ids) merged.positions.push_back(points_[p]);
-    for (uint32_t p : ids)
-        merged.indices.push_back(uint32_t(std::lower_bound(point_ids.begin(), point_ids.end(), p) - point_ids.begin()));
+    std::vector<uint32_t> merged_of;
+    for (uint32_t c : members) {
+        const ClusterLayout& layout = clusters_[c].layout;
+        merged_of.clear();
+        for (uint32_t p : layout.verts)
+            merged_of.push_back(uint32_t(std::lower_bound(point_ids.begin(), point_ids.end(), p) - point_ids.begin()));
+        for (uint8_t v : layout.local) merged.indices.push_back(merged_of[v]);
+    }
 
     SimplifyOptions so;
     so.target_ratio = 0;
@@ -250,18 +294,6 @@ GroupResult Builder::simplifyGroup(const std::vector<uint32_t>& members) const {
         return r;
     }
     Mesh& out = s->mesh;
-    DistanceOptions dopt;
-    dopt.sample_count = uint32_t(std::ceil(double(merged.faceCount()) * o_.samples_per_triangle));
-    dopt.seed = o_.seed;
-    Result<DistanceResult> d = measureSurfaceDistance(merged, out, dopt);
-    if (d.ok()) {
-        r.hausdorff = d->hausdorff;
-    } else {
-        // Nothing of non-zero area to sample: the group's own extent bounds the distance.
-        Aabb box;
-        for (const Vec3f& p : merged.positions) box.expand(p);
-        r.hausdorff = box.diagonal();
-    }
     // Output vertices at a point of the merge (the locked border, and points that did not move)
     // keep its id; the others are new points.
     std::vector<std::pair<PositionKey, uint32_t>> keys(merged.positions.size());
@@ -274,9 +306,27 @@ GroupResult Builder::simplifyGroup(const std::vector<uint32_t>& members) const {
                                    [](const auto& e, const PositionKey& key) { return e.first < key; });
         if (it != keys.end() && it->first == k) r.point_of[v] = it->second;
     }
-    r.split = splitIntoClusters(out.positions, out.indices, o_.max_triangles, o_.max_vertices);
+    const GroupMeshes meshes{merged.positions, merged.indices, point_ids, out.positions, out.indices, r.point_of};
+    Result<double> d = groupDistance(meshes, o_.samples_per_triangle, o_.seed);
+    if (!d.ok()) {
+        r.status = d.status();
+        return r;
+    }
+    r.hausdorff = *d;
+    if (!std::isfinite(r.hausdorff)) {
+        // No output triangle: the group's own extent bounds the distance.
+        Aabb box;
+        for (const Vec3f& p : merged.positions) box.expand(p);
+        r.hausdorff = box.diagonal();
+    }
+    // Output clusters, their vertices ordered as their point ids will be: the merge's points by id,
+    // then the new points, which commitGroup numbers after every existing point in output order.
+    const auto rank = [&](uint32_t v) {
+        return r.point_of[v] == kNewPoint ? uint64_t(1) << 32 | v : uint64_t(r.point_of[v]);
+    };
+    for (const auto& part : splitIntoClusters(out.positions, out.indices, o_.max_triangles, o_.max_vertices))
+        r.split.push_back(layoutOf(out.indices, part, rank));
     r.positions = std::move(out.positions);
-    r.indices = std::move(out.indices);
     return r;
 }
 
@@ -307,7 +357,10 @@ void Builder::commitGroup(const std::vector<uint32_t>& members, GroupResult& r, 
             points_.push_back(r.positions[&p - r.point_of.data()]);
         }
     const size_t first_output = clusters_.size();
-    addClusters(r.indices, r.split, r.point_of, g, next_level);
+    for (ClusterLayout& layout : r.split) {
+        for (uint32_t& v : layout.verts) v = r.point_of[v];
+        addCluster(std::move(layout), g, next_level);
+    }
     // The culling sphere encloses the outputs and everything below the group (an input's own
     // group's culling sphere, or an LOD0 input's geometry), so spheres nest down the DAG and culling
     // a group never hides a finer cluster that is in view.
@@ -325,10 +378,11 @@ void Builder::commitGroup(const std::vector<uint32_t>& members, GroupResult& r, 
     enclosingSphere(centers, radii, groups_[g].bounds_center, groups_[g].bounds_radius);
 }
 
-Status Builder::buildLevel(std::vector<uint32_t>& level, uint32_t depth) {
+Status Builder::buildLevel(std::vector<uint32_t>& level, uint32_t depth, uint32_t group_size) {
     const WeightedGraph graph = adjacency(level);
     LODBAKE_ASSIGN_OR_RETURN(std::vector<std::vector<uint32_t>> parts,
-                             partitionGraph(graph, o_.group_size, o_.min_group_size, o_.max_group_size, o_.seed));
+                             partitionGraph(graph, group_size, std::min(o_.min_group_size, group_size),
+                                            o_.max_group_size, o_.seed));
     for (auto& part : parts)
         for (uint32_t& v : part) v = level[v];
     std::vector<GroupResult> results(parts.size());
@@ -343,9 +397,17 @@ Status Builder::buildLevel(std::vector<uint32_t>& level, uint32_t depth) {
     return Status::okStatus();
 }
 
+// Undoes a level: drops the clusters, groups and points it added and frees its input clusters again.
+void Builder::rollBack(const std::vector<uint32_t>& level, size_t clusters, size_t groups, size_t points) {
+    clusters_.resize(clusters);
+    groups_.resize(groups);
+    group_members_.resize(groups);
+    points_.resize(points);
+    for (uint32_t c : level) clusters_[c].parent_group = kNone;
+}
+
 void Builder::flatten(ClusterLodHierarchy& out) const {
     out.clusters.reserve(clusters_.size());
-    std::vector<uint32_t> local;
     for (const BuildCluster& c : clusters_) {
         lodrt::ClusterLodCluster rec;
         std::copy(c.center, c.center + 3, rec.center);
@@ -354,15 +416,10 @@ void Builder::flatten(ClusterLodHierarchy& out) const {
         rec.parent_group = c.parent_group;
         rec.first_vertex = uint32_t(out.positions.size());
         rec.first_triangle = uint32_t(out.indices.size() / 3);
-        rec.triangle_count = uint32_t(c.tris.size() / 3);
-        // Local vertices in ascending point order (a sorted list, looked up by bisection).
-        local.assign(c.tris.begin(), c.tris.end());
-        std::sort(local.begin(), local.end());
-        local.erase(std::unique(local.begin(), local.end()), local.end());
-        for (uint32_t p : local) out.positions.push_back(points_[p]);
-        for (uint32_t p : c.tris)
-            out.indices.push_back(uint8_t(std::lower_bound(local.begin(), local.end(), p) - local.begin()));
-        rec.vertex_count = uint32_t(local.size());
+        rec.triangle_count = uint32_t(c.layout.local.size() / 3);
+        for (uint32_t p : c.layout.verts) out.positions.push_back(points_[p]);
+        out.indices.insert(out.indices.end(), c.layout.local.begin(), c.layout.local.end());
+        rec.vertex_count = uint32_t(c.layout.verts.size());
         out.clusters.push_back(rec);
     }
     out.groups = groups_;
@@ -377,15 +434,27 @@ Status Builder::run(const MeshView& lod0, ClusterLodHierarchy& out) {
     std::vector<uint32_t> tris;
     LODBAKE_RETURN_IF_ERROR(weldInput(lod0, points_, tris));
     std::vector<uint32_t> level;
-    addClusters(tris, splitIntoClusters(points_, tris, o_.max_triangles, o_.max_vertices), {}, kNone, level);
+    LODBAKE_RETURN_IF_ERROR(addLod0Clusters(tris, level));
     out.lod0_cluster_count = uint32_t(level.size());
     size_t triangles = tris.size() / 3;
-    uint32_t depth = 0;
+    uint32_t depth = 0, group_size = o_.group_size;
     while (level.size() > 1 && depth < o_.max_levels) {
-        LODBAKE_RETURN_IF_ERROR(buildLevel(level, ++depth));
+        const std::vector<uint32_t> input = level;
+        const size_t clusters = clusters_.size(), groups = groups_.size(), points = points_.size();
+        LODBAKE_RETURN_IF_ERROR(buildLevel(level, depth + 1, group_size));
         size_t next_triangles = 0;
-        for (uint32_t c : level) next_triangles += clusters_[c].tris.size() / 3;
+        for (uint32_t c : level) next_triangles += clusters_[c].layout.local.size() / 3;
         const bool stalled = double(next_triangles) > double(triangles) * (1.0 - o_.min_level_reduction);
+        if (stalled && group_size < o_.max_group_size) {
+            // The locked borders between groups hold the level: group again with larger groups, so
+            // that most of those borders fall inside a group and can be simplified; the larger size
+            // stays for the levels above.
+            rollBack(input, clusters, groups, points);
+            level = input;
+            group_size = std::min(o_.max_group_size, group_size * 2);
+            continue;
+        }
+        ++depth;
         triangles = next_triangles;
         if (stalled) break;
     }

@@ -26,12 +26,30 @@ struct WeightedGraph {
     std::vector<uint32_t> vertex_weight;
 };
 
-/// Partitions the graph into about vertex_count / group_size parts with METIS (k-way, fixed seed),
+/// Partitions the graph into about vertex_count / group_size parts with METIS (recursive bisection, fixed seed),
 /// then merges parts below min_size into the neighbouring part they share the most weight with when
 /// it stays within max_size, and cuts parts above max_size. Returns each part's vertices, ascending,
 /// parts ordered by their smallest vertex. Falls back to a chunked order when METIS reports an error.
 Result<std::vector<std::vector<uint32_t>>> partitionGraph(const WeightedGraph& graph, uint32_t group_size,
                                                           uint32_t min_size, uint32_t max_size, uint64_t seed);
+
+/// A group's merge and its simplification, with the point id of every vertex (kNewPointId for an
+/// output vertex at no point of the merge).
+inline constexpr uint32_t kNewPointId = 0x80000000u;
+struct GroupMeshes {
+    const std::vector<Vec3f>& merged_positions;
+    const std::vector<uint32_t>& merged_indices;
+    const std::vector<uint32_t>& merged_point;
+    const std::vector<Vec3f>& out_positions;
+    const std::vector<uint32_t>& out_indices;
+    const std::vector<uint32_t>& out_point;
+};
+
+/// Two-sided Hausdorff distance between the merge and its simplification (group_distance.cpp):
+/// about samples_per_triangle area-uniform samples per merged triangle on each side plus every
+/// vertex, less the vertices and triangles both meshes share (their distance is zero). Infinite when
+/// the output has no triangle. Fails only when resources run out.
+Result<double> groupDistance(const GroupMeshes& meshes, double samples_per_triangle, uint64_t seed);
 
 /// Sphere enclosing points (centre of their box, largest distance), radius rounded up so the float
 /// sphere still contains every point.

@@ -1545,7 +1545,9 @@ LODBAKE_STEP Status EdgeCollapser::accumulateQuadrics(const std::vector<uint8_t>
         Quadric constraint[3];
         uint8_t has_constraint[3];
     };
-    std::vector<FaceQuadrics> batch(kBatch);
+    // Sized by the mesh when it is below a batch: the cluster LOD builder simplifies thousands of
+    // small groups, and a full batch per call is megabytes of zeroing each time.
+    std::vector<FaceQuadrics> batch(std::min(kBatch, face_count));
     for (uint32_t base = 0; base < face_count; base += kBatch) {
         const uint32_t count = std::min(kBatch, face_count - base);
         LODBAKE_RETURN_IF_ERROR(forChunks(count, [&](size_t, uint32_t first, uint32_t last) {
@@ -1594,7 +1596,7 @@ LODBAKE_STEP Status EdgeCollapser::accumulateAttributeBlocks() {
     // Each face's attribute block is computed in parallel (fixed chunks of a batch of faces, into
     // a small buffer) and added to its wedges in face order: the same sums as a serial loop.
     constexpr uint32_t kBatch = 2 * kInitChunk;
-    std::vector<double> face_blocks(size_t(kBatch) * block_size_);
+    std::vector<double> face_blocks(size_t(std::min(kBatch, face_count)) * block_size_);
     for (uint32_t base = 0; base < face_count; base += kBatch) {
         const uint32_t count = std::min(kBatch, face_count - base);
         LODBAKE_RETURN_IF_ERROR(forChunks(count, [&](size_t, uint32_t first, uint32_t last) {
@@ -1668,8 +1670,8 @@ LODBAKE_STEP Status EdgeCollapser::queueInitialKeys() {
     // half-edge order (the heap's content and so its layout are those of a serial build).
     {
         constexpr uint32_t kBatch = 64 * kInitChunk;
-        std::vector<float> batch_cost(kBatch);
-        std::vector<uint8_t> batch_valid(kBatch);
+        std::vector<float> batch_cost(std::min(kBatch, he_count));
+        std::vector<uint8_t> batch_valid(std::min(kBatch, he_count));
         for (uint32_t base = 0; base < he_count; base += kBatch) {
             const uint32_t count = std::min(kBatch, he_count - base);
             LODBAKE_RETURN_IF_ERROR(forChunks(count, [&](size_t, uint32_t first, uint32_t last) {

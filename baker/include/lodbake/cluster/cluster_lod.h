@@ -7,9 +7,9 @@
 // crack-free cut (lodrt/cluster_lod.h selects it).
 //
 // Error of a group: a conservative bound on the two-sided distance of its output clusters to LOD0,
-// the largest error of its input clusters plus the measured two-sided Hausdorff distance
-// (mesh_distance.h) between its merged inputs and its simplified output (the triangle inequality
-// makes the sum a bound; it is monotonic by construction).
+// the largest error of its input clusters plus the measured two-sided Hausdorff distance between its
+// merged inputs and its simplified output (Metro-style samples and vertices through DistanceIndex,
+// mesh_distance.h; the triangle inequality makes the sum a bound; it is monotonic by construction).
 //
 // Deterministic: identical input and options give identical output for any thread count (groups are
 // simplified in parallel into slots indexed by group and committed in group order; METIS runs on
@@ -29,7 +29,8 @@ namespace lodbake {
 struct ClusterLodOptions {
     uint32_t max_triangles = lodrt::ClusterLodCluster::kMaxTriangles; // per cluster, at most the format's 128
     uint32_t max_vertices = lodrt::ClusterLodCluster::kMaxVertices;   // per cluster, at most the format's 255
-    uint32_t group_size = 8;                                          // clusters per group the partition aims at
+    uint32_t group_size = 8; // clusters per group the partition aims at; doubled (up to max_group_size)
+                             // for a level that stops shrinking, which is then built again
     uint32_t min_group_size = 4;       // smaller parts are merged into a neighbouring group when one has room
     uint32_t max_group_size = 32;      // larger parts are cut
     float simplify_ratio = 0.5f;       // triangles a group keeps after simplification
@@ -37,7 +38,8 @@ struct ClusterLodOptions {
                                        // (every vertex is measured too)
     uint64_t seed = 1;                 // METIS seed and distance sampling seed
     uint32_t max_levels = 48;          // guard against a hierarchy that stops shrinking
-    float min_level_reduction = 0.05f; // stop when a level keeps more than (1 - this) of the triangles
+    float min_level_reduction = 0.05f; // a level that keeps more than (1 - this) of the triangles has
+                                       // stalled: regrouped larger, or the build stops
 };
 
 /// The hierarchy as plain arrays, in the runtime's layout (lodrt/cluster_lod.h). Clusters are stored
