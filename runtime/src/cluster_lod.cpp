@@ -16,6 +16,16 @@ bool finiteSphere(const float center[3], float radius) {
            radius >= 0;
 }
 
+// A cone is unit-axis with cos and sin of one angle, or absent (cutoff <= 0, never used).
+bool validCone(const ClusterLodCluster& cl) {
+    if (!std::isfinite(cl.cone_cutoff) || cl.cone_cutoff > 1 || !std::isfinite(cl.cone_sin)) return false;
+    if (!(cl.cone_cutoff > 0)) return true;
+    const float len2 =
+        cl.cone_axis[0] * cl.cone_axis[0] + cl.cone_axis[1] * cl.cone_axis[1] + cl.cone_axis[2] * cl.cone_axis[2];
+    const float unit = cl.cone_cutoff * cl.cone_cutoff + cl.cone_sin * cl.cone_sin;
+    return std::isfinite(len2) && std::fabs(len2 - 1) < 1e-3f && cl.cone_sin >= 0 && unit > 1 - 1e-3f;
+}
+
 bool rangeFits(uint32_t first, uint32_t count, uint32_t size) {
     return uint64_t(first) + uint64_t(count) <= uint64_t(size);
 }
@@ -31,7 +41,8 @@ Result validateClusters(const ClusterLodView& lod, uint32_t& with_parent, uint32
             !rangeFits(cl.first_triangle, cl.triangle_count, lod.triangle_count))
             return Result::OutOfBounds;
         if (cl.vertex_count > ClusterLodCluster::kMaxVertices || cl.triangle_count > ClusterLodCluster::kMaxTriangles ||
-            !finiteSphere(cl.center, cl.radius) || (cl.self_group != kClusterNone && cl.self_group == cl.parent_group))
+            !finiteSphere(cl.center, cl.radius) || (cl.self_group != kClusterNone && cl.self_group == cl.parent_group) ||
+            !validCone(cl))
             return Result::BadStructure;
         (cl.parent_group == kClusterNone ? without_parent : with_parent) += 1;
     }
@@ -101,6 +112,10 @@ struct Walk {
             return;
         }
         if (frustum && classifySphere(*frustum, cl.center, cl.radius) == Containment::Outside) return;
+        if (frustum && cl.cone_cutoff > 0 && clusterBackFacing(cl, eye)) {
+            ++stats.cone_culled;
+            return;
+        }
         if (stats.written < capacity) out[stats.written++] = c;
         ++stats.selected;
         stats.triangles += cl.triangle_count;
@@ -118,6 +133,20 @@ struct Walk {
 };
 
 } // namespace
+
+bool clusterBackFacing(const ClusterLodCluster& cl, const float eye[3]) {
+    if (!(cl.cone_cutoff > 0)) return false;
+    const float vx = cl.center[0] - eye[0], vy = cl.center[1] - eye[1], vz = cl.center[2] - eye[2];
+    const float d = std::sqrt(vx * vx + vy * vy + vz * vz);
+    if (!(d > cl.radius)) return false;
+    const float cos_f = (vx * cl.cone_axis[0] + vy * cl.cone_axis[1] + vz * cl.cone_axis[2]) / d;
+    if (!(cos_f > 0)) return false;
+    const float sin_f = std::sqrt(std::fmax(0.0f, 1.0f - cos_f * cos_f));
+    // cos(f + a); the margin covers the rounding of the eye's transform and of these few operations.
+    const float cos_sum = cos_f * cl.cone_cutoff - sin_f * cl.cone_sin;
+    constexpr float kMargin = 1e-4f;
+    return cos_sum > kMargin && d * (cos_sum - kMargin) > cl.radius;
+}
 
 Result validateClusterLod(const ClusterLodView& lod) {
     if ((lod.cluster_count > 0 && !lod.clusters) || (lod.group_count > 0 && !lod.groups) ||

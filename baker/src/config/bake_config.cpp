@@ -147,6 +147,7 @@ Status applyImpl(const Json& root, const std::string& name, BakeSettings& s) {
         {"progressive_fans", [&](const Json& v, const std::string& w) { return readBool(v, w, s.progressive_fans); }},
         {"pfrep_from_chain", [&](const Json& v, const std::string& w) { return readBool(v, w, s.pfrep_from_chain); }},
         {"pfrep_format", [&](const Json& v, const std::string& w) { return readUint(v, w, 2, 3, s.pfrep_format); }},
+        {"cluster_lod", [&](const Json& v, const std::string& w) { return readBool(v, w, s.cluster_lod); }},
         {"remove_covered_components",
          [&](const Json& v, const std::string& w) { return readBool(v, w, s.remove_covered_components); }},
         {"merge",
@@ -244,6 +245,7 @@ std::string settingsToJson(const BakeSettings& s) {
         j["progressive_fans"] = s.progressive_fans;
         j["pfrep_from_chain"] = s.pfrep_from_chain;
         j["pfrep_format"] = s.pfrep_format;
+        j["cluster_lod"] = s.cluster_lod;
         j["remove_covered_components"] = s.remove_covered_components;
         j["merge"] = mergeModeName(s.merge);
         j["merge_scene"] = s.merge_scene;

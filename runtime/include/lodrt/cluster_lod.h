@@ -54,6 +54,11 @@ struct ClusterLodCluster {
     uint32_t vertex_count = 0;
     uint32_t first_triangle = 0; // range of the hierarchy's triangles (3 local vertex indices each)
     uint32_t triangle_count = 0;
+    /// Normal cone (conservative): every triangle's unit normal n has dot(n, cone_axis) >=
+    /// cone_cutoff = cos(a), cone_sin = sin(a). cone_cutoff <= 0 means no cone (never cone-culled).
+    float cone_axis[3] = {};
+    float cone_cutoff = -1;
+    float cone_sin = 1;
 
     static constexpr uint32_t kMaxTriangles = 128;
     static constexpr uint32_t kMaxVertices = 255;
@@ -103,11 +108,20 @@ struct ClusterCutStats {
     uint32_t written = 0;        // cluster indices written to the output
     uint32_t groups_visited = 0; // groups entered
     uint32_t triangles = 0;      // triangles of the selected clusters
+    uint32_t cone_culled = 0;    // clusters of the cut not drawn because they face away from the eye
 };
+
+/// True when every triangle of `cluster` faces away from `eye` (model space): for every point p of
+/// the cluster's sphere and every normal n of its cone, dot(n, p - eye) > 0. Conservative: with
+/// angle(axis, center - eye) = f and the cone's half angle a, it holds when f + a < 90 degrees and
+/// |center - eye| * cos(f + a) exceeds the radius (plus a small margin for float rounding).
+LODRT_API bool clusterBackFacing(const ClusterLodCluster& cluster, const float eye[3]);
 
 /// Selects the cut of one instance for a view: writes the indices of the clusters to draw to
 /// out[0, capacity) and returns the counts. `eye` is in world space; `frustum` (world space) may be
-/// null to select without culling (the crack-free cut of the whole surface). `params` as in
+/// null to select without culling (the crack-free cut of the whole surface). With a frustum, a
+/// cluster of the cut is also not drawn when clusterBackFacing says its normal cone faces away from
+/// the eye (only triangles no one can see are dropped; the clusters drawn still meet edge for edge). `params` as in
 /// selection.h (pixel_threshold, vertical_fov, viewport_height, lod_bias; other fields unused).
 /// Returns InvalidArgument (and no output) when the scratch is too small or the instance scale is
 /// not positive and finite; `lod` is assumed to have passed validateClusterLod.
