@@ -12,12 +12,19 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <fstream>
 #include <map>
 #include <random>
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
+#include "../gltf/gltf_test_util.h"
+#include "cli_runner.h"
+#include "data_uri.h"
 #include "lodbake/bake/bake.h"
+#include "lodbake/core/file_io.h"
 #include "lodbake/cluster/cluster_lod.h"
 #include "lodbake/io/mesh_io.h"
 #include "lodrt/cluster_pack.h"
@@ -393,6 +400,45 @@ TEST(ClusterLodPack, BakeWritesTheExtensionWithIdenticalBytesAtOneAndTwoThreads)
     // Only LOD0's mesh carries it.
     for (uint32_t m = 1; m < pack.meshCount(); ++m)
         EXPECT_EQ(lodrt::clusterPackFind(pack, m, &source), lodrt::Result::NotLoaded);
+}
+
+// schemas/LODBAKE_cluster_lod: the example and a baked pack's object validate against the schema,
+// and the example's table and pages open and decode.
+std::string validateAgainstSchema(const nlohmann::json& object, const std::string& name) {
+    const std::string path = lodbake_test::scratchDir() + "/" + name;
+    std::ofstream(path) << object.dump(1);
+    const std::string schema =
+        lodbake_test::sourceDir() + "/schemas/LODBAKE_cluster_lod/schema/mesh.LODBAKE_cluster_lod.schema.json";
+    const lodbake_test::CommandResult r = lodbake_test::runCommand(
+        lodbake_test::python() + " " +
+        lodbake_test::shellQuote(lodbake_test::sourceDir() + "/tests/support/validate_schema.py") + " " +
+        lodbake_test::shellQuote(schema) + " " + lodbake_test::shellQuote(path));
+    return r.exit_code == 0 ? std::string() : "exit " + std::to_string(r.exit_code) + ": " + r.output;
+}
+
+TEST(ClusterLodPack, SchemaExampleIsValidAndDecodes) {
+    auto text = lodbake::readFileBytes(lodbake_test::sourceDir() + "/schemas/LODBAKE_cluster_lod/examples/minimal.gltf");
+    ASSERT_TRUE(text.ok());
+    const nlohmann::json doc = nlohmann::json::parse(text->begin(), text->end());
+    const nlohmann::json& object = doc["meshes"][0]["extensions"][lodrt::format::kExtClusterLod];
+    EXPECT_EQ(validateAgainstSchema(object, "cluster_example.json"), "");
+    nlohmann::json bad = object;
+    bad.erase("pages");
+    EXPECT_NE(validateAgainstSchema(bad, "cluster_example_bad.json"), ""); // the validator can refuse
+    std::vector<uint8_t> buffer;
+    ASSERT_TRUE(lodbake_test::dataUriBytes(doc["buffers"][0]["uri"].get<std::string>(), buffer));
+    auto viewBytes = [&](const nlohmann::json& index) {
+        const nlohmann::json& view = doc["bufferViews"][index.get<size_t>()];
+        const size_t offset = view.value("byteOffset", size_t(0)), length = view["byteLength"].get<size_t>();
+        EXPECT_LE(offset + length, buffer.size());
+        return std::vector<uint8_t>(buffer.begin() + long(offset), buffer.begin() + long(offset + length));
+    };
+    Decoded d;
+    d.table = viewBytes(object["table"]);
+    d.pages = viewBytes(object["pages"]);
+    ASSERT_TRUE(openAndDecode(d)) << d.error;
+    EXPECT_EQ(d.pack.view.cluster_count, 1u);
+    EXPECT_EQ(d.pack.places[0].triangle_count, 4u);
 }
 
 } // namespace
