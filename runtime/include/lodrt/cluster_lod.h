@@ -15,7 +15,7 @@
 // projects to more than the threshold (its inputs may be drawn) and its culling sphere, which
 // encloses everything below it, is not outside the frustum, so the cost follows what is drawn and
 // what is visible. With a frustum, the cut is exactly the frustum-less cut less the clusters whose
-// own sphere is outside. No allocation: the
+// own sphere is outside or whose normal cone faces away from the eye. No allocation: the
 // caller owns the scratch and the output. Pure apart from the caller's scratch; callable from any
 // thread with one scratch per thread.
 
@@ -80,7 +80,8 @@ struct ClusterLodView {
 };
 
 /// Checks what the cut relies on, treating every field as untrusted: every index and range in bounds,
-/// finite non-negative errors and radii, every cluster's parent_group listing it among its children
+/// finite non-negative errors and radii, normal cones finite with a unit axis (when present), every
+/// cluster's parent_group listing it among its children
 /// and every root without a parent. Returns Ok, OutOfBounds (an index or range outside its array) or
 /// BadStructure (a non-finite or negative value, a child list that disagrees with parent_group). Monotonicity is a
 /// property of a good bake, not a safety condition: the walk terminates and stays in bounds without it.

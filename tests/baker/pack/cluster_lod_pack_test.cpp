@@ -441,4 +441,30 @@ TEST(ClusterLodPack, SchemaExampleIsValidAndDecodes) {
     EXPECT_EQ(d.pack.places[0].triangle_count, 4u);
 }
 
+// The CLI: --clusters writes the extension, --print-config shows the key, loddump prints the
+// hierarchy per depth and its checks pass; without the flag the pack has no extension.
+TEST(ClusterLodPack, CliFlagAndLoddumpSummary) {
+    const std::string dir = lodbake_test::scratchDir();
+    const std::string obj = dir + "/cluster_cli_sphere.obj", with = dir + "/cluster_cli_with.glb",
+                      without = dir + "/cluster_cli_without.glb";
+    lodbake::Diagnostics diagnostics;
+    ASSERT_TRUE(lodbake::writeMesh(bumpySphere(24, 32), obj, lodbake::WriteOptions(), diagnostics).ok());
+    lodbake_test::CliRun r = lodbake_test::runLodbake({"bake", obj, "-o", with, "--levels", "0.5", "--clusters", "--quiet"});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    r = lodbake_test::runLodbake({"bake", obj, "-o", without, "--levels", "0.5", "--quiet"});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    r = lodbake_test::runLodbake({"bake", "--clusters", "--print-config"});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_TRUE(nlohmann::json::parse(r.out)["cluster_lod"].get<bool>());
+    const lodbake_test::CommandResult dump =
+        lodbake_test::runCommand(lodbake_test::shellQuote(LODBAKE_TEST_LODDUMP) + " " + lodbake_test::shellQuote(with));
+    ASSERT_EQ(dump.exit_code, 0) << dump.output;
+    EXPECT_NE(dump.output.find("cluster LOD on mesh 0 (LODBAKE_cluster_lod)"), std::string::npos) << dump.output;
+    EXPECT_NE(dump.output.find("18 cuts crack-free"), std::string::npos) << dump.output;
+    const lodbake_test::CommandResult plain = lodbake_test::runCommand(
+        lodbake_test::shellQuote(LODBAKE_TEST_LODDUMP) + " " + lodbake_test::shellQuote(without));
+    ASSERT_EQ(plain.exit_code, 0) << plain.output;
+    EXPECT_EQ(plain.output.find("cluster LOD"), std::string::npos);
+}
+
 } // namespace
