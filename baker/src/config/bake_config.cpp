@@ -201,6 +201,9 @@ Status validateSettings(const BakeSettings& settings, const std::string& name) {
     // --compact keeps the level data only in LODBAKE_ streams, --web only in EXT_meshopt_compression.
     if (settings.compact && settings.web)
         return invalidInput(name + ": /web: cannot be combined with compact (a pack keeps its level data in one form)");
+    // A --web pack carries no LODBAKE_ extension at all (docs/format/web.md).
+    if (settings.web && settings.cluster_lod)
+        return invalidInput(name + ": /cluster_lod: cannot be combined with web (a web pack has no LODBAKE_ extensions)");
     return Status::okStatus();
 }
 

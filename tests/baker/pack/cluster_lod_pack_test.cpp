@@ -382,6 +382,18 @@ TEST(ClusterLodPack, BakeWritesTheExtensionWithIdenticalBytesAtOneAndTwoThreads)
         glb[t] = out.value().glb;
     }
     EXPECT_EQ(glb[0], glb[1]);
+    {
+        lodbake::BakeSettings web;
+        web.cluster_lod = true;
+        web.web = true;
+        std::vector<lodbake::BakeInput> inputs(1);
+        inputs[0].mesh = bumpySphere(8, 12);
+        lodbake::Diagnostics diagnostics;
+        auto refused = lodbake::bake(std::move(inputs), web, diagnostics);
+        ASSERT_FALSE(refused.ok());
+        EXPECT_NE(refused.status().message().find("/cluster_lod: cannot be combined with web"), std::string::npos)
+            << refused.status().message();
+    }
     lodrt::Pack pack;
     char message[256] = {0};
     ASSERT_EQ(lodrt::loadPack(glb[0].data(), glb[0].size(), nullptr, &pack, message, sizeof(message)),
