@@ -61,11 +61,11 @@ def write_glb(doc, bin_bytes):
 def bake(cli, tmp, pfrep_format, clusters=False):
     off = os.path.join(tmp, "sphere.off")
     with open(off, "w") as f:
-        f.write(sphere_off(32, 48) if clusters else sphere_off())
+        f.write(sphere_off(16, 24) if clusters else sphere_off())
     out = os.path.join(tmp, "sphere.glb")
     subprocess.run([cli, "bake", off, "-o", out, "--levels", "0.5,0.25", "--preset",
                     os.path.join(HERE, "..", "..", "..", "configs", "desktop.json"), "--quiet",
-                    "--pfrep-format", str(pfrep_format)] + (["--clusters"] if clusters else []),
+                    "--pfrep-format", str(pfrep_format)] + (["--clusters", "--no-progressive-fans"] if clusters else []),
                    check=True, stdout=subprocess.DEVNULL)
     with open(out, "rb") as f:
         return f.read()
@@ -643,7 +643,8 @@ def pfrep_triangles_lie(p):
 
 
 # --- LODBAKE_cluster_lod (docs/format/cluster_lod.md): loddump's check, with lodrt's reader ---
-# Their base is a finer sphere baked with --clusters, so the hierarchy has levels of groups.
+# Their base is a finer sphere baked with --clusters (and without the PFRep blob, to keep the packs
+# small), so the hierarchy has levels of groups.
 CLUSTER_CASES = set()
 
 
