@@ -242,16 +242,19 @@ Result clusterPackFind(const Pack& pack, uint32_t mesh, ClusterPackSource* out, 
     }
     const BufferViewInfo& table = pack.bufferView(uint32_t(views[0]));
     const BufferViewInfo& pages = pack.bufferView(uint32_t(views[1]));
-    const GlbView& glb = pack.container();
-    if (!glb.bin)
-        return fail(Result::NotLoaded, message, size, "/meshes/%u/extensions/%s: the BIN chunk is not in memory", mesh,
-                    fmt::kExtClusterLod);
-    // loadPack checked both views against the buffer and the buffer against the BIN chunk.
-    out->table = glb.bin + table.byte_offset;
+    // loadPack and loadPackJson checked both views against the buffer and the buffer against the
+    // BIN chunk's length.
+    out->table_view = uint32_t(views[0]);
+    out->pages_view = uint32_t(views[1]);
+    out->table_offset = table.byte_offset;
     out->table_size = size_t(table.byte_length);
     out->pages_offset = pages.byte_offset;
     out->pages_size = pages.byte_length;
-    out->pages = glb.bin + pages.byte_offset;
+    const GlbView& glb = pack.container();
+    if (glb.bin) {
+        out->table = glb.bin + table.byte_offset;
+        out->pages = glb.bin + pages.byte_offset;
+    }
     return Result::Ok;
 }
 

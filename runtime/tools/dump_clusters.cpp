@@ -27,6 +27,10 @@ bool openAll(const lodrt::Pack& pack, uint32_t mesh, Opened& o, ClusterSummary& 
         *error = message;
         return false;
     }
+    if (!source.table) {
+        *error = "the BIN chunk is not in memory";
+        return false;
+    }
     lodrt::ClusterPackInfo info;
     if (lodrt::clusterPackReadInfo(source.table, source.table_size, &info, message, sizeof(message)) !=
         lodrt::Result::Ok) {

@@ -65,7 +65,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         if (lodrt::loadPack(data, size, nullptr, &pack) != lodrt::Result::Ok) return 0;
         for (uint32_t m = 0; m < pack.meshCount(); ++m) {
             lodrt::ClusterPackSource source;
-            if (lodrt::clusterPackFind(pack, m, &source) != lodrt::Result::Ok) continue;
+            if (lodrt::clusterPackFind(pack, m, &source) != lodrt::Result::Ok || !source.table) continue;
             std::vector<uint8_t> table(source.table, source.table + source.table_size);
             decodeAll(table.data(), table.size(), source.pages, size_t(source.pages_size));
         }

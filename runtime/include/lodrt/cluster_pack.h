@@ -21,19 +21,24 @@
 
 namespace lodrt {
 
-/// Where a mesh's extension keeps its bytes: the table's bytes (in memory) and the pages view's byte
-/// range in the buffer (absolute offset in the GLB BIN chunk, so a page can be range-read).
+/// Where a mesh's extension keeps its bytes: the two buffer views, their byte ranges in the GLB BIN
+/// chunk (so the table and each page can be range-read, e.g. with PackSource::readBufferView), and
+/// their bytes when the BIN chunk is in memory.
 struct ClusterPackSource {
-    const uint8_t* table = nullptr;
+    uint32_t table_view = 0;
+    uint32_t pages_view = 0;
+    uint64_t table_offset = 0; // of the table view in the BIN chunk
     size_t table_size = 0;
-    uint64_t pages_offset = 0; // of the pages view in its buffer (the BIN chunk)
+    uint64_t pages_offset = 0; // of the pages view in the BIN chunk
     uint64_t pages_size = 0;
-    const uint8_t* pages = nullptr; // the pages' bytes when the BIN chunk is in memory, else null
+    const uint8_t* table = nullptr; // the bytes when the BIN chunk is in memory (loadPack), else null
+    const uint8_t* pages = nullptr;
 };
 
 /// Finds `format::kExtClusterLod` on mesh `mesh` of `pack` and checks its object (the two buffer
-/// views exist and lie in the GLB BIN chunk). Returns Ok, NotLoaded when the mesh has no such
-/// extension, BadGltf / OutOfBounds with a one-line message otherwise.
+/// views exist and lie in the GLB BIN chunk, tightly packed). Returns Ok (with null byte pointers
+/// for a pack loaded with loadPackJson), NotLoaded when the mesh has no such extension, BadGltf /
+/// OutOfBounds with a one-line message otherwise.
 LODRT_API Result clusterPackFind(const Pack& pack, uint32_t mesh, ClusterPackSource* out, char* error_message = nullptr,
                                  size_t error_message_size = 0);
 

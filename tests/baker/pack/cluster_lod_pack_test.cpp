@@ -409,6 +409,22 @@ TEST(ClusterLodPack, BakeWritesTheExtensionWithIdenticalBytesAtOneAndTwoThreads)
     for (uint32_t c = 0; c < d.pack.view.cluster_count; ++c)
         if (d.pack.view.clusters[c].self_group == lodrt::kClusterNone) lod0_triangles += d.pack.places[c].triangle_count;
     EXPECT_EQ(lod0_triangles, pack.primitive(pack.mesh(0).first_primitive).triangle_count);
+    // A pack opened from its JSON chunk alone (range reads): the same views and byte ranges, no bytes;
+    // the table and pages read at those ranges of the BIN chunk are the ones above.
+    lodrt::GlbView glb_view;
+    ASSERT_EQ(lodrt::parseGlb(glb[0].data(), glb[0].size(), &glb_view), lodrt::Result::Ok);
+    lodrt::Pack json_only;
+    ASSERT_EQ(lodrt::loadPackJson(glb_view.json, glb_view.json_size, glb_view.bin_size, nullptr, &json_only),
+              lodrt::Result::Ok);
+    lodrt::ClusterPackSource ranged;
+    ASSERT_EQ(lodrt::clusterPackFind(json_only, 0, &ranged), lodrt::Result::Ok);
+    EXPECT_EQ(ranged.table, nullptr);
+    EXPECT_EQ(ranged.pages, nullptr);
+    EXPECT_EQ(ranged.table_view, source.table_view);
+    EXPECT_EQ(std::vector<uint8_t>(glb_view.bin + ranged.table_offset, glb_view.bin + ranged.table_offset + ranged.table_size),
+              d.table);
+    EXPECT_EQ(std::vector<uint8_t>(glb_view.bin + ranged.pages_offset, glb_view.bin + ranged.pages_offset + ranged.pages_size),
+              d.pages);
     // Only LOD0's mesh carries it.
     for (uint32_t m = 1; m < pack.meshCount(); ++m)
         EXPECT_EQ(lodrt::clusterPackFind(pack, m, &source), lodrt::Result::NotLoaded);
