@@ -90,6 +90,7 @@ struct Walk {
     uint32_t* out;
     uint32_t capacity;
     ClusterCutStats stats;
+    ClusterResidency* residency; // or null: every group resident
 
     // The error of the LOD sphere projects to more than the threshold: d = max(|c - eye| - r, 0).
     bool tooCoarse(const ClusterLodGroup& g) const {
@@ -105,11 +106,20 @@ struct Walk {
     void consider(uint32_t c) {
         const ClusterLodCluster& cl = lod.clusters[c];
         if (cl.self_group != kClusterNone && tooCoarse(lod.groups[cl.self_group])) {
+            const bool resident = !residency || residency->group_resident[cl.self_group] != 0;
             if (stamps[cl.self_group] != epoch) {
                 stamps[cl.self_group] = epoch;
-                stack[stack_size++] = cl.self_group;
+                if (resident) {
+                    stack[stack_size++] = cl.self_group;
+                } else {
+                    if (residency->missing_count < residency->missing_capacity)
+                        residency->missing[residency->missing_count] = cl.self_group;
+                    ++residency->missing_count;
+                }
             }
-            return;
+            // Not resident: this cluster stands in for the finer ones (so do its siblings: the same
+            // group decides for all of them).
+            if (resident) return;
         }
         if (frustum && classifySphere(*frustum, cl.center, cl.radius) == Containment::Outside) return;
         if (frustum && cl.cone_cutoff > 0 && clusterBackFacing(cl, eye)) {
@@ -172,6 +182,34 @@ size_t clusterCutScratchBytes(const ClusterLodView& lod) {
 Result selectClusterCut(const ClusterLodView& lod, const ClusterInstance& instance, const float eye[3],
                         const Frustum* frustum, const SelectionParams& params, ClusterCutScratch& scratch,
                         uint32_t* out, uint32_t capacity, ClusterCutStats* stats) {
+    return selectClusterCutResident(lod, instance, eye, frustum, params, scratch, nullptr, out, capacity, stats);
+}
+
+void clusterResidencyClosure(const ClusterLodView& lod, uint8_t* group_resident) {
+    // A group's outputs are inputs of their parent groups; if one of those is not resident the walk
+    // may not reach every output, so the group is not resident either. Parents lie above their
+    // children, so a pass per level settles it; the bound only guards a hostile hierarchy.
+    for (uint32_t pass = 0; pass <= lod.group_count; ++pass) {
+        bool changed = false;
+        for (uint32_t c = 0; c < lod.cluster_count; ++c) {
+            const ClusterLodCluster& cl = lod.clusters[c];
+            if (cl.self_group == kClusterNone || cl.parent_group == kClusterNone) continue;
+            if (group_resident[cl.self_group] && !group_resident[cl.parent_group]) {
+                group_resident[cl.self_group] = 0;
+                changed = true;
+            }
+        }
+        if (!changed) return;
+    }
+}
+
+Result selectClusterCutResident(const ClusterLodView& lod, const ClusterInstance& instance, const float eye[3],
+                                const Frustum* frustum, const SelectionParams& params, ClusterCutScratch& scratch,
+                                ClusterResidency* residency, uint32_t* out, uint32_t capacity,
+                                ClusterCutStats* stats) {
+    if (residency && (!residency->group_resident || (residency->missing_capacity > 0 && !residency->missing)))
+        return Result::InvalidArgument;
+    if (residency) residency->missing_count = 0;
     const float k = pixelsPerUnitAtDistanceOne(params);
     const float threshold = params.pixel_threshold == 0 ? 1.0f : params.pixel_threshold;
     const size_t need = clusterCutScratchBytes(lod);
@@ -197,7 +235,8 @@ Result selectClusterCut(const ClusterLodView& lod, const ClusterInstance& instan
               scratch.epoch,
               out,
               capacity,
-              {}};
+              {},
+              residency};
     walk.run();
     if (stats) *stats = walk.stats;
     return Result::Ok;

@@ -474,4 +474,15 @@ Result clusterPageDecode(const ClusterLodPack& pack, uint32_t page_index, const 
     return Result::Ok;
 }
 
+void clusterGroupResidency(const ClusterLodPack& pack, const uint8_t* page_resident, uint8_t* group_resident) {
+    const ClusterLodView& v = pack.view;
+    for (uint32_t g = 0; g < v.group_count; ++g) {
+        uint8_t resident = 1;
+        for (uint32_t i = 0; i < v.groups[g].child_count && resident; ++i)
+            resident = page_resident[pack.places[v.group_children[v.groups[g].first_child + i]].page] ? 1 : 0;
+        group_resident[g] = resident;
+    }
+    clusterResidencyClosure(v, group_resident);
+}
+
 } // namespace lodrt

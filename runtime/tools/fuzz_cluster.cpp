@@ -42,6 +42,14 @@ void decodeAll(const uint8_t* table, size_t table_size, const uint8_t* pages, si
     const float eye[3] = {0.5f, 2.0f, -3.0f};
     (void)lodrt::selectClusterCut(pack.view, lodrt::ClusterInstance(), eye, &frustum, lodrt::SelectionParams(), cut,
                                   out.data(), uint32_t(out.size()), nullptr);
+    // And with every other page resident (the closure runs over the hostile hierarchy too).
+    std::vector<uint8_t> pages_in(pack.page_count), groups_in(pack.view.group_count + 1);
+    for (uint32_t p = 0; p < pack.page_count; ++p) pages_in[p] = uint8_t(p % 2);
+    lodrt::clusterGroupResidency(pack, pages_in.data(), groups_in.data());
+    std::vector<uint32_t> missing(pack.view.group_count / 2 + 1);
+    lodrt::ClusterResidency residency{groups_in.data(), missing.data(), uint32_t(missing.size()), 0};
+    (void)lodrt::selectClusterCutResident(pack.view, lodrt::ClusterInstance(), eye, &frustum, lodrt::SelectionParams(),
+                                          cut, &residency, out.data(), uint32_t(out.size()), nullptr);
     for (uint32_t p = 0; p < pack.page_count; ++p) {
         const lodrt::ClusterPage& page = pack.pages[p];
         // A copy of exactly the page's bytes, so ASan sees any read past its end.

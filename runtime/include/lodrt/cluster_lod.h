@@ -130,4 +130,30 @@ LODRT_API Result selectClusterCut(const ClusterLodView& lod, const ClusterInstan
                                   const Frustum* frustum, const SelectionParams& params, ClusterCutScratch& scratch,
                                   uint32_t* out, uint32_t capacity, ClusterCutStats* stats);
 
+/// Which groups' input clusters are loaded (their pages resident), for a cut that draws the finest
+/// resident clusters until the missing pages arrive.
+struct ClusterResidency {
+    /// Per group: nonzero when its input clusters can be drawn. Must be closed upward
+    /// (clusterResidencyClosure): a resident group's outputs' parent groups are resident too, else
+    /// the stand-in clusters of two groups could overlap.
+    const uint8_t* group_resident = nullptr;
+    uint32_t* missing = nullptr; // out: groups the cut would have entered but could not, each once
+    uint32_t missing_capacity = 0;
+    uint32_t missing_count = 0; // out: all of them (may exceed the capacity)
+};
+
+/// Clears the residency of every group whose outputs have a non-resident parent group, until the
+/// set is closed upward. Call after the resident pages change (not per frame): O(levels x clusters).
+LODRT_API void clusterResidencyClosure(const ClusterLodView& lod, uint8_t* group_resident);
+
+/// selectClusterCut over the resident part of the hierarchy: where the cut would enter a group that
+/// is not resident, the group's outputs are drawn instead (all of them decide alike, so the drawn
+/// clusters still meet edge for edge, only coarser there) and the group is listed as missing.
+/// `residency` may be null (every group resident: exactly selectClusterCut). The roots' pages are
+/// assumed resident. InvalidArgument also for a residency without group_resident or output.
+LODRT_API Result selectClusterCutResident(const ClusterLodView& lod, const ClusterInstance& instance,
+                                          const float eye[3], const Frustum* frustum, const SelectionParams& params,
+                                          ClusterCutScratch& scratch, ClusterResidency* residency, uint32_t* out,
+                                          uint32_t capacity, ClusterCutStats* stats);
+
 } // namespace lodrt

@@ -126,4 +126,10 @@ LODRT_API Result clusterPageDecode(const ClusterLodPack& pack, uint32_t page_ind
                                    size_t index_capacity, void* scratch, size_t scratch_size,
                                    char* error_message = nullptr, size_t error_message_size = 0);
 
+/// Group residency for selectClusterCutResident from page residency (page_resident[p] nonzero when
+/// page p is decoded and uploaded): a group is resident when the pages of all its input clusters
+/// are, then closed upward (clusterResidencyClosure). Call when pages arrive or leave.
+LODRT_API void clusterGroupResidency(const ClusterLodPack& pack, const uint8_t* page_resident,
+                                     uint8_t* group_resident);
+
 } // namespace lodrt

@@ -14,6 +14,7 @@
 #include <cstring>
 #include <fstream>
 #include <map>
+#include <set>
 #include <random>
 #include <string>
 #include <vector>
@@ -324,6 +325,70 @@ TEST(ClusterLodPack, ConeCullingDropsOnlyBackFacingClusters) {
     }
     // Seen from outside a sphere about half of it faces away: culling must find a good part of that.
     EXPECT_GT(culled, drawn_total / 5) << culled << " culled, " << drawn_total << " drawn";
+}
+
+// Pages arriving in any order: the cut draws only clusters of resident pages, stays crack-free, lists
+// the groups it needs, and once every page is in it is the full cut.
+TEST(ClusterLodPack, PartialResidencyDrawsResidentClustersWithoutCracks) {
+    const ClusterLodHierarchy h = build(bumpySphere(60, 80));
+    const Decoded d = writeAndDecode(h);
+    ASSERT_TRUE(d.error.empty()) << d.error;
+    const lodrt::ClusterLodView& v = d.pack.view;
+    const Edges edges(d);
+    std::vector<uint32_t> lod0;
+    for (uint32_t c = 0; c < v.cluster_count; ++c)
+        if (v.clusters[c].self_group == lodrt::kClusterNone) lod0.push_back(c);
+    const std::vector<Edge> lod0_boundary = edges.boundary(lod0);
+    std::vector<uint8_t> pages(d.pack.page_count, 0), groups(v.group_count, 0);
+    std::vector<uint32_t> missing(v.group_count);
+    std::vector<uint32_t> scratch(lodrt::clusterCutScratchBytes(v) / 4 + 1, 0), out(v.cluster_count);
+    lodrt::ClusterCutScratch s{scratch.data(), scratch.size() * 4, 0};
+    std::mt19937 rng(5);
+    size_t partial_cuts = 0, stand_ins = 0, closed_off = 0; // groups the upward closure made non-resident
+    for (const auto& eye : randomEyes(300, 1.05f, 9)) {
+        // Root pages always; every other page resident with a chance of 0.5, 0.75 or 0.95.
+        const double chance = 0.5 + 0.25 * double(partial_cuts % 3) - (partial_cuts % 3 == 2 ? 0.05 : 0.0);
+        for (uint8_t& p : pages) p = std::uniform_real_distribution<double>(0, 1)(rng) < chance;
+        for (uint32_t r = 0; r < v.root_count; ++r) pages[d.pack.places[v.roots[r]].page] = 1;
+        lodrt::clusterGroupResidency(d.pack, pages.data(), groups.data());
+        for (uint32_t g = 0; g < v.group_count; ++g) {
+            bool raw = true;
+            for (uint32_t i = 0; i < v.groups[g].child_count; ++i)
+                raw = raw && pages[d.pack.places[v.group_children[v.groups[g].first_child + i]].page];
+            closed_off += raw && !groups[g];
+        }
+        lodrt::ClusterResidency residency{groups.data(), missing.data(), uint32_t(missing.size()), 0};
+        lodrt::ClusterCutStats st;
+        ASSERT_EQ(lodrt::selectClusterCutResident(v, lodrt::ClusterInstance(), eye.data(), nullptr, params(), s,
+                                                  &residency, out.data(), uint32_t(out.size()), &st),
+                  lodrt::Result::Ok);
+        const std::vector<uint32_t> drawn(out.begin(), out.begin() + st.written);
+        for (uint32_t c : drawn) ASSERT_TRUE(pages[d.pack.places[c].page]) << "cluster " << c << " of a missing page";
+        std::vector<Edge> b = edges.boundary(drawn), extra;
+        std::set_difference(b.begin(), b.end(), lod0_boundary.begin(), lod0_boundary.end(), std::back_inserter(extra));
+        ASSERT_TRUE(extra.empty()) << extra.size() << " boundary edges LOD0 lacks with partial residency";
+        const std::vector<uint32_t> full = cut(v, eye.data(), nullptr);
+        if (residency.missing_count == 0) {
+            EXPECT_EQ(std::multiset<uint32_t>(drawn.begin(), drawn.end()), std::multiset<uint32_t>(full.begin(), full.end()));
+        } else {
+            ++stand_ins;
+            for (uint32_t i = 0; i < residency.missing_count; ++i) EXPECT_FALSE(groups[missing[i]]);
+        }
+        ++partial_cuts;
+    }
+    EXPECT_GT(stand_ins, 20u); // the run did cut with missing pages
+    EXPECT_GT(closed_off, 0u) << "the closure never mattered: the test would not see overlapping stand-ins";
+    // Everything resident: the full cut.
+    std::fill(pages.begin(), pages.end(), uint8_t(1));
+    lodrt::clusterGroupResidency(d.pack, pages.data(), groups.data());
+    const float eye[3] = {0.0f, 0.0f, 1.3f};
+    lodrt::ClusterResidency all{groups.data(), missing.data(), uint32_t(missing.size()), 0};
+    lodrt::ClusterCutStats st;
+    ASSERT_EQ(lodrt::selectClusterCutResident(v, lodrt::ClusterInstance(), eye, nullptr, params(), s, &all, out.data(),
+                                              uint32_t(out.size()), &st),
+              lodrt::Result::Ok);
+    EXPECT_EQ(all.missing_count, 0u);
+    EXPECT_EQ(std::vector<uint32_t>(out.begin(), out.begin() + st.written), cut(v, eye, nullptr));
 }
 
 TEST(ClusterLodPack, RefusesEveryTruncationAndCorruptionWithAMessage) {
