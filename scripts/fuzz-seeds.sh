@@ -11,7 +11,7 @@ root=$(cd "$(dirname "$0")/.." && pwd)
 mkdir -p "$out"
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
-for t in gltf obj off ply preset conf manifest cache lod pack pfrep valence meshopt; do mkdir -p "$out/$t"; done
+for t in gltf obj off ply preset conf manifest cache lod pack pfrep valence meshopt cluster; do mkdir -p "$out/$t"; done
 
 cp "$root"/tests/malformed/ply/*.ply "$out/ply/"
 cp "$root"/tests/malformed/off/*.off "$out/off/"
@@ -27,6 +27,7 @@ cp "$root"/configs/*.json "$out/preset/"
 cp "$root"/tests/malformed/preset/*.json "$out/preset/"
 cp "$root"/tests/malformed/lbm/*.lbm "$out/valence/"
 cp "$root"/tests/fuzz/seeds/meshopt/* "$out/meshopt/"
+cp "$root"/tests/fuzz/seeds/cluster/* "$out/cluster/"
 cp "$root"/tests/malformed/lbp/*.lbp "$out/pfrep/"
 cp "$root"/tests/malformed/pack/*.glb "$out/pack/"
 cp "$root"/tests/malformed/conf/*.conf "$out/conf/"

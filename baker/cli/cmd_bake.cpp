@@ -70,6 +70,8 @@ options:
                         levels (archive's default)
   --pfrep-format F      3 (default): that blob range-coded, decoded whole by the runtime; 2: the
                         uncompressed blob, streamed as a growing prefix (preset key pfrep_format)
+  --clusters            add LOD0's cluster LOD hierarchy (LODBAKE_cluster_lod: clusters, groups and
+                        pages a runtime cuts per view; preset key cluster_lod; docs/cluster_lod.md)
   --adaptive-precision  levels after LOD0 coded with position/normal bits from their own measured
                         error (preset key stream_precision.adaptive; on in desktop, mobile, vr)
   --no-adaptive-precision  every level coded with LOD0's bits (archive's default)
@@ -108,6 +110,7 @@ struct CliOverrides {
     bool pfrep_from_chain = false;
     bool no_pfrep_from_chain = false;
     uint32_t pfrep_format = 0; // 0: the preset's
+    bool clusters = false;
     bool adaptive_precision = false;
     bool no_adaptive_precision = false;
     bool remove_covered_components = false;
@@ -127,6 +130,7 @@ void applyOverrides(const CliOverrides& o, BakeSettings& s) {
     if (o.pfrep_from_chain) s.pfrep_from_chain = true;
     if (o.no_pfrep_from_chain) s.pfrep_from_chain = false;
     if (o.pfrep_format != 0) s.pfrep_format = o.pfrep_format;
+    if (o.clusters) s.cluster_lod = true;
     if (o.adaptive_precision) s.stream_precision.adaptive = true;
     if (o.no_adaptive_precision) s.stream_precision.adaptive = false;
     if (o.remove_covered_components) s.remove_covered_components = true;
@@ -354,6 +358,7 @@ int parseOverrides(Args& args, CliOverrides& overrides) {
         if (f != "2" && f != "3") return usageError("--pfrep-format expects 2 or 3, got '" + f + "'");
         overrides.pfrep_format = f == "2" ? 2u : 3u;
     }
+    overrides.clusters = args.flags.count("--clusters") > 0;
     overrides.adaptive_precision = args.flags.count("--adaptive-precision") > 0;
     overrides.no_adaptive_precision = args.flags.count("--no-adaptive-precision") > 0;
     overrides.remove_covered_components = args.flags.count("--remove-covered-components") > 0;
@@ -560,6 +565,7 @@ int runBake(int argc, char** argv) {
                     {"--pfrep-from-chain", nullptr, false},
                     {"--no-pfrep-from-chain", nullptr, false},
                     {"--pfrep-format", nullptr, true},
+                    {"--clusters", nullptr, false},
                     {"--adaptive-precision", nullptr, false},
                     {"--no-adaptive-precision", nullptr, false},
                     {"--remove-covered-components", nullptr, false}, {"--merge", nullptr, true},

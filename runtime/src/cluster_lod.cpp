@@ -16,6 +16,16 @@ bool finiteSphere(const float center[3], float radius) {
            radius >= 0;
 }
 
+// A cone is unit-axis with cos and sin of one angle, or absent (cutoff <= 0, never used).
+bool validCone(const ClusterLodCluster& cl) {
+    if (!std::isfinite(cl.cone_cutoff) || cl.cone_cutoff > 1 || !std::isfinite(cl.cone_sin)) return false;
+    if (!(cl.cone_cutoff > 0)) return true;
+    const float len2 =
+        cl.cone_axis[0] * cl.cone_axis[0] + cl.cone_axis[1] * cl.cone_axis[1] + cl.cone_axis[2] * cl.cone_axis[2];
+    const float unit = cl.cone_cutoff * cl.cone_cutoff + cl.cone_sin * cl.cone_sin;
+    return std::isfinite(len2) && std::fabs(len2 - 1) < 1e-3f && cl.cone_sin >= 0 && unit > 1 - 1e-3f;
+}
+
 bool rangeFits(uint32_t first, uint32_t count, uint32_t size) {
     return uint64_t(first) + uint64_t(count) <= uint64_t(size);
 }
@@ -31,7 +41,8 @@ Result validateClusters(const ClusterLodView& lod, uint32_t& with_parent, uint32
             !rangeFits(cl.first_triangle, cl.triangle_count, lod.triangle_count))
             return Result::OutOfBounds;
         if (cl.vertex_count > ClusterLodCluster::kMaxVertices || cl.triangle_count > ClusterLodCluster::kMaxTriangles ||
-            !finiteSphere(cl.center, cl.radius) || (cl.self_group != kClusterNone && cl.self_group == cl.parent_group))
+            !finiteSphere(cl.center, cl.radius) || (cl.self_group != kClusterNone && cl.self_group == cl.parent_group) ||
+            !validCone(cl))
             return Result::BadStructure;
         (cl.parent_group == kClusterNone ? without_parent : with_parent) += 1;
     }
@@ -79,6 +90,7 @@ struct Walk {
     uint32_t* out;
     uint32_t capacity;
     ClusterCutStats stats;
+    ClusterResidency* residency; // or null: every group resident
 
     // The error of the LOD sphere projects to more than the threshold: d = max(|c - eye| - r, 0).
     bool tooCoarse(const ClusterLodGroup& g) const {
@@ -94,13 +106,26 @@ struct Walk {
     void consider(uint32_t c) {
         const ClusterLodCluster& cl = lod.clusters[c];
         if (cl.self_group != kClusterNone && tooCoarse(lod.groups[cl.self_group])) {
+            const bool resident = !residency || residency->group_resident[cl.self_group] != 0;
             if (stamps[cl.self_group] != epoch) {
                 stamps[cl.self_group] = epoch;
-                stack[stack_size++] = cl.self_group;
+                if (resident) {
+                    stack[stack_size++] = cl.self_group;
+                } else {
+                    if (residency->missing_count < residency->missing_capacity)
+                        residency->missing[residency->missing_count] = cl.self_group;
+                    ++residency->missing_count;
+                }
             }
-            return;
+            // Not resident: this cluster stands in for the finer ones (so do its siblings: the same
+            // group decides for all of them).
+            if (resident) return;
         }
         if (frustum && classifySphere(*frustum, cl.center, cl.radius) == Containment::Outside) return;
+        if (frustum && cl.cone_cutoff > 0 && clusterBackFacing(cl, eye)) {
+            ++stats.cone_culled;
+            return;
+        }
         if (stats.written < capacity) out[stats.written++] = c;
         ++stats.selected;
         stats.triangles += cl.triangle_count;
@@ -118,6 +143,20 @@ struct Walk {
 };
 
 } // namespace
+
+bool clusterBackFacing(const ClusterLodCluster& cl, const float eye[3]) {
+    if (!(cl.cone_cutoff > 0)) return false;
+    const float vx = cl.center[0] - eye[0], vy = cl.center[1] - eye[1], vz = cl.center[2] - eye[2];
+    const float d = std::sqrt(vx * vx + vy * vy + vz * vz);
+    if (!(d > cl.radius)) return false;
+    const float cos_f = (vx * cl.cone_axis[0] + vy * cl.cone_axis[1] + vz * cl.cone_axis[2]) / d;
+    if (!(cos_f > 0)) return false;
+    const float sin_f = std::sqrt(std::fmax(0.0f, 1.0f - cos_f * cos_f));
+    // cos(f + a); the margin covers the rounding of the eye's transform and of these few operations.
+    const float cos_sum = cos_f * cl.cone_cutoff - sin_f * cl.cone_sin;
+    constexpr float kMargin = 1e-4f;
+    return cos_sum > kMargin && d * (cos_sum - kMargin) > cl.radius;
+}
 
 Result validateClusterLod(const ClusterLodView& lod) {
     if ((lod.cluster_count > 0 && !lod.clusters) || (lod.group_count > 0 && !lod.groups) ||
@@ -143,6 +182,34 @@ size_t clusterCutScratchBytes(const ClusterLodView& lod) {
 Result selectClusterCut(const ClusterLodView& lod, const ClusterInstance& instance, const float eye[3],
                         const Frustum* frustum, const SelectionParams& params, ClusterCutScratch& scratch,
                         uint32_t* out, uint32_t capacity, ClusterCutStats* stats) {
+    return selectClusterCutResident(lod, instance, eye, frustum, params, scratch, nullptr, out, capacity, stats);
+}
+
+void clusterResidencyClosure(const ClusterLodView& lod, uint8_t* group_resident) {
+    // A group's outputs are inputs of their parent groups; if one of those is not resident the walk
+    // may not reach every output, so the group is not resident either. Parents lie above their
+    // children, so a pass per level settles it; the bound only guards a hostile hierarchy.
+    for (uint32_t pass = 0; pass <= lod.group_count; ++pass) {
+        bool changed = false;
+        for (uint32_t c = 0; c < lod.cluster_count; ++c) {
+            const ClusterLodCluster& cl = lod.clusters[c];
+            if (cl.self_group == kClusterNone || cl.parent_group == kClusterNone) continue;
+            if (group_resident[cl.self_group] && !group_resident[cl.parent_group]) {
+                group_resident[cl.self_group] = 0;
+                changed = true;
+            }
+        }
+        if (!changed) return;
+    }
+}
+
+Result selectClusterCutResident(const ClusterLodView& lod, const ClusterInstance& instance, const float eye[3],
+                                const Frustum* frustum, const SelectionParams& params, ClusterCutScratch& scratch,
+                                ClusterResidency* residency, uint32_t* out, uint32_t capacity,
+                                ClusterCutStats* stats) {
+    if (residency && (!residency->group_resident || (residency->missing_capacity > 0 && !residency->missing)))
+        return Result::InvalidArgument;
+    if (residency) residency->missing_count = 0;
     const float k = pixelsPerUnitAtDistanceOne(params);
     const float threshold = params.pixel_threshold == 0 ? 1.0f : params.pixel_threshold;
     const size_t need = clusterCutScratchBytes(lod);
@@ -168,7 +235,8 @@ Result selectClusterCut(const ClusterLodView& lod, const ClusterInstance& instan
               scratch.epoch,
               out,
               capacity,
-              {}};
+              {},
+              residency};
     walk.run();
     if (stats) *stats = walk.stats;
     return Result::Ok;

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "contact_sheet.h"
+#include "dump_clusters.h"
 #include "sheet_materials.h"
 #include "tool_module.h"
 #include "lodrt/format.h"
@@ -164,6 +165,7 @@ struct LodReport {
     std::vector<LodGroup> groups;
     std::vector<Problem> problems;
     std::vector<Problem> warnings; // listed with the problems; they do not fail the check
+    std::vector<loddump::ClusterSummary> clusters; // per mesh with LODBAKE_cluster_lod that checks out
 };
 
 constexpr std::string_view kValence = lodrt::format::kExtValenceCompression;
@@ -565,6 +567,40 @@ void checkStreams(const lodrt::Pack& pack, const std::vector<LodGroup>& groups, 
     }
 }
 
+// LODBAKE_cluster_lod on any mesh: read, every page decoded, the hierarchy checked (dump_clusters.h).
+void checkClusters(const lodrt::Pack& pack, LodReport& report) {
+    for (uint32_t m = 0; m < pack.meshCount(); ++m) {
+        if (!pack.mesh(m).json.find("extensions").find(lodrt::format::kExtClusterLod).isValid()) continue;
+        loddump::ClusterSummary summary;
+        std::string error;
+        if (loddump::checkClusterLod(pack, m, &summary, &error))
+            report.clusters.push_back(std::move(summary));
+        else
+            report.problems.push_back(
+                {"/meshes/" + std::to_string(m) + "/extensions/" + std::string(lodrt::format::kExtClusterLod), error});
+    }
+}
+
+// The hierarchy per depth and its bytes.
+void printClusterText(const LodReport& report) {
+    for (const loddump::ClusterSummary& s : report.clusters) {
+        std::printf("cluster LOD on mesh %u (%s): %u clusters, %u groups, %u roots, %u pages, %u with a normal "
+                    "cone; grid %u bits, quantization error %.4g\n",
+                    s.mesh, lodrt::format::kExtClusterLod, s.clusters, s.groups, s.roots, s.pages, s.cone_clusters,
+                    s.position_bits, s.quantization_error);
+        std::printf("  bytes: table %llu, pages %llu (%.2f per LOD0 triangle; page %llu..%llu)\n", ull(s.table_bytes),
+                    ull(s.page_bytes),
+                    s.lod0_triangles ? double(s.table_bytes + s.page_bytes) / double(s.lod0_triangles) : 0.0,
+                    ull(s.min_page_bytes), ull(s.max_page_bytes));
+        std::printf("  %5s %9s %11s %12s\n", "depth", "clusters", "triangles", "max error");
+        for (const loddump::ClusterDepthRow& r : s.depths)
+            std::printf("  %5u %9llu %11llu %12.4g\n", r.depth, ull(r.clusters), ull(r.triangles), r.max_error);
+        std::printf("  checks: pages decode, errors and LOD spheres grow up the DAG, every cluster reachable, %u cuts "
+                    "crack-free\n",
+                    s.cuts_checked);
+    }
+}
+
 std::string nodePointer(uint32_t node) {
     return "/nodes/" + std::to_string(node);
 }
@@ -716,6 +752,7 @@ LodReport analyseLods(const lodrt::Pack& pack) {
         report.groups.push_back(std::move(group));
     }
     checkStreams(pack, report.groups, report.problems);
+    checkClusters(pack, report);
     checkLevelSteps(report);
     return report;
 }
@@ -858,6 +895,7 @@ void printText(const char* path, const lodrt::Pack& pack, const LodReport& lods,
     std::printf("pack %s: %s, JSON %zu bytes, BIN %zu bytes\n", path, c.is_binary ? "GLB" : "glTF JSON", c.json_size,
                 c.bin_size);
     printLodText(pack, lods, level_filter);
+    printClusterText(lods);
     const std::vector<bool> shown = meshFilter(pack, lods, level_filter);
     for (uint32_t m = 0; m < pack.meshCount(); ++m) {
         if (!shown[m]) continue;

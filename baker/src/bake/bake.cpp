@@ -348,6 +348,7 @@ Result<BakeOutput> bakeScene(std::vector<BakeInput> inputs, PackScene scene, con
     streams.progressive_fans = settings.progressive_fans;
     streams.pfrep_from_chain = settings.pfrep_from_chain;
     streams.pfrep_format = settings.pfrep_format;
+    streams.cluster_lod = settings.cluster_lod;
     // A --web pack is for clients that read none of our streams (docs/format/web.md).
     const std::vector<PackStreamEncoder> encoders =
         settings.web ? std::vector<PackStreamEncoder>() : builtinStreamEncoders(streams);

@@ -890,8 +890,10 @@ struct Quantization {
     I32Array qpos; // three per input vertex
 };
 
-Status quantizePositions(const Mesh& mesh, uint32_t bits, Quantization& out, double& max_error) {
+Status quantizePositions(const Mesh& mesh, const codec::ValenceEncodeOptions& options, Quantization& out,
+                         double& max_error) {
     const size_t vn = mesh.vertexCount();
+    const uint32_t bits = options.position_bits;
     float* lo = out.lo;
     float hi[3] = {0, 0, 0};
     for (size_t i = 0; i < vn; ++i) {
@@ -901,7 +903,14 @@ Status quantizePositions(const Mesh& mesh, uint32_t bits, Quantization& out, dou
             if (i == 0 || c[j] > hi[j]) hi[j] = c[j];
         }
     }
-    const float cube = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2], 0.0f});
+    float cube = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2], 0.0f});
+    if (options.cube_size > 0) {
+        for (int j = 0; j < 3; ++j)
+            if (vn > 0 && (lo[j] < options.cube_min[j] || hi[j] > options.cube_min[j] + options.cube_size))
+                return invalidInput("valence encoder: a vertex lies outside the given quantization cube");
+        for (int j = 0; j < 3; ++j) lo[j] = options.cube_min[j];
+        cube = options.cube_size;
+    }
     if (!std::isfinite(cube)) return invalidInput("valence encoder: bounding box extent overflows a float");
     const uint32_t qmax = (1u << bits) - 1;
     const float step = cube / float(qmax);
@@ -1687,7 +1696,7 @@ Result<ValenceEncodeResult> encodeValence(const Mesh& mesh, const ValenceEncodeO
     const size_t vn = mesh.vertexCount(), fn = mesh.faceCount();
     ValenceEncodeResult result;
     Quantization quantized;
-    LODBAKE_RETURN_IF_ERROR(quantizePositions(mesh, options.position_bits, quantized, result.max_position_error));
+    LODBAKE_RETURN_IF_ERROR(quantizePositions(mesh, options, quantized, result.max_position_error));
     LODBAKE_ASSIGN_OR_RETURN(std::unique_ptr<Attempt> attempt, conquer(mesh));
     const auto& a = attempt->engine.a;
     const uint32_t vc = uint32_t(attempt->closed.source.size()),

@@ -147,6 +147,7 @@ Status applyImpl(const Json& root, const std::string& name, BakeSettings& s) {
         {"progressive_fans", [&](const Json& v, const std::string& w) { return readBool(v, w, s.progressive_fans); }},
         {"pfrep_from_chain", [&](const Json& v, const std::string& w) { return readBool(v, w, s.pfrep_from_chain); }},
         {"pfrep_format", [&](const Json& v, const std::string& w) { return readUint(v, w, 2, 3, s.pfrep_format); }},
+        {"cluster_lod", [&](const Json& v, const std::string& w) { return readBool(v, w, s.cluster_lod); }},
         {"remove_covered_components",
          [&](const Json& v, const std::string& w) { return readBool(v, w, s.remove_covered_components); }},
         {"merge",
@@ -200,6 +201,9 @@ Status validateSettings(const BakeSettings& settings, const std::string& name) {
     // --compact keeps the level data only in LODBAKE_ streams, --web only in EXT_meshopt_compression.
     if (settings.compact && settings.web)
         return invalidInput(name + ": /web: cannot be combined with compact (a pack keeps its level data in one form)");
+    // A --web pack carries no LODBAKE_ extension at all (docs/format/web.md).
+    if (settings.web && settings.cluster_lod)
+        return invalidInput(name + ": /cluster_lod: cannot be combined with web (a web pack has no LODBAKE_ extensions)");
     return Status::okStatus();
 }
 
@@ -244,6 +248,7 @@ std::string settingsToJson(const BakeSettings& s) {
         j["progressive_fans"] = s.progressive_fans;
         j["pfrep_from_chain"] = s.pfrep_from_chain;
         j["pfrep_format"] = s.pfrep_format;
+        j["cluster_lod"] = s.cluster_lod;
         j["remove_covered_components"] = s.remove_covered_components;
         j["merge"] = mergeModeName(s.merge);
         j["merge_scene"] = s.merge_scene;

@@ -12,6 +12,7 @@ namespace lodbake {
 // leave it out.
 std::optional<PackStreamEncoder> progressiveFansStream(const StreamSettings& settings); // pfrep_stream.cpp
 std::optional<PackStreamEncoder> valenceStream(const StreamSettings& settings);         // valence_stream.cpp
+std::optional<PackStreamEncoder> clusterLodStream(const StreamSettings& settings);      // cluster_stream.cpp
 
 namespace {
 
@@ -21,6 +22,7 @@ using StreamFactory = std::optional<PackStreamEncoder> (*)(const StreamSettings&
 // valence commit renumbers it into the decoded vertex order).
 constexpr StreamFactory kStreams[] = {
     progressiveFansStream,
+    clusterLodStream,
     valenceStream,
 };
 

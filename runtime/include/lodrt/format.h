@@ -208,5 +208,41 @@ constexpr uint32_t kRangeCdfRateLastConnectivity = 7; // connectivity symbols: t
 constexpr uint32_t kRangeCdfRateStep = 16;
 constexpr uint32_t kValenceNormalContexts = 17; // bit length of the same component's previous residual
 
+// LODBAKE_cluster_lod (docs/format/cluster_lod.md): a cluster LOD hierarchy on LOD0's mesh. The
+// extension object names two buffer views: kClusterTableMember (the table below) and
+// kClusterPagesMember (the pages, back to back). Little-endian throughout.
+constexpr const char kExtClusterLod[] = "LODBAKE_cluster_lod";
+constexpr const char kClusterTableMember[] = "table";
+constexpr const char kClusterPagesMember[] = "pages";
+constexpr uint32_t kClusterMagic = 0x4C43424Cu; // "LBCL" little-endian
+constexpr uint32_t kClusterVersion = 1;
+// Table header (byte offset: type): 0 u32 magic, 4 u32 version, 8 u32 cluster_count, 12 u32 group_count,
+// 16 u32 group_child_count, 20 u32 root_count, 24 u32 page_count, 28 u32 position_bits (the grid's
+// bits, kValenceMinPositionBits..kValenceMaxPositionBits), 32 f32[3] grid_min, 44 f32 grid_size (the
+// quantization cube every page's valence header repeats), 48 f32 quantization_error (largest distance
+// quantization moves a vertex; included in every group error), 52 u32[3] zero. Then the records:
+// clusters, groups, group children (u32 cluster indices), roots (u32 cluster indices), pages.
+constexpr uint32_t kClusterHeaderSize = 64;
+// Cluster record: 0 f32[3] center, 12 f32 radius (geometry sphere of the decoded triangles), 16 f32[3]
+// cone_axis, 28 f32 cone_cutoff (cosine of the normal cone's half angle; <= 0: no cone), 32 u32
+// self_group, 36 u32 parent_group (kClusterNoGroup: none), 40 u32 page, 44 u16 first_triangle (in the
+// page's cluster-sorted triangles), 46 u8 triangle_count, 47 u8 vertex_count (distinct vertices).
+constexpr uint32_t kClusterRecordSize = 48;
+// Group record: 0 f32[3] lod_center, 12 f32 lod_radius, 16 f32 error, 20 f32[3] bounds_center, 32 f32
+// bounds_radius, 36 u32 first_child, 40 u32 child_count, 44 u32 depth.
+constexpr uint32_t kClusterGroupRecordSize = 48;
+// Page record: 0 u32 byte_offset (in the pages view), 4 u32 stream_bytes (a valence stream, docs/format/
+// valence.md, positions only), 8 u32 run_count (kClusterRunSize-byte runs after the stream), 12 u32
+// cluster_count. A run is u8 local cluster (the page's clusters in table order), u8 triangles: the
+// decoded triangles in stream order, run after run.
+constexpr uint32_t kClusterPageRecordSize = 16;
+constexpr uint32_t kClusterRunSize = 2;
+constexpr uint32_t kClusterNoGroup = 0xffffffffu;
+constexpr uint32_t kClusterMaxTriangles = 128;      // per cluster
+constexpr uint32_t kClusterMaxVertices = 255;       // per cluster
+constexpr uint32_t kClusterPageMaxClusters = 256;   // per page (a run's u8 cluster)
+constexpr uint32_t kClusterPageMaxTriangles = 65535; // per page (a cluster's u16 first_triangle)
+constexpr uint32_t kClusterMaxCount = 1u << 26;     // clusters, groups, children, roots, pages
+
 } // namespace format
 } // namespace lodrt

@@ -58,14 +58,14 @@ def write_glb(doc, bin_bytes):
     return struct.pack("<III", GLB_MAGIC, 2, 12 + len(body)) + body
 
 
-def bake(cli, tmp, pfrep_format):
+def bake(cli, tmp, pfrep_format, clusters=False):
     off = os.path.join(tmp, "sphere.off")
     with open(off, "w") as f:
-        f.write(sphere_off())
+        f.write(sphere_off(16, 24) if clusters else sphere_off())
     out = os.path.join(tmp, "sphere.glb")
     subprocess.run([cli, "bake", off, "-o", out, "--levels", "0.5,0.25", "--preset",
                     os.path.join(HERE, "..", "..", "..", "configs", "desktop.json"), "--quiet",
-                    "--pfrep-format", str(pfrep_format)],
+                    "--pfrep-format", str(pfrep_format)] + (["--clusters", "--no-progressive-fans"] if clusters else []),
                    check=True, stdout=subprocess.DEVNULL)
     with open(out, "rb") as f:
         return f.read()
@@ -642,16 +642,168 @@ def pfrep_triangles_lie(p):
         levels[1]["removals"], levels[1]["triangles"] + 2, levels[1]["triangles"])
 
 
+# --- LODBAKE_cluster_lod (docs/format/cluster_lod.md): loddump's check, with lodrt's reader ---
+# Their base is a finer sphere baked with --clusters (and without the PFRep blob, to keep the packs
+# small), so the hierarchy has levels of groups.
+CLUSTER_CASES = set()
+
+
+def cluster_case(fn):
+    CLUSTER_CASES.add(fn.__name__)
+    return case(fn)
+
+
+def cluster_ext(p):
+    return p.mesh_of(p.root)["extensions"]["LODBAKE_cluster_lod"]
+
+
+def cluster_path(p):
+    return "/meshes/%d/extensions/LODBAKE_cluster_lod" % mesh_index(p, 0)
+
+
+def cluster_table(p):
+    """(view, header counts) of the table: clusters, groups, children, roots, pages."""
+    view = cluster_ext(p)["table"]
+    return view, [p.read(view, 8 + 4 * i, "<I") for i in range(5)]
+
+
+CLUSTER_RECORD, GROUP_RECORD, PAGE_RECORD, HEADER = 48, 48, 16, 64
+
+
+def cluster_record(p, c):
+    return HEADER + CLUSTER_RECORD * c
+
+
+def group_record(p, g):
+    _, (clusters, _, _, _, _) = cluster_table(p)
+    return HEADER + CLUSTER_RECORD * clusters + GROUP_RECORD * g
+
+
+def page_record(p, page):
+    _, (clusters, groups, children, roots, _) = cluster_table(p)
+    return HEADER + CLUSTER_RECORD * clusters + GROUP_RECORD * groups + 4 * (children + roots) + PAGE_RECORD * page
+
+
+@cluster_case
+def cluster_table_view_missing(p):
+    cluster_ext(p)["table"] = len(p.doc["bufferViews"]) + 3
+    return cluster_path(p) + "/table: expected a buffer view index"
+
+
+@cluster_case
+def cluster_table_bad_magic(p):
+    view, _ = cluster_table(p)
+    p.patch(view, 0, "<I", 0x4C43424D)
+    return "table: bad magic (expected \"LBCL\")"
+
+
+@cluster_case
+def cluster_table_count_lies(p):
+    view, counts = cluster_table(p)
+    p.patch(view, 8, "<I", counts[0] + 1)
+    return "table: %d bytes, its counts need %d" % (p.view_range(view)[1], p.view_range(view)[1] + CLUSTER_RECORD)
+
+
+@cluster_case
+def cluster_page_outside_view(p):
+    view, _ = cluster_table(p)
+    p.patch(view, page_record(p, 0), "<I", 1 << 24)
+    return "page 0: bytes [16777216, "
+
+
+@cluster_case
+def cluster_triangle_count_lies(p):
+    view, _ = cluster_table(p)
+    p.patch(view, cluster_record(p, 1) + 46, "<B", 200)
+    return "cluster 1: 200 triangles over"
+
+
+@cluster_case
+def cluster_parent_does_not_list_it(p):
+    view, (clusters, groups, _, _, _) = cluster_table(p)
+    parent = p.read(view, cluster_record(p, 0) + 36, "<I")
+    p.patch(view, cluster_record(p, 0) + 36, "<I", (parent + 1) % groups)
+    return "table: the hierarchy is inconsistent (BadStructure"
+
+
+@cluster_case
+def cluster_first_triangle_lies(p):
+    view, _ = cluster_table(p)
+    first = p.read(view, cluster_record(p, 0) + 44, "<H")
+    p.patch(view, cluster_record(p, 0) + 44, "<H", first + 1)
+    return "cluster 0: first triangle %d, expected 0" % (first + 1)
+
+
+@cluster_case
+def cluster_vertex_count_lies(p):
+    view, _ = cluster_table(p)
+    vertices = p.read(view, cluster_record(p, 0) + 47, "<B")
+    p.patch(view, cluster_record(p, 0) + 47, "<B", vertices - 1)
+    return "vertices, its record says"
+
+
+@cluster_case
+def cluster_page_grid_differs(p):
+    view, _ = cluster_table(p)
+    pages = cluster_ext(p)["pages"]
+    offset = p.read(view, page_record(p, 0), "<I")
+    p.patch(pages, offset + 28, "<f", p.read(pages, offset + 28, "<f") - 1.0)
+    return "page 0: expected a positions-only stream on the table's grid"
+
+
+@cluster_case
+def cluster_run_names_no_cluster(p):
+    view, _ = cluster_table(p)
+    pages = cluster_ext(p)["pages"]
+    offset, stream = p.read(view, page_record(p, 0), "<I"), p.read(view, page_record(p, 0) + 4, "<I")
+    p.patch(pages, offset + stream, "<B", 255)
+    return "page 0: run 0 names no cluster of the page or is empty"
+
+
+@cluster_case
+def cluster_page_stream_corrupt(p):
+    view, _ = cluster_table(p)
+    pages = cluster_ext(p)["pages"]
+    offset = p.read(view, page_record(p, 0), "<I")
+    p.patch(pages, offset + 64, "<B", 0xff) # the connectivity stream's first byte must be 0
+    return "page 0: stream fails to decode"
+
+
+@cluster_case
+def cluster_error_decreases(p):
+    view, (clusters, _, _, _, _) = cluster_table(p)
+    for c in range(clusters):
+        own, parent = p.read(view, cluster_record(p, c) + 32, "<I"), p.read(view, cluster_record(p, c) + 36, "<I")
+        if own != 0xFFFFFFFF and parent != 0xFFFFFFFF:
+            error = p.read(view, group_record(p, own) + 16, "<f")
+            p.patch(view, group_record(p, parent) + 16, "<f", error / 2)
+            return "(errors must not decrease)"
+    raise AssertionError("the cluster base has no cluster with both groups")
+
+
+@cluster_case
+def cluster_group_never_entered(p):
+    view, (clusters, _, _, _, _) = cluster_table(p)
+    # Every output of the group the first LOD0 cluster is an input of claims a LOD0 origin instead:
+    # the group is never entered and its inputs cannot be reached.
+    parent = p.read(view, cluster_record(p, 0) + 36, "<I")
+    for c in range(clusters):
+        if p.read(view, cluster_record(p, c) + 32, "<I") == parent:
+            p.patch(view, cluster_record(p, c) + 32, "<I", 0xFFFFFFFF)
+    return ": not reachable from the roots"
+
+
 def main():
     if len(sys.argv) != 2:
         sys.exit("usage: make_corpus.py LODBAKE_CLI")
     with tempfile.TemporaryDirectory() as tmp:
-        bases = {2: bake(sys.argv[1], tmp, 2), 3: bake(sys.argv[1], tmp, 3)}
+        bases = {2: bake(sys.argv[1], tmp, 2), 3: bake(sys.argv[1], tmp, 3),
+                 "clusters": bake(sys.argv[1], tmp, 3, clusters=True)}
     for old in os.listdir(HERE):
         if old.endswith(".glb") or old.endswith(".expected"):
             os.remove(os.path.join(HERE, old))
     for name, fn in CASES.items():
-        p = Pack(bases[3 if name in FORMAT3_CASES else 2])
+        p = Pack(bases["clusters" if name in CLUSTER_CASES else 3 if name in FORMAT3_CASES else 2])
         out = fn(p)
         glb, expected = out if isinstance(out, tuple) else (p.glb(), out)
         assert "\n" not in expected

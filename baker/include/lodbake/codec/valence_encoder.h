@@ -32,6 +32,11 @@ struct ValenceEncodeOptions {
     uint32_t uv_bits = 12;       // per component, 4..16
     uint32_t color_bits = 8;     // per channel, 4..16
     uint32_t tangent_bits = 10;  // octahedral bits per component, 4..16
+    /// A quantization cube shared by several streams (the pages of LODBAKE_cluster_lod, so a vertex
+    /// two pages share decodes to one float): when cube_size > 0, positions are quantized in the cube
+    /// at cube_min of edge cube_size instead of the mesh's own bounds; a vertex outside it fails.
+    float cube_min[3] = {0, 0, 0};
+    float cube_size = 0;
 };
 
 /// One coded attribute of an encoded stream.

@@ -123,6 +123,7 @@ struct StreamSettings {
     bool progressive_fans = true; // LODBAKE_progressive_fans on LOD0
     bool pfrep_from_chain = false; // ... built from the chain's own collapses (StreamNeeds::collapse_record)
     uint32_t pfrep_format = 3;     // ... written as format 3 (range-coded) or 2 (docs/format/pfrep.md)
+    bool cluster_lod = false;      // LODBAKE_cluster_lod on LOD0 (grid bits: valence.position_bits)
 };
 
 /// The stream encoders built into this baker that `settings` enable, in the order they run (valence
