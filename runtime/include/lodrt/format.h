@@ -208,5 +208,10 @@ constexpr uint32_t kRangeCdfRateLastConnectivity = 7; // connectivity symbols: t
 constexpr uint32_t kRangeCdfRateStep = 16;
 constexpr uint32_t kValenceNormalContexts = 17; // bit length of the same component's previous residual
 
+// Out-of-core partition files (baker/include/lodbake/ooc/partition.h): the 8-byte magic that
+// starts each, and the extension of their content-hash names.
+constexpr char kPartitionMagic[8] = {'L', 'B', 'P', 'A', 'R', 'T', '0', '1'};
+constexpr const char kPartitionExtension[] = ".lbpart";
+
 } // namespace format
 } // namespace lodrt
