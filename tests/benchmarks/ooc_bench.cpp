@@ -9,8 +9,10 @@
 // Bar: the partitioner's peak resident memory stays under the limit it was given (issue: "peak
 // resident memory stays under the limit whatever the input size").
 //
-// usage: ooc_bench [--triangles N] [--memory-limit MIB] [--dir DIR] [--threads N] [--no-anchor] [--check]
-//   defaults: 10,000,000 triangles, 1024 MiB, DIR = the build's ooc_bench_out folder.
+// usage: ooc_bench [--triangles N] [--memory-limit MIB] [--dir DIR] [--threads N] [--no-anchor]
+//                  [--scan FILE] [--check]
+//   defaults: 10,000,000 triangles, 1024 MiB, DIR = the build's ooc_bench_out folder. --scan reads
+//   an existing file (made by lodbake_scansim --surface) instead of generating one, and keeps it.
 
 #include <chrono>
 #include <cstdio>
@@ -79,7 +81,7 @@ int main(int argc, char** argv) {
     uint64_t triangles = 10000000, limit_mib = 1024;
     int threads = 0;
     bool anchor = true;
-    std::string dir = LODBAKE_BENCH_OUT_DIR;
+    std::string dir = LODBAKE_BENCH_OUT_DIR, given_scan;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
         if (a == "--triangles" && i + 1 < argc) triangles = std::strtoull(argv[++i], nullptr, 10);
@@ -87,29 +89,39 @@ int main(int argc, char** argv) {
         else if (a == "--dir" && i + 1 < argc) dir = argv[++i];
         else if (a == "--threads" && i + 1 < argc) threads = std::atoi(argv[++i]);
         else if (a == "--no-anchor") anchor = false;
+        else if (a == "--scan" && i + 1 < argc) given_scan = argv[++i];
         else {
             std::fprintf(stderr, "usage: ooc_bench [--triangles N] [--memory-limit MIB] [--dir DIR] [--threads N] "
-                                 "[--no-anchor] [--check]\n");
+                                 "[--no-anchor] [--scan FILE] [--check]\n");
             return 2;
         }
     }
     std::error_code ec;
     std::filesystem::create_directories(dir, ec);
-    const std::string scan = dir + "/ooc_bench_scan.ply";
+    const std::string scan = given_scan.empty() ? dir + "/ooc_bench_scan.ply" : given_scan;
     const std::string work = dir + "/ooc_bench_work";
 
     lodbake::scansim::SurfaceOptions surface;
     surface.triangles = triangles;
     lodbake::scansim::SurfaceStats stats;
-    const Stage gen = measure([&] {
-        lodbake::Result<lodbake::scansim::SurfaceStats> r = lodbake::scansim::writeSurfacePly(surface, scan);
-        if (!r.ok()) fail(r.status());
-        stats = *r;
-    });
+    if (given_scan.empty()) {
+        const Stage gen = measure([&] {
+            lodbake::Result<lodbake::scansim::SurfaceStats> r = lodbake::scansim::writeSurfacePly(surface, scan);
+            if (!r.ok()) fail(r.status());
+            stats = *r;
+        });
+        printStage("generate (scansim surface)", gen, stats.triangles, nullptr);
+    } else {
+        lodbake::Diagnostics d;
+        auto reader = lodbake::openMeshStream(scan, lodbake::StreamReadOptions(), d);
+        if (!reader.ok()) fail(reader.status());
+        stats.vertices = (*reader)->info().vertex_count;
+        stats.triangles = (*reader)->info().triangle_estimate;
+        stats.bytes = std::filesystem::file_size(scan, ec);
+    }
     const uint64_t t = stats.triangles;
     std::printf("scan: %llu triangles, %llu vertices, %.1f MB (%s)\n", (unsigned long long)t,
                 (unsigned long long)stats.vertices, double(stats.bytes) / 1e6, scan.c_str());
-    printStage("generate (scansim surface)", gen, t, nullptr);
 
     double checksum = 0;
     const Stage stream = measure([&] {
@@ -164,6 +176,6 @@ int main(int argc, char** argv) {
                   lodbake_bench::Limit::AtMost, anchor ? read.peak_mib : NAN);
     lodbake::ooc::removePartitionFiles(set);
     std::filesystem::remove(work, ec);
-    std::filesystem::remove(scan, ec);
+    if (given_scan.empty()) std::filesystem::remove(scan, ec);
     return bars.finish(check);
 }

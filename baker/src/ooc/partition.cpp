@@ -257,7 +257,7 @@ Status cellsAndTriangles(MeshStreamReader& reader, const PartitionOptions& o, co
 Status writePartition(const PartitionOptions& o, const std::string& spill_path, int spill_fd, uint64_t spill_bytes,
                       uint64_t leaf, uint64_t triangles, MemoryAccount& memory, PartitionFile& out) {
     const std::string raw_path = rawPath(o.work_dir, leaf);
-    const uint64_t job_bytes = kSpillBlockBytes + kJobFileBuffer + 24 * triangles;
+    const uint64_t job_bytes = kSpillBlockBytes + kJobFileBuffer + 36 * triangles;
     memory.add(job_bytes);
     std::vector<uint32_t> tri(size_t(triangles * 3)), ids;
     {
@@ -267,14 +267,44 @@ Status writePartition(const PartitionOptions& o, const std::string& spill_path, 
         ::close(fd);
         LODBAKE_RETURN_IF_ERROR(read);
     }
-    ids = tri;
-    std::sort(ids.begin(), ids.end());
-    ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
-    ids.shrink_to_fit();
-    const uint64_t vertex_bytes = 16 * uint64_t(ids.size());
-    memory.add(vertex_bytes);
-    memory.sub(12 * triangles);
-    for (uint32_t& v : tri) v = uint32_t(std::lower_bound(ids.begin(), ids.end(), v) - ids.begin());
+    // Local numbers in increasing global id. A leaf is compact in space, and scans number their
+    // vertices in scan order, so its ids usually span a range a few times its triangle count: then a
+    // table over the range numbers them in two sweeps. Otherwise (id, corner) pairs are sorted once
+    // and swept. Either takes at most 24 bytes per triangle and touches memory in order (a binary
+    // search per corner does not, and dominates on large leaves).
+    uint64_t vertex_bytes = 0;
+    const auto [lo_it, hi_it] = std::minmax_element(tri.begin(), tri.end());
+    const uint64_t first_id = *lo_it, range = uint64_t(*hi_it) - first_id + 1;
+    if (range <= 6 * triangles) {
+        std::vector<uint32_t> table(size_t(range), 0);
+        for (uint32_t v : tri) table[size_t(v - first_id)] = 1;
+        size_t distinct = 0;
+        for (uint32_t used : table) distinct += used;
+        ids.reserve(distinct);
+        memory.add(4 * uint64_t(distinct));
+        for (size_t r = 0; r < table.size(); ++r) {
+            if (!table[r]) continue;
+            table[r] = uint32_t(ids.size());
+            ids.push_back(uint32_t(first_id + r));
+        }
+        for (uint32_t& v : tri) v = table[size_t(v - first_id)];
+    } else {
+        std::vector<uint64_t> keyed(tri.size());
+        for (size_t i = 0; i < tri.size(); ++i) keyed[i] = (uint64_t(tri[i]) << 32) | uint64_t(i);
+        std::sort(keyed.begin(), keyed.end());
+        size_t distinct = 0;
+        for (size_t i = 0; i < keyed.size(); ++i) distinct += i == 0 || (keyed[i] >> 32) != (keyed[i - 1] >> 32);
+        ids.reserve(distinct);
+        memory.add(4 * uint64_t(distinct));
+        for (uint64_t k : keyed) {
+            const uint32_t id = uint32_t(k >> 32);
+            if (ids.empty() || ids.back() != id) ids.push_back(id);
+            tri[size_t(k & 0xffffffffu)] = uint32_t(ids.size() - 1);
+        }
+    }
+    memory.sub(24 * triangles);
+    vertex_bytes = 16 * uint64_t(ids.size());
+    memory.add(12 * uint64_t(ids.size()));
     std::vector<Vec3f> positions(ids.size());
     // Ids are sorted, so each block of the spill is read at most once.
     std::vector<uint8_t> block(kSpillBlockBytes);

@@ -7,6 +7,7 @@
 #include <atomic>
 #include <csignal>
 #include <filesystem>
+#include <set>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -63,35 +64,28 @@ std::vector<std::string> filesIn(const std::string& dir) {
     return names;
 }
 
-} // namespace
-
-TEST(PartitionTest, UnionIsExactlyTheInputWithinTargetAndLimit) {
-    const std::string dir = freshDir("union");
-    const std::string scan = makeScan(dir, 40000);
+// Partitions `scan` and checks the set against `input`, the same file read whole.
+void checkUnion(const std::string& scan, const lodbake::Mesh& input, PartitionOptions o) {
     lodbake::Diagnostics d;
-    auto input = lodbake::readMesh(scan, lodbake::ReadOptions(), d);
-    ASSERT_TRUE(input.ok());
-    const PartitionOptions o = smallOptions(dir + "/work", 2);
     lodbake::Result<PartitionSet> set = partitionMesh(scan, o, d);
     ASSERT_TRUE(set.ok()) << set.status().message();
     EXPECT_GE(set->partitions.size(), 3u);
-    EXPECT_EQ(set->triangle_count, input->mesh.faceCount());
-    EXPECT_EQ(set->vertex_count, input->mesh.vertexCount());
+    EXPECT_EQ(set->triangle_count, input.faceCount());
+    EXPECT_EQ(set->vertex_count, input.vertexCount());
     EXPECT_LE(set->largest_partition, set->target_triangles);
     EXPECT_LE(set->accounted_peak_bytes, o.memory_limit_bytes);
     EXPECT_LE(set->accounted_peak_bytes, set->memory_bound_bytes);
 
     std::vector<Tri> expected, got;
-    for (size_t t = 0; t < input->mesh.faceCount(); ++t)
-        expected.emplace_back(input->mesh.indices[3 * t], input->mesh.indices[3 * t + 1], input->mesh.indices[3 * t + 2]);
+    for (size_t t = 0; t < input.faceCount(); ++t)
+        expected.emplace_back(input.indices[3 * t], input.indices[3 * t + 1], input.indices[3 * t + 2]);
     for (const PartitionFile& f : set->partitions) {
         EXPECT_EQ(fs::path(f.path).extension(), ".lbpart");
         lodbake::Result<PartitionData> p = readPartitionFile(f.path);
         ASSERT_TRUE(p.ok()) << p.status().message();
         EXPECT_EQ(p->global_ids.size(), f.vertex_count);
         EXPECT_EQ(p->indices.size(), 3 * size_t(f.triangle_count));
-        for (size_t v = 0; v < p->global_ids.size(); ++v)
-            ASSERT_EQ(p->positions[v], input->mesh.positions[p->global_ids[v]]);
+        for (size_t v = 0; v < p->global_ids.size(); ++v) ASSERT_EQ(p->positions[v], input.positions[p->global_ids[v]]);
         for (size_t t = 0; t < p->indices.size(); t += 3)
             got.emplace_back(p->global_ids[p->indices[t]], p->global_ids[p->indices[t + 1]],
                              p->global_ids[p->indices[t + 2]]);
@@ -103,6 +97,38 @@ TEST(PartitionTest, UnionIsExactlyTheInputWithinTargetAndLimit) {
     EXPECT_EQ(filesIn(o.work_dir).size(), set->partitions.size());
     removePartitionFiles(*set);
     EXPECT_TRUE(fs::is_empty(o.work_dir));
+}
+
+} // namespace
+
+TEST(PartitionTest, UnionIsExactlyTheInputWithinTargetAndLimit) {
+    const std::string dir = freshDir("union");
+    const std::string scan = makeScan(dir, 40000);
+    lodbake::Diagnostics d;
+    auto input = lodbake::readMesh(scan, lodbake::ReadOptions(), d);
+    ASSERT_TRUE(input.ok());
+    checkUnion(scan, input->mesh, smallOptions(dir + "/work", 2));
+}
+
+TEST(PartitionTest, ScatteredVertexOrderGivesTheSameUnion) {
+    // A scan with its vertices in a scattered order and enough leaves that a leaf's ids span more
+    // than six times its triangle count: the partition jobs then number vertices by sorting.
+    const std::string dir = freshDir("scattered");
+    const std::string scan = makeScan(dir, 200000);
+    lodbake::Diagnostics d;
+    auto input = lodbake::readMesh(scan, lodbake::ReadOptions(), d);
+    ASSERT_TRUE(input.ok());
+    lodbake::Mesh shuffled = input->mesh;
+    std::vector<uint32_t> order(shuffled.vertexCount());
+    for (size_t i = 0; i < order.size(); ++i) order[i] = uint32_t((i * 7919) % order.size());
+    ASSERT_EQ(std::set<uint32_t>(order.begin(), order.end()).size(), order.size());
+    for (size_t i = 0; i < order.size(); ++i) shuffled.positions[order[i]] = input->mesh.positions[i];
+    for (uint32_t& v : shuffled.indices) v = order[v];
+    ASSERT_TRUE(lodbake::writeMesh(shuffled, dir + "/shuffled.ply", lodbake::WriteOptions(), d).ok());
+    // 3 MiB on one thread: leaves of about 5,000 triangles, so about 40 of them.
+    PartitionOptions o = smallOptions(dir + "/work", 1);
+    o.memory_limit_bytes = uint64_t(3) << 20;
+    checkUnion(dir + "/shuffled.ply", shuffled, o);
 }
 
 TEST(PartitionTest, SameFilesForAnyThreadCountAndForObj) {

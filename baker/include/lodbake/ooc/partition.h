@@ -42,8 +42,8 @@
 
 namespace lodbake::ooc {
 
-/// Bytes a partition job holds per triangle of its partition: raw triangles (12) and a sorted copy
-/// of their ids (12), or after the copy shrinks, unique ids and positions (16 per vertex, at most 3
+/// Bytes a partition job holds per triangle of its partition: raw triangles (12) and sorted
+/// (id, corner) pairs (24), then the triangles with unique ids and positions (16 per vertex, at most 3
 /// vertices per triangle): at most 60, whatever the mesh. The file is written through a buffer.
 constexpr uint64_t kJobBytesPerTriangle = 64;
 
