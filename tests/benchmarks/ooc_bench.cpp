@@ -2,8 +2,8 @@
 // displaced-torus scan of N triangles (lodbake_scansim's surface mode) into a work folder, then in
 // the same run: streams it through the streaming reader (both passes), partitions it under a memory
 // limit, and reads it whole with readMesh() as the anchor. Prints wall time, triangles per second and
-// peak resident memory of each stage (VmHWM, reset between stages through /proc/self/clear_refs), and
-// the ratios to readMesh. The in-memory reader runs last so that its memory does not stay resident
+// process CPU time and peak resident memory of each stage (VmHWM, reset between stages through
+// /proc/self/clear_refs), and the ratios to readMesh. The in-memory reader runs last so that its memory does not stay resident
 // under the other stages' figures.
 //
 // Bar: the partitioner's peak resident memory stays under the limit it was given (issue: "peak
@@ -22,6 +22,8 @@
 #include <fstream>
 #include <string>
 #include <system_error>
+
+#include <sys/resource.h>
 
 #include "bench_bar.h"
 #include "lodbake/io/mesh_io.h"
@@ -47,16 +49,26 @@ void resetPeak() {
     clear << "5";
 }
 
+// CPU seconds of the whole process (every thread), user and system: on a shared machine the wall
+// time also counts the time the process waited for a core.
+double processCpuSeconds() {
+    rusage u{};
+    getrusage(RUSAGE_SELF, &u);
+    return double(u.ru_utime.tv_sec + u.ru_stime.tv_sec) + 1e-6 * double(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
+}
+
 struct Stage {
-    double seconds = 0, peak_mib = 0;
+    double seconds = 0, cpu_seconds = 0, peak_mib = 0;
 };
 
 template <class F> Stage measure(F&& f) {
     resetPeak();
     const auto t0 = Clock::now();
+    const double c0 = processCpuSeconds();
     f();
     Stage s;
     s.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+    s.cpu_seconds = processCpuSeconds() - c0;
     s.peak_mib = peakMiB();
     return s;
 }
@@ -67,10 +79,11 @@ void fail(const lodbake::Status& s) {
 }
 
 void printStage(const char* name, const Stage& s, uint64_t triangles, const Stage* anchor) {
-    std::printf("%-28s %9.2f s %12.3f Mtri/s %10.1f MiB peak", name, s.seconds, double(triangles) / s.seconds / 1e6,
-                s.peak_mib);
+    std::printf("%-28s %8.2f s wall %8.2f s cpu %9.3f Mtri/s (wall) %9.3f Mtri/s (cpu) %9.1f MiB peak", name, s.seconds,
+                s.cpu_seconds, double(triangles) / s.seconds / 1e6, double(triangles) / s.cpu_seconds / 1e6, s.peak_mib);
     if (anchor && anchor->seconds > 0)
-        std::printf("   vs readMesh: time x%.3f, peak x%.3f", s.seconds / anchor->seconds, s.peak_mib / anchor->peak_mib);
+        std::printf("   vs readMesh: wall x%.3f, cpu x%.3f, peak x%.3f", s.seconds / anchor->seconds,
+                    s.cpu_seconds / anchor->cpu_seconds, s.peak_mib / anchor->peak_mib);
     std::printf("\n");
 }
 

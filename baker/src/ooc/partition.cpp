@@ -21,6 +21,10 @@
 
 namespace lodbake::ooc {
 
+// Partition files and the spill are written as the host's arrays of u32 and float: the format is
+// little-endian, and so is every host the baker runs on.
+static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "partition files are written as little-endian arrays");
+
 namespace {
 
 constexpr uint64_t kSpillBufferBytes = uint64_t(1) << 20;
@@ -267,27 +271,38 @@ Status writePartition(const PartitionOptions& o, const std::string& spill_path, 
         ::close(fd);
         LODBAKE_RETURN_IF_ERROR(read);
     }
-    // Local numbers in increasing global id. A leaf is compact in space, and scans number their
-    // vertices in scan order, so its ids usually span a range a few times its triangle count: then a
-    // table over the range numbers them in two sweeps. Otherwise (id, corner) pairs are sorted once
-    // and swept. Either takes at most 24 bytes per triangle and touches memory in order (a binary
-    // search per corner does not, and dominates on large leaves).
+    // Local numbers in increasing global id. A leaf is compact in space and scans number their
+    // vertices in scan order, so its ids usually span a range within a small multiple of its
+    // triangle count: then a bitmap over the range with a running count per 64 ids (3/16 byte per id,
+    // at most 24 bytes per triangle) gives each id its rank. Otherwise (id, corner) pairs are sorted
+    // once and swept. A binary search per corner would touch memory at random, and dominates on
+    // large leaves.
     uint64_t vertex_bytes = 0;
     const auto [lo_it, hi_it] = std::minmax_element(tri.begin(), tri.end());
     const uint64_t first_id = *lo_it, range = uint64_t(*hi_it) - first_id + 1;
-    if (range <= 6 * triangles) {
-        std::vector<uint32_t> table(size_t(range), 0);
-        for (uint32_t v : tri) table[size_t(v - first_id)] = 1;
-        size_t distinct = 0;
-        for (uint32_t used : table) distinct += used;
+    if (range <= std::min<uint64_t>(o.bitmap_ids_per_triangle, 128) * triangles) {
+        const size_t words = size_t((range + 63) / 64);
+        std::vector<uint64_t> bits(words, 0);
+        std::vector<uint32_t> rank(words, 0);
+        for (uint32_t v : tri) {
+            const uint64_t r = v - first_id;
+            bits[size_t(r >> 6)] |= uint64_t(1) << (r & 63);
+        }
+        uint32_t distinct = 0;
+        for (size_t w = 0; w < words; ++w) {
+            rank[w] = distinct;
+            distinct += uint32_t(__builtin_popcountll(bits[w]));
+        }
         ids.reserve(distinct);
         memory.add(4 * uint64_t(distinct));
-        for (size_t r = 0; r < table.size(); ++r) {
-            if (!table[r]) continue;
-            table[r] = uint32_t(ids.size());
-            ids.push_back(uint32_t(first_id + r));
+        for (size_t w = 0; w < words; ++w)
+            for (uint64_t m = bits[w]; m != 0; m &= m - 1)
+                ids.push_back(uint32_t(first_id + 64 * w + uint64_t(__builtin_ctzll(m))));
+        for (uint32_t& v : tri) {
+            const uint64_t r = v - first_id;
+            const size_t w = size_t(r >> 6);
+            v = rank[w] + uint32_t(__builtin_popcountll(bits[w] & ((uint64_t(1) << (r & 63)) - 1)));
         }
-        for (uint32_t& v : tri) v = table[size_t(v - first_id)];
     } else {
         std::vector<uint64_t> keyed(tri.size());
         for (size_t i = 0; i < tri.size(); ++i) keyed[i] = (uint64_t(tri[i]) << 32) | uint64_t(i);

@@ -16,6 +16,7 @@
 
 #include <gtest/gtest.h>
 
+#include "lodbake/core/file_io.h"
 #include "lodbake/io/mesh_io.h"
 #include "lodbake/ooc/partition.h"
 #include "scansim.h"
@@ -64,11 +65,15 @@ std::vector<std::string> filesIn(const std::string& dir) {
     return names;
 }
 
-// Partitions `scan` and checks the set against `input`, the same file read whole.
-void checkUnion(const std::string& scan, const lodbake::Mesh& input, PartitionOptions o) {
+// Partitions `scan` and checks the set against `input`, the same file read whole; `hashes` gets the
+// partitions' content hashes.
+void checkUnion(const std::string& scan, const lodbake::Mesh& input, PartitionOptions o,
+                std::vector<uint64_t>* hashes = nullptr) {
     lodbake::Diagnostics d;
     lodbake::Result<PartitionSet> set = partitionMesh(scan, o, d);
     ASSERT_TRUE(set.ok()) << set.status().message();
+    if (hashes)
+        for (const PartitionFile& f : set->partitions) hashes->push_back(f.content_hash);
     EXPECT_GE(set->partitions.size(), 3u);
     EXPECT_EQ(set->triangle_count, input.faceCount());
     EXPECT_EQ(set->vertex_count, input.vertexCount());
@@ -111,10 +116,9 @@ TEST(PartitionTest, UnionIsExactlyTheInputWithinTargetAndLimit) {
 }
 
 TEST(PartitionTest, ScatteredVertexOrderGivesTheSameUnion) {
-    // A scan with its vertices in a scattered order and enough leaves that a leaf's ids span more
-    // than six times its triangle count: the partition jobs then number vertices by sorting.
+    // A scan with its vertices in a scattered order: a leaf's ids span the whole range.
     const std::string dir = freshDir("scattered");
-    const std::string scan = makeScan(dir, 200000);
+    const std::string scan = makeScan(dir, 120000);
     lodbake::Diagnostics d;
     auto input = lodbake::readMesh(scan, lodbake::ReadOptions(), d);
     ASSERT_TRUE(input.ok());
@@ -125,10 +129,16 @@ TEST(PartitionTest, ScatteredVertexOrderGivesTheSameUnion) {
     for (size_t i = 0; i < order.size(); ++i) shuffled.positions[order[i]] = input->mesh.positions[i];
     for (uint32_t& v : shuffled.indices) v = order[v];
     ASSERT_TRUE(lodbake::writeMesh(shuffled, dir + "/shuffled.ply", lodbake::WriteOptions(), d).ok());
-    // 3 MiB on one thread: leaves of about 5,000 triangles, so about 40 of them.
+    // 3 MiB on one thread: leaves of about 5,000 triangles, so about 24 of them, their vertices
+    // numbered through the bitmap over their id range, then by sorting.
     PartitionOptions o = smallOptions(dir + "/work", 1);
     o.memory_limit_bytes = uint64_t(3) << 20;
-    checkUnion(dir + "/shuffled.ply", shuffled, o);
+    std::vector<uint64_t> by_bitmap, by_sort;
+    checkUnion(dir + "/shuffled.ply", shuffled, o, &by_bitmap);
+    o.bitmap_ids_per_triangle = 0;
+    checkUnion(dir + "/shuffled.ply", shuffled, o, &by_sort);
+    EXPECT_EQ(by_bitmap, by_sort);
+    EXPECT_GE(by_sort.size(), 20u);
 }
 
 TEST(PartitionTest, SameFilesForAnyThreadCountAndForObj) {
@@ -194,13 +204,31 @@ TEST(PartitionTest, ErrorsCancelsAndFullDisksLeaveNoFiles) {
 
 TEST(PartitionTest, ReadPartitionFileRefusesDamage) {
     const std::string dir = freshDir("damage");
-    const std::string scan = makeScan(dir, 2000);
+    const std::string scan = makeScan(dir, 18);
     lodbake::Diagnostics d;
     lodbake::Result<PartitionSet> set = partitionMesh(scan, smallOptions(dir + "/work", 1), d);
-    ASSERT_TRUE(set.ok() && !set->partitions.empty());
+    ASSERT_TRUE(set.ok() && set->partitions.size() == 1);
     const std::string path = set->partitions[0].path;
-    fs::resize_file(path, fs::file_size(path) - 4);
-    lodbake::Result<PartitionData> cut = readPartitionFile(path);
-    ASSERT_FALSE(cut.ok());
-    EXPECT_EQ(cut.status().message().rfind(path + ": header: ", 0), 0u) << cut.status().message();
+    auto bytes = lodbake::readFileBytes(path);
+    ASSERT_TRUE(bytes.ok());
+    ASSERT_TRUE(readPartitionFile(path).ok());
+    const std::string damaged = dir + "/damaged.lbpart";
+    auto refused = [&](const std::vector<uint8_t>& b) {
+        EXPECT_TRUE(lodbake::writeFileAtomic(damaged, b.data(), b.size()).ok());
+        lodbake::Result<PartitionData> r = readPartitionFile(damaged);
+        if (r.ok()) return false;
+        EXPECT_EQ(r.status().message().rfind(damaged + ": ", 0), 0u) << r.status().message();
+        return true;
+    };
+    for (size_t n = 0; n < bytes->size(); ++n)
+        EXPECT_TRUE(refused(std::vector<uint8_t>(bytes->begin(), bytes->begin() + std::ptrdiff_t(n)))) << n;
+    std::vector<uint8_t> longer = *bytes;
+    longer.push_back(0);
+    EXPECT_TRUE(refused(longer)) << "trailing bytes";
+    std::vector<uint8_t> magic = *bytes;
+    magic[7] = '2';
+    EXPECT_TRUE(refused(magic)) << "unknown version";
+    std::vector<uint8_t> index = *bytes;
+    index[index.size() - 4] = 0xff; // the last local index, far out of range
+    EXPECT_TRUE(refused(index)) << "index out of range";
 }

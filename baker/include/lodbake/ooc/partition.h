@@ -54,6 +54,10 @@ struct PartitionOptions {
     StreamReadOptions read;
     const std::atomic<bool>* cancel = nullptr;    // set to stop: the run fails and removes its files
     uint64_t sample_cap = uint64_t(1) << 20;      // S above (the sample holds up to 2 S positions)
+    // A job numbers its leaf's vertices by rank in a bitmap over the leaf's id range (3/16 byte per
+    // id) when the range is at most this many ids per triangle of the leaf, else by sorting (id,
+    // corner) pairs; at most 128 (the bound kJobBytesPerTriangle assumes), 0 always sorts.
+    uint32_t bitmap_ids_per_triangle = 128;
 };
 
 struct PartitionFile {
