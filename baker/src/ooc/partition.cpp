@@ -259,7 +259,7 @@ Status cellsAndTriangles(MeshStreamReader& reader, const PartitionOptions& o, co
 
 // Pass 4, one leaf: the partition file, named by the hash of its bytes.
 Status writePartition(const PartitionOptions& o, const std::string& spill_path, int spill_fd, uint64_t spill_bytes,
-                      uint64_t leaf, uint64_t triangles, MemoryAccount& memory, PartitionFile& out) {
+                      uint64_t leaf, uint64_t triangles, MemoryAccount& memory, PartitionFile& out, bool& created) {
     const std::string raw_path = rawPath(o.work_dir, leaf);
     const uint64_t job_bytes = kSpillBlockBytes + kJobFileBuffer + 36 * triangles;
     memory.add(job_bytes);
@@ -362,6 +362,9 @@ Status writePartition(const PartitionOptions& o, const std::string& spill_path, 
     out.triangle_count = counts[1];
     out.bounds_min = lo;
     out.bounds_max = hi;
+    // A file of that name holds these very bytes (its name is their hash): one from an earlier run
+    // in the same folder, or an identical leaf of this run. It is kept even if this run fails.
+    created = ::access(out.path.c_str(), F_OK) != 0;
     if (std::rename(provisional.c_str(), out.path.c_str()) != 0) {
         const std::string err = std::strerror(errno);
         ::unlink(provisional.c_str());
@@ -418,6 +421,7 @@ Result<PartitionSet> partitionMesh(const std::string& input, const PartitionOpti
     if (spill_fd < 0) return ioError(spill_path + ": cannot open: " + std::strerror(errno));
     std::vector<PartitionFile> out(leaf_triangles.size());
     std::vector<Status> status(leaf_triangles.size());
+    std::vector<uint8_t> created(leaf_triangles.size(), 0);
     tbb::task_arena arena(int(plan.jobs));
     arena.execute([&] {
         tbb::parallel_for(size_t(0), leaf_triangles.size(), [&](size_t leaf) {
@@ -426,14 +430,16 @@ Result<PartitionSet> partitionMesh(const std::string& input, const PartitionOpti
                 status[leaf] = cancelled(input);
                 return;
             }
+            bool made = false;
             status[leaf] = writePartition(o, spill_path, spill_fd, vp.count * sizeof(Vec3f), leaf,
-                                          leaf_triangles[leaf], memory, out[leaf]);
+                                          leaf_triangles[leaf], memory, out[leaf], made);
+            created[leaf] = made;
         });
     });
     ::close(spill_fd);
     for (size_t leaf = 0; leaf < out.size(); ++leaf) {
         files.temporary(rawPath(o.work_dir, leaf));
-        if (!out[leaf].path.empty()) files.output(out[leaf].path);
+        if (created[leaf]) files.output(out[leaf].path);
     }
     for (const Status& s : status) LODBAKE_RETURN_IF_ERROR(s);
     for (PartitionFile& f : out)

@@ -181,6 +181,14 @@ TEST(PartitionTest, ErrorsCancelsAndFullDisksLeaveNoFiles) {
     ASSERT_FALSE(c.ok());
     EXPECT_NE(c.status().message().find("cancelled"), std::string::npos);
     EXPECT_TRUE(fs::is_empty(cancelled.work_dir));
+    // A cancelled run in a folder that holds an earlier run's partitions leaves them as they were.
+    cancel = false;
+    ASSERT_TRUE(partitionMesh(scan, cancelled, d).ok());
+    const std::vector<std::string> earlier = filesIn(cancelled.work_dir);
+    cancel = true;
+    ASSERT_FALSE(partitionMesh(scan, cancelled, d).ok());
+    EXPECT_EQ(filesIn(cancelled.work_dir), earlier);
+    fs::remove_all(cancelled.work_dir);
     // A full disk, simulated by a file size limit: the spill (180 KB) cannot be written.
     std::signal(SIGXFSZ, SIG_IGN);
     rlimit old{};

@@ -17,8 +17,8 @@
 //     locally in global-id order, positions fetched from the spill, and the partition written to
 //     `<work>/<content hash><kPartitionExtension>`.
 // The set is the same for any thread count (files in leaf order, named by content). Raw files and
-// the spill are always removed; on an error or a cancel every partition file written so far is
-// removed too. A write error (a full disk) is an IoError naming the path.
+// the spill are always removed; on an error or a cancel every partition file the run created is
+// removed too (a file already there under the same name, hence with the same bytes, stays). A write error (a full disk) is an IoError naming the path.
 //
 // Memory formula (bytes; V vertices, T triangles, J concurrent jobs, W the reader window, C the
 // reader's chunk arrays, S the sample cap):
