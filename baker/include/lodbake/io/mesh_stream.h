@@ -15,8 +15,9 @@
 // - Triangles as three vertex ids. Triangles stay as they are; a polygon of n > 3 corners becomes
 //   the fan (0, i, i + 1), since choosing a diagonal needs positions (readMesh splits quads on the
 //   shorter valid diagonal and ear-clips larger polygons); faces with fewer than 3 corners are
-//   dropped (counted in StreamInfo::short_faces). For triangle meshes, readMesh() and the stream give
-//   the same positions and the same triangles in the same order.
+//   dropped (counted in StreamInfo::short_faces). For a triangle mesh in PLY, or in OBJ without vt
+//   or vn corners (readMesh makes one vertex per distinct v/vt/vn triple), readMesh() and the stream
+//   give the same positions and the same triangles in the same order.
 // - PLY: `element face` with a `vertex_indices` (or `vertex_index`) list; other elements are skipped.
 //   Triangle strips and range grids need positions to triangulate and are refused (Unsupported).
 // - OBJ: `v` statements are the vertices and `f`/`fo` corners their (resolved) position indices;
