@@ -143,7 +143,8 @@ Result<Plan> planMemory(const PartitionOptions& o, uint64_t vertices, uint64_t t
     if (limit < plan.fixed + plan.jobs * (per_job_fixed + kJobBytesPerTriangle * 64))
         return too_small(plan.fixed + per_job_fixed + kJobBytesPerTriangle * 64);
     plan.target = (limit - plan.fixed - plan.jobs * per_job_fixed) / (plan.jobs * kJobBytesPerTriangle);
-    plan.target = std::min<uint64_t>(plan.target, 0xffffffffu / 2);
+    // A job's corners are numbered in 32 bits (the sorted pairs keep the corner's index).
+    plan.target = std::min<uint64_t>(plan.target, 0xffffffffu / 4);
     const uint64_t sized = std::max<uint64_t>(1, plan.target * 4 / 5);
     plan.leaves = std::max<uint64_t>(1, (triangles + sized - 1) / sized);
     plan.cell_bytes = plan.leaves > 65535 ? 4 : 2;
@@ -155,7 +156,7 @@ Result<Plan> planMemory(const PartitionOptions& o, uint64_t vertices, uint64_t t
     return plan;
 }
 
-// Pass 1: positions to the spill, bounds, and the sample (every `stride`-th vertex; when the sample
+// Pass 1: positions to the spill, and the sample (every `stride`-th vertex; when the sample
 // reaches twice the cap, every other entry is dropped and the stride doubles).
 struct VertexPass {
     std::vector<std::pair<Vec3f, uint32_t>> sample;

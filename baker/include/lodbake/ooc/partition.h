@@ -5,8 +5,8 @@
 // later. Memory stays within the limit the caller passes, whatever the input size.
 //
 // Passes (docs/pipeline.md, "Out-of-core foundations"):
-//  1. vertices: positions are spilled to a temporary file in the work folder, their bounds taken and
-//     a deterministic sample kept (every k-th vertex, k doubling as the sample fills);
+//  1. vertices: positions are spilled to a temporary file in the work folder and a deterministic
+//     sample kept (every k-th vertex, k doubling as the sample fills);
 //  2. a k-d tree over the sample cuts space into L leaves of about equal vertex counts, L chosen so
 //     that a leaf's triangles fit a job (below); the spill is read back once to give every vertex
 //     its leaf number (2 bytes, 4 beyond 65,535 leaves);
