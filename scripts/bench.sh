@@ -41,6 +41,7 @@ fi
 benches="bake_bench bake_stages_bench batch_bench codec_bench collapse_bench distance_bench multilevel_bench
 pack_size_bench pfrep_bench read_bench repair_bench runtime_bench simplify_bench"
 benches="$benches cluster_bench"
+benches="$benches ooc_bench"
 for b in $benches; do
     if [ ! -x "$bin/$b" ]; then
         echo "bench.sh: $bin/$b: not built (configure with -DLODBAKE_BUILD_BENCHMARKS=ON and build; BUILD_DIR=$build_dir)" >&2
@@ -81,6 +82,7 @@ if [ $quick = 1 ]; then
     add simplify_bench bunny_zipper.ply lucy100k.ply
     add simplify_bench --speed-only --runs 1 dragon_poisson.ply
     add cluster_bench --mesh "$meshes/igea.ply" --frames 50
+    add ooc_bench --triangles 2000000 --memory-limit 256
     add scripts/bench-textured.sh "$meshes/spot.obj"
     add scripts/bench-merge.sh "$build_dir"
 else
@@ -98,6 +100,7 @@ else
     add runtime_bench
     add simplify_bench
     add cluster_bench
+    add ooc_bench
     add scripts/bench-textured.sh
     add scripts/bench-merge.sh "$build_dir"
 fi

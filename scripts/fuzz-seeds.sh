@@ -11,7 +11,7 @@ root=$(cd "$(dirname "$0")/.." && pwd)
 mkdir -p "$out"
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
-for t in gltf obj off ply preset conf manifest cache lod pack pfrep valence meshopt cluster; do mkdir -p "$out/$t"; done
+for t in gltf obj off ply preset conf manifest cache stream lod pack pfrep valence meshopt cluster; do mkdir -p "$out/$t"; done
 
 cp "$root"/tests/malformed/ply/*.ply "$out/ply/"
 cp "$root"/tests/malformed/off/*.off "$out/off/"
@@ -152,3 +152,5 @@ cp "$out/pack/rock_web.glb" "$out/gltf/rock_web.glb"
 cp "$out"/gltf/*.glb "$out/pack/" 2>/dev/null || true
 # The LOD runtime (models, streaming) reads the same packs.
 cp "$out"/pack/* "$out/lod/"
+# The streaming readers read every PLY and OBJ seed, and the small generated scans.
+cp "$out"/ply/* "$out"/obj/* "$root"/tests/fuzz/seeds/stream/* "$out/stream/"

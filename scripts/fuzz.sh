@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Runs one libFuzzer target for a set time.
 # usage: scripts/fuzz.sh TARGET SECONDS [libFuzzer options...]
-#   TARGET: ply obj off gltf preset conf manifest cache (baker readers, bake manifests and cache
-#   files, tests/fuzz/) or lod pack pfrep valence meshopt cluster (runtime, runtime/tools/fuzz_*.cpp).
+#   TARGET: ply obj off gltf preset conf manifest cache stream (baker readers, bake manifests, cache
+#   files and the streaming readers, tests/fuzz/) or lod pack pfrep valence meshopt cluster (runtime,
+#   runtime/tools/fuzz_*.cpp).
 # Configures and builds $LODBAKE_FUZZ_BUILD_DIR (default build-fuzz) with Clang and
 # -DLODBAKE_BUILD_FUZZERS=ON unless LODBAKE_FUZZ_NO_BUILD=1, builds the seed corpora once
 # (scripts/fuzz-seeds.sh, with $LODBAKE_CLI or build/baker/lodbake, else the fuzz build's own CLI),
@@ -22,12 +23,12 @@ cd "$root"
 build=${LODBAKE_FUZZ_BUILD_DIR:-build-fuzz}
 
 case "$target" in
-ply | obj | off | gltf | preset | conf | manifest | cache)
+ply | obj | off | gltf | preset | conf | manifest | cache | stream)
     exe="$build/tests/fuzz/lodbake_fuzz_$target" cmake_target=lodbake_fuzz_$target
     ;;
 lod | pack | pfrep | valence | meshopt | cluster) exe="$build/runtime/lodrt_fuzz_$target" cmake_target=lodrt_fuzz_$target ;;
 *)
-    echo "fuzz.sh: unknown target '$target' (ply obj off gltf preset conf manifest cache lod pack pfrep valence meshopt cluster)" >&2
+    echo "fuzz.sh: unknown target '$target' (ply obj off gltf preset conf manifest cache stream lod pack pfrep valence meshopt cluster)" >&2
     exit 2
     ;;
 esac
@@ -35,6 +36,7 @@ dict=
 case "$target" in
 ply | obj | off | gltf | preset) dict=tests/fuzz/dict/$target.dict ;;
 manifest) dict=tests/fuzz/dict/preset.dict ;;
+stream) dict=tests/fuzz/dict/ply.dict ;;
 lod | pack) dict=tests/fuzz/dict/gltf.dict ;;
 esac
 

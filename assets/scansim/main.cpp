@@ -8,6 +8,7 @@
 #include <string>
 
 #include "lodbake/core/file_io.h"
+#include "lodbake/core/temp_files.h"
 #include "scansim.h"
 
 namespace {
@@ -16,6 +17,7 @@ using namespace lodbake;
 using namespace lodbake::scansim;
 
 const char* kHelp = R"(usage: lodbake_scansim -o DIR [options]
+       lodbake_scansim --surface FILE.ply --triangles N [--seed N] [--ascii | --big-endian]
 
 Scans a procedural rock on a plinth from several turntable positions, the way a Cyberware or
 structured-light scanner does, and writes DIR/<name>_<deg>.ply (Stanford `element range_grid`
@@ -39,6 +41,14 @@ options:
                        atlas of 6*K*K charts (K in [1, 64]; 6 gives 216 charts)
   --atlas-quads M      quads per chart edge of that mesh (default 5)
   -h, --help           this help
+
+surface mode (a procedural scan of any size, for the out-of-core bake):
+  --surface FILE.ply   write a displaced torus with fractal relief and Gaussian range noise to
+                       FILE.ply while generating it, one grid row in memory at a time
+  --triangles N        about N triangles (the grid gives 2 x rows x cols; 18 .. 2^36)
+  --seed N             seed of the relief and the noise (default 1)
+  --ascii              ascii PLY (default binary little endian)
+  --big-endian         binary big endian PLY
 )";
 
 int usage(const std::string& message) {
@@ -61,9 +71,47 @@ bool parseUnsigned(const std::string& s, uint64_t& out) {
     return errno == 0 && end && *end == '\0';
 }
 
+// `--surface FILE --triangles N [--seed N] [--ascii | --big-endian]`: the surface generator.
+int surfaceMain(int argc, char** argv) {
+    SurfaceOptions options;
+    std::string path;
+    bool have_triangles = false;
+    for (int i = 1; i < argc; ++i) {
+        const std::string a = argv[i];
+        const bool has_value = i + 1 < argc;
+        uint64_t u = 0;
+        if (a == "--surface" && has_value) {
+            path = argv[++i];
+        } else if ((a == "--triangles" || a == "--seed") && has_value) {
+            if (!parseUnsigned(argv[++i], u)) return usage(a + " needs a non-negative integer");
+            (a == "--seed" ? options.seed : options.triangles) = u;
+            have_triangles |= a == "--triangles";
+        } else if (a == "--ascii") {
+            options.encoding = SurfaceOptions::Encoding::Ascii;
+        } else if (a == "--big-endian") {
+            options.encoding = SurfaceOptions::Encoding::BinaryBigEndian;
+        } else {
+            return usage("surface mode: unexpected argument '" + a + "'");
+        }
+    }
+    if (path.empty() || !have_triangles) return usage("surface mode needs --surface FILE.ply and --triangles N");
+    installTempFileSignalCleanup();
+    Result<SurfaceStats> stats = writeSurfacePly(options, path);
+    if (!stats.ok()) {
+        std::fprintf(stderr, "error: %s\n", stats.status().message().c_str());
+        return stats.status().code() == StatusCode::InvalidInput ? 2 : 1;
+    }
+    std::printf("%s: %llu vertices, %llu triangles (grid %llu x %llu), %llu bytes\n", path.c_str(),
+                (unsigned long long)stats->vertices, (unsigned long long)stats->triangles,
+                (unsigned long long)stats->rows, (unsigned long long)stats->cols, (unsigned long long)stats->bytes);
+    return 0;
+}
+
 } // namespace
 
 int main(int argc, char** argv) {
+    for (int i = 1; i < argc; ++i)
+        if (std::string(argv[i]) == "--surface") return surfaceMain(argc, argv);
     ScanOptions options;
     AtlasOptions atlas;
     bool write_atlas = false;

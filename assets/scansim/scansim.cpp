@@ -99,8 +99,13 @@ double quintic(double t) {
     return t * t * t * (t * (t * 6.0 - 15.0) + 10.0);
 }
 
-// Lattice value noise in [-1, 1], smooth (C2) thanks to the quintic fade.
+bool finitePositive(double v) {
+    return std::isfinite(v) && v > 0.0;
+}
 
+} // namespace
+
+// Lattice value noise in [-1, 1], smooth (C2) thanks to the quintic fade.
 double valueNoise(uint64_t seed, uint64_t octave, const Vec3d& p) {
     const double fx = std::floor(p.x), fy = std::floor(p.y), fz = std::floor(p.z);
     const int64_t ix = int64_t(fx), iy = int64_t(fy), iz = int64_t(fz);
@@ -120,11 +125,9 @@ double valueNoise(uint64_t seed, uint64_t octave, const Vec3d& p) {
     return y0 + (y1 - y0) * tz;
 }
 
-bool finitePositive(double v) {
-    return std::isfinite(v) && v > 0.0;
+double hashUniform(uint64_t a, uint64_t b, uint64_t c, uint64_t d) {
+    return unitFromHash(hash4(a, b, c, d));
 }
-
-} // namespace
 
 Shape::Shape(const ShapeOptions& options, uint64_t seed) : options_(options), seed_(seed) {
     const ShapeOptions& o = options_;

@@ -143,6 +143,47 @@ struct AtlasOptions {
 /// The atlased mesh as Wavefront OBJ text (v, vt, f v/vt). Deterministic for the given options.
 Result<std::string> atlasObjText(const ScanOptions& options, const AtlasOptions& atlas);
 
+/// Seeded lattice value noise in [-1, 1], C2-smooth; each octave number is an independent lattice.
+double valueNoise(uint64_t seed, uint64_t octave, const Vec3d& p);
+
+/// Uniform in (0, 1), never 0 or 1, from a counter-based hash of four words.
+double hashUniform(uint64_t a, uint64_t b, uint64_t c, uint64_t d);
+
+/// A procedural scan of any size (surface.cpp), written straight to a PLY while it is generated: a
+/// torus (closed, genus 1, so every triangle has three neighbours and no pole needs special cases)
+/// sampled on a rows x cols grid, displaced along its normal by seeded fractal value noise (the
+/// scanned object's relief) and per-vertex Gaussian noise (the scanner's range noise). Memory is
+/// one grid row whatever the size; the output is a pure function of the options.
+struct SurfaceOptions {
+    uint64_t seed = 1;
+    uint64_t triangles = 1000000; // target; the grid makes 2 * rows * cols, the nearest it can
+    enum class Encoding { BinaryLittleEndian, BinaryBigEndian, Ascii } encoding = Encoding::BinaryLittleEndian;
+    double major_radius = 1.0;      // metres, centre of the tube to the torus axis (+y)
+    double minor_radius = 0.4;      // metres, radius of the tube
+    double relief = 0.08;           // fractal displacement amplitude, as a fraction of minor_radius
+    double relief_frequency = 3.0;  // lowest octave's frequency in cycles per metre
+    int relief_octaves = 6;         // each octave doubles the frequency and halves the amplitude
+    double range_noise = 0.15;      // Gaussian noise sigma along the normal, in grid spacings
+};
+
+struct SurfaceStats {
+    uint64_t rows = 0, cols = 0;
+    uint64_t vertices = 0;
+    uint64_t triangles = 0;
+    uint64_t bytes = 0; // size of the file written
+};
+
+/// Grid size for the options: rows around the tube, cols around the axis (cols / rows follows the
+/// ratio of the two circumferences, so grid cells are about square). An error for a target below
+/// 18 triangles or above 2^36, or for vertex ids that would not fit 32 bits.
+Result<SurfaceStats> surfaceGrid(const SurfaceOptions& options);
+
+/// Writes the surface as PLY (`element vertex` with float x y z, then `element face` with
+/// `list uchar int vertex_indices`, triangles facing outwards) to `path` through a temporary in the
+/// same folder, renamed into place at the end: an error (a full disk names the path) or an
+/// interruption leaves no file behind.
+Result<SurfaceStats> writeSurfacePly(const SurfaceOptions& options, const std::string& path);
+
 /// p_world = R(q)^T * p + t, the Stanford .conf convention.
 Vec3d scannerToWorld(const Vec3d& p, const double quaternion[4], const double translation[3]);
 

@@ -244,5 +244,10 @@ constexpr uint32_t kClusterPageMaxClusters = 256;   // per page (a run's u8 clus
 constexpr uint32_t kClusterPageMaxTriangles = 65535; // per page (a cluster's u16 first_triangle)
 constexpr uint32_t kClusterMaxCount = 1u << 26;     // clusters, groups, children, roots, pages
 
+// Out-of-core partition files (baker/include/lodbake/ooc/partition.h): the 8-byte magic that
+// starts each, and the extension of their content-hash names.
+constexpr char kPartitionMagic[8] = {'L', 'B', 'P', 'A', 'R', 'T', '0', '1'};
+constexpr const char kPartitionExtension[] = ".lbpart";
+
 } // namespace format
 } // namespace lodrt

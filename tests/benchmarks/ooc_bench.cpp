@@ -1,0 +1,194 @@
+// ooc_bench: the foundations of the out-of-core bake, measured on a generated scan. Generates a
+// displaced-torus scan of N triangles (lodbake_scansim's surface mode) into a work folder, then in
+// the same run: streams it through the streaming reader (both passes), partitions it under a memory
+// limit, and reads it whole with readMesh() as the anchor. Prints wall time, triangles per second and
+// process CPU time and peak resident memory of each stage (VmHWM, reset between stages through
+// /proc/self/clear_refs), and the ratios to readMesh. The in-memory reader runs last so that its memory does not stay resident
+// under the other stages' figures.
+//
+// Bar: the partitioner's peak resident memory stays under the limit it was given (issue: "peak
+// resident memory stays under the limit whatever the input size").
+//
+// usage: ooc_bench [--triangles N] [--memory-limit MIB] [--dir DIR] [--threads N] [--no-anchor]
+//                  [--scan FILE] [--check]
+//   defaults: 10,000,000 triangles, 1024 MiB, DIR = the build's ooc_bench_out folder. --scan reads
+//   an existing file (made by lodbake_scansim --surface) instead of generating one, and keeps it.
+
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <system_error>
+
+#include <sys/resource.h>
+
+#include "bench_bar.h"
+#include "lodbake/io/mesh_io.h"
+#include "lodbake/io/mesh_stream.h"
+#include "lodbake/ooc/partition.h"
+#include "scansim.h"
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// Peak resident memory since the last resetPeak(), in MiB.
+double peakMiB() {
+    std::ifstream status("/proc/self/status");
+    std::string line;
+    while (std::getline(status, line))
+        if (line.rfind("VmHWM:", 0) == 0) return std::strtod(line.c_str() + 6, nullptr) / 1024.0;
+    return NAN;
+}
+
+void resetPeak() {
+    std::ofstream clear("/proc/self/clear_refs");
+    clear << "5";
+}
+
+// CPU seconds of the whole process (every thread), user and system: on a shared machine the wall
+// time also counts the time the process waited for a core.
+double processCpuSeconds() {
+    rusage u{};
+    getrusage(RUSAGE_SELF, &u);
+    return double(u.ru_utime.tv_sec + u.ru_stime.tv_sec) + 1e-6 * double(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
+}
+
+struct Stage {
+    double seconds = 0, cpu_seconds = 0, peak_mib = 0;
+};
+
+template <class F> Stage measure(F&& f) {
+    resetPeak();
+    const auto t0 = Clock::now();
+    const double c0 = processCpuSeconds();
+    f();
+    Stage s;
+    s.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+    s.cpu_seconds = processCpuSeconds() - c0;
+    s.peak_mib = peakMiB();
+    return s;
+}
+
+void fail(const lodbake::Status& s) {
+    std::fprintf(stderr, "ooc_bench: %s\n", s.message().c_str());
+    std::exit(1);
+}
+
+void printStage(const char* name, const Stage& s, uint64_t triangles, const Stage* anchor) {
+    std::printf("%-28s %8.2f s wall %8.2f s cpu %9.3f Mtri/s (wall) %9.3f Mtri/s (cpu) %9.1f MiB peak", name, s.seconds,
+                s.cpu_seconds, double(triangles) / s.seconds / 1e6, double(triangles) / s.cpu_seconds / 1e6, s.peak_mib);
+    if (anchor && anchor->seconds > 0)
+        std::printf("   vs readMesh: wall x%.3f, cpu x%.3f, peak x%.3f", s.seconds / anchor->seconds,
+                    s.cpu_seconds / anchor->cpu_seconds, s.peak_mib / anchor->peak_mib);
+    std::printf("\n");
+}
+
+} // namespace
+
+int main(int argc, char** argv) {
+    const bool check = lodbake_bench::takeCheckFlag(argc, argv);
+    uint64_t triangles = 10000000, limit_mib = 1024;
+    int threads = 0;
+    bool anchor = true;
+    std::string dir = LODBAKE_BENCH_OUT_DIR, given_scan;
+    for (int i = 1; i < argc; ++i) {
+        const std::string a = argv[i];
+        if (a == "--triangles" && i + 1 < argc) triangles = std::strtoull(argv[++i], nullptr, 10);
+        else if (a == "--memory-limit" && i + 1 < argc) limit_mib = std::strtoull(argv[++i], nullptr, 10);
+        else if (a == "--dir" && i + 1 < argc) dir = argv[++i];
+        else if (a == "--threads" && i + 1 < argc) threads = std::atoi(argv[++i]);
+        else if (a == "--no-anchor") anchor = false;
+        else if (a == "--scan" && i + 1 < argc) given_scan = argv[++i];
+        else {
+            std::fprintf(stderr, "usage: ooc_bench [--triangles N] [--memory-limit MIB] [--dir DIR] [--threads N] "
+                                 "[--no-anchor] [--scan FILE] [--check]\n");
+            return 2;
+        }
+    }
+    std::error_code ec;
+    std::filesystem::create_directories(dir, ec);
+    const std::string scan = given_scan.empty() ? dir + "/ooc_bench_scan.ply" : given_scan;
+    const std::string work = dir + "/ooc_bench_work";
+
+    lodbake::scansim::SurfaceOptions surface;
+    surface.triangles = triangles;
+    lodbake::scansim::SurfaceStats stats;
+    if (given_scan.empty()) {
+        const Stage gen = measure([&] {
+            lodbake::Result<lodbake::scansim::SurfaceStats> r = lodbake::scansim::writeSurfacePly(surface, scan);
+            if (!r.ok()) fail(r.status());
+            stats = *r;
+        });
+        printStage("generate (scansim surface)", gen, stats.triangles, nullptr);
+    } else {
+        lodbake::Diagnostics d;
+        auto reader = lodbake::openMeshStream(scan, lodbake::StreamReadOptions(), d);
+        if (!reader.ok()) fail(reader.status());
+        stats.vertices = (*reader)->info().vertex_count;
+        stats.triangles = (*reader)->info().triangle_estimate;
+        stats.bytes = std::filesystem::file_size(scan, ec);
+    }
+    const uint64_t t = stats.triangles;
+    std::printf("scan: %llu triangles, %llu vertices, %.1f MB (%s)\n", (unsigned long long)t,
+                (unsigned long long)stats.vertices, double(stats.bytes) / 1e6, scan.c_str());
+
+    double checksum = 0;
+    const Stage stream = measure([&] {
+        lodbake::Diagnostics d;
+        auto reader = lodbake::openMeshStream(scan, lodbake::StreamReadOptions(), d);
+        if (!reader.ok()) fail(reader.status());
+        lodbake::Status s = (*reader)->forEachVertexChunk([&](uint64_t, const lodbake::Vec3f* p, size_t n) {
+            for (size_t i = 0; i < n; ++i) checksum += double(p[i].x);
+            return lodbake::Status();
+        });
+        if (s.ok())
+            s = (*reader)->forEachTriangleChunk([&](uint64_t, const uint32_t* c, size_t n) {
+                checksum += double(c[3 * n - 1]);
+                return lodbake::Status();
+            });
+        if (!s.ok()) fail(s);
+    });
+
+    lodbake::ooc::PartitionSet set;
+    const Stage part = measure([&] {
+        lodbake::Diagnostics d;
+        lodbake::ooc::PartitionOptions o;
+        o.work_dir = work;
+        o.memory_limit_bytes = limit_mib << 20;
+        o.threads = threads;
+        lodbake::Result<lodbake::ooc::PartitionSet> r = lodbake::ooc::partitionMesh(scan, o, d);
+        if (!r.ok()) fail(r.status());
+        set = std::move(r).value();
+    });
+
+    Stage read;
+    if (anchor) {
+        read = measure([&] {
+            lodbake::Diagnostics d;
+            lodbake::Result<lodbake::LoadedMesh> m = lodbake::readMesh(scan, lodbake::ReadOptions(), d);
+            if (!m.ok()) fail(m.status());
+            checksum += double(m->mesh.faceCount());
+        });
+    }
+    const Stage* a = anchor ? &read : nullptr;
+    printStage("stream reader (2 passes)", stream, t, a);
+    printStage("partition", part, t, a);
+    if (anchor) printStage("readMesh (anchor)", read, t, nullptr);
+    std::printf("partitions: %zu files (%llu leaves), target %llu triangles, largest %llu; memory bound %.1f MiB, "
+                "accounted peak %.1f MiB, limit %llu MiB (checksum %g)\n",
+                set.partitions.size(), (unsigned long long)set.leaf_count, (unsigned long long)set.target_triangles,
+                (unsigned long long)set.largest_partition, double(set.memory_bound_bytes) / 1048576.0,
+                double(set.accounted_peak_bytes) / 1048576.0, (unsigned long long)limit_mib, checksum);
+
+    lodbake_bench::Bars bars("ooc_bench");
+    bars.absolute("partition peak RSS MiB <= memory limit", part.peak_mib, double(limit_mib),
+                  lodbake_bench::Limit::AtMost, anchor ? read.peak_mib : NAN);
+    lodbake::ooc::removePartitionFiles(set);
+    std::filesystem::remove(work, ec);
+    if (given_scan.empty()) std::filesystem::remove(scan, ec);
+    return bars.finish(check);
+}
