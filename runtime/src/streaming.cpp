@@ -326,7 +326,7 @@ Result PackSource::copyLevelIndices(uint32_t model, uint32_t level, const uint8_
 // ---- Streamer ----
 
 struct Streamer::Task {
-    enum class Kind : uint8_t { Level, PfrepHeader, PfrepStep, PfrepWhole };
+    enum class Kind : uint8_t { Level, PfrepHeader, PfrepStep, PfrepWhole, ClusterRead, ClusterDecode };
     const PackSource* source = nullptr;
     Kind kind = Kind::Level;
     uint32_t model = 0, level = 0;
@@ -347,6 +347,12 @@ struct Streamer::Task {
     uint32_t step_count = 0;
     uint64_t step_bytes[kMaxLevels + 1] = {};
     PfrepModel steps[kMaxLevels + 1];
+    // Cluster page (ClusterRead, then ClusterDecode): the page's coded bytes are read into `coded`
+    // (coded_size bytes); the decode writes positions and then indices into dst (vertex_count * 3
+    // floats, triangle_count * 3 indices) with `scratch` (scratch_bytes).
+    const ClusterLodPack* cluster_pack = nullptr;
+    uint32_t page = 0, vertex_count = 0, triangle_count = 0;
+    void* scratch = nullptr;
     bool is_busy = false; // frame-thread view
     Result result = Result::Ok;
     std::atomic<uint32_t> done{0};
@@ -402,6 +408,18 @@ struct Streamer::Task {
         case Kind::PfrepWhole:
             t->result = runPfrepWhole(*t);
             break;
+        case Kind::ClusterRead:
+            t->result = t->source->readBufferView(t->view, t->cluster_pack->pages[t->page].byte_offset, t->coded,
+                                                  t->coded_size);
+            break;
+        case Kind::ClusterDecode: {
+            float* positions = reinterpret_cast<float*>(t->dst);
+            uint32_t* indices = reinterpret_cast<uint32_t*>(t->dst + size_t(t->vertex_count) * 3 * sizeof(float));
+            t->result = clusterPageDecode(*t->cluster_pack, t->page, t->coded, t->coded_size, positions,
+                                          size_t(t->vertex_count) * 3, indices, size_t(t->triangle_count) * 3,
+                                          t->scratch, t->scratch_bytes);
+            break;
+        }
         }
         t->done.store(1, std::memory_order_release);
     }
@@ -419,10 +437,19 @@ void Streamer::release() {
     for (uint32_t i = 0; i < slot_count_; ++i) detail::deallocateBytes(a, slots_[i].data);
     // A finished but uncollected PFRep step owns its new buffer.
     for (uint32_t i = 0; i < task_count_; ++i)
-        if (tasks_[i].is_busy && (tasks_[i].kind == Task::Kind::PfrepStep || tasks_[i].kind == Task::Kind::PfrepWhole)) {
+        if (tasks_[i].is_busy && tasks_[i].kind != Task::Kind::Level && tasks_[i].kind != Task::Kind::PfrepHeader) {
             detail::deallocateBytes(a, tasks_[i].dst);
             detail::deallocateBytes(a, tasks_[i].coded);
+            detail::deallocateBytes(a, tasks_[i].scratch);
         }
+    for (uint32_t i = 0; i < page_count_; ++i) detail::deallocateBytes(a, pages_[i].data);
+    for (uint32_t i = 0; clusters_ && i < pfrep_count_; ++i) detail::deallocateBytes(a, clusters_[i].memory);
+    detail::deallocateBytes(a, clusters_);
+    detail::deallocateBytes(a, pages_);
+    clusters_ = nullptr;
+    pages_ = nullptr;
+    page_count_ = 0;
+    cluster_frame_ = 1;
     for (uint32_t i = 0; i < pfrep_count_; ++i) detail::deallocateBytes(a, pfrep_[i].data);
     for (uint32_t i = 0; i < task_count_; ++i) tasks_[i].~Task();
     detail::deallocateBytes(a, tasks_);
@@ -482,6 +509,10 @@ Result Streamer::init(const PackSource* source, const JobSystem* jobs, const Str
     }
     pfrep_count_ = uint32_t(model_count);
     for (uint32_t m = 0; m < pfrep_count_; ++m) initPfrepStream(m);
+    if (!initClusters()) {
+        release();
+        return Result::OutOfMemory;
+    }
     rebuildResidentTable();
     return Result::Ok;
 }
@@ -638,6 +669,15 @@ void Streamer::collect() {
         if (!t.is_busy || t.done.load(std::memory_order_acquire) == 0) continue;
         t.is_busy = false;
         --busy_tasks_;
+        if (t.kind == Task::Kind::ClusterRead) {
+            collectClusterRead(t);
+            if (t.is_busy) --i; // resubmitted as its decode: collect it now if it already ran inline
+            continue;
+        }
+        if (t.kind == Task::Kind::ClusterDecode) {
+            collectClusterDecode(t);
+            continue;
+        }
         if (t.kind == Task::Kind::Level) {
             Slot& s = slots_[t.slot];
             stats_.in_flight_bytes -= s.size;
@@ -791,9 +831,11 @@ void Streamer::scorePfrepStreams(const ModelDemand* demand) {
     }
 }
 
-// Request ids: levels are slots [0, slot_count_), PFRep streams follow.
+// Request ids: levels are slots [0, slot_count_), PFRep streams follow, then cluster pages.
 float Streamer::usefulness(uint32_t id) const {
-    return id < slot_count_ ? slots_[id].usefulness : pfrep_[id - slot_count_].usefulness;
+    if (id < slot_count_) return slots_[id].usefulness;
+    if (id < slot_count_ + pfrep_count_) return pfrep_[id - slot_count_].usefulness;
+    return pages_[id - slot_count_ - pfrep_count_].usefulness;
 }
 
 // Fills candidates_ with the absent levels and the streams worth loading; returns their count.
@@ -804,6 +846,9 @@ uint32_t Streamer::rankCandidates() {
             candidates_[candidate_count++] = i;
     for (uint32_t m = 0; m < pfrep_count_; ++m)
         if (pfrep_[m].usefulness > 0) candidates_[candidate_count++] = slot_count_ + m;
+    for (uint32_t p = 0; p < page_count_; ++p)
+        if (pages_[p].state == LevelState::Absent && pages_[p].usefulness > 0)
+            candidates_[candidate_count++] = slot_count_ + pfrep_count_ + p;
     // Most useful first; ties by id (levels before prefixes) so the order does not depend on the sort.
     std::sort(candidates_, candidates_ + candidate_count, [this](uint32_t a, uint32_t b) {
         const float ua = usefulness(a), ub = usefulness(b);
@@ -820,6 +865,11 @@ uint64_t Streamer::requestBytes(uint32_t id, bool* is_pinned) const {
     if (id < slot_count_) {
         *is_pinned = slots_[id].is_coarsest != 0;
         return slots_[id].size;
+    }
+    if (id >= slot_count_ + pfrep_count_) {
+        const PageSlot& page = pages_[id - slot_count_ - pfrep_count_];
+        *is_pinned = page.is_pinned != 0;
+        return page.estimate;
     }
     const PfrepStream& ps = pfrep_[id - slot_count_];
     if (ps.step < 0) {
@@ -851,6 +901,22 @@ uint32_t Streamer::leastUsefulVictim(float useful) const {
             victim_usefulness = v.held_usefulness;
         }
     }
+    // Pages: the least useful, then the least recently wanted, then the finest.
+    uint32_t page_victim = UINT32_MAX;
+    for (uint32_t p = 0; p < page_count_; ++p) {
+        const PageSlot& v = pages_[p];
+        if (v.state != LevelState::Resident || v.is_pinned || !(v.usefulness < useful)) continue;
+        if (page_victim != UINT32_MAX) {
+            const PageSlot& w = pages_[page_victim];
+            if (v.usefulness != w.usefulness ? v.usefulness > w.usefulness
+                : v.last_wanted != w.last_wanted ? v.last_wanted > w.last_wanted
+                                                 : v.depth >= w.depth)
+                continue;
+        }
+        page_victim = p;
+    }
+    if (page_victim != UINT32_MAX && (victim == UINT32_MAX || pages_[page_victim].usefulness <= victim_usefulness))
+        victim = slot_count_ + pfrep_count_ + page_victim;
     return victim;
 }
 
@@ -869,6 +935,10 @@ bool Streamer::makeRoom(uint64_t size, float useful) {
         if (v.step > 0 && v.state != PfrepStreamState::Loading && v.held_usefulness < useful)
             reclaimable += v.step_bytes[v.step] - v.step_bytes[0];
     }
+    for (uint32_t p = 0; p < page_count_; ++p) {
+        const PageSlot& v = pages_[p];
+        if (v.state == LevelState::Resident && !v.is_pinned && v.usefulness < useful) reclaimable += v.size;
+    }
     const uint64_t used = stats_.resident_bytes + stats_.in_flight_bytes;
     if (used + size > budget + reclaimable) return false;
     while (stats_.resident_bytes + stats_.in_flight_bytes + size > budget) {
@@ -876,6 +946,8 @@ bool Streamer::makeRoom(uint64_t size, float useful) {
         if (victim == UINT32_MAX) break;
         if (victim < slot_count_) {
             evict(victim);
+        } else if (victim >= slot_count_ + pfrep_count_) {
+            evictPage(victim - slot_count_ - pfrep_count_);
         } else if (!shrinkPfrep(victim - slot_count_)) {
             break;
         }
@@ -940,6 +1012,7 @@ bool Streamer::prepareTask(uint32_t task_index, uint32_t id, uint64_t size) {
         stats_.in_flight_bytes += size;
         return true;
     }
+    if (id >= slot_count_ + pfrep_count_) return prepareClusterTask(t, id - slot_count_ - pfrep_count_, size);
     PfrepStream* ps = &pfrep_[id - slot_count_];
     t.slot = id - slot_count_;
     t.view = ps->view;
@@ -975,13 +1048,15 @@ void Streamer::update(const ModelDemand* demand) {
     collect();
     scoreLevels(demand);
     scorePfrepStreams(demand);
+    scoreClusterPages();
     const uint32_t candidate_count = rankCandidates();
     uint32_t next_task = 0;
     for (uint32_t c = 0; c < candidate_count; ++c) {
         while (next_task < task_count_ && tasks_[next_task].is_busy) ++next_task;
         if (next_task == task_count_) break;
         const uint32_t id = candidates_[c];
-        if (id >= slot_count_ && pfrep_[id - slot_count_].state == PfrepStreamState::Loading)
+        if (id >= slot_count_ && id < slot_count_ + pfrep_count_ &&
+            pfrep_[id - slot_count_].state == PfrepStreamState::Loading)
             continue; // collected inline and resubmitted
         bool is_pinned = false;
         const uint64_t size = requestBytes(id, &is_pinned);
@@ -1005,6 +1080,342 @@ void Streamer::update(const ModelDemand* demand) {
     // keep and the camera may come back); eviction happens only to make room above.
     collect();
     rebuildResidentTable();
+    rebuildClusterResidency();
+    if (++cluster_frame_ == 0) cluster_frame_ = 1; // stamps of frame 0 mean "never"
+}
+
+// ---- Cluster pages ----
+
+namespace {
+
+size_t align8(size_t n) {
+    return (n + 7) & ~size_t(7);
+}
+
+} // namespace
+
+// Reads and opens model m's cluster table. Returns NotLoaded (no extension), OutOfMemory, or the
+// find / read / open error (the model then streams its levels only).
+Result Streamer::initClusterModel(uint32_t m, uint32_t* page_count) {
+    ClusterModel& cm = clusters_[m];
+    *page_count = 0;
+    const ModelSet& models = source_->models();
+    const Pack& pack = source_->pack();
+    const LevelInfo& level0 = models.level(models.model(m).first_level);
+    if (level0.mesh == kNoIndex || level0.mesh >= pack.meshCount()) return Result::NotLoaded;
+    Result r = clusterPackFind(pack, level0.mesh, &cm.source);
+    if (r != Result::Ok) return r;
+    const Allocator& a = options_.allocator;
+    uint8_t* table = detail::allocateArray<uint8_t>(a, cm.source.table_size);
+    if (!table) return Result::OutOfMemory;
+    ClusterPackInfo info;
+    r = source_->readBufferView(cm.source.table_view, 0, table, cm.source.table_size);
+    if (r == Result::Ok) r = clusterPackReadInfo(table, cm.source.table_size, &info);
+    size_t bytes = 0;
+    if (r == Result::Ok) {
+        const size_t groups = info.group_count, pages = info.page_count;
+        bytes = align8(info.memory_bytes) + align8(pages) + align8(groups) + 2 * align8(groups * sizeof(uint32_t)) +
+                align8((groups + 1) * sizeof(uint32_t)) + align8(size_t(info.cluster_count) * sizeof(uint32_t));
+        cm.memory = detail::allocateBytes(a, bytes);
+        if (!cm.memory) r = Result::OutOfMemory;
+    }
+    if (r == Result::Ok) {
+        std::memset(cm.memory, 0, bytes);
+        r = clusterPackOpen(table, cm.source.table_size, cm.source.pages_size, cm.memory, info.memory_bytes, &cm.pack);
+    }
+    detail::deallocateBytes(a, table);
+    if (r != Result::Ok) {
+        detail::deallocateBytes(a, cm.memory);
+        cm.memory = nullptr;
+        return r;
+    }
+    uint8_t* at = static_cast<uint8_t*>(cm.memory) + align8(info.memory_bytes);
+    const size_t groups = info.group_count;
+    auto take = [&at](size_t n) {
+        uint8_t* p = at;
+        at += align8(n);
+        return p;
+    };
+    cm.page_resident = take(info.page_count);
+    cm.group_resident = take(groups);
+    cm.group_stamp = reinterpret_cast<uint32_t*>(take(groups * sizeof(uint32_t)));
+    cm.stack = reinterpret_cast<uint32_t*>(take(groups * sizeof(uint32_t)));
+    cm.output_first = reinterpret_cast<uint32_t*>(take((groups + 1) * sizeof(uint32_t)));
+    cm.output_parent = reinterpret_cast<uint32_t*>(take(size_t(info.cluster_count) * sizeof(uint32_t)));
+    // Each group's outputs' parent groups (the groups whose residency the closure ties it to).
+    const ClusterLodView& v = cm.pack.view;
+    for (uint32_t c = 0; c < v.cluster_count; ++c)
+        if (v.clusters[c].self_group != kClusterNone && v.clusters[c].parent_group != kClusterNone)
+            ++cm.output_first[v.clusters[c].self_group + 1];
+    for (uint32_t g = 0; g < v.group_count; ++g) cm.output_first[g + 1] += cm.output_first[g];
+    for (uint32_t c = 0; c < v.cluster_count; ++c) {
+        const ClusterLodCluster& cl = v.clusters[c];
+        if (cl.self_group == kClusterNone || cl.parent_group == kClusterNone) continue;
+        cm.output_parent[cm.output_first[cl.self_group] + cm.stack[cl.self_group]++] = cl.parent_group;
+    }
+    std::memset(cm.stack, 0, groups * sizeof(uint32_t));
+    cm.has_table = 1;
+    cm.is_dirty = 1;
+    *page_count = cm.pack.page_count;
+    return Result::Ok;
+}
+
+// Opens every model's table, then sets up one slot per page of every table.
+bool Streamer::initClusters() {
+    const Allocator& a = options_.allocator;
+    clusters_ = detail::allocateArray<ClusterModel>(a, pfrep_count_);
+    if (!clusters_) return false;
+    std::memset(static_cast<void*>(clusters_), 0, sizeof(ClusterModel) * pfrep_count_);
+    uint32_t total = 0;
+    for (uint32_t m = 0; m < pfrep_count_; ++m) {
+        uint32_t pages = 0;
+        const Result r = initClusterModel(m, &pages);
+        if (r == Result::OutOfMemory) return false;
+        if (r != Result::Ok && r != Result::NotLoaded) ++stats_.failures;
+        clusters_[m].first_page = total;
+        total += pages;
+    }
+    page_count_ = total;
+    pages_ = detail::allocateArray<PageSlot>(a, total);
+    uint32_t* candidates = detail::allocateArray<uint32_t>(a, size_t(slot_count_) + pfrep_count_ + total);
+    if (!pages_ || !candidates) {
+        detail::deallocateBytes(a, candidates);
+        page_count_ = 0;
+        return false;
+    }
+    detail::deallocateBytes(a, candidates_);
+    candidates_ = candidates;
+    for (uint32_t m = 0; m < pfrep_count_; ++m) {
+        const ClusterModel& cm = clusters_[m];
+        if (!cm.has_table) continue;
+        const ClusterLodView& v = cm.pack.view;
+        for (uint32_t p = 0; p < cm.pack.page_count; ++p) {
+            PageSlot& slot = pages_[cm.first_page + p];
+            std::memset(static_cast<void*>(&slot), 0, sizeof(slot));
+            slot.state = LevelState::Absent;
+            slot.model = m;
+            const ClusterPage& page = cm.pack.pages[p];
+            uint64_t vertices = 0;
+            for (uint32_t i = 0; i < page.cluster_count; ++i) {
+                const ClusterLodCluster& cl = v.clusters[cm.pack.page_clusters[page.first_cluster + i]];
+                vertices += cm.pack.places[cm.pack.page_clusters[page.first_cluster + i]].vertex_count;
+                if (cl.parent_group == kClusterNone) slot.is_pinned = 1;
+                else if (v.groups[cl.parent_group].depth > slot.depth) slot.depth = v.groups[cl.parent_group].depth;
+            }
+            slot.vertex_bound = vertices > 0xffffffffu ? 0xffffffffu : uint32_t(vertices);
+            slot.estimate = (uint64_t(slot.vertex_bound) + page.triangle_count) * 3 * 4;
+        }
+    }
+    return true;
+}
+
+const ClusterLodPack* Streamer::clusterPack(uint32_t model) const {
+    return clusters_ && model < pfrep_count_ && clusters_[model].has_table ? &clusters_[model].pack : nullptr;
+}
+
+const uint8_t* Streamer::clusterGroupResident(uint32_t model) const {
+    if (!clusterPack(model) || !clusters_[model].is_drawable) return nullptr;
+    return clusters_[model].group_resident;
+}
+
+LevelState Streamer::clusterPageState(uint32_t model, uint32_t page) const {
+    const ClusterLodPack* pack = clusterPack(model);
+    if (!pack || page >= pack->page_count) return LevelState::Absent;
+    return pages_[clusters_[model].first_page + page].state;
+}
+
+bool Streamer::clusterPageData(uint32_t model, uint32_t page, ClusterPageData* out) const {
+    if (clusterPageState(model, page) != LevelState::Resident || !out) return false;
+    const PageSlot& slot = pages_[clusters_[model].first_page + page];
+    out->positions = reinterpret_cast<const float*>(slot.data);
+    out->indices = reinterpret_cast<const uint32_t*>(slot.data + size_t(slot.vertex_count) * 3 * sizeof(float));
+    out->vertex_count = slot.vertex_count;
+    out->triangle_count = slot.triangle_count;
+    return true;
+}
+
+void Streamer::markClusterPage(uint32_t page, float priority) {
+    PageSlot& slot = pages_[page];
+    if (slot.last_wanted != cluster_frame_) {
+        slot.last_wanted = cluster_frame_;
+        slot.priority = priority;
+    } else if (priority > slot.priority) {
+        slot.priority = priority;
+    }
+}
+
+// Marks the pages of `group`'s inputs and of every group above it wanted this frame: a group's
+// residency needs its outputs' parent groups resident (the closure), up to the roots.
+void Streamer::markClusterGroup(ClusterModel& cm, uint32_t group, float priority) {
+    const ClusterLodView& v = cm.pack.view;
+    if (group >= v.group_count || cm.group_stamp[group] == cluster_frame_) return;
+    cm.group_stamp[group] = cluster_frame_;
+    uint32_t size = 0;
+    cm.stack[size++] = group;
+    while (size > 0) {
+        const uint32_t g = cm.stack[--size];
+        const ClusterLodGroup& gr = v.groups[g];
+        for (uint32_t i = 0; i < gr.child_count; ++i)
+            markClusterPage(cm.first_page + cm.pack.places[v.group_children[gr.first_child + i]].page, priority);
+        for (uint32_t i = cm.output_first[g]; i < cm.output_first[g + 1]; ++i) {
+            const uint32_t parent = cm.output_parent[i];
+            if (cm.group_stamp[parent] == cluster_frame_) continue;
+            cm.group_stamp[parent] = cluster_frame_;
+            cm.stack[size++] = parent;
+        }
+    }
+}
+
+void Streamer::wantClusterPages(uint32_t model, const uint32_t* drawn, uint32_t drawn_count, const uint32_t* missing,
+                                uint32_t missing_count, float priority) {
+    if (!clusterPack(model) || !(priority > 0)) return;
+    ClusterModel& cm = clusters_[model];
+    const ClusterLodView& v = cm.pack.view;
+    for (uint32_t i = 0; drawn && i < drawn_count; ++i) {
+        if (drawn[i] >= v.cluster_count) continue;
+        markClusterPage(cm.first_page + cm.pack.places[drawn[i]].page, priority);
+        markClusterGroup(cm, v.clusters[drawn[i]].parent_group, priority);
+    }
+    for (uint32_t i = 0; missing && i < missing_count; ++i) markClusterGroup(cm, missing[i], priority);
+}
+
+// Root pages are pinned; pages wanted this frame are worth their priority, coarser groups' more (a
+// finer page is useless until the pages above it arrive); the others nothing (evicted first).
+void Streamer::scoreClusterPages() {
+    for (uint32_t p = 0; p < page_count_; ++p) {
+        PageSlot& slot = pages_[p];
+        if (slot.is_pinned)
+            slot.usefulness = INFINITY;
+        else if (slot.last_wanted == cluster_frame_)
+            slot.usefulness = slot.priority * float(1 + slot.depth);
+        else
+            slot.usefulness = 0;
+    }
+}
+
+void Streamer::evictPage(uint32_t page) {
+    PageSlot& slot = pages_[page];
+    assert(slot.state == LevelState::Resident);
+    detail::deallocateBytes(options_.allocator, slot.data);
+    slot.data = nullptr;
+    slot.state = LevelState::Absent;
+    stats_.resident_bytes -= slot.size;
+    stats_.cluster_resident_bytes -= slot.size;
+    --stats_.cluster_resident_pages;
+    ++stats_.cluster_page_evictions;
+    clusters_[slot.model].is_dirty = 1;
+}
+
+// The read job: the page's coded bytes (transient); `size`, the page's estimate, counts in flight.
+bool Streamer::prepareClusterTask(Task& t, uint32_t page, uint64_t size) {
+    PageSlot& slot = pages_[page];
+    const ClusterModel& cm = clusters_[slot.model];
+    const uint32_t local = page - cm.first_page;
+    const uint32_t length = cm.pack.pages[local].byte_length;
+    t.coded = static_cast<uint8_t*>(detail::allocateBytes(options_.allocator, length));
+    if (!t.coded) {
+        slot.state = LevelState::Failed;
+        ++stats_.failures;
+        return false;
+    }
+    t.kind = Task::Kind::ClusterRead;
+    t.coded_size = length;
+    t.cluster_pack = &cm.pack;
+    t.page = local;
+    t.slot = page;
+    t.view = cm.source.pages_view;
+    t.dst = nullptr;
+    t.scratch = nullptr;
+    t.size = size_t(size);
+    slot.state = LevelState::Loading;
+    stats_.in_flight_bytes += size;
+    ++stats_.cluster_page_reads;
+    return true;
+}
+
+// The page's bytes arrived: check its header here, size the decode (never above the estimate the
+// budget reserved) and submit it; a bad page fails alone.
+void Streamer::collectClusterRead(Task& t) {
+    PageSlot& slot = pages_[t.slot];
+    const Allocator& a = options_.allocator;
+    Result r = t.result;
+    ClusterPageInfo info;
+    if (r == Result::Ok) r = clusterPageReadInfo(*t.cluster_pack, t.page, t.coded, t.coded_size, &info);
+    if (r == Result::Ok && info.vertex_count > slot.vertex_bound) r = Result::BadStructure;
+    if (r == Result::Ok) {
+        stats_.streamed_bytes += t.coded_size;
+        t.dst = static_cast<uint8_t*>(
+            detail::allocateBytes(a, (size_t(info.vertex_count) + info.triangle_count) * 3 * sizeof(uint32_t)));
+        t.scratch = detail::allocateBytes(a, info.scratch_bytes);
+        if (!t.dst || !t.scratch) r = Result::OutOfMemory;
+    }
+    if (r != Result::Ok) {
+        detail::deallocateBytes(a, t.dst);
+        detail::deallocateBytes(a, t.scratch);
+        detail::deallocateBytes(a, t.coded);
+        t.dst = t.coded = nullptr;
+        t.scratch = nullptr;
+        stats_.in_flight_bytes -= t.size;
+        slot.state = LevelState::Failed;
+        ++stats_.failures;
+        return;
+    }
+    t.kind = Task::Kind::ClusterDecode;
+    t.vertex_count = info.vertex_count;
+    t.triangle_count = info.triangle_count;
+    t.scratch_bytes = info.scratch_bytes;
+    t.result = Result::Ok;
+    t.done.store(0, std::memory_order_relaxed);
+    t.is_busy = true;
+    ++busy_tasks_;
+    if (jobs_.submit)
+        jobs_.submit(jobs_.user, &Task::run, &t);
+    else
+        Task::run(&t);
+}
+
+void Streamer::collectClusterDecode(Task& t) {
+    PageSlot& slot = pages_[t.slot];
+    const Allocator& a = options_.allocator;
+    detail::deallocateBytes(a, t.coded);
+    detail::deallocateBytes(a, t.scratch);
+    t.coded = nullptr;
+    t.scratch = nullptr;
+    stats_.in_flight_bytes -= t.size;
+    if (t.result != Result::Ok) {
+        detail::deallocateBytes(a, t.dst);
+        t.dst = nullptr;
+        slot.state = LevelState::Failed;
+        ++stats_.failures;
+        return;
+    }
+    slot.data = t.dst;
+    t.dst = nullptr;
+    slot.vertex_count = t.vertex_count;
+    slot.triangle_count = t.triangle_count;
+    slot.size = (uint64_t(t.vertex_count) + t.triangle_count) * 3 * 4;
+    slot.state = LevelState::Resident;
+    stats_.resident_bytes += slot.size;
+    stats_.cluster_resident_bytes += slot.size;
+    ++stats_.cluster_resident_pages;
+    clusters_[slot.model].is_dirty = 1;
+}
+
+// Group residency from page residency, for the models whose pages changed since the last update.
+void Streamer::rebuildClusterResidency() {
+    for (uint32_t m = 0; clusters_ && m < pfrep_count_; ++m) {
+        ClusterModel& cm = clusters_[m];
+        if (!cm.has_table || !cm.is_dirty) continue;
+        cm.is_dirty = 0;
+        uint8_t drawable = 1;
+        for (uint32_t p = 0; p < cm.pack.page_count; ++p) {
+            const PageSlot& slot = pages_[cm.first_page + p];
+            cm.page_resident[p] = slot.state == LevelState::Resident ? 1 : 0;
+            if (slot.is_pinned && !cm.page_resident[p]) drawable = 0;
+        }
+        clusterGroupResidency(cm.pack, cm.page_resident, cm.group_resident);
+        cm.is_drawable = drawable;
+    }
 }
 
 } // namespace lodrt

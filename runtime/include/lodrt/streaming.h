@@ -24,12 +24,25 @@
 // whole after its header and decoded on the job (pfrepDecompress) into the format 2 bytes, which
 // hold every step at once; the budget counts the decoded bytes, and growing back after a shrink
 // decodes it whole again.
+//
+// A model whose level-0 mesh carries LODBAKE_cluster_lod (lodrt/cluster_pack.h) gets its cluster
+// table read and opened at init (one allocation per model) and its pages streamed: the pages holding
+// the roots are pinned (requested first, never evicted); the others are requested when the engine
+// reports, after its cut, the clusters it drew and the groups it could not enter (wantClusterPages).
+// A page is read by range on a job, its stream header checked on the frame thread, then decoded
+// (clusterPageDecode) on a second job into one buffer of positions and indices. Decoded page bytes
+// count towards the same budget as levels and PFRep prefixes (the coded page and the decoder's
+// scratch are transient, freed when the decode is collected, and not counted); to make room the
+// pages not wanted this frame go first, least recently wanted first, then the finer ones. The group
+// residency the cut needs is rebuilt (clusterGroupResidency) whenever a page arrives or leaves, so a
+// cut made after update() draws the finest resident ancestor wherever a page is missing.
 
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
 
 #include "lodrt/allocator.h"
+#include "lodrt/cluster_pack.h"
 #include "lodrt/format.h"
 #include "lodrt/export.h"
 #include "lodrt/model.h"
@@ -151,6 +164,10 @@ struct StreamStats {
     // Format 3 whole-blob decodes started; each job allocates two buffers (the decoded blob, and
     // the coded blob with the decoder's scratch) where a read allocates one.
     uint32_t pfrep_decodes = 0;
+    uint64_t cluster_resident_bytes = 0; // decoded cluster page bytes held now (part of resident_bytes)
+    uint32_t cluster_resident_pages = 0;
+    uint32_t cluster_page_reads = 0;     // page reads started since init (each followed by a decode)
+    uint32_t cluster_page_evictions = 0; // pages dropped to make room since init
 };
 
 enum class LevelState : uint8_t { Absent, Loading, Resident, Failed };
@@ -160,6 +177,16 @@ enum class LevelState : uint8_t { Absent, Loading, Resident, Failed };
 /// Failed: the header, directory, extension object or a step was bad; a prefix validated before
 /// the failure stays usable, but the stream never grows again.
 enum class PfrepStreamState : uint8_t { None, Absent, Loading, Resident, Failed };
+
+/// A resident cluster page as clusterPageDecode wrote it: `vertex_count` positions (3 floats each)
+/// and `triangle_count` triangles (3 page-local indices each), every cluster's triangles at its
+/// ClusterPlace range. Valid until the next update().
+struct ClusterPageData {
+    const float* positions = nullptr;
+    const uint32_t* indices = nullptr;
+    uint32_t vertex_count = 0;
+    uint32_t triangle_count = 0;
+};
 
 class LODRT_API Streamer {
 public:
@@ -200,6 +227,29 @@ public:
     /// True when no job is outstanding.
     bool idle() const { return busy_tasks_ == 0; }
 
+    /// The model's open cluster table, or null (no LODBAKE_cluster_lod, or a table that failed to
+    /// read or validate: counted in failures, the model's levels stream as usual). Valid while the
+    /// streamer lives.
+    const ClusterLodPack* clusterPack(uint32_t model) const;
+    /// Per group of clusterPack(model): nonzero when the pages of all its input clusters are
+    /// resident, closed upward (clusterGroupResidency): the `group_resident` to pass to
+    /// selectClusterCutResident. Null until every page holding a root is resident (the hierarchy
+    /// cannot be drawn before), and for a model without a table. Valid until the next update().
+    const uint8_t* clusterGroupResident(uint32_t model) const;
+    /// Absent, Loading (read or decode running), Resident or Failed (read, header or decode failed;
+    /// never retried: the cut keeps drawing the coarser clusters there).
+    LevelState clusterPageState(uint32_t model, uint32_t page) const;
+    /// The decoded page; false when it is not resident.
+    bool clusterPageData(uint32_t model, uint32_t page, ClusterPageData* out) const;
+    /// Reports this frame's cut of one instance of `model`, before update(): the clusters it drew
+    /// (`drawn`, selectClusterCutResident's output) and the groups it listed as missing. The pages
+    /// holding the drawn clusters' and missing groups' inputs, and those of every group above them
+    /// (the residency closure needs them), are wanted this frame; absent ones are requested, coarser
+    /// groups' pages first, with `priority` (> 0, as ModelDemand::priority). Calls accumulate until
+    /// update(). No allocation; ignores bad ids.
+    void wantClusterPages(uint32_t model, const uint32_t* drawn, uint32_t drawn_count, const uint32_t* missing,
+                          uint32_t missing_count, float priority);
+
     struct Task; // internal
 
 private:
@@ -229,6 +279,45 @@ private:
         uint8_t format;         // 2: streamed as prefixes; 3: read whole and decoded (to format 2)
         size_t scratch_bytes;   // format 3: pfrepDecompress scratch
     };
+    struct ClusterModel {
+        ClusterLodPack pack;
+        ClusterPackSource source;
+        void* memory;             // the table, its open memory and the arrays below, one allocation
+        uint8_t* page_resident;   // per page
+        uint8_t* group_resident;  // per group
+        uint32_t* group_stamp;    // per group: frame of the last wantClusterPages visit
+        uint32_t* stack;          // per group
+        uint32_t* output_first;   // group_count + 1: each group's outputs' parent groups in output_parent
+        uint32_t* output_parent;
+        uint32_t first_page;      // into pages_
+        uint8_t has_table;
+        uint8_t is_dirty;         // page residency changed: rebuild group_resident
+        uint8_t is_drawable;      // every root page resident
+    };
+    struct PageSlot {
+        uint8_t* data;         // positions, then indices
+        uint64_t size;         // resident bytes
+        uint64_t estimate;     // bytes reserved before the header is known (an upper bound)
+        uint32_t vertex_bound; // sum of its clusters' vertex counts
+        uint32_t vertex_count, triangle_count;
+        uint32_t model;
+        uint32_t depth;        // of the group whose inputs it holds; 0 for root pages
+        uint32_t last_wanted;  // cluster frame
+        float priority;        // of the frame it was last wanted in
+        float usefulness;
+        LevelState state;
+        uint8_t is_pinned;
+    };
+    Result initClusterModel(uint32_t model, uint32_t* page_count);
+    bool initClusters();
+    void markClusterGroup(ClusterModel& cm, uint32_t group, float priority);
+    void markClusterPage(uint32_t page, float priority);
+    void scoreClusterPages();
+    void evictPage(uint32_t page);
+    void collectClusterRead(Task& t);
+    void collectClusterDecode(Task& t);
+    bool prepareClusterTask(Task& t, uint32_t page, uint64_t size);
+    void rebuildClusterResidency();
     void collect();
     void evict(uint32_t slot);
     bool shrinkPfrep(uint32_t stream);
@@ -260,6 +349,10 @@ private:
     uint8_t* resident_table_ = nullptr;
     PfrepStream* pfrep_ = nullptr; // one per model
     uint32_t pfrep_count_ = 0;
+    ClusterModel* clusters_ = nullptr; // one per model
+    PageSlot* pages_ = nullptr;        // every model's pages
+    uint32_t page_count_ = 0;
+    uint32_t cluster_frame_ = 1;
     StreamStats stats_;
 };
 

@@ -22,6 +22,7 @@
 #include <nlohmann/json.hpp>
 
 #include "../gltf/gltf_test_util.h"
+#include "../../runtime/cluster_edges.h"
 #include "cli_runner.h"
 #include "data_uri.h"
 #include "lodbake/bake/bake.h"
@@ -142,45 +143,13 @@ template <class Fn> void forTriangles(const Decoded& d, uint32_t c, Fn&& fn) {
     }
 }
 
-using Edge = uint64_t;
+using Edge = lodrt_test::ClusterEdges::Edge;
 
-// Boundary edges (by decoded position) of a set of clusters: edges used an odd number of times.
-// Each cluster's edges are found once.
-class Edges {
+// The crack check (tests/runtime/cluster_edges.h) over the decoded pages.
+class Edges : public lodrt_test::ClusterEdges {
 public:
-    explicit Edges(const Decoded& d) : cluster_edges_(d.pack.view.cluster_count) {
-        for (uint32_t c = 0; c < d.pack.view.cluster_count; ++c)
-            forTriangles(d, c, [&](const float* const* p) {
-                const uint32_t v[3] = {id(p[0]), id(p[1]), id(p[2])};
-                if (v[0] == v[1] || v[1] == v[2] || v[0] == v[2]) return;
-                for (int k = 0; k < 3; ++k)
-                    cluster_edges_[c].push_back(uint64_t(std::min(v[k], v[(k + 1) % 3])) << 32 |
-                                                std::max(v[k], v[(k + 1) % 3]));
-            });
-    }
-    std::vector<Edge> boundary(const std::vector<uint32_t>& clusters) const {
-        std::vector<Edge> edges;
-        for (uint32_t c : clusters) edges.insert(edges.end(), cluster_edges_[c].begin(), cluster_edges_[c].end());
-        std::sort(edges.begin(), edges.end());
-        std::vector<Edge> out;
-        for (size_t i = 0; i < edges.size();) {
-            size_t j = i;
-            while (j < edges.size() && edges[j] == edges[i]) ++j;
-            if ((j - i) % 2 == 1) out.push_back(edges[i]);
-            i = j;
-        }
-        return out;
-    }
-
-private:
-    uint32_t id(const float* p) {
-        std::array<uint32_t, 3> k;
-        const float v[3] = {p[0] + 0.0f, p[1] + 0.0f, p[2] + 0.0f};
-        std::memcpy(k.data(), v, 12);
-        return ids_.emplace(k, uint32_t(ids_.size())).first->second;
-    }
-    std::map<std::array<uint32_t, 3>, uint32_t> ids_;
-    std::vector<std::vector<Edge>> cluster_edges_;
+    explicit Edges(const Decoded& d)
+        : ClusterEdges(d.pack.view.cluster_count, [&d](uint32_t c, auto&& fn) { forTriangles(d, c, fn); }) {}
 };
 
 lodrt::SelectionParams params() {
