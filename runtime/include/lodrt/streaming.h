@@ -144,21 +144,24 @@ struct JobSystem {
 /// Zero-initialised means defaults.
 struct StreamerOptions {
     Allocator allocator;        // level memory and the streamer's tables
-    uint64_t budget_bytes = 0;  // resident + in-flight level and PFRep prefix bytes; 0 = unlimited.
-                                // Coarsest levels and PFRep directories are always loaded and count
-                                // towards it, but are never evicted. A growing prefix holds its old
+    uint64_t budget_bytes = 0;  // resident + in-flight level, PFRep prefix and decoded cluster page
+                                // bytes; 0 = unlimited. Coarsest levels, PFRep directories and root
+                                // cluster pages are always loaded and count towards it, but are
+                                // never evicted. A growing prefix holds its old
                                 // and its new buffer while the step is read: both count.
     uint32_t max_in_flight = 0; // jobs outstanding at once; 0 means 4
 };
 
 struct StreamStats {
-    uint64_t resident_bytes = 0;  // level and PFRep prefix bytes held now
-    uint64_t in_flight_bytes = 0; // level and PFRep prefix buffer bytes being read
+    uint64_t resident_bytes = 0;  // level, PFRep prefix and cluster page bytes held now
+    uint64_t in_flight_bytes = 0; // level and PFRep prefix buffer bytes being read, and the bytes
+                                  // reserved for the cluster pages being read and decoded
     uint64_t streamed_bytes = 0;  // total bytes read since init
     uint32_t resident_levels = 0;
     uint32_t requests = 0;  // jobs submitted since init
     uint32_t evictions = 0; // levels dropped since init
-    uint32_t failures = 0;  // levels or PFRep steps whose read or check failed (never retried)
+    uint32_t failures = 0;  // levels, PFRep steps, cluster tables or cluster pages whose read or
+                            // check failed (never retried)
     uint64_t pfrep_resident_bytes = 0; // PFRep prefix bytes held now (part of resident_bytes)
     uint32_t pfrep_shrinks = 0;        // PFRep prefixes shortened by one step to make room
     // Format 3 whole-blob decodes started; each job allocates two buffers (the decoded blob, and
