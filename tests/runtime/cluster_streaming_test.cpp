@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -16,6 +17,7 @@
 #include <random>
 #include <set>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "cluster_edges.h"
@@ -164,6 +166,7 @@ struct Engine {
     std::vector<uint32_t> scratch, out, missing;
     lodrt::ClusterCutScratch cut_scratch;
     uint32_t drawn = 0, missing_count = 0;
+    const lodrt::JobSystem* threads = nullptr; // set before open() to run jobs on worker threads
 
     // The baked pack, or `bytes` with reads of [fail_begin, fail_end) failing.
     bool open(uint64_t budget, const std::vector<uint8_t>* bytes = nullptr, uint64_t fail_begin = 0,
@@ -178,7 +181,7 @@ struct Engine {
             ADD_FAILURE() << message;
             return false;
         }
-        job_system = jobs.system();
+        job_system = threads ? *threads : jobs.system();
         lodrt::StreamerOptions options;
         options.allocator = counter.hook();
         options.budget_bytes = budget;
@@ -412,6 +415,38 @@ TEST(ClusterStreaming, BadPagesFailAloneAndTheRestKeepsWorking) {
     // Every other page read became resident.
     const lodrt::StreamStats st = bad.streamer.stats();
     EXPECT_EQ(st.cluster_resident_pages + 2, st.cluster_page_reads);
+}
+
+// Jobs on their own threads while the frame keeps cutting: the same settled cut.
+TEST(ClusterStreaming, WorkerThreadsSettleToTheFullCut) {
+    struct Threads {
+        std::vector<std::thread> running;
+        static void submit(void* user, void (*run)(void*), void* task) {
+            static_cast<Threads*>(user)->running.emplace_back(run, task);
+        }
+        ~Threads() {
+            for (std::thread& t : running) t.join();
+        }
+    } threads;
+    const lodrt::JobSystem system{&Threads::submit, &threads};
+    Engine e;
+    e.threads = &system;
+    ASSERT_TRUE(e.open(0));
+    const float eye[3] = {0.7f, 0.2f, 0.06f};
+    // Bounded by time: on a loaded machine the job threads may get little of the CPU.
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
+    bool settled = false;
+    while (!settled && std::chrono::steady_clock::now() < deadline) {
+        e.frame(eye);
+        settled = e.streamer.clusterGroupResident(0) && e.missing_count == 0 && e.streamer.idle();
+        std::this_thread::sleep_for(std::chrono::microseconds(200));
+    }
+    ASSERT_TRUE(settled);
+    std::vector<uint32_t> drawn = e.drawnClusters(), full = fullCut(e.pack->view, eye);
+    std::sort(drawn.begin(), drawn.end());
+    std::sort(full.begin(), full.end());
+    EXPECT_EQ(drawn, full);
+    EXPECT_EQ(e.streamer.stats().failures, 0u);
 }
 
 TEST(ClusterStreaming, SteadyStateFramesAllocateNothing) {
