@@ -449,6 +449,39 @@ TEST(ClusterStreaming, BadPagesFailAloneAndTheRestKeepsWorking) {
     EXPECT_EQ(st.cluster_resident_pages + 2, st.cluster_page_reads);
 }
 
+// A corrupted table fails the model's cluster streaming only: no table, one failure, and the
+// model's levels still stream.
+TEST(ClusterStreaming, BadTableFailsTheClustersOnly) {
+    Engine clean;
+    ASSERT_TRUE(clean.open(0));
+    lodrt::ClusterPackSource where;
+    ASSERT_EQ(lodrt::clusterPackFind(clean.source.pack(), clean.source.models().modelLevel(0, 0).mesh, &where),
+              Result::Ok);
+    std::vector<uint8_t> bytes = bakedPack();
+    bytes[clean.file.binOffset() + where.table_offset] ^= 0x5a; // the table's magic
+    File file;
+    file.bytes = bytes;
+    PackSource source;
+    ASSERT_EQ(source.openReader(file.reader(), file.bytes.size(), nullptr), Result::Ok);
+    ManualJobs jobs;
+    const lodrt::JobSystem system = jobs.system();
+    Streamer streamer;
+    ASSERT_EQ(streamer.init(&source, &system, nullptr), Result::Ok);
+    EXPECT_EQ(streamer.clusterPack(0), nullptr);
+    EXPECT_EQ(streamer.clusterGroupResident(0), nullptr);
+    EXPECT_EQ(streamer.stats().failures, 1u);
+    const uint32_t drawn[1] = {0};
+    streamer.wantClusterPages(0, drawn, 1, nullptr, 0, 1.0f); // ignored
+    std::vector<lodrt::ModelDemand> demand(1);
+    demand[0] = {0, 1.0f};
+    for (int f = 0; f < 6; ++f) {
+        streamer.update(demand.data());
+        jobs.runAll();
+    }
+    EXPECT_EQ(streamer.state(0, 0), LevelState::Resident);
+    EXPECT_EQ(streamer.stats().cluster_page_reads, 0u);
+}
+
 // Jobs on their own threads while the frame keeps cutting: the same settled cut.
 TEST(ClusterStreaming, WorkerThreadsSettleToTheFullCut) {
     struct Threads {
