@@ -391,7 +391,15 @@ TEST(ClusterStreaming, SmallBudgetEvictsAndStaysCrackFree) {
         ASSERT_TRUE(alone.open(0));
         ASSERT_GT(alone.settle(eye), 0);
         if (alone.streamer.stats().resident_bytes > budget2) continue; // this view does not fit
+        std::vector<LevelState> start(e2.pack->page_count);
+        for (uint32_t p = 0; p < e2.pack->page_count; ++p) start[p] = e2.streamer.clusterPageState(0, p);
+        const uint32_t reads_before = e2.streamer.stats().cluster_page_reads;
         ASSERT_GT(e2.settle(eye), 0);
+        // Every page read while settling is one the view keeps: none is evicted and read again.
+        uint32_t arrived = 0;
+        for (uint32_t p = 0; p < e2.pack->page_count; ++p)
+            arrived += start[p] != LevelState::Resident && e2.streamer.clusterPageState(0, p) == LevelState::Resident;
+        EXPECT_EQ(e2.streamer.stats().cluster_page_reads - reads_before, arrived);
         EXPECT_EQ(e2.missing_count, 0u);
         std::vector<uint32_t> drawn = e2.drawnClusters(), full = fullCut(e2.pack->view, eye);
         std::sort(drawn.begin(), drawn.end());
