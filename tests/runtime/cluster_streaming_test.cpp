@@ -366,6 +366,12 @@ TEST(ClusterStreaming, SmallBudgetEvictsAndStaysCrackFree) {
             peak = std::max(peak, st.resident_bytes + st.in_flight_bytes);
             ASSERT_LE(st.resident_bytes + st.in_flight_bytes, budget);
             if (!e.streamer.clusterGroupResident(0)) continue;
+            // The group residency the cut used is the one of the pages resident now.
+            std::vector<uint8_t> pages(e.pack->page_count), groups(e.pack->view.group_count);
+            for (uint32_t p = 0; p < e.pack->page_count; ++p)
+                pages[p] = e.streamer.clusterPageState(0, p) == LevelState::Resident;
+            lodrt::clusterGroupResidency(*e.pack, pages.data(), groups.data());
+            ASSERT_EQ(std::memcmp(groups.data(), e.streamer.clusterGroupResident(0), groups.size()), 0);
             expectDrawnResident(e, ref);
             const auto cracks = ref.edges->cracks(e.drawnClusters(), ref.lod0_boundary);
             ASSERT_TRUE(cracks.empty()) << cracks.size() << " boundary edges LOD0 lacks";
