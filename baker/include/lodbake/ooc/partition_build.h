@@ -32,7 +32,7 @@ namespace lodbake::ooc {
 /// Bytes per partition triangle that buildClusterLod holds at most, output included: welded points
 /// and triangles, every level's cluster layouts and the graph of a level, the flattened hierarchy
 /// (about twice LOD0's triangles over all levels), and the groups simplified at once.
-constexpr uint64_t kClusterBuildBytesPerTriangle = 448;
+constexpr uint64_t kClusterBuildBytesPerTriangle = 256;
 
 /// The memory formula's bytes per triangle whatever the partition (at most 3 vertices per
 /// triangle): the value for PartitionOptions::build_bytes_per_triangle, so that partitions are sized
