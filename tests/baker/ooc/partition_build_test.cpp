@@ -4,6 +4,7 @@
 // memory accounting stays within the limit.
 
 #include <algorithm>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -42,7 +43,7 @@ struct Fixture {
     PartitionSet set;
 };
 
-Fixture partitioned(const std::string& name, uint64_t triangles) {
+Fixture partitioned(const std::string& name, uint64_t triangles, uint64_t limit = uint64_t(3) << 20) {
     Fixture f;
     f.dir = freshDir(name);
     lodbake::scansim::SurfaceOptions so;
@@ -61,7 +62,7 @@ Fixture partitioned(const std::string& name, uint64_t triangles) {
     o.read.vertex_chunk = 4096;
     o.read.triangle_chunk = 4096;
     o.sample_cap = 4096;
-    o.memory_limit_bytes = uint64_t(3) << 20;
+    o.memory_limit_bytes = limit;
     auto set = partitionMesh(scan, o, d);
     EXPECT_TRUE(set.ok()) << set.status().message();
     if (set.ok()) f.set = std::move(*set);
@@ -293,4 +294,31 @@ TEST(PartitionBuildTest, MemoryAccountingStaysUnderTheLimit) {
     EXPECT_EQ(refused.status().code(), lodbake::StatusCode::ResourceLimit);
     EXPECT_EQ(refused.status().message().rfind(pf.path + ": memory limit", 0), 0u) << refused.status().message();
     EXPECT_TRUE(filesIn(o.work_dir).empty());
+}
+
+TEST(PartitionBuildTest, OnePartitionIsTheWholeBuild) {
+    // The job adds nothing to buildClusterLod but the file: a partition holding the whole input gives
+    // the hierarchy the in-memory build gives.
+    Fixture f = partitioned("whole", 8000, uint64_t(64) << 20);
+    ASSERT_EQ(f.set.partitions.size(), 1u);
+    lodbake::Diagnostics d;
+    auto built = buildPartition(f.set.partitions[0].path, buildOptions(f.dir + "/lods"), d);
+    ASSERT_TRUE(built.ok()) << built.status().message();
+    auto back = readPartitionLodFile(built->path);
+    ASSERT_TRUE(back.ok()) << back.status().message();
+    auto whole = lodbake::buildClusterLod(f.input, lodbake::ClusterLodOptions(), d);
+    ASSERT_TRUE(whole.ok());
+    const lodbake::ClusterLodHierarchy& a = back->hierarchy;
+    ASSERT_EQ(a.clusters.size(), whole->clusters.size());
+    ASSERT_EQ(a.groups.size(), whole->groups.size());
+    EXPECT_EQ(0, std::memcmp(a.clusters.data(), whole->clusters.data(), a.clusters.size() * sizeof a.clusters[0]));
+    EXPECT_EQ(0, std::memcmp(a.groups.data(), whole->groups.data(), a.groups.size() * sizeof a.groups[0]));
+    EXPECT_EQ(a.group_children, whole->group_children);
+    EXPECT_EQ(a.roots, whole->roots);
+    EXPECT_EQ(a.positions, whole->positions);
+    EXPECT_EQ(a.indices, whole->indices);
+    EXPECT_EQ(a.lod0_cluster_count, whole->lod0_cluster_count);
+    EXPECT_EQ(a.level_count, whole->level_count);
+    // A closed scan: no border at all.
+    EXPECT_EQ(built->border_edge_count, 0u);
 }
