@@ -214,6 +214,7 @@ Result<PartitionLod> readPartitionLodFile(const std::string& path) {
     size_t at = kHeaderBytes;
     auto take = [&](auto& v, size_t n) {
         v.resize(n);
+        if (n == 0) return; // data() of an empty array may be null
         std::memcpy(static_cast<void*>(v.data()), bytes.data() + at, n * sizeof(v[0]));
         at += n * sizeof(v[0]);
     };
