@@ -200,6 +200,11 @@ TEST(PartitionBuildTest, IndependentPartitionsCoverTheInputAndMeetWithoutCracks)
         ++shared;
     }
     EXPECT_GT(shared, 100u);
+    // And nothing else: the scan is closed and manifold, so each partition's border is exactly its
+    // edges shared with other partitions.
+    size_t border_edges = 0;
+    for (const PartitionLod& p : parts) border_edges += p.border_edges.size() / 2;
+    EXPECT_EQ(border_edges, 2 * shared);
 
     // Cuts of the partitions side by side: no boundary edge the input lacks, at any view.
     const lodbake::ClusterLodHierarchy u = unionOf(parts);
