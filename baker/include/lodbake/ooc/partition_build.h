@@ -5,7 +5,8 @@
 //
 // The partition's border with the other partitions is locked. A partition edge shared with a
 // triangle of another partition is used by one triangle of this partition (on a manifold input), so
-// it is an open boundary of the partition mesh, and buildClusterLod's group simplification
+// it is an open boundary of the partition mesh (not so for a non-manifold edge or point that the cut
+// leaves with a whole manifold piece on one side: such inputs can crack), and buildClusterLod's group simplification
 // (lock_border) never moves or removes an open-boundary point: every level of every partition keeps
 // the border edge for edge, and cuts of independently built partitions meet without cracks. The
 // input's own open boundaries are locked the same way, as in the in-memory build. The hierarchy
@@ -29,9 +30,11 @@
 
 namespace lodbake::ooc {
 
-/// Bytes per partition triangle that buildClusterLod holds at most, output included: welded points
-/// and triangles, every level's cluster layouts and the graph of a level, the flattened hierarchy
-/// (about twice LOD0's triangles over all levels), and the groups simplified at once.
+/// Bytes per partition triangle allowed for buildClusterLod, output included: welded points and
+/// triangles, every level's cluster layouts and the graph of a level, the flattened hierarchy (about
+/// twice LOD0's triangles over all levels), and the groups simplified at once. An allowance with
+/// about a factor of two of margin over the resident memory of whole jobs (ooc_bench --cluster),
+/// not a proven bound: the builder's arrays depend on how the levels shrink.
 constexpr uint64_t kClusterBuildBytesPerTriangle = 256;
 
 /// The memory formula's bytes per triangle whatever the partition (at most 3 vertices per
