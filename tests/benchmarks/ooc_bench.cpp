@@ -6,15 +6,26 @@
 // /proc/self/clear_refs), and the ratios to readMesh. The in-memory reader runs last so that its memory does not stay resident
 // under the other stages' figures.
 //
-// Bar: the partitioner's peak resident memory stays under the limit it was given (issue: "peak
-// resident memory stays under the limit whatever the input size").
+// With --cluster, the partitions (sized for the partition job) are then built one after the other by
+// buildPartition (lodbake/ooc/partition_build.h), and the whole scan by buildClusterLod, in the same
+// run: triangles per second and peak resident memory of both, and the errors of the two at equal
+// triangle counts. A depth-d cut is every cluster made at depth <= d whose parent group is deeper
+// (a partition's roots stay in every cut above its top); its triangles and its largest and
+// triangle-weighted mean group error are printed per depth, and each partitioned cut's errors are
+// divided by the whole build's at the same triangle count (log-log interpolation between depths).
+//
+// Bars: the partitioner's peak resident memory stays under the limit it was given (issue: "peak
+// resident memory stays under the limit whatever the input size"); with --cluster, so do the
+// partition jobs'.
 //
 // usage: ooc_bench [--triangles N] [--memory-limit MIB] [--dir DIR] [--threads N] [--no-anchor]
-//                  [--scan FILE] [--check]
+//                  [--scan FILE] [--cluster] [--check]
 //   defaults: 10,000,000 triangles, 1024 MiB, DIR = the build's ooc_bench_out folder. --scan reads
 //   an existing file (made by lodbake_scansim --surface) instead of generating one, and keeps it.
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -22,6 +33,7 @@
 #include <fstream>
 #include <string>
 #include <system_error>
+#include <vector>
 
 #include <sys/resource.h>
 
@@ -29,6 +41,7 @@
 #include "lodbake/io/mesh_io.h"
 #include "lodbake/io/mesh_stream.h"
 #include "lodbake/ooc/partition.h"
+#include "lodbake/ooc/partition_build.h"
 #include "scansim.h"
 
 namespace {
@@ -87,13 +100,72 @@ void printStage(const char* name, const Stage& s, uint64_t triangles, const Stag
     std::printf("\n");
 }
 
+// A depth cut's size and errors (see the header).
+struct DepthCut {
+    uint32_t depth = 0;
+    uint64_t triangles = 0;
+    double max_error = 0, mean_error = 0;
+};
+
+// Depth-d cuts, d = 0 .. deepest, of hierarchies side by side (one per partition, or the whole).
+std::vector<DepthCut> depthCuts(const std::vector<const lodbake::ClusterLodHierarchy*>& parts) {
+    uint32_t deepest = 0;
+    for (const auto* h : parts)
+        for (const auto& g : h->groups) deepest = std::max(deepest, g.depth);
+    std::vector<DepthCut> cuts(deepest + 1);
+    for (uint32_t d = 0; d <= deepest; ++d) {
+        DepthCut& c = cuts[d];
+        c.depth = d;
+        double weighted = 0;
+        for (const auto* h : parts)
+            for (const auto& cl : h->clusters) {
+                const uint32_t own = cl.self_group == lodrt::kClusterNone ? 0 : h->groups[cl.self_group].depth;
+                const bool above = cl.parent_group != lodrt::kClusterNone && h->groups[cl.parent_group].depth <= d;
+                if (own > d || above) continue;
+                const double e = cl.self_group == lodrt::kClusterNone ? 0.0 : double(h->groups[cl.self_group].error);
+                c.triangles += cl.triangle_count;
+                c.max_error = std::max(c.max_error, e);
+                weighted += e * cl.triangle_count;
+            }
+        c.mean_error = c.triangles ? weighted / double(c.triangles) : 0;
+    }
+    return cuts;
+}
+
+// The whole build's error at `triangles`, interpolated in log-log between its depth cuts (NAN outside).
+double errorAt(const std::vector<DepthCut>& whole, uint64_t triangles, bool mean) {
+    for (size_t i = 1; i < whole.size(); ++i) {
+        const DepthCut &fine = whole[i - 1], &coarse = whole[i];
+        if (triangles > fine.triangles || triangles < coarse.triangles) continue;
+        const double ef = mean ? fine.mean_error : fine.max_error, ec = mean ? coarse.mean_error : coarse.max_error;
+        if (ef <= 0 || fine.triangles == coarse.triangles) return ec;
+        const double f = std::log(double(fine.triangles) / double(triangles)) /
+                         std::log(double(fine.triangles) / double(coarse.triangles));
+        return std::exp(std::log(ef) + f * (std::log(ec) - std::log(ef)));
+    }
+    return NAN;
+}
+
+void printComparison(const std::vector<DepthCut>& part, const std::vector<DepthCut>& whole) {
+    std::printf("depth cuts (whole buildClusterLod):\n");
+    for (const DepthCut& c : whole)
+        std::printf("  depth %2u %10llu triangles  max error %.6g  mean error %.6g\n", c.depth,
+                    (unsigned long long)c.triangles, c.max_error, c.mean_error);
+    std::printf("depth cuts (partition jobs side by side), error / whole's at equal triangles:\n");
+    for (const DepthCut& c : part) {
+        const double wm = errorAt(whole, c.triangles, false), wa = errorAt(whole, c.triangles, true);
+        std::printf("  depth %2u %10llu triangles  max error %.6g (x%.3f)  mean error %.6g (x%.3f)\n", c.depth,
+                    (unsigned long long)c.triangles, c.max_error, c.max_error / wm, c.mean_error, c.mean_error / wa);
+    }
+}
+
 } // namespace
 
 int main(int argc, char** argv) {
     const bool check = lodbake_bench::takeCheckFlag(argc, argv);
     uint64_t triangles = 10000000, limit_mib = 1024;
     int threads = 0;
-    bool anchor = true;
+    bool anchor = true, cluster = false;
     std::string dir = LODBAKE_BENCH_OUT_DIR, given_scan;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
@@ -102,10 +174,11 @@ int main(int argc, char** argv) {
         else if (a == "--dir" && i + 1 < argc) dir = argv[++i];
         else if (a == "--threads" && i + 1 < argc) threads = std::atoi(argv[++i]);
         else if (a == "--no-anchor") anchor = false;
+        else if (a == "--cluster") cluster = true;
         else if (a == "--scan" && i + 1 < argc) given_scan = argv[++i];
         else {
             std::fprintf(stderr, "usage: ooc_bench [--triangles N] [--memory-limit MIB] [--dir DIR] [--threads N] "
-                                 "[--no-anchor] [--scan FILE] [--check]\n");
+                                 "[--no-anchor] [--scan FILE] [--cluster] [--check]\n");
             return 2;
         }
     }
@@ -160,9 +233,40 @@ int main(int argc, char** argv) {
         o.work_dir = work;
         o.memory_limit_bytes = limit_mib << 20;
         o.threads = threads;
+        if (cluster) o.build_bytes_per_triangle = lodbake::ooc::kPartitionBuildBytesPerTriangle;
         lodbake::Result<lodbake::ooc::PartitionSet> r = lodbake::ooc::partitionMesh(scan, o, d);
         if (!r.ok()) fail(r.status());
         set = std::move(r).value();
+    });
+
+    // The partition jobs, one after the other, each under the same limit; their outputs are read back
+    // afterwards (outside the measured stage) for the error comparison.
+    std::vector<std::string> lod_files;
+    uint64_t job_bound = 0, job_accounted = 0;
+    const std::string lods = dir + "/ooc_bench_lods";
+    const Stage jobs = measure([&] {
+        if (!cluster) return;
+        lodbake::ooc::PartitionBuildOptions o;
+        o.work_dir = lods;
+        o.memory_limit_bytes = limit_mib << 20;
+        for (const lodbake::ooc::PartitionFile& f : set.partitions) {
+            lodbake::Diagnostics d;
+            auto r = lodbake::ooc::buildPartition(f.path, o, d);
+            if (!r.ok()) fail(r.status());
+            lod_files.push_back(r->path);
+            job_bound = std::max(job_bound, r->memory_bound_bytes);
+            job_accounted = std::max(job_accounted, r->accounted_peak_bytes);
+        }
+    });
+    lodbake::ClusterLodHierarchy whole;
+    const Stage whole_build = measure([&] {
+        if (!cluster) return;
+        lodbake::Diagnostics d;
+        lodbake::Result<lodbake::LoadedMesh> m = lodbake::readMesh(scan, lodbake::ReadOptions(), d);
+        if (!m.ok()) fail(m.status());
+        auto h = lodbake::buildClusterLod(m->mesh, lodbake::ClusterLodOptions(), d);
+        if (!h.ok()) fail(h.status());
+        whole = std::move(*h);
     });
 
     Stage read;
@@ -184,9 +288,36 @@ int main(int argc, char** argv) {
                 (unsigned long long)set.largest_partition, double(set.memory_bound_bytes) / 1048576.0,
                 double(set.accounted_peak_bytes) / 1048576.0, (unsigned long long)limit_mib, checksum);
 
+    if (cluster) {
+        printStage("partition jobs (sequential)", jobs, t, a);
+        printStage("readMesh + buildClusterLod", whole_build, t, a);
+        std::printf("partition jobs: largest memory bound %.1f MiB, accounted peak %.1f MiB\n",
+                    double(job_bound) / 1048576.0, double(job_accounted) / 1048576.0);
+        std::vector<lodbake::ooc::PartitionLod> parts;
+        std::vector<const lodbake::ClusterLodHierarchy*> views;
+        uint64_t roots = 0;
+        for (const std::string& f : lod_files) {
+            auto p = lodbake::ooc::readPartitionLodFile(f);
+            if (!p.ok()) fail(p.status());
+            parts.push_back(std::move(*p));
+        }
+        for (const auto& p : parts) {
+            views.push_back(&p.hierarchy);
+            roots += p.hierarchy.roots.size();
+        }
+        std::printf("partitioned: %zu hierarchies, %llu roots; whole: %zu roots, %u levels\n", parts.size(),
+                    (unsigned long long)roots, whole.roots.size(), whole.level_count);
+        printComparison(depthCuts(views), depthCuts({&whole}));
+        for (const std::string& f : lod_files) std::filesystem::remove(f, ec);
+        std::filesystem::remove(lods, ec);
+    }
+
     lodbake_bench::Bars bars("ooc_bench");
     bars.absolute("partition peak RSS MiB <= memory limit", part.peak_mib, double(limit_mib),
                   lodbake_bench::Limit::AtMost, anchor ? read.peak_mib : NAN);
+    if (cluster)
+        bars.absolute("partition jobs peak RSS MiB <= memory limit", jobs.peak_mib, double(limit_mib),
+                      lodbake_bench::Limit::AtMost, whole_build.peak_mib);
     lodbake::ooc::removePartitionFiles(set);
     std::filesystem::remove(work, ec);
     if (given_scan.empty()) std::filesystem::remove(scan, ec);

@@ -9,6 +9,7 @@
 #include <system_error>
 
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <tbb/parallel_for.h>
@@ -134,15 +135,17 @@ Result<Plan> planMemory(const PartitionOptions& o, uint64_t vertices, uint64_t t
     plan.jobs = uint64_t(std::max(1, concurrency));
     const uint64_t limit = o.memory_limit_bytes;
     const uint64_t per_job_fixed = kSpillBlockBytes + kJobFileBuffer;
+    // Leaves sized for the job that will build them when that job needs more than this one.
+    const uint64_t per_triangle = std::max(kJobBytesPerTriangle, o.build_bytes_per_triangle);
     auto too_small = [&](uint64_t needed) {
         return resourceLimit(input + ": memory limit of " + std::to_string(limit >> 20) + " MiB is too small (needs at least " +
                              std::to_string((needed >> 20) + 1) + " MiB for this input)");
     };
     // Jobs share what is left after the fixed part; fewer jobs when one would get too few triangles.
-    while (plan.jobs > 1 && limit < plan.fixed + plan.jobs * (per_job_fixed + kJobBytesPerTriangle * 4096)) --plan.jobs;
-    if (limit < plan.fixed + plan.jobs * (per_job_fixed + kJobBytesPerTriangle * 64))
-        return too_small(plan.fixed + per_job_fixed + kJobBytesPerTriangle * 64);
-    plan.target = (limit - plan.fixed - plan.jobs * per_job_fixed) / (plan.jobs * kJobBytesPerTriangle);
+    while (plan.jobs > 1 && limit < plan.fixed + plan.jobs * (per_job_fixed + per_triangle * 4096)) --plan.jobs;
+    if (limit < plan.fixed + plan.jobs * (per_job_fixed + per_triangle * 64))
+        return too_small(plan.fixed + per_job_fixed + per_triangle * 64);
+    plan.target = (limit - plan.fixed - plan.jobs * per_job_fixed) / (plan.jobs * per_triangle);
     // A job's corners are numbered in 32 bits (the sorted pairs keep the corner's index).
     plan.target = std::min<uint64_t>(plan.target, 0xffffffffu / 4);
     const uint64_t sized = std::max<uint64_t>(1, plan.target * 4 / 5);
@@ -152,7 +155,7 @@ Result<Plan> planMemory(const PartitionOptions& o, uint64_t vertices, uint64_t t
     if (limit < pass3_fixed + plan.leaves * kMinAppendBuffer) return too_small(pass3_fixed + plan.leaves * kMinAppendBuffer);
     plan.append_buffer = std::min(kMaxAppendBuffer, (limit - pass3_fixed) / plan.leaves);
     plan.bound = std::max(pass3_fixed + plan.leaves * plan.append_buffer,
-                          plan.fixed + plan.jobs * (per_job_fixed + kJobBytesPerTriangle * plan.target));
+                          plan.fixed + plan.jobs * (per_job_fixed + per_triangle * plan.target));
     return plan;
 }
 
@@ -451,27 +454,46 @@ Result<PartitionSet> partitionMesh(const std::string& input, const PartitionOpti
 }
 
 Result<PartitionData> readPartitionFile(const std::string& path) {
-    LODBAKE_ASSIGN_OR_RETURN(std::vector<uint8_t> bytes, readFileBytes(path));
-    const size_t head = sizeof(lodrt::format::kPartitionMagic) + 8 + 24;
-    if (bytes.size() < head || std::memcmp(bytes.data(), lodrt::format::kPartitionMagic, 8) != 0)
+    // Read straight into the arrays (no copy of the whole file), hashing the bytes in file order:
+    // the hash is the one the file is named by.
+    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd < 0) return ioError(path + ": cannot open: " + std::strerror(errno));
+    struct Closer {
+        int fd;
+        ~Closer() { ::close(fd); }
+    } closer{fd};
+    struct stat st {};
+    if (::fstat(fd, &st) != 0) return ioError(path + ": cannot stat: " + std::strerror(errno));
+    const uint64_t size = uint64_t(st.st_size);
+    constexpr size_t head = sizeof(lodrt::format::kPartitionMagic) + 8 + 24;
+    uint8_t header[head];
+    if (size < head || !readAt(fd, 0, header, head, path).ok() ||
+        std::memcmp(header, lodrt::format::kPartitionMagic, 8) != 0)
         return invalidInput(path + ": header: expected a partition file (magic LBPART01)");
     uint32_t counts[2];
-    std::memcpy(counts, bytes.data() + 8, 8);
+    std::memcpy(counts, header + 8, 8);
     const uint64_t expected = head + 16 * uint64_t(counts[0]) + 12 * uint64_t(counts[1]);
-    if (bytes.size() != expected)
+    if (size != expected)
         return invalidInput(path + ": header: " + std::to_string(counts[0]) + " vertices and " + std::to_string(counts[1]) +
                             " triangles need " + std::to_string(expected) + " bytes, the file has " +
-                            std::to_string(bytes.size()));
+                            std::to_string(size));
     PartitionData d;
     d.global_ids.resize(counts[0]);
     d.positions.resize(counts[0]);
     d.indices.resize(size_t(counts[1]) * 3);
-    const uint8_t* p = bytes.data() + head;
-    std::memcpy(d.global_ids.data(), p, 4 * d.global_ids.size());
-    p += 4 * d.global_ids.size();
-    std::memcpy(static_cast<void*>(d.positions.data()), p, 12 * d.positions.size());
-    p += 12 * d.positions.size();
-    std::memcpy(d.indices.data(), p, 4 * d.indices.size());
+    Hasher hasher;
+    hasher.addBytes(header, head);
+    uint64_t at = head;
+    auto read = [&](void* data, size_t bytes) {
+        Status s = readAt(fd, at, data, bytes, path);
+        hasher.addBytes(data, bytes);
+        at += bytes;
+        return s;
+    };
+    LODBAKE_RETURN_IF_ERROR(read(d.global_ids.data(), 4 * d.global_ids.size()));
+    LODBAKE_RETURN_IF_ERROR(read(d.positions.data(), 12 * d.positions.size()));
+    LODBAKE_RETURN_IF_ERROR(read(d.indices.data(), 4 * d.indices.size()));
+    d.content_hash = hasher.digest();
     for (size_t i = 1; i < d.global_ids.size(); ++i)
         if (d.global_ids[i] <= d.global_ids[i - 1])
             return invalidInput(path + ": vertex " + std::to_string(i) + ": expected global ids in increasing order");

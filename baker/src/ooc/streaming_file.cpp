@@ -91,6 +91,7 @@ Status StreamingFile::flush() {
 
 Status StreamingFile::write(const void* data, size_t size) {
     if (fd_ < 0) return internalError(path_ + ": write to a file that is not open");
+    if (size == 0) return Status(); // an empty array's data() may be null, which memcpy must not get
     const uint8_t* p = static_cast<const uint8_t*>(data);
     written_ += size;
     if (used_ + size > buffer_.size()) {

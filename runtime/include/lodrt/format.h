@@ -248,6 +248,10 @@ constexpr uint32_t kClusterMaxCount = 1u << 26;     // clusters, groups, childre
 // starts each, and the extension of their content-hash names.
 constexpr char kPartitionMagic[8] = {'L', 'B', 'P', 'A', 'R', 'T', '0', '1'};
 constexpr const char kPartitionExtension[] = ".lbpart";
+// A partition's cluster hierarchy, written by the partition job (baker/include/lodbake/ooc/
+// partition_build.h; layout in docs/pipeline.md, "Partition jobs").
+constexpr char kPartitionLodMagic[8] = {'L', 'B', 'P', 'L', 'O', 'D', '0', '1'};
+constexpr const char kPartitionLodExtension[] = ".lbplod";
 
 } // namespace format
 } // namespace lodrt

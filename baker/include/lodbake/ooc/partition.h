@@ -25,7 +25,8 @@
 //   fixed     = W + C + 32 S + 1 MiB (spill buffer) + 64 KiB (spill reads)
 //   pass 3    = fixed + V * cell_bytes + L * B
 //   pass 4    = fixed + J * (kJobBytesPerTriangle * T_leaf + 1 MiB + 64 KiB)
-// The target T_leaf is (limit - fixed - J * (1 MiB + 64 KiB)) / (J * kJobBytesPerTriangle), L is
+// The target T_leaf is (limit - fixed - J * (1 MiB + 64 KiB)) / (J * P), P = kJobBytesPerTriangle (or
+// build_bytes_per_triangle when larger, and then P stands for 64 in pass 4 too), L is
 // T / (0.8 T_leaf) rounded up (the margin absorbs the sample's error in leaf sizes) and
 // B = min(1 MiB, (limit - fixed - V * cell_bytes) / L), which must be at least 4 KiB: a limit too
 // small for the input is a ResourceLimit error that states the minimum.
@@ -58,6 +59,10 @@ struct PartitionOptions {
     // id) when the range is at most this many ids per triangle of the leaf, else by sorting (id,
     // corner) pairs; at most 128 (the bound kJobBytesPerTriangle assumes), 0 always sorts.
     uint32_t bitmap_ids_per_triangle = 128;
+    // Bytes per triangle of the job that will build each partition under the same limit
+    // (ooc::kPartitionBuildBytesPerTriangle for buildPartition); leaves are sized by it in place of
+    // kJobBytesPerTriangle when it is larger. 0: sized for writing the partitions only.
+    uint64_t build_bytes_per_triangle = 0;
 };
 
 struct PartitionFile {
@@ -88,11 +93,13 @@ struct PartitionData {
     std::vector<uint32_t> global_ids; // increasing
     std::vector<Vec3f> positions;
     std::vector<uint32_t> indices;    // 3 per triangle, local vertex numbers
+    uint64_t content_hash = 0;        // of the file's bytes (what partitionMesh names it by)
 };
 
 /// Reads and checks a partition file (magic, sizes, ids increasing, indices in range). File layout,
 /// little-endian: kPartitionMagic, u32 vertex count V, u32 triangle count T, 6 floats of bounds
-/// (min xyz, max xyz), V u32 global ids, V x 3 float positions, T x 3 u32 local indices.
+/// (min xyz, max xyz), V u32 global ids, V x 3 float positions, T x 3 u32 local indices. Reads into
+/// the arrays directly: memory is 16 V + 12 T bytes.
 Result<PartitionData> readPartitionFile(const std::string& path);
 
 /// Removes the files of a set.
