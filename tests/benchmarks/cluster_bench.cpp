@@ -35,6 +35,7 @@
 
 #include "bench_bar.h"
 #include "bench_timing.h"
+#include "cluster_cracks.h"
 #include "heap_count.h"
 #include "lodbake/cluster/cluster_lod.h"
 #include "lodbake/io/mesh_io.h"
@@ -305,118 +306,9 @@ void flyByBar(const lodbake::Mesh& mesh, const lodbake::ClusterLodHierarchy& h, 
     g_bars.absolute("fly-by clusters drawn above 1 px", double(violations), 0, Limit::AtMost);
 }
 
-// Crack check over many cuts. Positions become point ids by their bits (-0 is +0), edges are point
-// pairs. A cut's boundary is the edges its clusters use once in all; only an edge that some cluster
-// does not use exactly twice can be on it, so each cluster keeps those (with how often it uses
-// them) and a view adds up their uses in a counter per edge.
-class CrackCheck {
-public:
-    CrackCheck(const lodbake::Mesh& lod0, const lodbake::ClusterLodHierarchy& h) {
-        std::vector<std::array<uint32_t, 3>> bits;
-        auto add = [&](const lodbake::Vec3f& p) {
-            const float v[3] = {p.x + 0.0f, p.y + 0.0f, p.z + 0.0f};
-            std::array<uint32_t, 3> b;
-            std::memcpy(b.data(), v, 12);
-            bits.push_back(b);
-        };
-        for (const auto& p : lod0.positions) add(p);
-        for (const auto& p : h.positions) add(p);
-        std::vector<uint32_t> order(bits.size());
-        for (uint32_t i = 0; i < order.size(); ++i) order[i] = i;
-        std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return bits[a] < bits[b]; });
-        std::vector<uint32_t> id(bits.size());
-        for (size_t i = 0, next = 0; i < order.size(); ++i) {
-            if (i > 0 && bits[order[i]] != bits[order[i - 1]]) ++next;
-            id[order[i]] = uint32_t(next);
-        }
-        // LOD0's boundary: edges of its non-degenerate triangles used once.
-        std::vector<uint64_t> e;
-        for (size_t f = 0; f < lod0.faceCount(); ++f) {
-            uint32_t t[3];
-            for (int k = 0; k < 3; ++k) t[k] = id[lod0.indices[f * 3 + k]];
-            if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue;
-            for (int k = 0; k < 3; ++k) e.push_back(edgeOf(t[k], t[(k + 1) % 3]));
-        }
-        std::sort(e.begin(), e.end());
-        for (size_t i = 0; i < e.size();) {
-            size_t j = i;
-            while (j < e.size() && e[j] == e[i]) ++j;
-            if (j - i == 1) lod0_boundary_.push_back(e[i]);
-            i = j;
-        }
-        std::vector<uint64_t>().swap(e);
-        // Every use of every edge by every cluster.
-        const size_t base = lod0.positions.size();
-        std::vector<std::pair<uint64_t, uint32_t>> uses;
-        for (uint32_t c = 0; c < h.clusters.size(); ++c) {
-            const auto& cl = h.clusters[c];
-            for (uint32_t t = 0; t < cl.triangle_count; ++t) {
-                uint32_t v[3];
-                for (int k = 0; k < 3; ++k)
-                    v[k] = id[base + cl.first_vertex + h.indices[(size_t(cl.first_triangle) + t) * 3 + k]];
-                for (int k = 0; k < 3; ++k) uses.push_back({edgeOf(v[k], v[(k + 1) % 3]), c});
-            }
-        }
-        std::sort(uses.begin(), uses.end());
-        entries_.resize(h.clusters.size());
-        for (size_t i = 0; i < uses.size();) {
-            size_t j = i;
-            while (j < uses.size() && uses[j].first == uses[i].first) ++j;
-            // An edge every cluster uses exactly twice adds up to an even count in any cut: never on
-            // its boundary. Otherwise every use counts.
-            bool odd_somewhere = false;
-            for (size_t a = i; a < j;) {
-                size_t b = a;
-                while (b < j && uses[b].second == uses[a].second) ++b;
-                odd_somewhere |= b - a != 2;
-                a = b;
-            }
-            const uint32_t edge = uint32_t(on_lod0_boundary_.size());
-            bool kept = false;
-            for (size_t a = i; a < j;) {
-                size_t b = a;
-                while (b < j && uses[b].second == uses[a].second) ++b;
-                if (odd_somewhere) {
-                    entries_[uses[a].second].push_back({edge, uint32_t(b - a)});
-                    kept = true;
-                }
-                a = b;
-            }
-            if (kept)
-                on_lod0_boundary_.push_back(
-                    std::binary_search(lod0_boundary_.begin(), lod0_boundary_.end(), uses[i].first));
-            i = j;
-        }
-        count_.assign(on_lod0_boundary_.size(), 0);
-    }
-
-    /// Boundary edges of the cut that LOD0 lacks.
-    size_t cracks(const uint32_t* cut, size_t n) {
-        for (size_t i = 0; i < n; ++i)
-            for (const Entry& e : entries_[cut[i]]) count_[e.edge] += e.uses;
-        size_t bad = 0;
-        for (size_t i = 0; i < n; ++i)
-            for (const Entry& e : entries_[cut[i]]) bad += count_[e.edge] == 1 && !on_lod0_boundary_[e.edge];
-        for (size_t i = 0; i < n; ++i)
-            for (const Entry& e : entries_[cut[i]]) count_[e.edge] = 0;
-        return bad;
-    }
-
-private:
-    static uint64_t edgeOf(uint32_t a, uint32_t b) { return uint64_t(std::min(a, b)) << 32 | std::max(a, b); }
-    struct Entry {
-        uint32_t edge;
-        uint32_t uses;
-    };
-    std::vector<uint64_t> lod0_boundary_;
-    std::vector<uint8_t> on_lod0_boundary_;
-    std::vector<std::vector<Entry>> entries_;
-    std::vector<uint32_t> count_;
-};
-
 void crackFreeBar(const lodbake::Mesh& mesh, const lodbake::ClusterLodHierarchy& h, int views) {
     const double t0 = nowSeconds();
-    CrackCheck check(mesh, h);
+    lodbake_test::CrackChecker check(mesh, h);
     const lodrt::ClusterLodView view = h.view();
     Scratch scratch(view);
     lodbake::Aabb box;
