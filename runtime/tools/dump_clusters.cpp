@@ -7,6 +7,7 @@
 #include <map>
 #include <utility>
 
+#include "cluster_edges.h"
 #include "lodrt/cluster_pack.h"
 
 namespace loddump {
@@ -116,51 +117,23 @@ bool checkReachable(const lodrt::ClusterLodView& v, std::string* error) {
     return true;
 }
 
-class EdgeSet {
-public:
-    std::vector<uint64_t> boundary(const Opened& o, const std::vector<uint32_t>& clusters) {
-        std::vector<uint64_t> edges;
-        for (uint32_t c : clusters) {
-            const lodrt::ClusterPlace& place = o.pack.places[c];
-            const std::vector<float>& pos = o.positions[place.page];
-            const std::vector<uint32_t>& idx = o.indices[place.page];
-            for (uint32_t t = place.first_triangle; t < place.first_triangle + place.triangle_count; ++t) {
-                uint32_t v[3];
-                for (int i = 0; i < 3; ++i) v[i] = id(&pos[3 * size_t(idx[3 * size_t(t) + size_t(i)])]);
-                if (v[0] == v[1] || v[1] == v[2] || v[0] == v[2]) continue;
-                for (int k = 0; k < 3; ++k)
-                    edges.push_back(uint64_t(std::min(v[k], v[(k + 1) % 3])) << 32 | std::max(v[k], v[(k + 1) % 3]));
-            }
-        }
-        std::sort(edges.begin(), edges.end());
-        std::vector<uint64_t> out;
-        for (size_t i = 0; i < edges.size();) {
-            size_t j = i;
-            while (j < edges.size() && edges[j] == edges[i]) ++j;
-            if ((j - i) % 2 == 1) out.push_back(edges[i]);
-            i = j;
-        }
-        return out;
-    }
-
-private:
-    uint32_t id(const float* p) {
-        uint32_t k[3];
-        const float v[3] = {p[0] + 0.0f, p[1] + 0.0f, p[2] + 0.0f};
-        std::memcpy(k, v, sizeof(k));
-        return ids_.emplace(std::make_pair(uint64_t(k[0]) << 32 | k[1], k[2]), uint32_t(ids_.size())).first->second;
-    }
-    std::map<std::pair<uint64_t, uint32_t>, uint32_t> ids_;
-};
-
 // Cuts from eyes on the axes of the roots' bounds, near and far: no boundary edge LOD0 lacks.
 bool checkCuts(const Opened& o, ClusterSummary& s, std::string* error) {
     const lodrt::ClusterLodView& v = o.pack.view;
-    EdgeSet edges;
+    const lodrt_tools::ClusterEdges edges(v.cluster_count, [&o](uint32_t c, auto&& triangle) {
+        const lodrt::ClusterPlace& place = o.pack.places[c];
+        const std::vector<float>& pos = o.positions[place.page];
+        const std::vector<uint32_t>& idx = o.indices[place.page];
+        for (uint32_t t = place.first_triangle; t < place.first_triangle + place.triangle_count; ++t) {
+            const float* p[3];
+            for (int i = 0; i < 3; ++i) p[i] = &pos[3 * size_t(idx[3 * size_t(t) + size_t(i)])];
+            triangle(p);
+        }
+    });
     std::vector<uint32_t> lod0;
     for (uint32_t c = 0; c < v.cluster_count; ++c)
         if (v.clusters[c].self_group == lodrt::kClusterNone) lod0.push_back(c);
-    const std::vector<uint64_t> lod0_boundary = edges.boundary(o, lod0);
+    const std::vector<lodrt_tools::ClusterEdges::Edge> lod0_boundary = edges.boundary(lod0);
     const lodrt::ClusterLodCluster& root = v.clusters[v.roots[0]];
     float radius = root.radius;
     for (uint32_t g = 0; g < v.group_count; ++g) radius = std::max(radius, v.groups[g].bounds_radius);
@@ -177,9 +150,8 @@ bool checkCuts(const Opened& o, ClusterSummary& s, std::string* error) {
                 *error = "cut selection failed";
                 return false;
             }
-            const std::vector<uint64_t> b = edges.boundary(o, std::vector<uint32_t>(out.begin(), out.begin() + stats.written));
-            std::vector<uint64_t> extra;
-            std::set_difference(b.begin(), b.end(), lod0_boundary.begin(), lod0_boundary.end(), std::back_inserter(extra));
+            const std::vector<lodrt_tools::ClusterEdges::Edge> extra =
+                edges.cracks(std::vector<uint32_t>(out.begin(), out.begin() + stats.written), lod0_boundary);
             if (!extra.empty()) {
                 *error = "a cut has " + std::to_string(extra.size()) + " boundary edges LOD0 lacks (a crack)";
                 return false;

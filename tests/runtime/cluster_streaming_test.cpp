@@ -113,8 +113,8 @@ lodrt::SelectionParams params() {
 struct Reference {
     std::vector<std::vector<float>> positions;
     std::vector<std::vector<uint32_t>> indices;
-    std::vector<lodrt_test::ClusterEdges::Edge> lod0_boundary;
-    std::unique_ptr<lodrt_test::ClusterEdges> edges;
+    std::vector<lodrt_tools::ClusterEdges::Edge> lod0_boundary;
+    std::unique_ptr<lodrt_tools::ClusterEdges> edges;
 };
 
 Reference decodeAll(const PackSource& source, const lodrt::ClusterLodPack& pack) {
@@ -137,7 +137,7 @@ Reference decodeAll(const PackSource& source, const lodrt::ClusterLodPack& pack)
                                            scratch.data(), scratch.size() * 8),
                   Result::Ok);
     }
-    ref.edges.reset(new lodrt_test::ClusterEdges(pack.view.cluster_count, [&](uint32_t c, auto&& fn) {
+    ref.edges.reset(new lodrt_tools::ClusterEdges(pack.view.cluster_count, [&](uint32_t c, auto&& fn) {
         const lodrt::ClusterPlace& place = pack.places[c];
         const std::vector<float>& pos = ref.positions[place.page];
         const std::vector<uint32_t>& idx = ref.indices[place.page];

@@ -22,7 +22,7 @@
 #include <nlohmann/json.hpp>
 
 #include "../gltf/gltf_test_util.h"
-#include "../../runtime/cluster_edges.h"
+#include "cluster_edges.h"
 #include "cli_runner.h"
 #include "data_uri.h"
 #include "lodbake/bake/bake.h"
@@ -143,10 +143,10 @@ template <class Fn> void forTriangles(const Decoded& d, uint32_t c, Fn&& fn) {
     }
 }
 
-using Edge = lodrt_test::ClusterEdges::Edge;
+using Edge = lodrt_tools::ClusterEdges::Edge;
 
-// The crack check (tests/runtime/cluster_edges.h) over the decoded pages.
-class Edges : public lodrt_test::ClusterEdges {
+// The crack check (runtime/tools/cluster_edges.h) over the decoded pages.
+class Edges : public lodrt_tools::ClusterEdges {
 public:
     explicit Edges(const Decoded& d)
         : ClusterEdges(d.pack.view.cluster_count, [&d](uint32_t c, auto&& fn) { forTriangles(d, c, fn); }) {}

@@ -1,7 +1,8 @@
 #pragma once
-// Test helper: the crack check of cluster LOD cuts. Boundary edges (by decoded position) of a set of
-// clusters are the edges used an odd number of times; a cut is crack-free when it has no boundary
-// edge that the LOD0 clusters lack. Shared by the cluster pack and cluster streaming suites.
+// The crack check of cluster LOD cuts over decoded pages: boundary edges (by decoded position) of a
+// set of clusters are the edges used an odd number of times; a cut is crack-free when it has no
+// boundary edge that the LOD0 clusters lack. Shared by loddump's cluster checks and the cluster
+// pack and cluster streaming tests. Standard library only.
 
 #include <algorithm>
 #include <array>
@@ -11,7 +12,7 @@
 #include <map>
 #include <vector>
 
-namespace lodrt_test {
+namespace lodrt_tools {
 
 class ClusterEdges {
 public:
@@ -60,4 +61,4 @@ private:
     std::vector<std::vector<Edge>> cluster_edges_;
 };
 
-} // namespace lodrt_test
+} // namespace lodrt_tools
