@@ -117,10 +117,9 @@ Status ObjStreamReader::forEachVertexChunk(const VertexChunkSink& sink) {
 }
 
 Status ObjStreamReader::forEachTriangleChunk(const TriangleChunkSink& sink) {
-    const size_t chunk_triangles = std::max<size_t>(1, options_.triangle_chunk);
-    std::vector<uint32_t> chunk, poly;
-    chunk.reserve(chunk_triangles * 3);
-    uint64_t vertices = 0, texcoords = 0, normals = 0, first = 0, triangles = 0;
+    TriangleChunker chunker(sink, options_.triangle_chunk);
+    std::vector<uint32_t> poly;
+    uint64_t vertices = 0, texcoords = 0, normals = 0;
     auto statement = [&](std::string_view key, std::string_view rest, uint64_t line) -> Status {
         if (key == "v") ++vertices;
         else if (key == "vt") ++texcoords;
@@ -137,22 +136,13 @@ Status ObjStreamReader::forEachTriangleChunk(const TriangleChunkSink& sink) {
             poly.push_back(c.v);
         }
         if (poly.size() < 3) return fail(line, "f: expected at least 3 vertices, got " + std::to_string(poly.size()));
-        for (size_t k = 1; k + 1 < poly.size(); ++k) {
-            chunk.insert(chunk.end(), {poly[0], poly[k], poly[k + 1]});
-            ++triangles;
-            if (chunk.size() == chunk_triangles * 3) {
-                LODBAKE_RETURN_IF_ERROR(sink(first, chunk.data(), chunk_triangles));
-                first += chunk_triangles;
-                chunk.clear();
-            }
-        }
-        return Status();
+        return chunker.addPolygon(poly);
     };
     LODBAKE_RETURN_IF_ERROR(forEachStatement(statement));
-    if (!chunk.empty()) LODBAKE_RETURN_IF_ERROR(sink(first, chunk.data(), chunk.size() / 3));
+    LODBAKE_RETURN_IF_ERROR(chunker.finish());
     if (vertices == 0) return invalidInput(name_ + ": no vertices (no 'v' statements)");
     info_.vertex_count = vertices;
-    info_.triangle_estimate = triangles;
+    info_.triangle_estimate = chunker.triangles();
     return Status();
 }
 

@@ -258,10 +258,9 @@ Status PlyStreamReader::forEachTriangleChunk(const TriangleChunkSink& sink) {
     StreamWindow window(*source_, options_.buffer_bytes, options_.max_record_bytes,
                         header_.encoding == Encoding::Ascii ? StreamWindow::Cut::Tokens : StreamWindow::Cut::Bytes);
     BodyCursor cursor(nullptr, 0, 0, header_.encoding);
-    const size_t chunk_triangles = std::max<size_t>(1, options_.triangle_chunk);
-    std::vector<uint32_t> chunk, poly;
-    chunk.reserve(chunk_triangles * 3);
-    uint64_t first = 0, triangles = 0, short_faces = 0;
+    TriangleChunker chunker(sink, options_.triangle_chunk);
+    std::vector<uint32_t> poly;
+    uint64_t short_faces = 0;
     for (size_t ei = 0; ei < header_.elements.size(); ++ei) {
         if (index_prop_[ei] < 0) continue;
         LODBAKE_RETURN_IF_ERROR(moveToElement(ei, window, cursor));
@@ -282,21 +281,12 @@ Status PlyStreamReader::forEachTriangleChunk(const TriangleChunkSink& sink) {
                 ++short_faces;
                 return Status();
             }
-            for (size_t k = 1; k + 1 < poly.size(); ++k) {
-                chunk.insert(chunk.end(), {poly[0], poly[k], poly[k + 1]});
-                ++triangles;
-                if (chunk.size() == chunk_triangles * 3) {
-                    LODBAKE_RETURN_IF_ERROR(sink(first, chunk.data(), chunk_triangles));
-                    first += chunk_triangles;
-                    chunk.clear();
-                }
-            }
-            return Status();
+            return chunker.addPolygon(poly);
         };
         LODBAKE_RETURN_IF_ERROR(readRecords(ei, window, cursor, record));
     }
-    if (!chunk.empty()) LODBAKE_RETURN_IF_ERROR(sink(first, chunk.data(), chunk.size() / 3));
-    info_.triangle_estimate = triangles;
+    LODBAKE_RETURN_IF_ERROR(chunker.finish());
+    info_.triangle_estimate = chunker.triangles();
     info_.short_faces = short_faces;
     if (short_faces > 0)
         diagnostics_.warn(name_ + ": face: " + std::to_string(short_faces) + " faces with fewer than 3 vertices dropped");

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "lodbake/core/status.h"
+#include "lodbake/io/mesh_stream.h"
 
 namespace lodbake::detail {
 
@@ -64,6 +65,39 @@ private:
     size_t valid_ = 0;
     size_t exposed_ = 0;
     size_t boundary() const;
+};
+
+/// The streaming readers' triangles, handed to the sink in chunks of a fixed number of triangles:
+/// polygons are fanned from their first corner; finish() hands over the last, shorter chunk.
+class TriangleChunker {
+public:
+    TriangleChunker(const TriangleChunkSink& sink, size_t chunk_triangles)
+        : sink_(sink), chunk_triangles_(chunk_triangles < 1 ? 1 : chunk_triangles) {
+        chunk_.reserve(chunk_triangles_ * 3);
+    }
+    Status addPolygon(const std::vector<uint32_t>& corners) {
+        for (size_t k = 1; k + 1 < corners.size(); ++k) {
+            chunk_.insert(chunk_.end(), {corners[0], corners[k], corners[k + 1]});
+            ++triangles_;
+            if (chunk_.size() == chunk_triangles_ * 3) LODBAKE_RETURN_IF_ERROR(flush());
+        }
+        return Status();
+    }
+    Status finish() { return chunk_.empty() ? Status() : flush(); }
+    uint64_t triangles() const { return triangles_; }
+
+private:
+    Status flush() {
+        const size_t count = chunk_.size() / 3;
+        LODBAKE_RETURN_IF_ERROR(sink_(first_, chunk_.data(), count));
+        first_ += count;
+        chunk_.clear();
+        return Status();
+    }
+    const TriangleChunkSink& sink_;
+    size_t chunk_triangles_;
+    std::vector<uint32_t> chunk_;
+    uint64_t first_ = 0, triangles_ = 0;
 };
 
 } // namespace lodbake::detail
