@@ -1103,6 +1103,19 @@ int renderSheet(const lodrt::Pack& pack, const LodReport& report, int level_filt
         rows.emplace_back();
         for (uint32_t l = 0; l < g.levels.size(); ++l)
             if (levelSelected(level_filter, l)) rows.back().push_back(levelTriangles(pack, g.levels[l], l, textures));
+        // A cluster hierarchy on the group's LOD0 mesh: a row of its cuts beside the chain's.
+        const uint32_t lod0 = g.levels.empty() ? lodrt::kNoIndex : g.levels[0].mesh;
+        if (lod0 != lodrt::kNoIndex &&
+            pack.mesh(lod0).json.find("extensions").find(lodrt::format::kExtClusterLod).isValid()) {
+            std::vector<loddump::SheetMesh> cuts;
+            std::string why;
+            if (!loddump::clusterCutSheets(pack, lod0, &cuts, &why)) {
+                std::fprintf(stderr, "error: %s: /meshes/%u/extensions/%s: %s\n", out_path, lod0,
+                             lodrt::format::kExtClusterLod, why.c_str());
+                return kExitBadPack;
+            }
+            rows.push_back(std::move(cuts));
+        }
     }
     if (report.groups.empty()) {
         // No LOD group: one row of every mesh instanced by a node.

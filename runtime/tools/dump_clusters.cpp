@@ -184,7 +184,76 @@ void summarise(const Opened& o, ClusterSummary& s) {
     for (const auto& r : rows) s.depths.push_back(r.second);
 }
 
+// The roots' centre and a radius enclosing every group's culling sphere: where the cut's eyes sit.
+void hierarchyBounds(const lodrt::ClusterLodView& v, float centre[3], float* radius) {
+    const lodrt::ClusterLodCluster& root = v.clusters[v.roots[0]];
+    for (int k = 0; k < 3; ++k) centre[k] = root.center[k];
+    *radius = root.radius;
+    for (uint32_t g = 0; g < v.group_count; ++g) *radius = std::max(*radius, v.groups[g].bounds_radius);
+    *radius = std::max(*radius, 1e-6f);
+}
+
+// One cut as a contact-sheet cell: the drawn clusters' triangles, each cluster in a palette colour
+// picked by a hash of its index (neighbours rarely share one).
+SheetMesh cutMesh(const Opened& o, const uint32_t* cut, uint32_t count, const std::string& label) {
+    static const float kPalette[][3] = {{0.90f, 0.30f, 0.25f}, {0.25f, 0.65f, 0.90f}, {0.95f, 0.80f, 0.25f},
+                                        {0.40f, 0.80f, 0.35f}, {0.75f, 0.40f, 0.85f}, {0.95f, 0.55f, 0.20f},
+                                        {0.30f, 0.85f, 0.80f}, {0.85f, 0.45f, 0.60f}, {0.55f, 0.55f, 0.95f},
+                                        {0.70f, 0.85f, 0.30f}, {0.60f, 0.40f, 0.25f}, {0.80f, 0.80f, 0.80f}};
+    constexpr uint32_t kColours = sizeof(kPalette) / sizeof(kPalette[0]);
+    SheetMesh m;
+    m.label = label;
+    m.materials.resize(kColours);
+    for (uint32_t i = 0; i < kColours; ++i)
+        for (int k = 0; k < 3; ++k) m.materials[i].base_colour[k] = kPalette[i][k];
+    for (uint32_t i = 0; i < count; ++i) {
+        const lodrt::ClusterPlace& place = o.pack.places[cut[i]];
+        const std::vector<float>& pos = o.positions[place.page];
+        const std::vector<uint32_t>& idx = o.indices[place.page];
+        const uint32_t colour = uint32_t((uint64_t(cut[i]) * 0x9E3779B1u) >> 16) % kColours;
+        for (uint32_t t = place.first_triangle; t < place.first_triangle + place.triangle_count; ++t) {
+            for (int c = 0; c < 3; ++c) {
+                const float* p = &pos[3 * size_t(idx[3 * size_t(t) + size_t(c)])];
+                m.indices.push_back(uint32_t(m.positions.size() / 3));
+                m.positions.insert(m.positions.end(), p, p + 3);
+            }
+            m.triangle_material.push_back(colour);
+        }
+    }
+    return m;
+}
+
 } // namespace
+
+bool clusterCutSheets(const lodrt::Pack& pack, uint32_t mesh, std::vector<SheetMesh>* out, std::string* error) {
+    ClusterSummary s;
+    Opened o;
+    if (!openAll(pack, mesh, o, s, error)) return false;
+    const lodrt::ClusterLodView& v = o.pack.view;
+    float centre[3], radius;
+    hierarchyBounds(v, centre, &radius);
+    // The contact sheet's camera direction (contact_sheet.h: azimuth 30, elevation 20 degrees).
+    const float azimuth = 30.0f * 3.14159265f / 180.0f, elevation = 20.0f * 3.14159265f / 180.0f;
+    const float to_camera[3] = {std::sin(azimuth) * std::cos(elevation), std::sin(elevation),
+                                std::cos(azimuth) * std::cos(elevation)};
+    std::vector<uint32_t> scratch(lodrt::clusterCutScratchBytes(v) / 4 + 1, 0), cut(v.cluster_count);
+    lodrt::ClusterCutScratch cut_scratch{scratch.data(), scratch.size() * 4, 0};
+    const lodrt::SelectionParams params;
+    for (int distance : {2, 8, 32}) {
+        float eye[3];
+        for (int k = 0; k < 3; ++k) eye[k] = centre[k] + to_camera[k] * float(distance) * radius;
+        lodrt::ClusterCutStats stats;
+        if (lodrt::selectClusterCut(v, lodrt::ClusterInstance(), eye, nullptr, params, cut_scratch, cut.data(),
+                                    uint32_t(cut.size()), &stats) != lodrt::Result::Ok) {
+            *error = "cut selection failed";
+            return false;
+        }
+        // The sheet's font has digits and a few letters: "<distance>r <triangles> tris".
+        out->push_back(cutMesh(o, cut.data(), stats.written,
+                               std::to_string(distance) + "r " + std::to_string(stats.triangles) + " tris"));
+    }
+    return true;
+}
 
 bool checkClusterLod(const lodrt::Pack& pack, uint32_t mesh, ClusterSummary* out, std::string* error) {
     ClusterSummary s;

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "contact_sheet.h"
 #include "lodrt/pack.h"
 
 namespace loddump {
@@ -33,5 +34,11 @@ struct ClusterSummary {
 /// Reads, decodes and checks mesh `mesh`'s extension (which must be present). False with a one-line
 /// message (the element inside the extension, then what was expected) on the first problem.
 bool checkClusterLod(const lodrt::Pack& pack, uint32_t mesh, ClusterSummary* out, std::string* error);
+
+/// loddump --render: the cuts of mesh `mesh`'s hierarchy for an eye on the contact sheet's camera
+/// direction at 2, 8 and 32 times the roots' radius from their centre (1 px threshold, 1080 px
+/// viewport, 60 degree field of view), each cluster in one of a few colours so that clusters and
+/// their sizes show. False with a one-line message when the extension does not read or decode.
+bool clusterCutSheets(const lodrt::Pack& pack, uint32_t mesh, std::vector<SheetMesh>* out, std::string* error);
 
 } // namespace loddump

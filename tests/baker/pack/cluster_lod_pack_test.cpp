@@ -27,6 +27,7 @@
 #include "data_uri.h"
 #include "lodbake/bake/bake.h"
 #include "lodbake/core/file_io.h"
+#include "lodbake/image/texture_resize.h"
 #include "lodbake/cluster/cluster_lod.h"
 #include "lodbake/io/mesh_io.h"
 #include "lodrt/cluster_pack.h"
@@ -527,6 +528,43 @@ TEST(ClusterLodPack, CliFlagAndLoddumpSummary) {
         lodbake_test::shellQuote(LODBAKE_TEST_LODDUMP) + " " + lodbake_test::shellQuote(without));
     ASSERT_EQ(plain.exit_code, 0) << plain.output;
     EXPECT_EQ(plain.output.find("cluster LOD"), std::string::npos);
+
+    // --render adds a row of three cuts, each cluster in a palette colour: the row below the chain's
+    // shows many colours, where the chain's levels are shaded in one.
+    auto render = [&](const std::string& pack, const std::string& png) {
+        const lodbake_test::CommandResult rendered =
+            lodbake_test::runCommand(lodbake_test::withoutLeakCheck() + lodbake_test::shellQuote(LODBAKE_TEST_LODDUMP) +
+                                     " " + lodbake_test::shellQuote(pack) + " --render " + lodbake_test::shellQuote(png));
+        EXPECT_EQ(rendered.exit_code, 0) << rendered.output;
+        const lodbake::Result<std::vector<uint8_t>> bytes = lodbake::readFileBytes(png);
+        EXPECT_TRUE(bytes.ok());
+        return lodbake::decodeImage(bytes.ok() ? *bytes : std::vector<uint8_t>(), png);
+    };
+    const auto with_image = render(with, dir + "/cluster_cli_with.png");
+    const auto without_image = render(without, dir + "/cluster_cli_without.png");
+    ASSERT_TRUE(with_image.ok() && without_image.ok());
+    ASSERT_EQ(with_image->channels, 3u);
+    EXPECT_EQ(with_image->height, 2 * without_image->height);
+    auto hues = [&](uint32_t y0, uint32_t y1) { // hue buckets of 15 degrees that many saturated pixels fall in
+        std::map<int, size_t> pixels;
+        for (uint32_t y = y0; y < y1; ++y)
+            for (uint32_t x = 0; x < with_image->width; ++x) {
+                const uint8_t* p = &with_image->samples[(size_t(y) * with_image->width + x) * 3];
+                const int red = p[0], green = p[1], blue = p[2];
+                const int hi = std::max({red, green, blue}), lo = std::min({red, green, blue});
+                if (hi - lo < 40) continue; // grey: background, labels, the chain's shading
+                const double h = hi == red     ? double(green - blue) / (hi - lo)
+                                 : hi == green ? 2.0 + double(blue - red) / (hi - lo)
+                                               : 4.0 + double(red - green) / (hi - lo);
+                ++pixels[int(std::floor((h < 0 ? h + 6 : h) * 4))];
+            }
+        size_t buckets = 0;
+        for (const auto& bucket : pixels) buckets += bucket.second >= 200 ? 1 : 0;
+        return buckets;
+    };
+    const uint32_t half = with_image->height / 2;
+    EXPECT_LE(hues(0, half), 1u);
+    EXPECT_GE(hues(half, with_image->height), 6u);
 }
 
 } // namespace
