@@ -12,6 +12,7 @@
 
 #include "lodrt/format.h"
 #include "lodrt/valence.h"
+#include "little_endian.h"
 
 namespace lodrt {
 
@@ -19,20 +20,9 @@ namespace {
 
 namespace fmt = format;
 
-uint32_t readU32(const uint8_t* p) {
-    return uint32_t(p[0]) | (uint32_t(p[1]) << 8) | (uint32_t(p[2]) << 16) | (uint32_t(p[3]) << 24);
-}
-
-uint16_t readU16(const uint8_t* p) {
-    return uint16_t(p[0] | (p[1] << 8));
-}
-
-float readF32(const uint8_t* p) {
-    const uint32_t bits = readU32(p);
-    float f;
-    std::memcpy(&f, &bits, sizeof(f));
-    return f;
-}
+using detail::loadF32;
+using detail::loadU16;
+using detail::loadU32;
 
 Result fail(Result code, char* message, size_t size, const char* format, ...) {
     if (message && size > 0) {
@@ -89,14 +79,14 @@ bool finite3(const float v[3]) {
 // One cluster record into `cl` and `place`; a message names the first bad field.
 Result readCluster(const uint8_t* r, uint32_t c, const ClusterPackInfo& info, ClusterLodCluster& cl,
                    ClusterPlace& place, char* message, size_t size) {
-    for (int j = 0; j < 3; ++j) cl.center[j] = readF32(r + 4 * j);
-    cl.radius = readF32(r + 12);
-    for (int j = 0; j < 3; ++j) cl.cone_axis[j] = readF32(r + 16 + 4 * j);
-    cl.cone_cutoff = readF32(r + 28);
-    cl.self_group = readU32(r + 32);
-    cl.parent_group = readU32(r + 36);
-    place.page = readU32(r + 40);
-    place.first_triangle = readU16(r + 44);
+    for (int j = 0; j < 3; ++j) cl.center[j] = loadF32(r + 4 * j);
+    cl.radius = loadF32(r + 12);
+    for (int j = 0; j < 3; ++j) cl.cone_axis[j] = loadF32(r + 16 + 4 * j);
+    cl.cone_cutoff = loadF32(r + 28);
+    cl.self_group = loadU32(r + 32);
+    cl.parent_group = loadU32(r + 36);
+    place.page = loadU32(r + 40);
+    place.first_triangle = loadU16(r + 44);
     place.triangle_count = r[46];
     place.vertex_count = r[47];
     if (!finite3(cl.center) || !std::isfinite(cl.radius) || cl.radius < 0)
@@ -133,14 +123,14 @@ Result readCluster(const uint8_t* r, uint32_t c, const ClusterPackInfo& info, Cl
 }
 
 Result readGroup(const uint8_t* r, uint32_t g, ClusterLodGroup& group, char* message, size_t size) {
-    for (int j = 0; j < 3; ++j) group.lod_center[j] = readF32(r + 4 * j);
-    group.lod_radius = readF32(r + 12);
-    group.error = readF32(r + 16);
-    for (int j = 0; j < 3; ++j) group.bounds_center[j] = readF32(r + 20 + 4 * j);
-    group.bounds_radius = readF32(r + 32);
-    group.first_child = readU32(r + 36);
-    group.child_count = readU32(r + 40);
-    group.depth = readU32(r + 44);
+    for (int j = 0; j < 3; ++j) group.lod_center[j] = loadF32(r + 4 * j);
+    group.lod_radius = loadF32(r + 12);
+    group.error = loadF32(r + 16);
+    for (int j = 0; j < 3; ++j) group.bounds_center[j] = loadF32(r + 20 + 4 * j);
+    group.bounds_radius = loadF32(r + 32);
+    group.first_child = loadU32(r + 36);
+    group.child_count = loadU32(r + 40);
+    group.depth = loadU32(r + 44);
     if (!finite3(group.lod_center) || !finite3(group.bounds_center) || !std::isfinite(group.lod_radius) ||
         !std::isfinite(group.bounds_radius) || !std::isfinite(group.error) || group.lod_radius < 0 ||
         group.bounds_radius < 0 || group.error < 0)
@@ -157,10 +147,10 @@ Result readPages(const uint8_t* table, const TableLayout& t, uint64_t pages_size
     for (uint32_t p = 0; p < info.page_count; ++p) {
         const uint8_t* r = table + t.pages + uint64_t(p) * fmt::kClusterPageRecordSize;
         ClusterPage& page = pages[p];
-        page.byte_offset = readU32(r);
-        page.stream_bytes = readU32(r + 4);
-        page.run_count = readU32(r + 8);
-        page.cluster_count = readU32(r + 12);
+        page.byte_offset = loadU32(r);
+        page.stream_bytes = loadU32(r + 4);
+        page.run_count = loadU32(r + 8);
+        page.cluster_count = loadU32(r + 12);
         const uint64_t length = uint64_t(page.stream_bytes) + uint64_t(page.run_count) * fmt::kClusterRunSize;
         if (page.byte_offset + length > pages_size || length > 0xffffffffu)
             return fail(Result::OutOfBounds, message, size, "page %u: bytes [%llu, %llu) outside the %llu-byte pages view",
@@ -264,21 +254,21 @@ Result clusterPackReadInfo(const uint8_t* table, size_t table_size, ClusterPackI
     if (table_size < fmt::kClusterHeaderSize)
         return fail(Result::Truncated, message, size, "table: %zu bytes, shorter than its %u-byte header", table_size,
                     fmt::kClusterHeaderSize);
-    if (readU32(table) != fmt::kClusterMagic)
+    if (loadU32(table) != fmt::kClusterMagic)
         return fail(Result::BadMagic, message, size, "table: bad magic (expected \"LBCL\")");
-    if (readU32(table + 4) != fmt::kClusterVersion)
-        return fail(Result::UnsupportedVersion, message, size, "table: version %u (expected %u)", readU32(table + 4),
+    if (loadU32(table + 4) != fmt::kClusterVersion)
+        return fail(Result::UnsupportedVersion, message, size, "table: version %u (expected %u)", loadU32(table + 4),
                     fmt::kClusterVersion);
     ClusterPackInfo in;
-    in.cluster_count = readU32(table + 8);
-    in.group_count = readU32(table + 12);
-    in.group_child_count = readU32(table + 16);
-    in.root_count = readU32(table + 20);
-    in.page_count = readU32(table + 24);
-    in.position_bits = readU32(table + 28);
-    for (int j = 0; j < 3; ++j) in.grid_min[j] = readF32(table + 32 + 4 * j);
-    in.grid_size = readF32(table + 44);
-    in.quantization_error = readF32(table + 48);
+    in.cluster_count = loadU32(table + 8);
+    in.group_count = loadU32(table + 12);
+    in.group_child_count = loadU32(table + 16);
+    in.root_count = loadU32(table + 20);
+    in.page_count = loadU32(table + 24);
+    in.position_bits = loadU32(table + 28);
+    for (int j = 0; j < 3; ++j) in.grid_min[j] = loadF32(table + 32 + 4 * j);
+    in.grid_size = loadF32(table + 44);
+    in.quantization_error = loadF32(table + 48);
     for (uint32_t counts : {in.cluster_count, in.group_count, in.group_child_count, in.root_count, in.page_count})
         if (counts > fmt::kClusterMaxCount)
             return fail(Result::BadStructure, message, size, "table: a count above the format's limit of %u",
@@ -294,7 +284,7 @@ Result clusterPackReadInfo(const uint8_t* table, size_t table_size, ClusterPackI
         !std::isfinite(in.quantization_error) || in.quantization_error < 0)
         return fail(Result::BadStructure, message, size, "table: bad position grid (bits %u)", in.position_bits);
     for (uint32_t o = 52; o < fmt::kClusterHeaderSize; o += 4)
-        if (readU32(table + o) != 0) return fail(Result::BadStructure, message, size, "table: reserved bytes not 0");
+        if (loadU32(table + o) != 0) return fail(Result::BadStructure, message, size, "table: reserved bytes not 0");
     const TableLayout t = layoutOf(in);
     if (table_size < t.end)
         return fail(Result::Truncated, message, size, "table: %zu bytes, its counts need %llu", table_size,
@@ -339,8 +329,8 @@ Result clusterPackOpen(const uint8_t* table, size_t table_size, uint64_t pages_s
         r = readGroup(table + t.groups + uint64_t(g) * fmt::kClusterGroupRecordSize, g, groups[g], message, size);
         if (r != Result::Ok) return r;
     }
-    for (uint32_t i = 0; i < info.group_child_count; ++i) children[i] = readU32(table + t.children + 4 * uint64_t(i));
-    for (uint32_t i = 0; i < info.root_count; ++i) roots[i] = readU32(table + t.roots + 4 * uint64_t(i));
+    for (uint32_t i = 0; i < info.group_child_count; ++i) children[i] = loadU32(table + t.children + 4 * uint64_t(i));
+    for (uint32_t i = 0; i < info.root_count; ++i) roots[i] = loadU32(table + t.roots + 4 * uint64_t(i));
     for (uint32_t p = 0; p < info.page_count; ++p) new (&pages[p]) ClusterPage();
     r = readPages(table, t, pages_size, pack, pages, page_clusters, clusters, places, message, size);
     if (r != Result::Ok) return r;

@@ -11,15 +11,12 @@
 #include <thread>
 
 #include "lodrt/format.h"
+#include "little_endian.h"
 #include "memory.h"
 
 namespace lodrt {
 
 namespace {
-
-uint32_t readU32(const uint8_t* p) {
-    return uint32_t(p[0]) | uint32_t(p[1]) << 8 | uint32_t(p[2]) << 16 | uint32_t(p[3]) << 24;
-}
 
 void setError(char* error, size_t error_size, const char* text) {
     if (error && error_size > 0) std::snprintf(error, error_size, "%s", text);
@@ -125,21 +122,21 @@ Result PackSource::openReader(const RangeReader& reader, uint64_t file_size, con
         setError(error, error_size, "container: the range reader failed on the GLB header");
         return r;
     }
-    if (readU32(header) != format::kGlbMagic) {
+    if (detail::loadU32(header) != format::kGlbMagic) {
         setError(error, error_size, "container: expected the GLB magic \"glTF\"");
         return Result::BadMagic;
     }
-    if (readU32(header + 4) != format::kGlbVersion) {
+    if (detail::loadU32(header + 4) != format::kGlbVersion) {
         setError(error, error_size, "container: GLB container version is not 2");
         return Result::UnsupportedVersion;
     }
-    const uint64_t length = readU32(header + 8);
+    const uint64_t length = detail::loadU32(header + 8);
     if (length != file_size) {
         setError(error, error_size, "container: the GLB header's length differs from the file size");
         return length > file_size ? Result::Truncated : Result::TrailingBytes;
     }
-    const uint64_t json_size = readU32(header + 12);
-    if (readU32(header + 16) != format::kGlbChunkJson || json_size == 0 || json_size % 4 != 0) {
+    const uint64_t json_size = detail::loadU32(header + 12);
+    if (detail::loadU32(header + 16) != format::kGlbChunkJson || json_size == 0 || json_size % 4 != 0) {
         setError(error, error_size, "container: expected a non-empty JSON chunk first, 4-byte aligned");
         return Result::BadChunk;
     }
@@ -160,16 +157,16 @@ Result PackSource::openReader(const RangeReader& reader, uint64_t file_size, con
             setError(error, error_size, "container: the range reader failed on the BIN chunk header");
             return r;
         }
-        const uint64_t chunk_size = readU32(chunk);
+        const uint64_t chunk_size = detail::loadU32(chunk);
         if (chunk_size % 4 != 0 || json_end + sizeof(chunk) + chunk_size > file_size) {
             setError(error, error_size, "container: chunk length not a multiple of 4 or past the end of the file");
             return chunk_size % 4 != 0 ? Result::BadChunk : Result::Truncated;
         }
-        if (readU32(chunk + 4) == format::kGlbChunkJson) {
+        if (detail::loadU32(chunk + 4) == format::kGlbChunkJson) {
             setError(error, error_size, "container: a second JSON chunk");
             return Result::BadChunk;
         }
-        if (readU32(chunk + 4) == format::kGlbChunkBin) {
+        if (detail::loadU32(chunk + 4) == format::kGlbChunkBin) {
             if (chunk_size == 0) {
                 setError(error, error_size, "container: empty BIN chunk");
                 return Result::BadChunk;
@@ -620,11 +617,7 @@ Result Streamer::readCompressedHeader(PfrepStream& ps) {
     if (r != Result::Ok) return r;
     // Every vertex has a 10-byte record and a 2-byte offset in the decoded blob and every slot at
     // least one bit, so the vertex and slot counts (and the scratch they size) are bounded by it.
-    auto load32 = [&ps](size_t at) {
-        return uint32_t(ps.header[at]) | (uint32_t(ps.header[at + 1]) << 8) | (uint32_t(ps.header[at + 2]) << 16) |
-               (uint32_t(ps.header[at + 3]) << 24);
-    };
-    const uint32_t vertices = load32(8), slots = load32(56);
+    const uint32_t vertices = detail::loadU32(ps.header + 8), slots = detail::loadU32(ps.header + 56);
     if (info.decoded_bytes < format::kPfrepHeaderSize || ps.view_size <= format::kPfrepHeaderSize ||
         info.decoded_bytes > ps.view_size * format::kPfrepMaxExpansion ||
         uint64_t(vertices) * (format::kPfrepVertexRecordSize + 2) > info.decoded_bytes ||

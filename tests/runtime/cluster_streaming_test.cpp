@@ -498,16 +498,8 @@ TEST(ClusterStreaming, BadTableFailsTheClustersOnly) {
 
 // Jobs on their own threads while the frame keeps cutting: the same settled cut.
 TEST(ClusterStreaming, WorkerThreadsSettleToTheFullCut) {
-    struct Threads {
-        std::vector<std::thread> running;
-        static void submit(void* user, void (*run)(void*), void* task) {
-            static_cast<Threads*>(user)->running.emplace_back(run, task);
-        }
-        ~Threads() {
-            for (std::thread& t : running) t.join();
-        }
-    } threads;
-    const lodrt::JobSystem system{&Threads::submit, &threads};
+    lodrt_test::ThreadJobs threads;
+    const lodrt::JobSystem system = threads.system();
     Engine e;
     e.threads = &system;
     ASSERT_TRUE(e.open(0));

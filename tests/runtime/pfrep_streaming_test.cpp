@@ -403,18 +403,8 @@ TEST(PfrepStreamingTest, WorkerThreadsReachTheSameResult) {
     ASSERT_EQ(source.openBytes(bytes.data(), bytes.size(), nullptr), Result::Ok);
     const Blob blob = blobOf(source, 1);
     // Each job on its own thread: steps complete while the frame keeps calling update().
-    // The threads are joined however the test leaves this scope, so a failed assertion reports
-    // instead of terminating on a joinable std::thread.
-    struct Threads {
-        std::vector<std::thread> running;
-        static void submit(void* user, void (*run)(void*), void* task) {
-            static_cast<Threads*>(user)->running.emplace_back(run, task);
-        }
-        ~Threads() {
-            for (std::thread& t : running) t.join();
-        }
-    } threads;
-    const lodrt::JobSystem system{&Threads::submit, &threads};
+    lodrt_test::ThreadJobs threads;
+    const lodrt::JobSystem system = threads.system();
     {
         Streamer streamer;
         ASSERT_EQ(streamer.init(&source, &system, nullptr), Result::Ok);
