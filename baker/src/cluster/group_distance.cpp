@@ -13,21 +13,15 @@
 
 #include "cluster/cluster_internal.h"
 #include "lodbake/simplify/mesh_distance.h"
+#include "simplify/surface_sampling.h"
 
 namespace lodbake::cluster_detail {
 
 namespace {
 
-uint64_t splitmix64(uint64_t x) {
-    x += 0x9e3779b97f4a7c15ull;
-    x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
-    x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
-    return x ^ (x >> 31);
-}
-
-double toUnit(uint64_t bits) {
-    return double(bits >> 11) * (1.0 / 9007199254740992.0);
-}
+using detail::pointOnTriangle;
+using detail::splitmix64;
+using detail::toUnit;
 
 using TriangleKey = std::array<uint32_t, 3>; // a triangle's point ids, ascending
 
@@ -74,8 +68,7 @@ double oneSide(const std::vector<Vec3f>& positions, const std::vector<uint32_t>&
         const Vec3d c = toDouble(positions[indices[t * 3 + 2]]);
         for (size_t i = 0; i < n; ++i) {
             const double u1 = toUnit(splitmix64(base + 2 * i + 1)), u2 = toUnit(splitmix64(base + 2 * i + 2));
-            const double r1 = std::sqrt(u1);
-            points.push_back(a * (1.0 - r1) + b * (r1 * (1.0 - u2)) + c * (r1 * u2));
+            points.push_back(pointOnTriangle(a, b, c, u1, u2));
         }
     }
     // Queried in Morton order, so that each starts near the last one's answer (the cursor).

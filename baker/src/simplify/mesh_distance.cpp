@@ -34,6 +34,7 @@
 
 #include "core/large_array.h"
 #include "core/parallel.h"
+#include "simplify/surface_sampling.h"
 #include "lodbake/core/bvh.h"
 
 namespace lodbake {
@@ -48,17 +49,9 @@ constexpr size_t kChunkSize = 2048; // points per task; fixed so the reduction o
 constexpr uint64_t kReferenceStream = 0x5265664d65736821ull; // decorrelates the two sides' samples
 constexpr uint64_t kApproxStream = 0x417070726f782121ull;
 
-uint64_t splitmix64(uint64_t x) {
-    x += 0x9e3779b97f4a7c15ull;
-    x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
-    x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
-    return x ^ (x >> 31);
-}
-
-// Uniform in [0, 1) with 53 random bits.
-double toUnit(uint64_t bits) {
-    return double(bits >> 11) * (1.0 / 9007199254740992.0);
-}
+using detail::pointOnTriangle;
+using detail::splitmix64;
+using detail::toUnit;
 
 constexpr uint32_t kMortonCells = 1u << 21; // per axis: 3 x 21 bits fill a 63-bit code
 
@@ -250,8 +243,7 @@ public:
         const Vec3d a = toDouble(from_.positions[from_.indices[tri * 3]]);
         const Vec3d b = toDouble(from_.positions[from_.indices[tri * 3 + 1]]);
         const Vec3d c = toDouble(from_.positions[from_.indices[tri * 3 + 2]]);
-        const double r1 = std::sqrt(u1);
-        return a * (1.0 - r1) + b * (r1 * (1.0 - u2)) + c * (r1 * u2);
+        return pointOnTriangle(a, b, c, u1, u2);
     }
 
 private:
