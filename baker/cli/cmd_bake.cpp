@@ -22,6 +22,7 @@
 #include "lodbake/bake/bake.h"
 #include "lodbake/bake/batch.h"
 #include "lodbake/bake/depfile.h"
+#include "lodbake/bake/memory_budget.h"
 #include "lodbake/bake/progress.h"
 #include "lodbake/config/bake_config.h"
 #include "lodbake/config/bake_manifest.h"
@@ -57,6 +58,9 @@ options:
   --preset NAME|FILE    bake preset: a bundled one by name (desktop, mobile, vr, archive; installed
                         in share/lodbake/presets) or a preset file (a path: contains '/' or '.')
   --threads N           worker threads (default: all; the output bytes do not depend on it)
+  --memory-limit MIB    resident memory the bakes of this run may be allowed together (default: half
+                        of physical memory); a pack whose allowance alone exceeds it fails, packs
+                        baked side by side wait for room; the output bytes do not depend on it
   --levels LIST         override lod_ratios: comma-separated triangle ratios in (0, 1]
   --pixels P            override pixel_threshold
   --compact             compressed-only pack: valence streams replace the plain level data
@@ -100,6 +104,8 @@ exit status: 0 ok, 1 a bake failed (every other pack is still written), 2 usage 
 struct CliOverrides {
     bool has_threads = false;
     uint32_t threads = 0;
+    bool has_memory_limit = false;
+    uint32_t memory_limit_mib = 0;
     bool has_levels = false;
     std::vector<double> levels;
     bool has_pixels = false;
@@ -122,6 +128,7 @@ struct CliOverrides {
 
 void applyOverrides(const CliOverrides& o, BakeSettings& s) {
     if (o.has_threads) s.threads = o.threads;
+    if (o.has_memory_limit) s.memory_limit_mib = o.memory_limit_mib;
     if (o.has_levels) s.lod_ratios = o.levels;
     if (o.has_pixels) s.pixel_threshold = o.pixels;
     if (o.compact) s.compact = true;
@@ -330,6 +337,14 @@ int parseOverrides(Args& args, CliOverrides& overrides) {
             return usageError("--threads expects an integer in [0, 1024], got '" + args.values["--threads"] + "'");
         overrides.has_threads = true;
         overrides.threads = uint32_t(n);
+    }
+    if (args.values.count("--memory-limit")) {
+        double n = 0;
+        if (!parseNumber(args.values["--memory-limit"], n) || n < 0 || n > double(1u << 30) || n != std::floor(n))
+            return usageError("--memory-limit expects an integer number of MiB in [0, 1073741824], got '" +
+                              args.values["--memory-limit"] + "'");
+        overrides.has_memory_limit = true;
+        overrides.memory_limit_mib = uint32_t(n);
     }
     if (args.values.count("--levels")) {
         std::vector<double> ratios;
@@ -557,6 +572,7 @@ int runBake(int argc, char** argv) {
                     {"--manifest", nullptr, true},
                     {"--preset", nullptr, true},
                     {"--threads", nullptr, true},
+                    {"--memory-limit", nullptr, true},
                     {"--levels", nullptr, true},
                     {"--pixels", nullptr, true},
                     {"--compact", nullptr, false},
@@ -614,6 +630,9 @@ int runBake(int argc, char** argv) {
     installTempFileSignalCleanup();
     BatchOptions options;
     options.threads = overrides.has_threads ? overrides.threads : base.threads;
+    // Like --threads, one limit for the whole run (a manifest's per-asset value is ignored).
+    const uint32_t limit_mib = overrides.has_memory_limit ? overrides.memory_limit_mib : base.memory_limit_mib;
+    options.memory_limit_bytes = limit_mib > 0 ? uint64_t(limit_mib) << 20 : defaultBakeMemoryLimit();
     options.read = args.read;
     if (args.values.count("--cache-dir")) options.cache_dir = args.values["--cache-dir"];
     ProgressPrinter printer(jobs, quiet);

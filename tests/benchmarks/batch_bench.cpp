@@ -7,14 +7,17 @@
 //  2. the same batch re-baked with a warm --cache-dir against the cold (cache-filling) bake: ratio,
 //     bar <= 5 %;
 //  3. peak memory (getrusage ru_maxrss of the child) of baking the largest shared scan, per input
-//     triangle: bar <= 300 B/triangle; anchor: the peak of `lodbake info` reading the same file.
+//     triangle: bar <= 300 B/triangle; anchor: the peak of `lodbake info` reading the same file;
+//  4. with --allowance, for every mesh baked with the preset and with the preset plus --clusters:
+//     the memory allowance of --memory-limit (lodbake/bake/memory_budget.h, read from the CLI's
+//     refusal at a 1 MiB limit) against the bake's peak RSS; bar: allowance >= peak for every row.
 // Every bake is a separate `lodbake` process, as a build system runs it.
 //
 // Bars (docs/pipeline.md, docs/bake.md): speedup >= 1.7 on wall time; packs of both thread counts and
 // of the warm re-bake byte-identical; warm/cold <= 5 %; peak <= 300 B per input triangle.
 //
 // usage: batch_bench [--runs N] [--preset FILE] [--only MESH,...] [--skip-threads] [--skip-cache] [--skip-memory]
-//                    [--check]
+//                    [--allowance] [--check]
 // Defaults: 1 run (the 1-thread batch takes minutes), configs/desktop.json, every shared mesh.
 // Not a ctest: these machines are noisy, so with N runs the run of median wall time is compared.
 // --check: exit 1 when a bar is not met.
@@ -25,6 +28,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -162,6 +166,45 @@ bool bestBatch(const std::vector<std::string>& base, const std::string& out_dir,
     return true;
 }
 
+// Part 4: the allowance --memory-limit gives each bake, against the bake's measured peak.
+bool measureAllowances(const std::string& cli, const std::vector<std::string>& meshes, const std::string& preset,
+                       const std::string& work, lodbake_bench::Bars& bars) {
+    double lowest = INFINITY;
+    std::string lowest_row;
+    std::printf("allowance: %-34s %-10s %10s %10s %6s\n", "mesh", "options", "peak MiB", "allowed", "ratio");
+    for (const std::string& m : meshes) {
+        const std::string mesh = std::string(LODBAKE_BENCH_MESHES_DIR) + "/" + m;
+        for (const bool clusters : {false, true}) {
+            std::vector<std::string> args = {cli, "bake", mesh, "-o", work + "/allowance.glb", "--preset", preset,
+                                             "--threads", "2", "--quiet"};
+            if (clusters) args.push_back("--clusters");
+            std::vector<std::string> refused = args;
+            refused.insert(refused.end(), {"--memory-limit", "1"});
+            const ChildRun limit = runChild(refused, work + "/allowance_refused.log");
+            const std::string message = readAll(work + "/allowance_refused.log");
+            const size_t at = message.find(" is allowed ");
+            const ChildRun bake = runChild(args, work + "/allowance.log");
+            if (limit.exit_code != 1 || at == std::string::npos || bake.exit_code != 0) {
+                std::fprintf(stderr, "batch_bench: %s: no allowance or the bake failed, see %s and %s\n", m.c_str(),
+                             (work + "/allowance_refused.log").c_str(), (work + "/allowance.log").c_str());
+                return false;
+            }
+            const double allowed_mib = std::atof(message.c_str() + at + 12);
+            const double peak_mib = double(bake.maxrss_kb) / 1024.0;
+            const double ratio = allowed_mib / peak_mib;
+            std::printf("allowance: %-34s %-10s %10.1f %10.0f %6.2f\n", m.c_str(), clusters ? "+clusters" : "preset",
+                        peak_mib, allowed_mib, ratio);
+            if (ratio < lowest) {
+                lowest = ratio;
+                lowest_row = m + (clusters ? " --clusters" : "");
+            }
+        }
+    }
+    bars.absolute("lowest memory allowance / bake peak RSS (" + lowest_row + ")", lowest, 1.0,
+                  lodbake_bench::Limit::AtLeast);
+    return true;
+}
+
 } // namespace
 
 int main(int argc, char** argv) {
@@ -171,7 +214,7 @@ int main(int argc, char** argv) {
     int runs = 1;
     std::string preset = std::string(LODBAKE_BENCH_SOURCE_DIR) + "/configs/desktop.json";
     std::vector<std::string> meshes = lodbake_test::allSharedMeshNames();
-    bool do_threads = true, do_cache = true, do_memory = true;
+    bool do_threads = true, do_cache = true, do_memory = true, do_allowance = false;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
         if (a == "--runs" && i + 1 < argc)
@@ -186,9 +229,11 @@ int main(int argc, char** argv) {
             do_cache = false;
         else if (a == "--skip-memory")
             do_memory = false;
+        else if (a == "--allowance")
+            do_allowance = true;
         else {
             std::fprintf(stderr, "usage: batch_bench [--runs N] [--preset FILE] [--only MESH,...] [--skip-threads] "
-                                 "[--skip-cache] [--skip-memory] [--check]\n");
+                                 "[--skip-cache] [--skip-memory] [--allowance] [--check]\n");
             return 2;
         }
     }
@@ -285,6 +330,7 @@ int main(int argc, char** argv) {
                       triangles > 0 ? per_tri : NAN, 300, Limit::AtMost,
                       triangles > 0 ? info.maxrss_kb * 1024.0 / triangles : NAN);
     }
+    if (do_allowance && !measureAllowances(cli, meshes, preset, work, bars)) return 1;
     std::printf("load average at end %.1f\n", loadAverage());
     return bars.finish(check);
 }

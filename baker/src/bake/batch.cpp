@@ -14,6 +14,7 @@
 
 #include "core/parallel.h"
 #include "lodbake/bake/cache.h"
+#include "lodbake/bake/memory_budget.h"
 #include "lodbake/core/file_io.h"
 #include "lodbake/io/mesh_io.h"
 
@@ -107,8 +108,66 @@ void addToScene(const std::string& name, LoadedScene loaded, std::vector<BakeInp
     for (uint32_t r : loaded.roots) scene.roots.push_back(node_base + r);
 }
 
-void runJob(const BakeJob& job, size_t index, const BatchOptions& options, const BatchHooks& hooks,
-            BakeJobResult& result) {
+// A job's share of the batch's memory limit, held from before its inputs load until its pack is
+// staged, and released when the job ends however it ends.
+class JobMemory {
+public:
+    explicit JobMemory(MemoryGate* gate) : gate_(gate) {}
+    JobMemory(const JobMemory&) = delete;
+    JobMemory& operator=(const JobMemory&) = delete;
+    ~JobMemory() {
+        if (gate_ && bytes_ > 0) gate_->release(bytes_);
+    }
+    // Holds the allowance of `footprint` (refused when it alone exceeds the limit). Shrinking returns
+    // the difference; growing gives the reservation back and waits for the whole, so a waiting job
+    // never holds memory another one waits for.
+    Status hold(const BakeFootprint& footprint, const std::string& what) {
+        if (!gate_) return Status();
+        const uint64_t bytes = bakeMemoryAllowance(footprint);
+        if (bytes > gate_->limit()) return bakeOverLimit(what, footprint, gate_->limit());
+        if (bytes <= bytes_) {
+            gate_->release(bytes_ - bytes);
+        } else {
+            gate_->release(bytes_);
+            bytes_ = 0;
+            LODBAKE_RETURN_IF_ERROR(gate_->acquire(bytes, what));
+        }
+        bytes_ = bytes;
+        return Status();
+    }
+
+private:
+    MemoryGate* gate_ = nullptr;
+    uint64_t bytes_ = 0;
+};
+
+// The job's footprint before its inputs load, when every input can be sized without loading it
+// (memory_budget.h); unknown otherwise, and when a peek fails (the reader that loads the input then
+// reports the error in its own words). An OBJ is counted by one pass over it only when it is large
+// enough to matter: a face line of n >= 3 corners takes at least 2n bytes, so a file of B bytes
+// holds fewer than B / 2 triangles.
+BakeFootprint footprintBeforeLoading(const BakeJob& job, const BatchOptions& options, uint64_t limit) {
+    BakeFootprint total;
+    total.known = true;
+    for (const std::string& input : job.inputs) {
+        if (formatFromPath(input) == MeshFormat::Obj) {
+            BakeFootprint bound;
+            bound.triangles = inputBytes(input) / 2;
+            if (bakeMemoryAllowance(bound) <= limit) return BakeFootprint{};
+        }
+        Diagnostics ignored; // warnings come again from the reader that loads the input
+        Result<BakeFootprint> one = peekInputFootprint(input, options.read, ignored);
+        if (!one.ok() || !one->known) return BakeFootprint{};
+        total.triangles += one->triangles;
+    }
+    return total;
+}
+
+// What a memory refusal names: the input, or the output of a pack of several.
+std::string jobName(const BakeJob& job) { return job.inputs.size() == 1 ? job.inputs[0] : job.output; }
+
+void runJob(const BakeJob& job, size_t index, const BatchOptions& options, MemoryGate* gate,
+            const BatchHooks& hooks, BakeJobResult& result) {
     const Clock::time_point start = Clock::now();
     std::mutex mutex; // bake() reports the stages of a job's inputs from several workers
     auto stageDone = [&](size_t input, BakeStage stage, const StageTime& time) {
@@ -180,6 +239,12 @@ void runJob(const BakeJob& job, size_t index, const BatchOptions& options, const
         }
     }
 
+    JobMemory memory(gate);
+    if (gate) {
+        const BakeFootprint before = footprintBeforeLoading(job, options, gate->limit());
+        if (before.known) result.status = memory.hold(before, jobName(job));
+        if (!result.status.ok()) return;
+    }
     std::vector<BakeInput> inputs;
     PackScene scene;
     bool has_graph = false;
@@ -201,6 +266,12 @@ void runJob(const BakeJob& job, size_t index, const BatchOptions& options, const
         addToScene(names[i], std::move(loaded).value(), inputs, scene);
     }
     if (!has_graph) scene = PackScene{}; // no graph anywhere: the pack layout of plain inputs
+    if (gate) {
+        std::vector<const Mesh*> meshes;
+        for (const BakeInput& input : inputs) meshes.push_back(&input.mesh);
+        result.status = memory.hold(loadedFootprint(meshes), jobName(job));
+        if (!result.status.ok()) return;
+    }
     BakeSettings settings = job.settings;
     settings.threads = 0; // the batch's thread limit applies
     BakeHooks bake_hooks;
@@ -267,10 +338,12 @@ std::vector<BakeJobResult> runBakeJobs(const std::vector<BakeJob>& jobs, const B
     std::vector<size_t> order(jobs.size());
     for (size_t j = 0; j < order.size(); ++j) order[j] = j;
     std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return bytes[a] > bytes[b]; });
+    std::unique_ptr<MemoryGate> gate;
+    if (options.memory_limit_bytes > 0) gate = std::make_unique<MemoryGate>(options.memory_limit_bytes);
     std::atomic<size_t> next{0};
     const Status status = parallelFor(jobs.size(), 1, [&](size_t) {
         const size_t j = order[next.fetch_add(1)];
-        runJob(jobs[j], j, options, hooks, results[j]);
+        runJob(jobs[j], j, options, gate.get(), hooks, results[j]);
         // The stages reported as they finished; the timeline lists them as they began (ties: input,
         // then stage, then level, so equal start times print in a fixed order).
         std::vector<BakeJobResult::StageRun>& timeline = results[j].timeline;

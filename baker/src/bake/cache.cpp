@@ -170,7 +170,8 @@ Result<CacheLookup> cacheLookup(const std::string& cache_dir, const std::vector<
     KeyHasher h;
     h.str(kVersionString);
     BakeSettings keyed = settings;
-    keyed.threads = 0; // never changes the output bytes
+    keyed.threads = 0; // neither changes the output bytes
+    keyed.memory_limit_mib = 0;
     h.str(settingsToJson(keyed));
     h.u64(inputs.size());
     for (size_t i = 0; i < inputs.size(); ++i) {

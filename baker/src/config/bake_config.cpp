@@ -142,6 +142,8 @@ Status applyImpl(const Json& root, const std::string& name, BakeSettings& s) {
         {"textures",
          [&](const Json& v, const std::string&) { return applyObject(v, name, "/textures", texture_handlers); }},
         {"threads", [&](const Json& v, const std::string& w) { return readUint(v, w, 0, 1024, s.threads); }},
+        {"memory_limit_mib",
+         [&](const Json& v, const std::string& w) { return readUint(v, w, 0, 1u << 30, s.memory_limit_mib); }},
         {"compact", [&](const Json& v, const std::string& w) { return readBool(v, w, s.compact); }},
         {"web", [&](const Json& v, const std::string& w) { return readBool(v, w, s.web); }},
         {"progressive_fans", [&](const Json& v, const std::string& w) { return readBool(v, w, s.progressive_fans); }},
@@ -243,6 +245,7 @@ std::string settingsToJson(const BakeSettings& s) {
                          {"texels_per_pixel", s.textures.texels_per_pixel},
                          {"keep_unreadable_images", s.textures.keep_unreadable_images}};
         j["threads"] = s.threads;
+        j["memory_limit_mib"] = s.memory_limit_mib;
         j["compact"] = s.compact;
         j["web"] = s.web;
         j["progressive_fans"] = s.progressive_fans;

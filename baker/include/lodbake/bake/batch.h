@@ -31,6 +31,9 @@ struct BatchOptions {
     std::string cache_dir; // content-hash cache folder; empty: no cache
     uint32_t threads = 0;  // worker threads for the whole batch; 0: all cores (job settings.threads is ignored)
     ReadOptions read;      // reader limits for every input (a pack that reads fine does not depend on them)
+    // Resident memory the jobs running side by side may be allowed together (memory_budget.h); a job
+    // whose allowance alone exceeds it fails (ResourceLimit). 0: no limit. Never changes a pack's bytes.
+    uint64_t memory_limit_bytes = 0;
 };
 
 struct BakeJobResult {
@@ -73,7 +76,8 @@ struct BatchHooks {
 /// Bakes every job (each reads its inputs, bakes them into one pack and stages `output` in
 /// BakeJobResult::staged; nothing is renamed into place here, so an interrupted run leaves no
 /// output), at most options.threads workers. Jobs start largest first (by input bytes), so the
-/// longest one does not start last and leave the other workers idle at the end. Results come back in job order; one
+/// longest one does not start last and leave the other workers idle at the end. Under a memory
+/// limit a job waits, before it loads, until the running jobs leave room for its allowance. Results come back in job order; one
 /// failing job does not stop the others. The caller checks outputs for clashes with inputs and with each other
 /// beforehand.
 std::vector<BakeJobResult> runBakeJobs(const std::vector<BakeJob>& jobs, const BatchOptions& options,

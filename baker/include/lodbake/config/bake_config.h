@@ -55,6 +55,8 @@ struct BakeSettings {
     uint32_t error_samples = 200000; // area-uniform samples per side when measuring each level's error
     TextureLodSettings textures;
     uint32_t threads = 0;         // worker threads; 0: all cores (the output does not depend on it)
+    uint32_t memory_limit_mib = 0; // resident memory the run's bakes may be allowed together (docs/bake.md
+                                   // "Memory"); 0: half of physical memory. The output does not depend on it
     bool compact = false;         // list our stream extensions in extensionsRequired
     bool web = false; // levels as KHR_mesh_quantization + EXT_meshopt_compression, no LODBAKE_ streams (docs/format/web.md)
     bool progressive_fans = true; // embed LOD0's PFRep blob (LODBAKE_progressive_fans) in the pack
