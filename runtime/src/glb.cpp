@@ -1,14 +1,13 @@
 // GLB container reader (glTF 2.0 specification, "Binary glTF Layout").
 #include "lodrt/glb.h"
 
+#include "little_endian.h"
 #include "lodrt/format.h"
 
 namespace lodrt {
 namespace {
 
-uint32_t readU32(const uint8_t* p) {
-    return uint32_t(p[0]) | (uint32_t(p[1]) << 8) | (uint32_t(p[2]) << 16) | (uint32_t(p[3]) << 24);
-}
+using detail::loadU32;
 
 bool isJsonSpace(uint8_t c) {
     return c == ' ' || c == '\t' || c == '\n' || c == '\r';
@@ -28,8 +27,8 @@ Result parsePlainJson(const uint8_t* data, size_t size, GlbView* out) {
 Result parseBinary(const uint8_t* data, size_t size, GlbView* out) {
     using namespace format;
     if (size < kGlbHeaderSize) return Result::Truncated;
-    if (readU32(data + 4) != kGlbVersion) return Result::UnsupportedVersion;
-    const uint32_t length = readU32(data + 8);
+    if (loadU32(data + 4) != kGlbVersion) return Result::UnsupportedVersion;
+    const uint32_t length = loadU32(data + 8);
     if (length > size) return Result::Truncated;
     if (length < size) return Result::TrailingBytes;
     if (length % 4 != 0) return Result::BadChunk;
@@ -40,8 +39,8 @@ Result parseBinary(const uint8_t* data, size_t size, GlbView* out) {
     view.is_binary = true;
     while (pos < size) {
         if (size - pos < kGlbChunkHeaderSize) return Result::Truncated;
-        const uint32_t chunk_length = readU32(data + pos);
-        const uint32_t chunk_type = readU32(data + pos + 4);
+        const uint32_t chunk_length = loadU32(data + pos);
+        const uint32_t chunk_type = loadU32(data + pos + 4);
         pos += kGlbChunkHeaderSize;
         if (chunk_length > size - pos) return Result::Truncated;
         if (chunk_length % 4 != 0) return Result::BadChunk;

@@ -8,6 +8,7 @@
 #include "lodrt/detail/pfrep_codec.h"
 #include "lodrt/format.h"
 #include "lodrt/pfrep.h"
+#include "little_endian.h"
 #include "range_decoder.h"
 
 namespace lodrt {
@@ -15,9 +16,7 @@ namespace {
 
 using detail::kNone;
 
-uint32_t load32(const uint8_t* p) {
-    return uint32_t(p[0]) | (uint32_t(p[1]) << 8) | (uint32_t(p[2]) << 16) | (uint32_t(p[3]) << 24);
-}
+using detail::loadU32;
 void store32(uint8_t* p, uint32_t v) {
     for (int k = 0; k < 4; ++k) p[k] = uint8_t(v >> (8 * k));
 }
@@ -42,15 +41,15 @@ struct Header {
 
 Result readHeader(const uint8_t* p, size_t size, Header& h) {
     if (size < format::kPfrepHeaderSize) return Result::Truncated;
-    if (load32(p) != format::kPfrepMagic) return Result::BadMagic;
-    if (load32(p + 4) != format::kPfrepVersionCompressed) return Result::UnsupportedVersion;
-    h.vertex_count = load32(p + 8);
-    h.removed_count = load32(p + 12);
-    h.block_shift = load32(p + 16);
-    h.expanded_size = load32(p + 52);
-    h.total_slots = load32(p + 56);
+    if (loadU32(p) != format::kPfrepMagic) return Result::BadMagic;
+    if (loadU32(p + 4) != format::kPfrepVersionCompressed) return Result::UnsupportedVersion;
+    h.vertex_count = loadU32(p + 8);
+    h.removed_count = loadU32(p + 12);
+    h.block_shift = loadU32(p + 16);
+    h.expanded_size = loadU32(p + 52);
+    h.total_slots = loadU32(p + 56);
     if (h.vertex_count > format::kPfrepMaxVertices || h.removed_count > h.vertex_count ||
-        h.block_shift > format::kPfrepMaxBlockShift || load32(p + 60) != 0)
+        h.block_shift > format::kPfrepMaxBlockShift || loadU32(p + 60) != 0)
         return Result::BadStructure;
     h.block_count = uint32_t((uint64_t(h.vertex_count) + (uint64_t(1) << h.block_shift) - 1) >> h.block_shift);
     if (h.expanded_size < format::kPfrepHeaderSize + uint64_t(h.block_count) * 4) return Result::BadStructure;
@@ -210,7 +209,7 @@ Result pfrepDecompress(const void* data, size_t size, void* out, size_t out_capa
     s.total_slots = h.total_slots;
     float step[3];
     for (int a = 0; a < 3; ++a) {
-        const uint32_t bits = load32(in + 36 + 4 * a);
+        const uint32_t bits = loadU32(in + 36 + 4 * a);
         std::memcpy(&step[a], &bits, 4);
     }
     detail::pfrepAxisWeights(step, s.axis_weight);

@@ -12,6 +12,7 @@
 #include "lodrt/detail/valence_model.h"
 #include "lodrt/format.h"
 #include "lodrt/valence.h"
+#include "little_endian.h"
 #include "range_decoder.h"
 
 namespace lodrt {
@@ -22,18 +23,9 @@ using detail::kNone;
 using detail::VertexKind;
 using detail::VertexSymbol;
 
-uint32_t read32(const uint8_t* p) {
-    return uint32_t(p[0]) | (uint32_t(p[1]) << 8) | (uint32_t(p[2]) << 16) | (uint32_t(p[3]) << 24);
-}
-uint16_t read16(const uint8_t* p) {
-    return uint16_t(p[0] | (p[1] << 8));
-}
-float readFloat(const uint8_t* p) {
-    uint32_t u = read32(p);
-    float f;
-    std::memcpy(&f, &u, 4);
-    return f;
-}
+using detail::loadF32;
+using detail::loadU16;
+using detail::loadU32;
 
 using detail::RangeDecoder;
 
@@ -205,15 +197,15 @@ bool readAttributeRecord(const uint8_t* p, uint32_t index, const ValenceInfo& v,
     a->components = p[1];
     a->bits = p[2];
     a->predictor = p[3];
-    a->set = read16(p + 4);
-    if (read16(p + 6) != 0) return false;
+    a->set = loadU16(p + 4);
+    if (loadU16(p + 6) != 0) return false;
     for (int j = 0; j < 4; ++j) {
-        a->min[j] = readFloat(p + 8 + 4 * j);
-        a->size[j] = readFloat(p + 24 + 4 * j);
+        a->min[j] = loadF32(p + 8 + 4 * j);
+        a->size[j] = loadF32(p + 24 + 4 * j);
         if (!std::isfinite(a->min[j]) || !std::isfinite(a->size[j]) || a->size[j] < 0.0f) return false;
     }
-    a->bytes = read32(p + 40);
-    a->raw_bytes = read32(p + 44);
+    a->bytes = loadU32(p + 40);
+    a->raw_bytes = loadU32(p + 44);
     if (a->bits < kValenceMinAttributeBits || a->bits > kValenceMaxAttributeBits) return false;
     if (v.vertex_count > uint64_t(kValenceAttributesPerByte) * (uint64_t(a->bytes) + 1)) return false;
     uint32_t quantized = 0; // components with a range
@@ -242,9 +234,9 @@ bool readAttributeRecord(const uint8_t* p, uint32_t index, const ValenceInfo& v,
 Result readAttributeTable(const uint8_t* data, size_t size, ValenceInfo* v, uint64_t* total) {
     if (size < uint64_t(kValenceHeaderSize) + kValenceAttributeTablePrefix) return Result::Truncated;
     const uint8_t* prefix = data + kValenceHeaderSize;
-    const uint32_t count = read32(prefix);
+    const uint32_t count = loadU32(prefix);
     if (count == 0 || count > kValenceMaxAttributes) return Result::CorruptStream;
-    v->twin_bytes = read32(prefix + 4);
+    v->twin_bytes = loadU32(prefix + 4);
     v->twin_shift = prefix[8];
     if (v->twin_shift > kValenceMaxTwinShift || prefix[9] != 0 || prefix[10] != 0 || prefix[11] != 0 ||
         (v->twin_bytes == 0 && v->twin_shift != 0))
@@ -269,31 +261,31 @@ Result valenceReadInfo(const uint8_t* data, size_t size, ValenceInfo* info) {
     if (!info || (!data && size > 0)) return Result::InvalidArgument;
     *info = ValenceInfo();
     if (size < 4) return Result::Truncated;
-    if (read32(data) != kValenceMagic) return Result::BadMagic;
+    if (loadU32(data) != kValenceMagic) return Result::BadMagic;
     if (size < 6) return Result::Truncated;
-    const uint16_t version = read16(data + 4);
+    const uint16_t version = loadU16(data + 4);
     if (version != kValenceVersion && version != kValenceVersionWithoutAttributes) return Result::UnsupportedVersion;
     if (size < kValenceHeaderSize) return Result::Truncated;
-    const uint16_t flags = read16(data + 6);
+    const uint16_t flags = loadU16(data + 6);
     if (flags & ~kValenceKnownFlags) return Result::CorruptStream;
     // Version 7 is the attribute table's: it must be there, and only there.
     if (((flags & kValenceFlagAttributes) != 0) != (version == kValenceVersion)) return Result::CorruptStream;
     ValenceInfo v;
     v.version = version;
-    v.vertex_count = read32(data + 8);
-    v.triangle_count = read32(data + 12);
-    v.closed_vertex_count = read32(data + 16);
-    v.closed_triangle_count = read32(data + 20);
+    v.vertex_count = loadU32(data + 8);
+    v.triangle_count = loadU32(data + 12);
+    v.closed_vertex_count = loadU32(data + 16);
+    v.closed_triangle_count = loadU32(data + 20);
     v.position_bits = data[24];
     v.normal_bits = data[25];
-    if (read16(data + 26) != 0) return Result::CorruptStream;
-    for (int j = 0; j < 3; ++j) v.bounds_min[j] = readFloat(data + 28 + 4 * j);
-    v.cube_size = readFloat(data + 40);
-    v.connectivity_bytes = read32(data + 44);
-    v.position_bytes = read32(data + 48);
-    v.normal_bytes = read32(data + 52);
-    v.position_raw_bytes = read32(data + 56);
-    v.normal_raw_bytes = read32(data + 60);
+    if (loadU16(data + 26) != 0) return Result::CorruptStream;
+    for (int j = 0; j < 3; ++j) v.bounds_min[j] = loadF32(data + 28 + 4 * j);
+    v.cube_size = loadF32(data + 40);
+    v.connectivity_bytes = loadU32(data + 44);
+    v.position_bytes = loadU32(data + 48);
+    v.normal_bytes = loadU32(data + 52);
+    v.position_raw_bytes = loadU32(data + 56);
+    v.normal_raw_bytes = loadU32(data + 60);
     v.has_normals = (flags & kValenceFlagNormals) != 0;
     if (v.vertex_count > kValenceMaxCount || v.triangle_count > kValenceMaxCount ||
         v.closed_vertex_count > kValenceMaxCount || v.closed_triangle_count > kValenceMaxCount)
@@ -668,8 +660,8 @@ Result decodePositions(const uint8_t* data, const uint8_t* stream, const Valence
     const int32_t qmax = reader.qmax;
     int32_t last[3] = {(qmax + 1) / 2, (qmax + 1) / 2, (qmax + 1) / 2};
     detail::initRangeProbs(&reader.snap_models[0][0], sizeof(reader.snap_models) / 4);
-    reader.snap_flags = uint32_t(read16(data + 6) / kValenceFlagSnapX) & 7u; // header checked above
-    reader.spread_flags = uint32_t(read16(data + 6) / kValenceFlagSpreadX) & 7u;
+    reader.snap_flags = uint32_t(loadU16(data + 6) / kValenceFlagSnapX) & 7u; // header checked above
+    reader.spread_flags = uint32_t(loadU16(data + 6) / kValenceFlagSpreadX) & 7u;
     uint8_t* final_done = s.base + l.final_done;
     // An empty mesh has no scratch (null base): memset's pointer must not be null even for 0 bytes.
     if (vn > 0) std::memset(final_done, 0, vn);
