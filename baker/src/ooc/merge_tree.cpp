@@ -65,25 +65,63 @@ void appendGroups(const Piece& p, ClusterLodHierarchy& out) {
 
 } // namespace
 
+// The merge tree over files [begin, end): a leaf per file, and above them the k-d tree partitionMesh
+// cut (the left side takes half the leaves, rounded down), so that each merge joins two siblings,
+// which share the cut between them; with adjacent pairs in leaf order instead, a pair may straddle
+// a cut higher up and share nothing.
+struct TreeNode {
+    uint32_t begin = 0, end = 0;
+    int left = -1, right = -1;
+    uint32_t height = 0;
+    std::string file;
+};
+
+int buildTree(uint32_t begin, uint32_t end, MergePairing pairing, std::vector<TreeNode>& nodes) {
+    const int at = int(nodes.size());
+    nodes.push_back(TreeNode());
+    nodes[size_t(at)].begin = begin;
+    nodes[size_t(at)].end = end;
+    if (end - begin == 1) return at;
+    uint32_t mid = begin + (end - begin) / 2;
+    if (pairing == MergePairing::LeafOrder) {
+        // Adjacent pairs in leaf order, an odd last one carried up, level by level: the tree whose
+        // left side is the largest power of two below the count.
+        uint32_t p = 1;
+        while (2 * p < end - begin) p *= 2;
+        mid = begin + p;
+    }
+    const int l = buildTree(begin, mid, pairing, nodes);
+    const int r = buildTree(mid, end, pairing, nodes);
+    nodes[size_t(at)].left = l;
+    nodes[size_t(at)].right = r;
+    nodes[size_t(at)].height = 1 + std::max(nodes[size_t(l)].height, nodes[size_t(r)].height);
+    return at;
+}
+
 Result<MergeTree> mergeAll(const std::vector<std::string>& partition_lods, const MergeOptions& options,
                            Diagnostics& diagnostics) {
     if (partition_lods.empty()) return invalidInput("merge: expected at least one partition hierarchy");
     MergeTree tree;
     tree.partitions = partition_lods;
-    std::vector<std::string> level = partition_lods, written, before;
+    std::vector<std::string> written, before;
     std::error_code ec;
     if (std::filesystem::is_directory(options.work_dir, ec))
         for (const auto& e : std::filesystem::directory_iterator(options.work_dir, ec))
             before.push_back(joinPath(options.work_dir, e.path().filename().string()));
     std::sort(before.begin(), before.end());
-    while (level.size() > 1) {
-        std::vector<std::string> next;
-        for (size_t k = 0; k < level.size(); k += 2) {
-            if (k + 1 == level.size()) {
-                next.push_back(level[k]); // carried up
-                continue;
-            }
-            Result<MergeFile> m = mergePartitionLods(level[k], level[k + 1], options, diagnostics);
+    std::vector<TreeNode> nodes;
+    buildTree(0, uint32_t(partition_lods.size()), options.pairing, nodes);
+    for (TreeNode& n : nodes)
+        if (n.left < 0) n.file = partition_lods[n.begin];
+    const uint32_t top_height = nodes[0].height;
+    for (uint32_t h = 1; h <= top_height; ++h) {
+        for (TreeNode& n : nodes) { // preorder: nodes of one height in leaf order
+            if (n.height != h) continue;
+            MergeOptions job = options;
+            if (h < top_height && options.levels_per_job > 0)
+                job.cluster.max_levels = std::min(options.cluster.max_levels, options.levels_per_job);
+            Result<MergeFile> m =
+                mergePartitionLods(nodes[size_t(n.left)].file, nodes[size_t(n.right)].file, job, diagnostics);
             if (!m.ok()) {
                 removeWritten(written);
                 return m.status();
@@ -91,13 +129,12 @@ Result<MergeTree> mergeAll(const std::vector<std::string>& partition_lods, const
             if (!std::binary_search(before.begin(), before.end(), m->path)) written.push_back(m->path);
             tree.largest_memory_bound = std::max(tree.largest_memory_bound, m->memory_bound_bytes);
             tree.largest_accounted_peak = std::max(tree.largest_accounted_peak, m->accounted_peak_bytes);
-            next.push_back(m->path);
+            n.file = m->path;
             tree.merges.push_back(std::move(*m));
         }
-        level.swap(next);
         ++tree.merge_levels;
     }
-    tree.top = level[0];
+    tree.top = nodes[0].file;
     return tree;
 }
 

@@ -39,7 +39,8 @@ std::string freshDir(const std::string& name) {
 }
 
 // A generated scan cut into partitions (small reader buffers and a small limit on one thread give
-// leaves of about 12,000 triangles at 3 MiB), each built by the partition job.
+// leaves of about 12,000 triangles at 3 MiB), each built by the partition job to kLevelsPerJob
+// levels, as mergeAll's jobs below the top are (a single partition is the top: built in full).
 struct Fixture {
     std::string dir;
     lodbake::Mesh input;
@@ -74,6 +75,7 @@ Fixture built(const std::string& name, uint64_t triangles, uint64_t limit = uint
     PartitionBuildOptions bo;
     bo.work_dir = f.dir + "/lods";
     bo.memory_limit_bytes = uint64_t(64) << 20;
+    if (f.set.partitions.size() > 1) bo.cluster.max_levels = kLevelsPerJob;
     for (const PartitionFile& pf : f.set.partitions) {
         auto lod = buildPartition(pf.path, bo, d);
         EXPECT_TRUE(lod.ok()) << lod.status().message();
@@ -192,6 +194,10 @@ TEST(PartitionMergeTest, MergedPartitionsReachOneRootWithoutCracks) {
     for (const MergeFile& m : tree->merges) {
         EXPECT_LE(m.accounted_peak_bytes, m.memory_bound_bytes) << m.path;
         EXPECT_GT(m.group_count, 0u) << m.path; // the old cut let the merge build on
+        EXPECT_GT(m.shared_edges, 0u) << m.path; // siblings share their cut
+        if (&m != &tree->merges.back()) {
+            EXPECT_LE(m.level_count, kLevelsPerJob) << m.path;
+        }
         shared += m.shared_edges;
     }
     EXPECT_GT(shared, 100u);

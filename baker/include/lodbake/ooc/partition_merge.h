@@ -43,10 +43,29 @@ constexpr uint64_t kMergeBytesPerRoot = 60 + 48 + 48 + 44;
 /// The kind of a hierarchy file.
 enum class LodFileKind : uint32_t { Partition = 0, Merge = 1 };
 
+/// Levels a job below the top of the merge tree builds (mergeAll; the partition jobs should build as
+/// many, through PartitionBuildOptions::cluster.max_levels). A job's outer border is locked, so
+/// every level it builds simplifies its inside further while the strip along its border stays as
+/// fine as its input: built as far as the lock allows, a partition ends up far coarser inside than
+/// the in-memory build at the same triangle count. One level per job keeps the tree level by level
+/// (a merge at tree level m builds about depth m + 1), so a strip waits at most until the merge
+/// that unlocks it; the top merge then builds on as far as it can.
+constexpr uint32_t kLevelsPerJob = 1;
+
+/// How mergeAll pairs the partitions' files, given in leaf order.
+enum class MergePairing {
+    KdSiblings, // the partitioner's k-d tree (the left side takes half the leaves, rounded down): each
+                // merge joins two siblings, which share the cut between them
+    LeafOrder,  // adjacent pairs in leaf order, an odd last one carried up, level by level: a pair can
+                // straddle a cut higher up the tree and share nothing
+};
+
 struct MergeOptions {
     std::string work_dir; // where the output goes; created if missing
     uint64_t memory_limit_bytes = uint64_t(1) << 30;
-    ClusterLodOptions cluster;
+    ClusterLodOptions cluster; // for mergeAll: the top merge's (its max_levels included)
+    uint32_t levels_per_job = kLevelsPerJob; // mergeAll, every merge but the top; 0: as many as it can
+    MergePairing pairing = MergePairing::KdSiblings; // mergeAll
 };
 
 /// What a merge job wrote.
@@ -111,10 +130,12 @@ struct MergeTree {
     uint64_t largest_accounted_peak = 0;
 };
 
-/// Merges the partitions' hierarchy files (in leaf order) pairwise, level by level: at each level
-/// files 2k and 2k+1 are merged and an odd last file is carried up, until one file remains. The jobs
-/// run one after the other, each under options.memory_limit_bytes. On an error every merge file the
-/// run wrote is removed.
+/// Merges the partitions' hierarchy files (in leaf order) pairwise, level by level, as a binary tree
+/// over them (options.pairing): at tree height 1 the sibling leaves are merged, at height h the
+/// nodes whose two children are done, in leaf order; a file whose sibling is a larger subtree is
+/// carried up until that subtree is merged. Every merge but the top builds at most
+/// options.levels_per_job levels; the top builds on as far as it can. The jobs run one after the other, each under options.memory_limit_bytes. On an error every
+/// merge file the run wrote is removed.
 Result<MergeTree> mergeAll(const std::vector<std::string>& partition_lods, const MergeOptions& options,
                            Diagnostics& diagnostics);
 
