@@ -453,6 +453,9 @@ Status openInputs(const std::string paths[2], const MergeOptions& o, InputTop to
         LODBAKE_RETURN_IF_ERROR(readHeader(fds[i].fd, tops[i]));
         LODBAKE_RETURN_IF_ERROR(readRootRecords(fds[i].fd, tops[i]));
     }
+    if (tops[0].hash == tops[1].hash)
+        return invalidInput(paths[1] + ": content: expected a hierarchy other than " + paths[0] +
+                            " (the two inputs hold the same bytes)");
     uint64_t roots = 0, v = 0, t = 0, b = 0, e = 0;
     for (int i = 0; i < 2; ++i) {
         roots += tops[i].roots.size();

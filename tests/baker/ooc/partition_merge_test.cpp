@@ -306,8 +306,13 @@ TEST(PartitionMergeTest, DamagedInputIsAnErrorNamingItWithNoOutput) {
     const size_t roots_at = 60 + 60 * size_t(counts[0]) + 48 * size_t(counts[1]) + 4 * size_t(counts[2]);
     std::fill(root.begin() + std::ptrdiff_t(roots_at), root.begin() + std::ptrdiff_t(roots_at + 4), uint8_t(0xff));
     expectError(f.dir + "/renamed.lbplod", root, "root out of range", true);
-    // Missing.
+    // The same hierarchy twice.
     lodbake::Diagnostics d;
+    auto twice = mergePartitionLods(other, other, mergeOptions(out), d);
+    ASSERT_FALSE(twice.ok());
+    EXPECT_EQ(twice.status().code(), lodbake::StatusCode::InvalidInput);
+    EXPECT_TRUE(filesIn(out).empty());
+    // Missing.
     auto missing = mergePartitionLods(f.dir + "/none.lbplod", other, mergeOptions(out), d);
     ASSERT_FALSE(missing.ok());
     EXPECT_NE(missing.status().message().find(f.dir + "/none.lbplod"), std::string::npos);
