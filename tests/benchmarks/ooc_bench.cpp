@@ -14,12 +14,25 @@
 // triangle-weighted mean group error are printed per depth, and each partitioned cut's errors are
 // divided by the whole build's at the same triangle count (log-log interpolation between depths).
 //
+// With --cluster the partitions' hierarchies are then merged pairwise level by level (ooc::mergeAll,
+// lodbake/ooc/partition_merge.h) and assembled into one hierarchy, compared with the whole build at
+// equal triangle counts through threshold cuts: the cut at error threshold t is every cluster whose
+// own error is at most t and whose parent's is above it (what the runtime draws where one model unit
+// projects to one pixel); the error of a hierarchy at N triangles is the smallest group error whose
+// cut has at most N triangles, and that cut's triangle-weighted mean error is printed beside it. N
+// runs over the whole build's depth-cut triangle counts. --levels-per-job N sets the levels each
+// partition job and each merge below the top builds (default ooc::kLevelsPerJob; 0: as far as the
+// locked border allows); --leaf-order-pairs merges adjacent pairs in leaf order instead of the k-d
+// tree's siblings.
+//
 // Bars: the partitioner's peak resident memory stays under the limit it was given (issue: "peak
 // resident memory stays under the limit whatever the input size"); with --cluster, so do the
-// partition jobs'.
+// partition and merge jobs', and the merged hierarchy's error at equal triangle counts is within 10 %
+// of the in-memory build's (issue: "levels whose measured errors are within 10 % of the in-memory
+// path's at equal triangle counts").
 //
 // usage: ooc_bench [--triangles N] [--memory-limit MIB] [--dir DIR] [--threads N] [--no-anchor]
-//                  [--scan FILE] [--cluster] [--check]
+//                  [--scan FILE] [--cluster] [--levels-per-job N] [--leaf-order-pairs] [--check]
 //   defaults: 10,000,000 triangles, 1024 MiB, DIR = the build's ooc_bench_out folder. --scan reads
 //   an existing file (made by lodbake_scansim --surface) instead of generating one, and keeps it.
 
@@ -42,6 +55,7 @@
 #include "lodbake/io/mesh_stream.h"
 #include "lodbake/ooc/partition.h"
 #include "lodbake/ooc/partition_build.h"
+#include "lodbake/ooc/partition_merge.h"
 #include "scansim.h"
 
 namespace {
@@ -146,17 +160,79 @@ double errorAt(const std::vector<DepthCut>& whole, uint64_t triangles, bool mean
     return NAN;
 }
 
-void printComparison(const std::vector<DepthCut>& part, const std::vector<DepthCut>& whole) {
+void printComparison(const char* label, const std::vector<DepthCut>& part, const std::vector<DepthCut>& whole) {
     std::printf("depth cuts (whole buildClusterLod):\n");
     for (const DepthCut& c : whole)
         std::printf("  depth %2u %10llu triangles  max error %.6g  mean error %.6g\n", c.depth,
                     (unsigned long long)c.triangles, c.max_error, c.mean_error);
-    std::printf("depth cuts (partition jobs side by side), error / whole's at equal triangles:\n");
+    std::printf("depth cuts (%s), error / whole's at equal triangles:\n", label);
     for (const DepthCut& c : part) {
         const double wm = errorAt(whole, c.triangles, false), wa = errorAt(whole, c.triangles, true);
         std::printf("  depth %2u %10llu triangles  max error %.6g (x%.3f)  mean error %.6g (x%.3f)\n", c.depth,
                     (unsigned long long)c.triangles, c.max_error, c.max_error / wm, c.mean_error, c.mean_error / wa);
     }
+}
+
+// A threshold cut's size and errors (see the header).
+struct ThresholdCut {
+    double threshold = 0;
+    uint64_t triangles = 0;
+    double mean_error = 0;
+};
+
+// The error of `h` at `triangles` (the header's definition), by a sweep over the group errors: a
+// cluster is in the cut for thresholds in [own error, parent error).
+ThresholdCut errorAtTriangles(const lodbake::ClusterLodHierarchy& h, uint64_t triangles) {
+    const auto own = [&](const lodrt::ClusterLodCluster& c) {
+        return c.self_group == lodrt::kClusterNone ? 0.0 : double(h.groups[c.self_group].error);
+    };
+    std::vector<std::pair<double, int64_t>> events;
+    for (const auto& c : h.clusters) {
+        events.push_back({own(c), int64_t(c.triangle_count)});
+        if (c.parent_group != lodrt::kClusterNone)
+            events.push_back({double(h.groups[c.parent_group].error), -int64_t(c.triangle_count)});
+    }
+    std::sort(events.begin(), events.end());
+    ThresholdCut cut;
+    cut.threshold = NAN;
+    int64_t count = 0;
+    for (size_t i = 0; i < events.size();) {
+        size_t j = i;
+        while (j < events.size() && events[j].first == events[i].first) count += events[j++].second;
+        if (uint64_t(count) <= triangles) {
+            cut.threshold = events[i].first;
+            break;
+        }
+        i = j;
+    }
+    if (std::isnan(cut.threshold)) return cut;
+    double weighted = 0;
+    for (const auto& c : h.clusters) {
+        const double e = own(c);
+        const double parent = c.parent_group == lodrt::kClusterNone ? INFINITY : double(h.groups[c.parent_group].error);
+        if (e > cut.threshold || parent <= cut.threshold) continue;
+        cut.triangles += c.triangle_count;
+        weighted += e * c.triangle_count;
+    }
+    cut.mean_error = cut.triangles ? weighted / double(cut.triangles) : 0;
+    return cut;
+}
+
+// Prints the merged hierarchy's errors against the whole build's at the whole build's depth-cut
+// triangle counts, and returns the largest ratio of the errors (NAN when none was comparable).
+double printThresholdComparison(const lodbake::ClusterLodHierarchy& merged, const lodbake::ClusterLodHierarchy& whole) {
+    std::printf("threshold cuts at equal triangles (N = whole build's depth-cut triangles): error, mean error\n");
+    double worst = NAN;
+    for (const DepthCut& d : depthCuts({&whole})) {
+        if (d.depth == 0) continue;
+        const ThresholdCut w = errorAtTriangles(whole, d.triangles), m = errorAtTriangles(merged, d.triangles);
+        const double ratio = m.threshold / w.threshold;
+        if (std::isfinite(ratio) && !(ratio <= worst)) worst = ratio;
+        std::printf("  N %10llu  whole %.6g (%llu tri, mean %.6g)  merged %.6g (%llu tri, mean %.6g)  ratio x%.3f mean x%.3f\n",
+                    (unsigned long long)d.triangles, w.threshold, (unsigned long long)w.triangles, w.mean_error,
+                    m.threshold, (unsigned long long)m.triangles, m.mean_error, ratio, m.mean_error / w.mean_error);
+    }
+    return worst;
 }
 
 } // namespace
@@ -165,7 +241,8 @@ int main(int argc, char** argv) {
     const bool check = lodbake_bench::takeCheckFlag(argc, argv);
     uint64_t triangles = 10000000, limit_mib = 1024;
     int threads = 0;
-    bool anchor = true, cluster = false;
+    uint32_t levels_per_job = lodbake::ooc::kLevelsPerJob;
+    bool anchor = true, cluster = false, leaf_order = false;
     std::string dir = LODBAKE_BENCH_OUT_DIR, given_scan;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
@@ -175,10 +252,12 @@ int main(int argc, char** argv) {
         else if (a == "--threads" && i + 1 < argc) threads = std::atoi(argv[++i]);
         else if (a == "--no-anchor") anchor = false;
         else if (a == "--cluster") cluster = true;
+        else if (a == "--leaf-order-pairs") leaf_order = true;
+        else if (a == "--levels-per-job" && i + 1 < argc) levels_per_job = uint32_t(std::strtoul(argv[++i], nullptr, 10));
         else if (a == "--scan" && i + 1 < argc) given_scan = argv[++i];
         else {
             std::fprintf(stderr, "usage: ooc_bench [--triangles N] [--memory-limit MIB] [--dir DIR] [--threads N] "
-                                 "[--no-anchor] [--scan FILE] [--cluster] [--check]\n");
+                                 "[--no-anchor] [--scan FILE] [--cluster] [--levels-per-job N] [--leaf-order-pairs] [--check]\n");
             return 2;
         }
     }
@@ -249,6 +328,7 @@ int main(int argc, char** argv) {
         lodbake::ooc::PartitionBuildOptions o;
         o.work_dir = lods;
         o.memory_limit_bytes = limit_mib << 20;
+        if (levels_per_job > 0) o.cluster.max_levels = levels_per_job;
         for (const lodbake::ooc::PartitionFile& f : set.partitions) {
             lodbake::Diagnostics d;
             auto r = lodbake::ooc::buildPartition(f.path, o, d);
@@ -257,6 +337,19 @@ int main(int argc, char** argv) {
             job_bound = std::max(job_bound, r->memory_bound_bytes);
             job_accounted = std::max(job_accounted, r->accounted_peak_bytes);
         }
+    });
+    lodbake::ooc::MergeTree tree;
+    const Stage merges = measure([&] {
+        if (!cluster) return;
+        lodbake::ooc::MergeOptions o;
+        o.work_dir = lods;
+        o.memory_limit_bytes = limit_mib << 20;
+        o.levels_per_job = levels_per_job;
+        if (leaf_order) o.pairing = lodbake::ooc::MergePairing::LeafOrder;
+        lodbake::Diagnostics d;
+        auto r = lodbake::ooc::mergeAll(lod_files, o, d);
+        if (!r.ok()) fail(r.status());
+        tree = std::move(*r);
     });
     lodbake::ClusterLodHierarchy whole;
     const Stage whole_build = measure([&] {
@@ -279,6 +372,7 @@ int main(int argc, char** argv) {
         });
     }
     const Stage* a = anchor ? &read : nullptr;
+    double worst_ratio = NAN;
     printStage("stream reader (2 passes)", stream, t, a);
     printStage("partition", part, t, a);
     if (anchor) printStage("readMesh (anchor)", read, t, nullptr);
@@ -307,7 +401,31 @@ int main(int argc, char** argv) {
         }
         std::printf("partitioned: %zu hierarchies, %llu roots; whole: %zu roots, %u levels\n", parts.size(),
                     (unsigned long long)roots, whole.roots.size(), whole.level_count);
-        printComparison(depthCuts(views), depthCuts({&whole}));
+        printComparison("partition jobs side by side", depthCuts(views), depthCuts({&whole}));
+        printStage("merge jobs (sequential)", merges, t, a);
+        uint64_t top_roots = 0, top_triangles = 0;
+        if (!tree.merges.empty()) {
+            top_roots = tree.merges.back().root_count;
+            top_triangles = tree.merges.back().root_triangles;
+        }
+        std::printf("merges: %zu jobs over %u levels; largest memory bound %.1f MiB, accounted peak %.1f MiB; top: %llu "
+                    "roots, %llu triangles\n",
+                    tree.merges.size(), tree.merge_levels, double(tree.largest_memory_bound) / 1048576.0,
+                    double(tree.largest_accounted_peak) / 1048576.0, (unsigned long long)top_roots,
+                    (unsigned long long)top_triangles);
+        for (const lodbake::ooc::MergeFile& m : tree.merges)
+            std::printf("  merge: %u + seeds (%u triangles), %u shared edges -> %u groups, %u levels, %u roots (%u "
+                        "triangles), bound %.2f MiB\n",
+                        m.seed_count, m.seed_triangles, m.shared_edges, m.group_count, m.level_count, m.root_count,
+                        m.root_triangles, double(m.memory_bound_bytes) / 1048576.0);
+        parts.clear();
+        auto assembled = lodbake::ooc::assembleHierarchy(tree, uint64_t(8) << 30);
+        if (!assembled.ok()) fail(assembled.status());
+        std::printf("assembled: %zu clusters, %zu groups, %zu roots, deepest group %u\n", assembled->clusters.size(),
+                    assembled->groups.size(), assembled->roots.size(), assembled->level_count);
+        printComparison("merged and assembled", depthCuts({&*assembled}), depthCuts({&whole}));
+        worst_ratio = printThresholdComparison(*assembled, whole);
+        for (const lodbake::ooc::MergeFile& m : tree.merges) std::filesystem::remove(m.path, ec);
         for (const std::string& f : lod_files) std::filesystem::remove(f, ec);
         std::filesystem::remove(lods, ec);
     }
@@ -318,6 +436,12 @@ int main(int argc, char** argv) {
     if (cluster)
         bars.absolute("partition jobs peak RSS MiB <= memory limit", jobs.peak_mib, double(limit_mib),
                       lodbake_bench::Limit::AtMost, whole_build.peak_mib);
+    if (cluster) {
+        bars.absolute("merge jobs peak RSS MiB <= memory limit", merges.peak_mib, double(limit_mib),
+                      lodbake_bench::Limit::AtMost, whole_build.peak_mib);
+        bars.absolute("merged / in-memory error at equal triangles <= 1.10 (largest)", worst_ratio, 1.10,
+                      lodbake_bench::Limit::AtMost);
+    }
     lodbake::ooc::removePartitionFiles(set);
     std::filesystem::remove(work, ec);
     if (given_scan.empty()) std::filesystem::remove(scan, ec);

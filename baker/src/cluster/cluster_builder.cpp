@@ -43,6 +43,12 @@ struct BuildCluster {
     float lod_center[3] = {}; // own LOD sphere and error (its self group's; LOD0: geometry sphere, 0)
     float lod_radius = 0;
     float error = 0;
+    // What a group of it must enclose in its culling sphere when it has no self group: an LOD0
+    // cluster's own geometry, or the culling sphere a seed of a continued hierarchy carries (else
+    // it is the self group's culling sphere, complete only once the group is committed).
+    float below_center[3] = {};
+    float below_radius = 0;
+    uint32_t depth = 0; // its self group's depth (LOD0: 0; a seed: given)
 };
 
 // What simplifying one group produced, before it is committed (computed in parallel).
@@ -167,15 +173,17 @@ public:
     explicit Builder(const ClusterLodOptions& options) : o_(options) {}
 
     Status run(const MeshView& lod0, ClusterLodHierarchy& out);
+    Status runFrom(const ClusterLodSeed& seed, ClusterLodHierarchy& out);
 
 private:
+    Status addSeedClusters(const ClusterLodSeed& seed, std::vector<uint32_t>& level);
+    Status grow(std::vector<uint32_t>& level, size_t triangles, ClusterLodHierarchy& out);
     Status addLod0Clusters(const std::vector<uint32_t>& tris, std::vector<uint32_t>& level);
     void addCluster(ClusterLayout layout, uint32_t self_group, std::vector<uint32_t>& level);
     WeightedGraph adjacency(const std::vector<uint32_t>& level) const;
     GroupResult simplifyGroup(const std::vector<uint32_t>& members) const;
-    void commitGroup(const std::vector<uint32_t>& members, GroupResult& r, uint32_t depth,
-                     std::vector<uint32_t>& next_level);
-    Status buildLevel(std::vector<uint32_t>& level, uint32_t depth, uint32_t group_size);
+    void commitGroup(const std::vector<uint32_t>& members, GroupResult& r, std::vector<uint32_t>& next_level);
+    Status buildLevel(std::vector<uint32_t>& level, uint32_t group_size);
     void rollBack(const std::vector<uint32_t>& level, size_t clusters, size_t groups, size_t points);
     void flatten(ClusterLodHierarchy& out) const;
 
@@ -196,11 +204,14 @@ void Builder::addCluster(ClusterLayout layout, uint32_t self_group, std::vector<
     if (self_group == kNone) {
         std::copy(c.center, c.center + 3, c.lod_center);
         c.lod_radius = c.radius;
+        std::copy(c.center, c.center + 3, c.below_center);
+        c.below_radius = c.radius;
     } else {
         const lodrt::ClusterLodGroup& g = groups_[self_group];
         std::copy(g.lod_center, g.lod_center + 3, c.lod_center);
         c.lod_radius = g.lod_radius;
         c.error = g.error;
+        c.depth = g.depth;
     }
     level.push_back(uint32_t(clusters_.size()));
     clusters_.push_back(std::move(c));
@@ -332,22 +343,25 @@ GroupResult Builder::simplifyGroup(const std::vector<uint32_t>& members) const {
 
 // Records the group (error and spheres, monotonic over its inputs), gives new points their ids in
 // output order and adds its output clusters to the next level.
-void Builder::commitGroup(const std::vector<uint32_t>& members, GroupResult& r, uint32_t depth,
-                          std::vector<uint32_t>& next_level) {
+void Builder::commitGroup(const std::vector<uint32_t>& members, GroupResult& r, std::vector<uint32_t>& next_level) {
     const uint32_t g = uint32_t(groups_.size());
     lodrt::ClusterLodGroup group;
     double child_error = 0;
+    uint32_t child_depth = 0;
     std::vector<const float*> centers;
     std::vector<float> radii;
     for (uint32_t c : members) {
         child_error = std::max(child_error, double(clusters_[c].error));
+        child_depth = std::max(child_depth, clusters_[c].depth);
         centers.push_back(clusters_[c].lod_center);
         radii.push_back(clusters_[c].lod_radius);
         clusters_[c].parent_group = g;
     }
     group.error = roundUpFloat(child_error + r.hausdorff);
     enclosingSphere(centers, radii, group.lod_center, group.lod_radius);
-    group.depth = depth;
+    // One more than its deepest input: the level number in a build from LOD0 (every input of a
+    // level was made by the level below), and still increasing up the DAG in a continued one.
+    group.depth = child_depth + 1;
     groups_.push_back(group);
     group_members_.push_back(members);
 
@@ -368,8 +382,8 @@ void Builder::commitGroup(const std::vector<uint32_t>& members, GroupResult& r, 
     radii.clear();
     for (uint32_t c : members) {
         const uint32_t below = clusters_[c].self_group;
-        centers.push_back(below == kNone ? clusters_[c].center : groups_[below].bounds_center);
-        radii.push_back(below == kNone ? clusters_[c].radius : groups_[below].bounds_radius);
+        centers.push_back(below == kNone ? clusters_[c].below_center : groups_[below].bounds_center);
+        radii.push_back(below == kNone ? clusters_[c].below_radius : groups_[below].bounds_radius);
     }
     for (size_t c = first_output; c < clusters_.size(); ++c) {
         centers.push_back(clusters_[c].center);
@@ -378,7 +392,7 @@ void Builder::commitGroup(const std::vector<uint32_t>& members, GroupResult& r, 
     enclosingSphere(centers, radii, groups_[g].bounds_center, groups_[g].bounds_radius);
 }
 
-Status Builder::buildLevel(std::vector<uint32_t>& level, uint32_t depth, uint32_t group_size) {
+Status Builder::buildLevel(std::vector<uint32_t>& level, uint32_t group_size) {
     const WeightedGraph graph = adjacency(level);
     LODBAKE_ASSIGN_OR_RETURN(std::vector<std::vector<uint32_t>> parts,
                              partitionGraph(graph, group_size, std::min(o_.min_group_size, group_size),
@@ -390,7 +404,7 @@ Status Builder::buildLevel(std::vector<uint32_t>& level, uint32_t depth, uint32_
     std::vector<uint32_t> next;
     for (size_t i = 0; i < parts.size(); ++i) {
         LODBAKE_RETURN_IF_ERROR(results[i].status);
-        commitGroup(parts[i], results[i], depth, next);
+        commitGroup(parts[i], results[i], next);
         GroupResult().positions.swap(results[i].positions); // free as we go
     }
     level.swap(next);
@@ -436,12 +450,19 @@ Status Builder::run(const MeshView& lod0, ClusterLodHierarchy& out) {
     std::vector<uint32_t> level;
     LODBAKE_RETURN_IF_ERROR(addLod0Clusters(tris, level));
     out.lod0_cluster_count = uint32_t(level.size());
-    size_t triangles = tris.size() / 3;
+    const size_t triangles = tris.size() / 3;
+    std::vector<uint32_t>().swap(tris);
+    return grow(level, triangles, out);
+}
+
+// The levels above `level` (the first level's clusters, of `triangles` triangles in all), until one
+// cluster remains or a level stalls; then the hierarchy is flattened into `out`.
+Status Builder::grow(std::vector<uint32_t>& level, size_t triangles, ClusterLodHierarchy& out) {
     uint32_t depth = 0, group_size = o_.group_size;
     while (level.size() > 1 && depth < o_.max_levels) {
         const std::vector<uint32_t> input = level;
         const size_t clusters = clusters_.size(), groups = groups_.size(), points = points_.size();
-        LODBAKE_RETURN_IF_ERROR(buildLevel(level, depth + 1, group_size));
+        LODBAKE_RETURN_IF_ERROR(buildLevel(level, group_size));
         size_t next_triangles = 0;
         for (uint32_t c : level) next_triangles += clusters_[c].layout.local.size() / 3;
         const bool stalled = double(next_triangles) > double(triangles) * (1.0 - o_.min_level_reduction);
@@ -463,6 +484,57 @@ Status Builder::run(const MeshView& lod0, ClusterLodHierarchy& out) {
     out.roots = level;
     flatten(out);
     return Status::okStatus();
+}
+
+// The seed's clusters as the first level, with the errors, LOD spheres, culling spheres and depths
+// they carry from the hierarchy they are the roots of.
+Status Builder::addSeedClusters(const ClusterLodSeed& seed, std::vector<uint32_t>& level) {
+    const uint64_t triangle_total = seed.triangles.size() / 3;
+    for (size_t i = 0; i < seed.clusters.size(); ++i) {
+        const ClusterLodSeed::Cluster& s = seed.clusters[i];
+        const std::string at = "cluster lod: seed cluster " + std::to_string(i) + ": ";
+        if (s.triangle_count == 0 || s.triangle_count > lodrt::ClusterLodCluster::kMaxTriangles ||
+            uint64_t(s.first_triangle) + s.triangle_count > triangle_total)
+            return invalidInput(at + "expected 1..128 triangles within the seed's triangles");
+        const bool finite = std::isfinite(s.error) && s.error >= 0 && std::isfinite(s.lod_radius) &&
+                            s.lod_radius >= 0 && std::isfinite(s.bounds_radius) && s.bounds_radius >= 0 &&
+                            isFinite(Vec3f{s.lod_center[0], s.lod_center[1], s.lod_center[2]}) &&
+                            isFinite(Vec3f{s.bounds_center[0], s.bounds_center[1], s.bounds_center[2]});
+        if (!finite) return invalidInput(at + "expected a finite, non-negative error and spheres");
+        std::vector<uint32_t> part(s.triangle_count);
+        for (uint32_t t = 0; t < s.triangle_count; ++t) part[t] = s.first_triangle + t;
+        ClusterLayout layout = layoutOf(seed.triangles, part, [](uint32_t p) { return p; });
+        if (layout.verts.size() > lodrt::ClusterLodCluster::kMaxVertices)
+            return invalidInput(at + "expected at most 255 distinct points");
+        addCluster(std::move(layout), kNone, level);
+        BuildCluster& c = clusters_.back();
+        c.error = s.error;
+        std::copy(s.lod_center, s.lod_center + 3, c.lod_center);
+        c.lod_radius = s.lod_radius;
+        std::copy(s.bounds_center, s.bounds_center + 3, c.below_center);
+        c.below_radius = s.bounds_radius;
+        c.depth = s.depth;
+    }
+    return Status::okStatus();
+}
+
+Status Builder::runFrom(const ClusterLodSeed& seed, ClusterLodHierarchy& out) {
+    if (seed.clusters.empty() || seed.triangles.size() % 3 != 0)
+        return invalidInput("cluster lod: seed: expected at least one cluster and 3 point ids per triangle");
+    for (size_t v = 0; v < seed.points.size(); ++v)
+        if (!isFinite(seed.points[v]))
+            return invalidInput("cluster lod: seed point " + std::to_string(v) + ": expected a finite position");
+    for (size_t i = 0; i < seed.triangles.size(); ++i)
+        if (seed.triangles[i] >= seed.points.size())
+            return invalidInput("cluster lod: seed triangle " + std::to_string(i / 3) + ": point " +
+                                std::to_string(seed.triangles[i]) + " out of range");
+    points_ = seed.points;
+    std::vector<uint32_t> level;
+    LODBAKE_RETURN_IF_ERROR(addSeedClusters(seed, level));
+    out.lod0_cluster_count = uint32_t(level.size());
+    size_t triangles = 0;
+    for (uint32_t c : level) triangles += clusters_[c].layout.local.size() / 3;
+    return grow(level, triangles, out);
 }
 
 } // namespace
@@ -491,6 +563,18 @@ Result<ClusterLodHierarchy> buildClusterLod(const MeshView& lod0, const ClusterL
     if (!out.reached_single_group)
         diagnostics.note("cluster lod: " + std::to_string(out.roots.size()) +
                          " root clusters: a level stopped shrinking (locked borders or open boundaries)");
+    return out;
+}
+
+Result<ClusterLodHierarchy> continueClusterLod(const ClusterLodSeed& seed, const ClusterLodOptions& options,
+                                               Diagnostics& diagnostics) {
+    LODBAKE_RETURN_IF_ERROR(checkOptions(options));
+    ClusterLodHierarchy out;
+    Builder builder(options);
+    LODBAKE_RETURN_IF_ERROR(builder.runFrom(seed, out));
+    if (!out.reached_single_group)
+        diagnostics.note("cluster lod: " + std::to_string(out.roots.size()) +
+                         " root clusters: a continued level stopped shrinking (locked borders or open boundaries)");
     return out;
 }
 

@@ -252,6 +252,10 @@ constexpr const char kPartitionExtension[] = ".lbpart";
 // partition_build.h; layout in docs/pipeline.md, "Partition jobs").
 constexpr char kPartitionLodMagic[8] = {'L', 'B', 'P', 'L', 'O', 'D', '0', '1'};
 constexpr const char kPartitionLodExtension[] = ".lbplod";
+// Two neighbouring hierarchies (partitions' or merges') continued as one, written by the merge job
+// (baker/include/lodbake/ooc/partition_merge.h; layout in docs/pipeline.md, "Merge jobs").
+constexpr char kPartitionMergeMagic[8] = {'L', 'B', 'P', 'M', 'R', 'G', '0', '1'};
+constexpr const char kPartitionMergeExtension[] = ".lbpmrg";
 
 } // namespace format
 } // namespace lodrt

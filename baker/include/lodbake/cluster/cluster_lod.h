@@ -65,4 +65,39 @@ struct ClusterLodHierarchy {
 Result<ClusterLodHierarchy> buildClusterLod(const MeshView& lod0, const ClusterLodOptions& options,
                                             Diagnostics& diagnostics);
 
+/// Clusters to continue a hierarchy from (continueClusterLod): the roots of one or more hierarchies
+/// built elsewhere, such as neighbouring out-of-core partitions, over points whose identity the
+/// caller has settled (two vertices are one point when the caller gives them one id; positions may
+/// repeat across ids).
+struct ClusterLodSeed {
+    std::vector<Vec3f> points;
+    std::vector<uint32_t> triangles; // 3 point ids per triangle, each cluster's in one range
+    struct Cluster {
+        uint32_t first_triangle = 0;
+        uint32_t triangle_count = 0; // 1..128, over at most 255 distinct points
+        // What the groups above it must respect for monotonicity: its error and LOD sphere (its
+        // self group's, or 0 and its bounding sphere for an LOD0 cluster), the culling sphere of
+        // everything below and including it, and its self group's depth (0 for LOD0).
+        float error = 0;
+        float lod_center[3] = {};
+        float lod_radius = 0;
+        float bounds_center[3] = {};
+        float bounds_radius = 0;
+        uint32_t depth = 0;
+    };
+    std::vector<Cluster> clusters;
+};
+
+/// Builds on from `seed` as buildClusterLod builds on from LOD0's clusters: the seed clusters are
+/// the first level (clusters[0, seed.clusters.size()) of the result, in order, with lod0_cluster_count
+/// their number; their self_group is none, their errors and spheres are the caller's to keep), grouped
+/// by shared point pairs, simplified with lock_border, measured and split, level by level until one
+/// cluster remains or a level stalls. A group's error is its measured distance plus its inputs'
+/// largest error, its LOD sphere encloses theirs, its culling sphere their culling spheres and its
+/// outputs, and its depth is one more than its deepest input's. Deterministic for any thread count.
+/// Fails (InvalidInput) on a seed cluster outside the limits or its ranges, a point id out of range,
+/// or a non-finite position, error or sphere.
+Result<ClusterLodHierarchy> continueClusterLod(const ClusterLodSeed& seed, const ClusterLodOptions& options,
+                                               Diagnostics& diagnostics);
+
 } // namespace lodbake
