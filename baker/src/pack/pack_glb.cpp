@@ -643,13 +643,16 @@ Result<uint64_t> writeFileImpl(PackDescription& description, const std::string& 
     static const uint8_t zeros[4] = {0, 0, 0, 0};
     std::vector<uint8_t> copy_buffer;
     uint64_t at = 0;
+    auto writeBin = [&](uint64_t end) { // bin[at, end), never offsetting an empty array's null data()
+        return end > at ? out.write(parts.bin.data() + at, size_t(end - at)) : Status::okStatus();
+    };
     for (const SpilledView& v : parts.spilled) {
-        LODBAKE_RETURN_IF_ERROR(out.write(parts.bin.data() + at, size_t(v.bin_offset - at)));
+        LODBAKE_RETURN_IF_ERROR(writeBin(v.bin_offset));
         LODBAKE_RETURN_IF_ERROR(v.file->copyTo(out, v.size, copy_buffer, cancel));
         LODBAKE_RETURN_IF_ERROR(out.write(zeros, size_t(align4(v.size) - v.size)));
         at = v.bin_offset;
     }
-    LODBAKE_RETURN_IF_ERROR(out.write(parts.bin.data() + at, size_t(parts.bin.size() - at)));
+    LODBAKE_RETURN_IF_ERROR(writeBin(parts.bin.size()));
     LODBAKE_RETURN_IF_ERROR(out.write(zeros, size_t(align4(bin_size) - bin_size)));
     if (cancel && cancel->load()) return ioError(path + ": writing cancelled");
     const uint64_t written = out.bytesWritten();
