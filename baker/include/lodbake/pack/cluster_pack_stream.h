@@ -10,14 +10,16 @@
 // the pages in memory), for any thread count and any pages_in_flight.
 //
 // Memory formula (bytes; C clusters, G groups, H group children, R roots, P pages, J pages in
-// flight, T_max the triangles of the largest page, V_max its vertices as the source stores them):
-//   bound = 48 C + 48 G + 4 H + 4 R + 16 P + 64         (the table being filled)
-//         + 4 C + 4 P + 4                               (the page plan: each page's clusters)
-//         + J * (12 V_max + 3 T_max                     (a page's geometry from the source)
-//                + kClusterPageBytesPerTriangle T_max)  (coding, decoding and deriving one page)
-//         + spill buffer (1 MiB by default)
+// flight; a page of T triangles whose clusters have V vertices in all, as the table counts them):
+//   bound = 48 C + 48 G + 4 H + 4 R + 16 P + 64              (the table being filled)
+//         + 4 C + 4 P + 4                                    (the page plan: each page's clusters)
+//         + J * max over pages of (12 V + 3 T                (a page's geometry from the source)
+//                                  + kClusterPageBytesPerTriangle T)  (coding it)
+//         + the spill's write buffer (1 MiB by default)
 // plus the caller's table records (ClusterLodView: 60 C + 48 G + 4 H + 4 R, lent, not copied).
-// clusterPackStreamBound() computes it; the writer reports the bytes it accounted at most.
+// clusterPackStreamBound() computes it; the writer reports the bytes it accounted at most (each
+// slot's geometry at its capacity, each page in flight at the allowance). A source that grows its
+// arrays beyond the counts (push_back doubling) is held at its capacity and can exceed it.
 
 #include <atomic>
 #include <cstddef>
@@ -108,8 +110,8 @@ struct ClusterPackStreamResult {
     uint64_t accounted_peak_bytes = 0;   // the arrays held at most, coding at its per-triangle allowance
 };
 
-/// The formula above for `table` at `pages_in_flight` pages (not 0) and `spill_buffer_bytes`;
-/// V_max counts 3 vertices per triangle, the most a source can store.
+/// The formula above for `table` and its `plan` at `pages_in_flight` pages (not 0) and
+/// `spill_buffer_bytes` (at least 4 KiB, as PackTempFile holds).
 uint64_t clusterPackStreamBound(const lodrt::ClusterLodView& table, const ClusterPagePlan& plan,
                                 size_t pages_in_flight, size_t spill_buffer_bytes);
 
