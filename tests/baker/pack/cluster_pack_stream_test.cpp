@@ -26,7 +26,9 @@
 #include "lodbake/pack/cluster_lod_pack.h"
 #include "lodbake/pack/pack.h"
 #include "lodbake/pack/pack_glb.h"
+#include "lodbake/stream/stream.h"
 #include "lodrt/format.h"
+#include "stream_level.h"
 #include "test_paths.h"
 
 namespace {
@@ -127,15 +129,21 @@ TEST(ClusterPackStream, SharedScanGivesTheInMemoryWritersBytes) {
     expectSameAsInMemory(build(loaded->mesh), freshDir("scan"));
 }
 
-// A pack of two levels with the hierarchy on LOD0, the pages in memory or spilled.
-lodbake::PackDescription twoLevels(const Mesh& lod0, lodbake::PackExtension clusters) {
+// A pack of two levels with the hierarchy on LOD0, the pages in memory or spilled. Compact: both
+// levels carry a valence stream and their plain accessors lose their views, so the binary chunk is
+// rebuilt around the pages view.
+lodbake::PackDescription twoLevels(const Mesh& lod0, lodbake::PackExtension clusters, bool compact = false) {
     lodbake::PackDescription d;
+    d.compact = compact;
     lodbake::PackAsset a;
     a.name = "sphere";
     a.levels.resize(2);
     a.levels[0].mesh = lod0;
-    a.levels[0].mesh_extensions.push_back(std::move(clusters));
     a.levels[1].mesh = bumpySphere(10, 14);
+    for (size_t l = 0; l < 2 && compact; ++l)
+        EXPECT_TRUE(
+            lodbake_test::encodeStreamLevel(lodbake::valenceStreamEncoder(), lodbake::LodChain{}, l, a.levels[l]).ok());
+    a.levels[0].mesh_extensions.push_back(std::move(clusters));
     a.screen_coverage = {0.5, 0};
     d.assets.push_back(std::move(a));
     return d;
@@ -147,9 +155,24 @@ TEST(ClusterPackStream, GlbFileIsTheInMemoryPackAndLoddumpAcceptsIt) {
     const ClusterLodHierarchy h = build(lod0);
     auto memory = lodbake::writeClusterLodPack(h, lodbake::ClusterPackOptions());
     ASSERT_TRUE(memory.ok()) << memory.status().message();
+    const std::string out = dir + "/sphere.glb";
+    size_t sizes[2] = {0, 0};
+    for (bool compact : {true, false}) {
+        auto glb = lodbake::writePackGlb(twoLevels(lod0, memory->extension, compact));
+        ASSERT_TRUE(glb.ok()) << glb.status().message();
+        sizes[compact] = glb->size();
+        auto s = streamed(h, out, 2);
+        ASSERT_TRUE(s.ok()) << s.status().message();
+        s->pages.reset();
+        auto written = lodbake::writePackGlbFile(twoLevels(lod0, std::move(s->extension), compact), out);
+        ASSERT_TRUE(written.ok()) << written.status().message();
+        auto bytes = lodbake::readFileBytes(out);
+        ASSERT_TRUE(bytes.ok());
+        EXPECT_TRUE(*bytes == *glb) << "compact " << compact;
+    }
+    EXPECT_LT(sizes[1], sizes[0]); // the compact pack did drop plain accessors' views
     auto glb = lodbake::writePackGlb(twoLevels(lod0, memory->extension));
     ASSERT_TRUE(glb.ok()) << glb.status().message();
-    const std::string out = dir + "/sphere.glb";
     {
         auto s = streamed(h, out, 2);
         ASSERT_TRUE(s.ok()) << s.status().message();
