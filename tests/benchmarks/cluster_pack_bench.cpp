@@ -9,12 +9,26 @@
 // with missing pages, the pages and bytes resident at most, reads and evictions, and the largest
 // projected error of a drawn cluster on settled frames (the bar: at most the 1 px threshold).
 //
+// With --stream, the streamed writer (lodbake/pack/cluster_pack_stream.h) against the in-memory one on
+// one scan's hierarchy: the in-memory writer and writePackGlb first, then the hierarchy's geometry is
+// written to a file in page order and dropped (the table records stay), and the streamed writer
+// reads it back a page at a time (pread) and writes the GLB with writePackGlbFile. For each: wall
+// time and the peak resident memory above the resident memory before it (VmHWM, reset through
+// /proc/self/clear_refs), against the streamed writer's memory formula and accounted peak; and
+// whether the two GLBs are the same bytes.
+//
 // usage: cluster_pack_bench [MESH...]   (default: bunny_zipper, igea, dragon_poisson from ../shared/meshes)
+//        cluster_pack_bench --stream MESH [--dir DIR] [--in-flight J]   (DIR: where the files go, default /tmp)
 #include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <deque>
+#include <cstdlib>
+#include <fstream>
+#include <new>
 #include <string>
 #include <utility>
 #include <vector>
@@ -24,10 +38,19 @@
 #include "lodbake/bake/bake.h"
 #include "lodbake/cluster/cluster_lod.h"
 #include "lodbake/codec/valence_encoder.h"
+#include "lodbake/core/file_io.h"
+#include "lodbake/core/hash.h"
 #include "lodbake/pack/cluster_lod_pack.h"
+#include "lodbake/pack/cluster_pack_stream.h"
+#include "lodbake/pack/pack_glb.h"
 #include "lodrt/cluster_pack.h"
 #include "lodrt/streaming.h"
 #include "lodrt/valence.h"
+
+#include <fcntl.h>
+#include <malloc.h>
+#include <sys/resource.h>
+#include <unistd.h>
 
 namespace {
 
@@ -287,9 +310,212 @@ bool runStreaming(const std::string& path) {
 
 } // namespace
 
+// ---- Streamed writer ----
+
+// Live heap bytes (malloc_usable_size of every block from operator new) and their peak since
+// resetHeapPeak(): what the writers hold, without the allocator's free lists and arenas that the
+// resident memory also shows.
+std::atomic<int64_t> g_heap_live{0}, g_heap_peak{0};
+
+void resetHeapPeak() { g_heap_peak.store(g_heap_live.load()); }
+
+
+double statusMiB(const char* key) {
+    std::ifstream status("/proc/self/status");
+    std::string line;
+    while (std::getline(status, line))
+        if (line.rfind(key, 0) == 0) return std::strtod(line.c_str() + std::strlen(key), nullptr) / 1024.0;
+    return NAN;
+}
+
+// Frees what malloc keeps, resets the peak and returns the resident memory now, in MiB.
+double startMeasure() {
+    malloc_trim(0);
+    resetHeapPeak();
+    std::ofstream("/proc/self/clear_refs") << "5";
+    return statusMiB("VmRSS:");
+}
+
+double heapPeakMiB(int64_t before) { return double(g_heap_peak.load() - before) / (1024.0 * 1024.0); }
+
+// CPU seconds of the process (every thread): on a shared machine wall time also counts waiting.
+double cpuSeconds() {
+    rusage u{};
+    getrusage(RUSAGE_SELF, &u);
+    return double(u.ru_utime.tv_sec + u.ru_stime.tv_sec) + 1e-6 * double(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
+}
+
+double seconds(std::chrono::steady_clock::time_point since) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
+}
+
+// Page geometry read back from a file written in page order, as an out-of-core hierarchy would
+// hand it over.
+class FilePageSource : public lodbake::ClusterPageSource {
+public:
+    int fd = -1;
+    std::vector<uint64_t> offset; // per page, then the end
+    std::vector<uint32_t> vertices;
+    lodbake::Status readPage(uint32_t page, const uint32_t*, size_t, lodbake::ClusterPageGeometry& out) override {
+        out.positions.resize(vertices[page]);
+        const size_t position_bytes = 12 * size_t(vertices[page]);
+        out.indices.resize(size_t(offset[page + 1] - offset[page]) - position_bytes);
+        if (::pread(fd, out.positions.data(), position_bytes, off_t(offset[page])) != ssize_t(position_bytes) ||
+            ::pread(fd, out.indices.data(), out.indices.size(), off_t(offset[page] + position_bytes)) !=
+                ssize_t(out.indices.size()))
+            return lodbake::ioError("page file: read failed");
+        return lodbake::Status::okStatus();
+    }
+};
+
+// Each page's positions, then its indices, cluster after cluster.
+bool writePageFile(const lodbake::ClusterLodHierarchy& h, const std::string& path, FilePageSource& source) {
+    const lodbake::ClusterPagePlan plan = lodbake::planClusterPages(h.view());
+    std::ofstream file(path, std::ios::binary);
+    uint64_t at = 0;
+    for (size_t p = 0; p < plan.pageCount(); ++p) {
+        source.offset.push_back(at);
+        uint32_t v = 0;
+        for (uint32_t i = plan.page_first[p]; i < plan.page_first[p + 1]; ++i) {
+            const lodrt::ClusterLodCluster& c = h.clusters[plan.page_clusters[i]];
+            file.write(reinterpret_cast<const char*>(h.positions.data() + c.first_vertex), 12 * std::streamsize(c.vertex_count));
+            v += c.vertex_count;
+        }
+        for (uint32_t i = plan.page_first[p]; i < plan.page_first[p + 1]; ++i) {
+            const lodrt::ClusterLodCluster& c = h.clusters[plan.page_clusters[i]];
+            file.write(reinterpret_cast<const char*>(h.indices.data() + 3 * size_t(c.first_triangle)),
+                       3 * std::streamsize(c.triangle_count));
+        }
+        source.vertices.push_back(v);
+        at += 12 * uint64_t(v);
+        for (uint32_t i = plan.page_first[p]; i < plan.page_first[p + 1]; ++i)
+            at += 3 * uint64_t(h.clusters[plan.page_clusters[i]].triangle_count);
+    }
+    source.offset.push_back(at);
+    file.close();
+    source.fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    return bool(file) && source.fd >= 0;
+}
+
+// The roots' triangles as one mesh: the pack's one discrete level.
+lodbake::Mesh rootsMesh(const lodbake::ClusterLodHierarchy& h) {
+    lodbake::Mesh m;
+    for (uint32_t r : h.roots) {
+        const lodrt::ClusterLodCluster& c = h.clusters[r];
+        const uint32_t base = uint32_t(m.positions.size());
+        m.positions.insert(m.positions.end(), h.positions.begin() + c.first_vertex,
+                           h.positions.begin() + c.first_vertex + c.vertex_count);
+        for (uint32_t i = 0; i < 3 * c.triangle_count; ++i)
+            m.indices.push_back(base + h.indices[3 * size_t(c.first_triangle) + i]);
+    }
+    return m;
+}
+
+lodbake::PackDescription onePack(const lodbake::Mesh& level, lodbake::PackExtension clusters) {
+    lodbake::PackDescription d;
+    d.assets.resize(1);
+    d.assets[0].name = "scan";
+    d.assets[0].levels.resize(1);
+    d.assets[0].levels[0].mesh = level;
+    d.assets[0].levels[0].mesh_extensions.push_back(std::move(clusters));
+    return d;
+}
+
+bool runStream(const std::string& path, const std::string& dir, size_t in_flight) {
+    lodbake::Diagnostics diagnostics;
+    lodbake::Mesh mesh;
+    if (!lodbake_bench::loadRepaired(path, mesh, diagnostics)) return false;
+    auto built = lodbake::buildClusterLod(lodbake::MeshView(mesh), lodbake::ClusterLodOptions{}, diagnostics);
+    if (!built.ok()) return std::fprintf(stderr, "error: %s\n", built.status().message().c_str()), false;
+    mesh = lodbake::Mesh();
+    lodbake::ClusterLodHierarchy& h = *built;
+    const lodbake::Mesh level = rootsMesh(h);
+    size_t lod0_triangles = 0;
+    for (uint32_t c = 0; c < h.lod0_cluster_count; ++c) lod0_triangles += h.clusters[c].triangle_count;
+    std::printf("%s: %zu clusters, %zu groups, %zu LOD0 triangles, level (the roots) of %zu triangles\n", path.c_str(),
+                h.clusters.size(), h.groups.size(), lod0_triangles, level.faceCount());
+    // In memory: the extension and the GLB as bytes.
+    uint64_t memory_hash = 0, memory_size = 0;
+    {
+        const double before = startMeasure();
+        const int64_t heap_before = g_heap_live.load();
+        const auto start = std::chrono::steady_clock::now();
+        const double cpu = cpuSeconds();
+        auto written = lodbake::writeClusterLodPack(h, lodbake::ClusterPackOptions{});
+        if (!written.ok()) return std::fprintf(stderr, "error: %s\n", written.status().message().c_str()), false;
+        auto glb = lodbake::writePackGlb(onePack(level, std::move(written->extension)));
+        if (!glb.ok()) return std::fprintf(stderr, "error: %s\n", glb.status().message().c_str()), false;
+        const double s = seconds(start), peak = statusMiB("VmHWM:") - before, cpu_s = cpuSeconds() - cpu;
+        lodbake::Hasher hasher;
+        hasher.addBytes(glb->data(), glb->size());
+        memory_hash = hasher.digest();
+        memory_size = glb->size();
+        std::printf("  in memory (writeClusterLodPack + writePackGlb): %.2f s wall, %.2f s CPU, peak RSS +%.1f MiB, heap "
+                    "+%.1f MiB, pack %llu bytes (pages %zu)\n",
+                    s, cpu_s, peak, heapPeakMiB(heap_before), (unsigned long long)memory_size, written->stats.page_bytes);
+    }
+    // Streamed: the geometry to a file and dropped, then read back a page at a time.
+    FilePageSource source;
+    const std::string pages_path = dir + "/cluster_pack_bench_pages.bin", out = dir + "/cluster_pack_bench_stream.glb";
+    if (!writePageFile(h, pages_path, source)) return std::fprintf(stderr, "error: cannot write %s\n", pages_path.c_str()), false;
+    const lodrt::ClusterLodView view = h.view();
+    const lodbake::ClusterPackBounds bounds = lodbake::clusterPackBounds(h);
+    std::vector<lodbake::Vec3f>().swap(h.positions);
+    std::vector<uint8_t>().swap(h.indices);
+    const double before = startMeasure();
+    const int64_t heap_before = g_heap_live.load();
+    const auto start = std::chrono::steady_clock::now();
+    const double cpu = cpuSeconds();
+    lodbake::ClusterPackStreamOptions options;
+    options.pages_in_flight = in_flight;
+    auto streamed = lodbake::writeClusterLodPackStreamed(view, bounds, source, out, options);
+    if (!streamed.ok()) return std::fprintf(stderr, "error: %s\n", streamed.status().message().c_str()), false;
+    const uint64_t bound = streamed->memory_bound_bytes, accounted = streamed->accounted_peak_bytes;
+    const double pages_peak = statusMiB("VmHWM:") - before, pages_heap = heapPeakMiB(heap_before);
+    streamed->pages.reset();
+    auto file_size = lodbake::writePackGlbFile(onePack(level, std::move(streamed->extension)), out);
+    if (!file_size.ok()) return std::fprintf(stderr, "error: %s\n", file_size.status().message().c_str()), false;
+    const double s = seconds(start), peak = statusMiB("VmHWM:") - before, heap = heapPeakMiB(heap_before),
+                 cpu_s = cpuSeconds() - cpu;
+    ::close(source.fd);
+    ::unlink(pages_path.c_str());
+    auto bytes = lodbake::readFileBytes(out);
+    ::unlink(out.c_str());
+    if (!bytes.ok()) return false;
+    lodbake::Hasher hasher;
+    hasher.addBytes(bytes->data(), bytes->size());
+    const double mib = 1.0 / (1024.0 * 1024.0);
+    std::printf("  streamed (writeClusterLodPackStreamed + writePackGlbFile, %zu pages in flight): %.2f s wall, %.2f s CPU, peak RSS "
+                "+%.1f MiB, heap +%.1f MiB (pages alone: RSS +%.1f MiB, heap +%.1f MiB), formula %.1f MiB, accounted "
+                "%.1f MiB; table records lent %.1f MiB, level %.1f MiB\n",
+                in_flight, s, cpu_s, peak, heap, pages_peak, pages_heap, double(bound) * mib, double(accounted) * mib,
+                double(view.cluster_count * sizeof(lodrt::ClusterLodCluster) +
+                       view.group_count * sizeof(lodrt::ClusterLodGroup) + 4 * (view.group_child_count + view.root_count)) *
+                    mib,
+                double(level.positions.size() * 12 + level.indices.size() * 4) * mib);
+    std::printf("  same bytes as in memory: %s (%llu bytes)\n",
+                hasher.digest() == memory_hash && bytes->size() == memory_size ? "yes" : "NO",
+                (unsigned long long)bytes->size());
+    return hasher.digest() == memory_hash;
+}
+
 int main(int argc, char** argv) {
     std::vector<std::string> meshes;
-    for (int i = 1; i < argc; ++i) meshes.push_back(argv[i]);
+    std::string stream_mesh, dir = "/tmp";
+    size_t in_flight = 0;
+    for (int i = 1; i < argc; ++i) {
+        const std::string arg = argv[i];
+        if (arg == "--stream" && i + 1 < argc) {
+            stream_mesh = argv[++i];
+        } else if (arg == "--dir" && i + 1 < argc) {
+            dir = argv[++i];
+        } else if (arg == "--in-flight" && i + 1 < argc) {
+            in_flight = size_t(std::strtoul(argv[++i], nullptr, 10));
+        } else {
+            meshes.push_back(arg);
+        }
+    }
+    if (!stream_mesh.empty()) return runStream(stream_mesh, dir, in_flight > 0 ? in_flight : 4) ? 0 : 1;
     if (meshes.empty())
         for (const char* name : {"bunny_zipper.ply", "igea.ply", "dragon_poisson.ply"})
             meshes.push_back(std::string(LODBAKE_BENCH_MESHES_DIR) + "/" + name);
@@ -298,3 +524,19 @@ int main(int argc, char** argv) {
     ok = runStreaming(meshes[0]) && ok;
     return ok ? 0 : 1;
 }
+
+void* operator new(size_t size) {
+    void* p = std::malloc(size ? size : 1);
+    if (!p) throw std::bad_alloc();
+    const int64_t live = g_heap_live.fetch_add(int64_t(malloc_usable_size(p))) + int64_t(malloc_usable_size(p));
+    int64_t peak = g_heap_peak.load();
+    while (live > peak && !g_heap_peak.compare_exchange_weak(peak, live)) {
+    }
+    return p;
+}
+void operator delete(void* p) noexcept {
+    if (!p) return;
+    g_heap_live.fetch_sub(int64_t(malloc_usable_size(p)));
+    std::free(p);
+}
+void operator delete(void* p, size_t) noexcept { operator delete(p); }

@@ -6,6 +6,8 @@
 #include <cstdlib>
 #include <exception>
 #include <ostream>
+#include <map>
+#include <memory>
 #include <set>
 #include <streambuf>
 
@@ -17,6 +19,7 @@
 #include "pack/web_meshopt.h"
 #include "lodbake/core/json_writer.h"
 #include "lodbake/pack/pack.h"
+#include "lodbake/pack/pack_file.h"
 #include "lodbake/version.h"
 #include "lodrt/format.h"
 
@@ -83,6 +86,7 @@ struct ViewPatch {
     size_t primitive = 0; // Scope::Primitive only
     std::string extension;
     std::string member;
+    std::shared_ptr<const PackTempFile> spilled; // the view's bytes are in this file (writePackGlbFile)
 };
 
 Status addExtension(const PackExtension& e, BufferBuilder& buffer, tinygltf::ExtensionMap& target,
@@ -90,13 +94,17 @@ Status addExtension(const PackExtension& e, BufferBuilder& buffer, tinygltf::Ext
                     std::vector<ViewPatch>& patches) {
     JsonNode object = e.json;
     if (!object.isObject()) return invalidInput("pack: extension " + e.name + ": expected a JSON object");
-    if (e.blobs.size() != e.blob_view_members.size())
+    if (e.blobs.size() != e.blob_view_members.size() || (!e.spilled.empty() && e.spilled.size() != e.blobs.size()))
         return internalError("pack: extension " + e.name + ": blob and member counts differ");
     for (size_t b = 0; b < e.blobs.size(); ++b) {
-        object.set(e.blob_view_members[b], buffer.addView(e.blobs[b].data(), e.blobs[b].size(), 0));
+        // A spilled blob gets an empty view here; placeSpilledViews gives it its length and room.
+        const std::shared_ptr<const PackTempFile> spilled = e.spilled.empty() ? nullptr : e.spilled[b];
+        object.set(e.blob_view_members[b],
+                   buffer.addView(e.blobs[b].data(), spilled ? 0 : e.blobs[b].size(), 0));
         ViewPatch patch = where;
         patch.extension = e.name;
         patch.member = e.blob_view_members[b];
+        patch.spilled = spilled;
         patches.push_back(std::move(patch));
     }
     target[e.name] = toValue(object);
@@ -207,22 +215,28 @@ private:
 // Frees what a level no longer needs once it is in the model (its mesh and extension blobs).
 void releaseLevel(PackLevel& level) {
     level.mesh = Mesh();
-    for (PackExtension& e : level.mesh_extensions) std::vector<std::vector<uint8_t>>().swap(e.blobs);
+    for (PackExtension& e : level.mesh_extensions) {
+        std::vector<std::vector<uint8_t>>().swap(e.blobs);
+        e.spilled.clear(); // the writer keeps the files it still needs
+    }
     for (auto& list : level.primitive_extensions)
-        for (PackExtension& e : list) std::vector<std::vector<uint8_t>>().swap(e.blobs);
+        for (PackExtension& e : list) {
+            std::vector<std::vector<uint8_t>>().swap(e.blobs);
+            e.spilled.clear();
+        }
 }
 
 void appendU32(std::vector<uint8_t>& out, uint32_t v) {
     for (int k = 0; k < 4; ++k) out.push_back(uint8_t(v >> (8 * k)));
 }
 
-// The GLB tinygltf writes for a model whose only buffer holds `bin`, given `shell`: what it wrote for
-// the same model with that buffer empty (its JSON then says "byteLength":0 and it has no BIN chunk).
-// Same layout as tinygltf's WriteBinaryGltfStream: 12-byte header, the JSON chunk padded with spaces
-// to 4 bytes, the BIN chunk padded with zeros. `bin` becomes the result (its bytes move once).
+// The GLB tinygltf writes for a model whose only buffer holds `bin_size` bytes, up to where those
+// bytes start, given `shell`: what it wrote for the same model with that buffer empty (its JSON then
+// says "byteLength":0 and it has no BIN chunk). Same layout as tinygltf's WriteBinaryGltfStream:
+// 12-byte header, the JSON chunk padded with spaces to 4 bytes, the BIN chunk (padded with zeros by
+// the caller) after its 8-byte chunk header.
 // `web`: the --web pack's compressed views (their extension objects and the fallback buffer), or null.
-Result<std::vector<uint8_t>> assembleGlb(const std::vector<uint8_t>& shell, std::vector<uint8_t> bin,
-                                         const WebViews* web) {
+Result<std::vector<uint8_t>> glbHead(const std::vector<uint8_t>& shell, uint64_t bin_size, const WebViews* web) {
     if (shell.size() < 20) return internalError("pack: tinygltf wrote no GLB header");
     uint32_t json_chunk = 0;
     for (int k = 0; k < 4; ++k) json_chunk |= uint32_t(shell[12 + size_t(k)]) << (8 * k);
@@ -235,7 +249,6 @@ Result<std::vector<uint8_t>> assembleGlb(const std::vector<uint8_t>& shell, std:
     const size_t at = json.find(empty);
     if (at == std::string::npos || json.find(empty, at + 1) != std::string::npos)
         return internalError("pack: the GLB's buffer entry was not found");
-    const uint64_t bin_size = bin.size();
     if (bin_size > 0xffffffffull - 64 - json.size()) return resourceLimit("pack: GLB larger than 4 GiB");
     if (bin_size > 0)
         json.replace(at, empty.size(),
@@ -256,9 +269,53 @@ Result<std::vector<uint8_t>> assembleGlb(const std::vector<uint8_t>& shell, std:
     if (bin_size == 0) return head;
     appendU32(head, uint32_t(bin_size) + bin_pad);
     appendU32(head, 0x004E4942u); // "BIN\0"
-    bin.insert(bin.end(), bin_pad, uint8_t(0));
+    return head;
+}
+
+// The whole GLB with `bin` as its binary chunk; `bin` becomes the result (its bytes move once).
+Result<std::vector<uint8_t>> assembleGlb(const std::vector<uint8_t>& shell, std::vector<uint8_t> bin,
+                                         const WebViews* web) {
+    LODBAKE_ASSIGN_OR_RETURN(std::vector<uint8_t> head, glbHead(shell, bin.size(), web));
+    if (bin.empty()) return head;
+    bin.insert(bin.end(), (4 - bin.size() % 4) % 4, uint8_t(0));
     bin.insert(bin.begin(), head.begin(), head.end());
     return bin;
+}
+
+// A view whose bytes are in a file: in the in-memory binary chunk it is empty at `bin_offset`; the
+// GLB holds the file's `size` bytes there, padded with zeros to 4.
+struct SpilledView {
+    uint64_t bin_offset = 0;
+    uint64_t size = 0;
+    std::shared_ptr<const PackTempFile> file;
+};
+
+uint64_t align4(uint64_t n) { return (n + 3) / 4 * 4; }
+
+// Gives each spilled view its length and moves every later view by the room it takes, so the views
+// are where the same blob in memory would have put them (the binary chunk's views are in offset
+// order, each 4-aligned). Returns the spilled views in offset order.
+Result<std::vector<SpilledView>> placeSpilledViews(tinygltf::Model& model, const std::vector<ViewPatch>& patches) {
+    std::map<int, std::shared_ptr<const PackTempFile>> spilled;
+    for (const ViewPatch& p : patches) {
+        if (!p.spilled) continue;
+        const tinygltf::Value& v = patchTarget(model, p)[p.extension].Get(p.member);
+        if (!v.IsInt() || v.Get<int>() < 0 || size_t(v.Get<int>()) >= model.bufferViews.size())
+            return internalError("pack: extension " + p.extension + ": spilled view not found");
+        spilled[v.Get<int>()] = p.spilled;
+    }
+    std::vector<SpilledView> out;
+    uint64_t shift = 0;
+    for (size_t i = 0; i < model.bufferViews.size(); ++i) {
+        tinygltf::BufferView& view = model.bufferViews[i];
+        const auto it = spilled.find(int(i));
+        if (it != spilled.end()) out.push_back({uint64_t(view.byteOffset), it->second->bytesWritten(), it->second});
+        view.byteOffset = size_t(view.byteOffset + shift);
+        if (it == spilled.end()) continue;
+        view.byteLength = size_t(out.back().size);
+        shift += align4(out.back().size);
+    }
+    return out;
 }
 
 // An upper bound of the binary chunk's size: every attribute stream as floats, indices as 32 bits,
@@ -478,9 +535,18 @@ Status addSceneGraph(tinygltf::Model& model, BufferBuilder& buffer, ModelDedupe&
     return Status::okStatus();
 }
 
+// The GLB in parts: tinygltf's output for the model with an empty buffer, the binary chunk, the
+// --web views and the views whose bytes are in files (empty in `bin`).
+struct GlbParts {
+    std::vector<uint8_t> shell, bin;
+    WebViews web;
+    bool has_web = false;
+    std::vector<SpilledView> spilled;
+};
+
 // `owned`, when set, is `description` itself: each level's data is released as soon as the model
 // holds a copy, so the pack's bytes never exist twice beside all the meshes.
-Result<std::vector<uint8_t>> writeImpl(const PackDescription& description, PackDescription* owned) {
+Result<GlbParts> buildGlb(const PackDescription& description, PackDescription* owned) {
     tinygltf::Model model;
     model.asset.version = "2.0";
     model.asset.generator = std::string("lodbake ") + kVersionString;
@@ -534,19 +600,64 @@ Result<std::vector<uint8_t>> writeImpl(const PackDescription& description, PackD
     if (description.compact || description.web)
         bin = dropStreamedAccessors(model, description.compact ? streams : std::set<std::string>(), bin, patches);
     if (description.web) appendWebViews(model, bin, web);
+    GlbParts parts;
+    LODBAKE_ASSIGN_OR_RETURN(parts.spilled, placeSpilledViews(model, patches));
+    if (description.web && !parts.spilled.empty())
+        return unsupported("pack: --web packs hold no extension blobs in files");
     // tinygltf copies a buffer's data before writing it (and the GLB holds it a third time), so the
     // model is written with an empty buffer and the GLB is assembled here around the binary chunk,
     // byte for byte as tinygltf lays it out: the pack's bytes exist at most twice, briefly.
     model.buffers.push_back(tinygltf::Buffer());
     tinygltf::TinyGLTF writer;
-    std::vector<uint8_t> shell;
     {
-        VectorStreamBuf sink(shell);
+        VectorStreamBuf sink(parts.shell);
         std::ostream stream(&sink);
         if (!writer.WriteGltfSceneToStream(&model, stream, false, true) || !stream)
             return internalError("pack: tinygltf failed");
     }
-    return assembleGlb(shell, std::move(bin), description.web ? &web : nullptr);
+    parts.bin = std::move(bin);
+    parts.web = std::move(web);
+    parts.has_web = description.web;
+    return parts;
+}
+
+Result<std::vector<uint8_t>> writeImpl(const PackDescription& description, PackDescription* owned) {
+    LODBAKE_ASSIGN_OR_RETURN(GlbParts parts, buildGlb(description, owned));
+    if (!parts.spilled.empty()) return internalError("pack: an extension blob is in a file: use writePackGlbFile");
+    return assembleGlb(parts.shell, std::move(parts.bin), parts.has_web ? &parts.web : nullptr);
+}
+
+// The GLB to `path` through a temporary: the head, then the binary chunk with each spilled view's
+// file copied in its place through `buffer_bytes`.
+Result<uint64_t> writeFileImpl(PackDescription& description, const std::string& path,
+                               const std::atomic<bool>* cancel, size_t buffer_bytes) {
+    LODBAKE_ASSIGN_OR_RETURN(GlbParts parts, buildGlb(description, &description));
+    uint64_t bin_size = parts.bin.size();
+    for (const SpilledView& v : parts.spilled) bin_size += align4(v.size);
+    LODBAKE_ASSIGN_OR_RETURN(std::vector<uint8_t> head, glbHead(parts.shell, bin_size, parts.has_web ? &parts.web : nullptr));
+    std::vector<uint8_t>().swap(parts.shell);
+    PackTempFile out;
+    LODBAKE_RETURN_IF_ERROR(out.open(path, buffer_bytes));
+    LODBAKE_RETURN_IF_ERROR(out.write(head.data(), head.size()));
+    std::vector<uint8_t>().swap(head);
+    static const uint8_t zeros[4] = {0, 0, 0, 0};
+    std::vector<uint8_t> copy_buffer;
+    uint64_t at = 0;
+    auto writeBin = [&](uint64_t end) { // bin[at, end), never offsetting an empty array's null data()
+        return end > at ? out.write(parts.bin.data() + at, size_t(end - at)) : Status::okStatus();
+    };
+    for (const SpilledView& v : parts.spilled) {
+        LODBAKE_RETURN_IF_ERROR(writeBin(v.bin_offset));
+        LODBAKE_RETURN_IF_ERROR(v.file->copyTo(out, v.size, copy_buffer, cancel));
+        LODBAKE_RETURN_IF_ERROR(out.write(zeros, size_t(align4(v.size) - v.size)));
+        at = v.bin_offset;
+    }
+    LODBAKE_RETURN_IF_ERROR(writeBin(parts.bin.size()));
+    LODBAKE_RETURN_IF_ERROR(out.write(zeros, size_t(align4(bin_size) - bin_size)));
+    if (cancel && cancel->load()) return ioError(path + ": writing cancelled");
+    const uint64_t written = out.bytesWritten();
+    LODBAKE_RETURN_IF_ERROR(out.commit());
+    return written;
 }
 
 } // namespace
@@ -562,6 +673,15 @@ Result<std::vector<uint8_t>> writePackGlb(const PackDescription& description) {
 Result<std::vector<uint8_t>> writePackGlb(PackDescription&& description) {
     try {
         return writeImpl(description, &description);
+    } catch (const std::exception& e) {
+        return internalError(std::string("pack: glTF writing failed: ") + e.what());
+    }
+}
+
+Result<uint64_t> writePackGlbFile(PackDescription&& description, const std::string& path,
+                                  const std::atomic<bool>* cancel, size_t buffer_bytes) {
+    try {
+        return writeFileImpl(description, path, cancel, buffer_bytes);
     } catch (const std::exception& e) {
         return internalError(std::string("pack: glTF writing failed: ") + e.what());
     }

@@ -13,6 +13,7 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -22,12 +23,17 @@
 
 namespace lodbake {
 
+class PackTempFile; // lodbake/pack/pack_file.h
+
 struct PackExtension {
     std::string name;                           // e.g. lodrt::format::kExtLodMetrics
     JsonNode json;                              // the extension object
     std::vector<std::vector<uint8_t>> blobs;    // payloads, each stored in its own buffer view
     std::vector<std::string> blob_view_members; // blob i's buffer-view index goes into this member
     bool is_stream = false;                     // a compressed stream: listed in extensionsRequired when compact
+    /// Empty, or one per blob: blob i is held by file spilled[i] (all its bytes, finished) instead of
+    /// blobs[i], which stays empty. Only writePackGlbFile writes such an extension.
+    std::vector<std::shared_ptr<const PackTempFile>> spilled;
 };
 
 struct PackLevel {

@@ -3,7 +3,10 @@
 // helpers (src/io/gltf_model.h). The pack module owns it because it is the pack's layout; the io
 // module's glTF reader and writer know nothing of packs.
 
+#include <atomic>
+#include <cstddef>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "lodbake/core/status.h"
@@ -21,5 +24,14 @@ struct PackDescription;
 Result<std::vector<uint8_t>> writePackGlb(const PackDescription& description);
 /// The same bytes; frees each level's mesh and blobs once the pack holds them (lower peak memory).
 Result<std::vector<uint8_t>> writePackGlb(PackDescription&& description);
+/// The same bytes, written to `path`, and the only writer of extensions with blobs in files
+/// (PackExtension::spilled, the streamed cluster pages): the binary chunk except those blobs is
+/// assembled in memory, and each file is copied into its place through a bounded buffer. Memory:
+/// the pack without its spilled blobs, plus `buffer_bytes` and a 64 KiB copy buffer. Written to a
+/// temporary in the folder of `path` renamed into place: on any error or when `cancel` is set
+/// (IoError naming `path`) nothing is left. A failed write (a full disk) is an IoError naming
+/// `path`. Returns the bytes written.
+Result<uint64_t> writePackGlbFile(PackDescription&& description, const std::string& path,
+                                  const std::atomic<bool>* cancel = nullptr, size_t buffer_bytes = size_t(1) << 20);
 
 } // namespace lodbake
