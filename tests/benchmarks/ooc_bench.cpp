@@ -23,7 +23,10 @@
 // runs over the whole build's depth-cut triangle counts. --levels-per-job N sets the levels each
 // partition job and each merge below the top builds (default ooc::kLevelsPerJob; 0: as far as the
 // locked border allows); --leaf-order-pairs merges adjacent pairs in leaf order instead of the k-d
-// tree's siblings.
+// tree's siblings; --pairwise merges two files per job (MergeOptions::group_by_memory off) instead
+// of as many k-d siblings as one job's bound fits; --reseed S also builds the whole input in memory
+// with ClusterLodOptions::seed S and prints its ratios to the default build's the same way (how far
+// two in-memory builds that differ only in METIS's and the sampler's seed are apart).
 //
 // Bars: the partitioner's peak resident memory stays under the limit it was given (issue: "peak
 // resident memory stays under the limit whatever the input size"); with --cluster, so do the
@@ -32,7 +35,8 @@
 // path's at equal triangle counts").
 //
 // usage: ooc_bench [--triangles N] [--memory-limit MIB] [--dir DIR] [--threads N] [--no-anchor]
-//                  [--scan FILE] [--cluster] [--levels-per-job N] [--leaf-order-pairs] [--check]
+//                  [--scan FILE] [--cluster] [--levels-per-job N] [--leaf-order-pairs] [--pairwise] [--reseed S]
+//                  [--check]
 //   defaults: 10,000,000 triangles, 1024 MiB, DIR = the build's ooc_bench_out folder. --scan reads
 //   an existing file (made by lodbake_scansim --surface) instead of generating one, and keeps it.
 
@@ -242,7 +246,8 @@ int main(int argc, char** argv) {
     uint64_t triangles = 10000000, limit_mib = 1024;
     int threads = 0;
     uint32_t levels_per_job = lodbake::ooc::kLevelsPerJob;
-    bool anchor = true, cluster = false, leaf_order = false;
+    bool anchor = true, cluster = false, leaf_order = false, pairwise = false;
+    uint64_t reseed = 0;
     std::string dir = LODBAKE_BENCH_OUT_DIR, given_scan;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
@@ -253,11 +258,13 @@ int main(int argc, char** argv) {
         else if (a == "--no-anchor") anchor = false;
         else if (a == "--cluster") cluster = true;
         else if (a == "--leaf-order-pairs") leaf_order = true;
+        else if (a == "--pairwise") pairwise = true;
+        else if (a == "--reseed" && i + 1 < argc) reseed = std::strtoull(argv[++i], nullptr, 10);
         else if (a == "--levels-per-job" && i + 1 < argc) levels_per_job = uint32_t(std::strtoul(argv[++i], nullptr, 10));
         else if (a == "--scan" && i + 1 < argc) given_scan = argv[++i];
         else {
             std::fprintf(stderr, "usage: ooc_bench [--triangles N] [--memory-limit MIB] [--dir DIR] [--threads N] "
-                                 "[--no-anchor] [--scan FILE] [--cluster] [--levels-per-job N] [--leaf-order-pairs] [--check]\n");
+                                 "[--no-anchor] [--scan FILE] [--cluster] [--levels-per-job N] [--leaf-order-pairs] [--pairwise] [--reseed S] [--check]\n");
             return 2;
         }
     }
@@ -346,6 +353,7 @@ int main(int argc, char** argv) {
         o.memory_limit_bytes = limit_mib << 20;
         o.levels_per_job = levels_per_job;
         if (leaf_order) o.pairing = lodbake::ooc::MergePairing::LeafOrder;
+        o.group_by_memory = !pairwise;
         lodbake::Diagnostics d;
         auto r = lodbake::ooc::mergeAll(lod_files, o, d);
         if (!r.ok()) fail(r.status());
@@ -425,6 +433,18 @@ int main(int argc, char** argv) {
                     assembled->groups.size(), assembled->roots.size(), assembled->level_count);
         printComparison("merged and assembled", depthCuts({&*assembled}), depthCuts({&whole}));
         worst_ratio = printThresholdComparison(*assembled, whole);
+        if (reseed != 0) {
+            lodbake::Diagnostics d;
+            lodbake::Result<lodbake::LoadedMesh> m = lodbake::readMesh(scan, lodbake::ReadOptions(), d);
+            if (!m.ok()) fail(m.status());
+            lodbake::ClusterLodOptions o;
+            o.seed = reseed;
+            auto other = lodbake::buildClusterLod(m->mesh, o, d);
+            if (!other.ok()) fail(other.status());
+            std::printf("in-memory build with seed %llu against the default seed:\n", (unsigned long long)reseed);
+            const double noise = printThresholdComparison(*other, whole);
+            std::printf("in-memory, seed %llu / seed 1: largest ratio %.3f\n", (unsigned long long)reseed, noise);
+        }
         for (const lodbake::ooc::MergeFile& m : tree.merges) std::filesystem::remove(m.path, ec);
         for (const std::string& f : lod_files) std::filesystem::remove(f, ec);
         std::filesystem::remove(lods, ec);

@@ -66,6 +66,7 @@ struct MergeOptions {
     ClusterLodOptions cluster; // for mergeAll: the top merge's (its max_levels included)
     uint32_t levels_per_job = kLevelsPerJob; // mergeAll, every merge but the top; 0: as many as it can
     MergePairing pairing = MergePairing::KdSiblings; // mergeAll
+    bool group_by_memory = true; // mergeAll: a job joins as many k-d siblings as fit (see mergeAll)
 };
 
 /// What a merge job wrote.
@@ -79,7 +80,7 @@ struct MergeFile {
     uint32_t seed_triangles = 0; // T_r
     uint32_t shared_edges = 0;   // border edges the two inputs shared (now interior)
     uint32_t cluster_count = 0, group_count = 0, root_count = 0, level_count = 0;
-    uint32_t root_triangles = 0; // of the new roots
+    uint32_t root_vertices = 0, root_triangles = 0; // of the new roots
     uint32_t border_vertex_count = 0, border_edge_count = 0;
     bool reached_single_group = false;
     uint64_t memory_bound_bytes = 0;
@@ -118,6 +119,22 @@ struct MergedLod {
 
 /// Reads and checks a file written by mergePartitionLods (layout in docs/pipeline.md, "Merge jobs").
 Result<MergedLod> readMergeFile(const std::string& path);
+
+/// The merge job's fixed allowance: the buffer that hashes an input and the output's write buffer.
+constexpr uint64_t kMergeFixedBytes = uint64_t(2) << 20;
+
+/// What one input adds to a merge job's bound: its roots, their geometry and its border.
+struct MergeInputSize {
+    uint64_t roots = 0, root_vertices = 0, root_triangles = 0, border_vertices = 0, border_edges = 0;
+    /// kMergeBytesPerRoot R + 48 V_r + (15 + kClusterBuildBytesPerTriangle) T_r + 64 B + 32 E. A merge's
+    /// bound is kMergeFixedBytes plus its two inputs'; a merge that builds no level keeps its inputs'
+    /// roots and at most their borders, so its output adds at most the sum of its inputs'.
+    uint64_t boundBytes() const;
+};
+
+/// Reads a hierarchy file's header and root records (hashing it, as a merge does) and returns what it
+/// adds to a merge job's bound. Errors as mergePartitionLods's for that input.
+Result<MergeInputSize> mergeInputSize(const std::string& path);
 
 /// The merge tree of a set of partition hierarchies.
 struct MergeTree {
