@@ -2,9 +2,10 @@
 // The merge step of the out-of-core bake (docs/pipeline.md, "Merge jobs"): two neighbouring
 // hierarchy files (partition jobs' .lbplod, or merges' .lbpmrg) in, their roots taken as one level and
 // the hierarchy continued over both (continueClusterLod) until one root remains or a level stalls,
-// out as a content-hashed file. mergeAll pairs the partitions' files in leaf order, level by level,
-// until one file remains; assembleHierarchy renumbers the partitions' hierarchies and every merge
-// into one ClusterLodHierarchy when it fits in memory.
+// out as a content-hashed file. mergeAll merges the partitions' files over the partitioner's k-d tree,
+// round by round (each round one level, over as many k-d siblings per job as its bound fits) until
+// one file remains; assembleHierarchy renumbers the partitions' hierarchies and every merge into one
+// ClusterLodHierarchy when it fits in memory.
 //
 // Welding: a root vertex at a position of its file's recorded border is the input vertex of that
 // global id (border positions are bit-identical on both sides, the border lock keeps them), so the
@@ -139,20 +140,25 @@ Result<MergeInputSize> mergeInputSize(const std::string& path);
 /// The merge tree of a set of partition hierarchies.
 struct MergeTree {
     std::vector<std::string> partitions; // the .lbplod files, leaf order
-    std::vector<MergeFile> merges;       // in the order run: level by level, pairs in leaf order
+    std::vector<MergeFile> merges;       // in the order run: round by round, jobs in leaf order
     std::string top;                     // the file that holds the root(s): the last merge, or the
                                          // only partition
-    uint32_t merge_levels = 0;
+    uint32_t merge_levels = 0;           // rounds
     uint64_t largest_memory_bound = 0;   // over the merge jobs
     uint64_t largest_accounted_peak = 0;
 };
 
-/// Merges the partitions' hierarchy files (in leaf order) pairwise, level by level, as a binary tree
-/// over them (options.pairing): at tree height 1 the sibling leaves are merged, at height h the
-/// nodes whose two children are done, in leaf order; a file whose sibling is a larger subtree is
-/// carried up until that subtree is merged. Every merge but the top builds at most
-/// options.levels_per_job levels; the top builds on as far as it can. The jobs run one after the other, each under options.memory_limit_bytes. On an error every
-/// merge file the run wrote is removed.
+/// Merges the partitions' hierarchy files (in leaf order) over a binary tree (options.pairing), in
+/// rounds. With group_by_memory, a round takes each highest node not yet merged whose files below
+/// (the previous rounds' outputs) fit one merge job's bound together (kMergeFixedBytes plus their
+/// MergeInputSize::boundBytes) and runs the merges under it, children first: those below it build no
+/// level (their output carries their inputs' roots, the shared cut no longer on the border), the one
+/// at the node builds the round's level. A node whose two children are done is merged even when its
+/// subtree fits no further. Without group_by_memory every round merges the nodes whose two children
+/// are done (tree height h in round h), a file whose sibling is a larger subtree waiting. Every job
+/// but the top builds at most options.levels_per_job levels; the top builds on as far as it can. The
+/// jobs run one after the other, each under options.memory_limit_bytes. On an error every merge file
+/// the run wrote is removed.
 Result<MergeTree> mergeAll(const std::vector<std::string>& partition_lods, const MergeOptions& options,
                            Diagnostics& diagnostics);
 
