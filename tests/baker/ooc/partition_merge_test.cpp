@@ -185,7 +185,7 @@ TEST(PartitionMergeTest, ContinuingFromLod0ClustersIsTheBuildFromLod0) {
 // What every merge tree of a closed scan must give: one root, every merge under its bound, siblings
 // sharing their cut, jobs below the top within kLevelsPerJob levels, and an assembled hierarchy whose
 // LOD0 is the input and whose cuts show no crack across the old cuts.
-void expectMergedWithoutCracks(const Fixture& f, const MergeTree& merged) {
+static void expectMergedWithoutCracks(const Fixture& f, const MergeTree& merged) {
     const MergeTree* tree = &merged;
     EXPECT_EQ(tree->merges.size(), f.lods.size() - 1);
     EXPECT_GE(tree->merge_levels, 2u);
@@ -255,21 +255,27 @@ TEST(PartitionMergeTest, MergedPartitionsReachOneRootWithoutCracks) {
     expectMergedWithoutCracks(f, *tree);
 }
 
+// Grouping by memory under a limit that fits three of the largest partitions' roots.
+static MergeOptions groupedOptions(const Fixture& f, const std::string& work) {
+    uint64_t largest = 0;
+    for (const std::string& p : f.lods) {
+        auto size = mergeInputSize(p);
+        EXPECT_TRUE(size.ok()) << size.status().message();
+        if (size.ok()) largest = std::max(largest, size->boundBytes());
+    }
+    MergeOptions o = mergeOptions(work);
+    o.memory_limit_bytes = kMergeFixedBytes + 3 * largest;
+    return o;
+}
+
 // Grouped by memory under a limit that fits about three partitions' roots: a round joins several
 // k-d siblings in one job (merges that build no level below it, the one at its top one level), and
 // the result is as sound as the pairwise tree's.
 TEST(PartitionMergeTest, GroupedMergesReachOneRootWithoutCracks) {
     Fixture f = built("grouped", 60000);
     ASSERT_GE(f.lods.size(), 5u);
-    uint64_t largest = 0;
-    for (const std::string& p : f.lods) {
-        auto size = mergeInputSize(p);
-        ASSERT_TRUE(size.ok()) << size.status().message();
-        largest = std::max(largest, size->boundBytes());
-    }
     lodbake::Diagnostics d;
-    MergeOptions o = mergeOptions(f.dir + "/merges");
-    o.memory_limit_bytes = kMergeFixedBytes + 3 * largest;
+    const MergeOptions o = groupedOptions(f, f.dir + "/merges");
     auto tree = mergeAll(f.lods, o, d);
     ASSERT_TRUE(tree.ok()) << tree.status().message();
     uint32_t carried = 0;
@@ -288,13 +294,16 @@ TEST(PartitionMergeTest, GroupedMergesReachOneRootWithoutCracks) {
 }
 
 TEST(PartitionMergeTest, SameBytesAtOneAndTwoThreads) {
-    Fixture f = built("threads", 20000);
-    ASSERT_GE(f.lods.size(), 2u);
+    Fixture f = built("threads", 60000);
+    ASSERT_GE(f.lods.size(), 5u);
     for (int threads : {1, 2}) {
         lodbake::ScopedThreadLimit limit{size_t(threads)};
         lodbake::Diagnostics d;
-        auto tree = mergeAll(f.lods, mergeOptions(f.dir + "/t" + std::to_string(threads)), d);
+        auto tree = mergeAll(f.lods, groupedOptions(f, f.dir + "/t" + std::to_string(threads)), d);
         ASSERT_TRUE(tree.ok()) << tree.status().message();
+        EXPECT_GE(tree->merge_levels, 2u);
+        EXPECT_TRUE(std::any_of(tree->merges.begin(), tree->merges.end(),
+                                [](const MergeFile& m) { return m.group_count == 0; })); // a merge that builds no level
     }
     const std::vector<std::string> one = filesIn(f.dir + "/t1"), two = filesIn(f.dir + "/t2");
     EXPECT_EQ(one.size(), f.lods.size() - 1);
