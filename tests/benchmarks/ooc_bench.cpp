@@ -23,7 +23,11 @@
 // runs over the whole build's depth-cut triangle counts. --levels-per-job N sets the levels each
 // partition job and each merge below the top builds (default ooc::kLevelsPerJob; 0: as far as the
 // locked border allows); --leaf-order-pairs merges adjacent pairs in leaf order instead of the k-d
-// tree's siblings.
+// tree's siblings; --pairwise merges two files per job (MergeOptions::group_by_memory off) instead
+// of as many k-d siblings as one job's bound fits; --seeds K also builds the whole input in memory
+// with ClusterLodOptions::seed 2..K, prints each one's ratios to the default build's the same way (how
+// far in-memory builds that differ only in METIS's and the sampler's seed are apart), and the merged
+// error at each N over the largest and the smallest of the K in-memory builds' errors there.
 //
 // Bars: the partitioner's peak resident memory stays under the limit it was given (issue: "peak
 // resident memory stays under the limit whatever the input size"); with --cluster, so do the
@@ -32,7 +36,8 @@
 // path's at equal triangle counts").
 //
 // usage: ooc_bench [--triangles N] [--memory-limit MIB] [--dir DIR] [--threads N] [--no-anchor]
-//                  [--scan FILE] [--cluster] [--levels-per-job N] [--leaf-order-pairs] [--check]
+//                  [--scan FILE] [--cluster] [--levels-per-job N] [--leaf-order-pairs] [--pairwise] [--seeds K]
+//                  [--check]
 //   defaults: 10,000,000 triangles, 1024 MiB, DIR = the build's ooc_bench_out folder. --scan reads
 //   an existing file (made by lodbake_scansim --surface) instead of generating one, and keeps it.
 
@@ -235,6 +240,44 @@ double printThresholdComparison(const lodbake::ClusterLodHierarchy& merged, cons
     return worst;
 }
 
+// In-memory builds of `scan` with seeds 2..seeds, each compared with the default build (seed 1), and
+// the merged error at each N over the largest and smallest of the seeds' errors there.
+void printSeedSpread(const std::string& scan, uint64_t seeds, const lodbake::ClusterLodHierarchy& merged,
+                     const lodbake::ClusterLodHierarchy& whole) {
+    lodbake::Diagnostics d;
+    lodbake::Result<lodbake::LoadedMesh> m = lodbake::readMesh(scan, lodbake::ReadOptions(), d);
+    if (!m.ok()) fail(m.status());
+    std::vector<lodbake::ClusterLodHierarchy> builds;
+    for (uint64_t seed = 2; seed <= seeds; ++seed) {
+        lodbake::ClusterLodOptions o;
+        o.seed = seed;
+        auto other = lodbake::buildClusterLod(m->mesh, o, d);
+        if (!other.ok()) fail(other.status());
+        std::printf("in-memory build with seed %llu against the default seed:\n", (unsigned long long)seed);
+        const double largest = printThresholdComparison(*other, whole);
+        std::printf("in-memory, seed %llu / seed 1: largest ratio %.3f\n", (unsigned long long)seed, largest);
+        builds.push_back(std::move(*other));
+    }
+    std::printf("merged over the in-memory builds' (seeds 1..%llu) largest and smallest error at each N:\n",
+                (unsigned long long)seeds);
+    double beyond = NAN;
+    for (const DepthCut& c : depthCuts({&whole})) {
+        if (c.depth == 0) continue;
+        double hi = errorAtTriangles(whole, c.triangles).threshold, lo = hi;
+        for (const auto& b : builds) {
+            const double e = errorAtTriangles(b, c.triangles).threshold;
+            if (!std::isfinite(e) || e <= 0) continue;
+            hi = std::max(hi, e);
+            lo = std::min(lo, e);
+        }
+        const double e = errorAtTriangles(merged, c.triangles).threshold;
+        if (std::isfinite(e / hi) && !(e / hi <= beyond)) beyond = e / hi;
+        std::printf("  N %10llu  merged / largest x%.3f  merged / smallest x%.3f  (largest / smallest x%.3f)\n",
+                    (unsigned long long)c.triangles, e / hi, e / lo, hi / lo);
+    }
+    std::printf("merged / largest in-memory error over seeds 1..%llu: largest %.3f\n", (unsigned long long)seeds, beyond);
+}
+
 } // namespace
 
 int main(int argc, char** argv) {
@@ -242,7 +285,8 @@ int main(int argc, char** argv) {
     uint64_t triangles = 10000000, limit_mib = 1024;
     int threads = 0;
     uint32_t levels_per_job = lodbake::ooc::kLevelsPerJob;
-    bool anchor = true, cluster = false, leaf_order = false;
+    bool anchor = true, cluster = false, leaf_order = false, pairwise = false;
+    uint64_t seeds = 1;
     std::string dir = LODBAKE_BENCH_OUT_DIR, given_scan;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
@@ -253,11 +297,13 @@ int main(int argc, char** argv) {
         else if (a == "--no-anchor") anchor = false;
         else if (a == "--cluster") cluster = true;
         else if (a == "--leaf-order-pairs") leaf_order = true;
+        else if (a == "--pairwise") pairwise = true;
+        else if (a == "--seeds" && i + 1 < argc) seeds = std::strtoull(argv[++i], nullptr, 10);
         else if (a == "--levels-per-job" && i + 1 < argc) levels_per_job = uint32_t(std::strtoul(argv[++i], nullptr, 10));
         else if (a == "--scan" && i + 1 < argc) given_scan = argv[++i];
         else {
             std::fprintf(stderr, "usage: ooc_bench [--triangles N] [--memory-limit MIB] [--dir DIR] [--threads N] "
-                                 "[--no-anchor] [--scan FILE] [--cluster] [--levels-per-job N] [--leaf-order-pairs] [--check]\n");
+                                 "[--no-anchor] [--scan FILE] [--cluster] [--levels-per-job N] [--leaf-order-pairs] [--pairwise] [--seeds K] [--check]\n");
             return 2;
         }
     }
@@ -346,6 +392,7 @@ int main(int argc, char** argv) {
         o.memory_limit_bytes = limit_mib << 20;
         o.levels_per_job = levels_per_job;
         if (leaf_order) o.pairing = lodbake::ooc::MergePairing::LeafOrder;
+        o.group_by_memory = !pairwise;
         lodbake::Diagnostics d;
         auto r = lodbake::ooc::mergeAll(lod_files, o, d);
         if (!r.ok()) fail(r.status());
@@ -425,6 +472,7 @@ int main(int argc, char** argv) {
                     assembled->groups.size(), assembled->roots.size(), assembled->level_count);
         printComparison("merged and assembled", depthCuts({&*assembled}), depthCuts({&whole}));
         worst_ratio = printThresholdComparison(*assembled, whole);
+        if (seeds > 1) printSeedSpread(scan, seeds, *assembled, whole);
         for (const lodbake::ooc::MergeFile& m : tree.merges) std::filesystem::remove(m.path, ec);
         for (const std::string& f : lod_files) std::filesystem::remove(f, ec);
         std::filesystem::remove(lods, ec);

@@ -74,6 +74,7 @@ struct TreeNode {
     int left = -1, right = -1;
     uint32_t height = 0;
     std::string file;
+    MergeInputSize size; // of `file`, once it is there
 };
 
 int buildTree(uint32_t begin, uint32_t end, MergePairing pairing, std::vector<TreeNode>& nodes) {
@@ -98,6 +99,72 @@ int buildTree(uint32_t begin, uint32_t end, MergePairing pairing, std::vector<Tr
     return at;
 }
 
+namespace {
+
+// One tree node's merge job: its two children's files in, `levels` levels built (0: none, the
+// inputs' roots carried as the output's roots with their shared cut no longer on the border).
+Status runMerge(std::vector<TreeNode>& nodes, TreeNode& n, uint32_t levels, const MergeOptions& options,
+                const std::vector<std::string>& before, std::vector<std::string>& written, MergeTree& tree,
+                Diagnostics& diagnostics) {
+    MergeOptions job = options;
+    job.cluster.max_levels = levels;
+    LODBAKE_ASSIGN_OR_RETURN(MergeFile m, mergePartitionLods(nodes[size_t(n.left)].file, nodes[size_t(n.right)].file,
+                                                              job, diagnostics));
+    if (!std::binary_search(before.begin(), before.end(), m.path)) written.push_back(m.path);
+    tree.largest_memory_bound = std::max(tree.largest_memory_bound, m.memory_bound_bytes);
+    tree.largest_accounted_peak = std::max(tree.largest_accounted_peak, m.accounted_peak_bytes);
+    n.file = m.path;
+    n.size.roots = m.root_count;
+    n.size.root_vertices = m.root_vertices;
+    n.size.root_triangles = m.root_triangles;
+    n.size.border_vertices = m.border_vertex_count;
+    n.size.border_edges = m.border_edge_count;
+    tree.merges.push_back(std::move(m));
+    return Status::okStatus();
+}
+
+// Runs the merges below `at` whose node has no file yet, children first, left before right: `at`
+// itself builds `levels`, the ones below it none.
+Status runSubtree(std::vector<TreeNode>& nodes, int at, uint32_t levels, const MergeOptions& options,
+                  const std::vector<std::string>& before, std::vector<std::string>& written, MergeTree& tree,
+                  Diagnostics& diagnostics, bool top_of_job) {
+    TreeNode& n = nodes[size_t(at)];
+    if (!n.file.empty()) return Status::okStatus();
+    LODBAKE_RETURN_IF_ERROR(runSubtree(nodes, n.left, 0, options, before, written, tree, diagnostics, false));
+    LODBAKE_RETURN_IF_ERROR(runSubtree(nodes, n.right, 0, options, before, written, tree, diagnostics, false));
+    return runMerge(nodes, n, top_of_job ? levels : 0, options, before, written, tree, diagnostics);
+}
+
+// The nodes a round merges (preorder, hence leaf order): each highest node with no file whose files
+// below fit in one job's bound (with grouping by memory), else each node whose two children have
+// files. The rest wait for their subtree.
+std::vector<int> roundNodes(const std::vector<TreeNode>& nodes, const MergeOptions& options) {
+    std::vector<uint64_t> sum(nodes.size(), 0);
+    std::vector<uint8_t> ready(nodes.size(), 0);
+    for (size_t i = nodes.size(); i-- > 0;) {
+        const TreeNode& n = nodes[i];
+        if (!n.file.empty() || n.left < 0) continue;
+        for (int c : {n.left, n.right}) {
+            const TreeNode& k = nodes[size_t(c)];
+            sum[i] += k.file.empty() ? sum[size_t(c)] : k.size.boundBytes();
+        }
+        ready[i] = !nodes[size_t(n.left)].file.empty() && !nodes[size_t(n.right)].file.empty();
+    }
+    std::vector<int> picked;
+    std::vector<uint8_t> covered(nodes.size(), 0); // an ancestor is picked
+    for (size_t i = 0; i < nodes.size(); ++i) {
+        const TreeNode& n = nodes[i];
+        if (n.left < 0) continue;
+        const bool fits = options.group_by_memory && kMergeFixedBytes + sum[i] <= options.memory_limit_bytes;
+        const bool pick = !covered[i] && n.file.empty() && (fits || ready[i]);
+        if (pick) picked.push_back(int(i));
+        covered[size_t(n.left)] = covered[size_t(n.right)] = covered[i] || pick;
+    }
+    return picked;
+}
+
+} // namespace
+
 Result<MergeTree> mergeAll(const std::vector<std::string>& partition_lods, const MergeOptions& options,
                            Diagnostics& diagnostics) {
     if (partition_lods.empty()) return invalidInput("merge: expected at least one partition hierarchy");
@@ -112,25 +179,22 @@ Result<MergeTree> mergeAll(const std::vector<std::string>& partition_lods, const
     std::vector<TreeNode> nodes;
     buildTree(0, uint32_t(partition_lods.size()), options.pairing, nodes);
     for (TreeNode& n : nodes)
-        if (n.left < 0) n.file = partition_lods[n.begin];
-    const uint32_t top_height = nodes[0].height;
-    for (uint32_t h = 1; h <= top_height; ++h) {
-        for (TreeNode& n : nodes) { // preorder: nodes of one height in leaf order
-            if (n.height != h) continue;
-            MergeOptions job = options;
-            if (h < top_height && options.levels_per_job > 0)
-                job.cluster.max_levels = std::min(options.cluster.max_levels, options.levels_per_job);
-            Result<MergeFile> m =
-                mergePartitionLods(nodes[size_t(n.left)].file, nodes[size_t(n.right)].file, job, diagnostics);
-            if (!m.ok()) {
-                removeWritten(written);
-                return m.status();
+        if (n.left < 0) {
+            n.file = partition_lods[n.begin];
+            if (options.group_by_memory) {
+                LODBAKE_ASSIGN_OR_RETURN(n.size, mergeInputSize(n.file));
             }
-            if (!std::binary_search(before.begin(), before.end(), m->path)) written.push_back(m->path);
-            tree.largest_memory_bound = std::max(tree.largest_memory_bound, m->memory_bound_bytes);
-            tree.largest_accounted_peak = std::max(tree.largest_accounted_peak, m->accounted_peak_bytes);
-            n.file = m->path;
-            tree.merges.push_back(std::move(*m));
+        }
+    const uint32_t below_top = options.levels_per_job > 0 ? std::min(options.cluster.max_levels, options.levels_per_job)
+                                                          : options.cluster.max_levels;
+    while (nodes[0].file.empty()) {
+        for (int at : roundNodes(nodes, options)) {
+            const uint32_t levels = at == 0 ? options.cluster.max_levels : below_top;
+            const Status s = runSubtree(nodes, at, levels, options, before, written, tree, diagnostics, true);
+            if (!s.ok()) {
+                removeWritten(written);
+                return s;
+            }
         }
         ++tree.merge_levels;
     }

@@ -464,8 +464,13 @@ Status openInputs(const std::string paths[2], const MergeOptions& o, InputTop to
         b += tops[i].counts[kBorderVerts];
         e += tops[i].counts[kBorderEdges];
     }
-    result.memory_bound_bytes =
-        2 * kBuffer + kMergeBytesPerRoot * roots + 48 * v + 15 * t + kClusterBuildBytesPerTriangle * t + 64 * b + 32 * e;
+    MergeInputSize both;
+    both.roots = roots;
+    both.root_vertices = v;
+    both.root_triangles = t;
+    both.border_vertices = b;
+    both.border_edges = e;
+    result.memory_bound_bytes = kMergeFixedBytes + both.boundBytes();
     if (result.memory_bound_bytes > o.memory_limit_bytes)
         return resourceLimit(paths[0] + ": memory limit of " + std::to_string(o.memory_limit_bytes >> 20) +
                              " MiB is too small (needs at least " + std::to_string((result.memory_bound_bytes >> 20) + 1) +
@@ -551,13 +556,38 @@ Result<MergeFile> mergePartitionLods(const std::string& a_path, const std::strin
     result.cluster_count = uint32_t(h.clusters.size());
     result.group_count = uint32_t(h.groups.size());
     result.root_count = uint32_t(h.roots.size());
-    for (uint32_t r : h.roots) result.root_triangles += h.clusters[r].triangle_count;
+    for (uint32_t r : h.roots) {
+        result.root_vertices += h.clusters[r].vertex_count;
+        result.root_triangles += h.clusters[r].triangle_count;
+    }
     result.level_count = h.level_count;
     result.border_vertex_count = uint32_t(m.border_ids.size());
     result.border_edge_count = uint32_t(m.border_edges.size() / 2);
     result.reached_single_group = h.reached_single_group;
     result.accounted_peak_bytes = peak;
     return result;
+}
+
+Result<MergeInputSize> mergeInputSize(const std::string& path) {
+    InputTop top;
+    top.path = path;
+    Closer fd;
+    fd.fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd.fd < 0) return ioError(path + ": cannot open: " + std::strerror(errno));
+    LODBAKE_RETURN_IF_ERROR(readHeader(fd.fd, top));
+    LODBAKE_RETURN_IF_ERROR(readRootRecords(fd.fd, top));
+    MergeInputSize s;
+    s.roots = top.roots.size();
+    s.root_vertices = top.root_vertices;
+    s.root_triangles = top.root_triangles;
+    s.border_vertices = top.counts[kBorderVerts];
+    s.border_edges = top.counts[kBorderEdges];
+    return s;
+}
+
+uint64_t MergeInputSize::boundBytes() const {
+    return kMergeBytesPerRoot * roots + 48 * root_vertices + 15 * root_triangles +
+           kClusterBuildBytesPerTriangle * root_triangles + 64 * border_vertices + 32 * border_edges;
 }
 
 Result<MergedLod> readMergeFile(const std::string& path) {

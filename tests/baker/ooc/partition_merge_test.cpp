@@ -182,18 +182,16 @@ TEST(PartitionMergeTest, ContinuingFromLod0ClustersIsTheBuildFromLod0) {
     EXPECT_FALSE(lodbake::continueClusterLod(seed, lodbake::ClusterLodOptions(), d).ok());
 }
 
-TEST(PartitionMergeTest, MergedPartitionsReachOneRootWithoutCracks) {
-    Fixture f = built("union", 30000);
-    ASSERT_GE(f.lods.size(), 3u);
-    lodbake::Diagnostics d;
-    auto tree = mergeAll(f.lods, mergeOptions(f.dir + "/merges"), d);
-    ASSERT_TRUE(tree.ok()) << tree.status().message();
+// What every merge tree of a closed scan must give: one root, every merge under its bound, siblings
+// sharing their cut, jobs below the top within kLevelsPerJob levels, and an assembled hierarchy whose
+// LOD0 is the input and whose cuts show no crack across the old cuts.
+static void expectMergedWithoutCracks(const Fixture& f, const MergeTree& merged) {
+    const MergeTree* tree = &merged;
     EXPECT_EQ(tree->merges.size(), f.lods.size() - 1);
     EXPECT_GE(tree->merge_levels, 2u);
     uint64_t shared = 0;
     for (const MergeFile& m : tree->merges) {
         EXPECT_LE(m.accounted_peak_bytes, m.memory_bound_bytes) << m.path;
-        EXPECT_GT(m.group_count, 0u) << m.path; // the old cut let the merge build on
         EXPECT_GT(m.shared_edges, 0u) << m.path; // siblings share their cut
         if (&m != &tree->merges.back()) {
             EXPECT_LE(m.level_count, kLevelsPerJob) << m.path;
@@ -245,14 +243,67 @@ TEST(PartitionMergeTest, MergedPartitionsReachOneRootWithoutCracks) {
     lodbake_test::expectCrackFree(f.input, *whole, 300, 29);
 }
 
+TEST(PartitionMergeTest, MergedPartitionsReachOneRootWithoutCracks) {
+    Fixture f = built("union", 30000);
+    ASSERT_GE(f.lods.size(), 3u);
+    lodbake::Diagnostics d;
+    MergeOptions o = mergeOptions(f.dir + "/merges");
+    o.group_by_memory = false; // two files per job
+    auto tree = mergeAll(f.lods, o, d);
+    ASSERT_TRUE(tree.ok()) << tree.status().message();
+    for (const MergeFile& m : tree->merges) EXPECT_GT(m.group_count, 0u) << m.path; // the old cut let it build on
+    expectMergedWithoutCracks(f, *tree);
+}
+
+// Grouping by memory under a limit that fits three of the largest partitions' roots.
+static MergeOptions groupedOptions(const Fixture& f, const std::string& work) {
+    uint64_t largest = 0;
+    for (const std::string& p : f.lods) {
+        auto size = mergeInputSize(p);
+        EXPECT_TRUE(size.ok()) << size.status().message();
+        if (size.ok()) largest = std::max(largest, size->boundBytes());
+    }
+    MergeOptions o = mergeOptions(work);
+    o.memory_limit_bytes = kMergeFixedBytes + 3 * largest;
+    return o;
+}
+
+// Grouped by memory under a limit that fits about three partitions' roots: a round joins several
+// k-d siblings in one job (merges that build no level below it, the one at its top one level), and
+// the result is as sound as the pairwise tree's.
+TEST(PartitionMergeTest, GroupedMergesReachOneRootWithoutCracks) {
+    Fixture f = built("grouped", 60000);
+    ASSERT_GE(f.lods.size(), 5u);
+    lodbake::Diagnostics d;
+    const MergeOptions o = groupedOptions(f, f.dir + "/merges");
+    auto tree = mergeAll(f.lods, o, d);
+    ASSERT_TRUE(tree.ok()) << tree.status().message();
+    uint32_t carried = 0;
+    for (const MergeFile& m : tree->merges) {
+        EXPECT_LE(m.memory_bound_bytes, o.memory_limit_bytes) << m.path;
+        if (m.group_count == 0) {
+            ++carried; // built no level: its roots are its inputs' roots
+            EXPECT_EQ(m.root_count, m.seed_count) << m.path;
+        }
+    }
+    EXPECT_GT(carried, 0u);
+    uint32_t pairwise_rounds = 0; // the height of the k-d tree over the leaves
+    while ((size_t(1) << pairwise_rounds) < f.lods.size()) ++pairwise_rounds;
+    EXPECT_LT(tree->merge_levels, pairwise_rounds);
+    expectMergedWithoutCracks(f, *tree);
+}
+
 TEST(PartitionMergeTest, SameBytesAtOneAndTwoThreads) {
-    Fixture f = built("threads", 20000);
-    ASSERT_GE(f.lods.size(), 2u);
+    Fixture f = built("threads", 60000);
+    ASSERT_GE(f.lods.size(), 5u);
     for (int threads : {1, 2}) {
         lodbake::ScopedThreadLimit limit{size_t(threads)};
         lodbake::Diagnostics d;
-        auto tree = mergeAll(f.lods, mergeOptions(f.dir + "/t" + std::to_string(threads)), d);
+        auto tree = mergeAll(f.lods, groupedOptions(f, f.dir + "/t" + std::to_string(threads)), d);
         ASSERT_TRUE(tree.ok()) << tree.status().message();
+        EXPECT_GE(tree->merge_levels, 2u);
+        EXPECT_TRUE(std::any_of(tree->merges.begin(), tree->merges.end(),
+                                [](const MergeFile& m) { return m.group_count == 0; })); // a merge that builds no level
     }
     const std::vector<std::string> one = filesIn(f.dir + "/t1"), two = filesIn(f.dir + "/t2");
     EXPECT_EQ(one.size(), f.lods.size() - 1);
@@ -331,6 +382,10 @@ TEST(PartitionMergeTest, MemoryBoundIsCheckedAndKept) {
     // The builder's allowance dominates: the bound follows the roots, not the partitions.
     EXPECT_GT(bound, kClusterBuildBytesPerTriangle * probe->seed_triangles);
     EXPECT_LT(bound, (uint64_t(3) << 20) + 400 * uint64_t(probe->seed_triangles));
+    // mergeAll sizes its jobs by the same bound, summed over the inputs.
+    auto a = mergeInputSize(f.lods[0]), b = mergeInputSize(f.lods[1]);
+    ASSERT_TRUE(a.ok() && b.ok());
+    EXPECT_EQ(bound, kMergeFixedBytes + a->boundBytes() + b->boundBytes());
     o.work_dir = f.dir + "/exact";
     o.memory_limit_bytes = bound;
     auto exact = mergePartitionLods(f.lods[0], f.lods[1], o, d);

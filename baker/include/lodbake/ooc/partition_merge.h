@@ -2,9 +2,10 @@
 // The merge step of the out-of-core bake (docs/pipeline.md, "Merge jobs"): two neighbouring
 // hierarchy files (partition jobs' .lbplod, or merges' .lbpmrg) in, their roots taken as one level and
 // the hierarchy continued over both (continueClusterLod) until one root remains or a level stalls,
-// out as a content-hashed file. mergeAll pairs the partitions' files in leaf order, level by level,
-// until one file remains; assembleHierarchy renumbers the partitions' hierarchies and every merge
-// into one ClusterLodHierarchy when it fits in memory.
+// out as a content-hashed file. mergeAll merges the partitions' files over the partitioner's k-d tree,
+// round by round (each round one level, over as many k-d siblings per job as its bound fits) until
+// one file remains; assembleHierarchy renumbers the partitions' hierarchies and every merge into one
+// ClusterLodHierarchy when it fits in memory.
 //
 // Welding: a root vertex at a position of its file's recorded border is the input vertex of that
 // global id (border positions are bit-identical on both sides, the border lock keeps them), so the
@@ -66,6 +67,7 @@ struct MergeOptions {
     ClusterLodOptions cluster; // for mergeAll: the top merge's (its max_levels included)
     uint32_t levels_per_job = kLevelsPerJob; // mergeAll, every merge but the top; 0: as many as it can
     MergePairing pairing = MergePairing::KdSiblings; // mergeAll
+    bool group_by_memory = true; // mergeAll: a job joins as many k-d siblings as fit (see mergeAll)
 };
 
 /// What a merge job wrote.
@@ -79,7 +81,7 @@ struct MergeFile {
     uint32_t seed_triangles = 0; // T_r
     uint32_t shared_edges = 0;   // border edges the two inputs shared (now interior)
     uint32_t cluster_count = 0, group_count = 0, root_count = 0, level_count = 0;
-    uint32_t root_triangles = 0; // of the new roots
+    uint32_t root_vertices = 0, root_triangles = 0; // of the new roots
     uint32_t border_vertex_count = 0, border_edge_count = 0;
     bool reached_single_group = false;
     uint64_t memory_bound_bytes = 0;
@@ -119,23 +121,44 @@ struct MergedLod {
 /// Reads and checks a file written by mergePartitionLods (layout in docs/pipeline.md, "Merge jobs").
 Result<MergedLod> readMergeFile(const std::string& path);
 
+/// The merge job's fixed allowance: the buffer that hashes an input and the output's write buffer.
+constexpr uint64_t kMergeFixedBytes = uint64_t(2) << 20;
+
+/// What one input adds to a merge job's bound: its roots, their geometry and its border.
+struct MergeInputSize {
+    uint64_t roots = 0, root_vertices = 0, root_triangles = 0, border_vertices = 0, border_edges = 0;
+    /// kMergeBytesPerRoot R + 48 V_r + (15 + kClusterBuildBytesPerTriangle) T_r + 64 B + 32 E. A merge's
+    /// bound is kMergeFixedBytes plus its two inputs'; a merge that builds no level keeps its inputs'
+    /// roots and at most their borders, so its output adds at most the sum of its inputs'.
+    uint64_t boundBytes() const;
+};
+
+/// Reads a hierarchy file's header and root records (hashing it, as a merge does) and returns what it
+/// adds to a merge job's bound. Errors as mergePartitionLods's for that input.
+Result<MergeInputSize> mergeInputSize(const std::string& path);
+
 /// The merge tree of a set of partition hierarchies.
 struct MergeTree {
     std::vector<std::string> partitions; // the .lbplod files, leaf order
-    std::vector<MergeFile> merges;       // in the order run: level by level, pairs in leaf order
+    std::vector<MergeFile> merges;       // in the order run: round by round, jobs in leaf order
     std::string top;                     // the file that holds the root(s): the last merge, or the
                                          // only partition
-    uint32_t merge_levels = 0;
+    uint32_t merge_levels = 0;           // rounds
     uint64_t largest_memory_bound = 0;   // over the merge jobs
     uint64_t largest_accounted_peak = 0;
 };
 
-/// Merges the partitions' hierarchy files (in leaf order) pairwise, level by level, as a binary tree
-/// over them (options.pairing): at tree height 1 the sibling leaves are merged, at height h the
-/// nodes whose two children are done, in leaf order; a file whose sibling is a larger subtree is
-/// carried up until that subtree is merged. Every merge but the top builds at most
-/// options.levels_per_job levels; the top builds on as far as it can. The jobs run one after the other, each under options.memory_limit_bytes. On an error every
-/// merge file the run wrote is removed.
+/// Merges the partitions' hierarchy files (in leaf order) over a binary tree (options.pairing), in
+/// rounds. With group_by_memory, a round takes each highest node not yet merged whose files below
+/// (the previous rounds' outputs) fit one merge job's bound together (kMergeFixedBytes plus their
+/// MergeInputSize::boundBytes) and runs the merges under it, children first: those below it build no
+/// level (their output carries their inputs' roots, the shared cut no longer on the border), the one
+/// at the node builds the round's level. A node whose two children are done is merged even when its
+/// subtree fits no further. Without group_by_memory every round merges the nodes whose two children
+/// are done (tree height h in round h), a file whose sibling is a larger subtree waiting. Every job
+/// but the top builds at most options.levels_per_job levels; the top builds on as far as it can. The
+/// jobs run one after the other, each under options.memory_limit_bytes. On an error every merge file
+/// the run wrote is removed.
 Result<MergeTree> mergeAll(const std::vector<std::string>& partition_lods, const MergeOptions& options,
                            Diagnostics& diagnostics);
 
