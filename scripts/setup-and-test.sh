@@ -35,8 +35,9 @@ ctest --test-dir "$build_dir" --output-on-failure --parallel "$jobs" --timeout 9
 step "release tests"
 
 if [ "${LODBAKE_SKIP_SANITIZERS:-0}" != 1 ]; then
-    # One instrumented tree serves both the test suite and the fuzzers: -fsanitize=fuzzer-no-link
-    # (added by LODBAKE_BUILD_FUZZERS to lodbake_lib and lodrt) only adds coverage counters.
+    # One instrumented tree serves both the test suite and the fuzzers: LODBAKE_BUILD_FUZZERS adds
+    # -fsanitize=fuzzer-no-link (coverage instrumentation) to lodrt, and compiles the baker's readers
+    # once more with it for the fuzz targets (lodbake_fuzz_readers, tests/fuzz/CMakeLists.txt).
     asan_dir=${LODBAKE_ASAN_BUILD_DIR:-build-asan}
     sanitize="-fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer"
     CC=clang CXX=clang++ cmake -S . -B "$asan_dir" -G Ninja -DCMAKE_BUILD_TYPE=Release \
