@@ -3,7 +3,8 @@
 #  1. install dependencies (scripts/install-deps.sh; only what is missing);
 #  2. Release build with warnings as errors, every test with CTest;
 #  3. sanitizer build (Clang, AddressSanitizer + UndefinedBehaviorSanitizer, findings abort; the
-#     runtime still without exceptions), every test again, plus the libFuzzer targets;
+#     runtime still without exceptions), every test again but those labelled `heavy`, plus the
+#     libFuzzer targets;
 #  4. fuzz smoke: each fuzz target for LODBAKE_FUZZ_SMOKE_SECONDS (default 8) from its seeds, one
 #     target per core at a time.
 # Set LODBAKE_SKIP_SANITIZERS=1 to stop after step 2. Timings of each step are printed at the end.
@@ -34,8 +35,9 @@ ctest --test-dir "$build_dir" --output-on-failure --parallel "$jobs" --timeout 9
 step "release tests"
 
 if [ "${LODBAKE_SKIP_SANITIZERS:-0}" != 1 ]; then
-    # One instrumented tree serves both the test suite and the fuzzers: -fsanitize=fuzzer-no-link
-    # (added by LODBAKE_BUILD_FUZZERS to lodbake_lib and lodrt) only adds coverage counters.
+    # One instrumented tree serves both the test suite and the fuzzers: LODBAKE_BUILD_FUZZERS adds
+    # -fsanitize=fuzzer-no-link (coverage instrumentation) to lodrt, and compiles the baker's readers
+    # once more with it for the fuzz targets (lodbake_fuzz_readers, tests/fuzz/CMakeLists.txt).
     asan_dir=${LODBAKE_ASAN_BUILD_DIR:-build-asan}
     sanitize="-fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer"
     CC=clang CXX=clang++ cmake -S . -B "$asan_dir" -G Ninja -DCMAKE_BUILD_TYPE=Release \
@@ -50,10 +52,14 @@ if [ "${LODBAKE_SKIP_SANITIZERS:-0}" != 1 ]; then
     # Packs must not depend on the compiler: shared scans baked by both trees, sha256 compared.
     scripts/compare-compilers.sh "$build_dir" "$asan_dir"
     step "compiler comparison"
-    # Asserts stay on in this build (no NDEBUG). Leaks are reported too.
+    # Asserts stay on in this build (no NDEBUG). Leaks are reported too. Tests labelled `heavy` (big
+    # scans again, whole-batch byte identity; never a truncation, corruption or fuzz test) ran in the
+    # Release step and are left out here (tests/CMakeLists.txt, docs/robustness.md).
+    echo "sanitizer tests: leaving out the tests labelled heavy:"
+    ctest --test-dir "$asan_dir" -N -L heavy | grep -E '^ *Test +#' || true
     ASAN_OPTIONS=abort_on_error=1:detect_leaks=1:strict_string_checks=1:detect_stack_use_after_return=1 \
         UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
-        ctest --test-dir "$asan_dir" --output-on-failure --parallel "$jobs" --timeout 1800
+        ctest --test-dir "$asan_dir" --output-on-failure --parallel "$jobs" --timeout 1800 -LE heavy
     step "sanitizer tests"
 
     smoke=${LODBAKE_FUZZ_SMOKE_SECONDS:-8}

@@ -45,6 +45,7 @@ import subprocess
 import sys
 import zlib
 
+XVFB_WRAPPER = os.path.join(os.path.dirname(os.path.abspath(__file__)), "lodview_xvfb.sh")
 CLEAR = (158, 178, 199)  # glClearColor(0.62, 0.70, 0.78) in 8 bits
 FRAME_FIELDS = {
     "frame": int, "eye": list, "frame_ms": float, "cpu_ms": float, "gpu_ms": float, "cull_ms": float,
@@ -132,7 +133,8 @@ def self_test():
 def lodview(args, name, extra):
     prefix = os.path.join(args.out, name)
     report = prefix + ".json"
-    cmd = [args.xvfb_run, "-a", "-s", "-screen 0 640x480x24", args.lodview, *args.packs, "--headless",
+    # lodview's own exit status, not xvfb-run's (which can fail its clean-up after lodview is done).
+    cmd = [XVFB_WRAPPER, args.xvfb_run, "640x480x24", args.lodview, *args.packs, "--headless",
            "--frames", str(FRAMES), "--size", f"{WIDTH}x{HEIGHT}", "--grid", str(GRID), "--report", report,
            "--screenshot", prefix, "--shots", f"0,{FRAMES // 2}", *extra]
     print("+", " ".join(cmd), flush=True)
