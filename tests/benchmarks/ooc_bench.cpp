@@ -269,8 +269,8 @@ int runPagesMode(int argc, char** argv) {
         else if (a == "--threads" && i + 1 < argc) threads = std::atoi(argv[++i]);
         else if (a == "--scan" && i + 1 < argc) given_scan = argv[++i];
         else {
-            std::fprintf(stderr, "usage: ooc_bench --pages [--scan FILE | --triangles N] [--memory-limit MIB] [--dir DIR] "
-                                 "[--threads N] [--check]\n");
+            std::fprintf(stderr, "usage: ooc_bench --pages [--scan FILE | --triangles N] [--memory-limit MIB] "
+                                 "[--dir DIR] [--threads N] [--check]\n");
             return 2;
         }
     }
@@ -356,7 +356,8 @@ int runPagesMode(int argc, char** argv) {
     std::printf("streamed: peak RSS %.1f MiB above its start (%.1f MiB); table bound %.1f MiB, accounted %.1f MiB; "
                 "writer bound %.1f MiB, accounted %.1f MiB; %.1f MiB read from the files\n",
                 pages.peak_mib - streamed_start, streamed_start, double(streamed.table_bound_bytes) / 1048576.0,
-                double(streamed.table_accounted_bytes) / 1048576.0, double(streamed.pack.memory_bound_bytes) / 1048576.0,
+                double(streamed.table_accounted_bytes) / 1048576.0,
+                double(streamed.pack.memory_bound_bytes) / 1048576.0,
                 double(streamed.pack.accounted_peak_bytes) / 1048576.0, double(streamed.bytes_read) / 1048576.0);
     std::printf("in memory: peak RSS %.1f MiB above its start (%.1f MiB)\n", memory.peak_mib - memory_start,
                 memory_start);

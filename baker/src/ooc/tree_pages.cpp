@@ -17,15 +17,38 @@ namespace lodbake::ooc {
 namespace {
 
 constexpr uint32_t kNone = lodrt::kClusterNone;
-constexpr size_t kPartitionHeader = 8 + 8 + 4 * 11; // magic, source hash, 11 counts
+constexpr size_t kPartitionHeader = 8 + 8 + 4 * 11;  // magic, source hash, 11 counts
 constexpr size_t kMergeHeader = 8 + 16 + 8 + 4 * 11; // magic, 2 input hashes, 2 kinds, 11 counts
 constexpr uint64_t kSeedRecord = 44;
 constexpr uint32_t kRecordsPerRead = 1024; // cluster records read at once (60 KiB)
 static_assert(sizeof(lodrt::ClusterLodCluster) == 60 && sizeof(lodrt::ClusterLodGroup) == 48, "record layout");
 
 // The counts both layouts share, in header order, and the arrays in file order.
-enum Count { kClusters, kGroups, kChildren, kRoots, kPositions, kTriangles, kLod0, kLevels, kSingle, kBorderVerts, kBorderEdges };
-enum Array { aClusters, aGroups, aChildren, aRoots, aPositions, aIndices, aBorderIds, aBorderPositions, aBorderEdges, aSeeds };
+enum Count {
+    kClusters,
+    kGroups,
+    kChildren,
+    kRoots,
+    kPositions,
+    kTriangles,
+    kLod0,
+    kLevels,
+    kSingle,
+    kBorderVerts,
+    kBorderEdges
+};
+enum Array {
+    aClusters,
+    aGroups,
+    aChildren,
+    aRoots,
+    aPositions,
+    aIndices,
+    aBorderIds,
+    aBorderPositions,
+    aBorderEdges,
+    aSeeds
+};
 
 // A file's header as read, with its arrays' offsets.
 struct Head {
@@ -36,8 +59,7 @@ struct Head {
     int64_t mtime_ns = 0;
 };
 
-template <class T>
-uint64_t bytesOf(const std::vector<T>& v) {
+template <class T> uint64_t bytesOf(const std::vector<T>& v) {
     return uint64_t(v.capacity()) * sizeof(T);
 }
 
@@ -132,8 +154,8 @@ uint64_t boundOf(const Files& files) {
         groups += c[kGroups];
         children += c[kChildren];
         per_file += kTreeTableBytesPerFile + 2 * (files.paths[i].size() + 1) + 4 * uint64_t(c[kRoots]);
-        transient = std::max(transient, 4 * uint64_t(c[kClusters]) +
-                                            std::max(merge ? kSeedRecord * c[kLod0] : 0, 60 * uint64_t(kRecordsPerRead)));
+        transient = std::max(transient, 4 * uint64_t(c[kClusters]) + std::max(merge ? kSeedRecord * c[kLod0] : 0,
+                                                                              60 * uint64_t(kRecordsPerRead)));
     }
     return 72 * clusters + 48 * groups + 4 * children + 4 * uint64_t(files.heads[files.top].counts[kRoots]) + per_file +
            transient;
@@ -197,7 +219,8 @@ Status readFile(Assembly& a, size_t f) {
     LODBAKE_RETURN_IF_ERROR(openRead(path, file));
     Head again;
     LODBAKE_RETURN_IF_ERROR(readHead(file.fd, path, h.merge, again));
-    if (again.size != h.size || again.mtime_ns != h.mtime_ns || std::memcmp(again.counts, h.counts, sizeof h.counts) != 0)
+    if (again.size != h.size || again.mtime_ns != h.mtime_ns ||
+        std::memcmp(again.counts, h.counts, sizeof h.counts) != 0)
         return corrupt(path, "changed while the table was read");
     const uint32_t own_base = a.next, group_base = a.groups;
     const uint32_t lod0 = c[kLod0];
@@ -207,12 +230,13 @@ Status readFile(Assembly& a, size_t f) {
     LODBAKE_RETURN_IF_ERROR(numberFile(a, f, file.fd, global, own_base));
     // Beside the global numbers: the seeds' records while numberFile ran, then the read buffer.
     std::vector<lodrt::ClusterLodCluster> buffer(kRecordsPerRead);
-    t.accounted_peak_bytes = std::max(t.accounted_peak_bytes,
-                                      a.held + bytesOf(global) + std::max(h.merge ? kSeedRecord * lod0 : 0, bytesOf(buffer)));
+    t.accounted_peak_bytes = std::max(
+        t.accounted_peak_bytes, a.held + bytesOf(global) + std::max(h.merge ? kSeedRecord * lod0 : 0, bytesOf(buffer)));
     for (uint32_t k = 0; k < c[kClusters]; ++k) {
         if (k % kRecordsPerRead == 0) {
             const uint32_t n = std::min<uint32_t>(kRecordsPerRead, c[kClusters] - k);
-            LODBAKE_RETURN_IF_ERROR(readAt(file.fd, h.offset[aClusters] + 60 * uint64_t(k), buffer.data(), 60 * size_t(n), path));
+            LODBAKE_RETURN_IF_ERROR(
+                readAt(file.fd, h.offset[aClusters] + 60 * uint64_t(k), buffer.data(), 60 * size_t(n), path));
         }
         lodrt::ClusterLodCluster rec = buffer[k % kRecordsPerRead];
         const bool groups_ok = (rec.self_group == kNone || rec.self_group < c[kGroups]) &&
@@ -355,8 +379,9 @@ Result<TreeClusterTable> assembleClusterTable(const MergeTree& tree, uint64_t me
     return t;
 }
 
-TreePageSource::TreePageSource(const TreeClusterTable& table, size_t window_bytes)
-    : table_(table), fds_(table.files.size(), -1), window_(std::max<size_t>(window_bytes, 4096)) {}
+TreePageSource::TreePageSource(const TreeClusterTable& table, size_t window_bytes, size_t max_open_files)
+    : table_(table), fds_(table.files.size(), -1), max_open_(std::max<size_t>(max_open_files, 1)),
+      window_(std::max<size_t>(window_bytes, 4096)) {}
 
 TreePageSource::~TreePageSource() {
     for (int fd : fds_)
@@ -365,6 +390,14 @@ TreePageSource::~TreePageSource() {
 
 Status TreePageSource::openFile(uint32_t file) {
     if (fds_[file] >= 0) return Status();
+    if (open_count_ >= max_open_) { // a tree of many files: close them all, reopen as needed
+        for (int& fd : fds_)
+            if (fd >= 0) {
+                ::close(fd);
+                fd = -1;
+            }
+        open_count_ = 0;
+    }
     const TreeFile& tf = table_.files[file];
     Closer f;
     LODBAKE_RETURN_IF_ERROR(openRead(tf.path, f));
@@ -375,6 +408,7 @@ Status TreePageSource::openFile(uint32_t file) {
                                     " bytes, has " + std::to_string(uint64_t(st.st_size)) + ")");
     fds_[file] = f.fd;
     f.fd = -1;
+    ++open_count_;
     return Status();
 }
 
@@ -388,8 +422,9 @@ Status TreePageSource::read(uint32_t file, uint64_t offset, void* data, size_t s
         window_file_ = ~0u;
         window_size_ = size_t(std::min<uint64_t>(window_.size(), tf.size - offset));
         Status s = readAt(fds_[file], offset, window_.data(), window_size_, tf.path);
-        if (!s.ok()) return corrupt(tf.path, "geometry: expected " + std::to_string(window_size_) + " bytes at " +
-                                                 std::to_string(offset) + " (" + s.message() + ")");
+        if (!s.ok())
+            return corrupt(tf.path, "geometry: expected " + std::to_string(window_size_) + " bytes at " +
+                                        std::to_string(offset) + " (" + s.message() + ")");
         window_file_ = file;
         window_offset_ = offset;
     }
@@ -405,8 +440,8 @@ Status TreePageSource::readCluster(uint32_t cluster, ClusterPageGeometry& out) {
     out.positions.resize(v + c.vertex_count);
     out.indices.resize(t + size_t(c.triangle_count) * 3);
     if (c.vertex_count > 0)
-        LODBAKE_RETURN_IF_ERROR(
-            read(at.file, tf.positions_offset + 12 * uint64_t(at.first_vertex), &out.positions[v], 12 * size_t(c.vertex_count)));
+        LODBAKE_RETURN_IF_ERROR(read(at.file, tf.positions_offset + 12 * uint64_t(at.first_vertex), &out.positions[v],
+                                     12 * size_t(c.vertex_count)));
     if (c.triangle_count > 0)
         LODBAKE_RETURN_IF_ERROR(read(at.file, tf.indices_offset + 3 * uint64_t(at.first_triangle), &out.indices[t],
                                      3 * size_t(c.triangle_count)));

@@ -160,6 +160,27 @@ TEST(TreePagesTest, TableIsTheAssembledHierarchysRecordsAndBoundsAreItsBounds) {
     ASSERT_TRUE(source.readPage(0, all.data(), all.size(), g).ok());
     EXPECT_EQ(g.positions, whole->positions);
     EXPECT_EQ(g.indices, whole->indices);
+    // One descriptor at a time: every file closed and reopened (and checked again) as reads move on.
+    TreePageSource one_open(*table, 4096, 1);
+    auto again = one_open.bounds();
+    ASSERT_TRUE(again.ok()) << again.status().message();
+    expectSameBounds(*again, *bounds);
+    lodbake::ClusterPageGeometry g1;
+    ASSERT_TRUE(one_open.readPage(0, all.data(), all.size(), g1).ok());
+    EXPECT_EQ(g1.positions, whole->positions);
+    EXPECT_EQ(g1.indices, whole->indices);
+
+    // A tree of one partition (its own top) gives its hierarchy's records.
+    MergeTree single;
+    single.partitions = {t.tree.partitions[0]};
+    single.top = t.tree.partitions[0];
+    auto one = assembleHierarchy(single, uint64_t(1) << 30);
+    auto one_table = assembleClusterTable(single, uint64_t(1) << 30);
+    ASSERT_TRUE(one.ok() && one_table.ok());
+    ASSERT_EQ(one_table->clusters.size(), one->clusters.size());
+    EXPECT_EQ(0, std::memcmp(one_table->clusters.data(), one->clusters.data(), one->clusters.size() * 60));
+    EXPECT_EQ(one_table->roots, one->roots);
+    EXPECT_EQ(one_table->group_children, one->group_children);
 
     // A limit below the bound is refused, naming the top file and the minimum.
     auto refused = assembleClusterTable(t.tree, *bound - 1);
@@ -254,7 +275,8 @@ TEST(TreePagesTest, TruncatedOrChangedFileAndCancelLeaveNoSpill) {
         EXPECT_EQ(bounds.status().code(), lodbake::StatusCode::InvalidInput);
         EXPECT_EQ(bounds.status().message().rfind(victim + ": changed since", 0), 0u) << bounds.status().message();
         TreePageSource pages(*table);
-        auto s = lodbake::writeClusterLodPackStreamed(table->view(), before, pages, out, lodbake::ClusterPackStreamOptions());
+        auto s = lodbake::writeClusterLodPackStreamed(table->view(), before, pages, out,
+                                                      lodbake::ClusterPackStreamOptions());
         ASSERT_FALSE(s.ok());
         EXPECT_EQ(s.status().message().rfind(victim + ": ", 0), 0u) << s.status().message();
         EXPECT_TRUE(filesIn(out_dir).empty());
@@ -263,7 +285,8 @@ TEST(TreePagesTest, TruncatedOrChangedFileAndCancelLeaveNoSpill) {
     auto refused = assembleClusterTable(t.tree, uint64_t(1) << 30);
     ASSERT_FALSE(refused.ok());
     EXPECT_EQ(refused.status().code(), lodbake::StatusCode::InvalidInput);
-    EXPECT_EQ(refused.status().message().rfind(victim + ": header: the counts need", 0), 0u) << refused.status().message();
+    EXPECT_EQ(refused.status().message().rfind(victim + ": header: the counts need", 0), 0u)
+        << refused.status().message();
     auto s = writeTreeClusterPages(t.tree, out, TreePagesOptions());
     ASSERT_FALSE(s.ok());
     EXPECT_EQ(s.status().message().rfind(victim + ": ", 0), 0u) << s.status().message();

@@ -18,7 +18,7 @@
 //                                                   or the cluster records read 1,024 at a time)
 // computed from the files' headers before any record is read; a limit below it is a ResourceLimit
 // error naming the top file and the minimum. The page source holds its window (64 KiB by default)
-// and one descriptor per file.
+// and at most 64 file descriptors.
 
 #include <atomic>
 #include <cstddef>
@@ -67,10 +67,10 @@ struct TreeClusterTable {
     uint32_t level_count = 0; // deepest group
     bool reached_single_group = false;
     uint32_t vertex_count = 0, triangle_count = 0; // of the concatenation
-    std::vector<TreeFile> files;        // the partitions in leaf order, then the merges as run
-    std::vector<ClusterLocator> locators; // per cluster
-    uint64_t memory_bound_bytes = 0;      // the formula above
-    uint64_t accounted_peak_bytes = 0;    // the arrays held at most
+    std::vector<TreeFile> files;                   // the partitions in leaf order, then the merges as run
+    std::vector<ClusterLocator> locators;          // per cluster
+    uint64_t memory_bound_bytes = 0;               // the formula above
+    uint64_t accounted_peak_bytes = 0;             // the arrays held at most
 
     /// A view for the pack writer; valid while this object lives and is unchanged.
     lodrt::ClusterLodView view() const;
@@ -84,13 +84,15 @@ Result<uint64_t> clusterTableBound(const MergeTree& tree);
 /// read); a limit below the bound is ResourceLimit.
 Result<TreeClusterTable> assembleClusterTable(const MergeTree& tree, uint64_t memory_limit_bytes);
 
-/// The geometry of a table's clusters read from its files: each file opened once (on first use) and
-/// checked against the size and modification time the table saw; reads go through one window of
-/// `window_bytes`, refilled by pread where a read falls outside it. A short read or a changed file is
-/// an InvalidInput error naming the file.
+/// The geometry of a table's clusters read from its files: each file opened on first use and kept
+/// open (at most `max_open_files` at once, at least 1: beyond, every descriptor is closed and files
+/// are reopened as needed), checked at every opening against the size and modification time the
+/// table saw; reads go through one window of `window_bytes`, refilled by pread where a read falls
+/// outside it. A short read or a changed file is an InvalidInput error naming the file.
 class TreePageSource : public ClusterPageSource {
 public:
-    explicit TreePageSource(const TreeClusterTable& table, size_t window_bytes = size_t(64) << 10);
+    explicit TreePageSource(const TreeClusterTable& table, size_t window_bytes = size_t(64) << 10,
+                            size_t max_open_files = 64);
     ~TreePageSource() override;
     TreePageSource(const TreePageSource&) = delete;
     TreePageSource& operator=(const TreePageSource&) = delete;
@@ -107,6 +109,7 @@ public:
 private:
     const TreeClusterTable& table_;
     std::vector<int> fds_;
+    size_t max_open_ = 64, open_count_ = 0;
     std::vector<uint8_t> window_;
     uint32_t window_file_ = ~0u;
     uint64_t window_offset_ = 0;
