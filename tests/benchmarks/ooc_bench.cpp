@@ -354,7 +354,7 @@ int runPagesMode(int argc, char** argv) {
     printStage("streamed tree pages", pages, t, nullptr);
     printStage("assemble + in-memory pack", memory, t, nullptr);
     std::printf("streamed: peak RSS %.1f MiB above its start (%.1f MiB); table bound %.1f MiB, accounted %.1f MiB; "
-                "writer bound %.1f MiB, accounted %.1f MiB; %.1f MiB read from the files\n",
+                "writer bound %.1f MiB, accounted %.1f MiB; %.1f MiB of geometry read back\n",
                 pages.peak_mib - streamed_start, streamed_start, double(streamed.table_bound_bytes) / 1048576.0,
                 double(streamed.table_accounted_bytes) / 1048576.0,
                 double(streamed.pack.memory_bound_bytes) / 1048576.0,

@@ -103,7 +103,7 @@ public:
     /// clusterPackBounds(assembleHierarchy(tree)).
     Result<ClusterPackBounds> bounds();
 
-    /// Bytes read from the files so far.
+    /// Geometry bytes handed out so far (the window may read somewhat more from the files).
     uint64_t bytesRead() const { return bytes_read_; }
 
 private:
@@ -130,7 +130,7 @@ struct TreePagesResult {
     ClusterPackStreamResult pack; // the extension, its spilled pages and the writer's memory figures
     uint64_t table_bound_bytes = 0;
     uint64_t table_accounted_bytes = 0;
-    uint64_t bytes_read = 0; // from the tree's files, bounds pass and pages
+    uint64_t bytes_read = 0; // geometry handed out by the source: the bounds pass and the pages
     uint32_t cluster_count = 0;
 };
 
