@@ -49,18 +49,24 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <string>
 #include <system_error>
 #include <vector>
 
+#include <malloc.h>
 #include <sys/resource.h>
 
 #include "bench_bar.h"
+#include "core/parallel.h"
+#include "lodbake/core/file_io.h"
 #include "lodbake/io/mesh_io.h"
 #include "lodbake/io/mesh_stream.h"
 #include "lodbake/ooc/partition.h"
 #include "lodbake/ooc/partition_build.h"
 #include "lodbake/ooc/partition_merge.h"
+#include "lodbake/ooc/tree_pages.h"
+#include "lodbake/pack/cluster_lod_pack.h"
 #include "scansim.h"
 
 namespace {
@@ -278,9 +284,148 @@ void printSeedSpread(const std::string& scan, uint64_t seeds, const lodbake::Clu
     std::printf("merged / largest in-memory error over seeds 1..%llu: largest %.3f\n", (unsigned long long)seeds, beyond);
 }
 
+// --pages: partition + build + merge a scan (as --cluster does), then write the merge tree's
+// LODBAKE_cluster_lod pages without its geometry (ooc::writeTreeClusterPages: the table from the
+// files' records, the pages read back by offset, spilled) against the in-memory path
+// (ooc::assembleHierarchy + writeClusterLodPack), each stage's peak resident memory above the
+// resident memory at its start (after malloc_trim; VmHWM reset), and the same-bytes check (table
+// blob and pages).
+//   ooc_bench --pages [--scan FILE | --triangles N] [--memory-limit MIB] [--dir DIR] [--threads N] [--check]
+double residentMiB() {
+    std::ifstream status("/proc/self/status");
+    std::string line;
+    while (std::getline(status, line))
+        if (line.rfind("VmRSS:", 0) == 0) return std::strtod(line.c_str() + 6, nullptr) / 1024.0;
+    return NAN;
+}
+
+int runPagesMode(int argc, char** argv) {
+    const bool check = lodbake_bench::takeCheckFlag(argc, argv);
+    uint64_t triangles = 2000000, limit_mib = 1024;
+    int threads = 0;
+    std::string dir = LODBAKE_BENCH_OUT_DIR, given_scan;
+    for (int i = 1; i < argc; ++i) {
+        const std::string a = argv[i];
+        if (a == "--triangles" && i + 1 < argc) triangles = std::strtoull(argv[++i], nullptr, 10);
+        else if (a == "--memory-limit" && i + 1 < argc) limit_mib = std::strtoull(argv[++i], nullptr, 10);
+        else if (a == "--dir" && i + 1 < argc) dir = argv[++i];
+        else if (a == "--threads" && i + 1 < argc) threads = std::atoi(argv[++i]);
+        else if (a == "--scan" && i + 1 < argc) given_scan = argv[++i];
+        else {
+            std::fprintf(stderr, "usage: ooc_bench --pages [--scan FILE | --triangles N] [--memory-limit MIB] "
+                                 "[--dir DIR] [--threads N] [--check]\n");
+            return 2;
+        }
+    }
+    std::error_code ec;
+    std::filesystem::create_directories(dir, ec);
+    const std::string scan = given_scan.empty() ? dir + "/ooc_bench_pages_scan.ply" : given_scan;
+    const std::string work = dir + "/ooc_bench_pages_work", lods = dir + "/ooc_bench_pages_lods";
+    if (given_scan.empty()) {
+        lodbake::scansim::SurfaceOptions surface;
+        surface.triangles = triangles;
+        if (auto r = lodbake::scansim::writeSurfacePly(surface, scan); !r.ok()) fail(r.status());
+    }
+    std::unique_ptr<lodbake::ScopedThreadLimit> limit;
+    if (threads > 0) limit = std::make_unique<lodbake::ScopedThreadLimit>(size_t(threads));
+    lodbake::ooc::PartitionSet set;
+    lodbake::ooc::MergeTree tree;
+    const Stage build = measure([&] {
+        lodbake::Diagnostics d;
+        lodbake::ooc::PartitionOptions po;
+        po.work_dir = work;
+        po.memory_limit_bytes = limit_mib << 20;
+        po.threads = threads;
+        po.build_bytes_per_triangle = lodbake::ooc::kPartitionBuildBytesPerTriangle;
+        auto r = lodbake::ooc::partitionMesh(scan, po, d);
+        if (!r.ok()) fail(r.status());
+        set = std::move(*r);
+        lodbake::ooc::PartitionBuildOptions bo;
+        bo.work_dir = lods;
+        bo.memory_limit_bytes = limit_mib << 20;
+        if (set.partitions.size() > 1) bo.cluster.max_levels = lodbake::ooc::kLevelsPerJob;
+        std::vector<std::string> files;
+        for (const lodbake::ooc::PartitionFile& f : set.partitions) {
+            auto b = lodbake::ooc::buildPartition(f.path, bo, d);
+            if (!b.ok()) fail(b.status());
+            files.push_back(b->path);
+        }
+        lodbake::ooc::MergeOptions mo;
+        mo.work_dir = lods;
+        mo.memory_limit_bytes = limit_mib << 20;
+        auto m = lodbake::ooc::mergeAll(files, mo, d);
+        if (!m.ok()) fail(m.status());
+        tree = std::move(*m);
+    });
+    uint64_t t = 0;
+    for (const lodbake::ooc::PartitionFile& f : set.partitions) t += f.triangle_count;
+    uint64_t file_bytes = 0;
+    for (const std::string& f : tree.partitions) file_bytes += std::filesystem::file_size(f, ec);
+    for (const lodbake::ooc::MergeFile& m : tree.merges) file_bytes += std::filesystem::file_size(m.path, ec);
+    std::printf("scan: %llu triangles (%s); %zu partitions, %zu merges, hierarchy files %.1f MiB\n",
+                (unsigned long long)t, scan.c_str(), tree.partitions.size(), tree.merges.size(),
+                double(file_bytes) / 1048576.0);
+    printStage("partition + build + merge", build, t, nullptr);
+
+    const std::string out = dir + "/ooc_bench_pages.glb";
+    lodbake::ooc::TreePagesResult streamed;
+    malloc_trim(0); // the build's freed heap back to the system, so the stages start from what is live
+    const double streamed_start = residentMiB();
+    const Stage pages = measure([&] {
+        lodbake::ooc::TreePagesOptions o;
+        o.memory_limit_bytes = limit_mib << 20;
+        auto r = lodbake::ooc::writeTreeClusterPages(tree, out, o);
+        if (!r.ok()) fail(r.status());
+        streamed = std::move(*r);
+    });
+    std::vector<uint8_t> memory_table, memory_pages;
+    uint32_t clusters = 0;
+    malloc_trim(0);
+    const double memory_start = residentMiB();
+    const Stage memory = measure([&] {
+        auto h = lodbake::ooc::assembleHierarchy(tree, uint64_t(16) << 30);
+        if (!h.ok()) fail(h.status());
+        auto p = lodbake::writeClusterLodPack(*h, lodbake::ClusterPackOptions());
+        if (!p.ok()) fail(p.status());
+        clusters = uint32_t(h->clusters.size());
+        memory_table = std::move(p->extension.blobs[0]);
+        memory_pages = std::move(p->extension.blobs[1]);
+    });
+    auto spill = lodbake::readFileBytes(streamed.pack.pages->tempPath());
+    if (!spill.ok()) fail(spill.status());
+    const bool same = streamed.pack.extension.blobs[0] == memory_table && *spill == memory_pages;
+    printStage("streamed tree pages", pages, t, nullptr);
+    printStage("assemble + in-memory pack", memory, t, nullptr);
+    std::printf("streamed: peak RSS %.1f MiB above its start (%.1f MiB); table bound %.1f MiB, accounted %.1f MiB; "
+                "writer bound %.1f MiB, accounted %.1f MiB; %.1f MiB of geometry read back\n",
+                pages.peak_mib - streamed_start, streamed_start, double(streamed.table_bound_bytes) / 1048576.0,
+                double(streamed.table_accounted_bytes) / 1048576.0,
+                double(streamed.pack.memory_bound_bytes) / 1048576.0,
+                double(streamed.pack.accounted_peak_bytes) / 1048576.0, double(streamed.bytes_read) / 1048576.0);
+    std::printf("in memory: peak RSS %.1f MiB above its start (%.1f MiB)\n", memory.peak_mib - memory_start,
+                memory_start);
+    std::printf("%u clusters; table %zu bytes, pages %zu bytes: %s\n", clusters, memory_table.size(),
+                memory_pages.size(), same ? "same bytes" : "DIFFERENT BYTES");
+    streamed = lodbake::ooc::TreePagesResult();
+    for (const lodbake::ooc::MergeFile& m : tree.merges) std::filesystem::remove(m.path, ec);
+    for (const std::string& f : tree.partitions) std::filesystem::remove(f, ec);
+    std::filesystem::remove(lods, ec);
+    lodbake::ooc::removePartitionFiles(set);
+    std::filesystem::remove(work, ec);
+    if (given_scan.empty()) std::filesystem::remove(scan, ec);
+
+    lodbake_bench::Bars bars("ooc_bench --pages");
+    bars.absolute("streamed tree pages: same table and pages bytes (1 = yes)", same ? 1.0 : 0.0, 1.0,
+                  lodbake_bench::Limit::AtLeast);
+    bars.absolute("streamed tree pages peak RSS MiB <= memory limit", pages.peak_mib, double(limit_mib),
+                  lodbake_bench::Limit::AtMost, memory.peak_mib);
+    return bars.finish(check);
+}
+
 } // namespace
 
 int main(int argc, char** argv) {
+    if (argc > 1 && std::string(argv[1]) == "--pages") return runPagesMode(argc - 1, argv + 1);
     const bool check = lodbake_bench::takeCheckFlag(argc, argv);
     uint64_t triangles = 10000000, limit_mib = 1024;
     int threads = 0;
