@@ -363,7 +363,16 @@ Result<ClusterPagesWritten> writeClusterPages(const lodrt::ClusterLodView& t, co
             slot.clusters = plan.page_clusters.data() + plan.page_first[p];
             slot.count = plan.page_first[p + 1] - plan.page_first[p];
             slot.triangles = 0;
-            for (size_t k = 0; k < slot.count; ++k) slot.triangles += t.clusters[slot.clusters[k]].triangle_count;
+            size_t vertices = 0;
+            for (size_t k = 0; k < slot.count; ++k) {
+                slot.triangles += t.clusters[slot.clusters[k]].triangle_count;
+                vertices += t.clusters[slot.clusters[k]].vertex_count;
+            }
+            // An array larger than this page needs is given back: positions kept from one page beside
+            // indices kept from another could hold more than the largest page, which the bound counts.
+            if (slot.geometry.positions.capacity() > vertices) std::vector<Vec3f>().swap(slot.geometry.positions);
+            if (slot.geometry.indices.capacity() > 3 * slot.triangles)
+                std::vector<uint8_t>().swap(slot.geometry.indices);
             slot.geometry.positions.clear();
             slot.geometry.indices.clear();
             LODBAKE_RETURN_IF_ERROR(source.readPage(p, slot.clusters, slot.count, slot.geometry));
