@@ -1,6 +1,8 @@
 #pragma once
 // Tiny hand-built meshes for unit tests (pmp tests/helpers.h style).
 
+#include <cmath>
+#include <cstdint>
 #include <initializer_list>
 
 #include "lodbake/core/mesh.h"
@@ -35,5 +37,30 @@ inline lodbake::Mesh finEdge() {
 
 /// A quad split into two triangles (open: 4 boundary edges in one loop).
 inline lodbake::Mesh quad() { return makeMesh({{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}}, {0, 1, 2, 0, 2, 3}); }
+
+/// A bumpy closed sphere: a latitude-longitude grid of `rings` x `segments` with the poles welded.
+inline lodbake::Mesh bumpySphere(int rings, int segments) {
+    using lodbake::Vec3f;
+    lodbake::Mesh m;
+    const float pi = 3.14159265f;
+    m.positions.push_back(Vec3f(0, 0, 1));
+    for (int r = 1; r < rings; ++r)
+        for (int s = 0; s < segments; ++s) {
+            const float th = pi * float(r) / float(rings), ph = 2 * pi * float(s) / float(segments);
+            const float bump = 1.0f + 0.05f * std::sin(5 * ph) * std::sin(4 * th);
+            m.positions.push_back(
+                Vec3f(bump * std::sin(th) * std::cos(ph), bump * std::sin(th) * std::sin(ph), bump * std::cos(th)));
+        }
+    m.positions.push_back(Vec3f(0, 0, -1));
+    const uint32_t south = uint32_t(m.positions.size() - 1);
+    auto at = [&](int r, int s) { return uint32_t(1 + (r - 1) * segments + (s % segments)); };
+    for (int s = 0; s < segments; ++s) m.indices.insert(m.indices.end(), {0, at(1, s), at(1, s + 1)});
+    for (int r = 1; r + 1 < rings; ++r)
+        for (int s = 0; s < segments; ++s)
+            m.indices.insert(m.indices.end(), {at(r, s), at(r + 1, s), at(r + 1, s + 1), at(r, s), at(r + 1, s + 1),
+                                               at(r, s + 1)});
+    for (int s = 0; s < segments; ++s) m.indices.insert(m.indices.end(), {south, at(rings - 1, s + 1), at(rings - 1, s)});
+    return m;
+}
 
 } // namespace lodbake_test

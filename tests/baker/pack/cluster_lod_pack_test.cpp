@@ -33,6 +33,7 @@
 #include "lodrt/cluster_pack.h"
 #include "lodrt/format.h"
 #include "lodrt/pack.h"
+#include "mesh_builders.h"
 #include "test_paths.h"
 
 namespace {
@@ -41,29 +42,7 @@ using lodbake::ClusterLodHierarchy;
 using lodbake::Mesh;
 using lodbake::Vec3f;
 
-// A bumpy closed sphere: latitude-longitude grid with the poles welded.
-Mesh bumpySphere(int rings, int segments) {
-    Mesh m;
-    const float pi = 3.14159265f;
-    m.positions.push_back(Vec3f(0, 0, 1));
-    for (int r = 1; r < rings; ++r)
-        for (int s = 0; s < segments; ++s) {
-            const float th = pi * float(r) / float(rings), ph = 2 * pi * float(s) / float(segments);
-            const float bump = 1.0f + 0.05f * std::sin(5 * ph) * std::sin(4 * th);
-            m.positions.push_back(
-                Vec3f(bump * std::sin(th) * std::cos(ph), bump * std::sin(th) * std::sin(ph), bump * std::cos(th)));
-        }
-    m.positions.push_back(Vec3f(0, 0, -1));
-    const uint32_t south = uint32_t(m.positions.size() - 1);
-    auto at = [&](int r, int s) { return uint32_t(1 + (r - 1) * segments + (s % segments)); };
-    for (int s = 0; s < segments; ++s) m.indices.insert(m.indices.end(), {0, at(1, s), at(1, s + 1)});
-    for (int r = 1; r + 1 < rings; ++r)
-        for (int s = 0; s < segments; ++s)
-            m.indices.insert(m.indices.end(), {at(r, s), at(r + 1, s), at(r + 1, s + 1), at(r, s), at(r + 1, s + 1),
-                                               at(r, s + 1)});
-    for (int s = 0; s < segments; ++s) m.indices.insert(m.indices.end(), {south, at(rings - 1, s + 1), at(rings - 1, s)});
-    return m;
-}
+using lodbake_test::bumpySphere;
 
 ClusterLodHierarchy build(const Mesh& mesh) {
     lodbake::Diagnostics d;
