@@ -40,6 +40,9 @@
 //                  [--check]
 //   defaults: 10,000,000 triangles, 1024 MiB, DIR = the build's ooc_bench_out folder. --scan reads
 //   an existing file (made by lodbake_scansim --surface) instead of generating one, and keeps it.
+//
+// --driver runs the whole out-of-core bake through ooc::buildOutOfCore on a scan file in a child
+// process and reports its peak RSS and throughput (runDriverMode below).
 
 #include <algorithm>
 #include <chrono>
@@ -56,12 +59,16 @@
 
 #include <malloc.h>
 #include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include "bench_bar.h"
 #include "core/parallel.h"
 #include "lodbake/core/file_io.h"
+#include "lodbake/core/hash.h"
 #include "lodbake/io/mesh_io.h"
 #include "lodbake/io/mesh_stream.h"
+#include "lodbake/ooc/driver.h"
 #include "lodbake/ooc/partition.h"
 #include "lodbake/ooc/partition_build.h"
 #include "lodbake/ooc/partition_merge.h"
@@ -422,10 +429,146 @@ int runPagesMode(int argc, char** argv) {
     return bars.finish(check);
 }
 
+
+// --driver: the whole out-of-core bake through ooc::buildOutOfCore (partitioner, partition jobs and
+// merge rounds side by side under one memory gate, streamed pages) on a scan file, in a child
+// process so that its peak resident memory (getrusage RUSAGE_CHILDREN ru_maxrss) is the run's alone:
+// wall time per stage, throughput in input triangles per second, peak RSS against the limit and the
+// accounted peak. --repeat N runs it N times and reports the medians.
+//   ooc_bench --driver --scan FILE [--memory-limit MIB] [--dir DIR] [--threads N] [--repeat N] [--check]
+struct DriverRun {
+    double seconds = 0, stage[4] = {0, 0, 0, 0}, peak_mib = 0, accounted_mib = 0;
+    uint64_t triangles = 0, partitions = 0, merges = 0, rounds = 0, clusters = 0, output_bytes = 0;
+    uint64_t output_hash = 0; // of the table blob and the pages file, to compare runs
+};
+
+// Runs the driver in a forked child, which writes its figures to a pipe.
+bool runDriverChild(const std::string& scan, const std::string& dir, uint64_t limit_mib, int threads, DriverRun& run) {
+    int fds[2];
+    if (pipe(fds) != 0) return false;
+    const auto t0 = Clock::now();
+    const pid_t pid = fork();
+    if (pid < 0) return false;
+    if (pid == 0) {
+        close(fds[0]);
+        std::unique_ptr<lodbake::ScopedThreadLimit> limit;
+        if (threads > 0) limit = std::make_unique<lodbake::ScopedThreadLimit>(size_t(threads));
+        lodbake::ooc::OutOfCoreOptions o;
+        o.work_dir = dir + "/ooc_bench_driver_work";
+        o.memory_limit_bytes = limit_mib << 20;
+        o.threads = threads;
+        lodbake::Diagnostics d;
+        const std::string out = dir + "/ooc_bench_driver_pages.bin";
+        auto r = lodbake::ooc::buildOutOfCore(scan, out, o, d);
+        if (!r.ok()) {
+            std::fprintf(stderr, "ooc_bench: %s\n", r.status().message().c_str());
+            _exit(1);
+        }
+        DriverRun c;
+        c.stage[0] = r->partition.seconds;
+        c.stage[1] = r->build.seconds;
+        c.stage[2] = r->merge.seconds;
+        c.stage[3] = r->pages.seconds;
+        c.accounted_mib = double(r->accounted_peak_bytes) / 1048576.0;
+        c.triangles = r->triangle_count;
+        c.partitions = r->partition_count;
+        c.merges = r->merge_count;
+        c.rounds = r->merge_rounds;
+        c.clusters = r->cluster_count;
+        std::error_code ec;
+        c.output_bytes = std::filesystem::file_size(out, ec);
+        {
+            lodbake::Hasher h;
+            h.addBytes(r->table.data(), r->table.size());
+            std::ifstream f(out, std::ios::binary);
+            std::vector<char> buf(size_t(1) << 20);
+            while (f.read(buf.data(), std::streamsize(buf.size())) || f.gcount() > 0)
+                h.addBytes(buf.data(), size_t(f.gcount()));
+            c.output_hash = h.digest();
+        }
+        std::filesystem::remove(out, ec);
+        const ssize_t w = write(fds[1], &c, sizeof c);
+        _exit(w == ssize_t(sizeof c) ? 0 : 1);
+    }
+    close(fds[1]);
+    DriverRun c;
+    const ssize_t got = read(fds[0], &c, sizeof c);
+    close(fds[0]);
+    int status = 0;
+    rusage u{};
+    if (wait4(pid, &status, 0, &u) != pid || !WIFEXITED(status) || WEXITSTATUS(status) != 0 || got != ssize_t(sizeof c))
+        return false;
+    run = c;
+    run.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+    run.peak_mib = double(u.ru_maxrss) / 1024.0;
+    return true;
+}
+
+double median(std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    return v.empty() ? NAN : v[v.size() / 2];
+}
+
+int runDriverMode(int argc, char** argv) {
+    const bool check = lodbake_bench::takeCheckFlag(argc, argv);
+    uint64_t limit_mib = 1024;
+    int threads = 0, repeat = 1;
+    std::string dir = LODBAKE_BENCH_OUT_DIR, scan;
+    for (int i = 1; i < argc; ++i) {
+        const std::string a = argv[i];
+        if (a == "--memory-limit" && i + 1 < argc) limit_mib = std::strtoull(argv[++i], nullptr, 10);
+        else if (a == "--dir" && i + 1 < argc) dir = argv[++i];
+        else if (a == "--threads" && i + 1 < argc) threads = std::atoi(argv[++i]);
+        else if (a == "--repeat" && i + 1 < argc) repeat = std::max(1, std::atoi(argv[++i]));
+        else if (a == "--scan" && i + 1 < argc) scan = argv[++i];
+        else {
+            std::fprintf(stderr, "usage: ooc_bench --driver --scan FILE [--memory-limit MIB] [--dir DIR] [--threads N] "
+                                 "[--repeat N] [--check]\n");
+            return 2;
+        }
+    }
+    if (scan.empty()) {
+        std::fprintf(stderr, "ooc_bench --driver: --scan FILE is required\n");
+        return 2;
+    }
+    std::error_code ec;
+    std::filesystem::create_directories(dir, ec);
+    std::vector<DriverRun> runs;
+    for (int k = 0; k < repeat; ++k) {
+        DriverRun r;
+        if (!runDriverChild(scan, dir, limit_mib, threads, r)) {
+            std::fprintf(stderr, "ooc_bench --driver: the run failed\n");
+            return 1;
+        }
+        std::printf("run %d: %.1f s wall (partition %.1f, jobs %.1f, merges %.1f, pages %.1f), %.3f Mtri/s, "
+                    "peak RSS %.1f MiB, accounted %.1f MiB, hash %s\n",
+                    k + 1, r.seconds, r.stage[0], r.stage[1], r.stage[2], r.stage[3], double(r.triangles) / r.seconds / 1e6,
+                    r.peak_mib, r.accounted_mib, lodbake::hashToHex(r.output_hash).c_str());
+        runs.push_back(r);
+    }
+    std::vector<double> secs, peaks;
+    for (const DriverRun& r : runs) {
+        secs.push_back(r.seconds);
+        peaks.push_back(r.peak_mib);
+    }
+    const DriverRun& f = runs.front();
+    const double s = median(secs), peak = median(peaks);
+    std::printf("%llu triangles, %llu partitions, %llu merges in %llu rounds, %llu clusters, pages %.1f MiB, "
+                "table + pages hash %s\n",
+                (unsigned long long)f.triangles, (unsigned long long)f.partitions, (unsigned long long)f.merges,
+                (unsigned long long)f.rounds, (unsigned long long)f.clusters, double(f.output_bytes) / 1048576.0,
+                lodbake::hashToHex(f.output_hash).c_str());
+    std::printf("median of %d: %.1f s wall, %.3f Mtri/s, peak RSS %.1f MiB (limit %llu MiB)\n", repeat, s,
+                double(f.triangles) / s / 1e6, peak, (unsigned long long)limit_mib);
+    lodbake_bench::Bars bars("ooc_bench --driver");
+    bars.absolute("out-of-core driver peak RSS MiB <= memory limit", peak, double(limit_mib), lodbake_bench::Limit::AtMost);
+    return bars.finish(check);
+}
 } // namespace
 
 int main(int argc, char** argv) {
     if (argc > 1 && std::string(argv[1]) == "--pages") return runPagesMode(argc - 1, argv + 1);
+    if (argc > 1 && std::string(argv[1]) == "--driver") return runDriverMode(argc - 1, argv + 1);
     const bool check = lodbake_bench::takeCheckFlag(argc, argv);
     uint64_t triangles = 10000000, limit_mib = 1024;
     int threads = 0;

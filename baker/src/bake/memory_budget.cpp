@@ -63,27 +63,6 @@ BakeFootprint loadedFootprint(const std::vector<const Mesh*>& meshes) {
     return footprint;
 }
 
-Status MemoryGate::acquire(uint64_t bytes, const std::string& what) {
-    if (bytes > limit_)
-        return resourceLimit(what + ": needs " + std::to_string(mib(bytes)) + " MiB, above the memory limit of " +
-                             std::to_string(mib(limit_)) + " MiB (--memory-limit)");
-    std::unique_lock<std::mutex> lock(mutex_);
-    const uint64_t ticket = next_ticket_++;
-    changed_.wait(lock, [&] { return ticket == serving_ && (reserved_ == 0 || reserved_ + bytes <= limit_); });
-    reserved_ += bytes;
-    ++serving_;
-    changed_.notify_all();
-    return Status();
-}
-
-void MemoryGate::release(uint64_t bytes) {
-    {
-        std::lock_guard<std::mutex> lock(mutex_);
-        reserved_ -= std::min(bytes, reserved_);
-    }
-    changed_.notify_all();
-}
-
 Status bakeOverLimit(const std::string& what, const BakeFootprint& footprint, uint64_t limit) {
     return resourceLimit(what + ": the in-memory bake of " + std::to_string(footprint.triangles) + " triangles and " +
                          std::to_string(footprint.texels) + " texels is allowed " +

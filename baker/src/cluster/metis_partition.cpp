@@ -5,6 +5,7 @@
 // file alone; its types never leave it.
 
 #include <algorithm>
+#include <mutex>
 #include <numeric>
 
 #include <metis.h>
@@ -42,6 +43,12 @@ bool metisPartition(const WeightedGraph& g, uint32_t part_count, uint64_t seed, 
     // coarsening stops at once (it coarsens to a multiple of the part count) and its time goes into
     // an initial partition of the whole graph; recursive bisection coarsens each bisection and
     // gives groups of the same quality for a fraction of the time.
+    // METIS seeds and draws from GKlib's random state, which is global to the process: two calls at
+    // once (two cluster builds side by side, as the out-of-core driver runs them) interleave their
+    // draws and make either partition depend on the schedule. One call at a time keeps each a
+    // function of its graph and seed.
+    static std::mutex metis_mutex;
+    std::lock_guard<std::mutex> metis_lock(metis_mutex);
     const int status = METIS_PartGraphRecursive(&nvtxs, &ncon, xadj.data(), adjncy.data(), vwgt.data(), nullptr,
                                            adjwgt.data(), &nparts, nullptr, nullptr, options, &objval, part.data());
     if (status != METIS_OK) return false;

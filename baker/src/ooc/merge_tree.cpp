@@ -6,6 +6,9 @@
 
 #include <unistd.h>
 
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
 #include "lodbake/core/file_io.h"
 #include "lodbake/ooc/partition_merge.h"
 
@@ -106,10 +109,17 @@ namespace {
 Status runMerge(std::vector<TreeNode>& nodes, TreeNode& n, uint32_t levels, const MergeOptions& options,
                 const std::vector<std::string>& before, std::vector<std::string>& written, MergeTree& tree,
                 Diagnostics& diagnostics) {
+    if (options.cancel && options.cancel->load()) return ioError(nodes[size_t(n.left)].file + ": merge cancelled");
     MergeOptions job = options;
     job.cluster.max_levels = levels;
-    LODBAKE_ASSIGN_OR_RETURN(MergeFile m, mergePartitionLods(nodes[size_t(n.left)].file, nodes[size_t(n.right)].file,
-                                                              job, diagnostics));
+    // The job's bound (kMergeFixedBytes plus its two inputs', as mergePartitionLods computes it) is
+    // reserved for as long as it runs.
+    const uint64_t bound = kMergeFixedBytes + nodes[size_t(n.left)].size.boundBytes() + nodes[size_t(n.right)].size.boundBytes();
+    if (options.gate) LODBAKE_RETURN_IF_ERROR(options.gate->acquire(bound, nodes[size_t(n.left)].file));
+    auto made = mergePartitionLods(nodes[size_t(n.left)].file, nodes[size_t(n.right)].file, job, diagnostics);
+    if (options.gate) options.gate->release(bound);
+    if (!made.ok()) return made.status();
+    MergeFile m = std::move(*made);
     if (!std::binary_search(before.begin(), before.end(), m.path)) written.push_back(m.path);
     tree.largest_memory_bound = std::max(tree.largest_memory_bound, m.memory_bound_bytes);
     tree.largest_accounted_peak = std::max(tree.largest_accounted_peak, m.accounted_peak_bytes);
@@ -155,7 +165,8 @@ std::vector<int> roundNodes(const std::vector<TreeNode>& nodes, const MergeOptio
     for (size_t i = 0; i < nodes.size(); ++i) {
         const TreeNode& n = nodes[i];
         if (n.left < 0) continue;
-        const bool fits = options.group_by_memory && kMergeFixedBytes + sum[i] <= options.memory_limit_bytes;
+        const bool fits = options.group_by_memory &&
+                          kMergeFixedBytes + sum[i] <= (options.group_bytes > 0 ? options.group_bytes : options.memory_limit_bytes);
         const bool pick = !covered[i] && n.file.empty() && (fits || ready[i]);
         if (pick) picked.push_back(int(i));
         covered[size_t(n.left)] = covered[size_t(n.right)] = covered[i] || pick;
@@ -181,20 +192,46 @@ Result<MergeTree> mergeAll(const std::vector<std::string>& partition_lods, const
     for (TreeNode& n : nodes)
         if (n.left < 0) {
             n.file = partition_lods[n.begin];
-            if (options.group_by_memory) {
+            if (options.group_by_memory || options.gate) {
                 LODBAKE_ASSIGN_OR_RETURN(n.size, mergeInputSize(n.file));
             }
         }
     const uint32_t below_top = options.levels_per_job > 0 ? std::min(options.cluster.max_levels, options.levels_per_job)
                                                           : options.cluster.max_levels;
     while (nodes[0].file.empty()) {
-        for (int at : roundNodes(nodes, options)) {
-            const uint32_t levels = at == 0 ? options.cluster.max_levels : below_top;
-            const Status s = runSubtree(nodes, at, levels, options, before, written, tree, diagnostics, true);
-            if (!s.ok()) {
-                removeWritten(written);
-                return s;
-            }
+        const std::vector<int> round = roundNodes(nodes, options);
+        // Each picked node's subtree is disjoint from the others': with a gate they run side by side,
+        // each into its own slot, appended in leaf order so the tree lists the same merges either way.
+        std::vector<MergeTree> part(round.size());
+        std::vector<std::vector<std::string>> part_written(round.size());
+        std::vector<Status> status(round.size());
+        std::vector<Diagnostics> notes(round.size());
+        auto run = [&](size_t k) {
+            const uint32_t levels = round[k] == 0 ? options.cluster.max_levels : below_top;
+            status[k] = runSubtree(nodes, round[k], levels, options, before, part_written[k], part[k], notes[k], true);
+        };
+        if (options.gate && round.size() > 1) {
+            tbb::parallel_for(size_t(0), round.size(), size_t(1), [&](size_t k) {
+                // Isolated: a thread waiting inside one job's loops must not pick up another subtree,
+                // whose wait at the gate could then hold up the job below it on the same stack.
+                tbb::this_task_arena::isolate([&] { run(k); });
+            });
+        } else {
+            for (size_t k = 0; k < round.size(); ++k) run(k);
+        }
+        Status failed;
+        for (size_t k = 0; k < round.size(); ++k) {
+            written.insert(written.end(), part_written[k].begin(), part_written[k].end());
+            for (MergeFile& m : part[k].merges) tree.merges.push_back(std::move(m));
+            tree.largest_memory_bound = std::max(tree.largest_memory_bound, part[k].largest_memory_bound);
+            tree.largest_accounted_peak = std::max(tree.largest_accounted_peak, part[k].largest_accounted_peak);
+            for (const Diagnostic& d : notes[k].items())
+                d.severity == Severity::Warning ? diagnostics.warn(d.message) : diagnostics.note(d.message);
+            if (failed.ok() && !status[k].ok()) failed = status[k];
+        }
+        if (!failed.ok()) {
+            removeWritten(written);
+            return failed;
         }
         ++tree.merge_levels;
     }

@@ -141,11 +141,19 @@ Result<Plan> planMemory(const PartitionOptions& o, uint64_t vertices, uint64_t t
         return resourceLimit(input + ": memory limit of " + std::to_string(limit >> 20) + " MiB is too small (needs at least " +
                              std::to_string((needed >> 20) + 1) + " MiB for this input)");
     };
-    // Jobs share what is left after the fixed part; fewer jobs when one would get too few triangles.
-    while (plan.jobs > 1 && limit < plan.fixed + plan.jobs * (per_job_fixed + per_triangle * 4096)) --plan.jobs;
-    if (limit < plan.fixed + plan.jobs * (per_job_fixed + per_triangle * 64))
-        return too_small(plan.fixed + per_job_fixed + per_triangle * 64);
-    plan.target = (limit - plan.fixed - plan.jobs * per_job_fixed) / (plan.jobs * per_triangle);
+    if (o.leaf_triangles > 0) {
+        // A fixed leaf size: the limit decides only how many jobs run at once.
+        plan.target = o.leaf_triangles;
+        const uint64_t job = per_job_fixed + per_triangle * plan.target;
+        if (limit < plan.fixed + job) return too_small(plan.fixed + job);
+        plan.jobs = std::min(plan.jobs, (limit - plan.fixed) / job);
+    } else {
+        // Jobs share what is left after the fixed part; fewer jobs when one would get too few triangles.
+        while (plan.jobs > 1 && limit < plan.fixed + plan.jobs * (per_job_fixed + per_triangle * 4096)) --plan.jobs;
+        if (limit < plan.fixed + plan.jobs * (per_job_fixed + per_triangle * 64))
+            return too_small(plan.fixed + per_job_fixed + per_triangle * 64);
+        plan.target = (limit - plan.fixed - plan.jobs * per_job_fixed) / (plan.jobs * per_triangle);
+    }
     // A job's corners are numbered in 32 bits (the sorted pairs keep the corner's index).
     plan.target = std::min<uint64_t>(plan.target, 0xffffffffu / 4);
     const uint64_t sized = std::max<uint64_t>(1, plan.target * 4 / 5);

@@ -11,13 +11,12 @@
 // (docs/benchmarks.md, "Bake memory"), not a proven bound. The limit never changes a pack's bytes:
 // a bake that fits runs exactly as without a limit, one that does not is refused before it loads.
 
-#include <condition_variable>
 #include <cstdint>
-#include <mutex>
 #include <string>
 #include <vector>
 
 #include "lodbake/core/diagnostics.h"
+#include "lodbake/core/memory_gate.h" // MemoryGate, which the batch runner uses
 #include "lodbake/core/mesh.h"
 #include "lodbake/core/status.h"
 #include "lodbake/io/mesh_io.h"
@@ -52,27 +51,6 @@ Result<BakeFootprint> peekInputFootprint(const std::string& path, const ReadOpti
 /// The footprint of loaded meshes: their triangles and the texels of every distinct texture (a
 /// texture whose header cannot be read counts as none; the bake reports it).
 BakeFootprint loadedFootprint(const std::vector<const Mesh*>& meshes);
-
-/// Lets bakes run side by side while the sum of their reservations stays under `limit` bytes. A
-/// reservation larger than the limit is refused at once; one that fits waits until the running ones
-/// leave room, in arrival order (a big job is not starved by small ones); a reservation always fits
-/// when nothing else is reserved. Waiting holds no reservation, so jobs cannot wait on each other.
-class MemoryGate {
-public:
-    explicit MemoryGate(uint64_t limit) : limit_(limit) {}
-    uint64_t limit() const { return limit_; }
-    /// Blocks until `bytes` are reserved; ResourceLimit naming `what` when bytes > limit.
-    Status acquire(uint64_t bytes, const std::string& what);
-    void release(uint64_t bytes);
-
-private:
-    std::mutex mutex_;
-    std::condition_variable changed_;
-    uint64_t limit_ = 0;
-    uint64_t reserved_ = 0;
-    uint64_t next_ticket_ = 0;
-    uint64_t serving_ = 0;
-};
 
 /// The refusal of a pack whose allowance exceeds the limit: "<what>: the in-memory bake of T
 /// triangles and X texels is allowed N MiB, above the memory limit of L MiB (--memory-limit)".

@@ -63,6 +63,11 @@ struct PartitionOptions {
     // (ooc::kPartitionBuildBytesPerTriangle for buildPartition); leaves are sized by it in place of
     // kJobBytesPerTriangle when it is larger. 0: sized for writing the partitions only.
     uint64_t build_bytes_per_triangle = 0;
+    // The target triangles per leaf (T_leaf) when not 0: leaves are then sized by it alone, so the
+    // partitions do not depend on the limit or the thread count, and the limit only decides how many
+    // jobs run at once (fewer than `threads` when fewer fit; none fitting is a ResourceLimit error
+    // stating the minimum). 0: T_leaf from the limit and the thread count (formula above).
+    uint64_t leaf_triangles = 0;
 };
 
 struct PartitionFile {

@@ -25,6 +25,7 @@
 // computed from the inputs' headers and root records before any geometry is read; a limit below it
 // is a ResourceLimit error naming the first input and the minimum.
 
+#include <atomic>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -32,6 +33,7 @@
 #include "lodbake/cluster/cluster_lod.h"
 #include "lodbake/core/diagnostics.h"
 #include "lodbake/core/math.h"
+#include "lodbake/core/memory_gate.h"
 #include "lodbake/core/status.h"
 #include "lodbake/ooc/partition_build.h"
 
@@ -68,6 +70,13 @@ struct MergeOptions {
     uint32_t levels_per_job = kLevelsPerJob; // mergeAll, every merge but the top; 0: as many as it can
     MergePairing pairing = MergePairing::KdSiblings; // mergeAll
     bool group_by_memory = true; // mergeAll: a job joins as many k-d siblings as fit (see mergeAll)
+    // mergeAll with group_by_memory: the bound a job's grouped files must fit, when not 0 (else
+    // memory_limit_bytes). A fixed value keeps the tree, hence every file, independent of the limit.
+    uint64_t group_bytes = 0;
+    // mergeAll: when set, the merges of a round (disjoint subtrees) run concurrently, each subtree's
+    // jobs one after the other, each reserving its bound here first; else one after the other.
+    MemoryGate* gate = nullptr;
+    const std::atomic<bool>* cancel = nullptr; // mergeAll: checked before every job; set, the run fails
 };
 
 /// What a merge job wrote.
