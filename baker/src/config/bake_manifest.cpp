@@ -47,6 +47,10 @@ Status checkKeys(const Json& object, const std::string& where, const std::set<st
 
 Result<std::string> readPath(const Json& v, const std::string& where) {
     if (!v.is_string() || v.get<std::string>().empty()) return expected(where, "a non-empty path string", v);
+    // A line break or other control character in a path would split the errors that name the file.
+    for (const char c : v.get<std::string>())
+        if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f)
+            return expected(where, "a path without control characters", v);
     return v.get<std::string>();
 }
 

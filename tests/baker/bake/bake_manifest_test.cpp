@@ -95,6 +95,9 @@ TEST(BakeManifestTest, ErrorsNameTheManifestAndThePointer) {
         {R"({"version": 1, "assets": [{"input": "a.ply", "settings": {"version": 1}}]})",
          "/settings/version: not allowed"},
         {R"({"version": 1, "assets": [{"input": 7}]})", "/assets/0/input: expected a non-empty path string"},
+        {R"({"version": 1, "assets": [{"input": "a.ply", "preset": "a\nngltf"}]})",
+         "/assets/0/preset: expected a path without control characters"}, // found by the manifest fuzzer
+        {R"({"version": 1, "assets": [{"input": "a\tb.ply"}]})", "/assets/0/input: expected a path without control"},
         {R"({"version": 1, "preset": "missing.json", "assets": [{"input": "a.ply"}]})", "missing.json"},
         {R"({"version": 1, "assets": [)", "not valid JSON"},
     };
