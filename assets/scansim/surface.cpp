@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "lodbake/core/math.h"
-#include "lodbake/ooc/streaming_file.h"
+#include "lodbake/core/spill_file.h"
 #include "scansim.h"
 
 namespace lodbake::scansim {
@@ -170,7 +170,7 @@ Result<SurfaceStats> surfaceGrid(const SurfaceOptions& o) {
 
 Result<SurfaceStats> writeSurfacePly(const SurfaceOptions& o, const std::string& path) {
     LODBAKE_ASSIGN_OR_RETURN(SurfaceStats g, surfaceGrid(o));
-    ooc::StreamingFile file;
+    SpillFile file;
     LODBAKE_RETURN_IF_ERROR(file.open(path, size_t(4) << 20));
     const std::string header = surfaceHeader(o, g);
     LODBAKE_RETURN_IF_ERROR(file.write(header.data(), header.size()));

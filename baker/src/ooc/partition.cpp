@@ -17,7 +17,7 @@
 
 #include "lodbake/core/file_io.h"
 #include "lodbake/core/hash.h"
-#include "lodbake/ooc/streaming_file.h"
+#include "lodbake/core/spill_file.h"
 #include "lodrt/format.h"
 
 namespace lodbake::ooc {
@@ -177,7 +177,7 @@ struct VertexPass {
 
 Status spillVertices(MeshStreamReader& reader, const PartitionOptions& o, const std::string& input,
                      const std::string& spill_path, MemoryAccount& memory, VertexPass& pass) {
-    StreamingFile spill;
+    SpillFile spill;
     LODBAKE_RETURN_IF_ERROR(spill.open(spill_path, kSpillBufferBytes));
     pass.sample.reserve(size_t(2 * o.sample_cap));
     memory.add(32 * o.sample_cap);
@@ -352,7 +352,7 @@ Status writePartition(const PartitionOptions& o, const std::string& spill_path, 
     }
     // The file image, hashed as it is written.
     const std::string provisional = joinPath(o.work_dir, ".job" + std::to_string(leaf) + "_" + std::to_string(::getpid()));
-    StreamingFile file;
+    SpillFile file;
     LODBAKE_RETURN_IF_ERROR(file.open(provisional, size_t(kJobFileBuffer)));
     Hasher hasher;
     auto put = [&](const void* data, size_t size) {

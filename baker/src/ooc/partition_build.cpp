@@ -14,7 +14,7 @@
 #include "lodbake/core/file_io.h"
 #include "lodbake/core/hash.h"
 #include "lodbake/ooc/partition.h"
-#include "lodbake/ooc/streaming_file.h"
+#include "lodbake/core/spill_file.h"
 #include "lodrt/format.h"
 
 namespace lodbake::ooc {
@@ -177,7 +177,7 @@ Result<PartitionLodFile> buildPartition(const std::string& partition_path, const
     std::filesystem::create_directories(o.work_dir, ec);
     if (ec) return ioError(o.work_dir + ": cannot create the folder: " + ec.message());
     result.path = joinPath(o.work_dir, hashToHex(result.content_hash) + lodrt::format::kPartitionLodExtension);
-    StreamingFile file;
+    SpillFile file;
     LODBAKE_RETURN_IF_ERROR(file.open(result.path, size_t(kWriteBuffer)));
     LODBAKE_RETURN_IF_ERROR(emit(lod, [&](const void* p, size_t n) { return file.write(p, n); }));
     LODBAKE_RETURN_IF_ERROR(file.commit());

@@ -16,7 +16,7 @@
 
 #include "lodbake/core/file_io.h"
 #include "lodbake/core/hash.h"
-#include "lodbake/ooc/streaming_file.h"
+#include "lodbake/core/spill_file.h"
 #include "lodrt/format.h"
 
 namespace lodbake::ooc {
@@ -489,7 +489,7 @@ Status writeMerged(const MergedLod& m, const MergeOptions& o, MergeFile& result)
     std::filesystem::create_directories(o.work_dir, ec);
     if (ec) return ioError(o.work_dir + ": cannot create the folder: " + ec.message());
     result.path = joinPath(o.work_dir, hashToHex(result.content_hash) + lodrt::format::kPartitionMergeExtension);
-    StreamingFile file;
+    SpillFile file;
     LODBAKE_RETURN_IF_ERROR(file.open(result.path, size_t(kBuffer)));
     LODBAKE_RETURN_IF_ERROR(emit(m, [&](const void* p, size_t n) { return file.write(p, n); }));
     return file.commit();

@@ -9,7 +9,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "lodbake/ooc/streaming_file.h"
+#include "lodbake/core/spill_file.h"
 #include "lodrt/format.h"
 
 namespace lodbake::ooc {

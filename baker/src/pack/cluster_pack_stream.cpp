@@ -103,7 +103,7 @@ Result<ClusterPackStreamResult> writeClusterLodPackStreamed(const lodrt::Cluster
     LODBAKE_RETURN_IF_ERROR(detail::checkClusterPackLimits(table, plan));
     if (bounds.empty) return invalidInput("cluster pack: no bounds for the grid");
     const size_t in_flight = options.pages_in_flight > 0 ? options.pages_in_flight : 2 * maxParallelism();
-    auto spill = std::make_shared<PackTempFile>();
+    auto spill = std::make_shared<SpillFile>();
     LODBAKE_RETURN_IF_ERROR(spill->open(output_path, options.spill_buffer_bytes));
     const size_t spill_buffer = spill->bufferBytes();
     detail::ClusterPageWriterOptions writer;

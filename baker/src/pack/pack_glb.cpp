@@ -19,7 +19,7 @@
 #include "pack/web_meshopt.h"
 #include "lodbake/core/json_writer.h"
 #include "lodbake/pack/pack.h"
-#include "lodbake/pack/pack_file.h"
+#include "lodbake/core/spill_file.h"
 #include "lodbake/version.h"
 #include "lodrt/format.h"
 
@@ -86,7 +86,7 @@ struct ViewPatch {
     size_t primitive = 0; // Scope::Primitive only
     std::string extension;
     std::string member;
-    std::shared_ptr<const PackTempFile> spilled; // the view's bytes are in this file (writePackGlbFile)
+    std::shared_ptr<const SpillFile> spilled; // the view's bytes are in this file (writePackGlbFile)
 };
 
 Status addExtension(const PackExtension& e, BufferBuilder& buffer, tinygltf::ExtensionMap& target,
@@ -98,7 +98,7 @@ Status addExtension(const PackExtension& e, BufferBuilder& buffer, tinygltf::Ext
         return internalError("pack: extension " + e.name + ": blob and member counts differ");
     for (size_t b = 0; b < e.blobs.size(); ++b) {
         // A spilled blob gets an empty view here; placeSpilledViews gives it its length and room.
-        const std::shared_ptr<const PackTempFile> spilled = e.spilled.empty() ? nullptr : e.spilled[b];
+        const std::shared_ptr<const SpillFile> spilled = e.spilled.empty() ? nullptr : e.spilled[b];
         object.set(e.blob_view_members[b],
                    buffer.addView(e.blobs[b].data(), spilled ? 0 : e.blobs[b].size(), 0));
         ViewPatch patch = where;
@@ -287,7 +287,7 @@ Result<std::vector<uint8_t>> assembleGlb(const std::vector<uint8_t>& shell, std:
 struct SpilledView {
     uint64_t bin_offset = 0;
     uint64_t size = 0;
-    std::shared_ptr<const PackTempFile> file;
+    std::shared_ptr<const SpillFile> file;
 };
 
 uint64_t align4(uint64_t n) { return (n + 3) / 4 * 4; }
@@ -296,7 +296,7 @@ uint64_t align4(uint64_t n) { return (n + 3) / 4 * 4; }
 // are where the same blob in memory would have put them (the binary chunk's views are in offset
 // order, each 4-aligned). Returns the spilled views in offset order.
 Result<std::vector<SpilledView>> placeSpilledViews(tinygltf::Model& model, const std::vector<ViewPatch>& patches) {
-    std::map<int, std::shared_ptr<const PackTempFile>> spilled;
+    std::map<int, std::shared_ptr<const SpillFile>> spilled;
     for (const ViewPatch& p : patches) {
         if (!p.spilled) continue;
         const tinygltf::Value& v = patchTarget(model, p)[p.extension].Get(p.member);
@@ -636,7 +636,7 @@ Result<uint64_t> writeFileImpl(PackDescription& description, const std::string& 
     for (const SpilledView& v : parts.spilled) bin_size += align4(v.size);
     LODBAKE_ASSIGN_OR_RETURN(std::vector<uint8_t> head, glbHead(parts.shell, bin_size, parts.has_web ? &parts.web : nullptr));
     std::vector<uint8_t>().swap(parts.shell);
-    PackTempFile out;
+    SpillFile out;
     LODBAKE_RETURN_IF_ERROR(out.open(path, buffer_bytes));
     LODBAKE_RETURN_IF_ERROR(out.write(head.data(), head.size()));
     std::vector<uint8_t>().swap(head);

@@ -33,7 +33,7 @@
 #include "lodbake/core/status.h"
 #include "lodbake/pack/cluster_lod_pack.h"
 #include "lodbake/pack/pack.h"
-#include "lodbake/pack/pack_file.h"
+#include "lodbake/core/spill_file.h"
 
 namespace lodbake {
 
@@ -105,13 +105,13 @@ struct ClusterPackStreamResult {
     /// kExtClusterLod with the table blob in memory and the pages blob in `pages` (extension.spilled[1]).
     PackExtension extension;
     ClusterPackStats stats;
-    std::shared_ptr<PackTempFile> pages; // the spill, removed when the last owner drops it
+    std::shared_ptr<SpillFile> pages; // the spill, removed when the last owner drops it
     uint64_t memory_bound_bytes = 0;     // the formula above
     uint64_t accounted_peak_bytes = 0;   // the arrays held at most, coding at its per-triangle allowance
 };
 
 /// The formula above for `table` and its `plan` at `pages_in_flight` pages (not 0) and
-/// `spill_buffer_bytes` (at least 4 KiB, as PackTempFile holds).
+/// `spill_buffer_bytes` (at least 4 KiB, as SpillFile holds).
 uint64_t clusterPackStreamBound(const lodrt::ClusterLodView& table, const ClusterPagePlan& plan,
                                 size_t pages_in_flight, size_t spill_buffer_bytes);
 

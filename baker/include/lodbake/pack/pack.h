@@ -23,7 +23,7 @@
 
 namespace lodbake {
 
-class PackTempFile; // lodbake/pack/pack_file.h
+class SpillFile; // lodbake/core/spill_file.h
 
 struct PackExtension {
     std::string name;                           // e.g. lodrt::format::kExtLodMetrics
@@ -33,7 +33,7 @@ struct PackExtension {
     bool is_stream = false;                     // a compressed stream: listed in extensionsRequired when compact
     /// Empty, or one per blob: blob i is held by file spilled[i] (all its bytes, finished) instead of
     /// blobs[i], which stays empty. Only writePackGlbFile writes such an extension.
-    std::vector<std::shared_ptr<const PackTempFile>> spilled;
+    std::vector<std::shared_ptr<const SpillFile>> spilled;
 };
 
 struct PackLevel {

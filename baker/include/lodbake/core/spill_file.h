@@ -1,7 +1,7 @@
 #pragma once
-// Files a pack is written through when its bytes should not all be in memory at once
-// (docs/pipeline.md, "Streamed pack writer"): the spill that holds a large blob (the cluster pages)
-// until the GLB is assembled, and the GLB itself, written sequentially and renamed into place.
+// Files written or read a buffer at a time, for data larger than memory (the out-of-core jobs, the
+// streamed pack writer's spill and GLB, the generated scans): written sequentially to a temporary
+// renamed into place. Every error names the path.
 
 #include <atomic>
 #include <cstddef>
@@ -18,12 +18,12 @@ namespace lodbake {
 /// commit() renames it to `path`; destroyed without commit() it is removed, so an error or a cancel
 /// leaves nothing behind. Registered with the signal cleanup (lodbake/core/temp_files.h) while it
 /// exists. Every error names `path`; a failed write (a full disk) is an IoError.
-class PackTempFile {
+class SpillFile {
 public:
-    PackTempFile() = default;
-    PackTempFile(const PackTempFile&) = delete;
-    PackTempFile& operator=(const PackTempFile&) = delete;
-    ~PackTempFile();
+    SpillFile() = default;
+    SpillFile(const SpillFile&) = delete;
+    SpillFile& operator=(const SpillFile&) = delete;
+    ~SpillFile();
 
     /// Creates the temporary for `path`; `buffer_bytes` (at least 4 KiB) are held until finish().
     Status open(const std::string& path, size_t buffer_bytes = size_t(1) << 20);
@@ -38,7 +38,7 @@ public:
     /// Writes bytes [0, size) of this file (finished) into `out` through `buffer`, whose size is the
     /// piece read at a time (it is resized to 64 KiB when empty). Stops with an IoError naming
     /// `out`'s path when `cancel` is set.
-    Status copyTo(PackTempFile& out, uint64_t size, std::vector<uint8_t>& buffer,
+    Status copyTo(SpillFile& out, uint64_t size, std::vector<uint8_t>& buffer,
                   const std::atomic<bool>* cancel) const;
 
     uint64_t bytesWritten() const { return written_; }
@@ -55,5 +55,15 @@ private:
     uint64_t written_ = 0;
     Status flush();
 };
+
+/// Writes all of `data` to the open descriptor `fd` (retrying short writes); the error names `path`.
+Status writeAll(int fd, const void* data, size_t size, const std::string& path);
+
+/// Appends `data` to the file at `path` (created if missing): open, write, close.
+Status appendToFile(const std::string& path, const void* data, size_t size);
+
+/// Reads exactly `size` bytes at `offset` of the open descriptor `fd`; a short file is an error
+/// naming `path`.
+Status readAt(int fd, uint64_t offset, void* data, size_t size, const std::string& path);
 
 } // namespace lodbake

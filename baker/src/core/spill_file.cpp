@@ -1,7 +1,8 @@
-#include "lodbake/ooc/streaming_file.h"
+#include "lodbake/core/spill_file.h"
 
-#include <atomic>
+#include <algorithm>
 #include <cerrno>
+#include <cstdio>
 #include <cstring>
 
 #include <fcntl.h>
@@ -10,7 +11,7 @@
 #include "lodbake/core/file_io.h"
 #include "lodbake/core/temp_files.h"
 
-namespace lodbake::ooc {
+namespace lodbake {
 
 namespace {
 
@@ -57,41 +58,42 @@ Status readAt(int fd, uint64_t offset, void* data, size_t size, const std::strin
     return Status();
 }
 
-StreamingFile::~StreamingFile() { discard(); }
+SpillFile::~SpillFile() { discard(); }
 
-Status StreamingFile::open(const std::string& path, size_t buffer_bytes) {
+Status SpillFile::open(const std::string& path, size_t buffer_bytes) {
     discard();
-    // As AtomicFileWriter: a dot name in the destination folder, unique per process and writer.
+    // As AtomicFileWriter: a dot name in the destination folder, unique per process and file.
     static std::atomic<uint64_t> counter{0};
-    const std::string dir = parentDirectory(path);
     const size_t slash = path.find_last_of('/');
     const std::string base = slash == std::string::npos ? path : path.substr(slash + 1);
     path_ = path;
-    temp_ = joinPath(dir, "." + base + ".tmp" + std::to_string(::getpid()) + "_" + std::to_string(counter.fetch_add(1)));
+    temp_ = joinPath(parentDirectory(path),
+                     "." + base + ".tmp" + std::to_string(::getpid()) + "_" + std::to_string(counter.fetch_add(1)));
     slot_ = registerTempFile(temp_);
-    fd_ = ::open(temp_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+    fd_ = ::open(temp_.c_str(), O_RDWR | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
     if (fd_ < 0) {
         const std::string err = errnoText();
         unregisterTempFile(slot_);
         slot_ = -1;
+        temp_.clear();
         return ioError(path + ": cannot write: " + err);
     }
-    buffer_.assign(buffer_bytes < 4096 ? 4096 : buffer_bytes, 0);
+    buffer_.assign(std::max<size_t>(buffer_bytes, 4096), 0);
     used_ = 0;
     written_ = 0;
-    return Status();
+    return Status::okStatus();
 }
 
-Status StreamingFile::flush() {
-    if (used_ == 0) return Status();
+Status SpillFile::flush() {
+    if (used_ == 0) return Status::okStatus();
     const Status s = writeAll(fd_, buffer_.data(), used_, path_);
     used_ = 0;
     return s;
 }
 
-Status StreamingFile::write(const void* data, size_t size) {
-    if (fd_ < 0) return internalError(path_ + ": write to a file that is not open");
-    if (size == 0) return Status(); // an empty array's data() may be null, which memcpy must not get
+Status SpillFile::write(const void* data, size_t size) {
+    if (fd_ < 0 || buffer_.empty()) return internalError(path_ + ": write to a file that is not open");
+    if (size == 0) return Status::okStatus(); // an empty array's data() may be null, which memcpy must not get
     const uint8_t* p = static_cast<const uint8_t*>(data);
     written_ += size;
     if (used_ + size > buffer_.size()) {
@@ -100,12 +102,19 @@ Status StreamingFile::write(const void* data, size_t size) {
     }
     std::memcpy(buffer_.data() + used_, p, size);
     used_ += size;
-    return Status();
+    return Status::okStatus();
 }
 
-Status StreamingFile::commit() {
+Status SpillFile::finish() {
+    if (fd_ < 0) return internalError(path_ + ": finish of a file that is not open");
+    const Status s = flush();
+    std::vector<uint8_t>().swap(buffer_);
+    return s;
+}
+
+Status SpillFile::commit() {
+    Status s = fd_ >= 0 && !buffer_.empty() ? finish() : Status::okStatus();
     if (fd_ < 0) return internalError(path_ + ": commit of a file that is not open");
-    Status s = flush();
     if (::close(fd_) != 0 && s.ok()) s = ioError(path_ + ": write failed: " + errnoText());
     fd_ = -1;
     if (s.ok() && std::rename(temp_.c_str(), path_.c_str()) != 0)
@@ -117,11 +126,10 @@ Status StreamingFile::commit() {
     unregisterTempFile(slot_);
     slot_ = -1;
     temp_.clear();
-    std::vector<uint8_t>().swap(buffer_);
     return s;
 }
 
-void StreamingFile::discard() {
+void SpillFile::discard() {
     if (fd_ >= 0) ::close(fd_);
     fd_ = -1;
     if (!temp_.empty()) ::unlink(temp_.c_str());
@@ -132,4 +140,25 @@ void StreamingFile::discard() {
     used_ = 0;
 }
 
-} // namespace lodbake::ooc
+Status SpillFile::copyTo(SpillFile& out, uint64_t size, std::vector<uint8_t>& buffer,
+                            const std::atomic<bool>* cancel) const {
+    if (fd_ < 0 || !buffer_.empty()) return internalError(path_ + ": copy from a file that is not finished");
+    if (size > written_) return internalError(path_ + ": copy of more bytes than the file holds");
+    if (buffer.empty()) buffer.resize(size_t(1) << 16);
+    uint64_t offset = 0;
+    while (offset < size) {
+        if (cancel && cancel->load()) return ioError(out.path() + ": writing cancelled");
+        const size_t want = size_t(std::min<uint64_t>(buffer.size(), size - offset));
+        const ssize_t n = ::pread(fd_, buffer.data(), want, off_t(offset));
+        if (n < 0) {
+            if (errno == EINTR) continue;
+            return ioError(path_ + ": read failed: " + errnoText());
+        }
+        if (n == 0) return ioError(path_ + ": read failed: the file ends early");
+        LODBAKE_RETURN_IF_ERROR(out.write(buffer.data(), size_t(n)));
+        offset += uint64_t(n);
+    }
+    return Status::okStatus();
+}
+
+} // namespace lodbake
