@@ -306,22 +306,21 @@ Status levelSide(const PartInfo& info, const DistanceIndex& index, const LargeAr
     });
 }
 
-// What pass 2 shares across partitions.
+// One level's state through pass 2.
 struct LevelState {
-    const DistanceIndex* index = nullptr;
-    const LargeArray<Vec3d>* points = nullptr;
+    DistanceIndex index;
+    LargeArray<Vec3d> points;
     std::vector<double> best; // squared nearest distance of each level point so far
     std::vector<uint32_t> candidates;
-    std::vector<uint64_t> seen; // bit per global id: measured by an earlier partition
-    double tiny = 0.0;
+    double tiny = 0.0; // the absolute term of the pruning slack
     uint64_t queries = 0;
     OneSidedDistance input_side;
 };
 
 // Pass 2, one partition: read it again, rebuild its CDF from where the area pass placed it, index it
-// and measure both sides.
+// and measure both sides of every level. `seen` has a bit per global id measured by an earlier partition.
 Status distancePass(const PartInfo& info, bool last_positive, const InputSummary& s, const LevelErrorOptions& o,
-                    uint64_t key, LevelState& st, Account& acc) {
+                    uint64_t key, std::vector<uint64_t>& seen, std::vector<LevelState>& levels, Account& acc) {
     const uint64_t bytes = 20 * uint64_t(info.vertices) +
                            (20 + kDistanceIndexBytesPerTriangle) * uint64_t(info.triangles);
     acc.add(bytes);
@@ -339,14 +338,16 @@ Status distancePass(const PartInfo& info, bool last_positive, const InputSummary
     std::vector<uint32_t> new_vertices;
     for (uint32_t v = 0; v < d.global_ids.size(); ++v) {
         const uint32_t id = d.global_ids[v];
-        uint64_t& word = st.seen[id >> 6];
+        uint64_t& word = seen[id >> 6];
         const uint64_t bit = uint64_t(1) << (id & 63);
         if (!(word & bit) && o.distance.include_vertices) new_vertices.push_back(v);
         word |= bit;
     }
-    LODBAKE_RETURN_IF_ERROR(inputSide(d, info, cdf, last_positive, s, o.distance.sample_count, key, new_vertices,
-                                      *st.index, st.input_side));
-    LODBAKE_RETURN_IF_ERROR(levelSide(info, index, *st.points, st.tiny, st.best, st.candidates, st.queries));
+    for (LevelState& st : levels) {
+        LODBAKE_RETURN_IF_ERROR(inputSide(d, info, cdf, last_positive, s, o.distance.sample_count, key, new_vertices,
+                                          st.index, st.input_side));
+        LODBAKE_RETURN_IF_ERROR(levelSide(info, index, st.points, st.tiny, st.best, st.candidates, st.queries));
+    }
     acc.sub(bytes);
     return Status::okStatus();
 }
@@ -358,119 +359,140 @@ size_t referencedVertices(const Mesh& mesh) {
     return size_t(std::count(used.begin(), used.end(), uint8_t(1)));
 }
 
-// The memory formula of level_error.h.
-struct Bound {
-    uint64_t area_pass = 0, level = 0, distance_pass = 0;
-    uint64_t total() const { return std::max({area_pass, level, distance_pass}); }
-};
-
-Bound memoryBound(const std::vector<PartInfo>& parts, uint64_t sub_triangles, uint64_t level_triangles,
-                  uint64_t level_points, uint64_t id_count) {
+// The memory formula of level_error.h; `level_triangles` and `level_points` are summed over the levels.
+uint64_t memoryBound(const std::vector<PartInfo>& parts, uint64_t sub_triangles, uint64_t level_triangles,
+                     uint64_t level_points, uint64_t id_count) {
     uint64_t v = 0, t = 0;
     for (const PartInfo& p : parts) {
         v = std::max<uint64_t>(v, p.vertices);
         t = std::max<uint64_t>(t, p.triangles);
     }
     const uint64_t bitmap = (id_count + 63) / 64 * 8;
-    Bound b;
-    b.area_pass = 48 * sub_triangles + 16 * v + 12 * t;
-    b.level = (48 + kDistanceIndexBytesPerTriangle) * sub_triangles +
-              (8 + kDistanceIndexBytesPerTriangle) * level_triangles + 52 * level_points + bitmap;
-    b.distance_pass = (8 + kDistanceIndexBytesPerTriangle) * level_triangles + 40 * level_points + bitmap + 20 * v +
-                      (20 + kDistanceIndexBytesPerTriangle) * t;
-    return b;
+    const uint64_t area_pass = 48 * sub_triangles + 16 * v + 12 * t;
+    const uint64_t level = (48 + kDistanceIndexBytesPerTriangle) * sub_triangles +
+                           (8 + kDistanceIndexBytesPerTriangle) * level_triangles + 52 * level_points + bitmap;
+    const uint64_t distance_pass = (8 + kDistanceIndexBytesPerTriangle) * level_triangles + 40 * level_points +
+                                   bitmap + 20 * v + (20 + kDistanceIndexBytesPerTriangle) * t;
+    return std::max({area_pass, level, distance_pass});
 }
 
-// The level's points, its index, and each point's first nearest distance: to the input's subsample.
-Status prepareLevel(const Mesh& level, const LevelErrorOptions& o, InputSummary& s, DistanceIndex& index,
-                    LargeArray<Vec3d>& points, LevelState& st, Account& acc) {
-    const uint64_t sub_triangles = s.sub_indices.size() / 3;
-    // The subsample's corners (48 per triangle) are already counted; its index and the level's now.
-    acc.add(kDistanceIndexBytesPerTriangle * sub_triangles +
-            (8 + kDistanceIndexBytesPerTriangle) * (level.indices.size() / 3));
-    LODBAKE_ASSIGN_OR_RETURN(index, DistanceIndex::build(level.positions, level.indices));
-    LODBAKE_ASSIGN_OR_RETURN(points, detail::approximationSidePoints(level, o.distance));
-    acc.add(52 * uint64_t(points.size()));
-    LODBAKE_ASSIGN_OR_RETURN(DistanceIndex sub, DistanceIndex::build(s.sub_positions, s.sub_indices));
-    st.best.assign(points.size(), 0.0);
-    LODBAKE_RETURN_IF_ERROR(parallelForChunks(points.size(), kDistanceChunkSize, [&](size_t, size_t first, size_t end) {
+// A level's points, its index, each point's first nearest distance (to the input's subsample, `sub`)
+// and its pruning slack (from the largest coordinate of the input's bounds `box` and the level).
+Status prepareLevel(const Mesh& level, const LevelErrorOptions& o, const DistanceIndex& sub, const Aabb& box,
+                    LevelState& st, Account& acc) {
+    acc.add((8 + kDistanceIndexBytesPerTriangle) * (level.indices.size() / 3));
+    LODBAKE_ASSIGN_OR_RETURN(st.index, DistanceIndex::build(level.positions, level.indices));
+    LODBAKE_ASSIGN_OR_RETURN(st.points, detail::approximationSidePoints(level, o.distance));
+    acc.add(52 * uint64_t(st.points.size()));
+    st.best.assign(st.points.size(), 0.0);
+    LODBAKE_RETURN_IF_ERROR(parallelForChunks(st.points.size(), kDistanceChunkSize, [&](size_t, size_t first, size_t end) {
         DistanceIndex::Cursor cursor;
-        for (size_t k = first; k < end; ++k) st.best[k] = sub.closestDistanceSq(points[k], cursor);
+        for (size_t k = first; k < end; ++k) st.best[k] = sub.closestDistanceSq(st.points[k], cursor);
     }));
-    std::vector<Vec3f>().swap(s.sub_positions);
-    std::vector<uint32_t>().swap(s.sub_indices);
-    // The subsample and the sampling's sort keys go; the points, their distances, the candidates and
-    // a partition's sample list (24 + 8 + 4 + 4 per point) stay.
-    acc.sub((48 + kDistanceIndexBytesPerTriangle) * sub_triangles + 12 * uint64_t(points.size()));
-    st.index = &index;
-    st.points = &points;
-    return Status::okStatus();
-}
-
-Result<LevelErrorResult> measure(const std::vector<std::string>& files, const Mesh& level, const LevelErrorOptions& o) {
-    if (files.empty()) return invalidInput("level error: expected at least one partition file");
-    LODBAKE_RETURN_IF_ERROR(detail::checkDistanceOptions(o.distance));
-    LODBAKE_RETURN_IF_ERROR(detail::checkDistanceSurface(level, "level"));
-    std::vector<PartInfo> parts(files.size());
-    LevelErrorResult result;
-    InputSummary s;
-    for (size_t p = 0; p < files.size(); ++p) {
-        LODBAKE_RETURN_IF_ERROR(readHeader(files[p], parts[p]));
-        result.input_triangles += parts[p].triangles;
-        s.id_count = std::max(s.id_count, uint64_t(parts[p].last_id) + 1);
-    }
-    const uint64_t cap = std::max<uint64_t>(1, o.bound_triangles);
-    const uint64_t stride = (result.input_triangles + cap - 1) / cap;
-    result.subsample_triangles = (result.input_triangles + stride - 1) / stride;
-    result.level_points = o.distance.sample_count + (o.distance.include_vertices ? referencedVertices(level) : 0);
-    result.memory_bound_bytes = memoryBound(parts, result.subsample_triangles, level.indices.size() / 3,
-                                            result.level_points, s.id_count)
-                                    .total();
-    if (result.memory_bound_bytes > o.memory_limit_bytes)
-        return resourceLimit(files[0] + ": memory limit of " + std::to_string(o.memory_limit_bytes >> 20) +
-                             " MiB is too small to measure the level (needs at least " +
-                             std::to_string((result.memory_bound_bytes >> 20) + 1) + " MiB)");
-    Account acc;
-    acc.add(48 * result.subsample_triangles); // the subsample's corners, gathered by the area pass
-    LODBAKE_RETURN_IF_ERROR(areaPass(parts, stride, o, s, acc));
-    const uint64_t key = detail::splitmix64(o.distance.seed ^ detail::kReferenceStream);
-    assignSamples(parts, key, o.distance.sample_count, s);
-
-    LevelState st;
-    st.seen.assign(size_t((s.id_count + 63) / 64), 0);
-    acc.add(8 * uint64_t(st.seen.size()));
-    DistanceIndex index;
-    LargeArray<Vec3d> points;
-    LODBAKE_RETURN_IF_ERROR(prepareLevel(level, o, s, index, points, st, acc));
-    Aabb all = s.box;
+    // The sampling's sort keys are gone; the points, their distances, the candidates and a partition's
+    // sample list (24 + 8 + 4 + 4 per point) stay.
+    acc.sub(12 * uint64_t(st.points.size()));
+    Aabb all = box;
     for (const Vec3f& v : level.positions) all.expand(v);
     const float magnitude = std::max({std::fabs(all.min.x), std::fabs(all.min.y), std::fabs(all.min.z),
                                       std::fabs(all.max.x), std::fabs(all.max.y), std::fabs(all.max.z)});
     const double absolute = double(magnitude) * std::ldexp(1.0, -24);
     st.tiny = absolute * absolute;
+    return Status::okStatus();
+}
+
+// The headers, the bound, and the checks that need no file read.
+Status planMeasurement(const std::vector<std::string>& files, const std::vector<const Mesh*>& levels,
+                       const LevelErrorOptions& o, std::vector<PartInfo>& parts, InputSummary& s,
+                       LevelErrorResult& common, std::vector<uint64_t>& level_points, uint64_t& stride) {
+    if (files.empty()) return invalidInput("level error: expected at least one partition file");
+    LODBAKE_RETURN_IF_ERROR(detail::checkDistanceOptions(o.distance));
+    uint64_t level_triangles = 0, points = 0;
+    for (const Mesh* level : levels) {
+        LODBAKE_RETURN_IF_ERROR(detail::checkDistanceSurface(*level, "level"));
+        level_points.push_back(o.distance.sample_count + (o.distance.include_vertices ? referencedVertices(*level) : 0));
+        level_triangles += level->indices.size() / 3;
+        points += level_points.back();
+    }
+    parts.resize(files.size());
+    for (size_t p = 0; p < files.size(); ++p) {
+        LODBAKE_RETURN_IF_ERROR(readHeader(files[p], parts[p]));
+        common.input_triangles += parts[p].triangles;
+        s.id_count = std::max(s.id_count, uint64_t(parts[p].last_id) + 1);
+    }
+    const uint64_t cap = std::max<uint64_t>(1, o.bound_triangles);
+    stride = (common.input_triangles + cap - 1) / cap;
+    common.subsample_triangles = (common.input_triangles + stride - 1) / stride;
+    common.partition_count = parts.size();
+    common.memory_bound_bytes = memoryBound(parts, common.subsample_triangles, level_triangles, points, s.id_count);
+    if (common.memory_bound_bytes > o.memory_limit_bytes)
+        return resourceLimit(files[0] + ": memory limit of " + std::to_string(o.memory_limit_bytes >> 20) +
+                             " MiB is too small to measure the level" + (levels.size() > 1 ? "s" : "") +
+                             " (needs at least " + std::to_string((common.memory_bound_bytes >> 20) + 1) + " MiB)");
+    return Status::okStatus();
+}
+
+Result<std::vector<LevelErrorResult>> measure(const std::vector<std::string>& files,
+                                              const std::vector<const Mesh*>& levels, const LevelErrorOptions& o) {
+    std::vector<PartInfo> parts;
+    InputSummary s;
+    LevelErrorResult common;
+    std::vector<uint64_t> level_points;
+    uint64_t stride = 1;
+    LODBAKE_RETURN_IF_ERROR(planMeasurement(files, levels, o, parts, s, common, level_points, stride));
+    Account acc;
+    acc.add(48 * common.subsample_triangles); // the subsample's corners, gathered by the area pass
+    LODBAKE_RETURN_IF_ERROR(areaPass(parts, stride, o, s, acc));
+    const uint64_t key = detail::splitmix64(o.distance.seed ^ detail::kReferenceStream);
+    assignSamples(parts, key, o.distance.sample_count, s);
+
+    std::vector<uint64_t> seen(size_t((s.id_count + 63) / 64), 0);
+    acc.add(8 * uint64_t(seen.size()));
+    std::vector<LevelState> states(levels.size());
+    {
+        const uint64_t sub_bytes = (48 + kDistanceIndexBytesPerTriangle) * common.subsample_triangles;
+        acc.add(kDistanceIndexBytesPerTriangle * common.subsample_triangles);
+        LODBAKE_ASSIGN_OR_RETURN(DistanceIndex sub, DistanceIndex::build(s.sub_positions, s.sub_indices));
+        for (size_t l = 0; l < levels.size(); ++l)
+            LODBAKE_RETURN_IF_ERROR(prepareLevel(*levels[l], o, sub, s.box, states[l], acc));
+        std::vector<Vec3f>().swap(s.sub_positions);
+        std::vector<uint32_t>().swap(s.sub_indices);
+        acc.sub(sub_bytes);
+    }
     for (size_t p = 0; p < parts.size(); ++p) {
         if (cancelled(o)) return ioError(parts[p].path + ": level error measurement cancelled");
-        LODBAKE_RETURN_IF_ERROR(distancePass(parts[p], p == s.last_positive_part, s, o, key, st, acc));
+        LODBAKE_RETURN_IF_ERROR(distancePass(parts[p], p == s.last_positive_part, s, o, key, seen, states, acc));
     }
-    for (double& b : st.best) b = std::sqrt(b);
-    const OneSidedDistance level_side = detail::combineSideDistances(st.best.data(), st.best.size());
-    result.distance = detail::twoSidedDistance(st.input_side, level_side, s.box.diagonal());
-    result.partition_count = parts.size();
-    for (uint64_t w : st.seen) result.input_vertices += uint64_t(__builtin_popcountll(w));
-    result.level_queries = st.queries;
-    result.accounted_peak_bytes = acc.peak;
-    return result;
+    for (uint64_t w : seen) common.input_vertices += uint64_t(__builtin_popcountll(w));
+    common.accounted_peak_bytes = acc.peak;
+    std::vector<LevelErrorResult> results(levels.size(), common);
+    for (size_t l = 0; l < levels.size(); ++l) {
+        LevelState& st = states[l];
+        for (double& b : st.best) b = std::sqrt(b);
+        const OneSidedDistance level_side = detail::combineSideDistances(st.best.data(), st.best.size());
+        results[l].distance = detail::twoSidedDistance(st.input_side, level_side, s.box.diagonal());
+        results[l].level_points = level_points[l];
+        results[l].level_queries = st.queries;
+    }
+    return results;
 }
 
 } // namespace
 
-Result<LevelErrorResult> measureLevelError(const std::vector<std::string>& partition_files, const Mesh& level,
-                                           const LevelErrorOptions& options) {
+Result<std::vector<LevelErrorResult>> measureLevelErrors(const std::vector<std::string>& partition_files,
+                                                         const std::vector<const Mesh*>& levels,
+                                                         const LevelErrorOptions& options) {
     const int threads = options.threads > 0 ? options.threads : tbb::this_task_arena::max_concurrency();
     tbb::task_arena arena(std::max(1, threads));
-    Result<LevelErrorResult> result = internalError("level error: not run");
-    arena.execute([&] { result = measure(partition_files, level, options); });
+    Result<std::vector<LevelErrorResult>> result = internalError("level error: not run");
+    arena.execute([&] { result = measure(partition_files, levels, options); });
     return result;
+}
+
+Result<LevelErrorResult> measureLevelError(const std::vector<std::string>& partition_files, const Mesh& level,
+                                           const LevelErrorOptions& options) {
+    LODBAKE_ASSIGN_OR_RETURN(std::vector<LevelErrorResult> results, measureLevelErrors(partition_files, {&level}, options));
+    return std::move(results[0]);
 }
 
 Result<LevelErrorResult> measureLevelError(const PartitionSet& set, const Mesh& level, const LevelErrorOptions& options) {

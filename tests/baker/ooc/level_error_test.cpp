@@ -178,6 +178,28 @@ TEST(LevelErrorTest, SameBitsAtOneAndTwoThreads) {
     EXPECT_EQ(one->level_queries, two->level_queries);
 }
 
+TEST(LevelErrorTest, SeveralLevelsInOnePassEqualEachAlone) {
+    LevelFixture f = levelFixture("batch", 30000);
+    const lodbake::Mesh fine = simplified(f.input, 0.2f), coarse = simplified(f.input, 0.02f);
+    const LevelErrorOptions o = levelOptions(2);
+    auto both = measureLevelErrors({f.set.partitions[0].path, f.set.partitions[1].path}, {&fine, &coarse}, o);
+    ASSERT_TRUE(both.ok()) << both.status().message();
+    ASSERT_EQ(both->size(), 2u);
+    const lodbake::Mesh* levels[2] = {&fine, &coarse};
+    for (size_t i = 0; i < 2; ++i) {
+        auto alone = measureLevelError({f.set.partitions[0].path, f.set.partitions[1].path}, *levels[i], o);
+        ASSERT_TRUE(alone.ok());
+        const lodbake::DistanceResult& a = alone->distance;
+        const lodbake::DistanceResult& b = (*both)[i].distance;
+        expectSameBits(a.hausdorff, b.hausdorff, "hausdorff");
+        expectSameBits(a.mean, b.mean, "mean");
+        expectSameBits(a.rms, b.rms, "rms");
+        EXPECT_EQ(alone->level_queries, (*both)[i].level_queries);
+        EXPECT_LT(alone->memory_bound_bytes, (*both)[i].memory_bound_bytes);
+    }
+    EXPECT_LT((*both)[0].distance.mean, (*both)[1].distance.mean);
+}
+
 TEST(LevelErrorTest, MemoryStaysUnderItsBoundAndTheLimit) {
     LevelFixture f = levelFixture("memory", 30000);
     const lodbake::Mesh level = simplified(f.input, 0.1f);

@@ -24,7 +24,8 @@
 //   pass 1  (areas)      48 S + 16 V_p + 12 T_p
 //   level               128 S + 88 T_L + 52 P_L + I / 8
 //   pass 2  (distances)  88 T_L + 40 P_L + I / 8 + 20 V_p + 100 T_p
-// The bound is the largest of the three; a limit below it is a ResourceLimit error naming the first
+// With several levels (measureLevelErrors) the level terms are summed over them. The bound is the
+// largest of the three; a limit below it is a ResourceLimit error naming the first
 // partition file and the minimum. 80 bytes per triangle is an allowance for a DistanceIndex and its
 // build, and 8 per triangle the partition's area CDF.
 
@@ -72,6 +73,14 @@ struct LevelErrorResult {
 /// or options fail as measureSurfaceDistance does.
 Result<LevelErrorResult> measureLevelError(const std::vector<std::string>& partition_files, const Mesh& level,
                                            const LevelErrorOptions& options);
+
+/// Several levels in one pass over the files: each file is read twice and indexed once for all of them.
+/// results[i] is bit for bit what measureLevelError(partition_files, *levels[i], options) returns,
+/// except the memory figures, which are the whole run's (the level terms of the formula summed over
+/// the levels). Pointers must not be null.
+Result<std::vector<LevelErrorResult>> measureLevelErrors(const std::vector<std::string>& partition_files,
+                                                         const std::vector<const Mesh*>& levels,
+                                                         const LevelErrorOptions& options);
 
 /// The same over a partitioner's set (its files in leaf order).
 Result<LevelErrorResult> measureLevelError(const PartitionSet& set, const Mesh& level, const LevelErrorOptions& options);
