@@ -25,7 +25,7 @@
 //   level               128 S + 88 T_L + 52 P_L + I / 8
 //   pass 2  (distances)  88 T_L + 40 P_L + I / 8 + 20 V_p + 100 T_p
 // With several levels (measureLevelErrors) the level terms are summed over them. The bound is the
-// largest of the three; a limit below it is a ResourceLimit error naming the first
+// largest of the three (the caller's level mesh aside); a limit below it is a ResourceLimit error naming the first
 // partition file and the minimum. 80 bytes per triangle is an allowance for a DistanceIndex and its
 // build, and 8 per triangle the partition's area CDF.
 
