@@ -135,8 +135,9 @@ Result<PartitionData> loadPartition(const PartInfo& info) {
                             hashToHex(d.content_hash) + ": the file is corrupted");
     if (info.hash != 0 && d.content_hash != info.hash)
         return invalidInput(info.path + ": content: changed while the level error was measured");
-    if (d.global_ids.back() != info.last_id)
-        return invalidInput(info.path + ": vertex ids: changed while the level error was measured");
+    if (d.global_ids.size() != info.vertices || d.indices.size() != 3 * size_t(info.triangles) ||
+        d.global_ids.back() != info.last_id)
+        return invalidInput(info.path + ": header: changed while the level error was measured");
     Aabb box;
     for (size_t v = 0; v < d.positions.size(); ++v) {
         if (!isFinite(d.positions[v]))

@@ -2,13 +2,15 @@
 // partitions: it equals measureSurfaceDistance of the same level against the whole input in
 // partition order (the same points; the level side bit for bit, the input side's sums up to their
 // rounding), stays within sampling noise of the measurement against the input in file order, gives
-// the known error of a shifted copy, is the same bits at 1 and 2 threads, keeps its accounted memory
-// under its bound, and refuses damaged partition files naming them.
+// the known error of a shifted copy, is the same bits at 1 and 2 threads and for several levels at
+// once, keeps its accounted memory under its bound, and refuses damaged partition files (and stops
+// at a cancel) naming them.
 
 #include "lodbake/ooc/level_error.h"
 
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -262,6 +264,13 @@ TEST(LevelErrorTest, DamagedPartitionFilesAreRefusedNamingThem) {
     expectRefused(with_missing, with_missing[1], "missing");
     write(path, *bytes);
     EXPECT_TRUE(measureLevelError(files, level, levelOptions(2)).ok());
+    // A cancel is an error naming the file it stopped at.
+    std::atomic<bool> cancel{true};
+    LevelErrorOptions o = levelOptions(2);
+    o.cancel = &cancel;
+    auto cancelled = measureLevelError(files, level, o);
+    ASSERT_FALSE(cancelled.ok());
+    EXPECT_EQ(cancelled.status().message().rfind(files[0] + ": ", 0), 0u) << cancelled.status().message();
 }
 
 TEST(LevelErrorTest, PartitionFilesOfAMergeTree) {
