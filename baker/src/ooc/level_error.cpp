@@ -490,6 +490,19 @@ Result<std::vector<LevelErrorResult>> measureLevelErrors(const std::vector<std::
     return result;
 }
 
+Result<uint64_t> levelErrorBound(const std::vector<std::string>& partition_files,
+                                 const std::vector<const Mesh*>& levels, const LevelErrorOptions& options) {
+    std::vector<PartInfo> parts;
+    InputSummary s;
+    LevelErrorResult common;
+    std::vector<uint64_t> level_points;
+    uint64_t stride = 1;
+    LevelErrorOptions unlimited = options;
+    unlimited.memory_limit_bytes = ~uint64_t(0);
+    LODBAKE_RETURN_IF_ERROR(planMeasurement(partition_files, levels, unlimited, parts, s, common, level_points, stride));
+    return common.memory_bound_bytes;
+}
+
 Result<LevelErrorResult> measureLevelError(const std::vector<std::string>& partition_files, const Mesh& level,
                                            const LevelErrorOptions& options) {
     LODBAKE_ASSIGN_OR_RETURN(std::vector<LevelErrorResult> results, measureLevelErrors(partition_files, {&level}, options));

@@ -210,6 +210,11 @@ TEST(LevelErrorTest, MemoryStaysUnderItsBoundAndTheLimit) {
     ASSERT_TRUE(r.ok());
     EXPECT_GT(r->accounted_peak_bytes, 0u);
     EXPECT_LE(r->accounted_peak_bytes, r->memory_bound_bytes);
+    std::vector<std::string> files;
+    for (const PartitionFile& p : f.set.partitions) files.push_back(p.path);
+    auto bound = levelErrorBound(files, {&level}, o);
+    ASSERT_TRUE(bound.ok());
+    EXPECT_EQ(*bound, r->memory_bound_bytes);
     o.memory_limit_bytes = r->memory_bound_bytes - 1;
     auto refused = measureLevelError(f.set, level, o);
     ASSERT_FALSE(refused.ok());

@@ -82,6 +82,13 @@ Result<std::vector<LevelErrorResult>> measureLevelErrors(const std::vector<std::
                                                          const std::vector<const Mesh*>& levels,
                                                          const LevelErrorOptions& options);
 
+/// The memory bound of measureLevelErrors(partition_files, levels, options) (the formula above), from
+/// the files' headers and the levels alone, whatever options.memory_limit_bytes: what a caller
+/// reserves at a MemoryGate before running it. Fails as the measurement does for a bad level, options
+/// or header.
+Result<uint64_t> levelErrorBound(const std::vector<std::string>& partition_files, const std::vector<const Mesh*>& levels,
+                                 const LevelErrorOptions& options);
+
 /// The same over a partitioner's set (its files in leaf order).
 Result<LevelErrorResult> measureLevelError(const PartitionSet& set, const Mesh& level, const LevelErrorOptions& options);
 
