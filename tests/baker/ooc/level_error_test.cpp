@@ -3,8 +3,8 @@
 // partition order (the same points; the level side bit for bit, the input side's sums up to their
 // rounding), stays within sampling noise of the measurement against the input in file order, gives
 // the known error of a shifted copy, is the same bits at 1 and 2 threads and for several levels at
-// once, keeps its accounted memory under its bound, and refuses damaged partition files (and stops
-// at a cancel) naming them.
+// once, keeps its accounted memory under its bound, refuses damaged partition files (and stops at a
+// cancel) naming them, and measures what buildOutOfCore leaves with keep_intermediate.
 
 #include "lodbake/ooc/level_error.h"
 
@@ -20,6 +20,7 @@
 
 #include "lodbake/core/file_io.h"
 #include "lodbake/io/mesh_io.h"
+#include "lodbake/ooc/driver.h"
 #include "lodbake/ooc/partition_build.h"
 #include "lodbake/simplify/simplify.h"
 #include "scansim.h"
@@ -299,4 +300,44 @@ TEST(LevelErrorTest, PartitionFilesOfAMergeTree) {
     auto missing = partitionFilesOf(tree);
     ASSERT_FALSE(missing.ok());
     EXPECT_EQ(missing.status().message().rfind(tree.partitions[0] + ": ", 0), 0u) << missing.status().message();
+}
+
+TEST(LevelErrorTest, WhatTheDriverLeavesIsMeasuredAgainstTheInput) {
+    const std::string dir = levelErrorDir("driver");
+    lodbake::scansim::SurfaceOptions so;
+    so.triangles = 40000;
+    const std::string scan = dir + "/scan.ply";
+    ASSERT_TRUE(lodbake::scansim::writeSurfacePly(so, scan).ok());
+    OutOfCoreOptions o;
+    o.work_dir = dir + "/work";
+    o.memory_limit_bytes = uint64_t(512) << 20;
+    o.threads = 2;
+    o.sample_cap = 4096;
+    o.leaf_triangles = 12000;
+    o.merge_group_bytes = uint64_t(8) << 20;
+    o.keep_intermediate = true;
+    lodbake::Diagnostics d;
+    auto baked = buildOutOfCore(scan, dir + "/pages.bin", o, d);
+    ASSERT_TRUE(baked.ok()) << baked.status().message();
+    auto files = partitionFilesOf(baked->tree);
+    ASSERT_TRUE(files.ok()) << files.status().message();
+    ASSERT_EQ(files->size(), baked->partition_count);
+    ASSERT_GE(files->size(), 3u);
+    // The input in partition order, from the files, for the in-memory measurement.
+    lodbake::Mesh input;
+    input.positions.resize(baked->vertex_count);
+    for (const std::string& path : *files) {
+        auto data = readPartitionFile(path);
+        ASSERT_TRUE(data.ok());
+        for (size_t v = 0; v < data->global_ids.size(); ++v) input.positions[data->global_ids[v]] = data->positions[v];
+        for (uint32_t i : data->indices) input.indices.push_back(data->global_ids[i]);
+    }
+    ASSERT_EQ(input.faceCount(), baked->triangle_count);
+    const lodbake::Mesh level = simplified(input, 0.05f);
+    const LevelErrorOptions lo = levelOptions(2);
+    auto ooc = measureLevelError(*files, level, lo);
+    ASSERT_TRUE(ooc.ok()) << ooc.status().message();
+    auto mem = lodbake::measureSurfaceDistance(input, level, lo.distance);
+    ASSERT_TRUE(mem.ok());
+    expectSameMeasurement(ooc->distance, *mem);
 }
