@@ -43,6 +43,9 @@
 //
 // --driver runs the whole out-of-core bake through ooc::buildOutOfCore on a scan file in a child
 // process and reports its peak RSS and throughput (runDriverMode below).
+//
+// --level-error measures one level's error against the input out of core (ooc::measureLevelError)
+// and in memory, each in a child process: time and peak RSS of both (runLevelErrorMode below).
 
 #include <algorithm>
 #include <chrono>
@@ -69,11 +72,13 @@
 #include "lodbake/io/mesh_io.h"
 #include "lodbake/io/mesh_stream.h"
 #include "lodbake/ooc/driver.h"
+#include "lodbake/ooc/level_error.h"
 #include "lodbake/ooc/partition.h"
 #include "lodbake/ooc/partition_build.h"
 #include "lodbake/ooc/partition_merge.h"
 #include "lodbake/ooc/tree_pages.h"
 #include "lodbake/pack/cluster_lod_pack.h"
+#include "lodbake/simplify/simplify.h"
 #include "scansim.h"
 
 namespace {
@@ -564,10 +569,212 @@ int runDriverMode(int argc, char** argv) {
     bars.absolute("out-of-core driver peak RSS MiB <= memory limit", peak, double(limit_mib), lodbake_bench::Limit::AtMost);
     return bars.finish(check);
 }
+
+// --level-error: the out-of-core level error (ooc::measureLevelError, lodbake/ooc/level_error.h)
+// against the in-memory measurement (measureSurfaceDistance on the input read whole) of the same
+// level. A first child process reads the scan, simplifies it to --ratio of its triangles (the level,
+// written to DIR/ooc_bench_level.ply) and partitions it (leaves of --leaf-triangles, as the driver
+// sizes them); then one child measures out of core from the partition files and one in memory from
+// the scan, each reading the level from its file, so that each one's peak RSS (RUSAGE_CHILDREN of
+// that child) is its own: wall time of the measurement and the child's peak RSS, the ratios out of
+// core / in memory, and both results (they differ by sampling noise only: the in-memory samples are
+// stratified over the file's triangle order, the out-of-core ones over the partitions').
+//   ooc_bench --level-error --scan FILE [--ratio R] [--leaf-triangles N] [--memory-limit MIB] [--dir DIR]
+//             [--threads N] [--samples N] [--check]
+struct LevelErrorRun {
+    double seconds = 0, peak_mib = 0, accounted_mib = 0, bound_mib = 0;
+    double hausdorff = 0, mean = 0, rms = 0, diagonal = 0;
+    uint64_t input_triangles = 0, level_triangles = 0, partitions = 0, level_points = 0, level_queries = 0;
+};
+
+struct LevelErrorSetup {
+    std::string scan, dir, level_path, list_path;
+    double ratio = 0.1;
+    uint64_t leaf_triangles = lodbake::ooc::kDefaultLeafTriangles, limit_mib = 1024;
+    uint32_t samples = 200000;
+    int threads = 0;
+};
+
+// Runs `body` in a forked child that writes a LevelErrorRun to a pipe; the child's peak RSS is added.
+template <class Body> bool runLevelErrorChild(Body&& body, LevelErrorRun& run) {
+    int fds[2];
+    if (pipe(fds) != 0) return false;
+    const pid_t pid = fork();
+    if (pid < 0) return false;
+    if (pid == 0) {
+        close(fds[0]);
+        LevelErrorRun c;
+        if (!body(c)) _exit(1);
+        const ssize_t w = write(fds[1], &c, sizeof c);
+        _exit(w == ssize_t(sizeof c) ? 0 : 1);
+    }
+    close(fds[1]);
+    LevelErrorRun c;
+    const ssize_t got = read(fds[0], &c, sizeof c);
+    close(fds[0]);
+    int status = 0;
+    rusage u{};
+    if (wait4(pid, &status, 0, &u) != pid || !WIFEXITED(status) || WEXITSTATUS(status) != 0 || got != ssize_t(sizeof c))
+        return false;
+    run = c;
+    run.peak_mib = double(u.ru_maxrss) / 1024.0;
+    return true;
+}
+
+bool readLevelErrorMesh(const std::string& path, lodbake::Mesh& mesh) {
+    lodbake::Diagnostics d;
+    auto r = lodbake::readMesh(path, lodbake::ReadOptions(), d);
+    if (!r.ok()) {
+        std::fprintf(stderr, "ooc_bench: %s\n", r.status().message().c_str());
+        return false;
+    }
+    mesh = std::move(r->mesh);
+    return true;
+}
+
+// The level (simplified from the scan, written as a PLY) and the partitions (their paths, one a line).
+bool prepareLevelError(const LevelErrorSetup& st, LevelErrorRun& c) {
+    std::unique_ptr<lodbake::ScopedThreadLimit> limit;
+    if (st.threads > 0) limit = std::make_unique<lodbake::ScopedThreadLimit>(size_t(st.threads));
+    lodbake::Mesh input;
+    if (!readLevelErrorMesh(st.scan, input)) return false;
+    lodbake::SimplifyOptions so;
+    so.target_ratio = float(st.ratio);
+    lodbake::Diagnostics d;
+    auto level = lodbake::simplify(input, so, d);
+    if (!level.ok() || !lodbake::writeMesh(level->mesh, st.level_path, lodbake::WriteOptions(), d).ok()) return false;
+    c.input_triangles = input.faceCount();
+    c.level_triangles = level->mesh.faceCount();
+    lodbake::ooc::PartitionOptions po;
+    po.work_dir = st.dir + "/ooc_bench_level_error_work";
+    po.memory_limit_bytes = st.limit_mib << 20;
+    po.threads = st.threads;
+    po.build_bytes_per_triangle = lodbake::ooc::kPartitionBuildBytesPerTriangle;
+    po.leaf_triangles = st.leaf_triangles;
+    auto set = lodbake::ooc::partitionMesh(st.scan, po, d);
+    if (!set.ok()) {
+        std::fprintf(stderr, "ooc_bench: %s\n", set.status().message().c_str());
+        return false;
+    }
+    std::ofstream list(st.list_path);
+    for (const auto& f : set->partitions) list << f.path << "\n";
+    c.partitions = set->partitions.size();
+    return bool(list);
+}
+
+void fillLevelErrorRun(const lodbake::DistanceResult& r, LevelErrorRun& c) {
+    c.hausdorff = r.hausdorffRel();
+    c.mean = r.meanRel();
+    c.rms = r.rmsRel();
+    c.diagonal = r.diagonal;
+}
+
+bool oocLevelError(const LevelErrorSetup& st, LevelErrorRun& c) {
+    std::unique_ptr<lodbake::ScopedThreadLimit> limit;
+    if (st.threads > 0) limit = std::make_unique<lodbake::ScopedThreadLimit>(size_t(st.threads));
+    lodbake::Mesh level;
+    if (!readLevelErrorMesh(st.level_path, level)) return false;
+    std::vector<std::string> files;
+    std::ifstream list(st.list_path);
+    for (std::string line; std::getline(list, line);) files.push_back(line);
+    lodbake::ooc::LevelErrorOptions o;
+    o.distance.sample_count = st.samples;
+    o.memory_limit_bytes = st.limit_mib << 20;
+    o.threads = st.threads;
+    const auto t0 = Clock::now();
+    auto r = lodbake::ooc::measureLevelError(files, level, o);
+    c.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+    if (!r.ok()) {
+        std::fprintf(stderr, "ooc_bench: %s\n", r.status().message().c_str());
+        return false;
+    }
+    fillLevelErrorRun(r->distance, c);
+    c.accounted_mib = double(r->accounted_peak_bytes) / 1048576.0;
+    c.bound_mib = double(r->memory_bound_bytes) / 1048576.0;
+    c.input_triangles = r->input_triangles;
+    c.level_triangles = level.faceCount();
+    c.partitions = r->partition_count;
+    c.level_points = r->level_points;
+    c.level_queries = r->level_queries;
+    return true;
+}
+
+bool inMemoryLevelError(const LevelErrorSetup& st, LevelErrorRun& c) {
+    std::unique_ptr<lodbake::ScopedThreadLimit> limit;
+    if (st.threads > 0) limit = std::make_unique<lodbake::ScopedThreadLimit>(size_t(st.threads));
+    lodbake::Mesh input, level;
+    if (!readLevelErrorMesh(st.scan, input) || !readLevelErrorMesh(st.level_path, level)) return false;
+    lodbake::DistanceOptions o;
+    o.sample_count = st.samples;
+    const auto t0 = Clock::now();
+    auto r = lodbake::measureSurfaceDistance(input, level, o);
+    c.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+    if (!r.ok()) return false;
+    fillLevelErrorRun(*r, c);
+    c.input_triangles = input.faceCount();
+    c.level_triangles = level.faceCount();
+    return true;
+}
+
+int runLevelErrorMode(int argc, char** argv) {
+    const bool check = lodbake_bench::takeCheckFlag(argc, argv);
+    LevelErrorSetup st;
+    st.dir = LODBAKE_BENCH_OUT_DIR;
+    for (int i = 1; i < argc; ++i) {
+        const std::string a = argv[i];
+        if (a == "--scan" && i + 1 < argc) st.scan = argv[++i];
+        else if (a == "--ratio" && i + 1 < argc) st.ratio = std::strtod(argv[++i], nullptr);
+        else if (a == "--leaf-triangles" && i + 1 < argc) st.leaf_triangles = std::strtoull(argv[++i], nullptr, 10);
+        else if (a == "--memory-limit" && i + 1 < argc) st.limit_mib = std::strtoull(argv[++i], nullptr, 10);
+        else if (a == "--dir" && i + 1 < argc) st.dir = argv[++i];
+        else if (a == "--threads" && i + 1 < argc) st.threads = std::atoi(argv[++i]);
+        else if (a == "--samples" && i + 1 < argc) st.samples = uint32_t(std::strtoul(argv[++i], nullptr, 10));
+        else {
+            std::fprintf(stderr, "usage: ooc_bench --level-error --scan FILE [--ratio R] [--leaf-triangles N] "
+                                 "[--memory-limit MIB] [--dir DIR] [--threads N] [--samples N]\n");
+            return 2;
+        }
+    }
+    if (st.scan.empty()) {
+        std::fprintf(stderr, "ooc_bench --level-error: --scan FILE is required\n");
+        return 2;
+    }
+    std::error_code ec;
+    std::filesystem::create_directories(st.dir, ec);
+    st.level_path = st.dir + "/ooc_bench_level.ply";
+    st.list_path = st.dir + "/ooc_bench_level_error_parts.txt";
+    std::filesystem::remove_all(st.dir + "/ooc_bench_level_error_work", ec);
+    LevelErrorRun prep, ooc, mem;
+    if (!runLevelErrorChild([&](LevelErrorRun& c) { return prepareLevelError(st, c); }, prep) ||
+        !runLevelErrorChild([&](LevelErrorRun& c) { return oocLevelError(st, c); }, ooc) ||
+        !runLevelErrorChild([&](LevelErrorRun& c) { return inMemoryLevelError(st, c); }, mem)) {
+        std::fprintf(stderr, "ooc_bench --level-error: a run failed\n");
+        return 1;
+    }
+    std::filesystem::remove_all(st.dir + "/ooc_bench_level_error_work", ec);
+    std::printf("%llu input triangles in %llu partitions, level of %llu triangles (%s), %u samples per side\n",
+                (unsigned long long)ooc.input_triangles, (unsigned long long)ooc.partitions,
+                (unsigned long long)ooc.level_triangles, st.level_path.c_str(), st.samples);
+    std::printf("out of core: %8.2f s, peak RSS %8.1f MiB (accounted %.1f, bound %.1f), %llu level points, "
+                "%llu partition queries\n",
+                ooc.seconds, ooc.peak_mib, ooc.accounted_mib, ooc.bound_mib, (unsigned long long)ooc.level_points,
+                (unsigned long long)ooc.level_queries);
+    std::printf("in memory:   %8.2f s, peak RSS %8.1f MiB\n", mem.seconds, mem.peak_mib);
+    std::printf("ratio out of core / in memory: time x%.3f, peak RSS x%.3f\n", ooc.seconds / mem.seconds,
+                ooc.peak_mib / mem.peak_mib);
+    for (const LevelErrorRun* r : {&ooc, &mem})
+        std::printf("%-12s hausdorff %.4e  mean %.4e  rms %.4e (of the diagonal %.6g)\n",
+                    r == &ooc ? "out of core" : "in memory", r->hausdorff, r->mean, r->rms, r->diagonal);
+    lodbake_bench::Bars bars("ooc_bench --level-error");
+    bars.absolute("out-of-core level error peak RSS MiB <= memory limit", ooc.peak_mib, double(st.limit_mib),
+                  lodbake_bench::Limit::AtMost);
+    return bars.finish(check);
+}
 } // namespace
 
 int main(int argc, char** argv) {
     if (argc > 1 && std::string(argv[1]) == "--pages") return runPagesMode(argc - 1, argv + 1);
+    if (argc > 1 && std::string(argv[1]) == "--level-error") return runLevelErrorMode(argc - 1, argv + 1);
     if (argc > 1 && std::string(argv[1]) == "--driver") return runDriverMode(argc - 1, argv + 1);
     const bool check = lodbake_bench::takeCheckFlag(argc, argv);
     uint64_t triangles = 10000000, limit_mib = 1024;

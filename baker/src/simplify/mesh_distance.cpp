@@ -34,6 +34,7 @@
 
 #include "core/large_array.h"
 #include "core/parallel.h"
+#include "simplify/distance_sides.h"
 #include "simplify/surface_sampling.h"
 #include "lodbake/core/bvh.h"
 
@@ -45,9 +46,9 @@ using detail::LargeArray;
 // A side's points (Morton order); large, filled once, read in order by the queries.
 using PointArray = LargeArray<Vec3d>;
 
-constexpr size_t kChunkSize = 2048; // points per task; fixed so the reduction order never changes
-constexpr uint64_t kReferenceStream = 0x5265664d65736821ull; // decorrelates the two sides' samples
-constexpr uint64_t kApproxStream = 0x417070726f782121ull;
+constexpr size_t kChunkSize = detail::kDistanceChunkSize;
+using detail::kApproxStream;
+using detail::kReferenceStream;
 
 using detail::pointOnTriangle;
 using detail::splitmix64;
@@ -81,10 +82,8 @@ uint64_t mortonCode(const Vec3d& q) {
 }
 
 double triangleArea(const Mesh& mesh, size_t t) {
-    Vec3d a = toDouble(mesh.positions[mesh.indices[t * 3]]);
-    Vec3d b = toDouble(mesh.positions[mesh.indices[t * 3 + 1]]);
-    Vec3d c = toDouble(mesh.positions[mesh.indices[t * 3 + 2]]);
-    return 0.5 * length(cross(b - a, c - a));
+    return detail::samplingTriangleArea(mesh.positions[mesh.indices[t * 3]], mesh.positions[mesh.indices[t * 3 + 1]],
+                                        mesh.positions[mesh.indices[t * 3 + 2]]);
 }
 
 // Checks what this module relies on; the whole-mesh checks belong to cleanup::validate().
@@ -463,15 +462,7 @@ Result<DistanceResult> measurePrepared(const DistanceReference& reference, const
     }
     LODBAKE_ASSIGN_OR_RETURN(SideStats approx_to_ref, measurePoints(approx.points, reference.index()));
 
-    DistanceResult r;
-    r.max_ref_to_approx = ref_to_approx.max;
-    r.max_approx_to_ref = approx_to_ref.max;
-    r.hausdorff = std::max(r.max_ref_to_approx, r.max_approx_to_ref);
-    const double n12 = double(ref_to_approx.count), n21 = double(approx_to_ref.count);
-    r.mean = (ref_to_approx.sum / n12 + approx_to_ref.sum / n21) / 2.0;
-    r.rms = std::sqrt((ref_to_approx.sum_sq / n12 + approx_to_ref.sum_sq / n21) / 2.0);
-    r.diagonal = reference.diagonal();
-    return r;
+    return detail::twoSidedDistance(ref_to_approx, approx_to_ref, reference.diagonal());
 }
 
 // Measures approximations[i] for every i, each prepared (prepareApprox) while the one before it is
@@ -929,5 +920,51 @@ Result<DistanceResult> measureSurfaceDistance(const Mesh& reference, const Mesh&
     LODBAKE_ASSIGN_OR_RETURN(DistanceReference prepared, DistanceReference::prepare(reference));
     return measureSurfaceDistance(prepared, approx, options);
 }
+
+namespace detail {
+
+Status checkDistanceOptions(const DistanceOptions& options) { return checkOptions(options); }
+
+Status checkDistanceSurface(const Mesh& mesh, const char* role) { return checkSurface(mesh, role); }
+
+Result<LargeArray<Vec3d>> approximationSidePoints(const Mesh& approx, const DistanceOptions& options) {
+    return samplePoints(approx, options, kApproxStream, "approximation");
+}
+
+OneSidedDistance combineSideDistances(const double* distances, size_t count) {
+    // measurePointsAt's arithmetic: per chunk in point order, then the chunks in order.
+    OneSidedDistance total;
+    for (size_t first = 0; first < count; first += kChunkSize) {
+        const size_t end = std::min(count, first + kChunkSize);
+        SideStats s;
+        for (size_t k = first; k < end; ++k) {
+            const double d = distances[k];
+            s.max = std::max(s.max, d);
+            s.sum += d;
+            s.sum_sq += d * d;
+            s.count++;
+        }
+        total.max = std::max(total.max, s.max);
+        total.sum += s.sum;
+        total.sum_sq += s.sum_sq;
+        total.count += s.count;
+    }
+    return total;
+}
+
+DistanceResult twoSidedDistance(const OneSidedDistance& ref_to_approx, const OneSidedDistance& approx_to_ref,
+                                double diagonal) {
+    DistanceResult r;
+    r.max_ref_to_approx = ref_to_approx.max;
+    r.max_approx_to_ref = approx_to_ref.max;
+    r.hausdorff = std::max(r.max_ref_to_approx, r.max_approx_to_ref);
+    const double n12 = double(ref_to_approx.count), n21 = double(approx_to_ref.count);
+    r.mean = (ref_to_approx.sum / n12 + approx_to_ref.sum / n21) / 2.0;
+    r.rms = std::sqrt((ref_to_approx.sum_sq / n12 + approx_to_ref.sum_sq / n21) / 2.0);
+    r.diagonal = diagonal;
+    return r;
+}
+
+} // namespace detail
 
 } // namespace lodbake
