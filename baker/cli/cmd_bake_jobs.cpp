@@ -69,6 +69,7 @@ int runOneJob(const BakeSettings& settings, const std::string& work_dir, const s
     installTempFileSignalCleanup();
     ooc::JobRunOptions options;
     options.memory_limit_bytes = memoryLimit(settings);
+    options.threads = int(settings.threads);
     Diagnostics diagnostics;
     Result<ooc::JobRecord> record = ooc::runJob(work_dir, id, options, diagnostics);
     if (!quiet) printDiagnostics(diagnostics);

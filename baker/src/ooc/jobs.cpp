@@ -12,6 +12,8 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <tbb/task_arena.h>
+
 #include "lodbake/core/file_io.h"
 #include "lodbake/core/hash.h"
 #include "lodbake/core/spill_file.h"
@@ -361,8 +363,11 @@ Result<JobPlan> planOutOfCore(const std::string& input, const std::string& work_
     return plan;
 }
 
-Result<JobRecord> runJob(const std::string& work_dir, const std::string& job_id, const JobRunOptions& options,
-                         Diagnostics& diagnostics) {
+namespace {
+
+// runJob's work, inside the arena of its thread count.
+Result<JobRecord> runJobInArena(const std::string& work_dir, const std::string& job_id, const JobRunOptions& options,
+                                Diagnostics& diagnostics) {
     const std::string plan_path = jobPlanPath(work_dir);
     LODBAKE_ASSIGN_OR_RETURN(JobPlan plan, readJobPlan(plan_path));
     const JobSpec* spec = plan.find(job_id);
@@ -407,6 +412,16 @@ Result<JobRecord> runJob(const std::string& work_dir, const std::string& job_id,
     const std::string text = jobRecordJson(record);
     LODBAKE_RETURN_IF_ERROR(writeFileAtomic(jobRecordPath(work_dir, job_id), text.data(), text.size()));
     return record;
+}
+
+} // namespace
+
+Result<JobRecord> runJob(const std::string& work_dir, const std::string& job_id, const JobRunOptions& options,
+                         Diagnostics& diagnostics) {
+    tbb::task_arena arena(options.threads > 0 ? options.threads : int(tbb::task_arena::automatic));
+    Result<JobRecord> result = internalError(job_id + ": job not run");
+    arena.execute([&] { result = runJobInArena(work_dir, job_id, options, diagnostics); });
+    return result;
 }
 
 JobProgress jobProgress(const std::string& work_dir, const JobPlan& plan) {

@@ -272,6 +272,26 @@ TEST(OocJobsTest, BadPlansAndRecordsAreRefusedNamingTheFile) {
         EXPECT_TRUE(mentions(r.status(), record)) << r.status().message();
         std::ofstream(record, std::ios::trunc) << text;
     }
+    // The pages job hashes every input first: a merge file changed since its job ran is refused, and
+    // the pages, the table and the record stay as they were.
+    {
+        const std::string pages_record = lodbake_test::readTextFile(jobRecordPath(work, "pages"));
+        auto merge = readJobRecord(jobRecordPath(work, readJobPlan(plan_path)->jobs[readJobPlan(plan_path)->jobs.size() - 2].id));
+        ASSERT_TRUE(merge.ok());
+        ASSERT_EQ(merge->kind, JobKind::Merge);
+        const std::string file = work + "/" + merge->output;
+        const std::vector<uint8_t> good = fileBytes(file);
+        std::vector<uint8_t> bad = good;
+        bad[bad.size() / 3] ^= 0x10;
+        ASSERT_TRUE(lodbake::writeFileAtomic(file, bad.data(), bad.size()).ok());
+        auto r = runJob(work, "pages", {}, d);
+        ASSERT_FALSE(r.ok());
+        EXPECT_TRUE(mentions(r.status(), file)) << r.status().message();
+        EXPECT_TRUE(mentions(r.status(), "corrupted")) << r.status().message();
+        EXPECT_EQ(lodbake_test::readTextFile(jobRecordPath(work, "pages")), pages_record);
+        ASSERT_TRUE(lodbake::writeFileAtomic(file, good.data(), good.size()).ok());
+        EXPECT_TRUE(runJob(work, "pages", {}, d).ok());
+    }
     // Hostile documents: every one refused, naming the file, on one line.
     const std::vector<std::string> hostile = {
         "",
@@ -362,7 +382,8 @@ TEST(OocJobsTest, CliJobsInSeparateProcessesGiveTheDriversBytes) {
         finished = lines.size() == 1;
         for (size_t i = 1; i < lines.size(); ++i) {
             const lodbake_test::CliRun job =
-                lodbake_test::runLodbake({"bake", "--run-job", lines[i], "--work-dir", work, "--memory-limit", "512"});
+                lodbake_test::runLodbake(
+                {"bake", "--run-job", lines[i], "--work-dir", work, "--memory-limit", "512", "--threads", "1"});
             ASSERT_EQ(job.exit_code, 0) << job.err;
             EXPECT_EQ(job.out, jobRecordPath(work, lines[i]) + "\n");
         }

@@ -111,6 +111,7 @@ Result<JobPlan> planOutOfCore(const std::string& input, const std::string& work_
 struct JobRunOptions {
     uint64_t memory_limit_bytes = uint64_t(1) << 30; // the job refuses to start when its bound exceeds it
     size_t pages_in_flight = 0;                      // pages job (ClusterPackStreamOptions); no effect on bytes
+    int threads = 0;                                 // worker threads; 0: TBB's default; no effect on bytes
     const std::atomic<bool>* cancel = nullptr;
 };
 
