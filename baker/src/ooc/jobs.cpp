@@ -152,6 +152,13 @@ Result<MergeTree> treeOf(const std::string& work_dir, const JobPlan& plan, const
 // has its record. Returns whether it added any.
 Result<bool> extendPlan(const std::string& work_dir, JobPlan& plan) {
     if (plan.complete) return false;
+    // The tree's leaves are the jobs partition-0, partition-1, ... listed first (an edited plan may
+    // say otherwise).
+    const size_t partitions = partitionJobCount(plan);
+    for (size_t i = 0; i < partitions; ++i)
+        if (plan.jobs[i].kind != JobKind::Partition || plan.jobs[i].id != "partition-" + std::to_string(i))
+            return invalidInput(jobPlanPath(work_dir) + ": /jobs/" + std::to_string(i) + ": expected job partition-" +
+                                std::to_string(i));
     std::map<std::string, JobRecord> records;
     for (const JobSpec& job : plan.jobs) {
         JobRecord r;
@@ -160,7 +167,7 @@ Result<bool> extendPlan(const std::string& work_dir, JobPlan& plan) {
         records[job.id] = std::move(r);
     }
     std::vector<TreeNode> nodes;
-    buildTree(0, uint32_t(partitionJobCount(plan)), MergePairing::KdSiblings, nodes);
+    buildTree(0, uint32_t(partitions), MergePairing::KdSiblings, nodes);
     for (size_t i = 0; i < nodes.size(); ++i) {
         const auto it = records.find(nodeJobId(nodes, int(i)));
         if (it == records.end()) continue;

@@ -334,6 +334,19 @@ TEST(OocJobsTest, BadPlansAndRecordsAreRefusedNamingTheFile) {
             EXPECT_TRUE(mentions(p.status(), "plan.json")) << p.status().message();
         }
     }
+    // A plan whose partition jobs are not partition-0... (edited) is refused when planning on.
+    {
+        std::string text = plan_text;
+        for (size_t at = text.find("\"partition-"); at != std::string::npos; at = text.find("\"partition-", at + 1))
+            text.replace(at + 1, 9, "piece-xyz");
+        text.replace(text.find("\"complete\": true"), 16, "\"complete\": false");
+        ASSERT_TRUE(parseJobPlan(text, plan_path).ok());
+        std::ofstream(plan_path, std::ios::trunc) << text;
+        auto r = planOutOfCore(std::string(), work, jobsOptions(work, 2), d);
+        ASSERT_FALSE(r.ok());
+        EXPECT_TRUE(mentions(r.status(), plan_path)) << r.status().message();
+        std::ofstream(plan_path, std::ios::trunc) << plan_text;
+    }
     // A record round-trips.
     auto rec = readJobRecord(jobRecordPath(work, "pages"));
     ASSERT_TRUE(rec.ok()) << rec.status().message();
