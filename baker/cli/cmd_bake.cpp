@@ -32,6 +32,7 @@
 #include "lodbake/core/temp_files.h"
 
 #include "cli_common.h"
+#include "cmd_bake_jobs.h"
 
 namespace lodbake::cli {
 
@@ -97,6 +98,12 @@ options:
   --cache-dir DIR       reuse packs whose inputs, settings and baker version are unchanged
   --quiet               print only warnings and errors
   --print-config        print the resolved settings (sorted keys) and exit
+
+out-of-core job list (docs/pipeline.md "Job list"; docs/cli.md):
+  --plan --work-dir DIR  IN --clusters: partition IN into DIR and write DIR/plan.json; again (IN
+                        optional): add the jobs whose inputs are now done. Prints the plan, then
+                        the ids of the jobs that can run now
+  --run-job ID --work-dir DIR  run one job of DIR/plan.json from its files; prints its record
 
 exit status: 0 ok, 1 a bake failed (every other pack is still written), 2 usage error.
 )";
@@ -592,6 +599,7 @@ int runBake(int argc, char** argv) {
                     {"--cache-dir", nullptr, true},
                     {"--quiet", "-q", false},
                     {"--print-config", nullptr, false},
+                    {"--plan", nullptr, false}, {"--run-job", nullptr, true}, {"--work-dir", nullptr, true},
                     {"--help", "-h", false}},
                    args, code))
         return code;
@@ -613,6 +621,7 @@ int runBake(int argc, char** argv) {
     CliOverrides overrides;
     if (const int c = parseOverrides(args, overrides); c != kContinue) return c;
     applyOverrides(overrides, base);
+    if (isBakeJobCommand(args)) return runBakeJobCommand(args, base); // the out-of-core job list
 
     // The jobs.
     JobList list;

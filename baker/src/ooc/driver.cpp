@@ -13,7 +13,9 @@
 
 #include "lodbake/core/file_io.h"
 #include "lodbake/core/memory_gate.h"
+#include "lodbake/ooc/jobs.h"
 #include "lodbake/ooc/partition_build.h"
+#include "ooc/merge_rounds.h"
 
 namespace lodbake::ooc {
 
@@ -60,17 +62,14 @@ Status cancelled(const std::string& input) { return ioError(input + ": out-of-co
 
 bool isCancelled(const OutOfCoreOptions& o) { return o.cancel && o.cancel->load(); }
 
-// The partition jobs side by side, each reserving its bound at the gate; outputs in leaf order.
-Result<std::vector<std::string>> buildPartitions(const std::string& input, const PartitionSet& set,
-                                                 const OutOfCoreOptions& o, MemoryGate& gate, RunFiles& files,
-                                                 Diagnostics& diagnostics) {
-    PartitionBuildOptions bo;
-    bo.work_dir = o.work_dir;
-    bo.memory_limit_bytes = o.memory_limit_bytes;
-    bo.cluster = o.cluster;
-    if (set.partitions.size() > 1) bo.cluster.max_levels = std::min(o.cluster.max_levels, kLevelsPerJob);
+// The partition jobs (runPartitionJob) side by side, each reserving its bound at the gate; outputs in
+// leaf order.
+Result<std::vector<PartitionJobOutput>> buildPartitions(const std::string& input, const PartitionSet& set,
+                                                        const OutOfCoreOptions& o, MemoryGate& gate, RunFiles& files,
+                                                        Diagnostics& diagnostics) {
+    const ClusterLodOptions cluster = partitionJobCluster(o.cluster, set.partitions.size());
     const size_t n = set.partitions.size();
-    std::vector<std::string> out(n);
+    std::vector<PartitionJobOutput> out(n);
     std::vector<Status> status(n);
     std::vector<Diagnostics> notes(n);
     const int threads = o.threads > 0 ? o.threads : tbb::this_task_arena::max_concurrency();
@@ -88,18 +87,18 @@ Result<std::vector<std::string>> buildPartitions(const std::string& input, const
                 const uint64_t bound = buildBound(f);
                 status[i] = gate.acquire(bound, f.path);
                 if (!status[i].ok()) return;
-                auto r = buildPartition(f.path, bo, notes[i]);
+                auto r = runPartitionJob(f.path, o.work_dir, cluster, o.memory_limit_bytes, notes[i]);
                 gate.release(bound);
                 if (!r.ok()) {
                     status[i] = r.status();
                     return;
                 }
-                out[i] = r->path;
+                out[i] = std::move(*r);
             });
         });
     });
     for (size_t i = 0; i < n; ++i) {
-        if (!out[i].empty()) files.made.push_back(out[i]);
+        if (!out[i].file.path.empty()) files.made.push_back(out[i].file.path);
         for (const Diagnostic& d : notes[i].items())
             d.severity == Severity::Warning ? diagnostics.warn(d.message) : diagnostics.note(d.message);
     }
@@ -108,31 +107,85 @@ Result<std::vector<std::string>> buildPartitions(const std::string& input, const
     return out;
 }
 
-// The merge rounds, the independent merges of a round side by side under the same gate.
-Result<MergeTree> mergePartitions(const std::vector<std::string>& lods, const OutOfCoreOptions& o, MemoryGate& gate,
-                                  Diagnostics& diagnostics) {
-    MergeOptions mo;
-    mo.work_dir = o.work_dir;
-    mo.memory_limit_bytes = o.memory_limit_bytes;
-    mo.cluster = o.cluster;
-    mo.group_bytes = o.merge_group_bytes;
-    mo.gate = &gate;
-    mo.cancel = o.cancel;
-    const int threads = o.threads > 0 ? o.threads : tbb::this_task_arena::max_concurrency();
-    tbb::task_arena arena(std::max(1, threads));
-    Result<MergeTree> tree = internalError("merge not run");
-    arena.execute([&] { tree = mergeAll(lods, mo, diagnostics); });
-    return tree;
+// The merges under one picked node of a round (subtreeMerges), one after the other, each reserving
+// its bound (kMergeFixedBytes plus its two inputs', as mergePartitionLods computes it) at the gate.
+Status runSubtree(std::vector<TreeNode>& nodes, int picked, const MergeOptions& mo, const OutOfCoreOptions& o,
+                  MemoryGate& gate, std::vector<MergeFile>& made, Diagnostics& diagnostics) {
+    for (const MergeStep& step : subtreeMerges(nodes, picked, roundLevels(picked, mo))) {
+        TreeNode& n = nodes[size_t(step.node)];
+        const TreeNode& left = nodes[size_t(n.left)];
+        const TreeNode& right = nodes[size_t(n.right)];
+        if (isCancelled(o)) return ioError(left.file + ": merge cancelled");
+        const uint64_t bound = kMergeFixedBytes + left.size.boundBytes() + right.size.boundBytes();
+        LODBAKE_RETURN_IF_ERROR(gate.acquire(bound, left.file));
+        ClusterLodOptions cluster = o.cluster;
+        cluster.max_levels = step.levels;
+        auto m = runMergeJob(left.file, right.file, o.work_dir, cluster, o.memory_limit_bytes, diagnostics);
+        gate.release(bound);
+        if (!m.ok()) return m.status();
+        n.file = m->path;
+        n.size = {m->root_count, m->root_vertices, m->root_triangles, m->border_vertex_count, m->border_edge_count};
+        made.push_back(std::move(*m));
+    }
+    return Status::okStatus();
 }
 
-// The pages of the tree into `output_path`: the writer's spill renamed into place.
+// The merge rounds over the partitions' k-d tree (roundNodes, as mergeAll and the job list choose
+// them): the picked nodes of a round head disjoint subtrees, which run side by side under the gate;
+// their merges are listed in the order the job list plans them whatever ran first.
+Status mergeRounds(const std::vector<PartitionJobOutput>& lods, const OutOfCoreOptions& o, MemoryGate& gate,
+                   RunFiles& files, MergeTree& tree, Diagnostics& diagnostics) {
+    const MergeOptions mo = planMergeOptions(o.cluster, o.merge_group_bytes, o.memory_limit_bytes);
+    std::vector<TreeNode> nodes;
+    buildTree(0, uint32_t(lods.size()), mo.pairing, nodes);
+    for (TreeNode& n : nodes)
+        if (n.left < 0) {
+            n.file = lods[n.begin].file.path;
+            n.size = lods[n.begin].size;
+            tree.partitions.push_back(n.file);
+        }
+    const int threads = o.threads > 0 ? o.threads : tbb::this_task_arena::max_concurrency();
+    tbb::task_arena arena(std::max(1, threads));
+    while (nodes[0].file.empty()) {
+        const std::vector<int> round = roundNodes(nodes, mo);
+        std::vector<std::vector<MergeFile>> made(round.size());
+        std::vector<Status> status(round.size());
+        std::vector<Diagnostics> notes(round.size());
+        arena.execute([&] {
+            tbb::parallel_for(size_t(0), round.size(), size_t(1), [&](size_t k) {
+                // Isolated: a thread waiting inside one job's loops must not pick up another subtree,
+                // whose wait at the gate could then hold up the job below it on the same stack.
+                tbb::this_task_arena::isolate(
+                    [&] { status[k] = runSubtree(nodes, round[k], mo, o, gate, made[k], notes[k]); });
+            });
+        });
+        Status failed;
+        for (size_t k = 0; k < round.size(); ++k) {
+            for (MergeFile& m : made[k]) {
+                files.made.push_back(m.path);
+                tree.largest_memory_bound = std::max(tree.largest_memory_bound, m.memory_bound_bytes);
+                tree.largest_accounted_peak = std::max(tree.largest_accounted_peak, m.accounted_peak_bytes);
+                tree.merges.push_back(std::move(m));
+            }
+            for (const Diagnostic& d : notes[k].items())
+                d.severity == Severity::Warning ? diagnostics.warn(d.message) : diagnostics.note(d.message);
+            if (failed.ok() && !status[k].ok()) failed = status[k];
+        }
+        LODBAKE_RETURN_IF_ERROR(failed);
+        ++tree.merge_levels;
+    }
+    tree.top = nodes[0].file;
+    return Status::okStatus();
+}
+
+// The pages of the tree (runPagesJob) into `output_path`: the writer's spill renamed into place.
 Status writePages(const MergeTree& tree, const std::string& output_path, const OutOfCoreOptions& o,
                   OutOfCoreResult& result) {
     TreePagesOptions po;
     po.memory_limit_bytes = o.memory_limit_bytes;
     po.stream = o.pages;
     po.stream.cancel = o.cancel;
-    LODBAKE_ASSIGN_OR_RETURN(TreePagesResult pages, writeTreeClusterPages(tree, output_path, po));
+    LODBAKE_ASSIGN_OR_RETURN(TreePagesResult pages, runPagesJob(tree, output_path, po));
     result.pages_peak_bytes = pages.table_accounted_bytes + pages.pack.accounted_peak_bytes;
     result.cluster_count = pages.cluster_count;
     result.stats = pages.pack.stats;
@@ -146,16 +199,7 @@ Status writePages(const MergeTree& tree, const std::string& output_path, const O
 Status runStages(const std::string& input, const std::string& output_path, const OutOfCoreOptions& o,
                  RunFiles& files, OutOfCoreResult& result, Diagnostics& diagnostics) {
     auto t0 = Clock::now();
-    PartitionOptions po;
-    po.work_dir = o.work_dir;
-    po.memory_limit_bytes = o.memory_limit_bytes;
-    po.threads = o.threads;
-    po.read = o.read;
-    po.sample_cap = o.sample_cap;
-    po.cancel = o.cancel;
-    po.build_bytes_per_triangle = kPartitionBuildBytesPerTriangle;
-    po.leaf_triangles = o.leaf_triangles;
-    LODBAKE_ASSIGN_OR_RETURN(PartitionSet set, partitionMesh(input, po, diagnostics));
+    LODBAKE_ASSIGN_OR_RETURN(PartitionSet set, partitionMesh(input, outOfCorePartitionOptions(o), diagnostics));
     for (const PartitionFile& f : set.partitions) files.made.push_back(f.path);
     result.partition = {since(t0), set.partitions.size()};
     result.triangle_count = set.triangle_count;
@@ -166,12 +210,13 @@ Status runStages(const std::string& input, const std::string& output_path, const
 
     MemoryGate gate(o.memory_limit_bytes);
     t0 = Clock::now();
-    LODBAKE_ASSIGN_OR_RETURN(std::vector<std::string> lods, buildPartitions(input, set, o, gate, files, diagnostics));
+    LODBAKE_ASSIGN_OR_RETURN(std::vector<PartitionJobOutput> lods,
+                             buildPartitions(input, set, o, gate, files, diagnostics));
     result.build = {since(t0), lods.size()};
 
     t0 = Clock::now();
-    LODBAKE_ASSIGN_OR_RETURN(MergeTree tree, mergePartitions(lods, o, gate, diagnostics));
-    for (const MergeFile& m : tree.merges) files.made.push_back(m.path);
+    MergeTree tree;
+    LODBAKE_RETURN_IF_ERROR(mergeRounds(lods, o, gate, files, tree, diagnostics));
     result.merge = {since(t0), tree.merges.size()};
     result.merge_count = tree.merges.size();
     result.merge_rounds = tree.merge_levels;

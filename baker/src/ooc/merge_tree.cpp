@@ -11,6 +11,7 @@
 
 #include "lodbake/core/file_io.h"
 #include "lodbake/ooc/partition_merge.h"
+#include "ooc/merge_rounds.h"
 
 namespace lodbake::ooc {
 
@@ -68,18 +69,6 @@ void appendGroups(const Piece& p, ClusterLodHierarchy& out) {
 
 } // namespace
 
-// The merge tree over files [begin, end): a leaf per file, and above them the k-d tree partitionMesh
-// cut (the left side takes half the leaves, rounded down), so that each merge joins two siblings,
-// which share the cut between them; with adjacent pairs in leaf order instead, a pair may straddle
-// a cut higher up and share nothing.
-struct TreeNode {
-    uint32_t begin = 0, end = 0;
-    int left = -1, right = -1;
-    uint32_t height = 0;
-    std::string file;
-    MergeInputSize size; // of `file`, once it is there
-};
-
 int buildTree(uint32_t begin, uint32_t end, MergePairing pairing, std::vector<TreeNode>& nodes) {
     const int at = int(nodes.size());
     nodes.push_back(TreeNode());
@@ -133,16 +122,35 @@ Status runMerge(std::vector<TreeNode>& nodes, TreeNode& n, uint32_t levels, cons
     return Status::okStatus();
 }
 
-// Runs the merges below `at` whose node has no file yet, children first, left before right: `at`
-// itself builds `levels`, the ones below it none.
+// Runs the merges under picked node `at` (subtreeMerges), one after the other.
 Status runSubtree(std::vector<TreeNode>& nodes, int at, uint32_t levels, const MergeOptions& options,
                   const std::vector<std::string>& before, std::vector<std::string>& written, MergeTree& tree,
-                  Diagnostics& diagnostics, bool top_of_job) {
-    TreeNode& n = nodes[size_t(at)];
-    if (!n.file.empty()) return Status::okStatus();
-    LODBAKE_RETURN_IF_ERROR(runSubtree(nodes, n.left, 0, options, before, written, tree, diagnostics, false));
-    LODBAKE_RETURN_IF_ERROR(runSubtree(nodes, n.right, 0, options, before, written, tree, diagnostics, false));
-    return runMerge(nodes, n, top_of_job ? levels : 0, options, before, written, tree, diagnostics);
+                  Diagnostics& diagnostics) {
+    for (const MergeStep& step : subtreeMerges(nodes, at, levels))
+        LODBAKE_RETURN_IF_ERROR(
+            runMerge(nodes, nodes[size_t(step.node)], step.levels, options, before, written, tree, diagnostics));
+    return Status::okStatus();
+}
+
+void collectMerges(const std::vector<TreeNode>& nodes, int at, uint32_t levels, std::vector<MergeStep>& out) {
+    const TreeNode& n = nodes[size_t(at)];
+    if (!n.file.empty()) return;
+    collectMerges(nodes, n.left, 0, out);
+    collectMerges(nodes, n.right, 0, out);
+    out.push_back({at, levels});
+}
+
+} // namespace
+
+std::vector<MergeStep> subtreeMerges(const std::vector<TreeNode>& nodes, int at, uint32_t levels) {
+    std::vector<MergeStep> out;
+    collectMerges(nodes, at, levels, out);
+    return out;
+}
+
+uint32_t roundLevels(int node, const MergeOptions& options) {
+    if (node == 0 || options.levels_per_job == 0) return options.cluster.max_levels;
+    return std::min(options.cluster.max_levels, options.levels_per_job);
 }
 
 // The nodes a round merges (preorder, hence leaf order): each highest node with no file whose files
@@ -174,7 +182,6 @@ std::vector<int> roundNodes(const std::vector<TreeNode>& nodes, const MergeOptio
     return picked;
 }
 
-} // namespace
 
 Result<MergeTree> mergeAll(const std::vector<std::string>& partition_lods, const MergeOptions& options,
                            Diagnostics& diagnostics) {
@@ -196,8 +203,6 @@ Result<MergeTree> mergeAll(const std::vector<std::string>& partition_lods, const
                 LODBAKE_ASSIGN_OR_RETURN(n.size, mergeInputSize(n.file));
             }
         }
-    const uint32_t below_top = options.levels_per_job > 0 ? std::min(options.cluster.max_levels, options.levels_per_job)
-                                                          : options.cluster.max_levels;
     while (nodes[0].file.empty()) {
         const std::vector<int> round = roundNodes(nodes, options);
         // Each picked node's subtree is disjoint from the others': with a gate they run side by side,
@@ -207,8 +212,8 @@ Result<MergeTree> mergeAll(const std::vector<std::string>& partition_lods, const
         std::vector<Status> status(round.size());
         std::vector<Diagnostics> notes(round.size());
         auto run = [&](size_t k) {
-            const uint32_t levels = round[k] == 0 ? options.cluster.max_levels : below_top;
-            status[k] = runSubtree(nodes, round[k], levels, options, before, part_written[k], part[k], notes[k], true);
+            status[k] = runSubtree(nodes, round[k], roundLevels(round[k], options), options, before, part_written[k],
+                                   part[k], notes[k]);
         };
         if (options.gate && round.size() > 1) {
             tbb::parallel_for(size_t(0), round.size(), size_t(1), [&](size_t k) {

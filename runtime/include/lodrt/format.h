@@ -256,6 +256,14 @@ constexpr const char kPartitionLodExtension[] = ".lbplod";
 // (baker/include/lodbake/ooc/partition_merge.h; layout in docs/pipeline.md, "Merge jobs").
 constexpr char kPartitionMergeMagic[8] = {'L', 'B', 'P', 'M', 'R', 'G', '0', '1'};
 constexpr const char kPartitionMergeExtension[] = ".lbpmrg";
+// The out-of-core job list (baker/include/lodbake/ooc/jobs.h; protocol in docs/pipeline.md, "Job
+// list"): the plan in the work folder, each finished job's record (job-<id>.json), and the files the
+// pages job writes (the LODBAKE_cluster_lod pages blob and table blob, named by content hash).
+constexpr const char kOocPlanFile[] = "plan.json";
+constexpr const char kOocJobRecordPrefix[] = "job-";
+constexpr const char kOocJobRecordSuffix[] = ".json";
+constexpr const char kOocPagesExtension[] = ".lbpages";
+constexpr const char kOocTableExtension[] = ".lbtable";
 
 } // namespace format
 } // namespace lodrt
