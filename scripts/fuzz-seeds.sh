@@ -11,7 +11,7 @@ root=$(cd "$(dirname "$0")/.." && pwd)
 mkdir -p "$out"
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
-for t in gltf obj off ply preset conf manifest cache stream lod pack pfrep valence meshopt cluster; do mkdir -p "$out/$t"; done
+for t in gltf obj off ply preset conf manifest cache stream lod pack pfrep valence meshopt cluster jobs; do mkdir -p "$out/$t"; done
 
 cp "$root"/tests/malformed/ply/*.ply "$out/ply/"
 cp "$root"/tests/malformed/off/*.off "$out/off/"
@@ -33,6 +33,7 @@ cp "$root"/tests/malformed/pack/*.glb "$out/pack/"
 cp "$root"/tests/malformed/conf/*.conf "$out/conf/"
 cp "$root"/tests/malformed/manifest/*.json "$out/manifest/"
 cp "$root"/tests/fuzz/seeds/cache/* "$out/cache/"
+cp "$root"/tests/fuzz/seeds/jobs/* "$out/jobs/"
 for dir in "$root"/tests/fuzz/regressions/*/; do
     t=$(basename "$dir")
     if [ ! -d "$out/$t" ]; then

@@ -23,19 +23,19 @@ cd "$root"
 build=${LODBAKE_FUZZ_BUILD_DIR:-build-fuzz}
 
 case "$target" in
-ply | obj | off | gltf | preset | conf | manifest | cache | stream)
+ply | obj | off | gltf | preset | conf | manifest | cache | stream | jobs)
     exe="$build/tests/fuzz/lodbake_fuzz_$target" cmake_target=lodbake_fuzz_$target
     ;;
 lod | pack | pfrep | valence | meshopt | cluster) exe="$build/runtime/lodrt_fuzz_$target" cmake_target=lodrt_fuzz_$target ;;
 *)
-    echo "fuzz.sh: unknown target '$target' (ply obj off gltf preset conf manifest cache stream lod pack pfrep valence meshopt cluster)" >&2
+    echo "fuzz.sh: unknown target '$target' (ply obj off gltf preset conf manifest cache stream lod pack pfrep valence meshopt cluster jobs)" >&2
     exit 2
     ;;
 esac
 dict=
 case "$target" in
 ply | obj | off | gltf | preset) dict=tests/fuzz/dict/$target.dict ;;
-manifest) dict=tests/fuzz/dict/preset.dict ;;
+manifest | jobs) dict=tests/fuzz/dict/preset.dict ;;
 stream) dict=tests/fuzz/dict/ply.dict ;;
 lod | pack) dict=tests/fuzz/dict/gltf.dict ;;
 esac

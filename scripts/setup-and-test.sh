@@ -65,7 +65,7 @@ if [ "${LODBAKE_SKIP_SANITIZERS:-0}" != 1 ]; then
     step "sanitizer tests"
 
     smoke=${LODBAKE_FUZZ_SMOKE_SECONDS:-8}
-    fuzz_targets=(ply obj off gltf preset conf manifest cache stream lod pack pfrep valence meshopt cluster)
+    fuzz_targets=(ply obj off gltf preset conf manifest cache stream lod pack pfrep valence meshopt cluster jobs)
     # Seeds once (fuzz.sh would build them on its first call), then one target per core at a time.
     ASAN_OPTIONS=detect_leaks=0 scripts/fuzz-seeds.sh "$asan_dir/seeds" "$build_dir/baker/lodbake" \
         >"$asan_dir/fuzz-seeds.log" 2>&1 || {
