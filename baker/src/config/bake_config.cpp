@@ -4,6 +4,7 @@
 #include "lodbake/config/bake_config.h"
 
 #include <cmath>
+#include <cstdio>
 #include <exception>
 #include <functional>
 #include <map>
@@ -70,8 +71,9 @@ Status readBool(const Json& v, const std::string& where, bool& out) {
 }
 
 std::string minSwitchRatioExpected() {
-    return "expected 0 or a number in [" + JsonWriter::formatNumber(kMinSwitchRatioLow) + ", " +
-           JsonWriter::formatNumber(kMinSwitchRatioHigh) + "]";
+    char text[80];
+    std::snprintf(text, sizeof text, "expected 0 or a number in [%g, %g]", kMinSwitchRatioLow, kMinSwitchRatioHigh);
+    return text;
 }
 
 // A member handler gets the value and its location "<file>: <JSON pointer>" for messages.
