@@ -739,7 +739,8 @@ LodReport analyseLods(const lodrt::Pack& pack) {
                 }
             if (ok) chain.push_back(uint32_t(id));
         }
-        const lodrt::JsonValue metrics_object = pack.node(n).json.find("extensions").find(lodrt::format::kExtLodMetrics);
+        const lodrt::JsonValue metrics_object =
+            pack.node(n).json.find("extensions").find(lodrt::format::kExtLodMetrics);
         const lodrt::JsonValue metrics = metrics_object.find("levels");
         group.screen.pixel_threshold = float(metrics_object.find("pixelThreshold").number());
         group.screen.viewport_height = float(metrics_object.find("viewportHeight").number());

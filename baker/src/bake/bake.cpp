@@ -187,8 +187,8 @@ private:
             metrics = lodMetrics(mesh_, chain_, chain_options_.screen, settings_.hysteresis);
             // Dead levels leave the metrics here; their meshes and streams leave the pack once every
             // task that reads the chain is done (assemblePackAsset).
-            dropped_levels = dropIndistinctLevels(metrics, mesh_, chain_, chain_options_.screen,
-                                                  settings_.lod_min_switch_ratio);
+            dropped_levels =
+                dropIndistinctLevels(metrics, mesh_, chain_, chain_options_.screen, settings_.lod_min_switch_ratio);
             for (const DroppedLodLevel& d : dropped_levels) {
                 kept_levels_[d.level] = 0;
                 measure_diagnostics.note(name_ + ": " + droppedLevelNote(d, settings_.lod_min_switch_ratio));

@@ -256,7 +256,8 @@ TEST(DeadLevelsTest, DistinctLevelsAreBakedByteForByteAsWithoutTheRule) {
 TEST(DeadLevelsTest, SettingIsZeroOrAFactorAboveOne) {
     for (const char* ok : {"0", "1.001", "1.05", "4", "100"}) {
         BakeSettings s;
-        EXPECT_TRUE(applyPresetJson(std::string(R"({"version": 1, "lod_min_switch_ratio": )") + ok + "}", "p.json", s).ok())
+        EXPECT_TRUE(
+            applyPresetJson(std::string(R"({"version": 1, "lod_min_switch_ratio": )") + ok + "}", "p.json", s).ok())
             << ok;
         EXPECT_EQ(s.lod_min_switch_ratio, std::stod(ok));
     }

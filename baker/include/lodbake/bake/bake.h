@@ -25,13 +25,13 @@ struct BakeInput {
 /// A level of the chain as built that the pack leaves out because the next kept coarser level takes
 /// over at almost the same distance (BakeSettings::lod_min_switch_ratio, docs/bake.md "Dead levels").
 struct DroppedLodLevel {
-    size_t level = 0;              // its index in the chain as built, LOD0 = 0
-    double ratio = 0;              // its lod_ratios entry
+    size_t level = 0; // its index in the chain as built, LOD0 = 0
+    double ratio = 0; // its lod_ratios entry
     uint64_t triangles = 0;
-    double hausdorff_error = 0;    // as the metrics carry it (the running maximum down the chain)
-    double switch_distance = 0;    // where it would have been taken
-    size_t finer_level = 0;        // the kept level drawn in its place (chain as built)
-    size_t coarser_level = 0;      // the next kept coarser level (chain as built), taken at
+    double hausdorff_error = 0; // as the metrics carry it (the running maximum down the chain)
+    double switch_distance = 0; // where it would have been taken
+    size_t finer_level = 0;     // the kept level drawn in its place (chain as built)
+    size_t coarser_level = 0;   // the next kept coarser level (chain as built), taken at
     double coarser_switch_distance = 0;
 };
 
