@@ -64,6 +64,9 @@ options:
                         baked side by side wait for room; the output bytes do not depend on it
   --levels LIST         override lod_ratios: comma-separated triangle ratios in (0, 1]
   --pixels P            override pixel_threshold
+  --min-switch-ratio K  keep a level only when the next coarser level is taken more than K times
+                        farther, else drop it as dead weight (default 1.05; 0 keeps every level;
+                        preset key lod_min_switch_ratio)
   --compact             compressed-only pack: valence streams replace the plain level data
   --web                 web pack: every level quantized and EXT_meshopt_compression-compressed
                         (Babylon.js, three.js), no LODBAKE_ streams; not with --compact (preset key web)
@@ -117,6 +120,8 @@ struct CliOverrides {
     std::vector<double> levels;
     bool has_pixels = false;
     double pixels = 0;
+    bool has_min_switch_ratio = false;
+    double min_switch_ratio = 0;
     bool compact = false;
     bool web = false;
     bool no_progressive_fans = false;
@@ -138,6 +143,7 @@ void applyOverrides(const CliOverrides& o, BakeSettings& s) {
     if (o.has_memory_limit) s.memory_limit_mib = o.memory_limit_mib;
     if (o.has_levels) s.lod_ratios = o.levels;
     if (o.has_pixels) s.pixel_threshold = o.pixels;
+    if (o.has_min_switch_ratio) s.lod_min_switch_ratio = o.min_switch_ratio;
     if (o.compact) s.compact = true;
     if (o.web) s.web = true;
     if (o.no_progressive_fans) s.progressive_fans = false;
@@ -370,6 +376,14 @@ int parseOverrides(Args& args, CliOverrides& overrides) {
         overrides.has_pixels = true;
         overrides.pixels = p;
     }
+    if (args.values.count("--min-switch-ratio")) {
+        double k = 0;
+        if (!parseNumber(args.values["--min-switch-ratio"], k) || !isValidMinSwitchRatio(k))
+            return usageError("--min-switch-ratio expects 0 or a number in [1.001, 100], got '" +
+                              args.values["--min-switch-ratio"] + "'");
+        overrides.has_min_switch_ratio = true;
+        overrides.min_switch_ratio = k;
+    }
     overrides.compact = args.flags.count("--compact") > 0;
     overrides.web = args.flags.count("--web") > 0;
     overrides.no_progressive_fans = args.flags.count("--no-progressive-fans") > 0;
@@ -582,6 +596,7 @@ int runBake(int argc, char** argv) {
                     {"--memory-limit", nullptr, true},
                     {"--levels", nullptr, true},
                     {"--pixels", nullptr, true},
+                    {"--min-switch-ratio", nullptr, true},
                     {"--compact", nullptr, false},
                     {"--web", nullptr, false},
                     {"--no-progressive-fans", nullptr, false},

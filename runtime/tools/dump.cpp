@@ -42,7 +42,8 @@ void printUsage(std::FILE* out) {
                       "Checks: %s ids in range and without cycles, screen coverage not increasing and\n"
                       "errors not decreasing from one level to the next, no two neighbouring levels with the\n"
                       "same triangle count (a Hausdorff error more than 4 times the finer level's is a\n"
-                      "warning), every compressed stream decodes and\n"
+                      "warning), no level after LOD0 that selection never picks (its switch distance is\n"
+                      "the next level's), every compressed stream decodes and\n"
                       "matches the plain accessors, each PFRep level the extension lists is what the blob\n"
                       "extracts and no finer than the chain level it stands for.\n"
                       "--render OUT.png draws every level of every group side by side (shaded with each\n"
@@ -154,6 +155,7 @@ struct LodLevelRow {
 struct LodGroup {
     uint32_t root = 0;
     std::vector<LodLevelRow> levels;
+    lodrt::SelectionParams screen; // the screen LODBAKE_lod_metrics was baked for (defaults without it)
 };
 
 struct Problem {
@@ -612,8 +614,48 @@ std::string nodePointer(uint32_t node) {
 // everything else, so a pack with a broken stream or id still reports that first.
 constexpr double kMaxErrorStep = 4.0;
 
+// The bake's default lod_min_switch_ratio (BakeSettings): a level taken over by the next one less
+// than this many times farther than its own switch distance is drawn over almost no distances.
+constexpr double kMinSwitchRatio = 1.05;
+
+// lodrt's selection takes the coarsest level whose switch distance (its Hausdorff error in float
+// times K / pixel threshold, runtime/src/selection.cpp) has been passed: a level whose switch distance
+// is the next level's is never selected (an error: dead weight the bake drops, docs/bake.md "Dead
+// levels"), and LOD0 is never selected when level 1's is 0 (a warning: viewers without MSFT_lod
+// still show it). A level after LOD0 whose next level is taken less than kMinSwitchRatio times
+// farther is a warning (a pack baked with a smaller lod_min_switch_ratio, or before the rule).
+// Computed as the runtime does, for the screen the pack was baked for.
+void checkNeverSelected(const LodGroup& group, LodReport& report) {
+    const float k = lodrt::pixelsPerUnitAtDistanceOne(group.screen);
+    const float p = group.screen.pixel_threshold == 0 ? 1.0f : group.screen.pixel_threshold;
+    if (!(k > 0) || !std::isfinite(k)) return; // a screen the runtime refuses: other checks report it
+    auto distance = [&](const LodLevelRow& row) { return float(row.hausdorff) * k / p; };
+    for (uint32_t l = 0; l + 1 < group.levels.size(); ++l) {
+        const LodLevelRow& a = group.levels[l];
+        const LodLevelRow& b = group.levels[l + 1];
+        if (!b.has_metrics || (l > 0 && !a.has_metrics)) continue;
+        const float da = l == 0 ? 0.0f : distance(a), db = distance(b);
+        if (l > 0 && db > da && double(db) <= kMinSwitchRatio * double(da)) {
+            char band[96];
+            std::snprintf(band, sizeof band, "%.7g to %.7g, a factor %.5g", double(da), double(db), double(db / da));
+            report.warnings.push_back({nodePointer(a.node), "level " + std::to_string(l) + " is selected only from " +
+                                                                band + " (at most 1.05)"});
+        }
+        if (!(db <= da)) continue;
+        char text[64];
+        std::snprintf(text, sizeof text, "%.7g", double(db));
+        const std::string msg = "level " + std::to_string(l) + " is never selected: level " + std::to_string(l + 1) +
+                                " is taken at the same switch distance (" + text + ")";
+        if (l == 0)
+            report.warnings.push_back({nodePointer(b.node), msg});
+        else
+            report.problems.push_back({nodePointer(a.node), msg});
+    }
+}
+
 void checkLevelSteps(LodReport& report) {
     for (const LodGroup& group : report.groups) {
+        checkNeverSelected(group, report);
         for (uint32_t l = 1; l < group.levels.size(); ++l) {
             const LodLevelRow& a = group.levels[l - 1];
             const LodLevelRow& b = group.levels[l];
@@ -697,8 +739,12 @@ LodReport analyseLods(const lodrt::Pack& pack) {
                 }
             if (ok) chain.push_back(uint32_t(id));
         }
-        const lodrt::JsonValue metrics =
-            pack.node(n).json.find("extensions").find(lodrt::format::kExtLodMetrics).find("levels");
+        const lodrt::JsonValue metrics_object =
+            pack.node(n).json.find("extensions").find(lodrt::format::kExtLodMetrics);
+        const lodrt::JsonValue metrics = metrics_object.find("levels");
+        group.screen.pixel_threshold = float(metrics_object.find("pixelThreshold").number());
+        group.screen.viewport_height = float(metrics_object.find("viewportHeight").number());
+        group.screen.vertical_fov = float(metrics_object.find("verticalFov").number());
         const lodrt::JsonValue coverage = pack.node(n).json.find("extras").find(lodrt::format::kMsftScreenCoverage);
         if (metrics.isValid() && metrics.size() != chain.size())
             report.problems.push_back({nodePointer(n) + "/extensions/LODBAKE_lod_metrics/levels",

@@ -144,6 +144,9 @@ int main(int argc, char** argv) {
     // counterpart there, so the like-for-like pack leaves it out.
     settings.progressive_fans = false;
     settings.textures.enabled = false;
+    // gltfpack's files are one per ratio; the like-for-like pack keeps every ratio's level, dead
+    // ones too (docs/bake.md, "Dead levels").
+    settings.lod_min_switch_ratio = 0.0;
     if (no_adaptive) settings.stream_precision.adaptive = false;
     const double ratios[] = {1.0, 0.5, 0.25, 0.1, 0.03, 0.01};
 

@@ -148,6 +148,33 @@ TEST(DumpTest, FlagsRepeatedLevelsAndErrorLeaps) {
     EXPECT_EQ(runDump("\"" + path + "\"").out.find("Hausdorff error"), std::string::npos);
 }
 
+TEST(DumpTest, FlagsLevelsSelectionNeverOrHardlyPicks) {
+    // Levels 1 and 2 have the same error, so selection never picks level 1 (an error); level 3 is
+    // taken at 1.02 times level 2's distance (a warning).
+    lodrt_test::LodPackSpec spec;
+    spec.errors = {0, 0.001, 0.001, 0.00102, 0.004};
+    const std::string path = scratchPath("dead.glb");
+    writeBytes(path, lodrt_test::lodPackGlb(spec));
+    DumpRun run = runDump("\"" + path + "\"");
+    EXPECT_EQ(run.exit_code, 1);
+    EXPECT_NE(run.out.find("/nodes/1: level 1 is never selected: level 2 is taken at the same switch distance"),
+              std::string::npos)
+        << run.out;
+    EXPECT_NE(run.out.find("warning /nodes/2: level 2 is selected only from"), std::string::npos) << run.out;
+    EXPECT_EQ(run.out.find("level 3 is selected only"), std::string::npos) << run.out;
+    // Control: errors that grow by more than 1.05 at each step raise neither.
+    spec.errors = {0, 0.001, 0.0011, 0.004};
+    writeBytes(path, lodrt_test::lodPackGlb(spec));
+    run = runDump("\"" + path + "\"");
+    EXPECT_EQ(run.out.find("never selected"), std::string::npos) << run.out;
+    EXPECT_EQ(run.out.find("selected only"), std::string::npos) << run.out;
+    // Level 1 without error: LOD0 is never selected, a warning.
+    spec.errors = {0, 0, 0.001, 0.004};
+    writeBytes(path, lodrt_test::lodPackGlb(spec));
+    run = runDump("\"" + path + "\"");
+    EXPECT_NE(run.out.find("warning /nodes/1: level 0 is never selected"), std::string::npos) << run.out;
+}
+
 TEST(DumpTest, MissingFileIsExit1NamingTheFile) {
     const std::string path = scratchPath("does_not_exist.glb");
     std::remove(path.c_str());

@@ -121,9 +121,12 @@ public:
                const BakeHooks& hooks)
         : mesh_(mesh), chain_(chain), chain_options_(chain_options), settings_(settings), encoders_(encoders),
           name_(name), index_(index), hooks_(hooks), level_count_(chain.levels.size() + 1),
-          commits(encoders.size() * level_count_, PackStreamCommit()), level_with_measure_(level_count_, false) {}
+          commits(encoders.size() * level_count_, PackStreamCommit()), kept_levels_(level_count_, 1),
+          level_with_measure_(level_count_, false) {}
 
     size_t levelCount() const { return level_count_; }
+    /// Whether level l of the chain as built (LOD0 = 0) stays in the pack; read once run() has returned.
+    bool isKept(size_t l) const { return kept_levels_[l] != 0; }
     const Mesh& levelMesh(size_t l) const { return l == 0 ? mesh_ : chain_.levels[l - 1].mesh; }
 
     Status run() {
@@ -182,11 +185,20 @@ private:
             StageTimer timer(hooks_, index_, BakeStage::Measure);
             measureChain(mesh_, chain_, chain_options_, reference_sides_, measure_diagnostics);
             metrics = lodMetrics(mesh_, chain_, chain_options_.screen, settings_.hysteresis);
+            // Dead levels leave the metrics here; their meshes and streams leave the pack once every
+            // task that reads the chain is done (assemblePackAsset).
+            dropped_levels =
+                dropIndistinctLevels(metrics, mesh_, chain_, chain_options_.screen, settings_.lod_min_switch_ratio);
+            for (const DroppedLodLevel& d : dropped_levels) {
+                kept_levels_[d.level] = 0;
+                measure_diagnostics.note(name_ + ": " + droppedLevelNote(d, settings_.lod_min_switch_ratio));
+            }
         }
         // Encoders that read the measured errors code the levels of this phase now, in a nested loop
         // that idle threads join; later phases' Level tasks do it themselves.
         deferred_ = parallelFor(nested_levels_.size(), 1, [&](size_t i) {
             const size_t l = nested_levels_[i];
+            if (!kept_levels_[l]) return;
             for (size_t e = 0; e < encoders_.size(); ++e) {
                 if (!encoders_[e].needs.measured_errors || encoders_[e].needs.lod0_only) continue;
                 StageTimer timer(hooks_, index_, BakeStage::Encode, l);
@@ -194,7 +206,7 @@ private:
             }
         });
         StageTimer timer(hooks_, index_, BakeStage::Textures);
-        textures = textureLevels(mesh_, level_count_, metrics, settings_, name_, measure_diagnostics);
+        textures = textureLevels(mesh_, metrics.levels.size(), metrics, settings_, name_, measure_diagnostics);
     }
 
     // Levels `first` and on. A failure here (a bad reference or level) leaves the side to the
@@ -216,6 +228,8 @@ private:
     }
 
     void prepareLevel(size_t l) {
+        // A Level task outside the measurement's phase runs after it: a dropped level needs no coding.
+        if (!level_with_measure_[l] && !kept_levels_[l]) return;
         for (size_t e = 0; e < encoders_.size(); ++e) {
             if (encoders_[e].needs.lod0_only) continue;
             // In the measurement's phase, the measurement task codes these after it (measure()).
@@ -241,38 +255,50 @@ public:
     // Products, read once run() has returned.
     std::vector<Result<PackStreamCommit>> commits; // encoder e, level l at e * levelCount() + l
     Diagnostics measure_diagnostics;
-    LodMetrics metrics;
+    LodMetrics metrics; // of the kept levels
+    std::vector<DroppedLodLevel> dropped_levels;
     Result<TextureLevels> textures = TextureLevels{};
 
 private:
     // Chain level i's reference side (LOD0's points against the level), when a MeasureReference task
     // measured it in an earlier phase; the measurement then skips it.
     std::vector<Result<OneSidedDistance>> reference_sides_;
+    // Written by the measurement before any task that reads it starts (bytes, not bits: no shared words).
+    std::vector<uint8_t> kept_levels_;
     std::vector<bool> level_with_measure_;
     std::vector<size_t> nested_levels_;
     Status deferred_ = Status::okStatus();
 };
 
-// The asset's pack entry: the levels' meshes (moved out of `mesh` and the chain), their textures,
-// then every stream's commit in encoder and level order.
+// The asset's pack entry: the kept levels' meshes (moved out of `mesh` and the chain, which then
+// holds the kept levels only, as the streams' commits read it), their textures, then every stream's
+// commit in encoder and level order.
 Status assemblePackAsset(const std::string& name, Mesh& mesh, LodChain& chain, AssetTasks& tasks,
                          const std::vector<PackStreamEncoder>& encoders, AssetSlot& slot) {
     const size_t level_count = tasks.levelCount();
+    std::vector<size_t> levels; // the kept levels of the chain as built, LOD0 first
+    std::vector<bool> keep_chain;
+    for (size_t l = 0; l < level_count; ++l) {
+        if (tasks.isKept(l)) levels.push_back(l);
+        if (l > 0) keep_chain.push_back(tasks.isKept(l));
+    }
+    keepLevels(chain, keep_chain);
     const TextureLevels& textures = *tasks.textures;
     slot.report.metrics = tasks.metrics;
     slot.report.texture_sizes = textures.sizes;
+    slot.report.dropped_levels = tasks.dropped_levels;
     PackAsset& asset = slot.asset;
     asset.name = name;
     asset.screen_coverage = msftScreenCoverage(tasks.metrics);
     asset.node_extensions.push_back(lodMetricsExtension(tasks.metrics));
-    asset.levels.resize(level_count);
+    asset.levels.resize(levels.size());
     asset.levels[0].mesh = std::move(mesh);
-    for (size_t l = 1; l < level_count; ++l) asset.levels[l].mesh = std::move(chain.levels[l - 1].mesh);
+    for (size_t k = 1; k < levels.size(); ++k) asset.levels[k].mesh = std::move(chain.levels[k - 1].mesh);
     applyTextureLevels(textures, asset.levels);
     for (size_t e = 0; e < encoders.size(); ++e)
-        for (size_t l = 0; l < level_count; ++l) {
-            const PackStreamCommit& commit = *tasks.commits[e * level_count + l];
-            if (commit) LODBAKE_RETURN_IF_ERROR(commit(asset.levels[l]));
+        for (size_t k = 0; k < levels.size(); ++k) {
+            const PackStreamCommit& commit = *tasks.commits[e * level_count + levels[k]];
+            if (commit) LODBAKE_RETURN_IF_ERROR(commit(asset.levels[k]));
         }
     return Status::okStatus();
 }
@@ -421,6 +447,22 @@ std::string bakeReportJson(const BakeOutput& output, const BakeSettings& setting
             j.endObject();
         }
         j.endArray();
+        if (!a.dropped_levels.empty()) {
+            j.key("droppedLevels").beginArray();
+            for (const DroppedLodLevel& d : a.dropped_levels) {
+                j.beginObject();
+                j.field("level", uint64_t(d.level));
+                j.field("ratio", d.ratio);
+                j.field("triangles", d.triangles);
+                j.field("hausdorffError", d.hausdorff_error);
+                j.field("switchDistance", d.switch_distance);
+                j.field("finerLevel", uint64_t(d.finer_level));
+                j.field("coarserLevel", uint64_t(d.coarser_level));
+                j.field("coarserSwitchDistance", d.coarser_switch_distance);
+                j.endObject();
+            }
+            j.endArray();
+        }
         j.endObject();
     }
     j.endArray();

@@ -2,6 +2,8 @@
 #include "lodbake/bake/bake.h"
 
 #include <algorithm>
+#include <cmath>
+#include <cstdio>
 
 #include "lodbake/core/lod_policy.h"
 
@@ -43,6 +45,58 @@ LodMetrics lodMetrics(const Mesh& full, const LodChain& chain, const ScreenParam
         m.levels.push_back(l);
     }
     return m;
+}
+
+double lodErrorFloor(const Mesh& mesh) {
+    const Aabb box = computeBounds(mesh);
+    if (box.isEmpty()) return 0.0;
+    double largest = 0.0;
+    for (int k = 0; k < 3; ++k)
+        largest = std::max({largest, std::fabs(double(box.min[k])), std::fabs(double(box.max[k]))});
+    return std::ldexp(largest, -20);
+}
+
+std::vector<DroppedLodLevel> dropIndistinctLevels(LodMetrics& metrics, const Mesh& full, const LodChain& chain,
+                                                  const ScreenParams& screen, double min_ratio) {
+    std::vector<double> distances;
+    for (const LodMetricsLevel& l : metrics.levels) distances.push_back(l.switch_distance);
+    const double floor = switchDistance(lodErrorFloor(full), screen);
+    const std::vector<bool> keep = distinctLevels(distances, min_ratio, floor);
+    std::vector<DroppedLodLevel> dropped;
+    std::vector<LodMetricsLevel> kept;
+    size_t finer = 0; // the last kept level so far (LOD0 is always kept, and so is the last level)
+    for (size_t l = 0; l < keep.size(); ++l) {
+        if (keep[l]) {
+            kept.push_back(metrics.levels[l]);
+            finer = l;
+            continue;
+        }
+        size_t coarser = l + 1;
+        while (!keep[coarser]) ++coarser;
+        DroppedLodLevel d;
+        d.level = l;
+        d.ratio = l - 1 < chain.levels.size() ? chain.levels[l - 1].target_ratio : 0.0;
+        d.triangles = metrics.levels[l].triangles;
+        d.hausdorff_error = metrics.levels[l].hausdorff_error;
+        d.switch_distance = metrics.levels[l].switch_distance;
+        d.finer_level = finer;
+        d.coarser_level = coarser;
+        d.coarser_switch_distance = metrics.levels[coarser].switch_distance;
+        dropped.push_back(d);
+    }
+    metrics.levels = std::move(kept);
+    return dropped;
+}
+
+std::string droppedLevelNote(const DroppedLodLevel& d, double min_ratio) {
+    char text[400];
+    std::snprintf(text, sizeof text,
+                  "lod chain: level %zu (ratio %g, %llu triangles, Hausdorff %.4g) dropped: it would be taken at "
+                  "%.4g and level %zu at %.4g, not more than %g times farther (lod_min_switch_ratio); level %zu "
+                  "serves until %.4g",
+                  d.level, d.ratio, static_cast<unsigned long long>(d.triangles), d.hausdorff_error, d.switch_distance,
+                  d.coarser_level, d.coarser_switch_distance, min_ratio, d.finer_level, d.coarser_switch_distance);
+    return text;
 }
 
 } // namespace lodbake

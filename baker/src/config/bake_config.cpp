@@ -4,6 +4,7 @@
 #include "lodbake/config/bake_config.h"
 
 #include <cmath>
+#include <cstdio>
 #include <exception>
 #include <functional>
 #include <map>
@@ -67,6 +68,12 @@ Status readBool(const Json& v, const std::string& where, bool& out) {
     if (!v.is_boolean()) return expected(where, "true or false", v);
     out = v.get<bool>();
     return Status::okStatus();
+}
+
+std::string minSwitchRatioExpected() {
+    char text[80];
+    std::snprintf(text, sizeof text, "expected 0 or a number in [%g, %g]", kMinSwitchRatioLow, kMinSwitchRatioHigh);
+    return text;
 }
 
 // A member handler gets the value and its location "<file>: <JSON pointer>" for messages.
@@ -136,6 +143,15 @@ Status applyImpl(const Json& root, const std::string& name, BakeSettings& s) {
          [&](const Json& v, const std::string& w) { return readNumber(v, w, 1.0, 179.0, false, s.vertical_fov_deg); }},
         {"hysteresis",
          [&](const Json& v, const std::string& w) { return readNumber(v, w, 0.0, 0.9, false, s.hysteresis); }},
+        {"lod_min_switch_ratio",
+         [&](const Json& v, const std::string& w) -> Status {
+             if (!v.is_number()) return expected(w, "a number", v);
+             const double d = v.get<double>();
+             if (!isValidMinSwitchRatio(d))
+                 return invalidInput(w + ": " + minSwitchRatioExpected() + ", got " + shortDump(v));
+             s.lod_min_switch_ratio = d;
+             return Status::okStatus();
+         }},
         {"repair", [&](const Json& v, const std::string& w) { return readBool(v, w, s.repair); }},
         {"error_samples",
          [&](const Json& v, const std::string& w) { return readUint(v, w, 1000, 100000000, s.error_samples); }},
@@ -200,6 +216,9 @@ Status validateSettings(const BakeSettings& settings, const std::string& name) {
     if (settings.textures.min_size_px > settings.textures.max_size_px)
         return invalidInput(name + ": /textures: min_size_px " + std::to_string(settings.textures.min_size_px) +
                             " must not exceed max_size_px " + std::to_string(settings.textures.max_size_px));
+    if (!isValidMinSwitchRatio(settings.lod_min_switch_ratio))
+        return invalidInput(name + ": /lod_min_switch_ratio: " + minSwitchRatioExpected() + ", got " +
+                            JsonWriter::formatNumber(settings.lod_min_switch_ratio));
     // --compact keeps the level data only in LODBAKE_ streams, --web only in EXT_meshopt_compression.
     if (settings.compact && settings.web)
         return invalidInput(name + ": /web: cannot be combined with compact (a pack keeps its level data in one form)");
@@ -237,6 +256,7 @@ std::string settingsToJson(const BakeSettings& s) {
         j["viewport_height_px"] = s.viewport_height_px;
         j["vertical_fov_deg"] = s.vertical_fov_deg;
         j["hysteresis"] = s.hysteresis;
+        j["lod_min_switch_ratio"] = s.lod_min_switch_ratio;
         j["repair"] = s.repair;
         j["error_samples"] = s.error_samples;
         j["textures"] = {{"enabled", s.textures.enabled},

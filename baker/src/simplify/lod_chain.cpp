@@ -160,6 +160,16 @@ void measureLodChain(const Mesh& mesh, LodChain& chain, const LodChainOptions& o
     updateSwitchDistances(chain, options.screen);
 }
 
+void keepLevels(LodChain& chain, const std::vector<bool>& keep) {
+    size_t kept = 0;
+    for (size_t i = 0; i < chain.levels.size(); ++i) {
+        if (i < keep.size() && !keep[i]) continue;
+        if (kept != i) chain.levels[kept] = std::move(chain.levels[i]);
+        ++kept;
+    }
+    chain.levels.erase(chain.levels.begin() + long(kept), chain.levels.end());
+}
+
 void updateSwitchDistances(LodChain& chain, const ScreenParams& screen) {
     double previous = 0.0;
     for (LodLevel& level : chain.levels) {

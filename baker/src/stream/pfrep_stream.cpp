@@ -3,6 +3,7 @@
 // extension object; this wraps it into a PackExtension.
 #include <memory>
 #include <optional>
+#include <vector>
 
 #include "lodbake/pfrep/pfrep_compress.h"
 #include "lodbake/pfrep/pfrep_extension.h"
@@ -10,6 +11,26 @@
 #include "lodrt/format.h"
 
 namespace lodbake {
+
+namespace {
+
+// Leaves in the extension object's `levels` (LOD0's entry, then one per chain level of `ratios`,
+// the chain as prepared) the entries of the levels `chain` still holds.
+void keepChainLevels(JsonNode& json, const std::vector<double>& ratios, const LodChain& chain) {
+    const JsonNode* levels = json.find("levels");
+    if (!levels || chain.levels.size() == ratios.size() || levels->items().size() != ratios.size() + 1) return;
+    JsonNode kept = JsonNode::array();
+    kept.push(levels->items()[0]);
+    size_t next = 0; // the next chain level to find
+    for (size_t i = 0; i < ratios.size(); ++i)
+        if (next < chain.levels.size() && chain.levels[next].target_ratio == ratios[i]) {
+            kept.push(levels->items()[i + 1]);
+            ++next;
+        }
+    json.set("levels", std::move(kept));
+}
+
+} // namespace
 
 std::optional<PackStreamEncoder> progressiveFansStream(const StreamSettings& settings) {
     if (!settings.progressive_fans) return std::nullopt;
@@ -44,7 +65,13 @@ std::optional<PackStreamEncoder> progressiveFansStream(const StreamSettings& set
             // Extra data beside the plain levels, never a replacement for them: a viewer that
             // ignores it loses nothing, so it is not a stream --compact makes required.
             e->is_stream = false;
-            return PackStreamCommit([e](PackLevel& level) {
+            // The bake may drop dead levels from the chain after this prepare (docs/bake.md, "Dead
+            // levels"); `levels` has one entry per pack level, so the commit keeps those of the levels
+            // the chain still holds when it runs (chain levels are told apart by their ratio).
+            std::vector<double> ratios;
+            for (const LodLevel& l : chain.levels) ratios.push_back(l.target_ratio);
+            return PackStreamCommit([e, ratios, &chain](PackLevel& level) {
+                keepChainLevels(e->json, ratios, chain);
                 level.mesh_extensions.push_back(std::move(*e));
                 return Status::okStatus();
             });

@@ -43,6 +43,16 @@ const char* mergeModeName(MergeMode mode);
 /// Parses a mergeModeName(); false for anything else.
 bool parseMergeMode(const std::string& text, MergeMode& mode);
 
+/// BakeSettings::lod_min_switch_ratio is 0 (keep every level) or a factor in this range: far enough
+/// above 1 that the pack's 7-digit rounding can never make two distinct switch distances equal.
+inline constexpr double kMinSwitchRatioLow = 1.001;
+inline constexpr double kMinSwitchRatioHigh = 100.0;
+
+/// Whether `ratio` is a valid lod_min_switch_ratio.
+inline bool isValidMinSwitchRatio(double ratio) {
+    return ratio == 0.0 || (ratio >= kMinSwitchRatioLow && ratio <= kMinSwitchRatioHigh);
+}
+
 struct BakeSettings {
     int version = kBakePresetVersion;
     std::vector<double> lod_ratios{0.5, 0.25, 0.1, 0.03,
@@ -51,6 +61,8 @@ struct BakeSettings {
     double viewport_height_px = 1080.0;
     double vertical_fov_deg = 60.0;
     double hysteresis = 0.1;         // band around each switch distance, fraction of it: [d(1-h), d(1+h)]
+    double lod_min_switch_ratio = 1.05; // a level is kept only when the next kept coarser level is taken more
+                                        // than this many times farther (docs/bake.md "Dead levels"); 0 keeps all
     bool repair = true;              // run the default repair pipeline before simplifying
     uint32_t error_samples = 200000; // area-uniform samples per side when measuring each level's error
     TextureLodSettings textures;

@@ -228,6 +228,12 @@ void measureLodChain(const Mesh& mesh, LodChain& chain, const LodChainOptions& o
 void measureLodChain(const Mesh& mesh, LodChain& chain, const LodChainOptions& options,
                      const std::vector<const OneSidedDistance*>& reference_sides, Diagnostics& diagnostics);
 
+/// Leaves out the levels whose `keep` entry is false (`keep[i]` for levels[i]; missing entries keep);
+/// the kept levels, the collapse record and the removal log are unchanged, so a kept level's
+/// collapse_count still names its prefix of them. The bake drops levels whose switch distance is not
+/// distinct from the next coarser one's (lod_policy.h, distinctLevels) this way.
+void keepLevels(LodChain& chain, const std::vector<bool>& keep);
+
 /// Switch distance and screen coverage of every level (the policy of core/lod_policy.h): from its
 /// measured Hausdorff error when there is one, else its quadric estimate, made non-decreasing down
 /// the chain so selection by distance is monotone.

@@ -48,7 +48,9 @@ struct StreamCost {
 /// Two steps, so that the costly one can run while other stages still read the meshes: `prepare`
 /// only reads `mesh` (the level as baked, before any encoder's commit; it must stay unchanged until
 /// prepare returns) and does all the coding; the commit it returns is cheap and runs later, one
-/// level and one encoder at a time, in encoder order.
+/// level and one encoder at a time, in encoder order, while `chain` is still alive. Between the two
+/// the bake may drop dead levels from `chain` (docs/bake.md, "Dead levels"): their commits never run,
+/// and a commit that lists the levels (LOD0's PFRep) reads the kept ones from `chain` then.
 struct PackStreamEncoder {
     std::string extension_name;
     StreamNeeds needs;
