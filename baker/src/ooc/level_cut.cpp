@@ -60,6 +60,21 @@ std::vector<uint32_t> weldByPosition(const std::vector<Vec3f>& points, uint32_t&
     return first;
 }
 
+// A vertex all of whose triangles welding made degenerate is left out (the numbering keeps its
+// order of first use).
+void dropUnusedVertices(Mesh& mesh) {
+    std::vector<uint32_t> number(mesh.positions.size(), kNone);
+    for (uint32_t v : mesh.indices) number[v] = 0;
+    uint32_t kept = 0;
+    for (uint32_t& n : number)
+        if (n == 0) n = kept++;
+    if (kept == mesh.positions.size()) return;
+    for (size_t v = 0; v < number.size(); ++v)
+        if (number[v] != kNone) mesh.positions[number[v]] = mesh.positions[v];
+    mesh.positions.resize(kept);
+    for (uint32_t& v : mesh.indices) v = number[v];
+}
+
 } // namespace
 
 uint64_t levelCutBytes(const LevelCut& cut) {
@@ -147,6 +162,7 @@ Result<Mesh> extractLevelCut(const TreeClusterTable& table, TreePageSource& sour
         if (a == b || b == c || a == c) continue;
         mesh.indices.insert(mesh.indices.end(), {a, b, c});
     }
+    dropUnusedVertices(mesh);
     return mesh;
 }
 
