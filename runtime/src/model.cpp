@@ -448,10 +448,11 @@ struct ModelBuilder {
                 return fail(Result::BadGltf, "%s/levels/%u/triangles: %llu; the level's mesh has %llu", path, l,
                             static_cast<unsigned long long>(triangles),
                             static_cast<unsigned long long>(levels[l].triangle_count));
-            if (l == 0 && v[2] != 0)
-                return fail(Result::BadGltf, "%s/levels/0: level 0 must have switchDistance 0", path);
-            if (l == 0 && !cut_level0 && (v[0] != 0 || v[1] != 0))
-                return fail(Result::BadGltf, "%s/levels/0: level 0 must have zero errors (no inputTriangles)", path);
+            if (l == 0 && !cut_level0 && (v[0] != 0 || v[1] != 0 || v[2] != 0))
+                return fail(Result::BadGltf, "%s/levels/0: level 0 must have zero errors and switchDistance 0", path);
+            if (l == 0 && cut_level0 && v[2] != 0)
+                return fail(Result::BadGltf, "%s/levels/0: level 0 must have switchDistance 0 (with inputTriangles)",
+                            path);
             for (int k = 0; k < 3; ++k)
                 if (v[k] < prev[k])
                     return fail(Result::BadGltf, "%s/levels/%u/%s: level %u: decreases from level %u (%g after %g)",
