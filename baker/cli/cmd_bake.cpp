@@ -33,6 +33,7 @@
 
 #include "cli_common.h"
 #include "cmd_bake_jobs.h"
+#include "cmd_bake_ooc.h"
 
 namespace lodbake::cli {
 
@@ -61,7 +62,11 @@ options:
   --threads N           worker threads (default: all; the output bytes do not depend on it)
   --memory-limit MIB    resident memory the bakes of this run may be allowed together (default: half
                         of physical memory); a pack whose allowance alone exceeds it fails, packs
-                        baked side by side wait for room; the output bytes do not depend on it
+                        baked side by side wait for room; the output bytes do not depend on it.
+                        With --clusters, one PLY or OBJ input over it is baked out of core: the
+                        MSFT_lod chain then starts at the finest level that fits
+  --work-dir DIR        where an out-of-core bake keeps its partitions (a hidden folder inside DIR,
+                        removed at the end; default: the output's folder)
   --levels LIST         override lod_ratios: comma-separated triangle ratios in (0, 1]
   --pixels P            override pixel_threshold
   --min-switch-ratio K  keep a level only when the next coarser level is taken more than K times
@@ -594,6 +599,7 @@ int runBake(int argc, char** argv) {
                     {"--preset", nullptr, true},
                     {"--threads", nullptr, true},
                     {"--memory-limit", nullptr, true},
+                    {"--work-dir", nullptr, true},
                     {"--levels", nullptr, true},
                     {"--pixels", nullptr, true},
                     {"--min-switch-ratio", nullptr, true},
@@ -614,7 +620,7 @@ int runBake(int argc, char** argv) {
                     {"--cache-dir", nullptr, true},
                     {"--quiet", "-q", false},
                     {"--print-config", nullptr, false},
-                    {"--plan", nullptr, false}, {"--run-job", nullptr, true}, {"--work-dir", nullptr, true},
+                    {"--plan", nullptr, false}, {"--run-job", nullptr, true},
                     {"--help", "-h", false}},
                    args, code))
         return code;
@@ -659,6 +665,7 @@ int runBake(int argc, char** argv) {
     options.memory_limit_bytes = limit_mib > 0 ? uint64_t(limit_mib) << 20 : defaultBakeMemoryLimit();
     options.read = args.read;
     if (args.values.count("--cache-dir")) options.cache_dir = args.values["--cache-dir"];
+    options.out_of_core = outOfCoreBaker(args.values.count("--work-dir") ? args.values["--work-dir"] : "", args.read);
     ProgressPrinter printer(jobs, quiet);
     BatchHooks hooks;
     hooks.stage_done = [&](size_t job, size_t input, BakeStage stage, const StageTime&) {

@@ -405,10 +405,26 @@ struct ModelBuilder {
         return Result::Ok;
     }
 
-    Result fillMeasured(const char* path, JsonValue metrics, const ModelInfo& model, LevelInfo* levels) {
+    // inputTriangles (an out-of-core chain that may start below the input): an integer at least
+    // level 0's triangle count. Level 0 may then carry errors (a cut of the cluster hierarchy).
+    Result readInputTriangles(const char* path, JsonValue metrics, ModelInfo* model, const LevelInfo* levels) {
+        const JsonValue v = metrics.find(format::kLodMetricsInputTriangles);
+        if (!v.isValid()) return Result::Ok;
+        uint64_t n = 0;
+        if (!v.asUint64(&n) || n < levels[0].triangle_count)
+            return fail(Result::BadGltf, "%s/%s: expected an integer >= level 0's %llu triangles", path,
+                        format::kLodMetricsInputTriangles, static_cast<unsigned long long>(levels[0].triangle_count));
+        model->input_triangle_count = n;
+        return Result::Ok;
+    }
+
+    Result fillMeasured(const char* path, JsonValue metrics, ModelInfo& model, LevelInfo* levels) {
         JsonValue array = metrics.find("levels");
         if (!array.isArray() || array.size() != model.level_count)
             return fail(Result::BadGltf, "%s/levels: expected %u entries (MSFT_lod ids + 1)", path, model.level_count);
+        Result ir = readInputTriangles(path, metrics, &model, levels);
+        if (ir != Result::Ok) return ir;
+        const bool cut_level0 = model.input_triangle_count > 0;
         static const char* const kKeys[3] = {"hausdorffError", "meanError", "switchDistance"};
         double prev[3] = {0, 0, 0};
         for (uint32_t l = 0; l < model.level_count; ++l) {
@@ -432,8 +448,11 @@ struct ModelBuilder {
                 return fail(Result::BadGltf, "%s/levels/%u/triangles: %llu; the level's mesh has %llu", path, l,
                             static_cast<unsigned long long>(triangles),
                             static_cast<unsigned long long>(levels[l].triangle_count));
-            if (l == 0 && (v[0] != 0 || v[1] != 0 || v[2] != 0))
+            if (l == 0 && !cut_level0 && (v[0] != 0 || v[1] != 0 || v[2] != 0))
                 return fail(Result::BadGltf, "%s/levels/0: level 0 must have zero errors and switchDistance 0", path);
+            if (l == 0 && cut_level0 && v[2] != 0)
+                return fail(Result::BadGltf, "%s/levels/0: level 0 must have switchDistance 0 (with inputTriangles)",
+                            path);
             for (int k = 0; k < 3; ++k)
                 if (v[k] < prev[k])
                     return fail(Result::BadGltf, "%s/levels/%u/%s: level %u: decreases from level %u (%g after %g)",

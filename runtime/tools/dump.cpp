@@ -156,6 +156,7 @@ struct LodGroup {
     uint32_t root = 0;
     std::vector<LodLevelRow> levels;
     lodrt::SelectionParams screen; // the screen LODBAKE_lod_metrics was baked for (defaults without it)
+    uint64_t input_triangles = 0; // LODBAKE_lod_metrics inputTriangles; 0 when absent
 };
 
 struct Problem {
@@ -745,6 +746,7 @@ LodReport analyseLods(const lodrt::Pack& pack) {
         group.screen.pixel_threshold = float(metrics_object.find("pixelThreshold").number());
         group.screen.viewport_height = float(metrics_object.find("viewportHeight").number());
         group.screen.vertical_fov = float(metrics_object.find("verticalFov").number());
+        const lodrt::JsonValue input_triangles = metrics_object.find(lodrt::format::kLodMetricsInputTriangles);
         const lodrt::JsonValue coverage = pack.node(n).json.find("extras").find(lodrt::format::kMsftScreenCoverage);
         if (metrics.isValid() && metrics.size() != chain.size())
             report.problems.push_back({nodePointer(n) + "/extensions/LODBAKE_lod_metrics/levels",
@@ -778,6 +780,12 @@ LodReport analyseLods(const lodrt::Pack& pack) {
             }
             group.levels.push_back(row);
         }
+        if (input_triangles.isValid() &&
+            (!input_triangles.asUint64(&group.input_triangles) || group.levels.empty() ||
+             group.input_triangles < group.levels[0].triangles))
+            report.problems.push_back({nodePointer(n) + "/extensions/LODBAKE_lod_metrics/" +
+                                           lodrt::format::kLodMetricsInputTriangles,
+                                       "expected an integer at least level 0's triangle count"});
         for (uint32_t l = 1; l < group.levels.size(); ++l) {
             const LodLevelRow& a = group.levels[l - 1];
             const LodLevelRow& b = group.levels[l];
@@ -843,6 +851,11 @@ void printLodText(const lodrt::Pack& pack, const LodReport& report, int level_fi
     for (const LodGroup& g : report.groups) {
         std::printf("lod group \"%s\" (node %u): %zu levels\n", printable(pack.node(g.root).name).c_str(), g.root,
                     g.levels.size());
+        if (g.input_triangles > 0 && !g.levels.empty())
+            std::printf("  input: %llu triangles; the chain starts %s\n", ull(g.input_triangles),
+                        g.input_triangles > g.levels[0].triangles
+                            ? "below it (level 0 is a cut of the cluster hierarchy)"
+                            : "at it");
         std::printf("  %-5s %5s %5s %10s %10s %11s %11s %9s %11s %17s %17s %17s\n", "level", "node", "mesh",
                     "triangles", "vertices", "hausdorff", "mean", "coverage", "switch_dist", "plain  ratio",
                     "valence  ratio", "pfrep  ratio");
@@ -881,8 +894,9 @@ std::string lodJson(const lodrt::Pack& pack, const LodReport& report, int level_
     for (size_t gi = 0; gi < report.groups.size(); ++gi) {
         const LodGroup& g = report.groups[gi];
         out += gi ? ",\n    " : "\n    ";
-        out += "{\"node\": " + std::to_string(g.root) + ", \"name\": " + jsonString(pack.node(g.root).name) +
-               ", \"levels\": [";
+        out += "{\"node\": " + std::to_string(g.root) + ", \"name\": " + jsonString(pack.node(g.root).name);
+        if (g.input_triangles > 0) out += ", \"inputTriangles\": " + std::to_string(g.input_triangles);
+        out += ", \"levels\": [";
         bool first = true;
         for (uint32_t l = 0; l < g.levels.size(); ++l) {
             if (!levelSelected(level_filter, l)) continue;

@@ -1,4 +1,5 @@
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <string>
 #include <vector>
@@ -208,5 +209,44 @@ TEST(ModelTest, EveryTruncatedPackFailsCleanly) {
             lodrt::buildModels(pack, nullptr, &models);
         }
         EXPECT_NE(r, Result::Ok) << n;
+    }
+}
+
+// LODBAKE_lod_metrics inputTriangles (an out-of-core chain that starts below its input): level 0 may
+// then carry errors, not a switch distance; the count must be an integer at least level 0's.
+TEST(ModelTest, InputTrianglesLetLevelZeroCarryAnError) {
+    auto metrics = [](const char* input, double level0_error, double level0_switch) {
+        char text[1024];
+        std::snprintf(text, sizeof(text),
+                      R"({%s"levels":[{"triangles":1,"hausdorffError":%g,"meanError":0,"switchDistance":%g,)"
+                      R"("hysteresisBand":[0,%g]},)"
+                      R"({"triangles":1,"hausdorffError":0.1,"meanError":0,"switchDistance":1,"hysteresisBand":[0.9,1.1]},)"
+                      R"({"triangles":1,"hausdorffError":0.2,"meanError":0,"switchDistance":2,"hysteresisBand":[1.9,2.1]},)"
+                      R"({"triangles":1,"hausdorffError":0.3,"meanError":0,"switchDistance":3,"hysteresisBand":[2.9,3.1]}]})",
+                      input, level0_error, level0_switch, level0_switch);
+        return std::string(text);
+    };
+    {
+        Pack pack;
+        ModelSet models;
+        LodPackSpec spec;
+        spec.node0_metrics = metrics(R"("inputTriangles":10,)", 0.05, 0);
+        const Built b = build(spec, &models, &pack);
+        ASSERT_EQ(b.result, Result::Ok) << b.message;
+        EXPECT_EQ(models.model(0).input_triangle_count, 10u);
+        EXPECT_FLOAT_EQ(models.modelLevel(0, 0).hausdorff_error, 0.05f);
+    }
+    const std::string refused[] = {
+        metrics("", 0.05, 0),                           // an error on level 0 without inputTriangles
+        metrics(R"("inputTriangles":10,)", 0.05, 0.5),  // a switch distance on level 0
+        metrics(R"("inputTriangles":0,)", 0, 0),        // fewer than level 0's triangles
+        metrics(R"("inputTriangles":"10",)", 0.05, 0),  // not an integer
+    };
+    for (const std::string& m : refused) {
+        LodPackSpec spec;
+        spec.node0_metrics = m;
+        const Built b = buildBroken(spec);
+        EXPECT_EQ(b.result, Result::BadGltf) << m;
+        EXPECT_EQ(b.message.rfind("/nodes/0/extensions/LODBAKE_lod_metrics", 0), 0u) << b.message;
     }
 }

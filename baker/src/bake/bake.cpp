@@ -408,15 +408,21 @@ Result<BakeOutput> bakeScene(std::vector<BakeInput> inputs, PackScene scene, con
 }
 
 std::string bakeReportJson(const BakeOutput& output, const BakeSettings& settings) {
+    return bakeReportJson(output, settings, uint64_t(output.glb.size()));
+}
+
+std::string bakeReportJson(const BakeOutput& output, const BakeSettings& settings, uint64_t pack_bytes) {
     JsonWriter j;
     j.beginObject();
-    j.field("packBytes", uint64_t(output.glb.size()));
+    j.field("packBytes", pack_bytes);
     j.key("assets").beginArray();
     for (const BakeAssetReport& a : output.assets) {
         j.beginObject();
         j.field("name", a.name);
         j.field("inputTriangles", a.input_triangles);
         j.field("inputVertices", a.input_vertices);
+        // An out-of-core pack: its chain is cut from the cluster hierarchy and may start below the input.
+        if (a.metrics.input_triangles > 0) j.field("outOfCore", true);
         j.key("repairUnresolved").beginArray();
         for (const std::string& u : a.repair_unresolved) j.value(u);
         j.endArray();

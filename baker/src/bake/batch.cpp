@@ -8,6 +8,7 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <sstream>
 #include <memory>
 #include <mutex>
@@ -108,6 +109,9 @@ void addToScene(const std::string& name, LoadedScene loaded, std::vector<BakeInp
     for (uint32_t r : loaded.roots) scene.roots.push_back(node_base + r);
 }
 
+// What a refusal over the limit adds: the route that would bake the input anyway.
+constexpr const char kOutOfCoreHint[] = "--clusters with a PLY or OBJ input bakes it out of core instead";
+
 // A job's share of the batch's memory limit, held from before its inputs load until its pack is
 // staged, and released when the job ends however it ends.
 class JobMemory {
@@ -124,7 +128,15 @@ public:
     Status hold(const BakeFootprint& footprint, const std::string& what) {
         if (!gate_) return Status();
         const uint64_t bytes = bakeMemoryAllowance(footprint);
-        if (bytes > gate_->limit()) return bakeOverLimit(what, footprint, gate_->limit());
+        if (bytes > gate_->limit()) {
+            const Status refused = bakeOverLimit(what, footprint, gate_->limit());
+            return Status(refused.code(), refused.message() + "; " + kOutOfCoreHint);
+        }
+        return holdBytes(bytes, what);
+    }
+    // Holds `bytes` (at most the limit) as hold() does.
+    Status holdBytes(uint64_t bytes, const std::string& what) {
+        if (!gate_) return Status();
         if (bytes <= bytes_) {
             gate_->release(bytes_ - bytes);
         } else {
@@ -165,6 +177,49 @@ BakeFootprint footprintBeforeLoading(const BakeJob& job, const BatchOptions& opt
 
 // What a memory refusal names: the input, or the output of a pack of several.
 std::string jobName(const BakeJob& job) { return job.inputs.size() == 1 ? job.inputs[0] : job.output; }
+
+using StageDone = std::function<void(size_t input, BakeStage stage, const StageTime& time)>;
+
+// A job over the limit baked out of core (BatchOptions::out_of_core), holding the whole limit: the
+// pack is written by the out-of-core writer into a temporary staged for job.output, so it is
+// committed, or dropped, with the job's other outputs. Not stored in the cache (the pack is never in
+// memory).
+void runOutOfCoreJob(const BakeJob& job, const BatchOptions& options, JobMemory& memory, uint64_t limit,
+                     const StageDone& stage_done, const std::function<void(BakeStage, bool)>& running,
+                     BakeJobResult& result) {
+    result.status = memory.holdBytes(limit, jobName(job));
+    if (!result.status.ok()) return;
+    const Clock::time_point start = Clock::now();
+    running(BakeStage::LodChain, true);
+    OutOfCorePack pack;
+    result.staged = std::make_unique<AtomicFileWriter>();
+    result.status = result.staged->addFile(job.output, [&](const std::string& temp) -> Status {
+        Result<OutOfCorePack> made = options.out_of_core(job, temp, limit, options.threads, result.diagnostics);
+        if (!made.ok()) return made.status();
+        pack = std::move(made).value();
+        return Status();
+    });
+    running(BakeStage::LodChain, false);
+    if (!result.status.ok()) {
+        result.staged.reset();
+        return;
+    }
+    Clock::time_point at = start;
+    for (const std::pair<BakeStage, double>& run : pack.stage_seconds) {
+        StageTime time;
+        time.wall_seconds = run.second;
+        time.start = at;
+        at += std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(run.second));
+        stage_done(run.first == BakeStage::Pack ? kWholePack : 0, run.first, time);
+    }
+    result.files_read.push_back(job.inputs[0]);
+    BakeOutput output;
+    output.assets.push_back(std::move(pack.report));
+    result.report_json = bakeReportJson(output, job.settings, pack.pack_bytes);
+    result.summary = bakeSummaryText(output);
+    result.pack_bytes = pack.pack_bytes;
+    result.wall_seconds = secondsSince(start);
+}
 
 void runJob(const BakeJob& job, size_t index, const BatchOptions& options, MemoryGate* gate,
             const BatchHooks& hooks, BakeJobResult& result) {
@@ -242,6 +297,9 @@ void runJob(const BakeJob& job, size_t index, const BatchOptions& options, Memor
     JobMemory memory(gate);
     if (gate) {
         const BakeFootprint before = footprintBeforeLoading(job, options, gate->limit());
+        if (before.known && bakeMemoryAllowance(before) > gate->limit() && options.out_of_core && outOfCoreEligible(job))
+            return runOutOfCoreJob(job, options, memory, gate->limit(), stageDone,
+                                   [&](BakeStage stage, bool on) { running(0, stage, on); }, result);
         if (before.known) result.status = memory.hold(before, jobName(job));
         if (!result.status.ok()) return;
     }
@@ -305,6 +363,12 @@ void runJob(const BakeJob& job, size_t index, const BatchOptions& options, Memor
 }
 
 } // namespace
+
+bool outOfCoreEligible(const BakeJob& job) {
+    if (job.inputs.size() != 1 || !job.settings.cluster_lod || job.settings.web) return false;
+    const MeshFormat format = formatFromPath(job.inputs[0]);
+    return format == MeshFormat::Ply || format == MeshFormat::Obj;
+}
 
 std::string inputGroupName(const std::string& path) {
     const size_t slash = path.find_last_of("/\\");

@@ -75,16 +75,37 @@ void AtomicFileWriter::discard() {
     staged_.clear();
 }
 
-Status AtomicFileWriter::add(const std::string& path, const void* data, size_t size) {
-    // The temporary sits in the destination folder so the final rename never crosses file systems.
-    // Its name starts with '.' and ends in the process id and a per-process counter so concurrent
-    // bakes, and concurrent writers of one process, do not collide. It is registered before it is
-    // created so that a signal (installTempFileSignalCleanup) removes it.
+namespace {
+
+// The temporary sits in the destination folder so the final rename never crosses file systems.
+// Its name starts with '.' and ends in the process id and a per-process counter so concurrent
+// bakes, and concurrent writers of one process, do not collide.
+std::string stagingPath(const std::string& path) {
     static std::atomic<uint64_t> counter{0};
     const std::string dir = parentDirectory(path);
     const std::string base = fs::path(path).filename().string();
-    const std::string temp = joinPath(dir, "." + base + ".tmp" + std::to_string(::getpid()) + "_" +
-                                               std::to_string(counter.fetch_add(1)));
+    return joinPath(dir, "." + base + ".tmp" + std::to_string(::getpid()) + "_" + std::to_string(counter.fetch_add(1)));
+}
+
+} // namespace
+
+Status AtomicFileWriter::addFile(const std::string& path,
+                                 const std::function<Status(const std::string& temp_path)>& write) {
+    const std::string temp = stagingPath(path);
+    const int slot = registerTempFile(temp);
+    const Status s = write(temp);
+    if (!s.ok()) {
+        std::remove(temp.c_str());
+        unregisterTempFile(slot);
+        return s;
+    }
+    staged_.push_back({temp, path, slot});
+    return Status();
+}
+
+Status AtomicFileWriter::add(const std::string& path, const void* data, size_t size) {
+    // Registered before it is created so that a signal (installTempFileSignalCleanup) removes it.
+    const std::string temp = stagingPath(path);
     const int slot = registerTempFile(temp);
     FILE* f = std::fopen(temp.c_str(), "wb");
     if (!f) {

@@ -60,6 +60,7 @@ PackExtension lodMetricsExtension(const LodMetrics& m) {
     e.name = lodrt::format::kExtLodMetrics;
     e.json = JsonNode::object();
     e.json.set("boundingRadius", up(m.bounding_radius));
+    if (m.input_triangles > 0) e.json.set(lodrt::format::kLodMetricsInputTriangles, m.input_triangles);
     e.json.set("levels", std::move(levels));
     e.json.set("pixelThreshold", m.pixel_threshold);
     e.json.set("verticalFov", m.vertical_fov_rad);

@@ -19,6 +19,10 @@ constexpr uint32_t kGlbChunkHeaderSize = 8;
 // https://github.com/KhronosGroup/glTF/tree/main/extensions/2.0/Vendor/MSFT_lod, whose screen
 // coverage array sits in the LOD0 node's extras under kMsftScreenCoverage.
 constexpr const char kExtLodMetrics[] = "LODBAKE_lod_metrics";
+// LODBAKE_lod_metrics member: the input's triangle count when the MSFT_lod chain starts below the
+// input (an out-of-core bake's chain is cut from its cluster hierarchy); levels[0] may then carry
+// errors > 0. Absent: levels[0] is the input.
+constexpr const char kLodMetricsInputTriangles[] = "inputTriangles";
 constexpr const char kExtValenceCompression[] = "LODBAKE_valence_compression";
 constexpr const char kExtProgressiveFans[] = "LODBAKE_progressive_fans";
 constexpr const char kExtMsftLod[] = "MSFT_lod";

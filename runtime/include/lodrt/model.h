@@ -56,6 +56,9 @@ struct ModelInfo {
     uint32_t first_level = 0; // into ModelSet::level()
     uint32_t level_count = 0; // 1 .. kMaxLevels; level 0 is the finest
     ErrorSource error_source = ErrorSource::Unknown;
+    /// LODBAKE_lod_metrics inputTriangles: the input's triangles when the chain may start below the
+    /// input (an out-of-core bake, level 0 a cut of the cluster hierarchy); 0 when absent.
+    uint64_t input_triangle_count = 0;
     float aabb_min[3] = {0, 0, 0}; // of level 0's POSITION accessors (glTF min/max), object units
     float aabb_max[3] = {0, 0, 0};
     float sphere_center[3] = {0, 0, 0}; // bounding sphere around the box

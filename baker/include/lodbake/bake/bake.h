@@ -93,5 +93,7 @@ Result<BakeOutput> bakeScene(std::vector<BakeInput> inputs, PackScene scene, con
 /// The report as JSON (stable key order): settings echo, per asset the repair leftovers, every
 /// level's metrics and texture sizes, and the pack size.
 std::string bakeReportJson(const BakeOutput& output, const BakeSettings& settings);
+/// As above for a pack of `pack_bytes` written elsewhere (output.glb empty: an out-of-core pack).
+std::string bakeReportJson(const BakeOutput& output, const BakeSettings& settings, uint64_t pack_bytes);
 
 } // namespace lodbake

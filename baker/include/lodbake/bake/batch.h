@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <utility>
 #include <string>
 #include <vector>
 
@@ -27,6 +28,26 @@ struct BakeJob {
     BakeSettings settings;
 };
 
+/// What an out-of-core bake (BatchOptions::out_of_core) made: the pack, already written to the path
+/// it was given, and its report.
+struct OutOfCorePack {
+    uint64_t pack_bytes = 0;
+    BakeAssetReport report; // the chain's metrics (metrics.input_triangles set: where it starts)
+    /// Wall seconds of what ran, in order (the driver's stages as LodChain, the levels as Encode, the
+    /// GLB as Pack).
+    std::vector<std::pair<BakeStage, double>> stage_seconds;
+};
+
+/// Bakes `job` (one PLY or OBJ input, settings.cluster_lod) out of core within `memory_limit_bytes`
+/// with at most `threads` workers (0: all), writing its pack to `glb_path` (a temporary the runner
+/// stages for job.output). Leaves no file behind on an error.
+using OutOfCoreBake = std::function<Result<OutOfCorePack>(const BakeJob& job, const std::string& glb_path,
+                                                          uint64_t memory_limit_bytes, uint32_t threads,
+                                                          Diagnostics& diagnostics)>;
+
+/// True when `job` may be baked out of core: one input, PLY or OBJ, settings.cluster_lod, not --web.
+bool outOfCoreEligible(const BakeJob& job);
+
 struct BatchOptions {
     std::string cache_dir; // content-hash cache folder; empty: no cache
     uint32_t threads = 0;  // worker threads for the whole batch; 0: all cores (job settings.threads is ignored)
@@ -34,6 +55,10 @@ struct BatchOptions {
     // Resident memory the jobs running side by side may be allowed together (memory_budget.h); a job
     // whose allowance alone exceeds it fails (ResourceLimit). 0: no limit. Never changes a pack's bytes.
     uint64_t memory_limit_bytes = 0;
+    // Set: a job whose allowance exceeds memory_limit_bytes and that outOfCoreEligible() accepts is
+    // baked by this instead of refused (lodbake/ooc/ooc_pack.h behind it in the CLI), holding the
+    // whole limit while it runs. Unset, or an ineligible job: refused as before.
+    OutOfCoreBake out_of_core;
 };
 
 struct BakeJobResult {

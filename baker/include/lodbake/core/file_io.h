@@ -3,6 +3,7 @@
 // or interrupted run never leaves a partial output file behind.
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -38,6 +39,11 @@ public:
     Status add(const std::string& path, const void* data, size_t size);
     Status add(const std::string& path, const std::vector<uint8_t>& data) { return add(path, data.data(), data.size()); }
     Status add(const std::string& path, const std::string& text) { return add(path, text.data(), text.size()); }
+
+    /// Stages a file that `write` creates at the temporary path it is given (in the folder of `path`,
+    /// registered with the signal cleanup), for writers that write their own file (a pack larger than
+    /// memory). Fails with write's error, the temporary removed.
+    Status addFile(const std::string& path, const std::function<Status(const std::string& temp_path)>& write);
 
     /// Renames every staged file into place.
     Status commit();

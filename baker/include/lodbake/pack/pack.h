@@ -107,6 +107,10 @@ struct LodMetrics {
     double pixel_threshold = 1;
     double viewport_height_px = 1080;
     double vertical_fov_rad = 0;
+    /// The input's triangles when the chain starts below it (an out-of-core bake: levels[0] is a cut
+    /// of the cluster hierarchy, not the input): written as inputTriangles; 0, the default, writes
+    /// nothing (levels[0] is the input).
+    uint64_t input_triangles = 0;
     std::vector<LodMetricsLevel> levels;
 };
 

@@ -1,0 +1,324 @@
+// The pack of an out-of-core bake (lodbake/ooc/ooc_pack.h).
+#include "lodbake/ooc/ooc_pack.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <memory>
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include "lodbake/cleanup/normals.h"
+#include "lodbake/core/spill_file.h"
+#include "lodbake/pack/pack_glb.h"
+#include "lodrt/format.h"
+
+namespace lodbake::ooc {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+constexpr size_t kCopyBytes = size_t(64) << 10;
+constexpr uint32_t kBoundsClustersPerRead = 256;
+
+// The run's own folder inside the work folder, removed with everything in it however the run ends
+// (and the work folder too when the run created it and it is left empty).
+class RunFolder {
+public:
+    ~RunFolder() {
+        std::error_code ec;
+        if (!path_.empty()) fs::remove_all(path_, ec);
+        if (created_parent_) fs::remove(parent_, ec); // only when empty
+    }
+    Status make(const std::string& work_dir, const std::string& input) {
+        static std::atomic<uint64_t> counter{0};
+        std::error_code ec;
+        parent_ = work_dir;
+        if (!fs::exists(parent_, ec)) {
+            if (!fs::create_directories(parent_, ec) || ec)
+                return ioError(work_dir + ": cannot create the work folder for " + input);
+            created_parent_ = true;
+        }
+        path_ = (fs::path(parent_) / (".lodbake-ooc-" + std::to_string(::getpid()) + "-" +
+                                      std::to_string(counter.fetch_add(1))))
+                    .string();
+        if (!fs::create_directory(path_, ec) || ec) {
+            path_.clear();
+            return ioError(work_dir + ": cannot create a folder in the work folder for " + input);
+        }
+        return Status::okStatus();
+    }
+    const std::string& path() const { return path_; }
+
+private:
+    std::string parent_, path_;
+    bool created_parent_ = false;
+};
+
+// The input (ratio 1) and every ratio's cut, finest first; a cut no coarser than the one before it
+// is left out (ratios below what the hierarchy's roots allow give the same cut).
+std::vector<OocPackLevel> candidateLevels(const TreeClusterTable& table, uint64_t input_triangles,
+                                          const std::vector<double>& ratios) {
+    std::vector<double> all{1.0};
+    for (double r : ratios)
+        if (r > 0 && r < 1) all.push_back(r);
+    std::stable_sort(all.begin(), all.end(), [](double a, double b) { return a > b; });
+    std::vector<OocPackLevel> out;
+    for (double r : all) {
+        OocPackLevel level;
+        level.ratio = r;
+        level.target_triangles = uint64_t(std::llround(r * double(input_triangles)));
+        level.cut = r == 1.0 ? measureLevelCut(table, 0.0f) : findLevelCut(table, level.target_triangles);
+        if (!out.empty() && level.cut.triangles >= out.back().cut.triangles) continue;
+        level.held_bytes = levelHeldBytes(level.cut);
+        level.work_bytes = levelWorkBytes(level.cut);
+        out.push_back(level);
+    }
+    return out;
+}
+
+// Keeps the longest run of the coarsest levels whose held bytes plus the largest working set fit.
+uint64_t keepLevelsThatFit(std::vector<OocPackLevel>& levels, uint64_t budget) {
+    uint64_t held = 0, work = 0, peak = 0;
+    for (size_t i = levels.size(); i-- > 0;) {
+        const uint64_t h = held + levels[i].held_bytes, w = std::max(work, levels[i].work_bytes);
+        if (h + w > budget) break;
+        held = h;
+        work = w;
+        peak = h + w;
+        levels[i].kept = true;
+    }
+    return peak;
+}
+
+// The bounding box of the hierarchy's LOD0 (the input's triangles), read cluster by cluster.
+Result<ClusterPackBounds> lod0Bounds(const TreeClusterTable& table, TreePageSource& source) {
+    ClusterPackBounds b;
+    std::vector<uint32_t> ids;
+    ClusterPageGeometry geometry;
+    for (uint32_t first = 0; first < table.lod0_cluster_count; first += kBoundsClustersPerRead) {
+        const uint32_t count = std::min(kBoundsClustersPerRead, table.lod0_cluster_count - first);
+        ids.resize(count);
+        for (uint32_t i = 0; i < count; ++i) ids[i] = first + i;
+        geometry.positions.clear();
+        geometry.indices.clear();
+        LODBAKE_RETURN_IF_ERROR(source.readPage(0, ids.data(), count, geometry));
+        for (const Vec3f& p : geometry.positions) b.add(p);
+    }
+    return b;
+}
+
+// The chain's metrics: the kept levels' errors (the cut's bound, or the caller's measurement), the
+// switch policy of the in-memory bake (core/lod_policy.h). Level 0 is shown from distance 0 whatever
+// its error; the input's triangle count says where the chain starts.
+LodMetrics chainMetrics(const std::vector<LevelCut>& cuts, const std::vector<LevelError>& errors, double diagonal,
+                        const OocPackOptions& o, uint64_t input_triangles) {
+    LodMetrics m;
+    m.bounding_radius = diagonal / 2;
+    m.pixel_threshold = o.screen.pixel_threshold;
+    m.viewport_height_px = o.screen.viewport_height_px;
+    m.vertical_fov_rad = o.screen.vertical_fov_rad;
+    m.input_triangles = input_triangles;
+    for (size_t i = 0; i < cuts.size(); ++i) {
+        LodMetricsLevel l;
+        l.triangles = cuts[i].triangles;
+        l.hausdorff_error = errors.empty() ? double(cuts[i].error_bound) : errors[i].hausdorff;
+        l.mean_error = errors.empty() ? double(cuts[i].error_bound) : errors[i].mean;
+        if (i > 0) {
+            // A coarser level never claims to be better than the finer one.
+            const LodMetricsLevel& prev = m.levels.back();
+            l.hausdorff_error = std::max(l.hausdorff_error, prev.hausdorff_error);
+            l.mean_error = std::max(l.mean_error, prev.mean_error);
+            l.switch_distance = levelSwitchDistance(l.hausdorff_error, prev.switch_distance, o.screen);
+            l.screen_coverage = screenCoverage(m.bounding_radius, l.switch_distance, o.screen);
+            const HysteresisBand band = hysteresisBand(l.switch_distance, o.hysteresis);
+            l.hysteresis_near = band.near;
+            l.hysteresis_far = band.far;
+        } else {
+            l.screen_coverage = 1.0;
+        }
+        l.hausdorff_error_rel = diagonal > 0 ? l.hausdorff_error / diagonal : 0.0;
+        l.mean_error_rel = diagonal > 0 ? l.mean_error / diagonal : 0.0;
+        m.levels.push_back(l);
+    }
+    return m;
+}
+
+// One kept level: the cut extracted, its normals, its valence stream (at the precision the chain's
+// errors give it, as in the in-memory bake).
+Result<PackLevel> bakeLevel(const TreeClusterTable& table, TreePageSource& source, const LevelCut& cut,
+                            const PackStreamEncoder& encoder, const LodChain& chain, size_t index,
+                            const std::string& input) {
+    PackLevel level;
+    Result<Mesh> mesh = extractLevelCut(table, source, cut);
+    if (!mesh.ok()) return Status(mesh.status().code(), input + ": level " + std::to_string(index) + ": " +
+                                                            mesh.status().message());
+    level.mesh = std::move(mesh).value();
+    if (level.mesh.faceCount() == 0) return invalidInput(input + ": level " + std::to_string(index) + ": no triangles");
+    computeNormals(level.mesh);
+    Result<PackStreamCommit> commit = encoder.prepare(chain, index, level.mesh);
+    if (!commit.ok()) return Status(commit.status().code(), input + ": level " + std::to_string(index) + ": " +
+                                                                commit.status().message());
+    if (*commit) LODBAKE_RETURN_IF_ERROR((*commit)(level));
+    return level;
+}
+
+// The driver's pages file copied into a spill beside the output (the GLB writer takes its spilled
+// blobs as SpillFiles), then removed.
+Result<std::shared_ptr<SpillFile>> copyPages(const std::string& pages_path, const std::string& output_path,
+                                             const std::atomic<bool>* cancel) {
+    auto spill = std::make_shared<SpillFile>();
+    LODBAKE_RETURN_IF_ERROR(spill->open(output_path));
+    const int fd = ::open(pages_path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd < 0) return ioError(pages_path + ": cannot read the cluster pages");
+    std::vector<uint8_t> buffer(kCopyBytes);
+    Status s;
+    const off_t size = ::lseek(fd, 0, SEEK_END);
+    if (size < 0) s = ioError(pages_path + ": cannot read the cluster pages");
+    for (uint64_t at = 0; s.ok() && at < uint64_t(size); at += buffer.size()) {
+        if (cancel && cancel->load()) {
+            s = ioError(output_path + ": out-of-core bake cancelled");
+            break;
+        }
+        const size_t n = size_t(std::min<uint64_t>(buffer.size(), uint64_t(size) - at));
+        s = readAt(fd, at, buffer.data(), n, pages_path);
+        if (s.ok()) s = spill->write(buffer.data(), n);
+    }
+    ::close(fd);
+    std::remove(pages_path.c_str());
+    LODBAKE_RETURN_IF_ERROR(s);
+    LODBAKE_RETURN_IF_ERROR(spill->finish());
+    return spill;
+}
+
+PackExtension clusterExtension(std::vector<uint8_t> table, std::shared_ptr<SpillFile> pages) {
+    PackExtension e;
+    e.name = lodrt::format::kExtClusterLod;
+    e.json = JsonNode::object();
+    e.blobs.push_back(std::move(table));
+    e.blob_view_members.push_back(lodrt::format::kClusterTableMember);
+    e.blobs.emplace_back();
+    e.blob_view_members.push_back(lodrt::format::kClusterPagesMember);
+    e.spilled.push_back(nullptr);
+    e.spilled.push_back(std::move(pages));
+    e.is_stream = false; // beside the MSFT_lod chain, never instead of it
+    return e;
+}
+
+// Everything after the driver: the cuts, the levels that fit, their meshes and streams, the GLB.
+Status packLevels(const std::string& input, const std::string& output_path, const OocPackOptions& o,
+                  OocPackResult& result) {
+    Clock::time_point t0 = Clock::now();
+    const uint64_t limit = o.driver.memory_limit_bytes;
+    LODBAKE_ASSIGN_OR_RETURN(TreeClusterTable table, assembleClusterTable(result.driver.tree, limit));
+    result.levels = candidateLevels(table, result.driver.triangle_count, o.lod_ratios);
+    const uint64_t fixed = table.accounted_peak_bytes + result.driver.table.size() + kOocPackFixedBytes;
+    result.level_budget_bytes = limit > fixed ? limit - fixed : 0;
+    result.level_peak_bytes = keepLevelsThatFit(result.levels, result.level_budget_bytes);
+    std::vector<LevelCut> cuts;
+    for (const OocPackLevel& l : result.levels)
+        if (l.kept) cuts.push_back(l.cut);
+    if (cuts.empty())
+        return resourceLimit(input + ": no discrete level fits the memory limit of " + std::to_string(limit >> 20) +
+                             " MiB beside the cluster table (the coarsest needs " +
+                             std::to_string((fixed + result.levels.back().held_bytes + result.levels.back().work_bytes +
+                                             (uint64_t(1) << 20) - 1) >> 20) +
+                             " MiB)");
+    std::vector<LevelError> errors;
+    if (o.level_errors) {
+        LODBAKE_ASSIGN_OR_RETURN(errors, o.level_errors(cuts));
+        if (!errors.empty() && errors.size() != cuts.size())
+            return internalError(input + ": level errors: " + std::to_string(errors.size()) + " for " +
+                                 std::to_string(cuts.size()) + " levels");
+    }
+    TreePageSource source(table);
+    LODBAKE_ASSIGN_OR_RETURN(ClusterPackBounds bounds, lod0Bounds(table, source));
+    const double dx = double(bounds.max[0]) - bounds.min[0], dy = double(bounds.max[1]) - bounds.min[1],
+                 dz = double(bounds.max[2]) - bounds.min[2];
+    result.metrics = chainMetrics(cuts, errors, std::sqrt(dx * dx + dy * dy + dz * dz), o, result.driver.triangle_count);
+    // The chain the valence stream reads for adaptive precision: each level's error as measured.
+    LodChain chain;
+    for (size_t i = 1; i < cuts.size(); ++i) {
+        LodLevel level;
+        level.has_distance = true;
+        level.distance.hausdorff = result.metrics.levels[i].hausdorff_error;
+        level.distance.mean = result.metrics.levels[i].mean_error;
+        chain.levels.push_back(std::move(level));
+    }
+    const PackStreamEncoder encoder = valenceStreamEncoder(o.valence);
+    PackDescription description;
+    description.compact = o.compact;
+    PackAsset asset;
+    asset.name = o.name;
+    for (size_t i = 0; i < cuts.size(); ++i) {
+        if (o.driver.cancel && o.driver.cancel->load()) return ioError(output_path + ": out-of-core bake cancelled");
+        LODBAKE_ASSIGN_OR_RETURN(PackLevel level, bakeLevel(table, source, cuts[i], encoder, chain, i, input));
+        result.metrics.levels[i].triangles = level.mesh.faceCount();
+        result.metrics.levels[i].vertices = level.mesh.vertexCount();
+        asset.levels.push_back(std::move(level));
+    }
+    result.cut_seconds = since(t0);
+    t0 = Clock::now();
+    asset.screen_coverage = msftScreenCoverage(result.metrics);
+    asset.node_extensions.push_back(lodMetricsExtension(result.metrics));
+    LODBAKE_ASSIGN_OR_RETURN(std::shared_ptr<SpillFile> pages,
+                             copyPages(result.driver.output, output_path, o.driver.cancel));
+    asset.levels[0].mesh_extensions.insert(asset.levels[0].mesh_extensions.begin(),
+                                           clusterExtension(std::move(result.driver.table), std::move(pages)));
+    description.assets.push_back(std::move(asset));
+    LODBAKE_RETURN_IF_ERROR(checkCompact(description));
+    LODBAKE_ASSIGN_OR_RETURN(result.pack_bytes, writePackGlbFile(std::move(description), output_path, o.driver.cancel));
+    result.pack_seconds = since(t0);
+    return Status::okStatus();
+}
+
+} // namespace
+
+uint64_t leafTrianglesForLimit(uint64_t limit, const StreamReadOptions& read, uint64_t sample_cap) {
+    constexpr uint64_t kMiB = uint64_t(1) << 20;
+    const uint64_t fixed = read.buffer_bytes + 12 * uint64_t(read.vertex_chunk) + 12 * uint64_t(read.triangle_chunk) +
+                           32 * sample_cap + kMiB + (uint64_t(64) << 10);
+    uint64_t leaf = kDefaultLeafTriangles;
+    while (leaf > 4096 && fixed + kPartitionBuildBytesPerTriangle * leaf + 2 * kMiB > limit) leaf /= 2;
+    return leaf;
+}
+
+uint64_t levelHeldBytes(const LevelCut& cut) {
+    // Positions and normals (V <= V_c), indices, the stream (at most 8 bytes per triangle), and the
+    // same accessors again in the GLB's binary chunk.
+    return 2 * (24 * cut.cluster_vertices + 12 * cut.triangles) + 8 * cut.triangles;
+}
+
+uint64_t levelWorkBytes(const LevelCut& cut) {
+    static const double coder = valenceStreamEncoder().cost.bytes_per_triangle;
+    const uint64_t coding = 24 * cut.cluster_vertices + 12 * cut.triangles + uint64_t(coder * double(cut.triangles));
+    return std::max(levelCutBytes(cut), coding);
+}
+
+Result<OocPackResult> writeOutOfCorePack(const std::string& input, const std::string& output_path,
+                                         const OocPackOptions& options, Diagnostics& diagnostics) {
+    if (options.driver.work_dir.empty()) return invalidInput(input + ": out-of-core bake: no work folder given");
+    RunFolder folder;
+    LODBAKE_RETURN_IF_ERROR(folder.make(options.driver.work_dir, input));
+    OutOfCoreOptions driver = options.driver;
+    driver.work_dir = folder.path();
+    driver.keep_intermediate = true; // the levels are cut from the tree's files; the folder goes at the end
+    driver.pages.pack.position_bits = options.valence.position_bits;
+    OocPackResult result;
+    LODBAKE_ASSIGN_OR_RETURN(result.driver,
+                             buildOutOfCore(input, (fs::path(folder.path()) / "pages.bin").string(), driver, diagnostics));
+    LODBAKE_RETURN_IF_ERROR(packLevels(input, output_path, options, result));
+    result.input_triangles = result.driver.triangle_count;
+    result.input_vertices = result.driver.vertex_count;
+    return result;
+}
+
+} // namespace lodbake::ooc
