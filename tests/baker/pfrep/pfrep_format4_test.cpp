@@ -240,6 +240,22 @@ TEST(PfrepFormat4Test, MismatchedLod0IsAnError) {
     }
 }
 
+// The encoder refuses a build that does not replay on the LOD0 it is given, with a message.
+TEST(PfrepFormat4Test, EncoderRefusesAnotherLod0) {
+    const Built& b = small();
+    ASSERT_FALSE(b.coded.empty());
+    std::vector<uint32_t> triangles = b.lod0.triangles;
+    triangles.resize(triangles.size() - 3);
+    EXPECT_FALSE(lodbake::compressPfrepFormat4(b.build, b.lod0.points, triangles).ok());
+    triangles = b.lod0.triangles;
+    std::reverse(triangles.begin(), triangles.end()); // every triangle flipped: other fans
+    auto flipped = lodbake::compressPfrepFormat4(b.build, b.lod0.points, triangles);
+    EXPECT_FALSE(flipped.ok());
+    lodbake::PfrepBuild other = b.build;
+    other.rank_kept[0] = other.rank_point[0]; // not its own neighbour
+    EXPECT_FALSE(lodbake::compressPfrepFormat4(other, b.lod0.points, b.lod0.triangles).ok());
+}
+
 TEST(PfrepFormat4Test, HeaderErrorsAndShortBuffers) {
     const Built& b = small();
     ASSERT_GE(b.coded.size(), size_t(lodrt::format::kPfrepHeaderSize));
