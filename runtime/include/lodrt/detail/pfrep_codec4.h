@@ -84,7 +84,7 @@ struct Pfrep4State {
 inline uint64_t pfrep4ScratchValues(const Pfrep4Header& h) {
     const uint64_t t = h.stored_triangles, p = h.point_count, v = h.vertex_count;
     auto even = [](uint64_t x) { return (x + 1) & ~uint64_t(1); };
-    return even((sizeof(Pfrep4Models) + 3) / 4) + even(3 * t) * 3 + even(t) * 5 + even(2 * t) * 3 + even(p) * 3 +
+    return even((sizeof(Pfrep4Models) + 3) / 4) + even(3 * t) * 3 + even(t) * 4 + even(2 * t) * 3 + even(p) * 3 +
            even(p + 1) + even(v) * 2 + even(v + 1) * 4 + even(8 * uint64_t(kPfrepMaxFan) + 2);
 }
 
