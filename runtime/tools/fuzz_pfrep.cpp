@@ -63,7 +63,8 @@ void decodeCompressed(const std::vector<uint8_t>& blob) {
         exercise(model);
 }
 
-// Format 4 against the torus LOD0 (8 x 6 points, 96 triangles), with capped buffers.
+// Format 4 against the torus LOD0 (8 x 6 points, 96 triangles; tests/malformed/lbp/f4_torus.lbp is
+// its format 4 blob, written by PfrepFormat4Test.FuzzTorusSeed), with capped buffers.
 void decodeFormat4(const std::vector<uint8_t>& blob) {
     lodrt::PfrepFormat4Info info;
     if (lodrt::pfrepFormat4Info(blob.data(), blob.size(), &info) != lodrt::Result::Ok) return;
@@ -81,6 +82,17 @@ void decodeFormat4(const std::vector<uint8_t>& blob) {
             const uint32_t c = ((i + 1) % kRing) * kTube + (j + 1) % kTube, d = i * kTube + (j + 1) % kTube;
             triangles.insert(triangles.end(), {a, b, c, a, c, d});
         }
+    // Points renumbered by first use, as format 4 numbers LOD0 (the positions are all distinct).
+    std::vector<uint32_t> id(kRing * kTube, ~0u);
+    std::vector<float> numbered;
+    for (uint32_t& p : triangles) {
+        if (id[p] == ~0u) {
+            id[p] = uint32_t(numbered.size() / 3);
+            numbered.insert(numbered.end(), points.begin() + p * 3, points.begin() + p * 3 + 3);
+        }
+        p = id[p];
+    }
+    points.swap(numbered);
     lodrt::PfrepLod0 lod0;
     lod0.positions = points.data();
     lod0.point_count = kRing * kTube;

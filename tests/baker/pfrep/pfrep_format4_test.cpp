@@ -6,7 +6,10 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstring>
+#include <fstream>
+#include <iterator>
 #include <random>
 #include <vector>
 
@@ -287,6 +290,41 @@ TEST(PfrepFormat4Test, HeaderErrorsAndShortBuffers) {
     EXPECT_EQ(lodrt::pfrepDecodeFormat4(b.coded.data(), b.coded.size(), lod0, out.data(), out.size(), scratch.data(),
                                         info.scratch_bytes, &model),
               lodrt::Result::Ok);
+}
+
+// The pfrep fuzz target's format 4 LOD0: a torus of 8 x 6 points, built as runtime/tools/fuzz_pfrep.cpp
+// builds it (the fuzz target then numbers the points by first use, as chainPoints does).
+lodbake::Mesh fuzzTorus() {
+    constexpr uint32_t kRing = 8, kTube = 6;
+    lodbake::Mesh mesh;
+    for (uint32_t i = 0; i < kRing; ++i)
+        for (uint32_t j = 0; j < kTube; ++j) {
+            const float u = float(i) * 6.2831853f / kRing, v = float(j) * 6.2831853f / kTube;
+            mesh.positions.push_back(lodbake::Vec3f((2.0f + std::cos(v)) * std::cos(u),
+                                                    (2.0f + std::cos(v)) * std::sin(u), std::sin(v)));
+            const uint32_t a = i * kTube + j, b = ((i + 1) % kRing) * kTube + j;
+            const uint32_t c = ((i + 1) % kRing) * kTube + (j + 1) % kTube, d = i * kTube + (j + 1) % kTube;
+            mesh.indices.insert(mesh.indices.end(), {a, b, c, a, c, d});
+        }
+    return mesh;
+}
+
+// The fuzz corpus's format 4 seed (tests/malformed/lbp/f4_torus.lbp) decodes against that LOD0, so
+// the fuzz target and its replay reach the format 4 decoder and the refinement behind it. A fresh
+// seed is written to the build's tests folder (copy it over the corpus file after a format change).
+TEST(PfrepFormat4Test, FuzzTorusSeed) {
+    const Built fresh = buildAndCode(fuzzTorus());
+    ASSERT_FALSE(fresh.coded.empty());
+    ASSERT_EQ(fresh.lod0.points.size(), 48u);
+    std::ofstream(std::string(LODBAKE_TEST_BINARY_DIR) + "/f4_torus.lbp", std::ios::binary)
+        .write(reinterpret_cast<const char*>(fresh.coded.data()), std::streamsize(fresh.coded.size()));
+    std::ifstream in(lodbake_test::sourceDir() + "/tests/malformed/lbp/f4_torus.lbp", std::ios::binary);
+    ASSERT_TRUE(in.good()) << "the fuzz corpus has no format 4 seed";
+    const std::vector<uint8_t> seed((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const Format4Decoded d = decode4(seed, fresh.lod0.view());
+    ASSERT_EQ(d.result, lodrt::Result::Ok) << lodrt::resultName(d.result);
+    EXPECT_EQ(d.model.vertex_count, 48u);
+    EXPECT_GT(d.model.removed_count, 0u);
 }
 
 } // namespace
