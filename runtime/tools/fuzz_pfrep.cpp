@@ -1,8 +1,11 @@
 // libFuzzer target for the PFRep reader (lodrt/pfrep.h): open (whole, and as a prefix that then
 // grows to the whole input), then every extraction and refinement entry point on whatever opened;
-// a format 3 input is decoded (pfrepDecompress) and the result exercised the same way.
+// a format 3 input is decoded (pfrepDecompress) and the result exercised the same way; a format 4
+// input is decoded (pfrepDecodeFormat4) against a generated LOD0 (a torus of 8 x 6 points, the LOD0
+// of the format 4 seeds) and exercised.
 // Build with -DLODRT_BUILD_FUZZERS=ON and Clang; run as `lodrt_fuzz_pfrep CORPUS_DIR` (blobs written
 // by `lodbake pfrep` make a good seed corpus).
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -60,10 +63,54 @@ void decodeCompressed(const std::vector<uint8_t>& blob) {
         exercise(model);
 }
 
+// Format 4 against the torus LOD0 (8 x 6 points, 96 triangles; tests/malformed/lbp/f4_torus.lbp is
+// its format 4 blob, written by PfrepFormat4Test.FuzzTorusSeed), with capped buffers.
+void decodeFormat4(const std::vector<uint8_t>& blob) {
+    lodrt::PfrepFormat4Info info;
+    if (lodrt::pfrepFormat4Info(blob.data(), blob.size(), &info) != lodrt::Result::Ok) return;
+    if (info.decoded_bytes > (64u << 20) || info.scratch_bytes > (256u << 20)) return;
+    constexpr uint32_t kRing = 8, kTube = 6;
+    std::vector<float> points;
+    std::vector<uint32_t> triangles;
+    for (uint32_t i = 0; i < kRing; ++i)
+        for (uint32_t j = 0; j < kTube; ++j) {
+            const float u = float(i) * 6.2831853f / kRing, v = float(j) * 6.2831853f / kTube;
+            points.push_back((2.0f + std::cos(v)) * std::cos(u));
+            points.push_back((2.0f + std::cos(v)) * std::sin(u));
+            points.push_back(std::sin(v));
+            const uint32_t a = i * kTube + j, b = ((i + 1) % kRing) * kTube + j;
+            const uint32_t c = ((i + 1) % kRing) * kTube + (j + 1) % kTube, d = i * kTube + (j + 1) % kTube;
+            triangles.insert(triangles.end(), {a, b, c, a, c, d});
+        }
+    // Points renumbered by first use, as format 4 numbers LOD0 (the positions are all distinct).
+    std::vector<uint32_t> id(kRing * kTube, ~0u);
+    std::vector<float> numbered;
+    for (uint32_t& p : triangles) {
+        if (id[p] == ~0u) {
+            id[p] = uint32_t(numbered.size() / 3);
+            numbered.insert(numbered.end(), points.begin() + p * 3, points.begin() + p * 3 + 3);
+        }
+        p = id[p];
+    }
+    points.swap(numbered);
+    lodrt::PfrepLod0 lod0;
+    lod0.positions = points.data();
+    lod0.point_count = kRing * kTube;
+    lod0.triangles = triangles.data();
+    lod0.triangle_count = uint32_t(triangles.size() / 3);
+    std::vector<uint8_t> decoded(info.decoded_bytes);
+    std::vector<uint64_t> scratch((info.scratch_bytes + 7) / 8);
+    lodrt::PfrepModel model;
+    if (lodrt::pfrepDecodeFormat4(blob.data(), blob.size(), lod0, decoded.data(), decoded.size(), scratch.data(),
+                                  info.scratch_bytes, &model) == lodrt::Result::Ok)
+        exercise(model);
+}
+
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     // The reader copies nothing; a copy of exactly `size` bytes lets ASan see any read past the end.
     std::vector<uint8_t> blob(data, data + size);
     decodeCompressed(blob);
+    decodeFormat4(blob);
     lodrt::PfrepModel model;
     if (lodrt::openPfrep(blob.data(), blob.size(), &model) == lodrt::Result::Ok) exercise(model);
     // Streaming: a prefix (cut where the last byte says), then the rest arriving in a moved buffer.

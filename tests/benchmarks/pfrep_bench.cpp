@@ -11,7 +11,11 @@
 //   5. --format3: format 3 (compressed) on the six scans of issue 30: bytes per vertex of format 2 and
 //      format 3 (bar: <= 6, must <= 10), whole-blob decode speed (bar: >= 30 M vertices/s, thread
 //      CPU, best of 3), and the decoded blob compared with format 2 byte for byte.
-// usage: pfrep_bench [--quick | --refine | --quality | --format3 | --shared MESH] [--check]
+//   6. --format4: format 3 and format 4 (coded against LOD0's points and triangles, which the decoder
+//      is given) of the same blobs on the same six scans, in one run: bytes per vertex and whole-blob
+//      decode speed of each (thread CPU, best of 3); format 4's encoder checks its decoded table
+//      against the builder's (records, triangles and dependencies of every entry).
+// usage: pfrep_bench [--quick | --refine | --quality | --format3 | --format4 [MESH...] | --shared MESH] [--check]
 //   quick: skips the largest scans in part 1 (part 2 then runs on igea) and part 4; refine: part 3 only;
 //   --check: exit 1 when a bar is not met.
 #include <algorithm>
@@ -351,6 +355,122 @@ int format3(bool check) {
     return bars.finish(check);
 }
 
+// Best-of-3 thread CPU seconds of `decode`, which returns whether it succeeded.
+template <class F> double bestOf3(F decode, bool& ok) {
+    double best = HUGE_VAL;
+    ok = true;
+    for (int rep = 0; rep < 3; ++rep) {
+        const double t0 = threadCpuSeconds();
+        ok &= decode();
+        best = std::min(best, threadCpuSeconds() - t0);
+    }
+    return best;
+}
+
+// --format4: format 3 and format 4 of the same blobs (own half-edge pass), side by side.
+int format4(bool check, std::vector<std::string> scans) {
+    lodbake_bench::Bars bars("pfrep_bench");
+    using lodbake_bench::Limit;
+    double worst = -1, slowest = HUGE_VAL;
+    std::string worst_name, slowest_name;
+    bool all_ok = true;
+    size_t measured = 0;
+    if (scans.empty())
+        scans = {"bunny_zipper.ply", "igea.ply", "lucy100k.ply", "nefertiti.obj", "dragon_poisson.ply",
+                 "dragon_stand_merged.ply"};
+    for (const std::string& name : scans) {
+        lodbake::Mesh mesh;
+        if (!load(name, mesh)) continue;
+        lodbake::PfrepBuild build;
+        double seconds = 0;
+        if (!bake(mesh, build, seconds)) continue;
+        std::vector<lodbake::Vec3f> points;
+        std::vector<uint32_t> triangles;
+        if (!lodbake::chainPoints(mesh, points, triangles).ok()) continue;
+        auto f3 = lodbake::compressPfrep(build.blob);
+        // The same blob coded against LOD0's points rounded to a 14-bit grid over their box (what a
+        // pack's quantized LOD0 stream would hand the decoder): the positions' differences cost more.
+        std::vector<lodbake::Vec3f> rounded = points;
+        {
+            lodbake::Vec3f lo = points[0], hi = points[0];
+            for (const lodbake::Vec3f& p : points)
+                for (int a = 0; a < 3; ++a) {
+                    lo[a] = std::min(lo[a], p[a]);
+                    hi[a] = std::max(hi[a], p[a]);
+                }
+            for (lodbake::Vec3f& p : rounded)
+                for (int a = 0; a < 3; ++a) {
+                    const float step = (hi[a] - lo[a]) / 16383.0f;
+                    if (step > 0) p[a] = lo[a] + std::round((p[a] - lo[a]) / step) * step;
+                }
+        }
+        auto f4_rounded = lodbake::compressPfrepFormat4(build, rounded, triangles);
+        double t0 = threadCpuSeconds();
+        auto f4 = lodbake::compressPfrepFormat4(build, points, triangles);
+        const double encode4 = threadCpuSeconds() - t0;
+        if (!f3.ok() || !f4.ok()) {
+            std::printf("  %s: %s\n", name.c_str(), (!f3.ok() ? f3.status() : f4.status()).message().c_str());
+            all_ok = false;
+            continue;
+        }
+        lodrt::PfrepCompressedInfo info3;
+        lodrt::PfrepFormat4Info info4;
+        if (lodrt::pfrepCompressedInfo(f3->data(), f3->size(), &info3) != lodrt::Result::Ok ||
+            lodrt::pfrepFormat4Info(f4->data(), f4->size(), &info4) != lodrt::Result::Ok)
+            continue;
+        std::vector<uint8_t> out3(info3.decoded_bytes), out4(info4.decoded_bytes);
+        std::vector<uint64_t> scratch3((info3.scratch_bytes + 7) / 8), scratch4((info4.scratch_bytes + 7) / 8);
+        lodrt::PfrepLod0 lod0;
+        lod0.positions = &points[0].x;
+        lod0.point_count = uint32_t(points.size());
+        lod0.triangles = triangles.data();
+        lod0.triangle_count = uint32_t(triangles.size() / 3);
+        bool ok3 = false, ok4 = false;
+        const double s3 = bestOf3([&] {
+            lodrt::PfrepModel m;
+            return lodrt::pfrepDecompress(f3->data(), f3->size(), out3.data(), out3.size(), scratch3.data(),
+                                          info3.scratch_bytes, &m) == lodrt::Result::Ok;
+        }, ok3);
+        const double s4 = bestOf3([&] {
+            lodrt::PfrepModel m;
+            return lodrt::pfrepDecodeFormat4(f4->data(), f4->size(), lod0, out4.data(), out4.size(), scratch4.data(),
+                                             info4.scratch_bytes, &m) == lodrt::Result::Ok;
+        }, ok4);
+        all_ok &= ok3 && ok4;
+        ++measured;
+        const double vertices = double(build.rank_point.size());
+        const double per3 = double(f3->size()) / vertices, per4 = double(f4->size()) / vertices;
+        if (per4 > worst) {
+            worst = per4;
+            worst_name = name;
+        }
+        if (vertices / s4 / 1e6 < slowest) {
+            slowest = vertices / s4 / 1e6;
+            slowest_name = name;
+        }
+        std::printf("  %-24s V %8zu  format 3 %9zu bytes (%.2f B/vertex, decode %.1f ms, %.2f M vertices/s)  "
+                    "format 4 %9zu bytes (%.2f B/vertex, decode %.1f ms, %.2f M vertices/s; encode %.2f s; scratch "
+                    "%.0f B/vertex)  against a 14-bit LOD0 %zu bytes (%.2f B/vertex)  %s\n",
+                    name.c_str(), build.rank_point.size(), f3->size(), per3, s3 * 1e3, vertices / s3 / 1e6,
+                    f4->size(), per4, s4 * 1e3, vertices / s4 / 1e6, encode4, double(info4.scratch_bytes) / vertices,
+                    f4_rounded.ok() ? f4_rounded->size() : size_t(0),
+                    f4_rounded.ok() ? double(f4_rounded->size()) / vertices : 0.0,
+                    ok3 && ok4 && f4_rounded.ok() ? "both decode" : "DECODE FAILED");
+        all_ok &= f4_rounded.ok();
+    }
+    if (measured < scans.size()) {
+        bars.unmeasured("format 4 bytes per vertex", 6, Limit::AtMost, false);
+        bars.unmeasured("format 4 decode M vertices/s", 30, Limit::AtLeast, false);
+    } else {
+        bars.absolute("format 4 bytes per vertex (worst: " + worst_name + ", " + std::to_string(scans.size()) + " scans; must <= 10)", worst, 6,
+                      Limit::AtMost);
+        bars.absolute("format 4 whole-blob decode M vertices/s, thread CPU (slowest: " + slowest_name + ")", slowest,
+                      30, Limit::AtLeast);
+    }
+    bars.absolute("format 4 scans not coding or decoding", all_ok ? 0 : 1, 0, Limit::AtMost);
+    return bars.finish(check);
+}
+
 } // namespace
 
 int main(int argc, char** argv) {
@@ -362,6 +482,8 @@ int main(int argc, char** argv) {
     const bool refine_only = argc > 1 && std::strcmp(argv[1], "--refine") == 0;
     if (argc > 1 && std::strcmp(argv[1], "--quality") == 0) return qualityVariants();
     if (argc > 1 && std::strcmp(argv[1], "--format3") == 0) return format3(check);
+    if (argc > 1 && std::strcmp(argv[1], "--format4") == 0)
+        return format4(check, std::vector<std::string>(argv + 2, argv + argc)); // scans (default: the six)
     // Refinement knobs: --frame-budget N (mask bits changed per frame over all instances, in a
     // rotating instance order; 0 = none), --cull-band R (PfrepView::cull_hysteresis, radians).
     // --interleave N: instance i is refined on frames where (i + frame) % N == 0 (N = 1: every frame).

@@ -795,6 +795,8 @@ Result<PfrepBuild> buildBlob(const CollapseSequence& sequence, const std::vector
     LODBAKE_RETURN_IF_ERROR(writeEntries(state, build));
     LODBAKE_RETURN_IF_ERROR(writeBlob(state, build));
 
+    build.rank_kept.resize(removed);
+    for (uint32_t r = 0; r < removed; ++r) build.rank_kept[r] = sequence.records[r].kept_point;
     build.rank_point = std::move(rank_point);
     build.removed = removed;
     build.level0_triangles = state.level0;

@@ -3,12 +3,14 @@
 #include "lodbake/pfrep/pfrep_compress.h"
 
 #include <algorithm>
+#include <array>
 #include <cstring>
 #include <memory>
 #include <string>
 
 #include "codec/range_encoder.h"
 #include "lodrt/detail/pfrep_codec.h"
+#include "lodrt/detail/pfrep_codec4.h"
 #include "lodrt/format.h"
 #include "lodrt/pfrep.h"
 
@@ -38,6 +40,10 @@ struct EncodeCoder {
     }
     uint64_t uint(lodrt::detail::PfrepUintModel& model, uint64_t v) {
         enc.uint(model.klass, model.top, v);
+        return v;
+    }
+    uint32_t direct(uint32_t v, uint32_t count) {
+        enc.direct(v, count);
         return v;
     }
     bool failed() const { return false; }
@@ -197,6 +203,143 @@ Result<std::vector<uint8_t>> compressPfrep(const std::vector<uint8_t>& blob) {
         lodrt::pfrepDecompress(out.data(), out.size(), decoded.data(), decoded.size(), scratch.data(), scratch.size() * 8, &check);
     if (r != lodrt::Result::Ok || decoded != blob)
         return internalError(std::string("pfrep: format 3 does not decode to its blob: ") + lodrt::resultName(r));
+    return out;
+}
+
+namespace {
+
+// A validated format 2 blob's entries and records by rank.
+struct BlobView {
+    const std::vector<uint8_t>& blob;
+    const lodrt::PfrepModel& model;
+    uint32_t blockOffset(uint32_t b) const { return load32(blob.data() + fmt::kPfrepHeaderSize + size_t(b) * 4); }
+    uint32_t blockCount(uint32_t b) const {
+        return uint32_t(std::min<uint64_t>(uint64_t(b + 1) << model.block_shift, model.vertex_count) -
+                        (uint64_t(b) << model.block_shift));
+    }
+    const uint8_t* record(uint32_t i) const {
+        const uint32_t b = i >> model.block_shift;
+        return blob.data() + blockOffset(b) + size_t(i - (b << model.block_shift)) * fmt::kPfrepVertexRecordSize;
+    }
+    const uint8_t* entry(uint32_t i) const {
+        const uint32_t b = i >> model.block_shift, count = blockCount(b);
+        const uint8_t* rel = blob.data() + blockOffset(b) + size_t(count) * fmt::kPfrepVertexRecordSize;
+        return rel + size_t(count) * 2 + lodrt::detail::pfrepLoad16(rel + 2 * (i - (b << model.block_shift)));
+    }
+};
+
+// Entry i's triangles as (a, b, dependency) triples, sorted: what levels and refinement read of it.
+bool entryTriangles(const BlobView& view, uint32_t i, PfrepEntry& e, std::vector<std::array<uint32_t, 3>>& out) {
+    if (!parseEntry(view.entry(i), i, e)) return false;
+    out.clear();
+    for (uint32_t k = 0; k < e.n; ++k)
+        if (e.groups[k] != 0)
+            out.push_back({e.neighbours[k], e.neighbours[(k + 1) % e.n],
+                           e.groups[k] == 1 ? lodrt::detail::kNone : e.dependencies[e.groups[k] - 2]});
+    std::sort(out.begin(), out.end());
+    return true;
+}
+
+// The decoded format 4 blob against the builder's: same counts, records, and entry triangles.
+Status compareTables(const std::vector<uint8_t>& built, const lodrt::PfrepModel& built_model,
+                     const std::vector<uint8_t>& decoded, const lodrt::PfrepModel& decoded_model) {
+    if (built_model.vertex_count != decoded_model.vertex_count ||
+        built_model.removed_count != decoded_model.removed_count ||
+        built_model.level0_triangles != decoded_model.level0_triangles)
+        return internalError("pfrep: format 4 decodes to other counts");
+    const BlobView a{built, built_model}, b{decoded, decoded_model};
+    std::vector<uint32_t> na(lodrt::detail::kPfrepMaxFan), da(lodrt::detail::kPfrepMaxDependencies),
+        ga(lodrt::detail::kPfrepMaxFan), nb(na.size()), db(da.size()), gb(ga.size());
+    PfrepEntry ea, eb;
+    ea.neighbours = na.data();
+    ea.dependencies = da.data();
+    ea.groups = ga.data();
+    eb.neighbours = nb.data();
+    eb.dependencies = db.data();
+    eb.groups = gb.data();
+    std::vector<std::array<uint32_t, 3>> ta, tb;
+    for (uint32_t i = 0; i < built_model.vertex_count; ++i) {
+        if (std::memcmp(a.record(i), b.record(i), fmt::kPfrepVertexRecordSize) != 0)
+            return internalError("pfrep: format 4 decodes vertex " + std::to_string(i) + " to another record");
+        if (!entryTriangles(a, i, ea, ta) || !entryTriangles(b, i, eb, tb) || ta != tb)
+            return internalError("pfrep: format 4 decodes entry " + std::to_string(i) + " to other triangles");
+    }
+    return Status::okStatus();
+}
+
+} // namespace
+
+Result<std::vector<uint8_t>> compressPfrepFormat4(const PfrepBuild& build, const std::vector<Vec3f>& points,
+                                                  const std::vector<uint32_t>& triangles) {
+    namespace d = lodrt::detail;
+    lodrt::PfrepModel model;
+    const lodrt::Result opened = lodrt::openPfrep(build.blob.data(), build.blob.size(), &model);
+    if (opened != lodrt::Result::Ok)
+        return invalidInput(std::string("pfrep: format 2 blob: ") + lodrt::resultName(opened));
+    if (triangles.size() % 3 != 0 || points.size() >= fmt::kPfrepMaxVertices || triangles.size() / 3 > 0xFFFFFFFFu ||
+        build.rank_point.size() != model.vertex_count || build.rank_kept.size() != model.removed_count ||
+        build.stored_triangles > 0xFFFFFFFFu)
+        return invalidInput("pfrep: format 4: the build does not match its blob or LOD0");
+    d::Pfrep4State s;
+    s.h.vertex_count = model.vertex_count;
+    s.h.removed_count = model.removed_count;
+    s.h.point_count = uint32_t(points.size());
+    s.h.level0_triangles = uint32_t(triangles.size() / 3);
+    s.h.stored_triangles = uint32_t(build.stored_triangles);
+    for (int a = 0; a < 3; ++a) {
+        s.h.position_min[a] = model.position_min[a];
+        s.h.position_step[a] = model.position_step[a];
+    }
+    s.h.error_unit = model.error_unit;
+    s.lod0.positions = points.empty() ? nullptr : &points[0].x;
+    s.lod0.triangles = triangles.data();
+    s.lod0.point_count = s.h.point_count;
+    s.lod0.triangle_count = s.h.level0_triangles;
+    std::vector<uint64_t> scratch((d::pfrep4ScratchValues(s.h) + 1) / 2);
+    d::Pfrep4Models* models = d::pfrep4Carve(s, reinterpret_cast<uint32_t*>(scratch.data()));
+    models->init();
+    const BlobView view{build.blob, model};
+    std::vector<uint8_t> records(size_t(model.vertex_count) * fmt::kPfrepVertexRecordSize);
+    for (uint32_t i = 0; i < model.vertex_count; ++i)
+        std::memcpy(&records[size_t(i) * fmt::kPfrepVertexRecordSize], view.record(i), fmt::kPfrepVertexRecordSize);
+    EncodeCoder c;
+    if (!d::pfrep4LoadLod0(s) || !d::pfrep4CodeRemovals(c, *models, s, build.rank_point.data(), build.rank_kept.data()))
+        return invalidInput("pfrep: format 4: the removal sequence does not replay on LOD0");
+    if (!d::pfrep4BuildSlots(s) || !d::pfrep4Layout(s))
+        return invalidInput("pfrep: format 4: the replayed table does not fit format 2");
+    s.h.decoded_size = uint32_t(s.layout_size);
+    std::vector<uint8_t> rebuilt(s.h.decoded_size, 0);
+    if (!d::pfrep4CodeRecords(c, *models, s, records.data(), rebuilt.data()))
+        return invalidInput("pfrep: format 4: a record is not codable");
+    std::vector<uint8_t> out(fmt::kPfrepHeaderSize, 0);
+    store32(out.data(), fmt::kPfrepMagic);
+    store32(out.data() + 4, fmt::kPfrepVersionLod0);
+    store32(out.data() + 8, s.h.vertex_count);
+    store32(out.data() + 12, s.h.removed_count);
+    store32(out.data() + 16, s.h.point_count);
+    store32(out.data() + 20, s.h.level0_triangles);
+    std::memcpy(out.data() + 24, build.blob.data() + 24, 28); // position_min, position_step, error_unit
+    store32(out.data() + 52, s.h.decoded_size);
+    store32(out.data() + 56, s.h.stored_triangles);
+    const std::vector<uint8_t> coded = c.enc.finish();
+    out.insert(out.end(), coded.begin(), coded.end());
+    // Decode it again and compare with the builder's table.
+    lodrt::PfrepFormat4Info info;
+    if (lodrt::pfrepFormat4Info(out.data(), out.size(), &info) != lodrt::Result::Ok)
+        return internalError("pfrep: format 4 header does not read back");
+    std::vector<uint8_t> decoded(info.decoded_bytes);
+    std::vector<uint64_t> decode_scratch((info.scratch_bytes + 7) / 8);
+    lodrt::PfrepLod0 lod0;
+    lod0.positions = s.lod0.positions;
+    lod0.point_count = s.h.point_count;
+    lod0.triangles = triangles.data();
+    lod0.triangle_count = s.h.level0_triangles;
+    lodrt::PfrepModel check;
+    const lodrt::Result r = lodrt::pfrepDecodeFormat4(out.data(), out.size(), lod0, decoded.data(), decoded.size(),
+                                                      decode_scratch.data(), info.scratch_bytes, &check);
+    if (r != lodrt::Result::Ok)
+        return internalError(std::string("pfrep: format 4 does not decode: ") + lodrt::resultName(r));
+    LODBAKE_RETURN_IF_ERROR(compareTables(build.blob, model, decoded, check));
     return out;
 }
 

@@ -94,6 +94,14 @@ constexpr uint32_t kPfrepMaxExpansion = 64;
 constexpr uint32_t kPfrepMentionSlots = 8;         // latest mentioners of a vertex kept
 constexpr uint32_t kPfrepCandidateLimit = 256;     // neighbour candidates of a vertex
 constexpr uint32_t kPfrepCandidateScanLimit = 4096; // fan values scanned for them
+// PFRep format 4 (docs/format/pfrep.md "Format 4"): the table coded against LOD0's points and
+// triangles, which the decoder is given. Header as version 2 except bytes 16 (point_count: LOD0's
+// points), 52 (the format 2 blob_size it decodes to) and 56 (stored_triangles), then one
+// range-coded stream (lodrt/detail/pfrep_codec4.h) to the end of the blob.
+constexpr uint32_t kPfrepVersionLod0 = 4;
+// Format 4 headers claiming more stored triangles than this many times LOD0's are refused (a
+// half-edge sequence stores about 2.6 times as many).
+constexpr uint32_t kPfrepMaxStoredPerLevel0 = 16;
 // Compressed mesh (.lbm), docs/format/valence.md. Little-endian header of kValenceHeaderSize bytes,
 // then the connectivity, position and normal streams, back to back; the position and normal streams
 // each have a range-coded part followed by a raw bit part (the low mantissa bits of the residuals).

@@ -100,6 +100,39 @@ LODRT_API Result pfrepCompressedInfo(const void* data, size_t size, PfrepCompres
 LODRT_API Result pfrepDecompress(const void* data, size_t size, void* out, size_t out_capacity, void* scratch,
                                  size_t scratch_bytes, PfrepModel* model);
 
+// ---- Format 4 (coded against LOD0; docs/format/pfrep.md "Format 4"). ----
+// A format 4 blob holds only the removal sequence and the criterion codes; the decoder is given
+// LOD0's points and triangles (numbered as the format says), replays the removals and writes a
+// format 2 blob with the same levels, fans' triangles, dependencies and records, which then opens
+// as any format 2 blob. Every byte (and LOD0) is treated as hostile.
+
+/// LOD0 as a format 4 decoder needs it: point_count points (3 floats each) and triangle_count
+/// triangles (3 point ids each, no repeated point).
+struct PfrepLod0 {
+    const float* positions = nullptr;
+    uint32_t point_count = 0;
+    const uint32_t* triangles = nullptr;
+    uint32_t triangle_count = 0;
+};
+
+struct PfrepFormat4Info {
+    uint32_t vertex_count = 0;
+    uint32_t point_count = 0;     // LOD0's points the blob refers to
+    uint32_t level0_triangles = 0; // LOD0's triangles
+    uint32_t decoded_bytes = 0;   // size of the format 2 blob it decodes to
+    size_t scratch_bytes = 0;     // scratch pfrepDecodeFormat4 needs (8-byte aligned)
+};
+
+/// Reads the header of a format 4 blob (its first format::kPfrepHeaderSize bytes are enough):
+/// Truncated / BadMagic / UnsupportedVersion / BadStructure.
+LODRT_API Result pfrepFormat4Info(const void* data, size_t size, PfrepFormat4Info* info);
+
+/// Decodes a format 4 blob data[0, size) against `lod0` into out[0, info.decoded_bytes) and opens
+/// the result as openPfrep does. BufferTooSmall for short buffers; BadStructure when lod0 does not
+/// match the header or is malformed; CorruptStream / Truncated on a bad stream.
+LODRT_API Result pfrepDecodeFormat4(const void* data, size_t size, const PfrepLod0& lod0, void* out,
+                                    size_t out_capacity, void* scratch, size_t scratch_bytes, PfrepModel* model);
+
 /// Dequantized positions of every vertex (3 floats each) into `out` of `capacity` floats
 /// (needs 3 * vertex_count). Vertices not loaded yet get 0.
 LODRT_API Result pfrepDecodePositions(const PfrepModel& model, float* out, size_t capacity);

@@ -32,6 +32,7 @@ struct PfrepOptions {
 struct PfrepBuild {
     std::vector<uint8_t> blob;
     std::vector<uint32_t> rank_point;  // point id (CollapseSequence::point_positions) of every blob vertex
+    std::vector<uint32_t> rank_kept;   // per removed rank: the point it collapsed into (format 4)
     size_t removed = 0;                // vertices removable in order (the collapses recorded)
     size_t level0_triangles = 0;       // triangles of the full-detail mesh
     size_t stored_triangles = 0;       // every triangle that ever exists in the sequence

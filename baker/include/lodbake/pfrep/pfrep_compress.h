@@ -4,7 +4,9 @@
 #include <cstdint>
 #include <vector>
 
+#include "lodbake/core/mesh.h"
 #include "lodbake/core/status.h"
+#include "lodbake/pfrep/pfrep_builder.h"
 
 namespace lodbake {
 
@@ -13,5 +15,13 @@ namespace lodbake {
 /// to exactly `blob`. InvalidInput for a blob that is not valid or not canonical (an entry not
 /// written the way the builder writes it: smallest widths, one group per slot).
 Result<std::vector<uint8_t>> compressPfrep(const std::vector<uint8_t>& blob);
+
+/// Codes `build` as format 4 (docs/format/pfrep.md "Format 4"): its removal sequence and criterion
+/// codes, against LOD0's `points` and `triangles` (3 point ids each) numbered as the sequence numbers
+/// them (chainPoints of LOD0). The result is decoded again (lodrt::pfrepDecodeFormat4) and compared
+/// with build.blob: same vertices, records, and triangles and dependencies at every entry.
+/// InvalidInput when the build does not fit LOD0 or format 4 cannot hold it.
+Result<std::vector<uint8_t>> compressPfrepFormat4(const PfrepBuild& build, const std::vector<Vec3f>& points,
+                                                  const std::vector<uint32_t>& triangles);
 
 } // namespace lodbake
