@@ -23,20 +23,14 @@
 #include "lodbake/ooc/driver.h"
 #include "lodbake/ooc/partition_build.h"
 #include "lodbake/simplify/simplify.h"
-#include "scansim.h"
-#include "test_paths.h"
+#include "ooc_scans.h"
 
 namespace fs = std::filesystem;
 using namespace lodbake::ooc;
 
 namespace {
 
-std::string levelErrorDir(const std::string& name) {
-    const std::string dir = lodbake_test::scratchDir() + "/level_error/" + name;
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-    return dir;
-}
+std::string levelErrorDir(const std::string& name) { return lodbake_test::freshOocDir("level_error", name); }
 
 struct LevelFixture {
     std::string dir;
@@ -47,29 +41,11 @@ struct LevelFixture {
 
 // A generated scan cut into partitions of about 12,000 triangles (small reader buffers, a 3 MiB limit).
 LevelFixture levelFixture(const std::string& name, uint64_t triangles) {
+    lodbake_test::PartitionedScan scan = lodbake_test::partitionedScan(levelErrorDir(name), triangles);
     LevelFixture f;
-    f.dir = levelErrorDir(name);
-    lodbake::scansim::SurfaceOptions so;
-    so.triangles = triangles;
-    const std::string scan = f.dir + "/scan.ply";
-    EXPECT_TRUE(lodbake::scansim::writeSurfacePly(so, scan).ok());
-    lodbake::Diagnostics d;
-    auto input = lodbake::readMesh(scan, lodbake::ReadOptions(), d);
-    EXPECT_TRUE(input.ok());
-    if (input.ok()) f.input = std::move(input->mesh);
-    PartitionOptions o;
-    o.work_dir = f.dir + "/parts";
-    o.threads = 1;
-    o.read.buffer_bytes = 64 << 10;
-    o.read.max_record_bytes = 256 << 10;
-    o.read.vertex_chunk = 4096;
-    o.read.triangle_chunk = 4096;
-    o.sample_cap = 4096;
-    o.memory_limit_bytes = uint64_t(3) << 20;
-    auto set = partitionMesh(scan, o, d);
-    EXPECT_TRUE(set.ok()) << set.status().message();
-    if (!set.ok()) return f;
-    f.set = std::move(*set);
+    f.dir = scan.dir;
+    f.input = std::move(scan.input);
+    f.set = std::move(scan.set);
     f.partition_order.positions.resize(f.set.vertex_count);
     for (const PartitionFile& p : f.set.partitions) {
         auto data = readPartitionFile(p.path);

@@ -19,8 +19,7 @@
 #include "lodbake/io/mesh_io.h"
 #include "lodbake/ooc/partition.h"
 #include "lodbake/ooc/partition_build.h"
-#include "scansim.h"
-#include "test_paths.h"
+#include "ooc_scans.h"
 
 namespace fs = std::filesystem;
 using namespace lodbake::ooc;
@@ -28,45 +27,10 @@ using lodbake_test::PositionIds;
 
 namespace {
 
-std::string freshDir(const std::string& name) {
-    const std::string dir = lodbake_test::scratchDir() + "/partition_build/" + name;
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-    return dir;
-}
-
-// A generated scan of `triangles` triangles cut into a few partitions (small reader buffers and a
-// 4 MiB limit on one thread give leaves of about 12,000 triangles).
-struct Fixture {
-    std::string dir;
-    lodbake::Mesh input;
-    PartitionSet set;
-};
+using Fixture = lodbake_test::PartitionedScan;
 
 Fixture partitioned(const std::string& name, uint64_t triangles, uint64_t limit = uint64_t(3) << 20) {
-    Fixture f;
-    f.dir = freshDir(name);
-    lodbake::scansim::SurfaceOptions so;
-    so.triangles = triangles;
-    const std::string scan = f.dir + "/scan.ply";
-    EXPECT_TRUE(lodbake::scansim::writeSurfacePly(so, scan).ok());
-    lodbake::Diagnostics d;
-    auto input = lodbake::readMesh(scan, lodbake::ReadOptions(), d);
-    EXPECT_TRUE(input.ok());
-    if (input.ok()) f.input = std::move(input->mesh);
-    PartitionOptions o;
-    o.work_dir = f.dir + "/parts";
-    o.threads = 1;
-    o.read.buffer_bytes = 64 << 10;
-    o.read.max_record_bytes = 256 << 10;
-    o.read.vertex_chunk = 4096;
-    o.read.triangle_chunk = 4096;
-    o.sample_cap = 4096;
-    o.memory_limit_bytes = limit;
-    auto set = partitionMesh(scan, o, d);
-    EXPECT_TRUE(set.ok()) << set.status().message();
-    if (set.ok()) f.set = std::move(*set);
-    return f;
+    return lodbake_test::partitionedScan(lodbake_test::freshOocDir("partition_build", name), triangles, limit);
 }
 
 PartitionBuildOptions buildOptions(const std::string& work) {

@@ -22,8 +22,7 @@
 #include "lodbake/ooc/partition.h"
 #include "lodbake/ooc/partition_build.h"
 #include "lodbake/ooc/partition_merge.h"
-#include "scansim.h"
-#include "test_paths.h"
+#include "ooc_scans.h"
 
 namespace fs = std::filesystem;
 using namespace lodbake::ooc;
@@ -31,12 +30,7 @@ using lodbake_test::PositionIds;
 
 namespace {
 
-std::string freshDir(const std::string& name) {
-    const std::string dir = lodbake_test::scratchDir() + "/partition_merge/" + name;
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-    return dir;
-}
+std::string freshDir(const std::string& name) { return lodbake_test::freshOocDir("partition_merge", name); }
 
 // A generated scan cut into partitions (small reader buffers and a small limit on one thread give
 // leaves of about 12,000 triangles at 3 MiB), each built by the partition job to kLevelsPerJob
@@ -49,38 +43,9 @@ struct Fixture {
 };
 
 Fixture built(const std::string& name, uint64_t triangles, uint64_t limit = uint64_t(3) << 20) {
-    Fixture f;
-    f.dir = freshDir(name);
-    lodbake::scansim::SurfaceOptions so;
-    so.triangles = triangles;
-    const std::string scan = f.dir + "/scan.ply";
-    EXPECT_TRUE(lodbake::scansim::writeSurfacePly(so, scan).ok());
-    lodbake::Diagnostics d;
-    auto input = lodbake::readMesh(scan, lodbake::ReadOptions(), d);
-    EXPECT_TRUE(input.ok());
-    if (input.ok()) f.input = std::move(input->mesh);
-    PartitionOptions o;
-    o.work_dir = f.dir + "/parts";
-    o.threads = 1;
-    o.read.buffer_bytes = 64 << 10;
-    o.read.max_record_bytes = 256 << 10;
-    o.read.vertex_chunk = 4096;
-    o.read.triangle_chunk = 4096;
-    o.sample_cap = 4096;
-    o.memory_limit_bytes = limit;
-    auto set = partitionMesh(scan, o, d);
-    EXPECT_TRUE(set.ok()) << set.status().message();
-    if (!set.ok()) return f;
-    f.set = std::move(*set);
-    PartitionBuildOptions bo;
-    bo.work_dir = f.dir + "/lods";
-    bo.memory_limit_bytes = uint64_t(64) << 20;
-    if (f.set.partitions.size() > 1) bo.cluster.max_levels = kLevelsPerJob;
-    for (const PartitionFile& pf : f.set.partitions) {
-        auto lod = buildPartition(pf.path, bo, d);
-        EXPECT_TRUE(lod.ok()) << lod.status().message();
-        if (lod.ok()) f.lods.push_back(lod->path);
-    }
+    lodbake_test::PartitionedScan scan = lodbake_test::partitionedScan(freshDir(name), triangles, limit);
+    Fixture f{scan.dir, std::move(scan.input), std::move(scan.set), {}};
+    f.lods = lodbake_test::buildLeafLods(f.set, f.dir + "/lods");
     return f;
 }
 

@@ -19,41 +19,20 @@
 #include "lodbake/core/file_io.h"
 #include "lodbake/io/mesh_io.h"
 #include "lodbake/ooc/partition.h"
-#include "scansim.h"
-#include "test_paths.h"
+#include "ooc_scans.h"
 
 namespace fs = std::filesystem;
 using namespace lodbake::ooc;
 
 namespace {
 
-std::string freshDir(const std::string& name) {
-    const std::string dir = lodbake_test::scratchDir() + "/partition/" + name;
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-    return dir;
-}
+std::string freshDir(const std::string& name) { return lodbake_test::freshOocDir("partition", name); }
 
-std::string makeScan(const std::string& dir, uint64_t triangles) {
-    lodbake::scansim::SurfaceOptions o;
-    o.triangles = triangles;
-    const std::string path = dir + "/scan.ply";
-    EXPECT_TRUE(lodbake::scansim::writeSurfacePly(o, path).ok());
-    return path;
-}
+std::string makeScan(const std::string& dir, uint64_t triangles) { return lodbake_test::writeGeneratedScan(dir, triangles); }
 
 // Small buffers so that a few-MiB limit gives several partitions of a 40,000-triangle scan.
 PartitionOptions smallOptions(const std::string& work, int threads) {
-    PartitionOptions o;
-    o.work_dir = work;
-    o.threads = threads;
-    o.read.buffer_bytes = 64 << 10;
-    o.read.max_record_bytes = 256 << 10;
-    o.read.vertex_chunk = 4096;
-    o.read.triangle_chunk = 4096;
-    o.sample_cap = 4096;
-    o.memory_limit_bytes = uint64_t(4) << 20;
-    return o;
+    return lodbake_test::smallPartitionOptions(work, threads, uint64_t(4) << 20);
 }
 
 using Tri = std::tuple<uint32_t, uint32_t, uint32_t>;

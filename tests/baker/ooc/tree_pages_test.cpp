@@ -23,20 +23,14 @@
 #include "lodbake/ooc/partition_build.h"
 #include "lodbake/ooc/partition_merge.h"
 #include "lodbake/pack/cluster_lod_pack.h"
-#include "scansim.h"
-#include "test_paths.h"
+#include "ooc_scans.h"
 
 namespace fs = std::filesystem;
 using namespace lodbake::ooc;
 
 namespace {
 
-std::string freshDir(const std::string& name) {
-    const std::string dir = lodbake_test::scratchDir() + "/tree_pages/" + name;
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-    return dir;
-}
+std::string freshDir(const std::string& name) { return lodbake_test::freshOocDir("tree_pages", name); }
 
 std::vector<std::string> filesIn(const std::string& dir) {
     std::vector<std::string> names;
@@ -54,39 +48,14 @@ struct Tree {
 };
 
 Tree mergedScan(const std::string& name, uint64_t triangles) {
+    const lodbake_test::PartitionedScan scan = lodbake_test::partitionedScan(freshDir(name), triangles);
     Tree t;
-    t.dir = freshDir(name);
-    lodbake::scansim::SurfaceOptions so;
-    so.triangles = triangles;
-    const std::string scan = t.dir + "/scan.ply";
-    EXPECT_TRUE(lodbake::scansim::writeSurfacePly(so, scan).ok());
-    lodbake::Diagnostics d;
-    PartitionOptions o;
-    o.work_dir = t.dir + "/parts";
-    o.threads = 1;
-    o.read.buffer_bytes = 64 << 10;
-    o.read.max_record_bytes = 256 << 10;
-    o.read.vertex_chunk = 4096;
-    o.read.triangle_chunk = 4096;
-    o.sample_cap = 4096;
-    o.memory_limit_bytes = uint64_t(3) << 20;
-    auto set = partitionMesh(scan, o, d);
-    EXPECT_TRUE(set.ok()) << set.status().message();
-    if (!set.ok()) return t;
-    PartitionBuildOptions bo;
-    bo.work_dir = t.dir + "/lods";
-    bo.memory_limit_bytes = uint64_t(64) << 20;
-    if (set->partitions.size() > 1) bo.cluster.max_levels = kLevelsPerJob;
-    std::vector<std::string> lods;
-    for (const PartitionFile& pf : set->partitions) {
-        auto lod = buildPartition(pf.path, bo, d);
-        EXPECT_TRUE(lod.ok()) << lod.status().message();
-        if (lod.ok()) lods.push_back(lod->path);
-    }
+    t.dir = scan.dir;
     MergeOptions mo;
     mo.work_dir = t.dir + "/lods";
     mo.memory_limit_bytes = uint64_t(64) << 20;
-    auto tree = mergeAll(lods, mo, d);
+    lodbake::Diagnostics d;
+    auto tree = mergeAll(lodbake_test::buildLeafLods(scan.set, t.dir + "/lods"), mo, d);
     EXPECT_TRUE(tree.ok()) << tree.status().message();
     if (tree.ok()) t.tree = std::move(*tree);
     return t;

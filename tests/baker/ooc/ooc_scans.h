@@ -1,0 +1,95 @@
+#pragma once
+// Shared set-up of the out-of-core tests: a fresh scratch folder, a generated scan written to it, and
+// the partitioner's options with small reader buffers, so that a few-MiB limit cuts a scan of tens of
+// thousands of triangles into several partitions (about 12,000 triangles each at 3 MiB on one
+// thread).
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "lodbake/core/diagnostics.h"
+#include "lodbake/io/mesh_io.h"
+#include "lodbake/ooc/partition.h"
+#include "lodbake/ooc/partition_build.h"
+#include "lodbake/ooc/partition_merge.h"
+#include "scansim.h"
+#include "test_paths.h"
+
+namespace lodbake_test {
+
+/// `<scratch>/<suite>/<name>`, emptied.
+inline std::string freshOocDir(const std::string& suite, const std::string& name) {
+    const std::string dir = scratchDir() + "/" + suite + "/" + name;
+    std::filesystem::remove_all(dir);
+    std::filesystem::create_directories(dir);
+    return dir;
+}
+
+/// A generated closed scan of `triangles` triangles written to `dir`/scan.ply; returns its path.
+inline std::string writeGeneratedScan(const std::string& dir, uint64_t triangles) {
+    lodbake::scansim::SurfaceOptions o;
+    o.triangles = triangles;
+    const std::string path = dir + "/scan.ply";
+    EXPECT_TRUE(lodbake::scansim::writeSurfacePly(o, path).ok());
+    return path;
+}
+
+/// The partitioner's options with small reader buffers and sample.
+inline lodbake::ooc::PartitionOptions smallPartitionOptions(const std::string& work, int threads, uint64_t limit) {
+    lodbake::ooc::PartitionOptions o;
+    o.work_dir = work;
+    o.threads = threads;
+    o.read.buffer_bytes = 64 << 10;
+    o.read.max_record_bytes = 256 << 10;
+    o.read.vertex_chunk = 4096;
+    o.read.triangle_chunk = 4096;
+    o.sample_cap = 4096;
+    o.memory_limit_bytes = limit;
+    return o;
+}
+
+/// A generated scan, read whole and cut into partitions in `dir`/parts on one thread.
+struct PartitionedScan {
+    std::string dir;
+    std::string scan;
+    lodbake::Mesh input;
+    lodbake::ooc::PartitionSet set;
+};
+
+inline PartitionedScan partitionedScan(const std::string& dir, uint64_t triangles, uint64_t limit = uint64_t(3) << 20) {
+    PartitionedScan f;
+    f.dir = dir;
+    f.scan = writeGeneratedScan(dir, triangles);
+    lodbake::Diagnostics d;
+    auto input = lodbake::readMesh(f.scan, lodbake::ReadOptions(), d);
+    EXPECT_TRUE(input.ok());
+    if (input.ok()) f.input = std::move(input->mesh);
+    auto set = lodbake::ooc::partitionMesh(f.scan, smallPartitionOptions(dir + "/parts", 1, limit), d);
+    EXPECT_TRUE(set.ok()) << set.status().message();
+    if (set.ok()) f.set = std::move(*set);
+    return f;
+}
+
+/// Every partition of `set` built by the partition job into `work`, to kLevelsPerJob levels as
+/// mergeAll's jobs below the top are (a single partition is the top: built in full); the hierarchy
+/// files in leaf order.
+inline std::vector<std::string> buildLeafLods(const lodbake::ooc::PartitionSet& set, const std::string& work) {
+    lodbake::ooc::PartitionBuildOptions o;
+    o.work_dir = work;
+    o.memory_limit_bytes = uint64_t(64) << 20;
+    if (set.partitions.size() > 1) o.cluster.max_levels = lodbake::ooc::kLevelsPerJob;
+    std::vector<std::string> lods;
+    lodbake::Diagnostics d;
+    for (const lodbake::ooc::PartitionFile& pf : set.partitions) {
+        auto lod = lodbake::ooc::buildPartition(pf.path, o, d);
+        EXPECT_TRUE(lod.ok()) << lod.status().message();
+        if (lod.ok()) lods.push_back(lod->path);
+    }
+    return lods;
+}
+
+} // namespace lodbake_test
