@@ -40,7 +40,7 @@ namespace {
 using detail::kDistanceChunkSize;
 using detail::LargeArray;
 
-constexpr size_t kHeaderBytes = sizeof(lodrt::format::kPartitionMagic) + 8 + 24;
+constexpr size_t kHeaderBytes = lodrt::format::kPartitionHeaderBytes;
 // The level side skips a partition whose box is farther than a point's nearest distance so far, with
 // the relative slack of DistanceIndex's own pruning: rounding never skips a nearer triangle.
 constexpr double kPruneRelative = 1.0 + 1.0 / (1 << 20);

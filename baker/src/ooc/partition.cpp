@@ -473,7 +473,7 @@ Result<PartitionData> readPartitionFile(const std::string& path) {
     struct stat st {};
     if (::fstat(fd, &st) != 0) return ioError(path + ": cannot stat: " + std::strerror(errno));
     const uint64_t size = uint64_t(st.st_size);
-    constexpr size_t head = sizeof(lodrt::format::kPartitionMagic) + 8 + 24;
+    constexpr size_t head = lodrt::format::kPartitionHeaderBytes;
     uint8_t header[head];
     if (size < head || !readAt(fd, 0, header, head, path).ok() ||
         std::memcmp(header, lodrt::format::kPartitionMagic, 8) != 0)

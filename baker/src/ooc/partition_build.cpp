@@ -27,7 +27,7 @@ static_assert(sizeof(lodrt::ClusterLodGroup) == 48, "a group record is 12 four-b
 namespace {
 
 constexpr uint64_t kWriteBuffer = uint64_t(1) << 20;
-constexpr size_t kHeaderBytes = 8 + 8 + 4 * 11; // magic, source hash, 11 counts
+constexpr size_t kHeaderBytes = lodrt::format::kPartitionLodHeaderBytes;
 
 // The partition's border: its edges not used by exactly two of its triangles (open boundary: the
 // cut to other partitions and the input's own boundary; non-manifold edges too, a superset the

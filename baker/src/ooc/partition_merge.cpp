@@ -26,9 +26,9 @@ static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "merge files are writte
 namespace {
 
 constexpr uint64_t kBuffer = uint64_t(1) << 20;
-constexpr size_t kPartitionHeader = 8 + 8 + 4 * 11; // magic, source hash, 11 counts
-constexpr size_t kMergeHeader = 8 + 16 + 8 + 4 * 11; // magic, 2 input hashes, 2 kinds, 11 counts
-constexpr size_t kSeedRecord = 44;
+constexpr size_t kPartitionHeader = lodrt::format::kPartitionLodHeaderBytes;
+constexpr size_t kMergeHeader = lodrt::format::kPartitionMergeHeaderBytes;
+constexpr size_t kSeedRecord = lodrt::format::kMergeSeedRecordBytes;
 constexpr uint32_t kNone = lodrt::kClusterNone;
 
 // The counts both layouts share, in header order.

@@ -17,9 +17,9 @@ namespace lodbake::ooc {
 namespace {
 
 constexpr uint32_t kNone = lodrt::kClusterNone;
-constexpr size_t kPartitionHeader = 8 + 8 + 4 * 11;  // magic, source hash, 11 counts
-constexpr size_t kMergeHeader = 8 + 16 + 8 + 4 * 11; // magic, 2 input hashes, 2 kinds, 11 counts
-constexpr uint64_t kSeedRecord = 44;
+constexpr size_t kPartitionHeader = lodrt::format::kPartitionLodHeaderBytes;
+constexpr size_t kMergeHeader = lodrt::format::kPartitionMergeHeaderBytes;
+constexpr uint64_t kSeedRecord = lodrt::format::kMergeSeedRecordBytes;
 constexpr uint32_t kRecordsPerRead = 1024; // cluster records read at once (60 KiB)
 static_assert(sizeof(lodrt::ClusterLodCluster) == 60 && sizeof(lodrt::ClusterLodGroup) == 48, "record layout");
 

@@ -268,6 +268,13 @@ constexpr const char kPartitionLodExtension[] = ".lbplod";
 // (baker/include/lodbake/ooc/partition_merge.h; layout in docs/pipeline.md, "Merge jobs").
 constexpr char kPartitionMergeMagic[8] = {'L', 'B', 'P', 'M', 'R', 'G', '0', '1'};
 constexpr const char kPartitionMergeExtension[] = ".lbpmrg";
+// Fixed sizes in those files (layouts in docs/pipeline.md): a partition file's header (magic, vertex
+// and triangle counts, bounds), a hierarchy file's (magic, source hash, 11 counts), a merge file's
+// (magic, 2 input hashes, 2 input kinds, 11 counts), and a merge file's record of one LOD0 seed.
+constexpr uint32_t kPartitionHeaderBytes = 8 + 8 + 24;
+constexpr uint32_t kPartitionLodHeaderBytes = 8 + 8 + 4 * 11;
+constexpr uint32_t kPartitionMergeHeaderBytes = 8 + 16 + 8 + 4 * 11;
+constexpr uint32_t kMergeSeedRecordBytes = 44;
 // The out-of-core job list (baker/include/lodbake/ooc/jobs.h; protocol in docs/pipeline.md, "Job
 // list"): the plan in the work folder, each finished job's record (job-<id>.json), and the files the
 // pages job writes (the LODBAKE_cluster_lod pages blob and table blob, named by content hash).
