@@ -62,9 +62,9 @@ options:
   --threads N           worker threads (default: all; the output bytes do not depend on it)
   --memory-limit MIB    resident memory the bakes of this run may be allowed together (default: half
                         of physical memory); a pack whose allowance alone exceeds it fails, packs
-                        baked side by side wait for room; the output bytes do not depend on it.
-                        With --clusters, one PLY or OBJ input over it is baked out of core: the
-                        MSFT_lod chain then starts at the finest level that fits
+                        baked side by side wait for room; an in-memory bake's bytes do not
+                        depend on it. With --clusters, one PLY or OBJ input over it is baked out
+                        of core: the MSFT_lod chain then starts at the finest level that fits
   --work-dir DIR        where an out-of-core bake keeps its partitions (a hidden folder inside DIR,
                         removed at the end; default: the output's folder)
   --levels LIST         override lod_ratios: comma-separated triangle ratios in (0, 1]
