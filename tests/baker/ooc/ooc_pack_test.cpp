@@ -256,6 +256,51 @@ TEST(OocPackTest, RecordedErrorsAreTheLevelsMeasuredAgainstTheInput) {
     }
 }
 
+// A limit that holds every level but not their measurement (its bound, beside the extracted meshes):
+// the finest levels record their cut's bound, the coarsest that fit are measured, and a note says so.
+TEST(OocPackTest, MeasurementThatDoesNotFitFallsBackToTheBoundWithANote) {
+    const std::string dir = packDir("fallback");
+    const std::string scan = packScan(dir);
+    OocPackOptions o = packOptions(dir + "/work", 256, 2);
+    const PackRun wide = runPack(scan, dir + "/wide.glb", o);
+    ASSERT_TRUE(wide.result.ok()) << wide.result.status().message();
+    const OocPackResult& w = *wide.result;
+    ASSERT_EQ(keptLevels(w), w.levels.size());
+    uint64_t held = 0, work = 0, meshes = 0;
+    for (const OocPackLevel& l : w.levels) {
+        held += l.held_bytes;
+        work = std::max(work, l.work_bytes);
+        meshes += 12 * l.cut.cluster_vertices + 12 * l.cut.triangles;
+    }
+    ASSERT_GT(meshes + w.measure_bound_bytes, held + work) << "the measurement would fit wherever the levels do";
+    const uint64_t fixed = (uint64_t(256) << 20) - w.level_budget_bytes;
+    o.driver.memory_limit_bytes = ((fixed + held + work) | ((uint64_t(1) << 20) - 1)) + 1; // rounded up to a MiB
+    ASSERT_LT(o.driver.memory_limit_bytes - fixed, meshes + w.measure_bound_bytes);
+    lodbake::Diagnostics d;
+    auto r = writeOutOfCorePack(scan, dir + "/tight.glb", o, d);
+    ASSERT_TRUE(r.ok()) << r.status().message();
+    ASSERT_EQ(keptLevels(*r), r->levels.size());
+    EXPECT_EQ(r->levels[0].error_source, LevelErrorSource::Input);
+    EXPECT_EQ(r->levels[1].error_source, LevelErrorSource::Bound);
+    uint64_t measured = 0;
+    for (size_t l = 1; l < r->levels.size(); ++l) {
+        const bool is_measured = r->levels[l].error_source == LevelErrorSource::Measured;
+        measured += is_measured;
+        if (!is_measured) {
+            EXPECT_EQ(r->levels[l].error_source, LevelErrorSource::Bound) << l;
+            EXPECT_EQ(measured, 0u) << "a bound level coarser than a measured one: " << l;
+            EXPECT_GE(r->metrics.levels[l].hausdorff_error, double(r->levels[l].cut.error_bound)) << l;
+        }
+    }
+    EXPECT_EQ(r->measured_levels, measured);
+    EXPECT_LE(r->level_peak_bytes, r->level_budget_bytes);
+    bool noted = false;
+    for (const lodbake::Diagnostic& item : d.items())
+        noted |= item.message.find("error bound") != std::string::npos && item.message.find(scan) != std::string::npos;
+    EXPECT_TRUE(noted);
+    EXPECT_TRUE(filesUnder(dir + "/work").empty());
+}
+
 TEST(OocPackTest, SmallerLimitStartsTheChainBelowTheInputAndSaysSo) {
     const std::string dir = packDir("below");
     const std::string scan = packScan(dir);
