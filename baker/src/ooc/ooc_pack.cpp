@@ -30,6 +30,7 @@ double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::
 
 constexpr size_t kCopyBytes = size_t(64) << 10;
 constexpr uint32_t kBoundsClustersPerRead = 256;
+constexpr uint32_t kSmallestSubsample = 4096; // the measurement's subsample is not cut below it
 
 // The run's own folder inside the work folder, removed with everything in it however the run ends
 // (and the work folder too when the run created it and it is left empty).
@@ -197,17 +198,24 @@ Result<std::vector<LevelError>> measureKeptLevels(const std::vector<LevelCut>& c
     lo.distance = o.distance;
     lo.threads = o.driver.threads;
     lo.cancel = o.driver.cancel;
-    // The coarsest levels whose measurement fits: the bound grows with every level added.
+    // The coarsest levels whose measurement fits: the bound grows with every level added. A smaller
+    // subsample (the level side's starting search) costs time, never bits: the nearest distance is
+    // exact whatever it is, so it shrinks before a level falls back to its bound.
     size_t from = cuts.size();
     uint64_t bound = 0;
-    for (size_t k = first; k < cuts.size(); ++k) {
+    const uint32_t full_subsample = lo.bound_triangles;
+    for (size_t k = first; k < cuts.size() && from == cuts.size(); ++k) {
         std::vector<const Mesh*> levels;
         for (size_t i = k; i < cuts.size(); ++i) levels.push_back(&meshes[i]);
-        LODBAKE_ASSIGN_OR_RETURN(const uint64_t b, levelErrorBound(files, levels, lo));
-        if (b <= room) {
-            from = k;
-            bound = b;
-            break;
+        for (uint32_t s = full_subsample;; s /= 4) {
+            lo.bound_triangles = s;
+            LODBAKE_ASSIGN_OR_RETURN(const uint64_t b, levelErrorBound(files, levels, lo));
+            if (b <= room) {
+                from = k;
+                bound = b;
+                break;
+            }
+            if (s <= kSmallestSubsample) break;
         }
     }
     if (from > first)
