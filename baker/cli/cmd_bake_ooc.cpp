@@ -51,6 +51,7 @@ OutOfCoreBake outOfCoreBaker(const std::string& work_dir, const ReadOptions& rea
         pack.report.metrics = made.metrics;
         const ooc::OutOfCoreResult& d = made.driver;
         pack.stage_seconds = {{BakeStage::LodChain, d.partition.seconds + d.build.seconds + d.merge.seconds},
+                              {BakeStage::Measure, made.measure_seconds},
                               {BakeStage::Encode, d.pages.seconds + made.cut_seconds},
                               {BakeStage::Pack, made.pack_seconds}};
         return pack;
