@@ -19,8 +19,8 @@
 // Errors of a level: measured against the input (measureLevelErrors, level_error.h: the bake's
 // error_samples, one pass over the partition files for every kept level), the two-sided distance
 // the in-memory bake records; the input itself (the cut at 0) has error 0. The measurement's bound
-// (levelErrorBound) is reserved beside the kept levels' held bytes; the finest levels whose
-// measurement does not fit keep the cut's group-error bound (LevelCut::error_bound, a bound on their
+// (levelErrorBound) is reserved beside the kept levels' meshes, its subsample shrunk (time, not bits)
+// before a level is given up; the finest levels whose measurement does not fit keep the cut's group-error bound (LevelCut::error_bound, a bound on their
 // distance to the input) as both errors, and a diagnostic note says which. A coarser level's errors
 // are at least the finer level's, as in the in-memory bake.
 //
