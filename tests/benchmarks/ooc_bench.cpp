@@ -46,6 +46,15 @@
 //
 // --level-error measures one level's error against the input out of core (ooc::measureLevelError)
 // and in memory, each in a child process: time and peak RSS of both (runLevelErrorMode below).
+//
+// --pack-errors compares the levels of three packs of one scan by their recorded (measured) errors:
+// the in-memory `lodbake bake --clusters` pack (a child process of the CLI), the out-of-core pack
+// (ooc::writeOutOfCorePack with partitions of --leaf-triangles, default 65,536, under --memory-limit,
+// default 4096 MiB, so that every level is kept and measured), and the same writer with one
+// partition of 4 Mi triangles holding the whole input (the cuts of an in-memory cluster hierarchy).
+// Each out-of-core level's Hausdorff and mean errors are divided by the in-memory chain's at the
+// same triangle count (log-log interpolation between its levels; a count outside its levels is
+// marked and not judged) (runPackErrorsMode below).
 
 #include <algorithm>
 #include <chrono>
@@ -73,11 +82,15 @@
 #include "lodbake/io/mesh_stream.h"
 #include "lodbake/ooc/driver.h"
 #include "lodbake/ooc/level_error.h"
+#include "lodbake/ooc/ooc_pack.h"
 #include "lodbake/ooc/partition.h"
 #include "lodbake/ooc/partition_build.h"
 #include "lodbake/ooc/partition_merge.h"
 #include "lodbake/ooc/tree_pages.h"
 #include "lodbake/pack/cluster_lod_pack.h"
+#include "lodbake/config/bake_config.h"
+#include "lodrt/model.h"
+#include "lodrt/pack.h"
 #include "lodbake/simplify/simplify.h"
 #include "scansim.h"
 
@@ -770,12 +783,181 @@ int runLevelErrorMode(int argc, char** argv) {
                   lodbake_bench::Limit::AtMost);
     return bars.finish(check);
 }
+
+// ---- --pack-errors ------------------------------------------------------------------------------
+
+struct PackLevelError {
+    uint64_t triangles = 0;
+    double hausdorff = 0, mean = 0;
+};
+
+// The chain of a pack as lodrt reads its LODBAKE_lod_metrics.
+bool packChain(const std::string& path, std::vector<PackLevelError>& chain) {
+    auto glb = lodbake::readFileBytes(path);
+    if (!glb.ok()) return false;
+    lodrt::Pack pack;
+    lodrt::ModelSet models;
+    char message[256] = "";
+    if (lodrt::loadPack(glb->data(), glb->size(), nullptr, &pack, message, sizeof message) != lodrt::Result::Ok ||
+        lodrt::buildModels(pack, nullptr, &models, message, sizeof message) != lodrt::Result::Ok ||
+        models.modelCount() != 1) {
+        std::fprintf(stderr, "%s: %s\n", path.c_str(), message);
+        return false;
+    }
+    for (uint32_t l = 0; l < models.model(0).level_count; ++l) {
+        const lodrt::LevelInfo& level = models.modelLevel(0, l);
+        chain.push_back({level.triangle_count, level.hausdorff_error, level.mean_error});
+    }
+    return true;
+}
+
+// A chain's error at `triangles`: log-log interpolation between its measured levels (level 0, the
+// input, has error 0 and is left out); its end level's within 2 % beyond either end; NaN further out.
+double chainErrorAt(const std::vector<PackLevelError>& chain, uint64_t triangles, bool mean) {
+    if (chain.size() < 2) return NAN;
+    const PackLevelError &finest = chain[1], &coarsest = chain.back();
+    if (triangles > finest.triangles && double(triangles) <= 1.02 * double(finest.triangles))
+        return mean ? finest.mean : finest.hausdorff;
+    if (triangles < coarsest.triangles && 1.02 * double(triangles) >= double(coarsest.triangles))
+        return mean ? coarsest.mean : coarsest.hausdorff;
+    for (size_t i = 1; i + 1 < chain.size(); ++i) {
+        const PackLevelError &a = chain[i], &b = chain[i + 1]; // a finer than b
+        if (triangles > a.triangles || triangles < b.triangles) continue;
+        const double ea = mean ? a.mean : a.hausdorff, eb = mean ? b.mean : b.hausdorff;
+        if (a.triangles == b.triangles || ea <= 0 || eb <= 0) return ea;
+        const double t = (std::log(double(a.triangles)) - std::log(double(triangles))) /
+                         (std::log(double(a.triangles)) - std::log(double(b.triangles)));
+        return std::exp(std::log(ea) + t * (std::log(eb) - std::log(ea)));
+    }
+    return NAN;
+}
+
+bool oocPackChain(const std::string& scan, const std::string& out, uint64_t leaf, uint64_t limit_mib, int threads,
+                  std::vector<PackLevelError>& chain, std::vector<lodbake::ooc::LevelErrorSource>& sources,
+                  double& seconds) {
+    const lodbake::BakeSettings settings;
+    lodbake::ooc::OocPackOptions o;
+    o.driver.work_dir = out + ".work";
+    o.driver.memory_limit_bytes = limit_mib << 20;
+    o.driver.threads = threads;
+    o.driver.leaf_triangles = leaf;
+    o.driver.merge_group_bytes = lodbake::ooc::kPartitionBuildBytesPerTriangle * leaf;
+    o.lod_ratios = settings.lod_ratios;
+    o.distance.sample_count = settings.error_samples;
+    o.name = "mesh";
+    lodbake::Diagnostics d;
+    const auto t0 = std::chrono::steady_clock::now();
+    auto r = lodbake::ooc::writeOutOfCorePack(scan, out, o, d);
+    seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    for (const lodbake::Diagnostic& item : d.items()) std::printf("  note: %s\n", item.message.c_str());
+    if (!r.ok()) {
+        std::fprintf(stderr, "%s\n", r.status().message().c_str());
+        return false;
+    }
+    std::printf("  %s: %llu partitions, %llu merges, %llu of %zu candidate levels kept, %llu measured\n",
+                out.c_str(), (unsigned long long)r->driver.partition_count, (unsigned long long)r->driver.merge_count,
+                (unsigned long long)r->metrics.levels.size(), r->levels.size(), (unsigned long long)r->measured_levels);
+    for (const lodbake::ooc::OocPackLevel& l : r->levels)
+        if (l.kept) sources.push_back(l.error_source);
+    return packChain(out, chain);
+}
+
+const char* sourceName(lodbake::ooc::LevelErrorSource s) {
+    switch (s) {
+    case lodbake::ooc::LevelErrorSource::Input: return "input";
+    case lodbake::ooc::LevelErrorSource::Measured: return "measured";
+    case lodbake::ooc::LevelErrorSource::Bound: return "bound";
+    case lodbake::ooc::LevelErrorSource::Caller: return "caller";
+    }
+    return "?";
+}
+
+// Prints one out-of-core chain against the in-memory one; judges each measured level's ratios.
+void printPackComparison(const char* label, const std::vector<PackLevelError>& ooc,
+                         const std::vector<lodbake::ooc::LevelErrorSource>& sources,
+                         const std::vector<PackLevelError>& mem, lodbake_bench::Bars* bars) {
+    std::printf("%s at equal triangle counts:\n", label);
+    std::printf("  level  triangles  source    hausdorff   in-memory   ratio    mean        in-memory   ratio\n");
+    for (size_t l = 0; l < ooc.size(); ++l) {
+        const PackLevelError& e = ooc[l];
+        const double mh = chainErrorAt(mem, e.triangles, false), mm = chainErrorAt(mem, e.triangles, true);
+        std::printf("  %5zu %10llu  %-8s  %.4e  %.4e  %6.3f   %.4e  %.4e  %6.3f%s\n", l,
+                    (unsigned long long)e.triangles, l < sources.size() ? sourceName(sources[l]) : "?", e.hausdorff,
+                    mh, e.hausdorff / mh, e.mean, mm, e.mean / mm, std::isnan(mh) ? "  (outside the chain)" : "");
+        if (bars && !std::isnan(mh) && l < sources.size() && sources[l] == lodbake::ooc::LevelErrorSource::Measured) {
+            const std::string name = "out of core level " + std::to_string(l);
+            bars->ratio(name + " hausdorff / in-memory <= 1.10", e.hausdorff, mh, 1.10, lodbake_bench::Limit::AtMost);
+            bars->ratio(name + " mean / in-memory <= 1.10", e.mean, mm, 1.10, lodbake_bench::Limit::AtMost);
+        }
+    }
+}
+
+int runPackErrorsMode(int argc, char** argv) {
+    const bool check = lodbake_bench::takeCheckFlag(argc, argv);
+    std::string scan, dir = LODBAKE_BENCH_OUT_DIR;
+    uint64_t leaf = 65536, limit_mib = 4096;
+    int threads = 0;
+    for (int i = 1; i < argc; ++i) {
+        const std::string a = argv[i];
+        if (a == "--scan" && i + 1 < argc) scan = argv[++i];
+        else if (a == "--leaf-triangles" && i + 1 < argc) leaf = std::strtoull(argv[++i], nullptr, 10);
+        else if (a == "--memory-limit" && i + 1 < argc) limit_mib = std::strtoull(argv[++i], nullptr, 10);
+        else if (a == "--dir" && i + 1 < argc) dir = argv[++i];
+        else if (a == "--threads" && i + 1 < argc) threads = std::atoi(argv[++i]);
+        else {
+            std::fprintf(stderr, "usage: ooc_bench --pack-errors --scan FILE [--leaf-triangles N] [--memory-limit MIB] "
+                                 "[--dir DIR] [--threads N] [--check]\n");
+            return 2;
+        }
+    }
+    if (scan.empty()) {
+        std::fprintf(stderr, "ooc_bench --pack-errors: --scan FILE is required\n");
+        return 2;
+    }
+    std::error_code ec;
+    std::filesystem::create_directories(dir, ec);
+    const std::string mem_glb = dir + "/pack_errors_in_memory.glb";
+    std::string command = std::string("'") + LODBAKE_BENCH_CLI + "' bake '" + scan + "' --clusters --quiet -o '" +
+                          mem_glb + "'";
+    if (threads > 0) command += " --threads " + std::to_string(threads);
+    const auto t0 = std::chrono::steady_clock::now();
+    if (std::system(command.c_str()) != 0) {
+        std::fprintf(stderr, "ooc_bench --pack-errors: %s failed\n", command.c_str());
+        return 1;
+    }
+    const double mem_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    std::vector<PackLevelError> mem, ooc, whole;
+    std::vector<lodbake::ooc::LevelErrorSource> ooc_sources, whole_sources;
+    double ooc_seconds = 0, whole_seconds = 0;
+    if (!packChain(mem_glb, mem)) return 1;
+    std::printf("scan %s; in-memory pack %.1f s\n", scan.c_str(), mem_seconds);
+    if (!oocPackChain(scan, dir + "/pack_errors_ooc.glb", leaf, limit_mib, threads, ooc, ooc_sources, ooc_seconds))
+        return 1;
+    if (!oocPackChain(scan, dir + "/pack_errors_whole.glb", uint64_t(1) << 22, limit_mib, threads, whole,
+                      whole_sources, whole_seconds))
+        return 1;
+    std::printf("out-of-core pack (partitions of %llu triangles) %.1f s; one partition %.1f s\n",
+                (unsigned long long)leaf, ooc_seconds, whole_seconds);
+    std::printf("in-memory --clusters pack chain:\n");
+    for (size_t l = 0; l < mem.size(); ++l)
+        std::printf("  %5zu %10llu  hausdorff %.4e  mean %.4e\n", l, (unsigned long long)mem[l].triangles,
+                    mem[l].hausdorff, mem[l].mean);
+    lodbake_bench::Bars bars("ooc_bench --pack-errors");
+    printPackComparison("out of core vs the in-memory --clusters pack", ooc, ooc_sources, mem, &bars);
+    printPackComparison("one partition (an in-memory hierarchy's cuts) vs the in-memory --clusters pack", whole,
+                        whole_sources, mem, nullptr);
+    // What the partitions and merges change, the cuts being the same kind on both sides.
+    printPackComparison("out of core vs one partition (its in-memory column is the one-partition pack's)", ooc,
+                        ooc_sources, whole, nullptr);
+    return bars.finish(check);
+}
 } // namespace
 
 int main(int argc, char** argv) {
     if (argc > 1 && std::string(argv[1]) == "--pages") return runPagesMode(argc - 1, argv + 1);
     if (argc > 1 && std::string(argv[1]) == "--level-error") return runLevelErrorMode(argc - 1, argv + 1);
     if (argc > 1 && std::string(argv[1]) == "--driver") return runDriverMode(argc - 1, argv + 1);
+    if (argc > 1 && std::string(argv[1]) == "--pack-errors") return runPackErrorsMode(argc - 1, argv + 1);
     const bool check = lodbake_bench::takeCheckFlag(argc, argv);
     uint64_t triangles = 10000000, limit_mib = 1024;
     int threads = 0;

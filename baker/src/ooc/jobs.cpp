@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <map>
@@ -448,6 +449,24 @@ JobProgress jobProgress(const std::string& work_dir, const JobPlan& plan) {
         if (ready) p.ready.push_back(job.id);
     }
     return p;
+}
+
+void removePlannedFiles(const std::string& work_dir) {
+    const std::string plan_path = jobPlanPath(work_dir);
+    const Result<JobPlan> plan = readJobPlan(plan_path);
+    if (!plan.ok()) return;
+    for (const JobSpec& job : plan->jobs) {
+        for (const JobInput& in : job.inputs)
+            if (!in.file.empty()) std::remove(joinPath(work_dir, in.file).c_str());
+        const std::string record_path = jobRecordPath(work_dir, job.id);
+        const Result<JobRecord> record = readJobRecord(record_path);
+        if (record.ok()) {
+            if (!record->output.empty()) std::remove(joinPath(work_dir, record->output).c_str());
+            if (!record->table.empty()) std::remove(joinPath(work_dir, record->table).c_str());
+        }
+        std::remove(record_path.c_str());
+    }
+    std::remove(plan_path.c_str());
 }
 
 Result<OutOfCoreResult> plannedResult(const std::string& work_dir) {

@@ -13,6 +13,8 @@
 
 #include "lodbake/cleanup/normals.h"
 #include "lodbake/core/spill_file.h"
+#include "lodbake/ooc/jobs.h"
+#include "lodbake/ooc/level_error.h"
 #include "lodbake/pack/pack_glb.h"
 #include "lodrt/format.h"
 
@@ -28,6 +30,7 @@ double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::
 
 constexpr size_t kCopyBytes = size_t(64) << 10;
 constexpr uint32_t kBoundsClustersPerRead = 256;
+constexpr uint32_t kSmallestSubsample = 4096; // the measurement's subsample is not cut below it
 
 // The run's own folder inside the work folder, removed with everything in it however the run ends
 // (and the work folder too when the run created it and it is left empty).
@@ -116,7 +119,7 @@ Result<ClusterPackBounds> lod0Bounds(const TreeClusterTable& table, TreePageSour
     return b;
 }
 
-// The chain's metrics: the kept levels' errors (the cut's bound, or the caller's measurement), the
+// The chain's metrics: the kept levels' errors (measured, the cut's bound, or the caller's), the
 // switch policy of the in-memory bake (core/lod_policy.h). Level 0 is shown from distance 0 whatever
 // its error; the input's triangle count says where the chain starts.
 LodMetrics chainMetrics(const std::vector<LevelCut>& cuts, const std::vector<LevelError>& errors, double diagonal,
@@ -130,10 +133,10 @@ LodMetrics chainMetrics(const std::vector<LevelCut>& cuts, const std::vector<Lev
     for (size_t i = 0; i < cuts.size(); ++i) {
         LodMetricsLevel l;
         l.triangles = cuts[i].triangles;
-        l.hausdorff_error = errors.empty() ? double(cuts[i].error_bound) : errors[i].hausdorff;
-        l.mean_error = errors.empty() ? double(cuts[i].error_bound) : errors[i].mean;
+        l.hausdorff_error = errors[i].hausdorff;
+        l.mean_error = errors[i].mean;
         if (i > 0) {
-            // A coarser level never claims to be better than the finer one.
+            // A coarser level never claims to be better than the finer one (as the in-memory bake).
             const LodMetricsLevel& prev = m.levels.back();
             l.hausdorff_error = std::max(l.hausdorff_error, prev.hausdorff_error);
             l.mean_error = std::max(l.mean_error, prev.mean_error);
@@ -152,17 +155,22 @@ LodMetrics chainMetrics(const std::vector<LevelCut>& cuts, const std::vector<Lev
     return m;
 }
 
-// One kept level: the cut extracted, its normals, its valence stream (at the precision the chain's
-// errors give it, as in the in-memory bake).
-Result<PackLevel> bakeLevel(const TreeClusterTable& table, TreePageSource& source, const LevelCut& cut,
-                            const PackStreamEncoder& encoder, const LodChain& chain, size_t index,
-                            const std::string& input) {
-    PackLevel level;
+// One kept level's mesh: the cut extracted (positions and triangles).
+Result<Mesh> extractLevel(const TreeClusterTable& table, TreePageSource& source, const LevelCut& cut, size_t index,
+                          const std::string& input) {
     Result<Mesh> mesh = extractLevelCut(table, source, cut);
     if (!mesh.ok()) return Status(mesh.status().code(), input + ": level " + std::to_string(index) + ": " +
                                                             mesh.status().message());
-    level.mesh = std::move(mesh).value();
-    if (level.mesh.faceCount() == 0) return invalidInput(input + ": level " + std::to_string(index) + ": no triangles");
+    if (mesh->faceCount() == 0) return invalidInput(input + ": level " + std::to_string(index) + ": no triangles");
+    return mesh;
+}
+
+// One kept level made a pack level: its normals and its valence stream (at the precision the chain's
+// errors give it, as in the in-memory bake).
+Result<PackLevel> bakeLevel(Mesh mesh, const PackStreamEncoder& encoder, const LodChain& chain, size_t index,
+                            const std::string& input) {
+    PackLevel level;
+    level.mesh = std::move(mesh);
     computeNormals(level.mesh);
     Result<PackStreamCommit> commit = encoder.prepare(chain, index, level.mesh);
     if (!commit.ok()) return Status(commit.status().code(), input + ": level " + std::to_string(index) + ": " +
@@ -171,10 +179,72 @@ Result<PackLevel> bakeLevel(const TreeClusterTable& table, TreePageSource& sourc
     return level;
 }
 
+// The kept levels' errors. The input's level (the cut at 0) has error 0. The others are measured
+// against the input's partition files in one pass, as many of the coarsest as fit beside the held
+// levels (`room` bytes); the finer ones keep their cut's bound, and a note says so.
+Result<std::vector<LevelError>> measureKeptLevels(const std::vector<LevelCut>& cuts, const std::vector<Mesh>& meshes,
+                                                  const std::string& input, const OocPackOptions& o, uint64_t room,
+                                                  OocPackResult& result, Diagnostics& diagnostics) {
+    std::vector<LevelError> errors(cuts.size());
+    std::vector<LevelErrorSource> sources(cuts.size(), LevelErrorSource::Bound);
+    size_t first = 0; // the first level that is not the input
+    if (!cuts.empty() && cuts[0].threshold <= 0.0f && cuts[0].triangles == result.driver.triangle_count) {
+        sources[0] = LevelErrorSource::Input;
+        first = 1;
+    }
+    for (size_t i = first; i < cuts.size(); ++i) errors[i] = {double(cuts[i].error_bound), double(cuts[i].error_bound)};
+    LODBAKE_ASSIGN_OR_RETURN(std::vector<std::string> files, partitionFilesOf(result.driver.tree));
+    LevelErrorOptions lo;
+    lo.distance = o.distance;
+    lo.threads = o.driver.threads;
+    lo.cancel = o.driver.cancel;
+    // The coarsest levels whose measurement fits: the bound grows with every level added. A smaller
+    // subsample (the level side's starting search) costs time, never bits: the nearest distance is
+    // exact whatever it is, so it shrinks before a level falls back to its bound.
+    size_t from = cuts.size();
+    uint64_t bound = 0;
+    const uint32_t full_subsample = lo.bound_triangles;
+    for (size_t k = first; k < cuts.size() && from == cuts.size(); ++k) {
+        std::vector<const Mesh*> levels;
+        for (size_t i = k; i < cuts.size(); ++i) levels.push_back(&meshes[i]);
+        for (uint32_t s = full_subsample;; s /= 4) {
+            lo.bound_triangles = s;
+            LODBAKE_ASSIGN_OR_RETURN(const uint64_t b, levelErrorBound(files, levels, lo));
+            if (b <= room) {
+                from = k;
+                bound = b;
+                break;
+            }
+            if (s <= kSmallestSubsample) break;
+        }
+    }
+    if (from > first)
+        diagnostics.note(input + ": " + std::to_string(from - first) +
+                         " finest level(s) record their cut's error bound: measuring them against the input does "
+                         "not fit the memory limit beside the kept levels");
+    if (from < cuts.size()) {
+        std::vector<const Mesh*> levels;
+        for (size_t i = from; i < cuts.size(); ++i) levels.push_back(&meshes[i]);
+        lo.memory_limit_bytes = room;
+        LODBAKE_ASSIGN_OR_RETURN(std::vector<LevelErrorResult> measured, measureLevelErrors(files, levels, lo));
+        for (size_t i = from; i < cuts.size(); ++i) {
+            errors[i] = {measured[i - from].distance.hausdorff, measured[i - from].distance.mean};
+            sources[i] = LevelErrorSource::Measured;
+        }
+        result.measured_levels = cuts.size() - from;
+        result.measure_bound_bytes = bound;
+        result.measure_peak_bytes = measured.empty() ? 0 : measured[0].accounted_peak_bytes;
+    }
+    size_t k = 0;
+    for (OocPackLevel& l : result.levels)
+        if (l.kept) l.error_source = sources[k++];
+    return errors;
+}
+
 // The driver's pages file copied into a spill beside the output (the GLB writer takes its spilled
-// blobs as SpillFiles), then removed.
+// blobs as SpillFiles), then removed when `remove_pages` (the in-process run's own file).
 Result<std::shared_ptr<SpillFile>> copyPages(const std::string& pages_path, const std::string& output_path,
-                                             const std::atomic<bool>* cancel) {
+                                             bool remove_pages, const std::atomic<bool>* cancel) {
     auto spill = std::make_shared<SpillFile>();
     LODBAKE_RETURN_IF_ERROR(spill->open(output_path));
     const int fd = ::open(pages_path.c_str(), O_RDONLY | O_CLOEXEC);
@@ -193,7 +263,7 @@ Result<std::shared_ptr<SpillFile>> copyPages(const std::string& pages_path, cons
         if (s.ok()) s = spill->write(buffer.data(), n);
     }
     ::close(fd);
-    std::remove(pages_path.c_str());
+    if (remove_pages) std::remove(pages_path.c_str());
     LODBAKE_RETURN_IF_ERROR(s);
     LODBAKE_RETURN_IF_ERROR(spill->finish());
     return spill;
@@ -213,12 +283,11 @@ PackExtension clusterExtension(std::vector<uint8_t> table, std::shared_ptr<Spill
     return e;
 }
 
-// Everything after the driver: the cuts, the levels that fit, their meshes and streams, the GLB.
-Status packLevels(const std::string& input, const std::string& output_path, const OocPackOptions& o,
-                  OocPackResult& result) {
-    Clock::time_point t0 = Clock::now();
+// The kept levels' cuts, finest first, from the driver's tree (the table's records held); none fitting
+// is a ResourceLimit error naming the input.
+Result<std::vector<LevelCut>> keptCuts(const TreeClusterTable& table, const std::string& input, const OocPackOptions& o,
+                                       OocPackResult& result) {
     const uint64_t limit = o.driver.memory_limit_bytes;
-    LODBAKE_ASSIGN_OR_RETURN(TreeClusterTable table, assembleClusterTable(result.driver.tree, limit));
     result.levels = candidateLevels(table, result.driver.triangle_count, o.lod_ratios);
     const uint64_t fixed = table.accounted_peak_bytes + result.driver.table.size() + kOocPackFixedBytes;
     result.level_budget_bytes = limit > fixed ? limit - fixed : 0;
@@ -232,19 +301,58 @@ Status packLevels(const std::string& input, const std::string& output_path, cons
                              std::to_string((fixed + result.levels.back().held_bytes + result.levels.back().work_bytes +
                                              (uint64_t(1) << 20) - 1) >> 20) +
                              " MiB)");
-    std::vector<LevelError> errors;
+    return cuts;
+}
+
+// The kept levels' errors: the caller's, or measured against the input with every kept level's mesh
+// held (positions and triangles: at most 12 bytes per cluster vertex and per triangle).
+Result<std::vector<LevelError>> keptLevelErrors(const std::vector<LevelCut>& cuts, const std::vector<Mesh>& meshes,
+                                                const std::string& input, const OocPackOptions& o,
+                                                OocPackResult& result, Diagnostics& diagnostics) {
     if (o.level_errors) {
-        LODBAKE_ASSIGN_OR_RETURN(errors, o.level_errors(cuts));
-        if (!errors.empty() && errors.size() != cuts.size())
-            return internalError(input + ": level errors: " + std::to_string(errors.size()) + " for " +
-                                 std::to_string(cuts.size()) + " levels");
+        LODBAKE_ASSIGN_OR_RETURN(std::vector<LevelError> errors, o.level_errors(cuts));
+        if (!errors.empty()) {
+            if (errors.size() != cuts.size())
+                return internalError(input + ": level errors: " + std::to_string(errors.size()) + " for " +
+                                     std::to_string(cuts.size()) + " levels");
+            for (OocPackLevel& l : result.levels)
+                if (l.kept) l.error_source = LevelErrorSource::Caller;
+            return errors;
+        }
     }
+    uint64_t meshes_bytes = 0;
+    for (const LevelCut& c : cuts) meshes_bytes += 12 * c.cluster_vertices + 12 * c.triangles;
+    const uint64_t room = result.level_budget_bytes > meshes_bytes ? result.level_budget_bytes - meshes_bytes : 0;
+    LODBAKE_ASSIGN_OR_RETURN(std::vector<LevelError> errors,
+                             measureKeptLevels(cuts, meshes, input, o, room, result, diagnostics));
+    result.level_peak_bytes = std::max(result.level_peak_bytes, meshes_bytes + result.measure_bound_bytes);
+    return errors;
+}
+
+// Everything after the driver: the cuts, the levels that fit, their meshes, errors and streams, the GLB.
+Status packLevels(const std::string& input, const std::string& output_path, const OocPackOptions& o,
+                  bool remove_pages, OocPackResult& result, Diagnostics& diagnostics) {
+    Clock::time_point t0 = Clock::now();
+    LODBAKE_ASSIGN_OR_RETURN(TreeClusterTable table, assembleClusterTable(result.driver.tree, o.driver.memory_limit_bytes));
+    LODBAKE_ASSIGN_OR_RETURN(const std::vector<LevelCut> cuts, keptCuts(table, input, o, result));
     TreePageSource source(table);
+    std::vector<Mesh> meshes;
+    for (size_t i = 0; i < cuts.size(); ++i) {
+        if (o.driver.cancel && o.driver.cancel->load()) return ioError(output_path + ": out-of-core bake cancelled");
+        LODBAKE_ASSIGN_OR_RETURN(Mesh mesh, extractLevel(table, source, cuts[i], i, input));
+        meshes.push_back(std::move(mesh));
+    }
+    result.cut_seconds = since(t0);
+    t0 = Clock::now();
+    LODBAKE_ASSIGN_OR_RETURN(const std::vector<LevelError> errors,
+                             keptLevelErrors(cuts, meshes, input, o, result, diagnostics));
+    result.measure_seconds = since(t0);
+    t0 = Clock::now();
     LODBAKE_ASSIGN_OR_RETURN(ClusterPackBounds bounds, lod0Bounds(table, source));
     const double dx = double(bounds.max[0]) - bounds.min[0], dy = double(bounds.max[1]) - bounds.min[1],
                  dz = double(bounds.max[2]) - bounds.min[2];
     result.metrics = chainMetrics(cuts, errors, std::sqrt(dx * dx + dy * dy + dz * dz), o, result.driver.triangle_count);
-    // The chain the valence stream reads for adaptive precision: each level's error as measured.
+    // The chain the valence stream reads for adaptive precision: each level's error as recorded.
     LodChain chain;
     for (size_t i = 1; i < cuts.size(); ++i) {
         LodLevel level;
@@ -260,17 +368,17 @@ Status packLevels(const std::string& input, const std::string& output_path, cons
     asset.name = o.name;
     for (size_t i = 0; i < cuts.size(); ++i) {
         if (o.driver.cancel && o.driver.cancel->load()) return ioError(output_path + ": out-of-core bake cancelled");
-        LODBAKE_ASSIGN_OR_RETURN(PackLevel level, bakeLevel(table, source, cuts[i], encoder, chain, i, input));
+        LODBAKE_ASSIGN_OR_RETURN(PackLevel level, bakeLevel(std::move(meshes[i]), encoder, chain, i, input));
         result.metrics.levels[i].triangles = level.mesh.faceCount();
         result.metrics.levels[i].vertices = level.mesh.vertexCount();
         asset.levels.push_back(std::move(level));
     }
-    result.cut_seconds = since(t0);
+    result.cut_seconds += since(t0);
     t0 = Clock::now();
     asset.screen_coverage = msftScreenCoverage(result.metrics);
     asset.node_extensions.push_back(lodMetricsExtension(result.metrics));
     LODBAKE_ASSIGN_OR_RETURN(std::shared_ptr<SpillFile> pages,
-                             copyPages(result.driver.output, output_path, o.driver.cancel));
+                             copyPages(result.driver.output, output_path, remove_pages, o.driver.cancel));
     asset.levels[0].mesh_extensions.insert(asset.levels[0].mesh_extensions.begin(),
                                            clusterExtension(std::move(result.driver.table), std::move(pages)));
     description.assets.push_back(std::move(asset));
@@ -315,9 +423,23 @@ Result<OocPackResult> writeOutOfCorePack(const std::string& input, const std::st
     OocPackResult result;
     LODBAKE_ASSIGN_OR_RETURN(result.driver,
                              buildOutOfCore(input, (fs::path(folder.path()) / "pages.bin").string(), driver, diagnostics));
-    LODBAKE_RETURN_IF_ERROR(packLevels(input, output_path, options, result));
+    LODBAKE_RETURN_IF_ERROR(packLevels(input, output_path, options, true, result, diagnostics));
     result.input_triangles = result.driver.triangle_count;
     result.input_vertices = result.driver.vertex_count;
+    return result;
+}
+
+Result<OocPackResult> writePlannedPack(const std::string& work_dir, const std::string& output_path,
+                                       const OocPackOptions& options, Diagnostics& diagnostics) {
+    LODBAKE_ASSIGN_OR_RETURN(JobPlan plan, readJobPlan(jobPlanPath(work_dir)));
+    OocPackResult result;
+    LODBAKE_ASSIGN_OR_RETURN(result.driver, plannedResult(work_dir));
+    const std::string input = plan.input.empty() ? jobPlanPath(work_dir) : plan.input;
+    // The pages job's file stays until the GLB is written: a failure leaves the plan as it was.
+    LODBAKE_RETURN_IF_ERROR(packLevels(input, output_path, options, false, result, diagnostics));
+    result.input_triangles = result.driver.triangle_count;
+    result.input_vertices = result.driver.vertex_count;
+    removePlannedFiles(work_dir);
     return result;
 }
 

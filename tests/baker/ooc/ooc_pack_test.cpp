@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -20,6 +21,8 @@
 #include "../gltf/gltf_test_util.h"
 #include "cli_runner.h"
 #include "lodbake/core/file_io.h"
+#include "lodbake/io/mesh_io.h"
+#include "lodbake/simplify/mesh_distance.h"
 #include "lodrt/cluster_pack.h"
 #include "lodrt/format.h"
 #include "lodrt/model.h"
@@ -50,9 +53,9 @@ std::vector<std::string> filesUnder(const std::string& dir) {
     return names;
 }
 
-std::string packScan(const std::string& dir) {
+std::string packScan(const std::string& dir, uint64_t triangles = kScanTriangles) {
     lodbake::scansim::SurfaceOptions so;
-    so.triangles = kScanTriangles;
+    so.triangles = triangles;
     const std::string scan = dir + "/scan.ply";
     EXPECT_TRUE(lodbake::scansim::writeSurfacePly(so, scan).ok());
     return scan;
@@ -162,6 +165,142 @@ TEST(OocPackTest, ChainNearTheRatiosWithTheClustersOnItsFinestLevel) {
     EXPECT_TRUE(filesUnder(dir + "/work").empty()) << filesUnder(dir + "/work").front();
 }
 
+// Level `mesh` of a pack (not compact): its positions and triangles from the GLB's accessors.
+lodbake::Mesh glbLevelMesh(const std::vector<uint8_t>& glb, uint32_t mesh) {
+    const nlohmann::json json = lodbake_test::glbJson(glb);
+    const std::vector<uint8_t> bin = lodbake_test::glbBin(glb);
+    const nlohmann::json& primitive = json["meshes"][mesh]["primitives"][0];
+    auto accessorBytes = [&](const nlohmann::json& accessor, size_t& count) {
+        const nlohmann::json& view = json["bufferViews"][accessor["bufferView"].get<size_t>()];
+        count = accessor["count"].get<size_t>();
+        return bin.data() + view.value("byteOffset", size_t(0)) + accessor.value("byteOffset", size_t(0));
+    };
+    lodbake::Mesh m;
+    size_t count = 0;
+    const nlohmann::json& position = json["accessors"][primitive["attributes"]["POSITION"].get<size_t>()];
+    EXPECT_EQ(position["componentType"].get<int>(), 5126);
+    const uint8_t* p = accessorBytes(position, count);
+    m.positions.resize(count);
+    std::memcpy(m.positions.data(), p, count * 12);
+    const nlohmann::json& index = json["accessors"][primitive["indices"].get<size_t>()];
+    const uint8_t* q = accessorBytes(index, count);
+    const int type = index["componentType"].get<int>();
+    m.indices.resize(count);
+    for (size_t i = 0; i < count; ++i) {
+        if (type == 5125) std::memcpy(&m.indices[i], q + 4 * i, 4);
+        else if (type == 5123) {
+            uint16_t v = 0;
+            std::memcpy(&v, q + 2 * i, 2);
+            m.indices[i] = v;
+        } else {
+            ADD_FAILURE() << "index type " << type;
+        }
+    }
+    return m;
+}
+
+// Each recorded level error is the level's measured distance to the input: the level read back
+// from the pack and measured in memory against the whole input (its triangles in file order, so
+// other samples of the same surface: within sampling noise), never the cut's bound. The control:
+// the same level shifted by 1 % of the diagonal measures far outside that tolerance.
+TEST(OocPackTest, RecordedErrorsAreTheLevelsMeasuredAgainstTheInput) {
+    const std::string dir = packDir("measured");
+    const std::string scan = packScan(dir);
+    OocPackOptions o = packOptions(dir + "/work", 256, 2);
+    o.distance.sample_count = 50000;
+    const PackRun run = runPack(scan, dir + "/out.glb", o);
+    ASSERT_TRUE(run.result.ok()) << run.result.status().message();
+    const OocPackResult& r = *run.result;
+    ASSERT_EQ(keptLevels(r), r.levels.size());
+    ASSERT_GE(r.levels.size(), 4u);
+    EXPECT_EQ(r.levels[0].error_source, LevelErrorSource::Input);
+    for (size_t l = 1; l < r.levels.size(); ++l) EXPECT_EQ(r.levels[l].error_source, LevelErrorSource::Measured) << l;
+    EXPECT_EQ(r.measured_levels, r.levels.size() - 1);
+    EXPECT_GT(r.measure_bound_bytes, 0u);
+    EXPECT_LE(r.measure_peak_bytes, r.measure_bound_bytes);
+    EXPECT_LE(r.level_peak_bytes, r.level_budget_bytes);
+
+    lodbake::Diagnostics d;
+    auto input = lodbake::readMesh(scan, lodbake::ReadOptions(), d);
+    ASSERT_TRUE(input.ok());
+    lodbake::DistanceOptions distance;
+    distance.sample_count = 50000;
+    LoadedPack loaded;
+    loadInLodrt(run.glb, loaded);
+    ASSERT_EQ(loaded.models.model(0).level_count, r.levels.size());
+    EXPECT_EQ(loaded.models.modelLevel(0, 0).hausdorff_error, 0.0f);
+    double finer_h = 0, finer_mean = 0;
+    for (uint32_t l = 1; l < r.levels.size(); ++l) {
+        const lodrt::LevelInfo& level = loaded.models.modelLevel(0, l);
+        const lodbake::Mesh mesh = glbLevelMesh(run.glb, level.mesh);
+        ASSERT_EQ(mesh.faceCount(), level.triangle_count);
+        auto mem = lodbake::measureSurfaceDistance(input->mesh, mesh, distance);
+        ASSERT_TRUE(mem.ok());
+        // The recorded errors keep the chain's rule: at least the finer level's.
+        finer_h = std::max(finer_h, mem->hausdorff);
+        finer_mean = std::max(finer_mean, mem->mean);
+        EXPECT_NEAR(level.hausdorff_error, finer_h, 0.1 * finer_h) << l;
+        EXPECT_NEAR(level.mean_error, finer_mean, 0.03 * finer_mean) << l;
+        EXPECT_NEAR(r.metrics.levels[l].mean_error, finer_mean, 0.03 * finer_mean) << l;
+        // Not the bound, which was recorded as both errors: the measured mean is far below it. (The
+        // Hausdorff error can equal it: a group's error is its largest vertex distance, which the
+        // measurement also finds when the cut is one level above the input.)
+        const double bound = r.levels[l].cut.error_bound;
+        EXPECT_LT(level.mean_error, 0.5 * bound) << l;
+        // Control: a level 1 % of the diagonal away measures outside the tolerance.
+        lodbake::Mesh shifted = mesh;
+        for (lodbake::Vec3f& p : shifted.positions) p.x += float(0.01 * mem->diagonal);
+        auto off = lodbake::measureSurfaceDistance(input->mesh, shifted, distance);
+        ASSERT_TRUE(off.ok());
+        EXPECT_GT(std::fabs(off->mean - level.mean_error), 0.03 * finer_mean) << l;
+    }
+}
+
+// A limit that holds every level but not their measurement (its bound, beside the extracted meshes):
+// the finest levels record their cut's bound, the coarsest that fit are measured, and a note says so.
+TEST(OocPackTest, MeasurementThatDoesNotFitFallsBackToTheBoundWithANote) {
+    const std::string dir = packDir("fallback");
+    const std::string scan = packScan(dir);
+    OocPackOptions o = packOptions(dir + "/work", 256, 2);
+    const PackRun wide = runPack(scan, dir + "/wide.glb", o);
+    ASSERT_TRUE(wide.result.ok()) << wide.result.status().message();
+    const OocPackResult& w = *wide.result;
+    ASSERT_EQ(keptLevels(w), w.levels.size());
+    uint64_t held = 0, work = 0, meshes = 0;
+    for (const OocPackLevel& l : w.levels) {
+        held += l.held_bytes;
+        work = std::max(work, l.work_bytes);
+        meshes += 12 * l.cut.cluster_vertices + 12 * l.cut.triangles;
+    }
+    ASSERT_GT(meshes + w.measure_bound_bytes, held + work) << "the measurement would fit wherever the levels do";
+    const uint64_t fixed = (uint64_t(256) << 20) - w.level_budget_bytes;
+    o.driver.memory_limit_bytes = ((fixed + held + work) | ((uint64_t(1) << 20) - 1)) + 1; // rounded up to a MiB
+    ASSERT_LT(o.driver.memory_limit_bytes - fixed, meshes + w.measure_bound_bytes);
+    lodbake::Diagnostics d;
+    auto r = writeOutOfCorePack(scan, dir + "/tight.glb", o, d);
+    ASSERT_TRUE(r.ok()) << r.status().message();
+    ASSERT_EQ(keptLevels(*r), r->levels.size());
+    EXPECT_EQ(r->levels[0].error_source, LevelErrorSource::Input);
+    EXPECT_EQ(r->levels[1].error_source, LevelErrorSource::Bound);
+    uint64_t measured = 0;
+    for (size_t l = 1; l < r->levels.size(); ++l) {
+        const bool is_measured = r->levels[l].error_source == LevelErrorSource::Measured;
+        measured += is_measured;
+        if (!is_measured) {
+            EXPECT_EQ(r->levels[l].error_source, LevelErrorSource::Bound) << l;
+            EXPECT_EQ(measured, 0u) << "a bound level coarser than a measured one: " << l;
+            EXPECT_GE(r->metrics.levels[l].hausdorff_error, double(r->levels[l].cut.error_bound)) << l;
+        }
+    }
+    EXPECT_EQ(r->measured_levels, measured);
+    EXPECT_LE(r->level_peak_bytes, r->level_budget_bytes);
+    bool noted = false;
+    for (const lodbake::Diagnostic& item : d.items())
+        noted |= item.message.find("error bound") != std::string::npos && item.message.find(scan) != std::string::npos;
+    EXPECT_TRUE(noted);
+    EXPECT_TRUE(filesUnder(dir + "/work").empty());
+}
+
 TEST(OocPackTest, SmallerLimitStartsTheChainBelowTheInputAndSaysSo) {
     const std::string dir = packDir("below");
     const std::string scan = packScan(dir);
@@ -194,7 +333,7 @@ TEST(OocPackTest, SmallerLimitStartsTheChainBelowTheInputAndSaysSo) {
     EXPECT_EQ(model.input_triangle_count, wide.result->input_triangles);
     const lodrt::LevelInfo& first = loaded.models.modelLevel(0, 0);
     EXPECT_LT(first.triangle_count, wide.result->input_triangles);
-    EXPECT_GT(first.hausdorff_error, 0.0f); // a cut's bound, allowed on level 0 with inputTriangles
+    EXPECT_GT(first.hausdorff_error, 0.0f); // a cut's error, allowed on level 0 with inputTriangles
     EXPECT_EQ(first.switch_distance, 0.0f);
     lodrt::ClusterPackSource source;
     ASSERT_EQ(lodrt::clusterPackFind(loaded.pack, first.mesh, &source), lodrt::Result::Ok);
@@ -308,6 +447,65 @@ TEST(OocPackCliTest, ClustersBakeOverTheLimitOutOfCoreAndTheValidatorAcceptsTheP
         lodbake_test::shellQuote(lodbake_test::sourceDir() + "/scripts/node/validate-gltf.js") + " " +
         lodbake_test::shellQuote(out));
     EXPECT_EQ(valid.exit_code, 0) << valid.output;
+}
+
+std::vector<std::string> outputLines(const std::string& out) {
+    std::vector<std::string> lines;
+    std::string line;
+    for (char c : out) {
+        if (c != '\n') line += c;
+        else lines.push_back(line), line.clear();
+    }
+    return lines;
+}
+
+// A farm's bake: --plan and each job in processes of their own, the last --plan with -o writing
+// the pack, gives the bytes of the in-process `lodbake bake --clusters --memory-limit N` of the same
+// input. 90 MiB makes partitions of 131,072 triangles (leafTrianglesForLimit), so a scan of 300,000
+// is three partitions and their merges. Once the pack is written the plan's files are gone.
+TEST(OocPackCliTest, PlannedBakeWritesTheInProcessPack) {
+    const std::string dir = packDir("cli_plan");
+    const std::string scan = packScan(dir, 300000);
+    const std::string limit = "90";
+    const std::string reference = dir + "/ref/scan.glb";
+    fs::create_directories(dir + "/ref");
+    const lodbake_test::CliRun baked = lodbake_test::runLodbake(
+        {"bake", scan, "--clusters", "--memory-limit", limit, "--threads", "2", "-o", reference});
+    ASSERT_EQ(baked.exit_code, 0) << baked.err;
+    const std::string work = dir + "/work", out = dir + "/farm/scan.glb";
+    fs::create_directories(dir + "/farm");
+    bool finished = false;
+    size_t partitions = 0, jobs = 0;
+    for (int step = 0; step < 20 && !finished; ++step) {
+        const lodbake_test::CliRun plan = lodbake_test::runLodbake(
+            {"bake", scan, "--clusters", "--plan", "--work-dir", work, "--memory-limit", limit, "-o", out});
+        ASSERT_EQ(plan.exit_code, 0) << plan.err;
+        const std::vector<std::string> lines = outputLines(plan.out);
+        ASSERT_FALSE(lines.empty());
+        finished = lines.size() == 1;
+        // The pack is written only by the --plan that finds every job done.
+        EXPECT_EQ(fs::exists(out), finished);
+        for (size_t i = 1; i < lines.size(); ++i) {
+            partitions += lines[i].rfind("partition-", 0) == 0;
+            ++jobs;
+            const lodbake_test::CliRun job = lodbake_test::runLodbake(
+                {"bake", "--run-job", lines[i], "--work-dir", work, "--memory-limit", limit, "--threads", "1"});
+            ASSERT_EQ(job.exit_code, 0) << job.err;
+        }
+    }
+    ASSERT_TRUE(finished);
+    EXPECT_GE(partitions, 3u);
+    EXPECT_GT(jobs, partitions + 1); // merges and the pages job
+    auto farm = lodbake::readFileBytes(out);
+    auto ref = lodbake::readFileBytes(reference);
+    ASSERT_TRUE(farm.ok() && ref.ok());
+    EXPECT_FALSE(ref->empty());
+    EXPECT_EQ(*farm, *ref);
+    EXPECT_TRUE(filesUnder(work).empty()) << filesUnder(work).front();
+    // --output belongs to --plan only.
+    const lodbake_test::CliRun wrong =
+        lodbake_test::runLodbake({"bake", "--run-job", "pages", "--work-dir", work, "-o", out});
+    EXPECT_EQ(wrong.exit_code, 2) << wrong.err;
 }
 
 TEST(OocPackCliTest, AFailedOutOfCoreBakeLeavesNoOutputAndNoWorkFiles) {

@@ -153,6 +153,11 @@ JobProgress jobProgress(const std::string& work_dir, const JobPlan& plan);
 /// GLB writer of an out-of-core bake takes; InvalidInput naming the plan when it is not complete.
 Result<OutOfCoreResult> plannedResult(const std::string& work_dir);
 
+/// Removes every file of the plan in `work_dir`: each job's input files, output, table and record
+/// (those that are there), then plan.json; what was not removed is left quietly (the work folder is
+/// the caller's). What a finished bake does once its GLB is written.
+void removePlannedFiles(const std::string& work_dir);
+
 // The job functions, shared by runJob and the in-process driver.
 
 /// A partition job's output: the hierarchy file and what it adds to a merge's bound.

@@ -16,9 +16,13 @@
 // any geometry is read; finer levels exist only as cluster pages. None fitting is a ResourceLimit
 // error naming the input.
 //
-// Errors of a level: the cut's group-error bound (LevelCut::error_bound, a bound on its distance to
-// the input), as both the Hausdorff and the mean error until errors are measured against the input
-// (OocPackOptions::level_errors, the seam for that measurement).
+// Errors of a level: measured against the input (measureLevelErrors, level_error.h: the bake's
+// error_samples, one pass over the partition files for every kept level), the two-sided distance
+// the in-memory bake records; the input itself (the cut at 0) has error 0. The measurement's bound
+// (levelErrorBound) is reserved beside the kept levels' meshes, its subsample shrunk (time, not bits)
+// before a level is given up; the finest levels whose measurement does not fit keep the cut's group-error bound (LevelCut::error_bound, a bound on their
+// distance to the input) as both errors, and a diagnostic note says which. A coarser level's errors
+// are at least the finer level's, as in the in-memory bake.
 //
 // Determinism: the driver's output, the cuts, the welding and the coding depend on the input and the
 // options only; the limit decides only which levels are kept. Failure: every file the run made
@@ -37,6 +41,7 @@
 #include "lodbake/ooc/driver.h"
 #include "lodbake/ooc/level_cut.h"
 #include "lodbake/pack/pack.h"
+#include "lodbake/simplify/mesh_distance.h"
 #include "lodbake/stream/stream.h"
 
 namespace lodbake::ooc {
@@ -58,12 +63,15 @@ uint64_t levelWorkBytes(const LevelCut& cut);
 /// the limit only below that (about 300 MiB), where no default job could run at all.
 uint64_t leafTrianglesForLimit(uint64_t limit, const StreamReadOptions& read, uint64_t sample_cap);
 
-/// Measured errors of the kept levels (finest first), when a caller measures them against the
-/// input: each entry's hausdorff and mean replace the cut's bound. Empty: the bound is used.
+/// Errors of a kept level (finest first), when a caller replaces the measurement: each entry's
+/// hausdorff and mean are recorded as the level's errors.
 struct LevelError {
     double hausdorff = 0;
     double mean = 0;
 };
+
+/// How the kept levels' errors were found.
+enum class LevelErrorSource : uint32_t { Input = 0, Measured = 1, Bound = 2, Caller = 3 };
 
 struct OocPackOptions {
     OutOfCoreOptions driver;         // work folder, limit, threads, cluster and page options, cancel
@@ -73,8 +81,9 @@ struct OocPackOptions {
     double hysteresis = 0.1;
     ValenceStreamOptions valence;    // the levels' streams (position bits also the pages' grid bits)
     bool compact = false;            // PackDescription::compact
+    DistanceOptions distance;        // the measurement's (the bake sets sample_count to error_samples)
     /// Called with the kept levels' cuts (finest first) before their metrics are written; returns
-    /// one LevelError per level, or an empty list to keep the cut's bound. Optional.
+    /// one LevelError per level, which replaces the measurement, or an empty list to measure. Optional.
     std::function<Result<std::vector<LevelError>>(const std::vector<LevelCut>& kept)> level_errors;
 };
 
@@ -85,6 +94,7 @@ struct OocPackLevel {
     LevelCut cut;
     uint64_t held_bytes = 0, work_bytes = 0;
     bool kept = false;
+    LevelErrorSource error_source = LevelErrorSource::Bound; // kept levels: where their errors came from
 };
 
 struct OocPackResult {
@@ -94,8 +104,11 @@ struct OocPackResult {
     std::vector<OocPackLevel> levels; // every candidate (duplicates of a finer cut left out)
     uint64_t level_budget_bytes = 0;  // what the levels could use
     uint64_t level_peak_bytes = 0;    // what the kept levels were accounted (sum held + max work)
+    uint64_t measured_levels = 0;     // kept levels measured against the input
+    uint64_t measure_bound_bytes = 0; // levelErrorBound of those levels (reserved beside the kept levels)
+    uint64_t measure_peak_bytes = 0;  // the measurement's accounted peak
     OutOfCoreResult driver;           // its tree's files are gone
-    double cut_seconds = 0, pack_seconds = 0;
+    double cut_seconds = 0, measure_seconds = 0, pack_seconds = 0;
 };
 
 /// Bakes `input` (.ply or .obj) out of core into the pack at `output_path` (written through a
@@ -103,5 +116,14 @@ struct OocPackResult {
 /// its file; on any error no output and none of the run's files are left.
 Result<OocPackResult> writeOutOfCorePack(const std::string& input, const std::string& output_path,
                                          const OocPackOptions& options, Diagnostics& diagnostics);
+
+/// The pack of a finished job list (jobs.h) in `work_dir`: plannedResult's tree, pages and table, and
+/// the partition files the plan's first step wrote, made into the GLB at `output_path` by the same
+/// code as writeOutOfCorePack's after its driver, so that for the same options (the plan's and
+/// these: options.driver's limit and cancel, the chain's) the bytes are writeOutOfCorePack's. The
+/// plan's input names errors. Once the GLB is in place every file the plan lists (partitions, the
+/// jobs' outputs and records, plan.json) is removed; on an error they all stay, so it can run again.
+Result<OocPackResult> writePlannedPack(const std::string& work_dir, const std::string& output_path,
+                                       const OocPackOptions& options, Diagnostics& diagnostics);
 
 } // namespace lodbake::ooc
