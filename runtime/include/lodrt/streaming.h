@@ -279,8 +279,13 @@ private:
         uint32_t step_count;    // chain levels + 1
         PfrepStreamState state;
         uint8_t is_failed;
-        uint8_t format;         // 2: streamed as prefixes; 3: read whole and decoded (to format 2)
+        uint8_t format;         // 2: streamed as prefixes; 3, 4: read whole and decoded (to format 2)
         size_t scratch_bytes;   // format 3: pfrepDecompress scratch
+        // Format 4: LOD0's valence stream, [lod0_offset, + lod0_size) of level 0's bytes (slot
+        // lod0_slot), which must be resident when the blob is decoded.
+        uint64_t lod0_offset;
+        uint64_t lod0_size;
+        uint32_t lod0_slot;
     };
     struct ClusterModel {
         ClusterLodPack pack;
