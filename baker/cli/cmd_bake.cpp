@@ -81,10 +81,10 @@ options:
                         levels (preset key pfrep_from_chain; on in desktop, mobile, vr)
   --no-pfrep-from-chain  build it from a half-edge simplification of its own: more accurate PFRep
                         levels (archive's default)
-  --pfrep-format F      3 (default): that blob range-coded, decoded whole by the runtime; 4: coded
-                        against LOD0's own stream (the runtime decodes it once LOD0 is resident);
-                        2: the uncompressed blob, streamed as a growing prefix (preset key
-                        pfrep_format)
+  --pfrep-format F      4 (default): that blob coded against LOD0's own stream, decoded by the
+                        runtime once LOD0 is resident (--compact packs; format 3 otherwise); 3: range-
+                        coded, decoded whole by the runtime; 2: the uncompressed blob, streamed as a
+                        growing prefix (preset key pfrep_format)
   --clusters            add LOD0's cluster LOD hierarchy (LODBAKE_cluster_lod: clusters, groups and
                         pages a runtime cuts per view; preset key cluster_lod; docs/cluster_lod.md)
   --adaptive-precision  levels after LOD0 coded with position/normal bits from their own measured

@@ -14,7 +14,7 @@
 // The same bake with --web instead of --compact (EXT_meshopt_compression + KHR_mesh_quantization,
 // docs/format/web.md) is measured against the same gltfpack files: bar <= 1.0 on the worst scan
 // (goal 0.9).
-// The same --compact bake with the PFRep blob (LODBAKE_progressive_fans, format 3 as the bake writes it
+// The same --compact bake with the PFRep blob (LODBAKE_progressive_fans, format 4 as the bake writes it
 // by default; pfrep_from_chain as the preset says) is measured against them too: bar <= 0.7 on the
 // worst scan, must <= 1.0 (issue 30). --pfrep-format F bakes that blob as format F instead (2, 3 or 4).
 //

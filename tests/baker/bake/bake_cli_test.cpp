@@ -341,7 +341,7 @@ TEST(BakeCliUsageTest, PresetErrorsAndOverrides) {
     ASSERT_EQ(r.exit_code, 0) << r.output;
     EXPECT_TRUE(nlohmann::json::parse(r.output)["pfrep_from_chain"].get<bool>());
     EXPECT_EQ(bake("--print-config --pfrep-from-chain --no-pfrep-from-chain").exit_code, 2);
-    EXPECT_EQ(printed["pfrep_format"].get<uint32_t>(), 3u); // the PFRep blob range-coded by default
+    EXPECT_EQ(printed["pfrep_format"].get<uint32_t>(), 4u); // the PFRep blob coded against LOD0 by default
     r = bake("--print-config --preset " + shellQuote(src("configs/desktop.json")) + " --pfrep-format 2");
     ASSERT_EQ(r.exit_code, 0) << r.output;
     EXPECT_EQ(nlohmann::json::parse(r.output)["pfrep_format"].get<uint32_t>(), 2u);
