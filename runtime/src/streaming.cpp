@@ -223,6 +223,27 @@ JsonValue pfrepExtension(const Pack& pack, const ModelSet& models, uint32_t m) {
     return pack.mesh(level0.mesh).json.find("extensions").find(format::kExtProgressiveFans);
 }
 
+// Format 4: LOD0's one primitive's valence stream, inside level 0's bytes (docs/format/pfrep.md "In a
+// glTF pack"). False when LOD0 has another layout (the stream then fails).
+bool findLod0Stream(const Pack& pack, const ModelSet& models, uint32_t m, uint64_t* offset, uint64_t* size,
+                    uint32_t* slot) {
+    const LevelInfo& level0 = models.level(models.model(m).first_level);
+    if (level0.mesh == kNoIndex || level0.mesh >= pack.meshCount() || level0.data_size == 0) return false;
+    const MeshInfo& mesh = pack.mesh(level0.mesh);
+    if (mesh.primitive_count != 1) return false;
+    const JsonValue ext = pack.primitive(mesh.first_primitive).json.find("extensions").find(format::kExtValenceCompression);
+    uint64_t view = 0;
+    if (!ext.find("bufferView").asUint64(&view) || view >= pack.bufferViewCount()) return false;
+    const BufferViewInfo& v = pack.bufferView(uint32_t(view));
+    if (!pack.buffer(v.buffer).is_glb_bin || v.byte_offset < level0.data_offset ||
+        v.byte_offset + v.byte_length > level0.data_offset + level0.data_size || v.byte_length == 0)
+        return false;
+    *offset = v.byte_offset - level0.data_offset;
+    *size = v.byte_length;
+    *slot = models.model(m).first_level;
+    return true;
+}
+
 } // namespace
 
 Result PackSource::pfrepDecodeMemory(uint32_t model, uint64_t* decoded_bytes, uint64_t* scratch_bytes) const {
@@ -232,14 +253,40 @@ Result PackSource::pfrepDecodeMemory(uint32_t model, uint64_t* decoded_bytes, ui
     const JsonValue ext = pfrepExtension(pack_, models_, model);
     uint64_t view = 0, blob_format = 0;
     if (!ext.isObject() || !ext.find(format::kPfrepExtensionFormatMember).asUint64(&blob_format) ||
-        blob_format != format::kPfrepVersionCompressed)
+        (blob_format != format::kPfrepVersionCompressed && blob_format != format::kPfrepVersionLod0))
         return Result::Ok;
     if (!ext.find("bufferView").asUint64(&view) || view >= pack_.bufferViewCount()) return Result::BadStructure;
     uint8_t header[format::kPfrepHeaderSize];
     Result r = readBufferView(uint32_t(view), 0, header, sizeof(header));
     if (r != Result::Ok) return r;
+    if (blob_format == format::kPfrepVersionLod0) return format4DecodeMemory(model, header, decoded_bytes, scratch_bytes);
     PfrepCompressedInfo info;
     r = pfrepCompressedInfo(header, sizeof(header), &info);
+    if (r != Result::Ok) return r;
+    *decoded_bytes = info.decoded_bytes;
+    *scratch_bytes = info.scratch_bytes;
+    return Result::Ok;
+}
+
+// Format 4: the scratch depends on LOD0's stream too, which is read once (a transient buffer).
+Result PackSource::format4DecodeMemory(uint32_t model, const uint8_t* header, uint64_t* decoded_bytes,
+                                       uint64_t* scratch_bytes) const {
+    uint64_t offset = 0, size = 0;
+    uint32_t slot = 0;
+    if (!findLod0Stream(pack_, models_, model, &offset, &size, &slot) || size > SIZE_MAX) return Result::BadStructure;
+    const LevelInfo& level0 = models_.modelLevel(model, 0);
+    uint8_t* stream = static_cast<uint8_t*>(detail::allocateBytes(allocator_, size_t(size)));
+    if (!stream) return Result::OutOfMemory;
+    Result r = Result::Ok;
+    if (bin_)
+        std::memcpy(stream, bin_ + level0.data_offset + offset, size_t(size));
+    else if (reader_.read)
+        r = reader_.read(reader_.user, bin_offset_ + level0.data_offset + offset, stream, size_t(size));
+    else
+        r = Result::InvalidArgument;
+    PfrepPackFormat4Info info;
+    if (r == Result::Ok) r = pfrepPackFormat4Info(header, format::kPfrepHeaderSize, stream, size_t(size), &info);
+    detail::deallocateBytes(allocator_, stream);
     if (r != Result::Ok) return r;
     *decoded_bytes = info.decoded_bytes;
     *scratch_bytes = info.scratch_bytes;
@@ -518,31 +565,6 @@ Result Streamer::init(const PackSource* source, const JobSystem* jobs, const Str
     rebuildResidentTable();
     return Result::Ok;
 }
-
-namespace {
-
-// Format 4: LOD0's one primitive's valence stream, inside level 0's bytes (docs/format/pfrep.md "In a
-// glTF pack"). False when LOD0 has another layout (the stream then fails).
-bool findLod0Stream(const Pack& pack, const ModelSet& models, uint32_t m, uint64_t* offset, uint64_t* size,
-                    uint32_t* slot) {
-    const LevelInfo& level0 = models.level(models.model(m).first_level);
-    if (level0.mesh == kNoIndex || level0.mesh >= pack.meshCount() || level0.data_size == 0) return false;
-    const MeshInfo& mesh = pack.mesh(level0.mesh);
-    if (mesh.primitive_count != 1) return false;
-    const JsonValue ext = pack.primitive(mesh.first_primitive).json.find("extensions").find(format::kExtValenceCompression);
-    uint64_t view = 0;
-    if (!ext.find("bufferView").asUint64(&view) || view >= pack.bufferViewCount()) return false;
-    const BufferViewInfo& v = pack.bufferView(uint32_t(view));
-    if (!pack.buffer(v.buffer).is_glb_bin || v.byte_offset < level0.data_offset ||
-        v.byte_offset + v.byte_length > level0.data_offset + level0.data_size || v.byte_length == 0)
-        return false;
-    *offset = v.byte_offset - level0.data_offset;
-    *size = v.byte_length;
-    *slot = models.model(m).first_level;
-    return true;
-}
-
-} // namespace
 
 void Streamer::initPfrepStream(uint32_t m) {
     PfrepStream& ps = *new (&pfrep_[m]) PfrepStream();

@@ -763,6 +763,11 @@ TEST(PfrepStreamingTest, Format4WaitsForLevel0ThenMatchesFormat2) {
         ASSERT_NE(got, nullptr);
         const Blob want = blobOf(source2, m);
         expectSameTables(*got, want.whole);
+        // What an engine sizes its allocator by: the decoded size and the scratch (LOD0's stream read).
+        uint64_t decoded = 0, scratch = 0;
+        ASSERT_EQ(source.pfrepDecodeMemory(m, &decoded, &scratch), Result::Ok);
+        EXPECT_EQ(decoded, got->size);
+        EXPECT_GT(scratch, decoded);
     }
     // Model 0's blob zeroed after its header: its stream fails, the levels and model 1 still stream.
     const Format4Blob b = format4Blob(source, 0);
