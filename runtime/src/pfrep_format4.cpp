@@ -91,8 +91,8 @@ size_t pfrepNumberLod0ScratchBytes(uint32_t vertex_count) {
 Result pfrepNumberLod0(const float* positions, uint32_t vertex_count, const uint32_t* indices, uint32_t triangle_count,
                        float* points, size_t point_capacity, uint32_t* triangles, size_t triangle_capacity,
                        void* scratch, size_t scratch_bytes, PfrepLod0* lod0) {
-    if ((vertex_count > 0 && (!positions || !points)) || (triangle_count > 0 && (!indices || !triangles)) ||
-        !scratch || !lod0)
+    if ((vertex_count > 0 && (!positions || !points)) || (triangle_count > 0 && (!indices || !triangles)) || !scratch ||
+        !lod0)
         return Result::InvalidArgument;
     if (point_capacity < size_t(vertex_count) * 3 || triangle_capacity < size_t(triangle_count) * 3 ||
         scratch_bytes < pfrepNumberLod0ScratchBytes(vertex_count))
@@ -179,8 +179,7 @@ Result pfrepDecodeFormat4(const void* data, size_t size, const PfrepLod0& lod0, 
     if (!detail::pfrep4LoadLod0(s)) return Result::BadStructure;
     if (!detail::pfrep4CodeLod0Check(c, s)) return c.rd.overrun() ? Result::Truncated : Result::BadStructure;
     if (!detail::pfrep4CodeRemovals(c, *models, s, nullptr, nullptr) || !detail::pfrep4CodeTail(c, s, nullptr) ||
-        !detail::pfrep4BuildSlots(s) ||
-        !detail::pfrep4Layout(s) || s.layout_size != s.h.decoded_size ||
+        !detail::pfrep4BuildSlots(s) || !detail::pfrep4Layout(s) || s.layout_size != s.h.decoded_size ||
         !detail::pfrep4CodeRecords(c, *models, s, nullptr, o))
         return c.rd.overrun() ? Result::Truncated : Result::CorruptStream;
     detail::pfrep4WriteBlob(s, o);
@@ -191,7 +190,9 @@ Result pfrepDecodeFormat4(const void* data, size_t size, const PfrepLod0& lod0, 
 
 namespace {
 
-size_t align8(uint64_t n) { return size_t((n + 7) & ~uint64_t(7)); }
+size_t align8(uint64_t n) {
+    return size_t((n + 7) & ~uint64_t(7));
+}
 
 // Scratch of a pack's format 4 decode, in order: LOD0's positions and indices as its stream decodes
 // them, the numbered points and triangles, then one block the valence decoder, the numbering and
@@ -261,7 +262,8 @@ Result pfrepDecodePackFormat4(const void* blob, size_t blob_size, const void* lo
     o.position_capacity = size_t(v.vertex_count) * 3;
     o.scratch = shared;
     o.scratch_size = size_t(p.shared);
-    if (valenceDecode(static_cast<const uint8_t*>(lod0_stream), lod0_size, o) != Result::Ok) return Result::BadStructure;
+    if (valenceDecode(static_cast<const uint8_t*>(lod0_stream), lod0_size, o) != Result::Ok)
+        return Result::BadStructure;
     PfrepLod0 lod0;
     r = pfrepNumberLod0(positions, v.vertex_count, indices, v.triangle_count, points, size_t(v.vertex_count) * 3,
                         triangles, size_t(v.triangle_count) * 3, shared, size_t(p.shared), &lod0);

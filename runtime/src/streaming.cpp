@@ -231,7 +231,8 @@ bool findLod0Stream(const Pack& pack, const ModelSet& models, uint32_t m, uint64
     if (level0.mesh == kNoIndex || level0.mesh >= pack.meshCount() || level0.data_size == 0) return false;
     const MeshInfo& mesh = pack.mesh(level0.mesh);
     if (mesh.primitive_count != 1) return false;
-    const JsonValue ext = pack.primitive(mesh.first_primitive).json.find("extensions").find(format::kExtValenceCompression);
+    const JsonValue ext =
+        pack.primitive(mesh.first_primitive).json.find("extensions").find(format::kExtValenceCompression);
     uint64_t view = 0;
     if (!ext.find("bufferView").asUint64(&view) || view >= pack.bufferViewCount()) return false;
     const BufferViewInfo& v = pack.bufferView(uint32_t(view));
@@ -259,7 +260,8 @@ Result PackSource::pfrepDecodeMemory(uint32_t model, uint64_t* decoded_bytes, ui
     uint8_t header[format::kPfrepHeaderSize];
     Result r = readBufferView(uint32_t(view), 0, header, sizeof(header));
     if (r != Result::Ok) return r;
-    if (blob_format == format::kPfrepVersionLod0) return format4DecodeMemory(model, header, decoded_bytes, scratch_bytes);
+    if (blob_format == format::kPfrepVersionLod0)
+        return format4DecodeMemory(model, header, decoded_bytes, scratch_bytes);
     PfrepCompressedInfo info;
     r = pfrepCompressedInfo(header, sizeof(header), &info);
     if (r != Result::Ok) return r;
@@ -593,7 +595,8 @@ void Streamer::initPfrepStream(uint32_t m) {
                 (f == format::kPfrepVersion || f == format::kPfrepVersionCompressed || f == format::kPfrepVersionLod0);
         ps.format = uint8_t(f);
     }
-    is_ok = is_ok && (ps.format != format::kPfrepVersionLod0 || findLod0Stream(pack, models, m, &ps.lod0_offset, &ps.lod0_size, &ps.lod0_slot));
+    is_ok = is_ok && (ps.format != format::kPfrepVersionLod0 ||
+                      findLod0Stream(pack, models, m, &ps.lod0_offset, &ps.lod0_size, &ps.lod0_slot));
     const JsonValue levels = ext.find("levels");
     is_ok = is_ok && levels.isArray() && levels.size() >= info.level_count;
     for (uint32_t l = 0; is_ok && l < info.level_count; ++l) {
@@ -1032,7 +1035,8 @@ bool Streamer::preparePfrepWhole(Task& t, PfrepStream& ps, uint64_t size) {
         if (s.state != LevelState::Resident) return false;
         lod0 = s.data + ps.lod0_offset;
         PfrepPackFormat4Info info;
-        if (pfrepPackFormat4Info(ps.header, format::kPfrepHeaderSize, lod0, size_t(ps.lod0_size), &info) != Result::Ok) {
+        if (pfrepPackFormat4Info(ps.header, format::kPfrepHeaderSize, lod0, size_t(ps.lod0_size), &info) !=
+            Result::Ok) {
             ps.state = PfrepStreamState::Failed;
             ps.is_failed = 1;
             ++stats_.failures;

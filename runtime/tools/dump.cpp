@@ -574,9 +574,9 @@ void checkStreams(const lodrt::Pack& pack, const std::vector<LodGroup>& groups, 
         const lodrt::Result r = openPackPfrep(pack, mesh, uint32_t(format), data, size_t(size), decoded, &model);
         if (r != lodrt::Result::Ok) {
             problems.push_back({where, std::string("stream fails to decode") +
-                                           (format == lodrt::format::kPfrepVersion        ? ": "
+                                           (format == lodrt::format::kPfrepVersion       ? ": "
                                             : format == lodrt::format::kPfrepVersionLod0 ? " (format 4): "
-                                                                                          : " (format 3): ") +
+                                                                                         : " (format 3): ") +
                                            lodrt::resultName(r)});
             continue;
         }

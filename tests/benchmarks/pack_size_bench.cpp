@@ -118,9 +118,10 @@ int main(int argc, char** argv) {
                     std::strcmp(argv[i + 1], "4") == 0)) {
             pfrep_format = uint32_t(argv[++i][0] - '0');
         } else if (argv[i][0] == '-') {
-            std::fprintf(stderr,
-                         "usage: pack_size_bench [--levels] [--preset FILE] [--no-adaptive] [--pfrep-format F] [--check] "
-                         "[MESH...]\n");
+            std::fprintf(
+                stderr,
+                "usage: pack_size_bench [--levels] [--preset FILE] [--no-adaptive] [--pfrep-format F] [--check] "
+                "[MESH...]\n");
             return 2;
         } else {
             meshes.push_back(argv[i]);

@@ -281,7 +281,8 @@ Result<std::vector<uint32_t>> renumberRanks(const std::vector<uint32_t>& ranks, 
 }
 
 Result<std::vector<uint8_t>> codeFormat4(const PfrepBuild& build, const std::vector<Vec3f>& points,
-                                         const std::vector<uint32_t>& triangles, const std::vector<uint32_t>* point_of) {
+                                         const std::vector<uint32_t>& triangles,
+                                         const std::vector<uint32_t>* point_of) {
     namespace d = lodrt::detail;
     lodrt::PfrepModel model;
     const lodrt::Result opened = lodrt::openPfrep(build.blob.data(), build.blob.size(), &model);
@@ -315,10 +316,13 @@ Result<std::vector<uint8_t>> codeFormat4(const PfrepBuild& build, const std::vec
     std::vector<uint8_t> records(size_t(model.vertex_count) * fmt::kPfrepVertexRecordSize);
     for (uint32_t i = 0; i < model.vertex_count; ++i)
         std::memcpy(&records[size_t(i) * fmt::kPfrepVertexRecordSize], view.record(i), fmt::kPfrepVertexRecordSize);
-    LODBAKE_ASSIGN_OR_RETURN(const std::vector<uint32_t> rank_point, renumberRanks(build.rank_point, point_of, points.size()));
-    LODBAKE_ASSIGN_OR_RETURN(const std::vector<uint32_t> rank_kept, renumberRanks(build.rank_kept, point_of, points.size()));
+    LODBAKE_ASSIGN_OR_RETURN(const std::vector<uint32_t> rank_point,
+                             renumberRanks(build.rank_point, point_of, points.size()));
+    LODBAKE_ASSIGN_OR_RETURN(const std::vector<uint32_t> rank_kept,
+                             renumberRanks(build.rank_kept, point_of, points.size()));
     EncodeCoder c;
-    if (!d::pfrep4LoadLod0(s) || !d::pfrep4CodeLod0Check(c, s) || !d::pfrep4CodeRemovals(c, *models, s, rank_point.data(), rank_kept.data()) ||
+    if (!d::pfrep4LoadLod0(s) || !d::pfrep4CodeLod0Check(c, s) ||
+        !d::pfrep4CodeRemovals(c, *models, s, rank_point.data(), rank_kept.data()) ||
         !d::pfrep4CodeTail(c, s, rank_point.data()))
         return invalidInput("pfrep: format 4: the removal sequence does not replay on LOD0");
     if (!d::pfrep4BuildSlots(s) || !d::pfrep4Layout(s))

@@ -77,7 +77,8 @@ std::vector<PositionKey> canonicalTriangles(const std::vector<uint32_t>& triangl
 // or the triangles differ (quantization welded two points, or made a triangle degenerate).
 std::vector<uint32_t> streamPointOf(const Mesh& mesh, const std::vector<Vec3f>& points,
                                     const std::vector<uint32_t>& triangles, const DecodedLevelStream& decoded,
-                                    const std::vector<Vec3f>& stream_points, const std::vector<uint32_t>& stream_triangles) {
+                                    const std::vector<Vec3f>& stream_points,
+                                    const std::vector<uint32_t>& stream_triangles) {
     if (points.size() != stream_points.size() || triangles.size() != stream_triangles.size()) return {};
     const auto index = pointIndex(points), stream_index = pointIndex(stream_points);
     std::vector<uint32_t> point_of(points.size(), UINT32_MAX);
@@ -106,8 +107,8 @@ std::vector<uint32_t> streamPointOf(const Mesh& mesh, const std::vector<Vec3f>& 
 // resident (docs/format/pfrep.md "In a glTF pack"). No value when LOD0's stream cannot stand for it
 // (several primitives, or a topology its quantization changed): the bake then writes format 3.
 Result<std::optional<std::vector<uint8_t>>> codeAgainstStream(const PfrepExtensionObject& object,
-                                                               const ValenceStreamOptions& valence,
-                                                               const LodChain& chain, const Mesh& mesh) {
+                                                              const ValenceStreamOptions& valence,
+                                                              const LodChain& chain, const Mesh& mesh) {
     using NoBlob = std::optional<std::vector<uint8_t>>;
     LODBAKE_ASSIGN_OR_RETURN(std::optional<DecodedLevelStream> decoded, decodedLevelStream(valence, chain, 0, mesh));
     if (!decoded || decoded->mesh.positions.size() >= lodrt::format::kPfrepMaxVertices) return NoBlob();
@@ -146,7 +147,8 @@ Result<std::optional<std::vector<uint8_t>>> codeAgainstStream(const PfrepExtensi
 Result<uint32_t> codeBlob(PfrepExtensionObject& object, uint32_t format, const ValenceStreamOptions& valence,
                           const LodChain& chain, const Mesh& mesh) {
     if (format == lodrt::format::kPfrepVersionLod0) {
-        LODBAKE_ASSIGN_OR_RETURN(std::optional<std::vector<uint8_t>> blob, codeAgainstStream(object, valence, chain, mesh));
+        LODBAKE_ASSIGN_OR_RETURN(std::optional<std::vector<uint8_t>> blob,
+                                 codeAgainstStream(object, valence, chain, mesh));
         if (blob) {
             object.blob = std::move(*blob);
             return format;
