@@ -9,6 +9,7 @@
 #include "lodrt/detail/pfrep_codec4.h"
 #include "lodrt/format.h"
 #include "lodrt/pfrep.h"
+#include "lodrt/valence.h"
 #include "little_endian.h"
 #include "range_decoder.h"
 
@@ -50,7 +51,9 @@ Result readHeader(const uint8_t* p, size_t size, detail::Pfrep4Header& h) {
     h.error_unit = loadF32(p + 48);
     h.decoded_size = loadU32(p + 52);
     h.stored_triangles = loadU32(p + 56);
-    if (!std::isfinite(h.error_unit) || h.error_unit < 0 || loadU32(p + 60) != 0) return Result::BadStructure;
+    h.flags = loadU32(p + 60);
+    if (!std::isfinite(h.error_unit) || h.error_unit < 0 || (h.flags & ~format::kPfrep4Flags) != 0)
+        return Result::BadStructure;
     if (h.vertex_count > format::kPfrepMaxVertices || h.removed_count > h.vertex_count ||
         h.point_count > format::kPfrepMaxVertices || h.vertex_count > h.point_count ||
         h.stored_triangles < h.level0_triangles ||
@@ -65,7 +68,73 @@ Result readHeader(const uint8_t* p, size_t size, detail::Pfrep4Header& h) {
     return Result::Ok;
 }
 
+// Slots of the welding hash table: a power of two at least twice the vertex count.
+uint64_t weldSlots(uint32_t vertex_count) {
+    uint64_t n = 2;
+    while (n < uint64_t(vertex_count) * 2) n <<= 1;
+    return n;
+}
+
+uint32_t positionHash(const uint32_t bits[3]) {
+    uint32_t h = bits[0] * 0x9E3779B1u;
+    h ^= bits[1] * 0x85EBCA77u + (h << 6) + (h >> 2);
+    h ^= bits[2] * 0xC2B2AE3Du + (h << 6) + (h >> 2);
+    return h ^ (h >> 15);
+}
+
 } // namespace
+
+size_t pfrepNumberLod0ScratchBytes(uint32_t vertex_count) {
+    return size_t((weldSlots(vertex_count) + vertex_count) * sizeof(uint32_t) + 7) & ~size_t(7);
+}
+
+Result pfrepNumberLod0(const float* positions, uint32_t vertex_count, const uint32_t* indices, uint32_t triangle_count,
+                       float* points, size_t point_capacity, uint32_t* triangles, size_t triangle_capacity,
+                       void* scratch, size_t scratch_bytes, PfrepLod0* lod0) {
+    if ((vertex_count > 0 && (!positions || !points)) || (triangle_count > 0 && (!indices || !triangles)) || !scratch ||
+        !lod0)
+        return Result::InvalidArgument;
+    if (point_capacity < size_t(vertex_count) * 3 || triangle_capacity < size_t(triangle_count) * 3 ||
+        scratch_bytes < pfrepNumberLod0ScratchBytes(vertex_count))
+        return Result::BufferTooSmall;
+    const uint64_t slots = weldSlots(vertex_count);
+    uint32_t* table = static_cast<uint32_t*>(scratch);
+    uint32_t* point_of = table + slots; // per vertex: its welded point (kNone until used)
+    std::memset(table, 0xFF, size_t(slots) * sizeof(uint32_t));
+    // Weld: each vertex to the first vertex with its position bits (open addressing), kept in
+    // point_of as "weld representative" for now.
+    for (uint32_t v = 0; v < vertex_count; ++v) {
+        uint32_t bits[3];
+        std::memcpy(bits, positions + size_t(v) * 3, 12);
+        uint64_t at = positionHash(bits) & (slots - 1);
+        while (table[at] != detail::kNone && std::memcmp(positions + size_t(table[at]) * 3, bits, 12) != 0)
+            at = (at + 1) & (slots - 1);
+        if (table[at] == detail::kNone) table[at] = v;
+        point_of[v] = table[at];
+    }
+    // The table is free again: it now maps a representative to its point id.
+    std::memset(table, 0xFF, size_t(vertex_count) * sizeof(uint32_t)); // slots >= vertex_count
+    uint32_t point_count = 0, kept = 0;
+    for (uint32_t t = 0; t < triangle_count; ++t) {
+        const uint32_t* c = indices + size_t(t) * 3;
+        if (c[0] >= vertex_count || c[1] >= vertex_count || c[2] >= vertex_count) return Result::BadStructure;
+        const uint32_t w[3] = {point_of[c[0]], point_of[c[1]], point_of[c[2]]};
+        if (w[0] == w[1] || w[1] == w[2] || w[0] == w[2]) continue;
+        for (uint32_t k = 0; k < 3; ++k) {
+            if (table[w[k]] == detail::kNone) {
+                std::memcpy(points + size_t(point_count) * 3, positions + size_t(w[k]) * 3, 12);
+                table[w[k]] = point_count++;
+            }
+            triangles[size_t(kept) * 3 + k] = table[w[k]];
+        }
+        ++kept;
+    }
+    lod0->positions = points;
+    lod0->point_count = point_count;
+    lod0->triangles = triangles;
+    lod0->triangle_count = kept;
+    return Result::Ok;
+}
 
 Result pfrepFormat4Info(const void* data, size_t size, PfrepFormat4Info* info) {
     if (!data || !info) return Result::InvalidArgument;
@@ -108,14 +177,98 @@ Result pfrepDecodeFormat4(const void* data, size_t size, const PfrepLod0& lod0, 
     DecodeCoder c;
     if (!c.rd.init(in + format::kPfrepHeaderSize, size - format::kPfrepHeaderSize)) return Result::CorruptStream;
     if (!detail::pfrep4LoadLod0(s)) return Result::BadStructure;
-    if (!detail::pfrep4CodeRemovals(c, *models, s, nullptr, nullptr) || !detail::pfrep4BuildSlots(s) ||
-        !detail::pfrep4Layout(s) || s.layout_size != s.h.decoded_size ||
+    if (!detail::pfrep4CodeLod0Check(c, s)) return c.rd.overrun() ? Result::Truncated : Result::BadStructure;
+    if (!detail::pfrep4CodeRemovals(c, *models, s, nullptr, nullptr) || !detail::pfrep4CodeTail(c, s, nullptr) ||
+        !detail::pfrep4BuildSlots(s) || !detail::pfrep4Layout(s) || s.layout_size != s.h.decoded_size ||
         !detail::pfrep4CodeRecords(c, *models, s, nullptr, o))
         return c.rd.overrun() ? Result::Truncated : Result::CorruptStream;
     detail::pfrep4WriteBlob(s, o);
     if (c.rd.overrun()) return Result::Truncated;
     if (!c.rd.finishedExactly()) return Result::CorruptStream;
     return openPfrep(o, s.h.decoded_size, model);
+}
+
+namespace {
+
+size_t align8(uint64_t n) {
+    return size_t((n + 7) & ~uint64_t(7));
+}
+
+// Scratch of a pack's format 4 decode, in order: LOD0's positions and indices as its stream decodes
+// them, the numbered points and triangles, then one block the valence decoder, the numbering and
+// the format 4 decoder use in turn (the largest of the three).
+struct PackScratch {
+    uint64_t positions = 0, indices = 0, points = 0, triangles = 0, shared = 0, total = 0;
+};
+
+Result packScratch(const void* blob, size_t blob_size, const void* lod0_stream, size_t lod0_size, ValenceInfo* v,
+                   PfrepFormat4Info* f, PackScratch* p) {
+    if (!blob || !lod0_stream) return Result::InvalidArgument;
+    Result r = pfrepFormat4Info(blob, blob_size, f);
+    if (r != Result::Ok) return r;
+    if (valenceReadInfo(static_cast<const uint8_t*>(lod0_stream), lod0_size, v) != Result::Ok)
+        return Result::BadStructure;
+    // The blob's LOD0 is the stream's, welded: it cannot have more points or triangles.
+    if (f->point_count > v->vertex_count || f->level0_triangles > v->triangle_count) return Result::BadStructure;
+    const uint64_t vc = v->vertex_count, tc = v->triangle_count;
+    p->positions = align8(vc * 12);
+    p->indices = align8(tc * 12);
+    p->points = align8(vc * 12);
+    p->triangles = align8(tc * 12);
+    uint64_t shared = valenceScratchSize(*v);
+    const uint64_t number = pfrepNumberLod0ScratchBytes(v->vertex_count);
+    shared = shared > number ? shared : number;
+    shared = shared > f->scratch_bytes ? shared : f->scratch_bytes;
+    p->shared = align8(shared);
+    p->total = p->positions + p->indices + p->points + p->triangles + p->shared;
+    if (p->total > SIZE_MAX) return Result::BadStructure;
+    return Result::Ok;
+}
+
+} // namespace
+
+Result pfrepPackFormat4Info(const void* blob, size_t blob_size, const void* lod0_stream, size_t lod0_size,
+                            PfrepPackFormat4Info* info) {
+    if (!info) return Result::InvalidArgument;
+    ValenceInfo v;
+    PfrepFormat4Info f;
+    PackScratch p;
+    const Result r = packScratch(blob, blob_size, lod0_stream, lod0_size, &v, &f, &p);
+    if (r != Result::Ok) return r;
+    info->decoded_bytes = f.decoded_bytes;
+    info->scratch_bytes = size_t(p.total);
+    return Result::Ok;
+}
+
+Result pfrepDecodePackFormat4(const void* blob, size_t blob_size, const void* lod0_stream, size_t lod0_size, void* out,
+                              size_t out_capacity, void* scratch, size_t scratch_bytes, PfrepModel* model) {
+    if (!out || !scratch || !model || (reinterpret_cast<uintptr_t>(scratch) & 7) != 0) return Result::InvalidArgument;
+    ValenceInfo v;
+    PfrepFormat4Info f;
+    PackScratch p;
+    Result r = packScratch(blob, blob_size, lod0_stream, lod0_size, &v, &f, &p);
+    if (r != Result::Ok) return r;
+    if (scratch_bytes < p.total || out_capacity < f.decoded_bytes) return Result::BufferTooSmall;
+    uint8_t* at = static_cast<uint8_t*>(scratch);
+    float* positions = reinterpret_cast<float*>(at);
+    uint32_t* indices = reinterpret_cast<uint32_t*>(at + p.positions);
+    float* points = reinterpret_cast<float*>(at + p.positions + p.indices);
+    uint32_t* triangles = reinterpret_cast<uint32_t*>(at + p.positions + p.indices + p.points);
+    uint8_t* shared = at + p.positions + p.indices + p.points + p.triangles;
+    ValenceOutput o;
+    o.indices = indices;
+    o.index_capacity = size_t(v.triangle_count) * 3;
+    o.positions = positions;
+    o.position_capacity = size_t(v.vertex_count) * 3;
+    o.scratch = shared;
+    o.scratch_size = size_t(p.shared);
+    if (valenceDecode(static_cast<const uint8_t*>(lod0_stream), lod0_size, o) != Result::Ok)
+        return Result::BadStructure;
+    PfrepLod0 lod0;
+    r = pfrepNumberLod0(positions, v.vertex_count, indices, v.triangle_count, points, size_t(v.vertex_count) * 3,
+                        triangles, size_t(v.triangle_count) * 3, shared, size_t(p.shared), &lod0);
+    if (r != Result::Ok) return Result::BadStructure;
+    return pfrepDecodeFormat4(blob, blob_size, lod0, out, out_capacity, shared, size_t(p.shared), model);
 }
 
 } // namespace lodrt

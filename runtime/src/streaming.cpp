@@ -223,6 +223,28 @@ JsonValue pfrepExtension(const Pack& pack, const ModelSet& models, uint32_t m) {
     return pack.mesh(level0.mesh).json.find("extensions").find(format::kExtProgressiveFans);
 }
 
+// Format 4: LOD0's one primitive's valence stream, inside level 0's bytes (docs/format/pfrep.md "In a
+// glTF pack"). False when LOD0 has another layout (the stream then fails).
+bool findLod0Stream(const Pack& pack, const ModelSet& models, uint32_t m, uint64_t* offset, uint64_t* size,
+                    uint32_t* slot) {
+    const LevelInfo& level0 = models.level(models.model(m).first_level);
+    if (level0.mesh == kNoIndex || level0.mesh >= pack.meshCount() || level0.data_size == 0) return false;
+    const MeshInfo& mesh = pack.mesh(level0.mesh);
+    if (mesh.primitive_count != 1) return false;
+    const JsonValue ext =
+        pack.primitive(mesh.first_primitive).json.find("extensions").find(format::kExtValenceCompression);
+    uint64_t view = 0;
+    if (!ext.find("bufferView").asUint64(&view) || view >= pack.bufferViewCount()) return false;
+    const BufferViewInfo& v = pack.bufferView(uint32_t(view));
+    if (!pack.buffer(v.buffer).is_glb_bin || v.byte_offset < level0.data_offset ||
+        v.byte_offset + v.byte_length > level0.data_offset + level0.data_size || v.byte_length == 0)
+        return false;
+    *offset = v.byte_offset - level0.data_offset;
+    *size = v.byte_length;
+    *slot = models.model(m).first_level;
+    return true;
+}
+
 } // namespace
 
 Result PackSource::pfrepDecodeMemory(uint32_t model, uint64_t* decoded_bytes, uint64_t* scratch_bytes) const {
@@ -232,14 +254,41 @@ Result PackSource::pfrepDecodeMemory(uint32_t model, uint64_t* decoded_bytes, ui
     const JsonValue ext = pfrepExtension(pack_, models_, model);
     uint64_t view = 0, blob_format = 0;
     if (!ext.isObject() || !ext.find(format::kPfrepExtensionFormatMember).asUint64(&blob_format) ||
-        blob_format != format::kPfrepVersionCompressed)
+        (blob_format != format::kPfrepVersionCompressed && blob_format != format::kPfrepVersionLod0))
         return Result::Ok;
     if (!ext.find("bufferView").asUint64(&view) || view >= pack_.bufferViewCount()) return Result::BadStructure;
     uint8_t header[format::kPfrepHeaderSize];
     Result r = readBufferView(uint32_t(view), 0, header, sizeof(header));
     if (r != Result::Ok) return r;
+    if (blob_format == format::kPfrepVersionLod0)
+        return format4DecodeMemory(model, header, decoded_bytes, scratch_bytes);
     PfrepCompressedInfo info;
     r = pfrepCompressedInfo(header, sizeof(header), &info);
+    if (r != Result::Ok) return r;
+    *decoded_bytes = info.decoded_bytes;
+    *scratch_bytes = info.scratch_bytes;
+    return Result::Ok;
+}
+
+// Format 4: the scratch depends on LOD0's stream too, which is read once (a transient buffer).
+Result PackSource::format4DecodeMemory(uint32_t model, const uint8_t* header, uint64_t* decoded_bytes,
+                                       uint64_t* scratch_bytes) const {
+    uint64_t offset = 0, size = 0;
+    uint32_t slot = 0;
+    if (!findLod0Stream(pack_, models_, model, &offset, &size, &slot) || size > SIZE_MAX) return Result::BadStructure;
+    const LevelInfo& level0 = models_.modelLevel(model, 0);
+    uint8_t* stream = static_cast<uint8_t*>(detail::allocateBytes(allocator_, size_t(size)));
+    if (!stream) return Result::OutOfMemory;
+    Result r = Result::Ok;
+    if (bin_)
+        std::memcpy(stream, bin_ + level0.data_offset + offset, size_t(size));
+    else if (reader_.read)
+        r = reader_.read(reader_.user, bin_offset_ + level0.data_offset + offset, stream, size_t(size));
+    else
+        r = Result::InvalidArgument;
+    PfrepPackFormat4Info info;
+    if (r == Result::Ok) r = pfrepPackFormat4Info(header, format::kPfrepHeaderSize, stream, size_t(size), &info);
+    detail::deallocateBytes(allocator_, stream);
     if (r != Result::Ok) return r;
     *decoded_bytes = info.decoded_bytes;
     *scratch_bytes = info.scratch_bytes;
@@ -342,6 +391,7 @@ struct Streamer::Task {
     size_t coded_size = 0, scratch_bytes = 0;
     const uint32_t* removals = nullptr;
     uint32_t step_count = 0;
+    size_t lod0_size = 0; // format 4: LOD0's valence stream, copied after the scratch in `coded`
     uint64_t step_bytes[kMaxLevels + 1] = {};
     PfrepModel steps[kMaxLevels + 1];
     // Cluster page (ClusterRead, then ClusterDecode): the page's coded bytes are read into `coded`
@@ -368,7 +418,11 @@ struct Streamer::Task {
         Result r = t.source->readBufferView(t.view, 0, t.coded, t.coded_size);
         if (r != Result::Ok) return r;
         uint8_t* scratch = t.coded + ((t.coded_size + 7) & ~size_t(7));
-        r = pfrepDecompress(t.coded, t.coded_size, t.dst, t.size, scratch, t.scratch_bytes, &t.pfrep);
+        if (t.lod0_size > 0)
+            r = pfrepDecodePackFormat4(t.coded, t.coded_size, scratch + t.scratch_bytes, t.lod0_size, t.dst, t.size,
+                                       scratch, t.scratch_bytes, &t.pfrep);
+        else
+            r = pfrepDecompress(t.coded, t.coded_size, t.dst, t.size, scratch, t.scratch_bytes, &t.pfrep);
         if (r != Result::Ok) return r;
         if (t.pfrep.blob_size != t.size) return Result::BadStructure;
         const uint64_t directory = pfrepDirectoryBytes(t.dst, t.size);
@@ -528,6 +582,9 @@ void Streamer::initPfrepStream(uint32_t m) {
     ps.step_count = info.level_count + 1;
     ps.format = uint8_t(format::kPfrepVersion);
     ps.scratch_bytes = 0;
+    ps.lod0_offset = 0;
+    ps.lod0_size = 0;
+    ps.lod0_slot = 0;
     // The extension object is as hostile as the blob: a bad one fails the stream, not the model.
     uint64_t view = 0;
     bool is_ok = ext.find("bufferView").asUint64(&view) && view < pack.bufferViewCount();
@@ -535,9 +592,11 @@ void Streamer::initPfrepStream(uint32_t m) {
     if (format_member.isValid()) {
         uint64_t f = 0;
         is_ok = is_ok && format_member.asUint64(&f) &&
-                (f == format::kPfrepVersion || f == format::kPfrepVersionCompressed);
+                (f == format::kPfrepVersion || f == format::kPfrepVersionCompressed || f == format::kPfrepVersionLod0);
         ps.format = uint8_t(f);
     }
+    is_ok = is_ok && (ps.format != format::kPfrepVersionLod0 ||
+                      findLod0Stream(pack, models, m, &ps.lod0_offset, &ps.lod0_size, &ps.lod0_slot));
     const JsonValue levels = ext.find("levels");
     is_ok = is_ok && levels.isArray() && levels.size() >= info.level_count;
     for (uint32_t l = 0; is_ok && l < info.level_count; ++l) {
@@ -613,7 +672,16 @@ void pointStepsAt(PfrepModel* steps, int32_t top, const uint8_t* data) {
 // decoder's scratch.
 Result Streamer::readCompressedHeader(PfrepStream& ps) {
     PfrepCompressedInfo info;
-    const Result r = pfrepCompressedInfo(ps.header, format::kPfrepHeaderSize, &info);
+    Result r = Result::Ok;
+    if (ps.format == format::kPfrepVersionLod0) {
+        // Format 4: the scratch also depends on LOD0's stream; it is sized when the decode starts.
+        PfrepFormat4Info info4;
+        r = pfrepFormat4Info(ps.header, format::kPfrepHeaderSize, &info4);
+        info.decoded_bytes = info4.decoded_bytes;
+        info.scratch_bytes = 0;
+    } else {
+        r = pfrepCompressedInfo(ps.header, format::kPfrepHeaderSize, &info);
+    }
     if (r != Result::Ok) return r;
     // Every vertex has a 10-byte record and a 2-byte offset in the decoded blob and every slot at
     // least one bit, so the vertex and slot counts (and the scratch they size) are bounded by it.
@@ -692,8 +760,8 @@ void Streamer::collect() {
         if (t.kind == Task::Kind::PfrepHeader) {
             if (r == Result::Ok) {
                 stats_.streamed_bytes += t.size;
-                r = ps.format == format::kPfrepVersionCompressed ? readCompressedHeader(ps) : Result::Ok;
-                if (ps.format != format::kPfrepVersionCompressed) {
+                r = ps.format == format::kPfrepVersion ? Result::Ok : readCompressedHeader(ps);
+                if (ps.format == format::kPfrepVersion) {
                     ps.directory_bytes = pfrepDirectoryBytes(ps.header, sizeof(ps.header));
                     if (ps.directory_bytes == 0 || ps.directory_bytes > ps.view_size) r = Result::BadStructure;
                 }
@@ -817,6 +885,10 @@ void Streamer::scorePfrepStreams(const ModelDemand* demand) {
         }
         ps.held_usefulness = ps.step > 0 && uint32_t(ps.step) <= target ? priority : 0.0f;
         if (ps.is_failed) continue;
+        // Format 4 is decoded against LOD0's stream: past its header it waits for level 0.
+        if (ps.format == format::kPfrepVersionLod0 && ps.directory_bytes != 0 &&
+            slots_[ps.lod0_slot].state != LevelState::Resident)
+            continue;
         if (ps.step < 0)
             ps.usefulness = INFINITY;
         else if (uint32_t(ps.step) < target)
@@ -870,7 +942,7 @@ uint64_t Streamer::requestBytes(uint32_t id, bool* is_pinned) const {
         return ps.directory_bytes; // 0 for the header, which lives in the stream itself
     }
     // Format 3 grows back (after a shrink) only by decoding the whole blob again.
-    return ps.format == format::kPfrepVersionCompressed ? ps.step_bytes[ps.step_count - 1] : ps.step_bytes[ps.step + 1];
+    return ps.format != format::kPfrepVersion ? ps.step_bytes[ps.step_count - 1] : ps.step_bytes[ps.step + 1];
 }
 
 // The resident level (or shrinkable PFRep stream) least useful and worth less than `useful`;
@@ -954,9 +1026,29 @@ bool Streamer::preparePfrepWhole(Task& t, PfrepStream& ps, uint64_t size) {
     const uint64_t coded_room = (ps.view_size + 7) & ~uint64_t(7);
     uint8_t* data = nullptr;
     uint8_t* coded = nullptr;
-    if (size <= SIZE_MAX && coded_room + ps.scratch_bytes <= SIZE_MAX) {
+    const uint8_t* lod0 = nullptr;
+    if (ps.format == format::kPfrepVersionLod0) {
+        // Format 4 decodes against LOD0's stream: level 0 must be resident (scorePfrepStreams waits
+        // for it; another request of this update may have evicted it since). Its stream is copied
+        // into the task, so level 0 may go while the job runs.
+        const Slot& s = slots_[ps.lod0_slot];
+        if (s.state != LevelState::Resident) return false;
+        lod0 = s.data + ps.lod0_offset;
+        PfrepPackFormat4Info info;
+        if (pfrepPackFormat4Info(ps.header, format::kPfrepHeaderSize, lod0, size_t(ps.lod0_size), &info) !=
+            Result::Ok) {
+            ps.state = PfrepStreamState::Failed;
+            ps.is_failed = 1;
+            ++stats_.failures;
+            return false;
+        }
+        ps.scratch_bytes = (info.scratch_bytes + 7) & ~size_t(7);
+    }
+    const uint64_t lod0_room = lod0 ? ps.lod0_size : 0;
+    if (size <= SIZE_MAX && coded_room + ps.scratch_bytes + lod0_room <= SIZE_MAX) {
         data = static_cast<uint8_t*>(detail::allocateBytes(options_.allocator, size_t(size)));
-        coded = static_cast<uint8_t*>(detail::allocateBytes(options_.allocator, size_t(coded_room + ps.scratch_bytes)));
+        coded = static_cast<uint8_t*>(
+            detail::allocateBytes(options_.allocator, size_t(coded_room + ps.scratch_bytes + lod0_room)));
     }
     if (!data || !coded) {
         detail::deallocateBytes(options_.allocator, data);
@@ -974,6 +1066,8 @@ bool Streamer::preparePfrepWhole(Task& t, PfrepStream& ps, uint64_t size) {
     t.scratch_bytes = ps.scratch_bytes;
     t.removals = ps.removals;
     t.step_count = ps.step_count;
+    t.lod0_size = size_t(lod0_room);
+    if (lod0) std::memcpy(coded + coded_room + ps.scratch_bytes, lod0, size_t(lod0_room));
     stats_.in_flight_bytes += size;
     ++stats_.pfrep_decodes;
     return true;
@@ -1013,7 +1107,7 @@ bool Streamer::prepareTask(uint32_t task_index, uint32_t id, uint64_t size) {
         t.kind = Task::Kind::PfrepHeader;
         t.dst = ps->header;
         t.size = sizeof(ps->header);
-    } else if (ps->format == format::kPfrepVersionCompressed) {
+    } else if (ps->format != format::kPfrepVersion) {
         if (!preparePfrepWhole(t, *ps, size)) return false;
     } else {
         uint8_t* data = static_cast<uint8_t*>(detail::allocateBytes(options_.allocator, size_t(size)));

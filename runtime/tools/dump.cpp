@@ -504,10 +504,26 @@ void checkPfrepLevels(const lodrt::JsonValue& pfrep, const lodrt::PfrepModel& mo
 }
 
 // Checks every compressed stream of the pack: valence streams decode and agree with the primitive;
-// The extension's blob as a model: format 2 opened in place, format 3 decoded first (into `decoded`).
-lodrt::Result openPackPfrep(uint32_t format, const uint8_t* data, size_t size, std::vector<uint8_t>& decoded,
-                            lodrt::PfrepModel* model) {
+// The extension's blob as a model: format 2 opened in place, format 3 decoded first (into `decoded`),
+// format 4 decoded against the mesh's (one) primitive's valence stream.
+lodrt::Result openPackPfrep(const lodrt::Pack& pack, const lodrt::MeshInfo& mesh, uint32_t format, const uint8_t* data,
+                            size_t size, std::vector<uint8_t>& decoded, lodrt::PfrepModel* model) {
     if (format == lodrt::format::kPfrepVersion) return lodrt::openPfrep(data, size, model);
+    if (format == lodrt::format::kPfrepVersionLod0) {
+        if (mesh.primitive_count != 1) return lodrt::Result::BadStructure;
+        const lodrt::JsonValue ext = pack.primitive(mesh.first_primitive).json.find("extensions").find(kValence);
+        const uint32_t view = ext.isObject() ? extensionView(pack, ext, "bufferView") : lodrt::kNoIndex;
+        uint64_t stream_size = 0;
+        const uint8_t* stream = view == lodrt::kNoIndex ? nullptr : viewBytes(pack, view, &stream_size);
+        if (!stream) return lodrt::Result::BadStructure;
+        lodrt::PfrepPackFormat4Info info;
+        lodrt::Result r = lodrt::pfrepPackFormat4Info(data, size, stream, size_t(stream_size), &info);
+        if (r != lodrt::Result::Ok) return r;
+        decoded.resize(info.decoded_bytes);
+        std::vector<uint64_t> scratch((info.scratch_bytes + 7) / 8);
+        return lodrt::pfrepDecodePackFormat4(data, size, stream, size_t(stream_size), decoded.data(), decoded.size(),
+                                             scratch.data(), scratch.size() * 8, model);
+    }
     lodrt::PfrepCompressedInfo info;
     lodrt::Result r = lodrt::pfrepCompressedInfo(data, size, &info);
     if (r != lodrt::Result::Ok) return r;
@@ -548,16 +564,19 @@ void checkStreams(const lodrt::Pack& pack, const std::vector<LodGroup>& groups, 
         const lodrt::JsonValue format_member = pfrep.find(lodrt::format::kPfrepExtensionFormatMember);
         if (format_member.isValid() &&
             (!format_member.asUint64(&format) ||
-             (format != lodrt::format::kPfrepVersion && format != lodrt::format::kPfrepVersionCompressed))) {
-            problems.push_back({where + "/format", "format: expected 2 or 3"});
+             (format != lodrt::format::kPfrepVersion && format != lodrt::format::kPfrepVersionCompressed &&
+              format != lodrt::format::kPfrepVersionLod0))) {
+            problems.push_back({where + "/format", "format: expected 2, 3 or 4"});
             continue;
         }
         lodrt::PfrepModel model;
-        std::vector<uint8_t> decoded; // format 3: the format 2 bytes it decodes to (model points into them)
-        const lodrt::Result r = openPackPfrep(uint32_t(format), data, size_t(size), decoded, &model);
+        std::vector<uint8_t> decoded; // format 3, 4: the format 2 bytes it decodes to (model points into them)
+        const lodrt::Result r = openPackPfrep(pack, mesh, uint32_t(format), data, size_t(size), decoded, &model);
         if (r != lodrt::Result::Ok) {
             problems.push_back({where, std::string("stream fails to decode") +
-                                           (format == lodrt::format::kPfrepVersion ? ": " : " (format 3): ") +
+                                           (format == lodrt::format::kPfrepVersion       ? ": "
+                                            : format == lodrt::format::kPfrepVersionLod0 ? " (format 4): "
+                                                                                         : " (format 3): ") +
                                            lodrt::resultName(r)});
             continue;
         }

@@ -14,11 +14,11 @@
 // The same bake with --web instead of --compact (EXT_meshopt_compression + KHR_mesh_quantization,
 // docs/format/web.md) is measured against the same gltfpack files: bar <= 1.0 on the worst scan
 // (goal 0.9).
-// The same --compact bake with the PFRep blob (LODBAKE_progressive_fans, format 3 as the bake writes it
+// The same --compact bake with the PFRep blob (LODBAKE_progressive_fans, format 4 as the bake writes it
 // by default; pfrep_from_chain as the preset says) is measured against them too: bar <= 0.7 on the
-// worst scan, must <= 1.0 (issue 30).
+// worst scan, must <= 1.0 (issue 30). --pfrep-format F bakes that blob as format F instead (2, 3 or 4).
 //
-// usage: pack_size_bench [--levels] [--preset FILE] [--no-adaptive] [--check] [MESH...]
+// usage: pack_size_bench [--levels] [--preset FILE] [--no-adaptive] [--pfrep-format F] [--check] [MESH...]
 //        (default: configs/desktop.json, the untextured shared scans)
 // Not a ctest. Needs `npm ci` in scripts/node-bench.
 
@@ -104,6 +104,7 @@ int main(int argc, char** argv) {
     const bool check = lodbake_bench::takeCheckFlag(argc, argv);
     std::vector<std::string> meshes;
     bool levels = false, no_adaptive = false;
+    uint32_t pfrep_format = 0; // 0: the bake's default
     std::string preset_path = std::string(LODBAKE_BENCH_SOURCE_DIR) + "/configs/desktop.json";
     for (int i = 1; i < argc; ++i) {
         if (std::strcmp(argv[i], "--levels") == 0) {
@@ -112,9 +113,15 @@ int main(int argc, char** argv) {
             no_adaptive = true;
         } else if (std::strcmp(argv[i], "--preset") == 0 && i + 1 < argc) {
             preset_path = argv[++i];
+        } else if (std::strcmp(argv[i], "--pfrep-format") == 0 && i + 1 < argc &&
+                   (std::strcmp(argv[i + 1], "2") == 0 || std::strcmp(argv[i + 1], "3") == 0 ||
+                    std::strcmp(argv[i + 1], "4") == 0)) {
+            pfrep_format = uint32_t(argv[++i][0] - '0');
         } else if (argv[i][0] == '-') {
-            std::fprintf(stderr,
-                         "usage: pack_size_bench [--levels] [--preset FILE] [--no-adaptive] [--check] [MESH...]\n");
+            std::fprintf(
+                stderr,
+                "usage: pack_size_bench [--levels] [--preset FILE] [--no-adaptive] [--pfrep-format F] [--check] "
+                "[MESH...]\n");
             return 2;
         } else {
             meshes.push_back(argv[i]);
@@ -152,6 +159,7 @@ int main(int argc, char** argv) {
 
     lodbake::BakeSettings pfrep_settings = settings;
     pfrep_settings.progressive_fans = true;
+    if (pfrep_format != 0) pfrep_settings.pfrep_format = pfrep_format;
 
     lodbake::BakeSettings web_settings = settings;
     web_settings.compact = false;

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -50,6 +51,7 @@ std::vector<uint8_t>* bakePack(uint32_t pfrep_format) {
     {
         lodbake::BakeSettings settings;
         settings.pfrep_format = pfrep_format;
+        settings.compact = pfrep_format == lodrt::format::kPfrepVersionLod0; // format 4 is for compact packs
         settings.lod_ratios = {0.5, 0.25, 0.1, 0.03};
         settings.error_samples = 2000;
         settings.threads = 2;
@@ -568,4 +570,217 @@ TEST(PfrepStreamingTest, Format3CorruptBlobsNeverCrash) {
             EXPECT_EQ(lodrt::pfrepExtractLevel(*m, k, tris.data(), tris.size() / 3, &count), Result::Ok);
     }
     EXPECT_GT(failed, 50);
+}
+
+// ---- Format 4: coded against LOD0's own valence stream (docs/format/pfrep.md "In a glTF pack") ----
+
+namespace {
+
+const std::vector<uint8_t>& bakedPack4() {
+    static const std::vector<uint8_t>* glb = bakePack(lodrt::format::kPfrepVersionLod0);
+    return *glb;
+}
+
+// The bytes of buffer view `view` of a pack in memory.
+std::vector<uint8_t> viewBytes(const PackSource& source, uint32_t view) {
+    std::vector<uint8_t> bytes(source.pack().bufferView(view).byte_length);
+    EXPECT_EQ(source.readBufferView(view, 0, bytes.data(), bytes.size()), Result::Ok);
+    return bytes;
+}
+
+// Model m's PFRep blob and its LOD0's (one primitive's) valence stream.
+struct Format4Blob {
+    std::vector<uint8_t> blob, lod0;
+};
+
+Format4Blob format4Blob(const PackSource& source, uint32_t m) {
+    Format4Blob out;
+    const lodrt::Pack& pack = source.pack();
+    const lodrt::MeshInfo& mesh = pack.mesh(source.models().modelLevel(m, 0).mesh);
+    const lodrt::JsonValue ext = mesh.json.find("extensions").find("LODBAKE_progressive_fans");
+    uint64_t view = 0, format = 0;
+    EXPECT_TRUE(ext.find("bufferView").asUint64(&view));
+    EXPECT_TRUE(ext.find("format").asUint64(&format));
+    EXPECT_EQ(format, 4u);
+    out.blob = viewBytes(source, uint32_t(view));
+    EXPECT_EQ(mesh.primitive_count, 1u);
+    const lodrt::JsonValue stream =
+        pack.primitive(mesh.first_primitive).json.find("extensions").find("LODBAKE_valence_compression");
+    EXPECT_TRUE(stream.find("bufferView").asUint64(&view));
+    out.lod0 = viewBytes(source, uint32_t(view));
+    return out;
+}
+
+// Decodes `b.blob` against `lod0` into `out`; the result code.
+Result decodePack4(const std::vector<uint8_t>& blob, const std::vector<uint8_t>& lod0, std::vector<uint8_t>& out,
+                   lodrt::PfrepModel* model) {
+    lodrt::PfrepPackFormat4Info info;
+    const Result r = lodrt::pfrepPackFormat4Info(blob.data(), blob.size(), lod0.data(), lod0.size(), &info);
+    if (r != Result::Ok) return r;
+    out.assign(info.decoded_bytes, 0);
+    std::vector<uint64_t> scratch((info.scratch_bytes + 7) / 8);
+    return lodrt::pfrepDecodePackFormat4(blob.data(), blob.size(), lod0.data(), lod0.size(), out.data(), out.size(),
+                                         scratch.data(), scratch.size() * 8, model);
+}
+
+std::vector<std::array<uint32_t, 3>> sortedLevel(const lodrt::PfrepModel& model, uint32_t level) {
+    const std::vector<uint32_t> tris = extract(model, level);
+    std::vector<std::array<uint32_t, 3>> out(tris.size() / 3);
+    for (size_t t = 0; t < out.size(); ++t) out[t] = {tris[t * 3], tris[t * 3 + 1], tris[t * 3 + 2]};
+    std::sort(out.begin(), out.end());
+    return out;
+}
+
+// `got` (decoded from format 4) against `want` (the format 2 blob of the same input): every level
+// as a triangle set, every position, and view-dependent refinement from a moving camera mask for
+// mask (the criterion data: radius, error, cone).
+void expectSameTables(const lodrt::PfrepModel& got, const lodrt::PfrepModel& want) {
+    ASSERT_EQ(got.vertex_count, want.vertex_count);
+    ASSERT_EQ(got.removed_count, want.removed_count);
+    ASSERT_EQ(got.level0_triangles, want.level0_triangles);
+    for (uint32_t k = 0; k <= want.removed_count; ++k) ASSERT_EQ(sortedLevel(got, k), sortedLevel(want, k)) << k;
+    std::vector<float> pa(size_t(want.vertex_count) * 3), pb(pa.size());
+    ASSERT_EQ(lodrt::pfrepDecodePositions(want, pa.data(), pa.size()), Result::Ok);
+    ASSERT_EQ(lodrt::pfrepDecodePositions(got, pb.data(), pb.size()), Result::Ok);
+    EXPECT_EQ(pa, pb);
+    std::vector<uint8_t> ma(lodrt::pfrepMaskBytes(want)), mb(ma.size());
+    lodrt::pfrepMaskCoarsest(want, ma.data());
+    lodrt::pfrepMaskCoarsest(got, mb.data());
+    std::vector<uint32_t> scratch(lodrt::pfrepScratchValues(want));
+    for (int frame = 0; frame < 12; ++frame) {
+        lodrt::PfrepView view;
+        view.eye[0] = 0.5f + 0.1f * float(frame);
+        view.eye[1] = -0.3f;
+        view.eye[2] = 0.4f;
+        for (auto& plane : view.planes) plane[3] = 1e6f; // no culling
+        view.pixels_per_unit_at_distance_one = 800.0f;
+        size_t ca = 0, cb = 0;
+        ASSERT_EQ(lodrt::pfrepRefine(want, view, ma.data(), scratch.data(), scratch.size(), &ca), Result::Ok);
+        ASSERT_EQ(lodrt::pfrepRefine(got, view, mb.data(), scratch.data(), scratch.size(), &cb), Result::Ok);
+        ASSERT_EQ(ma, mb) << "frame " << frame;
+        EXPECT_EQ(ca, cb);
+    }
+}
+
+} // namespace
+
+// The pack's format 4 blob decodes, against LOD0's stream, to format 2's tables; a LOD0 of the
+// same size but another geometry (the other model's) is refused by the blob's LOD0 check.
+TEST(PfrepStreamingTest, Format4DecodesAgainstLod0ToTheFormat2Tables) {
+    PackSource source2, source4;
+    ASSERT_EQ(source2.openBytes(bakedPack().data(), bakedPack().size(), nullptr), Result::Ok);
+    ASSERT_FALSE(bakedPack4().empty());
+    ASSERT_EQ(source4.openBytes(bakedPack4().data(), bakedPack4().size(), nullptr), Result::Ok);
+    Format4Blob b[2] = {format4Blob(source4, 0), format4Blob(source4, 1)};
+    for (uint32_t m = 0; m < 2; ++m) {
+        SCOPED_TRACE("model " + std::to_string(m));
+        const Blob want = blobOf(source2, m);
+        EXPECT_LT(b[m].blob.size() * 4, want.bytes.size());
+        std::vector<uint8_t> decoded;
+        lodrt::PfrepModel got;
+        ASSERT_EQ(decodePack4(b[m].blob, b[m].lod0, decoded, &got), Result::Ok);
+        expectSameTables(got, want.whole);
+        // The other model's LOD0: same point and triangle counts, other positions.
+        std::vector<uint8_t> other;
+        EXPECT_EQ(decodePack4(b[m].blob, b[1 - m].lod0, other, &got), Result::BadStructure);
+    }
+}
+
+// Hostile bytes in a pack context: every cut of the blob, and bytes changed in the blob or in LOD0's
+// stream, give an error or (for a change the stream cannot see) a valid model; never a crash.
+TEST(PfrepStreamingTest, Format4TruncatedOrCorruptIsRefused) {
+    PackSource source4;
+    ASSERT_EQ(source4.openBytes(bakedPack4().data(), bakedPack4().size(), nullptr), Result::Ok);
+    const Format4Blob b = format4Blob(source4, 0);
+    std::vector<uint8_t> out;
+    lodrt::PfrepModel model;
+    for (size_t cut = 0; cut < b.blob.size(); cut += 1 + cut / 64) {
+        const std::vector<uint8_t> part(b.blob.begin(), b.blob.begin() + std::ptrdiff_t(cut));
+        EXPECT_NE(decodePack4(part, b.lod0, out, &model), Result::Ok) << cut;
+    }
+    for (size_t cut = 0; cut < b.lod0.size(); cut += 1 + cut / 16) {
+        const std::vector<uint8_t> part(b.lod0.begin(), b.lod0.begin() + std::ptrdiff_t(cut));
+        EXPECT_NE(decodePack4(b.blob, part, out, &model), Result::Ok) << cut;
+    }
+    uint32_t seed = 11;
+    auto next = [&seed] {
+        seed = seed * 1664525u + 1013904223u;
+        return seed >> 8;
+    };
+    int refused = 0;
+    for (int i = 0; i < 200; ++i) {
+        Format4Blob c = b;
+        std::vector<uint8_t>& target = i % 2 ? c.blob : c.lod0;
+        target[next() % target.size()] ^= uint8_t(1 + next() % 255);
+        if (decodePack4(c.blob, c.lod0, out, &model) != Result::Ok) {
+            ++refused;
+            continue;
+        }
+        std::vector<uint32_t> tris(3 * lodrt::pfrepMaxTriangles(model));
+        size_t count = 0;
+        for (uint32_t k = 0; k <= model.removed_count; k += 1 + model.removed_count / 8)
+            EXPECT_EQ(lodrt::pfrepExtractLevel(model, k, tris.data(), tris.size() / 3, &count), Result::Ok);
+    }
+    EXPECT_GT(refused, 150);
+}
+
+// The Streamer decodes a format 4 blob only once the model's level 0 is resident (it never loads
+// level 0 for it), then holds the same tables as format 2; a pack whose blob read fails fails the
+// stream, not the frame.
+TEST(PfrepStreamingTest, Format4WaitsForLevel0ThenMatchesFormat2) {
+    PackSource source2;
+    ASSERT_EQ(source2.openBytes(bakedPack().data(), bakedPack().size(), nullptr), Result::Ok);
+    File file;
+    file.bytes = bakedPack4();
+    ASSERT_FALSE(file.bytes.empty());
+    PackSource source;
+    ASSERT_EQ(source.openReader(file.reader(), file.bytes.size(), nullptr), Result::Ok);
+    ManualJobs jobs;
+    const lodrt::JobSystem system = jobs.system();
+    Streamer streamer;
+    ASSERT_EQ(streamer.init(&source, &system, nullptr), Result::Ok);
+    for (int i = 0; i < 6; ++i) {
+        streamer.update(nullptr); // nothing wanted: the coarsest levels and the blobs' headers only
+        jobs.runAll();
+    }
+    for (uint32_t m = 0; m < 2; ++m) {
+        EXPECT_NE(streamer.state(m, 0), lodrt::LevelState::Resident);
+        EXPECT_EQ(streamer.pfrepState(m), PfrepStreamState::Absent);
+        EXPECT_EQ(streamer.pfrepModel(m), nullptr);
+    }
+    std::vector<ModelDemand> demand(2, ModelDemand{0, 1.0f});
+    for (int i = 0; i < 8; ++i) {
+        streamer.update(demand.data());
+        jobs.runAll();
+    }
+    streamer.update(demand.data());
+    for (uint32_t m = 0; m < 2; ++m) {
+        SCOPED_TRACE("model " + std::to_string(m));
+        ASSERT_EQ(streamer.state(m, 0), lodrt::LevelState::Resident);
+        ASSERT_EQ(streamer.pfrepState(m), PfrepStreamState::Resident);
+        EXPECT_EQ(streamer.pfrepLevel(m), 0);
+        const lodrt::PfrepModel* got = streamer.pfrepModel(m);
+        ASSERT_NE(got, nullptr);
+        const Blob want = blobOf(source2, m);
+        expectSameTables(*got, want.whole);
+        // What an engine sizes its allocator by: the decoded size and the scratch (LOD0's stream read).
+        uint64_t decoded = 0, scratch = 0;
+        ASSERT_EQ(source.pfrepDecodeMemory(m, &decoded, &scratch), Result::Ok);
+        EXPECT_EQ(decoded, got->size);
+        EXPECT_GT(scratch, decoded);
+    }
+    // Model 0's blob zeroed after its header: its stream fails, the levels and model 1 still stream.
+    const Format4Blob b = format4Blob(source, 0);
+    std::vector<uint8_t> broken = file.bytes;
+    const auto at = std::search(broken.begin(), broken.end(), b.blob.begin(), b.blob.end());
+    ASSERT_NE(at, broken.end());
+    for (size_t i = 80; i < b.blob.size(); ++i) at[std::ptrdiff_t(i)] = 0; // the stream after its header
+    PackSource broken_source;
+    ASSERT_EQ(broken_source.openBytes(broken.data(), broken.size(), nullptr), Result::Ok);
+    Streamer s2;
+    ASSERT_EQ(s2.init(&broken_source, nullptr, nullptr), Result::Ok);
+    for (int i = 0; i < 8; ++i) s2.update(demand.data());
+    EXPECT_EQ(s2.pfrepState(0), PfrepStreamState::Failed);
+    EXPECT_EQ(s2.state(0, 0), lodrt::LevelState::Resident);
+    EXPECT_EQ(s2.pfrepState(1), PfrepStreamState::Resident);
 }

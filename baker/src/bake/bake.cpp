@@ -20,6 +20,7 @@
 #include "lodbake/simplify/lod_chain.h"
 #include "lodbake/simplify/mesh_distance.h"
 #include "lodbake/stream/stream.h"
+#include "lodrt/format.h"
 
 namespace lodbake {
 
@@ -373,7 +374,11 @@ Result<BakeOutput> bakeScene(std::vector<BakeInput> inputs, PackScene scene, con
     streams.valence.release_memory = hooks.release_memory;
     streams.progressive_fans = settings.progressive_fans;
     streams.pfrep_from_chain = settings.pfrep_from_chain;
-    streams.pfrep_format = settings.pfrep_format;
+    // Format 4 is decoded from level 0's bytes, which hold LOD0's valence stream only in a compact
+    // pack (docs/format/pfrep.md "In a glTF pack"); elsewhere the blob is format 3.
+    streams.pfrep_format = settings.pfrep_format == lodrt::format::kPfrepVersionLod0 && !settings.compact
+                               ? lodrt::format::kPfrepVersionCompressed
+                               : settings.pfrep_format;
     streams.cluster_lod = settings.cluster_lod;
     // A --web pack is for clients that read none of our streams (docs/format/web.md).
     const std::vector<PackStreamEncoder> encoders =

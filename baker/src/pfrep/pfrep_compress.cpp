@@ -267,10 +267,22 @@ Status compareTables(const std::vector<uint8_t>& built, const lodrt::PfrepModel&
     return Status::okStatus();
 }
 
-} // namespace
+// The build's ranks in LOD0's numbering: point_of maps the build's points (null: the same numbering).
+Result<std::vector<uint32_t>> renumberRanks(const std::vector<uint32_t>& ranks, const std::vector<uint32_t>* point_of,
+                                            size_t point_count) {
+    if (!point_of) return ranks;
+    std::vector<uint32_t> out(ranks.size());
+    for (size_t i = 0; i < ranks.size(); ++i) {
+        if (ranks[i] >= point_of->size() || (*point_of)[ranks[i]] >= point_count)
+            return invalidInput("pfrep: format 4: a point of the build has no point in LOD0");
+        out[i] = (*point_of)[ranks[i]];
+    }
+    return out;
+}
 
-Result<std::vector<uint8_t>> compressPfrepFormat4(const PfrepBuild& build, const std::vector<Vec3f>& points,
-                                                  const std::vector<uint32_t>& triangles) {
+Result<std::vector<uint8_t>> codeFormat4(const PfrepBuild& build, const std::vector<Vec3f>& points,
+                                         const std::vector<uint32_t>& triangles,
+                                         const std::vector<uint32_t>* point_of) {
     namespace d = lodrt::detail;
     lodrt::PfrepModel model;
     const lodrt::Result opened = lodrt::openPfrep(build.blob.data(), build.blob.size(), &model);
@@ -291,6 +303,8 @@ Result<std::vector<uint8_t>> compressPfrepFormat4(const PfrepBuild& build, const
         s.h.position_step[a] = model.position_step[a];
     }
     s.h.error_unit = model.error_unit;
+    // A pack's blob (LOD0 numbered on its decoded stream) also checks that LOD0 (docs/format/pfrep.md).
+    s.h.flags = point_of ? lodrt::format::kPfrep4FlagCodedTail | lodrt::format::kPfrep4FlagLod0Check : 0;
     s.lod0.positions = points.empty() ? nullptr : &points[0].x;
     s.lod0.triangles = triangles.data();
     s.lod0.point_count = s.h.point_count;
@@ -302,8 +316,14 @@ Result<std::vector<uint8_t>> compressPfrepFormat4(const PfrepBuild& build, const
     std::vector<uint8_t> records(size_t(model.vertex_count) * fmt::kPfrepVertexRecordSize);
     for (uint32_t i = 0; i < model.vertex_count; ++i)
         std::memcpy(&records[size_t(i) * fmt::kPfrepVertexRecordSize], view.record(i), fmt::kPfrepVertexRecordSize);
+    LODBAKE_ASSIGN_OR_RETURN(const std::vector<uint32_t> rank_point,
+                             renumberRanks(build.rank_point, point_of, points.size()));
+    LODBAKE_ASSIGN_OR_RETURN(const std::vector<uint32_t> rank_kept,
+                             renumberRanks(build.rank_kept, point_of, points.size()));
     EncodeCoder c;
-    if (!d::pfrep4LoadLod0(s) || !d::pfrep4CodeRemovals(c, *models, s, build.rank_point.data(), build.rank_kept.data()))
+    if (!d::pfrep4LoadLod0(s) || !d::pfrep4CodeLod0Check(c, s) ||
+        !d::pfrep4CodeRemovals(c, *models, s, rank_point.data(), rank_kept.data()) ||
+        !d::pfrep4CodeTail(c, s, rank_point.data()))
         return invalidInput("pfrep: format 4: the removal sequence does not replay on LOD0");
     if (!d::pfrep4BuildSlots(s) || !d::pfrep4Layout(s))
         return invalidInput("pfrep: format 4: the replayed table does not fit format 2");
@@ -321,6 +341,7 @@ Result<std::vector<uint8_t>> compressPfrepFormat4(const PfrepBuild& build, const
     std::memcpy(out.data() + 24, build.blob.data() + 24, 28); // position_min, position_step, error_unit
     store32(out.data() + 52, s.h.decoded_size);
     store32(out.data() + 56, s.h.stored_triangles);
+    store32(out.data() + 60, s.h.flags);
     const std::vector<uint8_t> coded = c.enc.finish();
     out.insert(out.end(), coded.begin(), coded.end());
     // Decode it again and compare with the builder's table.
@@ -341,6 +362,19 @@ Result<std::vector<uint8_t>> compressPfrepFormat4(const PfrepBuild& build, const
         return internalError(std::string("pfrep: format 4 does not decode: ") + lodrt::resultName(r));
     LODBAKE_RETURN_IF_ERROR(compareTables(build.blob, model, decoded, check));
     return out;
+}
+
+} // namespace
+
+Result<std::vector<uint8_t>> compressPfrepFormat4(const PfrepBuild& build, const std::vector<Vec3f>& points,
+                                                  const std::vector<uint32_t>& triangles) {
+    return codeFormat4(build, points, triangles, nullptr);
+}
+
+Result<std::vector<uint8_t>> compressPfrepFormat4(const PfrepBuild& build, const std::vector<Vec3f>& points,
+                                                  const std::vector<uint32_t>& triangles,
+                                                  const std::vector<uint32_t>& point_of) {
+    return codeFormat4(build, points, triangles, &point_of);
 }
 
 } // namespace lodbake

@@ -23,6 +23,9 @@ PfrepExtensionObject finishObject(PfrepBuild build, PfrepExtensionObject out) {
     out.json.set("triangleCount", out.triangle_count);
     out.json.set("vertexCount", uint64_t(out.vertex_count));
     out.blob = std::move(build.blob);
+    out.rank_point = std::move(build.rank_point);
+    out.rank_kept = std::move(build.rank_kept);
+    out.stored_triangles = build.stored_triangles;
     return out;
 }
 

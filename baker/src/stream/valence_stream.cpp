@@ -146,8 +146,7 @@ Result<DecodedIndices> decodeIndices(const std::vector<uint8_t>& bytes, size_t v
 // Codes `mesh` (positions, normals, one triangle list) and checks the stream by decoding it with the
 // runtime decoder: the indices written as plain accessors are the decoder's own, and a codec that
 // lost a triangle is caught here rather than in a reader.
-Result<CodedStream> codeStream(const Mesh& mesh, const ValencePrecision& precision, const std::string& where,
-                               const std::function<void()>& release_memory) {
+codec::ValenceEncodeOptions encodeOptions(const Mesh& mesh, const ValencePrecision& precision) {
     codec::ValenceEncodeOptions encode_options;
     encode_options.position_bits = precision.position_bits;
     encode_options.normal_bits = precision.normal_bits;
@@ -155,7 +154,12 @@ Result<CodedStream> codeStream(const Mesh& mesh, const ValencePrecision& precisi
     encode_options.uv_bits = precision.uv_bits;
     encode_options.color_bits = precision.color_bits;
     encode_options.tangent_bits = precision.tangent_bits;
-    Result<codec::ValenceEncodeResult> encoded = codec::encodeValence(mesh, encode_options);
+    return encode_options;
+}
+
+Result<CodedStream> codeStream(const Mesh& mesh, const ValencePrecision& precision, const std::string& where,
+                               const std::function<void()>& release_memory) {
+    Result<codec::ValenceEncodeResult> encoded = codec::encodeValence(mesh, encodeOptions(mesh, precision));
     if (!encoded.ok()) return Status(encoded.status().code(), where + ": " + encoded.status().message());
     // The decoder's scratch is one large block that the allocator maps fresh, while the coder's freed
     // tables may still be resident: without this the check's peak sits on top of the coder's (peak
@@ -453,6 +457,20 @@ PackStreamEncoder valenceStreamEncoder(const ValenceStreamOptions& options) {
 
 std::optional<PackStreamEncoder> valenceStream(const StreamSettings& settings) {
     return valenceStreamEncoder(settings.valence);
+}
+
+Result<std::optional<DecodedLevelStream>> decodedLevelStream(const ValenceStreamOptions& options, const LodChain& chain,
+                                                             size_t level_index, const Mesh& mesh) {
+    const std::vector<SubMesh> ranges = primitiveRanges(mesh);
+    if (ranges.size() != 1 || ranges[0].first_index != 0 || ranges[0].index_count != mesh.indices.size())
+        return std::optional<DecodedLevelStream>();
+    const ValencePrecision precision = valencePrecision(options, chain, level_index, mesh);
+    LODBAKE_ASSIGN_OR_RETURN(codec::ValenceEncodeResult encoded,
+                             codec::encodeValence(mesh, encodeOptions(mesh, precision)));
+    DecodedLevelStream out;
+    LODBAKE_ASSIGN_OR_RETURN(out.mesh, codec::decodeValence(encoded.bytes, "level " + std::to_string(level_index)));
+    out.new_vertex_of = std::move(encoded.new_vertex_of);
+    return std::optional<DecodedLevelStream>(std::move(out));
 }
 
 } // namespace lodbake

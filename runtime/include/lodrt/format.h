@@ -99,6 +99,14 @@ constexpr uint32_t kPfrepCandidateScanLimit = 4096; // fan values scanned for th
 // points), 52 (the format 2 blob_size it decodes to) and 56 (stored_triangles), then one
 // range-coded stream (lodrt/detail/pfrep_codec4.h) to the end of the blob.
 constexpr uint32_t kPfrepVersionLod0 = 4;
+// Format 4 header word at offset 60 (flags; other bits must be 0). kPfrep4FlagCodedTail: the ranks
+// of the points never removed are coded (a pack's blob, whose LOD0 is numbered on its decoded
+// stream) instead of following point ids.
+constexpr uint32_t kPfrep4FlagCodedTail = 1;
+// kPfrep4FlagLod0Check: the stream starts with a 32-bit check of the LOD0 it was coded against
+// (pfrep4Lod0Check), and a decoder given another LOD0 refuses the blob (BadStructure).
+constexpr uint32_t kPfrep4FlagLod0Check = 2;
+constexpr uint32_t kPfrep4Flags = kPfrep4FlagCodedTail | kPfrep4FlagLod0Check;
 // Format 4 headers claiming more stored triangles than this many times LOD0's are refused (a
 // half-edge sequence stores about 2.6 times as many).
 constexpr uint32_t kPfrepMaxStoredPerLevel0 = 16;

@@ -133,6 +133,34 @@ LODRT_API Result pfrepFormat4Info(const void* data, size_t size, PfrepFormat4Inf
 LODRT_API Result pfrepDecodeFormat4(const void* data, size_t size, const PfrepLod0& lod0, void* out,
                                     size_t out_capacity, void* scratch, size_t scratch_bytes, PfrepModel* model);
 
+/// A pack's LOD0 numbered for format 4 (docs/format/pfrep.md "In a glTF pack"), from the mesh its
+/// LODBAKE_valence_compression stream decodes to (`positions`: 3 floats per vertex; `indices`: 3
+/// per triangle): vertices with bit-identical positions are one point; points are numbered in order
+/// of first use by the triangles whose three corners are distinct points, in triangle order; those
+/// triangles are LOD0's. Writes the points into `points` (3 * vertex_count floats) and the
+/// triangles into `triangles` (3 * triangle_count), and sets *lod0 to them. `scratch` holds
+/// pfrepNumberLod0ScratchBytes(vertex_count) bytes (8-byte aligned). BadStructure for an index out
+/// of range, BufferTooSmall for short buffers.
+LODRT_API size_t pfrepNumberLod0ScratchBytes(uint32_t vertex_count);
+LODRT_API Result pfrepNumberLod0(const float* positions, uint32_t vertex_count, const uint32_t* indices,
+                                 uint32_t triangle_count, float* points, size_t point_capacity, uint32_t* triangles,
+                                 size_t triangle_capacity, void* scratch, size_t scratch_bytes, PfrepLod0* lod0);
+
+/// A pack's format 4 blob (LODBAKE_progressive_fans with format 4) is decoded against the
+/// LODBAKE_valence_compression stream of the same mesh (LOD0, one primitive): the stream is decoded,
+/// numbered by pfrepNumberLod0, and handed to pfrepDecodeFormat4. `blob` needs its header only for
+/// the info. BadStructure when the stream is not a valid one or the blob was coded against another
+/// LOD0 (its check differs, or its counts); otherwise the two decoders' results.
+struct PfrepPackFormat4Info {
+    uint32_t decoded_bytes = 0; // the format 2 blob
+    size_t scratch_bytes = 0;   // everything else: LOD0 decoded and numbered, and the decoder's scratch
+};
+LODRT_API Result pfrepPackFormat4Info(const void* blob, size_t blob_size, const void* lod0_stream, size_t lod0_size,
+                                      PfrepPackFormat4Info* info);
+LODRT_API Result pfrepDecodePackFormat4(const void* blob, size_t blob_size, const void* lod0_stream, size_t lod0_size,
+                                        void* out, size_t out_capacity, void* scratch, size_t scratch_bytes,
+                                        PfrepModel* model);
+
 /// Dequantized positions of every vertex (3 floats each) into `out` of `capacity` floats
 /// (needs 3 * vertex_count). Vertices not loaded yet get 0.
 LODRT_API Result pfrepDecodePositions(const PfrepModel& model, float* out, size_t capacity);

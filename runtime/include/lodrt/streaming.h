@@ -115,16 +115,19 @@ public:
     Result copyLevelIndices(uint32_t model, uint32_t level, const uint8_t* level_bytes, uint32_t* out, size_t capacity,
                             size_t* written) const;
 
-    /// Memory a Streamer allocates for the model's format 3 PFRep blob (docs/format/pfrep.md
-    /// "Format 3"): the decoded format 2 bytes it keeps resident, and the scratch one decode takes
-    /// meanwhile, read from the blob's header (one readBufferView of its first bytes). Both 0 when
-    /// the model has no PFRep or a format 2 one. Returns Ok; InvalidArgument (bad model id, null
-    /// outputs); BadStructure (an extension without a valid bufferView); the read's or
-    /// pfrepCompressedInfo's error (the streamer fails such a stream too).
+    /// Memory a Streamer allocates for the model's format 3 or 4 PFRep blob (docs/format/pfrep.md
+    /// "Format 3", "In a glTF pack"): the decoded format 2 bytes it keeps resident, and the scratch
+    /// one decode takes meanwhile, read from the blob's header (one readBufferView of its first
+    /// bytes; format 4 also reads LOD0's valence stream once, into a transient buffer from the
+    /// pack's allocator). Both 0 when the model has no PFRep or a format 2 one. Returns Ok;
+    /// InvalidArgument (bad model id, null outputs); BadStructure (an extension without a valid
+    /// bufferView); the read's or pfrepCompressedInfo's error (the streamer fails such a stream too).
     Result pfrepDecodeMemory(uint32_t model, uint64_t* decoded_bytes, uint64_t* scratch_bytes) const;
 
 private:
     void release();
+    Result format4DecodeMemory(uint32_t model, const uint8_t* header, uint64_t* decoded_bytes,
+                               uint64_t* scratch_bytes) const;
     Pack pack_;
     ModelSet models_;
     Allocator allocator_;
@@ -279,8 +282,13 @@ private:
         uint32_t step_count;    // chain levels + 1
         PfrepStreamState state;
         uint8_t is_failed;
-        uint8_t format;         // 2: streamed as prefixes; 3: read whole and decoded (to format 2)
+        uint8_t format;         // 2: streamed as prefixes; 3, 4: read whole and decoded (to format 2)
         size_t scratch_bytes;   // format 3: pfrepDecompress scratch
+        // Format 4: LOD0's valence stream, [lod0_offset, + lod0_size) of level 0's bytes (slot
+        // lod0_slot), which must be resident when the blob is decoded.
+        uint64_t lod0_offset;
+        uint64_t lod0_size;
+        uint32_t lod0_slot;
     };
     struct ClusterModel {
         ClusterLodPack pack;

@@ -341,13 +341,16 @@ TEST(BakeCliUsageTest, PresetErrorsAndOverrides) {
     ASSERT_EQ(r.exit_code, 0) << r.output;
     EXPECT_TRUE(nlohmann::json::parse(r.output)["pfrep_from_chain"].get<bool>());
     EXPECT_EQ(bake("--print-config --pfrep-from-chain --no-pfrep-from-chain").exit_code, 2);
-    EXPECT_EQ(printed["pfrep_format"].get<uint32_t>(), 3u); // the PFRep blob range-coded by default
+    EXPECT_EQ(printed["pfrep_format"].get<uint32_t>(), 4u); // the PFRep blob coded against LOD0 by default
     r = bake("--print-config --preset " + shellQuote(src("configs/desktop.json")) + " --pfrep-format 2");
     ASSERT_EQ(r.exit_code, 0) << r.output;
     EXPECT_EQ(nlohmann::json::parse(r.output)["pfrep_format"].get<uint32_t>(), 2u);
     r = bake("--print-config --pfrep-format 4");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_EQ(nlohmann::json::parse(r.output)["pfrep_format"].get<uint32_t>(), 4u);
+    r = bake("--print-config --pfrep-format 5");
     EXPECT_EQ(r.exit_code, 2);
-    EXPECT_NE(r.output.find("--pfrep-format expects 2 or 3, got '4'"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("--pfrep-format expects 2, 3 or 4, got '5'"), std::string::npos) << r.output;
     EXPECT_EQ(bake("x.ply -o out.gltf").exit_code, 2);
     EXPECT_EQ(bake("-o out.glb").exit_code, 2);
 }

@@ -271,7 +271,8 @@ TEST(PfrepFormat4Test, HeaderErrorsAndShortBuffers) {
     EXPECT_EQ(decode4(with32(4, 3), b.lod0.view()).result, lodrt::Result::UnsupportedVersion);
     EXPECT_EQ(decode4(with32(8, 0xFFFFFFF0u), b.lod0.view()).result, lodrt::Result::BadStructure);
     EXPECT_EQ(decode4(with32(56, 0xFFFFFFF0u), b.lod0.view()).result, lodrt::Result::BadStructure);
-    EXPECT_EQ(decode4(with32(60, 1), b.lod0.view()).result, lodrt::Result::BadStructure);
+    EXPECT_EQ(decode4(with32(60, 4), b.lod0.view()).result, lodrt::Result::BadStructure); // an unknown flag
+    EXPECT_NE(decode4(with32(60, 1), b.lod0.view()).result, lodrt::Result::Ok); // a tail the stream does not code
     lodrt::PfrepModel model;
     EXPECT_EQ(lodrt::openPfrep(b.coded.data(), b.coded.size(), &model), lodrt::Result::UnsupportedVersion);
     lodrt::PfrepCompressedInfo info3;

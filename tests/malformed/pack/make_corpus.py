@@ -532,8 +532,8 @@ def case3(fn):
 
 @case3
 def pfrep3_unknown_format(p):
-    p.pfrep()["format"] = 4
-    return pfrep_path(p) + "/format: format: expected 2 or 3"
+    p.pfrep()["format"] = 5
+    return pfrep_path(p) + "/format: format: expected 2, 3 or 4"
 
 
 @case3

@@ -24,4 +24,12 @@ Result<std::vector<uint8_t>> compressPfrep(const std::vector<uint8_t>& blob);
 Result<std::vector<uint8_t>> compressPfrepFormat4(const PfrepBuild& build, const std::vector<Vec3f>& points,
                                                   const std::vector<uint32_t>& triangles);
 
+/// The same against a LOD0 numbered apart from the build (a pack's LOD0 as its decoded stream
+/// numbers it, lodrt::pfrepNumberLod0): point_of[p] is the id in `points` / `triangles` of the
+/// build's point p. The blob then also codes the ranks of the points never removed
+/// (format::kPfrep4FlagCodedTail), so it decodes to the build's table as the plain call does.
+Result<std::vector<uint8_t>> compressPfrepFormat4(const PfrepBuild& build, const std::vector<Vec3f>& points,
+                                                  const std::vector<uint32_t>& triangles,
+                                                  const std::vector<uint32_t>& point_of);
+
 } // namespace lodbake

@@ -31,6 +31,9 @@ struct PfrepExtensionObject {
     uint64_t triangle_count = 0;             // triangles of PFRep level 0
     std::vector<PfrepExtensionLevel> levels; // one per chain level, highest detail first
     JsonNode json; // the extension object without its bufferView member (the pack writer adds it)
+    /// The build's sequence beside the blob (PfrepBuild's members), for coding it as format 4.
+    std::vector<uint32_t> rank_point, rank_kept;
+    size_t stored_triangles = 0;
 };
 
 /// Builds the PFRep of `lod0` (half-edge sequence, `options`) and, for each ratio of

@@ -7,6 +7,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -118,13 +119,24 @@ ValencePrecision valencePrecision(const ValenceStreamOptions& options, const Lod
 /// when the decoded triangles are not the input's (an internal error).
 PackStreamEncoder valenceStreamEncoder(const ValenceStreamOptions& options = {});
 
+/// A level as its LODBAKE_valence_compression stream decodes (the bytes valenceStreamEncoder writes
+/// for it with `options`): the decoded mesh and where each input vertex went. No value for a level
+/// with several primitives (each coded apart). LOD0's format 4 PFRep blob is coded against it.
+struct DecodedLevelStream {
+    Mesh mesh;
+    std::vector<uint32_t> new_vertex_of; // input vertex -> decoded vertex
+};
+Result<std::optional<DecodedLevelStream>> decodedLevelStream(const ValenceStreamOptions& options, const LodChain& chain,
+                                                             size_t level_index, const Mesh& mesh);
+
 /// What the bake's settings say about the streams (BakeSettings: stream precision, progressive_fans,
 /// pfrep_from_chain).
 struct StreamSettings {
     ValenceStreamOptions valence;
     bool progressive_fans = true; // LODBAKE_progressive_fans on LOD0
     bool pfrep_from_chain = false; // ... built from the chain's own collapses (StreamNeeds::collapse_record)
-    uint32_t pfrep_format = 3;     // ... written as format 3 (range-coded) or 2 (docs/format/pfrep.md)
+    uint32_t pfrep_format =
+        4; // ... written as format 4 (against LOD0's stream), 3 (range-coded) or 2 (docs/format/pfrep.md)
     bool cluster_lod = false;      // LODBAKE_cluster_lod on LOD0 (grid bits: valence.position_bits)
 };
 

@@ -34,6 +34,7 @@ struct Pfrep4Lod0 {
 struct Pfrep4Header {
     uint32_t vertex_count = 0, removed_count = 0, point_count = 0, level0_triangles = 0;
     uint32_t stored_triangles = 0, decoded_size = 0;
+    uint32_t flags = 0; // format::kPfrep4Flag* (the word at offset 60)
     float position_min[3] = {0, 0, 0}, position_step[3] = {0, 0, 0};
     float error_unit = 0;
 };
@@ -262,12 +263,62 @@ bool pfrep4CodeRemovals(Coder& c, Pfrep4Models& models, Pfrep4State& s, const ui
 
 // ---- Table ----
 
-/// Ranks of the points never removed (by point id), then every stored triangle as a slot of its
-/// lowest-ranked corner, in the order the triangles were listed. False when the counts disagree.
+/// The check of LOD0 that kPfrep4FlagLod0Check codes: FNV-1a over the 32-bit words point_count,
+/// triangle_count, every point's three float bit patterns and every triangle's three ids, in order.
+inline uint32_t pfrep4Lod0Check(const Pfrep4Lod0& l) {
+    uint32_t h = 2166136261u;
+    auto word = [&h](uint32_t w) {
+        for (int b = 0; b < 4; ++b) h = (h ^ ((w >> (8 * b)) & 0xFFu)) * 16777619u;
+    };
+    word(l.point_count);
+    word(l.triangle_count);
+    for (size_t i = 0; i < size_t(l.point_count) * 3; ++i) {
+        uint32_t bits;
+        std::memcpy(&bits, l.positions + i, 4);
+        word(bits);
+    }
+    for (size_t i = 0; i < size_t(l.triangle_count) * 3; ++i) word(l.triangles[i]);
+    return h;
+}
+
+/// With kPfrep4FlagLod0Check, codes pfrep4Lod0Check(s.lod0) as two 16-bit direct values; false when
+/// decoding finds another value (the blob was coded against another LOD0).
+template <class Coder> bool pfrep4CodeLod0Check(Coder& c, const Pfrep4State& s) {
+    if ((s.h.flags & format::kPfrep4FlagLod0Check) == 0) return true;
+    const uint32_t check = pfrep4Lod0Check(s.lod0);
+    const uint32_t low = c.direct(check & 0xFFFFu, 16), high = c.direct(check >> 16, 16);
+    return Coder::kEncoding || (low | (high << 16)) == check;
+}
+
+/// With format::kPfrep4FlagCodedTail: the ranks removed_count ... vertex_count - 1 of the points
+/// never removed, each the index of its point among those not ranked yet (by increasing id), coded
+/// as the removals' indices are (`tail` holds the points by rank when encoding). A LOD0 numbered
+/// apart from the build (a pack's decoded stream) keeps the build's ranks this way. Without the flag
+/// nothing is coded and pfrep4BuildSlots ranks them by point id.
+template <class Coder> bool pfrep4CodeTail(Coder& c, Pfrep4State& s, const uint32_t* tail) {
+    if ((s.h.flags & format::kPfrep4FlagCodedTail) == 0) return true;
+    uint32_t remaining = s.h.vertex_count - s.h.removed_count;
+    for (uint32_t i = s.h.removed_count; i < s.h.vertex_count; ++i, --remaining) {
+        uint32_t u = Coder::kEncoding ? tail[i] : 0;
+        if (Coder::kEncoding && (u >= s.h.point_count || s.rank_of[u] != kNone)) return false;
+        const uint32_t index = pfrep4CodeIndex(c, remaining, Coder::kEncoding ? pfrep4FenwickBelow(s, u) : 0);
+        if (c.failed() || index >= remaining) return false;
+        if (!Coder::kEncoding) u = pfrep4FenwickSelect(s, index);
+        pfrep4FenwickAdd(s, u, -1);
+        s.rank_of[u] = i;
+        s.rank_point[i] = u;
+    }
+    return true;
+}
+
+/// Ranks of the points never removed (by point id, unless pfrep4CodeTail ranked them), then every
+/// stored triangle as a slot of its lowest-ranked corner, in the order the triangles were listed.
+/// False when the counts disagree.
 inline bool pfrep4BuildSlots(Pfrep4State& s) {
-    uint32_t rank = s.h.removed_count;
+    uint32_t rank = (s.h.flags & format::kPfrep4FlagCodedTail) != 0 ? s.h.vertex_count : s.h.removed_count;
     for (uint32_t p = 0; p < s.h.point_count; ++p)
         if (s.rank_of[p] == kNone) {
+            if (rank >= s.h.vertex_count) return false;
             s.rank_of[p] = rank;
             s.rank_point[rank++] = p;
         }
