@@ -32,6 +32,7 @@ ooc::OocPackOptions outOfCorePackOptions(const BakeSettings& s, const std::strin
     o.valence.error_fraction = s.stream_precision.error_fraction;
     o.compact = s.compact;
     o.distance.sample_count = s.error_samples;
+    o.remove_covered_components = s.remove_covered_components;
     o.driver.pages.pack.position_bits = o.valence.position_bits;
     return o;
 }

@@ -51,7 +51,7 @@
 // the in-memory `lodbake bake --clusters` pack (a child process of the CLI), the out-of-core pack
 // (ooc::writeOutOfCorePack with partitions of --leaf-triangles, default 65,536, under --memory-limit,
 // default 4096 MiB, so that every level is kept and measured), and the same writer with one
-// partition of 4 Mi triangles holding the whole input (the cuts of an in-memory cluster hierarchy).
+// partition of 4 Mi triangles holding the whole input (an in-memory cluster hierarchy).
 // Each out-of-core level's Hausdorff and mean errors are divided by the in-memory chain's at the
 // same triangle count (log-log interpolation between its levels; a count outside its levels is
 // marked and not judged) (runPackErrorsMode below).
@@ -854,9 +854,13 @@ bool oocPackChain(const std::string& scan, const std::string& out, uint64_t leaf
         std::fprintf(stderr, "%s\n", r.status().message().c_str());
         return false;
     }
-    std::printf("  %s: %llu partitions, %llu merges, %llu of %zu candidate levels kept, %llu measured\n",
+    size_t simplified = 0;
+    for (const lodbake::ooc::OocPackLevel& l : r->levels) simplified += l.simplified;
+    std::printf("  %s: %llu partitions, %llu merges, %llu of %zu candidate levels kept, %llu measured, %zu "
+                "simplified from the finest kept level (the others cuts)\n",
                 out.c_str(), (unsigned long long)r->driver.partition_count, (unsigned long long)r->driver.merge_count,
-                (unsigned long long)r->metrics.levels.size(), r->levels.size(), (unsigned long long)r->measured_levels);
+                (unsigned long long)r->metrics.levels.size(), r->levels.size(), (unsigned long long)r->measured_levels,
+                simplified);
     for (const lodbake::ooc::OocPackLevel& l : r->levels)
         if (l.kept) sources.push_back(l.error_source);
     return packChain(out, chain);

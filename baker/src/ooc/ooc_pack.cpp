@@ -11,11 +11,13 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include "lodbake/bake/memory_budget.h"
 #include "lodbake/cleanup/normals.h"
 #include "lodbake/core/spill_file.h"
 #include "lodbake/ooc/jobs.h"
 #include "lodbake/ooc/level_error.h"
 #include "lodbake/pack/pack_glb.h"
+#include "lodbake/simplify/lod_chain.h"
 #include "lodrt/format.h"
 
 namespace lodbake::ooc {
@@ -182,9 +184,12 @@ Result<PackLevel> bakeLevel(Mesh mesh, const PackStreamEncoder& encoder, const L
 // The kept levels' errors. The input's level (the cut at 0) has error 0. The others are measured
 // against the input's partition files in one pass, as many of the coarsest as fit beside the held
 // levels (`room` bytes); the finer ones keep their cut's bound, and a note says so.
+// With `simplified` (the levels after the first come from the simplifier, so no cut's bound holds for
+// them) every one of them must be measured: when that does not fit, nothing is measured and the list
+// comes back empty.
 Result<std::vector<LevelError>> measureKeptLevels(const std::vector<LevelCut>& cuts, const std::vector<Mesh>& meshes,
                                                   const std::string& input, const OocPackOptions& o, uint64_t room,
-                                                  OocPackResult& result, Diagnostics& diagnostics) {
+                                                  bool simplified, OocPackResult& result, Diagnostics& diagnostics) {
     std::vector<LevelError> errors(cuts.size());
     std::vector<LevelErrorSource> sources(cuts.size(), LevelErrorSource::Bound);
     size_t first = 0; // the first level that is not the input
@@ -218,6 +223,7 @@ Result<std::vector<LevelError>> measureKeptLevels(const std::vector<LevelCut>& c
             if (s <= kSmallestSubsample) break;
         }
     }
+    if (simplified && from > std::max<size_t>(first, 1)) return std::vector<LevelError>{};
     if (from > first)
         diagnostics.note(input + ": " + std::to_string(from - first) +
                          " finest level(s) record their cut's error bound: measuring them against the input does "
@@ -307,7 +313,7 @@ Result<std::vector<LevelCut>> keptCuts(const TreeClusterTable& table, const std:
 // The kept levels' errors: the caller's, or measured against the input with every kept level's mesh
 // held (positions and triangles: at most 12 bytes per cluster vertex and per triangle).
 Result<std::vector<LevelError>> keptLevelErrors(const std::vector<LevelCut>& cuts, const std::vector<Mesh>& meshes,
-                                                const std::string& input, const OocPackOptions& o,
+                                                const std::string& input, const OocPackOptions& o, bool simplified,
                                                 OocPackResult& result, Diagnostics& diagnostics) {
     if (o.level_errors) {
         LODBAKE_ASSIGN_OR_RETURN(std::vector<LevelError> errors, o.level_errors(cuts));
@@ -324,9 +330,71 @@ Result<std::vector<LevelError>> keptLevelErrors(const std::vector<LevelCut>& cut
     for (const LevelCut& c : cuts) meshes_bytes += 12 * c.cluster_vertices + 12 * c.triangles;
     const uint64_t room = result.level_budget_bytes > meshes_bytes ? result.level_budget_bytes - meshes_bytes : 0;
     LODBAKE_ASSIGN_OR_RETURN(std::vector<LevelError> errors,
-                             measureKeptLevels(cuts, meshes, input, o, room, result, diagnostics));
+                             measureKeptLevels(cuts, meshes, input, o, room, simplified, result, diagnostics));
     result.level_peak_bytes = std::max(result.level_peak_bytes, meshes_bytes + result.measure_bound_bytes);
     return errors;
+}
+
+// The levels after the finest kept one made by the in-memory bake's LOD chain (the same simplifier
+// and options) run on the finest kept level's mesh, at the same triangle counts (the candidates'
+// targets, fractions of the input): a free simplification of the whole level is closer to the input
+// than a cut of the hierarchy, whose groups are simplified apart. Only when the simplifier's working
+// set (the in-memory bake's per-triangle allowance, kBakeBytesPerTriangle) fits beside the kept
+// levels' held bytes; otherwise, or when the chain stops above a target, the cuts stay and a note
+// says so. Returns whether `meshes` (the finest level's only on entry) now holds every level.
+Result<bool> simplifyCoarserLevels(std::vector<Mesh>& meshes, const std::string& input, const OocPackOptions& o,
+                                   OocPackResult& result, Diagnostics& diagnostics) {
+    std::vector<const OocPackLevel*> kept;
+    uint64_t held = 0;
+    for (const OocPackLevel& l : result.levels)
+        if (l.kept) {
+            kept.push_back(&l);
+            held += l.held_bytes;
+        }
+    if (kept.size() < 2) return false;
+    const size_t faces = meshes[0].faceCount();
+    const uint64_t work = kBakeBytesPerTriangle * uint64_t(faces);
+    if (held + work > result.level_budget_bytes) {
+        diagnostics.note(input + ": the coarser levels are cuts of the cluster hierarchy: simplifying the finest "
+                                 "kept level does not fit the memory limit beside the kept levels");
+        return false;
+    }
+    LodChainOptions co;
+    co.simplify.remove_covered_components = o.remove_covered_components;
+    co.screen = o.screen;
+    co.measure_error = false; // measured against the input below, with the finest level
+    co.record_collapses = false;
+    co.ratios.clear();
+    for (size_t i = 1; i < kept.size(); ++i)
+        co.ratios.push_back(std::min(1.0, double(kept[i]->target_triangles) / double(std::max<size_t>(faces, 1))));
+    Diagnostics chain_notes;
+    LODBAKE_ASSIGN_OR_RETURN(LodChain chain, buildLodChain(meshes[0], co, chain_notes));
+    for (const Diagnostic& item : chain_notes.items()) diagnostics.note(input + ": " + item.message);
+    if (chain.levels.size() + 1 != kept.size()) {
+        diagnostics.note(input + ": the coarser levels are cuts of the cluster hierarchy: the simplifier stopped "
+                                 "above a level's target on the finest kept level");
+        return false;
+    }
+    for (LodLevel& level : chain.levels) meshes.push_back(std::move(level.mesh));
+    result.level_peak_bytes = std::max(result.level_peak_bytes, held + work);
+    return true;
+}
+
+// The kept levels' meshes (finest first) and whether the coarser ones came from the simplifier.
+Result<bool> levelMeshes(const TreeClusterTable& table, TreePageSource& source, const std::vector<LevelCut>& cuts,
+                         const std::string& input, const std::string& output_path, const OocPackOptions& o,
+                         std::vector<Mesh>& meshes, OocPackResult& result, Diagnostics& diagnostics) {
+    meshes.clear();
+    LODBAKE_ASSIGN_OR_RETURN(Mesh finest, extractLevel(table, source, cuts[0], 0, input));
+    meshes.push_back(std::move(finest));
+    LODBAKE_ASSIGN_OR_RETURN(const bool simplified, simplifyCoarserLevels(meshes, input, o, result, diagnostics));
+    if (simplified) return true;
+    for (size_t i = 1; i < cuts.size(); ++i) {
+        if (o.driver.cancel && o.driver.cancel->load()) return ioError(output_path + ": out-of-core bake cancelled");
+        LODBAKE_ASSIGN_OR_RETURN(Mesh mesh, extractLevel(table, source, cuts[i], i, input));
+        meshes.push_back(std::move(mesh));
+    }
+    return false;
 }
 
 // Everything after the driver: the cuts, the levels that fit, their meshes, errors and streams, the GLB.
@@ -337,15 +405,29 @@ Status packLevels(const std::string& input, const std::string& output_path, cons
     LODBAKE_ASSIGN_OR_RETURN(const std::vector<LevelCut> cuts, keptCuts(table, input, o, result));
     TreePageSource source(table);
     std::vector<Mesh> meshes;
-    for (size_t i = 0; i < cuts.size(); ++i) {
-        if (o.driver.cancel && o.driver.cancel->load()) return ioError(output_path + ": out-of-core bake cancelled");
-        LODBAKE_ASSIGN_OR_RETURN(Mesh mesh, extractLevel(table, source, cuts[i], i, input));
-        meshes.push_back(std::move(mesh));
-    }
+    LODBAKE_ASSIGN_OR_RETURN(bool simplified,
+                             levelMeshes(table, source, cuts, input, output_path, o, meshes, result, diagnostics));
     result.cut_seconds = since(t0);
     t0 = Clock::now();
-    LODBAKE_ASSIGN_OR_RETURN(const std::vector<LevelError> errors,
-                             keptLevelErrors(cuts, meshes, input, o, result, diagnostics));
+    LODBAKE_ASSIGN_OR_RETURN(std::vector<LevelError> errors,
+                             keptLevelErrors(cuts, meshes, input, o, simplified, result, diagnostics));
+    if (simplified && errors.empty()) {
+        // A simplified level has no bound to fall back on: the cuts, which have one, replace them.
+        diagnostics.note(input + ": the coarser levels are cuts of the cluster hierarchy: measuring the simplified "
+                                 "levels against the input does not fit the memory limit beside the kept levels");
+        meshes.resize(1);
+        for (size_t i = 1; i < cuts.size(); ++i) {
+            LODBAKE_ASSIGN_OR_RETURN(Mesh mesh, extractLevel(table, source, cuts[i], i, input));
+            meshes.push_back(std::move(mesh));
+        }
+        simplified = false;
+        LODBAKE_ASSIGN_OR_RETURN(errors, keptLevelErrors(cuts, meshes, input, o, false, result, diagnostics));
+    }
+    bool after_finest = false;
+    for (OocPackLevel& l : result.levels) {
+        l.simplified = simplified && l.kept && after_finest;
+        after_finest |= l.kept;
+    }
     result.measure_seconds = since(t0);
     t0 = Clock::now();
     LODBAKE_ASSIGN_OR_RETURN(ClusterPackBounds bounds, lod0Bounds(table, source));

@@ -20,6 +20,7 @@
 
 #include "../gltf/gltf_test_util.h"
 #include "cli_runner.h"
+#include "lodbake/bake/memory_budget.h"
 #include "lodbake/core/file_io.h"
 #include "lodbake/io/mesh_io.h"
 #include "lodbake/simplify/mesh_distance.h"
@@ -148,8 +149,11 @@ TEST(OocPackTest, ChainNearTheRatiosWithTheClustersOnItsFinestLevel) {
     for (uint32_t l = 0; l < model.level_count; ++l) {
         const lodrt::LevelInfo& level = loaded.models.modelLevel(0, l);
         EXPECT_EQ(level.triangle_count, r.metrics.levels[l].triangles);
-        // Welding drops only triangles a cut made degenerate.
-        EXPECT_NEAR(double(level.triangle_count), double(r.levels[l].cut.triangles), 0.01 * double(r.levels[l].cut.triangles));
+        // Level 0 is the cut (welding drops only triangles it made degenerate); the coarser levels are
+        // the simplifier's, run on it down to the same targets.
+        EXPECT_EQ(r.levels[l].simplified, l > 0) << l;
+        const double expected = l == 0 ? double(r.levels[l].cut.triangles) : double(r.levels[l].target_triangles);
+        EXPECT_NEAR(double(level.triangle_count), expected, 0.01 * expected) << l;
         EXPECT_GE(level.hausdorff_error, previous_error);
         previous_error = level.hausdorff_error;
         lodrt::ClusterPackSource source;
@@ -325,6 +329,11 @@ TEST(OocPackTest, SmallerLimitStartsTheChainBelowTheInputAndSaysSo) {
     ASSERT_TRUE(tight.result.ok()) << tight.result.status().message();
     EXPECT_FALSE(tight.result->levels[0].kept);
     EXPECT_EQ(keptLevels(*tight.result), levels.size() - 1);
+    // The simplifier's allowance for the finest kept level does not fit this budget: every level is a
+    // cut (the wide run's coarser levels are the simplifier's).
+    EXPECT_TRUE(wide.result->levels.back().simplified);
+    for (const OocPackLevel& l : tight.result->levels) EXPECT_FALSE(l.simplified) << l.ratio;
+    ASSERT_LT(tight.result->level_budget_bytes, lodbake::kBakeBytesPerTriangle * tight.result->levels[1].cut.triangles);
     LoadedPack loaded;
     loadInLodrt(tight.glb, loaded);
     ASSERT_EQ(loaded.models.modelCount(), 1u);
@@ -359,6 +368,9 @@ TEST(OocPackTest, SameBytesAtAnyThreadCountAndAtTwoLimitsKeepingTheSameLevels) {
     const PackRun other = runPack(scan, dir + "/other.glb", packOptions(dir + "/work", 192, 2));
     ASSERT_TRUE(one.result.ok() && two.result.ok() && other.result.ok());
     ASSERT_EQ(keptLevels(*one.result), keptLevels(*other.result));
+    // Both limits hold the simplifier beside the levels: the coarser levels are its, at both.
+    EXPECT_TRUE(one.result->levels.back().simplified);
+    EXPECT_TRUE(other.result->levels.back().simplified);
     EXPECT_FALSE(one.glb.empty());
     EXPECT_EQ(one.glb, two.glb);
     EXPECT_EQ(one.glb, other.glb);

@@ -16,6 +16,15 @@
 // any geometry is read; finer levels exist only as cluster pages. None fitting is a ResourceLimit
 // error naming the input.
 //
+// The finest kept level is a cut (the input does not fit in memory); the coarser kept levels are the
+// in-memory bake's LOD chain (buildLodChain, the bake's simplifier options) run on that level's mesh
+// down to the same targets (fractions of the input's triangles): a whole-level simplification is
+// closer to the input than a cut, whose groups were simplified apart. This needs the simplifier's
+// working set (kBakeBytesPerTriangle per triangle of the finest kept level, bake/memory_budget.h)
+// beside the kept levels' held bytes, and the measurement of every simplified level (they have no
+// cut's bound to fall back on); otherwise, or when the simplifier stops above a target, the coarser
+// levels are cuts too and a diagnostic note says why (OocPackLevel::simplified says which).
+//
 // Errors of a level: measured against the input (measureLevelErrors, level_error.h: the bake's
 // error_samples, one pass over the partition files for every kept level), the two-sided distance
 // the in-memory bake records; the input itself (the cut at 0) has error 0. The measurement's bound
@@ -25,7 +34,8 @@
 // are at least the finer level's, as in the in-memory bake.
 //
 // Determinism: the driver's output, the cuts, the welding and the coding depend on the input and the
-// options only; the limit decides only which levels are kept. Failure: every file the run made
+// options only; the limit decides only which levels are kept and whether the coarser ones are the
+// simplifier's. Failure: every file the run made
 // (partition, hierarchy and merge files, the pages, the output's temporaries) is removed, the work
 // folder too when the run created it, and no output is left.
 
@@ -82,6 +92,7 @@ struct OocPackOptions {
     ValenceStreamOptions valence;    // the levels' streams (position bits also the pages' grid bits)
     bool compact = false;            // PackDescription::compact
     DistanceOptions distance;        // the measurement's (the bake sets sample_count to error_samples)
+    bool remove_covered_components = false; // the simplifier's option for the coarser levels (the bake's)
     /// Called with the kept levels' cuts (finest first) before their metrics are written; returns
     /// one LevelError per level, which replaces the measurement, or an empty list to measure. Optional.
     std::function<Result<std::vector<LevelError>>(const std::vector<LevelCut>& kept)> level_errors;
@@ -94,6 +105,7 @@ struct OocPackLevel {
     LevelCut cut;
     uint64_t held_bytes = 0, work_bytes = 0;
     bool kept = false;
+    bool simplified = false; // kept, coarser than the finest kept level, made by the simplifier (not the cut)
     LevelErrorSource error_source = LevelErrorSource::Bound; // kept levels: where their errors came from
 };
 
