@@ -18,20 +18,14 @@
 #include "core/parallel.h"
 #include "lodbake/core/file_io.h"
 #include "lodbake/pack/cluster_lod_pack.h"
-#include "scansim.h"
-#include "test_paths.h"
+#include "ooc_scans.h"
 
 namespace fs = std::filesystem;
 using namespace lodbake::ooc;
 
 namespace {
 
-std::string driverDir(const std::string& name) {
-    const std::string dir = lodbake_test::scratchDir() + "/ooc_driver/" + name;
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-    return dir;
-}
+std::string driverDir(const std::string& name) { return lodbake_test::freshOocDir("ooc_driver", name); }
 
 std::vector<std::string> driverFilesIn(const std::string& dir) {
     std::vector<std::string> names;
@@ -41,13 +35,7 @@ std::vector<std::string> driverFilesIn(const std::string& dir) {
     return names;
 }
 
-std::string driverScan(const std::string& dir, uint64_t triangles) {
-    lodbake::scansim::SurfaceOptions so;
-    so.triangles = triangles;
-    const std::string scan = dir + "/scan.ply";
-    EXPECT_TRUE(lodbake::scansim::writeSurfacePly(so, scan).ok());
-    return scan;
-}
+std::string driverScan(const std::string& dir, uint64_t triangles) { return lodbake_test::writeGeneratedScan(dir, triangles); }
 
 // Small reader buffers and partitions of about 12,000 triangles, so a 60,000-triangle scan makes
 // several partitions and merge rounds.

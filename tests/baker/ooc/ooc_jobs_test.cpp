@@ -16,28 +16,16 @@
 
 #include "cli_runner.h"
 #include "lodbake/core/file_io.h"
-#include "scansim.h"
-#include "test_paths.h"
+#include "ooc_scans.h"
 
 namespace fs = std::filesystem;
 using namespace lodbake::ooc;
 
 namespace {
 
-std::string jobsDir(const std::string& name) {
-    const std::string dir = lodbake_test::scratchDir() + "/ooc_jobs/" + name;
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-    return dir;
-}
+std::string jobsDir(const std::string& name) { return lodbake_test::freshOocDir("ooc_jobs", name); }
 
-std::string jobsScan(const std::string& dir, uint64_t triangles) {
-    lodbake::scansim::SurfaceOptions so;
-    so.triangles = triangles;
-    const std::string scan = dir + "/scan.ply";
-    EXPECT_TRUE(lodbake::scansim::writeSurfacePly(so, scan).ok());
-    return scan;
-}
+std::string jobsScan(const std::string& dir, uint64_t triangles) { return lodbake_test::writeGeneratedScan(dir, triangles); }
 
 // As OocDriverTest's: partitions of about 12,000 triangles, so 60,000 triangles make several
 // partitions and merge rounds.
