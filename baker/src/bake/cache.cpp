@@ -136,6 +136,9 @@ bool parseCacheEntry(const std::vector<uint8_t>& bytes, CacheEntry& entry) {
     if (std::sscanf(sizes.c_str(), "%llu %llu %llu %16[0-9a-f]%c", &s, &r, &g, hash, &tail) != 4 ||
         std::string(hash).size() != 16)
         return false;
+    // sscanf also takes signs, leading zeros and extra blanks; only the line the writer makes is an
+    // entry, so that an accepted entry is exactly what serializeCacheEntry would write.
+    if (sizes != std::to_string(s) + " " + std::to_string(r) + " " + std::to_string(g) + " " + hash) return false;
     pos = eol + 1;
     const uint64_t rest = bytes.size() - pos;
     if (s > rest || r > rest - s || g != rest - s - r) return false;
