@@ -163,6 +163,21 @@ inline uint32_t pfrep4FenwickSelect(const Pfrep4State& s, uint32_t index) { // t
     return at;
 }
 
+/// Rank i to the next point of the `remaining` points not ranked yet: its index among them by
+/// increasing id (truncated binary, pfrep4CodeIndex), the point (`u` when encoding) taken out of the
+/// Fenwick tree. Returns the point, or kNone on a corrupt stream (or, encoding, a point that is not
+/// among them).
+template <class Coder> uint32_t pfrep4CodeNextPoint(Coder& c, Pfrep4State& s, uint32_t remaining, uint32_t i, uint32_t u) {
+    if (Coder::kEncoding && (u >= s.h.point_count || s.rank_of[u] != kNone)) return kNone;
+    const uint32_t index = pfrep4CodeIndex(c, remaining, Coder::kEncoding ? pfrep4FenwickBelow(s, u) : 0);
+    if (c.failed() || index >= remaining) return kNone;
+    if (!Coder::kEncoding) u = pfrep4FenwickSelect(s, index);
+    pfrep4FenwickAdd(s, u, -1);
+    s.rank_of[u] = i;
+    s.rank_point[i] = u;
+    return u;
+}
+
 /// LOD0's triangles as the first stored triangles, linked into their corners' incidence lists; the
 /// Fenwick tree holds the points on a triangle. False when LOD0 is not what the header says.
 inline bool pfrep4LoadLod0(Pfrep4State& s) {
@@ -227,14 +242,8 @@ template <class Coder>
 bool pfrep4CodeRemovals(Coder& c, Pfrep4Models& models, Pfrep4State& s, const uint32_t* removed, const uint32_t* kept) {
     uint32_t remaining = s.h.vertex_count;
     for (uint32_t i = 0; i < s.h.removed_count; ++i, --remaining) {
-        uint32_t u = Coder::kEncoding ? removed[i] : 0;
-        if (Coder::kEncoding && (u >= s.h.point_count || s.rank_of[u] != kNone)) return false;
-        const uint32_t index = pfrep4CodeIndex(c, remaining, Coder::kEncoding ? pfrep4FenwickBelow(s, u) : 0);
-        if (c.failed() || index >= remaining) return false;
-        if (!Coder::kEncoding) u = pfrep4FenwickSelect(s, index);
-        pfrep4FenwickAdd(s, u, -1);
-        s.rank_of[u] = i;
-        s.rank_point[i] = u;
+        const uint32_t u = pfrep4CodeNextPoint(c, s, remaining, i, Coder::kEncoding ? removed[i] : 0);
+        if (u == kNone) return false;
         // u's live triangles (its ring) and their other corners, in list order.
         uint32_t ring_size = 0, count = 0;
         for (uint32_t node = s.head[u]; node != kNone; node = s.next[node]) {
@@ -299,14 +308,7 @@ template <class Coder> bool pfrep4CodeTail(Coder& c, Pfrep4State& s, const uint3
     if ((s.h.flags & format::kPfrep4FlagCodedTail) == 0) return true;
     uint32_t remaining = s.h.vertex_count - s.h.removed_count;
     for (uint32_t i = s.h.removed_count; i < s.h.vertex_count; ++i, --remaining) {
-        uint32_t u = Coder::kEncoding ? tail[i] : 0;
-        if (Coder::kEncoding && (u >= s.h.point_count || s.rank_of[u] != kNone)) return false;
-        const uint32_t index = pfrep4CodeIndex(c, remaining, Coder::kEncoding ? pfrep4FenwickBelow(s, u) : 0);
-        if (c.failed() || index >= remaining) return false;
-        if (!Coder::kEncoding) u = pfrep4FenwickSelect(s, index);
-        pfrep4FenwickAdd(s, u, -1);
-        s.rank_of[u] = i;
-        s.rank_point[i] = u;
+        if (pfrep4CodeNextPoint(c, s, remaining, i, Coder::kEncoding ? tail[i] : 0) == kNone) return false;
     }
     return true;
 }
