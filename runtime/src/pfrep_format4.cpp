@@ -68,6 +68,25 @@ Result readHeader(const uint8_t* p, size_t size, detail::Pfrep4Header& h) {
     return Result::Ok;
 }
 
+// Where the main stream starts, past the split list (kPfrep4FlagSplitPoints: its u32 byte count,
+// then its own range-coded stream, at least 5 bytes); *split / *split_bytes locate the list (null /
+// 0 without the flag).
+Result splitList(const uint8_t* p, size_t size, const detail::Pfrep4Header& h, const uint8_t** split,
+                 size_t* split_bytes, size_t* stream_at) {
+    *split = nullptr;
+    *split_bytes = 0;
+    *stream_at = format::kPfrepHeaderSize;
+    if ((h.flags & format::kPfrep4FlagSplitPoints) == 0) return Result::Ok;
+    if (size < format::kPfrepHeaderSize + 4) return Result::Truncated;
+    const uint32_t bytes = loadU32(p + format::kPfrepHeaderSize);
+    if (bytes < 5) return Result::CorruptStream;
+    if (bytes > size - format::kPfrepHeaderSize - 4) return Result::Truncated;
+    *split = p + format::kPfrepHeaderSize + 4;
+    *split_bytes = bytes;
+    *stream_at = format::kPfrepHeaderSize + 4 + size_t(bytes);
+    return Result::Ok;
+}
+
 // Slots of the welding hash table: a power of two at least twice the vertex count.
 uint64_t weldSlots(uint32_t vertex_count) {
     uint64_t n = 2;
@@ -88,11 +107,16 @@ size_t pfrepNumberLod0ScratchBytes(uint32_t vertex_count) {
     return size_t((weldSlots(vertex_count) + vertex_count) * sizeof(uint32_t) + 7) & ~size_t(7);
 }
 
-Result pfrepNumberLod0(const float* positions, uint32_t vertex_count, const uint32_t* indices, uint32_t triangle_count,
-                       float* points, size_t point_capacity, uint32_t* triangles, size_t triangle_capacity,
-                       void* scratch, size_t scratch_bytes, PfrepLod0* lod0) {
+namespace {
+
+// pfrepNumberLod0, with the split list split[0, split_bytes) applied to the welds when split is not
+// null.
+Result numberLod0(const uint8_t* split, size_t split_bytes, const float* positions, uint32_t vertex_count,
+                  const uint32_t* indices, uint32_t triangle_count, float* points, size_t point_capacity,
+                  uint32_t* triangles, size_t triangle_capacity, void* scratch, size_t scratch_bytes,
+                  PfrepLod0* lod0) {
     if ((vertex_count > 0 && (!positions || !points)) || (triangle_count > 0 && (!indices || !triangles)) || !scratch ||
-        !lod0)
+        !lod0 || (split_bytes > 0 && !split))
         return Result::InvalidArgument;
     if (point_capacity < size_t(vertex_count) * 3 || triangle_capacity < size_t(triangle_count) * 3 ||
         scratch_bytes < pfrepNumberLod0ScratchBytes(vertex_count))
@@ -111,6 +135,16 @@ Result pfrepNumberLod0(const float* positions, uint32_t vertex_count, const uint
             at = (at + 1) & (slots - 1);
         if (table[at] == detail::kNone) table[at] = v;
         point_of[v] = table[at];
+    }
+    if (split) { // the table is free: two vertex_count arrays for the welds' lists (slots >= 2 * vertex_count)
+        detail::Pfrep4SplitModels models;
+        models.init();
+        DecodeCoder c;
+        if (!c.rd.init(split, split_bytes)) return Result::CorruptStream;
+        if (!detail::pfrep4CodeSplits(c, models, vertex_count, point_of, nullptr, table, table + vertex_count))
+            return c.rd.overrun() ? Result::Truncated : Result::CorruptStream;
+        if (c.rd.overrun()) return Result::Truncated;
+        if (!c.rd.finishedExactly()) return Result::CorruptStream;
     }
     // The table is free again: it now maps a representative to its point id.
     std::memset(table, 0xFF, size_t(vertex_count) * sizeof(uint32_t)); // slots >= vertex_count
@@ -134,6 +168,38 @@ Result pfrepNumberLod0(const float* positions, uint32_t vertex_count, const uint
     lod0->triangles = triangles;
     lod0->triangle_count = kept;
     return Result::Ok;
+}
+
+} // namespace
+
+Result pfrepNumberLod0(const float* positions, uint32_t vertex_count, const uint32_t* indices, uint32_t triangle_count,
+                       float* points, size_t point_capacity, uint32_t* triangles, size_t triangle_capacity,
+                       void* scratch, size_t scratch_bytes, PfrepLod0* lod0) {
+    return numberLod0(nullptr, 0, positions, vertex_count, indices, triangle_count, points, point_capacity, triangles,
+                      triangle_capacity, scratch, scratch_bytes, lod0);
+}
+
+Result pfrepNumberLod0Split(const void* split, size_t split_bytes, const float* positions, uint32_t vertex_count,
+                            const uint32_t* indices, uint32_t triangle_count, float* points, size_t point_capacity,
+                            uint32_t* triangles, size_t triangle_capacity, void* scratch, size_t scratch_bytes,
+                            PfrepLod0* lod0) {
+    if (split && split_bytes == 0) return Result::InvalidArgument;
+    return numberLod0(static_cast<const uint8_t*>(split), split_bytes, positions, vertex_count, indices,
+                      triangle_count, points, point_capacity, triangles, triangle_capacity, scratch, scratch_bytes,
+                      lod0);
+}
+
+Result pfrepFormat4SplitList(const void* blob, size_t size, const void** split, size_t* split_bytes) {
+    if (!blob || !split || !split_bytes) return Result::InvalidArgument;
+    const uint8_t* p = static_cast<const uint8_t*>(blob);
+    detail::Pfrep4Header h;
+    Result r = readHeader(p, size, h);
+    if (r != Result::Ok) return r;
+    const uint8_t* at = nullptr;
+    size_t stream_at = 0;
+    r = splitList(p, size, h, &at, split_bytes, &stream_at);
+    *split = at;
+    return r;
 }
 
 Result pfrepFormat4Info(const void* data, size_t size, PfrepFormat4Info* info) {
@@ -165,7 +231,11 @@ Result pfrepDecodeFormat4(const void* data, size_t size, const PfrepLod0& lod0, 
     if (lod0.point_count != s.h.point_count || lod0.triangle_count != s.h.level0_triangles ||
         (lod0.point_count > 0 && !lod0.positions) || (lod0.triangle_count > 0 && !lod0.triangles))
         return Result::BadStructure;
-    if (size < format::kPfrepHeaderSize + 5) return Result::Truncated; // the range coder's first bytes
+    const uint8_t* split = nullptr;
+    size_t split_bytes = 0, stream_at = 0;
+    r = splitList(in, size, s.h, &split, &split_bytes, &stream_at);
+    if (r != Result::Ok) return r;
+    if (size < stream_at + 5) return Result::Truncated; // the range coder's first bytes
     s.lod0.positions = lod0.positions;
     s.lod0.triangles = lod0.triangles;
     s.lod0.point_count = lod0.point_count;
@@ -175,7 +245,7 @@ Result pfrepDecodeFormat4(const void* data, size_t size, const PfrepLod0& lod0, 
     uint8_t* o = static_cast<uint8_t*>(out);
     std::memset(o, 0, s.h.decoded_size);
     DecodeCoder c;
-    if (!c.rd.init(in + format::kPfrepHeaderSize, size - format::kPfrepHeaderSize)) return Result::CorruptStream;
+    if (!c.rd.init(in + stream_at, size - stream_at)) return Result::CorruptStream;
     if (!detail::pfrep4LoadLod0(s)) return Result::BadStructure;
     if (!detail::pfrep4CodeLod0Check(c, s)) return c.rd.overrun() ? Result::Truncated : Result::BadStructure;
     if (!detail::pfrep4CodeRemovals(c, *models, s, nullptr, nullptr) || !detail::pfrep4CodeTail(c, s, nullptr) ||
@@ -264,9 +334,15 @@ Result pfrepDecodePackFormat4(const void* blob, size_t blob_size, const void* lo
     o.scratch_size = size_t(p.shared);
     if (valenceDecode(static_cast<const uint8_t*>(lod0_stream), lod0_size, o) != Result::Ok)
         return Result::BadStructure;
+    const void* split = nullptr;
+    size_t split_bytes = 0;
+    r = pfrepFormat4SplitList(blob, blob_size, &split, &split_bytes);
+    if (r != Result::Ok) return r;
     PfrepLod0 lod0;
-    r = pfrepNumberLod0(positions, v.vertex_count, indices, v.triangle_count, points, size_t(v.vertex_count) * 3,
-                        triangles, size_t(v.triangle_count) * 3, shared, size_t(p.shared), &lod0);
+    r = numberLod0(static_cast<const uint8_t*>(split), split_bytes, positions, v.vertex_count, indices,
+                   v.triangle_count, points, size_t(v.vertex_count) * 3, triangles, size_t(v.triangle_count) * 3,
+                   shared, size_t(p.shared), &lod0);
+    if (r == Result::CorruptStream || r == Result::Truncated) return r; // the split list
     if (r != Result::Ok) return Result::BadStructure;
     return pfrepDecodeFormat4(blob, blob_size, lod0, out, out_capacity, shared, size_t(p.shared), model);
 }

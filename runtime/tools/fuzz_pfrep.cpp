@@ -2,9 +2,11 @@
 // grows to the whole input), then every extraction and refinement entry point on whatever opened;
 // a format 3 input is decoded (pfrepDecompress) and the result exercised the same way; a format 4
 // input is decoded (pfrepDecodeFormat4) against a generated LOD0 (a torus of 8 x 6 points, the LOD0
-// of the format 4 seeds) and exercised.
+// of the format 4 seeds; for a blob with a split list, the torus with two vertices on one position,
+// numbered with the list by pfrepNumberLod0Split) and exercised.
 // Build with -DLODRT_BUILD_FUZZERS=ON and Clang; run as `lodrt_fuzz_pfrep CORPUS_DIR` (blobs written
 // by `lodbake pfrep` make a good seed corpus).
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -63,6 +65,16 @@ void decodeCompressed(const std::vector<uint8_t>& blob) {
         exercise(model);
 }
 
+void decodeFormat4Against(const std::vector<uint8_t>& blob, const lodrt::PfrepFormat4Info& info,
+                          const lodrt::PfrepLod0& lod0) {
+    std::vector<uint8_t> decoded(info.decoded_bytes);
+    std::vector<uint64_t> scratch((info.scratch_bytes + 7) / 8);
+    lodrt::PfrepModel model;
+    if (lodrt::pfrepDecodeFormat4(blob.data(), blob.size(), lod0, decoded.data(), decoded.size(), scratch.data(),
+                                  info.scratch_bytes, &model) == lodrt::Result::Ok)
+        exercise(model);
+}
+
 // Format 4 against the torus LOD0 (8 x 6 points, 96 triangles; tests/malformed/lbp/f4_torus.lbp is
 // its format 4 blob, written by PfrepFormat4Test.FuzzTorusSeed), with capped buffers.
 void decodeFormat4(const std::vector<uint8_t>& blob) {
@@ -82,6 +94,25 @@ void decodeFormat4(const std::vector<uint8_t>& blob) {
             const uint32_t c = ((i + 1) % kRing) * kTube + (j + 1) % kTube, d = i * kTube + (j + 1) % kTube;
             triangles.insert(triangles.end(), {a, b, c, a, c, d});
         }
+    lodrt::PfrepLod0 lod0;
+    const void* split = nullptr;
+    size_t split_bytes = 0;
+    if (lodrt::pfrepFormat4SplitList(blob.data(), blob.size(), &split, &split_bytes) != lodrt::Result::Ok) return;
+    std::vector<float> split_points(points.size());
+    std::vector<uint32_t> split_triangles(triangles.size());
+    if (split) {
+        // A blob with a split list (a pack's): the torus with vertex 27 on vertex 0's position, numbered
+        // with the list (tests/malformed/lbp/f4_torus_split.lbp, PfrepFormat4Test.FuzzWeldedTorusSeed).
+        std::copy(points.begin(), points.begin() + 3, points.begin() + 27 * 3);
+        std::vector<uint64_t> number_scratch((lodrt::pfrepNumberLod0ScratchBytes(kRing * kTube) + 7) / 8);
+        if (lodrt::pfrepNumberLod0Split(split, split_bytes, points.data(), kRing * kTube, triangles.data(),
+                                        uint32_t(triangles.size() / 3), split_points.data(), split_points.size(),
+                                        split_triangles.data(), split_triangles.size(), number_scratch.data(),
+                                        number_scratch.size() * 8, &lod0) != lodrt::Result::Ok)
+            return;
+        decodeFormat4Against(blob, info, lod0);
+        return;
+    }
     // Points renumbered by first use, as format 4 numbers LOD0 (the positions are all distinct).
     std::vector<uint32_t> id(kRing * kTube, ~0u);
     std::vector<float> numbered;
@@ -93,17 +124,11 @@ void decodeFormat4(const std::vector<uint8_t>& blob) {
         p = id[p];
     }
     points.swap(numbered);
-    lodrt::PfrepLod0 lod0;
     lod0.positions = points.data();
     lod0.point_count = kRing * kTube;
     lod0.triangles = triangles.data();
     lod0.triangle_count = uint32_t(triangles.size() / 3);
-    std::vector<uint8_t> decoded(info.decoded_bytes);
-    std::vector<uint64_t> scratch((info.scratch_bytes + 7) / 8);
-    lodrt::PfrepModel model;
-    if (lodrt::pfrepDecodeFormat4(blob.data(), blob.size(), lod0, decoded.data(), decoded.size(), scratch.data(),
-                                  info.scratch_bytes, &model) == lodrt::Result::Ok)
-        exercise(model);
+    decodeFormat4Against(blob, info, lod0);
 }
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {

@@ -784,3 +784,96 @@ TEST(PfrepStreamingTest, Format4WaitsForLevel0ThenMatchesFormat2) {
     EXPECT_EQ(s2.state(0, 0), lodrt::LevelState::Resident);
     EXPECT_EQ(s2.pfrepState(1), PfrepStreamState::Resident);
 }
+
+// ---- Format 4 over a LOD0 whose stream welds points (the blob's split list) ----
+
+namespace {
+
+// A height field with a crack: column n / 2 is there twice, the right sheet's copy 2e-5 to the side
+// (closer than the 14-bit stream's position step, so most of its points weld to the left sheet's
+// in LOD0's stream, as a merged scan's overlapping borders do).
+lodbake::Mesh crackedHeightField(int n) {
+    lodbake::Mesh mesh = heightField(n, 0.5f);
+    const int c = n / 2;
+    const uint32_t first_copy = uint32_t(mesh.positions.size());
+    for (int y = 0; y < n; ++y) {
+        lodbake::Vec3f p = mesh.positions[size_t(y * n + c)];
+        p.x += 2e-5f;
+        mesh.positions.push_back(p);
+    }
+    // The right sheet's triangles (those with a corner right of the crack) take the copies.
+    for (size_t t = 0; t < mesh.indices.size(); t += 3) {
+        bool right = false;
+        for (int k = 0; k < 3; ++k) right = right || int(mesh.indices[t + size_t(k)] % uint32_t(n)) > c;
+        if (!right) continue;
+        for (int k = 0; k < 3; ++k) {
+            uint32_t& v = mesh.indices[t + size_t(k)];
+            if (int(v % uint32_t(n)) == c) v = first_copy + v / uint32_t(n);
+        }
+    }
+    return mesh;
+}
+
+std::vector<uint8_t> bakeCracked(uint32_t pfrep_format) {
+    lodbake::BakeSettings settings;
+    settings.pfrep_format = pfrep_format;
+    settings.compact = pfrep_format == lodrt::format::kPfrepVersionLod0;
+    settings.lod_ratios = {0.5, 0.1};
+    settings.error_samples = 500;
+    settings.threads = 2;
+    std::vector<lodbake::BakeInput> inputs(1);
+    inputs[0].name = "cracked";
+    inputs[0].mesh = crackedHeightField(40);
+    lodbake::Diagnostics diagnostics;
+    auto baked = lodbake::bake(std::move(inputs), settings, diagnostics);
+    EXPECT_TRUE(baked.ok()) << baked.status().message();
+    return baked.ok() ? baked->glb : std::vector<uint8_t>();
+}
+
+} // namespace
+
+// The stream welds the crack's points; the format 4 blob tells them apart with its split list and
+// still decodes, against that stream, to format 2's tables. Cut or changed anywhere (header, list,
+// stream), the blob is refused or gives a valid model.
+TEST(PfrepStreamingTest, Format4SplitsPointsLod0sStreamWelds) {
+    const std::vector<uint8_t> glb2 = bakeCracked(lodrt::format::kPfrepVersion);
+    const std::vector<uint8_t> glb4 = bakeCracked(lodrt::format::kPfrepVersionLod0);
+    PackSource source2, source4;
+    ASSERT_EQ(source2.openBytes(glb2.data(), glb2.size(), nullptr), Result::Ok);
+    ASSERT_EQ(source4.openBytes(glb4.data(), glb4.size(), nullptr), Result::Ok);
+    const Format4Blob b = format4Blob(source4, 0);
+    ASSERT_GE(b.blob.size(), size_t(lodrt::format::kPfrepHeaderSize + 4));
+    uint32_t flags = 0;
+    std::memcpy(&flags, b.blob.data() + 60, 4);
+    EXPECT_EQ(flags, lodrt::format::kPfrep4Flags); // with a split list
+    const void* split = nullptr;
+    size_t split_bytes = 0;
+    ASSERT_EQ(lodrt::pfrepFormat4SplitList(b.blob.data(), b.blob.size(), &split, &split_bytes), Result::Ok);
+    EXPECT_GE(split_bytes, 5u);
+    std::vector<uint8_t> decoded;
+    lodrt::PfrepModel got;
+    ASSERT_EQ(decodePack4(b.blob, b.lod0, decoded, &got), Result::Ok);
+    expectSameTables(got, blobOf(source2, 0).whole);
+    std::vector<uint8_t> out;
+    lodrt::PfrepModel model;
+    for (size_t cut = 0; cut < b.blob.size(); cut += 1 + cut / 64) {
+        const std::vector<uint8_t> part(b.blob.begin(), b.blob.begin() + std::ptrdiff_t(cut));
+        EXPECT_NE(decodePack4(part, b.lod0, out, &model), Result::Ok) << cut;
+    }
+    int refused = 0, tried = 0;
+    const size_t end = lodrt::format::kPfrepHeaderSize + 4 + split_bytes + 8;
+    for (size_t at = lodrt::format::kPfrepHeaderSize; at < end && at < b.blob.size(); ++at)
+        for (uint8_t flip : {uint8_t(0x01), uint8_t(0x10), uint8_t(0x80)}) {
+            std::vector<uint8_t> bad = b.blob;
+            bad[at] ^= flip;
+            ++tried;
+            if (decodePack4(bad, b.lod0, out, &model) != Result::Ok) {
+                ++refused;
+                continue;
+            }
+            std::vector<uint32_t> tris(3 * lodrt::pfrepMaxTriangles(model));
+            size_t count = 0;
+            EXPECT_EQ(lodrt::pfrepExtractLevel(model, 0, tris.data(), tris.size() / 3, &count), Result::Ok);
+        }
+    EXPECT_GT(refused * 4, tried * 3);
+}

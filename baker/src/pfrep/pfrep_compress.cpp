@@ -281,8 +281,8 @@ Result<std::vector<uint32_t>> renumberRanks(const std::vector<uint32_t>& ranks, 
 }
 
 Result<std::vector<uint8_t>> codeFormat4(const PfrepBuild& build, const std::vector<Vec3f>& points,
-                                         const std::vector<uint32_t>& triangles,
-                                         const std::vector<uint32_t>* point_of) {
+                                         const std::vector<uint32_t>& triangles, const std::vector<uint32_t>* point_of,
+                                         const std::vector<uint8_t>& split_list) {
     namespace d = lodrt::detail;
     lodrt::PfrepModel model;
     const lodrt::Result opened = lodrt::openPfrep(build.blob.data(), build.blob.size(), &model);
@@ -290,7 +290,8 @@ Result<std::vector<uint8_t>> codeFormat4(const PfrepBuild& build, const std::vec
         return invalidInput(std::string("pfrep: format 2 blob: ") + lodrt::resultName(opened));
     if (triangles.size() % 3 != 0 || points.size() >= fmt::kPfrepMaxVertices || triangles.size() / 3 > 0xFFFFFFFFu ||
         build.rank_point.size() != model.vertex_count || build.rank_kept.size() != model.removed_count ||
-        build.stored_triangles > 0xFFFFFFFFu)
+        build.stored_triangles > 0xFFFFFFFFu || (!split_list.empty() && (!point_of || split_list.size() < 5)) ||
+        split_list.size() > 0xFFFFFFFFu)
         return invalidInput("pfrep: format 4: the build does not match its blob or LOD0");
     d::Pfrep4State s;
     s.h.vertex_count = model.vertex_count;
@@ -305,6 +306,7 @@ Result<std::vector<uint8_t>> codeFormat4(const PfrepBuild& build, const std::vec
     s.h.error_unit = model.error_unit;
     // A pack's blob (LOD0 numbered on its decoded stream) also checks that LOD0 (docs/format/pfrep.md).
     s.h.flags = point_of ? lodrt::format::kPfrep4FlagCodedTail | lodrt::format::kPfrep4FlagLod0Check : 0;
+    if (!split_list.empty()) s.h.flags |= lodrt::format::kPfrep4FlagSplitPoints;
     s.lod0.positions = points.empty() ? nullptr : &points[0].x;
     s.lod0.triangles = triangles.data();
     s.lod0.point_count = s.h.point_count;
@@ -342,6 +344,12 @@ Result<std::vector<uint8_t>> codeFormat4(const PfrepBuild& build, const std::vec
     store32(out.data() + 52, s.h.decoded_size);
     store32(out.data() + 56, s.h.stored_triangles);
     store32(out.data() + 60, s.h.flags);
+    if (!split_list.empty()) {
+        uint8_t count[4];
+        store32(count, uint32_t(split_list.size()));
+        out.insert(out.end(), count, count + 4);
+        out.insert(out.end(), split_list.begin(), split_list.end());
+    }
     const std::vector<uint8_t> coded = c.enc.finish();
     out.insert(out.end(), coded.begin(), coded.end());
     // Decode it again and compare with the builder's table.
@@ -368,13 +376,24 @@ Result<std::vector<uint8_t>> codeFormat4(const PfrepBuild& build, const std::vec
 
 Result<std::vector<uint8_t>> compressPfrepFormat4(const PfrepBuild& build, const std::vector<Vec3f>& points,
                                                   const std::vector<uint32_t>& triangles) {
-    return codeFormat4(build, points, triangles, nullptr);
+    return codeFormat4(build, points, triangles, nullptr, {});
 }
 
 Result<std::vector<uint8_t>> compressPfrepFormat4(const PfrepBuild& build, const std::vector<Vec3f>& points,
                                                   const std::vector<uint32_t>& triangles,
-                                                  const std::vector<uint32_t>& point_of) {
-    return codeFormat4(build, points, triangles, &point_of);
+                                                  const std::vector<uint32_t>& point_of,
+                                                  const std::vector<uint8_t>& split_list) {
+    return codeFormat4(build, points, triangles, &point_of, split_list);
+}
+
+std::vector<uint8_t> codePfrepSplitList(std::vector<uint32_t>& weld, const std::vector<uint32_t>& labels) {
+    const uint32_t n = uint32_t(weld.size());
+    std::vector<uint32_t> next(n), groups(n);
+    lodrt::detail::Pfrep4SplitModels models;
+    models.init();
+    EncodeCoder c;
+    lodrt::detail::pfrep4CodeSplits(c, models, n, weld.data(), labels.data(), next.data(), groups.data());
+    return c.enc.finish();
 }
 
 } // namespace lodbake

@@ -72,23 +72,81 @@ std::vector<PositionKey> canonicalTriangles(const std::vector<uint32_t>& triangl
     return out;
 }
 
+// Per vertex of LOD0's decoded stream, its input vertex's position bits as a label (input vertices
+// with equal bits are one point of the build, chainPoints). Empty when a decoded vertex stands for
+// input vertices at two positions.
+std::vector<uint32_t> inputLabels(const Mesh& mesh, const DecodedLevelStream& decoded) {
+    const size_t n = decoded.mesh.positions.size();
+    if (decoded.new_vertex_of.size() != mesh.positions.size()) return {};
+    std::vector<PositionKey> keys(mesh.positions.size());
+    for (size_t x = 0; x < keys.size(); ++x) keys[x] = positionKey(mesh.positions[x]);
+    std::vector<PositionKey> distinct = keys;
+    std::sort(distinct.begin(), distinct.end());
+    distinct.erase(std::unique(distinct.begin(), distinct.end()), distinct.end());
+    std::vector<uint32_t> label(n, UINT32_MAX);
+    for (size_t x = 0; x < keys.size(); ++x) {
+        const uint32_t v = decoded.new_vertex_of[x];
+        if (v >= n) return {};
+        const uint32_t l = uint32_t(std::lower_bound(distinct.begin(), distinct.end(), keys[x]) - distinct.begin());
+        if (label[v] != UINT32_MAX && label[v] != l) return {};
+        label[v] = l;
+    }
+    for (size_t v = 0; v < n; ++v) // a decoded vertex without an input one: a point of its own
+        if (label[v] == UINT32_MAX) label[v] = uint32_t(distinct.size() + v);
+    return label;
+}
+
+// Per vertex, the lowest vertex with its position bits (the welds of lodrt::pfrepNumberLod0).
+std::vector<uint32_t> positionWelds(const std::vector<Vec3f>& positions) {
+    const auto order = pointIndex(positions); // by position bits, then vertex id
+    std::vector<uint32_t> weld(positions.size());
+    for (size_t k = 0; k < order.size(); ++k)
+        weld[order[k].second] =
+            k > 0 && order[k].first == order[k - 1].first ? weld[order[k - 1].second] : order[k].second;
+    return weld;
+}
+
+// LOD0 numbered as lodrt::pfrepNumberLod0 numbers it, from the welds (after the split list): points
+// by first use by the triangles with three distinct welds. Per vertex its point (UINT32_MAX: on no
+// such triangle) into vertex_point, the points' positions and the triangles.
+void numberWelds(const Mesh& d, const std::vector<uint32_t>& weld, std::vector<uint32_t>& vertex_point,
+                 std::vector<Vec3f>& points, std::vector<uint32_t>& triangles) {
+    std::vector<uint32_t> id(weld.size(), UINT32_MAX);
+    points.clear();
+    triangles.clear();
+    for (size_t t = 0; t + 2 < d.indices.size(); t += 3) {
+        const uint32_t w[3] = {weld[d.indices[t]], weld[d.indices[t + 1]], weld[d.indices[t + 2]]};
+        if (w[0] == w[1] || w[1] == w[2] || w[0] == w[2]) continue;
+        for (uint32_t k = 0; k < 3; ++k) {
+            if (id[w[k]] == UINT32_MAX) {
+                id[w[k]] = uint32_t(points.size());
+                points.push_back(d.positions[w[k]]);
+            }
+            triangles.push_back(id[w[k]]);
+        }
+    }
+    vertex_point.resize(weld.size());
+    for (size_t v = 0; v < weld.size(); ++v) vertex_point[v] = id[weld[v]];
+}
+
 // LOD0's points (chainPoints of `mesh`, the build's numbering) -> the points of its decoded stream
-// (lodrt::pfrepNumberLod0), through the vertices the stream kept: empty when they are not one to one
-// or the triangles differ (quantization welded two points, or made a triangle degenerate).
+// (`vertex_point`: per decoded vertex its point), through the vertices the stream kept: empty when
+// they are not one to one or the triangles differ (a weld the split list left, or a triangle made
+// degenerate).
 std::vector<uint32_t> streamPointOf(const Mesh& mesh, const std::vector<Vec3f>& points,
                                     const std::vector<uint32_t>& triangles, const DecodedLevelStream& decoded,
-                                    const std::vector<Vec3f>& stream_points,
+                                    const std::vector<uint32_t>& vertex_point, size_t stream_point_count,
                                     const std::vector<uint32_t>& stream_triangles) {
-    if (points.size() != stream_points.size() || triangles.size() != stream_triangles.size()) return {};
-    const auto index = pointIndex(points), stream_index = pointIndex(stream_points);
+    if (points.size() != stream_point_count || triangles.size() != stream_triangles.size()) return {};
+    const auto index = pointIndex(points);
     std::vector<uint32_t> point_of(points.size(), UINT32_MAX);
     std::vector<uint8_t> taken(points.size(), 0);
     for (uint32_t x : mesh.indices) {
         const uint32_t p = findPoint(index, mesh.positions[x]);
         if (p == UINT32_MAX) continue; // on degenerate faces only
-        if (x >= decoded.new_vertex_of.size() || decoded.new_vertex_of[x] >= decoded.mesh.positions.size()) return {};
-        const uint32_t q = findPoint(stream_index, decoded.mesh.positions[decoded.new_vertex_of[x]]);
-        if (q == UINT32_MAX) return {};
+        if (x >= decoded.new_vertex_of.size() || decoded.new_vertex_of[x] >= vertex_point.size()) return {};
+        const uint32_t q = vertex_point[decoded.new_vertex_of[x]];
+        if (q >= points.size()) return {};
         if (point_of[p] == UINT32_MAX) {
             if (taken[q]) return {};
             taken[q] = 1;
@@ -103,9 +161,37 @@ std::vector<uint32_t> streamPointOf(const Mesh& mesh, const std::vector<Vec3f>& 
     return point_of;
 }
 
+// LOD0 as the runtime numbers it from its decoded stream `d` with `split_list` (lodrt::
+// pfrepNumberLod0Split), checked against numberWelds of `weld` (the welds the list leaves).
+Status numberStreamLod0(const Mesh& d, const std::vector<uint8_t>& split_list, const std::vector<uint32_t>& weld,
+                        std::vector<uint32_t>& vertex_point, std::vector<Vec3f>& stream_points,
+                        std::vector<uint32_t>& stream_triangles) {
+    const uint32_t vertex_count = uint32_t(d.positions.size()), triangle_count = uint32_t(d.faceCount());
+    std::vector<Vec3f> points(vertex_count);
+    std::vector<uint32_t> triangles(size_t(triangle_count) * 3);
+    std::vector<uint64_t> scratch((lodrt::pfrepNumberLod0ScratchBytes(vertex_count) + 7) / 8);
+    lodrt::PfrepLod0 lod0;
+    const lodrt::Result r = lodrt::pfrepNumberLod0Split(
+        split_list.empty() ? nullptr : split_list.data(), split_list.size(),
+        d.positions.empty() ? nullptr : &d.positions[0].x, vertex_count, d.indices.data(), triangle_count,
+        points.empty() ? nullptr : &points[0].x, points.size() * 3, triangles.data(), triangles.size(),
+        scratch.data(), scratch.size() * 8, &lod0);
+    if (r != lodrt::Result::Ok)
+        return internalError(std::string("pfrep: LOD0's decoded stream: ") + lodrt::resultName(r));
+    points.resize(lod0.point_count);
+    triangles.resize(size_t(lod0.triangle_count) * 3);
+    numberWelds(d, weld, vertex_point, stream_points, stream_triangles);
+    if (stream_triangles != triangles || stream_points.size() != points.size() ||
+        (!points.empty() && std::memcmp(points.data(), stream_points.data(), points.size() * sizeof(Vec3f)) != 0))
+        return internalError("pfrep: format 4's split list does not number LOD0 as the bake does");
+    return Status::okStatus();
+}
+
 // Format 4 against LOD0's own LODBAKE_valence_compression stream, as the runtime has it once LOD0 is
-// resident (docs/format/pfrep.md "In a glTF pack"). No value when LOD0's stream cannot stand for it
-// (several primitives, or a topology its quantization changed): the bake then writes format 3.
+// resident (docs/format/pfrep.md "In a glTF pack"). Points of the build that the stream's
+// quantization welds are told apart by the blob's split list. No value when LOD0's stream cannot
+// stand for it (several primitives, or a topology the split list cannot restore): the bake then
+// writes format 3.
 Result<std::optional<std::vector<uint8_t>>> codeAgainstStream(const PfrepExtensionObject& object,
                                                               const ValenceStreamOptions& valence,
                                                               const LodChain& chain, const Mesh& mesh) {
@@ -113,24 +199,20 @@ Result<std::optional<std::vector<uint8_t>>> codeAgainstStream(const PfrepExtensi
     LODBAKE_ASSIGN_OR_RETURN(std::optional<DecodedLevelStream> decoded, decodedLevelStream(valence, chain, 0, mesh));
     if (!decoded || decoded->mesh.positions.size() >= lodrt::format::kPfrepMaxVertices) return NoBlob();
     const Mesh& d = decoded->mesh;
-    const uint32_t vertex_count = uint32_t(d.positions.size()), triangle_count = uint32_t(d.faceCount());
-    std::vector<Vec3f> stream_points(vertex_count);
-    std::vector<uint32_t> stream_triangles(size_t(triangle_count) * 3);
-    std::vector<uint64_t> scratch((lodrt::pfrepNumberLod0ScratchBytes(vertex_count) + 7) / 8);
-    lodrt::PfrepLod0 lod0;
-    const lodrt::Result r = lodrt::pfrepNumberLod0(
-        d.positions.empty() ? nullptr : &d.positions[0].x, vertex_count, d.indices.data(), triangle_count,
-        stream_points.empty() ? nullptr : &stream_points[0].x, stream_points.size() * 3, stream_triangles.data(),
-        stream_triangles.size(), scratch.data(), scratch.size() * 8, &lod0);
-    if (r != lodrt::Result::Ok)
-        return internalError(std::string("pfrep: LOD0's decoded stream: ") + lodrt::resultName(r));
-    stream_points.resize(lod0.point_count);
-    stream_triangles.resize(size_t(lod0.triangle_count) * 3);
+    const std::vector<uint32_t> labels = inputLabels(mesh, *decoded);
+    if (labels.size() != d.positions.size()) return NoBlob();
+    std::vector<uint32_t> weld = positionWelds(d.positions);
+    std::vector<uint8_t> split_list;
+    for (size_t v = 0; v < weld.size() && split_list.empty(); ++v)
+        if (labels[v] != labels[weld[v]]) split_list = codePfrepSplitList(weld, labels);
+    std::vector<uint32_t> vertex_point, stream_triangles;
+    std::vector<Vec3f> stream_points;
+    LODBAKE_RETURN_IF_ERROR(numberStreamLod0(d, split_list, weld, vertex_point, stream_points, stream_triangles));
     std::vector<Vec3f> points;
     std::vector<uint32_t> triangles;
     LODBAKE_RETURN_IF_ERROR(chainPoints(mesh, points, triangles));
     const std::vector<uint32_t> point_of =
-        streamPointOf(mesh, points, triangles, *decoded, stream_points, stream_triangles);
+        streamPointOf(mesh, points, triangles, *decoded, vertex_point, stream_points.size(), stream_triangles);
     if (point_of.empty()) return NoBlob();
     PfrepBuild build;
     build.blob = object.blob;
@@ -138,7 +220,7 @@ Result<std::optional<std::vector<uint8_t>>> codeAgainstStream(const PfrepExtensi
     build.rank_kept = object.rank_kept;
     build.stored_triangles = object.stored_triangles;
     LODBAKE_ASSIGN_OR_RETURN(std::vector<uint8_t> blob,
-                             compressPfrepFormat4(build, stream_points, stream_triangles, point_of));
+                             compressPfrepFormat4(build, stream_points, stream_triangles, point_of, split_list));
     return NoBlob(std::move(blob));
 }
 

@@ -106,7 +106,11 @@ constexpr uint32_t kPfrep4FlagCodedTail = 1;
 // kPfrep4FlagLod0Check: the stream starts with a 32-bit check of the LOD0 it was coded against
 // (pfrep4Lod0Check), and a decoder given another LOD0 refuses the blob (BadStructure).
 constexpr uint32_t kPfrep4FlagLod0Check = 2;
-constexpr uint32_t kPfrep4Flags = kPfrep4FlagCodedTail | kPfrep4FlagLod0Check;
+// kPfrep4FlagSplitPoints: a split list follows the header (u32 byte count, then its range-coded
+// stream): which points of a pack's LOD0, welded by its stream's quantization, stand for several of
+// the blob's points (pfrepNumberLod0Split). Only a pack's blob (with both flags above) sets it.
+constexpr uint32_t kPfrep4FlagSplitPoints = 4;
+constexpr uint32_t kPfrep4Flags = kPfrep4FlagCodedTail | kPfrep4FlagLod0Check | kPfrep4FlagSplitPoints;
 // Format 4 headers claiming more stored triangles than this many times LOD0's are refused (a
 // half-edge sequence stores about 2.6 times as many).
 constexpr uint32_t kPfrepMaxStoredPerLevel0 = 16;

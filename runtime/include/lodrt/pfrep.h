@@ -146,9 +146,25 @@ LODRT_API Result pfrepNumberLod0(const float* positions, uint32_t vertex_count, 
                                  uint32_t triangle_count, float* points, size_t point_capacity, uint32_t* triangles,
                                  size_t triangle_capacity, void* scratch, size_t scratch_bytes, PfrepLod0* lod0);
 
+/// pfrepNumberLod0 with a format 4 blob's split list applied (docs/format/pfrep.md "Split list"):
+/// welded vertices that the list splits are points apart, so a LOD0 whose stream's quantization put
+/// several of the blob's points on one position is numbered as the blob was coded. `split` /
+/// `split_bytes` as pfrepFormat4SplitList finds them (null / 0: no list, the same as
+/// pfrepNumberLod0); same buffers and scratch. CorruptStream / Truncated for a list that does not
+/// decode.
+LODRT_API Result pfrepNumberLod0Split(const void* split, size_t split_bytes, const float* positions,
+                                      uint32_t vertex_count, const uint32_t* indices, uint32_t triangle_count,
+                                      float* points, size_t point_capacity, uint32_t* triangles,
+                                      size_t triangle_capacity, void* scratch, size_t scratch_bytes, PfrepLod0* lod0);
+
+/// The split list of a format 4 blob data[0, size) (format::kPfrep4FlagSplitPoints): *split points
+/// to its bytes, *split_bytes is their count (null / 0 when the blob has none). The header's errors,
+/// Truncated when the list does not fit in `size`, CorruptStream when its count is below 5.
+LODRT_API Result pfrepFormat4SplitList(const void* data, size_t size, const void** split, size_t* split_bytes);
+
 /// A pack's format 4 blob (LODBAKE_progressive_fans with format 4) is decoded against the
 /// LODBAKE_valence_compression stream of the same mesh (LOD0, one primitive): the stream is decoded,
-/// numbered by pfrepNumberLod0, and handed to pfrepDecodeFormat4. `blob` needs its header only for
+/// numbered by pfrepNumberLod0Split (with the blob's split list), and handed to pfrepDecodeFormat4. `blob` needs its header only for
 /// the info. BadStructure when the stream is not a valid one or the blob was coded against another
 /// LOD0 (its check differs, or its counts); otherwise the two decoders' results.
 struct PfrepPackFormat4Info {

@@ -28,8 +28,17 @@ Result<std::vector<uint8_t>> compressPfrepFormat4(const PfrepBuild& build, const
 /// numbers it, lodrt::pfrepNumberLod0): point_of[p] is the id in `points` / `triangles` of the
 /// build's point p. The blob then also codes the ranks of the points never removed
 /// (format::kPfrep4FlagCodedTail), so it decodes to the build's table as the plain call does.
+/// A non-empty `split_list` (codePfrepSplitList, by which `points` / `triangles` were numbered) is
+/// stored after the header (format::kPfrep4FlagSplitPoints).
 Result<std::vector<uint8_t>> compressPfrepFormat4(const PfrepBuild& build, const std::vector<Vec3f>& points,
                                                   const std::vector<uint32_t>& triangles,
-                                                  const std::vector<uint32_t>& point_of);
+                                                  const std::vector<uint32_t>& point_of,
+                                                  const std::vector<uint8_t>& split_list = {});
+
+/// The split list of a pack's format 4 blob (docs/format/pfrep.md "Split list"). `weld` holds, per
+/// vertex of LOD0's decoded stream, the lowest vertex with its position bits; vertices of a weld
+/// stand for one point of the build iff their `labels` are equal. Returns the coded list (what
+/// lodrt::pfrepNumberLod0Split reads) and leaves in `weld` the lowest vertex of each vertex's group.
+std::vector<uint8_t> codePfrepSplitList(std::vector<uint32_t>& weld, const std::vector<uint32_t>& labels);
 
 } // namespace lodbake

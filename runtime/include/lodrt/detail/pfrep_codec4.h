@@ -123,6 +123,65 @@ inline Pfrep4Models* pfrep4Carve(Pfrep4State& s, uint32_t* w) {
     return models;
 }
 
+// ---- Split list (format::kPfrep4FlagSplitPoints) ----
+
+/// Models of the split list; all start at 1/2.
+struct Pfrep4SplitModels {
+    uint32_t split[3];       // context: min(vertices of the weld, 4) - 2
+    PfrepUintModel group[2]; // context: min(groups so far, 2) - 1
+    void init() {
+        initRangeProbs(split, 3);
+        for (auto& u : group) u.init();
+    }
+};
+
+/// The split list of a pack's LOD0 (docs/format/pfrep.md "Split list"). `weld[v]` is, per vertex of
+/// the decoded stream, the lowest vertex with v's position bits (so weld[v] <= v). For every weld of
+/// two or more vertices, by increasing lowest vertex, one bit says whether it splits; the vertices
+/// of a weld that splits, by increasing id after its lowest, each name their group: a new one, or
+/// one of those so far (counted back from the newest); it must end with two groups or more. On
+/// return weld[v] is the lowest vertex of v's group. Encoding: vertices are in one group iff their
+/// `label`s are equal. `next` and `groups` hold vertex_count values each. False on a corrupt stream.
+template <class Coder>
+bool pfrep4CodeSplits(Coder& c, Pfrep4SplitModels& m, uint32_t vertex_count, uint32_t* weld, const uint32_t* label,
+                      uint32_t* next, uint32_t* groups) {
+    // Each weld as a list by increasing id from its lowest vertex (`groups` holds the heads meanwhile).
+    std::fill(groups, groups + vertex_count, kNone);
+    for (uint32_t v = vertex_count; v-- > 0;) {
+        const uint32_t w = weld[v];
+        next[v] = groups[w];
+        if (w != v) groups[w] = v;
+    }
+    for (uint32_t w = 0; w < vertex_count; ++w) {
+        if (weld[w] != w || next[w] == kNone) continue;
+        uint32_t size = 1;
+        bool splits = false;
+        for (uint32_t v = next[w]; v != kNone; v = next[v]) {
+            ++size;
+            if (Coder::kEncoding) splits = splits || label[v] != label[w];
+        }
+        const uint32_t ctx = (size < 4 ? size : 4) - 2;
+        if (!c.bit(m.split[ctx], splits ? 1u : 0u)) continue;
+        uint32_t count = 1; // groups so far, by their lowest vertex
+        groups[0] = w;
+        for (uint32_t v = next[w]; v != kNone; v = next[v]) {
+            uint32_t back = 0; // 0: a new group; g > 0: the g-th newest
+            if (Coder::kEncoding)
+                for (uint32_t g = 0; g < count && back == 0; ++g)
+                    if (label[groups[g]] == label[v]) back = count - g;
+            // The last vertex of a weld whose vertices so far are one group starts the second.
+            if (next[v] != kNone || count > 1) {
+                back = uint32_t(c.uint(m.group[count > 1 ? 1 : 0], back));
+                if (c.failed() || back > count) return false;
+            }
+            if (back == 0) groups[count++] = v;
+            weld[v] = back == 0 ? v : groups[count - back];
+        }
+        if (count < 2) return false;
+    }
+    return !c.failed();
+}
+
 // ---- Removal sequence ----
 
 /// Codes x in [0, count) with the truncated binary code (direct bits; count > 0).
