@@ -15,7 +15,10 @@
 //      is given) of the same blobs on the same six scans, in one run: bytes per vertex and whole-blob
 //      decode speed of each (thread CPU, best of 3); format 4's encoder checks its decoded table
 //      against the builder's (records, triangles and dependencies of every entry).
-// usage: pfrep_bench [--quick | --refine | --quality | --format3 | --format4 [MESH...] | --shared MESH] [--check]
+//   7. --pack GLB...: each pack's blobs decoded whole as the Streamer decodes them (format 4 against
+//      LOD0's valence stream, with its split list; format 3), thread CPU, best of 3.
+// usage: pfrep_bench [--quick | --refine | --quality | --format3 | --format4 [MESH...] | --pack GLB... |
+//                     --shared MESH] [--check]
 //   quick: skips the largest scans in part 1 (part 2 then runs on igea) and part 4; refine: part 3 only;
 //   --check: exit 1 when a bar is not met.
 #include <algorithm>
@@ -33,7 +36,9 @@
 #include "lodbake/pfrep/pfrep_compress.h"
 #include "lodbake/simplify/lod_chain.h"
 #include "lodbake/simplify/mesh_distance.h"
+#include "lodrt/format.h"
 #include "lodrt/pfrep.h"
+#include "lodrt/streaming.h"
 
 namespace {
 
@@ -473,6 +478,89 @@ int format4(bool check, std::vector<std::string> scans) {
 
 } // namespace
 
+// --pack GLB...: every LODBAKE_progressive_fans blob of each pack decoded whole as the Streamer
+// decodes it (format 4: pfrepDecodePackFormat4 against LOD0's valence stream, which it decodes and
+// numbers first; format 3: pfrepDecompress), thread CPU, best of 3.
+int packDecode(const std::vector<std::string>& files) {
+    std::printf("== pack blob decode (thread CPU, best of 3)\n");
+    for (const std::string& file : files) {
+        std::vector<uint8_t> glb;
+        if (FILE* f = std::fopen(file.c_str(), "rb")) {
+            for (int c; (c = std::fgetc(f)) != EOF;) glb.push_back(uint8_t(c));
+            std::fclose(f);
+        }
+        lodrt::PackSource source;
+        if (glb.empty() || source.openBytes(glb.data(), glb.size(), nullptr) != lodrt::Result::Ok) {
+            std::fprintf(stderr, "%s: not a pack\n", file.c_str());
+            return 1;
+        }
+        const lodrt::Pack& pack = source.pack();
+        auto view = [&](const lodrt::JsonValue& ext) {
+            uint64_t v = 0;
+            std::vector<uint8_t> bytes;
+            if (ext.find("bufferView").asUint64(&v) && v < pack.bufferViewCount()) {
+                bytes.resize(pack.bufferView(uint32_t(v)).byte_length);
+                if (source.readBufferView(uint32_t(v), 0, bytes.data(), bytes.size()) != lodrt::Result::Ok) bytes.clear();
+            }
+            return bytes;
+        };
+        for (uint32_t m = 0; m < source.models().modelCount(); ++m) {
+            const lodrt::MeshInfo& mesh = pack.mesh(source.models().modelLevel(m, 0).mesh);
+            const lodrt::JsonValue ext = mesh.json.find("extensions").find(lodrt::format::kExtProgressiveFans);
+            uint64_t format = lodrt::format::kPfrepVersion;
+            (void)ext.find(lodrt::format::kPfrepExtensionFormatMember).asUint64(&format);
+            const std::vector<uint8_t> blob = view(ext);
+            std::vector<uint8_t> lod0;
+            if (format == lodrt::format::kPfrepVersionLod0 && mesh.primitive_count == 1)
+                lod0 = view(pack.primitive(mesh.first_primitive).json.find("extensions").find(
+                    lodrt::format::kExtValenceCompression));
+            size_t decoded_bytes = 0, scratch_bytes = 0;
+            if (format == lodrt::format::kPfrepVersionLod0) {
+                lodrt::PfrepPackFormat4Info info;
+                if (lodrt::pfrepPackFormat4Info(blob.data(), blob.size(), lod0.data(), lod0.size(), &info) ==
+                    lodrt::Result::Ok) {
+                    decoded_bytes = info.decoded_bytes;
+                    scratch_bytes = info.scratch_bytes;
+                }
+            } else if (format == lodrt::format::kPfrepVersionCompressed) {
+                lodrt::PfrepCompressedInfo info;
+                if (lodrt::pfrepCompressedInfo(blob.data(), blob.size(), &info) == lodrt::Result::Ok) {
+                    decoded_bytes = info.decoded_bytes;
+                    scratch_bytes = info.scratch_bytes;
+                }
+            }
+            if (decoded_bytes == 0) {
+                std::fprintf(stderr, "%s: model %u: no format 3 or 4 blob\n", file.c_str(), m);
+                return 1;
+            }
+            std::vector<uint8_t> out(decoded_bytes);
+            std::vector<uint64_t> scratch((scratch_bytes + 7) / 8);
+            double best = 1e30;
+            lodrt::PfrepModel model;
+            for (int run = 0; run < 3; ++run) {
+                const double t0 = threadCpuSeconds();
+                const lodrt::Result r =
+                    format == lodrt::format::kPfrepVersionLod0
+                        ? lodrt::pfrepDecodePackFormat4(blob.data(), blob.size(), lod0.data(), lod0.size(), out.data(),
+                                                        out.size(), scratch.data(), scratch.size() * 8, &model)
+                        : lodrt::pfrepDecompress(blob.data(), blob.size(), out.data(), out.size(), scratch.data(),
+                                                 scratch.size() * 8, &model);
+                best = std::min(best, threadCpuSeconds() - t0);
+                if (r != lodrt::Result::Ok) {
+                    std::fprintf(stderr, "%s: model %u: %s\n", file.c_str(), m, lodrt::resultName(r));
+                    return 1;
+                }
+            }
+            std::printf("  %-40s model %u  format %u  V %8u  blob %9zu bytes  %.2f B/vertex  decode %.1f ms  "
+                        "%.3f M vertices/s\n",
+                        file.c_str(), m, unsigned(format), model.vertex_count, blob.size(),
+                        double(blob.size()) / double(model.vertex_count), best * 1e3,
+                        double(model.vertex_count) / best * 1e-6);
+        }
+    }
+    return 0;
+}
+
 int main(int argc, char** argv) {
     const bool check = lodbake_bench::takeCheckFlag(argc, argv);
     lodbake_bench::Bars bars("pfrep_bench");
@@ -482,6 +570,8 @@ int main(int argc, char** argv) {
     const bool refine_only = argc > 1 && std::strcmp(argv[1], "--refine") == 0;
     if (argc > 1 && std::strcmp(argv[1], "--quality") == 0) return qualityVariants();
     if (argc > 1 && std::strcmp(argv[1], "--format3") == 0) return format3(check);
+    if (argc > 2 && std::strcmp(argv[1], "--pack") == 0)
+        return packDecode(std::vector<std::string>(argv + 2, argv + argc)); // packs to decode
     if (argc > 1 && std::strcmp(argv[1], "--format4") == 0)
         return format4(check, std::vector<std::string>(argv + 2, argv + argc)); // scans (default: the six)
     // Refinement knobs: --frame-budget N (mask bits changed per frame over all instances, in a
