@@ -15,10 +15,12 @@
 #include <vector>
 
 #include "lodbake/bake/bake.h"
+#include "lodbake/io/mesh_io.h"
 #include "lodrt/format.h"
 #include "lodrt/pfrep.h"
 #include "lodrt/streaming.h"
 #include "manual_jobs.h"
+#include "test_paths.h"
 
 namespace {
 
@@ -876,4 +878,70 @@ TEST(PfrepStreamingTest, Format4SplitsPointsLod0sStreamWelds) {
             EXPECT_EQ(lodrt::pfrepExtractLevel(model, 0, tris.data(), tris.size() / 3, &count), Result::Ok);
         }
     EXPECT_GT(refused * 4, tried * 3);
+}
+
+// dragon_poisson's compact pack: its 14-bit LOD0 stream puts thousands of LOD0's points on another
+// point's position; the format 4 blob's split list tells them apart, and decoded against the stream
+// (as the Streamer decodes it) the blob gives the tables of the format 2 blob baked from the same
+// LOD0: sampled levels as triangle sets, every position, refinement masks. Heavy (two bakes of a
+// 1M-triangle scan; tests/CMakeLists.txt).
+TEST(PfrepStreamingTest, Format4OnDragonPoissonMatchesFormat2) {
+    LODBAKE_REQUIRE_SHARED_MESHES();
+    lodbake::Diagnostics diagnostics;
+    auto loaded = lodbake::readMesh(lodbake_test::sharedMesh("dragon_poisson.ply"), {}, diagnostics);
+    ASSERT_TRUE(loaded.ok()) << loaded.status().message();
+    std::vector<uint8_t> glb[2];
+    for (int f = 0; f < 2; ++f) {
+        lodbake::BakeSettings settings;
+        settings.pfrep_format = f ? lodrt::format::kPfrepVersionLod0 : lodrt::format::kPfrepVersion;
+        settings.compact = f == 1;
+        settings.lod_ratios = {0.1};
+        settings.error_samples = 500;
+        settings.threads = 2;
+        std::vector<lodbake::BakeInput> inputs(1);
+        inputs[0].name = "dragon";
+        inputs[0].mesh = loaded->mesh;
+        auto baked = lodbake::bake(std::move(inputs), settings, diagnostics);
+        ASSERT_TRUE(baked.ok()) << baked.status().message();
+        glb[f] = std::move(baked->glb);
+    }
+    PackSource source2, source4;
+    ASSERT_EQ(source2.openBytes(glb[0].data(), glb[0].size(), nullptr), Result::Ok);
+    ASSERT_EQ(source4.openBytes(glb[1].data(), glb[1].size(), nullptr), Result::Ok);
+    const Format4Blob b = format4Blob(source4, 0);
+    const void* split = nullptr;
+    size_t split_bytes = 0;
+    ASSERT_EQ(lodrt::pfrepFormat4SplitList(b.blob.data(), b.blob.size(), &split, &split_bytes), Result::Ok);
+    EXPECT_GE(split_bytes, 5u);
+    std::vector<uint8_t> decoded;
+    lodrt::PfrepModel got;
+    ASSERT_EQ(decodePack4(b.blob, b.lod0, decoded, &got), Result::Ok);
+    const Blob want = blobOf(source2, 0);
+    ASSERT_EQ(got.vertex_count, want.whole.vertex_count);
+    ASSERT_EQ(got.removed_count, want.whole.removed_count);
+    EXPECT_LT(b.blob.size() * 6, want.bytes.size());
+    const uint32_t step = std::max(1u, want.whole.removed_count / 24);
+    for (uint32_t k = 0; k <= want.whole.removed_count; k += step)
+        ASSERT_EQ(sortedLevel(got, k), sortedLevel(want.whole, k)) << k;
+    ASSERT_EQ(sortedLevel(got, want.whole.removed_count), sortedLevel(want.whole, want.whole.removed_count));
+    std::vector<float> pa(size_t(got.vertex_count) * 3), pb(pa.size());
+    ASSERT_EQ(lodrt::pfrepDecodePositions(want.whole, pa.data(), pa.size()), Result::Ok);
+    ASSERT_EQ(lodrt::pfrepDecodePositions(got, pb.data(), pb.size()), Result::Ok);
+    EXPECT_EQ(pa, pb);
+    std::vector<uint8_t> ma(lodrt::pfrepMaskBytes(want.whole)), mb(ma.size());
+    lodrt::pfrepMaskCoarsest(want.whole, ma.data());
+    lodrt::pfrepMaskCoarsest(got, mb.data());
+    std::vector<uint32_t> scratch(lodrt::pfrepScratchValues(want.whole));
+    for (int frame = 0; frame < 4; ++frame) {
+        lodrt::PfrepView view;
+        view.eye[0] = 0.1f * float(frame);
+        view.eye[2] = 0.3f;
+        for (auto& plane : view.planes) plane[3] = 1e6f;
+        view.pixels_per_unit_at_distance_one = 2000.0f;
+        size_t ca = 0, cb = 0;
+        ASSERT_EQ(lodrt::pfrepRefine(want.whole, view, ma.data(), scratch.data(), scratch.size(), &ca), Result::Ok);
+        ASSERT_EQ(lodrt::pfrepRefine(got, view, mb.data(), scratch.data(), scratch.size(), &cb), Result::Ok);
+        ASSERT_EQ(ma, mb) << "frame " << frame;
+        EXPECT_EQ(ca, cb);
+    }
 }
