@@ -54,6 +54,9 @@ Result readHeader(const uint8_t* p, size_t size, detail::Pfrep4Header& h) {
     h.flags = loadU32(p + 60);
     if (!std::isfinite(h.error_unit) || h.error_unit < 0 || (h.flags & ~format::kPfrep4Flags) != 0)
         return Result::BadStructure;
+    // A split list numbers a pack's LOD0, whose blob codes its tail and checks that LOD0.
+    if ((h.flags & format::kPfrep4FlagSplitPoints) != 0 && (h.flags & format::kPfrep4Flags) != format::kPfrep4Flags)
+        return Result::BadStructure;
     if (h.vertex_count > format::kPfrepMaxVertices || h.removed_count > h.vertex_count ||
         h.point_count > format::kPfrepMaxVertices || h.vertex_count > h.point_count ||
         h.stored_triangles < h.level0_triangles ||

@@ -272,7 +272,8 @@ TEST(PfrepFormat4Test, HeaderErrorsAndShortBuffers) {
     EXPECT_EQ(decode4(with32(8, 0xFFFFFFF0u), b.lod0.view()).result, lodrt::Result::BadStructure);
     EXPECT_EQ(decode4(with32(56, 0xFFFFFFF0u), b.lod0.view()).result, lodrt::Result::BadStructure);
     EXPECT_EQ(decode4(with32(60, 8), b.lod0.view()).result, lodrt::Result::BadStructure); // an unknown flag
-    EXPECT_NE(decode4(with32(60, 4), b.lod0.view()).result, lodrt::Result::Ok); // a split list that is not there
+    EXPECT_EQ(decode4(with32(60, 4), b.lod0.view()).result, lodrt::Result::BadStructure); // a list without the check
+    EXPECT_NE(decode4(with32(60, 7), b.lod0.view()).result, lodrt::Result::Ok); // a list that is not there
     EXPECT_NE(decode4(with32(60, 1), b.lod0.view()).result, lodrt::Result::Ok); // a tail the stream does not code
     lodrt::PfrepModel model;
     EXPECT_EQ(lodrt::openPfrep(b.coded.data(), b.coded.size(), &model), lodrt::Result::UnsupportedVersion);

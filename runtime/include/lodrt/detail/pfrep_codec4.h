@@ -5,6 +5,8 @@
 // among its current neighbours); the decoder replays the half-edge collapses to rebuild every stored
 // triangle and its dependency, lays out the entries, and reads the records' criterion codes as
 // differences from predictions (positions: LOD0's points quantized as the builder quantizes them).
+// A pack's blob may also carry a split list (pfrep4CodeSplits), which says how to number LOD0 from
+// its decoded stream when the stream's quantization put several of the blob's points on one position.
 // Written once as templates over the coder (pfrep_codec.h's convention), so the baker's encoder and
 // lodrt's decoder run the same replay and the same layout.
 
