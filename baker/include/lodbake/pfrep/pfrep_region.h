@@ -10,7 +10,7 @@
 namespace lodbake {
 
 struct PfrepRegionOptions {
-    uint32_t block_vertices = 2048; // target vertices per block (blocks of a band are near-equal)
+    uint32_t block_vertices = 1024; // target vertices per block (blocks of a band are near-equal)
     uint32_t root_vertices = 4096;  // block 0: at least this many of the coarsest ranks, and every
                                     // vertex never removed
 };
