@@ -8,6 +8,8 @@
 
 #include <algorithm>
 #include <cstring>
+#include <fstream>
+#include <iterator>
 #include <random>
 #include <vector>
 
@@ -18,6 +20,7 @@
 #include "lodrt/format.h"
 #include "lodrt/pfrep.h"
 #include "pfrep_region_view.h"
+#include "test_paths.h"
 
 namespace {
 
@@ -323,6 +326,25 @@ TEST(PfrepRegionTest, TruncatedAndCorruptedBlobsFailCleanly) {
     }
     EXPECT_GT(refused, 0u);
     EXPECT_GT(accepted + refused, 1000u);
+}
+
+// The pfrep fuzz target's region seed: a small region blob (icosphere, blocks of 16 vertices) with its
+// last 3 bytes cut, so `lodbake pfrep --extract` refuses it (Truncated) while the fuzzer loads every
+// block but the last. Written to the build folder; the committed copy must open the same way.
+TEST(PfrepRegionTest, FuzzSeed) {
+    const Blobs fresh = makeBlobs(2, 16, 16);
+    ASSERT_FALSE(fresh.region.empty());
+    std::vector<uint8_t> cut(fresh.region.begin(), fresh.region.end() - 3);
+    std::ofstream(std::string(LODBAKE_TEST_BINARY_DIR) + "/region_icosphere_cut.lbp", std::ios::binary)
+        .write(reinterpret_cast<const char*>(cut.data()), std::streamsize(cut.size()));
+    std::ifstream in(lodbake_test::sourceDir() + "/tests/malformed/lbp/region_icosphere_cut.lbp", std::ios::binary);
+    ASSERT_TRUE(in.good()) << "the fuzz corpus has no region seed";
+    const std::vector<uint8_t> seed((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    Opened o;
+    ASSERT_EQ(o.open(seed, seed.size()), lodrt::Result::Ok);
+    ASSERT_GT(o.g.block_count, 4u);
+    for (uint32_t k = 0; k + 1 < o.g.block_count; ++k) ASSERT_EQ(o.load(seed, k), lodrt::Result::Ok);
+    EXPECT_EQ(o.load(seed, o.g.block_count - 1), lodrt::Result::Truncated);
 }
 
 } // namespace
