@@ -52,11 +52,13 @@ options:
 )";
 
 // Opens a region blob with every block loaded (the decoded buffer is then the format 2 blob).
-lodrt::Result openRegionPfrep(const std::vector<uint8_t>& bytes, std::vector<uint8_t>& decoded, lodrt::PfrepModel* model) {
+lodrt::Result openRegionPfrep(const std::vector<uint8_t>& bytes, std::vector<uint8_t>& decoded,
+                              lodrt::PfrepModel* model) {
     lodrt::PfrepRegionInfo info;
     lodrt::Result r = lodrt::pfrepRegionInfo(bytes.data(), bytes.size(), &info);
     if (r != lodrt::Result::Ok) return r;
-    if (info.blob_size != bytes.size()) return info.blob_size > bytes.size() ? lodrt::Result::Truncated : lodrt::Result::TrailingBytes;
+    if (info.blob_size != bytes.size())
+        return info.blob_size > bytes.size() ? lodrt::Result::Truncated : lodrt::Result::TrailingBytes;
     decoded.resize(info.decoded_bytes);
     std::vector<uint64_t> state((info.state_bytes + 7) / 8);
     lodrt::PfrepRegions g;

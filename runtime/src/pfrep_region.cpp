@@ -22,8 +22,12 @@ float loadF32(const uint8_t* p) {
     std::memcpy(&v, p, 4);
     return v;
 }
-void storeU32(uint8_t* p, uint32_t v) { std::memcpy(p, &v, 4); }
-void storeU16(uint8_t* p, uint16_t v) { std::memcpy(p, &v, 2); }
+void storeU32(uint8_t* p, uint32_t v) {
+    std::memcpy(p, &v, 4);
+}
+void storeU16(uint8_t* p, uint16_t v) {
+    std::memcpy(p, &v, 2);
+}
 
 // LEB128 (7 bits per byte, low first, at most 5 bytes for 32 bits). False when it runs past `end`
 // or does not fit 32 bits.
@@ -42,7 +46,9 @@ bool readVarint(const uint8_t*& p, const uint8_t* end, uint32_t& out) {
     return false;
 }
 
-size_t align8(size_t n) { return (n + 7) & ~size_t(7); }
+size_t align8(size_t n) {
+    return (n + 7) & ~size_t(7);
+}
 
 // The state buffer: directory copy, resident bits, loaded flags, per-block input-triangle counts,
 // first rank slot of each block, and every block's rank list (filled when it loads).
@@ -108,7 +114,8 @@ Result readDirectory(const uint8_t* p, const RegionHeader& h, PfrepRegionBlock* 
         for (int c = 0; c < 3; ++c) {
             b.lo[c] = loadF32(r + 12 + 4 * c);
             b.hi[c] = loadF32(r + 24 + 4 * c);
-            if (!std::isfinite(b.lo[c]) || !std::isfinite(b.hi[c]) || !(b.lo[c] <= b.hi[c])) return Result::BadStructure;
+            if (!std::isfinite(b.lo[c]) || !std::isfinite(b.hi[c]) || !(b.lo[c] <= b.hi[c]))
+                return Result::BadStructure;
         }
         b.max_error = loadF32(r + 36);
         if (!std::isfinite(b.max_error) || b.max_error < 0) return Result::BadStructure;
@@ -129,7 +136,8 @@ Result readDirectory(const uint8_t* p, const RegionHeader& h, PfrepRegionBlock* 
 // opens that layout as a prefix holding no block. Allocation-free: the lengths are walked three
 // times (block stream sizes, then block offsets, then entry offsets).
 Result readSkeleton(const uint8_t* p, const RegionHeader& h, uint8_t* out, size_t capacity, PfrepModel& model) {
-    const uint8_t* s = p + format::kPfrepRegionHeaderSize + size_t(h.block_count) * format::kPfrepRegionDirectoryRecordSize;
+    const uint8_t* s =
+        p + format::kPfrepRegionHeaderSize + size_t(h.block_count) * format::kPfrepRegionDirectoryRecordSize;
     const uint8_t* end = s + h.skeleton_size;
     if (loadU32(s) != format::kPfrepMagic || loadU32(s + 4) != format::kPfrepVersion) return Result::BadStructure;
     const uint32_t vertices = loadU32(s + 8), removed = loadU32(s + 12), shift = loadU32(s + 16);
@@ -186,14 +194,13 @@ Result readSkeleton(const uint8_t* p, const RegionHeader& h, uint8_t* out, size_
     return Result::Ok;
 }
 
-
 // Byte range of entry v in the decoded buffer: up to the next entry of its format 2 block, or the
 // block's stream end.
 void entryRange(const PfrepModel& m, uint32_t v, uint64_t& begin, uint64_t& end) {
     begin = detail::pfrepEntryOffset(m, v);
     const uint32_t next = v + 1;
     end = (next < m.vertex_count && (next >> m.block_shift) == (v >> m.block_shift)) ? detail::pfrepEntryOffset(m, next)
-                                                                                      : detail::pfrepStreamEnd(m, v);
+                                                                                     : detail::pfrepStreamEnd(m, v);
 }
 
 // Zeroes the records and entries of ranks[0, n) (a failed or evicted block).
@@ -300,14 +307,16 @@ Result readRanks(const PfrepRegions& g, uint32_t block, const uint8_t* p, const 
 } // namespace
 
 Result pfrepRegionLoadBlock(PfrepRegions* regions, uint32_t block, const void* bytes, size_t size) {
-    if (!regions || !regions->state || block >= regions->block_count || (!bytes && size > 0)) return Result::InvalidArgument;
+    if (!regions || !regions->state || block >= regions->block_count || (!bytes && size > 0))
+        return Result::InvalidArgument;
     PfrepRegions& g = *regions;
     if (g.block_loaded[block]) return Result::Ok;
     const PfrepRegionBlock& b = g.blocks[block];
     if (size < b.size) return Result::Truncated;
     if (size > b.size) return Result::TrailingBytes;
     const StateLayout l = stateLayout(g.model.vertex_count, g.block_count);
-    uint32_t* ranks = reinterpret_cast<uint32_t*>(g.state + l.ranks) + reinterpret_cast<uint32_t*>(g.state + l.first)[block];
+    uint32_t* ranks =
+        reinterpret_cast<uint32_t*>(g.state + l.ranks) + reinterpret_cast<uint32_t*>(g.state + l.first)[block];
     const uint8_t* p = static_cast<const uint8_t*>(bytes);
     const uint8_t* end = p + size;
     const uint8_t* records = nullptr;
@@ -348,15 +357,18 @@ Result pfrepRegionLoadBlock(PfrepRegions* regions, uint32_t block, const void* b
     uint64_t all = originals;
     bool complete = true;
     for (uint32_t k = 0; k < g.block_count; ++k) {
-        if (g.block_loaded[k]) all += block_originals[k];
-        else if (k != block) complete = false;
+        if (g.block_loaded[k])
+            all += block_originals[k];
+        else if (k != block)
+            complete = false;
     }
     if (all > g.model.level0_triangles || (complete && all != g.model.level0_triangles)) {
         clearVertices(g, ranks, n);
         return Result::BadStructure;
     }
     uint8_t* resident = g.state + l.resident;
-    for (uint32_t k = 0; k < n; ++k) resident[ranks[k] >> 3] = uint8_t(resident[ranks[k] >> 3] | (1u << (ranks[k] & 7)));
+    for (uint32_t k = 0; k < n; ++k)
+        resident[ranks[k] >> 3] = uint8_t(resident[ranks[k] >> 3] | (1u << (ranks[k] & 7)));
     block_originals[block] = uint32_t(originals);
     g.state[l.loaded + block] = 1;
     g.loaded_bytes += b.size;
@@ -375,8 +387,8 @@ Result pfrepRegionReleaseMask(const PfrepRegions& g, uint32_t block, uint8_t* ma
     if (!g.state || block >= g.block_count || !mask || !scratch) return Result::InvalidArgument;
     if (!g.block_loaded[block]) return Result::Ok;
     const StateLayout l = stateLayout(g.model.vertex_count, g.block_count);
-    const uint32_t* ranks =
-        reinterpret_cast<const uint32_t*>(g.state + l.ranks) + reinterpret_cast<const uint32_t*>(g.state + l.first)[block];
+    const uint32_t* ranks = reinterpret_cast<const uint32_t*>(g.state + l.ranks) +
+                            reinterpret_cast<const uint32_t*>(g.state + l.first)[block];
     for (uint32_t k = 0; k < g.blocks[block].vertices; ++k) {
         const Result r = pfrepSimplifyVertex(g.model, mask, ranks[k], scratch, scratch_capacity);
         if (r != Result::Ok) return r;
@@ -389,8 +401,8 @@ Result pfrepRegionEvictBlock(PfrepRegions* regions, uint32_t block) {
     PfrepRegions& g = *regions;
     if (!g.block_loaded[block]) return Result::Ok;
     const StateLayout l = stateLayout(g.model.vertex_count, g.block_count);
-    const uint32_t* ranks =
-        reinterpret_cast<const uint32_t*>(g.state + l.ranks) + reinterpret_cast<const uint32_t*>(g.state + l.first)[block];
+    const uint32_t* ranks = reinterpret_cast<const uint32_t*>(g.state + l.ranks) +
+                            reinterpret_cast<const uint32_t*>(g.state + l.first)[block];
     const uint32_t n = g.blocks[block].vertices;
     clearVertices(g, ranks, n);
     uint8_t* resident = g.state + l.resident;

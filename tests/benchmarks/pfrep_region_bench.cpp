@@ -67,8 +67,8 @@ lodrt::PfrepView flightView(const float lo[3], const float hi[3], float height, 
 }
 
 struct Flight {
-    bool same = true;          // masks equal after every step, meshes at every settled frame
-    size_t max_triangles = 0;  // largest settled mesh
+    bool same = true;         // masks equal after every step, meshes at every settled frame
+    size_t max_triangles = 0; // largest settled mesh
     size_t steps = 0;
     double region_cpu = 0, whole_cpu = 0;
     std::vector<uint8_t> keep_listed; // blocks listed at the keep threshold at some frame
@@ -139,12 +139,18 @@ Flight fly(lodrt::PfrepRegions& g, const std::vector<uint8_t>* regions_blob, lod
 bool parse(int argc, char** argv, Options& o) {
     for (int a = 1; a < argc; ++a) {
         const bool has = a + 1 < argc;
-        if (std::strcmp(argv[a], "--mesh") == 0 && has) o.mesh = argv[++a];
-        else if (std::strcmp(argv[a], "--frames") == 0 && has) o.frames = std::max(2, std::atoi(argv[++a]));
-        else if (std::strcmp(argv[a], "--height") == 0 && has) o.height = float(std::atof(argv[++a]));
-        else if (std::strcmp(argv[a], "--runs") == 0 && has) o.runs = std::max(1, std::atoi(argv[++a]));
-        else if (std::strcmp(argv[a], "--block") == 0 && has) o.region.block_vertices = uint32_t(std::atoi(argv[++a]));
-        else if (std::strcmp(argv[a], "--root") == 0 && has) o.region.root_vertices = uint32_t(std::atoi(argv[++a]));
+        if (std::strcmp(argv[a], "--mesh") == 0 && has)
+            o.mesh = argv[++a];
+        else if (std::strcmp(argv[a], "--frames") == 0 && has)
+            o.frames = std::max(2, std::atoi(argv[++a]));
+        else if (std::strcmp(argv[a], "--height") == 0 && has)
+            o.height = float(std::atof(argv[++a]));
+        else if (std::strcmp(argv[a], "--runs") == 0 && has)
+            o.runs = std::max(1, std::atoi(argv[++a]));
+        else if (std::strcmp(argv[a], "--block") == 0 && has)
+            o.region.block_vertices = uint32_t(std::atoi(argv[++a]));
+        else if (std::strcmp(argv[a], "--root") == 0 && has)
+            o.region.root_vertices = uint32_t(std::atoi(argv[++a]));
         else {
             std::fprintf(stderr, "pfrep_region_bench: unknown argument %s\n", argv[a]);
             return false;
@@ -222,7 +228,8 @@ int main(int argc, char** argv) {
     uint32_t blocks_loaded = 0;
     for (uint32_t k = 0; k < g.block_count; ++k) blocks_loaded += g.block_loaded[k];
     const double fraction = double(g.loaded_bytes) / double(blob.size());
-    std::printf("flight %.2f diagonals above the box: %d frames, %zu refinement steps, largest settled mesh %zu triangles; loaded %u of %u blocks, "
+    std::printf("flight %.2f diagonals above the box: %d frames, %zu refinement steps, largest settled mesh %zu "
+                "triangles; loaded %u of %u blocks, "
                 "%llu of %zu bytes = %.3f of the region blob (%.3f of the format 2 blob); masks and meshes %s\n",
                 double(o.height), o.frames, first.steps, first.max_triangles, blocks_loaded, g.block_count,
                 (unsigned long long)g.loaded_bytes, blob.size(), fraction,

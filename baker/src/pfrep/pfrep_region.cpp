@@ -197,9 +197,9 @@ Result<std::vector<uint8_t>> writePfrepRegions(const std::vector<uint8_t>& forma
         return resourceLimit("pfrep regions: the blob would exceed 4 GiB or the block limit");
     std::vector<uint8_t> out;
     out.reserve(size_t(total));
-    for (uint32_t v : {lodrt::format::kPfrepRegionMagic, lodrt::format::kPfrepRegionVersion, m.vertex_count,
-                       m.removed_count, n, m.blob_size, uint32_t(skeleton.size()), uint32_t(total),
-                       max_radius | max_error << 8})
+    for (uint32_t v :
+         {lodrt::format::kPfrepRegionMagic, lodrt::format::kPfrepRegionVersion, m.vertex_count, m.removed_count, n,
+          m.blob_size, uint32_t(skeleton.size()), uint32_t(total), max_radius | max_error << 8})
         putU32(out, v);
     out.resize(lodrt::format::kPfrepRegionHeaderSize, 0);
     uint64_t at = open;

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <random>
@@ -19,6 +20,8 @@
 #include "lodrt/detail/pfrep_region.h"
 #include "lodrt/format.h"
 #include "lodrt/pfrep.h"
+#include "cli_runner.h"
+#include "lodbake/io/mesh_io.h"
 #include "pfrep_region_view.h"
 #include "test_paths.h"
 
@@ -79,7 +82,9 @@ struct Opened {
     }
 };
 
-bool bit(const uint8_t* bits, uint32_t v) { return (bits[v >> 3] >> (v & 7)) & 1; }
+bool bit(const uint8_t* bits, uint32_t v) {
+    return (bits[v >> 3] >> (v & 7)) & 1;
+}
 
 std::vector<uint32_t> level(const lodrt::PfrepModel& m, uint32_t k) {
     std::vector<uint32_t> idx(size_t(m.level0_triangles) * 3 + 3);
@@ -139,7 +144,8 @@ TEST(PfrepRegionTest, AllBlocksRebuildFormat2AndItsLevelsAndRefinement) {
         const lodrt::PfrepView view = flightView(frame, 12);
         size_t ca = 0, cb = 0;
         ASSERT_EQ(lodrt::pfrepRefine(m, view, mask_a.data(), scratch.data(), scratch.size(), &ca), lodrt::Result::Ok);
-        ASSERT_EQ(lodrt::pfrepRefine(whole, view, mask_b.data(), scratch.data(), scratch.size(), &cb), lodrt::Result::Ok);
+        ASSERT_EQ(lodrt::pfrepRefine(whole, view, mask_b.data(), scratch.data(), scratch.size(), &cb),
+                  lodrt::Result::Ok);
         ASSERT_EQ(ca, cb);
         ASSERT_EQ(mask_a, mask_b) << "frame " << frame;
         ASSERT_EQ(selective(m, mask_a), selective(whole, mask_b));
@@ -221,10 +227,10 @@ TEST(PfrepRegionTest, MissingBlocksAreNeverInserted) {
     lodrt::pfrepMaskCoarsest(m, mask.data());
     for (int frame = 0; frame < 8; ++frame) {
         for (int step = 0; step < 3; ++step)
-            ASSERT_EQ(lodrt::pfrepRefine(m, flightView(frame, 8), mask.data(), scratch.data(), scratch.size(), &changes),
-                      lodrt::Result::Ok);
-        for (uint32_t v = 0; v < m.vertex_count; ++v)
-            ASSERT_TRUE(bit(mask.data(), v) || bit(m.resident, v)) << v;
+            ASSERT_EQ(
+                lodrt::pfrepRefine(m, flightView(frame, 8), mask.data(), scratch.data(), scratch.size(), &changes),
+                lodrt::Result::Ok);
+        for (uint32_t v = 0; v < m.vertex_count; ++v) ASSERT_TRUE(bit(mask.data(), v) || bit(m.resident, v)) << v;
     }
     uint32_t refused = 0, inserted = 0;
     for (uint32_t v = 0; v < m.removed_count; v += 7) {
@@ -237,8 +243,7 @@ TEST(PfrepRegionTest, MissingBlocksAreNeverInserted) {
             ASSERT_EQ(r, lodrt::Result::Ok);
             inserted += before != mask;
         }
-        for (uint32_t x = 0; x < m.vertex_count; ++x)
-            ASSERT_TRUE(bit(mask.data(), x) || bit(m.resident, x));
+        for (uint32_t x = 0; x < m.vertex_count; ++x) ASSERT_TRUE(bit(mask.data(), x) || bit(m.resident, x));
     }
     // Both outcomes occur: closures that reach a missing block are refused, others go through.
     EXPECT_GT(refused, 10u);
@@ -259,7 +264,8 @@ TEST(PfrepRegionTest, EvictAndReload) {
     const size_t full = selective(o.g.model, mask).size();
     EXPECT_EQ(lodrt::pfrepRegionEvictBlock(&o.g, 0), lodrt::Result::InvalidArgument);
     for (uint32_t k = 1; k < o.g.block_count; k += 2) {
-        ASSERT_EQ(lodrt::pfrepRegionReleaseMask(o.g, k, mask.data(), scratch.data(), scratch.size()), lodrt::Result::Ok);
+        ASSERT_EQ(lodrt::pfrepRegionReleaseMask(o.g, k, mask.data(), scratch.data(), scratch.size()),
+                  lodrt::Result::Ok);
         ASSERT_EQ(lodrt::pfrepRegionEvictBlock(&o.g, k), lodrt::Result::Ok);
     }
     EXPECT_GT(o.g.model.loaded_from, 0u);
@@ -345,6 +351,40 @@ TEST(PfrepRegionTest, FuzzSeed) {
     ASSERT_GT(o.g.block_count, 4u);
     for (uint32_t k = 0; k + 1 < o.g.block_count; ++k) ASSERT_EQ(o.load(seed, k), lodrt::Result::Ok);
     EXPECT_EQ(o.load(seed, o.g.block_count - 1), lodrt::Result::Truncated);
+}
+
+// lodbake pfrep --regions writes a region blob that --extract reads with the format 2 blob's levels.
+TEST(PfrepRegionTest, CliWritesAndExtracts) {
+    const std::string dir = lodbake_test::scratchDir();
+    const std::string in = dir + "/pfrep_region_cli.ply";
+    lodbake::Diagnostics d;
+    ASSERT_TRUE(lodbake::writeMesh(lodbake_test::icosphere(3), in, {}, d).ok());
+    const std::string regions = dir + "/pfrep_region_cli.lbp", format2 = dir + "/pfrep_region_cli2.lbp";
+    lodbake_test::CliRun r = lodbake_test::runLodbake({"pfrep", in, "-o", regions, "--ratio", "0.1", "--regions"});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_NE(r.out.find("region blocks"), std::string::npos) << r.out;
+    r = lodbake_test::runLodbake({"pfrep", in, "-o", format2, "--ratio", "0.1", "--format", "2"});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    for (const char* k : {"0", "300"}) {
+        const std::string a = dir + "/pfrep_region_cli_a.ply", b = dir + "/pfrep_region_cli_b.ply";
+        ASSERT_EQ(lodbake_test::runLodbake({"pfrep", "--extract", k, regions, "-o", a}).exit_code, 0);
+        ASSERT_EQ(lodbake_test::runLodbake({"pfrep", "--extract", k, format2, "-o", b}).exit_code, 0);
+        EXPECT_EQ(lodbake_test::readTextFile(a), lodbake_test::readTextFile(b)) << "level " << k;
+    }
+    // A cut region blob: one error line, no output.
+    const std::string bad = dir + "/pfrep_region_cli_bad.lbp";
+    {
+        std::string bytes = lodbake_test::readTextFile(regions);
+        bytes.resize(bytes.size() - 5);
+        std::ofstream(bad, std::ios::binary) << bytes;
+    }
+    r = lodbake_test::runLodbake({"pfrep", "--extract", "0", bad, "-o", dir + "/pfrep_region_cli_bad.ply"});
+    EXPECT_EQ(r.exit_code, 1);
+    EXPECT_NE(r.err.find("Truncated"), std::string::npos) << r.err;
+    EXPECT_FALSE(std::filesystem::exists(dir + "/pfrep_region_cli_bad.ply"));
+    EXPECT_EQ(lodbake_test::runLodbake({"pfrep", in, "-o", regions, "--regions", "--format", "3"}).exit_code, 2);
+    EXPECT_EQ(
+        lodbake_test::runLodbake({"pfrep", "--extract", "0", regions, "--regions", "-o", dir + "/x.ply"}).exit_code, 2);
 }
 
 } // namespace

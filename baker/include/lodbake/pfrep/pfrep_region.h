@@ -18,8 +18,8 @@ struct PfrepRegionOptions {
 struct PfrepRegionStats {
     uint32_t blocks = 0;
     uint32_t bands = 0;
-    uint64_t open_bytes = 0;  // header + directory + skeleton
-    uint64_t root_bytes = 0;  // block 0
+    uint64_t open_bytes = 0; // header + directory + skeleton
+    uint64_t root_bytes = 0; // block 0
 };
 
 /// Writes the region blob of a format 2 blob (as buildPfrep returns it). The result decodes, once
