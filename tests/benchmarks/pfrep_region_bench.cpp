@@ -72,6 +72,8 @@ struct Flight {
     size_t steps = 0;
     double region_cpu = 0, whole_cpu = 0;
     std::vector<uint8_t> keep_listed; // blocks listed at the keep threshold at some frame
+    double load_cpu = 0;               // pfrepRegionLoadBlock, thread CPU
+    uint64_t load_bytes = 0, load_vertices = 0;
 };
 
 // Runs the flight on both models from their coarsest masks; loads needed blocks when `regions_blob`
@@ -99,9 +101,13 @@ Flight fly(lodrt::PfrepRegions& g, const std::vector<uint8_t>* regions_blob, lod
             for (size_t k = 0; k < count; ++k) {
                 if (g.block_loaded[needed[k]]) continue;
                 const lodrt::PfrepRegionBlock& b = g.blocks[needed[k]];
+                const double t = threadCpuSeconds();
                 if (lodrt::pfrepRegionLoadBlock(&g, needed[k], regions_blob->data() + b.offset, b.size) !=
                     lodrt::Result::Ok)
                     f.same = false;
+                f.load_cpu += threadCpuSeconds() - t;
+                f.load_bytes += b.size;
+                f.load_vertices += b.vertices;
                 loaded = true;
             }
             if (loaded) (void)lodrt::pfrepAttachCriterionTable(&g.model, region_table.data(), region_table.size());
@@ -295,6 +301,15 @@ int main(int argc, char** argv) {
     std::printf("blocks listed at the keep threshold (hysteresis %.2f, for a streamer that evicts): %.3f of the "
                 "region blob\n",
                 double(lodrt::PfrepView().hysteresis), double(keep_bytes) / double(blob.size()));
+    // Anchor: validating the whole format 2 blob in place (openPfrep).
+    lodrt::PfrepModel reopened;
+    const double t_open = threadCpuSeconds();
+    (void)lodrt::openPfrep(built->blob.data(), built->blob.size(), &reopened);
+    const double open_cpu = threadCpuSeconds() - t_open;
+    std::printf("block loading (validate and lay out), thread CPU: %.1f MB/s, %.1f M vertices/s; openPfrep of the "
+                "whole format 2 blob: %.1f M vertices/s\n",
+                double(first.load_bytes) / first.load_cpu * 1e-6, double(first.load_vertices) / first.load_cpu * 1e-6,
+                double(reopened.vertex_count) / open_cpu * 1e-6);
     std::printf("refinement over the flight, thread CPU, median of %d runs: region model %.2f ms, whole blob %.2f ms "
                 "(ratio %.3f)\n",
                 o.runs, rc * 1e3, wc * 1e3, rc / wc);
