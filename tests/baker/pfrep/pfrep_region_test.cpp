@@ -86,6 +86,23 @@ bool bit(const uint8_t* bits, uint32_t v) {
     return (bits[v >> 3] >> (v & 7)) & 1;
 }
 
+// Overwrites the record and entry of every non-resident vertex with 0xff: codes of a huge radius and
+// error (a criterion read would insert it) and an entry header announcing 65,598 neighbours of 31
+// bits (a decode would read far outside the buffer, which ASan reports, or insert garbage ranks).
+void poisonNonResident(Opened& o) {
+    const lodrt::PfrepModel& m = o.g.model;
+    for (uint32_t v = 0; v < m.vertex_count; ++v) {
+        if (bit(m.resident, v)) continue;
+        std::memset(o.decoded.data() + lodrt::detail::pfrepRecordOffset(m, v), 0xff,
+                    lodrt::format::kPfrepVertexRecordSize);
+        const uint64_t begin = lodrt::detail::pfrepEntryOffset(m, v);
+        const uint64_t end = v + 1 < m.vertex_count && ((v + 1) >> m.block_shift) == (v >> m.block_shift)
+                                 ? lodrt::detail::pfrepEntryOffset(m, v + 1)
+                                 : lodrt::detail::pfrepStreamEnd(m, v);
+        std::memset(o.decoded.data() + begin, 0xff, size_t(end - begin));
+    }
+}
+
 std::vector<uint32_t> level(const lodrt::PfrepModel& m, uint32_t k) {
     std::vector<uint32_t> idx(size_t(m.level0_triangles) * 3 + 3);
     size_t n = 0;
@@ -153,8 +170,8 @@ TEST(PfrepRegionTest, AllBlocksRebuildFormat2AndItsLevelsAndRefinement) {
 }
 
 // With the blocks the flight needs (loaded as it goes, never evicted) the region model makes the
-// whole blob's masks; non-resident records are poisoned (0xff codes: huge radius and error) so any
-// read of one would change a decision.
+// whole blob's masks; non-resident records and entries are poisoned (poisonNonResident), so any read
+// of one would change a decision or read outside the buffer.
 TEST(PfrepRegionTest, NeededBlocksGiveTheWholeBlobsMasksWithoutReadingOthers) {
     const Blobs& b = largerBlobs();
     Opened o;
@@ -162,12 +179,6 @@ TEST(PfrepRegionTest, NeededBlocksGiveTheWholeBlobsMasksWithoutReadingOthers) {
     ASSERT_EQ(o.load(b.region, 0), lodrt::Result::Ok);
     lodrt::PfrepModel whole;
     ASSERT_EQ(lodrt::openPfrep(b.format2.data(), b.format2.size(), &whole), lodrt::Result::Ok);
-    auto poison = [&]() {
-        for (uint32_t v = 0; v < o.g.model.vertex_count; ++v)
-            if (!bit(o.g.model.resident, v))
-                std::memset(o.decoded.data() + lodrt::detail::pfrepRecordOffset(o.g.model, v), 0xff,
-                            lodrt::format::kPfrepVertexRecordSize);
-    };
     std::vector<uint8_t> mask_a(lodrt::pfrepMaskBytes(whole)), mask_b(mask_a.size());
     std::vector<uint32_t> scratch(lodrt::pfrepScratchValues(whole));
     lodrt::pfrepMaskCoarsest(whole, mask_b.data());
@@ -182,7 +193,7 @@ TEST(PfrepRegionTest, NeededBlocksGiveTheWholeBlobsMasksWithoutReadingOthers) {
         ASSERT_EQ(needed[0], 0u);
         for (size_t k = 0; k < count; ++k) ASSERT_EQ(o.load(b.region, needed[k]), lodrt::Result::Ok);
         if (frame == 0) lodrt::pfrepMaskCoarsest(o.g.model, mask_a.data());
-        poison();
+        poisonNonResident(o);
         for (int step = 0; step < 3; ++step) {
             size_t ca = 0, cb = 0;
             ASSERT_EQ(lodrt::pfrepRefine(o.g.model, view, mask_a.data(), scratch.data(), scratch.size(), &ca),
@@ -220,10 +231,7 @@ TEST(PfrepRegionTest, MissingBlocksAreNeverInserted) {
         if (k % 4 != 0) {
             ASSERT_EQ(o.load(b.region, k), lodrt::Result::Ok);
         }
-    for (uint32_t v = 0; v < m.vertex_count; ++v)
-        if (!bit(m.resident, v))
-            std::memset(o.decoded.data() + lodrt::detail::pfrepRecordOffset(m, v), 0xff,
-                        lodrt::format::kPfrepVertexRecordSize);
+    poisonNonResident(o);
     lodrt::pfrepMaskCoarsest(m, mask.data());
     for (int frame = 0; frame < 8; ++frame) {
         for (int step = 0; step < 3; ++step)
