@@ -20,10 +20,12 @@
 #include "lodbake/io/mesh_io.h"
 #include "lodbake/pfrep/pfrep_builder.h"
 #include "lodbake/pfrep/pfrep_compress.h"
+#include "lodbake/pfrep/pfrep_region.h"
 #include "lodbake/simplify/lod_chain.h"
 #include "lodbake/simplify/mesh_distance.h"
 #include "lodbake/simplify/simplify.h"
 #include "lodbake/version.h"
+#include "lodrt/format.h"
 #include "lodrt/pfrep.h"
 
 #include "cli_common.h"
@@ -32,23 +34,48 @@ namespace lodbake::cli {
 
 namespace {
 
-const char* kPfrepHelp = R"(usage: lodbake pfrep IN -o OUT.lbp [--ratio R] [--format 2|3]
+const char* kPfrepHelp = R"(usage: lodbake pfrep IN -o OUT.lbp [--ratio R] [--format 2|3 | --regions]
        lodbake pfrep --extract K IN.lbp -o OUT
 
 Builds a PFRep blob (progressive fans, docs/format/pfrep.md) from a half-edge-collapse
 simplification of IN down to R of its triangles (default 0: as far as valid collapses go), or
-extracts from a blob (format 2 or 3) the mesh after K vertex removals (0: full detail) and writes
+extracts from a blob (format 2, 3 or region blocks) the mesh after K vertex removals (0: full detail) and writes
 it as a mesh file (.ply .obj .off .gltf .glb; positions only, dequantized).
 
 options:
   -o, --output OUT   output file
   --ratio R          target fraction of triangles in [0, 1] (build only)
   --format F         3 (default): range-coded; 2: the uncompressed, prefix-streamable layout
+  --regions          region blocks: the format 2 table in spatially coherent blocks that load
+                     independently (docs/format/pfrep.md "Region blocks")
   --extract K        extract level K instead of building
 )";
 
-// Opens a blob of format 2 or 3; a format 3 blob is decoded into `decoded`.
+// Opens a region blob with every block loaded (the decoded buffer is then the format 2 blob).
+lodrt::Result openRegionPfrep(const std::vector<uint8_t>& bytes, std::vector<uint8_t>& decoded,
+                              lodrt::PfrepModel* model) {
+    lodrt::PfrepRegionInfo info;
+    lodrt::Result r = lodrt::pfrepRegionInfo(bytes.data(), bytes.size(), &info);
+    if (r != lodrt::Result::Ok) return r;
+    if (info.blob_size != bytes.size())
+        return info.blob_size > bytes.size() ? lodrt::Result::Truncated : lodrt::Result::TrailingBytes;
+    decoded.resize(info.decoded_bytes);
+    std::vector<uint64_t> state((info.state_bytes + 7) / 8);
+    lodrt::PfrepRegions g;
+    r = lodrt::pfrepRegionOpen(bytes.data(), bytes.size(), decoded.data(), decoded.size(), state.data(),
+                               info.state_bytes, &g);
+    for (uint32_t k = 0; k < g.block_count && r == lodrt::Result::Ok; ++k)
+        r = lodrt::pfrepRegionLoadBlock(&g, k, bytes.data() + g.blocks[k].offset, g.blocks[k].size);
+    // Complete: the decoded bytes are a format 2 blob; open them as one (no residency bits needed).
+    if (r == lodrt::Result::Ok) r = lodrt::openPfrep(decoded.data(), decoded.size(), model);
+    return r;
+}
+
+// Opens a blob of format 2 or 3 or a region blob; a format 3 or region blob is decoded into `decoded`.
 lodrt::Result openAnyPfrep(const std::vector<uint8_t>& bytes, std::vector<uint8_t>& decoded, lodrt::PfrepModel* model) {
+    if (bytes.size() >= 4 && uint32_t(bytes[0] | bytes[1] << 8 | bytes[2] << 16 | uint32_t(bytes[3]) << 24) ==
+                                 lodrt::format::kPfrepRegionMagic)
+        return openRegionPfrep(bytes, decoded, model);
     lodrt::PfrepCompressedInfo info;
     const lodrt::Result header = lodrt::pfrepCompressedInfo(bytes.data(), bytes.size(), &info);
     if (header == lodrt::Result::UnsupportedVersion) return lodrt::openPfrep(bytes.data(), bytes.size(), model);
@@ -66,7 +93,7 @@ int runPfrep(int argc, char** argv) {
     int code = 0;
     if (!parseArgs(argc, argv, 2,
                    {{"--output", "-o", true}, {"--ratio", nullptr, true}, {"--extract", nullptr, true},
-                    {"--format", nullptr, true}, {"--help", "-h", false}},
+                    {"--format", nullptr, true}, {"--regions", nullptr, false}, {"--help", "-h", false}},
                    args, code))
         return code;
     if (args.flags.count("--help")) {
@@ -80,6 +107,7 @@ int runPfrep(int argc, char** argv) {
     if (args.values.count("--extract")) {
         if (args.values.count("--ratio")) return usageError("--ratio applies to building, not to --extract");
         if (args.values.count("--format")) return usageError("--format applies to building, not to --extract");
+        if (args.flags.count("--regions")) return usageError("--regions applies to building, not to --extract");
         double level = 0;
         if (!parseNumber(args.values["--extract"], level) || !(level >= 0 && level <= 4e9) || level != std::floor(level))
             return usageError("--extract expects a non-negative integer, got '" + args.values["--extract"] + "'");
@@ -136,6 +164,9 @@ int runPfrep(int argc, char** argv) {
         if (f != "2" && f != "3") return usageError("--format expects 2 or 3, got '" + f + "'");
         compressed = f == "3";
     }
+    const bool regions = args.flags.count("--regions") > 0;
+    if (regions && args.values.count("--format")) return usageError("--regions and --format exclude each other");
+    if (regions) compressed = false;
     Result<LoadedMesh> loaded = readMesh(in, args.read, diagnostics);
     if (!loaded.ok()) {
         printDiagnostics(diagnostics);
@@ -154,14 +185,22 @@ int runPfrep(int argc, char** argv) {
         }
         build->blob = std::move(*coded);
     }
+    if (regions) {
+        Result<std::vector<uint8_t>> blocked = writePfrepRegions(build->blob, PfrepRegionOptions());
+        if (!blocked.ok()) {
+            printDiagnostics(diagnostics);
+            return reportError(blocked.status().withPrefix(in));
+        }
+        build->blob = std::move(*blocked);
+    }
     const Status written = writeFileAtomic(out, build->blob.data(), build->blob.size());
     printDiagnostics(diagnostics);
     if (!written.ok()) return reportError(written);
     const size_t vertices = build->rank_point.size();
-    std::printf("%s: %zu vertices (%zu removable), %zu triangles at level 0, %zu stored, format %d, %zu bytes (%.2f "
+    std::printf("%s: %zu vertices (%zu removable), %zu triangles at level 0, %zu stored, format %d%s, %zu bytes (%.2f "
                 "bytes/vertex)\n",
                 out.c_str(), vertices, build->removed, build->level0_triangles, build->stored_triangles,
-                compressed ? 3 : 2, build->blob.size(), vertices ? double(build->blob.size()) / double(vertices) : 0.0);
+                compressed ? 3 : 2, regions ? " in region blocks" : "", build->blob.size(), vertices ? double(build->blob.size()) / double(vertices) : 0.0);
     return kExitOk;
 }
 

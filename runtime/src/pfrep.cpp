@@ -111,6 +111,10 @@ inline uint32_t neighbourAt(const uint8_t* s, const Entry& e, uint32_t i, uint32
 }
 
 inline bool maskBit(const uint8_t* mask, uint32_t v) { return (mask[v >> 3] >> (v & 7)) & 1; }
+// Whether v's record and entry are loaded: the resident bits of a region model, else the prefix rule.
+inline bool isResident(const PfrepModel& m, uint32_t v) {
+    return m.resident ? maskBit(m.resident, v) : v >= m.loaded_from;
+}
 inline void setBit(uint8_t* mask, uint32_t v) { mask[v >> 3] = uint8_t(mask[v >> 3] | (1u << (v & 7))); }
 inline void clearBit(uint8_t* mask, uint32_t v) { mask[v >> 3] = uint8_t(mask[v >> 3] & ~(1u << (v & 7))); }
 
@@ -227,8 +231,11 @@ inline bool allRemoved64(const uint8_t* p) {
 // mask (a bit cleared ahead in the current word is then skipped until the next pass).
 template <typename Fn> inline bool forEachPresent(const PfrepModel& m, const uint8_t* mask, Fn&& fn) {
     const size_t bytes = pfrepMaskBytes(m);
-    // Start at the first loaded vertex's word: the bits below are set in a well-formed mask.
-    size_t b = size_t(m.loaded_from / 64) * 8;
+    // Start at the first loaded vertex's word: the bits below are set in a well-formed mask. A
+    // region model may have resident vertices anywhere; its non-resident bits are set in a
+    // well-formed mask, and their bytes in the decoded buffer are validated or zero either way.
+    const uint32_t from = m.resident ? 0 : m.loaded_from;
+    size_t b = size_t(from / 64) * 8;
     auto word = [&](size_t at) {
         uint64_t w;
         std::memcpy(&w, mask + at, 8);
@@ -237,7 +244,7 @@ template <typename Fn> inline bool forEachPresent(const PfrepModel& m, const uin
             const uint32_t i = uint32_t(at * 8) + uint32_t(__builtin_ctzll(present));
             present &= present - 1;
             if (i >= m.vertex_count) return 1;
-            if (i < m.loaded_from) continue; // not loaded (a well-formed mask has these bits set)
+            if (i < from) continue; // not loaded (a well-formed mask has these bits set)
             if (!fn(i)) return 0;
         }
         return 2;
@@ -261,7 +268,7 @@ template <typename Fn> inline bool forEachPresent(const PfrepModel& m, const uin
             const uint32_t i = uint32_t(b * 8) + uint32_t(__builtin_ctz(present));
             present &= present - 1;
             if (i >= m.vertex_count) return true;
-            if (i < m.loaded_from) continue;
+            if (i < from) continue;
             if (!fn(i)) return false;
         }
     }
@@ -431,7 +438,8 @@ Result pfrepDecodePositions(const PfrepModel& m, float* out, size_t capacity) {
     if (!out && m.vertex_count > 0) return Result::InvalidArgument;
     if (capacity < size_t(m.vertex_count) * 3) return Result::BufferTooSmall;
     std::fill(out, out + size_t(m.loaded_from) * 3, 0.0f);
-    for (uint32_t v = m.loaded_from; v < m.vertex_count; ++v) {
+    for (uint32_t v = m.resident ? 0 : m.loaded_from; v < m.vertex_count; ++v) {
+        if (!isResident(m, v)) continue;
         const uint8_t* r = record(m, v);
         for (int k = 0; k < 3; ++k) out[size_t(v) * 3 + k] = m.position_min[k] + float(loadU16(r + 2 * k)) * m.position_step[k];
     }
@@ -560,15 +568,22 @@ void maskBelow(const PfrepModel& m, uint8_t* mask, uint32_t end) {
     const uint32_t full = end >> 3;
     std::memset(mask, 0xff, full);
     for (uint32_t v = full * 8; v < end; ++v) setBit(mask, v);
+    if (!m.resident) return;
+    // Region model: every non-resident vertex counts as removed (bits beyond vertex_count stay 0).
+    const size_t bytes = pfrepMaskBytes(m);
+    for (size_t k = 0; k < bytes; ++k) {
+        const uint32_t valid = k + 1 < bytes || m.vertex_count % 8 == 0 ? 0xffu : (1u << (m.vertex_count % 8)) - 1;
+        mask[k] = uint8_t(mask[k] | (~m.resident[k] & valid));
+    }
 }
 } // namespace
 
 void pfrepMaskFinest(const PfrepModel& m, uint8_t* mask) {
-    if (mask) maskBelow(m, mask, m.loaded_from);
+    if (mask) maskBelow(m, mask, m.resident ? 0 : m.loaded_from);
 }
 
 void pfrepMaskCoarsest(const PfrepModel& m, uint8_t* mask) {
-    if (mask) maskBelow(m, mask, std::max(m.removed_count, m.loaded_from));
+    if (mask) maskBelow(m, mask, m.resident ? m.removed_count : std::max(m.removed_count, m.loaded_from));
 }
 
 namespace {
@@ -585,7 +600,7 @@ size_t simplifyClosure(const PfrepModel& m, uint8_t* mask, uint32_t vertex, uint
     scratch[queued++] = vertex;
     while (next < queued) {
         const uint32_t x = scratch[next++];
-        if (x < m.loaded_from) continue; // not loaded: its dependencies are not loaded either
+        if (!isResident(m, x)) continue; // not loaded (a malformed mask): its entry is not read
         const Entry e = decodeHeader(s, entryStart(m, x));
         uint64_t bit = e.first_mask_bit + (e.has_original ? e.neighbours : 0);
         for (uint32_t k = 0; k < e.dependencies; ++k) {
@@ -603,23 +618,35 @@ size_t simplifyClosure(const PfrepModel& m, uint8_t* mask, uint32_t vertex, uint
     return queued;
 }
 
-// Inserts `vertex` (removed) and its insertion closure; returns the number of bits cleared.
+// Inserts `vertex` (removed, resident) and its insertion closure; returns the number of bits
+// cleared. kRegion: the closure may reach a non-resident vertex (a region model whose needed blocks
+// are not all loaded); it is then abandoned before that vertex's entry is read, every bit it cleared
+// is set again and 0 is returned. Popped vertices are kept at the end of the scratch for that
+// (heap + popped <= vertices cleared <= vertex_count). In a prefix model every corner ranks above a
+// loaded vertex, so it is loaded: no check.
+template <bool kRegion>
 size_t insertClosure(const PfrepModel& m, uint8_t* mask, uint32_t vertex, uint32_t* scratch) {
     const uint8_t* s = m.data;
     // A min-heap: vertices are processed in increasing rank, and every insertion pushes only higher
     // ranks, so a dependency's state is final when its triangles are examined.
-    size_t top = 0, cleared = 1;
+    size_t top = 0, cleared = 1, popped = 0;
+    bool missing = false;
     auto greater = [](uint32_t a, uint32_t b) { return a > b; };
     clearBit(mask, vertex);
     scratch[top++] = vertex;
     while (top > 0) {
         std::pop_heap(scratch, scratch + top, greater);
         const uint32_t x = scratch[--top];
+        if (kRegion) scratch[size_t(m.vertex_count) - 1 - popped++] = x;
         visitEntry(
             m, s, x, [&](uint32_t d) { return d == kNoDependency || maskBit(mask, d); },
             [&](const Entry&, uint32_t, uint32_t a, uint32_t b) {
                 for (uint32_t c : {a, b}) {
                     if (maskBit(mask, c)) {
+                        if (kRegion && (missing || !maskBit(m.resident, c))) {
+                            missing = true;
+                            return true;
+                        }
                         clearBit(mask, c);
                         ++cleared;
                         scratch[top++] = c;
@@ -628,8 +655,17 @@ size_t insertClosure(const PfrepModel& m, uint8_t* mask, uint32_t vertex, uint32
                 }
                 return true;
             });
+        if (kRegion && missing) {
+            for (size_t q = 0; q < top; ++q) setBit(mask, scratch[q]);
+            for (size_t q = 0; q < popped; ++q) setBit(mask, scratch[size_t(m.vertex_count) - 1 - q]);
+            return 0;
+        }
     }
     return cleared;
+}
+
+size_t insertClosure(const PfrepModel& m, uint8_t* mask, uint32_t vertex, uint32_t* scratch) {
+    return m.resident ? insertClosure<true>(m, mask, vertex, scratch) : insertClosure<false>(m, mask, vertex, scratch);
 }
 
 } // namespace
@@ -648,9 +684,9 @@ Result pfrepInsertVertex(const PfrepModel& m, uint8_t* mask, uint32_t vertex, ui
     if (!mask || !scratch || scratch_capacity < pfrepScratchValues(m) || vertex >= m.vertex_count)
         return Result::InvalidArgument;
     if (!maskBit(mask, vertex)) return Result::Ok;
-    if (vertex < m.loaded_from) return Result::NotLoaded;
-    insertClosure(m, mask, vertex, scratch);
-    return Result::Ok;
+    if (!isResident(m, vertex)) return Result::NotLoaded;
+    // A region closure that meets a non-resident vertex leaves the mask as it was.
+    return insertClosure(m, mask, vertex, scratch) > 0 ? Result::Ok : Result::NotLoaded;
 }
 
 Result pfrepExtractSelective(const PfrepModel& m, const uint8_t* mask, uint32_t* indices, size_t capacity,
@@ -886,7 +922,7 @@ float cullBand(const PfrepView& view) {
 
 Result pfrepVertexBounds(const PfrepModel& m, uint32_t vertex, PfrepVertexBounds* out) {
     if (!out || vertex >= m.vertex_count) return Result::InvalidArgument;
-    if (vertex < m.loaded_from) return Result::NotLoaded;
+    if (!isResident(m, vertex)) return Result::NotLoaded;
     const uint8_t* r = record(m, vertex);
     for (int k = 0; k < 3; ++k) out->position[k] = m.position_min[k] + float(loadU16(r + 2 * k)) * m.position_step[k];
     out->radius = logValue(m, r[6]);
@@ -902,7 +938,8 @@ Result pfrepAttachCriterionTable(PfrepModel* model, float* table, size_t capacit
     const PfrepModel& m = *model;
     if (capacity < pfrepCriterionTableFloats(m)) return Result::BufferTooSmall;
     uint8_t* codes = reinterpret_cast<uint8_t*>(table + size_t(m.vertex_count) * kCriterionStride);
-    for (uint32_t v = m.loaded_from; v < m.vertex_count; ++v) {
+    for (uint32_t v = m.resident ? 0 : m.loaded_from; v < m.vertex_count; ++v) {
+        if (!isResident(m, v)) continue;
         const uint8_t* r = record(m, v);
         float* t = table + size_t(v) * kCriterionStride;
         for (int k = 0; k < 3; ++k) t[k] = m.position_min[k] + float(loadU16(r + 2 * k)) * m.position_step[k];
@@ -917,7 +954,7 @@ Result pfrepAttachCriterionTable(PfrepModel* model, float* table, size_t capacit
 }
 
 bool pfrepWanted(const PfrepModel& m, const PfrepView& view, uint32_t vertex) {
-    if (vertex >= m.vertex_count || vertex < m.loaded_from) return false;
+    if (vertex >= m.vertex_count || !isResident(m, vertex)) return false;
     return wanted(m, view, criterion(view, 1.0f, 0.0f), vertex);
 }
 
@@ -989,7 +1026,7 @@ Result pfrepRefine(const PfrepModel& m, const PfrepView& view, uint8_t* mask, ui
             // is abandoned as soon as it meets one: otherwise the next pass would insert it again
             // and a static camera would toggle the same vertices every frame.
             const size_t n =
-                simplifyClosure(m, mask, i, scratch, [&](uint32_t d) { return d >= m.loaded_from && wanted(m, view, keep, d); });
+                simplifyClosure(m, mask, i, scratch, [&](uint32_t d) { return isResident(m, d) && wanted(m, view, keep, d); });
             if (n > 0) {
                 changed += n;
                 return true;
@@ -1004,7 +1041,7 @@ Result pfrepRefine(const PfrepModel& m, const PfrepView& view, uint8_t* mask, ui
         for (uint32_t k = 0; k < e.dependencies; ++k) {
             const uint32_t d = i - 1 - bitsAt(s, bit, e.dependency_width);
             bit += e.dependency_width + e.neighbours;
-            if (maskBit(mask, d) && d >= m.loaded_from && wanted(m, view, insert, d)) {
+            if (maskBit(mask, d) && isResident(m, d) && wanted(m, view, insert, d)) {
                 changed += insertClosure(m, mask, d, scratch);
                 if (budget > 0 && changed >= budget) return false;
             }
@@ -1014,5 +1051,39 @@ Result pfrepRefine(const PfrepModel& m, const PfrepView& view, uint8_t* mask, ui
     *changes = changed;
     return Result::Ok;
 }
+
+namespace detail {
+
+uint64_t pfrepRecordOffset(const PfrepModel& m, uint32_t v) { return uint64_t(record(m, v) - m.data); }
+
+uint64_t pfrepEntryOffset(const PfrepModel& m, uint32_t i) { return entryStart(m, i) / 8; }
+
+uint64_t pfrepStreamEnd(const PfrepModel& m, uint32_t i) {
+    return blockEnd(m, i >> m.block_shift) - format::kPfrepStreamPadding;
+}
+
+Result pfrepValidateEntryAt(const PfrepModel& m, uint32_t i, uint64_t begin, uint64_t end, uint64_t* originals,
+                            uint32_t* neighbours) {
+    uint64_t count = *originals;
+    Entry e;
+    const Result r = validateEntry(m, i, begin * 8, end * 8, count, e);
+    if (r != Result::Ok) return r;
+    // Canonical: the entry ends in the last byte of its range (as entries are contiguous in format 2).
+    if (((e.end_bit + 7) & ~uint64_t(7)) != end * 8) return Result::BadStructure;
+    *originals = count;
+    *neighbours = e.neighbours;
+    return Result::Ok;
+}
+
+size_t pfrepEntryNeighbours(const PfrepModel& m, uint32_t i, uint32_t* out, size_t capacity) {
+    const Entry e = decodeHeader(m.data, entryStart(m, i));
+    const size_t n = std::min<size_t>(e.neighbours, capacity);
+    for (size_t j = 0; j < n; ++j) out[j] = neighbourAt(m.data, e, i, uint32_t(j));
+    return e.neighbours;
+}
+
+float pfrepLogValue(const PfrepModel& m, uint32_t code) { return logValue(m, code); }
+
+} // namespace detail
 
 } // namespace lodrt

@@ -3,7 +3,9 @@
 // a format 3 input is decoded (pfrepDecompress) and the result exercised the same way; a format 4
 // input is decoded (pfrepDecodeFormat4) against a generated LOD0 (a torus of 8 x 6 points, the LOD0
 // of the format 4 seeds; for a blob with a split list, the torus with two vertices on one position,
-// numbered with the list by pfrepNumberLod0Split) and exercised.
+// numbered with the list by pfrepNumberLod0Split) and exercised; a region-block input (PFRG) is
+// opened, its blocks inside the input loaded (root first), the model exercised, then a block
+// released and evicted and the model exercised again.
 // Build with -DLODRT_BUILD_FUZZERS=ON and Clang; run as `lodrt_fuzz_pfrep CORPUS_DIR` (blobs written
 // by `lodbake pfrep` make a good seed corpus).
 #include <algorithm>
@@ -131,11 +133,47 @@ void decodeFormat4(const std::vector<uint8_t>& blob) {
     decodeFormat4Against(blob, info, lod0);
 }
 
+// Region blocks: buffers of exactly the sizes the header asks for (capped); every block is copied
+// into an allocation of exactly its size before loading.
+void decodeRegions(const std::vector<uint8_t>& blob) {
+    lodrt::PfrepRegionInfo info;
+    if (lodrt::pfrepRegionInfo(blob.data(), blob.size(), &info) != lodrt::Result::Ok) return;
+    if (info.vertex_count > (1u << 20) || info.decoded_bytes > (64u << 20) || info.state_bytes > (64u << 20)) return;
+    std::vector<uint8_t> decoded(info.decoded_bytes);
+    std::vector<uint64_t> state((info.state_bytes + 7) / 8);
+    lodrt::PfrepRegions g;
+    if (lodrt::pfrepRegionOpen(blob.data(), blob.size(), decoded.data(), decoded.size(), state.data(), info.state_bytes,
+                               &g) != lodrt::Result::Ok)
+        return;
+    for (uint32_t k = 0; k < g.block_count; ++k) {
+        const lodrt::PfrepRegionBlock& b = g.blocks[k];
+        if (uint64_t(b.offset) + b.size > blob.size()) break;
+        std::vector<uint8_t> bytes(blob.begin() + b.offset, blob.begin() + b.offset + b.size);
+        (void)lodrt::pfrepRegionLoadBlock(&g, k, bytes.data(), bytes.size());
+    }
+    lodrt::PfrepView view;
+    view.eye[2] = 1.0f;
+    for (int p = 0; p < 6; ++p) view.planes[p][3] = 1e6f;
+    std::vector<uint32_t> needed(g.block_count);
+    size_t count = 0;
+    (void)lodrt::pfrepRegionBlocksNeeded(g, view, needed.data(), needed.size(), &count);
+    exercise(g.model);
+    if (g.block_count > 1 && g.block_loaded[1]) {
+        std::vector<uint8_t> mask(lodrt::pfrepMaskBytes(g.model));
+        std::vector<uint32_t> scratch(lodrt::pfrepScratchValues(g.model));
+        lodrt::pfrepMaskFinest(g.model, mask.data());
+        (void)lodrt::pfrepRegionReleaseMask(g, 1, mask.data(), scratch.data(), scratch.size());
+        (void)lodrt::pfrepRegionEvictBlock(&g, 1);
+        exercise(g.model);
+    }
+}
+
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     // The reader copies nothing; a copy of exactly `size` bytes lets ASan see any read past the end.
     std::vector<uint8_t> blob(data, data + size);
     decodeCompressed(blob);
     decodeFormat4(blob);
+    decodeRegions(blob);
     lodrt::PfrepModel model;
     if (lodrt::openPfrep(blob.data(), blob.size(), &model) == lodrt::Result::Ok) exercise(model);
     // Streaming: a prefix (cut where the last byte says), then the rest arriving in a moved buffer.

@@ -114,6 +114,16 @@ constexpr uint32_t kPfrep4Flags = kPfrep4FlagCodedTail | kPfrep4FlagLod0Check | 
 // Format 4 headers claiming more stored triangles than this many times LOD0's are refused (a
 // half-edge sequence stores about 2.6 times as many).
 constexpr uint32_t kPfrepMaxStoredPerLevel0 = 16;
+// PFRep region blocks (docs/format/pfrep.md "Region blocks"): a container of the format 2 table cut
+// into spatially coherent blocks. Header of kPfrepRegionHeaderSize bytes, then block_count directory
+// records of kPfrepRegionDirectoryRecordSize bytes (u32 offset, u32 size, u32 vertices, f32 lo[3],
+// f32 hi[3], f32 max_error), then the skeleton (the format 2 header and one LEB128 entry length per
+// vertex), then the blocks back to back (block 0, the root, first).
+constexpr uint32_t kPfrepRegionMagic = 0x47524650u; // "PFRG"
+constexpr uint32_t kPfrepRegionVersion = 1;
+constexpr uint32_t kPfrepRegionHeaderSize = 64;
+constexpr uint32_t kPfrepRegionDirectoryRecordSize = 40;
+constexpr uint32_t kPfrepRegionMaxBlocks = 1u << 20;
 // Compressed mesh (.lbm), docs/format/valence.md. Little-endian header of kValenceHeaderSize bytes,
 // then the connectivity, position and normal streams, back to back; the position and normal streams
 // each have a range-coded part followed by a raw bit part (the low mantissa bits of the residuals).

@@ -50,6 +50,11 @@ struct PfrepModel {
     /// Optional criterion table (pfrepAttachCriterionTable; caller-owned, shared by every instance).
     /// pfrepExtendPrefix detaches it (the new vertices are not in it): attach it again.
     const float* criterion_table = nullptr;
+    /// Region blocks (pfrepRegionOpen): one bit per vertex, 1 = its record and entry are loaded.
+    /// When set, residency replaces the `v >= loaded_from` rule for selective refinement (a
+    /// non-resident vertex is never inserted, its record never read); loaded_from is then the
+    /// lowest rank of the resident suffix, so level k is extractable iff k >= loaded_from as before.
+    const uint8_t* resident = nullptr;
 };
 
 /// Validates the whole blob (size must equal its blob_size). Truncated / TrailingBytes / BadMagic /
@@ -283,5 +288,89 @@ LODRT_API Result pfrepAttachCriterionTable(PfrepModel* model, float* table, size
 /// valid (crack-free) refinement, and the next step continues towards the view.
 LODRT_API Result pfrepRefine(const PfrepModel& model, const PfrepView& view, uint8_t* mask, uint32_t* scratch,
                              size_t scratch_capacity, size_t* changes);
+
+// ---- Region blocks (docs/format/pfrep.md "Region blocks"). ----
+// A region blob holds the format 2 table cut into spatially coherent blocks: block 0 (the root)
+// holds the coarsest ranks, every other block a set of ranks of one rank band whose positions are
+// near each other. A small directory gives each block's byte range and bounds (a box containing the
+// bounding spheres of every vertex whose insertion can need one of its vertices, and the largest
+// error of those), so a streamer loads only the blocks a view needs (pfrepRegionBlocksNeeded).
+// Loading decodes a block into a caller-owned buffer laid out as the format 2 blob, so extraction
+// and refinement run on the format 2 code; the model's `resident` bits say which vertices are
+// there. Every byte is treated as hostile.
+
+struct PfrepRegionInfo {
+    uint32_t vertex_count = 0;
+    uint32_t block_count = 0;
+    uint32_t decoded_bytes = 0; // the format 2 buffer pfrepRegionOpen lays the blocks into
+    uint64_t open_bytes = 0;    // header, directory and skeleton: the prefix pfrepRegionOpen reads
+    uint64_t blob_size = 0;     // the whole region blob
+    size_t state_bytes = 0;     // state buffer pfrepRegionOpen needs (8-byte aligned)
+};
+
+/// Reads a region blob's header (its first format::kPfrepRegionHeaderSize bytes are enough):
+/// Truncated / BadMagic / UnsupportedVersion / BadStructure.
+LODRT_API Result pfrepRegionInfo(const void* data, size_t size, PfrepRegionInfo* info);
+
+/// One block of the directory.
+struct PfrepRegionBlock {
+    uint32_t offset = 0; // byte range in the region blob
+    uint32_t size = 0;
+    uint32_t vertices = 0;
+    float lo[3] = {0, 0, 0}; // bounds (docs/format/pfrep.md "Region blocks")
+    float hi[3] = {0, 0, 0};
+    float max_error = 0;
+};
+
+/// A region blob opened: the directory (copied into the state buffer), the decoded format 2 buffer
+/// and the residency. Use `model` for every pfrep function; it changes with each load or eviction.
+struct PfrepRegions {
+    PfrepModel model;
+    const PfrepRegionBlock* blocks = nullptr; // block_count entries (in the state buffer)
+    uint32_t block_count = 0;
+    uint64_t open_bytes = 0;
+    uint64_t blob_size = 0;
+    uint64_t loaded_bytes = 0; // open_bytes plus the sizes of the loaded blocks
+    const uint8_t* block_loaded = nullptr; // one byte per block, 1 = loaded
+    // Internal: the buffers (caller-owned).
+    uint8_t* decoded = nullptr;
+    uint8_t* state = nullptr;
+};
+
+/// Opens data[0, size) (size >= info.open_bytes; only the first open_bytes are read): validates the
+/// header, the directory and the skeleton, lays the format 2 header, block directory and entry
+/// offsets into `decoded` (info.decoded_bytes, zeroed elsewhere) and sets every vertex non-resident.
+/// `state` holds info.state_bytes (8-byte aligned). No block is loaded: load block 0 next. Both
+/// buffers must outlive *regions. Truncated / BadMagic / UnsupportedVersion / OutOfBounds /
+/// BadStructure / BufferTooSmall; *regions is only written on Ok.
+LODRT_API Result pfrepRegionOpen(const void* data, size_t size, void* decoded, size_t decoded_capacity, void* state,
+                                 size_t state_bytes, PfrepRegions* regions);
+
+/// Loads block `block` from its bytes (exactly blocks[block].size of them, from the blob at
+/// blocks[block].offset): validates its ranks, records and entries and lays them into the decoded
+/// buffer. Ok (nothing to do) when it is loaded already; InvalidArgument for a bad index; otherwise
+/// openPfrep's codes (BadStructure also for a rank another loaded block holds). On error nothing
+/// changes. When every block is loaded the decoded buffer is the format 2 blob, byte for byte.
+LODRT_API Result pfrepRegionLoadBlock(PfrepRegions* regions, uint32_t block, const void* bytes, size_t size);
+
+/// Before evicting block `block`, every instance mask must have its vertices removed: this simplifies
+/// each present vertex of the block (with its SimplifyVertex closure) in `mask`. `scratch` as for
+/// pfrepSimplifyVertex.
+LODRT_API Result pfrepRegionReleaseMask(const PfrepRegions& regions, uint32_t block, uint8_t* mask, uint32_t* scratch,
+                                        size_t scratch_capacity);
+
+/// Evicts a loaded block (not block 0): its vertices become non-resident and their bytes in the
+/// decoded buffer zero. Masks must have been released first (pfrepRegionReleaseMask). A criterion
+/// table attached to the model is detached (attach it again).
+LODRT_API Result pfrepRegionEvictBlock(PfrepRegions* regions, uint32_t block);
+
+/// The blocks `view` needs (block 0 always): every block whose bounds pass the criterion at the keep
+/// threshold (pixel_tolerance * hysteresis, frustum widened by cull_hysteresis). With these blocks
+/// resident, every vertex pfrepRefine would insert under this view from the whole blob, and every
+/// vertex of its insertion closure, is resident (docs/format/pfrep.md "Region blocks"). Writes up to
+/// `capacity` block indices in increasing order; `*count` receives how many are needed
+/// (BufferTooSmall when more than capacity).
+LODRT_API Result pfrepRegionBlocksNeeded(const PfrepRegions& regions, const PfrepView& view, uint32_t* blocks,
+                                         size_t capacity, size_t* count);
 
 } // namespace lodrt
