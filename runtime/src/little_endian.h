@@ -1,5 +1,6 @@
 #pragma once
-// Little-endian loads from untrusted bytes (any alignment), shared by the runtime's binary readers.
+// Little-endian loads from untrusted bytes and stores into caller buffers (any alignment), shared by
+// the runtime's binary readers.
 
 #include <cstdint>
 #include <cstring>
@@ -19,6 +20,15 @@ inline float loadF32(const uint8_t* p) {
     float f;
     std::memcpy(&f, &bits, sizeof(f));
     return f;
+}
+
+inline void storeU16(uint8_t* p, uint16_t v) {
+    p[0] = uint8_t(v);
+    p[1] = uint8_t(v >> 8);
+}
+
+inline void storeU32(uint8_t* p, uint32_t v) {
+    for (int i = 0; i < 4; ++i) p[i] = uint8_t(v >> (8 * i));
 }
 
 } // namespace lodrt::detail

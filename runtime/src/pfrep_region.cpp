@@ -8,26 +8,15 @@
 #include "lodrt/detail/pfrep_region.h"
 #include "lodrt/format.h"
 #include "lodrt/pfrep.h"
+#include "little_endian.h"
 
 namespace lodrt {
 namespace {
 
-uint32_t loadU32(const uint8_t* p) {
-    uint32_t v;
-    std::memcpy(&v, p, 4);
-    return v;
-}
-float loadF32(const uint8_t* p) {
-    float v;
-    std::memcpy(&v, p, 4);
-    return v;
-}
-void storeU32(uint8_t* p, uint32_t v) {
-    std::memcpy(p, &v, 4);
-}
-void storeU16(uint8_t* p, uint16_t v) {
-    std::memcpy(p, &v, 2);
-}
+using detail::loadF32;
+using detail::loadU32;
+using detail::storeU16;
+using detail::storeU32;
 
 // LEB128 (7 bits per byte, low first, at most 5 bytes for 32 bits). False when it runs past `end`
 // or does not fit 32 bits.
