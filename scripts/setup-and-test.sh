@@ -38,8 +38,8 @@ step "release tests"
 
 if [ "${LODBAKE_SKIP_SANITIZERS:-0}" != 1 ]; then
     # One instrumented tree serves both the test suite and the fuzzers: LODBAKE_BUILD_FUZZERS adds
-    # -fsanitize=fuzzer-no-link (coverage instrumentation) to lodrt, and compiles the baker's readers
-    # once more with it for the fuzz targets (lodbake_fuzz_readers, tests/fuzz/CMakeLists.txt).
+    # -fsanitize=fuzzer-no-link (coverage instrumentation) to lodrt and to the baker's readers
+    # (lodbake_readers), whose objects lodbake_lib and the fuzz targets share (tests/fuzz/CMakeLists.txt).
     asan_dir=${LODBAKE_ASAN_BUILD_DIR:-build-asan}
     sanitize="-fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer"
     CC=clang CXX=clang++ cmake -S . -B "$asan_dir" -G Ninja -DCMAKE_BUILD_TYPE=Release \
