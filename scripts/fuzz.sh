@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Runs one libFuzzer target for a set time.
 # usage: scripts/fuzz.sh TARGET SECONDS [libFuzzer options...]
-#   TARGET: ply obj off gltf preset conf manifest cache stream (baker readers, bake manifests, cache
-#   files and the streaming readers, tests/fuzz/) or lod pack pfrep valence meshopt cluster (runtime,
+#   TARGET: ply obj off gltf preset conf manifest cache stream jobs (baker readers, bake manifests, cache
+#   files, the streaming readers and the job list, tests/fuzz/) or lod pack pfrep valence meshopt cluster (runtime,
 #   runtime/tools/fuzz_*.cpp).
 # Configures and builds $LODBAKE_FUZZ_BUILD_DIR (default build-fuzz) with Clang and
 # -DLODBAKE_BUILD_FUZZERS=ON unless LODBAKE_FUZZ_NO_BUILD=1, builds the seed corpora once
@@ -10,6 +10,12 @@
 # and fuzzes on one core into $build/corpus/TARGET (kept between runs) with crashes written to
 # $build/artifacts/TARGET/. Exit status is libFuzzer's: non-zero on a crash, leak, timeout or
 # sanitizer report. A crash input belongs in tests/fuzz/regressions/TARGET/ once fixed.
+# libFuzzer picks a random seed, so each run explores anew (what hunting wants). With
+# LODBAKE_FUZZ_SEED=N the run is repeatable instead (the CI smoke, scripts/setup-and-test.sh): seed N,
+# a corpus folder emptied first ($build/corpus-seeded/TARGET), the seeds given in name order, no
+# corpus reloads, and address-space randomisation off (setarch -R) where the system allows it, since
+# the comparisons libFuzzer learns from include pointers. Add -runs=N to stop after N inputs rather
+# than after SECONDS (which then only caps the run).
 set -euo pipefail
 if [ $# -lt 2 ]; then
     echo "usage: scripts/fuzz.sh TARGET SECONDS [libFuzzer options...]" >&2
@@ -63,10 +69,23 @@ if [ ! -f "$seeds/.done" ]; then
     touch "$seeds/.done"
 fi
 
-corpus="$build/corpus/$target"
 artifacts="$build/artifacts/$target"
-mkdir -p "$corpus" "$artifacts"
-args=("$corpus" "$seeds/$target" -max_total_time="$seconds" -max_len=65536 -timeout=20 -rss_limit_mb=2048
-    -print_final_stats=1 -artifact_prefix="$artifacts/")
+mkdir -p "$artifacts"
+args=(-max_total_time="$seconds" -max_len=65536 -timeout=20 -rss_limit_mb=2048 -print_final_stats=1
+    -artifact_prefix="$artifacts/")
 [ -n "$dict" ] && args+=(-dict="$dict")
-exec "$exe" "${args[@]}" "$@"
+run=()
+if [ -n "${LODBAKE_FUZZ_SEED:-}" ]; then
+    corpus="$build/corpus-seeded/$target"
+    rm -rf "$corpus"
+    mkdir -p "$corpus"
+    list="$build/seeds/$target.list"
+    (cd "$seeds/$target" && find . -maxdepth 1 -type f | LC_ALL=C sort | sed "s|^\./|$PWD/|" | paste -sd, -) >"$list"
+    args=("$corpus" -seed_inputs=@"$list" -seed="$LODBAKE_FUZZ_SEED" -reload=0 "${args[@]}")
+    setarch "$(uname -m)" -R true 2>/dev/null && run=(setarch "$(uname -m)" -R)
+else
+    corpus="$build/corpus/$target"
+    mkdir -p "$corpus"
+    args=("$corpus" "$seeds/$target" "${args[@]}")
+fi
+exec "${run[@]}" "$exe" "${args[@]}" "$@"

@@ -13,7 +13,6 @@
 #include "lodbake/ooc/level_error.h"
 
 #include <fcntl.h>
-#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -100,27 +99,14 @@ Status readHeader(const std::string& path, PartInfo& info) {
         int fd;
         ~Closer() { ::close(fd); }
     } closer{fd};
-    struct stat st {};
-    if (::fstat(fd, &st) != 0) return ioError(path + ": cannot stat: " + std::strerror(errno));
-    uint8_t header[kHeaderBytes];
-    if (uint64_t(st.st_size) < kHeaderBytes || !readAt(fd, 0, header, kHeaderBytes, path).ok() ||
-        std::memcmp(header, lodrt::format::kPartitionMagic, 8) != 0)
-        return invalidInput(path + ": header: expected a partition file (magic LBPART01)");
-    uint32_t counts[2];
-    float bounds[6];
-    std::memcpy(counts, header + 8, 8);
-    std::memcpy(bounds, header + 16, 24);
-    const uint64_t expected = kHeaderBytes + 16 * uint64_t(counts[0]) + 12 * uint64_t(counts[1]);
-    if (uint64_t(st.st_size) != expected)
-        return invalidInput(path + ": header: " + std::to_string(counts[0]) + " vertices and " +
-                            std::to_string(counts[1]) + " triangles need " + std::to_string(expected) +
-                            " bytes, the file has " + std::to_string(st.st_size));
-    if (counts[0] == 0 || counts[1] == 0) return invalidInput(path + ": header: expected vertices and triangles");
-    info.vertices = counts[0];
-    info.triangles = counts[1];
-    info.lo = Vec3f(bounds[0], bounds[1], bounds[2]);
-    info.hi = Vec3f(bounds[3], bounds[4], bounds[5]);
-    LODBAKE_RETURN_IF_ERROR(readAt(fd, kHeaderBytes + 4 * (uint64_t(counts[0]) - 1), &info.last_id, 4, path));
+    LODBAKE_ASSIGN_OR_RETURN(const PartitionHeader header, readPartitionHeader(fd, path));
+    if (header.vertex_count == 0 || header.triangle_count == 0)
+        return invalidInput(path + ": header: expected vertices and triangles");
+    info.vertices = header.vertex_count;
+    info.triangles = header.triangle_count;
+    info.lo = header.bounds_min;
+    info.hi = header.bounds_max;
+    LODBAKE_RETURN_IF_ERROR(readAt(fd, kHeaderBytes + 4 * (uint64_t(info.vertices) - 1), &info.last_id, 4, path));
     return Status::okStatus();
 }
 

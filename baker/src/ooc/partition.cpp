@@ -461,6 +461,29 @@ Result<PartitionSet> partitionMesh(const std::string& input, const PartitionOpti
     return set;
 }
 
+Result<PartitionHeader> readPartitionHeader(int fd, const std::string& path) {
+    struct stat st {};
+    if (::fstat(fd, &st) != 0) return ioError(path + ": cannot stat: " + std::strerror(errno));
+    const uint64_t size = uint64_t(st.st_size);
+    PartitionHeader h;
+    constexpr size_t head = lodrt::format::kPartitionHeaderBytes;
+    if (size < head || !readAt(fd, 0, h.bytes, head, path).ok() ||
+        std::memcmp(h.bytes, lodrt::format::kPartitionMagic, 8) != 0)
+        return invalidInput(path + ": header: expected a partition file (magic LBPART01)");
+    float bounds[6];
+    std::memcpy(&h.vertex_count, h.bytes + 8, 4);
+    std::memcpy(&h.triangle_count, h.bytes + 12, 4);
+    std::memcpy(bounds, h.bytes + 16, 24);
+    h.bounds_min = Vec3f(bounds[0], bounds[1], bounds[2]);
+    h.bounds_max = Vec3f(bounds[3], bounds[4], bounds[5]);
+    const uint64_t expected = head + 16 * uint64_t(h.vertex_count) + 12 * uint64_t(h.triangle_count);
+    if (size != expected)
+        return invalidInput(path + ": header: " + std::to_string(h.vertex_count) + " vertices and " +
+                            std::to_string(h.triangle_count) + " triangles need " + std::to_string(expected) +
+                            " bytes, the file has " + std::to_string(size));
+    return h;
+}
+
 Result<PartitionData> readPartitionFile(const std::string& path) {
     // Read straight into the arrays (no copy of the whole file), hashing the bytes in file order:
     // the hash is the one the file is named by.
@@ -470,28 +493,15 @@ Result<PartitionData> readPartitionFile(const std::string& path) {
         int fd;
         ~Closer() { ::close(fd); }
     } closer{fd};
-    struct stat st {};
-    if (::fstat(fd, &st) != 0) return ioError(path + ": cannot stat: " + std::strerror(errno));
-    const uint64_t size = uint64_t(st.st_size);
-    constexpr size_t head = lodrt::format::kPartitionHeaderBytes;
-    uint8_t header[head];
-    if (size < head || !readAt(fd, 0, header, head, path).ok() ||
-        std::memcmp(header, lodrt::format::kPartitionMagic, 8) != 0)
-        return invalidInput(path + ": header: expected a partition file (magic LBPART01)");
-    uint32_t counts[2];
-    std::memcpy(counts, header + 8, 8);
-    const uint64_t expected = head + 16 * uint64_t(counts[0]) + 12 * uint64_t(counts[1]);
-    if (size != expected)
-        return invalidInput(path + ": header: " + std::to_string(counts[0]) + " vertices and " + std::to_string(counts[1]) +
-                            " triangles need " + std::to_string(expected) + " bytes, the file has " +
-                            std::to_string(size));
+    LODBAKE_ASSIGN_OR_RETURN(const PartitionHeader header, readPartitionHeader(fd, path));
+    const uint32_t vertices = header.vertex_count;
     PartitionData d;
-    d.global_ids.resize(counts[0]);
-    d.positions.resize(counts[0]);
-    d.indices.resize(size_t(counts[1]) * 3);
+    d.global_ids.resize(vertices);
+    d.positions.resize(vertices);
+    d.indices.resize(size_t(header.triangle_count) * 3);
     Hasher hasher;
-    hasher.addBytes(header, head);
-    uint64_t at = head;
+    hasher.addBytes(header.bytes, sizeof header.bytes);
+    uint64_t at = sizeof header.bytes;
     auto read = [&](void* data, size_t bytes) {
         Status s = readAt(fd, at, data, bytes, path);
         hasher.addBytes(data, bytes);
@@ -506,9 +516,9 @@ Result<PartitionData> readPartitionFile(const std::string& path) {
         if (d.global_ids[i] <= d.global_ids[i - 1])
             return invalidInput(path + ": vertex " + std::to_string(i) + ": expected global ids in increasing order");
     for (size_t i = 0; i < d.indices.size(); ++i)
-        if (d.indices[i] >= counts[0])
+        if (d.indices[i] >= vertices)
             return invalidInput(path + ": triangle " + std::to_string(i / 3) + ": vertex " + std::to_string(d.indices[i]) +
-                                " out of range (" + std::to_string(counts[0]) + " vertices)");
+                                " out of range (" + std::to_string(vertices) + " vertices)");
     return d;
 }
 

@@ -40,6 +40,7 @@
 #include "lodbake/core/math.h"
 #include "lodbake/core/status.h"
 #include "lodbake/io/mesh_stream.h"
+#include "lodrt/format.h"
 
 namespace lodbake::ooc {
 
@@ -106,6 +107,18 @@ struct PartitionData {
 /// (min xyz, max xyz), V u32 global ids, V x 3 float positions, T x 3 u32 local indices. Reads into
 /// the arrays directly: memory is 16 V + 12 T bytes.
 Result<PartitionData> readPartitionFile(const std::string& path);
+
+/// A partition file's header as read, checked for its magic and for a file size that is exactly what
+/// its counts need (layout below).
+struct PartitionHeader {
+    uint8_t bytes[lodrt::format::kPartitionHeaderBytes] = {}; // as in the file (hashed with the rest)
+    uint32_t vertex_count = 0;
+    uint32_t triangle_count = 0;
+    Vec3f bounds_min, bounds_max;
+};
+
+/// Reads and checks the header of the partition file open as `fd`; `path` names it in messages.
+Result<PartitionHeader> readPartitionHeader(int fd, const std::string& path);
 
 /// Removes the files of a set.
 void removePartitionFiles(const PartitionSet& set);
