@@ -3,6 +3,7 @@
 // limit. Callers parallelise over independent items and write into per-item slots, so the output
 // never depends on the thread count or the schedule (STYLE.md §7).
 
+#include <atomic>
 #include <cstddef>
 #include <exception>
 #include <new>
@@ -12,6 +13,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_pipeline.h>
 #include <tbb/partitioner.h>
 #include <tbb/task_group.h>
 
@@ -53,6 +55,61 @@ template <class Fn> Status parallelForChunks(size_t count, size_t chunk_size, Fn
         const size_t first = chunk * size;
         fn(chunk, first, first + size < count ? first + size : count);
     });
+}
+
+/// Runs items 0 .. count-1 through three stages, at most `slots` items at once: read(i, slot) one
+/// item at a time in increasing i, work(i, slot) on any number of items in parallel, write(i, slot)
+/// one item at a time in increasing i. Item i uses slot i % slots, which no other item uses until
+/// item i is written (an item enters only when fewer than `slots` are alive, and items leave in
+/// order), so a stage may keep its item's data in the caller's slot. Unlike batches of parallelFor,
+/// the next items are read and the finished ones written while others are worked on, and no thread
+/// waits for the slowest item of a batch. Each stage returns a Status: after a failure no further
+/// item is read, and the result is the failure of the lowest item (an item whose read failed is not
+/// worked on; items after a failed one are not written). fn must not throw; bad_alloc is caught
+/// and becomes a Status.
+template <class Read, class Work, class Write>
+Status orderedPipeline(size_t count, size_t slots, Read&& read, Work&& work, Write&& write) {
+    if (count == 0) return Status::okStatus();
+    slots = slots > 0 ? slots : 1;
+    struct Item {
+        size_t index = 0;
+        Status status = Status::okStatus();
+    };
+    std::atomic<bool> failed{false};
+    size_t next = 0;
+    Status result = Status::okStatus();
+    try {
+        tbb::parallel_pipeline(
+            slots,
+            tbb::make_filter<void, Item>(tbb::filter_mode::serial_in_order,
+                                         [&](tbb::flow_control& fc) {
+                                             Item item;
+                                             if (next == count || failed.load()) {
+                                                 fc.stop();
+                                                 return item;
+                                             }
+                                             item.index = next++;
+                                             item.status = read(item.index, item.index % slots);
+                                             if (!item.status.ok()) failed.store(true);
+                                             return item;
+                                         }) &
+                tbb::make_filter<Item, Item>(tbb::filter_mode::parallel,
+                                             [&](Item item) {
+                                                 if (item.status.ok()) item.status = work(item.index, item.index % slots);
+                                                 if (!item.status.ok()) failed.store(true);
+                                                 return item;
+                                             }) &
+                tbb::make_filter<Item, void>(tbb::filter_mode::serial_in_order, [&](const Item& item) {
+                    if (!result.ok()) return;
+                    result = item.status.ok() ? write(item.index, item.index % slots) : item.status;
+                    if (!result.ok()) failed.store(true);
+                }));
+    } catch (const std::bad_alloc&) {
+        return resourceLimit("out of memory in a parallel task");
+    } catch (const std::exception& e) {
+        return internalError(std::string("parallel task failed: ") + e.what());
+    }
+    return result;
 }
 
 /// Runs work that an idle worker thread may pick up while the caller goes on: each fn given to run()

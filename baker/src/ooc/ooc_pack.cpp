@@ -11,6 +11,7 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include "core/parallel.h"
 #include "lodbake/bake/memory_budget.h"
 #include "lodbake/cleanup/normals.h"
 #include "lodbake/core/spill_file.h"
@@ -179,6 +180,44 @@ Result<PackLevel> bakeLevel(Mesh mesh, const PackStreamEncoder& encoder, const L
                                                                 commit.status().message());
     if (*commit) LODBAKE_RETURN_IF_ERROR((*commit)(level));
     return level;
+}
+
+// The kept levels made pack levels (bakeLevel), finest first. The coder is sequential within a level
+// and the finest level takes most of the time, so the levels are coded side by side when all their
+// working sets fit beside the held levels; else one after the other, as the level budget was sized.
+// Each level is coded alone either way: the same bytes.
+Result<std::vector<PackLevel>> bakeLevels(std::vector<Mesh>& meshes, const PackStreamEncoder& encoder,
+                                          const LodChain& chain, const std::string& input,
+                                          const std::string& output_path, const OocPackOptions& o,
+                                          OocPackResult& result) {
+    uint64_t held = 0, work = 0;
+    for (const OocPackLevel& l : result.levels)
+        if (l.kept) {
+            held += l.held_bytes;
+            work += l.work_bytes;
+        }
+    std::vector<Result<PackLevel>> made(meshes.size(), Result<PackLevel>(internalError(input + ": level not coded")));
+    auto one = [&](size_t i) {
+        if (o.driver.cancel && o.driver.cancel->load())
+            made[i] = ioError(output_path + ": out-of-core bake cancelled");
+        else
+            made[i] = bakeLevel(std::move(meshes[i]), encoder, chain, i, input);
+    };
+    if (held + work <= result.level_budget_bytes) {
+        LODBAKE_RETURN_IF_ERROR(parallelFor(meshes.size(), 1, one));
+        result.level_peak_bytes = std::max(result.level_peak_bytes, held + work);
+    } else {
+        for (size_t i = 0; i < meshes.size(); ++i) {
+            one(i);
+            if (!made[i].ok()) break;
+        }
+    }
+    std::vector<PackLevel> levels;
+    for (Result<PackLevel>& level : made) {
+        LODBAKE_RETURN_IF_ERROR(level.status());
+        levels.push_back(std::move(*level));
+    }
+    return levels;
 }
 
 // The kept levels' errors. The input's level (the cut at 0) has error 0. The others are measured
@@ -448,12 +487,10 @@ Status packLevels(const std::string& input, const std::string& output_path, cons
     description.compact = o.compact;
     PackAsset asset;
     asset.name = o.name;
-    for (size_t i = 0; i < cuts.size(); ++i) {
-        if (o.driver.cancel && o.driver.cancel->load()) return ioError(output_path + ": out-of-core bake cancelled");
-        LODBAKE_ASSIGN_OR_RETURN(PackLevel level, bakeLevel(std::move(meshes[i]), encoder, chain, i, input));
-        result.metrics.levels[i].triangles = level.mesh.faceCount();
-        result.metrics.levels[i].vertices = level.mesh.vertexCount();
-        asset.levels.push_back(std::move(level));
+    LODBAKE_ASSIGN_OR_RETURN(asset.levels, bakeLevels(meshes, encoder, chain, input, output_path, o, result));
+    for (size_t i = 0; i < asset.levels.size(); ++i) {
+        result.metrics.levels[i].triangles = asset.levels[i].mesh.faceCount();
+        result.metrics.levels[i].vertices = asset.levels[i].mesh.vertexCount();
     }
     result.cut_seconds += since(t0);
     t0 = Clock::now();

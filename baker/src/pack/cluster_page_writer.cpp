@@ -80,7 +80,6 @@ struct CodedPage {
     std::vector<uint32_t> first_triangle, vertex_count;
     std::vector<float> cone; // 4 per cluster: axis, cutoff
     std::vector<float> radius;
-    Status status = Status::okStatus();
 };
 
 // A page being written: its clusters, the geometry the source gave, and the coded result.
@@ -353,47 +352,49 @@ Result<ClusterPagesWritten> writeClusterPages(const lodrt::ClusterLodView& t, co
     out.accounted_peak_bytes = fixed;
     std::vector<PageSlot> slots(std::max<size_t>(options.pages_in_flight, 1));
     uint64_t offset = 0;
-    for (size_t first = 0; first < page_count; first += slots.size()) {
-        const size_t count = std::min(slots.size(), page_count - first);
+    // Read in page order, coded in parallel, committed in page order (orderedPipeline): slot s holds
+    // page p while p is in flight, for p = s modulo the slots, so a page read next to the others
+    // never waits for a batch to finish.
+    auto read = [&](size_t p, size_t s) -> Status {
+        if (options.cancel && options.cancel->load()) return options.cancelled;
+        PageSlot& slot = slots[s];
+        slot.clusters = plan.page_clusters.data() + plan.page_first[p];
+        slot.count = plan.page_first[p + 1] - plan.page_first[p];
+        slot.triangles = 0;
+        size_t vertices = 0;
+        for (size_t k = 0; k < slot.count; ++k) {
+            slot.triangles += t.clusters[slot.clusters[k]].triangle_count;
+            vertices += t.clusters[slot.clusters[k]].vertex_count;
+        }
+        // An array larger than this page needs is given back: positions kept from one page beside
+        // indices kept from another could hold more than the largest page, which the bound counts.
+        if (slot.geometry.positions.capacity() > vertices) std::vector<Vec3f>().swap(slot.geometry.positions);
+        if (slot.geometry.indices.capacity() > 3 * slot.triangles) std::vector<uint8_t>().swap(slot.geometry.indices);
+        slot.geometry.positions.clear();
+        slot.geometry.indices.clear();
+        LODBAKE_RETURN_IF_ERROR(source.readPage(uint32_t(p), slot.clusters, slot.count, slot.geometry));
+        LODBAKE_RETURN_IF_ERROR(checkGeometry(t, slot, uint32_t(p)));
+        // Every slot counted as in flight with the page it holds last (the pages p - J + 1 .. p): at
+        // most J pages are, and which pages the slots hold does not depend on the schedule.
         uint64_t held = fixed;
-        for (size_t i = 0; i < count; ++i) {
-            if (options.cancel && options.cancel->load()) return options.cancelled;
-            PageSlot& slot = slots[i];
-            const uint32_t p = uint32_t(first + i);
-            slot.clusters = plan.page_clusters.data() + plan.page_first[p];
-            slot.count = plan.page_first[p + 1] - plan.page_first[p];
-            slot.triangles = 0;
-            size_t vertices = 0;
-            for (size_t k = 0; k < slot.count; ++k) {
-                slot.triangles += t.clusters[slot.clusters[k]].triangle_count;
-                vertices += t.clusters[slot.clusters[k]].vertex_count;
-            }
-            // An array larger than this page needs is given back: positions kept from one page beside
-            // indices kept from another could hold more than the largest page, which the bound counts.
-            if (slot.geometry.positions.capacity() > vertices) std::vector<Vec3f>().swap(slot.geometry.positions);
-            if (slot.geometry.indices.capacity() > 3 * slot.triangles)
-                std::vector<uint8_t>().swap(slot.geometry.indices);
-            slot.geometry.positions.clear();
-            slot.geometry.indices.clear();
-            LODBAKE_RETURN_IF_ERROR(source.readPage(p, slot.clusters, slot.count, slot.geometry));
-            LODBAKE_RETURN_IF_ERROR(checkGeometry(t, slot, p));
-        }
-        for (size_t i = 0; i < slots.size(); ++i) held += slotBytes(slots[i], i < count);
+        for (size_t i = 0; i < slots.size(); ++i) held += slotBytes(slots[i], i <= p);
         out.accounted_peak_bytes = std::max(out.accounted_peak_bytes, held);
-        LODBAKE_RETURN_IF_ERROR(parallelFor(count, 1, [&](size_t i) {
-            slots[i].coded = CodedPage();
-            slots[i].coded.status = codePage(t, grid, slots[i], slots[i].coded);
-        }));
-        for (size_t i = 0; i < count; ++i) {
-            PageSlot& slot = slots[i];
-            LODBAKE_RETURN_IF_ERROR(slot.coded.status);
-            if (offset + slot.coded.bytes.size() > 0xffffffffu) return resourceLimit("cluster pack: pages exceed 4 GiB");
-            LODBAKE_RETURN_IF_ERROR(sink(slot.coded.bytes.data(), slot.coded.bytes.size()));
-            commitPage(t, grid, slot, uint32_t(first + i), uint32_t(offset), page_count, out.table, out.stats);
-            offset += slot.coded.bytes.size();
-            slot.coded = CodedPage();
-        }
-    }
+        return Status::okStatus();
+    };
+    auto code = [&](size_t, size_t s) -> Status {
+        slots[s].coded = CodedPage();
+        return codePage(t, grid, slots[s], slots[s].coded);
+    };
+    auto commit = [&](size_t p, size_t s) -> Status {
+        PageSlot& slot = slots[s];
+        if (offset + slot.coded.bytes.size() > 0xffffffffu) return resourceLimit("cluster pack: pages exceed 4 GiB");
+        LODBAKE_RETURN_IF_ERROR(sink(slot.coded.bytes.data(), slot.coded.bytes.size()));
+        commitPage(t, grid, slot, uint32_t(p), uint32_t(offset), page_count, out.table, out.stats);
+        offset += slot.coded.bytes.size();
+        slot.coded = CodedPage();
+        return Status::okStatus();
+    };
+    LODBAKE_RETURN_IF_ERROR(orderedPipeline(page_count, slots.size(), read, code, commit));
     out.stats.table_bytes = out.table.size();
     out.stats.page_bytes = size_t(offset);
     out.stats.page_count = page_count;

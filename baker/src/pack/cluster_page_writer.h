@@ -1,8 +1,8 @@
 #pragma once
 // The LODBAKE_cluster_lod page writer both entry points run (cluster_lod_pack.h with the pages in
-// memory, cluster_pack_stream.h with the pages spilled to a file): pages read from a source a batch
-// at a time in page order, coded in parallel, handed to a sink in page order, and the table filled
-// as they are committed. The bytes depend on the hierarchy and the options only.
+// memory, cluster_pack_stream.h with the pages spilled to a file): pages read from a source in page
+// order, coded in parallel (at most pages_in_flight at once), handed to a sink in page order, and the
+// table filled as they are committed. The bytes depend on the hierarchy and the options only.
 
 #include <atomic>
 #include <cstddef>

@@ -65,3 +65,75 @@ TEST(ParallelTest, BackgroundTasksDestructorWaits) {
 }
 
 } // namespace
+
+// Items are written in order, a slot is never used by two items at once, and the failure reported is
+// the lowest item's, whatever finished first.
+TEST(ParallelTest, OrderedPipelineWritesInOrderAndKeepsSlotsApart) {
+    for (size_t threads : {size_t(1), size_t(2)}) {
+        for (size_t slots : {size_t(1), size_t(3), size_t(8)}) {
+            ScopedThreadLimit limit(threads);
+            const size_t count = 200;
+            std::vector<std::atomic<int>> busy(slots);
+            std::vector<uint64_t> value(slots, 0);
+            std::vector<size_t> written;
+            std::atomic<bool> overlap{false};
+            const Status status = lodbake::orderedPipeline(
+                count, slots,
+                [&](size_t i, size_t s) {
+                    if (busy[s].fetch_add(1) != 0) overlap = true;
+                    value[s] = i;
+                    return Status::okStatus();
+                },
+                [&](size_t i, size_t s) {
+                    // Uneven work, so later items often finish first.
+                    std::this_thread::sleep_for(std::chrono::microseconds((i * 7919) % 300));
+                    value[s] = value[s] * 3 + 1;
+                    return Status::okStatus();
+                },
+                [&](size_t i, size_t s) {
+                    if (value[s] != 3 * uint64_t(i) + 1) overlap = true;
+                    written.push_back(i);
+                    busy[s].fetch_sub(1);
+                    return Status::okStatus();
+                });
+            ASSERT_TRUE(status.ok()) << status.message();
+            EXPECT_FALSE(overlap) << threads << " thread(s), " << slots << " slots";
+            ASSERT_EQ(written.size(), count);
+            for (size_t i = 0; i < count; ++i) EXPECT_EQ(written[i], i);
+        }
+    }
+}
+
+TEST(ParallelTest, OrderedPipelineReportsTheLowestFailure) {
+    for (size_t threads : {size_t(1), size_t(2)}) {
+        ScopedThreadLimit limit(threads);
+        std::vector<size_t> written;
+        size_t reads = 0;
+        const Status status = lodbake::orderedPipeline(
+            100, 4,
+            [&](size_t i, size_t) {
+                ++reads;
+                return i == 40 ? lodbake::ioError("read 40") : Status::okStatus();
+            },
+            [&](size_t i, size_t) {
+                if (i == 37) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+                return i == 37 ? lodbake::invalidInput("work 37") : Status::okStatus();
+            },
+            [&](size_t i, size_t) {
+                written.push_back(i);
+                return Status::okStatus();
+            });
+        EXPECT_EQ(status.message(), "work 37") << threads << " thread(s)";
+        EXPECT_LE(reads, 41u); // nothing is read after the failed read
+        ASSERT_EQ(written.size(), 37u);
+        EXPECT_EQ(written.back(), 36u);
+        const Status thrown = lodbake::orderedPipeline(
+            10, 2, [](size_t, size_t) { return Status::okStatus(); },
+            [](size_t i, size_t) -> Status {
+                if (i == 5) throw std::bad_alloc();
+                return Status::okStatus();
+            },
+            [](size_t, size_t) { return Status::okStatus(); });
+        EXPECT_EQ(thrown.code(), StatusCode::ResourceLimit);
+    }
+}
