@@ -79,31 +79,30 @@ Status orderedPipeline(size_t count, size_t slots, Read&& read, Work&& work, Wri
     size_t next = 0;
     Status result = Status::okStatus();
     try {
-        tbb::parallel_pipeline(
-            slots,
-            tbb::make_filter<void, Item>(tbb::filter_mode::serial_in_order,
-                                         [&](tbb::flow_control& fc) {
-                                             Item item;
-                                             if (next == count || failed.load()) {
-                                                 fc.stop();
-                                                 return item;
-                                             }
-                                             item.index = next++;
-                                             item.status = read(item.index, item.index % slots);
-                                             if (!item.status.ok()) failed.store(true);
-                                             return item;
-                                         }) &
-                tbb::make_filter<Item, Item>(tbb::filter_mode::parallel,
-                                             [&](Item item) {
-                                                 if (item.status.ok()) item.status = work(item.index, item.index % slots);
-                                                 if (!item.status.ok()) failed.store(true);
-                                                 return item;
-                                             }) &
-                tbb::make_filter<Item, void>(tbb::filter_mode::serial_in_order, [&](const Item& item) {
-                    if (!result.ok()) return;
-                    result = item.status.ok() ? write(item.index, item.index % slots) : item.status;
-                    if (!result.ok()) failed.store(true);
-                }));
+        const auto read_stage = [&](tbb::flow_control& fc) {
+            Item item;
+            if (next == count || failed.load()) {
+                fc.stop();
+                return item;
+            }
+            item.index = next++;
+            item.status = read(item.index, item.index % slots);
+            if (!item.status.ok()) failed.store(true);
+            return item;
+        };
+        const auto work_stage = [&](Item item) {
+            if (item.status.ok()) item.status = work(item.index, item.index % slots);
+            if (!item.status.ok()) failed.store(true);
+            return item;
+        };
+        const auto write_stage = [&](const Item& item) {
+            if (!result.ok()) return;
+            result = item.status.ok() ? write(item.index, item.index % slots) : item.status;
+            if (!result.ok()) failed.store(true);
+        };
+        tbb::parallel_pipeline(slots, tbb::make_filter<void, Item>(tbb::filter_mode::serial_in_order, read_stage) &
+                                          tbb::make_filter<Item, Item>(tbb::filter_mode::parallel, work_stage) &
+                                          tbb::make_filter<Item, void>(tbb::filter_mode::serial_in_order, write_stage));
     } catch (const std::bad_alloc&) {
         return resourceLimit("out of memory in a parallel task");
     } catch (const std::exception& e) {
