@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "box_distance.h"
 #include "lodrt/format.h"
 
 #if defined(__SSE2__)
@@ -886,14 +887,7 @@ void dropContainingPlanes(const PfrepView& view, const InstanceBox& b, Criterion
 // is beyond the reach of the largest error, or entirely outside a plane by more than the largest slack.
 bool instanceRejected(const PfrepModel& m, const PfrepView& view, const InstanceBox& b, const Criterion& c) {
     if (!(c.tolerance_px > 0.0f)) return false;
-    float near2 = 0.0f, far2 = 0.0f;
-    for (int k = 0; k < 3; ++k) {
-        const float e = view.eye[k];
-        const float in = e < b.lo[k] ? b.lo[k] - e : (e > b.hi[k] ? e - b.hi[k] : 0.0f);
-        const float out = std::max(std::fabs(e - b.lo[k]), std::fabs(e - b.hi[k]));
-        near2 += in * in;
-        far2 += out * out;
-    }
+    const auto [near2, far2] = detail::eyeBoxDistance(view.eye, b.lo, b.hi);
     const float reach = m.max_radius + m.max_error * c.reach_per_error;
     if (near2 > reach * reach * (1.0f + kBoxMargin)) return true;
     const float slack = m.max_radius + c.sin_band * std::sqrt(far2);

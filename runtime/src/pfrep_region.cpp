@@ -8,6 +8,7 @@
 #include "lodrt/detail/pfrep_region.h"
 #include "lodrt/format.h"
 #include "lodrt/pfrep.h"
+#include "box_distance.h"
 #include "little_endian.h"
 
 namespace lodrt {
@@ -415,15 +416,11 @@ constexpr float kBlockMargin = 1e-4f;
 // Conservative form of pfrep.cpp's bounds test for every vertex whose sphere lies in the box and
 // whose error is at most max_error (docs/format/pfrep.md "Region blocks").
 bool blockPasses(const PfrepRegionBlock& b, const PfrepView& view, float tolerance, float sin_band) {
-    float near2 = 0.0f, far2 = 0.0f, half2 = 0.0f, scale = 0.0f;
+    const auto [near2, far2] = detail::eyeBoxDistance(view.eye, b.lo, b.hi);
+    float half2 = 0.0f, scale = 0.0f;
     for (int k = 0; k < 3; ++k) {
-        const float e = view.eye[k];
-        const float in = e < b.lo[k] ? b.lo[k] - e : (e > b.hi[k] ? e - b.hi[k] : 0.0f);
-        const float out = std::max(std::fabs(e - b.lo[k]), std::fabs(e - b.hi[k]));
-        near2 += in * in;
-        far2 += out * out;
         half2 += 0.25f * (b.hi[k] - b.lo[k]) * (b.hi[k] - b.lo[k]);
-        scale = std::max(scale, std::max(std::fabs(b.lo[k]), std::fabs(b.hi[k])) + std::fabs(e));
+        scale = std::max(scale, std::max(std::fabs(b.lo[k]), std::fabs(b.hi[k])) + std::fabs(view.eye[k]));
     }
     // A vertex passes only when dist - radius < error * ppu / tolerance; dist - radius >= the box's
     // distance from the eye.
