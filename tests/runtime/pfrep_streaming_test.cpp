@@ -625,6 +625,16 @@ Result decodePack4(const std::vector<uint8_t>& blob, const std::vector<uint8_t>&
                                          scratch.data(), scratch.size() * 8, model);
 }
 
+// A format 4 blob that must carry a split list (its size goes to *split_bytes), decoded against its
+// LOD0 into `decoded`.
+void decodeWithSplitList(const Format4Blob& b, std::vector<uint8_t>& decoded, lodrt::PfrepModel* got,
+                         size_t* split_bytes) {
+    const void* split = nullptr;
+    ASSERT_EQ(lodrt::pfrepFormat4SplitList(b.blob.data(), b.blob.size(), &split, split_bytes), Result::Ok);
+    EXPECT_GE(*split_bytes, 5u);
+    ASSERT_EQ(decodePack4(b.blob, b.lod0, decoded, got), Result::Ok);
+}
+
 std::vector<std::array<uint32_t, 3>> sortedLevel(const lodrt::PfrepModel& model, uint32_t level) {
     const std::vector<uint32_t> tris = extract(model, level);
     std::vector<std::array<uint32_t, 3>> out(tris.size() / 3);
@@ -848,13 +858,10 @@ TEST(PfrepStreamingTest, Format4SplitsPointsLod0sStreamWelds) {
     uint32_t flags = 0;
     std::memcpy(&flags, b.blob.data() + 60, 4);
     EXPECT_EQ(flags, lodrt::format::kPfrep4Flags); // with a split list
-    const void* split = nullptr;
-    size_t split_bytes = 0;
-    ASSERT_EQ(lodrt::pfrepFormat4SplitList(b.blob.data(), b.blob.size(), &split, &split_bytes), Result::Ok);
-    EXPECT_GE(split_bytes, 5u);
     std::vector<uint8_t> decoded;
     lodrt::PfrepModel got;
-    ASSERT_EQ(decodePack4(b.blob, b.lod0, decoded, &got), Result::Ok);
+    size_t split_bytes = 0;
+    ASSERT_NO_FATAL_FAILURE(decodeWithSplitList(b, decoded, &got, &split_bytes));
     expectSameTables(got, blobOf(source2, 0).whole);
     std::vector<uint8_t> out;
     lodrt::PfrepModel model;
@@ -909,13 +916,10 @@ TEST(PfrepStreamingTest, Format4OnDragonPoissonMatchesFormat2) {
     ASSERT_EQ(source2.openBytes(glb[0].data(), glb[0].size(), nullptr), Result::Ok);
     ASSERT_EQ(source4.openBytes(glb[1].data(), glb[1].size(), nullptr), Result::Ok);
     const Format4Blob b = format4Blob(source4, 0);
-    const void* split = nullptr;
-    size_t split_bytes = 0;
-    ASSERT_EQ(lodrt::pfrepFormat4SplitList(b.blob.data(), b.blob.size(), &split, &split_bytes), Result::Ok);
-    EXPECT_GE(split_bytes, 5u);
     std::vector<uint8_t> decoded;
     lodrt::PfrepModel got;
-    ASSERT_EQ(decodePack4(b.blob, b.lod0, decoded, &got), Result::Ok);
+    size_t split_bytes = 0;
+    ASSERT_NO_FATAL_FAILURE(decodeWithSplitList(b, decoded, &got, &split_bytes));
     const Blob want = blobOf(source2, 0);
     ASSERT_EQ(got.vertex_count, want.whole.vertex_count);
     ASSERT_EQ(got.removed_count, want.whole.removed_count);

@@ -16,6 +16,7 @@
 #include "lodbake/pfrep/pfrep_builder.h"
 #include "lodrt/format.h"
 #include "lodrt/pfrep.h"
+#include "pfrep_extract.h"
 #include "lodrt/streaming.h"
 #include "../../runtime/glb_builder.h"
 
@@ -39,31 +40,6 @@ const std::vector<uint8_t>& largerBlob() {
     return blob;
 }
 
-std::vector<uint32_t> level(const lodrt::PfrepModel& m, uint32_t k, lodrt::Result* result = nullptr) {
-    std::vector<uint32_t> idx(size_t(m.level0_triangles) * 3 + 3);
-    size_t n = 0;
-    const lodrt::Result r = lodrt::pfrepExtractLevel(m, k, idx.data(), idx.size() / 3, &n);
-    if (result) *result = r;
-    idx.resize(r == lodrt::Result::Ok ? n * 3 : 0);
-    return idx;
-}
-
-std::vector<uint32_t> fans(const lodrt::PfrepModel& m, uint32_t k) {
-    std::vector<uint32_t> values(lodrt::pfrepMaxFanValues(m) + 4);
-    size_t n = 0;
-    EXPECT_EQ(lodrt::pfrepExtractLevelFans(m, k, values.data(), values.size(), &n), lodrt::Result::Ok);
-    values.resize(n);
-    return values;
-}
-
-std::vector<uint32_t> selective(const lodrt::PfrepModel& m, const std::vector<uint8_t>& mask) {
-    std::vector<uint32_t> idx(size_t(m.level0_triangles) * 3 + 3);
-    size_t n = 0;
-    EXPECT_EQ(lodrt::pfrepExtractSelective(m, mask.data(), idx.data(), idx.size() / 3, &n), lodrt::Result::Ok);
-    idx.resize(n * 3);
-    return idx;
-}
-
 TEST(PfrepPrefixTest, EveryPrefixExtractsTheLevelsItCovers) {
     for (const std::vector<uint8_t>* blob_ptr : {&smallBlob(), &largerBlob()}) {
         const std::vector<uint8_t>& blob = *blob_ptr;
@@ -75,7 +51,7 @@ TEST(PfrepPrefixTest, EveryPrefixExtractsTheLevelsItCovers) {
         ASSERT_EQ(directory, lodrt::format::kPfrepHeaderSize + 4ull * full.block_count);
         // Reference levels from the whole blob.
         std::vector<std::vector<uint32_t>> reference(full.removed_count + 1);
-        for (uint32_t k = 0; k <= full.removed_count; ++k) reference[k] = level(full, k);
+        for (uint32_t k = 0; k <= full.removed_count; ++k) reference[k] = lodbake_test::pfrepLevel(full, k);
         uint32_t previous_from = full.vertex_count + 1;
         size_t distinct = 0;
         // Every length of the small blob; for the larger one (each open validates what it holds,
@@ -113,7 +89,7 @@ TEST(PfrepPrefixTest, EveryPrefixExtractsTheLevelsItCovers) {
                                     k == uint32_t((len * 7919u) % (full.removed_count + 1));
                 if (!all_levels && !sample) continue;
                 lodrt::Result lr;
-                const std::vector<uint32_t> got = level(m, k, &lr);
+                const std::vector<uint32_t> got = lodbake_test::pfrepLevel(m, k, &lr);
                 if (k < m.loaded_from) {
                     ASSERT_EQ(lr, lodrt::Result::NotLoaded) << len << " " << k;
                 } else {
@@ -122,8 +98,10 @@ TEST(PfrepPrefixTest, EveryPrefixExtractsTheLevelsItCovers) {
                 }
             }
             if (m.loaded_from <= full.removed_count) {
-                EXPECT_EQ(fans(m, full.removed_count), fans(full, full.removed_count));
-                EXPECT_EQ(fans(m, m.loaded_from), fans(full, m.loaded_from));
+                EXPECT_EQ(lodbake_test::pfrepLevelFans(m, full.removed_count),
+                          lodbake_test::pfrepLevelFans(full, full.removed_count));
+                EXPECT_EQ(lodbake_test::pfrepLevelFans(m, m.loaded_from),
+                          lodbake_test::pfrepLevelFans(full, m.loaded_from));
             }
         }
         EXPECT_GE(distinct, size_t(full.block_count) + 1);
@@ -163,7 +141,7 @@ TEST(PfrepPrefixTest, ExtendingAGrowingBufferMatchesOpeningIt) {
     EXPECT_EQ(m.loaded_original_triangles, m.level0_triangles);
     lodrt::PfrepModel full;
     ASSERT_EQ(lodrt::openPfrep(blob.data(), blob.size(), &full), lodrt::Result::Ok);
-    EXPECT_EQ(level(m, 0), level(full, 0));
+    EXPECT_EQ(lodbake_test::pfrepLevel(m, 0), lodbake_test::pfrepLevel(full, 0));
     // More bytes than the blob has.
     std::vector<uint8_t> longer = blob;
     longer.push_back(0);
@@ -196,10 +174,11 @@ TEST(PfrepPrefixTest, SelectiveRefinementStaysInsideTheLoadedPart) {
     view.pixels_per_unit_at_distance_one = 1e6f;
     size_t changes = 0;
     for (int step = 0; step < 4; ++step)
-        ASSERT_EQ(lodrt::pfrepRefine(m, view, mask.data(), scratch.data(), scratch.size(), &changes), lodrt::Result::Ok);
+        ASSERT_EQ(lodrt::pfrepRefine(m, view, mask.data(), scratch.data(), scratch.size(), &changes),
+                  lodrt::Result::Ok);
     for (uint32_t v = 0; v < m.loaded_from; ++v) ASSERT_TRUE((mask[v >> 3] >> (v & 7)) & 1) << v;
-    const std::vector<uint32_t> partial = selective(m, mask);
-    EXPECT_EQ(partial, selective(full, mask));
+    const std::vector<uint32_t> partial = lodbake_test::pfrepSelective(m, mask);
+    EXPECT_EQ(partial, lodbake_test::pfrepSelective(full, mask));
     auto present = [&] {
         size_t c = 0;
         for (uint32_t v = 0; v < m.vertex_count; ++v) c += !((mask[v >> 3] >> (v & 7)) & 1);
@@ -215,9 +194,10 @@ TEST(PfrepPrefixTest, SelectiveRefinementStaysInsideTheLoadedPart) {
     ASSERT_EQ(lodrt::pfrepExtendPrefix(&m, blob.data(), blob.size()), lodrt::Result::Ok);
     ASSERT_EQ(m.loaded_from, 0u);
     for (int step = 0; step < 4; ++step)
-        ASSERT_EQ(lodrt::pfrepRefine(m, view, mask.data(), scratch.data(), scratch.size(), &changes), lodrt::Result::Ok);
+        ASSERT_EQ(lodrt::pfrepRefine(m, view, mask.data(), scratch.data(), scratch.size(), &changes),
+                  lodrt::Result::Ok);
     EXPECT_GT(present(), present_partial);
-    EXPECT_EQ(selective(m, mask), selective(full, mask));
+    EXPECT_EQ(lodbake_test::pfrepSelective(m, mask), lodbake_test::pfrepSelective(full, mask));
 }
 
 TEST(PfrepPrefixTest, CorruptPrefixesAreRefused) {
@@ -344,7 +324,7 @@ TEST(PfrepPrefixTest, StreamsThroughPackSourceRangeReads) {
     held.resize(first);
     ASSERT_EQ(source.readBufferView(0, directory, held.data() + directory, first - directory), lodrt::Result::Ok);
     ASSERT_EQ(lodrt::pfrepExtendPrefix(&m, held.data(), held.size()), lodrt::Result::Ok);
-    EXPECT_EQ(level(m, coarsest), level(full, coarsest));
+    EXPECT_EQ(lodbake_test::pfrepLevel(m, coarsest), lodbake_test::pfrepLevel(full, coarsest));
     EXPECT_LT(first, blob.size() / 2) << "the coarse end is a small part of the blob";
     // Then level by level towards full detail.
     for (uint32_t want : {coarsest * 3 / 4, coarsest / 2, coarsest / 4, 0u}) {
@@ -356,7 +336,7 @@ TEST(PfrepPrefixTest, StreamsThroughPackSourceRangeReads) {
             ASSERT_EQ(lodrt::pfrepExtendPrefix(&m, held.data(), held.size()), lodrt::Result::Ok);
         }
         ASSERT_LE(m.loaded_from, want);
-        EXPECT_EQ(level(m, want), level(full, want)) << want;
+        EXPECT_EQ(lodbake_test::pfrepLevel(m, want), lodbake_test::pfrepLevel(full, want)) << want;
     }
     EXPECT_EQ(held.size(), blob.size());
     EXPECT_EQ(source.readBufferView(0, view_bytes, held.data(), 1), lodrt::Result::OutOfBounds);

@@ -20,6 +20,7 @@
 #include "lodrt/detail/pfrep_region.h"
 #include "lodrt/format.h"
 #include "lodrt/pfrep.h"
+#include "pfrep_extract.h"
 #include "cli_runner.h"
 #include "lodbake/io/mesh_io.h"
 #include "pfrep_region_view.h"
@@ -103,22 +104,6 @@ void poisonNonResident(Opened& o) {
     }
 }
 
-std::vector<uint32_t> level(const lodrt::PfrepModel& m, uint32_t k) {
-    std::vector<uint32_t> idx(size_t(m.level0_triangles) * 3 + 3);
-    size_t n = 0;
-    EXPECT_EQ(lodrt::pfrepExtractLevel(m, k, idx.data(), idx.size() / 3, &n), lodrt::Result::Ok);
-    idx.resize(n * 3);
-    return idx;
-}
-
-std::vector<uint32_t> selective(const lodrt::PfrepModel& m, const std::vector<uint8_t>& mask) {
-    std::vector<uint32_t> idx(size_t(m.level0_triangles) * 3 + 3);
-    size_t n = 0;
-    EXPECT_EQ(lodrt::pfrepExtractSelective(m, mask.data(), idx.data(), idx.size() / 3, &n), lodrt::Result::Ok);
-    idx.resize(n * 3);
-    return idx;
-}
-
 // A camera flying past the sphere (radius 1 about the origin), close to its +x side, looking at it.
 lodrt::PfrepView flightView(int frame, int frames) {
     const float t = float(frame) / float(std::max(frames - 1, 1));
@@ -149,8 +134,8 @@ TEST(PfrepRegionTest, AllBlocksRebuildFormat2AndItsLevelsAndRefinement) {
     EXPECT_EQ(m.max_radius, whole.max_radius);
     EXPECT_EQ(m.max_error, whole.max_error);
     for (uint32_t k = 0; k <= m.removed_count; k += std::max(1u, m.removed_count / 37))
-        ASSERT_EQ(level(m, k), level(whole, k)) << "level " << k;
-    ASSERT_EQ(level(m, m.removed_count), level(whole, m.removed_count));
+        ASSERT_EQ(lodbake_test::pfrepLevel(m, k), lodbake_test::pfrepLevel(whole, k)) << "level " << k;
+    ASSERT_EQ(lodbake_test::pfrepLevel(m, m.removed_count), lodbake_test::pfrepLevel(whole, m.removed_count));
     // Selective refinement along a flight, both models stepped alike: same masks, same meshes.
     std::vector<uint8_t> mask_a(lodrt::pfrepMaskBytes(m)), mask_b(mask_a.size());
     std::vector<uint32_t> scratch(lodrt::pfrepScratchValues(m));
@@ -165,7 +150,7 @@ TEST(PfrepRegionTest, AllBlocksRebuildFormat2AndItsLevelsAndRefinement) {
                   lodrt::Result::Ok);
         ASSERT_EQ(ca, cb);
         ASSERT_EQ(mask_a, mask_b) << "frame " << frame;
-        ASSERT_EQ(selective(m, mask_a), selective(whole, mask_b));
+        ASSERT_EQ(lodbake_test::pfrepSelective(m, mask_a), lodbake_test::pfrepSelective(whole, mask_b));
     }
 }
 
@@ -205,7 +190,7 @@ TEST(PfrepRegionTest, NeededBlocksGiveTheWholeBlobsMasksWithoutReadingOthers) {
         size_t present = 0;
         for (uint32_t v = 0; v < whole.vertex_count; ++v) present += !bit(mask_a.data(), v);
         max_present = std::max(max_present, present);
-        ASSERT_EQ(selective(o.g.model, mask_a), selective(whole, mask_b));
+        ASSERT_EQ(lodbake_test::pfrepSelective(o.g.model, mask_a), lodbake_test::pfrepSelective(whole, mask_b));
     }
     // The flight refines a part of the sphere and leaves blocks out (a small uniform sphere: its
     // accumulated bounding spheres are large; the fly-by benchmark measures a real scan).
@@ -269,7 +254,7 @@ TEST(PfrepRegionTest, EvictAndReload) {
     std::vector<uint8_t> mask(lodrt::pfrepMaskBytes(o.g.model));
     std::vector<uint32_t> scratch(lodrt::pfrepScratchValues(o.g.model));
     lodrt::pfrepMaskFinest(o.g.model, mask.data());
-    const size_t full = selective(o.g.model, mask).size();
+    const size_t full = lodbake_test::pfrepSelective(o.g.model, mask).size();
     EXPECT_EQ(lodrt::pfrepRegionEvictBlock(&o.g, 0), lodrt::Result::InvalidArgument);
     for (uint32_t k = 1; k < o.g.block_count; k += 2) {
         ASSERT_EQ(lodrt::pfrepRegionReleaseMask(o.g, k, mask.data(), scratch.data(), scratch.size()),
@@ -279,7 +264,7 @@ TEST(PfrepRegionTest, EvictAndReload) {
     EXPECT_GT(o.g.model.loaded_from, 0u);
     for (uint32_t v = 0; v < o.g.model.vertex_count; ++v)
         ASSERT_TRUE(bit(mask.data(), v) || bit(o.g.model.resident, v));
-    const size_t reduced = selective(o.g.model, mask).size();
+    const size_t reduced = lodbake_test::pfrepSelective(o.g.model, mask).size();
     EXPECT_LT(reduced, full);
     size_t changes = 0;
     ASSERT_EQ(lodrt::pfrepRefine(o.g.model, flightView(3, 8), mask.data(), scratch.data(), scratch.size(), &changes),
