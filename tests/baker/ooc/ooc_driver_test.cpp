@@ -37,21 +37,8 @@ std::vector<std::string> driverFilesIn(const std::string& dir) {
 
 std::string driverScan(const std::string& dir, uint64_t triangles) { return lodbake_test::writeGeneratedScan(dir, triangles); }
 
-// Small reader buffers and partitions of about 12,000 triangles, so a 60,000-triangle scan makes
-// several partitions and merge rounds.
 OutOfCoreOptions driverOptions(const std::string& work, uint64_t limit_mib, int threads) {
-    OutOfCoreOptions o;
-    o.work_dir = work;
-    o.memory_limit_bytes = limit_mib << 20;
-    o.threads = threads;
-    o.read.buffer_bytes = 64 << 10;
-    o.read.max_record_bytes = 256 << 10;
-    o.read.vertex_chunk = 4096;
-    o.read.triangle_chunk = 4096;
-    o.sample_cap = 4096;
-    o.leaf_triangles = 12000;
-    o.merge_group_bytes = uint64_t(8) << 20;
-    return o;
+    return lodbake_test::smallDriverOptions(work, limit_mib << 20, threads);
 }
 
 struct DriverOutput {

@@ -27,21 +27,8 @@ std::string jobsDir(const std::string& name) { return lodbake_test::freshOocDir(
 
 std::string jobsScan(const std::string& dir, uint64_t triangles) { return lodbake_test::writeGeneratedScan(dir, triangles); }
 
-// As OocDriverTest's: partitions of about 12,000 triangles, so 60,000 triangles make several
-// partitions and merge rounds.
 OutOfCoreOptions jobsOptions(const std::string& work, int threads) {
-    OutOfCoreOptions o;
-    o.work_dir = work;
-    o.memory_limit_bytes = uint64_t(256) << 20;
-    o.threads = threads;
-    o.read.buffer_bytes = 64 << 10;
-    o.read.max_record_bytes = 256 << 10;
-    o.read.vertex_chunk = 4096;
-    o.read.triangle_chunk = 4096;
-    o.sample_cap = 4096;
-    o.leaf_triangles = 12000;
-    o.merge_group_bytes = uint64_t(8) << 20;
-    return o;
+    return lodbake_test::smallDriverOptions(work, uint64_t(256) << 20, threads);
 }
 
 std::vector<uint8_t> fileBytes(const std::string& path) {

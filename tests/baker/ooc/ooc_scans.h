@@ -1,8 +1,8 @@
 #pragma once
-// Shared set-up of the out-of-core tests: a fresh scratch folder, a generated scan written to it, and
-// the partitioner's options with small reader buffers, so that a few-MiB limit cuts a scan of tens of
-// thousands of triangles into several partitions (about 12,000 triangles each at 3 MiB on one
-// thread).
+// Shared set-up of the out-of-core tests: a fresh scratch folder, a generated scan written to it,
+// and the partitioner's and the driver's options with small reader buffers, so that a few-MiB limit
+// cuts a scan of tens of thousands of triangles into several partitions (about 12,000 triangles
+// each at 3 MiB on one thread).
 
 #include <cstdint>
 #include <filesystem>
@@ -13,6 +13,7 @@
 
 #include "lodbake/core/diagnostics.h"
 #include "lodbake/io/mesh_io.h"
+#include "lodbake/ooc/driver.h"
 #include "lodbake/ooc/partition.h"
 #include "lodbake/ooc/partition_build.h"
 #include "lodbake/ooc/partition_merge.h"
@@ -38,17 +39,35 @@ inline std::string writeGeneratedScan(const std::string& dir, uint64_t triangles
     return path;
 }
 
-/// The partitioner's options with small reader buffers and sample.
-inline lodbake::ooc::PartitionOptions smallPartitionOptions(const std::string& work, int threads, uint64_t limit) {
-    lodbake::ooc::PartitionOptions o;
-    o.work_dir = work;
-    o.threads = threads;
+/// Small reader buffers and sample, for the partitioner's options and the driver's alike.
+template <class Options> void useSmallReads(Options& o) {
     o.read.buffer_bytes = 64 << 10;
     o.read.max_record_bytes = 256 << 10;
     o.read.vertex_chunk = 4096;
     o.read.triangle_chunk = 4096;
     o.sample_cap = 4096;
+}
+
+/// The partitioner's options with small reader buffers and sample.
+inline lodbake::ooc::PartitionOptions smallPartitionOptions(const std::string& work, int threads, uint64_t limit) {
+    lodbake::ooc::PartitionOptions o;
+    o.work_dir = work;
+    o.threads = threads;
+    useSmallReads(o);
     o.memory_limit_bytes = limit;
+    return o;
+}
+
+/// The driver's options with small reader buffers and partitions of about 12,000 triangles, so a
+/// 60,000-triangle scan makes several partitions and merge rounds.
+inline lodbake::ooc::OutOfCoreOptions smallDriverOptions(const std::string& work, uint64_t limit, int threads) {
+    lodbake::ooc::OutOfCoreOptions o;
+    o.work_dir = work;
+    o.memory_limit_bytes = limit;
+    o.threads = threads;
+    useSmallReads(o);
+    o.leaf_triangles = 12000;
+    o.merge_group_bytes = uint64_t(8) << 20;
     return o;
 }
 
