@@ -194,7 +194,7 @@ void entryRange(const PfrepModel& m, uint32_t v, uint64_t& begin, uint64_t& end)
 }
 
 // Zeroes the records and entries of ranks[0, n) (a failed or evicted block).
-void clearVertices(PfrepRegions& g, const uint32_t* ranks, uint32_t n) {
+void clearVertices(const PfrepRegions& g, const uint32_t* ranks, uint32_t n) {
     for (uint32_t k = 0; k < n; ++k) {
         uint64_t begin = 0, end = 0;
         entryRange(g.model, ranks[k], begin, end);
@@ -296,23 +296,33 @@ Result readRanks(const PfrepRegions& g, uint32_t block, const uint8_t* p, const 
 
 } // namespace
 
-Result pfrepRegionLoadBlock(PfrepRegions* regions, uint32_t block, const void* bytes, size_t size) {
-    if (!regions || !regions->state || block >= regions->block_count || (!bytes && size > 0))
-        return Result::InvalidArgument;
-    PfrepRegions& g = *regions;
-    if (g.block_loaded[block]) return Result::Ok;
+namespace detail {
+
+// Stage: ranks, records and entries laid out and validated; only the block's own (non-resident)
+// bytes of the decoded buffer and its rank slot in the state are written, so refinement may read
+// the resident vertices meanwhile.
+Result pfrepRegionStageBlock(const PfrepRegions& g, uint32_t block, const void* bytes, size_t size, uint8_t* claimed,
+                             PfrepRegionStaged* staged) {
+    if (!g.state || block >= g.block_count || (!bytes && size > 0) || !staged) return Result::InvalidArgument;
+    if (g.block_loaded[block]) return Result::InvalidArgument;
     const PfrepRegionBlock& b = g.blocks[block];
     if (size < b.size) return Result::Truncated;
     if (size > b.size) return Result::TrailingBytes;
     const StateLayout l = stateLayout(g.model.vertex_count, g.block_count);
     uint32_t* ranks =
-        reinterpret_cast<uint32_t*>(g.state + l.ranks) + reinterpret_cast<uint32_t*>(g.state + l.first)[block];
+        reinterpret_cast<uint32_t*>(g.state + l.ranks) + reinterpret_cast<const uint32_t*>(g.state + l.first)[block];
     const uint8_t* p = static_cast<const uint8_t*>(bytes);
     const uint8_t* end = p + size;
     const uint8_t* records = nullptr;
     Result r = readRanks(g, block, p, end, ranks, &records);
     if (r != Result::Ok) return r;
     const uint32_t n = b.vertices;
+    // A rank another block of the same batch staged is held twice: refused before anything is laid
+    // out, so a failed block never clears bytes another staged block validated.
+    if (claimed) {
+        for (uint32_t k = 0; k < n; ++k)
+            if ((claimed[ranks[k] >> 3] >> (ranks[k] & 7)) & 1) return Result::BadStructure;
+    }
     if (uint64_t(end - records) < uint64_t(n) * format::kPfrepVertexRecordSize) return Result::Truncated;
     const uint8_t* entries = records + size_t(n) * format::kPfrepVertexRecordSize;
     uint64_t total = 0;
@@ -324,8 +334,8 @@ Result pfrepRegionLoadBlock(PfrepRegions* regions, uint32_t block, const void* b
     if (total < uint64_t(end - entries)) return Result::TrailingBytes;
     if (total > uint64_t(end - entries)) return Result::Truncated;
     // Lay out and validate; on failure zero what was laid out.
-    uint64_t originals = 0;
-    uint32_t max_neighbours = g.model.max_fan_neighbours, max_radius = 0, max_error = 0;
+    PfrepRegionStaged out;
+    out.max_neighbours = g.model.max_fan_neighbours;
     for (uint32_t k = 0; k < n; ++k) {
         uint64_t begin = 0, stop = 0;
         entryRange(g.model, ranks[k], begin, stop);
@@ -334,17 +344,42 @@ Result pfrepRegionLoadBlock(PfrepRegions* regions, uint32_t block, const void* b
         std::memcpy(g.decoded + begin, entries, size_t(stop - begin));
         entries += stop - begin;
         uint32_t neighbours = 0;
-        r = detail::pfrepValidateEntryAt(g.model, ranks[k], begin, stop, &originals, &neighbours);
+        r = detail::pfrepValidateEntryAt(g.model, ranks[k], begin, stop, &out.originals, &neighbours);
         if (r != Result::Ok) {
             clearVertices(g, ranks, k + 1);
             return r;
         }
-        max_neighbours = std::max(max_neighbours, neighbours);
-        max_radius = std::max<uint32_t>(max_radius, rec[6]);
-        max_error = std::max<uint32_t>(max_error, rec[7]);
+        out.max_neighbours = std::max(out.max_neighbours, neighbours);
+        out.max_radius_code = std::max<uint32_t>(out.max_radius_code, rec[6]);
+        out.max_error_code = std::max<uint32_t>(out.max_error_code, rec[7]);
     }
+    if (claimed) {
+        for (uint32_t k = 0; k < n; ++k)
+            claimed[ranks[k] >> 3] = uint8_t(claimed[ranks[k] >> 3] | (1u << (ranks[k] & 7)));
+    }
+    *staged = out;
+    return Result::Ok;
+}
+
+void pfrepRegionUnclaim(const PfrepRegions& g, uint32_t block, uint8_t* claimed) {
+    if (!g.state || block >= g.block_count || !claimed) return;
+    const StateLayout l = stateLayout(g.model.vertex_count, g.block_count);
+    const uint32_t* ranks = reinterpret_cast<const uint32_t*>(g.state + l.ranks) +
+                            reinterpret_cast<const uint32_t*>(g.state + l.first)[block];
+    for (uint32_t k = 0; k < g.blocks[block].vertices; ++k)
+        claimed[ranks[k] >> 3] = uint8_t(claimed[ranks[k] >> 3] & ~(1u << (ranks[k] & 7)));
+}
+
+Result pfrepRegionCommitBlock(PfrepRegions* regions, uint32_t block, const PfrepRegionStaged& staged) {
+    if (!regions || !regions->state || block >= regions->block_count || regions->block_loaded[block])
+        return Result::InvalidArgument;
+    PfrepRegions& g = *regions;
+    const StateLayout l = stateLayout(g.model.vertex_count, g.block_count);
+    const uint32_t* ranks = reinterpret_cast<const uint32_t*>(g.state + l.ranks) +
+                            reinterpret_cast<const uint32_t*>(g.state + l.first)[block];
+    const uint32_t n = g.blocks[block].vertices;
     uint32_t* block_originals = reinterpret_cast<uint32_t*>(g.state + l.originals);
-    uint64_t all = originals;
+    uint64_t all = staged.originals;
     bool complete = true;
     for (uint32_t k = 0; k < g.block_count; ++k) {
         if (g.block_loaded[k])
@@ -359,17 +394,29 @@ Result pfrepRegionLoadBlock(PfrepRegions* regions, uint32_t block, const void* b
     uint8_t* resident = g.state + l.resident;
     for (uint32_t k = 0; k < n; ++k)
         resident[ranks[k] >> 3] = uint8_t(resident[ranks[k] >> 3] | (1u << (ranks[k] & 7)));
-    block_originals[block] = uint32_t(originals);
+    block_originals[block] = uint32_t(staged.originals);
     g.state[l.loaded + block] = 1;
-    g.loaded_bytes += b.size;
+    g.loaded_bytes += g.blocks[block].size;
     g.model.loaded_original_triangles = uint32_t(all);
-    g.model.max_fan_neighbours = max_neighbours;
-    g.model.max_radius = std::max(g.model.max_radius, detail::pfrepLogValue(g.model, max_radius));
-    g.model.max_error = std::max(g.model.max_error, detail::pfrepLogValue(g.model, max_error));
+    g.model.max_fan_neighbours = std::max(g.model.max_fan_neighbours, staged.max_neighbours);
+    g.model.max_radius = std::max(g.model.max_radius, detail::pfrepLogValue(g.model, staged.max_radius_code));
+    g.model.max_error = std::max(g.model.max_error, detail::pfrepLogValue(g.model, staged.max_error_code));
     g.model.loaded_from = residentSuffix(g.model, g.model.loaded_from);
     g.model.loaded_blocks = 0; // prefix blocks: not used by a region model
     g.model.criterion_table = nullptr;
     return Result::Ok;
+}
+
+} // namespace detail
+
+Result pfrepRegionLoadBlock(PfrepRegions* regions, uint32_t block, const void* bytes, size_t size) {
+    if (!regions || !regions->state || block >= regions->block_count || (!bytes && size > 0))
+        return Result::InvalidArgument;
+    if (regions->block_loaded[block]) return Result::Ok;
+    detail::PfrepRegionStaged staged;
+    const Result r = detail::pfrepRegionStageBlock(*regions, block, bytes, size, nullptr, &staged);
+    if (r != Result::Ok) return r;
+    return detail::pfrepRegionCommitBlock(regions, block, staged);
 }
 
 Result pfrepRegionReleaseMask(const PfrepRegions& g, uint32_t block, uint8_t* mask, uint32_t* scratch,

@@ -1,7 +1,7 @@
 #pragma once
-// Internal helpers shared by the PFRep region-block reader (runtime/src/pfrep_region.cpp) and its
-// writer (baker/src/pfrep/pfrep_region.cpp): positions inside a format 2 layout and per-entry
-// validation. Not a stable API.
+// Internal helpers shared by the PFRep region-block reader (runtime/src/pfrep_region.cpp), its
+// writer (baker/src/pfrep/pfrep_region.cpp) and the Streamer: positions inside a format 2 layout,
+// per-entry validation, and block loading in two halves. Not a stable API.
 
 #include <cstddef>
 #include <cstdint>
@@ -26,5 +26,26 @@ LODRT_API Result pfrepValidateEntryAt(const PfrepModel& m, uint32_t i, uint64_t 
 LODRT_API size_t pfrepEntryNeighbours(const PfrepModel& m, uint32_t i, uint32_t* out, size_t capacity);
 /// Value of a radius / error log code.
 LODRT_API float pfrepLogValue(const PfrepModel& m, uint32_t code);
+
+/// What staging a region block found, for its commit.
+struct PfrepRegionStaged {
+    uint64_t originals = 0;      // its input triangles
+    uint32_t max_neighbours = 0; // the model's max_fan_neighbours with the block's fans
+    uint32_t max_radius_code = 0, max_error_code = 0;
+};
+
+/// First half of pfrepRegionLoadBlock, for a loader thread while another thread refines with the
+/// model: checks the block's size and ranks (none resident, none set in `claimed` when given), lays
+/// its records and entries into the decoded buffer and validates them, writing nothing but those
+/// bytes, the block's rank list in the state buffer and (on Ok) the block's bits in `claimed` (V bits,
+/// owned by the loader: the ranks staged and not yet committed). On error the laid-out bytes are
+/// zero again. The block must not be loaded.
+LODRT_API Result pfrepRegionStageBlock(const PfrepRegions& regions, uint32_t block, const void* bytes, size_t size,
+                                       uint8_t* claimed, PfrepRegionStaged* staged);
+/// Clears a staged block's bits in `claimed` (after its commit, or instead of it).
+LODRT_API void pfrepRegionUnclaim(const PfrepRegions& regions, uint32_t block, uint8_t* claimed);
+/// Second half, on the thread that owns the model: checks the input triangles of all loaded blocks
+/// and makes the block's vertices resident. On BadStructure the block's bytes are zero again.
+LODRT_API Result pfrepRegionCommitBlock(PfrepRegions* regions, uint32_t block, const PfrepRegionStaged& staged);
 
 } // namespace lodrt::detail
