@@ -84,7 +84,8 @@ options:
   --pfrep-format F      4 (default): that blob coded against LOD0's own stream, decoded by the
                         runtime once LOD0 is resident (--compact packs; format 3 otherwise); 3: range-
                         coded, decoded whole by the runtime; 2: the uncompressed blob, streamed as a
-                        growing prefix (preset key pfrep_format)
+                        growing prefix; 5: the uncompressed blob cut into region blocks, of which the
+                        runtime loads those a view needs (preset key pfrep_format)
   --clusters            add LOD0's cluster LOD hierarchy (LODBAKE_cluster_lod: clusters, groups and
                         pages a runtime cuts per view; preset key cluster_lod; docs/cluster_lod.md)
   --adaptive-precision  levels after LOD0 coded with position/normal bits from their own measured
@@ -398,7 +399,8 @@ int parseOverrides(Args& args, CliOverrides& overrides) {
     overrides.no_pfrep_from_chain = args.flags.count("--no-pfrep-from-chain") > 0;
     if (args.values.count("--pfrep-format")) {
         const std::string& f = args.values["--pfrep-format"];
-        if (f != "2" && f != "3" && f != "4") return usageError("--pfrep-format expects 2, 3 or 4, got '" + f + "'");
+        if (f != "2" && f != "3" && f != "4" && f != "5")
+            return usageError("--pfrep-format expects 2, 3, 4 or 5, got '" + f + "'");
         overrides.pfrep_format = uint32_t(f[0] - '0');
     }
     overrides.clusters = args.flags.count("--clusters") > 0;

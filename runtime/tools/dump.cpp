@@ -504,11 +504,31 @@ void checkPfrepLevels(const lodrt::JsonValue& pfrep, const lodrt::PfrepModel& mo
 }
 
 // Checks every compressed stream of the pack: valence streams decode and agree with the primitive;
+// A region blob (format 5) with every block loaded, which makes `decoded` the format 2 blob.
+lodrt::Result loadAllRegions(const uint8_t* data, size_t size, std::vector<uint8_t>& decoded) {
+    lodrt::PfrepRegionInfo info;
+    lodrt::Result r = lodrt::pfrepRegionInfo(data, size, &info);
+    if (r != lodrt::Result::Ok) return r;
+    if (info.blob_size != size) return lodrt::Result::BadStructure;
+    decoded.assign(info.decoded_bytes, 0);
+    std::vector<uint64_t> state((info.state_bytes + 7) / 8);
+    lodrt::PfrepRegions regions;
+    r = lodrt::pfrepRegionOpen(data, size, decoded.data(), decoded.size(), state.data(), state.size() * 8, &regions);
+    for (uint32_t k = 0; r == lodrt::Result::Ok && k < regions.block_count; ++k)
+        r = lodrt::pfrepRegionLoadBlock(&regions, k, data + regions.blocks[k].offset, regions.blocks[k].size);
+    return r;
+}
+
 // The extension's blob as a model: format 2 opened in place, format 3 decoded first (into `decoded`),
-// format 4 decoded against the mesh's (one) primitive's valence stream.
+// format 4 decoded against the mesh's (one) primitive's valence stream, format 5 (region blocks)
+// with every block loaded.
 lodrt::Result openPackPfrep(const lodrt::Pack& pack, const lodrt::MeshInfo& mesh, uint32_t format, const uint8_t* data,
                             size_t size, std::vector<uint8_t>& decoded, lodrt::PfrepModel* model) {
     if (format == lodrt::format::kPfrepVersion) return lodrt::openPfrep(data, size, model);
+    if (format == lodrt::format::kPfrepFormatRegions) {
+        const lodrt::Result r = loadAllRegions(data, size, decoded);
+        return r == lodrt::Result::Ok ? lodrt::openPfrep(decoded.data(), decoded.size(), model) : r;
+    }
     if (format == lodrt::format::kPfrepVersionLod0) {
         if (mesh.primitive_count != 1) return lodrt::Result::BadStructure;
         const lodrt::JsonValue ext = pack.primitive(mesh.first_primitive).json.find("extensions").find(kValence);
@@ -565,18 +585,19 @@ void checkStreams(const lodrt::Pack& pack, const std::vector<LodGroup>& groups, 
         if (format_member.isValid() &&
             (!format_member.asUint64(&format) ||
              (format != lodrt::format::kPfrepVersion && format != lodrt::format::kPfrepVersionCompressed &&
-              format != lodrt::format::kPfrepVersionLod0))) {
-            problems.push_back({where + "/format", "format: expected 2, 3 or 4"});
+              format != lodrt::format::kPfrepVersionLod0 && format != lodrt::format::kPfrepFormatRegions))) {
+            problems.push_back({where + "/format", "format: expected 2, 3, 4 or 5"});
             continue;
         }
         lodrt::PfrepModel model;
-        std::vector<uint8_t> decoded; // format 3, 4: the format 2 bytes it decodes to (model points into them)
+        std::vector<uint8_t> decoded; // format 3, 4, 5: the format 2 bytes it decodes to (model points into them)
         const lodrt::Result r = openPackPfrep(pack, mesh, uint32_t(format), data, size_t(size), decoded, &model);
         if (r != lodrt::Result::Ok) {
             problems.push_back({where, std::string("stream fails to decode") +
-                                           (format == lodrt::format::kPfrepVersion       ? ": "
-                                            : format == lodrt::format::kPfrepVersionLod0 ? " (format 4): "
-                                                                                         : " (format 3): ") +
+                                           (format == lodrt::format::kPfrepVersion         ? ": "
+                                            : format == lodrt::format::kPfrepVersionLod0   ? " (format 4): "
+                                            : format == lodrt::format::kPfrepFormatRegions ? " (format 5): "
+                                                                                           : " (format 3): ") +
                                            lodrt::resultName(r)});
             continue;
         }

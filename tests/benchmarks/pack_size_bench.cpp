@@ -16,7 +16,7 @@
 // (goal 0.9).
 // The same --compact bake with the PFRep blob (LODBAKE_progressive_fans, format 4 as the bake writes it
 // by default; pfrep_from_chain as the preset says) is measured against them too: bar <= 0.7 on the
-// worst scan, must <= 1.0 (issue 30). --pfrep-format F bakes that blob as format F instead (2, 3 or 4).
+// worst scan, must <= 1.0 (issue 30). --pfrep-format F bakes that blob as format F instead (2, 3, 4 or 5).
 //
 // usage: pack_size_bench [--levels] [--preset FILE] [--no-adaptive] [--pfrep-format F] [--check] [MESH...]
 //        (default: configs/desktop.json, the untextured shared scans)
@@ -115,7 +115,7 @@ int main(int argc, char** argv) {
             preset_path = argv[++i];
         } else if (std::strcmp(argv[i], "--pfrep-format") == 0 && i + 1 < argc &&
                    (std::strcmp(argv[i + 1], "2") == 0 || std::strcmp(argv[i + 1], "3") == 0 ||
-                    std::strcmp(argv[i + 1], "4") == 0)) {
+                    std::strcmp(argv[i + 1], "4") == 0 || std::strcmp(argv[i + 1], "5") == 0)) {
             pfrep_format = uint32_t(argv[++i][0] - '0');
         } else if (argv[i][0] == '-') {
             std::fprintf(

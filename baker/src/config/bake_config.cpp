@@ -164,7 +164,7 @@ Status applyImpl(const Json& root, const std::string& name, BakeSettings& s) {
         {"web", [&](const Json& v, const std::string& w) { return readBool(v, w, s.web); }},
         {"progressive_fans", [&](const Json& v, const std::string& w) { return readBool(v, w, s.progressive_fans); }},
         {"pfrep_from_chain", [&](const Json& v, const std::string& w) { return readBool(v, w, s.pfrep_from_chain); }},
-        {"pfrep_format", [&](const Json& v, const std::string& w) { return readUint(v, w, 2, 4, s.pfrep_format); }},
+        {"pfrep_format", [&](const Json& v, const std::string& w) { return readUint(v, w, 2, 5, s.pfrep_format); }},
         {"cluster_lod", [&](const Json& v, const std::string& w) { return readBool(v, w, s.cluster_lod); }},
         {"remove_covered_components",
          [&](const Json& v, const std::string& w) { return readBool(v, w, s.remove_covered_components); }},

@@ -12,6 +12,7 @@
 #include "lodbake/pfrep/pfrep_builder.h"
 #include "lodbake/pfrep/pfrep_compress.h"
 #include "lodbake/pfrep/pfrep_extension.h"
+#include "lodbake/pfrep/pfrep_region.h"
 #include "lodbake/stream/stream.h"
 #include "lodrt/format.h"
 #include "lodrt/pfrep.h"
@@ -224,8 +225,8 @@ Result<std::optional<std::vector<uint8_t>>> codeAgainstStream(const PfrepExtensi
     return NoBlob(std::move(blob));
 }
 
-// The blob in the format the settings ask for (format 4 falls back to 3, see codeAgainstStream);
-// returns the format written.
+// The blob in the format the settings ask for (format 4 falls back to 3, see codeAgainstStream;
+// format 5 is the region container of the format 2 table); returns the format written.
 Result<uint32_t> codeBlob(PfrepExtensionObject& object, uint32_t format, const ValenceStreamOptions& valence,
                           const LodChain& chain, const Mesh& mesh) {
     if (format == lodrt::format::kPfrepVersionLod0) {
@@ -239,6 +240,8 @@ Result<uint32_t> codeBlob(PfrepExtensionObject& object, uint32_t format, const V
     }
     if (format == lodrt::format::kPfrepVersionCompressed) {
         LODBAKE_ASSIGN_OR_RETURN(object.blob, compressPfrep(object.blob));
+    } else if (format == lodrt::format::kPfrepFormatRegions) {
+        LODBAKE_ASSIGN_OR_RETURN(object.blob, writePfrepRegions(object.blob, PfrepRegionOptions{}));
     }
     return format;
 }

@@ -349,8 +349,11 @@ TEST(BakeCliUsageTest, PresetErrorsAndOverrides) {
     ASSERT_EQ(r.exit_code, 0) << r.output;
     EXPECT_EQ(nlohmann::json::parse(r.output)["pfrep_format"].get<uint32_t>(), 4u);
     r = bake("--print-config --pfrep-format 5");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_EQ(nlohmann::json::parse(r.output)["pfrep_format"].get<uint32_t>(), 5u);
+    r = bake("--print-config --pfrep-format 6");
     EXPECT_EQ(r.exit_code, 2);
-    EXPECT_NE(r.output.find("--pfrep-format expects 2, 3 or 4, got '5'"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("--pfrep-format expects 2, 3, 4 or 5, got '6'"), std::string::npos) << r.output;
     EXPECT_EQ(bake("x.ply -o out.gltf").exit_code, 2);
     EXPECT_EQ(bake("-o out.glb").exit_code, 2);
 }

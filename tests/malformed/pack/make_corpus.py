@@ -532,8 +532,41 @@ def case3(fn):
 
 @case3
 def pfrep3_unknown_format(p):
+    p.pfrep()["format"] = 6
+    return pfrep_path(p) + "/format: format: expected 2, 3, 4 or 5"
+
+
+@case3
+def pfrep5_claimed_by_a_format3_blob(p):
     p.pfrep()["format"] = 5
-    return pfrep_path(p) + "/format: format: expected 2, 3 or 4"
+    return pfrep_path(p) + ": stream fails to decode (format 5): BadMagic"
+
+
+# --- LODBAKE_progressive_fans format 5 blobs (`format`: 5, region blocks; lodrt::pfrepRegionOpen and
+# pfrepRegionLoadBlock): their base pack is baked with --pfrep-format 5 ---
+
+FORMAT5_CASES = set()
+
+
+def case5(fn):
+    FORMAT5_CASES.add(fn.__name__)
+    return case(fn)
+
+
+@case5
+def pfrep5_directory_lies(p):
+    # Block 0's size grows by one byte: the blocks no longer end at blob_size.
+    view = p.pfrep()["bufferView"]
+    p.patch(view, 64 + 4, "<I", p.read(view, 64 + 4, "<I") + 1)
+    return pfrep_path(p) + ": stream fails to decode (format 5): OutOfBounds"
+
+
+@case5
+def pfrep5_blob_cut(p):
+    view = p.pfrep()["bufferView"]
+    # The view ends before the blob_size its header gives.
+    p.doc["bufferViews"][view]["byteLength"] -= 4
+    return pfrep_path(p) + ": stream fails to decode (format 5): BadStructure"
 
 
 @case3
@@ -797,13 +830,14 @@ def main():
     if len(sys.argv) != 2:
         sys.exit("usage: make_corpus.py LODBAKE_CLI")
     with tempfile.TemporaryDirectory() as tmp:
-        bases = {2: bake(sys.argv[1], tmp, 2), 3: bake(sys.argv[1], tmp, 3),
+        bases = {2: bake(sys.argv[1], tmp, 2), 3: bake(sys.argv[1], tmp, 3), 5: bake(sys.argv[1], tmp, 5),
                  "clusters": bake(sys.argv[1], tmp, 3, clusters=True)}
     for old in os.listdir(HERE):
         if old.endswith(".glb") or old.endswith(".expected"):
             os.remove(os.path.join(HERE, old))
     for name, fn in CASES.items():
-        p = Pack(bases["clusters" if name in CLUSTER_CASES else 3 if name in FORMAT3_CASES else 2])
+        p = Pack(bases["clusters" if name in CLUSTER_CASES else 3 if name in FORMAT3_CASES else
+                       5 if name in FORMAT5_CASES else 2])
         out = fn(p)
         glb, expected = out if isinstance(out, tuple) else (p.glb(), out)
         assert "\n" not in expected

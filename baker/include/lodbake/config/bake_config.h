@@ -74,7 +74,8 @@ struct BakeSettings {
     bool progressive_fans = true; // embed LOD0's PFRep blob (LODBAKE_progressive_fans) in the pack
     bool pfrep_from_chain = false; // build that blob from the chain's own collapses (one simplification,
                                    // faster, coarser PFRep levels) instead of its own half-edge pass
-    uint32_t pfrep_format = 4;     // that blob's format: 4 against LOD0's stream, 3 range-coded, 2 a prefix
+    uint32_t pfrep_format = 4;     // that blob's format: 4 against LOD0's stream, 3 range-coded, 2 a prefix,
+                                   // 5 region blocks
     bool cluster_lod = false;      // LOD0's cluster LOD hierarchy as LODBAKE_cluster_lod (docs/cluster_lod.md)
     bool remove_covered_components = false; // levels may drop whole components lying within their accepted
                                             // error of the rest (SimplifyOptions::remove_covered_components)

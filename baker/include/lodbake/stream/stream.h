@@ -135,8 +135,8 @@ struct StreamSettings {
     ValenceStreamOptions valence;
     bool progressive_fans = true; // LODBAKE_progressive_fans on LOD0
     bool pfrep_from_chain = false; // ... built from the chain's own collapses (StreamNeeds::collapse_record)
-    uint32_t pfrep_format =
-        4; // ... written as format 4 (against LOD0's stream), 3 (range-coded) or 2 (docs/format/pfrep.md)
+    uint32_t pfrep_format = 4;     // ... written as format 4 (against LOD0's stream), 3 (range-coded), 2 or 5
+                                   // (region blocks; docs/format/pfrep.md)
     bool cluster_lod = false;      // LODBAKE_cluster_lod on LOD0 (grid bits: valence.position_bits)
 };
 
