@@ -10,6 +10,7 @@
 #include <new>
 #include <thread>
 
+#include "lodrt/detail/pfrep_region.h"
 #include "lodrt/format.h"
 #include "little_endian.h"
 #include "memory.h"
@@ -372,7 +373,16 @@ Result PackSource::copyLevelIndices(uint32_t model, uint32_t level, const uint8_
 // ---- Streamer ----
 
 struct Streamer::Task {
-    enum class Kind : uint8_t { Level, PfrepHeader, PfrepStep, PfrepWhole, ClusterRead, ClusterDecode };
+    enum class Kind : uint8_t {
+        Level,
+        PfrepHeader,
+        PfrepStep,
+        PfrepWhole,
+        PfrepRegionOpen,
+        PfrepRegionBlocks,
+        ClusterRead,
+        ClusterDecode
+    };
     const PackSource* source = nullptr;
     Kind kind = Kind::Level;
     uint32_t model = 0, level = 0;
@@ -400,6 +410,19 @@ struct Streamer::Task {
     const ClusterLodPack* cluster_pack = nullptr;
     uint32_t page = 0, vertex_count = 0, triangle_count = 0;
     void* scratch = nullptr;
+    // PFRep format 5: the opening reads open_bytes (coded_size) into `coded` and opens them into the
+    // stream's format 2 buffer (region_decoded, size) and state (region_state, scratch_bytes),
+    // giving `regions`; a block request reads its blocks back to back into `coded` and stages each
+    // against the stream's `regions_in`, leaving `staged` and `block_results` for the commit.
+    uint8_t* region_decoded = nullptr;
+    uint8_t* region_state = nullptr;
+    PfrepRegions regions;
+    const PfrepRegions* regions_in = nullptr;
+    uint8_t* claimed = nullptr;
+    uint32_t blocks[kMaxPfrepBlocksPerRequest] = {};
+    uint32_t block_count = 0;
+    detail::PfrepRegionStaged staged[kMaxPfrepBlocksPerRequest];
+    Result block_results[kMaxPfrepBlocksPerRequest] = {};
     bool is_busy = false; // frame-thread view
     Result result = Result::Ok;
     std::atomic<uint32_t> done{0};
@@ -444,6 +467,27 @@ struct Streamer::Task {
         return Result::Ok;
     }
 
+    static Result runRegionOpen(Task& t) {
+        const Result r = t.source->readBufferView(t.view, 0, t.coded, t.coded_size);
+        if (r != Result::Ok) return r;
+        return pfrepRegionOpen(t.coded, t.coded_size, t.region_decoded, t.size, t.region_state, t.scratch_bytes,
+                               &t.regions);
+    }
+
+    // Each block's read and stage has its own result: a bad block fails alone.
+    static Result runRegionBlocks(Task& t) {
+        uint8_t* at = t.coded;
+        for (uint32_t i = 0; i < t.block_count; ++i) {
+            const PfrepRegionBlock& b = t.regions_in->blocks[t.blocks[i]];
+            Result r = t.source->readBufferView(t.view, b.offset, at, b.size);
+            if (r == Result::Ok)
+                r = detail::pfrepRegionStageBlock(*t.regions_in, t.blocks[i], at, b.size, t.claimed, &t.staged[i]);
+            t.block_results[i] = r;
+            at += b.size;
+        }
+        return Result::Ok;
+    }
+
     static void run(void* task) {
         Task* t = static_cast<Task*>(task);
         switch (t->kind) {
@@ -458,6 +502,12 @@ struct Streamer::Task {
             break;
         case Kind::PfrepWhole:
             t->result = runPfrepWhole(*t);
+            break;
+        case Kind::PfrepRegionOpen:
+            t->result = runRegionOpen(*t);
+            break;
+        case Kind::PfrepRegionBlocks:
+            t->result = runRegionBlocks(*t);
             break;
         case Kind::ClusterRead:
             t->result = t->source->readBufferView(t->view, t->cluster_pack->pages[t->page].byte_offset, t->coded,
@@ -585,6 +635,9 @@ void Streamer::initPfrepStream(uint32_t m) {
     ps.lod0_offset = 0;
     ps.lod0_size = 0;
     ps.lod0_slot = 0;
+    ps.is_open = 0;
+    ps.batch_count = 0;
+    ps.batch_bytes = 0;
     // The extension object is as hostile as the blob: a bad one fails the stream, not the model.
     uint64_t view = 0;
     bool is_ok = ext.find("bufferView").asUint64(&view) && view < pack.bufferViewCount();
@@ -592,7 +645,8 @@ void Streamer::initPfrepStream(uint32_t m) {
     if (format_member.isValid()) {
         uint64_t f = 0;
         is_ok = is_ok && format_member.asUint64(&f) &&
-                (f == format::kPfrepVersion || f == format::kPfrepVersionCompressed || f == format::kPfrepVersionLod0);
+                (f == format::kPfrepVersion || f == format::kPfrepVersionCompressed || f == format::kPfrepVersionLod0 ||
+                 f == format::kPfrepFormatRegions);
         ps.format = uint8_t(f);
     }
     is_ok = is_ok && (ps.format != format::kPfrepVersionLod0 ||
@@ -647,7 +701,14 @@ const uint8_t* Streamer::levelData(uint32_t model, uint32_t level, size_t* size)
 
 const PfrepModel* Streamer::pfrepModel(uint32_t model) const {
     if (model >= pfrep_count_ || pfrep_[model].step < 0) return nullptr;
+    if (pfrep_[model].format == format::kPfrepFormatRegions) return &pfrep_[model].regions.model;
     return &pfrep_[model].steps[pfrep_[model].step];
+}
+
+const PfrepRegions* Streamer::pfrepRegions(uint32_t model) const {
+    if (model >= pfrep_count_ || pfrep_[model].format != format::kPfrepFormatRegions || !pfrep_[model].is_open)
+        return nullptr;
+    return &pfrep_[model].regions;
 }
 
 PfrepStreamState Streamer::pfrepState(uint32_t model) const {
@@ -655,6 +716,13 @@ PfrepStreamState Streamer::pfrepState(uint32_t model) const {
 }
 
 uint8_t Streamer::pfrepLevel(uint32_t model) const {
+    if (model < pfrep_count_ && pfrep_[model].format == format::kPfrepFormatRegions && pfrep_[model].step == 0) {
+        // Level k extracts once k >= loaded_from: the finest chain level whose removals reach it.
+        const PfrepStream& ps = pfrep_[model];
+        for (uint32_t l = 0; l + 1 < ps.step_count; ++l)
+            if (ps.removals[l] >= ps.regions.model.loaded_from) return uint8_t(l);
+        return kNoLevel;
+    }
     if (model >= pfrep_count_ || pfrep_[model].step <= 0) return kNoLevel;
     return uint8_t(pfrep_[model].step_count - 1 - uint32_t(pfrep_[model].step));
 }
@@ -723,6 +791,189 @@ void Streamer::collectPfrepWhole(Task& t, Result& r) {
     pointStepsAt(ps.steps, ps.step, ps.data);
 }
 
+namespace {
+
+size_t alignUp8(uint64_t n) {
+    return size_t((n + 7) & ~uint64_t(7));
+}
+
+} // namespace
+
+// Format 5: the header gives the opening's read and the one allocation the stream keeps (the format
+// 2 buffer, the region state, the claimed bits and three per-block arrays), bounded by the blob's
+// size before anything is allocated.
+Result Streamer::readRegionHeader(PfrepStream& ps) {
+    PfrepRegionInfo info;
+    const Result r = pfrepRegionInfo(ps.header, format::kPfrepHeaderSize, &info);
+    if (r != Result::Ok) return r;
+    if (info.blob_size != ps.view_size || info.open_bytes > ps.view_size ||
+        uint64_t(info.decoded_bytes) > ps.view_size * format::kPfrepMaxExpansion)
+        return Result::BadStructure;
+    ps.open_bytes = info.open_bytes;
+    ps.decoded_bytes = alignUp8(info.decoded_bytes);
+    ps.state_bytes = alignUp8(info.state_bytes);
+    ps.block_count = info.block_count;
+    ps.directory_bytes = ps.decoded_bytes + ps.state_bytes + alignUp8((uint64_t(info.vertex_count) + 7) / 8) +
+                         alignUp8(uint64_t(info.block_count) * sizeof(float)) + alignUp8(info.block_count) +
+                         alignUp8(uint64_t(info.block_count) * sizeof(uint32_t));
+    return Result::Ok;
+}
+
+// The opening arrived: the stream keeps its allocation and the directory; the root block is next.
+void Streamer::collectRegionOpen(Task& t, Result& r) {
+    PfrepStream& ps = pfrep_[t.slot];
+    stats_.in_flight_bytes -= ps.directory_bytes + t.coded_size;
+    detail::deallocateBytes(options_.allocator, t.coded);
+    t.coded = nullptr;
+    if (r != Result::Ok) {
+        detail::deallocateBytes(options_.allocator, ps.data);
+        ps.data = nullptr;
+        return;
+    }
+    stats_.streamed_bytes += t.coded_size;
+    stats_.resident_bytes += ps.directory_bytes;
+    stats_.pfrep_resident_bytes += ps.directory_bytes;
+    ps.regions = t.regions;
+    ps.is_open = 1;
+}
+
+// Blocks staged on the job are made resident here, in order; a block that failed to read, stage or
+// commit is never read again, and the stream fails only with its root block.
+void Streamer::collectRegionBlocks(Task& t, Result& r) {
+    PfrepStream& ps = pfrep_[t.slot];
+    stats_.in_flight_bytes -= t.coded_size;
+    detail::deallocateBytes(options_.allocator, t.coded);
+    t.coded = nullptr;
+    stats_.streamed_bytes += t.coded_size;
+    for (uint32_t i = 0; i < t.block_count; ++i) {
+        const uint32_t block = t.blocks[i];
+        Result b = r == Result::Ok ? t.block_results[i] : r;
+        if (b == Result::Ok) {
+            b = detail::pfrepRegionCommitBlock(&ps.regions, block, t.staged[i]);
+            detail::pfrepRegionUnclaim(ps.regions, block, ps.claimed);
+        }
+        if (b == Result::Ok) {
+            ps.block_state[block] = uint8_t(LevelState::Resident);
+            ++stats_.pfrep_blocks_loaded;
+            if (block == 0) ps.step = 0;
+        } else if (block == 0) {
+            r = b;
+        } else {
+            ps.block_state[block] = uint8_t(LevelState::Failed);
+            ++stats_.failures;
+        }
+    }
+}
+
+// Format 5's usefulness: the opening and the root block are pinned; then the blocks this frame's
+// views want (wantPfrepBlocks) and that are not resident, the most wanted first, are the next request.
+void Streamer::scoreRegionStream(PfrepStream& ps) {
+    ps.batch_count = 0;
+    ps.batch_bytes = 0;
+    if (!ps.is_open || ps.step < 0) {
+        ps.usefulness = INFINITY;
+        if (ps.is_open) {
+            ps.batch[0] = 0;
+            ps.batch_count = 1;
+            ps.batch_bytes = ps.regions.blocks[0].size;
+        }
+        return;
+    }
+    uint32_t n = 0;
+    for (uint32_t b = 1; b < ps.block_count; ++b)
+        if (ps.block_priority[b] > 0 && ps.block_state[b] == uint8_t(LevelState::Absent)) ps.needed[n++] = b;
+    if (n == 0) return;
+    const uint32_t per_request = std::min(options_.pfrep_blocks_per_request ? options_.pfrep_blocks_per_request : 16u,
+                                          kMaxPfrepBlocksPerRequest);
+    const float* priority = ps.block_priority;
+    const auto more_wanted = [priority](uint32_t a, uint32_t b) {
+        return priority[a] != priority[b] ? priority[a] > priority[b] : a < b;
+    };
+    if (n > per_request) {
+        std::partial_sort(ps.needed, ps.needed + per_request, ps.needed + n, more_wanted);
+        n = per_request;
+        std::sort(ps.needed, ps.needed + n);
+    }
+    for (uint32_t i = 0; i < n; ++i) {
+        ps.batch[i] = ps.needed[i];
+        ps.batch_bytes += ps.regions.blocks[ps.needed[i]].size;
+        ps.usefulness = std::max(ps.usefulness, priority[ps.needed[i]]);
+    }
+    ps.batch_count = n;
+}
+
+void Streamer::wantPfrepBlocks(uint32_t model, const PfrepView& view, float priority) {
+    if (model >= pfrep_count_ || !(priority > 0)) return;
+    PfrepStream& ps = pfrep_[model];
+    if (ps.format != format::kPfrepFormatRegions || !ps.is_open) return;
+    // Blocks are never evicted, so the vertices a view keeps stay resident from when they were
+    // inserted: the insert threshold's blocks are enough (docs/format/pfrep.md "Region blocks").
+    PfrepView insert = view;
+    insert.hysteresis = 1.0f;
+    insert.cull_hysteresis = 0.0f;
+    size_t count = 0;
+    if (pfrepRegionBlocksNeeded(ps.regions, insert, ps.needed, ps.block_count, &count) != Result::Ok) return;
+    for (size_t k = 0; k < count; ++k)
+        ps.block_priority[ps.needed[k]] = std::max(ps.block_priority[ps.needed[k]], priority);
+}
+
+// The opening: the stream's allocation (the format 2 buffer, the state and the arrays, counted in
+// flight until it is collected) and a transient buffer for the opening's bytes; then block requests,
+// read back to back into one transient buffer.
+bool Streamer::prepareRegionTask(Task& t, PfrepStream& ps, uint64_t size) {
+    const Allocator& a = options_.allocator;
+    t.coded = nullptr;
+    if (!ps.is_open) {
+        if (ps.directory_bytes <= SIZE_MAX && ps.open_bytes <= SIZE_MAX) {
+            ps.data = static_cast<uint8_t*>(detail::allocateBytes(a, size_t(ps.directory_bytes)));
+            t.coded = static_cast<uint8_t*>(detail::allocateBytes(a, size_t(ps.open_bytes)));
+        }
+        if (!ps.data || !t.coded) {
+            detail::deallocateBytes(a, ps.data);
+            detail::deallocateBytes(a, t.coded);
+            ps.data = nullptr;
+            t.coded = nullptr;
+            return false;
+        }
+        // pfrepRegionOpen zeroes the format 2 buffer on the job; the claimed bits and the block
+        // arrays start zero (LevelState::Absent, no priority).
+        uint8_t* at = ps.data + ps.decoded_bytes;
+        std::memset(at + ps.state_bytes, 0, size_t(ps.directory_bytes - ps.decoded_bytes - ps.state_bytes));
+        t.region_decoded = ps.data;
+        t.region_state = at;
+        at += ps.state_bytes;
+        ps.claimed = at;
+        at += alignUp8((uint64_t(detail::loadU32(ps.header + 8)) + 7) / 8);
+        ps.block_priority = reinterpret_cast<float*>(at);
+        at += alignUp8(uint64_t(ps.block_count) * sizeof(float));
+        ps.block_state = at;
+        at += alignUp8(ps.block_count);
+        ps.needed = reinterpret_cast<uint32_t*>(at);
+        t.kind = Task::Kind::PfrepRegionOpen;
+        t.dst = nullptr;
+        t.size = size_t(ps.decoded_bytes);
+        t.scratch_bytes = size_t(ps.state_bytes);
+        t.coded_size = size_t(ps.open_bytes);
+        stats_.in_flight_bytes += ps.directory_bytes + ps.open_bytes;
+        return true;
+    }
+    if (ps.batch_count == 0 || size > SIZE_MAX) return false;
+    t.coded = static_cast<uint8_t*>(detail::allocateBytes(a, size_t(size)));
+    if (!t.coded) return false;
+    t.kind = Task::Kind::PfrepRegionBlocks;
+    t.dst = nullptr;
+    t.coded_size = size_t(size);
+    t.regions_in = &ps.regions;
+    t.claimed = ps.claimed;
+    t.block_count = ps.batch_count;
+    for (uint32_t i = 0; i < ps.batch_count; ++i) {
+        t.blocks[i] = ps.batch[i];
+        ps.block_state[ps.batch[i]] = uint8_t(LevelState::Loading);
+    }
+    stats_.in_flight_bytes += size;
+    return true;
+}
+
 void Streamer::collect() {
     const Allocator& a = options_.allocator;
     for (uint32_t i = 0; i < task_count_; ++i) {
@@ -760,7 +1011,9 @@ void Streamer::collect() {
         if (t.kind == Task::Kind::PfrepHeader) {
             if (r == Result::Ok) {
                 stats_.streamed_bytes += t.size;
-                r = ps.format == format::kPfrepVersion ? Result::Ok : readCompressedHeader(ps);
+                r = ps.format == format::kPfrepVersion         ? Result::Ok
+                    : ps.format == format::kPfrepFormatRegions ? readRegionHeader(ps)
+                                                               : readCompressedHeader(ps);
                 if (ps.format == format::kPfrepVersion) {
                     ps.directory_bytes = pfrepDirectoryBytes(ps.header, sizeof(ps.header));
                     if (ps.directory_bytes == 0 || ps.directory_bytes > ps.view_size) r = Result::BadStructure;
@@ -768,6 +1021,10 @@ void Streamer::collect() {
             }
         } else if (t.kind == Task::Kind::PfrepWhole) {
             collectPfrepWhole(t, r);
+        } else if (t.kind == Task::Kind::PfrepRegionOpen) {
+            collectRegionOpen(t, r);
+        } else if (t.kind == Task::Kind::PfrepRegionBlocks) {
+            collectRegionBlocks(t, r);
         } else {
             stats_.in_flight_bytes -= t.size;
             if (r == Result::Ok && !t.has_prefix) {
@@ -877,6 +1134,10 @@ void Streamer::scorePfrepStreams(const ModelDemand* demand) {
             priority = demand[m].priority;
         }
         if (ps.state == PfrepStreamState::Loading) continue;
+        if (ps.format == format::kPfrepFormatRegions) {
+            if (!ps.is_failed) scoreRegionStream(ps);
+            continue;
+        }
         // A step that adds no bytes (two chain levels in one block) needs no read.
         while (!ps.is_failed && ps.step >= 0 && uint32_t(ps.step) < target &&
                ps.step_bytes[ps.step + 1] == ps.step_bytes[ps.step]) {
@@ -937,6 +1198,12 @@ uint64_t Streamer::requestBytes(uint32_t id, bool* is_pinned) const {
         return page.estimate;
     }
     const PfrepStream& ps = pfrep_[id - slot_count_];
+    if (ps.format == format::kPfrepFormatRegions) {
+        // The header, the opening (the stream's allocation and its read) and the root block are pinned.
+        *is_pinned = ps.step < 0;
+        if (ps.directory_bytes == 0) return 0;
+        return ps.is_open ? ps.batch_bytes : ps.directory_bytes + ps.open_bytes;
+    }
     if (ps.step < 0) {
         *is_pinned = true;
         return ps.directory_bytes; // 0 for the header, which lives in the stream itself
@@ -1107,6 +1374,13 @@ bool Streamer::prepareTask(uint32_t task_index, uint32_t id, uint64_t size) {
         t.kind = Task::Kind::PfrepHeader;
         t.dst = ps->header;
         t.size = sizeof(ps->header);
+    } else if (ps->format == format::kPfrepFormatRegions) {
+        if (!prepareRegionTask(t, *ps, size)) {
+            ps->state = PfrepStreamState::Failed;
+            ps->is_failed = 1;
+            ++stats_.failures;
+            return false;
+        }
     } else if (ps->format != format::kPfrepVersion) {
         if (!preparePfrepWhole(t, *ps, size)) return false;
     } else {
@@ -1168,6 +1442,9 @@ void Streamer::update(const ModelDemand* demand) {
     collect();
     rebuildResidentTable();
     rebuildClusterResidency();
+    for (uint32_t m = 0; m < pfrep_count_; ++m)
+        if (pfrep_[m].format == format::kPfrepFormatRegions && pfrep_[m].is_open)
+            std::memset(pfrep_[m].block_priority, 0, sizeof(float) * pfrep_[m].block_count);
     if (++cluster_frame_ == 0) cluster_frame_ = 1; // stamps of frame 0 mean "never"
 }
 

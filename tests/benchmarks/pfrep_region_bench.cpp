@@ -5,7 +5,10 @@
 // whole blob gives. The anchor is the whole blob: it is refined alongside from the same masks, the
 // two masks are compared after every refinement step and the meshes at every settled frame.
 // Refinement time of the region model and of the whole blob (thread CPU over the flight, median of
-// the runs) shows what residency costs.
+// the runs) shows what residency costs. Then the same flight through the shipping path: the mesh
+// baked into a pack with `pfrep_format` 5, read by a lodrt::Streamer through a range reader that
+// counts the blob's bytes, the views reported with wantPfrepBlocks; its bytes over the region blob
+// are the bar again, and every settled mesh is compared with the whole table's.
 // usage: pfrep_region_bench [--mesh PATH] [--frames N] [--height H] [--block V] [--root V] [--runs R] [--check]
 //   height: the flight's height above the bounding box in diagonals (0.15).
 //   default mesh: dragon_poisson.ply from the shared meshes.
@@ -21,10 +24,12 @@
 #include "../baker/pfrep/pfrep_region_view.h"
 #include "bench_bar.h"
 #include "bench_timing.h"
+#include "lodbake/bake/bake.h"
 #include "lodbake/io/mesh_io.h"
 #include "lodbake/pfrep/pfrep_builder.h"
 #include "lodbake/pfrep/pfrep_region.h"
 #include "lodrt/pfrep.h"
+#include "lodrt/streaming.h"
 
 namespace {
 
@@ -198,6 +203,121 @@ Evicting flyEvicting(lodrt::PfrepRegions& g, const std::vector<uint8_t>& blob, l
     return e;
 }
 
+// A pack in memory served by range reads, counting the bytes read inside [watch_begin, watch_end).
+struct CountingReader {
+    const std::vector<uint8_t>* bytes = nullptr;
+    uint64_t watch_begin = 0, watch_end = 0, watched = 0;
+    static lodrt::Result read(void* user, uint64_t offset, void* dst, size_t size) {
+        CountingReader* r = static_cast<CountingReader*>(user);
+        if (offset > r->bytes->size() || size > r->bytes->size() - offset) return lodrt::Result::Truncated;
+        const uint64_t lo = std::max(offset, r->watch_begin), hi = std::min(offset + size, r->watch_end);
+        if (hi > lo) r->watched += hi - lo;
+        std::memcpy(dst, r->bytes->data() + offset, size);
+        return lodrt::Result::Ok;
+    }
+};
+
+struct StreamedFlight {
+    bool ok = false, same = true;
+    uint64_t blob_bytes = 0, read_bytes = 0;
+    uint32_t blocks = 0, blocks_loaded = 0, requests = 0;
+    size_t max_triangles = 0;
+};
+
+// The flight through a Streamer (jobs inline) over a pack baked with format 5: each frame the view is
+// reported and update() called until it requests nothing more; then the streamed model and the whole
+// table (every block loaded from the pack's blob) are refined to a fixed point from the same masks.
+StreamedFlight flyStreamer(const lodbake::Mesh& mesh, float height, int frames) {
+    StreamedFlight f;
+    lodbake::BakeSettings settings;
+    settings.pfrep_format = lodrt::format::kPfrepFormatRegions;
+    std::vector<lodbake::BakeInput> inputs(1);
+    inputs[0].name = "scan";
+    inputs[0].mesh = mesh;
+    lodbake::Diagnostics d;
+    auto baked = lodbake::bake(std::move(inputs), settings, d);
+    if (!baked.ok()) {
+        std::printf("bake failed: %s\n", baked.status().message().c_str());
+        return f;
+    }
+    const std::vector<uint8_t>& glb = baked->glb;
+    CountingReader reader;
+    reader.bytes = &glb;
+    lodrt::PackSource source;
+    if (source.openReader(lodrt::RangeReader{&CountingReader::read, &reader}, glb.size(), nullptr) != lodrt::Result::Ok)
+        return f;
+    const lodrt::JsonValue ext = source.pack()
+                                     .mesh(source.models().modelLevel(0, 0).mesh)
+                                     .json.find("extensions")
+                                     .find(lodrt::format::kExtProgressiveFans);
+    uint64_t view_index = 0;
+    if (!ext.find("bufferView").asUint64(&view_index)) return f;
+    const lodrt::BufferViewInfo& view_info = source.pack().bufferView(uint32_t(view_index));
+    uint32_t json_length = 0;
+    std::memcpy(&json_length, glb.data() + 12, 4);
+    reader.watch_begin = 20 + uint64_t(json_length) + 8 + view_info.byte_offset;
+    reader.watch_end = reader.watch_begin + view_info.byte_length;
+    f.blob_bytes = view_info.byte_length;
+    // The anchor: the whole table, every block of the pack's blob loaded.
+    const uint8_t* blob = glb.data() + reader.watch_begin;
+    lodrt::PfrepRegionInfo info;
+    if (lodrt::pfrepRegionInfo(blob, size_t(f.blob_bytes), &info) != lodrt::Result::Ok) return f;
+    std::vector<uint8_t> table(info.decoded_bytes);
+    std::vector<uint64_t> state((info.state_bytes + 7) / 8);
+    lodrt::PfrepRegions all;
+    if (lodrt::pfrepRegionOpen(blob, size_t(f.blob_bytes), table.data(), table.size(), state.data(), state.size() * 8,
+                               &all) != lodrt::Result::Ok)
+        return f;
+    for (uint32_t k = 0; k < all.block_count; ++k)
+        if (lodrt::pfrepRegionLoadBlock(&all, k, blob + all.blocks[k].offset, all.blocks[k].size) != lodrt::Result::Ok)
+            return f;
+    lodrt::PfrepModel whole;
+    if (lodrt::openPfrep(table.data(), table.size(), &whole) != lodrt::Result::Ok) return f;
+    float lo[3], hi[3];
+    for (int k = 0; k < 3; ++k) {
+        lo[k] = whole.position_min[k];
+        hi[k] = whole.position_min[k] + 65535.0f * whole.position_step[k];
+    }
+    lodrt::Streamer streamer;
+    if (streamer.init(&source, nullptr, nullptr) != lodrt::Result::Ok) return f;
+    for (int i = 0; i < 4; ++i) streamer.update(nullptr);
+    const lodrt::PfrepModel* model = streamer.pfrepModel(0);
+    if (!model) return f;
+    std::vector<uint8_t> mask_a(lodrt::pfrepMaskBytes(whole)), mask_b(mask_a.size());
+    std::vector<uint32_t> scratch(lodrt::pfrepScratchValues(whole));
+    std::vector<uint32_t> ia(size_t(whole.level0_triangles) * 3), ib(ia.size());
+    lodrt::pfrepMaskCoarsest(*model, mask_a.data());
+    lodrt::pfrepMaskCoarsest(whole, mask_b.data());
+    for (int frame = 0; frame < frames; ++frame) {
+        const lodrt::PfrepView view = flightView(lo, hi, height, frame, frames);
+        for (int i = 0; i < 1000; ++i) {
+            const uint32_t before = streamer.stats().requests;
+            streamer.wantPfrepBlocks(0, view, 1.0f);
+            streamer.update(nullptr);
+            if (streamer.stats().requests == before) break;
+        }
+        for (int step = 0; step < 64; ++step) {
+            size_t ca = 0, cb = 0;
+            (void)lodrt::pfrepRefine(*model, view, mask_a.data(), scratch.data(), scratch.size(), &ca);
+            (void)lodrt::pfrepRefine(whole, view, mask_b.data(), scratch.data(), scratch.size(), &cb);
+            if (mask_a != mask_b) f.same = false;
+            if (ca == 0 && cb == 0) break;
+        }
+        size_t na = 0, nb = 0;
+        (void)lodrt::pfrepExtractSelective(*model, mask_a.data(), ia.data(), ia.size() / 3, &na);
+        (void)lodrt::pfrepExtractSelective(whole, mask_b.data(), ib.data(), ib.size() / 3, &nb);
+        if (na != nb || !std::equal(ia.begin(), ia.begin() + long(na * 3), ib.begin())) f.same = false;
+        f.max_triangles = std::max(f.max_triangles, na);
+    }
+    const lodrt::PfrepRegions* regions = streamer.pfrepRegions(0);
+    f.blocks = regions->block_count;
+    for (uint32_t k = 0; k < regions->block_count; ++k) f.blocks_loaded += regions->block_loaded[k];
+    f.read_bytes = reader.watched;
+    f.requests = streamer.stats().requests;
+    f.ok = streamer.stats().failures == 0;
+    return f;
+}
+
 bool parse(int argc, char** argv, Options& o) {
     for (int a = 1; a < argc; ++a) {
         const bool has = a + 1 < argc;
@@ -331,7 +451,21 @@ int main(int argc, char** argv) {
                         e.differing_steps, e.steps, e.differing_frames, o.frames);
         }
     }
+    const StreamedFlight sf = flyStreamer(loaded->mesh, o.height, o.frames);
+    const double streamed_fraction = sf.blob_bytes ? double(sf.read_bytes) / double(sf.blob_bytes) : 1.0;
+    std::printf("streamer flight (pack with pfrep_format 5, views reported with wantPfrepBlocks): read %llu of %llu "
+                "blob bytes = %.3f (header included), %u of %u blocks in %u requests, largest settled mesh %zu "
+                "triangles; settled meshes %s\n",
+                (unsigned long long)sf.read_bytes, (unsigned long long)sf.blob_bytes, streamed_fraction,
+                sf.blocks_loaded, sf.blocks, sf.requests, sf.max_triangles,
+                !sf.ok    ? "NOT MEASURED (stream failed)"
+                : sf.same ? "equal to the whole table's"
+                          : "DIFFER");
     bars.absolute("region bytes loaded / region blob (1 px fly-by)", fraction, 0.30, Limit::AtMost);
+    bars.absolute("streamer: blob bytes read / region blob (1 px fly-by, pack)", sf.ok ? streamed_fraction : 1.0, 0.30,
+                  Limit::AtMost);
+    bars.absolute("streamer: settled meshes differing from the whole table's", sf.ok && sf.same ? 0 : 1, 0,
+                  Limit::AtMost);
     bars.absolute("settled meshes or masks differing from the whole blob's", same ? 0 : 1, 0, Limit::AtMost);
     bars.ratio("refinement CPU, region model / whole blob", rc, wc, 1.10, Limit::AtMost);
     return bars.finish(check);

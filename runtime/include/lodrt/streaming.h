@@ -24,6 +24,16 @@
 // whole after its header and decoded on the job (pfrepDecompress) into the format 2 bytes, which
 // hold every step at once; the budget counts the decoded bytes, and growing back after a shrink
 // decodes it whole again.
+// A format 5 blob (region blocks, docs/format/pfrep.md "Region blocks") is loaded by view instead of
+// as a prefix: its header, then its directory and skeleton (pfrepRegionOpen, into one allocation
+// holding the format 2 buffer the blocks are laid into and the region state; pinned and counted),
+// then its root block (pinned); from then on the engine reports each instance's view before update()
+// (wantPfrepBlocks) and the streamer reads the blocks those views need (pfrepRegionBlocksNeeded),
+// most wanted first, up to StreamerOptions::pfrep_blocks_per_request per job, each validated and
+// laid out on the job (detail::pfrepRegionStageBlock) and made resident in update(). Refinement
+// may run on the model while a job stages blocks: a job writes only bytes of vertices that are not
+// resident. Loaded blocks stay: the format 2 buffer is allocated whole when the blob opens, so
+// evicting a block would free no memory; the budget counts that buffer and the block reads in flight.
 //
 // A model whose level-0 mesh carries LODBAKE_cluster_lod (lodrt/cluster_pack.h) gets its cluster
 // table read and opened at init (one allocation per model) and its pages streamed: the pages holding
@@ -153,7 +163,11 @@ struct StreamerOptions {
                                 // never evicted. A growing prefix holds its old
                                 // and its new buffer while the step is read: both count.
     uint32_t max_in_flight = 0; // jobs outstanding at once; 0 means 4
+    uint32_t pfrep_blocks_per_request = 0; // region blocks (format 5 PFRep) one job reads and lays out;
+                                           // 0 means 16; at most kMaxPfrepBlocksPerRequest
 };
+
+constexpr uint32_t kMaxPfrepBlocksPerRequest = 64;
 
 struct StreamStats {
     uint64_t resident_bytes = 0;  // level, PFRep prefix and cluster page bytes held now
@@ -174,14 +188,18 @@ struct StreamStats {
     uint32_t cluster_resident_pages = 0;
     uint32_t cluster_page_reads = 0;     // page reads started since init (each followed by a decode)
     uint32_t cluster_page_evictions = 0; // pages dropped to make room since init
+    uint32_t pfrep_blocks_loaded = 0;    // format 5 PFRep region blocks made resident since init
 };
 
 enum class LevelState : uint8_t { Absent, Loading, Resident, Failed };
 
-/// None: the model has no LODBAKE_progressive_fans. Absent: not even the directory is resident yet.
-/// Loading: a step is being read (the previous prefix stays usable). Resident: a prefix is held.
-/// Failed: the header, directory, extension object or a step was bad; a prefix validated before
-/// the failure stays usable, but the stream never grows again.
+/// None: the model has no LODBAKE_progressive_fans. Absent: not even the directory is resident yet
+/// (format 5: the root block). Loading: a step (format 5: a set of blocks) is being read (the
+/// previous prefix stays usable). Resident: a prefix (format 5: the root block and any others) is
+/// held. Failed: the header, directory, extension object or a step (format 5: the opening or the
+/// root block) was bad; a prefix validated before the failure stays usable, but the stream never
+/// grows again. A format 5 block other than the root that fails is counted in failures and never
+/// read again; the stream stays Resident and refinement never inserts its vertices.
 enum class PfrepStreamState : uint8_t { None, Absent, Loading, Resident, Failed };
 
 /// A resident cluster page as clusterPageDecode wrote it: `vertex_count` positions (3 floats each)
@@ -225,7 +243,19 @@ public:
     /// moves the bytes); criterion_table is always null (attach a table per prefix if wanted).
     /// Instance masks stay valid while the prefix grows; when loaded_from rises (the prefix was
     /// shrunk for the budget) reset them (pfrepMaskCoarsest) before refining again.
+    /// Format 5: the region model (`resident` bits set), non-null once the root block is resident;
+    /// its address stays the same and blocks only ever arrive, so masks stay valid.
     const PfrepModel* pfrepModel(uint32_t model) const;
+    /// Format 5: the opened region blob (directory, block_loaded, loaded_bytes; `model` as above), or
+    /// null (another format, or not opened yet). Valid until the next update().
+    const PfrepRegions* pfrepRegions(uint32_t model) const;
+    /// Format 5: reports one instance's view of `model` (in the model's space, as given to
+    /// pfrepRefine) before update(); the blocks it needs (pfrepRegionBlocksNeeded at its insert
+    /// threshold: hysteresis 1, no cull band, enough because blocks are never evicted) are wanted
+    /// this frame with `priority` (> 0, as ModelDemand::priority; the largest of the views needing a
+    /// block counts). Calls accumulate until update(). Tests every block's bounds once; no
+    /// allocation; ignores other formats, bad ids and streams not opened yet.
+    void wantPfrepBlocks(uint32_t model, const PfrepView& view, float priority);
     PfrepStreamState pfrepState(uint32_t model) const;
     /// Finest chain level whose PFRep level (`levels[l].removals` of the extension) the resident
     /// prefix covers, or kNoLevel (directory only, no PFRep, bad model id).
@@ -289,6 +319,21 @@ private:
         uint64_t lod0_offset;
         uint64_t lod0_size;
         uint32_t lod0_slot;
+        // Format 5 (region blocks): `data` holds the format 2 buffer, the region state and the arrays
+        // below (directory_bytes in all, allocated when the opening is requested).
+        PfrepRegions regions;
+        uint64_t open_bytes;    // header, directory and skeleton
+        uint64_t decoded_bytes; // the format 2 buffer
+        uint64_t state_bytes;   // pfrepRegionOpen's state
+        uint32_t block_count;
+        uint8_t is_open;
+        uint8_t* claimed;                          // ranks staged by the running job
+        float* block_priority;                     // per block: this frame's largest wanting priority
+        uint8_t* block_state;                      // per block: a LevelState
+        uint32_t* needed;                          // per block: scratch of wantPfrepBlocks and the batch choice
+        uint32_t batch[kMaxPfrepBlocksPerRequest]; // the next request's blocks, in increasing order
+        uint32_t batch_count;
+        uint64_t batch_bytes;
     };
     struct ClusterModel {
         ClusterLodPack pack;
@@ -336,6 +381,11 @@ private:
     void collectPfrepWhole(Task& t, Result& r);
     bool preparePfrepWhole(Task& t, PfrepStream& ps, uint64_t size);
     void initPfrepStream(uint32_t model);
+    Result readRegionHeader(PfrepStream& ps);
+    void scoreRegionStream(PfrepStream& ps);
+    bool prepareRegionTask(Task& t, PfrepStream& ps, uint64_t size);
+    void collectRegionOpen(Task& t, Result& r);
+    void collectRegionBlocks(Task& t, Result& r);
     void rebuildResidentTable();
     // update() in steps: score what is wanted, rank the requests, make room, start one.
     void scoreLevels(const ModelDemand* demand);
