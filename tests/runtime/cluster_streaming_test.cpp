@@ -27,6 +27,7 @@
 #include "lodrt/cluster_pack.h"
 #include "lodrt/streaming.h"
 #include "manual_jobs.h"
+#include "mesh_builders.h"
 
 namespace {
 
@@ -38,17 +39,7 @@ using lodrt_test::ManualJobs;
 
 // A wavy n x n height field over the unit square.
 lodbake::Mesh wavyGrid(int n) {
-    lodbake::Mesh mesh;
-    for (int y = 0; y < n; ++y)
-        for (int x = 0; x < n; ++x)
-            mesh.positions.push_back({float(x) / float(n - 1), float(y) / float(n - 1),
-                                      0.04f * std::sin(0.35f * float(x)) * std::cos(0.3f * float(y))});
-    for (int y = 0; y + 1 < n; ++y)
-        for (int x = 0; x + 1 < n; ++x) {
-            const uint32_t a = uint32_t(y * n + x), b = a + 1, c = a + uint32_t(n), d = c + 1;
-            mesh.indices.insert(mesh.indices.end(), {a, b, d, a, d, c});
-        }
-    return mesh;
+    return lodbake_test::wavyField(n, 0.04f, 0.35f, 0.3f);
 }
 
 const std::vector<uint8_t>& bakedPack() {

@@ -9,6 +9,7 @@
 #include "lodbake/pfrep/pfrep_builder.h"
 #include "lodrt/frustum.h"
 #include "lodrt/pfrep_instance.h"
+#include "mesh_builders.h"
 
 namespace {
 
@@ -21,17 +22,7 @@ struct Blob {
 const Blob& blob() {
     static Blob* b = [] {
         Blob* out = new Blob();
-        lodbake::Mesh mesh;
-        const int n = 40;
-        for (int y = 0; y < n; ++y)
-            for (int x = 0; x < n; ++x)
-                mesh.positions.push_back({float(x) / (n - 1), float(y) / (n - 1),
-                                          0.05f * std::sin(0.5f * float(x)) * std::cos(0.4f * float(y))});
-        for (int y = 0; y + 1 < n; ++y)
-            for (int x = 0; x + 1 < n; ++x) {
-                const uint32_t a = uint32_t(y * n + x), b2 = a + 1, c = a + uint32_t(n), d = c + 1;
-                mesh.indices.insert(mesh.indices.end(), {a, b2, d, a, d, c});
-            }
+        const lodbake::Mesh mesh = lodbake_test::wavyField(40, 0.05f, 0.5f, 0.4f);
         lodbake::PfrepOptions options;
         options.target_ratio = 0.02f;
         lodbake::Diagnostics diagnostics;

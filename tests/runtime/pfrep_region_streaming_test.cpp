@@ -6,7 +6,6 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cmath>
 #include <cstring>
 #include <string>
 #include <thread>
@@ -17,23 +16,14 @@
 #include "lodrt/pfrep.h"
 #include "lodrt/streaming.h"
 #include "manual_jobs.h"
+#include "mesh_builders.h"
 #include "pfrep_extract.h"
 
 namespace region_streaming {
 
 // A wavy height field of n x n vertices over [0, 1]^2.
 lodbake::Mesh waves(int n) {
-    lodbake::Mesh mesh;
-    for (int y = 0; y < n; ++y)
-        for (int x = 0; x < n; ++x)
-            mesh.positions.push_back({float(x) / float(n - 1), float(y) / float(n - 1),
-                                      0.04f * std::sin(0.37f * float(x)) * std::cos(0.29f * float(y))});
-    for (int y = 0; y + 1 < n; ++y)
-        for (int x = 0; x + 1 < n; ++x) {
-            const uint32_t a = uint32_t(y * n + x), b = a + 1, c = a + uint32_t(n), d = c + 1;
-            mesh.indices.insert(mesh.indices.end(), {a, b, d, a, d, c});
-        }
-    return mesh;
+    return lodbake_test::wavyField(n, 0.04f, 0.37f, 0.29f);
 }
 
 // One model whose blob is format 5 with a root block and a few dozen others (default block sizes).

@@ -63,4 +63,20 @@ inline lodbake::Mesh bumpySphere(int rings, int segments) {
     return m;
 }
 
+/// A wavy height field of n x n vertices over the unit square (2 (n - 1)^2 triangles):
+/// z = amplitude sin(kx x) cos(ky y) at grid column x, row y.
+inline lodbake::Mesh wavyField(int n, float amplitude, float kx, float ky) {
+    lodbake::Mesh mesh;
+    for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x)
+            mesh.positions.push_back({float(x) / float(n - 1), float(y) / float(n - 1),
+                                      amplitude * std::sin(kx * float(x)) * std::cos(ky * float(y))});
+    for (int y = 0; y + 1 < n; ++y)
+        for (int x = 0; x + 1 < n; ++x) {
+            const uint32_t a = uint32_t(y * n + x), b = a + 1, c = a + uint32_t(n), d = c + 1;
+            mesh.indices.insert(mesh.indices.end(), {a, b, d, a, d, c});
+        }
+    return mesh;
+}
+
 } // namespace lodbake_test

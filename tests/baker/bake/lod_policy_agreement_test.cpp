@@ -5,29 +5,19 @@
 
 #include <gtest/gtest.h>
 
-#include <cmath>
 #include <vector>
 
 #include "lodbake/bake/bake.h"
 #include "lodrt/model.h"
 #include "lodrt/pack.h"
 #include "lodrt/selection.h"
+#include "mesh_builders.h"
 
 namespace {
 
 // A bumpy height field: its levels have distinct, growing errors.
 lodbake::Mesh bumpyField(int n) {
-    lodbake::Mesh mesh;
-    for (int y = 0; y < n; ++y)
-        for (int x = 0; x < n; ++x)
-            mesh.positions.push_back({float(x) / float(n - 1), float(y) / float(n - 1),
-                                      0.06f * std::sin(0.45f * float(x)) * std::cos(0.35f * float(y))});
-    for (int y = 0; y + 1 < n; ++y)
-        for (int x = 0; x + 1 < n; ++x) {
-            const uint32_t a = uint32_t(y * n + x), b = a + 1, c = a + uint32_t(n), d = c + 1;
-            mesh.indices.insert(mesh.indices.end(), {a, b, d, a, d, c});
-        }
-    return mesh;
+    return lodbake_test::wavyField(n, 0.06f, 0.45f, 0.35f);
 }
 
 struct Screen {

@@ -18,6 +18,7 @@
 #include "lodbake/bake/memory_budget.h"
 #include "lodbake/core/file_io.h"
 #include "lodbake/io/mesh_io.h"
+#include "mesh_builders.h"
 #include "test_paths.h"
 
 namespace {
@@ -35,16 +36,7 @@ std::string shared(const std::string& name) { return lodbake_test::sourceDir() +
 
 // A bumpy (n x n)-cell grid written to `path`: 2 n^2 triangles.
 std::string writeGrid(int n, const std::string& path) {
-    Mesh mesh;
-    for (int y = 0; y <= n; ++y)
-        for (int x = 0; x <= n; ++x)
-            mesh.positions.push_back({float(x) / float(n), float(y) / float(n),
-                                      0.05f * std::sin(0.7f * float(x)) * std::cos(0.45f * float(y))});
-    for (int y = 0; y < n; ++y)
-        for (int x = 0; x < n; ++x) {
-            const uint32_t a = uint32_t(y * (n + 1) + x), b = a + 1, c = a + uint32_t(n + 1), d = c + 1;
-            mesh.indices.insert(mesh.indices.end(), {a, b, d, a, d, c});
-        }
+    const Mesh mesh = lodbake_test::wavyField(n + 1, 0.05f, 0.7f, 0.45f);
     Diagnostics diagnostics;
     EXPECT_TRUE(writeMesh(mesh, path, WriteOptions{}, diagnostics).ok()) << path;
     return path;
