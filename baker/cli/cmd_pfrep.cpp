@@ -47,7 +47,8 @@ options:
   --ratio R          target fraction of triangles in [0, 1] (build only)
   --format F         3 (default): range-coded; 2: the uncompressed, prefix-streamable layout
   --regions          region blocks: the format 2 table in spatially coherent blocks that load
-                     independently (docs/format/pfrep.md "Region blocks")
+                     independently (docs/format/pfrep.md "Region blocks"; 1,024 vertices each, cut
+                     for views of 1080 px, 60 degrees, 1 px; lodbake bake --pfrep-format 5 sets them)
   --extract K        extract level K instead of building
 )";
 

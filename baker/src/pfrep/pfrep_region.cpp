@@ -69,21 +69,50 @@ std::vector<Bounds> closureBounds(const lodrt::PfrepModel& m) {
     return bounds;
 }
 
-uint64_t spread(uint32_t x) { // 21 bits to every third bit
-    uint64_t v = x & 0x1fffff;
-    v = (v | v << 32) & 0x1f00000000ffffull;
-    v = (v | v << 16) & 0x1f0000ff0000ffull;
-    v = (v | v << 8) & 0x100f00f00f00f00full;
-    v = (v | v << 4) & 0x10c30c30c30c30c3ull;
-    v = (v | v << 2) & 0x1249249249249249ull;
-    return v;
+// A vertex of a band: the centre of its bounds, its reach (the distance within which its bounds'
+// error is refined, from the options' screen) and its rank.
+struct BandVertex {
+    std::array<float, 4> key;
+    uint32_t rank;
+};
+
+// Cuts `vertices` into `pieces` blocks of near-equal size by median splits across the longest axis
+// of their keys (ties by rank). A block is needed when a view comes within its max_error's reach of
+// its box, so the region where it is needed spans its box plus that reach on every side: splitting
+// the longest of the three box extents and the reach's spread keeps both small. (A run of a
+// space-filling curve of the same size can also straddle one of the curve's jumps and span two
+// distant parts.)
+void splitBand(std::vector<BandVertex>::iterator first, std::vector<BandVertex>::iterator last, size_t pieces,
+               std::vector<std::vector<uint32_t>>& blocks) {
+    if (pieces <= 1) {
+        std::vector<uint32_t> ranks;
+        for (auto it = first; it != last; ++it) ranks.push_back(it->rank);
+        std::sort(ranks.begin(), ranks.end());
+        blocks.push_back(std::move(ranks));
+        return;
+    }
+    std::array<float, 4> lo = first->key, hi = first->key;
+    for (auto it = first; it != last; ++it)
+        for (size_t k = 0; k < 4; ++k) {
+            lo[k] = std::min(lo[k], it->key[k]);
+            hi[k] = std::max(hi[k], it->key[k]);
+        }
+    size_t axis = 0;
+    for (size_t k = 1; k < 4; ++k)
+        if (hi[k] - lo[k] > hi[axis] - lo[axis]) axis = k;
+    const size_t left = pieces / 2, count = size_t(last - first);
+    const auto mid = first + std::ptrdiff_t(count * left / pieces);
+    std::nth_element(first, mid, last, [axis](const BandVertex& a, const BandVertex& b) {
+        return a.key[axis] != b.key[axis] ? a.key[axis] < b.key[axis] : a.rank < b.rank;
+    });
+    splitBand(first, mid, left, blocks);
+    splitBand(mid, last, pieces - left, blocks);
 }
 
 // Ranks of each block: block 0 the coarsest ranks; below them bands of halving size from the fine
-// end ([0, r/2), [r/2, 3r/4), ...: each about one level of detail, errors of one range), each cut in
-// Morton order of the record's quantized position into blocks of near-equal size. Coarse bands come
-// first in the blob.
-std::vector<std::vector<uint32_t>> cutBlocks(const lodrt::PfrepModel& m, const std::vector<uint8_t>& blob,
+// end ([0, r/2), [r/2, 3r/4), ...: each about one level of detail, errors of one range), each cut
+// by splitBand into blocks of near-equal size. Coarse bands come first in the blob.
+std::vector<std::vector<uint32_t>> cutBlocks(const lodrt::PfrepModel& m, const std::vector<Bounds>& bounds,
                                              const PfrepRegionOptions& options, uint32_t* bands) {
     const uint32_t per_block = std::max<uint32_t>(options.block_vertices, 1);
     const uint32_t root = std::max(m.vertex_count - m.removed_count, std::min(m.vertex_count, options.root_vertices));
@@ -97,23 +126,21 @@ std::vector<std::vector<uint32_t>> cutBlocks(const lodrt::PfrepModel& m, const s
     std::vector<std::vector<uint32_t>> blocks(1);
     for (uint32_t v = top; v < m.vertex_count; ++v) blocks[0].push_back(v);
     *bands = uint32_t(ranges.size()) + 1;
-    std::vector<std::pair<uint64_t, uint32_t>> order;
+    // switchDistance is linear in the error; a screen without a finite reach cuts by position.
+    const double per_error = switchDistance(1.0, options.screen);
+    const double reach = std::isfinite(per_error) ? per_error : 0.0;
+    std::vector<BandVertex> band_vertices;
     for (size_t band = ranges.size(); band-- > 0;) {
-        order.clear();
+        band_vertices.clear();
         for (uint32_t v = ranges[band].first; v < ranges[band].second; ++v) {
-            const uint8_t* r = blob.data() + lodrt::detail::pfrepRecordOffset(m, v);
-            uint64_t code = 0;
-            for (int k = 0; k < 3; ++k) code |= spread(uint32_t(r[2 * k] | r[2 * k + 1] << 8)) << k;
-            order.emplace_back(code, v);
+            BandVertex b;
+            for (int k = 0; k < 3; ++k) b.key[size_t(k)] = 0.5f * (bounds[v].lo[k] + bounds[v].hi[k]);
+            b.key[3] = float(reach * double(bounds[v].error));
+            b.rank = v;
+            band_vertices.push_back(b);
         }
-        std::sort(order.begin(), order.end());
-        const size_t count = order.size(), pieces = (count + per_block - 1) / per_block;
-        for (size_t p = 0; p < pieces; ++p) {
-            std::vector<uint32_t> ranks;
-            for (size_t k = count * p / pieces; k < count * (p + 1) / pieces; ++k) ranks.push_back(order[k].second);
-            std::sort(ranks.begin(), ranks.end());
-            blocks.push_back(std::move(ranks));
-        }
+        const size_t pieces = (band_vertices.size() + per_block - 1) / per_block;
+        splitBand(band_vertices.begin(), band_vertices.end(), pieces, blocks);
     }
     return blocks;
 }
@@ -155,7 +182,7 @@ Result<std::vector<uint8_t>> writePfrepRegions(const std::vector<uint8_t>& forma
         return invalidInput(std::string("pfrep blob: format 2 table: ") + lodrt::resultName(opened));
     const std::vector<Bounds> bounds = closureBounds(m);
     uint32_t bands = 0;
-    const std::vector<std::vector<uint32_t>> blocks = cutBlocks(m, format2, options, &bands);
+    const std::vector<std::vector<uint32_t>> blocks = cutBlocks(m, bounds, options, &bands);
     // Skeleton: the format 2 header and every entry's length.
     std::vector<uint8_t> skeleton(format2.begin(), format2.begin() + lodrt::format::kPfrepHeaderSize);
     uint32_t max_radius = 0, max_error = 0;

@@ -198,8 +198,8 @@ TEST(PfrepRegionTest, NeededBlocksGiveTheWholeBlobsMasksWithoutReadingOthers) {
     EXPECT_LT(o.g.loaded_bytes, b.region.size() * 95 / 100);
 }
 
-// Too few blocks: refinement only ever makes resident vertices present, inserting a non-resident
-// vertex is refused, and the mesh stays closed.
+// Only the blocks of one view resident while the camera moves on: refinement only ever makes
+// resident vertices present, inserting a non-resident vertex is refused, and the mesh stays closed.
 TEST(PfrepRegionTest, MissingBlocksAreNeverInserted) {
     const Blobs& b = largerBlobs();
     Opened o;
@@ -212,9 +212,19 @@ TEST(PfrepRegionTest, MissingBlocksAreNeverInserted) {
     EXPECT_EQ(lodrt::pfrepRefine(m, flightView(0, 2), mask.data(), scratch.data(), scratch.size(), &changes),
               lodrt::Result::NotLoaded);
     ASSERT_EQ(o.load(b.region, 0), lodrt::Result::Ok);
-    for (uint32_t k = 1; k < o.g.block_count; ++k)
-        if (k % 4 != 0) {
-            ASSERT_EQ(o.load(b.region, k), lodrt::Result::Ok);
+    // Resident: the blocks the flight's first view needs; the flight then moves on past them.
+    lodrt::PfrepView first = flightView(0, 8);
+    first.hysteresis = 1.0f;
+    first.cull_hysteresis = 0.0f;
+    std::vector<uint32_t> needed(o.g.block_count);
+    size_t needed_count = 0;
+    ASSERT_EQ(lodrt::pfrepRegionBlocksNeeded(o.g, first, needed.data(), needed.size(), &needed_count),
+              lodrt::Result::Ok);
+    ASSERT_GT(needed_count, 1u);
+    ASSERT_LT(needed_count, o.g.block_count);
+    for (size_t i = 0; i < needed_count; ++i)
+        if (needed[i] != 0) {
+            ASSERT_EQ(o.load(b.region, needed[i]), lodrt::Result::Ok);
         }
     poisonNonResident(o);
     lodrt::pfrepMaskCoarsest(m, mask.data());

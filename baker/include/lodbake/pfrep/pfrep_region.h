@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "lodbake/core/lod_policy.h"
 #include "lodbake/core/status.h"
 
 namespace lodbake {
@@ -13,6 +14,10 @@ struct PfrepRegionOptions {
     uint32_t block_vertices = 1024; // target vertices per block (blocks of a band are near-equal)
     uint32_t root_vertices = 4096;  // block 0: at least this many of the coarsest ranks, and every
                                     // vertex never removed
+    // The views the blocks are cut for: a vertex of error e is refined within switchDistance(e) of
+    // the eye, so blocks group vertices near in position and in that reach (docs/format/pfrep.md,
+    // "Blocks and bounds"). An invalid screen (no finite reach) cuts by position alone.
+    ScreenParams screen;
 };
 
 struct PfrepRegionStats {
