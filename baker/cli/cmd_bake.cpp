@@ -42,7 +42,8 @@ namespace {
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
-const char* kBakeHelp = R"(usage: lodbake bake IN... -o OUT.glb [--preset NAME|FILE] [options]   one pack from all inputs
+const char* kBakeHelp =
+    R"(usage: lodbake bake IN... -o OUT.glb [--preset NAME|FILE] [options]   one pack from all inputs
        lodbake bake IN... -o DIR/ [options]                          one pack per input: DIR/<stem>.glb
        lodbake bake --manifest FILE [-o DIR/] [options]              the packs a manifest lists
 
@@ -86,6 +87,9 @@ options:
                         coded, decoded whole by the runtime; 2: the uncompressed blob, streamed as a
                         growing prefix; 5: the uncompressed blob cut into region blocks, of which the
                         runtime loads those a view needs (preset key pfrep_format)
+  --pfrep-region-block N  format 5: vertices per region block, 64 to 65536 (default 1024; smaller
+                        blocks load less beside what a view refines, at 40 directory bytes and one
+                        bounds test per view and frame each; preset key pfrep_region_block)
   --clusters            add LOD0's cluster LOD hierarchy (LODBAKE_cluster_lod: clusters, groups and
                         pages a runtime cuts per view; preset key cluster_lod; docs/cluster_lod.md)
   --adaptive-precision  levels after LOD0 coded with position/normal bits from their own measured
@@ -136,6 +140,7 @@ struct CliOverrides {
     bool pfrep_from_chain = false;
     bool no_pfrep_from_chain = false;
     uint32_t pfrep_format = 0; // 0: the preset's
+    uint32_t pfrep_region_block = 0; // 0: the preset's
     bool clusters = false;
     bool adaptive_precision = false;
     bool no_adaptive_precision = false;
@@ -158,6 +163,7 @@ void applyOverrides(const CliOverrides& o, BakeSettings& s) {
     if (o.pfrep_from_chain) s.pfrep_from_chain = true;
     if (o.no_pfrep_from_chain) s.pfrep_from_chain = false;
     if (o.pfrep_format != 0) s.pfrep_format = o.pfrep_format;
+    if (o.pfrep_region_block != 0) s.pfrep_region_block = o.pfrep_region_block;
     if (o.clusters) s.cluster_lod = true;
     if (o.adaptive_precision) s.stream_precision.adaptive = true;
     if (o.no_adaptive_precision) s.stream_precision.adaptive = false;
@@ -403,6 +409,14 @@ int parseOverrides(Args& args, CliOverrides& overrides) {
             return usageError("--pfrep-format expects 2, 3, 4 or 5, got '" + f + "'");
         overrides.pfrep_format = uint32_t(f[0] - '0');
     }
+    if (args.values.count("--pfrep-region-block")) {
+        double n = 0;
+        const std::string& v = args.values["--pfrep-region-block"];
+        if (!parseNumber(v, n) || n < kMinPfrepRegionBlock || n > kMaxPfrepRegionBlock || n != std::floor(n))
+            return usageError("--pfrep-region-block expects an integer in [" + std::to_string(kMinPfrepRegionBlock) +
+                              ", " + std::to_string(kMaxPfrepRegionBlock) + "], got '" + v + "'");
+        overrides.pfrep_region_block = uint32_t(n);
+    }
     overrides.clusters = args.flags.count("--clusters") > 0;
     overrides.adaptive_precision = args.flags.count("--adaptive-precision") > 0;
     overrides.no_adaptive_precision = args.flags.count("--no-adaptive-precision") > 0;
@@ -613,10 +627,12 @@ int runBake(int argc, char** argv) {
                     {"--pfrep-from-chain", nullptr, false},
                     {"--no-pfrep-from-chain", nullptr, false},
                     {"--pfrep-format", nullptr, true},
+                    {"--pfrep-region-block", nullptr, true},
                     {"--clusters", nullptr, false},
                     {"--adaptive-precision", nullptr, false},
                     {"--no-adaptive-precision", nullptr, false},
-                    {"--remove-covered-components", nullptr, false}, {"--merge", nullptr, true},
+                    {"--remove-covered-components", nullptr, false},
+                    {"--merge", nullptr, true},
                     {"--keep-unreadable-images", nullptr, false},
                     {"--merge-scene", nullptr, false},
                     {"--report", nullptr, true},
@@ -624,7 +640,8 @@ int runBake(int argc, char** argv) {
                     {"--cache-dir", nullptr, true},
                     {"--quiet", "-q", false},
                     {"--print-config", nullptr, false},
-                    {"--plan", nullptr, false}, {"--run-job", nullptr, true},
+                    {"--plan", nullptr, false},
+                    {"--run-job", nullptr, true},
                     {"--help", "-h", false}},
                    args, code))
         return code;

@@ -8,7 +8,9 @@
 // the runs) shows what residency costs. Then the same flight through the shipping path: the mesh
 // baked into a pack with `pfrep_format` 5, read by a lodrt::Streamer through a range reader that
 // counts the blob's bytes, the views reported with wantPfrepBlocks; its bytes over the region blob
-// are the bar again, and every settled mesh is compared with the whole table's.
+// are the bar again, and every settled mesh is compared with the whole table's. The pack is baked
+// with --block as pfrep_region_block (its root block keeps the bake's 4,096 vertices), from the mesh
+// as the bake repairs it, so its blob is not the first pass's.
 // usage: pfrep_region_bench [--mesh PATH] [--frames N] [--height H] [--block V] [--root V] [--runs R] [--check]
 //   height: the flight's height above the bounding box in diagonals (0.15).
 //   default mesh: dragon_poisson.ply from the shared meshes.
@@ -227,10 +229,11 @@ struct StreamedFlight {
 // The flight through a Streamer (jobs inline) over a pack baked with format 5: each frame the view is
 // reported and update() called until it requests nothing more; then the streamed model and the whole
 // table (every block loaded from the pack's blob) are refined to a fixed point from the same masks.
-StreamedFlight flyStreamer(const lodbake::Mesh& mesh, float height, int frames) {
+StreamedFlight flyStreamer(const lodbake::Mesh& mesh, uint32_t block_vertices, float height, int frames) {
     StreamedFlight f;
     lodbake::BakeSettings settings;
     settings.pfrep_format = lodrt::format::kPfrepFormatRegions;
+    settings.pfrep_region_block = block_vertices;
     std::vector<lodbake::BakeInput> inputs(1);
     inputs[0].name = "scan";
     inputs[0].mesh = mesh;
@@ -451,7 +454,7 @@ int main(int argc, char** argv) {
                         e.differing_steps, e.steps, e.differing_frames, o.frames);
         }
     }
-    const StreamedFlight sf = flyStreamer(loaded->mesh, o.height, o.frames);
+    const StreamedFlight sf = flyStreamer(loaded->mesh, o.region.block_vertices, o.height, o.frames);
     const double streamed_fraction = sf.blob_bytes ? double(sf.read_bytes) / double(sf.blob_bytes) : 1.0;
     std::printf("streamer flight (pack with pfrep_format 5, views reported with wantPfrepBlocks): read %llu of %llu "
                 "blob bytes = %.3f (header included), %u of %u blocks in %u requests, largest settled mesh %zu "

@@ -22,26 +22,27 @@
 namespace region_streaming {
 
 // A wavy height field of n x n vertices over [0, 1]^2.
-lodbake::Mesh waves(int n) {
-    return lodbake_test::wavyField(n, 0.04f, 0.37f, 0.29f);
+// The wavy field of 180 x 180 vertices baked with a format 5 blob of `block_vertices` per block.
+std::vector<uint8_t> bakeWaves(uint32_t block_vertices) {
+    lodbake::BakeSettings settings;
+    settings.pfrep_format = lodrt::format::kPfrepFormatRegions;
+    settings.pfrep_region_block = block_vertices;
+    settings.lod_ratios = {0.5, 0.25, 0.1, 0.03};
+    settings.error_samples = 2000;
+    settings.threads = 2;
+    std::vector<lodbake::BakeInput> inputs(1);
+    inputs[0].name = "waves";
+    inputs[0].mesh = lodbake_test::wavyField(180, 0.04f, 0.37f, 0.29f);
+    lodbake::Diagnostics diagnostics;
+    auto baked = lodbake::bake(std::move(inputs), settings, diagnostics);
+    EXPECT_TRUE(baked.ok()) << baked.status().message();
+    return baked.ok() ? baked->glb : std::vector<uint8_t>();
 }
 
 // One model whose blob is format 5 with a root block and a few dozen others (default block sizes).
 const std::vector<uint8_t>& regionPack() {
-    static const std::vector<uint8_t>* glb = [] {
-        lodbake::BakeSettings settings;
-        settings.pfrep_format = lodrt::format::kPfrepFormatRegions;
-        settings.lod_ratios = {0.5, 0.25, 0.1, 0.03};
-        settings.error_samples = 2000;
-        settings.threads = 2;
-        std::vector<lodbake::BakeInput> inputs(1);
-        inputs[0].name = "waves";
-        inputs[0].mesh = waves(180);
-        lodbake::Diagnostics diagnostics;
-        auto baked = lodbake::bake(std::move(inputs), settings, diagnostics);
-        EXPECT_TRUE(baked.ok()) << baked.status().message();
-        return new std::vector<uint8_t>(baked.ok() ? baked->glb : std::vector<uint8_t>());
-    }();
+    static const std::vector<uint8_t>* glb =
+        new std::vector<uint8_t>(bakeWaves(lodbake::BakeSettings{}.pfrep_region_block));
     return *glb;
 }
 
@@ -380,6 +381,25 @@ TEST(PfrepRegionStreamingTest, WorkerThreadsStageWhileTheFrameRefines) {
         refineToFixedPoint(blob.whole, view, whole);
         EXPECT_EQ(settled, whole);
     }
+}
+
+// pfrep_region_block sizes the blocks the bake writes: a quarter of the default gives about four
+// times the blocks, none above it (the root block aside).
+TEST(PfrepRegionStreamingTest, RegionBlockSettingSizesTheBlocks) {
+    const std::vector<uint8_t> small = bakeWaves(256);
+    ASSERT_FALSE(small.empty());
+    lodrt::PackSource small_source, default_source;
+    ASSERT_EQ(small_source.openBytes(small.data(), small.size(), nullptr), lodrt::Result::Ok);
+    ASSERT_EQ(default_source.openBytes(regionPack().data(), regionPack().size(), nullptr), lodrt::Result::Ok);
+    const RegionBlob a = regionBlob(small_source, small), b = regionBlob(default_source, regionPack());
+    EXPECT_GE(a.blocks.size(), 3 * b.blocks.size());
+    uint32_t largest_small = 0, largest_default = 0;
+    for (size_t k = 1; k < a.blocks.size(); ++k) largest_small = std::max(largest_small, a.blocks[k].vertices);
+    for (size_t k = 1; k < b.blocks.size(); ++k) largest_default = std::max(largest_default, b.blocks[k].vertices);
+    EXPECT_LE(largest_small, 256u);
+    EXPECT_GT(largest_default, 256u);
+    // The same table either way.
+    EXPECT_EQ(a.format2, b.format2);
 }
 
 } // namespace region_streaming

@@ -379,6 +379,8 @@ Result<BakeOutput> bakeScene(std::vector<BakeInput> inputs, PackScene scene, con
     streams.pfrep_format = settings.pfrep_format == lodrt::format::kPfrepVersionLod0 && !settings.compact
                                ? lodrt::format::kPfrepVersionCompressed
                                : settings.pfrep_format;
+    streams.pfrep_regions.block_vertices = settings.pfrep_region_block;
+    streams.pfrep_regions.screen = screenParams(settings);
     streams.cluster_lod = settings.cluster_lod;
     // A --web pack is for clients that read none of our streams (docs/format/web.md).
     const std::vector<PackStreamEncoder> encoders =

@@ -165,6 +165,10 @@ Status applyImpl(const Json& root, const std::string& name, BakeSettings& s) {
         {"progressive_fans", [&](const Json& v, const std::string& w) { return readBool(v, w, s.progressive_fans); }},
         {"pfrep_from_chain", [&](const Json& v, const std::string& w) { return readBool(v, w, s.pfrep_from_chain); }},
         {"pfrep_format", [&](const Json& v, const std::string& w) { return readUint(v, w, 2, 5, s.pfrep_format); }},
+        {"pfrep_region_block",
+         [&](const Json& v, const std::string& w) {
+             return readUint(v, w, kMinPfrepRegionBlock, kMaxPfrepRegionBlock, s.pfrep_region_block);
+         }},
         {"cluster_lod", [&](const Json& v, const std::string& w) { return readBool(v, w, s.cluster_lod); }},
         {"remove_covered_components",
          [&](const Json& v, const std::string& w) { return readBool(v, w, s.remove_covered_components); }},
@@ -271,6 +275,7 @@ std::string settingsToJson(const BakeSettings& s) {
         j["progressive_fans"] = s.progressive_fans;
         j["pfrep_from_chain"] = s.pfrep_from_chain;
         j["pfrep_format"] = s.pfrep_format;
+        j["pfrep_region_block"] = s.pfrep_region_block;
         j["cluster_lod"] = s.cluster_lod;
         j["remove_covered_components"] = s.remove_covered_components;
         j["merge"] = mergeModeName(s.merge);

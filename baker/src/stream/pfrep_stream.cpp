@@ -227,8 +227,8 @@ Result<std::optional<std::vector<uint8_t>>> codeAgainstStream(const PfrepExtensi
 
 // The blob in the format the settings ask for (format 4 falls back to 3, see codeAgainstStream;
 // format 5 is the region container of the format 2 table); returns the format written.
-Result<uint32_t> codeBlob(PfrepExtensionObject& object, uint32_t format, const ValenceStreamOptions& valence,
-                          const LodChain& chain, const Mesh& mesh) {
+Result<uint32_t> codeBlob(PfrepExtensionObject& object, uint32_t format, const PfrepRegionOptions& regions,
+                          const ValenceStreamOptions& valence, const LodChain& chain, const Mesh& mesh) {
     if (format == lodrt::format::kPfrepVersionLod0) {
         LODBAKE_ASSIGN_OR_RETURN(std::optional<std::vector<uint8_t>> blob,
                                  codeAgainstStream(object, valence, chain, mesh));
@@ -241,7 +241,7 @@ Result<uint32_t> codeBlob(PfrepExtensionObject& object, uint32_t format, const V
     if (format == lodrt::format::kPfrepVersionCompressed) {
         LODBAKE_ASSIGN_OR_RETURN(object.blob, compressPfrep(object.blob));
     } else if (format == lodrt::format::kPfrepFormatRegions) {
-        LODBAKE_ASSIGN_OR_RETURN(object.blob, writePfrepRegions(object.blob, PfrepRegionOptions{}));
+        LODBAKE_ASSIGN_OR_RETURN(object.blob, writePfrepRegions(object.blob, regions));
     }
     return format;
 }
@@ -259,8 +259,8 @@ std::optional<PackStreamEncoder> progressiveFansStream(const StreamSettings& set
     cost.bytes_per_triangle = 190; // its own simplifier or the replay of the chain's collapses
     return makeStreamEncoder(
         lodrt::format::kExtProgressiveFans, needs, cost,
-        [format = settings.pfrep_format, valence = settings.valence](const LodChain& chain, size_t level_index,
-                                                                     const Mesh& mesh) -> Result<PackStreamCommit> {
+        [format = settings.pfrep_format, regions = settings.pfrep_regions, valence = settings.valence](
+            const LodChain& chain, size_t level_index, const Mesh& mesh) -> Result<PackStreamCommit> {
             if (level_index != 0 || mesh.faceCount() == 0) return PackStreamCommit();
             Diagnostics diagnostics; // notes only (e.g. nothing removable); the blob is valid either way
             // From the chain's own collapses when it recorded them (LodChain::removals), else its own
@@ -270,7 +270,7 @@ std::optional<PackStreamEncoder> progressiveFansStream(const StreamSettings& set
             // Format 3: the same table range-coded; format 4: coded against LOD0's decoded stream;
             // the runtime decodes either whole into the format 2 bytes. `format` is written only for
             // them, so a format 2 object reads as before.
-            LODBAKE_ASSIGN_OR_RETURN(const uint32_t written, codeBlob(object, format, valence, chain, mesh));
+            LODBAKE_ASSIGN_OR_RETURN(const uint32_t written, codeBlob(object, format, regions, valence, chain, mesh));
             if (written != lodrt::format::kPfrepVersion)
                 object.json.set(lodrt::format::kPfrepExtensionFormatMember, uint64_t(written));
             object.rank_point = {};

@@ -351,6 +351,14 @@ TEST(BakeCliUsageTest, PresetErrorsAndOverrides) {
     r = bake("--print-config --pfrep-format 5");
     ASSERT_EQ(r.exit_code, 0) << r.output;
     EXPECT_EQ(nlohmann::json::parse(r.output)["pfrep_format"].get<uint32_t>(), 5u);
+    r = bake("--print-config --pfrep-format 5 --pfrep-region-block 256");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_EQ(nlohmann::json::parse(r.output)["pfrep_region_block"].get<uint32_t>(), 256u);
+    EXPECT_EQ(printed["pfrep_region_block"].get<uint32_t>(), 1024u);
+    r = bake("--print-config --pfrep-region-block 32");
+    EXPECT_EQ(r.exit_code, 2);
+    EXPECT_NE(r.output.find("--pfrep-region-block expects an integer in [64, 65536], got '32'"), std::string::npos)
+        << r.output;
     r = bake("--print-config --pfrep-format 6");
     EXPECT_EQ(r.exit_code, 2);
     EXPECT_NE(r.output.find("--pfrep-format expects 2, 3, 4 or 5, got '6'"), std::string::npos) << r.output;

@@ -85,6 +85,8 @@ TEST(BakeConfigTest, WrongTypesRangesAndVersionsAreErrors) {
         {R"({"version": 1, "stream_precision": {"adaptive": 1}})",
          "/stream_precision/adaptive: expected true or false"},
         {R"({"version": 1, "stream_precision": {"bits": 8}})", "/stream_precision/bits: unknown key"},
+        {R"({"version": 1, "pfrep_format": 6})", "/pfrep_format: expected an integer in [2, 5]"},
+        {R"({"version": 1, "pfrep_region_block": 32})", "/pfrep_region_block: expected an integer in [64, 65536]"},
         {R"([1, 2])", "expected a JSON object"},
         {R"({"version": 1,)", "not valid JSON"},
     };

@@ -48,6 +48,11 @@ bool parseMergeMode(const std::string& text, MergeMode& mode);
 inline constexpr double kMinSwitchRatioLow = 1.001;
 inline constexpr double kMinSwitchRatioHigh = 100.0;
 
+/// BakeSettings::pfrep_region_block range: smaller blocks let a view load less beside what it
+/// refines, at 40 directory bytes per block and one bounds test per block per view and frame.
+inline constexpr uint32_t kMinPfrepRegionBlock = 64;
+inline constexpr uint32_t kMaxPfrepRegionBlock = 65536;
+
 /// Whether `ratio` is a valid lod_min_switch_ratio.
 inline bool isValidMinSwitchRatio(double ratio) {
     return ratio == 0.0 || (ratio >= kMinSwitchRatioLow && ratio <= kMinSwitchRatioHigh);
@@ -76,6 +81,7 @@ struct BakeSettings {
                                    // faster, coarser PFRep levels) instead of its own half-edge pass
     uint32_t pfrep_format = 4;     // that blob's format: 4 against LOD0's stream, 3 range-coded, 2 a prefix,
                                    // 5 region blocks
+    uint32_t pfrep_region_block = 1024; // format 5: vertices per region block (the unit a runtime loads)
     bool cluster_lod = false;      // LOD0's cluster LOD hierarchy as LODBAKE_cluster_lod (docs/cluster_lod.md)
     bool remove_covered_components = false; // levels may drop whole components lying within their accepted
                                             // error of the rest (SimplifyOptions::remove_covered_components)

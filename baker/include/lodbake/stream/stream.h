@@ -14,6 +14,7 @@
 #include "lodbake/core/mesh.h"
 #include "lodbake/core/status.h"
 #include "lodbake/pack/pack.h"
+#include "lodbake/pfrep/pfrep_region.h"
 #include "lodbake/simplify/lod_chain.h"
 
 namespace lodbake {
@@ -137,6 +138,7 @@ struct StreamSettings {
     bool pfrep_from_chain = false; // ... built from the chain's own collapses (StreamNeeds::collapse_record)
     uint32_t pfrep_format = 4;     // ... written as format 4 (against LOD0's stream), 3 (range-coded), 2 or 5
                                    // (region blocks; docs/format/pfrep.md)
+    PfrepRegionOptions pfrep_regions; // ... format 5: its block sizes and the views they are cut for
     bool cluster_lod = false;      // LODBAKE_cluster_lod on LOD0 (grid bits: valence.position_bits)
 };
 
