@@ -248,6 +248,22 @@ bool findLod0Stream(const Pack& pack, const ModelSet& models, uint32_t m, uint64
 
 } // namespace
 
+namespace {
+
+size_t alignUp8(uint64_t n) {
+    return size_t((n + 7) & ~uint64_t(7));
+}
+
+// Format 5: the one allocation a Streamer keeps for a region blob: the format 2 buffer, the region
+// state, the claimed bits and three per-block arrays.
+uint64_t regionStreamBytes(const PfrepRegionInfo& info) {
+    return alignUp8(info.decoded_bytes) + alignUp8(info.state_bytes) + alignUp8((uint64_t(info.vertex_count) + 7) / 8) +
+           alignUp8(uint64_t(info.block_count) * sizeof(float)) + alignUp8(info.block_count) +
+           alignUp8(uint64_t(info.block_count) * sizeof(uint32_t));
+}
+
+} // namespace
+
 Result PackSource::pfrepDecodeMemory(uint32_t model, uint64_t* decoded_bytes, uint64_t* scratch_bytes) const {
     if (model >= models_.modelCount() || !decoded_bytes || !scratch_bytes) return Result::InvalidArgument;
     *decoded_bytes = 0;
@@ -255,12 +271,21 @@ Result PackSource::pfrepDecodeMemory(uint32_t model, uint64_t* decoded_bytes, ui
     const JsonValue ext = pfrepExtension(pack_, models_, model);
     uint64_t view = 0, blob_format = 0;
     if (!ext.isObject() || !ext.find(format::kPfrepExtensionFormatMember).asUint64(&blob_format) ||
-        (blob_format != format::kPfrepVersionCompressed && blob_format != format::kPfrepVersionLod0))
+        (blob_format != format::kPfrepVersionCompressed && blob_format != format::kPfrepVersionLod0 &&
+         blob_format != format::kPfrepFormatRegions))
         return Result::Ok;
     if (!ext.find("bufferView").asUint64(&view) || view >= pack_.bufferViewCount()) return Result::BadStructure;
     uint8_t header[format::kPfrepHeaderSize];
     Result r = readBufferView(uint32_t(view), 0, header, sizeof(header));
     if (r != Result::Ok) return r;
+    if (blob_format == format::kPfrepFormatRegions) {
+        PfrepRegionInfo info;
+        r = pfrepRegionInfo(header, sizeof(header), &info);
+        if (r != Result::Ok) return r;
+        *decoded_bytes = regionStreamBytes(info);
+        *scratch_bytes = info.open_bytes;
+        return Result::Ok;
+    }
     if (blob_format == format::kPfrepVersionLod0)
         return format4DecodeMemory(model, header, decoded_bytes, scratch_bytes);
     PfrepCompressedInfo info;
@@ -791,14 +816,6 @@ void Streamer::collectPfrepWhole(Task& t, Result& r) {
     pointStepsAt(ps.steps, ps.step, ps.data);
 }
 
-namespace {
-
-size_t alignUp8(uint64_t n) {
-    return size_t((n + 7) & ~uint64_t(7));
-}
-
-} // namespace
-
 // Format 5: the header gives the opening's read and the one allocation the stream keeps (the format
 // 2 buffer, the region state, the claimed bits and three per-block arrays), bounded by the blob's
 // size before anything is allocated.
@@ -813,9 +830,7 @@ Result Streamer::readRegionHeader(PfrepStream& ps) {
     ps.decoded_bytes = alignUp8(info.decoded_bytes);
     ps.state_bytes = alignUp8(info.state_bytes);
     ps.block_count = info.block_count;
-    ps.directory_bytes = ps.decoded_bytes + ps.state_bytes + alignUp8((uint64_t(info.vertex_count) + 7) / 8) +
-                         alignUp8(uint64_t(info.block_count) * sizeof(float)) + alignUp8(info.block_count) +
-                         alignUp8(uint64_t(info.block_count) * sizeof(uint32_t));
+    ps.directory_bytes = regionStreamBytes(info);
     return Result::Ok;
 }
 

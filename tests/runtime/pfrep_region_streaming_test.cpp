@@ -253,6 +253,12 @@ TEST(PfrepRegionStreamingTest, BudgetCountsTheOpeningAndTheReads) {
     probe.update(nullptr);
     ASSERT_EQ(probe.pfrepState(0), lodrt::PfrepStreamState::Resident);
     const uint64_t pinned = probe.stats().resident_bytes;
+    // pfrepDecodeMemory reports that allocation and the opening's read, from the header alone.
+    uint64_t kept = 0, scratch = 0;
+    ASSERT_EQ(source.pfrepDecodeMemory(0, &kept, &scratch), lodrt::Result::Ok);
+    EXPECT_EQ(probe.stats().pfrep_resident_bytes, kept);
+    EXPECT_GE(kept, blob.info.decoded_bytes + blob.info.state_bytes);
+    EXPECT_EQ(scratch, blob.info.open_bytes);
     const uint64_t largest_pair =
         2 * std::max_element(blob.blocks.begin() + 1, blob.blocks.end(), [](const auto& a, const auto& b) {
                 return a.size < b.size;

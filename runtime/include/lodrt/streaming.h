@@ -129,7 +129,10 @@ public:
     /// "Format 3", "In a glTF pack"): the decoded format 2 bytes it keeps resident, and the scratch
     /// one decode takes meanwhile, read from the blob's header (one readBufferView of its first
     /// bytes; format 4 also reads LOD0's valence stream once, into a transient buffer from the
-    /// pack's allocator). Both 0 when the model has no PFRep or a format 2 one. Returns Ok;
+    /// pack's allocator). Format 5 (region blocks): the allocation it keeps (format 2 buffer and
+    /// region state) and, as scratch, the opening's read; block reads in flight come on top, at
+    /// most pfrep_blocks_per_request blocks per request. Both 0 when the model has no PFRep or a
+    /// format 2 one. Returns Ok;
     /// InvalidArgument (bad model id, null outputs); BadStructure (an extension without a valid
     /// bufferView); the read's or pfrepCompressedInfo's error (the streamer fails such a stream too).
     Result pfrepDecodeMemory(uint32_t model, uint64_t* decoded_bytes, uint64_t* scratch_bytes) const;

@@ -86,9 +86,10 @@ struct View::Pack {
     }
 };
 
-// Memory the streamer takes to decode a pack's format 3 PFRep blobs (their format 2 bytes and the
-// decoder's scratch): more than the pack's own bytes, since a blob decodes to about three times its
-// size. Blobs whose header does not read are not counted (the streamer fails those streams anyway).
+// Memory the streamer takes for a pack's format 3, 4 and 5 PFRep blobs (the format 2 bytes they are
+// decoded or laid out into, and the decoder's scratch or the opening's read): more than the pack's
+// own bytes, since a format 3 or 4 blob decodes to three to ten times its size. Blobs whose header
+// does not read are not counted (the streamer fails those streams anyway).
 uint64_t compressedPfrepDecodeBytes(const lodrt::PackSource& source) {
     uint64_t total = 0;
     for (uint32_t m = 0; m < source.models().modelCount(); ++m) {
