@@ -296,84 +296,95 @@ Result readRanks(const PfrepRegions& g, uint32_t block, const uint8_t* p, const 
 
 } // namespace
 
-namespace detail {
+namespace {
 
-// Stage: ranks, records and entries laid out and validated; only the block's own (non-resident)
-// bytes of the decoded buffer and its rank slot in the state are written, so refinement may read
-// the resident vertices meanwhile.
-Result pfrepRegionStageBlock(const PfrepRegions& g, uint32_t block, const void* bytes, size_t size, uint8_t* claimed,
-                             PfrepRegionStaged* staged) {
-    if (!g.state || block >= g.block_count || (!bytes && size > 0) || !staged) return Result::InvalidArgument;
+// A block's bytes: its ranks written to the block's rank slots in the state, its records and its
+// entries (each exactly its skeleton length). Checks sizes and ranks, and with `claimed` that no
+// rank is staged by another block of the same batch.
+struct BlockParts {
+    uint32_t* ranks = nullptr;
+    uint32_t n = 0;
+    const uint8_t* records = nullptr;
+    const uint8_t* entries = nullptr;
+};
+
+Result parseBlock(const PfrepRegions& g, uint32_t block, const void* bytes, size_t size, const uint8_t* claimed,
+                  BlockParts* parts) {
     if (g.block_loaded[block]) return Result::InvalidArgument;
     const PfrepRegionBlock& b = g.blocks[block];
     if (size < b.size) return Result::Truncated;
     if (size > b.size) return Result::TrailingBytes;
     const StateLayout l = stateLayout(g.model.vertex_count, g.block_count);
-    uint32_t* ranks =
+    BlockParts out;
+    out.ranks =
         reinterpret_cast<uint32_t*>(g.state + l.ranks) + reinterpret_cast<const uint32_t*>(g.state + l.first)[block];
+    out.n = b.vertices;
     const uint8_t* p = static_cast<const uint8_t*>(bytes);
     const uint8_t* end = p + size;
-    const uint8_t* records = nullptr;
-    Result r = readRanks(g, block, p, end, ranks, &records);
+    Result r = readRanks(g, block, p, end, out.ranks, &out.records);
     if (r != Result::Ok) return r;
-    const uint32_t n = b.vertices;
-    // A rank another block of the same batch staged is held twice: refused before anything is laid
-    // out, so a failed block never clears bytes another staged block validated.
+    // A rank another block of the same batch staged is held twice.
     if (claimed) {
-        for (uint32_t k = 0; k < n; ++k)
-            if ((claimed[ranks[k] >> 3] >> (ranks[k] & 7)) & 1) return Result::BadStructure;
+        for (uint32_t k = 0; k < out.n; ++k)
+            if ((claimed[out.ranks[k] >> 3] >> (out.ranks[k] & 7)) & 1) return Result::BadStructure;
     }
-    if (uint64_t(end - records) < uint64_t(n) * format::kPfrepVertexRecordSize) return Result::Truncated;
-    const uint8_t* entries = records + size_t(n) * format::kPfrepVertexRecordSize;
+    if (uint64_t(end - out.records) < uint64_t(out.n) * format::kPfrepVertexRecordSize) return Result::Truncated;
+    out.entries = out.records + size_t(out.n) * format::kPfrepVertexRecordSize;
     uint64_t total = 0;
-    for (uint32_t k = 0; k < n; ++k) {
+    for (uint32_t k = 0; k < out.n; ++k) {
         uint64_t begin = 0, stop = 0;
-        entryRange(g.model, ranks[k], begin, stop);
+        entryRange(g.model, out.ranks[k], begin, stop);
         total += stop - begin;
     }
-    if (total < uint64_t(end - entries)) return Result::TrailingBytes;
-    if (total > uint64_t(end - entries)) return Result::Truncated;
-    // Lay out and validate; on failure zero what was laid out.
-    PfrepRegionStaged out;
-    out.max_neighbours = g.model.max_fan_neighbours;
-    for (uint32_t k = 0; k < n; ++k) {
+    if (total < uint64_t(end - out.entries)) return Result::TrailingBytes;
+    if (total > uint64_t(end - out.entries)) return Result::Truncated;
+    *parts = out;
+    return Result::Ok;
+}
+
+// Validates the block's entries as openPfrep does, each read at at(begin, length) (its format 2
+// offset and length; 8 readable bytes must follow it: the bit reader loads whole words), and
+// gathers what the commit needs.
+template <typename At>
+Result validateEntries(const PfrepModel& m, const BlockParts& parts, At at, detail::PfrepRegionStaged* staged) {
+    detail::PfrepRegionStaged out;
+    out.max_neighbours = m.max_fan_neighbours;
+    // Validation reads only the entry's own bits and the model's counts, so a copy of the model whose
+    // data is the entry validates it wherever it lies.
+    PfrepModel at_entry = m;
+    for (uint32_t k = 0; k < parts.n; ++k) {
         uint64_t begin = 0, stop = 0;
-        entryRange(g.model, ranks[k], begin, stop);
-        const uint8_t* rec = records + size_t(k) * format::kPfrepVertexRecordSize;
-        std::memcpy(g.decoded + detail::pfrepRecordOffset(g.model, ranks[k]), rec, format::kPfrepVertexRecordSize);
-        std::memcpy(g.decoded + begin, entries, size_t(stop - begin));
-        entries += stop - begin;
+        entryRange(m, parts.ranks[k], begin, stop);
+        at_entry.data = at(begin, stop - begin);
         uint32_t neighbours = 0;
-        r = detail::pfrepValidateEntryAt(g.model, ranks[k], begin, stop, &out.originals, &neighbours);
-        if (r != Result::Ok) {
-            clearVertices(g, ranks, k + 1);
-            return r;
-        }
+        const Result r =
+            detail::pfrepValidateEntryAt(at_entry, parts.ranks[k], 0, stop - begin, &out.originals, &neighbours);
+        if (r != Result::Ok) return r;
+        const uint8_t* rec = parts.records + size_t(k) * format::kPfrepVertexRecordSize;
         out.max_neighbours = std::max(out.max_neighbours, neighbours);
         out.max_radius_code = std::max<uint32_t>(out.max_radius_code, rec[6]);
         out.max_error_code = std::max<uint32_t>(out.max_error_code, rec[7]);
-    }
-    if (claimed) {
-        for (uint32_t k = 0; k < n; ++k)
-            claimed[ranks[k] >> 3] = uint8_t(claimed[ranks[k] >> 3] | (1u << (ranks[k] & 7)));
     }
     *staged = out;
     return Result::Ok;
 }
 
-void pfrepRegionUnclaim(const PfrepRegions& g, uint32_t block, uint8_t* claimed) {
-    if (!g.state || block >= g.block_count || !claimed) return;
-    const StateLayout l = stateLayout(g.model.vertex_count, g.block_count);
-    const uint32_t* ranks = reinterpret_cast<const uint32_t*>(g.state + l.ranks) +
-                            reinterpret_cast<const uint32_t*>(g.state + l.first)[block];
-    for (uint32_t k = 0; k < g.blocks[block].vertices; ++k)
-        claimed[ranks[k] >> 3] = uint8_t(claimed[ranks[k] >> 3] & ~(1u << (ranks[k] & 7)));
+// Copies the block's records and entries to their format 2 places.
+void layOut(const PfrepRegions& g, const BlockParts& parts) {
+    const uint8_t* entries = parts.entries;
+    for (uint32_t k = 0; k < parts.n; ++k) {
+        uint64_t begin = 0, stop = 0;
+        entryRange(g.model, parts.ranks[k], begin, stop);
+        std::memcpy(g.decoded + detail::pfrepRecordOffset(g.model, parts.ranks[k]),
+                    parts.records + size_t(k) * format::kPfrepVertexRecordSize, format::kPfrepVertexRecordSize);
+        std::memcpy(g.decoded + begin, entries, size_t(stop - begin));
+        entries += stop - begin;
+    }
 }
 
-Result pfrepRegionCommitBlock(PfrepRegions* regions, uint32_t block, const PfrepRegionStaged& staged) {
-    if (!regions || !regions->state || block >= regions->block_count || regions->block_loaded[block])
-        return Result::InvalidArgument;
-    PfrepRegions& g = *regions;
+// Checks the input triangles of all loaded blocks with this one's and makes its vertices resident;
+// on BadStructure its laid-out bytes are zero again.
+Result makeResident(PfrepRegions& g, uint32_t block, const detail::PfrepRegionStaged& staged) {
     const StateLayout l = stateLayout(g.model.vertex_count, g.block_count);
     const uint32_t* ranks = reinterpret_cast<const uint32_t*>(g.state + l.ranks) +
                             reinterpret_cast<const uint32_t*>(g.state + l.first)[block];
@@ -407,16 +418,83 @@ Result pfrepRegionCommitBlock(PfrepRegions* regions, uint32_t block, const Pfrep
     return Result::Ok;
 }
 
+} // namespace
+
+namespace detail {
+
+// Stage: validated from the block's own bytes; nothing of the decoded buffer is written (refinement
+// may read it meanwhile, and its word-wide bit reads run past a resident entry's end into the next).
+Result pfrepRegionStageBlock(const PfrepRegions& g, uint32_t block, const void* bytes, size_t size, uint8_t* claimed,
+                             PfrepRegionStaged* staged) {
+    if (!g.state || block >= g.block_count || (!bytes && size > 0) || !staged) return Result::InvalidArgument;
+    BlockParts parts;
+    Result r = parseBlock(g, block, bytes, size, claimed, &parts);
+    if (r != Result::Ok) return r;
+    const uint8_t* entries = parts.entries;
+    r = validateEntries(
+        g.model, parts,
+        [&entries](uint64_t, uint64_t length) {
+            const uint8_t* at = entries;
+            entries += length;
+            return at;
+        },
+        staged);
+    if (r != Result::Ok) return r;
+    staged->records_offset = uint64_t(parts.records - static_cast<const uint8_t*>(bytes));
+    if (claimed) {
+        for (uint32_t k = 0; k < parts.n; ++k)
+            claimed[parts.ranks[k] >> 3] = uint8_t(claimed[parts.ranks[k] >> 3] | (1u << (parts.ranks[k] & 7)));
+    }
+    return Result::Ok;
+}
+
+void pfrepRegionUnclaim(const PfrepRegions& g, uint32_t block, uint8_t* claimed) {
+    if (!g.state || block >= g.block_count || !claimed) return;
+    const StateLayout l = stateLayout(g.model.vertex_count, g.block_count);
+    const uint32_t* ranks = reinterpret_cast<const uint32_t*>(g.state + l.ranks) +
+                            reinterpret_cast<const uint32_t*>(g.state + l.first)[block];
+    for (uint32_t k = 0; k < g.blocks[block].vertices; ++k)
+        claimed[ranks[k] >> 3] = uint8_t(claimed[ranks[k] >> 3] & ~(1u << (ranks[k] & 7)));
+}
+
+Result pfrepRegionCommitBlock(PfrepRegions* regions, uint32_t block, const void* bytes,
+                              const PfrepRegionStaged& staged) {
+    if (!regions || !regions->state || block >= regions->block_count || regions->block_loaded[block] || !bytes)
+        return Result::InvalidArgument;
+    PfrepRegions& g = *regions;
+    const StateLayout l = stateLayout(g.model.vertex_count, g.block_count);
+    BlockParts parts;
+    parts.ranks =
+        reinterpret_cast<uint32_t*>(g.state + l.ranks) + reinterpret_cast<const uint32_t*>(g.state + l.first)[block];
+    parts.n = g.blocks[block].vertices;
+    parts.records = static_cast<const uint8_t*>(bytes) + staged.records_offset;
+    parts.entries = parts.records + size_t(parts.n) * format::kPfrepVertexRecordSize;
+    layOut(g, parts);
+    return makeResident(g, block, staged);
+}
+
 } // namespace detail
 
+// Single-threaded: laid out first and validated in place, where the format 2 block padding follows
+// every entry (the caller's buffer need not be padded).
 Result pfrepRegionLoadBlock(PfrepRegions* regions, uint32_t block, const void* bytes, size_t size) {
     if (!regions || !regions->state || block >= regions->block_count || (!bytes && size > 0))
         return Result::InvalidArgument;
-    if (regions->block_loaded[block]) return Result::Ok;
-    detail::PfrepRegionStaged staged;
-    const Result r = detail::pfrepRegionStageBlock(*regions, block, bytes, size, nullptr, &staged);
+    PfrepRegions& g = *regions;
+    if (g.block_loaded[block]) return Result::Ok;
+    BlockParts parts;
+    Result r = parseBlock(g, block, bytes, size, nullptr, &parts);
     if (r != Result::Ok) return r;
-    return detail::pfrepRegionCommitBlock(regions, block, staged);
+    layOut(g, parts);
+    detail::PfrepRegionStaged staged;
+    r = validateEntries(
+        g.model, parts, [&g](uint64_t begin, uint64_t) { return static_cast<const uint8_t*>(g.decoded) + begin; },
+        &staged);
+    if (r != Result::Ok) {
+        clearVertices(g, parts.ranks, parts.n);
+        return r;
+    }
+    return makeResident(g, block, staged);
 }
 
 Result pfrepRegionReleaseMask(const PfrepRegions& g, uint32_t block, uint8_t* mask, uint32_t* scratch,

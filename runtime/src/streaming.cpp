@@ -837,6 +837,10 @@ Result Streamer::readRegionHeader(PfrepStream& ps) {
 // The opening arrived: the stream keeps its allocation and the directory; the root block is next.
 void Streamer::collectRegionOpen(Task& t, Result& r) {
     PfrepStream& ps = pfrep_[t.slot];
+    // The allocation was sized from the header read first: a source that served another header
+    // with the opening fails the stream (nothing beyond the buffers' capacities was written).
+    if (r == Result::Ok && std::memcmp(t.coded, ps.header, format::kPfrepRegionHeaderSize) != 0)
+        r = Result::BadStructure;
     stats_.in_flight_bytes -= ps.directory_bytes + t.coded_size;
     detail::deallocateBytes(options_.allocator, t.coded);
     t.coded = nullptr;
@@ -857,16 +861,16 @@ void Streamer::collectRegionOpen(Task& t, Result& r) {
 void Streamer::collectRegionBlocks(Task& t, Result& r) {
     PfrepStream& ps = pfrep_[t.slot];
     stats_.in_flight_bytes -= t.coded_size;
-    detail::deallocateBytes(options_.allocator, t.coded);
-    t.coded = nullptr;
     stats_.streamed_bytes += t.coded_size;
+    const uint8_t* bytes = t.coded;
     for (uint32_t i = 0; i < t.block_count; ++i) {
         const uint32_t block = t.blocks[i];
         Result b = r == Result::Ok ? t.block_results[i] : r;
         if (b == Result::Ok) {
-            b = detail::pfrepRegionCommitBlock(&ps.regions, block, t.staged[i]);
+            b = detail::pfrepRegionCommitBlock(&ps.regions, block, bytes, t.staged[i]);
             detail::pfrepRegionUnclaim(ps.regions, block, ps.claimed);
         }
+        bytes += ps.regions.blocks[block].size;
         if (b == Result::Ok) {
             ps.block_state[block] = uint8_t(LevelState::Resident);
             ++stats_.pfrep_blocks_loaded;
@@ -877,6 +881,16 @@ void Streamer::collectRegionBlocks(Task& t, Result& r) {
             ps.block_state[block] = uint8_t(LevelState::Failed);
             ++stats_.failures;
         }
+    }
+    detail::deallocateBytes(options_.allocator, t.coded);
+    t.coded = nullptr;
+    if (r != Result::Ok) {
+        // Without its root the stream never serves a model: its allocation goes now.
+        stats_.resident_bytes -= ps.directory_bytes;
+        stats_.pfrep_resident_bytes -= ps.directory_bytes;
+        detail::deallocateBytes(options_.allocator, ps.data);
+        ps.data = nullptr;
+        ps.is_open = 0;
     }
 }
 
@@ -907,14 +921,27 @@ void Streamer::scoreRegionStream(PfrepStream& ps) {
     if (n > per_request) {
         std::partial_sort(ps.needed, ps.needed + per_request, ps.needed + n, more_wanted);
         n = per_request;
-        std::sort(ps.needed, ps.needed + n);
+    } else {
+        std::sort(ps.needed, ps.needed + n, more_wanted);
     }
-    for (uint32_t i = 0; i < n; ++i) {
+    // The most wanted block always; then more while the budget has room beside what is held and
+    // in flight, so that a tight budget still gets one block per request rather than none.
+    const uint64_t held = stats_.resident_bytes + stats_.in_flight_bytes;
+    const uint64_t room = options_.budget_bytes == 0     ? UINT64_MAX
+                          : options_.budget_bytes > held ? options_.budget_bytes - held
+                                                         : 0;
+    uint32_t taken = 0;
+    for (; taken < n; ++taken) {
+        const uint64_t size = ps.regions.blocks[ps.needed[taken]].size;
+        if (taken > 0 && ps.batch_bytes + size > room) break;
+        ps.batch_bytes += size;
+    }
+    std::sort(ps.needed, ps.needed + taken);
+    for (uint32_t i = 0; i < taken; ++i) {
         ps.batch[i] = ps.needed[i];
-        ps.batch_bytes += ps.regions.blocks[ps.needed[i]].size;
         ps.usefulness = std::max(ps.usefulness, priority[ps.needed[i]]);
     }
-    ps.batch_count = n;
+    ps.batch_count = taken;
 }
 
 void Streamer::wantPfrepBlocks(uint32_t model, const PfrepView& view, float priority) {
@@ -972,8 +999,9 @@ bool Streamer::prepareRegionTask(Task& t, PfrepStream& ps, uint64_t size) {
         stats_.in_flight_bytes += ps.directory_bytes + ps.open_bytes;
         return true;
     }
-    if (ps.batch_count == 0 || size > SIZE_MAX) return false;
-    t.coded = static_cast<uint8_t*>(detail::allocateBytes(a, size_t(size)));
+    if (ps.batch_count == 0 || size > SIZE_MAX - detail::kPfrepRegionStagePadding) return false;
+    // Staging validates the blocks where they were read: the last one's entries need the padding.
+    t.coded = static_cast<uint8_t*>(detail::allocateBytes(a, size_t(size) + detail::kPfrepRegionStagePadding));
     if (!t.coded) return false;
     t.kind = Task::Kind::PfrepRegionBlocks;
     t.dst = nullptr;
@@ -1391,6 +1419,9 @@ bool Streamer::prepareTask(uint32_t task_index, uint32_t id, uint64_t size) {
         t.size = sizeof(ps->header);
     } else if (ps->format == format::kPfrepFormatRegions) {
         if (!prepareRegionTask(t, *ps, size)) {
+            // A batch of blocks that cannot be read now is asked for again; the opening and the
+            // root cannot wait.
+            if (ps->is_open && ps->step >= 0) return false;
             ps->state = PfrepStreamState::Failed;
             ps->is_failed = 1;
             ++stats_.failures;

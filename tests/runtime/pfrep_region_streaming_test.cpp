@@ -243,8 +243,7 @@ TEST(PfrepRegionStreamingTest, BudgetCountsTheOpeningAndTheReads) {
     lodrt::PackSource source;
     ASSERT_EQ(source.openBytes(bytes.data(), bytes.size(), nullptr), lodrt::Result::Ok);
     const RegionBlob blob = regionBlob(source, bytes);
-    lodrt::StreamerOptions options;
-    options.pfrep_blocks_per_request = 2;
+    lodrt::StreamerOptions options; // 16 blocks per request, more than the budget leaves room for
     // Room for the levels the pack pins, the stream's allocation and a little more.
     lodrt::Streamer probe;
     ASSERT_EQ(probe.init(&source, nullptr, nullptr), lodrt::Result::Ok);
@@ -289,10 +288,12 @@ TEST(PfrepRegionStreamingTest, CorruptBlocksFailAloneAndNeverCrash) {
     ASSERT_EQ(clean_source.openBytes(clean.data(), clean.size(), nullptr), lodrt::Result::Ok);
     const RegionBlob blob = regionBlob(clean_source, clean);
     const lodrt::PfrepView view = cornerView();
-    // Offsets inside the blob to damage: the header and opening every 97 bytes, and bytes of
-    // several needed blocks (their rank lists, records and entries).
+    // Offsets inside the blob to damage: the header and opening every 97 bytes, the root block, and
+    // bytes of several needed blocks (their rank lists, records and entries).
     std::vector<uint64_t> offsets;
     for (uint64_t at = 0; at < blob.info.open_bytes; at += 97) offsets.push_back(at);
+    for (uint32_t at = 0; at < blob.blocks[0].size; at += blob.blocks[0].size / 5 + 1)
+        offsets.push_back(blob.blocks[0].offset + at);
     for (uint32_t k = 1; k < blob.blocks.size(); k += 5)
         for (uint32_t at = 0; at < blob.blocks[k].size; at += blob.blocks[k].size / 7 + 1)
             offsets.push_back(blob.blocks[k].offset + at);
@@ -324,6 +325,9 @@ TEST(PfrepRegionStreamingTest, CorruptBlocksFailAloneAndNeverCrash) {
         const lodrt::StreamStats s = streamer.stats();
         if (streamer.pfrepState(0) == lodrt::PfrepStreamState::Failed) {
             ++failed_streams;
+            // Nothing of a failed stream stays held (a bad root block frees the opening's allocation).
+            EXPECT_EQ(s.pfrep_resident_bytes, 0u);
+            EXPECT_EQ(streamer.pfrepRegions(0), nullptr);
             continue;
         }
         EXPECT_EQ(streamer.pfrepState(0), lodrt::PfrepStreamState::Resident);
@@ -406,6 +410,49 @@ TEST(PfrepRegionStreamingTest, RegionBlockSettingSizesTheBlocks) {
     EXPECT_GT(largest_default, 256u);
     // The same table either way.
     EXPECT_EQ(a.format2, b.format2);
+}
+
+// A source that serves another opening than the header it served first (a file replaced between
+// the reads, or a hostile server): here the opening of the same table cut into four times fewer
+// blocks, consistent in itself. The allocation and the per-block arrays were sized from the first
+// header, so the stream fails and frees its allocation; nothing is read or written beyond it
+// (sanitizer job).
+TEST(PfrepRegionStreamingTest, AnOpeningWithAnotherHeaderFailsTheStream) {
+    CountingFile file;
+    file.bytes = bakeWaves(256);
+    ASSERT_FALSE(file.bytes.empty());
+    lodrt::PackSource first_source, other_source;
+    ASSERT_EQ(first_source.openBytes(file.bytes.data(), file.bytes.size(), nullptr), lodrt::Result::Ok);
+    ASSERT_EQ(other_source.openBytes(regionPack().data(), regionPack().size(), nullptr), lodrt::Result::Ok);
+    const RegionBlob first = regionBlob(first_source, file.bytes), other = regionBlob(other_source, regionPack());
+    ASSERT_GT(first.blocks.size(), other.blocks.size());
+    ASSERT_LE(other.info.open_bytes, first.info.open_bytes);
+    struct Swapping {
+        CountingFile* file;
+        uint64_t blob_offset;
+        const std::vector<uint8_t>* other_blob;
+        static lodrt::Result read(void* user, uint64_t offset, void* dst, size_t size) {
+            Swapping* s = static_cast<Swapping*>(user);
+            const lodrt::Result r = CountingFile::read(s->file, offset, dst, size);
+            if (r == lodrt::Result::Ok && offset == s->blob_offset && size > lodrt::format::kPfrepRegionHeaderSize)
+                std::memcpy(dst, s->other_blob->data(), std::min(size, s->other_blob->size()));
+            return r;
+        }
+    } swapping{&file, first.file_offset, &other.bytes};
+    lodrt::PackSource source;
+    ASSERT_EQ(source.openReader(lodrt::RangeReader{&Swapping::read, &swapping}, file.bytes.size(), nullptr),
+              lodrt::Result::Ok);
+    lodrt::Streamer streamer;
+    ASSERT_EQ(streamer.init(&source, nullptr, nullptr), lodrt::Result::Ok);
+    for (int frame = 0; frame < 8; ++frame) {
+        streamer.wantPfrepBlocks(0, cornerView(), 1.0f);
+        streamer.update(nullptr);
+    }
+    EXPECT_EQ(streamer.pfrepState(0), lodrt::PfrepStreamState::Failed);
+    EXPECT_EQ(streamer.pfrepModel(0), nullptr);
+    EXPECT_EQ(streamer.pfrepRegions(0), nullptr);
+    EXPECT_EQ(streamer.stats().pfrep_resident_bytes, 0u);
+    EXPECT_EQ(streamer.stats().in_flight_bytes, 0u);
 }
 
 } // namespace region_streaming

@@ -29,10 +29,11 @@
 // holding the format 2 buffer the blocks are laid into and the region state; pinned and counted),
 // then its root block (pinned); from then on the engine reports each instance's view before update()
 // (wantPfrepBlocks) and the streamer reads the blocks those views need (pfrepRegionBlocksNeeded),
-// most wanted first, up to StreamerOptions::pfrep_blocks_per_request per job, each validated and
-// laid out on the job (detail::pfrepRegionStageBlock) and made resident in update(). Refinement
-// may run on the model while a job stages blocks: a job writes only bytes of vertices that are not
-// resident. Loaded blocks stay: the format 2 buffer is allocated whole when the blob opens, so
+// most wanted first, up to StreamerOptions::pfrep_blocks_per_request per job (fewer when the
+// budget's room is smaller), each validated on the job where it was read
+// (detail::pfrepRegionStageBlock) and laid out and made resident in update(). Refinement may run
+// on the model while a job stages blocks: a job writes nothing the model's readers see. Loaded
+// blocks stay: the format 2 buffer is allocated whole when the blob opens, so
 // evicting a block would free no memory; the budget counts that buffer and the block reads in flight.
 //
 // A model whose level-0 mesh carries LODBAKE_cluster_lod (lodrt/cluster_pack.h) gets its cluster

@@ -32,20 +32,27 @@ struct PfrepRegionStaged {
     uint64_t originals = 0;      // its input triangles
     uint32_t max_neighbours = 0; // the model's max_fan_neighbours with the block's fans
     uint32_t max_radius_code = 0, max_error_code = 0;
+    uint64_t records_offset = 0; // where its records start in the block's bytes
 };
 
+/// Bytes that must be readable after a block's bytes given to pfrepRegionStageBlock: its entries are
+/// validated where they lie, and the bit reader loads whole 8-byte words.
+constexpr size_t kPfrepRegionStagePadding = 8;
+
 /// First half of pfrepRegionLoadBlock, for a loader thread while another thread refines with the
-/// model: checks the block's size and ranks (none resident, none set in `claimed` when given), lays
-/// its records and entries into the decoded buffer and validates them, writing nothing but those
-/// bytes, the block's rank list in the state buffer and (on Ok) the block's bits in `claimed` (V bits,
-/// owned by the loader: the ranks staged and not yet committed). On error the laid-out bytes are
-/// zero again. The block must not be loaded.
+/// model: checks the block's size and ranks (none resident, none set in `claimed` when given) and
+/// validates its records and entries in `bytes` (followed by kPfrepRegionStagePadding readable
+/// bytes), writing nothing but the block's rank list in the state buffer and (on Ok) the block's
+/// bits in `claimed` (V bits, owned by the loader: the ranks staged and not yet committed). The
+/// decoded buffer is not touched. The block must not be loaded.
 LODRT_API Result pfrepRegionStageBlock(const PfrepRegions& regions, uint32_t block, const void* bytes, size_t size,
                                        uint8_t* claimed, PfrepRegionStaged* staged);
 /// Clears a staged block's bits in `claimed` (after its commit, or instead of it).
 LODRT_API void pfrepRegionUnclaim(const PfrepRegions& regions, uint32_t block, uint8_t* claimed);
-/// Second half, on the thread that owns the model: checks the input triangles of all loaded blocks
-/// and makes the block's vertices resident. On BadStructure the block's bytes are zero again.
-LODRT_API Result pfrepRegionCommitBlock(PfrepRegions* regions, uint32_t block, const PfrepRegionStaged& staged);
+/// Second half, on the thread that owns the model: lays the staged block's records and entries
+/// (the same `bytes`) into the decoded buffer, checks the input triangles of all loaded blocks and
+/// makes the block's vertices resident. On BadStructure the block's bytes are zero again.
+LODRT_API Result pfrepRegionCommitBlock(PfrepRegions* regions, uint32_t block, const void* bytes,
+                                        const PfrepRegionStaged& staged);
 
 } // namespace lodrt::detail
