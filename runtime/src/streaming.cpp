@@ -254,12 +254,22 @@ size_t alignUp8(uint64_t n) {
     return size_t((n + 7) & ~uint64_t(7));
 }
 
-// Format 5: the one allocation a Streamer keeps for a region blob: the format 2 buffer, the region
-// state, the claimed bits and three per-block arrays.
-uint64_t regionStreamBytes(const PfrepRegionInfo& info) {
-    return alignUp8(info.decoded_bytes) + alignUp8(info.state_bytes) + alignUp8((uint64_t(info.vertex_count) + 7) / 8) +
-           alignUp8(uint64_t(info.block_count) * sizeof(float)) + alignUp8(info.block_count) +
-           alignUp8(uint64_t(info.block_count) * sizeof(uint32_t));
+// Format 5: the one allocation a Streamer keeps for a region blob, offsets in order: the format 2
+// buffer (from 0), the region state, the claimed bits (one per vertex) and three per-block arrays
+// (priority, LevelState, needed); `total` bytes in all.
+struct RegionStreamLayout {
+    uint64_t state, claimed, priority, block_state, needed, total;
+};
+
+RegionStreamLayout regionStreamLayout(const PfrepRegionInfo& info) {
+    RegionStreamLayout l;
+    l.state = alignUp8(info.decoded_bytes);
+    l.claimed = l.state + alignUp8(info.state_bytes);
+    l.priority = l.claimed + alignUp8((uint64_t(info.vertex_count) + 7) / 8);
+    l.block_state = l.priority + alignUp8(uint64_t(info.block_count) * sizeof(float));
+    l.needed = l.block_state + alignUp8(info.block_count);
+    l.total = l.needed + alignUp8(uint64_t(info.block_count) * sizeof(uint32_t));
+    return l;
 }
 
 } // namespace
@@ -282,7 +292,7 @@ Result PackSource::pfrepDecodeMemory(uint32_t model, uint64_t* decoded_bytes, ui
         PfrepRegionInfo info;
         r = pfrepRegionInfo(header, sizeof(header), &info);
         if (r != Result::Ok) return r;
-        *decoded_bytes = regionStreamBytes(info);
+        *decoded_bytes = regionStreamLayout(info).total;
         *scratch_bytes = info.open_bytes;
         return Result::Ok;
     }
@@ -669,9 +679,7 @@ void Streamer::initPfrepStream(uint32_t m) {
     const JsonValue format_member = ext.find(format::kPfrepExtensionFormatMember);
     if (format_member.isValid()) {
         uint64_t f = 0;
-        is_ok = is_ok && format_member.asUint64(&f) &&
-                (f == format::kPfrepVersion || f == format::kPfrepVersionCompressed || f == format::kPfrepVersionLod0 ||
-                 f == format::kPfrepFormatRegions);
+        is_ok = is_ok && format_member.asUint64(&f) && format::isPfrepPackFormat(f);
         ps.format = uint8_t(f);
     }
     is_ok = is_ok && (ps.format != format::kPfrepVersionLod0 ||
@@ -827,10 +835,8 @@ Result Streamer::readRegionHeader(PfrepStream& ps) {
         uint64_t(info.decoded_bytes) > ps.view_size * format::kPfrepMaxExpansion)
         return Result::BadStructure;
     ps.open_bytes = info.open_bytes;
-    ps.decoded_bytes = alignUp8(info.decoded_bytes);
-    ps.state_bytes = alignUp8(info.state_bytes);
     ps.block_count = info.block_count;
-    ps.directory_bytes = regionStreamBytes(info);
+    ps.directory_bytes = regionStreamLayout(info).total;
     return Result::Ok;
 }
 
@@ -977,24 +983,23 @@ bool Streamer::prepareRegionTask(Task& t, PfrepStream& ps, uint64_t size) {
             t.coded = nullptr;
             return false;
         }
+        // The header was validated when it arrived (readRegionHeader).
+        PfrepRegionInfo info;
+        (void)pfrepRegionInfo(ps.header, format::kPfrepHeaderSize, &info);
+        const RegionStreamLayout l = regionStreamLayout(info);
         // pfrepRegionOpen zeroes the format 2 buffer on the job; the claimed bits and the block
         // arrays start zero (LevelState::Absent, no priority).
-        uint8_t* at = ps.data + ps.decoded_bytes;
-        std::memset(at + ps.state_bytes, 0, size_t(ps.directory_bytes - ps.decoded_bytes - ps.state_bytes));
+        std::memset(ps.data + l.claimed, 0, size_t(l.total - l.claimed));
         t.region_decoded = ps.data;
-        t.region_state = at;
-        at += ps.state_bytes;
-        ps.claimed = at;
-        at += alignUp8((uint64_t(detail::loadU32(ps.header + 8)) + 7) / 8);
-        ps.block_priority = reinterpret_cast<float*>(at);
-        at += alignUp8(uint64_t(ps.block_count) * sizeof(float));
-        ps.block_state = at;
-        at += alignUp8(ps.block_count);
-        ps.needed = reinterpret_cast<uint32_t*>(at);
+        t.region_state = ps.data + l.state;
+        ps.claimed = ps.data + l.claimed;
+        ps.block_priority = reinterpret_cast<float*>(ps.data + l.priority);
+        ps.block_state = ps.data + l.block_state;
+        ps.needed = reinterpret_cast<uint32_t*>(ps.data + l.needed);
         t.kind = Task::Kind::PfrepRegionOpen;
         t.dst = nullptr;
-        t.size = size_t(ps.decoded_bytes);
-        t.scratch_bytes = size_t(ps.state_bytes);
+        t.size = size_t(l.state);
+        t.scratch_bytes = size_t(l.claimed - l.state);
         t.coded_size = size_t(ps.open_bytes);
         stats_.in_flight_bytes += ps.directory_bytes + ps.open_bytes;
         return true;

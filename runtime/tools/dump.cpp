@@ -503,7 +503,6 @@ void checkPfrepLevels(const lodrt::JsonValue& pfrep, const lodrt::PfrepModel& mo
     }
 }
 
-// Checks every compressed stream of the pack: valence streams decode and agree with the primitive;
 // A region blob (format 5) with every block loaded, which makes `decoded` the format 2 blob.
 lodrt::Result loadAllRegions(const uint8_t* data, size_t size, std::vector<uint8_t>& decoded) {
     lodrt::PfrepRegionInfo info;
@@ -552,6 +551,7 @@ lodrt::Result openPackPfrep(const lodrt::Pack& pack, const lodrt::MeshInfo& mesh
     return lodrt::pfrepDecompress(data, size, decoded.data(), decoded.size(), scratch.data(), info.scratch_bytes, model);
 }
 
+// Checks every compressed stream of the pack: valence streams decode and agree with the primitive;
 // PFRep blobs open and code the same full-detail triangle count as the mesh they sit on, and on a
 // group's full-detail mesh agree with the group's levels (checkPfrepLevels).
 void checkStreams(const lodrt::Pack& pack, const std::vector<LodGroup>& groups, std::vector<Problem>& problems) {
@@ -583,9 +583,7 @@ void checkStreams(const lodrt::Pack& pack, const std::vector<LodGroup>& groups, 
         uint64_t format = lodrt::format::kPfrepVersion;
         const lodrt::JsonValue format_member = pfrep.find(lodrt::format::kPfrepExtensionFormatMember);
         if (format_member.isValid() &&
-            (!format_member.asUint64(&format) ||
-             (format != lodrt::format::kPfrepVersion && format != lodrt::format::kPfrepVersionCompressed &&
-              format != lodrt::format::kPfrepVersionLod0 && format != lodrt::format::kPfrepFormatRegions))) {
+            (!format_member.asUint64(&format) || !lodrt::format::isPfrepPackFormat(format))) {
             problems.push_back({where + "/format", "format: expected 2, 3, 4 or 5"});
             continue;
         }
@@ -593,12 +591,11 @@ void checkStreams(const lodrt::Pack& pack, const std::vector<LodGroup>& groups, 
         std::vector<uint8_t> decoded; // format 3, 4, 5: the format 2 bytes it decodes to (model points into them)
         const lodrt::Result r = openPackPfrep(pack, mesh, uint32_t(format), data, size_t(size), decoded, &model);
         if (r != lodrt::Result::Ok) {
-            problems.push_back({where, std::string("stream fails to decode") +
-                                           (format == lodrt::format::kPfrepVersion         ? ": "
-                                            : format == lodrt::format::kPfrepVersionLod0   ? " (format 4): "
-                                            : format == lodrt::format::kPfrepFormatRegions ? " (format 5): "
-                                                                                           : " (format 3): ") +
-                                           lodrt::resultName(r)});
+            problems.push_back(
+                {where, std::string("stream fails to decode") +
+                            (format == lodrt::format::kPfrepVersion ? std::string(": ")
+                                                                    : " (format " + std::to_string(format) + "): ") +
+                            lodrt::resultName(r)});
             continue;
         }
         if (model.level0_triangles != mesh_triangles)

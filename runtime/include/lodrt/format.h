@@ -127,6 +127,10 @@ constexpr uint32_t kPfrepRegionMaxBlocks = 1u << 20;
 // LODBAKE_progressive_fans `format` value of a region blob in a pack (docs/format/pfrep.md "In a
 // glTF pack"): the Streamer loads the blocks the views reported by Streamer::wantPfrepBlocks need.
 constexpr uint32_t kPfrepFormatRegions = 5;
+// The values the extension's `format` member may take (docs/format/pfrep.md "In a glTF pack").
+constexpr bool isPfrepPackFormat(uint64_t f) {
+    return f == kPfrepVersion || f == kPfrepVersionCompressed || f == kPfrepVersionLod0 || f == kPfrepFormatRegions;
+}
 // Compressed mesh (.lbm), docs/format/valence.md. Little-endian header of kValenceHeaderSize bytes,
 // then the connectivity, position and normal streams, back to back; the position and normal streams
 // each have a range-coded part followed by a raw bit part (the low mantissa bits of the residuals).

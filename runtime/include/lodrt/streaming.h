@@ -326,9 +326,7 @@ private:
         // Format 5 (region blocks): `data` holds the format 2 buffer, the region state and the arrays
         // below (directory_bytes in all, allocated when the opening is requested).
         PfrepRegions regions;
-        uint64_t open_bytes;    // header, directory and skeleton
-        uint64_t decoded_bytes; // the format 2 buffer
-        uint64_t state_bytes;   // pfrepRegionOpen's state
+        uint64_t open_bytes; // header, directory and skeleton
         uint32_t block_count;
         uint8_t is_open;
         uint8_t* claimed;                          // ranks staged by the running job
